@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages doorbench builds with, only those that are missing.
+# Run as root (or with sudo); needs network access to Debian's archive only.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config
+  catch2                 # Catch2 v2 (tests)
+  libbenchmark-dev       # Google Benchmark (bench/)
+  nlohmann-json3-dev     # parameter files
+  libcli11-dev           # the doorbench command line
+  libceres-dev libeigen3-dev  # Jets for derivatives now, fitting later
+)
+
+missing=()
+for package in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$package" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$package")
+  fi
+done
+
+if ((${#missing[@]} == 0)); then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+as_root=()
+if [[ $(id -u) -ne 0 ]]; then as_root=(sudo); fi
+"${as_root[@]}" apt-get update -qq
+DEBIAN_FRONTEND=noninteractive "${as_root[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
