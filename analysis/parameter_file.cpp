@@ -9,7 +9,8 @@
 namespace doorbench {
 namespace {
 
-using nlohmann::json;
+// Ordered, so that files keep the spec's parameter order and effects their file order.
+using json = nlohmann::ordered_json;
 
 [[noreturn]] void fail(std::string_view source, const std::string& message) {
   throw ParameterFileError(std::string(source) + ": " + message);

@@ -25,11 +25,14 @@ T window(const T& x, const T& a, const T& b, const T& beta) {
   return switch_on(x, a, beta) - switch_on(x, b, beta);
 }
 
-// The logistic function 1 / (1 + exp(−u)), written with tanh so it never overflows.
+// The logistic function 1 / (1 + exp(−u)), in the form that neither overflows nor
+// loses relative accuracy in either tail.
 template <typename T>
 T logistic(const T& u) {
-  using std::tanh;
-  return T(0.5) * (T(1.0) + tanh(T(0.5) * u));
+  using std::exp;
+  if (u >= T(0.0)) return T(1.0) / (T(1.0) + exp(-u));
+  const T exp_u = exp(u);
+  return exp_u / (T(1.0) + exp_u);
 }
 
 // softplus_e(z) = e ln(1 + exp(z/e)), in the form max(z, 0) + e ln(1 + exp(−|z|/e))
@@ -39,7 +42,8 @@ T softplus(const T& z, const T& e) {
   using std::abs;
   using std::exp;
   using std::log1p;
-  const T positive_part = z > T(0.0) ? z : T(0.0);
+  // ">=" so that a Jet at exactly z = 0 gets the slope ½ (|z| differentiates as +z there).
+  const T positive_part = z >= T(0.0) ? z : T(0.0);
   return positive_part + e * log1p(exp(-abs(z) / e));
 }
 

@@ -1,0 +1,80 @@
+#pragma once
+// A numeric CSV table: the text layer under the door recording format of
+// door-models.md §5.1 (see docs/csv-format.md). Leading `# key: value` metadata lines,
+// one header row of column names, then one row of numbers per line, comma-separated,
+// `.` as decimal point. Nothing is guessed: every rule a text breaks is a CsvError that
+// names the source and the line.
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace doorbench {
+
+// Text that breaks the format. what() is one line, "SOURCE:LINE: detail", or
+// "SOURCE: detail" when no single line is to blame (line() is then 0).
+class CsvError : public std::runtime_error {
+ public:
+  CsvError(std::string_view source, int line, std::string_view detail);
+
+  const std::string& source() const { return source_; }
+  int line() const { return line_; }
+  const std::string& detail() const { return detail_; }
+
+ private:
+  std::string source_;
+  int line_;
+  std::string detail_;
+};
+
+using CsvMetadata = std::vector<std::pair<std::string, std::string>>;
+
+struct CsvTable {
+  // In file order. A `#` line that is not `# key: value` is a free-form note, kept here
+  // with an empty key and its text (after `#`, trimmed) as value.
+  CsvMetadata metadata;
+  std::vector<int> metadata_line_numbers;  // file line of each metadata entry, 1-based
+  int header_line = 0;                     // file line of the header row, 1-based
+  std::vector<std::string> column_names;
+  std::vector<std::vector<double>> columns;  // column-major: columns[c][row]
+  std::vector<int> line_numbers;             // file line of each data row, 1-based
+
+  std::optional<std::size_t> find_column(std::string_view name) const;
+  // The value of metadata key `key` (keys are unique in a parsed table). Throws
+  // std::invalid_argument for an empty key: notes have no key to look up.
+  std::optional<std::string> metadata_value(std::string_view key) const;
+  std::size_t row_count() const { return line_numbers.size(); }
+};
+
+// Parses `text`; `source` names it in error messages (usually the file's path).
+CsvTable parse_csv_table(std::string_view text, std::string_view source);
+
+// Reads and parses a file; the path is the source in messages. A file that cannot be read
+// throws CsvError "PATH: cannot open for reading".
+CsvTable read_csv_file(const std::filesystem::path& path);
+
+// Parses `text` (spaces and tabs around it allowed) as a whole, finite double the way data
+// cells are parsed; nullopt when it is anything else.
+std::optional<double> parse_csv_number(std::string_view text);
+
+// The shortest text that reads back as exactly `value`. Throws std::invalid_argument for
+// NaN and infinities, which are not valid samples.
+std::string format_csv_number(double value);
+
+// Writes `# key: value` lines (`# text` for a note, i.e. an empty key), the header and
+// one row per sample. Throws std::invalid_argument when the input could not be read back
+// as given: column count or lengths that differ, a null column, no columns, names that
+// are empty, duplicated, padded with spaces, numbers, start with `#` or contain `,` `"`
+// `;`, tabs or line breaks, invalid or duplicated metadata keys, values with line breaks
+// or edge spaces, notes that would read back as metadata, non-finite numbers.
+void write_csv(std::ostream& out, const CsvMetadata& metadata,
+               const std::vector<std::string>& column_names,
+               const std::vector<const std::vector<double>*>& columns);
+void write_csv(std::ostream& out, const CsvTable& table);
+
+}  // namespace doorbench

@@ -1,0 +1,34 @@
+#pragma once
+// Each verb of the doorbench command registers its options and, when chosen, the action
+// that main() runs after parsing. Actions throw CommandError for failures (exit 1) and
+// UsageError for wrong combinations of options (exit 2).
+#include <CLI/CLI.hpp>
+#include <functional>
+#include <stdexcept>
+#include <string>
+
+#include "analysis/door_model.h"
+
+namespace doorbench::app {
+
+class UsageError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+using Action = std::function<void()>;
+
+void add_model_command(CLI::App& app, Action& action);
+void add_simulate_command(CLI::App& app, Action& action);
+void add_demo_command(CLI::App& app, Action& action);
+
+// The options every verb that builds a model shares.
+struct ModelOptions {
+  std::string model = "sensory";
+  std::string params_path;   // empty: the reference door
+  std::string effects_path;  // empty: no effects
+};
+void add_model_options(CLI::App& command, ModelOptions& options);
+DoorModel load_model(const ModelOptions& options);
+
+}  // namespace doorbench::app

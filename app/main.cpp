@@ -1,0 +1,43 @@
+// doorbench: record, model, fit and play back the feel of a product mechanism.
+// Exit status: 0 success, 1 failure, 2 bad usage. Errors go to stderr on one line.
+#include <CLI/CLI.hpp>
+#include <exception>
+#include <iostream>
+
+#include "app/commands.h"
+
+int main(int argc, char** argv) {
+  CLI::App app{
+      "doorbench: measure a door's feel on the bench, fit models to it and play it back.\n"
+      "Run `doorbench VERB --help` for each verb."};
+  app.set_version_flag("--version", std::string("doorbench ") + DOORBENCH_VERSION);
+  app.require_subcommand(1);
+  doorbench::app::Action action;
+  doorbench::app::add_model_command(app, action);
+  doorbench::app::add_simulate_command(app, action);
+  doorbench::app::add_demo_command(app, action);
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& help) {
+    return app.exit(help);
+  } catch (const CLI::CallForAllHelp& help) {
+    return app.exit(help);
+  } catch (const CLI::CallForVersion& version) {
+    return app.exit(version);
+  } catch (const CLI::ParseError& error) {
+    std::cerr << "doorbench: " << error.what() << " (see doorbench --help)\n";
+    return 2;
+  }
+
+  try {
+    if (action) action();
+    return 0;
+  } catch (const doorbench::app::UsageError& error) {
+    std::cerr << "doorbench: " << error.what() << " (see doorbench --help)\n";
+    return 2;
+  } catch (const std::exception& error) {
+    std::cerr << "doorbench: " << error.what() << "\n";
+    return 1;
+  }
+}
