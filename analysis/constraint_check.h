@@ -17,8 +17,7 @@ class ConstraintCheck {
   const std::string& message() const { return message_; }
 
   void finite(std::string_view name, double value) {
-    if (ok() && !std::isfinite(value))
-      fail(name, value, "is not a finite number", "");
+    if (ok() && !std::isfinite(value)) fail(name, value, "is not a finite number", "");
   }
   // `holds` is the constraint's truth; `constraint` its text as in the spec's table;
   // `context` the other values it involves ("theta1 = 0.02"), or empty.

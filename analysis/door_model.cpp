@@ -73,9 +73,8 @@ std::string validate_effect(const EffectSetting& effect) {
 
 }  // namespace
 
-DoorModel::DoorModel(ModelKind kind, const DoorGeometry& geometry,
-                     std::vector<double> base_values, std::vector<Bounds> base_bounds,
-                     std::vector<EffectSetting> effects)
+DoorModel::DoorModel(ModelKind kind, const DoorGeometry& geometry, std::vector<double> base_values,
+                     std::vector<Bounds> base_bounds, std::vector<EffectSetting> effects)
     : kind_(kind), geometry_(geometry), effects_(std::move(effects)) {
   const bool sensory_model = kind == ModelKind::kSensory;
   base_parameter_count_ =
@@ -83,14 +82,13 @@ DoorModel::DoorModel(ModelKind kind, const DoorGeometry& geometry,
   base_term_count_ = sensory_model ? int{sensory::kTermCount} : int{physical::kTermCount};
   if (static_cast<int>(base_values.size()) != base_parameter_count_ ||
       static_cast<int>(base_bounds.size()) != base_parameter_count_) {
-    throw std::invalid_argument(std::string(to_string(kind)) + " model needs " +
-                                std::to_string(base_parameter_count_) +
-                                " parameter values and bounds, got " +
-                                std::to_string(base_values.size()));
+    throw std::invalid_argument(
+        std::string(to_string(kind)) + " model needs " + std::to_string(base_parameter_count_) +
+        " parameter values and bounds, got " + std::to_string(base_values.size()));
   }
-  const std::string message =
-      sensory_model ? validate_base(base_values, geometry, &sensory::validate)
-                    : validate_base(base_values, geometry, &physical::validate);
+  const std::string message = sensory_model
+                                  ? validate_base(base_values, geometry, &sensory::validate)
+                                  : validate_base(base_values, geometry, &physical::validate);
   if (!message.empty()) throw std::invalid_argument(message);
 
   values_ = std::move(base_values);
@@ -122,7 +120,8 @@ DoorModel::DoorModel(ModelKind kind, const DoorGeometry& geometry,
       active.term_index = static_cast<int>(term_names_.size());
       term_names_.emplace_back(info.name);
     }
-    if (effect.kind == effects::Kind::kInertiaError) inertia_error_offset_ = active.parameter_offset;
+    if (effect.kind == effects::Kind::kInertiaError)
+      inertia_error_offset_ = active.parameter_offset;
     for (std::size_t i = 0; i < info.parameters.size(); ++i) {
       values_.push_back(effect.values[i]);
       bounds_.push_back(effect.bounds[i]);
@@ -135,9 +134,9 @@ DoorModel::DoorModel(ModelKind kind, const DoorGeometry& geometry,
     throw std::invalid_argument("model has more parameters or terms than DoorModel supports");
   }
   if (inertia(values_.data()) <= 0) {
-    throw std::invalid_argument("effect inertia_error.delta_J = " +
-                                format_number(values_[inertia_error_offset_]) +
-                                " makes the inertia J + delta_J not positive");
+    throw std::invalid_argument(
+        "effect inertia_error.delta_J = " + format_number(values_[inertia_error_offset_]) +
+        " makes the inertia J + delta_J not positive");
   }
 }
 
@@ -206,8 +205,8 @@ TorqueDerivatives DoorModel::torque_derivatives(double theta_rad, double omega_r
   std::array<StateJet, kMaxParameters> parameters;
   for (int i = 0; i < parameter_count(); ++i) parameters[i] = StateJet(values_[i]);
   std::array<StateJet, kMaxTerms> terms;
-  const StateJet torque = evaluate(parameters.data(), StateJet(theta_rad, 0),
-                                   StateJet(omega_rad_s, 1), terms.data());
+  const StateJet torque =
+      evaluate(parameters.data(), StateJet(theta_rad, 0), StateJet(omega_rad_s, 1), terms.data());
   return {torque.a, torque.v[0], torque.v[1]};
 }
 

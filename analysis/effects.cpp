@@ -8,8 +8,11 @@ namespace {
 constexpr EffectParameter kViscousDamping[] = {
     {{"b", "N*m*s/rad", "viscous damping"}, 0.0, {0.0, 5.0}, 0.0, false}};
 constexpr EffectParameter kGravityImbalance[] = {
-    {{"g1", "N*m", "net gravity torque amplitude (imperfect balance)"}, 0.0, {-30.0, 30.0},
-     -1e300, false}};
+    {{"g1", "N*m", "net gravity torque amplitude (imperfect balance)"},
+     0.0,
+     {-30.0, 30.0},
+     -1e300,
+     false}};
 constexpr EffectParameter kStribeck[] = {
     {{"d_s", "N*m", "breakaway (static) friction level"}, 3.0, {0.0, 20.0}, 0.0, false},
     {{"w_s", "rad/s", "Stribeck speed"}, 0.05, {0.001, 1.0}, 0.0, true}};
@@ -18,18 +21,26 @@ constexpr EffectParameter kDirectionFriction[] = {
 constexpr EffectParameter kSoftClose[] = {
     {{"b_sc", "N*m*s/rad", "soft-close damping"}, 0.0, {0.0, 50.0}, 0.0, false},
     {{"theta_sc", "rad", "angle below which the damper acts"}, 0.1, {0.0, 0.5}, 0.0, false},
-    {{"beta_sc", "1/rad", "sharpness of the damper's switch (the spec's beta_f)"}, 10.0,
-     {1.0, 200.0}, 0.0, true}};
+    {{"beta_sc", "1/rad", "sharpness of the damper's switch (the spec's beta_f)"},
+     10.0,
+     {1.0, 200.0},
+     0.0,
+     true}};
 constexpr EffectParameter kEndStop[] = {
     {{"k_e", "N*m/rad", "limit stiffness"}, 0.0, {0.0, 100000.0}, 0.0, false},
     {{"theta_e", "rad", "angle where the limit begins"}, 1.5, {-0.1, 1.7}, -1e300, false},
-    {{"beta_e", "1/rad", "sharpness of the limit's switch (the spec's beta)"}, 3000.0,
-     {100.0, 20000.0}, 0.0, true}};
+    {{"beta_e", "1/rad", "sharpness of the limit's switch (the spec's beta)"},
+     3000.0,
+     {100.0, 20000.0},
+     0.0,
+     true}};
 constexpr EffectParameter kForceOffset[] = {
-    {{"F_off", "N", "load-cell offset: it reads F_u + F_off"}, 0.0, {-20.0, 20.0}, -1e300,
-     false}};
+    {{"F_off", "N", "load-cell offset: it reads F_u + F_off"}, 0.0, {-20.0, 20.0}, -1e300, false}};
 constexpr EffectParameter kInertiaError[] = {
-    {{"delta_J", "kg*m^2", "inertia error: J becomes J + delta_J"}, 0.0, {-0.5, 2.0}, -1e300,
+    {{"delta_J", "kg*m^2", "inertia error: J becomes J + delta_J"},
+     0.0,
+     {-0.5, 2.0},
+     -1e300,
      false}};
 
 const EffectInfo kCatalogue[kKindCount] = {
@@ -49,7 +60,9 @@ const EffectInfo kCatalogue[kKindCount] = {
 
 }  // namespace
 
-std::span<const EffectInfo> catalogue() { return kCatalogue; }
+std::span<const EffectInfo> catalogue() {
+  return kCatalogue;
+}
 
 const EffectInfo& info(Kind kind) {
   const int index = static_cast<int>(kind);

@@ -27,7 +27,7 @@ struct EffectParameter {
   ParameterInfo info;
   double default_value;
   Bounds default_bounds;
-  double minimum;         // values below are rejected
+  double minimum;          // values below are rejected
   bool minimum_is_strict;  // reject == minimum too
 };
 
@@ -55,8 +55,8 @@ struct BaseFriction {
 
 // The torque (N*m, positive = opening) of one effect with parameter values `p`.
 template <typename T>
-T torque(Kind kind, const T* p, const BaseFriction<T>& base, double handle_radius_m,
-         const T& theta, const T& omega) {
+T torque(Kind kind, const T* p, const BaseFriction<T>& base, double handle_radius_m, const T& theta,
+         const T& omega) {
   using std::exp;
   using std::sin;
   using std::tanh;

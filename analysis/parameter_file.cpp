@@ -98,10 +98,11 @@ ParameterFile parse_parameter_file(std::string_view json_text, std::string_view 
   const json root = parse_json(json_text, source);
   if (!root.is_object()) fail(source, "expected a JSON object at the top level");
   for (const auto& [key, unused] : root.items()) {
-    if (key != "about" && key != "handle_radius_m" && key != "theta_max_rad" &&
-        key != "sensory" && key != "physical" && key != "bench") {
-      fail(source, key + ": unknown key (expected about, handle_radius_m, theta_max_rad, "
-                         "sensory, physical, bench)");
+    if (key != "about" && key != "handle_radius_m" && key != "theta_max_rad" && key != "sensory" &&
+        key != "physical" && key != "bench") {
+      fail(source, key +
+                       ": unknown key (expected about, handle_radius_m, theta_max_rad, "
+                       "sensory, physical, bench)");
     }
   }
   ParameterFile file;
@@ -122,8 +123,7 @@ ParameterFile parse_parameter_file(std::string_view json_text, std::string_view 
   return file;
 }
 
-std::vector<EffectSetting> parse_effects_file(std::string_view json_text,
-                                              std::string_view source) {
+std::vector<EffectSetting> parse_effects_file(std::string_view json_text, std::string_view source) {
   const json root = parse_json(json_text, source);
   if (!root.is_object()) fail(source, "expected a JSON object of effects at the top level");
   std::vector<EffectSetting> settings;
@@ -197,9 +197,9 @@ DoorModel reference_model(ModelKind kind) {
 DoorModel load_model(ModelKind kind, const std::filesystem::path& params_path,
                      const std::filesystem::path& effects_path) {
   const std::string source = params_path.empty() ? "reference door" : params_path.string();
-  const ParameterFile file =
-      params_path.empty() ? parse_parameter_file(reference_door_json(), source)
-                          : parse_parameter_file(read_text_file(params_path), source);
+  const ParameterFile file = params_path.empty()
+                                 ? parse_parameter_file(reference_door_json(), source)
+                                 : parse_parameter_file(read_text_file(params_path), source);
   std::vector<EffectSetting> effects;
   if (!effects_path.empty()) {
     effects = parse_effects_file(read_text_file(effects_path), effects_path.string());

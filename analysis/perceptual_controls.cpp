@@ -35,7 +35,9 @@ std::string_view name_of(Control control) {
 
 }  // namespace
 
-std::span<const ControlInfo> controls() { return kControls; }
+std::span<const ControlInfo> controls() {
+  return kControls;
+}
 
 std::optional<Control> find(std::string_view name) {
   for (const ControlInfo& info : kControls) {
@@ -49,13 +51,20 @@ double read(const DoorModel& model, Control control) {
   const auto p = sensory::Parameters<double>::from(model.parameter_values().data());
   const double r_h = model.geometry().handle_radius_m;
   switch (control) {
-    case Control::kHeaviness: return p.J;
-    case Control::kLatchEffort: return (p.k * p.theta1 + p.k_inf * (p.theta1 - p.theta0)) / r_h;
-    case Control::kClosingEffort: return p.k_lock * (p.theta3 - p.theta2) / r_h;
-    case Control::kSnap: return p.c * (p.theta2 - p.theta1);
-    case Control::kSmoothness: return p.d1 / r_h;
-    case Control::kFrictionBalance: return p.d1 > 0 ? p.d2 / p.d1 : 0.0;
-    case Control::kFrictionChange: return p.theta4;
+    case Control::kHeaviness:
+      return p.J;
+    case Control::kLatchEffort:
+      return (p.k * p.theta1 + p.k_inf * (p.theta1 - p.theta0)) / r_h;
+    case Control::kClosingEffort:
+      return p.k_lock * (p.theta3 - p.theta2) / r_h;
+    case Control::kSnap:
+      return p.c * (p.theta2 - p.theta1);
+    case Control::kSmoothness:
+      return p.d1 / r_h;
+    case Control::kFrictionBalance:
+      return p.d1 > 0 ? p.d2 / p.d1 : 0.0;
+    case Control::kFrictionChange:
+      return p.theta4;
   }
   return 0.0;
 }
@@ -77,7 +86,8 @@ DoorModel set(const DoorModel& model, Control control, double value) {
       if (value < soft_share_N) {
         throw std::invalid_argument("latch_effort " + format_number(value) +
                                     " N is below what the soft spring alone gives, k theta1 / r_h "
-                                    "= " + format_number(soft_share_N) + " N");
+                                    "= " +
+                                    format_number(soft_share_N) + " N");
       }
       values[sensory::kKInf] = (value * r_h - p.k * p.theta1) / (p.theta1 - p.theta0);
       break;

@@ -14,8 +14,33 @@ namespace doorbench::physical {
 inline constexpr double kGravity_m_s2 = 9.80665;
 
 enum Index : int {
-  kMassDoor, kLc, kJd, kKs, kL0, kF0, kAx, kAy, kBu, kBv, kTh, kBh, kWf, kMuG, kRl, kKl,
-  kFl0, kH, kAlphaO, kAlphaC, kMuL, kE, kKSeal, kThetaSeal, kKStop, kCStop, kParameterCount
+  kMassDoor,
+  kLc,
+  kJd,
+  kKs,
+  kL0,
+  kF0,
+  kAx,
+  kAy,
+  kBu,
+  kBv,
+  kTh,
+  kBh,
+  kWf,
+  kMuG,
+  kRl,
+  kKl,
+  kFl0,
+  kH,
+  kAlphaO,
+  kAlphaC,
+  kMuL,
+  kE,
+  kKSeal,
+  kThetaSeal,
+  kKStop,
+  kCStop,
+  kParameterCount
 };
 
 inline constexpr std::array<ParameterInfo, kParameterCount> kParameterInfo = {{
@@ -48,22 +73,28 @@ inline constexpr std::array<ParameterInfo, kParameterCount> kParameterInfo = {{
 }};
 
 enum Term : int {
-  kGravityTerm, kSpring, kHingeFriction, kGuideFriction, kLatch, kSeal, kStops, kTermCount
+  kGravityTerm,
+  kSpring,
+  kHingeFriction,
+  kGuideFriction,
+  kLatch,
+  kSeal,
+  kStops,
+  kTermCount
 };
 inline constexpr std::array<std::string_view, kTermCount> kTermNames = {
     "gravity", "spring", "hinge_friction", "guide_friction", "latch", "seal", "stops"};
 
 template <typename T>
 struct Parameters {
-  T m_d, l_c, J_d, k_s, L0, F0, A_x, A_y, B_u, B_v, T_h, b_h, w_f, mu_g, r_l, k_l, F_l0, h,
-      alpha_o, alpha_c, mu_l, e, k_seal, theta_seal, k_stop, c_stop;
+  T m_d, l_c, J_d, k_s, L0, F0, A_x, A_y, B_u, B_v, T_h, b_h, w_f, mu_g, r_l, k_l, F_l0, h, alpha_o,
+      alpha_c, mu_l, e, k_seal, theta_seal, k_stop, c_stop;
 
   static Parameters from(const T* p) {
-    return {p[kMassDoor], p[kLc],   p[kJd],     p[kKs],     p[kL0],        p[kF0],
-            p[kAx],       p[kAy],   p[kBu],     p[kBv],     p[kTh],        p[kBh],
-            p[kWf],       p[kMuG],  p[kRl],     p[kKl],     p[kFl0],       p[kH],
-            p[kAlphaO],   p[kAlphaC], p[kMuL],  p[kE],      p[kKSeal],     p[kThetaSeal],
-            p[kKStop],    p[kCStop]};
+    return {p[kMassDoor], p[kLc],    p[kJd],        p[kKs],    p[kL0],     p[kF0],     p[kAx],
+            p[kAy],       p[kBu],    p[kBv],        p[kTh],    p[kBh],     p[kWf],     p[kMuG],
+            p[kRl],       p[kKl],    p[kFl0],       p[kH],     p[kAlphaO], p[kAlphaC], p[kMuL],
+            p[kE],        p[kKSeal], p[kThetaSeal], p[kKStop], p[kCStop]};
   }
 };
 

@@ -22,11 +22,14 @@ RunSummary summarize_run(const DoorModel& model, const Trajectory& run) {
     const double stops = stops_term >= 0 ? run.terms_Nm[stops_term][i] : 0.0;
     const double mechanism_N = (run.tau_m_Nm[i] - stops) / r_h;
     if (theta < kLatchZoneRad && theta > 0) {
-      if (omega > 0) summary.peak_unlatch_force_N = std::max(summary.peak_unlatch_force_N, -mechanism_N);
+      if (omega > 0)
+        summary.peak_unlatch_force_N = std::max(summary.peak_unlatch_force_N, -mechanism_N);
       if (omega < 0) summary.peak_latch_force_N = std::max(summary.peak_latch_force_N, mechanism_N);
     }
-    summary.largest_opening_hand_force_N = std::max(summary.largest_opening_hand_force_N, run.force_N[i]);
-    summary.largest_closing_hand_force_N = std::max(summary.largest_closing_hand_force_N, -run.force_N[i]);
+    summary.largest_opening_hand_force_N =
+        std::max(summary.largest_opening_hand_force_N, run.force_N[i]);
+    summary.largest_closing_hand_force_N =
+        std::max(summary.largest_closing_hand_force_N, -run.force_N[i]);
     summary.largest_speed_rad_s = std::max(summary.largest_speed_rad_s, std::abs(omega));
     summary.largest_angle_rad = std::max(summary.largest_angle_rad, theta);
     if (theta > kLatchZoneRad && theta < model.geometry().theta_max_rad - 0.1 &&
@@ -48,14 +51,15 @@ RunSummary summarize_run(const DoorModel& model, const Trajectory& run) {
 std::string format_summary(const RunSummary& s) {
   constexpr double kDeg = 180.0 / 3.14159265358979323846;
   char text[512];
-  std::snprintf(text, sizeof text,
-                "  peak force to unlatch      %6.1f N   (hand's largest opening push %.1f N)\n"
-                "  peak force to latch        %6.1f N   (hand's largest closing push %.1f N)\n"
-                "  friction in free movement  %6.1f N   (median, at the handle)\n"
-                "  largest speed              %6.1f deg/s, largest angle %.1f deg, final %.2f deg\n",
-                s.peak_unlatch_force_N, s.largest_opening_hand_force_N, s.peak_latch_force_N,
-                s.largest_closing_hand_force_N, s.free_movement_friction_N,
-                s.largest_speed_rad_s * kDeg, s.largest_angle_rad * kDeg, s.final_angle_rad * kDeg);
+  std::snprintf(
+      text, sizeof text,
+      "  peak force to unlatch      %6.1f N   (hand's largest opening push %.1f N)\n"
+      "  peak force to latch        %6.1f N   (hand's largest closing push %.1f N)\n"
+      "  friction in free movement  %6.1f N   (median, at the handle)\n"
+      "  largest speed              %6.1f deg/s, largest angle %.1f deg, final %.2f deg\n",
+      s.peak_unlatch_force_N, s.largest_opening_hand_force_N, s.peak_latch_force_N,
+      s.largest_closing_hand_force_N, s.free_movement_friction_N, s.largest_speed_rad_s * kDeg,
+      s.largest_angle_rad * kDeg, s.final_angle_rad * kDeg);
   return text;
 }
 

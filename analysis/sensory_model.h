@@ -11,8 +11,24 @@ namespace doorbench::sensory {
 
 // Parameter order is the spec's: files and reports list them this way.
 enum Index : int {
-  kJ, kK, kKInf, kKLock, kTheta0, kTheta1, kTheta2, kTheta3, kC, kD1, kD2, kS, kTheta4,
-  kBeta, kBetaF, kKStop, kCStop, kParameterCount
+  kJ,
+  kK,
+  kKInf,
+  kKLock,
+  kTheta0,
+  kTheta1,
+  kTheta2,
+  kTheta3,
+  kC,
+  kD1,
+  kD2,
+  kS,
+  kTheta4,
+  kBeta,
+  kBetaF,
+  kKStop,
+  kCStop,
+  kParameterCount
 };
 
 inline constexpr std::array<ParameterInfo, kParameterCount> kParameterInfo = {{
@@ -36,19 +52,19 @@ inline constexpr std::array<ParameterInfo, kParameterCount> kParameterInfo = {{
 }};
 
 enum Term : int { kUnlatch, kSnap, kLatch, kFriction, kStops, kTermCount };
-inline constexpr std::array<std::string_view, kTermCount> kTermNames = {
-    "unlatch", "snap", "latch", "friction", "stops"};
+inline constexpr std::array<std::string_view, kTermCount> kTermNames = {"unlatch", "snap", "latch",
+                                                                        "friction", "stops"};
 
 // Named view of a parameter array; T is double or a Ceres Jet.
 template <typename T>
 struct Parameters {
-  T J, k, k_inf, k_lock, theta0, theta1, theta2, theta3, c, d1, d2, s, theta4, beta, beta_f,
-      k_stop, c_stop;
+  T J, k, k_inf, k_lock, theta0, theta1, theta2, theta3, c, d1, d2, s, theta4, beta, beta_f, k_stop,
+      c_stop;
 
   static Parameters from(const T* p) {
-    return {p[kJ],      p[kK],      p[kKInf],   p[kKLock], p[kTheta0], p[kTheta1],
-            p[kTheta2], p[kTheta3], p[kC],      p[kD1],    p[kD2],     p[kS],
-            p[kTheta4], p[kBeta],   p[kBetaF],  p[kKStop], p[kCStop]};
+    return {p[kJ],      p[kK],      p[kKInf],  p[kKLock], p[kTheta0], p[kTheta1],
+            p[kTheta2], p[kTheta3], p[kC],     p[kD1],    p[kD2],     p[kS],
+            p[kTheta4], p[kBeta],   p[kBetaF], p[kKStop], p[kCStop]};
   }
 };
 
@@ -70,12 +86,16 @@ T evaluate(const T* parameter_values, double theta_max_rad, const T& theta, cons
            T* terms) {
   using std::tanh;
   const Parameters<T> p = Parameters<T>::from(parameter_values);
-  terms[kUnlatch] = -(p.k * theta + p.k_inf * (theta - p.theta0) * switch_on(theta, p.theta0, p.beta)) *
-                    switch_off(theta, p.theta1, p.beta);
-  terms[kSnap] = p.c * omega * window(theta, p.theta1, p.theta2, p.beta);
-  terms[kLatch] = p.k_lock * (p.theta3 - theta) * window(theta, p.theta2, p.theta3, p.beta);
-  terms[kFriction] =
-      -tanh(p.s * omega) * (p.d1 - p.d2 * switch_off(theta, p.theta4, p.beta_f));
+  // Each threshold's switch once: the terms share them.
+  const SwitchValues<T> at_theta0 = switch_values(theta, p.theta0, p.beta);
+  const SwitchValues<T> at_theta1 = switch_values(theta, p.theta1, p.beta);
+  const SwitchValues<T> at_theta2 = switch_values(theta, p.theta2, p.beta);
+  const SwitchValues<T> at_theta3 = switch_values(theta, p.theta3, p.beta);
+  terms[kUnlatch] = -(p.k * theta + p.k_inf * (theta - p.theta0) * at_theta0.on) * at_theta1.off;
+  terms[kSnap] = p.c * omega * window(theta, p.theta1, p.theta2, at_theta1, at_theta2);
+  terms[kLatch] =
+      p.k_lock * (p.theta3 - theta) * window(theta, p.theta2, p.theta3, at_theta2, at_theta3);
+  terms[kFriction] = -tanh(p.s * omega) * (p.d1 - p.d2 * switch_off(theta, p.theta4, p.beta_f));
   terms[kStops] = end_stop_torque(theta, omega, p.k_stop, p.c_stop, theta_max_rad);
   return terms[kUnlatch] + terms[kSnap] + terms[kLatch] + terms[kFriction] + terms[kStops];
 }

@@ -77,8 +77,7 @@ DoorStepper::DoorStepper(const DoorModel& model, const SimulationOptions& option
 DoorStepper::Derivative DoorStepper::derivative(double time_s, double theta, double omega,
                                                 const UserForce& hand) {
   ++stats_.torque_evaluations;
-  const double user_torque =
-      model_.geometry().handle_radius_m * hand.force_N(time_s, theta, omega);
+  const double user_torque = model_.geometry().handle_radius_m * hand.force_N(time_s, theta, omega);
   const double mechanism_torque = model_.torque_Nm(theta, omega);
   return {omega, (user_torque + mechanism_torque) / inertia_kg_m2_, user_torque * omega};
 }
@@ -90,16 +89,14 @@ double DoorStepper::try_step(const DoorState& s, const Derivative& k1, double h,
     return derivative(t + c * h, s.theta_rad + h * dtheta, s.omega_rad_s + h * domega, hand);
   };
   const Derivative k2 = stage(c2, a21 * k1.theta, a21 * k1.omega);
-  const Derivative k3 =
-      stage(c3, a31 * k1.theta + a32 * k2.theta, a31 * k1.omega + a32 * k2.omega);
+  const Derivative k3 = stage(c3, a31 * k1.theta + a32 * k2.theta, a31 * k1.omega + a32 * k2.omega);
   const Derivative k4 = stage(c4, a41 * k1.theta + a42 * k2.theta + a43 * k3.theta,
                               a41 * k1.omega + a42 * k2.omega + a43 * k3.omega);
-  const Derivative k5 =
-      stage(c5, a51 * k1.theta + a52 * k2.theta + a53 * k3.theta + a54 * k4.theta,
-            a51 * k1.omega + a52 * k2.omega + a53 * k3.omega + a54 * k4.omega);
-  const Derivative k6 = stage(
-      1.0, a61 * k1.theta + a62 * k2.theta + a63 * k3.theta + a64 * k4.theta + a65 * k5.theta,
-      a61 * k1.omega + a62 * k2.omega + a63 * k3.omega + a64 * k4.omega + a65 * k5.omega);
+  const Derivative k5 = stage(c5, a51 * k1.theta + a52 * k2.theta + a53 * k3.theta + a54 * k4.theta,
+                              a51 * k1.omega + a52 * k2.omega + a53 * k3.omega + a54 * k4.omega);
+  const Derivative k6 =
+      stage(1.0, a61 * k1.theta + a62 * k2.theta + a63 * k3.theta + a64 * k4.theta + a65 * k5.theta,
+            a61 * k1.omega + a62 * k2.omega + a63 * k3.omega + a64 * k4.omega + a65 * k5.omega);
   auto combine = [&](double Derivative::*field) {
     return b1 * k1.*field + b3 * k3.*field + b4 * k4.*field + b5 * k5.*field + b6 * k6.*field;
   };
@@ -110,16 +107,15 @@ double DoorStepper::try_step(const DoorState& s, const Derivative& k1, double h,
   k7 = derivative(candidate.time_s, candidate.theta_rad, candidate.omega_rad_s, hand);
 
   auto error = [&](double Derivative::*field) {
-    return h * (e1 * k1.*field + e3 * k3.*field + e4 * k4.*field + e5 * k5.*field +
-                e6 * k6.*field + e7 * k7.*field);
+    return h * (e1 * k1.*field + e3 * k3.*field + e4 * k4.*field + e5 * k5.*field + e6 * k6.*field +
+                e7 * k7.*field);
   };
-  const double theta_scale = options_.angle_tolerance_rad +
+  const double theta_scale =
+      options_.angle_tolerance_rad +
+      options_.relative_tolerance * std::max(std::abs(s.theta_rad), std::abs(candidate.theta_rad));
+  const double omega_scale = options_.rate_tolerance_rad_s +
                              options_.relative_tolerance *
-                                 std::max(std::abs(s.theta_rad), std::abs(candidate.theta_rad));
-  const double omega_scale =
-      options_.rate_tolerance_rad_s +
-      options_.relative_tolerance *
-          std::max(std::abs(s.omega_rad_s), std::abs(candidate.omega_rad_s));
+                                 std::max(std::abs(s.omega_rad_s), std::abs(candidate.omega_rad_s));
   return std::max(std::abs(error(&Derivative::theta)) / theta_scale,
                   std::abs(error(&Derivative::omega)) / omega_scale);
 }
@@ -137,8 +133,10 @@ void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& 
     // Land exactly on the end time without leaving a sliver of a step behind, and never
     // take a step longer than the controlled one.
     const bool last = step >= remaining * (1 - 1e-12);
-    if (last) step = remaining;
-    else if (remaining < 2 * step) step = 0.5 * remaining;
+    if (last)
+      step = remaining;
+    else if (remaining < 2 * step)
+      step = 0.5 * remaining;
 
     DoorState candidate;
     Derivative k7;
@@ -154,7 +152,8 @@ void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& 
       k1_ = k7;
       k1_time_s_ = state.time_s;
       ++stats_.accepted_steps;
-      if (stats_.accepted_steps == 1 || step < stats_.smallest_step_s) stats_.smallest_step_s = step;
+      if (stats_.accepted_steps == 1 || step < stats_.smallest_step_s)
+        stats_.smallest_step_s = step;
       stats_.largest_step_s = std::max(stats_.largest_step_s, step);
       if (!fixed) {
         const double growth =
@@ -171,9 +170,9 @@ void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& 
     next_step_s_ = step * shrink;
     if (next_step_s_ < options_.min_step_s) {
       throw std::runtime_error("simulation needs a step below " +
-                               format_number(options_.min_step_s) + " s at t = " +
-                               format_number(state.time_s) + " s, theta = " +
-                               format_number(state.theta_rad) + " rad");
+                               format_number(options_.min_step_s) +
+                               " s at t = " + format_number(state.time_s) +
+                               " s, theta = " + format_number(state.theta_rad) + " rad");
     }
   }
 }
@@ -187,15 +186,14 @@ Trajectory simulate(const DoorModel& model, const UserForce& hand, const DoorSta
   for (std::size_t i = 1; i < output_times_s.size(); ++i) {
     if (!(output_times_s[i] > output_times_s[i - 1])) {
       throw std::invalid_argument("simulate: output time " + format_number(output_times_s[i]) +
-                                  " s is not after " + format_number(output_times_s[i - 1]) +
-                                  " s");
+                                  " s is not after " + format_number(output_times_s[i - 1]) + " s");
     }
   }
   const std::size_t count = output_times_s.size();
   Trajectory out;
   out.handle_radius_m = model.geometry().handle_radius_m;
-  for (auto* column : {&out.time_s, &out.theta_rad, &out.omega_rad_s, &out.force_N,
-                       &out.tau_u_Nm, &out.tau_m_Nm}) {
+  for (auto* column : {&out.time_s, &out.theta_rad, &out.omega_rad_s, &out.force_N, &out.tau_u_Nm,
+                       &out.tau_m_Nm}) {
     column->resize(count);
   }
   for (int i = 0; i < model.term_count(); ++i) out.term_names.push_back(model.term_name(i));

@@ -46,7 +46,7 @@ struct SimulationOptions {
   double relative_tolerance = 1e-7;
   double angle_tolerance_rad = 1e-9;
   double rate_tolerance_rad_s = 1e-7;
-  double max_step_s = 1e-3;  // also never beyond the next output time
+  double max_step_s = 1e-3;   // also never beyond the next output time
   double min_step_s = 1e-10;  // below this the run fails rather than crawl
   // Fixed-step method: the step, shortened where needed to land on output times.
   double fixed_step_s = 1e-4;

@@ -5,26 +5,6 @@
 
 namespace doorbench {
 
-// S(x; x0, β) = ½ (1 + tanh(β (x − x0))): about 0 below x0, about 1 above.
-template <typename T>
-T switch_on(const T& x, const T& x0, const T& beta) {
-  using std::tanh;
-  return T(0.5) * (T(1.0) + tanh(beta * (x - x0)));
-}
-
-// S̄(x; x0, β) = 1 − S(x; x0, β).
-template <typename T>
-T switch_off(const T& x, const T& x0, const T& beta) {
-  using std::tanh;
-  return T(0.5) * (T(1.0) - tanh(beta * (x - x0)));
-}
-
-// W(x; a, b, β) = S(x; a, β) − S(x; b, β): about 1 for a < x < b, about 0 outside.
-template <typename T>
-T window(const T& x, const T& a, const T& b, const T& beta) {
-  return switch_on(x, a, beta) - switch_on(x, b, beta);
-}
-
 // The logistic function 1 / (1 + exp(−u)), in the form that neither overflows nor
 // loses relative accuracy in either tail.
 template <typename T>
@@ -33,6 +13,54 @@ T logistic(const T& u) {
   if (u >= T(0.0)) return T(1.0) / (T(1.0) + exp(-u));
   const T exp_u = exp(u);
   return exp_u / (T(1.0) + exp_u);
+}
+
+// S and S̄ at one point, each with full relative accuracy, from a single exponential.
+// (½ (1 + tanh u) would cancel catastrophically for u ≪ 0 and leave tails, and torques
+// that are sums of tails, with few correct digits.)
+template <typename T>
+struct SwitchValues {
+  T on;   // S(x; x0, β) = ½ (1 + tanh(β (x − x0))): about 0 below x0, about 1 above
+  T off;  // S̄(x; x0, β) = 1 − S
+};
+
+template <typename T>
+SwitchValues<T> switch_values(const T& x, const T& x0, const T& beta) {
+  using std::abs;
+  using std::exp;
+  // S = logistic(u) with u = 2β (x − x0), identical to ½ (1 + tanh(β (x − x0))).
+  const T u = T(2.0) * beta * (x - x0);
+  const T tail = exp(-abs(u));
+  const T large = T(1.0) / (T(1.0) + tail);
+  const T small = tail * large;
+  if (u >= T(0.0)) return {large, small};
+  return {small, large};
+}
+
+template <typename T>
+T switch_on(const T& x, const T& x0, const T& beta) {
+  return switch_values(x, x0, beta).on;
+}
+
+template <typename T>
+T switch_off(const T& x, const T& x0, const T& beta) {
+  return switch_values(x, x0, beta).off;
+}
+
+// W(x; a, b, β) = S(x; a) − S(x; b) from the switches at a and b. Above the middle it is
+// the identical S̄(x; b) − S̄(x; a): a difference of two small tails, not of two numbers
+// close to 1.
+template <typename T>
+T window(const T& x, const T& a, const T& b, const SwitchValues<T>& at_a,
+         const SwitchValues<T>& at_b) {
+  if (x + x > a + b) return at_b.off - at_a.off;
+  return at_a.on - at_b.on;
+}
+
+// W(x; a, b, β): about 1 for a < x < b, about 0 outside.
+template <typename T>
+T window(const T& x, const T& a, const T& b, const T& beta) {
+  return window(x, a, b, switch_values(x, a, beta), switch_values(x, b, beta));
 }
 
 // softplus_e(z) = e ln(1 + exp(z/e)), in the form max(z, 0) + e ln(1 + exp(−|z|/e))

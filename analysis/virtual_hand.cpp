@@ -35,7 +35,8 @@ VirtualHand::VirtualHand(const VirtualHandOptions& options, double handle_radius
   if (std::string message = options.validate(); !message.empty()) {
     throw std::invalid_argument(message);
   }
-  if (!(handle_radius_m > 0)) throw std::invalid_argument("virtual hand: handle radius must be > 0");
+  if (!(handle_radius_m > 0))
+    throw std::invalid_argument("virtual hand: handle radius must be > 0");
   const double d = options.duration_s;
   opening_start_s_ = options.rest_fraction * d;
   opening_end_s_ = opening_start_s_ + options.opening_fraction * d;
@@ -46,8 +47,8 @@ VirtualHand::VirtualHand(const VirtualHandOptions& options, double handle_radius
 namespace {
 
 // Minimum-jerk move from `from` to `to` over [start, end]: position and velocity.
-void minimum_jerk(double time, double start, double end, double from, double to,
-                  double& position, double& velocity) {
+void minimum_jerk(double time, double start, double end, double from, double to, double& position,
+                  double& velocity) {
   const double span = end - start;
   const double s = std::clamp((time - start) / span, 0.0, 1.0);
   const double s3 = s * s * s;
@@ -81,8 +82,8 @@ double VirtualHand::force_N(double time_s, double theta_rad, double omega_rad_s)
   // Impedance along the handle's arc: arc length = r_h θ.
   const double arc_error_m = handle_radius_m_ * (ref.theta_rad - theta_rad);
   const double arc_rate_error_m_s = handle_radius_m_ * (ref.omega_rad_s - omega_rad_s);
-  const double force = options_.stiffness_N_per_m * arc_error_m +
-                       options_.damping_N_s_per_m * arc_rate_error_m_s;
+  const double force =
+      options_.stiffness_N_per_m * arc_error_m + options_.damping_N_s_per_m * arc_rate_error_m_s;
   return ref.grip * std::clamp(force, -options_.max_force_N, options_.max_force_N);
 }
 

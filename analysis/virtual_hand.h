@@ -10,17 +10,17 @@
 namespace doorbench {
 
 struct VirtualHandOptions {
-  double target_angle_rad = 1.3963;     // 80°: short of the fully open stop
-  double duration_s = 10.0;             // the whole run, split by the fractions below
-  double rest_fraction = 0.1;           // before the opening, and again at the end
+  double target_angle_rad = 1.3963;  // 80°: short of the fully open stop
+  double duration_s = 10.0;          // the whole run, split by the fractions below
+  double rest_fraction = 0.1;        // before the opening, and again at the end
   double opening_fraction = 0.35;
   double pause_fraction = 0.1;          // the closing takes what is left
   double closing_overshoot_rad = 0.05;  // the closing aims this far past closed
   double hold_s = 0.3;                  // the hand keeps pushing, then lets go over release_s
   double release_s = 0.2;
-  double stiffness_N_per_m = 2000.0;    // along the handle's arc: a firm human grip
+  double stiffness_N_per_m = 2000.0;  // along the handle's arc: a firm human grip
   double damping_N_s_per_m = 60.0;
-  double max_force_N = 250.0;           // a person's push is limited
+  double max_force_N = 250.0;  // a person's push is limited
 
   // Empty when usable, else a one-line message naming the option.
   std::string validate() const;

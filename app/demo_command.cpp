@@ -30,12 +30,13 @@ void run_demo(const DemoOptions& options) {
     const DoorModel model = reference_model(kind);
     const Trajectory run = simulate_hand(model, VirtualHandOptions{}, 1000.0);
     const std::filesystem::path run_path = dir / (std::string(to_string(kind)) + "-open-close.csv");
-    write_recording_csv_file(run_path, to_recording(run, "doorbench demo, reference door, " +
-                                                             std::string(to_string(kind)) +
-                                                             " model, virtual hand"));
+    write_recording_csv_file(
+        run_path, to_recording(run, "doorbench demo, reference door, " +
+                                        std::string(to_string(kind)) + " model, virtual hand"));
     const std::filesystem::path params_path = dir / (std::string(to_string(kind)) + "-params.json");
     std::ofstream(params_path) << to_parameter_json(model);
-    std::cout << "\n" << to_string(kind) << " model (" << run_path.string() << "):\n"
+    std::cout << "\n"
+              << to_string(kind) << " model (" << run_path.string() << "):\n"
               << format_summary(summarize_run(model, run));
   }
   std::cout << "\nruns and parameter files are in " << dir.string() << "/\n";

@@ -38,8 +38,8 @@ void run_torque(const TorqueOptions& options) {
   const CsvTable grid = read_csv_file(options.grid_path);
   const auto theta_column = grid.find_column("theta_rad");
   const auto omega_column = grid.find_column("omega_rad_s");
-  for (const auto& [column, name] : {std::pair{theta_column, "theta_rad"},
-                                     std::pair{omega_column, "omega_rad_s"}}) {
+  for (const auto& [column, name] :
+       {std::pair{theta_column, "theta_rad"}, std::pair{omega_column, "omega_rad_s"}}) {
     if (!column) {
       throw CsvError(options.grid_path, grid.header_line,
                      std::string("header lacks required column ") + name);
@@ -84,8 +84,7 @@ void add_model_command(CLI::App& app, Action& action) {
       "GRID.csv has columns theta_rad,omega_rad_s; OUT.csv repeats them and adds tau_Nm and "
       "one tau_<term>_Nm column per term (N*m, positive = opening).");
   add_model_options(*torque, options->model);
-  torque->add_option("--in", options->grid_path, "Grid of (theta, omega) points (CSV)")
-      ->required();
+  torque->add_option("--in", options->grid_path, "Grid of (theta, omega) points (CSV)")->required();
   torque->add_option("--out", options->out_path, "Where to write the torques (CSV)")->required();
   torque->callback([options, &action] { action = [options] { run_torque(*options); }; });
 }

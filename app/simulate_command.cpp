@@ -42,8 +42,9 @@ std::string describe(const SimulateOptions& options) {
   if (!options.model.params_path.empty()) text += " --params " + options.model.params_path;
   if (!options.model.effects_path.empty()) text += " --effects " + options.model.effects_path;
   if (!options.force_path.empty()) return text + " --force " + options.force_path;
-  return text + " --hand " + options.hand + " --target-deg " + format_csv_number(options.target_deg) +
-         " --duration-s " + format_csv_number(options.duration_s);
+  return text + " --hand " + options.hand + " --target-deg " +
+         format_csv_number(options.target_deg) + " --duration-s " +
+         format_csv_number(options.duration_s);
 }
 
 void run_simulate(const SimulateOptions& options) {
@@ -55,8 +56,7 @@ void run_simulate(const SimulateOptions& options) {
   if (!options.force_path.empty()) {
     const Recording recording = read_recording_csv(options.force_path);
     const double r_h = model.geometry().handle_radius_m;
-    if (recording.handle_radius_m &&
-        std::abs(*recording.handle_radius_m - r_h) > 1e-9 * r_h) {
+    if (recording.handle_radius_m && std::abs(*recording.handle_radius_m - r_h) > 1e-9 * r_h) {
       throw std::runtime_error(options.force_path + ": handle_radius_m " +
                                format_csv_number(*recording.handle_radius_m) +
                                " differs from the door's " + format_csv_number(r_h) +
@@ -88,11 +88,12 @@ void add_simulate_command(CLI::App& app, Action& action) {
   auto* force = simulate->add_option(
       "--force", options->force_path,
       "Recording (CSV exchange format) whose force_N drives the door from its first state");
-  auto* hand = simulate->add_option(
-                   "--hand", options->hand,
-                   "Virtual hand: a PD controller on the handle tracking rest, a minimum-jerk "
-                   "opening, a pause and a closing")
-                   ->check(CLI::IsMember({"open-close"}));
+  auto* hand =
+      simulate
+          ->add_option("--hand", options->hand,
+                       "Virtual hand: a PD controller on the handle tracking rest, a minimum-jerk "
+                       "opening, a pause and a closing")
+          ->check(CLI::IsMember({"open-close"}));
   force->excludes(hand);
   simulate->add_option("--target-deg", options->target_deg, "Virtual hand: opening target (deg)")
       ->check(CLI::Range(0.1, 180.0))

@@ -21,8 +21,8 @@ void open_close_10s(benchmark::State& state, ModelKind kind) {
     steps = run.stats.accepted_steps;
     benchmark::DoNotOptimize(run.theta_rad.data());
   }
-  state.counters["realtime_factor"] =
-      benchmark::Counter(10.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+  state.counters["realtime_factor"] = benchmark::Counter(
+      10.0 * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
   state.counters["steps"] = static_cast<double>(steps);
 }
 

@@ -10,6 +10,7 @@ packages=(
   nlohmann-json3-dev     # parameter files
   libcli11-dev           # the doorbench command line
   libceres-dev libeigen3-dev  # Jets for derivatives now, fitting later
+  python3 python3-mpmath      # the independent high-precision check of the models
 )
 
 missing=()
