@@ -20,10 +20,10 @@ std::string VirtualHandOptions::validate() const {
   if (!finite(closing_overshoot_rad) || closing_overshoot_rad < 0) {
     return "virtual hand closing_overshoot_rad must be >= 0";
   }
-  if (!(hold_s >= 0) || !(release_s > 0) || hold_s + release_s > rest_fraction * duration_s) {
-    return "virtual hand hold_s + release_s must fit in the final rest (rest_fraction * "
-           "duration_s)";
+  if (!(hold_s >= 0) || !(release_s > 0) || !std::isfinite(hold_s + release_s)) {
+    return "virtual hand hold_s must be >= 0 and release_s > 0";
   }
+  if (rest_fraction <= 0) return "virtual hand rest_fraction must be > 0 (the hand lets go then)";
   if (!(stiffness_N_per_m > 0) || !(damping_N_s_per_m >= 0) || !(max_force_N > 0)) {
     return "virtual hand stiffness_N_per_m and max_force_N must be > 0, damping_N_s_per_m >= 0";
   }
@@ -42,6 +42,10 @@ VirtualHand::VirtualHand(const VirtualHandOptions& options, double handle_radius
   opening_end_s_ = opening_start_s_ + options.opening_fraction * d;
   closing_start_s_ = opening_end_s_ + options.pause_fraction * d;
   closing_end_s_ = (1.0 - options.rest_fraction) * d;
+  const double final_rest_s = options.rest_fraction * d;
+  const double fit = std::min(1.0, final_rest_s / (options.hold_s + options.release_s));
+  hold_s_ = options.hold_s * fit;
+  release_s_ = options.release_s * fit;
 }
 
 namespace {
@@ -68,9 +72,9 @@ VirtualHand::Reference VirtualHand::reference(double time_s) const {
   }
   minimum_jerk(time_s, closing_start_s_, closing_end_s_, options_.target_angle_rad, closed,
                ref.theta_rad, ref.omega_rad_s);
-  const double release_start = closing_end_s_ + options_.hold_s;
+  const double release_start = closing_end_s_ + hold_s_;
   if (time_s > release_start) {
-    const double s = std::clamp((time_s - release_start) / options_.release_s, 0.0, 1.0);
+    const double s = std::clamp((time_s - release_start) / release_s_, 0.0, 1.0);
     ref.grip = 1.0 - s * s * (3.0 - 2.0 * s);  // smooth let-go
   }
   return ref;
@@ -89,7 +93,7 @@ double VirtualHand::force_N(double time_s, double theta_rad, double omega_rad_s)
 
 int VirtualHand::stroke_at(double time_s) const {
   if (time_s >= opening_start_s_ && time_s < opening_end_s_) return 1;
-  if (time_s >= closing_start_s_ && time_s < closing_end_s_ + options_.hold_s) return 2;
+  if (time_s >= closing_start_s_ && time_s < closing_end_s_ + hold_s_) return 2;
   return 0;
 }
 

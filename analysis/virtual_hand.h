@@ -16,7 +16,9 @@ struct VirtualHandOptions {
   double opening_fraction = 0.35;
   double pause_fraction = 0.1;          // the closing takes what is left
   double closing_overshoot_rad = 0.05;  // the closing aims this far past closed
-  double hold_s = 0.3;                  // the hand keeps pushing, then lets go over release_s
+  // After the closing the hand keeps pushing for hold_s, then lets go over release_s; both
+  // shrink in proportion when they do not fit in the final rest (short runs).
+  double hold_s = 0.3;
   double release_s = 0.2;
   double stiffness_N_per_m = 2000.0;  // along the handle's arc: a firm human grip
   double damping_N_s_per_m = 60.0;
@@ -45,6 +47,7 @@ class VirtualHand final : public UserForce {
  private:
   VirtualHandOptions options_;
   double handle_radius_m_;
+  double hold_s_, release_s_;  // as used: shrunk to fit the final rest
   double opening_start_s_, opening_end_s_, closing_start_s_, closing_end_s_;
 };
 

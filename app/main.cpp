@@ -3,8 +3,37 @@
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <string>
 
 #include "app/commands.h"
+
+namespace {
+
+// CLI11 reports a mistyped verb only as "a subcommand is required"; name the word instead.
+std::string unknown_verb_message(const CLI::App& app, int argc, char** argv) {
+  const CLI::App* level = &app;
+  std::string path;
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') return "";
+    const auto subcommands = level->get_subcommands([](const CLI::App*) { return true; });
+    const CLI::App* next = nullptr;
+    std::string expected;
+    for (const CLI::App* sub : subcommands) {
+      if (sub->get_name() == word) next = sub;
+      expected += (expected.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (next == nullptr) {
+      if (subcommands.empty()) return "";
+      return "unknown verb '" + path + word + "' (expected " + expected + ")";
+    }
+    path += word + " ";
+    level = next;
+  }
+  return "";
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
@@ -26,7 +55,9 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& version) {
     return app.exit(version);
   } catch (const CLI::ParseError& error) {
-    std::cerr << "doorbench: " << error.what() << " (see doorbench --help)\n";
+    std::string message = unknown_verb_message(app, argc, argv);
+    if (message.empty()) message = error.what();
+    std::cerr << "doorbench: " << message << " (see doorbench --help)\n";
     return 2;
   }
 

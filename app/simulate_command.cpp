@@ -71,7 +71,7 @@ void run_simulate(const SimulateOptions& options) {
     run = simulate_hand(model, hand, options.rate_hz);
   }
   write_recording_csv_file(options.out_path, to_recording(run, describe(options)));
-  std::cerr << "doorbench: wrote " << run.size() << " samples to " << options.out_path << " ("
+  std::cerr << "wrote " << run.size() << " samples to " << options.out_path << " ("
             << run.stats.accepted_steps << " steps, smallest " << run.stats.smallest_step_s
             << " s)\n";
 }

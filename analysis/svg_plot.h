@@ -1,0 +1,34 @@
+#pragma once
+// Line plots as standalone SVG files (any browser shows them): several series with a
+// legend, axes with round-number ticks, labels with units. Long series are reduced to
+// each pixel column's first, smallest, largest and last point, which draws the same.
+#include <span>
+#include <string>
+#include <vector>
+
+namespace doorbench {
+
+struct PlotSeries {
+  std::string label;
+  std::span<const double> x;
+  std::span<const double> y;
+  std::string color;  // any SVG colour; empty picks from a palette
+};
+
+struct PlotOptions {
+  std::string title;
+  std::string x_label;  // with its unit, e.g. "angle (deg)"
+  std::string y_label;
+  int width_px = 760;
+  int height_px = 440;
+};
+
+// Throws std::invalid_argument when a series' x and y differ in length or no series has
+// a finite point.
+std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeries> series);
+
+// Writes the plot; throws std::runtime_error naming the path when it cannot.
+void write_svg_plot(const std::string& path, const PlotOptions& options,
+                    std::span<const PlotSeries> series);
+
+}  // namespace doorbench
