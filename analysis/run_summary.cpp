@@ -13,7 +13,11 @@ RunSummary summarize_run(const DoorModel& model, const Trajectory& run) {
   std::vector<int> friction_terms;
   for (int term = 0; term < model.term_count(); ++term) {
     if (model.term_name(term) == "stops") stops_term = term;
-    if (model.term_name(term).find("friction") != std::string::npos) friction_terms.push_back(term);
+    const std::string& name = model.term_name(term);
+    if (name.find("friction") != std::string::npos || name == "viscous_damping" ||
+        name == "stribeck") {
+      friction_terms.push_back(term);
+    }
   }
   std::vector<double> friction_samples_N;
   for (std::size_t i = 0; i < run.size(); ++i) {

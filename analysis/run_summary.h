@@ -18,7 +18,8 @@ struct RunSummary {
   double largest_speed_rad_s = 0.0;
   double largest_angle_rad = 0.0;
   // Median dry + viscous friction felt at the handle (N) in free movement:
-  // latch_zone_rad < θ < θ_max − 0.1 and |ω| > 0.05 rad/s. Terms named "*friction*".
+  // latch_zone_rad < θ < θ_max − 0.1 and |ω| > 0.05 rad/s: the terms named "*friction*",
+  // "stribeck" and "viscous_damping".
   double free_movement_friction_N = 0.0;
   double final_angle_rad = 0.0;
 };

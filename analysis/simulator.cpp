@@ -123,9 +123,11 @@ double DoorStepper::try_step(const DoorState& s, const Derivative& k1, double h,
 void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& hand) {
   const bool fixed = options_.method == SimulationOptions::Method::kFixedStep;
   while (state.time_s < end_time_s) {
-    if (!have_derivative_ || k1_time_s_ != state.time_s) {
+    const bool same_start =
+        have_derivative_ && k1_hand_ == &hand && k1_state_.time_s == state.time_s &&
+        k1_state_.theta_rad == state.theta_rad && k1_state_.omega_rad_s == state.omega_rad_s;
+    if (!same_start) {
       k1_ = derivative(state.time_s, state.theta_rad, state.omega_rad_s, hand);
-      k1_time_s_ = state.time_s;
       have_derivative_ = true;
     }
     const double remaining = end_time_s - state.time_s;
@@ -150,7 +152,8 @@ void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& 
                                candidate.user_work_J}
                    : candidate;
       k1_ = k7;
-      k1_time_s_ = state.time_s;
+      k1_state_ = state;
+      k1_hand_ = &hand;
       ++stats_.accepted_steps;
       if (stats_.accepted_steps == 1 || step < stats_.smallest_step_s)
         stats_.smallest_step_s = step;

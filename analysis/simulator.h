@@ -96,9 +96,12 @@ class DoorStepper {
   SimulationOptions options_;
   double inertia_kg_m2_;
   double next_step_s_;
+  // The derivative at the end of the last step, reused (first same as last) only when the
+  // next advance starts from that very state under the same hand.
   bool have_derivative_ = false;
   Derivative k1_{};
-  double k1_time_s_ = 0.0;
+  DoorState k1_state_{};
+  const UserForce* k1_hand_ = nullptr;
   StepperStats stats_;
 };
 

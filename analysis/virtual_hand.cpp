@@ -6,6 +6,10 @@
 
 namespace doorbench {
 
+namespace {
+constexpr double kMinimumClosingFraction = 0.05;
+}  // namespace
+
 std::string VirtualHandOptions::validate() const {
   auto finite = [](double value) { return std::isfinite(value); };
   if (!finite(target_angle_rad) || target_angle_rad <= 0) {
@@ -13,9 +17,9 @@ std::string VirtualHandOptions::validate() const {
   }
   if (!finite(duration_s) || duration_s <= 0) return "virtual hand duration_s must be > 0";
   if (!(rest_fraction >= 0) || !(opening_fraction > 0) || !(pause_fraction >= 0) ||
-      2 * rest_fraction + opening_fraction + pause_fraction >= 1.0) {
+      2 * rest_fraction + opening_fraction + pause_fraction > 1.0 - kMinimumClosingFraction) {
     return "virtual hand fractions must leave time for the closing: 2 * rest + opening + pause "
-           "< 1";
+           "<= 0.95";
   }
   if (!finite(closing_overshoot_rad) || closing_overshoot_rad < 0) {
     return "virtual hand closing_overshoot_rad must be >= 0";
@@ -54,6 +58,11 @@ namespace {
 void minimum_jerk(double time, double start, double end, double from, double to, double& position,
                   double& velocity) {
   const double span = end - start;
+  if (!(span > 0)) {  // no move: already there
+    position = time < start ? from : to;
+    velocity = 0.0;
+    return;
+  }
   const double s = std::clamp((time - start) / span, 0.0, 1.0);
   const double s3 = s * s * s;
   position = from + (to - from) * s3 * (10.0 - 15.0 * s + 6.0 * s * s);

@@ -13,6 +13,7 @@
 
 #include "analysis/door_model.h"
 #include "analysis/parameter_file.h"
+#include "tests/allocation_counter.h"
 
 namespace {
 
@@ -37,10 +38,6 @@ void* or_throw(void* pointer) {
   return pointer;
 }
 
-long long allocations() {
-  return g_allocations.load(std::memory_order_relaxed);
-}
-
 // Kept out of line: inlined into a delete-expression, a direct free() makes g++ -O2 warn
 // (-Wmismatched-new-delete) although the pair is right.
 [[gnu::noinline]] void release(void* pointer) noexcept {
@@ -48,6 +45,14 @@ long long allocations() {
 }
 
 }  // namespace
+
+namespace doorbench::testing {
+long long allocations() {
+  return g_allocations.load(std::memory_order_relaxed);
+}
+}  // namespace doorbench::testing
+
+using doorbench::testing::allocations;
 
 // The replaceable allocation functions ([new.delete]): plain, array, nothrow, aligned.
 void* operator new(std::size_t size) {
