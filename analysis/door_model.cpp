@@ -2,18 +2,11 @@
 
 #include <ceres/jet.h>
 
-#include <charconv>
 #include <stdexcept>
 
 #include "analysis/constraint_check.h"
 
 namespace doorbench {
-
-std::string format_number(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
 
 std::string validate_geometry(const DoorGeometry& geometry) {
   ConstraintCheck check("door");

@@ -75,6 +75,7 @@ struct StepperStats {
 // Thread safety: one stepper per thread; the model may be shared.
 class DoorStepper {
  public:
+  // Keeps a reference to `model` (the constant part), which must outlive the stepper.
   DoorStepper(const DoorModel& model, const SimulationOptions& options);
 
   // Advances `state` to `end_time_s` under `hand`. Throws std::runtime_error when the
