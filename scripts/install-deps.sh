@@ -11,6 +11,9 @@ packages=(
   libcli11-dev           # the doorbench command line
   libceres-dev libeigen3-dev  # Jets for derivatives now, fitting later
   python3 python3-mpmath      # the independent high-precision check of the models
+  libhdf5-dev hdf5-tools      # session files; h5dump reads them in tests
+  python3-h5py                # tests read sessions without doorbench
+  libtomlplusplus-dev         # rig files
 )
 
 missing=()

@@ -1,0 +1,90 @@
+#pragma once
+// Rig definition files (TOML, in rigs/): the bench's name, its sample clock and DAQ, its
+// channels (sensor kind, backend and device address, range, calibration, sensor-model
+// parameters), its triggers and, for the simulated backend, the door and the hand.
+// See docs/rig-format.md. Every error is a RigError whose text is
+// `FILE:LINE: KEY: what is wrong` (LINE and KEY as close to the cause as TOML allows).
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+#include <utility>
+#include <vector>
+
+namespace doorbench {
+
+class RigError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct RigChannel {
+  std::string name;         // unique within the rig, [A-Za-z0-9_]+
+  std::string sensor;       // load_cell | inclinometer | gyroscope
+  std::string serial;       // the sensor's serial number
+  std::string backend;      // simulated | comedi | modbus
+  std::string address;      // device address in the backend's own notation
+  double range_min_V = -10.0;  // the DAQ input range used for this channel
+  double range_max_V = 10.0;
+  std::string calibration;  // "nominal" (datasheet figures) or a calibration record id
+  std::string unit;         // physical unit after calibration: N (load_cell), rad
+                            // (inclinometer), rad/s (gyroscope)
+  // Sensor-model parameters by the names of sensors::*Parameters::fields(), file order.
+  std::vector<std::pair<std::string, double>> parameters;
+  int line = 0;             // of this channel's [[channels]] header
+};
+
+struct RigTrigger {
+  std::string name;
+  std::string kind;    // software | external
+  std::string source;  // for external: the digital line, e.g. "PFI0"
+  int line = 0;
+};
+
+// The simulated backend's door and virtual hand.
+struct RigSimulation {
+  std::string door = "reference";  // "reference" (built in) or a parameter file
+  std::string model = "physical";  // sensory | physical
+  std::string effects;             // optional effects file
+  std::uint64_t seed = 1;
+  bool realtime = false;           // pace samples in real time, or as fast as possible
+  int hand_cycles = 3;             // openings and closings by the virtual hand
+  double hand_target_deg = 80.0;
+  double hand_cycle_duration_s = 6.0;
+  int line = 0;
+};
+
+struct RigDefinition {
+  std::string source;  // the path (or name) it was read from
+  std::string text;    // the whole file, stored in every session
+  std::filesystem::path base_dir;  // relative paths inside resolve against this
+
+  std::string name;
+  std::string description;
+  double sample_rate_hz = 1000.0;     // [clock]
+  double convert_interval_s = 10e-6;  // [clock], the multiplexed converter's skew step
+  std::string daq_backend = "simulated";  // [daq]
+  std::string daq_device;
+  double daq_range_min_V = -10.0;
+  double daq_range_max_V = 10.0;
+  int daq_resolution_bits = 16;
+  std::vector<RigChannel> channels;
+  std::vector<RigTrigger> triggers;
+  std::optional<RigSimulation> simulation;  // required when a channel is simulated
+
+  const RigChannel* find_channel(std::string_view name) const;
+  // `path` as written in the file, resolved against base_dir unless absolute.
+  std::filesystem::path resolve(const std::string& path) const;
+};
+
+RigDefinition parse_rig(std::string_view text, std::string_view source,
+                        const std::filesystem::path& base_dir);
+RigDefinition read_rig_file(const std::filesystem::path& path);
+
+// The simulated reference bench (rigs/simulated-dishwasher.toml), built in like the
+// reference door, so that `doorbench record` and the demo run without the rigs folder.
+std::string_view simulated_dishwasher_rig_text();
+
+}  // namespace doorbench

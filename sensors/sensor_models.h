@@ -1,0 +1,153 @@
+#pragma once
+// Sensor models: each maps the physical truth to the raw signal a real sensor and DAQ
+// would give, with its documented imperfections. Parameters (constant) are apart from
+// state (filter memory, hysteresis, bias drift, the seeded noise generator), as in the
+// door models. Calibration (issue 5) maps back; `nominal_*` gives the datasheet's ideal
+// inverse, used by the simulated bench's nominal calibration records.
+//
+// Units: forces in N, angles in rad at the boundary (degrees only in parameter names that
+// say so), rates in rad/s, signals in V, DAQ samples in counts.
+//
+// Thread safety: a sensor object is used by one thread; parameters may be shared.
+#include <cstdint>
+#include <random>
+#include <span>
+#include <string>
+#include <string_view>
+
+namespace doorbench::sensors {
+
+// A named numeric parameter, for rig files: each *Parameters struct lists its fields so
+// that a rig file can set them by name (unknown names are rejected by the caller).
+struct ParameterField {
+  std::string_view name;
+  std::string_view unit;
+  std::string_view meaning;
+};
+
+// ---------------------------------------------------------------------------------------
+struct LoadCellParameters {
+  double full_scale_N = 445.0;            // rated capacity
+  double sensitivity_mV_per_V = 2.0;      // bridge output at full scale per volt of excitation
+  double excitation_V = 10.0;
+  double amplifier_gain = 500.0;          // bridge mV to DAQ volts: 2 mV/V · 10 V · 500 = 10 V at FS
+  double noise_rms_N = 0.2;               // white, referred to the force
+  double nonlinearity_fraction_fs = 5e-4; // largest deviation from the straight line / FS,
+                                          // a bow 4·nl·F·(1 − |F|/FS), largest at ±FS/2
+  double hysteresis_fraction_fs = 3e-4;   // loading vs unloading difference / FS (a play
+                                          // operator of that width)
+  double overload_fraction_fs = 1.5;      // the output clips at ± this × FS
+  double zero_offset_N = 0.0;             // unloaded reading
+  double compression_only = 1.0;          // 1: reads max(F, 0) (the bench's cell); 0: both ways
+
+  static std::span<const ParameterField> fields();
+  bool set(std::string_view name, double value);  // false for an unknown name
+  std::string validate() const;  // empty when usable, else one line naming the field
+  double volts_per_newton() const;  // nominal: sensitivity · excitation · gain / FS
+};
+
+class LoadCell {
+ public:
+  LoadCell(const LoadCellParameters& parameters, std::uint64_t seed);  // throws on invalid
+  // One sample: the force pressing on the cell (N) → the amplifier's output (V).
+  double sample_V(double force_N);
+  const LoadCellParameters& parameters() const { return parameters_; }
+
+ private:
+  LoadCellParameters parameters_;
+  std::mt19937_64 random_;
+  std::normal_distribution<double> unit_normal_{0.0, 1.0};
+  double play_output_N_ = 0.0;  // hysteresis state
+};
+
+// ---------------------------------------------------------------------------------------
+struct InclinometerParameters {
+  double range_deg = 10.0;        // the output saturates beyond ± this
+  double bandwidth_hz = 10.0;     // first-order low-pass (−3 dB)
+  double noise_rms_deg = 0.01;
+  double offset_deg = 0.0;        // reading when level
+  double output_V_per_deg = 0.4;  // ±10° → ±4 V
+
+  static std::span<const ParameterField> fields();
+  bool set(std::string_view name, double value);
+  std::string validate() const;
+};
+
+class Inclinometer {
+ public:
+  // The filter is discretized exactly for `sample_rate_hz` (zero-order hold input).
+  Inclinometer(const InclinometerParameters& parameters, double sample_rate_hz,
+               std::uint64_t seed);
+  double sample_V(double angle_rad);
+  // Starts the filter settled at this angle (as after a long rest).
+  void settle(double angle_rad);
+  const InclinometerParameters& parameters() const { return parameters_; }
+
+ private:
+  InclinometerParameters parameters_;
+  double filter_pole_;  // exp(−2π f_c / f_s)
+  std::mt19937_64 random_;
+  std::normal_distribution<double> unit_normal_{0.0, 1.0};
+  double filtered_deg_ = 0.0;
+};
+
+// ---------------------------------------------------------------------------------------
+struct GyroscopeParameters {
+  double range_dps = 100.0;                      // the output saturates beyond ± this
+  double noise_rms_dps = 0.05;                   // white, per sample
+  double bias_dps = 0.2;                         // initial bias
+  double bias_random_walk_dps_per_sqrt_s = 0.005;
+  double scale_factor_error = 0.0;               // reads (1 + this) · rate
+  double output_V_per_dps = 0.025;               // ±100 °/s → ±2.5 V
+
+  static std::span<const ParameterField> fields();
+  bool set(std::string_view name, double value);
+  std::string validate() const;
+};
+
+class Gyroscope {
+ public:
+  Gyroscope(const GyroscopeParameters& parameters, double sample_rate_hz, std::uint64_t seed);
+  double sample_V(double rate_rad_s);
+  double current_bias_dps() const { return bias_dps_; }
+  const GyroscopeParameters& parameters() const { return parameters_; }
+
+ private:
+  GyroscopeParameters parameters_;
+  double sample_interval_s_;
+  std::mt19937_64 random_;
+  std::normal_distribution<double> unit_normal_{0.0, 1.0};
+  double bias_dps_;
+};
+
+// ---------------------------------------------------------------------------------------
+// A multiplexed analog-input converter: all channels share one sample clock; within a
+// scan, channel k is converted k · convert_interval_s after the scan starts.
+struct DaqParameters {
+  double range_min_V = -10.0;
+  double range_max_V = 10.0;
+  double resolution_bits = 16;   // counts 0 … 2^bits − 1
+  double sample_rate_hz = 1000.0;
+  double convert_interval_s = 10e-6;
+
+  static std::span<const ParameterField> fields();
+  bool set(std::string_view name, double value);
+  std::string validate() const;
+};
+
+class Daq {
+ public:
+  explicit Daq(const DaqParameters& parameters);  // throws on invalid
+  // Rounds to the nearest count, clipped to 0 … max_count().
+  std::int32_t to_counts(double volts) const;
+  double to_volts(std::int32_t counts) const;  // the count's centre
+  std::int32_t max_count() const;
+  double volts_per_count() const;
+  double channel_time_offset_s(int channel_index) const;  // skew within a scan
+  const DaqParameters& parameters() const { return parameters_; }
+
+ private:
+  DaqParameters parameters_;
+};
+
+}  // namespace doorbench::sensors
