@@ -2,13 +2,24 @@
 // Sensor models: each maps the physical truth to the raw signal a real sensor and DAQ
 // would give, with its documented imperfections. Parameters (constant) are apart from
 // state (filter memory, hysteresis, bias drift, the seeded noise generator), as in the
-// door models. Calibration (issue 5) maps back; `nominal_*` gives the datasheet's ideal
-// inverse, used by the simulated bench's nominal calibration records.
+// door models. Calibration (issue 5) maps back; the nominal scale factors
+// (LoadCellParameters::volts_per_newton(), InclinometerParameters::volts_per_rad(),
+// GyroscopeParameters::volts_per_rad_s()) give the datasheet's ideal inverse, used by the
+// simulated bench's nominal calibration records. See docs/sensor-models.md.
 //
 // Units: forces in N, angles in rad at the boundary (degrees only in parameter names that
 // say so), rates in rad/s, signals in V, DAQ samples in counts.
 //
 // Thread safety: a sensor object is used by one thread; parameters may be shared.
+//
+// Every *Parameters struct lists its fields (fields(): name = the C++ field name, unit,
+// meaning), sets one by name (set()) and checks itself (validate(): "" when usable, else
+// one line `SENSOR FIELD = VALUE must be RULE` with SENSOR one of load_cell, inclinometer,
+// gyroscope, daq, e.g. `load_cell full_scale_N = -1 must be > 0`). The constructors throw
+// std::invalid_argument with that message.
+//
+// Noise comes from a std::mt19937_64 seeded with the constructor's seed through
+// std::normal_distribution: the same seed gives the same samples (on one standard library).
 #include <cstdint>
 #include <random>
 #include <span>
@@ -30,10 +41,11 @@ struct LoadCellParameters {
   double full_scale_N = 445.0;            // rated capacity
   double sensitivity_mV_per_V = 2.0;      // bridge output at full scale per volt of excitation
   double excitation_V = 10.0;
-  double amplifier_gain = 500.0;          // bridge mV to DAQ volts: 2 mV/V · 10 V · 500 = 10 V at FS
-  double noise_rms_N = 0.2;               // white, referred to the force
+  double amplifier_gain = 500.0;          // V/V, bridge to DAQ: 2 mV/V · 10 V · 500 = 10 V at FS
+  double noise_rms_N = 0.2;               // white (per sample), referred to the force
   double nonlinearity_fraction_fs = 5e-4; // largest deviation from the straight line / FS,
                                           // a bow 4·nl·F·(1 − |F|/FS), largest at ±FS/2
+                                          // (nl·FS there; beyond FS the bow keeps growing)
   double hysteresis_fraction_fs = 3e-4;   // loading vs unloading difference / FS (a play
                                           // operator of that width)
   double overload_fraction_fs = 1.5;      // the output clips at ± this × FS
@@ -43,13 +55,18 @@ struct LoadCellParameters {
   static std::span<const ParameterField> fields();
   bool set(std::string_view name, double value);  // false for an unknown name
   std::string validate() const;  // empty when usable, else one line naming the field
-  double volts_per_newton() const;  // nominal: sensitivity · excitation · gain / FS
+  // Nominal: sensitivity (mV/V) · 1e-3 · excitation · gain / FS (V/N).
+  double volts_per_newton() const;
 };
 
 class LoadCell {
  public:
   LoadCell(const LoadCellParameters& parameters, std::uint64_t seed);  // throws on invalid
-  // One sample: the force pressing on the cell (N) → the amplifier's output (V).
+  // One sample: the force on the cell (N, compression positive) → the amplifier's output
+  // (V). Chain: compression-only clamp max(F, 0) (if compression_only is 1) → play-operator
+  // hysteresis of width w = hysteresis_fraction_fs · FS (the output moves only when the
+  // input leaves [out − w/2, out + w/2], starting from 0) → + non-linearity bow →
+  // + zero_offset_N → + white noise → clip at ± overload_fraction_fs · FS → · volts_per_newton().
   double sample_V(double force_N);
   const LoadCellParameters& parameters() const { return parameters_; }
 
@@ -71,15 +88,20 @@ struct InclinometerParameters {
   static std::span<const ParameterField> fields();
   bool set(std::string_view name, double value);
   std::string validate() const;
+  double volts_per_rad() const;  // nominal: output_V_per_deg · 180/π
 };
 
 class Inclinometer {
  public:
   // The filter is discretized exactly for `sample_rate_hz` (zero-order hold input).
+  // Throws std::invalid_argument on invalid parameters or a sample rate that is not > 0.
   Inclinometer(const InclinometerParameters& parameters, double sample_rate_hz,
                std::uint64_t seed);
+  // One sample: the true angle (rad) → the output (V). Chain: degrees → first-order
+  // low-pass y += (1 − pole)(x − y) (the output is the updated y) → + offset_deg →
+  // + white noise → saturate at ± range_deg → · output_V_per_deg.
   double sample_V(double angle_rad);
-  // Starts the filter settled at this angle (as after a long rest).
+  // Starts the filter settled at this angle (as after a long rest). The filter starts at 0.
   void settle(double angle_rad);
   const InclinometerParameters& parameters() const { return parameters_; }
 
@@ -103,11 +125,17 @@ struct GyroscopeParameters {
   static std::span<const ParameterField> fields();
   bool set(std::string_view name, double value);
   std::string validate() const;
+  double volts_per_rad_s() const;  // nominal: output_V_per_dps · 180/π
 };
 
 class Gyroscope {
  public:
+  // Throws std::invalid_argument on invalid parameters or a sample rate that is not > 0.
   Gyroscope(const GyroscopeParameters& parameters, double sample_rate_hz, std::uint64_t seed);
+  // One sample: the true rate (rad/s) → the output (V). Chain: °/s · (1 + scale_factor_error)
+  // + current bias + white noise; then the bias takes a random-walk step
+  // N(0, bias_random_walk · sqrt(1/sample_rate)); the reading saturates at ± range_dps and
+  // is scaled by output_V_per_dps.
   double sample_V(double rate_rad_s);
   double current_bias_dps() const { return bias_dps_; }
   const GyroscopeParameters& parameters() const { return parameters_; }
@@ -126,9 +154,10 @@ class Gyroscope {
 struct DaqParameters {
   double range_min_V = -10.0;
   double range_max_V = 10.0;
-  double resolution_bits = 16;   // counts 0 … 2^bits − 1
+  double resolution_bits = 16;   // an integer in [8, 24]; counts 0 … 2^bits − 1
   double sample_rate_hz = 1000.0;
-  double convert_interval_s = 10e-6;
+  double convert_interval_s = 10e-6;  // >= 0; keeping (channels − 1) · this below
+                                     // 1 / sample_rate_hz is the caller's concern
 
   static std::span<const ParameterField> fields();
   bool set(std::string_view name, double value);
@@ -138,12 +167,15 @@ struct DaqParameters {
 class Daq {
  public:
   explicit Daq(const DaqParameters& parameters);  // throws on invalid
-  // Rounds to the nearest count, clipped to 0 … max_count().
+  // Rounds (volts − min)/(max − min) · max_count() to the nearest count, clipped to
+  // 0 … max_count() (NaN gives 0).
   std::int32_t to_counts(double volts) const;
-  double to_volts(std::int32_t counts) const;  // the count's centre
-  std::int32_t max_count() const;
-  double volts_per_count() const;
-  double channel_time_offset_s(int channel_index) const;  // skew within a scan
+  // The count's centre, min + counts · volts_per_count() (linear beyond the range).
+  double to_volts(std::int32_t counts) const;
+  std::int32_t max_count() const;  // 2^bits − 1
+  double volts_per_count() const;  // (max − min) / max_count()
+  // Skew within a scan: channel_index · convert_interval_s.
+  double channel_time_offset_s(int channel_index) const;
   const DaqParameters& parameters() const { return parameters_; }
 
  private:
