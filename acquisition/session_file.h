@@ -5,7 +5,13 @@
 // full), events, and groups for derived results and (simulated sessions) the truth.
 // The layout is in docs/session-format.md; plain HDF5 tools read it without doorbench.
 //
-// Thread safety: a writer or reader is used by one thread at a time.
+// Errors: SessionError for the file (cannot create, read or write it, not a session, no
+// such channel or group); std::invalid_argument for arguments the writer refuses;
+// std::logic_error for use of a closed writer. Every message starts with "PATH: ".
+//
+// Thread safety: a writer or reader is used by one thread at a time. Different writers
+// and readers may be used from different threads (Debian's HDF5 is built thread-safe and
+// serializes them). Reading a session while its writer has it open is not supported.
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -66,40 +72,58 @@ struct SessionEvent {
 };
 
 struct SessionWriterOptions {
-  std::size_t chunk_samples = 16384;  // HDF5 chunk and write-buffer size per channel
-  int deflate_level = 0;              // 0: no compression (fastest); 1-9: gzip
+  std::size_t chunk_samples = 16384;  // HDF5 chunk and write-buffer size per channel, 1…2^24
+  int deflate_level = 0;              // 0: no compression (fastest); 1-9: shuffle + gzip
   std::string validate() const;       // empty when usable
 };
 
 class SessionWriter {
  public:
-  // Creates `path` (an existing file is an error: sessions are never overwritten).
+  // Creates `path` (an existing file is an error: sessions are never overwritten) and
+  // writes the metadata. If creating fails half-way, the incomplete file is removed.
   SessionWriter(const std::filesystem::path& path, const SessionMetadata& metadata,
                 const SessionWriterOptions& options = {});
-  ~SessionWriter();  // closes if close() was not called; never throws
+  // Closes if close() was not called (keeping what was recorded); never throws: a failure
+  // is printed as one line on stderr.
+  ~SessionWriter();
   SessionWriter(const SessionWriter&) = delete;
   SessionWriter& operator=(const SessionWriter&) = delete;
 
-  // Channels are declared before their first samples; returns the channel's index.
+  // Declares a channel; returns its index (0, 1, … in the order added). A channel may be
+  // added at any time, also after other channels have samples (each has its own clock).
+  // Explicit-time channels (sample_rate_hz 0) hold values, not counts.
   int add_channel(const ChannelInfo& channel);
+  // Stores a record in full. Adding the same record again is allowed; a different record
+  // with the same id is not. A channel's record must be added before that channel's first
+  // sample (or, for a channel without samples, before close()); when both give a unit,
+  // the channel's unit must be the record's.
   void add_calibration(const calibration::CalibrationRecord& record);
 
-  // Buffered; memory stays bounded (one chunk per channel).
+  // Buffered; memory stays bounded (one chunk per channel). The call must match the
+  // channel: append_counts for counts, append_values for values on a uniform clock,
+  // append_timed_values for explicit times.
   void append_counts(int channel, std::span<const std::int32_t> counts);
   void append_values(int channel, std::span<const double> values);
-  // For channels with sample_rate_hz == 0: times (strictly increasing) with the values.
+  // For channels with sample_rate_hz == 0: finite times, strictly increasing (also across
+  // calls), as many as values.
   void append_timed_values(int channel, std::span<const double> time_s,
                            std::span<const double> values);
+  // Stored in the order added (not sorted). A non-empty `channel` must be a channel of
+  // the session; kind must not be empty.
   void add_event(const SessionEvent& event);
 
-  // A derived or side group (e.g. "results/fit-1", "truth"): 1-D float64 datasets and
-  // text attributes. `uses` names the data it was computed from.
+  // A derived or side group (e.g. "results/fit-1", "truth"; parents are created): 1-D
+  // float64 datasets and text attributes, each written once. By convention an attribute
+  // `uses` names the data the group was computed from. The groups the session writes
+  // itself (metadata, channels, calibrations, events) are refused.
   void write_group_dataset(const std::string& group, const std::string& name,
                            std::span<const double> values);
   void write_group_attribute(const std::string& group, const std::string& name,
                              const std::string& text);
 
-  void close();  // flushes everything; throws SessionError on failure
+  // Flushes everything and closes the file; throws SessionError on failure (the file is
+  // closed all the same). Any later call throws std::logic_error.
+  void close();
 
  private:
   struct Impl;
@@ -107,35 +131,44 @@ class SessionWriter {
 };
 
 struct ChannelSlice {
-  std::size_t first_index = 0;
+  std::size_t first_index = 0;  // of raw[0]; for an empty slice, where it would start
   std::vector<double> time_s;
   std::vector<double> raw;  // counts are exact in a double
 };
 
 class SessionReader {
  public:
-  explicit SessionReader(const std::filesystem::path& path);  // throws SessionError
+  // Opens read-only and loads metadata, channel infos, events and calibration records
+  // (samples stay on disk). Throws SessionError.
+  explicit SessionReader(const std::filesystem::path& path);
   ~SessionReader();
+  // A moved-from reader may only be destroyed or assigned to.
   SessionReader(SessionReader&&) noexcept;
   SessionReader& operator=(SessionReader&&) noexcept;
 
   const std::filesystem::path& path() const;
   const SessionMetadata& metadata() const;
-  const std::vector<ChannelInfo>& channels() const;
-  const ChannelInfo& channel(const std::string& name) const;  // throws naming it
+  const std::vector<ChannelInfo>& channels() const;  // in the order they were added
+  // An unknown name throws SessionError naming it and listing the channels.
+  const ChannelInfo& channel(const std::string& name) const;
   std::size_t sample_count(const std::string& channel) const;
-  double start_time_s() const;  // earliest sample time
-  double end_time_s() const;    // latest sample time
-  std::vector<SessionEvent> events() const;
+  double start_time_s() const;  // earliest sample time of any channel; 0 without samples
+  double end_time_s() const;    // latest sample time of any channel; 0 without samples
+  std::vector<SessionEvent> events() const;  // in the order they were added
   std::vector<calibration::CalibrationRecord> calibrations() const;
 
-  // Samples with start_s <= time <= end_s, read from disk for that range only.
+  // Samples with start_s <= time <= end_s (NaN: std::invalid_argument). Uniform
+  // channels: the index range comes from the clock and only it is read; time_s[i] is
+  // first_sample_time_s + (first_index + i) / sample_rate_hz. Explicit-time channels:
+  // all times are read to find the range, then only its samples.
   ChannelSlice read(const std::string& channel,
                     double start_s = -std::numeric_limits<double>::infinity(),
                     double end_s = std::numeric_limits<double>::infinity()) const;
-  // Physical values of a slice: raw → signal → the channel's calibration record.
+  // Physical values of a slice of this channel: signal = raw_offset + raw_scale · raw,
+  // then the channel's calibration record (none: the signal is the physical value).
   std::vector<double> physical(const std::string& channel, const ChannelSlice& slice) const;
 
+  // Names of the datasets directly in `group` ("truth", "results/fit-1"), by name.
   std::vector<std::string> group_datasets(const std::string& group) const;
   std::vector<double> read_group_dataset(const std::string& group, const std::string& name) const;
   std::string read_group_attribute(const std::string& group, const std::string& name) const;

@@ -8,7 +8,8 @@ namespace doorbench::calibration {
 
 double CalibrationRecord::apply(double input) const {
   double value = 0.0;  // Horner, from the highest power down
-  for (auto it = coefficients.rbegin(); it != coefficients.rend(); ++it) value = value * input + *it;
+  for (auto it = coefficients.rbegin(); it != coefficients.rend(); ++it)
+    value = value * input + *it;
   return value;
 }
 
@@ -46,7 +47,8 @@ std::string to_json(const CalibrationRecord& r) {
   return json.dump(2);
 }
 
-CalibrationRecord calibration_record_from_json(std::string_view json_text, std::string_view source) {
+CalibrationRecord calibration_record_from_json(std::string_view json_text,
+                                               std::string_view source) {
   const std::string where(source);
   nlohmann::json json;
   try {
@@ -75,7 +77,8 @@ CalibrationRecord calibration_record_from_json(std::string_view json_text, std::
   text("valid_until_utc", r.valid_until_utc, false);
   text("notes", r.notes, false);
   if (json.contains("version")) {
-    if (!json["version"].is_number_integer()) throw std::runtime_error(where + ": version must be an integer");
+    if (!json["version"].is_number_integer())
+      throw std::runtime_error(where + ": version must be an integer");
     r.version = json["version"].get<int>();
   }
   if (!json.contains("coefficients") || !json["coefficients"].is_array()) {

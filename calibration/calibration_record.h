@@ -13,17 +13,17 @@
 namespace doorbench::calibration {
 
 struct CalibrationRecord {
-  std::string id;             // unique, e.g. "loadcell-LC445-0193-2026-11-21"
-  int version = 1;            // a newer calibration of the same sensor gets a new id
-  std::string sensor_kind;    // load_cell | inclinometer | gyroscope | ...
+  std::string id;           // unique, e.g. "loadcell-LC445-0193-2026-11-21"
+  int version = 1;          // a newer calibration of the same sensor gets a new id
+  std::string sensor_kind;  // load_cell | inclinometer | gyroscope | ...
   std::string sensor_serial;
   std::string input_unit = "V";  // what the polynomial takes
-  std::string unit;           // what it gives: N, rad, rad/s
+  std::string unit;              // what it gives: N, rad, rad/s
   // physical = Σ coefficients[k] · input^k (at least offset and gain).
   std::vector<double> coefficients;
   double standard_uncertainty = 0.0;  // in `unit`
-  std::string method;         // "nominal (datasheet)", "multi-point", ...
-  std::string date_utc;       // ISO 8601
+  std::string method;                 // "nominal (datasheet)", "multi-point", ...
+  std::string date_utc;               // ISO 8601
   std::string operator_name;
   std::string valid_until_utc;  // empty: no expiry
   std::string notes;

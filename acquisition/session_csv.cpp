@@ -1,0 +1,217 @@
+#include "acquisition/session_csv.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace doorbench {
+namespace {
+
+std::string unit_suffix(const std::string& unit) {
+  std::string suffix;
+  for (char c : unit) suffix += (c == '/' || c == '*' || c == ' ' || c == '^') ? '_' : c;
+  return suffix;
+}
+
+// The unit a column name ends with: "_rad_s" style compound units first, else the text
+// after the last underscore.
+std::string unit_of_column(const std::string& column) {
+  for (const char* compound : {"_rad_s", "_deg_s", "_m_s", "_N_m"}) {
+    const std::string ending(compound);
+    if (column.size() > ending.size() &&
+        column.compare(column.size() - ending.size(), ending.size(), ending) == 0) {
+      std::string unit = ending.substr(1);
+      std::replace(unit.begin(), unit.end(), '_', unit == "N_m" ? '*' : '/');
+      return unit;
+    }
+  }
+  return column.substr(column.rfind('_') + 1);
+}
+
+std::string column_name(const ChannelInfo& channel) {
+  // Built with append: GCC 12 warns falsely (-Wrestrict) on "_" + std::string.
+  std::string suffix("_");
+  suffix.append(unit_suffix(channel.unit));
+  const std::string& name = channel.name;
+  const bool has_suffix = name.size() > suffix.size() &&
+                          name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
+  const std::string column = has_suffix ? name : name + suffix;
+  // An extra column must not take a main column's name (the inclinometer called "angle"
+  // would become angle_rad): prefix it with its sensor kind.
+  for (std::string_view main :
+       {kTimeColumn, kForceColumn, kAngleColumn, kRateColumn, kStrokeColumn}) {
+    if (column == main) return channel.sensor_kind + "_" + column;
+  }
+  return column;
+}
+
+bool is_signed_by_mounting(const ChannelInfo& channel) {
+  return channel.sensor_kind == "load_cell";
+}
+
+}  // namespace
+
+Recording session_to_recording(const SessionReader& session) {
+  const std::vector<ChannelInfo>& channels = session.channels();
+  if (channels.empty()) throw SessionError(session.path().string() + ": no channels to export");
+  const ChannelInfo* force = nullptr;
+  const ChannelInfo* rate = nullptr;
+  const ChannelInfo* angle = nullptr;
+  std::vector<const ChannelInfo*> extras;
+  for (const ChannelInfo& channel : channels) {
+    if (!force && channel.unit == "N")
+      force = &channel;
+    else if (!rate && channel.unit == "rad/s")
+      rate = &channel;
+    else if (!angle && channel.unit == "rad" && channel.sensor_kind != "inclinometer")
+      angle = &channel;
+    else
+      extras.push_back(&channel);
+  }
+  const std::string where = session.path().string();
+  if (!force) throw SessionError(where + ": no force channel (unit N) to export as force_N");
+  if (!rate && !angle) {
+    throw SessionError(where +
+                       ": neither a rate channel (rad/s) nor a full-range angle channel "
+                       "(rad, not an inclinometer) to export");
+  }
+
+  Recording recording;
+  recording.source = where;
+  recording.metadata.emplace_back("source", "doorbench export " + where);
+  const ChannelSlice clock = session.read(force->name);
+  const std::size_t count = clock.time_s.size();
+  recording.time_s = clock.time_s;
+  auto column = [&](const ChannelInfo& channel) {
+    const ChannelSlice slice = session.read(channel.name);
+    if (slice.raw.size() != count ||
+        std::abs(channel.sample_rate_hz - force->sample_rate_hz) > 1e-9 * force->sample_rate_hz) {
+      throw SessionError(where + ": channel " + channel.name + " is not on the clock of " +
+                         force->name + " (export needs one clock)");
+    }
+    return session.physical(channel.name, slice);
+  };
+
+  // Strokes from events; the load cell's mounting from each stroke's detail.
+  std::vector<SessionEvent> events = session.events();
+  std::stable_sort(events.begin(), events.end(), [](const SessionEvent& a, const SessionEvent& b) {
+    return a.time_s < b.time_s;
+  });
+  std::vector<int> stroke(count, 0);
+  std::vector<int> sign(count, 1);
+  bool any_stroke = false;
+  {
+    std::size_t next_event = 0;
+    int current = 0, number = 0, mounting = 1;
+    for (std::size_t i = 0; i < count; ++i) {
+      while (next_event < events.size() && events[next_event].time_s <= recording.time_s[i]) {
+        const SessionEvent& event = events[next_event++];
+        if (event.kind == "stroke_start") {
+          current = ++number;
+          any_stroke = true;
+          if (event.detail == "opening") mounting = 1;
+          if (event.detail == "closing") mounting = -1;
+        } else if (event.kind == "stroke_end") {
+          current = 0;
+        }
+      }
+      stroke[i] = current;
+      sign[i] = mounting;
+    }
+  }
+
+  recording.force_N = column(*force);
+  if (is_signed_by_mounting(*force)) {
+    for (std::size_t i = 0; i < count; ++i) recording.force_N[i] *= sign[i];
+  }
+  if (rate) recording.rate_rad_s = column(*rate);
+  if (angle) recording.angle_rad = column(*angle);
+  if (any_stroke) recording.stroke = stroke;
+  for (const ChannelInfo* extra : extras) {
+    recording.extra_names.push_back(column_name(*extra));
+    recording.extra_columns.push_back(column(*extra));
+  }
+  if (force->sample_rate_hz > 0) recording.sample_rate_hz = force->sample_rate_hz;
+  for (const std::string group : {"truth", "import"}) {
+    try {
+      const std::string radius = session.read_group_attribute(group, "handle_radius_m");
+      recording.handle_radius_m = std::stod(radius);
+      break;
+    } catch (const std::exception&) {
+      // not in this group
+    }
+  }
+  return recording;
+}
+
+void recording_to_session(const Recording& recording, const std::filesystem::path& path,
+                          const SessionMetadata& metadata) {
+  const std::size_t count = recording.size();
+  if (count == 0) throw std::invalid_argument(recording.source + ": no samples to import");
+  // A uniform clock when every interval matches the mean to a part in a million.
+  double rate_hz = 0.0;
+  if (count >= 2) {
+    const double mean_interval =
+        (recording.time_s.back() - recording.time_s.front()) / static_cast<double>(count - 1);
+    bool uniform = true;
+    for (std::size_t i = 1; i < count && uniform; ++i) {
+      const double interval = recording.time_s[i] - recording.time_s[i - 1];
+      uniform = std::abs(interval - mean_interval) <= 1e-6 * mean_interval;
+    }
+    if (uniform) rate_hz = 1.0 / mean_interval;
+  }
+
+  SessionWriter writer(path, metadata);
+  auto add = [&](const std::string& name, const std::string& unit,
+                 const std::vector<double>& values) {
+    ChannelInfo channel;
+    channel.name = name;
+    // A narrow-range inclinometer column (as export writes it) stays an inclinometer, so
+    // that it is not taken for the full-range angle on the way back.
+    channel.sensor_kind = name.rfind("inclinometer", 0) == 0 ? "inclinometer" : "imported";
+    channel.raw_type = RawType::kValues;
+    channel.raw_unit = unit;
+    channel.unit = unit;
+    channel.range_min = -std::numeric_limits<double>::max();
+    channel.range_max = std::numeric_limits<double>::max();
+    channel.sample_rate_hz = rate_hz;
+    channel.first_sample_time_s = recording.time_s.front();
+    const int index = writer.add_channel(channel);
+    if (rate_hz > 0)
+      writer.append_values(index, values);
+    else
+      writer.append_timed_values(index, recording.time_s, values);
+  };
+  add("force", "N", recording.force_N);
+  if (recording.angle_rad) add("angle", "rad", *recording.angle_rad);
+  if (recording.rate_rad_s) add("rate", "rad/s", *recording.rate_rad_s);
+  for (std::size_t e = 0; e < recording.extra_names.size(); ++e) {
+    const std::string& column = recording.extra_names[e];
+    add(column, unit_of_column(column), recording.extra_columns[e]);
+  }
+  if (recording.stroke) {
+    int current = 0;
+    for (std::size_t i = 0; i < count; ++i) {
+      const int stroke = (*recording.stroke)[i];
+      if (stroke == current) continue;
+      if (current != 0) writer.add_event({recording.time_s[i], "stroke_end", "", ""});
+      if (stroke != 0) {
+        writer.add_event(
+            {recording.time_s[i], "stroke_start", "", "stroke " + std::to_string(stroke)});
+      }
+      current = stroke;
+    }
+    // A stroke still open at the last sample has no end event: it runs to the end.
+  }
+  writer.write_group_attribute("import", "source_file", recording.source);
+  if (recording.handle_radius_m) {
+    writer.write_group_attribute("import", "handle_radius_m",
+                                 format_csv_number(*recording.handle_radius_m));
+  }
+  for (const auto& [key, value] : recording.metadata) {
+    if (!key.empty()) writer.write_group_attribute("import", "csv_" + key, value);
+  }
+  writer.close();
+}
+
+}  // namespace doorbench

@@ -1,0 +1,32 @@
+#pragma once
+// Between sessions and the CSV exchange format (door-models.md §5.1).
+//
+// Export maps channels by unit: the first channel in N gives force_N (a compression-only
+// load cell's reading signed by each stroke's mounting: + on openings, − on closings),
+// the first in rad/s gives rate_rad_s, the first in rad that is not an inclinometer gives
+// angle_rad; every other channel (the narrow-range inclinometer among them) becomes an
+// extra column <name>_<unit> (prefixed with its sensor kind if that would take a main
+// column's name: the inclinometer "angle" gives inclinometer_angle_rad). All exported channels must
+// share one uniform clock; the time column is the first exported channel's (converter skews of a
+// few µs are not resampled). Strokes come from stroke_start/stroke_end events.
+//
+// Import makes a session of a recording: one float64 channel per column, in the column's
+// unit, with no calibration (the values already are physical); uniform times become a
+// sample clock, others explicit times; strokes become events; the CSV's metadata lines
+// are kept as attributes of the session's "import" group. A column whose name starts with
+// "inclinometer" becomes an inclinometer channel (narrow range, not the door angle).
+#include <filesystem>
+#include <string>
+
+#include "acquisition/recording_csv.h"
+#include "acquisition/session_file.h"
+
+namespace doorbench {
+
+Recording session_to_recording(const SessionReader& session);
+
+// Writes `recording` as a new session at `path` (which must not exist).
+void recording_to_session(const Recording& recording, const std::filesystem::path& path,
+                          const SessionMetadata& metadata);
+
+}  // namespace doorbench

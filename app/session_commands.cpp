@@ -1,0 +1,235 @@
+// doorbench record, info, export and import: sessions on the command line.
+#include <unistd.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <ctime>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "acquisition/recorder.h"
+#include "acquisition/rig_file.h"
+#include "acquisition/session_csv.h"
+#include "app/commands.h"
+#include "app/session_recording.h"
+#include "sensors/simulated_bench.h"
+
+namespace doorbench::app {
+
+std::string utc_now_iso8601() {
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char text[32];
+  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  return text;
+}
+
+RigDefinition load_rig(const std::string& rig_path) {
+  if (rig_path.empty()) {
+    return parse_rig(simulated_dishwasher_rig_text(), "built-in rig simulated-dishwasher",
+                     std::filesystem::current_path());
+  }
+  return read_rig_file(rig_path);
+}
+
+RecordSummary record_simulated_session(const RigDefinition& rig,
+                                       const SessionRecordingOptions& options,
+                                       const std::filesystem::path& out_path) {
+  for (const RigChannel& channel : rig.channels) {
+    if (channel.backend != "simulated") {
+      throw std::runtime_error(rig.source + ": channel " + channel.name + " uses backend " +
+                               channel.backend +
+                               ", which doorbench cannot record yet (only simulated)");
+    }
+  }
+  const DoorModel model = sensors::simulated_door_model(rig);
+  const double duration_s =
+      options.duration_s > 0 ? options.duration_s
+                             : rig.simulation->hand_cycles * rig.simulation->hand_cycle_duration_s;
+  sensors::SimulatedBench bench(rig, model, duration_s);
+
+  SessionMetadata metadata;
+  metadata.rig_name = rig.name;
+  metadata.rig_definition = rig.text;
+  metadata.operator_name = options.operator_name;
+  metadata.product_id = options.product_id;
+  metadata.start_time_utc = utc_now_iso8601();
+  metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
+  metadata.notes = options.notes;
+
+  RecordOptions record;
+  record.duration_s = duration_s;
+  const bool terminal = isatty(STDERR_FILENO) != 0;
+  double next_report_s = 0.0;
+  if (options.show_progress) {
+    record.progress = [&](double recorded_s, std::size_t scans) {
+      if (terminal) {
+        std::fprintf(stderr, "\rrecording %s: %.1f / %.1f s, %zu scans", out_path.c_str(),
+                     recorded_s, duration_s, scans);
+      } else if (recorded_s >= next_report_s) {
+        std::fprintf(stderr, "recording %s: %.1f / %.1f s, %zu scans\n", out_path.c_str(),
+                     recorded_s, duration_s, scans);
+        next_report_s += duration_s / 4;
+      }
+    };
+  }
+  const RecordSummary summary = record_session(bench, metadata, out_path, record);
+  if (options.show_progress && terminal) std::fprintf(stderr, "\n");
+  return summary;
+}
+
+namespace {
+
+struct RecordCommandOptions {
+  std::string rig_path;
+  std::string out_path;
+  SessionRecordingOptions recording;
+};
+
+void run_record(const RecordCommandOptions& options) {
+  const RigDefinition rig = load_rig(options.rig_path);
+  const RecordSummary summary = record_simulated_session(rig, options.recording, options.out_path);
+  std::cerr << "wrote " << options.out_path << ": " << rig.channels.size() << " channels, "
+            << summary.scans << " scans (" << summary.duration_s << " s), " << summary.events
+            << " events\n";
+}
+
+std::string format_seconds(double seconds) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.3f s", seconds);
+  return text;
+}
+
+void run_info(const std::string& session_path) {
+  const SessionReader session(session_path);
+  const SessionMetadata& m = session.metadata();
+  std::cout << "session " << session_path << "\n"
+            << "  rig        " << m.rig_name << "\n"
+            << "  operator   " << m.operator_name << "\n"
+            << "  product    " << m.product_id << "\n"
+            << "  started    " << m.start_time_utc << "\n"
+            << "  software   " << m.software_version << "\n"
+            << "  duration   " << format_seconds(session.end_time_s() - session.start_time_s())
+            << " (" << format_seconds(session.start_time_s()) << " to "
+            << format_seconds(session.end_time_s()) << ")\n";
+  if (!m.notes.empty()) std::cout << "  notes      " << m.notes << "\n";
+  std::cout << "channels:\n";
+  std::printf("  %-14s %-13s %10s %10s %-7s %-6s %s\n", "name", "sensor", "samples", "rate Hz",
+              "raw", "unit", "calibration");
+  std::fflush(stdout);
+  for (const ChannelInfo& c : session.channels()) {
+    std::printf("  %-14s %-13s %10zu %10g %-7s %-6s %s\n", c.name.c_str(), c.sensor_kind.c_str(),
+                session.sample_count(c.name), c.sample_rate_hz, c.raw_unit.c_str(), c.unit.c_str(),
+                c.calibration_id.empty() ? "(values are physical)" : c.calibration_id.c_str());
+  }
+  std::fflush(stdout);
+  const std::vector<SessionEvent> events = session.events();
+  std::map<std::string, int> by_kind;
+  for (const SessionEvent& e : events) ++by_kind[e.kind];
+  std::cout << "events: " << events.size();
+  std::string separator = " (";
+  for (const auto& [kind, count] : by_kind) {
+    std::cout << separator << kind << " " << count;
+    separator = ", ";
+  }
+  std::cout << (events.empty() ? "" : ")") << "\n";
+  for (std::size_t i = 0; i < events.size() && i < 12; ++i) {
+    std::printf("  %10.3f s  %-13s %s%s%s\n", events[i].time_s, events[i].kind.c_str(),
+                events[i].channel.c_str(), events[i].channel.empty() ? "" : " ",
+                events[i].detail.c_str());
+  }
+  if (events.size() > 12) std::printf("  ... %zu more\n", events.size() - 12);
+  std::fflush(stdout);
+  std::cout << "calibrations:\n";
+  for (const calibration::CalibrationRecord& r : session.calibrations()) {
+    std::cout << "  " << r.id << "  " << r.sensor_kind << " " << r.sensor_serial << "  " << r.unit
+              << " = ";
+    for (std::size_t k = 0; k < r.coefficients.size(); ++k) {
+      std::cout << (k ? " + " : "") << r.coefficients[k]
+                << (k == 0   ? ""
+                    : k == 1 ? "·x"
+                             : "·x^" + std::to_string(k));
+    }
+    std::cout << "  (" << r.method << ")\n";
+  }
+}
+
+void run_export(const std::string& session_path, const std::string& csv_path) {
+  const SessionReader session(session_path);
+  const Recording recording = session_to_recording(session);
+  write_recording_csv_file(csv_path, recording);
+  std::cerr << "wrote " << csv_path << ": " << recording.size() << " rows\n";
+}
+
+struct ImportOptions {
+  std::string csv_path;
+  std::string out_path;
+  std::string operator_name, product_id, notes;
+};
+
+void run_import(const ImportOptions& options) {
+  const Recording recording = read_recording_csv(options.csv_path);
+  SessionMetadata metadata;
+  metadata.rig_name = "imported";
+  metadata.operator_name = options.operator_name;
+  metadata.product_id = options.product_id;
+  metadata.start_time_utc = utc_now_iso8601();
+  metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
+  metadata.notes = options.notes.empty() ? "imported from " + options.csv_path : options.notes;
+  recording_to_session(recording, options.out_path, metadata);
+  std::cerr << "wrote " << options.out_path << ": " << recording.size() << " samples\n";
+}
+
+}  // namespace
+
+void add_session_commands(CLI::App& app, Action& action) {
+  auto record = std::make_shared<RecordCommandOptions>();
+  CLI::App* record_command = app.add_subcommand(
+      "record",
+      "Record a session from a rig (for now the simulated backend: the rig's door opened and "
+      "closed by the virtual hand, through its sensor models)");
+  record_command->add_option("--rig", record->rig_path,
+                             "Rig file (TOML); default: the built-in simulated-dishwasher rig");
+  record_command
+      ->add_option("--duration-s", record->recording.duration_s,
+                   "How long to record; default: the rig's hand cycles")
+      ->check(CLI::Range(0.001, 86400.0));
+  record_command->add_option("--out", record->out_path, "The new session file (HDF5)")->required();
+  record_command->add_option("--operator", record->recording.operator_name, "Who records");
+  record_command->add_option("--product", record->recording.product_id, "The door or product");
+  record_command->add_option("--notes", record->recording.notes, "Free text kept in the session");
+  record_command->callback([record, &action] { action = [record] { run_record(*record); }; });
+
+  auto info_path = std::make_shared<std::string>();
+  CLI::App* info = app.add_subcommand(
+      "info", "Show a session: metadata, channels, rates, duration, events, calibration");
+  info->add_option("SESSION", *info_path, "Session file (HDF5)")->required();
+  info->callback([info_path, &action] { action = [info_path] { run_info(*info_path); }; });
+
+  auto export_paths = std::make_shared<std::pair<std::string, std::string>>();
+  CLI::App* export_command = app.add_subcommand(
+      "export",
+      "Write a session as CSV (the exchange format: physical units, strokes marked, the force "
+      "signed by the load cell's mounting)");
+  export_command->add_option("SESSION", export_paths->first, "Session file (HDF5)")->required();
+  export_command->add_option("--csv", export_paths->second, "The CSV file to write")->required();
+  export_command->callback([export_paths, &action] {
+    action = [export_paths] { run_export(export_paths->first, export_paths->second); };
+  });
+
+  auto import = std::make_shared<ImportOptions>();
+  CLI::App* import_command = app.add_subcommand(
+      "import", "Make a session of a recording in the CSV exchange format from elsewhere");
+  import_command->add_option("CSV", import->csv_path, "Recording (CSV exchange format)")
+      ->required();
+  import_command->add_option("--out", import->out_path, "The new session file (HDF5)")->required();
+  import_command->add_option("--operator", import->operator_name, "Who recorded it");
+  import_command->add_option("--product", import->product_id, "The door or product");
+  import_command->add_option("--notes", import->notes, "Free text kept in the session");
+  import_command->callback([import, &action] { action = [import] { run_import(*import); }; });
+}
+
+}  // namespace doorbench::app

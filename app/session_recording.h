@@ -1,0 +1,26 @@
+#pragma once
+// Recording a session from a rig, shared by `doorbench record` and the demo.
+#include <filesystem>
+#include <string>
+
+#include "acquisition/recorder.h"
+#include "acquisition/rig_file.h"
+
+namespace doorbench::app {
+
+struct SessionRecordingOptions {
+  double duration_s = 0.0;  // 0: the rig's hand cycles
+  std::string operator_name;
+  std::string product_id;
+  std::string notes;
+  bool show_progress = true;
+};
+
+// The rig file, or the built-in simulated-dishwasher rig when `rig_path` is empty.
+RigDefinition load_rig(const std::string& rig_path);
+RecordSummary record_simulated_session(const RigDefinition& rig,
+                                       const SessionRecordingOptions& options,
+                                       const std::filesystem::path& out_path);
+std::string utc_now_iso8601();
+
+}  // namespace doorbench::app

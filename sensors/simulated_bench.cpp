@@ -1,0 +1,245 @@
+#include "sensors/simulated_bench.h"
+
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <thread>
+
+#include "analysis/constraint_check.h"
+#include "analysis/parameter_file.h"
+
+namespace doorbench::sensors {
+
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+
+template <typename Parameters>
+Parameters parameters_of(const RigChannel& channel) {
+  Parameters parameters;
+  for (const auto& [name, value] : channel.parameters) {
+    if (!parameters.set(name, value)) {
+      throw std::invalid_argument("channel " + channel.name + ": unknown parameter " + name);
+    }
+  }
+  if (std::string problem = parameters.validate(); !problem.empty()) {
+    throw std::invalid_argument("channel " + channel.name + ": " + problem);
+  }
+  return parameters;
+}
+
+VirtualHandOptions hand_options(const RigSimulation& simulation) {
+  VirtualHandOptions options;
+  options.target_angle_rad = simulation.hand_target_deg * kRadPerDeg;
+  options.duration_s = simulation.hand_cycle_duration_s;
+  return options;
+}
+
+}  // namespace
+
+CyclingHand::CyclingHand(const VirtualHandOptions& one_cycle, double handle_radius_m, int cycles)
+    : hand_(one_cycle, handle_radius_m), cycles_(cycles) {
+  if (cycles < 1) throw std::invalid_argument("the virtual hand needs at least one cycle");
+}
+
+double CyclingHand::force_N(double time_s, double theta_rad, double omega_rad_s) const {
+  if (time_s < 0 || time_s >= cycles_ * period_s()) return 0.0;
+  return hand_.force_N(std::fmod(time_s, period_s()), theta_rad, omega_rad_s);
+}
+
+int CyclingHand::stroke_at(double time_s) const {
+  if (time_s < 0 || time_s >= cycles_ * period_s()) return 0;
+  return hand_.stroke_at(std::fmod(time_s, period_s()));
+}
+
+DoorModel simulated_door_model(const RigDefinition& rig) {
+  if (!rig.simulation) throw std::invalid_argument(rig.source + ": no [simulation] table");
+  const RigSimulation& simulation = *rig.simulation;
+  const std::optional<ModelKind> kind = parse_model_kind(simulation.model);
+  if (!kind)
+    throw std::invalid_argument(rig.source + ": simulation.model must be sensory or physical");
+  const std::filesystem::path params =
+      simulation.door == "reference" ? std::filesystem::path() : rig.resolve(simulation.door);
+  const std::filesystem::path effects =
+      simulation.effects.empty() ? std::filesystem::path() : rig.resolve(simulation.effects);
+  return load_model(*kind, params, effects);
+}
+
+calibration::CalibrationRecord nominal_calibration(const RigChannel& channel) {
+  calibration::CalibrationRecord record;
+  record.id = "nominal-" + (channel.serial.empty() ? channel.name : channel.serial);
+  record.sensor_kind = channel.sensor;
+  record.sensor_serial = channel.serial;
+  record.unit = channel.unit;
+  record.method = "nominal (datasheet figures of the sensor model)";
+  if (channel.sensor == "load_cell") {
+    const auto p = parameters_of<LoadCellParameters>(channel);
+    record.coefficients = {0.0, 1.0 / p.volts_per_newton()};
+    record.standard_uncertainty =
+        (p.nonlinearity_fraction_fs + p.hysteresis_fraction_fs) * p.full_scale_N / std::sqrt(3.0);
+  } else if (channel.sensor == "inclinometer") {
+    const auto p = parameters_of<InclinometerParameters>(channel);
+    record.coefficients = {0.0, kRadPerDeg / p.output_V_per_deg};
+    record.standard_uncertainty = p.noise_rms_deg * kRadPerDeg;
+  } else if (channel.sensor == "gyroscope") {
+    const auto p = parameters_of<GyroscopeParameters>(channel);
+    record.coefficients = {0.0, kRadPerDeg / p.output_V_per_dps};
+    record.standard_uncertainty = p.bias_dps * kRadPerDeg;
+  } else {
+    throw std::invalid_argument("channel " + channel.name + ": no sensor model for " +
+                                channel.sensor);
+  }
+  record.notes = "Before any calibration: the sensor's datasheet sensitivity, no offset.";
+  return record;
+}
+
+SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
+                               double expected_duration_s)
+    : rig_name_(rig.name),
+      door_json_(to_parameter_json(model)),
+      effects_json_(to_effects_json(model)),
+      model_(model),
+      simulation_(rig.simulation ? *rig.simulation : RigSimulation{}),
+      scan_rate_hz_(rig.sample_rate_hz),
+      convert_interval_s_(rig.convert_interval_s),
+      hand_(hand_options(simulation_), model.geometry().handle_radius_m, simulation_.hand_cycles),
+      stepper_(model, SimulationOptions{}) {
+  if (!rig.simulation) throw std::invalid_argument(rig.source + ": no [simulation] table");
+  for (std::size_t index = 0; index < rig.channels.size(); ++index) {
+    const RigChannel& rc = rig.channels[index];
+    if (rc.backend != "simulated") {
+      throw std::invalid_argument(rig.source + ": channel " + rc.name + " uses backend " +
+                                  rc.backend + "; the simulated bench simulates every channel");
+    }
+    DaqParameters daq_parameters;
+    daq_parameters.range_min_V = rc.range_min_V;
+    daq_parameters.range_max_V = rc.range_max_V;
+    daq_parameters.resolution_bits = rig.daq_resolution_bits;
+    daq_parameters.sample_rate_hz = rig.sample_rate_hz;
+    daq_parameters.convert_interval_s = rig.convert_interval_s;
+    const Daq daq(daq_parameters);
+    // One seed per channel, derived from the rig's: channels' noises are independent.
+    const std::uint64_t seed = simulation_.seed * 1000003u + index;
+    if (rc.sensor == "load_cell") {
+      sensors_.push_back({LoadCell(parameters_of<LoadCellParameters>(rc), seed), daq});
+    } else if (rc.sensor == "inclinometer") {
+      sensors_.push_back(
+          {Inclinometer(parameters_of<InclinometerParameters>(rc), scan_rate_hz_, seed), daq});
+    } else if (rc.sensor == "gyroscope") {
+      sensors_.push_back(
+          {Gyroscope(parameters_of<GyroscopeParameters>(rc), scan_rate_hz_, seed), daq});
+    } else {
+      throw std::invalid_argument("channel " + rc.name + ": no sensor model for " + rc.sensor);
+    }
+    if (rc.calibration != "nominal") {
+      throw std::invalid_argument(
+          rig.source + ": channel " + rc.name + " names calibration " + rc.calibration +
+          "; the calibration store arrives with the calibration issue, use \"nominal\"");
+    }
+    const calibration::CalibrationRecord record = nominal_calibration(rc);
+    calibrations_.push_back(record);
+    ChannelInfo info;
+    info.name = rc.name;
+    info.sensor_kind = rc.sensor;
+    info.sensor_serial = rc.serial;
+    info.raw_type = RawType::kCounts;
+    info.raw_unit = "counts";
+    info.raw_offset = rc.range_min_V;
+    info.raw_scale = daq.volts_per_count();
+    info.range_min = rc.range_min_V;
+    info.range_max = rc.range_max_V;
+    info.unit = rc.unit;
+    info.calibration_id = record.id;
+    info.sample_rate_hz = scan_rate_hz_;
+    info.first_sample_time_s = daq.channel_time_offset_s(static_cast<int>(index));
+    channels_.push_back(info);
+  }
+  const auto scans = static_cast<std::size_t>(std::ceil(expected_duration_s * scan_rate_hz_)) + 1;
+  for (auto* truth : {&truth_time_s_, &truth_theta_rad_, &truth_omega_rad_s_, &truth_force_N_}) {
+    truth->reserve(scans);
+  }
+}
+
+std::string SimulatedBench::description() const {
+  return "simulated bench (" + rig_name_ + ", " + std::string(to_string(model_.kind())) +
+         " model, seed " + std::to_string(simulation_.seed) + ")";
+}
+
+void SimulatedBench::start() {
+  state_ = DoorState{};
+  for (Channel& channel : sensors_) {
+    if (auto* inclinometer = std::get_if<Inclinometer>(&channel.sensor)) inclinometer->settle(0.0);
+  }
+  started_ = std::chrono::steady_clock::now();
+  next_scan_ = 0;
+}
+
+std::size_t SimulatedBench::read(ScanBlock& block) {
+  const std::size_t scans = block.capacity();
+  for (std::size_t s = 0; s < scans; ++s) {
+    const double scan_time_s = static_cast<double>(next_scan_) / scan_rate_hz_;
+    if (next_scan_ == 0) block.events.push_back({0.0, "trigger", "", "start (software)"});
+    // Strokes begin and end with the hand's phases; the load cell's mounting follows.
+    const int stroke = hand_.stroke_at(scan_time_s);
+    if (stroke != previous_stroke_) {
+      if (previous_stroke_ != 0) block.events.push_back({scan_time_s, "stroke_end", "", ""});
+      if (stroke != 0) {
+        mounting_sign_ = stroke == 1 ? 1 : -1;
+        block.events.push_back(
+            {scan_time_s, "stroke_start", "", stroke == 1 ? "opening" : "closing"});
+      }
+      previous_stroke_ = stroke;
+    }
+    for (std::size_t c = 0; c < sensors_.size(); ++c) {
+      const double convert_time_s = scan_time_s + c * convert_interval_s_;
+      stepper_.advance(state_, convert_time_s, hand_);
+      if (c == 0) {
+        truth_time_s_.push_back(scan_time_s);
+        truth_theta_rad_.push_back(state_.theta_rad);
+        truth_omega_rad_s_.push_back(state_.omega_rad_s);
+        truth_force_N_.push_back(
+            hand_.force_N(state_.time_s, state_.theta_rad, state_.omega_rad_s));
+      }
+      Channel& channel = sensors_[c];
+      double volts = 0.0;
+      if (auto* load_cell = std::get_if<LoadCell>(&channel.sensor)) {
+        const double hand_force_N =
+            hand_.force_N(state_.time_s, state_.theta_rad, state_.omega_rad_s);
+        volts = load_cell->sample_V(mounting_sign_ * hand_force_N);
+      } else if (auto* inclinometer = std::get_if<Inclinometer>(&channel.sensor)) {
+        volts = inclinometer->sample_V(state_.theta_rad);
+      } else if (auto* gyroscope = std::get_if<Gyroscope>(&channel.sensor)) {
+        volts = gyroscope->sample_V(state_.omega_rad_s);
+      }
+      block.counts[c][s] = channel.daq.to_counts(volts);
+    }
+    ++next_scan_;
+  }
+  block.scan_count = scans;
+  if (simulation_.realtime) {
+    const auto due = started_ + std::chrono::duration_cast<std::chrono::steady_clock::duration>(
+                                    std::chrono::duration<double>(next_scan_ / scan_rate_hz_));
+    std::this_thread::sleep_until(due);
+  }
+  return scans;
+}
+
+void SimulatedBench::write_extras(SessionWriter& writer) {
+  const std::string group = "truth";
+  writer.write_group_attribute(group, "about",
+                               "noise-free truth of the simulated bench at each scan's start: "
+                               "door angle and rate, and the hand's force F_u at the handle "
+                               "(positive = opening)");
+  writer.write_group_attribute(group, "model", std::string(to_string(model_.kind())));
+  writer.write_group_attribute(group, "door_parameters_json", door_json_);
+  writer.write_group_attribute(group, "effects_json", effects_json_);
+  writer.write_group_attribute(group, "seed", std::to_string(simulation_.seed));
+  writer.write_group_attribute(group, "handle_radius_m",
+                               format_number(model_.geometry().handle_radius_m));
+  writer.write_group_dataset(group, "time_s", truth_time_s_);
+  writer.write_group_dataset(group, "theta_rad", truth_theta_rad_);
+  writer.write_group_dataset(group, "omega_rad_s", truth_omega_rad_s_);
+  writer.write_group_dataset(group, "force_N", truth_force_N_);
+}
+
+}  // namespace doorbench::sensors

@@ -1,0 +1,92 @@
+#pragma once
+// The simulated bench: a door model (any model plus effects) opened and closed by the
+// virtual hand, its truth (θ, ω, the hand's force) turned into raw DAQ counts by the
+// sensor models of the rig's channels. Seeded: the same rig and seed give the same
+// session. Paced in real time or as fast as possible ([simulation] realtime).
+//
+// The load cell measures compression only (door-models.md §5): during openings it sits
+// between the hand and the inside of the handle and is pressed by +F_u; during closings
+// it is on the door's outer face and is pressed by −F_u. Each stroke_start event says
+// which ("opening" or "closing"), so F_u = ± the reading.
+//
+// The truth is kept in memory (32 bytes per scan) and written to the session's "truth"
+// group when recording ends. Thread safety: one thread.
+#include <chrono>
+#include <memory>
+#include <random>
+#include <variant>
+#include <vector>
+
+#include "acquisition/backend.h"
+#include "acquisition/rig_file.h"
+#include "analysis/door_model.h"
+#include "analysis/simulator.h"
+#include "analysis/virtual_hand.h"
+#include "sensors/sensor_models.h"
+
+namespace doorbench::sensors {
+
+// The virtual hand's open-close repeated `cycles` times, then no force.
+class CyclingHand final : public UserForce {
+ public:
+  CyclingHand(const VirtualHandOptions& one_cycle, double handle_radius_m, int cycles);
+  double force_N(double time_s, double theta_rad, double omega_rad_s) const override;
+  int stroke_at(double time_s) const;  // 1 opening, 2 closing, 0 between
+  double period_s() const { return hand_.duration_s(); }
+
+ private:
+  VirtualHand hand_;
+  int cycles_;
+};
+
+// The door model a rig's [simulation] table names (the built-in reference door, or a
+// parameter file relative to the rig, with an optional effects file).
+DoorModel simulated_door_model(const RigDefinition& rig);
+
+// The datasheet calibration of a channel's sensor model (volts → its unit).
+calibration::CalibrationRecord nominal_calibration(const RigChannel& channel);
+
+class SimulatedBench final : public AcquisitionBackend {
+ public:
+  // Every channel of the rig must use the simulated backend. `expected_duration_s`
+  // sizes the truth buffers so that reading does not allocate.
+  SimulatedBench(const RigDefinition& rig, const DoorModel& model, double expected_duration_s);
+
+  std::string description() const override;
+  std::vector<ChannelInfo> channels() const override { return channels_; }
+  std::vector<calibration::CalibrationRecord> calibrations() const override {
+    return calibrations_;
+  }
+  double scan_rate_hz() const override { return scan_rate_hz_; }
+  void start() override;
+  std::size_t read(ScanBlock& block) override;
+  void stop() override {}
+  void write_extras(SessionWriter& writer) override;
+
+ private:
+  using Sensor = std::variant<LoadCell, Inclinometer, Gyroscope>;
+  struct Channel {
+    Sensor sensor;
+    Daq daq;
+  };
+
+  std::string rig_name_;
+  std::string door_json_, effects_json_;
+  const DoorModel& model_;
+  RigSimulation simulation_;
+  double scan_rate_hz_;
+  double convert_interval_s_;
+  std::vector<ChannelInfo> channels_;
+  std::vector<calibration::CalibrationRecord> calibrations_;
+  std::vector<Channel> sensors_;
+  CyclingHand hand_;
+  DoorStepper stepper_;
+  DoorState state_;
+  std::size_t next_scan_ = 0;
+  int previous_stroke_ = 0;
+  int mounting_sign_ = 1;  // +1: the load cell is pressed by +F_u (opening mounting)
+  std::chrono::steady_clock::time_point started_;
+  std::vector<double> truth_time_s_, truth_theta_rad_, truth_omega_rad_s_, truth_force_N_;
+};
+
+}  // namespace doorbench::sensors
