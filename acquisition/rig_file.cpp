@@ -566,7 +566,7 @@ void read_simulation(const Section& root, RigDefinition& rig, const ParsedChanne
                 "only for rigs with simulated channels (no channel's backend is \"simulated\")");
   }
 
-  table->allow_only({"door", "model", "effects", "seed", "realtime", "hand"});
+  table->allow_only({"door", "model", "effects", "force", "seed", "realtime", "hand"});
   RigSimulation simulation;
   simulation.line = table->line();
   simulation.door = table->string("door").value_or(simulation.door);
@@ -575,6 +575,13 @@ void read_simulation(const Section& root, RigDefinition& rig, const ParsedChanne
   if (const auto effects = table->string("effects")) {
     check_file_exists(*table, rig, "effects", *effects);
     simulation.effects = *effects;
+  }
+  if (const auto force = table->string("force")) {
+    check_file_exists(*table, rig, "force", *force);
+    if (table->table("hand")) {
+      table->fail("force", "a scripted force replaces the virtual hand: remove [simulation.hand]");
+    }
+    simulation.force = *force;
   }
   if (const auto seed = table->integer("seed")) {
     if (*seed < 0) table->fail("seed", "must be >= 0 (got " + std::to_string(*seed) + ")");

@@ -21,11 +21,11 @@ class RigError : public std::runtime_error {
 };
 
 struct RigChannel {
-  std::string name;         // unique within the rig, [A-Za-z0-9_]+
-  std::string sensor;       // load_cell | inclinometer | gyroscope
-  std::string serial;       // the sensor's serial number
-  std::string backend;      // simulated | comedi | modbus
-  std::string address;      // device address in the backend's own notation
+  std::string name;            // unique within the rig, [A-Za-z0-9_]+
+  std::string sensor;          // load_cell | inclinometer | gyroscope
+  std::string serial;          // the sensor's serial number
+  std::string backend;         // simulated | comedi | modbus
+  std::string address;         // device address in the backend's own notation
   double range_min_V = -10.0;  // the DAQ input range used for this channel
   double range_max_V = 10.0;
   std::string calibration;  // "nominal" (datasheet figures) or a calibration record id
@@ -33,7 +33,7 @@ struct RigChannel {
                             // (inclinometer), rad/s (gyroscope)
   // Sensor-model parameters by the names of sensors::*Parameters::fields(), file order.
   std::vector<std::pair<std::string, double>> parameters;
-  int line = 0;             // of this channel's [[channels]] header
+  int line = 0;  // of this channel's [[channels]] header
 };
 
 struct RigTrigger {
@@ -48,23 +48,26 @@ struct RigSimulation {
   std::string door = "reference";  // "reference" (built in) or a parameter file
   std::string model = "physical";  // sensory | physical
   std::string effects;             // optional effects file
+  // Optional: a recording (CSV exchange format, with a stroke column) whose force_N drives
+  // the door instead of the virtual hand; then [simulation.hand] must be absent.
+  std::string force;
   std::uint64_t seed = 1;
-  bool realtime = false;           // pace samples in real time, or as fast as possible
-  int hand_cycles = 3;             // openings and closings by the virtual hand
+  bool realtime = false;  // pace samples in real time, or as fast as possible
+  int hand_cycles = 3;    // openings and closings by the virtual hand
   double hand_target_deg = 80.0;
   double hand_cycle_duration_s = 6.0;
   int line = 0;
 };
 
 struct RigDefinition {
-  std::string source;  // the path (or name) it was read from
-  std::string text;    // the whole file, stored in every session
+  std::string source;              // the path (or name) it was read from
+  std::string text;                // the whole file, stored in every session
   std::filesystem::path base_dir;  // relative paths inside resolve against this
 
   std::string name;
   std::string description;
-  double sample_rate_hz = 1000.0;     // [clock]
-  double convert_interval_s = 10e-6;  // [clock], the multiplexed converter's skew step
+  double sample_rate_hz = 1000.0;         // [clock]
+  double convert_interval_s = 10e-6;      // [clock], the multiplexed converter's skew step
   std::string daq_backend = "simulated";  // [daq]
   std::string daq_device;
   double daq_range_min_V = -10.0;

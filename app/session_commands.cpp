@@ -46,9 +46,9 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
     }
   }
   const DoorModel model = sensors::simulated_door_model(rig);
-  const double duration_s =
-      options.duration_s > 0 ? options.duration_s
-                             : rig.simulation->hand_cycles * rig.simulation->hand_cycle_duration_s;
+  const double duration_s = options.duration_s > 0
+                                ? options.duration_s
+                                : sensors::simulated_hand(rig, model)->natural_duration_s();
   sensors::SimulatedBench bench(rig, model, duration_s);
 
   SessionMetadata metadata;

@@ -1,6 +1,8 @@
 #include "sensors/simulated_bench.h"
 
+#include <algorithm>
 #include <cmath>
+#include <map>
 #include <numbers>
 #include <stdexcept>
 #include <thread>
@@ -50,6 +52,50 @@ double CyclingHand::force_N(double time_s, double theta_rad, double omega_rad_s)
 int CyclingHand::stroke_at(double time_s) const {
   if (time_s < 0 || time_s >= cycles_ * period_s()) return 0;
   return hand_.stroke_at(std::fmod(time_s, period_s()));
+}
+
+ScriptedForce::ScriptedForce(const Recording& recording)
+    : force_(recording.time_s, recording.force_N), time_s_(recording.time_s) {
+  if (!recording.stroke) {
+    throw std::invalid_argument(recording.source +
+                                ": a scripted force needs a stroke column (the load cell's "
+                                "mounting follows the strokes)");
+  }
+  stroke_ = *recording.stroke;
+  // Each stroke's mounting from the sign of its mean force.
+  std::map<int, double> force_sum;
+  for (std::size_t i = 0; i < stroke_.size(); ++i) force_sum[stroke_[i]] += recording.force_N[i];
+  mounting_.resize(stroke_.size());
+  for (std::size_t i = 0; i < stroke_.size(); ++i) {
+    mounting_[i] = force_sum[stroke_[i]] >= 0 ? 1 : -1;
+  }
+}
+
+std::size_t ScriptedForce::sample_at(double time_s) const {
+  const auto after = std::upper_bound(time_s_.begin(), time_s_.end(), time_s);
+  return after == time_s_.begin() ? 0 : static_cast<std::size_t>(after - time_s_.begin()) - 1;
+}
+
+double ScriptedForce::force_N(double time_s, double theta_rad, double omega_rad_s) const {
+  return force_.force_N(time_s, theta_rad, omega_rad_s);
+}
+
+int ScriptedForce::stroke_at(double time_s) const {
+  if (time_s < time_s_.front() || time_s > time_s_.back()) return 0;
+  return stroke_[sample_at(time_s)];
+}
+
+int ScriptedForce::mounting_at(double time_s) const {
+  return mounting_[sample_at(time_s)];
+}
+
+std::unique_ptr<StrokeForce> simulated_hand(const RigDefinition& rig, const DoorModel& model) {
+  if (!rig.simulation) throw std::invalid_argument(rig.source + ": no [simulation] table");
+  if (!rig.simulation->force.empty()) {
+    return std::make_unique<ScriptedForce>(read_recording_csv(rig.resolve(rig.simulation->force)));
+  }
+  return std::make_unique<CyclingHand>(
+      hand_options(*rig.simulation), model.geometry().handle_radius_m, rig.simulation->hand_cycles);
 }
 
 DoorModel simulated_door_model(const RigDefinition& rig) {
@@ -102,7 +148,7 @@ SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
       simulation_(rig.simulation ? *rig.simulation : RigSimulation{}),
       scan_rate_hz_(rig.sample_rate_hz),
       convert_interval_s_(rig.convert_interval_s),
-      hand_(hand_options(simulation_), model.geometry().handle_radius_m, simulation_.hand_cycles),
+      hand_(simulated_hand(rig, model)),
       stepper_(model, SimulationOptions{}) {
   if (!rig.simulation) throw std::invalid_argument(rig.source + ": no [simulation] table");
   for (std::size_t index = 0; index < rig.channels.size(); ++index) {
@@ -180,31 +226,31 @@ std::size_t SimulatedBench::read(ScanBlock& block) {
     const double scan_time_s = static_cast<double>(next_scan_) / scan_rate_hz_;
     if (next_scan_ == 0) block.events.push_back({0.0, "trigger", "", "start (software)"});
     // Strokes begin and end with the hand's phases; the load cell's mounting follows.
-    const int stroke = hand_.stroke_at(scan_time_s);
+    const int stroke = hand_->stroke_at(scan_time_s);
     if (stroke != previous_stroke_) {
       if (previous_stroke_ != 0) block.events.push_back({scan_time_s, "stroke_end", "", ""});
       if (stroke != 0) {
-        mounting_sign_ = stroke == 1 ? 1 : -1;
+        mounting_sign_ = hand_->mounting_at(scan_time_s);
         block.events.push_back(
-            {scan_time_s, "stroke_start", "", stroke == 1 ? "opening" : "closing"});
+            {scan_time_s, "stroke_start", "", mounting_sign_ > 0 ? "opening" : "closing"});
       }
       previous_stroke_ = stroke;
     }
     for (std::size_t c = 0; c < sensors_.size(); ++c) {
       const double convert_time_s = scan_time_s + c * convert_interval_s_;
-      stepper_.advance(state_, convert_time_s, hand_);
+      stepper_.advance(state_, convert_time_s, *hand_);
       if (c == 0) {
         truth_time_s_.push_back(scan_time_s);
         truth_theta_rad_.push_back(state_.theta_rad);
         truth_omega_rad_s_.push_back(state_.omega_rad_s);
         truth_force_N_.push_back(
-            hand_.force_N(state_.time_s, state_.theta_rad, state_.omega_rad_s));
+            hand_->force_N(state_.time_s, state_.theta_rad, state_.omega_rad_s));
       }
       Channel& channel = sensors_[c];
       double volts = 0.0;
       if (auto* load_cell = std::get_if<LoadCell>(&channel.sensor)) {
         const double hand_force_N =
-            hand_.force_N(state_.time_s, state_.theta_rad, state_.omega_rad_s);
+            hand_->force_N(state_.time_s, state_.theta_rad, state_.omega_rad_s);
         volts = load_cell->sample_V(mounting_sign_ * hand_force_N);
       } else if (auto* inclinometer = std::get_if<Inclinometer>(&channel.sensor)) {
         volts = inclinometer->sample_V(state_.theta_rad);

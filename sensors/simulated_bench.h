@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "acquisition/backend.h"
+#include "acquisition/recording_csv.h"
 #include "acquisition/rig_file.h"
 #include "analysis/door_model.h"
 #include "analysis/simulator.h"
@@ -26,18 +27,52 @@
 
 namespace doorbench::sensors {
 
+// A force at the handle that also knows its strokes, so the bench can mark them and
+// mount the compression-only load cell the right way round.
+class StrokeForce : public UserForce {
+ public:
+  // 0 between strokes; otherwise an id that differs from the previous stroke's.
+  virtual int stroke_at(double time_s) const = 0;
+  // During a stroke: +1 if it is an opening (the cell is pressed by +F_u), −1 a closing.
+  virtual int mounting_at(double time_s) const = 0;
+  virtual double natural_duration_s() const = 0;  // how long it has something to do
+};
+
 // The virtual hand's open-close repeated `cycles` times, then no force.
-class CyclingHand final : public UserForce {
+class CyclingHand final : public StrokeForce {
  public:
   CyclingHand(const VirtualHandOptions& one_cycle, double handle_radius_m, int cycles);
   double force_N(double time_s, double theta_rad, double omega_rad_s) const override;
-  int stroke_at(double time_s) const;  // 1 opening, 2 closing, 0 between
+  int stroke_at(double time_s) const override;  // 1 opening, 2 closing, 0 between
+  int mounting_at(double time_s) const override { return stroke_at(time_s) == 2 ? -1 : 1; }
+  double natural_duration_s() const override { return cycles_ * period_s(); }
   double period_s() const { return hand_.duration_s(); }
 
  private:
   VirtualHand hand_;
   int cycles_;
 };
+
+// A scripted force: a recording's force_N (linearly interpolated) and its strokes; each
+// stroke is an opening if its mean force is positive, else a closing.
+class ScriptedForce final : public StrokeForce {
+ public:
+  explicit ScriptedForce(const Recording& recording);  // needs a stroke column
+  double force_N(double time_s, double theta_rad, double omega_rad_s) const override;
+  int stroke_at(double time_s) const override;
+  int mounting_at(double time_s) const override;
+  double natural_duration_s() const override { return time_s_.back(); }
+
+ private:
+  std::size_t sample_at(double time_s) const;  // the last sample at or before time_s
+  RecordedForce force_;
+  std::vector<double> time_s_;
+  std::vector<int> stroke_;
+  std::vector<int> mounting_;  // per sample, from its stroke's mean force
+};
+
+// The force a rig's [simulation] table names: its scripted force file, or the virtual hand.
+std::unique_ptr<StrokeForce> simulated_hand(const RigDefinition& rig, const DoorModel& model);
 
 // The door model a rig's [simulation] table names (the built-in reference door, or a
 // parameter file relative to the rig, with an optional effects file).
@@ -49,7 +84,7 @@ calibration::CalibrationRecord nominal_calibration(const RigChannel& channel);
 class SimulatedBench final : public AcquisitionBackend {
  public:
   // Every channel of the rig must use the simulated backend. `expected_duration_s`
-  // sizes the truth buffers so that reading does not allocate.
+  // sizes the truth buffers so that reading does not allocate. `model` must outlive it.
   SimulatedBench(const RigDefinition& rig, const DoorModel& model, double expected_duration_s);
 
   std::string description() const override;
@@ -79,7 +114,7 @@ class SimulatedBench final : public AcquisitionBackend {
   std::vector<ChannelInfo> channels_;
   std::vector<calibration::CalibrationRecord> calibrations_;
   std::vector<Channel> sensors_;
-  CyclingHand hand_;
+  std::unique_ptr<StrokeForce> hand_;
   DoorStepper stepper_;
   DoorState state_;
   std::size_t next_scan_ = 0;

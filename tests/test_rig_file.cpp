@@ -300,7 +300,7 @@ TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
         "address, range_V, calibration, unit, parameters");
   CHECK(error_of(minimal() + "door_model = \"physical\"\n") ==
         "rig.toml:14: simulation.door_model: unknown key; valid keys: door, model, effects, "
-        "seed, realtime, hand");
+        "force, seed, realtime, hand");
   CHECK(error_of(minimal() + "[simulation.hand]\ncycle = 2\n") ==
         "rig.toml:15: simulation.hand.cycle: unknown key; valid keys: cycles, target_deg, "
         "cycle_duration_s");
@@ -711,6 +711,18 @@ TEST_CASE("Rig file: an effects file must exist too", "[rig_file]") {
             (dir.path / "stiff.json").string() + ", which does not exist");
   CHECK(error_of(minimal() + "effects = \"\"\n", dir.path) ==
         "rig.toml:14: simulation.effects: must not be empty");
+}
+
+TEST_CASE("Rig file: a scripted force file replaces the virtual hand", "[rig_file]") {
+  const TempDir dir;
+  dir.write("push.csv", "time_s,force_N,rate_rad_s,stroke\n0,1,0,1\n1,2,0,1\n");
+  CHECK(parse(minimal() + "force = \"push.csv\"\n", dir.path).simulation->force == "push.csv");
+  CHECK(error_of(minimal() + "force = \"pull.csv\"\n", dir.path) ==
+        "rig.toml:14: simulation.force: \"pull.csv\" resolves to " +
+            (dir.path / "pull.csv").string() + ", which does not exist");
+  CHECK(error_of(minimal() + "force = \"push.csv\"\n[simulation.hand]\ncycles = 2\n", dir.path) ==
+        "rig.toml:14: simulation.force: a scripted force replaces the virtual hand: remove "
+        "[simulation.hand]");
 }
 
 TEST_CASE("Rig file: a missing or unreadable file", "[rig_file]") {

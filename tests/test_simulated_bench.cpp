@@ -164,3 +164,86 @@ TEST_CASE("Simulated bench: the seed makes the session repeatable", "[simulated_
     CHECK(a.read(channel).raw != c.read(channel).raw);
   }
 }
+
+#include <fstream>
+
+#include "analysis/parameter_file.h"
+#include "analysis/trajectory_io.h"
+#include "analysis/virtual_hand.h"
+#include "tests/allocation_counter.h"
+
+namespace {
+
+// The built-in rig with its [simulation.hand] table replaced by `force = "force.csv"`.
+std::string scripted_rig_text() {
+  std::string text(simulated_dishwasher_rig_text());
+  const auto hand = text.find("[simulation.hand]");
+  REQUIRE(hand != std::string::npos);
+  text = text.substr(0, hand);
+  const auto simulation = text.find("[simulation]");
+  text.insert(text.find('\n', simulation) + 1, "force = \"force.csv\"\n");
+  return text;
+}
+
+}  // namespace
+
+TEST_CASE("Simulated bench: a scripted force drives the door, its strokes mount the load cell",
+          "[simulated_bench][session]") {
+  // The script: the virtual hand's force from a plain simulation, strokes 1 and 2.
+  const DoorModel door = reference_model(ModelKind::kPhysical);
+  VirtualHandOptions hand_options;
+  hand_options.duration_s = 4.0;
+  const VirtualHand hand(hand_options, door.geometry().handle_radius_m);
+  std::vector<double> times(4001);
+  for (std::size_t i = 0; i < times.size(); ++i) times[i] = i * 1e-3;
+  Trajectory run = simulate(door, hand, DoorState{}, times);
+  for (double t : times) run.stroke.push_back(hand.stroke_at(t));
+  const auto dir = std::filesystem::temp_directory_path() / "doorbench_test_scripted_force";
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  write_recording_csv_file(dir / "force.csv", to_recording(run, "test script"));
+
+  const RigDefinition rig = parse_rig(scripted_rig_text(), "scripted.toml", dir);
+  REQUIRE(rig.simulation->force == "force.csv");
+  const DoorModel model = sensors::simulated_door_model(rig);
+  const auto script = sensors::simulated_hand(rig, model);
+  CHECK(script->natural_duration_s() == 4.0);
+  sensors::SimulatedBench bench(rig, model, 4.0);
+  RecordOptions options;
+  options.duration_s = 4.0;
+  const auto path = dir / "scripted.h5";
+  record_session(bench, SessionMetadata{}, path, options);
+
+  const SessionReader session(path);
+  std::vector<std::string> starts;
+  for (const SessionEvent& event : session.events()) {
+    if (event.kind == "stroke_start") starts.push_back(event.detail);
+  }
+  CHECK(starts == std::vector<std::string>{"opening", "closing"});
+  // The truth's force is the script's, sample for sample.
+  const std::vector<double> truth_force = session.read_group_dataset("truth", "force_N");
+  REQUIRE(truth_force.size() == 4000);
+  for (std::size_t i = 0; i < truth_force.size(); i += 97) {
+    CHECK(truth_force[i] == Approx(run.force_N[i]).margin(1e-9));
+  }
+  // The same force replayed gives the same door (the bench's stepper matches simulate()).
+  const std::vector<double> theta = session.read_group_dataset("truth", "theta_rad");
+  CHECK(*std::max_element(theta.begin(), theta.end()) > 1.2);
+}
+
+TEST_CASE("Simulated bench: reading scans allocates nothing once started",
+          "[simulated_bench][allocation]") {
+  const RigDefinition rig = built_in_rig();
+  const DoorModel model = sensors::simulated_door_model(rig);
+  sensors::SimulatedBench bench(rig, model, 18.0);
+  ScanBlock block(bench.channels().size(), 100);
+  bench.start();
+  block.events.clear();
+  bench.read(block);  // the first block, with the start trigger
+  const long long before = doorbench::testing::allocations();
+  for (int i = 0; i < 170; ++i) {  // 17 s: every stroke of the three cycles
+    block.events.clear();
+    REQUIRE(bench.read(block) == 100);
+  }
+  CHECK(doorbench::testing::allocations() - before == 0);
+}
