@@ -2,6 +2,7 @@
 // through the ideal inverse sensor models (the nominal calibration records), must match
 // the simulator's truth within each sensor's noise; the same seed gives the same session.
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -246,4 +247,20 @@ TEST_CASE("Simulated bench: reading scans allocates nothing once started",
     REQUIRE(bench.read(block) == 100);
   }
   CHECK(doorbench::testing::allocations() - before == 0);
+}
+
+// Only a lower bound: a slow machine makes this longer, never shorter, so the check does
+// not depend on how busy the machine is.
+TEST_CASE("Simulated bench: realtime = true paces the scans in real time", "[simulated_bench]") {
+  RigDefinition rig = built_in_rig();
+  rig.simulation->realtime = true;
+  const DoorModel model = sensors::simulated_door_model(rig);
+  sensors::SimulatedBench bench(rig, model, 0.3);
+  ScanBlock block(bench.channels().size(), 100);
+  const auto started = std::chrono::steady_clock::now();
+  bench.start();
+  for (int i = 0; i < 3; ++i) bench.read(block);
+  const double elapsed_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+  CHECK(elapsed_s >= 0.3);
 }
