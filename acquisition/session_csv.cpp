@@ -104,10 +104,24 @@ Recording session_to_recording(const SessionReader& session) {
     std::size_t next_event = 0;
     int current = 0, number = 0, mounting = 1;
     for (std::size_t i = 0; i < count; ++i) {
-      while (next_event < events.size() && events[next_event].time_s <= recording.time_s[i]) {
+      // An event at a sample's time applies to that sample (a part in 1e9 of slack for
+      // times that went through arithmetic).
+      const double slack = 1e-9 * std::max(1.0, std::abs(recording.time_s[i]));
+      while (next_event < events.size() &&
+             events[next_event].time_s <= recording.time_s[i] + slack) {
         const SessionEvent& event = events[next_event++];
         if (event.kind == "stroke_start") {
-          current = ++number;
+          // Imported strokes keep their ids ("stroke 7"); others are numbered in order.
+          int id = 0;
+          if (event.detail.rfind("stroke ", 0) == 0) {
+            try {
+              id = std::stoi(event.detail.substr(7));
+            } catch (const std::exception&) {
+              id = 0;
+            }
+          }
+          number = id > 0 ? id : number + 1;
+          current = number;
           any_stroke = true;
           if (event.detail == "opening") mounting = 1;
           if (event.detail == "closing") mounting = -1;
@@ -148,17 +162,24 @@ void recording_to_session(const Recording& recording, const std::filesystem::pat
                           const SessionMetadata& metadata) {
   const std::size_t count = recording.size();
   if (count == 0) throw std::invalid_argument(recording.source + ": no samples to import");
-  // A uniform clock when every interval matches the mean to a part in a million.
+  // A uniform clock only when it gives back every time exactly (as the reader computes
+  // them: first + i / rate), trying the rate rounded to whole hertz first; otherwise the
+  // times are stored as they are.
   double rate_hz = 0.0;
   if (count >= 2) {
-    const double mean_interval =
-        (recording.time_s.back() - recording.time_s.front()) / static_cast<double>(count - 1);
-    bool uniform = true;
-    for (std::size_t i = 1; i < count && uniform; ++i) {
-      const double interval = recording.time_s[i] - recording.time_s[i - 1];
-      uniform = std::abs(interval - mean_interval) <= 1e-6 * mean_interval;
+    const double first = recording.time_s.front();
+    const double mean_rate = static_cast<double>(count - 1) / (recording.time_s.back() - first);
+    for (double candidate : {std::round(mean_rate), mean_rate}) {
+      if (!(candidate > 0) || std::abs(candidate - mean_rate) > 1e-6 * mean_rate) continue;
+      bool exact = true;
+      for (std::size_t i = 0; i < count && exact; ++i) {
+        exact = first + static_cast<double>(i) / candidate == recording.time_s[i];
+      }
+      if (exact) {
+        rate_hz = candidate;
+        break;
+      }
     }
-    if (uniform) rate_hz = 1.0 / mean_interval;
   }
 
   SessionWriter writer(path, metadata);

@@ -11,8 +11,9 @@
 // few µs are not resampled). Strokes come from stroke_start/stroke_end events.
 //
 // Import makes a session of a recording: one float64 channel per column, in the column's
-// unit, with no calibration (the values already are physical); uniform times become a
-// sample clock, others explicit times; strokes become events; the CSV's metadata lines
+// unit, with no calibration (the values already are physical); times become a sample
+// clock only when that clock gives every time back exactly, else they are stored as
+// explicit times; strokes become events that keep their ids; the CSV's metadata lines
 // are kept as attributes of the session's "import" group. A column whose name starts with
 // "inclinometer" becomes an inclinometer channel (narrow range, not the door angle).
 #include <filesystem>

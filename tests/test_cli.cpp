@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <sstream>
@@ -28,6 +29,7 @@
 
 #include "acquisition/csv_table.h"
 #include "acquisition/recording_csv.h"
+#include "acquisition/session_file.h"
 #include "analysis/door_model.h"
 #include "analysis/parameter_file.h"
 
@@ -306,7 +308,9 @@ TEST_CASE("CLI: --help for the command and every verb exits 0 and lists the opti
     std::vector<std::string> mentions;
   };
   const std::vector<HelpCase> cases = {
-      {{}, {"Usage:", "--help", "--version", "model", "simulate", "demo"}},
+      {{},
+       {"Usage:", "--help", "--version", "model", "simulate", "demo", "record", "info", "export",
+        "import"}},
       {{"model"}, {"Usage:", "model", "torque"}},
       {{"model", "torque"},
        {"Usage:", "model torque", "--model", "sensory", "physical", "--params", "--effects", "--in",
@@ -315,6 +319,12 @@ TEST_CASE("CLI: --help for the command and every verb exits 0 and lists the opti
        {"Usage:", "simulate", "--model", "--params", "--effects", "--force", "--hand", "open-close",
         "--target-deg", "--duration-s", "--rate-hz", "--out"}},
       {{"demo"}, {"Usage:", "demo", "--out"}},
+      {{"record"},
+       {"Usage:", "record", "--rig", "--duration-s", "--out", "--operator", "--product",
+        "--notes"}},
+      {{"info"}, {"Usage:", "info", "SESSION"}},
+      {{"export"}, {"Usage:", "export", "SESSION", "--csv"}},
+      {{"import"}, {"Usage:", "import", "CSV", "--out", "--operator", "--product", "--notes"}},
   };
   for (const HelpCase& help : cases) {
     std::vector<std::string> args = help.verb;
@@ -903,4 +913,558 @@ TEST_CASE("CLI: demo fails with exit 1 when its folder cannot be made", "[cli]")
   const RunResult result = run_doorbench({"demo", "--out", file}, scratch);
   require_failure(result);
   CHECK_THAT(result.err, Contains(file));
+}
+
+// =========================================================================================
+// 8. Sessions: record, info, export, import
+
+namespace {
+
+std::string shipped_rig_text() {
+  const fs::path rig = fs::path(DOORBENCH_SOURCE_DIR) / "rigs" / "simulated-dishwasher.toml";
+  REQUIRE(fs::is_regular_file(rig));
+  return read_text(rig);
+}
+
+// `text` with its one occurrence of `from` replaced by `to`.
+std::string replace_once(std::string text, const std::string& from, const std::string& to) {
+  const auto position = text.find(from);
+  REQUIRE(position != std::string::npos);
+  REQUIRE(text.find(from, position + 1) == std::string::npos);
+  text.replace(position, from.size(), to);
+  return text;
+}
+
+// `text` with every occurrence of `from` replaced by `to`.
+std::string replace_all(std::string text, const std::string& from, const std::string& to) {
+  for (auto position = text.find(from); position != std::string::npos;
+       position = text.find(from, position + to.size())) {
+    text.replace(position, from.size(), to);
+  }
+  return text;
+}
+
+// The line (from 1) of `text` on which `needle` starts.
+int line_of(const std::string& text, const std::string& needle) {
+  const auto position = text.find(needle);
+  REQUIRE(position != std::string::npos);
+  return 1 + static_cast<int>(
+                 std::count(text.begin(), text.begin() + static_cast<long>(position), '\n'));
+}
+
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  return lines;
+}
+
+std::vector<std::string> words_of(const std::string& line) {
+  std::vector<std::string> words;
+  std::istringstream in(line);
+  for (std::string word; in >> word;) words.push_back(word);
+  return words;
+}
+
+// The indented lines that follow the line starting with `heading`.
+std::vector<std::string> section_lines(const std::string& text, const std::string& heading) {
+  const std::vector<std::string> lines = lines_of(text);
+  std::vector<std::string> section;
+  auto line = std::find_if(lines.begin(), lines.end(),
+                           [&](const std::string& l) { return l.rfind(heading, 0) == 0; });
+  REQUIRE(line != lines.end());
+  for (++line; line != lines.end() && line->rfind(" ", 0) == 0; ++line) section.push_back(*line);
+  return section;
+}
+
+// A successful `record`: nothing on stdout; on stderr status lines, none of them an error, the
+// last one naming the session.
+void require_recorded(const RunResult& result, const std::string& session) {
+  require_success(result);
+  INFO("stdout: " << result.out << "\nstderr: " << result.err);
+  CHECK(result.out.empty());
+  REQUIRE_THAT(result.err, EndsWith("\n"));
+  const std::vector<std::string> lines = lines_of(result.err);
+  REQUIRE(!lines.empty());
+  for (const std::string& line : lines) CHECK_THAT(line, !StartsWith("doorbench: "));
+  CHECK_THAT(lines.back(), StartsWith("wrote " + session));
+}
+
+// The shipped rig with a 1.5 s hand cycle: 3 s hold two openings and two closings.
+fs::path quick_cycle_rig(const ScratchDir& scratch) {
+  return scratch.write(
+      "quick-cycle.toml",
+      replace_once(shipped_rig_text(), "cycle_duration_s = 6.0", "cycle_duration_s = 1.5"));
+}
+
+// A 3 s session recorded on quick_cycle_rig().
+std::string record_quick_session(const ScratchDir& scratch) {
+  const std::string rig = quick_cycle_rig(scratch).string();
+  const std::string session = (scratch / "quick.h5").string();
+  const RunResult result =
+      run_doorbench({"record", "--rig", rig, "--duration-s", "3", "--out", session}, scratch);
+  require_recorded(result, session);
+  return session;
+}
+
+// The lines of the CSV exchange format for `rows` rows at 1 kHz: rows 3, 4, ... (after a
+// metadata line and the header), so that row r is on line r + 3.
+std::vector<std::string> csv_rows(int rows) {
+  std::vector<std::string> lines;
+  for (int row = 0; row < rows; ++row) {
+    const int stroke = row >= 3 && row < 8 ? 1 : 0;
+    lines.push_back(doorbench::format_csv_number(row / 1000.0) + "," +
+                    doorbench::format_csv_number(0.5 * row) + "," +
+                    doorbench::format_csv_number(0.01 * row) + "," + std::to_string(stroke));
+  }
+  return lines;
+}
+
+std::string csv_text(const std::vector<std::string>& rows) {
+  std::string text = "# handle_radius_m: 0.58\ntime_s,force_N,rate_rad_s,stroke\n";
+  for (const std::string& row : rows) text += row + "\n";
+  return text;
+}
+
+}  // namespace
+
+TEST_CASE("CLI: record with the built-in rig writes a session of force, angle and rate",
+          "[cli][session]") {
+  ScratchDir scratch;
+  const std::string session = (scratch / "first session.h5").string();
+  const RunResult result =
+      run_doorbench({"record", "--duration-s", "2", "--out", session, "--operator", "Zoë Weber",
+                     "--product", "DW-60 #17", "--notes", "first try, lab 2; door cold"},
+                    scratch);
+  require_recorded(result, session);
+
+  const doorbench::SessionReader reader(session);
+  const std::vector<doorbench::ChannelInfo>& channels = reader.channels();
+  const std::array<std::array<std::string, 3>, 3> expected = {{{"force", "load_cell", "N"},
+                                                               {"angle", "inclinometer", "rad"},
+                                                               {"rate", "gyroscope", "rad/s"}}};
+  REQUIRE(channels.size() == expected.size());
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    INFO("channel " << i);
+    CHECK(channels[i].name == expected[i][0]);
+    CHECK(channels[i].sensor_kind == expected[i][1]);
+    CHECK(channels[i].unit == expected[i][2]);
+    CHECK(channels[i].sample_rate_hz == 1000.0);
+    CHECK(reader.sample_count(channels[i].name) == 2000);
+    CHECK(!channels[i].calibration_id.empty());
+  }
+
+  const doorbench::SessionMetadata& metadata = reader.metadata();
+  CHECK(metadata.operator_name == "Zoë Weber");
+  CHECK(metadata.product_id == "DW-60 #17");
+  CHECK(metadata.notes == "first try, lab 2; door cold");
+  CHECK(metadata.rig_name == "simulated-dishwasher");
+  CHECK(metadata.rig_definition == shipped_rig_text());
+  CHECK_THAT(metadata.software_version, StartsWith("doorbench "));
+  CHECK(metadata.start_time_utc.size() == 20);  // 2026-11-21T10:30:00Z
+  CHECK_THAT(metadata.start_time_utc, EndsWith("Z"));
+
+  // Every channel's calibration record is in the session, in full.
+  const auto records = reader.calibrations();
+  REQUIRE(records.size() == 3);
+  for (const doorbench::ChannelInfo& channel : channels) {
+    const auto record = std::find_if(records.begin(), records.end(),
+                                     [&](const auto& r) { return r.id == channel.calibration_id; });
+    REQUIRE(record != records.end());
+    CHECK(record->unit == channel.unit);
+  }
+
+  // One software trigger started it.
+  const std::vector<doorbench::SessionEvent> events = reader.events();
+  CHECK(std::count_if(events.begin(), events.end(),
+                      [](const auto& e) { return e.kind == "trigger"; }) == 1);
+
+  // The simulated bench's truth, one value per scan.
+  CHECK(reader.group_datasets("truth") ==
+        std::vector<std::string>{"force_N", "omega_rad_s", "theta_rad", "time_s"});
+  for (const std::string& name : reader.group_datasets("truth")) {
+    INFO("truth/" << name);
+    CHECK(reader.read_group_dataset("truth", name).size() == 2000);
+  }
+  CHECK(std::stod(reader.read_group_attribute("truth", "handle_radius_m")) == 0.58);
+  const std::vector<double> truth_force = reader.read_group_dataset("truth", "force_N");
+  CHECK(*std::max_element(truth_force.begin(), truth_force.end()) > 5.0);  // the hand pushed
+}
+
+TEST_CASE("CLI: record never overwrites a session", "[cli][session]") {
+  ScratchDir scratch;
+  const std::string session = (scratch / "s.h5").string();
+  require_recorded(run_doorbench({"record", "--duration-s", "2", "--out", session}, scratch),
+                   session);
+  const std::string before = read_text(session);
+
+  const RunResult again = run_doorbench(
+      {"record", "--duration-s", "3", "--out", session, "--operator", "someone else"}, scratch);
+  require_failure(again);
+  CHECK_THAT(again.err, Contains(session));
+  CHECK_THAT(again.err, Contains("already exists"));
+  // The first session is untouched.
+  CHECK(read_text(session) == before);
+  const doorbench::SessionReader reader(session);
+  CHECK(reader.sample_count("force") == 2000);
+  CHECK(reader.metadata().operator_name.empty());
+}
+
+TEST_CASE("CLI: record with a broken rig file names its file, line and key", "[cli][session]") {
+  ScratchDir scratch;
+  const std::string shipped = shipped_rig_text();
+  const std::string session = (scratch / "s.h5").string();
+  auto record_with = [&](const std::string& text) {
+    const std::string rig = scratch.write("broken rig.toml", text).string();
+    const RunResult result =
+        run_doorbench({"record", "--rig", rig, "--duration-s", "2", "--out", session}, scratch);
+    require_failure(result);
+    CHECK(!fs::exists(session));
+    return std::make_pair(rig, result);
+  };
+
+  SECTION("clock.sample_rate_hz misspelt") {
+    const std::string text =
+        replace_once(shipped, "\nsample_rate_hz = 1000.0", "\nsample_rte_hz = 1000.0");
+    const auto [rig, result] = record_with(text);
+    CHECK(line_of(text, "sample_rte_hz") == line_of(shipped, "\nsample_rate_hz = 1000.0") + 1);
+    CHECK_THAT(result.err, StartsWith("doorbench: " + rig + ":" +
+                                      std::to_string(line_of(text, "sample_rte_hz")) +
+                                      ": clock.sample_rte_hz: "));
+    CHECK_THAT(result.err, Contains("unknown key"));
+    CHECK_THAT(result.err, Contains("sample_rate_hz"));  // among the valid keys
+  }
+  SECTION("the load cell's noise_rms_N negative") {
+    const std::string text = replace_once(shipped, "noise_rms_N = 0.2 ", "noise_rms_N = -1  ");
+    const auto [rig, result] = record_with(text);
+    CHECK_THAT(result.err, StartsWith("doorbench: " + rig + ":" +
+                                      std::to_string(line_of(text, "noise_rms_N = -1")) +
+                                      ": channels[0].parameters.noise_rms_N: "));
+    CHECK_THAT(result.err, Contains("-1"));
+    CHECK_THAT(result.err, Contains(">= 0"));
+  }
+  SECTION("the hand's cycles zero") {
+    const std::string text = replace_once(shipped, "cycles = 3 ", "cycles = 0 ");
+    const auto [rig, result] = record_with(text);
+    CHECK_THAT(result.err,
+               StartsWith("doorbench: " + rig + ":" + std::to_string(line_of(text, "cycles = 0")) +
+                          ": simulation.hand.cycles: "));
+  }
+  SECTION("a rig file that is not there") {
+    const std::string missing = (scratch / "no-such-rig.toml").string();
+    const RunResult result =
+        run_doorbench({"record", "--rig", missing, "--duration-s", "2", "--out", session}, scratch);
+    require_failure(result);
+    CHECK_THAT(result.err, StartsWith("doorbench: " + missing + ": "));
+    CHECK(!fs::exists(session));
+  }
+}
+
+TEST_CASE("CLI: record refuses a rig whose channels are on comedi", "[cli][session]") {
+  ScratchDir scratch;
+  std::string text =
+      replace_all(shipped_rig_text(), "backend = \"simulated\"", "backend = \"comedi\"");
+  const auto simulation = text.find("\n[simulation]");
+  REQUIRE(simulation != std::string::npos);
+  text.erase(simulation + 1);  // no [simulation] without simulated channels
+  const std::string rig = scratch.write("comedi.toml", text).string();
+  const std::string session = (scratch / "s.h5").string();
+  const RunResult result =
+      run_doorbench({"record", "--rig", rig, "--duration-s", "2", "--out", session}, scratch);
+  require_failure(result);
+  CHECK_THAT(result.err, Contains(rig));
+  CHECK_THAT(result.err, Contains("comedi"));
+  CHECK_THAT(result.err, Contains("cannot record"));
+  CHECK_THAT(result.err, Contains("yet"));
+  CHECK(!fs::exists(session));
+}
+
+TEST_CASE("CLI: record --duration-s 0 is a usage error", "[cli][session]") {
+  ScratchDir scratch;
+  const std::string session = (scratch / "s.h5").string();
+  const RunResult result =
+      run_doorbench({"record", "--duration-s", "0", "--out", session}, scratch);
+  require_usage_error(result);
+  CHECK_THAT(result.err, Contains("--duration-s"));
+  CHECK(!fs::exists(session));
+}
+
+TEST_CASE("CLI: info lists the channels, events and calibration records", "[cli][session]") {
+  ScratchDir scratch;
+  const std::string session = record_quick_session(scratch);
+  const RunResult result = run_doorbench({"info", session}, scratch);
+  require_success(result);
+  CHECK(result.err.empty());
+  INFO("stdout: " << result.out);
+  const doorbench::SessionReader reader(session);
+
+  // name, sensor, samples, rate Hz, raw unit, unit, calibration
+  const std::vector<std::string> channel_lines = section_lines(result.out, "channels:");
+  const std::array<std::array<std::string, 3>, 3> expected = {{{"force", "load_cell", "N"},
+                                                               {"angle", "inclinometer", "rad"},
+                                                               {"rate", "gyroscope", "rad/s"}}};
+  for (const auto& [name, kind, unit] : expected) {
+    INFO("channel " << name);
+    const auto line = std::find_if(channel_lines.begin(), channel_lines.end(),
+                                   [&](const std::string& l) { return words_of(l).at(0) == name; });
+    REQUIRE(line != channel_lines.end());
+    const std::vector<std::string> words = words_of(*line);
+    REQUIRE(words.size() == 7);
+    CHECK(words[1] == kind);
+    CHECK(words[2] == "3000");
+    CHECK(words[3] == "1000");
+    CHECK(words[5] == unit);
+    CHECK(words[6] == reader.channel(name).calibration_id);
+  }
+
+  // events: TOTAL (KIND COUNT, ...)
+  const std::vector<doorbench::SessionEvent> events = reader.events();
+  auto count = [&](const std::string& kind) {
+    return static_cast<double>(
+        std::count_if(events.begin(), events.end(), [&](const auto& e) { return e.kind == kind; }));
+  };
+  REQUIRE(count("stroke_start") >= 4);
+  const std::vector<std::string> lines = lines_of(result.out);
+  const auto events_line = std::find_if(
+      lines.begin(), lines.end(), [](const std::string& l) { return l.rfind("events: ", 0) == 0; });
+  REQUIRE(events_line != lines.end());
+  CHECK(numbers_after(*events_line, "events:") ==
+        std::vector<double>{static_cast<double>(events.size())});
+  CHECK(numbers_after(*events_line, "trigger") == std::vector<double>{1.0});
+  CHECK(numbers_after(*events_line, "stroke_start") == std::vector<double>{count("stroke_start")});
+  CHECK(numbers_after(*events_line, "stroke_end") == std::vector<double>{count("stroke_end")});
+
+  // The three calibration records with their sensors and units.
+  const std::vector<std::string> calibration_lines = section_lines(result.out, "calibrations:");
+  CHECK(calibration_lines.size() == 3);
+  const auto records = reader.calibrations();
+  REQUIRE(records.size() == 3);
+  for (const auto& record : records) {
+    INFO("record " << record.id);
+    const auto line =
+        std::find_if(calibration_lines.begin(), calibration_lines.end(),
+                     [&](const std::string& l) { return words_of(l).at(0) == record.id; });
+    REQUIRE(line != calibration_lines.end());
+    CHECK_THAT(*line, Contains(record.sensor_kind));
+    CHECK_THAT(*line, Contains(record.sensor_serial));
+    CHECK_THAT(*line, Contains(" " + record.unit + " = "));
+  }
+}
+
+TEST_CASE("CLI: info and export fail with exit 1 on a missing file or one that is not a session",
+          "[cli][session]") {
+  ScratchDir scratch;
+  const std::string csv = (scratch / "out.csv").string();
+  SECTION("info of a missing file") {
+    const std::string missing = (scratch / "no-such-session.h5").string();
+    const RunResult result = run_doorbench({"info", missing}, scratch);
+    require_failure(result);
+    CHECK_THAT(result.err, StartsWith("doorbench: " + missing + ": "));
+  }
+  SECTION("info of a text file") {
+    const std::string text = scratch.write("text.h5", "time_s,force_N\n0,0\n").string();
+    const RunResult result = run_doorbench({"info", text}, scratch);
+    require_failure(result);
+    CHECK_THAT(result.err, StartsWith("doorbench: " + text + ": "));
+    CHECK_THAT(result.err, Contains("not a doorbench session"));
+  }
+  SECTION("export of a missing file") {
+    const std::string missing = (scratch / "no-such-session.h5").string();
+    const RunResult result = run_doorbench({"export", missing, "--csv", csv}, scratch);
+    require_failure(result);
+    CHECK_THAT(result.err, StartsWith("doorbench: " + missing + ": "));
+    CHECK(!fs::exists(csv));
+  }
+  SECTION("export of a text file") {
+    const std::string text = scratch.write("text.h5", "time_s,force_N\n0,0\n").string();
+    const RunResult result = run_doorbench({"export", text, "--csv", csv}, scratch);
+    require_failure(result);
+    CHECK_THAT(result.err, Contains("not a doorbench session"));
+    CHECK(!fs::exists(csv));
+  }
+}
+
+TEST_CASE("CLI: export writes the session's physical values, strokes and the signed force",
+          "[cli][session]") {
+  ScratchDir scratch;
+  const std::string session = record_quick_session(scratch);
+  const std::string csv = (scratch / "quick.csv").string();
+  const RunResult result = run_doorbench({"export", session, "--csv", csv}, scratch);
+  require_success(result);
+  CHECK(result.out.empty());
+  CHECK_THAT(result.err, !StartsWith("doorbench: "));
+
+  const doorbench::CsvTable table = doorbench::parse_csv_table(read_text(csv), csv);
+  CHECK(table.column_names == std::vector<std::string>{"time_s", "force_N", "rate_rad_s", "stroke",
+                                                       "inclinometer_angle_rad"});
+  const doorbench::Recording run = doorbench::read_recording_csv(csv);
+  REQUIRE(run.handle_radius_m);
+  CHECK(*run.handle_radius_m == 0.58);
+  REQUIRE(run.sample_rate_hz);
+  CHECK(*run.sample_rate_hz == 1000.0);
+  REQUIRE(run.size() == 3000);
+  REQUIRE(run.rate_rad_s);
+  REQUIRE(run.stroke);
+  CHECK(!run.angle_rad);  // the inclinometer is narrow-range, not the door angle
+  REQUIRE(run.extra_names == std::vector<std::string>{"inclinometer_angle_rad"});
+
+  // The values are the session's physical values.
+  const doorbench::SessionReader reader(session);
+  const doorbench::ChannelSlice force_slice = reader.read("force");
+  const std::vector<double> force = reader.physical("force", force_slice);
+  CHECK(run.time_s == force_slice.time_s);
+  CHECK(*run.rate_rad_s == reader.physical("rate", reader.read("rate")));
+  CHECK(run.extra_columns[0] == reader.physical("angle", reader.read("angle")));
+
+  // Strokes are numbered 1, 2, ... in order, each one run of rows; 0 between them.
+  const std::vector<int>& stroke = *run.stroke;
+  int strokes = 0;
+  for (std::size_t i = 1; i < stroke.size(); ++i) {
+    if (stroke[i] != stroke[i - 1] && stroke[i] != 0) {
+      if (stroke[i] != strokes + 1)
+        FAIL("row " << i << ": stroke " << stroke[i] << " after " << strokes);
+      strokes = stroke[i];
+    }
+  }
+  CHECK(stroke.front() == 0);
+  // As many as the session's stroke_start events; the odd ones are the openings.
+  std::vector<std::string> details;
+  for (const auto& event : reader.events()) {
+    if (event.kind == "stroke_start") details.push_back(event.detail);
+  }
+  REQUIRE(strokes == static_cast<int>(details.size()));
+  REQUIRE(strokes >= 4);
+  for (int k = 1; k <= strokes; ++k) {
+    CHECK(details[static_cast<std::size_t>(k - 1)] == (k % 2 == 1 ? "opening" : "closing"));
+  }
+
+  // The force is the load cell's reading, + in openings and − in closings: mostly positive
+  // in the openings, mostly negative in the closings, and following the hand's true force.
+  const std::vector<double> truth = reader.read_group_dataset("truth", "force_N");
+  REQUIRE(truth.size() == run.size());
+  std::map<int, std::array<int, 2>> signs;  // stroke: {positive, negative} rows
+  std::size_t pressed = 0, following = 0;
+  for (std::size_t i = 0; i < run.size(); ++i) {
+    if (std::abs(run.force_N[i]) != std::abs(force[i])) {
+      FAIL("row " << i << ": force_N " << run.force_N[i] << " is not ± " << force[i]);
+    }
+    if (stroke[i] == 0) continue;
+    const double mounting = stroke[i] % 2 == 1 ? 1.0 : -1.0;
+    if (run.force_N[i] != mounting * force[i]) {
+      FAIL("row " << i << " (stroke " << stroke[i] << "): force_N " << run.force_N[i] << " is not "
+                  << mounting << " × " << force[i]);
+    }
+    if (run.force_N[i] > 0) ++signs[stroke[i]][0];
+    if (run.force_N[i] < 0) ++signs[stroke[i]][1];
+    if (mounting * truth[i] > 5.0) {  // the hand presses the load cell
+      ++pressed;
+      if (std::abs(run.force_N[i] - truth[i]) < 0.05 * std::abs(truth[i]) + 2.0) ++following;
+    }
+  }
+  for (const auto& [id, count] : signs) {
+    INFO("stroke " << id << ": " << count[0] << " rows positive, " << count[1] << " negative");
+    const int mostly = id % 2 == 1 ? count[0] : count[1];
+    CHECK(mostly > 2 * (count[0] + count[1]) / 3);
+  }
+  INFO(following << " of " << pressed << " pressed rows follow the true force");
+  CHECK(pressed > 500);
+  CHECK(following > 0.95 * static_cast<double>(pressed));
+}
+
+TEST_CASE("CLI: import of an exported CSV and export again give back the same columns",
+          "[cli][session]") {
+  ScratchDir scratch;
+  const std::string session = record_quick_session(scratch);
+  const std::string first_csv = (scratch / "first.csv").string();
+  require_success(run_doorbench({"export", session, "--csv", first_csv}, scratch));
+
+  const std::string imported = (scratch / "imported.h5").string();
+  const RunResult result = run_doorbench(
+      {"import", first_csv, "--out", imported, "--operator", "Ann", "--product", "DW-60"}, scratch);
+  require_success(result);
+  CHECK(result.out.empty());
+  CHECK_THAT(result.err, !StartsWith("doorbench: "));
+  CHECK_THAT(result.err, Contains(imported));
+
+  const std::string second_csv = (scratch / "second.csv").string();
+  require_success(run_doorbench({"export", imported, "--csv", second_csv}, scratch));
+
+  const doorbench::Recording first = doorbench::read_recording_csv(first_csv);
+  const doorbench::Recording second = doorbench::read_recording_csv(second_csv);
+  REQUIRE(second.size() == first.size());
+  CHECK(second.force_N == first.force_N);
+  REQUIRE(second.rate_rad_s);
+  CHECK(*second.rate_rad_s == *first.rate_rad_s);
+  REQUIRE(second.stroke);
+  CHECK(*second.stroke == *first.stroke);
+  CHECK(second.time_s == first.time_s);
+  CHECK(second.extra_names == first.extra_names);
+  CHECK(second.extra_columns == first.extra_columns);
+  CHECK(!second.angle_rad);
+  REQUIRE(second.handle_radius_m);
+  CHECK(*second.handle_radius_m == 0.58);
+
+  const doorbench::SessionReader reader(imported);
+  CHECK(reader.metadata().operator_name == "Ann");
+  CHECK(reader.metadata().product_id == "DW-60");
+  CHECK(reader.sample_count("force") == first.size());
+  CHECK(reader.channel("force").unit == "N");
+  CHECK(reader.channel("rate").unit == "rad/s");
+}
+
+TEST_CASE("CLI: import rejects a broken CSV, naming its line, and leaves no session",
+          "[cli][session]") {
+  ScratchDir scratch;
+  const std::string session = (scratch / "s.h5").string();
+  std::vector<std::string> rows = csv_rows(20);  // row 4 is on line 7
+  SECTION("a row with a missing field") {
+    rows[4] = rows[4].substr(0, rows[4].rfind(','));
+  }
+  SECTION("time_s not increasing") {
+    rows[4] = doorbench::format_csv_number(3 / 1000.0) + rows[4].substr(rows[4].find(','));
+  }
+  const std::string csv = scratch.write("broken.csv", csv_text(rows)).string();
+  REQUIRE(lines_of(read_text(csv)).at(6) == rows[4]);
+  const RunResult result = run_doorbench({"import", csv, "--out", session}, scratch);
+  require_failure(result);
+  CHECK_THAT(result.err, StartsWith("doorbench: " + csv + ":7: "));
+  CHECK(!fs::exists(session));
+}
+
+TEST_CASE("CLI: import refuses to overwrite a session", "[cli][session]") {
+  ScratchDir scratch;
+  const std::string csv = scratch.write("run.csv", csv_text(csv_rows(20))).string();
+  const std::string session = scratch.write("s.h5", "not yet a session").string();
+  const RunResult result = run_doorbench({"import", csv, "--out", session}, scratch);
+  require_failure(result);
+  CHECK_THAT(result.err, Contains(session));
+  CHECK_THAT(result.err, Contains("already exists"));
+  CHECK(read_text(session) == "not yet a session");
+}
+
+// Known bug: import makes a uniform clock of rate 1 / mean interval, which for 30 rows at
+// 100 Hz (t = 0, 0.01, ..., 0.29) is 100.00000000000001 Hz; the clock's times then fall an
+// ulp below the CSV's, while the stroke events keep the CSV's times, so export starts and
+// ends every stroke one row late (and time_s comes back as 0.009999999999999998, ...).
+TEST_CASE("CLI: import and export keep the times and strokes of a 100 Hz recording",
+          "[cli][session]") {
+  ScratchDir scratch;
+  std::string text = "# handle_radius_m: 0.58\ntime_s,force_N,rate_rad_s,stroke\n";
+  for (int row = 0; row < 30; ++row) {
+    const int stroke = row >= 5 && row < 10 ? 1 : row >= 15 && row < 20 ? 2 : 0;
+    text += doorbench::format_csv_number(row / 100.0) + "," + std::to_string(row) + "," +
+            doorbench::format_csv_number(row / 10.0) + "," + std::to_string(stroke) + "\n";
+  }
+  const std::string csv = scratch.write("100hz.csv", text).string();
+  const std::string session = (scratch / "100hz.h5").string();
+  const std::string again = (scratch / "again.csv").string();
+  require_success(run_doorbench({"import", csv, "--out", session}, scratch));
+  require_success(run_doorbench({"export", session, "--csv", again}, scratch));
+  const doorbench::Recording original = doorbench::read_recording_csv(csv);
+  const doorbench::Recording exported = doorbench::read_recording_csv(again);
+  REQUIRE(exported.size() == original.size());
+  CHECK(exported.force_N == original.force_N);
+  REQUIRE(exported.stroke);
+  CHECK(*exported.stroke == *original.stroke);
+  CHECK(exported.time_s == original.time_s);
 }

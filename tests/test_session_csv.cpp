@@ -84,3 +84,21 @@ TEST_CASE("Session CSV: importing over an existing session is refused", "[sessio
   CHECK_THROWS_WITH(recording_to_session(original, path, SessionMetadata{}),
                     Catch::Matchers::Contains("already exists"));
 }
+
+TEST_CASE("Session CSV: stroke ids and regular times survive the round trip", "[session_csv]") {
+  // 30 rows at 100 Hz from t = 12.34 s, strokes 3 and 5: 1 / mean interval is not exactly
+  // 100 here, and 12.34 + i / 100 is not always the decimal time, so the importer must
+  // either find the exact clock or keep the times.
+  std::string csv = "time_s,force_N,rate_rad_s,stroke\n";
+  for (int i = 0; i < 30; ++i) {
+    const int stroke = (i >= 5 && i < 10) ? 3 : (i >= 15 && i < 20) ? 5 : 0;
+    csv += std::to_string(12.34 + i * 0.01).substr(0, 5) + "," + std::to_string(i) + ",0," +
+           std::to_string(stroke) + "\n";
+  }
+  const Recording original = parse_recording_csv(csv, "strokes.csv");
+  const auto path = fresh_path("strokes.h5");
+  recording_to_session(original, path, SessionMetadata{});
+  const Recording back = session_to_recording(SessionReader(path));
+  CHECK(back.time_s == original.time_s);
+  CHECK(*back.stroke == *original.stroke);
+}
