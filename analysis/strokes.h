@@ -1,0 +1,40 @@
+#pragma once
+// A prepared recording: strokes (one opening or one closing each) with the door's angle
+// and rate on the full range, and the handle force, ready for fitting. Preprocessing makes
+// these from a session or a CSV; fitting consumes them.
+#include <string>
+#include <vector>
+
+namespace doorbench {
+
+enum class StrokeDirection { kOpening, kClosing };
+
+struct Stroke {
+  int id = 0;                 // the recording's stroke id (or a running number)
+  StrokeDirection direction = StrokeDirection::kOpening;
+  std::vector<double> time_s;       // strictly increasing, on the recording's clock
+  std::vector<double> force_N;      // F_u at the handle, positive = opening
+  std::vector<double> theta_rad;    // full-range angle (fused)
+  std::vector<double> omega_rad_s;  // rate (bias removed)
+  std::size_t size() const { return time_s.size(); }
+};
+
+// A segment left out of the prepared data, and why (saturated gyroscope, a fault, too short).
+struct ExcludedSegment {
+  double start_s = 0.0;
+  double end_s = 0.0;
+  std::string reason;
+};
+
+struct PreparedData {
+  std::string source;            // the session or CSV it came from
+  double handle_radius_m = 0.0;  // from the data's metadata, when known (else 0)
+  double sample_rate_hz = 0.0;
+  std::vector<Stroke> strokes;
+  std::vector<ExcludedSegment> excluded;
+  // Noise levels the weights of a fit use (estimated from still periods, or the bench's).
+  double angle_noise_rad = 0.0;
+  double rate_noise_rad_s = 0.0;
+};
+
+}  // namespace doorbench
