@@ -12,6 +12,7 @@
 
 #include "analysis/door_model.h"
 #include "analysis/parameter_file.h"
+#include "tests/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;
@@ -33,25 +34,7 @@ void parse(const json& root) {
   parse_parameter_file(root.dump(2), "door.json");
 }
 
-// A scratch folder for files on disk, removed afterwards.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    path =
-        fs::temp_directory_path() / ("doorbench_test_parameter_file_" + std::to_string(::getpid()));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path file = path / name;
-    std::ofstream(file, std::ios::binary) << text;
-    return file;
-  }
-};
+using doorbench::testing::TempDir;
 
 }  // namespace
 

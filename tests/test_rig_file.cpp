@@ -13,6 +13,7 @@
 
 #include "acquisition/rig_file.h"
 #include "sensors/sensor_models.h"
+#include "tests/temp_dir.h"
 
 using doorbench::parse_rig;
 using doorbench::read_rig_file;
@@ -90,29 +91,7 @@ std::string read_file(const fs::path& path) {
   return text.str();
 }
 
-// A scratch folder for files on disk, removed afterwards.
-struct TempDir {
-  fs::path path;
-  TempDir() {
-    static int count = 0;
-    path = fs::temp_directory_path() / ("doorbench_test_rig_file_" + std::to_string(::getpid()) +
-                                        "_" + std::to_string(++count));
-    fs::remove_all(path);
-    fs::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ignored;
-    fs::remove_all(path, ignored);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  fs::path write(const std::string& name, const std::string& text) const {
-    const fs::path file = path / name;
-    fs::create_directories(file.parent_path());
-    std::ofstream(file, std::ios::binary) << text;
-    return file;
-  }
-};
+using doorbench::testing::TempDir;
 
 template <class Parameters>
 std::vector<std::string> field_names() {

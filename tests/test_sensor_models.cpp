@@ -94,8 +94,7 @@ TEST_CASE("load cell: the output clips at the overload level", "[sensors]") {
   CHECK(cell.sample_V(667.0) == 667.0 * p.volts_per_newton());  // just inside
 }
 
-TEST_CASE("load cell: hysteresis separates loading and unloading by the play width",
-          "[sensors]") {
+TEST_CASE("load cell: hysteresis separates loading and unloading by the play width", "[sensors]") {
   LoadCellParameters p = ideal_load_cell();
   p.hysteresis_fraction_fs = 3e-4;
   const double width_N = 3e-4 * 445.0;
@@ -308,7 +307,8 @@ TEST_CASE("daq: counts round-trip and the quantization error is half a count", "
   for (int i = 0; i <= 100000; ++i) {
     const double volts = -10.0 + 20.0 * i / 100000.0 + 1e-7 * std::sin(i);
     if (volts < -10.0 || volts > 10.0) continue;
-    largest_error_V = std::max(largest_error_V, std::abs(daq.to_volts(daq.to_counts(volts)) - volts));
+    largest_error_V =
+        std::max(largest_error_V, std::abs(daq.to_volts(daq.to_counts(volts)) - volts));
   }
   CHECK(largest_error_V <= daq.volts_per_count() / 2 * (1 + 1e-9));
   CHECK(largest_error_V > 0.45 * daq.volts_per_count());

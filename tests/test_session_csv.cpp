@@ -3,17 +3,18 @@
 #include <filesystem>
 
 #include "acquisition/session_csv.h"
+#include "tests/temp_dir.h"
 
 namespace {
 
 using namespace doorbench;
 
+// A file in this process's scratch folder (removed when the process ends).
 std::filesystem::path fresh_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "doorbench_test_session_csv";
-  std::filesystem::create_directories(dir);
-  const auto path = dir / name;
-  std::filesystem::remove(path);
-  return path;
+  static const doorbench::testing::TempDir scratch("session_csv");
+  // Catch2 runs a test case again for each SECTION in the same process: start afresh.
+  std::filesystem::remove(scratch / name);
+  return scratch / name;
 }
 
 }  // namespace

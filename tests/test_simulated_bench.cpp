@@ -12,18 +12,19 @@
 #include "acquisition/rig_file.h"
 #include "acquisition/session_csv.h"
 #include "sensors/simulated_bench.h"
+#include "tests/temp_dir.h"
 
 namespace {
 
 using namespace doorbench;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
+// A file in this process's scratch folder (removed when the process ends).
 std::filesystem::path fresh_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "doorbench_test_simulated_bench";
-  std::filesystem::create_directories(dir);
-  const auto path = dir / name;
-  std::filesystem::remove(path);
-  return path;
+  static const doorbench::testing::TempDir scratch("simulated_bench");
+  // Catch2 runs a test case again for each SECTION in the same process: start afresh.
+  std::filesystem::remove(scratch / name);
+  return scratch / name;
 }
 
 RigDefinition built_in_rig() {
@@ -199,9 +200,8 @@ TEST_CASE("Simulated bench: a scripted force drives the door, its strokes mount 
   for (std::size_t i = 0; i < times.size(); ++i) times[i] = i * 1e-3;
   Trajectory run = simulate(door, hand, DoorState{}, times);
   for (double t : times) run.stroke.push_back(hand.stroke_at(t));
-  const auto dir = std::filesystem::temp_directory_path() / "doorbench_test_scripted_force";
-  std::filesystem::remove_all(dir);
-  std::filesystem::create_directories(dir);
+  const doorbench::testing::TempDir scratch("scripted_force");
+  const std::filesystem::path dir = scratch.path;
   write_recording_csv_file(dir / "force.csv", to_recording(run, "test script"));
 
   const RigDefinition rig = parse_rig(scripted_rig_text(), "scripted.toml", dir);
