@@ -46,10 +46,10 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
     }
   }
   const DoorModel model = sensors::simulated_door_model(rig);
-  const double duration_s = options.duration_s > 0
-                                ? options.duration_s
-                                : sensors::simulated_hand(rig, model)->natural_duration_s();
-  sensors::SimulatedBench bench(rig, model, duration_s);
+  std::unique_ptr<sensors::StrokeForce> hand = sensors::simulated_hand(rig, model);
+  const double duration_s =
+      options.duration_s > 0 ? options.duration_s : hand->natural_duration_s();
+  sensors::SimulatedBench bench(rig, model, std::move(hand), duration_s);
 
   SessionMetadata metadata;
   metadata.rig_name = rig.name;

@@ -141,6 +141,10 @@ calibration::CalibrationRecord nominal_calibration(const RigChannel& channel) {
 
 SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
                                double expected_duration_s)
+    : SimulatedBench(rig, model, simulated_hand(rig, model), expected_duration_s) {}
+
+SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
+                               std::unique_ptr<StrokeForce> hand, double expected_duration_s)
     : rig_name_(rig.name),
       door_json_(to_parameter_json(model)),
       effects_json_(to_effects_json(model)),
@@ -148,9 +152,10 @@ SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
       simulation_(rig.simulation ? *rig.simulation : RigSimulation{}),
       scan_rate_hz_(rig.sample_rate_hz),
       convert_interval_s_(rig.convert_interval_s),
-      hand_(simulated_hand(rig, model)),
+      hand_(std::move(hand)),
       stepper_(model, SimulationOptions{}) {
   if (!rig.simulation) throw std::invalid_argument(rig.source + ": no [simulation] table");
+  if (!hand_) throw std::invalid_argument("the simulated bench needs a force at the handle");
   for (std::size_t index = 0; index < rig.channels.size(); ++index) {
     const RigChannel& rc = rig.channels[index];
     if (rc.backend != "simulated") {

@@ -86,6 +86,9 @@ class SimulatedBench final : public AcquisitionBackend {
   // Every channel of the rig must use the simulated backend. `expected_duration_s`
   // sizes the truth buffers so that reading does not allocate. `model` must outlive it.
   SimulatedBench(const RigDefinition& rig, const DoorModel& model, double expected_duration_s);
+  // The same with the force already built (simulated_hand(rig, model)).
+  SimulatedBench(const RigDefinition& rig, const DoorModel& model,
+                 std::unique_ptr<StrokeForce> hand, double expected_duration_s);
 
   std::string description() const override;
   std::vector<ChannelInfo> channels() const override { return channels_; }
