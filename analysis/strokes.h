@@ -35,6 +35,12 @@ struct PreparedData {
   // Noise levels the weights of a fit use (estimated from still periods, or the bench's).
   double angle_noise_rad = 0.0;
   double rate_noise_rad_s = 0.0;
+  // How the angle was obtained (e.g. "gyroscope anchored to inclinometer_angle_rad"), the
+  // gyroscope bias removed (its mean over the recording; 0 without a gyroscope), and the
+  // assumptions made (e.g. theta = 0 at the first still period when there is no angle).
+  std::string angle_source;
+  double gyro_bias_rad_s = 0.0;
+  std::vector<std::string> notes;
 };
 
 }  // namespace doorbench

@@ -1,0 +1,1002 @@
+#include "analysis/preprocessing.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <optional>
+
+#include "acquisition/session_csv.h"
+#include "acquisition/session_file.h"
+#include "analysis/constraint_check.h"
+
+namespace doorbench {
+
+namespace {
+
+constexpr double kDeg = kPreprocessingDeg;
+constexpr std::size_t kMinimumSamples = 10;
+// Robust white-noise estimate: residuals of a straight line fitted to blocks of this many
+// samples (short enough that smooth motion is a line within a block).
+constexpr std::size_t kNoiseBlock = 16;
+// Median of χ²(k)/k for k = kNoiseBlock − 2 = 14 degrees of freedom (Wilson–Hilferty:
+// (1 − 2/(9k))³ = 0.9531): the median block variance is this × σ².
+constexpr double kChiSquareMedianRatio = 0.9531;
+// Estimated noise levels never go below this fraction of the fallback (bench) figures.
+constexpr double kNoiseFloorFraction = 0.01;
+
+std::string text(double value, int digits = 3) {
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%.*g", digits, value);
+  return buffer;
+}
+
+std::string seconds(double value) {
+  char buffer[48];
+  std::snprintf(buffer, sizeof buffer, "%.3f s", value);
+  return buffer;
+}
+
+// Sample fault kinds (bits).
+enum Fault : std::uint8_t {
+  kSaturated = 1,
+  kRateNonFinite = 2,
+  kAngleNonFinite = 4,
+  kForceNonFinite = 8,
+  kGapBefore = 16,  // the interval ending at this sample is a gap
+};
+
+std::string describe_faults(std::uint8_t kinds, double gyro_limit_rad_s) {
+  std::string out;
+  auto add = [&out](const std::string& what) { out += (out.empty() ? "" : ", ") + what; };
+  if (kinds & kSaturated) {
+    add("gyroscope saturated (|rate_rad_s| >= " + text(gyro_limit_rad_s / kDeg, 4) + " deg/s)");
+  }
+  if (kinds & kRateNonFinite) add("non-finite rate_rad_s");
+  if (kinds & kAngleNonFinite) add("non-finite angle_rad");
+  if (kinds & kForceNonFinite) add("non-finite force_N");
+  if (kinds & kGapBefore) add("gap in time_s");
+  return out;
+}
+
+// Replaces non-finite values by linear interpolation in time between the nearest finite
+// neighbours (the nearest one at the ends). Returns false when no value is finite.
+bool fill_non_finite(std::vector<double>& values, const std::vector<double>& time_s) {
+  const std::size_t n = values.size();
+  std::size_t previous = n;  // index of the last finite value seen, n = none
+  std::size_t i = 0;
+  while (i < n) {
+    if (std::isfinite(values[i])) {
+      previous = i++;
+      continue;
+    }
+    std::size_t next = i;
+    while (next < n && !std::isfinite(values[next])) ++next;
+    if (previous == n && next == n) return false;
+    for (std::size_t k = i; k < next; ++k) {
+      if (previous == n) {
+        values[k] = values[next];
+      } else if (next == n) {
+        values[k] = values[previous];
+      } else {
+        const double s = (time_s[k] - time_s[previous]) / (time_s[next] - time_s[previous]);
+        values[k] = values[previous] + s * (values[next] - values[previous]);
+      }
+    }
+    i = next;
+  }
+  return true;
+}
+
+// Piecewise-linear through (x_k, y_k) (x increasing), constant beyond the ends; 0 when empty.
+double interpolate(const std::vector<double>& x, const std::vector<double>& y, double at) {
+  if (x.empty()) return 0.0;
+  if (at <= x.front()) return y.front();
+  if (at >= x.back()) return y.back();
+  const auto upper = std::upper_bound(x.begin(), x.end(), at);
+  const std::size_t k = static_cast<std::size_t>(upper - x.begin());
+  const double s = (at - x[k - 1]) / (x[k] - x[k - 1]);
+  return y[k - 1] + s * (y[k] - y[k - 1]);
+}
+
+double median(std::vector<double> values) {
+  const std::size_t middle = values.size() / 2;
+  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle),
+                   values.end());
+  double result = values[middle];
+  if (values.size() % 2 == 0) {
+    result = 0.5 * (result + *std::max_element(values.begin(),
+                                                values.begin() + static_cast<std::ptrdiff_t>(middle)));
+  }
+  return result;
+}
+
+// Robust white-noise level of a signal: the median over blocks of kNoiseBlock samples
+// (skipping blocks with faulty samples) of the variance about a fitted straight line.
+// NaN when no block qualifies.
+double robust_noise(const std::vector<double>& values, const std::vector<std::uint8_t>& faults) {
+  std::vector<double> variances;
+  const double k_mean = 0.5 * static_cast<double>(kNoiseBlock - 1);
+  double k_sq = 0;
+  for (std::size_t k = 0; k < kNoiseBlock; ++k) {
+    k_sq += (static_cast<double>(k) - k_mean) * (static_cast<double>(k) - k_mean);
+  }
+  for (std::size_t start = 0; start + kNoiseBlock <= values.size(); start += kNoiseBlock) {
+    bool faulty = false;
+    double mean = 0;
+    for (std::size_t k = 0; k < kNoiseBlock; ++k) {
+      faulty = faulty || faults[start + k] != 0;
+      mean += values[start + k];
+    }
+    if (faulty) continue;
+    mean /= static_cast<double>(kNoiseBlock);
+    double slope = 0;
+    for (std::size_t k = 0; k < kNoiseBlock; ++k) {
+      slope += (static_cast<double>(k) - k_mean) * (values[start + k] - mean);
+    }
+    slope /= k_sq;
+    double residual = 0;
+    for (std::size_t k = 0; k < kNoiseBlock; ++k) {
+      const double r = values[start + k] - mean - slope * (static_cast<double>(k) - k_mean);
+      residual += r * r;
+    }
+    variances.push_back(residual / static_cast<double>(kNoiseBlock - 2));
+  }
+  if (variances.empty()) return std::nan("");
+  return std::sqrt(median(std::move(variances)) / kChiSquareMedianRatio);
+}
+
+struct Range {
+  std::size_t first = 0, last = 0;  // inclusive sample indices
+};
+
+// Pooled standard deviation about a straight line (in time) fitted to each range.
+std::optional<double> pooled_detrended_std(const std::vector<Range>& ranges,
+                                           const std::vector<double>& time_s,
+                                           const std::vector<double>& values) {
+  double squares = 0, degrees = 0;
+  for (const Range& r : ranges) {
+    const std::size_t m = r.last - r.first + 1;
+    if (m < 3) continue;
+    double t_mean = 0, v_mean = 0;
+    for (std::size_t i = r.first; i <= r.last; ++i) {
+      t_mean += time_s[i];
+      v_mean += values[i];
+    }
+    t_mean /= static_cast<double>(m);
+    v_mean /= static_cast<double>(m);
+    double stt = 0, stv = 0;
+    for (std::size_t i = r.first; i <= r.last; ++i) {
+      stt += (time_s[i] - t_mean) * (time_s[i] - t_mean);
+      stv += (time_s[i] - t_mean) * (values[i] - v_mean);
+    }
+    const double slope = stt > 0 ? stv / stt : 0.0;
+    for (std::size_t i = r.first; i <= r.last; ++i) {
+      const double e = values[i] - v_mean - slope * (time_s[i] - t_mean);
+      squares += e * e;
+    }
+    degrees += static_cast<double>(m - 2);
+  }
+  if (degrees <= 0) return std::nullopt;
+  return std::sqrt(squares / degrees);
+}
+
+double mean_over(const std::vector<double>& values, const Range& r) {
+  double sum = 0;
+  for (std::size_t i = r.first; i <= r.last; ++i) sum += values[i];
+  return sum / static_cast<double>(r.last - r.first + 1);
+}
+
+std::size_t first_at_or_after(const std::vector<double>& time_s, double t) {
+  return static_cast<std::size_t>(std::lower_bound(time_s.begin(), time_s.end(), t) -
+                                  time_s.begin());
+}
+
+std::size_t last_at_or_before(const std::vector<double>& time_s, double t) {
+  const auto after = std::upper_bound(time_s.begin(), time_s.end(), t);
+  return after == time_s.begin() ? 0 : static_cast<std::size_t>(after - time_s.begin()) - 1;
+}
+
+// The stillness test (PreprocessingOptions): runs of quiet samples lasting
+// still_min_duration_s or more.
+std::vector<Range> find_still_periods(const std::vector<double>& time_s,
+                                      const std::vector<double>& rate,
+                                      const std::vector<double>& force,
+                                      const std::vector<std::uint8_t>& faults,
+                                      double rate_std_limit, double sample_rate_hz,
+                                      const PreprocessingOptions& options) {
+  const std::size_t n = time_s.size();
+  const auto half = static_cast<std::size_t>(
+      std::max(1.0, std::round(0.5 * options.still_window_s * sample_rate_hz)));
+  // Prefix sums, the rate centred on its mean to keep the variance's cancellation small.
+  double centre = 0;
+  for (double r : rate) centre += r;
+  centre /= static_cast<double>(n);
+  std::vector<double> s1(n + 1, 0.0), s2(n + 1, 0.0), sf(n + 1, 0.0);
+  std::vector<std::size_t> sb(n + 1, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = rate[i] - centre;
+    s1[i + 1] = s1[i] + r;
+    s2[i + 1] = s2[i] + r * r;
+    sf[i + 1] = sf[i] + std::abs(force[i]);
+    sb[i + 1] = sb[i] + (faults[i] != 0);
+  }
+  std::vector<Range> periods;
+  std::size_t run_start = n;  // n = not in a run
+  auto close_run = [&](std::size_t end_exclusive) {
+    if (run_start < end_exclusive) {
+      // Trimmed by the guard at both ends (a motion that starts gently passes the test for
+      // a while), then long enough?
+      const std::size_t first = first_at_or_after(time_s, time_s[run_start] + options.still_guard_s);
+      const std::size_t last =
+          last_at_or_before(time_s, time_s[end_exclusive - 1] - options.still_guard_s);
+      if (first < last && time_s[last] - time_s[first] >= options.still_min_duration_s) {
+        periods.push_back({first, last});
+      }
+    }
+    run_start = n;
+  };
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t lo = i >= half ? i - half : 0;
+    const std::size_t hi = std::min(n - 1, i + half);
+    const double m = static_cast<double>(hi - lo + 1);
+    const double mean = (s1[hi + 1] - s1[lo]) / m;
+    const double variance = std::max(0.0, (s2[hi + 1] - s2[lo]) / m - mean * mean);
+    const bool quiet = sb[hi + 1] == sb[lo] && std::sqrt(variance) < rate_std_limit &&
+                       std::abs(mean + centre) < options.still_rate_limit_rad_s &&
+                       (sf[hi + 1] - sf[lo]) / m < options.still_force_N;
+    if (quiet && run_start == n) run_start = i;
+    if (!quiet) close_run(i);
+  }
+  close_run(n);
+  return periods;
+}
+
+enum class Mode { kFused, kRateOnly, kAngleAndRate, kAngleOnly };
+
+struct Anchor {
+  Range period;  // the still period (bias from here)
+  Range region;  // where the absolute angle is compared (offset from here)
+  double time_s = 0;
+  std::size_t index = 0;  // the region's middle sample
+  double bias = 0;
+  bool has_bias = true;
+  double offset = 0;
+};
+
+struct Candidate {
+  Range range;
+  int id = 0;
+};
+
+// Motion segments of ω (see PreprocessingOptions, segmentation). Segments too short to be
+// strokes go to `excluded`. Ids are 1, 2, … in time order.
+std::vector<Candidate> segment_strokes(const std::vector<double>& time_s,
+                                       const std::vector<double>& theta,
+                                       const std::vector<double>& omega, double edge_rate,
+                                       const PreprocessingOptions& options,
+                                       std::vector<ExcludedSegment>& excluded) {
+  const std::size_t n = time_s.size();
+  struct Run {
+    std::size_t lo, hi;
+    int sign;
+  };
+  std::vector<Run> runs;
+  std::size_t i = 0;
+  while (i < n) {
+    if (std::abs(omega[i]) <= options.motion_rate_rad_s) {
+      ++i;
+      continue;
+    }
+    const int sign = omega[i] > 0 ? 1 : -1;
+    std::size_t lo = i, hi = i;
+    while (hi + 1 < n && sign * omega[hi + 1] > options.motion_rate_rad_s) ++hi;
+    i = hi + 1;
+    while (lo > 0 && sign * omega[lo - 1] > edge_rate) --lo;
+    while (hi + 1 < n && sign * omega[hi + 1] > edge_rate) ++hi;
+    if (!runs.empty() && runs.back().sign == sign && lo <= runs.back().hi + 1) {
+      runs.back().hi = std::max(runs.back().hi, hi);
+    } else {
+      runs.push_back({lo, hi, sign});
+    }
+    i = std::max(i, hi + 1);
+  }
+
+  auto net = [&](const Run& r) { return theta[r.hi] - theta[r.lo]; };
+  auto tiny = [&](const Run& r) { return std::abs(net(r)) < options.min_stroke_angle_rad; };
+  std::vector<Run> merged;
+  for (const Run& run : runs) {
+    if (!merged.empty()) {
+      Run& current = merged.back();
+      const double gap_s = time_s[run.lo] - time_s[current.hi];
+      const bool same_way = (net(current) > 0) == (net(run) > 0);
+      if (gap_s < options.merge_gap_s && (same_way || tiny(current) || tiny(run))) {
+        current.hi = run.hi;
+        continue;
+      }
+    }
+    merged.push_back(run);
+  }
+
+  std::vector<Run> kept;
+  for (const Run& run : merged) {
+    const double duration_s = time_s[run.hi] - time_s[run.lo];
+    const double angle = net(run);
+    if (duration_s < options.min_stroke_duration_s ||
+        std::abs(angle) < options.min_stroke_angle_rad) {
+      excluded.push_back({time_s[run.lo], time_s[run.hi],
+                          "movement too short for a stroke (" + text(duration_s) + " s, " +
+                              text(angle / kDeg) + " deg; a stroke needs >= " +
+                              text(options.min_stroke_duration_s) + " s and >= " +
+                              text(options.min_stroke_angle_rad / kDeg) + " deg)"});
+    } else {
+      kept.push_back(run);
+    }
+  }
+
+  // The margins of rest before and after, never past the middle of the gap to a neighbour.
+  std::vector<Candidate> strokes;
+  for (std::size_t k = 0; k < kept.size(); ++k) {
+    std::size_t lo = first_at_or_after(time_s, time_s[kept[k].lo] - options.stroke_margin_s);
+    std::size_t hi = last_at_or_before(time_s, time_s[kept[k].hi] + options.stroke_margin_s);
+    if (k > 0) lo = std::max(lo, (kept[k - 1].hi + kept[k].lo) / 2 + 1);
+    if (k + 1 < kept.size()) hi = std::min(hi, (kept[k].hi + kept[k + 1].lo) / 2);
+    strokes.push_back({{lo, hi}, static_cast<int>(k + 1)});
+  }
+  return strokes;
+}
+
+std::vector<Candidate> strokes_from_column(const std::vector<int>& stroke) {
+  std::vector<Candidate> strokes;
+  std::size_t i = 0;
+  while (i < stroke.size()) {
+    if (stroke[i] == 0) {
+      ++i;
+      continue;
+    }
+    std::size_t last = i;
+    while (last + 1 < stroke.size() && stroke[last + 1] == stroke[i]) ++last;
+    strokes.push_back({{i, last}, stroke[i]});
+    i = last + 1;
+  }
+  return strokes;
+}
+
+std::optional<std::size_t> find_inclinometer(const Recording& recording,
+                                             const PreprocessingOptions& options) {
+  for (std::size_t e = 0; e < recording.extra_names.size(); ++e) {
+    const std::string& name = recording.extra_names[e];
+    if (!options.inclinometer_column.empty()) {
+      if (name == options.inclinometer_column) return e;
+      continue;
+    }
+    const bool ends_rad = name.size() > 4 && name.compare(name.size() - 4, 4, "_rad") == 0;
+    const bool ends_deg = name.size() > 4 && name.compare(name.size() - 4, 4, "_deg") == 0;
+    if (name.rfind("inclinometer", 0) == 0 && (ends_rad || ends_deg)) return e;
+  }
+  return std::nullopt;
+}
+
+void check_length(const Recording& recording, const std::string& column, std::size_t size) {
+  if (size != recording.size()) {
+    throw PreprocessingError(recording.source + ": column " + column + " has " +
+                             std::to_string(size) + " values, time_s has " +
+                             std::to_string(recording.size()));
+  }
+}
+
+}  // namespace
+
+std::string PreprocessingOptions::validate() const {
+  struct Rule {
+    const char* name;
+    double value;
+    bool strictly_positive;  // else >= 0
+  };
+  const Rule rules[] = {
+      {"still_window_s", still_window_s, true},
+      {"still_min_duration_s", still_min_duration_s, true},
+      {"still_guard_s", still_guard_s, false},
+      {"still_noise_factor", still_noise_factor, true},
+      {"still_rate_std_floor_rad_s", still_rate_std_floor_rad_s, false},
+      {"still_rate_limit_rad_s", still_rate_limit_rad_s, true},
+      {"still_force_N", still_force_N, true},
+      {"bias_consistency_rad_s", bias_consistency_rad_s, true},
+      {"gyro_range_rad_s", gyro_range_rad_s, true},
+      {"gyro_saturation_fraction", gyro_saturation_fraction, false},
+      {"inclinometer_range_rad", inclinometer_range_rad, true},
+      {"inclinometer_margin_rad", inclinometer_margin_rad, false},
+      {"inclinometer_settle_s", inclinometer_settle_s, false},
+      {"derivative_cutoff_hz", derivative_cutoff_hz, true},
+      {"force_cutoff_hz", force_cutoff_hz, false},
+      {"motion_rate_rad_s", motion_rate_rad_s, true},
+      {"edge_rate_rad_s", edge_rate_rad_s, false},
+      {"merge_gap_s", merge_gap_s, false},
+      {"stroke_margin_s", stroke_margin_s, false},
+      {"min_stroke_duration_s", min_stroke_duration_s, false},
+      {"min_stroke_angle_rad", min_stroke_angle_rad, false},
+      {"max_gap_factor", max_gap_factor, true},
+      {"fallback_angle_noise_rad", fallback_angle_noise_rad, true},
+      {"fallback_rate_noise_rad_s", fallback_rate_noise_rad_s, true},
+  };
+  for (const Rule& rule : rules) {
+    const std::string head = std::string("preprocessing ") + rule.name + " = " +
+                             format_number(rule.value) + " must be ";
+    if (!std::isfinite(rule.value)) return head + "finite";
+    if (rule.strictly_positive && !(rule.value > 0)) return head + "> 0";
+    if (!rule.strictly_positive && !(rule.value >= 0)) return head + ">= 0";
+  }
+  if (gyro_saturation_fraction >= 1) {
+    return "preprocessing gyro_saturation_fraction = " + format_number(gyro_saturation_fraction) +
+           " must be < 1";
+  }
+  if (inclinometer_margin_rad >= inclinometer_range_rad) {
+    return "preprocessing inclinometer_margin_rad = " + format_number(inclinometer_margin_rad) +
+           " must be < inclinometer_range_rad = " + format_number(inclinometer_range_rad);
+  }
+  if (edge_rate_rad_s > motion_rate_rad_s) {
+    return "preprocessing edge_rate_rad_s = " + format_number(edge_rate_rad_s) +
+           " must be <= motion_rate_rad_s = " + format_number(motion_rate_rad_s);
+  }
+  if (max_gap_factor <= 1) {
+    return "preprocessing max_gap_factor = " + format_number(max_gap_factor) + " must be > 1";
+  }
+  return "";
+}
+
+std::vector<double> zero_phase_lowpass(std::span<const double> values, double cutoff_hz,
+                                       double sample_rate_hz) {
+  if (!(sample_rate_hz > 0) || !(cutoff_hz > 0) || !(cutoff_hz < 0.5 * sample_rate_hz) ||
+      !std::isfinite(sample_rate_hz)) {
+    throw std::invalid_argument("zero_phase_lowpass: cut-off " + text(cutoff_hz) +
+                                " Hz must be > 0 and below half the sample rate " +
+                                text(sample_rate_hz) + " Hz");
+  }
+  const std::size_t n = values.size();
+  if (n < 2) return std::vector<double>(values.begin(), values.end());
+  // 2nd-order Butterworth by the bilinear transform, pre-warped: −3 dB at the cut-off per
+  // pass, DC gain 1.
+  const double k = std::tan(std::numbers::pi * cutoff_hz / sample_rate_hz);
+  const double norm = 1.0 / (1.0 + std::numbers::sqrt2 * k + k * k);
+  const double b0 = k * k * norm, b1 = 2.0 * b0, b2 = b0;
+  const double a1 = 2.0 * (k * k - 1.0) * norm;
+  const double a2 = (1.0 - std::numbers::sqrt2 * k + k * k) * norm;
+  // Odd reflection about the end samples: a straight line continues as itself.
+  const std::size_t pad =
+      std::min(n - 1, static_cast<std::size_t>(std::ceil(3.0 * sample_rate_hz / cutoff_hz)));
+  std::vector<double> x(n + 2 * pad);
+  for (std::size_t i = 0; i < pad; ++i) {
+    x[i] = 2.0 * values[0] - values[pad - i];
+    x[pad + n + i] = 2.0 * values[n - 1] - values[n - 2 - i];
+  }
+  std::copy(values.begin(), values.end(), x.begin() + static_cast<std::ptrdiff_t>(pad));
+  auto run = [&](std::vector<double>& signal) {
+    // Direct form II transposed, started in the steady state of the first value.
+    const double first = signal.front();
+    double z1 = (1.0 - b0) * first, z2 = (b2 - a2) * first;
+    for (double& v : signal) {
+      const double in = v;
+      const double out = b0 * in + z1;
+      z1 = b1 * in - a1 * out + z2;
+      z2 = b2 * in - a2 * out;
+      v = out;
+    }
+  };
+  run(x);
+  std::reverse(x.begin(), x.end());
+  run(x);
+  std::reverse(x.begin(), x.end());
+  return std::vector<double>(x.begin() + static_cast<std::ptrdiff_t>(pad),
+                             x.begin() + static_cast<std::ptrdiff_t>(pad + n));
+}
+
+std::vector<double> smoothing_derivative(std::span<const double> time_s,
+                                         std::span<const double> values, double cutoff_hz,
+                                         double sample_rate_hz) {
+  if (time_s.size() != values.size()) {
+    throw std::invalid_argument("smoothing_derivative: as many times as values needed");
+  }
+  const std::size_t n = values.size();
+  std::vector<double> derivative(n, 0.0);
+  if (n < 2) return derivative;
+  const std::vector<double> smooth = zero_phase_lowpass(values, cutoff_hz, sample_rate_hz);
+  derivative[0] = (smooth[1] - smooth[0]) / (time_s[1] - time_s[0]);
+  derivative[n - 1] = (smooth[n - 1] - smooth[n - 2]) / (time_s[n - 1] - time_s[n - 2]);
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    derivative[i] = (smooth[i + 1] - smooth[i - 1]) / (time_s[i + 1] - time_s[i - 1]);
+  }
+  return derivative;
+}
+
+namespace {
+
+// The recording's columns, checked, with the method chosen, faults marked and non-finite
+// values bridged (they are never used as values: a stroke holding one is left out).
+struct Input {
+  std::string source;
+  Mode mode = Mode::kFused;
+  bool has_rate = false;
+  std::vector<double> t, force, rate, angle, incl;  // rate, angle, incl: empty when absent
+  std::string inclinometer_name;
+  std::vector<std::uint8_t> fault;
+  // unknown[i] counts the intervals in (0, i] over which the rate is unknown: saturated or
+  // non-finite at either end, or a gap.
+  std::vector<std::size_t> unknown;
+  double median_interval_s = 0;
+  double rate_hz = 0;  // 1 / median interval: what the filters use
+  double saturation_limit = 0;
+
+  std::size_t size() const { return t.size(); }
+  void check_cutoff(double cutoff_hz, const char* name) const {
+    if (!(cutoff_hz < 0.5 * rate_hz)) {
+      throw PreprocessingError(source + ": " + name + " " + text(cutoff_hz) +
+                               " Hz is not below half the sample rate (" + text(0.5 * rate_hz) +
+                               " Hz)");
+    }
+  }
+};
+
+Input read_input(const Recording& recording, const PreprocessingOptions& options) {
+  Input in;
+  in.source = recording.source;
+  const std::string& source = in.source;
+  const std::size_t n = recording.size();
+  if (n < kMinimumSamples) {
+    throw PreprocessingError(source + ": too few samples to prepare (" + std::to_string(n) +
+                             "; at least " + std::to_string(kMinimumSamples) + " needed)");
+  }
+  check_length(recording, "force_N", recording.force_N.size());
+  if (!recording.rate_rad_s && !recording.angle_rad) {
+    throw PreprocessingError(source +
+                             ": neither rate_rad_s nor angle_rad (at least one is needed)");
+  }
+  if (recording.rate_rad_s) check_length(recording, "rate_rad_s", recording.rate_rad_s->size());
+  if (recording.angle_rad) check_length(recording, "angle_rad", recording.angle_rad->size());
+  if (recording.stroke) check_length(recording, "stroke", recording.stroke->size());
+  in.t = recording.time_s;
+  const std::vector<double>& t = in.t;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (!std::isfinite(t[i]) || (i > 0 && !(t[i] > t[i - 1]))) {
+      throw PreprocessingError(source + ": time_s must be finite and strictly increasing (row " +
+                               std::to_string(i + 1) + " of the data)");
+    }
+  }
+
+  const std::optional<std::size_t> inclinometer = find_inclinometer(recording, options);
+  if (!options.inclinometer_column.empty() && !inclinometer) {
+    throw PreprocessingError(source + ": no column " + options.inclinometer_column +
+                             " (the inclinometer_column option)");
+  }
+  if (inclinometer) {
+    in.inclinometer_name = recording.extra_names[*inclinometer];
+    check_length(recording, in.inclinometer_name, recording.extra_columns[*inclinometer].size());
+  }
+  if (recording.rate_rad_s && recording.angle_rad) {
+    in.mode = Mode::kAngleAndRate;
+  } else if (recording.angle_rad) {
+    in.mode = Mode::kAngleOnly;
+  } else if (inclinometer) {
+    in.mode = Mode::kFused;
+  } else {
+    in.mode = Mode::kRateOnly;
+  }
+  in.has_rate = in.mode != Mode::kAngleOnly;
+  if (in.mode == Mode::kFused) {
+    in.incl = recording.extra_columns[*inclinometer];
+    const std::string& name = in.inclinometer_name;
+    if (name.compare(name.size() - 4, 4, "_deg") == 0) {
+      for (double& v : in.incl) v *= kDeg;
+    }
+  }
+
+  std::vector<double> intervals(n - 1);
+  for (std::size_t i = 1; i < n; ++i) intervals[i - 1] = t[i] - t[i - 1];
+  in.median_interval_s = median(intervals);
+  in.rate_hz = 1.0 / in.median_interval_s;
+
+  in.force = recording.force_N;
+  if (in.has_rate) in.rate = *recording.rate_rad_s;
+  if (recording.angle_rad) in.angle = *recording.angle_rad;
+  in.saturation_limit = (1.0 - options.gyro_saturation_fraction) * options.gyro_range_rad_s;
+  in.fault.assign(n, 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::uint8_t& f = in.fault[i];
+    if (!std::isfinite(in.force[i])) f |= kForceNonFinite;
+    if (in.has_rate && !std::isfinite(in.rate[i])) f |= kRateNonFinite;
+    if (in.has_rate && std::abs(in.rate[i]) >= in.saturation_limit) f |= kSaturated;
+    if (!in.angle.empty() && !std::isfinite(in.angle[i])) f |= kAngleNonFinite;
+    if (i > 0 && t[i] - t[i - 1] > options.max_gap_factor * in.median_interval_s) f |= kGapBefore;
+  }
+  if (!fill_non_finite(in.force, t)) throw PreprocessingError(source + ": no finite force_N value");
+  if (in.has_rate && !fill_non_finite(in.rate, t)) {
+    throw PreprocessingError(source + ": no finite rate_rad_s value");
+  }
+  if (!in.angle.empty() && !fill_non_finite(in.angle, t)) {
+    throw PreprocessingError(source + ": no finite angle_rad value");
+  }
+  in.unknown.assign(n, 0);
+  if (in.has_rate) {
+    const std::uint8_t rate_faults = kSaturated | kRateNonFinite;
+    for (std::size_t i = 1; i < n; ++i) {
+      const bool u = (in.fault[i] & (rate_faults | kGapBefore)) || (in.fault[i - 1] & rate_faults);
+      in.unknown[i] = in.unknown[i - 1] + (u ? 1 : 0);
+    }
+  }
+  return in;
+}
+
+struct Stillness {
+  double noise_estimate = 0;  // σ̂ of the tested rate (NaN when no block qualified)
+  double rate_std_limit = 0;
+  std::vector<Range> periods;
+  std::string rule;  // the test with its thresholds, for messages
+};
+
+Stillness find_stillness(const Input& in, const std::vector<double>& rate,
+                         const PreprocessingOptions& options) {
+  Stillness still;
+  still.noise_estimate = robust_noise(rate, in.fault);
+  still.rate_std_limit = std::max(
+      options.still_noise_factor * (std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0),
+      options.still_rate_std_floor_rad_s);
+  still.periods =
+      find_still_periods(in.t, rate, in.force, in.fault, still.rate_std_limit, in.rate_hz, options);
+  still.rule = "still: over " + text(options.still_window_s) + " s windows the rate's std < " +
+               text(still.rate_std_limit / kDeg) + " deg/s, |mean rate| < " +
+               text(options.still_rate_limit_rad_s / kDeg) + " deg/s and mean |force| < " +
+               text(options.still_force_N) + " N, for >= " +
+               text(options.still_min_duration_s) + " s";
+  return still;
+}
+
+// Anchors: still periods where the absolute angle is known (for the rate only: the still
+// periods with a consistent bias), each with a bias sample (the mean rate over the period).
+// Throws when the method needs an anchor and there is none.
+std::vector<Anchor> find_anchors(const Input& in, const Stillness& still,
+                                 const PreprocessingOptions& options) {
+  const std::vector<double>& t = in.t;
+  auto make_anchor = [&](const Range& period, const Range& region) {
+    Anchor anchor;
+    anchor.period = period;
+    anchor.region = region;
+    anchor.index = (region.first + region.last) / 2;
+    anchor.time_s = t[anchor.index];
+    anchor.bias = in.has_rate ? mean_over(in.rate, period) : 0.0;
+    return anchor;
+  };
+  std::vector<Anchor> anchors;
+  if (in.mode == Mode::kFused) {
+    const double limit = options.inclinometer_range_rad - options.inclinometer_margin_rad;
+    for (const Range& period : still.periods) {
+      const Range region{first_at_or_after(t, t[period.first] + options.inclinometer_settle_s),
+                         period.last};
+      if (region.first + 2 > region.last) continue;
+      bool valid = true;
+      for (std::size_t i = region.first; i <= region.last && valid; ++i) {
+        valid = std::isfinite(in.incl[i]) && std::abs(in.incl[i]) < limit;
+      }
+      if (valid) anchors.push_back(make_anchor(period, region));
+    }
+    if (anchors.empty()) {
+      throw PreprocessingError(in.source + ": no still period with the inclinometer (" +
+                               in.inclinometer_name + ") inside +-" + text(limit / kDeg) +
+                               " deg to anchor the integrated gyroscope to (" +
+                               std::to_string(still.periods.size()) + " still periods found; " +
+                               still.rule + ")");
+    }
+  } else if (in.mode == Mode::kAngleAndRate) {
+    for (const Range& period : still.periods) anchors.push_back(make_anchor(period, period));
+    if (anchors.empty()) {
+      // No still period: the recording's first and last windows, without bias samples.
+      const std::size_t n = in.size();
+      const auto w = static_cast<std::size_t>(std::clamp(
+          std::round(options.still_window_s * in.rate_hz), 1.0, static_cast<double>(n / 2)));
+      for (const Range r : {Range{0, w - 1}, Range{n - w, n - 1}}) {
+        Anchor anchor = make_anchor(r, r);
+        anchor.has_bias = false;
+        anchors.push_back(anchor);
+      }
+    }
+  } else if (in.mode == Mode::kRateOnly) {
+    if (still.periods.empty()) {
+      throw PreprocessingError(in.source +
+                               ": rate_rad_s only, and no still period to estimate the "
+                               "gyroscope bias and start theta = 0 from (" +
+                               still.rule + ")");
+    }
+    std::vector<double> means;
+    for (const Range& period : still.periods) means.push_back(mean_over(in.rate, period));
+    const double typical = median(means);
+    std::size_t closest = 0;
+    for (std::size_t p = 0; p < means.size(); ++p) {
+      if (std::abs(means[p] - typical) <= options.bias_consistency_rad_s) {
+        anchors.push_back(make_anchor(still.periods[p], still.periods[p]));
+      }
+      if (std::abs(means[p] - typical) < std::abs(means[closest] - typical)) closest = p;
+    }
+    if (anchors.empty()) {
+      anchors.push_back(make_anchor(still.periods[closest], still.periods[closest]));
+    }
+  }
+  return anchors;
+}
+
+struct Motion {
+  std::vector<double> theta, omega;
+  double mean_bias = 0;  // of the bias removed from the rate
+};
+
+// The bias piecewise-linear through the anchors' bias samples, the rate integrated
+// (trapezoid), and the drift removed between the anchors (docs/preprocessing.md). Sets each
+// anchor's offset; for the rate only, keeps just the first anchor (theta = 0 there).
+Motion integrate_and_anchor(const Input& in, std::vector<Anchor>& anchors) {
+  const std::vector<double>& t = in.t;
+  const std::size_t n = in.size();
+  std::vector<double> bias_t, bias_v;
+  for (const Anchor& anchor : anchors) {
+    if (!anchor.has_bias) continue;
+    bias_t.push_back(0.5 * (t[anchor.period.first] + t[anchor.period.last]));
+    bias_v.push_back(anchor.bias);
+  }
+  Motion motion;
+  motion.omega.resize(n);
+  std::vector<double> bias(n), integrated(n, 0.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    bias[i] = interpolate(bias_t, bias_v, t[i]);
+    motion.omega[i] = in.rate[i] - bias[i];
+    if (i > 0) {
+      integrated[i] =
+          integrated[i - 1] + 0.5 * (motion.omega[i - 1] + motion.omega[i]) * (t[i] - t[i - 1]);
+    }
+  }
+
+  if (in.mode == Mode::kRateOnly) {
+    anchors.resize(1);
+    anchors[0].offset = -mean_over(integrated, anchors[0].region);
+  } else {
+    const std::vector<double>& absolute = in.mode == Mode::kFused ? in.incl : in.angle;
+    for (Anchor& anchor : anchors) {
+      anchor.offset = mean_over(absolute, anchor.region) - mean_over(integrated, anchor.region);
+    }
+  }
+
+  // The correction: the nearest anchor's offset beyond the first and the last; between two
+  // anchors linear in time, or, where the rate is unknown in between, carried by the unknown
+  // intervals alone (the angle a saturated gyroscope lost stays where it was lost). Its
+  // slope is a bias correction and goes into ω too.
+  std::vector<double> correction(n), slope(n, 0.0);
+  for (std::size_t i = 0; i <= anchors.front().index; ++i) correction[i] = anchors.front().offset;
+  for (std::size_t i = anchors.back().index; i < n; ++i) correction[i] = anchors.back().offset;
+  for (std::size_t k = 0; k + 1 < anchors.size(); ++k) {
+    const Anchor& a = anchors[k];
+    const Anchor& b = anchors[k + 1];
+    const std::size_t lost = in.unknown[b.index] - in.unknown[a.index];
+    const double step = b.offset - a.offset;
+    for (std::size_t i = a.index + 1; i <= b.index; ++i) {
+      if (lost > 0) {
+        correction[i] = a.offset + step * static_cast<double>(in.unknown[i] - in.unknown[a.index]) /
+                                       static_cast<double>(lost);
+      } else {
+        slope[i] = step / (b.time_s - a.time_s);
+        correction[i] = a.offset + slope[i] * (t[i] - a.time_s);
+      }
+    }
+  }
+  motion.theta.resize(n);
+  double bias_sum = 0;
+  std::size_t bias_count = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    motion.omega[i] += slope[i];
+    motion.theta[i] = in.mode == Mode::kAngleAndRate ? in.angle[i] : integrated[i] + correction[i];
+    if (in.fault[i] & (kSaturated | kRateNonFinite)) continue;
+    bias_sum += bias[i] - slope[i];
+    ++bias_count;
+  }
+  motion.mean_bias = bias_count > 0 ? bias_sum / static_cast<double>(bias_count) : 0.0;
+  return motion;
+}
+
+// Cuts the strokes out of the motion, leaving out (and listing) those with faults, with an
+// unknown angle, or too short; then lists the faulty samples outside every stroke.
+void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor>& anchors,
+                 const std::vector<Candidate>& candidates, const PreprocessingOptions& options,
+                 PreparedData& data, std::vector<ExcludedSegment>& excluded) {
+  const std::vector<double>& t = in.t;
+  const std::size_t n = in.size();
+  std::vector<bool> covered(n, false);
+  // Before the first anchor and after the last the angle is only as good as the rate between
+  // the stroke and that anchor (with the rate only, that is everywhere).
+  const bool anchored = in.mode == Mode::kFused || in.mode == Mode::kRateOnly;
+  const std::size_t first_anchor = anchored ? anchors.front().index : 0;
+  const std::size_t last_anchor = anchored ? anchors.back().index : n - 1;
+  for (const Candidate& candidate : candidates) {
+    const Range& r = candidate.range;
+    for (std::size_t i = r.first; i <= r.last; ++i) covered[i] = true;
+    const double net = motion.theta[r.last] - motion.theta[r.first];
+    const double duration_s = t[r.last] - t[r.first];
+    const StrokeDirection direction =
+        net > 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing;
+    const std::string name = "stroke " + std::to_string(candidate.id) + " (" +
+                             (direction == StrokeDirection::kOpening ? "opening" : "closing") + ")";
+    std::uint8_t kinds = 0;
+    std::size_t fault_count = 0, first_fault = n;
+    for (std::size_t i = r.first; i <= r.last; ++i) {
+      // A gap before the first sample is outside the stroke.
+      const std::uint8_t f = i == r.first ? in.fault[i] & ~kGapBefore : in.fault[i];
+      if (f == 0) continue;
+      kinds |= f;
+      ++fault_count;
+      first_fault = std::min(first_fault, i);
+    }
+    const bool angle_unknown =
+        anchored && ((r.first < first_anchor && in.unknown[first_anchor] > in.unknown[r.first]) ||
+                     (r.last > last_anchor && in.unknown[r.last] > in.unknown[last_anchor]));
+    std::string reason;
+    if (kinds != 0) {
+      reason = name + ": " + describe_faults(kinds, in.saturation_limit) + " in " +
+               std::to_string(fault_count) + " samples from " + seconds(t[first_fault]);
+    } else if (angle_unknown) {
+      reason = name + ": angle unknown: the gyroscope's rate is unknown (saturated, non-finite "
+                      "or a gap) between this stroke and the " +
+               std::string(in.mode == Mode::kFused ? "nearest inclinometer anchor"
+                                                   : "still period where theta = 0");
+    } else if (duration_s < options.min_stroke_duration_s ||
+               std::abs(net) < options.min_stroke_angle_rad) {
+      reason = name + ": too short (" + text(duration_s) + " s, " + text(net / kDeg) +
+               " deg; a stroke needs >= " + text(options.min_stroke_duration_s) + " s and >= " +
+               text(options.min_stroke_angle_rad / kDeg) + " deg)";
+    }
+    if (!reason.empty()) {
+      excluded.push_back({t[r.first], t[r.last], reason});
+      continue;
+    }
+    Stroke stroke;
+    stroke.id = candidate.id;
+    stroke.direction = direction;
+    const auto begin = static_cast<std::ptrdiff_t>(r.first);
+    const auto end = static_cast<std::ptrdiff_t>(r.last + 1);
+    stroke.time_s.assign(t.begin() + begin, t.begin() + end);
+    stroke.force_N.assign(in.force.begin() + begin, in.force.begin() + end);
+    stroke.theta_rad.assign(motion.theta.begin() + begin, motion.theta.begin() + end);
+    stroke.omega_rad_s.assign(motion.omega.begin() + begin, motion.omega.begin() + end);
+    data.strokes.push_back(std::move(stroke));
+  }
+
+  std::size_t i = 0;
+  while (i < n) {
+    const std::uint8_t f = covered[i] ? 0 : in.fault[i];
+    if (f == 0) {
+      ++i;
+      continue;
+    }
+    std::size_t last = i;
+    std::uint8_t kinds = f;
+    while (last + 1 < n && !covered[last + 1] && in.fault[last + 1] != 0) kinds |= in.fault[++last];
+    const std::size_t first = (f & kGapBefore) && i > 0 ? i - 1 : i;  // a gap starts before
+    excluded.push_back({t[first], t[last],
+                        "outside the strokes: " + describe_faults(kinds, in.saturation_limit)});
+    i = last + 1;
+  }
+}
+
+}  // namespace
+
+PreparedData prepare(const Recording& recording, const PreprocessingOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
+  Input in = read_input(recording, options);
+  PreparedData data;
+  data.source = recording.source;
+  data.handle_radius_m = recording.handle_radius_m.value_or(0.0);
+  data.sample_rate_hz = recording.sample_rate_hz.value_or(in.rate_hz);
+  switch (in.mode) {
+    case Mode::kFused:
+      data.angle_source = "rate_rad_s integrated, anchored to " + in.inclinometer_name;
+      break;
+    case Mode::kRateOnly:
+      data.angle_source = "rate_rad_s integrated from theta = 0 at the first still period";
+      break;
+    case Mode::kAngleAndRate:
+      data.angle_source = "angle_rad (full range); rate_rad_s with its bias taken from angle_rad";
+      if (!in.inclinometer_name.empty()) {
+        data.notes.push_back(in.inclinometer_name + " not used: angle_rad is the full-range angle");
+      }
+      break;
+    case Mode::kAngleOnly:
+      data.angle_source = "angle_rad (full range); rate: its zero-phase smoothed derivative";
+      break;
+  }
+
+  // The rate the stillness test looks at: the gyroscope's (bias included), or the
+  // derivative of angle_rad.
+  std::vector<double> derived_rate;
+  if (in.mode == Mode::kAngleOnly) {
+    in.check_cutoff(options.derivative_cutoff_hz, "derivative_cutoff_hz");
+    derived_rate = smoothing_derivative(in.t, in.angle, options.derivative_cutoff_hz, in.rate_hz);
+  }
+  const std::vector<double>& tested_rate = in.has_rate ? in.rate : derived_rate;
+  const Stillness still = find_stillness(in, tested_rate, options);
+  std::vector<Anchor> anchors = find_anchors(in, still, options);
+  // The still periods trusted for the bias and the noise: the anchors' (in the inclinometer's
+  // range, or with a consistent bias), not a door creeping to rest at the open position.
+  std::vector<Range> trusted;
+  for (const Anchor& anchor : anchors) {
+    if (anchor.has_bias) trusted.push_back(anchor.period);
+  }
+  if (trusted.empty()) trusted = still.periods;
+
+  Motion motion;
+  if (in.has_rate) {
+    motion = integrate_and_anchor(in, anchors);
+  } else {
+    motion.theta = in.angle;
+    motion.omega = derived_rate;
+  }
+  data.gyro_bias_rad_s = motion.mean_bias;
+  if (in.mode == Mode::kFused) {
+    data.notes.push_back("theta anchored to " + in.inclinometer_name + " at " +
+                         std::to_string(anchors.size()) + " still periods");
+  } else if (in.mode == Mode::kRateOnly) {
+    data.notes.push_back("no absolute angle: theta = 0 at the still period from " +
+                         seconds(in.t[anchors.front().period.first]) +
+                         ", taken for the closed door; the angle drifts with the bias error "
+                         "from there");
+  } else if (in.mode == Mode::kAngleOnly) {
+    data.notes.push_back("rate: derivative of angle_rad after a zero-phase low-pass at " +
+                         text(options.derivative_cutoff_hz) + " Hz");
+  }
+
+  // Noise levels from the trusted still periods, else the bench's figures.
+  if (still.periods.empty()) {
+    data.notes.push_back("no still period: noise levels are the bench's figures");
+  }
+  const std::optional<double> rate_noise = pooled_detrended_std(trusted, in.t, tested_rate);
+  data.rate_noise_rad_s =
+      rate_noise ? std::max(*rate_noise, kNoiseFloorFraction * options.fallback_rate_noise_rad_s)
+                 : options.fallback_rate_noise_rad_s;
+  std::optional<double> angle_noise;
+  if (in.mode == Mode::kFused) {
+    std::vector<Range> regions;
+    for (const Anchor& anchor : anchors) regions.push_back(anchor.region);
+    angle_noise = pooled_detrended_std(regions, in.t, in.incl);
+  } else if (in.mode == Mode::kRateOnly) {
+    data.notes.push_back("angle noise: the fallback figure (no absolute angle sensor)");
+  } else {
+    angle_noise = pooled_detrended_std(trusted, in.t, in.angle);
+  }
+  data.angle_noise_rad =
+      angle_noise ? std::max(*angle_noise, kNoiseFloorFraction * options.fallback_angle_noise_rad)
+                  : options.fallback_angle_noise_rad;
+
+  if (options.force_cutoff_hz > 0) {
+    in.check_cutoff(options.force_cutoff_hz, "force_cutoff_hz");
+    in.force = zero_phase_lowpass(in.force, options.force_cutoff_hz, in.rate_hz);
+  }
+
+  std::vector<ExcludedSegment> excluded;
+  std::vector<Candidate> candidates;
+  if (recording.stroke && options.use_stroke_column) {
+    candidates = strokes_from_column(*recording.stroke);
+  } else {
+    const double noise = std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0;
+    const double edge =
+        std::min(options.motion_rate_rad_s, std::max(options.edge_rate_rad_s, 4.0 * noise));
+    candidates = segment_strokes(in.t, motion.theta, motion.omega, edge, options, excluded);
+  }
+  cut_strokes(in, motion, anchors, candidates, options, data, excluded);
+  std::stable_sort(excluded.begin(), excluded.end(),
+                   [](const ExcludedSegment& a, const ExcludedSegment& b) {
+                     return a.start_s < b.start_s;
+                   });
+  data.excluded = std::move(excluded);
+  return data;
+}
+
+PreparedData prepare_session(const std::filesystem::path& session_path,
+                             const PreprocessingOptions& options) {
+  const SessionReader session(session_path);
+  return prepare(session_to_recording(session), options);
+}
+
+}  // namespace doorbench
