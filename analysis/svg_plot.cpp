@@ -141,6 +141,7 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
   svg += buffer + escaped(options.y_label) + "</text>\n";
 
   // Series, reduced per pixel column: first, smallest, largest and last point in order.
+  int legend_entries = 0;
   for (std::size_t index = 0; index < series.size(); ++index) {
     const PlotSeries& s = series[index];
     const std::string color = s.color.empty() ? kPalette[index % 6] : s.color;
@@ -173,11 +174,13 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
       svg += buffer;
     }
     svg += "\"/>\n";
+    if (s.label.empty()) continue;  // unlabelled series share a labelled one's entry
+    const double legend_row = static_cast<double>(legend_entries++);
     std::snprintf(buffer, sizeof buffer,
                   "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
                   "stroke-width=\"3\"/><text x=\"%.1f\" y=\"%.1f\">",
-                  left + 10, top + 14 + 16.0 * index, left + 30, top + 14 + 16.0 * index,
-                  color.c_str(), left + 36, top + 18 + 16.0 * index);
+                  left + 10, top + 14 + 16.0 * legend_row, left + 30, top + 14 + 16.0 * legend_row,
+                  color.c_str(), left + 36, top + 18 + 16.0 * legend_row);
     svg += buffer + escaped(s.label) + "</text>\n";
   }
   svg += "</svg>\n";

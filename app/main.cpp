@@ -45,6 +45,7 @@ int main(int argc, char** argv) {
   doorbench::app::add_model_command(app, action);
   doorbench::app::add_simulate_command(app, action);
   doorbench::app::add_session_commands(app, action);
+  doorbench::app::add_fit_command(app, action);
   doorbench::app::add_demo_command(app, action);
 
   try {

@@ -1,0 +1,532 @@
+#include "analysis/fit_problem.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <limits>
+#include <stdexcept>
+#include <thread>
+
+#include "analysis/fit_equation_error.h"
+#include "analysis/fitting.h"
+
+namespace doorbench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+// DOORBENCH_FIT_TRACE=1 prints Ceres' progress and summaries to stderr.
+bool tracing() {
+  return std::getenv("DOORBENCH_FIT_TRACE") != nullptr;
+}
+
+}  // namespace
+
+int fit_thread_count(const FitOptions& options) {
+  if (options.num_threads > 0) return options.num_threads;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+// Checks the model's constraints once per evaluation point: a trial step that breaks one
+// fails to evaluate, and Levenberg–Marquardt shrinks its step.
+class FeasibilityCheck final : public ceres::EvaluationCallback {
+ public:
+  FeasibilityCheck(const DoorModel& model, const ParameterMap& map, const double* x)
+      : model_(model), map_(map), x_(x) {}
+  void PrepareForEvaluation(bool /*evaluate_jacobians*/, bool new_evaluation_point) override {
+    if (!new_evaluation_point) return;
+    try {
+      (void)model_.with_parameter_values(map_.values(x_));
+      feasible_ = true;
+    } catch (const std::invalid_argument&) {
+      feasible_ = false;
+    }
+  }
+  const bool* flag() const { return &feasible_; }
+
+ private:
+  const DoorModel& model_;
+  const ParameterMap& map_;
+  const double* x_;
+  bool feasible_ = true;
+};
+
+// Keeps the residuals and Jacobians of the last evaluation that asked for every Jacobian.
+// The trust-region solver evaluates the Jacobian at each accepted point, so the cache holds
+// it at the current iterate: the stopping rule and the statistics need no new evaluation.
+class CachingCost final : public ceres::CostFunction {
+ public:
+  explicit CachingCost(ceres::CostFunction* inner) : inner_(inner) {
+    set_num_residuals(inner->num_residuals());
+    *mutable_parameter_block_sizes() = inner->parameter_block_sizes();
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    if (!inner_->Evaluate(parameters, residuals, jacobians)) return false;
+    const std::vector<int32_t>& sizes = parameter_block_sizes();
+    bool every = jacobians != nullptr;
+    for (std::size_t b = 0; every && b < sizes.size(); ++b) every = jacobians[b] != nullptr;
+    if (!every) return true;
+    at_.clear();
+    jacobians_.resize(sizes.size());
+    for (std::size_t b = 0; b < sizes.size(); ++b) {
+      at_.insert(at_.end(), parameters[b], parameters[b] + sizes[b]);
+      jacobians_[b].assign(jacobians[b], jacobians[b] + num_residuals() * sizes[b]);
+    }
+    residuals_.assign(residuals, residuals + num_residuals());
+    return true;
+  }
+
+  bool cached_at(double const* const* parameters) const {
+    const std::vector<int32_t>& sizes = parameter_block_sizes();
+    if (at_.empty()) return false;
+    for (std::size_t b = 0, at = 0; b < sizes.size(); ++b) {
+      for (int i = 0; i < sizes[b]; ++i, ++at) {
+        if (at_[at] != parameters[b][i]) return false;
+      }
+    }
+    return true;
+  }
+
+  // Residuals and row-major Jacobians (one per parameter block) at `parameters`: the cached
+  // ones when taken there, else evaluated now.
+  bool evaluate_at(double const* const* parameters, const std::vector<double>** residuals,
+                   const std::vector<std::vector<double>>** jacobians) const {
+    if (!cached_at(parameters)) {
+      const std::vector<int32_t>& sizes = parameter_block_sizes();
+      std::vector<double*> pointers(sizes.size());
+      jacobians_.resize(sizes.size());
+      for (std::size_t b = 0; b < sizes.size(); ++b) {
+        jacobians_[b].resize(static_cast<std::size_t>(num_residuals()) * sizes[b]);
+        pointers[b] = jacobians_[b].data();
+      }
+      residuals_.resize(num_residuals());
+      at_.clear();
+      if (!inner_->Evaluate(parameters, residuals_.data(), pointers.data())) return false;
+      for (std::size_t b = 0; b < sizes.size(); ++b) {
+        at_.insert(at_.end(), parameters[b], parameters[b] + sizes[b]);
+      }
+    }
+    *residuals = &residuals_;
+    *jacobians = &jacobians_;
+    return true;
+  }
+
+ private:
+  std::unique_ptr<ceres::CostFunction> inner_;
+  mutable std::vector<double> at_;
+  mutable std::vector<double> residuals_;
+  mutable std::vector<std::vector<double>> jacobians_;
+};
+
+namespace {
+
+// The free parameters' block with the parameter file's bounds, in solver units.
+void add_free_block(ceres::Problem& problem, double* x, const DoorModel& model,
+                    const ParameterMap& map) {
+  problem.AddParameterBlock(x, map.free_count());
+  const auto bounds = model.parameter_bounds();
+  for (int k = 0; k < map.free_count(); ++k) {
+    const Bounds& b = bounds[map.free_index[k]];
+    problem.SetParameterLowerBound(x, k, b.lower / map.scale[k]);
+    problem.SetParameterUpperBound(x, k, b.upper / map.scale[k]);
+  }
+}
+
+ceres::Solver::Options solver_options(const FitOptions& options, int max_iterations) {
+  ceres::Solver::Options solver;
+  solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
+  solver.linear_solver_type = ceres::DENSE_QR;
+  solver.max_num_iterations = max_iterations;
+  solver.function_tolerance = options.function_tolerance;
+  solver.parameter_tolerance = options.parameter_tolerance;
+  solver.gradient_tolerance = options.gradient_tolerance;
+  solver.num_threads = fit_thread_count(options);
+  solver.logging_type = tracing() ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
+  solver.minimizer_progress_to_stdout = tracing();
+  // With bounds, Ceres follows each trust-region step with a projected line search that
+  // evaluates the whole Jacobian at every trial point (about 3 Jacobians per iteration
+  // here); the projected trust-region step alone converges as well at a third of the cost.
+  solver.max_num_line_search_step_size_iterations = 0;
+  // The stopping rules below read the user's parameter blocks.
+  solver.update_state_every_iteration = true;
+  // The window residuals are not smooth everywhere (contact with a stop at low speed, the
+  // latch switches at sub-switch scales): allowing steps that raise the cost for a while
+  // gets the solver through such rough valleys instead of crawling.
+  solver.use_nonmonotonic_steps = true;
+  return solver;
+}
+
+bool converged(const ceres::Solver::Summary& summary) {
+  return summary.termination_type == ceres::CONVERGENCE ||
+         summary.termination_type == ceres::USER_SUCCESS;
+}
+
+std::string termination_text(const ceres::Solver::Summary& summary) {
+  if (summary.termination_type == ceres::USER_SUCCESS) {
+    return "CONVERGENCE: the parameters settled (the stopping rule's own test)";
+  }
+  return std::string(ceres::TerminationTypeToString(summary.termination_type)) + ": " +
+         summary.message;
+}
+
+void trace_summary(const ceres::Solver::Summary& summary) {
+  if (tracing()) std::fprintf(stderr, "%s\n", summary.FullReport().c_str());
+}
+
+// Stops once two accepted steps in a row change no parameter by more than `tolerance` (x
+// is in units of each parameter's scale). For the equation-error stage, whose result is
+// only a start.
+class RelativeStepCheck final : public ceres::IterationCallback {
+ public:
+  RelativeStepCheck(const std::vector<double>& x, double tolerance)
+      : x_(x), previous_(x), tolerance_(tolerance) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (summary.iteration == 0 || !summary.step_is_successful) return ceres::SOLVER_CONTINUE;
+    double largest = 0.0;
+    for (std::size_t k = 0; k < x_.size(); ++k) {
+      largest = std::max(largest, std::abs(x_[k] - previous_[k]) / std::max(1.0, std::abs(x_[k])));
+    }
+    previous_ = x_;
+    settled_steps_ = largest <= tolerance_ ? settled_steps_ + 1 : 0;
+    return settled_steps_ >= 2 ? ceres::SOLVER_TERMINATE_SUCCESSFULLY : ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::vector<double>& x_;
+  std::vector<double> previous_;
+  double tolerance_;
+  int settled_steps_ = 0;
+};
+
+// Stops when, from the Jacobian the solver has just computed, the Gauss–Newton step for x
+// (window states eliminated) moves no determined parameter by more than `tolerance` of its
+// standard uncertainty (of the kind the fit reports): further iterations would change the
+// result by less than the statistics can tell. Also stops when three accepted steps in a
+// row each moved every parameter by less than that: the cost is rough at this scale (the
+// latch switches below their width, contact with a stop) and Levenberg–Marquardt would only
+// crawl.
+class PredictedStepCheck final : public ceres::IterationCallback {
+ public:
+  PredictedStepCheck(const WindowProblem& problem, double tolerance, bool robust)
+      : problem_(problem), tolerance_(tolerance), robust_(robust), previous_(problem.x()) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (!(tolerance_ > 0)) return ceres::SOLVER_CONTINUE;
+    if (summary.iteration > 0 && !summary.step_is_successful) return ceres::SOLVER_CONTINUE;
+    ReducedSystem system;
+    if (!problem_.reduce(/*cached_only=*/true, system)) return ceres::SOLVER_CONTINUE;
+    const Eigen::VectorXd sigma = standard_uncertainties(system, robust_);
+    const InformationInverse inverse = invert_information(system.information);
+    const Eigen::VectorXd step = inverse.inverse * system.gradient;
+    const std::vector<double>& x = problem_.x();
+    double predicted = 0.0;
+    double taken = 0.0;
+    for (int k = 0; k < step.size(); ++k) {
+      if (inverse.undetermined[k] || !(sigma(k) > 0)) continue;
+      predicted = std::max(predicted, std::abs(step(k)) / sigma(k));
+      taken = std::max(taken, std::abs(x[k] - previous_[k]) / sigma(k));
+    }
+    previous_ = x;
+    if (summary.iteration > 0) small_steps_ = taken <= tolerance_ ? small_steps_ + 1 : 0;
+    if (tracing()) {
+      std::fprintf(stderr, "step taken %.3g, predicted %.3g standard uncertainties\n", taken,
+                   predicted);
+    }
+    if (predicted <= tolerance_) {
+      reason_ = "the Gauss-Newton step predicts less than " + format_tolerance() +
+                " standard uncertainty for every parameter";
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    }
+    if (small_steps_ >= 3) {
+      reason_ = "three accepted steps in a row moved no parameter by more than " +
+                format_tolerance() + " standard uncertainty (the cost is rough at this scale)";
+      return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
+    }
+    return ceres::SOLVER_CONTINUE;
+  }
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string format_tolerance() const {
+    char text[32];
+    std::snprintf(text, sizeof text, "%g", tolerance_);
+    return text;
+  }
+
+  const WindowProblem& problem_;
+  double tolerance_;
+  bool robust_;
+  std::vector<double> previous_;
+  int small_steps_ = 0;
+  std::string reason_;
+};
+
+}  // namespace
+
+Eigen::VectorXd standard_uncertainties(const ReducedSystem& system, bool robust) {
+  const InformationInverse inverse = invert_information(system.information);
+  const Eigen::MatrixXd covariance = robust ? robust_covariance(system, inverse.inverse).covariance
+                                            : system.residual_variance() * inverse.inverse;
+  return covariance.diagonal().cwiseMax(0.0).cwiseSqrt();
+}
+
+RobustCovariance robust_covariance(const ReducedSystem& system, const Eigen::MatrixXd& inverse) {
+  const int p = static_cast<int>(system.information.rows());
+  const int windows = static_cast<int>(system.window_scores.size());
+  RobustCovariance out;
+  if (windows < 2) {
+    out.covariance = Eigen::MatrixXd::Constant(p, p, kNaN);
+    out.effective_windows = Eigen::VectorXd::Zero(p);
+    return out;
+  }
+  const int rank = invert_information(system.information).rank;
+  std::vector<Eigen::VectorXd> changes(windows);
+  Eigen::VectorXd mean = Eigen::VectorXd::Zero(p);
+  for (int w = 0; w < windows; ++w) {
+    const InformationInverse without =
+        invert_information(system.information - system.window_information[w]);
+    changes[w] = (without.rank == rank ? without.inverse : inverse) * system.window_scores[w];
+    mean += changes[w];
+  }
+  mean /= windows;
+  Eigen::MatrixXd covariance = Eigen::MatrixXd::Zero(p, p);
+  Eigen::VectorXd sum_of_squares = Eigen::VectorXd::Zero(p);
+  for (const Eigen::VectorXd& change : changes) {
+    const Eigen::VectorXd deviation = change - mean;
+    covariance += deviation * deviation.transpose();
+    sum_of_squares += deviation.cwiseAbs2().cwiseAbs2();
+  }
+  out.covariance = covariance * (static_cast<double>(windows - 1) / windows);
+  out.effective_windows.resize(p);
+  for (int k = 0; k < p; ++k) {
+    out.effective_windows(k) =
+        sum_of_squares(k) > 0 ? covariance(k, k) * covariance(k, k) / sum_of_squares(k) : 0.0;
+  }
+  return out;
+}
+
+double ReducedSystem::residual_variance() const {
+  const int dof = residuals - static_cast<int>(information.rows()) - window_parameters;
+  return dof > 0 ? sum_of_squares / dof : kNaN;
+}
+
+InformationInverse invert_information(const Eigen::MatrixXd& information) {
+  const int p = static_cast<int>(information.rows());
+  InformationInverse out;
+  out.undetermined.assign(p, 0);
+  Eigen::VectorXd unit(p);
+  for (int k = 0; k < p; ++k) {
+    unit(k) = information(k, k) > 0 ? 1.0 / std::sqrt(information(k, k)) : 0.0;
+  }
+  const Eigen::MatrixXd normalized = unit.asDiagonal() * information * unit.asDiagonal();
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(normalized);
+  const double largest = eigen.eigenvalues().maxCoeff();
+  Eigen::VectorXd inverse_eigen(p);
+  for (int e = 0; e < p; ++e) {
+    const double value = eigen.eigenvalues()(e);
+    if (value > kRankTolerance * largest) {
+      ++out.rank;
+      inverse_eigen(e) = 1.0 / value;
+      continue;
+    }
+    inverse_eigen(e) = 0.0;
+    for (int k = 0; k < p; ++k) {
+      const double share = eigen.eigenvectors()(k, e) * eigen.eigenvectors()(k, e);
+      if (share > kNullSpaceShare) out.undetermined[k] = 1;
+    }
+  }
+  for (int k = 0; k < p; ++k) {
+    if (!(information(k, k) > 0)) out.undetermined[k] = 1;
+  }
+  out.inverse =
+      unit.asDiagonal() *
+      (eigen.eigenvectors() * inverse_eigen.asDiagonal() * eigen.eigenvectors().transpose()) *
+      unit.asDiagonal();
+  return out;
+}
+
+WindowProblem::WindowProblem(const DoorModel& model, const PreparedData& data,
+                             const ParameterMap& map, const ProblemKind& kind,
+                             const FitWeights& weights, std::vector<double> x0)
+    : map_(map), x_(std::move(x0)) {
+  feasibility_ = std::make_unique<FeasibilityCheck>(model, map_, x_.data());
+  setup_.model = &model;
+  setup_.data = &data;
+  setup_.map = &map_;
+  setup_.substeps_per_sample = kind.windows.substeps_per_sample;
+  setup_.rate_noise_rad_s = weights.rate_noise_rad_s;
+  setup_.angle_noise_rad = weights.angle_noise_rad;
+  setup_.angle_residuals = weights.angle_residuals;
+  setup_.estimate_start_state = kind.estimate_start_states;
+  setup_.residual_power = kind.residual_power;
+  setup_.feasible = feasibility_->flag();
+  windows_ = split_windows(data, kind.windows);
+  z_.assign(kind.estimate_start_states ? 2 * windows_.size() : 0, 0.0);
+  ceres::Problem::Options problem_options;
+  problem_options.evaluation_callback = feasibility_.get();
+  problem_ = std::make_unique<ceres::Problem>(problem_options);
+  add_free_block(*problem_, x_.data(), model, map_);
+  for (std::size_t w = 0; w < windows_.size(); ++w) {
+    auto* cost = new CachingCost(make_window_cost(setup_, windows_[w]));
+    costs_.push_back(cost);
+    if (kind.estimate_start_states) {
+      problem_->AddResidualBlock(cost, nullptr, x_.data(), z_.data() + 2 * w);
+    } else {
+      problem_->AddResidualBlock(cost, nullptr, x_.data());
+    }
+  }
+}
+
+WindowProblem::~WindowProblem() = default;
+
+int WindowProblem::residual_count() const {
+  int count = 0;
+  for (const CachingCost* cost : costs_) count += cost->num_residuals();
+  return count;
+}
+
+WindowProblem::Outcome WindowProblem::solve(const FitOptions& options, int max_iterations,
+                                            double uncertainty_tolerance) {
+  ceres::Solver::Options solver = solver_options(options, max_iterations);
+  if (!z_.empty()) {
+    // The window states are eliminated first (Schur complement): each appears in one
+    // window only, so the reduced system is the size of x.
+    solver.linear_solver_type = ceres::DENSE_SCHUR;
+    auto ordering = std::make_shared<ceres::ParameterBlockOrdering>();
+    for (std::size_t w = 0; w < windows_.size(); ++w)
+      ordering->AddElementToGroup(z_.data() + 2 * w, 0);
+    ordering->AddElementToGroup(x_.data(), 1);
+    solver.linear_solver_ordering = ordering;
+  }
+  // Without the statistical stopping rule (the study's objective), the result must be the
+  // best point seen: monotonic steps only.
+  solver.use_nonmonotonic_steps = uncertainty_tolerance > 0;
+  PredictedStepCheck check(*this, uncertainty_tolerance,
+                           options.uncertainty == FitOptions::Uncertainty::kWindowRobust);
+  solver.callbacks.push_back(&check);
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, problem_.get(), &summary);
+  trace_summary(summary);
+  Outcome outcome;
+  outcome.usable = summary.IsSolutionUsable();
+  outcome.converged = converged(summary);
+  outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  outcome.initial_cost = summary.initial_cost;
+  outcome.final_cost = summary.final_cost;
+  outcome.termination = termination_text(summary);
+  if (summary.termination_type == ceres::USER_SUCCESS)
+    outcome.termination = "CONVERGENCE: " + check.reason();
+  return outcome;
+}
+
+bool WindowProblem::reduce(bool cached_only, ReducedSystem& out) const {
+  using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+  const int p = static_cast<int>(x_.size());
+  const bool states = estimates_states();
+  out = ReducedSystem{};
+  out.information = Eigen::MatrixXd::Zero(p, p);
+  out.gradient = Eigen::VectorXd::Zero(p);
+  out.window_information.reserve(windows_.size());
+  out.window_scores.reserve(windows_.size());
+  out.windows = static_cast<int>(windows_.size());
+  out.window_parameters = static_cast<int>(z_.size());
+  for (std::size_t w = 0; w < windows_.size(); ++w) {
+    const double* blocks[2] = {x_.data(), states ? z_.data() + 2 * w : nullptr};
+    if (cached_only && !costs_[w]->cached_at(blocks)) return false;
+    const std::vector<double>* residuals = nullptr;
+    const std::vector<std::vector<double>>* jacobians = nullptr;
+    if (!costs_[w]->evaluate_at(blocks, &residuals, &jacobians)) return false;
+    const int count = static_cast<int>(residuals->size());
+    const Eigen::Map<const RowMajor> a((*jacobians)[0].data(), count, p);
+    const Eigen::Map<const Eigen::VectorXd> r(residuals->data(), count);
+    Eigen::VectorXd score = a.transpose() * r;
+    Eigen::MatrixXd information = a.transpose() * a;
+    if (states) {
+      const Eigen::Map<const RowMajor> b((*jacobians)[1].data(), count, 2);
+      const Eigen::Matrix2d btb_inverse = (b.transpose() * b).inverse();
+      const Eigen::MatrixXd bta = b.transpose() * a;
+      information -= bta.transpose() * btb_inverse * bta;
+      score -= bta.transpose() * (btb_inverse * (b.transpose() * r));
+    }
+    out.information += information;
+    out.gradient += score;
+    out.window_information.push_back(std::move(information));
+    out.window_scores.push_back(std::move(score));
+    out.sum_of_squares += r.squaredNorm();
+    out.residuals += count;
+  }
+  return true;
+}
+
+EquationErrorOutcome solve_equation_error(const DoorModel& model, const PreparedData& data,
+                                          const ParameterMap& map, const FitOptions& options,
+                                          std::vector<double> x0) {
+  EquationErrorOutcome outcome;
+  outcome.x = std::move(x0);
+  FeasibilityCheck feasibility(model, map, outcome.x.data());
+  EquationErrorSetup setup;
+  setup.model = &model;
+  setup.data = &data;
+  setup.map = &map;
+  setup.rate_derivative_rad_s2 = rate_derivatives(data);
+  setup.feasible = feasibility.flag();
+  ceres::Problem::Options problem_options;
+  problem_options.evaluation_callback = &feasibility;
+  ceres::Problem problem(problem_options);
+  add_free_block(problem, outcome.x.data(), model, map);
+  constexpr int kChunk = 200;
+  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+    const int n = static_cast<int>(data.strokes[s].size());
+    for (int first = 0; first < n; first += kChunk) {
+      problem.AddResidualBlock(
+          make_equation_error_cost(setup, static_cast<int>(s), first, std::min(kChunk, n - first)),
+          nullptr, outcome.x.data());
+    }
+  }
+  ceres::Solver::Options solver = solver_options(options, options.max_iterations);
+  RelativeStepCheck check(outcome.x, options.equation_error_step_tolerance);
+  solver.callbacks.push_back(&check);
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  trace_summary(summary);
+  outcome.usable = summary.IsSolutionUsable();
+  outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  outcome.termination = summary.termination_type == ceres::USER_SUCCESS
+                            ? "CONVERGENCE: two accepted steps changed no parameter by more than "
+                              "equation_error_step_tolerance of its scale"
+                            : termination_text(summary);
+  return outcome;
+}
+
+double compare_with_ceres_covariance(WindowProblem& problem, const Eigen::MatrixXd& inverse,
+                                     int num_threads) {
+  const int p = static_cast<int>(problem.x().size());
+  ceres::Covariance::Options options;
+  options.algorithm_type = problem.estimates_states() ? ceres::SPARSE_QR : ceres::DENSE_SVD;
+  options.num_threads = num_threads;
+  ceres::Covariance covariance(options);
+  std::vector<double> block(static_cast<std::size_t>(p) * p);
+  const double* x = problem.x().data();
+  if (!covariance.Compute(std::vector<const double*>{x}, &problem.problem()) ||
+      !covariance.GetCovarianceBlock(x, x, block.data())) {
+    return kNaN;
+  }
+  double largest = 0.0;
+  for (int r = 0; r < p; ++r) {
+    for (int c = 0; c < p; ++c) {
+      const double scale = std::sqrt(inverse(r, r) * inverse(c, c));
+      const double difference =
+          std::abs(block[static_cast<std::size_t>(r) * p + c] - inverse(r, c));
+      largest = std::max(largest, difference / scale);
+    }
+  }
+  return largest;
+}
+
+}  // namespace doorbench

@@ -1,0 +1,59 @@
+#include "analysis/fit_synthetic.h"
+
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "analysis/simulator.h"
+#include "analysis/virtual_hand.h"
+
+namespace doorbench {
+
+PreparedData synthetic_strokes(const DoorModel& model, const SyntheticStrokeOptions& options) {
+  if (!(options.sample_rate_hz > 0) || options.runs.empty()) {
+    throw std::invalid_argument("synthetic strokes need runs and a sample rate > 0");
+  }
+  constexpr double kDegree = 3.14159265358979323846 / 180.0;
+  PreparedData data;
+  data.source = "synthetic";
+  data.handle_radius_m = model.geometry().handle_radius_m;
+  data.sample_rate_hz = options.sample_rate_hz;
+  data.rate_noise_rad_s = options.rate_noise_rad_s > 0 ? options.rate_noise_rad_s : 0.05 * kDegree;
+  data.angle_noise_rad = options.angle_noise_rad > 0 ? options.angle_noise_rad : 0.01 * kDegree;
+
+  std::mt19937 random(options.seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  const double r_h = model.geometry().handle_radius_m;
+  for (std::size_t r = 0; r < options.runs.size(); ++r) {
+    VirtualHandOptions hand_options;
+    hand_options.target_angle_rad = options.runs[r].target_angle_rad;
+    hand_options.duration_s = options.runs[r].duration_s;
+    const VirtualHand hand(hand_options, r_h);
+    const auto samples =
+        static_cast<std::size_t>(std::floor(hand_options.duration_s * options.sample_rate_hz));
+    std::vector<double> times(samples + 1);
+    for (std::size_t i = 0; i <= samples; ++i)
+      times[i] = static_cast<double>(i) / options.sample_rate_hz;
+    const Trajectory by_hand = simulate(model, hand, DoorState{}, times);
+    const RecordedForce recorded(times, by_hand.force_N);
+    const Trajectory run = simulate(model, recorded, DoorState{}, times);
+
+    for (int marker : {1, 2}) {
+      Stroke stroke;
+      stroke.id = static_cast<int>(2 * r) + marker;
+      stroke.direction = marker == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing;
+      for (std::size_t i = 0; i < run.size(); ++i) {
+        if (hand.stroke_at(times[i]) != marker) continue;
+        stroke.time_s.push_back(times[i]);
+        stroke.force_N.push_back(run.force_N[i] + options.force_noise_N * normal(random));
+        stroke.theta_rad.push_back(run.theta_rad[i] + options.angle_noise_rad * normal(random));
+        stroke.omega_rad_s.push_back(run.omega_rad_s[i] +
+                                     options.rate_noise_rad_s * normal(random));
+      }
+      data.strokes.push_back(std::move(stroke));
+    }
+  }
+  return data;
+}
+
+}  // namespace doorbench

@@ -1,0 +1,560 @@
+#include "analysis/fitting.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "analysis/constraint_check.h"
+#include "analysis/fit_problem.h"
+#include "analysis/sensory_model.h"
+
+namespace doorbench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A robust uncertainty resting on fewer windows than this is flagged in the notes.
+constexpr double kFewEffectiveWindows = 10.0;
+
+bool finite_positive(double value) {
+  return std::isfinite(value) && value > 0;
+}
+
+}  // namespace
+
+std::string FitOptions::validate() const {
+  if (!finite_positive(window_s)) return "fit window_s must be > 0";
+  if (substeps_per_sample < 1 || substeps_per_sample > 100) {
+    return "fit substeps_per_sample must be between 1 and 100";
+  }
+  if (!std::isfinite(rate_noise_rad_s) || rate_noise_rad_s < 0) {
+    return "fit rate_noise_rad_s must be >= 0 (0: the data's)";
+  }
+  if (!std::isfinite(angle_noise_rad) || angle_noise_rad < 0) {
+    return "fit angle_noise_rad must be >= 0 (0: the data's)";
+  }
+  if (max_objective_power < 1 || max_objective_power > 16) {
+    return "fit max_objective_power must be between 1 and 16";
+  }
+  if (max_iterations < 1) return "fit max_iterations must be >= 1";
+  if (!finite_positive(function_tolerance) || !finite_positive(parameter_tolerance) ||
+      !finite_positive(gradient_tolerance) || !finite_positive(uncertainty_tolerance) ||
+      !finite_positive(equation_error_step_tolerance)) {
+    return "fit function_tolerance, parameter_tolerance, gradient_tolerance, "
+           "uncertainty_tolerance and equation_error_step_tolerance must be > 0";
+  }
+  if (num_threads < 0) return "fit num_threads must be >= 0 (0: every hardware thread)";
+  if (cross_validation_folds < 0 || cross_validation_folds == 1) {
+    return "fit cross_validation_folds must be 0 (none) or >= 2";
+  }
+  if (held_out_max_iterations < 1) return "fit held_out_max_iterations must be >= 1";
+  if (!(correlation_threshold > 0 && correlation_threshold < 1)) {
+    return "fit correlation_threshold must lie strictly between 0 and 1";
+  }
+  if (!finite_positive(undetermined_relative_uncertainty)) {
+    return "fit undetermined_relative_uncertainty must be > 0";
+  }
+  return "";
+}
+
+std::vector<std::string> default_free_parameters(const DoorModel& model) {
+  std::vector<std::string> names;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    const std::string& name = model.parameter_name(i);
+    if (name == "k_stop" || name == "c_stop") continue;
+    if (model.kind() == ModelKind::kSensory && (name == "beta" || name == "beta_f")) continue;
+    names.push_back(name);
+  }
+  return names;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string parameter_list(const DoorModel& model) {
+  std::string list;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    if (i > 0) list += ", ";
+    list += model.parameter_name(i);
+  }
+  return list;
+}
+
+int find_or_throw(const DoorModel& model, const std::string& name, const char* option) {
+  const std::optional<int> index = model.find_parameter(name);
+  if (!index) {
+    throw std::invalid_argument("fit: " + std::string(option) + " names '" + name +
+                                "', which the " + std::string(to_string(model.kind())) +
+                                " model does not have (its parameters: " + parameter_list(model) +
+                                ")");
+  }
+  return *index;
+}
+
+std::vector<int> resolve_free(const DoorModel& model, const FitOptions& options) {
+  const std::vector<std::string> names =
+      options.free_parameters.empty() ? default_free_parameters(model) : options.free_parameters;
+  std::vector<char> free(model.parameter_count(), 0);
+  for (const std::string& name : names) free[find_or_throw(model, name, "free_parameters")] = 1;
+  for (const std::string& name : options.fixed_parameters) {
+    free[find_or_throw(model, name, "fixed_parameters")] = 0;
+  }
+  std::vector<int> indices;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    if (free[i]) indices.push_back(i);
+  }
+  if (indices.empty()) throw std::invalid_argument("fit: no parameter is free");
+  return indices;
+}
+
+void check_data(const PreparedData& data, const DoorModel& model) {
+  if (data.strokes.empty()) throw std::invalid_argument("fit: the data has no strokes");
+  for (const Stroke& stroke : data.strokes) {
+    const std::string which = "fit: stroke " + std::to_string(stroke.id);
+    const std::size_t n = stroke.time_s.size();
+    if (stroke.force_N.size() != n || stroke.theta_rad.size() != n ||
+        stroke.omega_rad_s.size() != n) {
+      throw std::invalid_argument(which + ": time, force, angle and rate differ in length");
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(stroke.time_s[i]) || !std::isfinite(stroke.force_N[i]) ||
+          !std::isfinite(stroke.theta_rad[i]) || !std::isfinite(stroke.omega_rad_s[i])) {
+        throw std::invalid_argument(which + ": sample " + std::to_string(i) + " is not finite");
+      }
+      if (i > 0 && !(stroke.time_s[i] > stroke.time_s[i - 1])) {
+        throw std::invalid_argument(which + ": time does not increase at sample " +
+                                    std::to_string(i));
+      }
+    }
+  }
+  const double model_radius = model.geometry().handle_radius_m;
+  if (data.handle_radius_m > 0 &&
+      std::abs(data.handle_radius_m - model_radius) > 1e-6 * model_radius) {
+    throw std::invalid_argument("fit: the data's handle radius (" +
+                                format_number(data.handle_radius_m) +
+                                " m) differs from the model's (" + format_number(model_radius) +
+                                " m); build the model with the bench's geometry");
+  }
+}
+
+// The solver's unit for each free parameter: its start's magnitude, or a tenth of its
+// bounds' width when the start is (nearly) zero.
+double parameter_scale(double start, const Bounds& bounds) {
+  const double width = bounds.upper - bounds.lower;
+  const bool usable_width = std::isfinite(width) && width > 0;
+  if (std::abs(start) > 0 && (!usable_width || std::abs(start) >= 1e-3 * width)) {
+    return std::abs(start);
+  }
+  if (usable_width) return 0.1 * width;
+  return 1.0;
+}
+
+// Replaces the start's free latch values with those read off the data, when they keep
+// every constraint. Records the origin of each value.
+void apply_latch_read_off(const DoorModel& start, const LatchReadOff& read,
+                          const std::vector<int>& free_index, std::vector<double>& values,
+                          std::vector<std::string>& origin, std::vector<std::string>& notes) {
+  const std::pair<int, std::optional<double>> readings[] = {
+      {sensory::kTheta0, read.theta0_rad},     {sensory::kTheta1, read.theta1_rad},
+      {sensory::kTheta2, read.theta2_rad},     {sensory::kTheta3, read.theta3_rad},
+      {sensory::kKInf, read.k_inf_Nm_per_rad}, {sensory::kKLock, read.k_lock_Nm_per_rad}};
+  std::vector<double> trial = values;
+  std::vector<int> replaced;
+  const auto bounds = start.parameter_bounds();
+  for (const auto& [index, reading] : readings) {
+    if (!reading || std::find(free_index.begin(), free_index.end(), index) == free_index.end()) {
+      continue;
+    }
+    trial[index] = std::clamp(*reading, bounds[index].lower, bounds[index].upper);
+    replaced.push_back(index);
+  }
+  if (replaced.empty()) return;
+  try {
+    (void)start.with_parameter_values(trial);
+  } catch (const std::invalid_argument& error) {
+    notes.push_back(std::string("the latch read off the data was not used: ") + error.what());
+    return;
+  }
+  values = trial;
+  for (int index : replaced) origin[index] = "read off the data";
+}
+
+// Free values of a model, scaled.
+std::vector<double> scaled_values(const ParameterMap& map, std::span<const double> values) {
+  return map.scaled(std::vector<double>(values.begin(), values.end()));
+}
+
+FitWeights resolve_weights(const FitOptions& options, const PreparedData& data,
+                           std::vector<std::string>& notes) {
+  FitWeights weights;
+  weights.angle_residuals = options.angle_residuals;
+  weights.rate_noise_rad_s = options.rate_noise_rad_s > 0 ? options.rate_noise_rad_s
+                             : data.rate_noise_rad_s > 0  ? data.rate_noise_rad_s
+                                                          : kBenchRateNoise_rad_s;
+  weights.angle_noise_rad = options.angle_noise_rad > 0 ? options.angle_noise_rad
+                            : data.angle_noise_rad > 0  ? data.angle_noise_rad
+                                                        : kBenchAngleNoise_rad;
+  if (options.rate_noise_rad_s == 0 && !(data.rate_noise_rad_s > 0)) {
+    notes.push_back("the data gives no rate noise level: sigma_omega is the bench's");
+  }
+  if (options.angle_noise_rad == 0 && !(data.angle_noise_rad > 0)) {
+    notes.push_back("the data gives no angle noise level: sigma_theta is the bench's");
+  }
+  return weights;
+}
+
+WindowOptions metric_windows(const FitOptions& options, const DoorModel& model) {
+  WindowOptions windows;
+  windows.window_s = options.window_s;
+  windows.substeps_per_sample = options.substeps_per_sample;
+  windows.cut_angles_rad = {0.0, model.geometry().theta_max_rad};
+  return windows;
+}
+
+ProblemKind window_fit_kind(const FitOptions& options, const DoorModel& model) {
+  ProblemKind kind;
+  kind.windows = metric_windows(options, model);
+  kind.windows.disjoint = options.estimate_window_states;
+  kind.estimate_start_states = options.estimate_window_states;
+  return kind;
+}
+
+// The window fit from the problem's x and z: coarse (one RK4 step per sample) then fine.
+// Leaves the result in `problem` (whose kind is the fine one).
+WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorModel& model,
+                                            const PreparedData& data, const ParameterMap& map,
+                                            const FitOptions& options, const FitWeights& weights,
+                                            int max_iterations) {
+  int used = 0;
+  double initial_cost = kNaN;
+  if (options.coarse_first && options.substeps_per_sample > 1) {
+    ProblemKind coarse_kind = window_fit_kind(options, model);
+    coarse_kind.windows.substeps_per_sample = 1;
+    WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
+    coarse.z() = problem.z();
+    const WindowProblem::Outcome outcome =
+        coarse.solve(options, max_iterations, 10 * options.uncertainty_tolerance);
+    used = outcome.iterations;
+    initial_cost = outcome.initial_cost;
+    if (outcome.usable) {
+      problem.x() = coarse.x();
+      problem.z() = coarse.z();
+    }
+  }
+  WindowProblem::Outcome outcome =
+      problem.solve(options, std::max(1, max_iterations - used), options.uncertainty_tolerance);
+  outcome.iterations += used;
+  if (used > 0) outcome.initial_cost = initial_cost;
+  return outcome;
+}
+
+// Held-out metrics: stroke s is in fold s mod k; each fold is refitted from the full fit
+// without its strokes, and its strokes are measured with that refit.
+FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
+                          const ParameterMap& map, const std::vector<double>& x,
+                          const FitOptions& options, const FitWeights& weights, int folds,
+                          std::vector<std::string>& notes) {
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  std::vector<StrokeFitMetrics> per_stroke(stroke_count);
+  std::vector<char> have(stroke_count, 0);
+  ParameterMap fold_map = map;
+  fold_map.base_values.assign(fitted.parameter_values().begin(), fitted.parameter_values().end());
+  for (int fold = 0; fold < folds; ++fold) {
+    PreparedData training;
+    training.source = data.source;
+    training.handle_radius_m = data.handle_radius_m;
+    training.sample_rate_hz = data.sample_rate_hz;
+    training.rate_noise_rad_s = data.rate_noise_rad_s;
+    training.angle_noise_rad = data.angle_noise_rad;
+    std::vector<int> held;
+    for (int s = 0; s < stroke_count; ++s) {
+      if (s % folds == fold) {
+        if (data.strokes[s].size() >= 2) held.push_back(s);
+      } else {
+        training.strokes.push_back(data.strokes[s]);
+      }
+    }
+    WindowProblem problem(fitted, training, fold_map, window_fit_kind(options, fitted), weights, x);
+    if (problem.windows().empty()) continue;
+    const WindowProblem::Outcome outcome = solve_coarse_to_fine(
+        problem, fitted, training, fold_map, options, weights, options.held_out_max_iterations);
+    if (!outcome.usable) {
+      notes.push_back("cross-validation fold " + std::to_string(fold + 1) +
+                      " failed: " + outcome.termination);
+      continue;
+    }
+    const DoorModel fold_model = fitted.with_parameter_values(fold_map.values(problem.x().data()));
+    const FitMetrics metrics =
+        compute_fit_metrics(fold_model, data, metric_windows(options, fitted), held);
+    for (std::size_t i = 0; i < held.size() && i < metrics.strokes.size(); ++i) {
+      per_stroke[held[i]] = metrics.strokes[i];
+      have[held[i]] = 1;
+    }
+  }
+  FitMetrics held_out;
+  for (int s = 0; s < stroke_count; ++s) {
+    if (have[s]) held_out.add(per_stroke[s]);
+  }
+  return held_out;
+}
+
+}  // namespace
+
+FitMetrics evaluate_model(const DoorModel& model, const PreparedData& data,
+                          const FitOptions& options) {
+  return compute_fit_metrics(model, data, metric_windows(options, model));
+}
+
+FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
+  const Clock::time_point began = Clock::now();
+  if (const std::string message = options.validate(); !message.empty()) {
+    throw std::invalid_argument(message);
+  }
+  check_data(data, start);
+  FitSummary summary;
+  summary.model_kind = start.kind();
+  summary.source = data.source;
+  summary.options = options;
+  summary.strokes = data.strokes.size();
+  const FitWeights weights = resolve_weights(options, data, summary.notes);
+  summary.rate_noise_rad_s = weights.rate_noise_rad_s;
+  summary.angle_noise_rad = weights.angle_noise_rad;
+
+  // Free parameters and the start.
+  const std::vector<int> free_index = resolve_free(start, options);
+  const int parameter_count = start.parameter_count();
+  std::vector<double> values(start.parameter_values().begin(), start.parameter_values().end());
+  std::vector<std::string> origin(parameter_count, "start model");
+  if (options.latch_start_from_data && start.kind() == ModelKind::kSensory) {
+    summary.latch_start = read_latch_start(data, start, weights.rate_noise_rad_s);
+    for (const std::string& note : summary.latch_start.notes) summary.notes.push_back(note);
+    apply_latch_read_off(start, summary.latch_start, free_index, values, origin, summary.notes);
+  }
+  const auto bounds = start.parameter_bounds();
+  for (int index : free_index) {
+    const double clamped = std::clamp(values[index], bounds[index].lower, bounds[index].upper);
+    if (clamped != values[index]) {
+      values[index] = clamped;
+      origin[index] = "clamped into bounds";
+      summary.notes.push_back("the start of " + start.parameter_name(index) +
+                              " lay outside its bounds and was moved onto the nearer one");
+    }
+  }
+  const DoorModel start_model = [&] {
+    try {
+      return start.with_parameter_values(values);
+    } catch (const std::invalid_argument& error) {
+      throw std::invalid_argument(std::string("fit: the start breaks a constraint: ") +
+                                  error.what());
+    }
+  }();
+
+  ParameterMap map;
+  map.base_values = values;
+  map.free_index = free_index;
+  for (int index : free_index) map.scale.push_back(parameter_scale(values[index], bounds[index]));
+  summary.free_parameters = map.free_count();
+  for (int index : free_index) summary.free_names.push_back(start.parameter_name(index));
+
+  // The window problem (built first: it tells whether there is enough data).
+  const Clock::time_point solve_began = Clock::now();
+  const std::vector<double> x_start = scaled_values(map, start_model.parameter_values());
+  WindowProblem problem(start_model, data, map, window_fit_kind(options, start), weights, x_start);
+  summary.windows = problem.windows().size();
+  summary.window_state_parameters = static_cast<int>(problem.z().size());
+  summary.residuals = static_cast<std::size_t>(problem.residual_count());
+  if (summary.windows == 0) throw std::invalid_argument("fit: no stroke has 2 samples or more");
+  if (static_cast<int>(summary.residuals) <= map.free_count() + summary.window_state_parameters) {
+    throw std::invalid_argument("fit: fewer residuals (" + std::to_string(summary.residuals) +
+                                ") than parameters to estimate (" +
+                                std::to_string(map.free_count() + summary.window_state_parameters) +
+                                ")");
+  }
+
+  summary.times.start_s = seconds_since(began);
+
+  // The equation-error stage, then the windows.
+  if (options.equation_error_start) {
+    const EquationErrorOutcome equation_error =
+        solve_equation_error(start_model, data, map, options, x_start);
+    summary.equation_error_iterations = equation_error.iterations;
+    summary.equation_error_termination = equation_error.termination;
+    if (equation_error.usable) {
+      problem.x() = equation_error.x;
+    } else {
+      summary.notes.push_back("the equation-error stage failed (" + equation_error.termination +
+                              "); the windows started from the start values");
+    }
+  }
+  const std::vector<double> window_start_values = map.values(problem.x().data());
+  summary.times.equation_error_s = seconds_since(solve_began);
+  const WindowProblem::Outcome outcome = solve_coarse_to_fine(
+      problem, start_model, data, map, options, weights, options.max_iterations);
+  if (!outcome.usable) throw std::runtime_error("fit: the solver failed: " + outcome.termination);
+  summary.converged = outcome.converged;
+  summary.termination = outcome.termination;
+  summary.iterations = outcome.iterations;
+  summary.initial_cost = outcome.initial_cost;
+  summary.final_cost = outcome.final_cost;
+
+  if (options.objective == FitOptions::Objective::kWholeStrokeMax) {
+    ProblemKind whole;
+    whole.windows = metric_windows(options, start);
+    whole.windows.whole_strokes = true;
+    whole.windows.cut_angles_rad.clear();  // the study replays strokes whole, impacts included
+    whole.residual_power = options.max_objective_power;
+    FitWeights rate_only = weights;  // the study's objective is about ω alone
+    rate_only.angle_residuals = false;
+    WindowProblem refine(start_model, data, map, whole, rate_only, problem.x());
+    // The predicted-step rule assumes least squares: Ceres' own tests only.
+    const WindowProblem::Outcome refined = refine.solve(options, options.max_iterations, 0.0);
+    const std::string norm = "L" + std::to_string(2 * options.max_objective_power);
+    if (refined.usable) {
+      problem.x() = refine.x();
+      summary.converged = refined.converged;
+      summary.termination = "whole strokes, " + norm + " norm: " + refined.termination;
+      summary.iterations += refined.iterations;
+    } else {
+      summary.notes.push_back("the whole-stroke objective failed (" + refined.termination +
+                              "); the result is the window fit's");
+    }
+    summary.notes.push_back("the objective was the study's (whole strokes replayed, " + norm +
+                            " norm of the rate error approximating its maximum); uncertainties "
+                            "are the window least-squares problem's at that result");
+  }
+  summary.solve_time_s = seconds_since(solve_began);
+  summary.times.windows_s = summary.solve_time_s - summary.times.equation_error_s;
+  const Clock::time_point statistics_began = Clock::now();
+
+  const std::vector<double> fitted_values = map.values(problem.x().data());
+  FitResult result{start.with_parameter_values(fitted_values), FitSummary{}};
+
+  // Statistics of the window problem at the result: (JᵀJ)⁻¹ from the reduced system, the
+  // classical σ² (JᵀJ)⁻¹ and the window-robust (JᵀJ)⁻¹ (Σ g_w g_wᵀ) (JᵀJ)⁻¹ · W/(W − p).
+  ReducedSystem system;
+  if (!problem.reduce(/*cached_only=*/false, system)) {
+    throw std::runtime_error("fit: a window failed to evaluate at the result");
+  }
+  const int p = map.free_count();
+  const InformationInverse inverse = invert_information(system.information);
+  summary.residual_variance = system.residual_variance();
+  summary.covariance_rank = inverse.rank;
+  const Eigen::MatrixXd classical = summary.residual_variance * inverse.inverse;
+  const RobustCovariance robust_result = robust_covariance(system, inverse.inverse);
+  const Eigen::MatrixXd& robust = robust_result.covariance;
+  summary.ceres_covariance_difference = kNaN;
+  if (options.check_covariance_with_ceres) {
+    summary.ceres_covariance_difference =
+        compare_with_ceres_covariance(problem, inverse.inverse, fit_thread_count(options));
+    if (std::isnan(summary.ceres_covariance_difference)) {
+      summary.notes.push_back("ceres::Covariance could not compute the covariance to compare");
+    }
+  }
+  const bool use_robust = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
+  const Eigen::MatrixXd& chosen = use_robust ? robust : classical;
+  summary.covariance.assign(static_cast<std::size_t>(p) * p, 0.0);
+  for (int r = 0; r < p; ++r) {
+    for (int c = 0; c < p; ++c) {
+      summary.covariance[static_cast<std::size_t>(r) * p + c] =
+          chosen(r, c) * map.scale[r] * map.scale[c];
+    }
+  }
+  for (int i = 0; i < parameter_count; ++i) {
+    FittedParameter parameter;
+    parameter.name = start.parameter_name(i);
+    parameter.unit = std::string(start.parameter_unit(i));
+    parameter.start = values[i];
+    parameter.equation_error = window_start_values[i];
+    parameter.value = fitted_values[i];
+    parameter.bounds = bounds[i];
+    parameter.start_origin = origin[i];
+    parameter.uncertainty = parameter.classical_uncertainty = parameter.robust_uncertainty = kNaN;
+    summary.parameters.push_back(parameter);
+  }
+  for (int k = 0; k < p; ++k) {
+    FittedParameter& parameter = summary.parameters[map.free_index[k]];
+    parameter.free = true;
+    parameter.classical_uncertainty = std::sqrt(std::max(0.0, classical(k, k))) * map.scale[k];
+    parameter.robust_uncertainty = std::sqrt(std::max(0.0, robust(k, k))) * map.scale[k];
+    parameter.uncertainty =
+        use_robust ? parameter.robust_uncertainty : parameter.classical_uncertainty;
+    parameter.effective_windows = robust_result.effective_windows(k);
+    const double width = parameter.bounds.upper - parameter.bounds.lower;
+    parameter.at_bound = std::abs(parameter.value - parameter.bounds.lower) <= 1e-6 * width ||
+                         std::abs(parameter.bounds.upper - parameter.value) <= 1e-6 * width;
+    if (inverse.undetermined[k]) {
+      parameter.determined = false;
+      parameter.uncertainty = parameter.classical_uncertainty = parameter.robust_uncertainty = kNaN;
+    } else if (!(parameter.uncertainty <=
+                 options.undetermined_relative_uncertainty * std::abs(parameter.value))) {
+      parameter.determined = false;
+    }
+    if (!parameter.determined) summary.undetermined.push_back(parameter.name);
+    if (parameter.at_bound) {
+      summary.notes.push_back(parameter.name +
+                              " ended on a bound: its uncertainty ignores the bound");
+    }
+  }
+  std::string few_windows;
+  for (int k = 0; k < p && use_robust; ++k) {
+    const FittedParameter& parameter = summary.parameters[map.free_index[k]];
+    if (parameter.determined && parameter.effective_windows < kFewEffectiveWindows) {
+      few_windows += (few_windows.empty() ? "" : ", ") + parameter.name;
+    }
+  }
+  if (!few_windows.empty()) {
+    summary.notes.push_back("the robust uncertainties of " + few_windows + " rest on fewer than " +
+                            std::to_string(static_cast<int>(kFewEffectiveWindows)) +
+                            " windows (n_eff): each is itself uncertain, like a t-distribution's "
+                            "scale with n_eff - 1 degrees of freedom");
+  }
+  for (int r = 0; r < p; ++r) {
+    for (int c = r + 1; c < p; ++c) {
+      if (inverse.undetermined[r] || inverse.undetermined[c]) continue;
+      const double denominator = std::sqrt(chosen(r, r) * chosen(c, c));
+      if (!(denominator > 0)) continue;
+      const double correlation = chosen(r, c) / denominator;
+      if (std::abs(correlation) > options.correlation_threshold) {
+        summary.strong_correlations.push_back(
+            {summary.free_names[r], summary.free_names[c], correlation});
+      }
+    }
+  }
+  std::sort(summary.strong_correlations.begin(), summary.strong_correlations.end(),
+            [](const ParameterCorrelation& a, const ParameterCorrelation& b) {
+              return std::abs(a.value) > std::abs(b.value);
+            });
+
+  summary.times.statistics_s = seconds_since(statistics_began);
+
+  // Metrics: on the fitted strokes, then held out.
+  const Clock::time_point metrics_began = Clock::now();
+  summary.fitted = compute_fit_metrics(result.model, data, metric_windows(options, start));
+  summary.times.metrics_s = seconds_since(metrics_began);
+  const Clock::time_point held_out_began = Clock::now();
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  if (options.cross_validation_folds > 0 && stroke_count >= 2) {
+    summary.folds = std::min(options.cross_validation_folds, stroke_count);
+    summary.held_out = cross_validate(result.model, data, map, problem.x(), options, weights,
+                                      summary.folds, summary.notes);
+  } else if (options.cross_validation_folds > 0) {
+    summary.notes.push_back("one stroke only: no held-out metrics");
+  }
+  summary.times.held_out_s = seconds_since(held_out_began);
+  if (!summary.converged) {
+    summary.notes.push_back("the solver did not report convergence: " + summary.termination);
+  }
+  summary.total_time_s = seconds_since(began);
+  result.summary = std::move(summary);
+  return result;
+}
+
+}  // namespace doorbench

@@ -1,0 +1,73 @@
+#include "app/fit_inputs.h"
+
+#include <fstream>
+#include <stdexcept>
+
+#include "acquisition/recording_csv.h"
+#include "analysis/parameter_file.h"
+#include "analysis/preprocessing.h"
+#include "app/commands.h"
+
+namespace doorbench::app {
+namespace {
+
+bool is_hdf5_file(const std::string& path) {
+  // Every HDF5 file starts with this signature (at offset 0 for files HDF5 itself made).
+  static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw std::runtime_error(path + ": cannot open for reading");
+  char head[8] = {};
+  in.read(head, sizeof head);
+  return in.gcount() == 8 && std::equal(head, head + 8, kSignature);
+}
+
+}  // namespace
+
+PreparedData load_prepared_data(const std::string& path) {
+  if (is_hdf5_file(path)) return prepare_session(path);
+  return prepare(read_recording_csv(path));
+}
+
+std::vector<EffectSetting> effects_from_argument(const std::string& argument) {
+  if (argument.empty()) return {};
+  if (argument.size() > 5 && argument.ends_with(".json")) {
+    return parse_effects_file(read_text_file(argument), argument);
+  }
+  std::vector<EffectSetting> settings;
+  std::size_t start = 0;
+  while (start <= argument.size()) {
+    const std::size_t comma = std::min(argument.find(',', start), argument.size());
+    const std::string name = argument.substr(start, comma - start);
+    const std::optional<effects::Kind> kind = effects::find(name);
+    if (!kind) {
+      std::string known;
+      for (const effects::EffectInfo& info : effects::catalogue()) {
+        known += (known.empty() ? "" : ", ") + std::string(info.name);
+      }
+      throw UsageError("--effects: unknown effect '" + name + "' (the catalogue has " + known +
+                       "; or give an effects file *.json)");
+    }
+    EffectSetting setting{*kind, {}, {}};
+    for (const effects::EffectParameter& parameter : effects::info(*kind).parameters) {
+      setting.values.push_back(parameter.default_value);
+      setting.bounds.push_back(parameter.default_bounds);
+    }
+    settings.push_back(std::move(setting));
+    start = comma + 1;
+  }
+  return settings;
+}
+
+DoorModel start_model(const std::string& model_kind, const std::string& params_path,
+                      const std::string& effects_argument) {
+  const std::optional<ModelKind> kind = parse_model_kind(model_kind);
+  if (!kind) throw UsageError("--model must be sensory or physical, not " + model_kind);
+  const DoorModel base = load_model(*kind, params_path, "");
+  DoorModel model = base;
+  for (EffectSetting& effect : effects_from_argument(effects_argument)) {
+    model = model.with_effect(std::move(effect));
+  }
+  return model;
+}
+
+}  // namespace doorbench::app

@@ -1,0 +1,540 @@
+// The fitting core (analysis/fitting.h and its parts): windows, the Jacobians through the
+// simulation, the latch read-off, recovery of known parameters from synthetic strokes
+// (sensory and physical), fixed parameters, bounds, constraints, uncertainties, held-out
+// metrics, the study's objective, options and messages.
+//
+// The data are synthetic_strokes() (analysis/fit_synthetic.h): the reference door driven
+// by the virtual hand to several target angles over several durations, with the bench's
+// noise (0.2 N, 0.01°, 0.05 °/s), seeded.
+#include <ceres/cost_function.h>
+
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "analysis/door_model.h"
+#include "analysis/fit_start.h"
+#include "analysis/fit_synthetic.h"
+#include "analysis/fit_windows.h"
+#include "analysis/fitting.h"
+#include "analysis/parameter_file.h"
+#include "analysis/physical_model.h"
+#include "analysis/sensory_model.h"
+
+using Catch::Matchers::Contains;
+using doorbench::DoorModel;
+using doorbench::FitOptions;
+using doorbench::FitResult;
+using doorbench::FitWindow;
+using doorbench::ModelKind;
+using doorbench::PreparedData;
+using doorbench::SyntheticStrokeOptions;
+using doorbench::WindowOptions;
+
+namespace {
+
+namespace sensory = doorbench::sensory;
+
+const DoorModel& sensory_truth() {
+  static const DoorModel model = doorbench::reference_model(ModelKind::kSensory);
+  return model;
+}
+
+const DoorModel& physical_truth() {
+  static const DoorModel model = doorbench::reference_model(ModelKind::kPhysical);
+  return model;
+}
+
+SyntheticStrokeOptions noise_free() {
+  SyntheticStrokeOptions options;
+  options.force_noise_N = options.angle_noise_rad = options.rate_noise_rad_s = 0.0;
+  return options;
+}
+
+// Six strokes (openings to about 34°, 57° and 74° and the closings), 1 to 2 s each.
+const PreparedData& noisy_sensory_data() {
+  static const PreparedData data = doorbench::synthetic_strokes(sensory_truth(), {});
+  return data;
+}
+
+const PreparedData& clean_sensory_data() {
+  static const PreparedData data = doorbench::synthetic_strokes(sensory_truth(), noise_free());
+  return data;
+}
+
+// Every free parameter of the default set 30% off, alternately above and below; the four
+// latch angles all 30% above, so that their order holds.
+DoorModel thirty_percent_off(const DoorModel& truth) {
+  std::vector<double> values(truth.parameter_values().begin(), truth.parameter_values().end());
+  for (int i = 0; i <= sensory::kTheta4; ++i) values[i] *= i % 2 == 1 ? 1.3 : 0.7;
+  for (int i = sensory::kTheta0; i <= sensory::kTheta3; ++i) {
+    values[i] = truth.parameter_values()[i] * 1.3;
+  }
+  return truth.with_parameter_values(values);
+}
+
+FitOptions quick_options() {
+  FitOptions options;
+  options.cross_validation_folds = 0;
+  return options;
+}
+
+const FitResult& noisy_sensory_fit() {
+  static const FitResult result = doorbench::fit_model(thirty_percent_off(sensory_truth()),
+                                                       noisy_sensory_data(), quick_options());
+  return result;
+}
+
+double normalized_error(const FitResult& result, const DoorModel& truth, int index) {
+  const doorbench::FittedParameter& parameter = result.summary.parameters[index];
+  return (parameter.value - truth.parameter_values()[index]) / parameter.uncertainty;
+}
+
+PreparedData one_stroke(const std::vector<double>& times) {
+  PreparedData data;
+  doorbench::Stroke stroke;
+  for (double t : times) {
+    stroke.time_s.push_back(t);
+    stroke.force_N.push_back(0.0);
+    stroke.theta_rad.push_back(0.5);
+    stroke.omega_rad_s.push_back(0.0);
+  }
+  data.strokes.push_back(stroke);
+  return data;
+}
+
+std::vector<double> uniform(double start, double step, int count) {
+  std::vector<double> times(count);
+  for (int i = 0; i < count; ++i) times[i] = start + step * i;
+  return times;
+}
+
+}  // namespace
+
+TEST_CASE("windows cover every sample once, restart after gaps and impacts", "[fitting]") {
+  WindowOptions options;  // 0.2 s
+  SECTION("shared boundaries, a short tail joins the window before") {
+    const PreparedData data = one_stroke(uniform(0.0, 0.001, 851));  // 0 .. 0.85 s
+    const std::vector<FitWindow> windows = doorbench::split_windows(data, options);
+    REQUIRE(windows.size() == 4);  // 0.2, 0.2, 0.2, 0.25 (the last 0.05 s joined)
+    int expected_first = 0;
+    for (const FitWindow& window : windows) {
+      CHECK(window.first == expected_first);
+      expected_first = window.first + window.count - 1;  // the next starts at this end
+    }
+    CHECK(windows.back().first + windows.back().count == 851);
+  }
+  SECTION("disjoint windows share no sample and miss none") {
+    options.disjoint = true;
+    const PreparedData data = one_stroke(uniform(0.0, 0.001, 1000));
+    const std::vector<FitWindow> windows = doorbench::split_windows(data, options);
+    int next = 0;
+    for (const FitWindow& window : windows) {
+      CHECK(window.first == next);
+      next = window.first + window.count;
+    }
+    CHECK(next == 1000);
+  }
+  SECTION("a gap ends a window") {
+    std::vector<double> times = uniform(0.0, 0.001, 100);
+    const std::vector<double> later = uniform(0.5, 0.001, 100);
+    times.insert(times.end(), later.begin(), later.end());
+    const std::vector<FitWindow> windows = doorbench::split_windows(one_stroke(times), options);
+    REQUIRE(windows.size() == 2);
+    CHECK(windows[0].count == 100);
+    CHECK(windows[1].first == 100);
+  }
+  SECTION("an impact on a stop at speed ends a window, a door resting on it does not") {
+    options.cut_angles_rad = {0.0};
+    PreparedData data = one_stroke(uniform(0.0, 0.001, 101));
+    doorbench::Stroke& stroke = data.strokes[0];
+    for (int i = 0; i <= 100; ++i) {
+      stroke.theta_rad[i] = 0.0505 - 0.001 * i;  // crosses 0 between samples 50 and 51
+      stroke.omega_rad_s[i] = -1.0;
+    }
+    std::vector<FitWindow> windows = doorbench::split_windows(data, options);
+    REQUIRE(windows.size() == 2);
+    CHECK(windows[0].first + windows[0].count == 51);
+    CHECK(windows[1].first == 51);
+    for (double& omega : stroke.omega_rad_s) omega = 0.001;
+    windows = doorbench::split_windows(data, options);
+    CHECK(windows.size() == 1);
+  }
+}
+
+TEST_CASE("the window residuals' Jacobian, through the RK4 simulation, matches finite differences",
+          "[fitting]") {
+  const DoorModel& model = sensory_truth();
+  const PreparedData& data = noisy_sensory_data();
+  doorbench::ParameterMap map;
+  map.base_values.assign(model.parameter_values().begin(), model.parameter_values().end());
+  for (int index : {sensory::kJ, sensory::kKInf, sensory::kTheta1, sensory::kC, sensory::kD2}) {
+    map.free_index.push_back(index);
+    map.scale.push_back(map.base_values[index]);
+  }
+  doorbench::WindowResidualSetup setup;
+  setup.model = &model;
+  setup.data = &data;
+  setup.map = &map;
+  setup.rate_noise_rad_s = 1e-3;
+  setup.angle_noise_rad = 2e-4;
+  setup.estimate_start_state = true;
+  // The window through which the first opening releases the latch.
+  const doorbench::Stroke& stroke = data.strokes[0];
+  int release = 0;
+  while (stroke.theta_rad[release] < 0.02) ++release;
+  const FitWindow window{0, release - 60, 120};
+  const std::unique_ptr<ceres::CostFunction> cost(doorbench::make_window_cost(setup, window));
+  const int n = cost->num_residuals();
+  REQUIRE(n == doorbench::window_residual_count(setup, window));
+  std::vector<double> x(map.free_count(), 1.0), z = {0.3, -0.2};
+  std::vector<double> residuals(n), jx(static_cast<std::size_t>(n) * x.size()), jz(2 * n);
+  const double* blocks[] = {x.data(), z.data()};
+  double* jacobians[] = {jx.data(), jz.data()};
+  REQUIRE(cost->Evaluate(blocks, residuals.data(), jacobians));
+  std::vector<double> plus(n), minus(n);
+  auto check_column = [&](std::vector<double>& block, int k, const std::vector<double>& jacobian,
+                          int width) {
+    const double h = 1e-6;
+    const double kept = block[k];
+    block[k] = kept + h;
+    REQUIRE(cost->Evaluate(blocks, plus.data(), nullptr));
+    block[k] = kept - h;
+    REQUIRE(cost->Evaluate(blocks, minus.data(), nullptr));
+    block[k] = kept;
+    double largest = 0.0, largest_error = 0.0;
+    for (int r = 0; r < n; ++r) {
+      const double numeric = (plus[r] - minus[r]) / (2 * h);
+      largest = std::max(largest, std::abs(numeric));
+      largest_error = std::max(largest_error, std::abs(numeric - jacobian[r * width + k]));
+    }
+    INFO("column " << k << ": largest derivative " << largest);
+    CHECK(largest > 0);
+    CHECK(largest_error <= 1e-4 * largest);
+  };
+  for (int k = 0; k < map.free_count(); ++k) check_column(x, k, jx, map.free_count());
+  for (int k = 0; k < 2; ++k) check_column(z, k, jz, 2);
+}
+
+TEST_CASE("windows simulated by RK4 reproduce the adaptive simulator's strokes", "[fitting]") {
+  // On noise-free strokes, at the true parameters, the only error is the integrators'. Impacts
+  // on the stops (a jump of the torque) are cut out of the windows.
+  WindowOptions options;
+  options.cut_angles_rad = {0.0, sensory_truth().geometry().theta_max_rad};
+  std::vector<double> rmse, largest;
+  for (int substeps : {1, 2}) {
+    options.substeps_per_sample = substeps;
+    const doorbench::FitMetrics metrics =
+        doorbench::compute_fit_metrics(sensory_truth(), clean_sensory_data(), options);
+    rmse.push_back(metrics.window.rmse());
+    largest.push_back(metrics.window.max_abs_error);
+    CHECK(metrics.study_objective_rad_s() < 1e-6);  // the replay is the data's own simulator
+  }
+  INFO("RMSE " << rmse[0] << ", " << rmse[1] << "; largest " << largest[0] << ", " << largest[1]);
+  // Far below the gyroscope's noise (8.7e-4 rad/s) at the default 2 sub-steps; finer than 1.
+  CHECK(rmse[1] < 1e-5);
+  CHECK(largest[1] < 1e-4);
+  CHECK(largest[1] < largest[0]);
+}
+
+TEST_CASE("the latch read off the force-angle curves lands within a switch width", "[fitting]") {
+  const DoorModel& truth = sensory_truth();
+  const doorbench::LatchReadOff read = doorbench::read_latch_start(
+      noisy_sensory_data(), thirty_percent_off(truth), noisy_sensory_data().rate_noise_rad_s);
+  CHECK(read.opening_strokes == 3);
+  CHECK(read.closing_strokes == 3);
+  const double switch_width = 4.0 / truth.parameter_values()[sensory::kBeta];  // 0.076°
+  const auto v = truth.parameter_values();
+  REQUIRE(read.theta0_rad);
+  REQUIRE(read.theta3_rad);
+  // Within a switch width of the truth, whatever the start's (30% off) J.
+  CHECK(std::abs(*read.theta0_rad - v[sensory::kTheta0]) < switch_width);
+  CHECK(std::abs(*read.theta1_rad - v[sensory::kTheta1]) < switch_width);
+  CHECK(std::abs(*read.theta2_rad - v[sensory::kTheta2]) < switch_width);
+  CHECK(std::abs(*read.theta3_rad - v[sensory::kTheta3]) < switch_width);
+  CHECK(*read.k_inf_Nm_per_rad == Approx(v[sensory::kKInf]).epsilon(0.25));
+  CHECK(*read.k_lock_Nm_per_rad == Approx(v[sensory::kKLock]).epsilon(0.25));
+  // The physical model's latch is not read.
+  const doorbench::LatchReadOff none =
+      doorbench::read_latch_start(noisy_sensory_data(), physical_truth(), 1e-3);
+  CHECK_FALSE(none.theta1_rad);
+  CHECK_FALSE(none.notes.empty());
+}
+
+TEST_CASE("from 30% off, the sensory fit recovers the parameters within their uncertainties",
+          "[fitting]") {
+  const DoorModel& truth = sensory_truth();
+  const FitResult& result = noisy_sensory_fit();
+  CHECK(result.summary.converged);
+  CHECK(result.summary.free_parameters == 13);
+  CHECK(result.summary.undetermined.empty());
+  double sum_of_squares = 0.0;
+  for (int i = 0; i <= sensory::kTheta4; ++i) {
+    const doorbench::FittedParameter& parameter = result.summary.parameters[i];
+    INFO(parameter.name << " = " << parameter.value << " +- " << parameter.uncertainty << ", true "
+                        << truth.parameter_values()[i]);
+    REQUIRE(parameter.free);
+    const double z = normalized_error(result, truth, i);
+    CHECK(std::abs(z) < 3.5);
+    sum_of_squares += z * z;
+    // Not absurdly large: every parameter to better than 20% (all but k to 5%).
+    CHECK(parameter.uncertainty < (i == sensory::kK ? 0.2 : 0.05) * std::abs(parameter.value));
+    CHECK(parameter.uncertainty > 0);
+  }
+  CHECK(std::sqrt(sum_of_squares / 13) < 2.0);
+  // The latch angles started from the data.
+  CHECK(result.summary.parameters[sensory::kTheta1].start_origin == "read off the data");
+  // The windows fit as well as the noise allows: about 5 σ_ω of process noise from 0.2 N.
+  CHECK(result.summary.fitted.window.rmse() < 0.01);
+  CHECK(result.summary.fitted.window.fit_percent() > 98.0);
+}
+
+TEST_CASE("on noise-free strokes the fit recovers the parameters tightly", "[fitting]") {
+  const DoorModel& truth = sensory_truth();
+  const FitResult result =
+      doorbench::fit_model(thirty_percent_off(truth), clean_sensory_data(), quick_options());
+  for (int i = 0; i <= sensory::kTheta4; ++i) {
+    INFO(truth.parameter_name(i));
+    CHECK(result.summary.parameters[i].value == Approx(truth.parameter_values()[i]).epsilon(1e-4));
+  }
+  CHECK(result.summary.fitted.window.rmse() < 1e-4);
+}
+
+TEST_CASE("fixed parameters stay fixed and the constraints hold at the result", "[fitting]") {
+  const DoorModel start = thirty_percent_off(sensory_truth());
+  FitOptions options = quick_options();
+  options.fixed_parameters = {"J", "s", "theta4"};  // out of the default set
+  const FitResult result = doorbench::fit_model(start, noisy_sensory_data(), options);
+  CHECK(result.summary.free_parameters == 10);
+  for (int index : {sensory::kJ, sensory::kS, sensory::kTheta4, sensory::kBeta, sensory::kBetaF,
+                    sensory::kKStop, sensory::kCStop}) {
+    INFO(start.parameter_name(index));
+    CHECK(result.model.parameter_values()[index] == start.parameter_values()[index]);
+    CHECK_FALSE(result.summary.parameters[index].free);
+    CHECK(std::isnan(result.summary.parameters[index].uncertainty));
+  }
+  const auto v = result.model.parameter_values();
+  CHECK(0 < v[sensory::kTheta0]);
+  CHECK(v[sensory::kTheta0] < v[sensory::kTheta1]);
+  CHECK(v[sensory::kTheta1] < v[sensory::kTheta2]);
+  CHECK(v[sensory::kTheta2] < v[sensory::kTheta3]);
+  CHECK(v[sensory::kD1] >= v[sensory::kD2]);
+  // A named free set.
+  options.fixed_parameters.clear();
+  options.free_parameters = {"d1", "d2"};
+  const FitResult two = doorbench::fit_model(sensory_truth(), noisy_sensory_data(), options);
+  CHECK(two.summary.free_parameters == 2);
+  CHECK(two.summary.free_names == std::vector<std::string>{"d1", "d2"});
+}
+
+TEST_CASE("bounds are respected, and a parameter held at one is reported", "[fitting]") {
+  const DoorModel& truth = sensory_truth();
+  std::vector<doorbench::Bounds> bounds(truth.parameter_bounds().begin(),
+                                        truth.parameter_bounds().end());
+  bounds[sensory::kD1] = {1.0, 2.3};  // the true 2.6 lies above
+  const DoorModel bounded(
+      ModelKind::kSensory, truth.geometry(),
+      std::vector<double>(truth.parameter_values().begin(), truth.parameter_values().end()),
+      bounds);
+  FitOptions options = quick_options();
+  options.free_parameters = {"d1", "d2", "J"};
+  const FitResult result = doorbench::fit_model(bounded, noisy_sensory_data(), options);
+  const doorbench::FittedParameter& d1 = result.summary.parameters[sensory::kD1];
+  CHECK(d1.start == 2.3);  // the start was moved into the bounds
+  CHECK(d1.start_origin == "clamped into bounds");
+  CHECK(d1.value <= 2.3);
+  CHECK(d1.value >= 1.0);
+  CHECK(d1.at_bound);
+  CHECK(result.model.parameter_values()[sensory::kD2] <= d1.value);
+  bool noted = false;
+  for (const std::string& note : result.summary.notes)
+    noted |= note.find("d1 ended on a bound") == 0;
+  CHECK(noted);
+}
+
+TEST_CASE("the physical model's spring and frictions are recovered", "[fitting]") {
+  const DoorModel& truth = physical_truth();
+  const PreparedData data = doorbench::synthetic_strokes(truth, {});
+  const std::vector<std::string> names = {"k_s", "F0", "T_h", "mu_g"};
+  std::vector<double> values(truth.parameter_values().begin(), truth.parameter_values().end());
+  double factor = 1.3;
+  for (const std::string& name : names) {
+    values[*truth.find_parameter(name)] *= factor;
+    factor = 2.0 - factor;
+  }
+  FitOptions options = quick_options();
+  options.free_parameters = names;
+  const FitResult result = doorbench::fit_model(truth.with_parameter_values(values), data, options);
+  CHECK(result.summary.converged);
+  for (const std::string& name : names) {
+    const int index = *truth.find_parameter(name);
+    const doorbench::FittedParameter& parameter = result.summary.parameters[index];
+    INFO(name << " = " << parameter.value << " +- " << parameter.uncertainty << ", true "
+              << truth.parameter_values()[index]);
+    CHECK(std::abs(normalized_error(result, truth, index)) < 3.5);
+    CHECK(parameter.uncertainty < 0.1 * std::abs(parameter.value));
+  }
+  // T_h and mu_g both scale the hinge-side friction: strongly (anti)correlated, and named.
+  bool named = false;
+  for (const doorbench::ParameterCorrelation& c : result.summary.strong_correlations) {
+    named |= (c.first == "T_h" && c.second == "mu_g") || (c.first == "mu_g" && c.second == "T_h");
+  }
+  CHECK(named);
+}
+
+TEST_CASE("parameters the data cannot tell apart are named undetermined", "[fitting]") {
+  // Gravity depends on m_d and l_c only through m_d l_c.
+  FitOptions options = quick_options();
+  options.free_parameters = {"m_d", "l_c", "T_h"};
+  const PreparedData data = doorbench::synthetic_strokes(physical_truth(), {});
+  const FitResult result = doorbench::fit_model(physical_truth(), data, options);
+  CHECK(result.summary.covariance_rank == 2);
+  CHECK(result.summary.undetermined == std::vector<std::string>{"m_d", "l_c"});
+  CHECK(std::isnan(result.summary.parameters[*physical_truth().find_parameter("m_d")].uncertainty));
+  CHECK_THAT(result.summary.brief_report(), Contains("Undetermined: m_d l_c."));
+}
+
+TEST_CASE("held-out metrics come from folds that left each stroke out", "[fitting]") {
+  FitOptions options;
+  options.free_parameters = {"J", "d1", "d2", "c"};
+  options.cross_validation_folds = 3;
+  const FitResult result = doorbench::fit_model(sensory_truth(), noisy_sensory_data(), options);
+  REQUIRE(result.summary.held_out);
+  CHECK(result.summary.folds == 3);
+  const doorbench::FitMetrics& held = *result.summary.held_out;
+  CHECK(held.strokes.size() == 6);
+  CHECK(held.window.count == result.summary.fitted.window.count);
+  // Held out is a little worse than fitted, never much better, and still good.
+  CHECK(held.window.rmse() > 0.95 * result.summary.fitted.window.rmse());
+  CHECK(held.window.rmse() < 2.0 * result.summary.fitted.window.rmse());
+  CHECK(std::isfinite(held.study_objective_rad_s()));
+  // More folds than strokes: leave one stroke out.
+  options.cross_validation_folds = 10;
+  options.free_parameters = {"d1"};
+  const FitResult loo = doorbench::fit_model(sensory_truth(), noisy_sensory_data(), options);
+  CHECK(loo.summary.folds == 6);
+}
+
+TEST_CASE("metrics follow their definitions", "[fitting]") {
+  doorbench::ErrorStats stats;
+  stats.add(1.0, 1.5, 0.1);
+  stats.add(2.0, 2.0, 0.2);
+  stats.add(3.0, 2.0, 0.3);
+  CHECK(stats.rmse() == Approx(std::sqrt((0.25 + 0.0 + 1.0) / 3)));
+  CHECK(stats.max_abs_error == 1.0);
+  CHECK(stats.time_of_max_s == 0.3);
+  // ‖ω − ω̂‖ = √1.25, ‖ω − mean ω‖ = √2.
+  CHECK(stats.fit_percent() == Approx(100 * (1 - std::sqrt(1.25 / 2))));
+  const doorbench::FitMetrics& fitted = noisy_sensory_fit().summary.fitted;
+  CHECK(fitted.strokes.size() == 6);
+  CHECK(fitted.failed_replays == 0);
+  // The study's objective: whole strokes replayed open-loop diverge far more than windows.
+  CHECK(fitted.study_objective_rad_s() > fitted.window.max_abs_error);
+  CHECK(fitted.replay.rmse() > fitted.window.rmse());
+}
+
+TEST_CASE("the study's objective can be the fit's", "[fitting]") {
+  SyntheticStrokeOptions short_run;
+  short_run.runs = {{0.8, 3.0}};
+  const PreparedData data = doorbench::synthetic_strokes(sensory_truth(), short_run);
+  FitOptions options = quick_options();
+  options.free_parameters = {"J", "d1", "d2"};
+  const FitResult windows = doorbench::fit_model(sensory_truth(), data, options);
+  options.objective = FitOptions::Objective::kWholeStrokeMax;
+  options.max_iterations = 20;
+  const FitResult study = doorbench::fit_model(sensory_truth(), data, options);
+  CHECK_THAT(study.summary.termination, Contains("whole strokes, L8 norm"));
+  // The objective minimized: the L8 norm of the rate errors of whole strokes replayed by the
+  // fit's integrator (the largest error's smooth stand-in).
+  WindowOptions whole;
+  whole.whole_strokes = true;
+  auto l8 = [&](const DoorModel& model) {
+    const doorbench::WindowSimulation replay = doorbench::simulate_windows(model, data, whole);
+    double sum = 0.0;
+    for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+      for (std::size_t i = 0; i < data.strokes[s].size(); ++i) {
+        sum += std::pow(replay.omega_rad_s[s][i] - data.strokes[s].omega_rad_s[i], 8);
+      }
+    }
+    return std::pow(sum, 1.0 / 8);
+  };
+  CHECK(l8(study.model) < l8(windows.model));
+  CHECK(std::isfinite(study.summary.fitted.study_objective_rad_s()));
+}
+
+TEST_CASE("the fit's covariance is the one ceres::Covariance computes", "[fitting]") {
+  FitOptions options = quick_options();
+  options.free_parameters = {"J", "k_inf", "theta1", "c", "d1", "d2"};
+  options.check_covariance_with_ceres = true;
+  const FitResult result = doorbench::fit_model(sensory_truth(), noisy_sensory_data(), options);
+  CHECK(result.summary.ceres_covariance_difference < 1e-6);
+  CHECK_THAT(result.summary.full_report(), Contains("ceres::Covariance agrees"));
+}
+
+TEST_CASE("the reports name what the reader needs", "[fitting]") {
+  const doorbench::FitSummary& summary = noisy_sensory_fit().summary;
+  const std::string brief = summary.brief_report();
+  CHECK_THAT(brief, Contains("Fit of the sensory model (13 free parameters) to 6 strokes"));
+  CHECK_THAT(brief, Contains("Study objective"));
+  const std::string full = summary.full_report();
+  for (const char* part : {"Parameters", "k_inf", "read off the data", "Correlations above 0.9",
+                           "Latch start read off the data", "windows: RMSE of omega",
+                           "study objective: max |omega error|", "Per stroke", "fixed"}) {
+    CHECK_THAT(full, Contains(part));
+  }
+}
+
+TEST_CASE("options and inputs are checked, with messages naming the culprit", "[fitting]") {
+  CHECK(FitOptions{}.validate().empty());
+  auto message = [](auto change) {
+    FitOptions options;
+    change(options);
+    return options.validate();
+  };
+  CHECK_THAT(message([](FitOptions& o) { o.window_s = 0; }), Contains("window_s"));
+  CHECK_THAT(message([](FitOptions& o) { o.substeps_per_sample = 0; }),
+             Contains("substeps_per_sample"));
+  CHECK_THAT(message([](FitOptions& o) { o.rate_noise_rad_s = -1; }), Contains("rate_noise_rad_s"));
+  CHECK_THAT(message([](FitOptions& o) { o.angle_noise_rad = NAN; }), Contains("angle_noise_rad"));
+  CHECK_THAT(message([](FitOptions& o) { o.max_objective_power = 0; }),
+             Contains("max_objective_power"));
+  CHECK_THAT(message([](FitOptions& o) { o.max_iterations = 0; }), Contains("max_iterations"));
+  CHECK_THAT(message([](FitOptions& o) { o.uncertainty_tolerance = 0; }),
+             Contains("uncertainty_tolerance"));
+  CHECK_THAT(message([](FitOptions& o) { o.num_threads = -1; }), Contains("num_threads"));
+  CHECK_THAT(message([](FitOptions& o) { o.cross_validation_folds = 1; }),
+             Contains("cross_validation_folds"));
+  CHECK_THAT(message([](FitOptions& o) { o.held_out_max_iterations = 0; }),
+             Contains("held_out_max_iterations"));
+  CHECK_THAT(message([](FitOptions& o) { o.correlation_threshold = 1; }),
+             Contains("correlation_threshold"));
+  CHECK_THAT(message([](FitOptions& o) { o.undetermined_relative_uncertainty = 0; }),
+             Contains("undetermined_relative_uncertainty"));
+
+  const PreparedData& data = noisy_sensory_data();
+  FitOptions bad;
+  bad.window_s = -1;
+  CHECK_THROWS_WITH(doorbench::fit_model(sensory_truth(), data, bad), Contains("window_s"));
+  FitOptions unknown;
+  unknown.free_parameters = {"k_inff"};
+  CHECK_THROWS_WITH(doorbench::fit_model(sensory_truth(), data, unknown),
+                    Contains("free_parameters names 'k_inff'"));
+  unknown.free_parameters.clear();
+  unknown.fixed_parameters = {"stribeck.d_s"};
+  CHECK_THROWS_WITH(doorbench::fit_model(sensory_truth(), data, unknown),
+                    Contains("fixed_parameters names 'stribeck.d_s'"));
+  CHECK_THROWS_WITH(doorbench::fit_model(sensory_truth(), PreparedData{}, FitOptions{}),
+                    Contains("no strokes"));
+  PreparedData other_radius = one_stroke(uniform(0.0, 0.001, 10));
+  other_radius.handle_radius_m = 0.5;
+  CHECK_THROWS_WITH(doorbench::fit_model(sensory_truth(), other_radius, FitOptions{}),
+                    Contains("handle radius"));
+  PreparedData backwards = one_stroke({0.0, 0.002, 0.001});
+  CHECK_THROWS_WITH(doorbench::fit_model(sensory_truth(), backwards, FitOptions{}),
+                    Contains("time does not increase at sample 2"));
+  CHECK(doorbench::default_free_parameters(sensory_truth()).size() == 13);
+  CHECK(doorbench::default_free_parameters(physical_truth()).size() == 24);
+}
