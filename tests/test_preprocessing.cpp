@@ -4,11 +4,12 @@
 // the noise levels are compared with the session's truth group. Also: a saturated gyroscope
 // segment, a rate-only and an angle-only recording, a CSV of an exact simulator run, the
 // zero-phase filter and the error messages.
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
-#include <unistd.h>
 
 #include "acquisition/recorder.h"
 #include "acquisition/rig_file.h"
@@ -18,6 +19,7 @@
 #include "analysis/trajectory_io.h"
 #include "analysis/virtual_hand.h"
 #include "sensors/simulated_bench.h"
+#include "tests/simulated_session.h"
 
 namespace {
 
@@ -46,18 +48,8 @@ std::filesystem::path fresh_path(const std::string& name) {
 // Three openings and closings of the reference door on the built-in simulated bench (18 s
 // of the virtual hand, then rest), recorded through the real session writer.
 std::filesystem::path record(const std::string& name, double duration_s, std::uint64_t seed) {
-  RigDefinition rig =
-      parse_rig(simulated_dishwasher_rig_text(), "built-in", std::filesystem::current_path());
-  rig.simulation->seed = seed;
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, duration_s);
-  SessionMetadata metadata;
-  metadata.rig_name = rig.name;
-  metadata.rig_definition = rig.text;
-  RecordOptions options;
-  options.duration_s = duration_s;
   const auto path = fresh_path(name);
-  record_session(bench, metadata, path, options);
+  doorbench::testing::record_built_in_session(path, duration_s, seed);
   return path;
 }
 
@@ -142,7 +134,6 @@ Trajectory exact_run() {
   return run;
 }
 
-
 bool has_note(const PreparedData& data, const std::string& text) {
   for (const std::string& note : data.notes) {
     if (note.find(text) != std::string::npos) return true;
@@ -214,8 +205,7 @@ TEST_CASE("Preprocessing: the fused angle, the rate and the bias match the bench
   for (std::size_t k = 0; k < 6; ++k) {
     const Stroke& stroke = data.strokes[k];
     CHECK(stroke.id == static_cast<int>(k + 1));
-    CHECK(stroke.direction ==
-          (k % 2 == 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing));
+    CHECK(stroke.direction == (k % 2 == 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing));
     // The stroke column's samples, ids kept.
     CHECK(stroke.time_s.front() == Approx(s.starts[k].time_s).margin(1e-9));
     CHECK(stroke.size() == stroke.force_N.size());
@@ -428,9 +418,8 @@ TEST_CASE("Preprocessing: motion segments merge across short pauses", "[preproce
     struct Move {
       double start_s, duration_s, from_deg, to_deg;
     };
-    const std::vector<Move> moves = {{1.0, 1.0, 0, 20},
-                                     {2.0 + pause_s, 1.0, 20, 40},
-                                     {4.0 + pause_s, 1.5, 40, 0}};
+    const std::vector<Move> moves = {
+        {1.0, 1.0, 0, 20}, {2.0 + pause_s, 1.0, 20, 40}, {4.0 + pause_s, 1.5, 40, 0}};
     Recording recording;
     recording.source = "mem";
     recording.angle_rad.emplace();
@@ -440,8 +429,8 @@ TEST_CASE("Preprocessing: motion segments merge across short pauses", "[preproce
       for (const Move& move : moves) {
         if (t < move.start_s) break;
         const double s = std::min((t - move.start_s) / move.duration_s, 1.0);
-        angle_deg = move.from_deg +
-                    (move.to_deg - move.from_deg) * s * s * s * (10 - 15 * s + 6 * s * s);
+        angle_deg =
+            move.from_deg + (move.to_deg - move.from_deg) * s * s * s * (10 - 15 * s + 6 * s * s);
       }
       recording.time_s.push_back(t);
       recording.force_N.push_back(0.0);

@@ -12,6 +12,7 @@
 #include "acquisition/rig_file.h"
 #include "acquisition/session_csv.h"
 #include "sensors/simulated_bench.h"
+#include "tests/simulated_session.h"
 #include "tests/temp_dir.h"
 
 namespace {
@@ -33,18 +34,9 @@ RigDefinition built_in_rig() {
 
 // Records `duration_s` of the built-in rig with `seed`; returns the session's path.
 std::filesystem::path record(const std::string& name, double duration_s, std::uint64_t seed) {
-  RigDefinition rig = built_in_rig();
-  rig.simulation->seed = seed;
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, duration_s);
-  SessionMetadata metadata;
-  metadata.rig_name = rig.name;
-  metadata.rig_definition = rig.text;
-  RecordOptions options;
-  options.duration_s = duration_s;
   const auto path = fresh_path(name);
-  const RecordSummary summary = record_session(bench, metadata, path, options);
-  REQUIRE(summary.scans == static_cast<std::size_t>(std::llround(duration_s * rig.sample_rate_hz)));
+  const std::size_t scans = doorbench::testing::record_built_in_session(path, duration_s, seed);
+  REQUIRE(scans == static_cast<std::size_t>(std::llround(duration_s * 1000.0)));
   return path;
 }
 
