@@ -212,11 +212,7 @@ FitWeights resolve_weights(const FitOptions& options, const PreparedData& data,
 }
 
 WindowOptions metric_windows(const FitOptions& options, const DoorModel& model) {
-  WindowOptions windows;
-  windows.window_s = options.window_s;
-  windows.substeps_per_sample = options.substeps_per_sample;
-  windows.cut_angles_rad = {0.0, model.geometry().theta_max_rad};
-  return windows;
+  return metric_window_options(options, model);
 }
 
 ProblemKind window_fit_kind(const FitOptions& options, const DoorModel& model) {
@@ -555,6 +551,14 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitO
   summary.total_time_s = seconds_since(began);
   result.summary = std::move(summary);
   return result;
+}
+
+WindowOptions metric_window_options(const FitOptions& options, const DoorModel& model) {
+  WindowOptions windows;
+  windows.window_s = options.window_s;
+  windows.substeps_per_sample = options.substeps_per_sample;
+  windows.cut_angles_rad = {0.0, model.geometry().theta_max_rad};
+  return windows;
 }
 
 }  // namespace doorbench

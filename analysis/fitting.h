@@ -115,6 +115,10 @@ struct FitOptions {
 // rough).
 std::vector<std::string> default_free_parameters(const DoorModel& model);
 
+// The windows on which metrics are reported (and on which the residual loop examines the
+// residual): the fit's window length and sub-steps, cut at the end stops.
+WindowOptions metric_window_options(const FitOptions& options, const DoorModel& model);
+
 struct FittedParameter {
   std::string name;
   std::string unit;

@@ -1,0 +1,918 @@
+#include "analysis/residual_loop.h"
+
+#include <ceres/jet.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <limits>
+#include <stdexcept>
+
+#include "analysis/fit_metrics.h"
+#include "analysis/fit_windows.h"
+#include "analysis/physical_model.h"
+#include "analysis/sensory_model.h"
+
+namespace doorbench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// An eigenvalue of the free parameters' scaled normal matrix below this share of the largest
+// is a direction the data does not determine (left out of the projection); a regressor
+// with less than this share of its norm left after the projection is indistinguishable
+// from the free parameters.
+constexpr double kProjectionRankTolerance = 1e-10;
+
+using Clock = std::chrono::steady_clock;
+
+double seconds_since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+std::string format(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
+std::string format(const char* pattern, ...) {
+  char buffer[1024];
+  va_list arguments;
+  va_start(arguments, pattern);
+  std::vsnprintf(buffer, sizeof buffer, pattern, arguments);
+  va_end(arguments);
+  return buffer;
+}
+
+std::string number(double value) {
+  if (std::isnan(value)) return "-";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  return format("%.4g", value);
+}
+
+std::string percent(double fraction) {
+  if (!std::isfinite(fraction)) return "-";
+  return format("%.1f%%", 100.0 * fraction);
+}
+
+std::string signed_percent(double fraction) {
+  if (!std::isfinite(fraction)) return "-";
+  return format("%+.1f%%", 100.0 * fraction);
+}
+
+bool finite_in(double value, double lower, double upper) {
+  return std::isfinite(value) && value >= lower && value <= upper;
+}
+
+// Why a grid is unusable for an effect parameter (empty when usable).
+std::string check_grid(const std::vector<double>& grid, const char* option, effects::Kind kind,
+                       int parameter) {
+  const effects::EffectParameter& info = effects::info(kind).parameters[parameter];
+  if (grid.empty()) return std::string("loop ") + option + " must not be empty";
+  for (double value : grid) {
+    if (!finite_in(value, info.default_bounds.lower, info.default_bounds.upper) ||
+        (info.minimum_is_strict && value <= info.minimum)) {
+      return std::string("loop ") + option + " must lie within " + std::string(info.info.name) +
+             "'s bounds [" + number(info.default_bounds.lower) + ", " +
+             number(info.default_bounds.upper) + "] (got " + number(value) + ")";
+    }
+  }
+  return "";
+}
+
+std::vector<effects::Kind> candidate_kinds(const DoorModel& model, const LoopOptions& options) {
+  std::vector<effects::Kind> kinds;
+  if (options.candidates.empty()) {
+    for (const effects::EffectInfo& effect : effects::catalogue()) kinds.push_back(effect.kind);
+  } else {
+    kinds = options.candidates;
+  }
+  std::erase_if(kinds, [&](effects::Kind kind) { return model.has_effect(kind); });
+  return kinds;
+}
+
+effects::BaseFriction<double> base_friction(const DoorModel& model) {
+  const auto p = model.parameter_values();
+  if (model.kind() == ModelKind::kSensory) return {p[sensory::kD1], p[sensory::kS]};
+  return {p[physical::kTh], 1.0 / p[physical::kWf]};
+}
+
+// One regressor of the examination: an effect at fixed nonlinear parameters, whose
+// amplitude (the first parameter, or d_s − d1 for Stribeck) is free.
+struct Regressor {
+  effects::Kind kind;
+  std::vector<double> unit_values;  // the effect's parameters at amplitude 1
+  double amplitude_offset = 0.0;    // parameter 0 = offset + amplitude (Stribeck: d1)
+  double lower = 0.0, upper = 0.0;  // the amplitude's range (parameter 0's bounds − offset)
+  std::string scan;
+};
+
+std::vector<Regressor> make_regressors(const DoorModel& model, const PreparedData& data,
+                                       const std::vector<effects::Kind>& kinds,
+                                       const LoopOptions& options) {
+  const effects::BaseFriction<double> friction = base_friction(model);
+  double theta_low = std::numeric_limits<double>::infinity();
+  double theta_high = -theta_low;
+  for (const Stroke& stroke : data.strokes) {
+    for (double theta : stroke.theta_rad) {
+      theta_low = std::min(theta_low, theta);
+      theta_high = std::max(theta_high, theta);
+    }
+  }
+  std::vector<Regressor> regressors;
+  for (effects::Kind kind : kinds) {
+    const effects::EffectInfo& info = effects::info(kind);
+    std::vector<double> defaults;
+    for (const effects::EffectParameter& parameter : info.parameters) {
+      defaults.push_back(parameter.default_value);
+    }
+    const Bounds amplitude_bounds = info.parameters[0].default_bounds;
+    auto add = [&](std::vector<double> values, double offset, std::string scan) {
+      Regressor regressor;
+      regressor.kind = kind;
+      values[0] = offset + 1.0;
+      regressor.unit_values = std::move(values);
+      regressor.amplitude_offset = offset;
+      regressor.lower = amplitude_bounds.lower - offset;
+      regressor.upper = amplitude_bounds.upper - offset;
+      regressor.scan = std::move(scan);
+      regressors.push_back(std::move(regressor));
+    };
+    switch (kind) {
+      case effects::Kind::kStribeck:
+        for (double speed : options.stribeck_speeds_rad_s) {
+          add({0.0, speed}, friction.level_Nm, "w_s = " + number(speed) + " rad/s");
+        }
+        break;
+      case effects::Kind::kSoftClose:
+        for (double angle : options.soft_close_angles_rad) {
+          for (double sharpness : options.soft_close_sharpness_per_rad) {
+            add({0.0, angle, sharpness}, 0.0,
+                "theta_sc = " + number(angle) + " rad, beta_sc = " + number(sharpness) + " 1/rad");
+          }
+        }
+        break;
+      case effects::Kind::kEndStop: {
+        const Bounds angle_bounds = info.parameters[1].default_bounds;
+        const int count = options.end_stop_angles;
+        for (int k = 0; k < count && std::isfinite(theta_low); ++k) {
+          const double angle =
+              std::clamp(theta_low + (theta_high - theta_low) * k / static_cast<double>(count),
+                         angle_bounds.lower, angle_bounds.upper);
+          add({0.0, angle, defaults[2]}, 0.0, "theta_e = " + number(angle) + " rad");
+        }
+        break;
+      }
+      default:
+        add(defaults, 0.0, "");
+        break;
+    }
+  }
+  return regressors;
+}
+
+// The forcing φ of the linearized window equations per unit amplitude, J ∂(dω/dt)/∂a: the
+// effect's torque at amplitude 1, or for the inertia error −dω̂/dt (dω/dt = τ/(J + ΔJ)).
+double unit_forcing(const Regressor& regressor, const DoorModel& model,
+                    const effects::BaseFriction<double>& friction, double theta, double omega,
+                    double acceleration) {
+  if (regressor.kind == effects::Kind::kInertiaError) return -acceleration;
+  return effects::torque(regressor.kind, regressor.unit_values.data(), friction,
+                         model.geometry().handle_radius_m, theta, omega);
+}
+
+}  // namespace
+
+std::string LoopOptions::validate() const {
+  if (const std::string message = fit.validate(); !message.empty()) {
+    return "loop fit options: " + message;
+  }
+  if (fit.cross_validation_folds < 2) {
+    return "loop fit.cross_validation_folds must be >= 2: the loop compares held-out errors";
+  }
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const int index = static_cast<int>(candidates[i]);
+    if (index < 0 || index >= effects::kKindCount) return "loop candidates holds an unknown effect";
+    for (std::size_t j = 0; j < i; ++j) {
+      if (candidates[j] == candidates[i]) {
+        return "loop candidates names " + std::string(effects::info(candidates[i]).name) + " twice";
+      }
+    }
+  }
+  if (max_steps < 1) return "loop max_steps must be >= 1";
+  if (refit_candidates < 1) return "loop refit_candidates must be >= 1";
+  if (!finite_in(min_explained_fraction, 0.0, 1.0) || min_explained_fraction >= 1.0) {
+    return "loop min_explained_fraction must lie in [0, 1)";
+  }
+  if (!std::isfinite(min_score_z) || min_score_z < 0) return "loop min_score_z must be >= 0";
+  if (!finite_in(min_held_out_improvement, 0.0, 1.0) || min_held_out_improvement >= 1.0) {
+    return "loop min_held_out_improvement must lie in [0, 1)";
+  }
+  if (!std::isfinite(min_bic_decrease) || min_bic_decrease < 0) {
+    return "loop min_bic_decrease must be >= 0";
+  }
+  if (std::string message =
+          check_grid(stribeck_speeds_rad_s, "stribeck_speeds_rad_s", effects::Kind::kStribeck, 1);
+      !message.empty()) {
+    return message;
+  }
+  if (std::string message =
+          check_grid(soft_close_angles_rad, "soft_close_angles_rad", effects::Kind::kSoftClose, 1);
+      !message.empty()) {
+    return message;
+  }
+  if (std::string message = check_grid(soft_close_sharpness_per_rad, "soft_close_sharpness_per_rad",
+                                       effects::Kind::kSoftClose, 2);
+      !message.empty()) {
+    return message;
+  }
+  if (end_stop_angles < 1) return "loop end_stop_angles must be >= 1";
+  for (const std::string& name : fixed_effect_parameters) {
+    bool known = false;
+    for (const effects::EffectInfo& effect : effects::catalogue()) {
+      for (const effects::EffectParameter& parameter : effect.parameters) {
+        known = known || name == std::string(effect.name) + "." + std::string(parameter.info.name);
+      }
+    }
+    if (!known) {
+      return "loop fixed_effect_parameters names '" + name +
+             "', which no effect has (write <effect>.<parameter>, e.g. end_stop.beta_e)";
+    }
+  }
+  if (refit_start != RefitStart::kBest && refit_start != RefitStart::kCurrentFit &&
+      refit_start != RefitStart::kStartModel) {
+    return "loop refit_start is not a RefitStart";
+  }
+  return "";
+}
+
+ModelFigures model_figures(const FitSummary& summary) {
+  ModelFigures figures;
+  figures.fitted_rmse_rad_s = summary.fitted.window.rmse();
+  figures.fitted_fit_percent = summary.fitted.window.fit_percent();
+  figures.held_out_rmse_rad_s = summary.held_out ? summary.held_out->window.rmse() : kNaN;
+  figures.held_out_fit_percent = summary.held_out ? summary.held_out->window.fit_percent() : kNaN;
+  figures.residuals = summary.residuals;
+  figures.free_parameters = summary.free_parameters;
+  figures.parameters = summary.free_parameters + summary.window_state_parameters;
+  const double n = static_cast<double>(summary.residuals);
+  const double degrees_of_freedom = n - figures.parameters;
+  figures.sum_of_squares = std::isfinite(summary.residual_variance) && degrees_of_freedom > 0
+                               ? summary.residual_variance * degrees_of_freedom
+                               : 2.0 * summary.final_cost;
+  figures.bic = n > 0 && figures.sum_of_squares > 0
+                    ? n * std::log(figures.sum_of_squares / n) + figures.parameters * std::log(n)
+                    : kNaN;
+  return figures;
+}
+
+namespace {
+
+// The free parameters a fit with `fit` would estimate (as fit_model resolves them; names
+// the model lacks are skipped here, the fit itself reports them).
+std::vector<int> free_indices(const DoorModel& model, const FitOptions& fit) {
+  const std::vector<std::string> names =
+      fit.free_parameters.empty() ? default_free_parameters(model) : fit.free_parameters;
+  std::vector<char> free(model.parameter_count(), 0);
+  for (const std::string& name : names) {
+    if (const std::optional<int> index = model.find_parameter(name)) free[*index] = 1;
+  }
+  for (const std::string& name : fit.fixed_parameters) {
+    if (const std::optional<int> index = model.find_parameter(name)) free[*index] = 0;
+  }
+  std::vector<int> indices;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    if (free[i]) indices.push_back(i);
+  }
+  return indices;
+}
+
+// A column of the linearized window simulation: the sensitivity (δθ, δω) of the simulated
+// state to one quantity, driven by a torque-like forcing (see examine()).
+struct Sensitivity {
+  double d_theta = 0.0, d_omega = 0.0, forcing = 0.0;
+};
+
+ResidualExamination examine(const DoorModel& model, const PreparedData& data,
+                            const LoopOptions& options, const FitOptions& fit) {
+  const std::vector<effects::Kind> kinds = candidate_kinds(model, options);
+  std::vector<Regressor> regressors = make_regressors(model, data, kinds, options);
+  const WindowOptions windows = metric_window_options(fit, model);
+  const WindowSimulation simulation = simulate_windows(model, data, windows);
+  const effects::BaseFriction<double> friction = base_friction(model);
+  const double inertia = model.inertia_kg_m2();
+  const double handle_radius_m = model.geometry().handle_radius_m;
+
+  // The free parameters' columns (nuisance): their torque derivative by forward-mode
+  // differentiation; J (and an inertia error) act through 1/J, like the inertia error.
+  const std::vector<int> free = free_indices(model, fit);
+  const int free_count = static_cast<int>(free.size());
+  std::vector<char> is_inertia(free_count, 0);
+  for (int k = 0; k < free_count; ++k) {
+    const std::string& name = model.parameter_name(free[k]);
+    is_inertia[k] = (model.kind() == ModelKind::kSensory && free[k] == sensory::kJ) ||
+                    (model.kind() == ModelKind::kPhysical && free[k] == physical::kJd) ||
+                    name == "inertia_error.delta_J";
+  }
+  using Dual = ceres::Jet<double, 1>;
+  std::vector<Dual> dual_parameters(model.parameter_values().begin(),
+                                    model.parameter_values().end());
+  Dual dual_terms[DoorModel::kMaxTerms];
+  auto parameter_forcing = [&](int k, double theta, double omega, double acceleration) {
+    if (is_inertia[k]) return -acceleration;
+    Dual& parameter = dual_parameters[free[k]];
+    parameter.v[0] = 1.0;
+    const Dual torque =
+        model.evaluate(dual_parameters.data(), Dual(theta), Dual(omega), dual_terms);
+    parameter.v[0] = 0.0;
+    return torque.v[0];
+  };
+
+  // Normal equations of every column at once: columns 0 .. free_count − 1 the free
+  // parameters, then the regressors, then the residual e.
+  const int regressor_count = static_cast<int>(regressors.size());
+  const int columns = free_count + regressor_count + 1;
+  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(columns, columns);
+  std::vector<Eigen::MatrixXd> window_grams;  // each window's share of `gram`
+  Eigen::VectorXd row(columns);
+  std::vector<Sensitivity> state(free_count + regressor_count);
+
+  ResidualExamination examination;
+  // Along each window the simulated state (θ̂, ω̂) starts from the measured one. A change a
+  // of one quantity (an effect's amplitude, a parameter) changes it, to first order, by
+  // a·(δθ, δω) with
+  //   d(δθ)/dt = δω,  J d(δω)/dt = ∂τ/∂θ δθ + ∂τ/∂ω δω + φ(θ̂, ω̂),  δ = 0 at the start,
+  // φ the quantity's torque per unit (∂τ/∂a; for J and ΔJ, −dω̂/dt), with ∂τ from the current
+  // model along the simulation. δω is the column of the rate residual e = ω − ω̂; the
+  // trapezoidal rule integrates it (A-stable through the stiff latch).
+  for (const FitWindow& window : split_windows(data, windows)) {
+    const Stroke& stroke = data.strokes[window.stroke];
+    const std::vector<double>& theta_sim = simulation.theta_rad[window.stroke];
+    const std::vector<double>& omega_sim = simulation.omega_rad_s[window.stroke];
+    bool usable = true;
+    for (int j = 1; j < window.count && usable; ++j) {
+      const int i = window.first + j;
+      usable = std::isfinite(theta_sim[i]) && std::isfinite(omega_sim[i]);
+    }
+    if (!usable) continue;
+    auto state_at = [&](int j, double& theta, double& omega) {
+      const int i = window.first + j;
+      theta = j == 0 ? stroke.theta_rad[i] : theta_sim[i];
+      omega = j == 0 ? stroke.omega_rad_s[i] : omega_sim[i];
+    };
+    auto forcing_of = [&](int c, double theta, double omega, double acceleration) {
+      return c < free_count ? parameter_forcing(c, theta, omega, acceleration)
+                            : unit_forcing(regressors[c - free_count], model, friction, theta,
+                                           omega, acceleration);
+    };
+    double theta = 0.0, omega = 0.0;
+    state_at(0, theta, omega);
+    TorqueDerivatives derivatives = model.torque_derivatives(theta, omega);
+    double acceleration =
+        (handle_radius_m * stroke.force_N[window.first] + derivatives.torque_Nm) / inertia;
+    for (int c = 0; c < free_count + regressor_count; ++c) {
+      state[c] = {0.0, 0.0, forcing_of(c, theta, omega, acceleration)};
+    }
+    Eigen::MatrixXd window_gram = Eigen::MatrixXd::Zero(columns, columns);
+    for (int j = 1; j < window.count; ++j) {
+      const int i = window.first + j;
+      const double h = stroke.time_s[i] - stroke.time_s[i - 1];
+      const double half_h = 0.5 * h;
+      const double a_theta = derivatives.dtorque_dtheta_Nm_per_rad / inertia;
+      const double a_omega = derivatives.dtorque_domega_Nm_s_per_rad / inertia;
+      state_at(j, theta, omega);
+      derivatives = model.torque_derivatives(theta, omega);
+      acceleration = (handle_radius_m * stroke.force_N[i] + derivatives.torque_Nm) / inertia;
+      const double b_theta = derivatives.dtorque_dtheta_Nm_per_rad / inertia;
+      const double b_omega = derivatives.dtorque_domega_Nm_s_per_rad / inertia;
+      const double determinant = (1.0 - half_h * b_omega) - half_h * half_h * b_theta;
+      const double error = stroke.omega_rad_s[i] - omega;
+      examination.rate_sum_of_squares += error * error;
+      ++examination.samples;
+      for (int c = 0; c < free_count + regressor_count; ++c) {
+        Sensitivity& s = state[c];
+        const double forcing = forcing_of(c, theta, omega, acceleration);
+        const double rhs_theta = s.d_theta + half_h * s.d_omega;
+        const double rhs_omega = s.d_omega + half_h * (a_theta * s.d_theta + a_omega * s.d_omega +
+                                                       (s.forcing + forcing) / inertia);
+        s.d_theta = (rhs_theta * (1.0 - half_h * b_omega) + half_h * rhs_omega) / determinant;
+        s.d_omega = (rhs_omega + half_h * b_theta * rhs_theta) / determinant;
+        s.forcing = forcing;
+        row[c] = s.d_omega;
+      }
+      row[columns - 1] = error;
+      if (!row.allFinite()) continue;
+      window_gram.selfadjointView<Eigen::Upper>().rankUpdate(row);
+    }
+    window_gram = window_gram.selfadjointView<Eigen::Upper>();
+    gram += window_gram;
+    window_grams.push_back(std::move(window_gram));
+  }
+
+  // Project the free parameters' columns out (the fit re-estimates them with the effect):
+  // with X those columns, x a regressor and P = I − X (XᵀX)⁺ Xᵀ,
+  //   x·Pe = x·e − xᵀX (XᵀX)⁺ Xᵀe,  |Px|² = x·x − xᵀX (XᵀX)⁺ Xᵀx,
+  // (XᵀX)⁺ taken on unit-diagonal scaling with a relative eigenvalue cut-off.
+  Eigen::MatrixXd projector_gram;  // (XᵀX)⁺ in scaled coordinates
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(free_count);
+  if (free_count > 0) {
+    for (int k = 0; k < free_count; ++k) {
+      const double d = gram(k, k);
+      scale[k] = d > 0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 0.0;
+    }
+    const Eigen::MatrixXd scaled =
+        scale.asDiagonal() * gram.topLeftCorner(free_count, free_count) * scale.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
+    const Eigen::VectorXd& values = eigen.eigenvalues();
+    const double largest = values.size() > 0 ? values.maxCoeff() : 0.0;
+    Eigen::VectorXd inverse_values = Eigen::VectorXd::Zero(values.size());
+    for (int k = 0; k < values.size(); ++k) {
+      if (values[k] > kProjectionRankTolerance * largest) inverse_values[k] = 1.0 / values[k];
+    }
+    projector_gram =
+        eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+  }
+  // β_a = (XᵀX)⁺ Xᵀ(column a), scaled: Xβ is the part of a column the parameters mimic.
+  auto coefficients = [&](int a) -> Eigen::VectorXd {
+    if (free_count == 0) return Eigen::VectorXd();
+    return projector_gram * scale.cwiseProduct(gram.block(0, a, free_count, 1));
+  };
+  // (P column a)·(P column b) over the rows of `g` (the whole data or one window).
+  auto project = [&](const Eigen::MatrixXd& g, int a, const Eigen::VectorXd& beta_a, int b,
+                     const Eigen::VectorXd& beta_b) {
+    double value = g(a, b);
+    if (free_count == 0) return value;
+    const Eigen::VectorXd ga = scale.cwiseProduct(g.block(0, a, free_count, 1));
+    const Eigen::VectorXd gb = scale.cwiseProduct(g.block(0, b, free_count, 1));
+    const Eigen::MatrixXd h =
+        scale.asDiagonal() * g.topLeftCorner(free_count, free_count) * scale.asDiagonal();
+    return value - beta_a.dot(gb) - beta_b.dot(ga) + beta_a.dot(h * beta_b);
+  };
+  const int e_column = columns - 1;
+  const Eigen::VectorXd beta_e = coefficients(e_column);
+
+  // Each effect's best configuration: the amplitude minimizing |Pe − a Px|² within its
+  // range, and the share of Σe² it removes.
+  for (effects::Kind kind : kinds) {
+    CandidateEvidence candidate;
+    candidate.kind = kind;
+    candidate.name = std::string(effects::info(kind).name);
+    int best = -1;
+    double best_amplitude = 0.0;
+    double best_reduction = -1.0;
+    double best_independent = 0.0;
+    double best_score = 0.0;
+    for (int r = 0; r < regressor_count; ++r) {
+      const Regressor& regressor = regressors[r];
+      if (regressor.kind != kind) continue;
+      const int c = free_count + r;
+      const Eigen::VectorXd beta_x = coefficients(c);
+      const double xx = gram(c, c);
+      const double pxx = project(gram, c, beta_x, c, beta_x);
+      const double pxe = project(gram, c, beta_x, e_column, beta_e);
+      double amplitude = 0.0;
+      double reduction = 0.0;
+      const double independent = xx > 0 ? std::max(0.0, pxx) / xx : 0.0;
+      if (independent > kProjectionRankTolerance && std::isfinite(pxe)) {
+        amplitude = std::clamp(pxe / pxx, regressor.lower, regressor.upper);
+        reduction = 2.0 * amplitude * pxe - amplitude * amplitude * pxx;
+      }
+      if (reduction > best_reduction) {
+        // The amplitude over its window-clustered standard error (a Wald test): windows are
+        // independent, the samples within one are not (the force noise integrates along
+        // it). With r = Pe − â Px the residual left, Var(â) = Σ_w (Px·r)_w² / |Px|⁴.
+        const double unconstrained = pxx > 0 ? pxe / pxx : 0.0;
+        double spread = 0.0;
+        for (const Eigen::MatrixXd& window_gram : window_grams) {
+          const double score = project(window_gram, c, beta_x, e_column, beta_e) -
+                               unconstrained * project(window_gram, c, beta_x, c, beta_x);
+          spread += score * score;
+        }
+        best = r;
+        best_amplitude = amplitude;
+        best_reduction = reduction;
+        best_independent = independent;
+        best_score = spread > 0 ? std::abs(pxe) / std::sqrt(spread) : 0.0;
+      }
+    }
+    if (best < 0) continue;  // no configuration (the end stop without data)
+    candidate.explained_fraction =
+        examination.rate_sum_of_squares > 0
+            ? std::max(0.0, best_reduction) / examination.rate_sum_of_squares
+            : 0.0;
+    candidate.independent_share = best_independent;
+    candidate.score_z = best_amplitude != 0.0 ? best_score : 0.0;
+    candidate.start_values = regressors[best].unit_values;
+    candidate.start_values[0] = regressors[best].amplitude_offset + best_amplitude;
+    candidate.scan = regressors[best].scan;
+    examination.candidates.push_back(std::move(candidate));
+  }
+  std::stable_sort(examination.candidates.begin(), examination.candidates.end(),
+                   [](const CandidateEvidence& a, const CandidateEvidence& b) {
+                     return a.explained_fraction > b.explained_fraction;
+                   });
+  for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
+    examination.candidates[k].rank = static_cast<int>(k) + 1;
+  }
+  return examination;
+}
+
+}  // namespace
+
+ResidualExamination examine_residual(const DoorModel& model, const PreparedData& data,
+                                     const LoopOptions& options) {
+  if (const std::string message = options.validate(); !message.empty()) {
+    throw std::invalid_argument(message);
+  }
+  return examine(model, data, options, options.fit);
+}
+
+namespace {
+
+std::vector<std::string> effect_parameter_names(effects::Kind kind) {
+  const effects::EffectInfo& info = effects::info(kind);
+  std::vector<std::string> names;
+  for (const effects::EffectParameter& parameter : info.parameters) {
+    names.push_back(std::string(info.name) + "." + std::string(parameter.info.name));
+  }
+  return names;
+}
+
+// The fit options of a refit with `kind` added to a model fitted with `current`.
+FitOptions refit_options(const FitOptions& current, const LoopOptions& options,
+                         effects::Kind kind) {
+  FitOptions fit = current;
+  fit.latch_start_from_data = false;  // the start is already a fit
+  for (const std::string& name : effect_parameter_names(kind)) {
+    const bool fixed =
+        std::find(options.fixed_effect_parameters.begin(), options.fixed_effect_parameters.end(),
+                  name) != options.fixed_effect_parameters.end();
+    if (fixed) {
+      fit.fixed_parameters.push_back(name);
+    } else if (!fit.free_parameters.empty()) {
+      fit.free_parameters.push_back(name);
+    }
+  }
+  return fit;
+}
+
+// Refits `current` with the candidate effect added (LoopOptions::RefitStart). `fits` counts
+// the calls of fit_model; `origin` says which start won.
+FitResult refit(const DoorModel& start, const FitResult& current, const FitOptions& current_options,
+                const PreparedData& data, const LoopOptions& options,
+                const CandidateEvidence& candidate, int& fits, std::string& origin) {
+  const effects::EffectInfo& info = effects::info(candidate.kind);
+  EffectSetting setting{candidate.kind, candidate.start_values, {}};
+  for (const effects::EffectParameter& parameter : info.parameters) {
+    setting.bounds.push_back(parameter.default_bounds);
+  }
+  const FitOptions from_fit = refit_options(current_options, options, candidate.kind);
+  FitOptions from_start = from_fit;
+  from_start.latch_start_from_data = options.fit.latch_start_from_data;
+  auto fresh_start = [&] {
+    std::vector<double> values(current.model.parameter_values().begin(),
+                               current.model.parameter_values().end());
+    for (int i = 0; i < current.model.base_parameter_count(); ++i) {
+      values[i] = start.parameter_values()[i];
+    }
+    return current.model.with_parameter_values(std::move(values)).with_effect(setting);
+  };
+  switch (options.refit_start) {
+    case LoopOptions::RefitStart::kCurrentFit:
+      origin = "the current fit";
+      ++fits;
+      return fit_model(current.model.with_effect(setting), data, from_fit);
+    case LoopOptions::RefitStart::kStartModel:
+      origin = "the start model";
+      ++fits;
+      return fit_model(fresh_start(), data, from_start);
+    case LoopOptions::RefitStart::kBest:
+      break;
+  }
+  // Both starts without cross-validation; the better one again, with it, from its result.
+  std::optional<FitResult> best;
+  std::string failures;
+  auto attempt = [&](auto make_model, FitOptions fit, const char* name) {
+    fit.cross_validation_folds = 0;
+    try {
+      const DoorModel model = make_model();
+      ++fits;
+      FitResult result = fit_model(model, data, fit);
+      if (!best || model_figures(result.summary).sum_of_squares <
+                       model_figures(best->summary).sum_of_squares) {
+        best = std::move(result);
+        origin = name;
+      }
+    } catch (const std::exception& error) {
+      failures += std::string(failures.empty() ? "" : "; ") + "from " + name + ": " + error.what();
+    }
+  };
+  attempt([&] { return current.model.with_effect(setting); }, from_fit, "the current fit");
+  attempt(fresh_start, from_start, "the start model");
+  if (!best) throw std::runtime_error(failures);
+  FitOptions final_fit = from_fit;
+  final_fit.equation_error_start = false;  // it starts at the optimum
+  ++fits;
+  return fit_model(best->model, data, final_fit);
+}
+
+std::string describe_figures(const ModelFigures& figures) {
+  return "window RMSE of omega " + number(figures.fitted_rmse_rad_s) + " rad/s fitted, " +
+         number(figures.held_out_rmse_rad_s) + " held out";
+}
+
+std::string parameter_text(const FittedParameter& parameter) {
+  std::string text = parameter.name + " = " + number(parameter.value);
+  if (parameter.free) {
+    text += " +- " + number(parameter.uncertainty);
+  } else {
+    text += " (fixed)";
+  }
+  if (!parameter.unit.empty()) text += " " + parameter.unit;
+  if (parameter.at_bound) text += " [at a bound]";
+  if (parameter.free && !parameter.determined) text += " [undetermined]";
+  return text;
+}
+
+}  // namespace
+
+LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
+                             const LoopOptions& options) {
+  const Clock::time_point began = Clock::now();
+  if (const std::string message = options.validate(); !message.empty()) {
+    throw std::invalid_argument(message);
+  }
+  int usable_strokes = 0;
+  for (const Stroke& stroke : data.strokes) usable_strokes += stroke.size() >= 2 ? 1 : 0;
+  if (usable_strokes < 2) {
+    throw std::invalid_argument(
+        "residual loop: the data needs at least 2 strokes (held-out errors need strokes left "
+        "out of a fit)");
+  }
+  auto say = [&](const std::string& line) {
+    if (options.progress) options.progress(line);
+  };
+
+  int fits = 0;
+  say("fitting the start model (" + std::string(to_string(start.kind())) + ", " +
+      std::to_string(start.effects().size()) + " effects) with " +
+      std::to_string(options.fit.cross_validation_folds) + "-fold cross-validation");
+  FitResult start_fit = fit_model(start, data, options.fit);
+  ++fits;
+  say("start model: " + describe_figures(model_figures(start_fit.summary)) +
+      format(" [%.1f s]", start_fit.summary.total_time_s));
+
+  FitResult current = start_fit;
+  FitOptions current_options = options.fit;  // the options current was fitted with
+  std::vector<LoopStep> steps;
+  std::vector<CandidateEvidence> last_candidates;
+  std::string stop_reason;
+  for (int step_number = 1;; ++step_number) {
+    if (step_number > options.max_steps) {
+      stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
+      break;
+    }
+    ResidualExamination examination = examine(current.model, data, options, current_options);
+    if (examination.candidates.empty()) {
+      stop_reason = "no candidate effect is left (every candidate is in the model)";
+      break;
+    }
+    std::string ranking = "step " + std::to_string(step_number) + ": the residual ranks ";
+    for (std::size_t k = 0; k < examination.candidates.size() && k < 4; ++k) {
+      if (k > 0) ranking += ", ";
+      ranking += examination.candidates[k].name + " (" +
+                 percent(examination.candidates[k].explained_fraction) +
+                 format(", z %.3g)", examination.candidates[k].score_z);
+    }
+    say(ranking);
+
+    const ModelFigures before = model_figures(current.summary);
+    std::vector<std::optional<FitResult>> refits(examination.candidates.size());
+    int refitted = 0;
+    for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
+      CandidateEvidence& candidate = examination.candidates[k];
+      if (refitted >= options.refit_candidates) {
+        candidate.verdict = "not refitted: ranked below the " +
+                            std::to_string(options.refit_candidates) + " refitted";
+        continue;
+      }
+      if (candidate.explained_fraction < options.min_explained_fraction) {
+        candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
+                            " of the residual (needs " + percent(options.min_explained_fraction) +
+                            ")";
+        continue;
+      }
+      if (candidate.score_z < options.min_score_z) {
+        candidate.verdict = "not refitted: score z = " + format("%.2g", candidate.score_z) +
+                            " (needs " + format("%.2g", options.min_score_z) + ")";
+        continue;
+      }
+      ++refitted;
+      candidate.refitted = true;
+      say("step " + std::to_string(step_number) + ": refitting with " + candidate.name +
+          (candidate.scan.empty() ? "" : " (" + candidate.scan + ")"));
+      const Clock::time_point refit_began = Clock::now();
+      try {
+        refits[k] = refit(start, current, current_options, data, options, candidate, fits,
+                          candidate.refit_start);
+      } catch (const std::exception& error) {
+        candidate.verdict = std::string("refit failed: ") + error.what();
+        say("  " + candidate.name + ": " + candidate.verdict);
+        continue;
+      }
+      const ModelFigures after = model_figures(refits[k]->summary);
+      candidate.after = after;
+      candidate.held_out_improvement =
+          (before.held_out_rmse_rad_s - after.held_out_rmse_rad_s) / before.held_out_rmse_rad_s;
+      candidate.bic_change = after.bic - before.bic;
+      const bool held_out_ok = candidate.held_out_improvement > options.min_held_out_improvement;
+      const bool bic_ok = candidate.bic_change < -options.min_bic_decrease;
+      candidate.qualifies = held_out_ok && bic_ok;
+      const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) +
+                                        " -> " + number(after.held_out_rmse_rad_s) + " rad/s (" +
+                                        signed_percent(-candidate.held_out_improvement) + ")";
+      const std::string bic_text = "BIC " + format("%+.4g", candidate.bic_change);
+      if (candidate.qualifies) {
+        candidate.verdict = "qualifies: " + held_out_text + ", " + bic_text;
+      } else if (!held_out_ok) {
+        candidate.verdict = "rejected: " + held_out_text + ", needs a fall of more than " +
+                            percent(options.min_held_out_improvement);
+      } else {
+        candidate.verdict = "rejected: " + bic_text + " (must fall by more than " +
+                            number(options.min_bic_decrease) + "), " + held_out_text;
+      }
+      say("  " + candidate.name + ": " + candidate.verdict +
+          format(" [refit from %s, %.1f s]", candidate.refit_start.c_str(),
+                 seconds_since(refit_began)));
+    }
+
+    int chosen = -1;
+    for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
+      const CandidateEvidence& candidate = examination.candidates[k];
+      if (!candidate.qualifies) continue;
+      if (chosen < 0 || candidate.after->held_out_rmse_rad_s <
+                            examination.candidates[chosen].after->held_out_rmse_rad_s) {
+        chosen = static_cast<int>(k);
+      }
+    }
+    if (chosen < 0) {
+      stop_reason =
+          refitted == 0
+              ? "no candidate was worth a refit (explained share or z below the thresholds)"
+              : "no refitted candidate qualified";
+      last_candidates = std::move(examination.candidates);
+      break;
+    }
+
+    const CandidateEvidence& accepted = examination.candidates[chosen];
+    LoopStep step;
+    step.number = step_number;
+    step.effect = accepted.kind;
+    step.effect_name = accepted.name;
+    step.explained_fraction = accepted.explained_fraction;
+    step.score_z = accepted.score_z;
+    step.rank = accepted.rank;
+    const std::string prefix = accepted.name + ".";
+    for (const FittedParameter& parameter : refits[chosen]->summary.parameters) {
+      if (parameter.name.rfind(prefix, 0) == 0) step.parameters.push_back(parameter);
+    }
+    step.before = before;
+    step.after = *accepted.after;
+    step.held_out_improvement = accepted.held_out_improvement;
+    step.bic_change = accepted.bic_change;
+    std::string added = "step " + std::to_string(step_number) + ": added " + accepted.name + ":";
+    for (const FittedParameter& parameter : step.parameters) {
+      added += ' ';
+      added += parameter_text(parameter);
+    }
+    say(added);
+    current = std::move(*refits[chosen]);
+    current_options = refit_options(current_options, options, accepted.kind);
+    step.candidates = std::move(examination.candidates);
+    steps.push_back(std::move(step));
+  }
+  say("stopped: " + stop_reason);
+
+  LoopResult result{std::move(start_fit),
+                    std::move(current),
+                    std::move(steps),
+                    std::move(last_candidates),
+                    std::move(stop_reason),
+                    fits,
+                    0.0,
+                    options};
+  result.total_time_s = seconds_since(began);
+  return result;
+}
+
+// ---------------------------------------------------------------------------------------
+// Reports.
+
+namespace {
+
+void figures_table(std::string& out, const ModelFigures& before, const ModelFigures& after) {
+  out += format("    %-30s %-12s %-12s\n", "", "before", "after");
+  auto row = [&](const char* name, double a, double b) {
+    out += format("    %-30s %-12s %-12s\n", name, number(a).c_str(), number(b).c_str());
+  };
+  row("window RMSE fitted (rad/s)", before.fitted_rmse_rad_s, after.fitted_rmse_rad_s);
+  row("window RMSE held out (rad/s)", before.held_out_rmse_rad_s, after.held_out_rmse_rad_s);
+  row("window FIT% fitted", before.fitted_fit_percent, after.fitted_fit_percent);
+  row("window FIT% held out", before.held_out_fit_percent, after.held_out_fit_percent);
+  row("BIC", before.bic, after.bic);
+  row("free parameters", before.free_parameters, after.free_parameters);
+  row("p in BIC (with window states)", before.parameters, after.parameters);
+}
+
+void candidate_table(std::string& out, const std::vector<CandidateEvidence>& candidates) {
+  out += format("    %-4s %-19s %-9s %-6s %-13s %-10s %s\n", "rank", "effect", "explains", "z",
+                "held-out RMSE", "BIC change", "verdict");
+  for (const CandidateEvidence& candidate : candidates) {
+    out += format("    %-4d %-19s %-9s %-6.3g %-13s %-10s %s\n", candidate.rank,
+                  candidate.name.c_str(), percent(candidate.explained_fraction).c_str(),
+                  candidate.score_z,
+                  candidate.after ? signed_percent(-candidate.held_out_improvement).c_str() : "-",
+                  candidate.after ? format("%+.4g", candidate.bic_change).c_str() : "-",
+                  candidate.verdict.c_str());
+    if (!candidate.scan.empty()) out += format("         scan: %s\n", candidate.scan.c_str());
+    if (!candidate.refit_start.empty()) {
+      out += format("         refit from %s\n", candidate.refit_start.c_str());
+    }
+  }
+}
+
+std::string effect_list(const std::vector<LoopStep>& steps) {
+  std::string list;
+  for (const LoopStep& step : steps) list += (list.empty() ? "" : ", ") + step.effect_name;
+  return list;
+}
+
+}  // namespace
+
+std::string LoopResult::brief_report() const {
+  const ModelFigures first = model_figures(start_fit.summary);
+  const ModelFigures last = model_figures(final_fit.summary);
+  std::string out;
+  out += format("Residual loop: %zu effect%s added%s; %d fits, %.2f s.\n", steps.size(),
+                steps.size() == 1 ? "" : "s",
+                steps.empty() ? "" : (" (" + effect_list(steps) + ")").c_str(), fits, total_time_s);
+  out += "Window RMSE of omega, held out: " + number(first.held_out_rmse_rad_s) + " -> " +
+         number(last.held_out_rmse_rad_s) + " rad/s; fitted: " + number(first.fitted_rmse_rad_s) +
+         " -> " + number(last.fitted_rmse_rad_s) + " rad/s.\n";
+  for (const LoopStep& step : steps) {
+    out += format("Step %d: %s (explains %s of the residual, z %.3g, rank %d of %zu):", step.number,
+                  step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z,
+                  step.rank, step.candidates.size());
+    for (const FittedParameter& parameter : step.parameters) {
+      if (!parameter.free) continue;
+      out += ' ';
+      out += parameter_text(parameter);
+      out += ';';
+    }
+    out += " held-out RMSE " + signed_percent(-step.held_out_improvement) + ", BIC " +
+           format("%+.4g", step.bic_change) + ".\n";
+  }
+  out += "Stopped: " + stop_reason + ".\n";
+  return out;
+}
+
+std::string LoopResult::full_report() const {
+  std::string out = brief_report();
+  const FitOptions& fit = start_fit.summary.options;
+  out +=
+      "\nMethod (docs/residual-loop.md): each step ranks the candidate effects by the share of "
+      "the rate residual's\nsum of squares their best amplitude explains (linearized window "
+      "sensitivity, free parameters\nprojected out), refits the best that are significant, and "
+      "accepts the one with the lowest\nheld-out RMSE among those that lower it by more than "
+      "the threshold and lower BIC.\n";
+  out += format("  cross-validation folds %d, window %.3g s\n", fit.cross_validation_folds,
+                fit.window_s);
+  out += format(
+      "  refit at most %d per step if it explains >= %s and z >= %.3g; accept if the "
+      "held-out RMSE falls > %s and BIC falls > %.3g\n",
+      options.refit_candidates, percent(options.min_explained_fraction).c_str(),
+      options.min_score_z, percent(options.min_held_out_improvement).c_str(),
+      options.min_bic_decrease);
+  out += "\nStart model: " + std::string(to_string(start_fit.model.kind())) + ", " +
+         describe_figures(model_figures(start_fit.summary)) + ", BIC " +
+         number(model_figures(start_fit.summary).bic) + "\n";
+  for (const LoopStep& step : steps) {
+    out += format("\nStep %d: added %s\n", step.number, step.effect_name.c_str());
+    out += "  parameters (standard uncertainty):\n";
+    for (const FittedParameter& parameter : step.parameters) {
+      out += "    " + parameter_text(parameter) + "\n";
+    }
+    out += "  figures:\n";
+    figures_table(out, step.before, step.after);
+    out += "  candidates:\n";
+    candidate_table(out, step.candidates);
+  }
+  if (!last_candidates.empty()) {
+    out += "\nLast examination (no step taken):\n";
+    candidate_table(out, last_candidates);
+  }
+  out += "\nStopped: " + stop_reason + ".\n";
+  out += "\nFinal fit:\n" + final_fit.summary.brief_report();
+  return out;
+}
+
+}  // namespace doorbench

@@ -1,0 +1,192 @@
+#pragma once
+// The residual loop (door-models.md §4; docs/residual-loop.md): fit a door model, look at
+// what it leaves unexplained, trace that to an effect of the catalogue (analysis/effects.h)
+// the model lacks, add it, refit, and keep it only when the error on held-out strokes falls
+// by more than a stated threshold AND the information criterion (BIC) falls. Repeat until
+// no candidate qualifies. In the manner of Ceres: LoopOptions with defaults and validate(),
+// one call, and a LoopResult with a brief and a full text report.
+//
+//   doorbench::LoopOptions options;                 // folds, thresholds, candidates
+//   options.progress = [](const std::string& line) { std::cerr << line << '\n'; };
+//   doorbench::LoopResult loop = doorbench::run_residual_loop(start_model, prepared, options);
+//   std::cout << loop.full_report();
+//   loop.final_fit.model;                            // the last accepted model, fitted
+//
+// Thread safety: free functions without shared state; the progress callback is called on
+// the caller's thread.
+#include <cstddef>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/door_model.h"
+#include "analysis/effects.h"
+#include "analysis/fitting.h"
+#include "analysis/strokes.h"
+
+namespace doorbench {
+
+struct LoopOptions {
+  // Every fit of the loop: the start model's and each candidate's (where a refit starts:
+  // refit_start). cross_validation_folds must be >= 2, since the loop compares held-out
+  // errors. Avoid 2: stroke s is in fold s mod k, so with openings and closings alternating
+  // each fold would be fitted on one direction alone (docs/residual-loop.md, "Limits").
+  FitOptions fit = [] {
+    FitOptions options;
+    options.cross_validation_folds = 3;
+    return options;
+  }();
+
+  // The effects the loop may add; empty: the whole catalogue. Effects the model already
+  // has are never candidates.
+  std::vector<effects::Kind> candidates;
+
+  // --- Stopping and acceptance ---
+  int max_steps = 4;         // effects added at most
+  int refit_candidates = 3;  // the best-ranked candidates refitted at each step
+  // A candidate is refitted only if its best amplitude explains at least this share of the
+  // rate residual's sum of squares (it cannot be what the model lacks otherwise).
+  double min_explained_fraction = 0.01;
+  // ... and its score is significant: score_z (CandidateEvidence) at least this. The largest
+  // of the candidates' scans is taken, so the level is above the usual 2 or 3.
+  double min_score_z = 4.0;
+  // Accept only if the held-out window RMSE of ω falls by more than this fraction of its
+  // value before the step ...
+  double min_held_out_improvement = 0.02;
+  // ... and BIC = n ln(SSR/n) + p ln(n) falls by more than this (0: falls at all).
+  double min_bic_decrease = 0.0;
+
+  // --- The residual examination's scans of nonlinear parameters (start values) ---
+  std::vector<double> stribeck_speeds_rad_s = {0.01, 0.02, 0.05, 0.1, 0.2, 0.5};  // w_s
+  std::vector<double> soft_close_angles_rad = {0.05, 0.1, 0.15, 0.2, 0.3, 0.4};   // θ_sc
+  std::vector<double> soft_close_sharpness_per_rad = {10.0, 50.0};                // β_sc
+  int end_stop_angles = 12;  // θ_e: this many angles evenly over the data's angle range
+  // Effect parameters held at their start (the scan's or the catalogue's default) in every
+  // refit, as the fit holds the sensory beta and beta_f by default. The end stop's switch is
+  // about 1 mrad wide: its sharpness is nearly unidentifiable and makes the cost rough.
+  std::vector<std::string> fixed_effect_parameters = {"end_stop.beta_e"};
+
+  // Where each candidate's refit starts.
+  enum class RefitStart {
+    // Both starts below, fitted without cross-validation; the one with the lower window sum
+    // of squares is fitted again from its result, with cross-validation (fit_model three times).
+    kBest,
+    // The current fitted model with the effect added.
+    kCurrentFit,
+    // The start model's base values (the latch read off the data again when options.fit
+    // asks), the effects already added at their fitted values, and the new effect. A fit
+    // that had to distort its parameters for the missing effect can leave a basin from
+    // which the refit cannot climb out; this start avoids it.
+    kStartModel,
+  };
+  RefitStart refit_start = RefitStart::kBest;
+
+  // Called with one line at each stage (fits, the ranking, each verdict); may be empty.
+  std::function<void(const std::string&)> progress;
+
+  // Empty when usable, else a one-line message naming the option.
+  std::string validate() const;
+};
+
+// Figures of one fitted model, the loop's "before" and "after".
+struct ModelFigures {
+  double fitted_rmse_rad_s = 0.0;    // window RMSE of ω on the fitted strokes
+  double fitted_fit_percent = 0.0;   // window FIT% on the fitted strokes
+  double held_out_rmse_rad_s = 0.0;  // the same on held-out strokes (cross-validation)
+  double held_out_fit_percent = 0.0;
+  // BIC = n ln(SSR/n) + p ln(n) of the window least-squares problem: n its residuals, SSR
+  // their weighted sum of squares (residual_variance · (n − p)), p the free parameters plus
+  // the estimated window start states.
+  std::size_t residuals = 0;
+  int free_parameters = 0;  // the model's free parameters
+  int parameters = 0;       // p: free parameters plus window start states
+  double sum_of_squares = 0.0;
+  double bic = 0.0;
+};
+ModelFigures model_figures(const FitSummary& summary);
+
+// One candidate effect as the residual examination and (if refitted) its fit saw it.
+struct CandidateEvidence {
+  effects::Kind kind = effects::Kind::kViscousDamping;
+  std::string name;
+  // The share of Σ(ω − ω̂)² over the windows that the effect's best amplitude removes, to
+  // first order (0 when the best amplitude has the wrong sign for the effect's bounds).
+  // The free parameters' own sensitivities are projected out first (they are refitted with
+  // the effect), so this is the first-order gain of the refit: a score test.
+  double explained_fraction = 0.0;
+  // The share of the effect's regressor (Σx²) the free parameters cannot mimic; near 0 the
+  // effect is indistinguishable from them (the inertia error while J is free).
+  double independent_share = 0.0;
+  // The significance of the amplitude: â = x·Pe / |Px|² (x its regressor, e the rate
+  // residual, P the projection above) over its window-clustered standard error
+  // √(Σ_w (Px·(Pe − â Px))_w²) / |Px|² (a Wald test robust to errors correlated within a
+  // window). About |N(0, 1)| when the effect is absent; 0 when the amplitude is clamped to 0.
+  double score_z = 0.0;
+  int rank = 0;  // 1 = explains the most
+  // The effect's parameters for the refit's start, in the catalogue's order: the amplitude
+  // from the regression (clamped into bounds), nonlinear ones from the scan's best point.
+  std::vector<double> start_values;
+  std::string scan;  // the scanned values chosen, e.g. "w_s = 0.05"; empty when none
+
+  bool refitted = false;
+  std::string refit_start;            // "the current fit" or "the start model"
+  std::optional<ModelFigures> after;  // the refit's figures
+  double held_out_improvement = 0.0;  // (before − after) / before, held-out window RMSE
+  double bic_change = 0.0;            // after − before
+  bool qualifies = false;             // passed both tests
+  std::string verdict;  // "not refitted: ...", "held-out RMSE fell 0.8% (needs > 2%)", ...
+};
+
+// The residual examination of one model (step 2 of the loop), without refits.
+struct ResidualExamination {
+  std::size_t samples = 0;           // rate residuals used (window samples after the first)
+  double rate_sum_of_squares = 0.0;  // Σ(ω − ω̂)², rad²/s²
+  std::vector<CandidateEvidence> candidates;  // best first
+};
+
+struct LoopStep {
+  int number = 0;  // 1, 2, ...
+  effects::Kind effect = effects::Kind::kViscousDamping;
+  std::string effect_name;
+  double explained_fraction = 0.0;  // the evidence
+  double score_z = 0.0;
+  int rank = 0;  // among `candidates`
+  // The added effect's parameters as the step's fit left them ("<effect>.<param>", with
+  // standard uncertainty).
+  std::vector<FittedParameter> parameters;
+  ModelFigures before, after;
+  double held_out_improvement = 0.0;
+  double bic_change = 0.0;
+  std::vector<CandidateEvidence> candidates;  // the whole ranking, with every refit's verdict
+};
+
+struct LoopResult {
+  FitResult start_fit;  // the start model's fit (step 0)
+  FitResult final_fit;  // the fit of the final model (= start_fit when nothing was added)
+  std::vector<LoopStep> steps;
+  // The examination that ended the loop, with why each candidate failed (empty when the
+  // loop stopped at max_steps or ran out of candidates).
+  std::vector<CandidateEvidence> last_candidates;
+  std::string stop_reason;
+  int fits = 0;  // calls of fit_model
+  double total_time_s = 0.0;
+  LoopOptions options;  // as given
+
+  const DoorModel& model() const { return final_fit.model; }
+  std::string brief_report() const;  // a few lines: the effects added and the error
+  std::string full_report() const;   // every step's evidence, parameters, figures, verdicts
+};
+
+// Step 2 alone: how much of the rate residual of `model` on `data` (windows as in
+// options.fit) each candidate effect of options.candidates would explain, best first.
+// The model's parameters are used as they are (fit it first).
+ResidualExamination examine_residual(const DoorModel& model, const PreparedData& data,
+                                     const LoopOptions& options = {});
+
+// The whole loop. Throws std::invalid_argument for unusable options (the validate()
+// message) or data, and whatever fit_model throws for the start model's fit.
+LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
+                             const LoopOptions& options = {});
+
+}  // namespace doorbench

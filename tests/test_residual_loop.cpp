@@ -1,0 +1,303 @@
+// The residual loop (analysis/residual_loop.h, docs/residual-loop.md) on short synthetic
+// recordings: the sensory reference door, with or without one catalogue effect, opened and
+// closed by the virtual hand three times (six strokes of 1 to 1.6 s at 1 kHz) with the
+// bench's noise, seeded. The loop must add nothing to clean data and name the missing effect
+// first, recovering its parameters.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "analysis/fit_synthetic.h"
+#include "analysis/parameter_file.h"
+#include "analysis/residual_loop.h"
+
+namespace {
+
+using doorbench::DoorModel;
+using doorbench::LoopOptions;
+using doorbench::LoopResult;
+using doorbench::ModelKind;
+using doorbench::PreparedData;
+namespace effects = doorbench::effects;
+
+DoorModel sensory_reference() { return doorbench::reference_model(ModelKind::kSensory); }
+
+// The reference door with one effect at `values` (catalogue bounds).
+DoorModel with_effect(const DoorModel& model, effects::Kind kind, std::vector<double> values) {
+  doorbench::EffectSetting setting{kind, std::move(values), {}};
+  for (const effects::EffectParameter& parameter : effects::info(kind).parameters) {
+    setting.bounds.push_back(parameter.default_bounds);
+  }
+  return model.with_effect(std::move(setting));
+}
+
+PreparedData recording(const DoorModel& truth) {
+  doorbench::SyntheticStrokeOptions options;
+  options.runs = {{0.6, 3.0}, {1.0, 4.0}, {1.3, 4.0}};
+  options.seed = 3;
+  return doorbench::synthetic_strokes(truth, options);
+}
+
+const PreparedData& clean_recording() {
+  static const PreparedData data = recording(sensory_reference());
+  return data;
+}
+
+const doorbench::FittedParameter& parameter(const doorbench::LoopStep& step,
+                                            const std::string& name) {
+  for (const doorbench::FittedParameter& p : step.parameters) {
+    if (p.name == name) return p;
+  }
+  FAIL("the step has no parameter " << name);
+  throw std::logic_error("unreachable");
+}
+
+// The value lies within 3 standard uncertainties of the truth.
+void check_recovered(const doorbench::FittedParameter& p, double truth) {
+  INFO(p.name << " = " << p.value << " +- " << p.uncertainty << ", truth " << truth);
+  REQUIRE(p.free);
+  REQUIRE(std::isfinite(p.uncertainty));
+  REQUIRE(p.uncertainty > 0);
+  CHECK(std::abs(p.value - truth) <= 3.0 * p.uncertainty);
+}
+
+// The loop on data made with `truth`, started from the plain sensory reference model. Checks
+// what every case shares: the first (and only) step adds `expected`, the held-out and fitted
+// errors fall, BIC falls, and the evidence names it first.
+LoopResult expect_first_step(const DoorModel& truth, effects::Kind expected,
+                             LoopOptions options = {}) {
+  const PreparedData data = recording(truth);
+  std::vector<std::string> progress;
+  options.progress = [&](const std::string& line) { progress.push_back(line); };
+  const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), data, options);
+  INFO(loop.full_report());
+  REQUIRE_FALSE(loop.steps.empty());
+  const doorbench::LoopStep& step = loop.steps.front();
+  CHECK(step.effect == expected);
+  CHECK(step.effect_name == effects::info(expected).name);
+  CHECK(step.rank == 1);
+  CHECK(step.explained_fraction > 0.1);
+  CHECK(step.after.held_out_rmse_rad_s < 0.5 * step.before.held_out_rmse_rad_s);
+  CHECK(step.held_out_improvement > options.min_held_out_improvement);
+  CHECK(step.after.fitted_rmse_rad_s < step.before.fitted_rmse_rad_s);
+  CHECK(step.after.bic < step.before.bic);
+  CHECK(step.bic_change == Approx(step.after.bic - step.before.bic));
+  CHECK(step.after.parameters > step.before.parameters);
+  // Nothing else is added: after the missing effect the residual is noise.
+  CHECK(loop.steps.size() == 1);
+  CHECK(loop.final_fit.model.has_effect(expected));
+  CHECK(loop.model().effects().size() == 1);
+  // The reports and the progress lines name the effect.
+  const std::string name(effects::info(expected).name);
+  CHECK(loop.brief_report().find(name) != std::string::npos);
+  CHECK(loop.full_report().find(name + ".") != std::string::npos);
+  CHECK_FALSE(progress.empty());
+  bool named = false;
+  for (const std::string& line : progress) named = named || line.find("added " + name) != std::string::npos;
+  CHECK(named);
+  return loop;
+}
+
+}  // namespace
+
+TEST_CASE("residual loop: clean data fitted with its own model adds nothing", "[residual_loop]") {
+  const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), clean_recording());
+  INFO(loop.full_report());
+  CHECK(loop.steps.empty());
+  CHECK(loop.final_fit.model.effects().empty());
+  CHECK_FALSE(loop.stop_reason.empty());
+  CHECK_FALSE(loop.last_candidates.empty());
+  for (const doorbench::CandidateEvidence& candidate : loop.last_candidates) {
+    CHECK_FALSE(candidate.qualifies);
+    CHECK_FALSE(candidate.verdict.empty());
+  }
+  // The figures of the start fit exist and are near the noise floor.
+  const doorbench::ModelFigures figures = doorbench::model_figures(loop.start_fit.summary);
+  CHECK(figures.held_out_rmse_rad_s < 0.01);
+  CHECK(std::isfinite(figures.bic));
+  CHECK(loop.brief_report().find("0 effects added") != std::string::npos);
+}
+
+TEST_CASE("residual loop: on clean data a forced refit is rejected by the held-out test",
+          "[residual_loop]") {
+  // The z filter off and one cheap candidate: the refit happens, lowers the fitted error a
+  // little, and must fail the 2% held-out threshold.
+  LoopOptions options;
+  options.min_score_z = 0.0;
+  options.min_explained_fraction = 0.0;
+  options.candidates = {effects::Kind::kGravityImbalance};
+  const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), clean_recording(), options);
+  INFO(loop.full_report());
+  CHECK(loop.steps.empty());
+  REQUIRE(loop.last_candidates.size() == 1);
+  const doorbench::CandidateEvidence& candidate = loop.last_candidates.front();
+  CHECK(candidate.refitted);
+  REQUIRE(candidate.after.has_value());
+  CHECK_FALSE(candidate.qualifies);
+  CHECK(candidate.held_out_improvement < options.min_held_out_improvement);
+  CHECK(std::abs(candidate.held_out_improvement) < 0.05);
+  CHECK(candidate.verdict.find("rejected") != std::string::npos);
+  CHECK(loop.full_report().find("Last examination") != std::string::npos);
+  CHECK(loop.fits >= 2);
+}
+
+TEST_CASE("residual loop: the examination finds nothing significant at the truth",
+          "[residual_loop]") {
+  const doorbench::ResidualExamination examination =
+      doorbench::examine_residual(sensory_reference(), clean_recording());
+  REQUIRE(examination.samples > 1000);
+  REQUIRE(examination.candidates.size() == static_cast<std::size_t>(effects::kKindCount));
+  const LoopOptions defaults;
+  for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
+    const doorbench::CandidateEvidence& candidate = examination.candidates[k];
+    INFO(candidate.name << ": explains " << candidate.explained_fraction << ", z "
+                        << candidate.score_z);
+    CHECK(candidate.rank == static_cast<int>(k) + 1);
+    CHECK(candidate.score_z < defaults.min_score_z);
+    CHECK(candidate.explained_fraction < 0.1);
+    if (k > 0) CHECK(candidate.explained_fraction <= examination.candidates[k - 1].explained_fraction);
+    CHECK(candidate.start_values.size() == effects::info(candidate.kind).parameters.size());
+  }
+}
+
+TEST_CASE("residual loop: the examination skips effects the model has and projects out J",
+          "[residual_loop]") {
+  const DoorModel model = with_effect(sensory_reference(), effects::Kind::kViscousDamping, {0.0});
+  LoopOptions options;
+  options.candidates = {effects::Kind::kViscousDamping, effects::Kind::kInertiaError,
+                        effects::Kind::kGravityImbalance};
+  const doorbench::ResidualExamination examination =
+      doorbench::examine_residual(model, clean_recording(), options);
+  REQUIRE(examination.candidates.size() == 2);
+  for (const doorbench::CandidateEvidence& candidate : examination.candidates) {
+    CHECK(candidate.kind != effects::Kind::kViscousDamping);
+    if (candidate.kind == effects::Kind::kInertiaError) {
+      // With J free, an inertia error is J itself: nothing of it is left to explain with.
+      CHECK(candidate.independent_share < 1e-6);
+      CHECK(candidate.explained_fraction == 0.0);
+    } else {
+      CHECK(candidate.independent_share > 0.1);
+    }
+  }
+}
+
+TEST_CASE("residual loop: finds a gravity imbalance first", "[residual_loop]") {
+  const double g1 = 3.0;
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kGravityImbalance, {g1}),
+      effects::Kind::kGravityImbalance);
+  check_recovered(parameter(loop.steps.front(), "gravity_imbalance.g1"), g1);
+}
+
+TEST_CASE("residual loop: finds viscous damping first", "[residual_loop]") {
+  const double b = 0.5;
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kViscousDamping, {b}),
+      effects::Kind::kViscousDamping);
+  check_recovered(parameter(loop.steps.front(), "viscous_damping.b"), b);
+}
+
+TEST_CASE("residual loop: finds a force-sensor offset first", "[residual_loop]") {
+  const double offset = 3.0;
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kForceOffset, {offset}),
+      effects::Kind::kForceOffset);
+  check_recovered(parameter(loop.steps.front(), "force_offset.F_off"), offset);
+}
+
+TEST_CASE("residual loop: finds Stribeck friction first", "[residual_loop][.slow]") {
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kStribeck, {5.0, 0.1}),
+      effects::Kind::kStribeck);
+  check_recovered(parameter(loop.steps.front(), "stribeck.d_s"), 5.0);
+  check_recovered(parameter(loop.steps.front(), "stribeck.w_s"), 0.1);
+}
+
+TEST_CASE("residual loop: finds direction-dependent friction first", "[residual_loop][.slow]") {
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kDirectionFriction, {1.5}),
+      effects::Kind::kDirectionFriction);
+  check_recovered(parameter(loop.steps.front(), "direction_friction.d_dir"), 1.5);
+}
+
+TEST_CASE("residual loop: finds a soft-close damper first", "[residual_loop][.slow]") {
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kSoftClose, {5.0, 0.15, 50.0}),
+      effects::Kind::kSoftClose);
+  check_recovered(parameter(loop.steps.front(), "soft_close.b_sc"), 5.0);
+  check_recovered(parameter(loop.steps.front(), "soft_close.theta_sc"), 0.15);
+  check_recovered(parameter(loop.steps.front(), "soft_close.beta_sc"), 50.0);
+}
+
+TEST_CASE("residual loop: finds an end stop first", "[residual_loop][.slow]") {
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kEndStop, {200.0, 1.2, 3000.0}),
+      effects::Kind::kEndStop);
+  check_recovered(parameter(loop.steps.front(), "end_stop.k_e"), 200.0);
+  check_recovered(parameter(loop.steps.front(), "end_stop.theta_e"), 1.2);
+  CHECK_FALSE(parameter(loop.steps.front(), "end_stop.beta_e").free);  // fixed_effect_parameters
+}
+
+TEST_CASE("residual loop: finds an inertia error first when J is held", "[residual_loop][.slow]") {
+  LoopOptions options;
+  options.fit.fixed_parameters = {"J"};  // otherwise the inertia error is J itself
+  const LoopResult loop = expect_first_step(
+      with_effect(sensory_reference(), effects::Kind::kInertiaError, {0.2}),
+      effects::Kind::kInertiaError, options);
+  check_recovered(parameter(loop.steps.front(), "inertia_error.delta_J"), 0.2);
+}
+
+TEST_CASE("residual loop: options are validated with a message naming the option",
+          "[residual_loop]") {
+  CHECK(LoopOptions{}.validate().empty());
+  auto message = [](auto change) {
+    LoopOptions options;
+    change(options);
+    return options.validate();
+  };
+  using Catch::Matchers::Contains;
+  CHECK_THAT(message([](LoopOptions& o) { o.fit.cross_validation_folds = 0; }),
+             Contains("cross_validation_folds"));
+  CHECK_THAT(message([](LoopOptions& o) { o.fit.window_s = -1; }),
+             Contains("loop fit options") && Contains("window_s"));
+  CHECK_THAT(message([](LoopOptions& o) { o.max_steps = 0; }), Contains("max_steps"));
+  CHECK_THAT(message([](LoopOptions& o) { o.refit_candidates = 0; }), Contains("refit_candidates"));
+  CHECK_THAT(message([](LoopOptions& o) { o.min_explained_fraction = 1.0; }),
+             Contains("min_explained_fraction"));
+  CHECK_THAT(message([](LoopOptions& o) { o.min_score_z = -1; }), Contains("min_score_z"));
+  CHECK_THAT(message([](LoopOptions& o) { o.min_held_out_improvement = -0.1; }),
+             Contains("min_held_out_improvement"));
+  CHECK_THAT(message([](LoopOptions& o) { o.min_bic_decrease = std::nan(""); }),
+             Contains("min_bic_decrease"));
+  CHECK_THAT(message([](LoopOptions& o) {
+               o.candidates = {effects::Kind::kStribeck, effects::Kind::kStribeck};
+             }),
+             Contains("stribeck twice"));
+  CHECK_THAT(message([](LoopOptions& o) { o.stribeck_speeds_rad_s = {}; }),
+             Contains("stribeck_speeds_rad_s"));
+  CHECK_THAT(message([](LoopOptions& o) { o.stribeck_speeds_rad_s = {0.0}; }),
+             Contains("stribeck_speeds_rad_s") && Contains("w_s"));
+  CHECK_THAT(message([](LoopOptions& o) { o.soft_close_angles_rad = {0.9}; }),
+             Contains("soft_close_angles_rad"));
+  CHECK_THAT(message([](LoopOptions& o) { o.soft_close_sharpness_per_rad = {1e6}; }),
+             Contains("soft_close_sharpness_per_rad"));
+  CHECK_THAT(message([](LoopOptions& o) { o.end_stop_angles = 0; }), Contains("end_stop_angles"));
+  CHECK_THAT(message([](LoopOptions& o) { o.fixed_effect_parameters = {"end_stop.beta"}; }),
+             Contains("fixed_effect_parameters") && Contains("end_stop.beta"));
+
+  // run_residual_loop and examine_residual throw the message.
+  LoopOptions bad;
+  bad.max_steps = 0;
+  CHECK_THROWS_WITH(doorbench::run_residual_loop(sensory_reference(), clean_recording(), bad),
+                    Contains("max_steps"));
+  CHECK_THROWS_WITH(doorbench::examine_residual(sensory_reference(), clean_recording(), bad),
+                    Contains("max_steps"));
+  // Held-out errors need at least two strokes.
+  PreparedData one_stroke = clean_recording();
+  one_stroke.strokes.resize(1);
+  CHECK_THROWS_WITH(doorbench::run_residual_loop(sensory_reference(), one_stroke),
+                    Contains("2 strokes"));
+}
