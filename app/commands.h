@@ -23,6 +23,7 @@ void add_simulate_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
 void add_session_commands(CLI::App& app, Action& action);
 void add_fit_command(CLI::App& app, Action& action);
+void add_loop_command(CLI::App& app, Action& action);
 
 // The options every verb that builds a model shares.
 struct ModelOptions {

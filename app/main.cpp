@@ -46,6 +46,7 @@ int main(int argc, char** argv) {
   doorbench::app::add_simulate_command(app, action);
   doorbench::app::add_session_commands(app, action);
   doorbench::app::add_fit_command(app, action);
+  doorbench::app::add_loop_command(app, action);
   doorbench::app::add_demo_command(app, action);
 
   try {

@@ -325,6 +325,11 @@ TEST_CASE("CLI: --help for the command and every verb exits 0 and lists the opti
       {{"info"}, {"Usage:", "info", "SESSION"}},
       {{"export"}, {"Usage:", "export", "SESSION", "--csv"}},
       {{"import"}, {"Usage:", "import", "CSV", "--out", "--operator", "--product", "--notes"}},
+      {{"fit"},
+       {"Usage:", "fit", "DATA", "--model", "--params", "--effects", "--free", "--fixed",
+        "--objective", "--folds", "--out"}},
+      {{"loop"},
+       {"Usage:", "loop", "DATA", "--model", "--params", "--folds", "--max-steps", "--out"}},
   };
   for (const HelpCase& help : cases) {
     std::vector<std::string> args = help.verb;
@@ -1467,4 +1472,49 @@ TEST_CASE("CLI: import and export keep the times and strokes of a 100 Hz recordi
   REQUIRE(exported.stroke);
   CHECK(*exported.stroke == *original.stroke);
   CHECK(exported.time_s == original.time_s);
+}
+
+TEST_CASE("CLI: fit and loop refuse bad usage and missing data", "[cli][fit]") {
+  ScratchDir scratch;
+  const std::string out = (scratch / "out").string();
+  // The loop compares held-out errors: two folds would fit each direction on the other.
+  require_usage_error(run_doorbench({"loop", "data.csv", "--folds", "2", "--out", out}, scratch));
+  require_usage_error(
+      run_doorbench({"fit", "data.csv", "--objective", "best", "--out", out}, scratch));
+  require_usage_error(run_doorbench({"fit", "data.csv"}, scratch));
+  const RunResult missing =
+      run_doorbench({"fit", (scratch / "nowhere.csv").string(), "--out", out}, scratch);
+  // Progress lines come first; the error is the last line.
+  CHECK(missing.exit_code == 1);
+  CHECK_THAT(missing.err, EndsWith("nowhere.csv: cannot open for reading\n"));
+  const RunResult unknown_effect = run_doorbench(
+      {"fit", (scratch / "nowhere.csv").string(), "--effects", "stribeck,wobble", "--out", out},
+      scratch);
+  CHECK(unknown_effect.exit_code != 0);
+}
+
+TEST_CASE("CLI: fit writes result.json, the report and plots for a simulated run", "[cli][fit]") {
+  ScratchDir scratch;
+  // Two opening-closing runs of the reference sensory door by the virtual hand, exact.
+  const std::string run = (scratch / "run.csv").string();
+  require_success(run_doorbench(
+      {"simulate", "--model", "sensory", "--hand", "open-close", "--duration-s", "5", "--out", run},
+      scratch));
+  const std::string out = (scratch / "fit").string();
+  const RunResult result =
+      run_doorbench({"fit", run, "--model", "sensory", "--folds", "0", "--out", out}, scratch);
+  require_success(result);
+  CHECK_THAT(result.out, Contains("Fit of the sensory model"));
+  for (const char* file : {"result.json", "report.md", "fitted-params.json", "rate.svg",
+                           "force-angle.svg", "residual-angle.svg", "residual-speed.svg"}) {
+    INFO(file);
+    CHECK(std::filesystem::exists(std::filesystem::path(out) / file));
+  }
+  // The fitted file is a parameter file doorbench reads back.
+  const std::string grid = (scratch / "grid.csv").string();
+  std::ofstream(grid) << "theta_rad,omega_rad_s\n0.02,0\n";
+  require_success(run_doorbench(
+      {"model", "torque", "--model", "sensory", "--params", out + "/fitted-params.json", "--in",
+       grid, "--out", (scratch / "torque.csv").string()},
+      scratch));
 }

@@ -1,0 +1,155 @@
+// What `doorbench fit` and `doorbench loop` write: result.json pieces and the plots.
+#include "app/fit_output.h"
+
+#include <cmath>
+#include <numbers>
+
+#include "analysis/fit_metrics.h"
+#include "analysis/svg_plot.h"
+
+namespace doorbench::app {
+namespace {
+
+constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+
+}  // namespace
+
+nlohmann::ordered_json error_stats_json(const ErrorStats& stats) {
+  auto number = [](double value) {
+    return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
+  };
+  return {{"samples", stats.count},
+          {"rmse_rad_s", number(stats.rmse())},
+          {"max_abs_error_rad_s", number(stats.max_abs_error)},
+          {"time_of_max_s", stats.time_of_max_s},
+          {"fit_percent", number(stats.fit_percent())}};
+}
+
+nlohmann::ordered_json metrics_json(const FitMetrics& metrics) {
+  nlohmann::ordered_json strokes = nlohmann::ordered_json::array();
+  for (const StrokeFitMetrics& stroke : metrics.strokes) {
+    strokes.push_back(
+        {{"stroke", stroke.stroke_id},
+         {"direction", stroke.direction == StrokeDirection::kOpening ? "opening" : "closing"},
+         {"windows", error_stats_json(stroke.window)},
+         {"whole_stroke_replay", error_stats_json(stroke.replay)},
+         {"replay_ok", stroke.replay_ok}});
+  }
+  const double study = metrics.study_objective_rad_s();
+  return {{"windows", error_stats_json(metrics.window)},
+          {"whole_stroke_replay", error_stats_json(metrics.replay)},
+          {"study_objective_max_abs_rate_error_rad_s",
+           std::isfinite(study) ? nlohmann::ordered_json(study) : nlohmann::ordered_json(nullptr)},
+          {"failed_replays", metrics.failed_replays},
+          {"strokes", strokes}};
+}
+
+nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedData& data) {
+  const FitSummary& s = result.summary;
+  nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
+  for (const FittedParameter& p : s.parameters) {
+    auto number = [](double value) {
+      return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
+    };
+    parameters.push_back({{"name", p.name},
+                          {"unit", p.unit},
+                          {"free", p.free},
+                          {"start", p.start},
+                          {"value", p.value},
+                          {"standard_uncertainty", number(p.uncertainty)},
+                          {"bounds", {p.bounds.lower, p.bounds.upper}},
+                          {"at_bound", p.at_bound},
+                          {"determined", p.determined}});
+  }
+  nlohmann::ordered_json correlations = nlohmann::ordered_json::array();
+  for (const ParameterCorrelation& c : s.strong_correlations) {
+    correlations.push_back({{"first", c.first}, {"second", c.second}, {"value", c.value}});
+  }
+  nlohmann::ordered_json excluded = nlohmann::ordered_json::array();
+  for (const ExcludedSegment& e : data.excluded) {
+    excluded.push_back({{"start_s", e.start_s}, {"end_s", e.end_s}, {"reason", e.reason}});
+  }
+  return {{"source", data.source},
+          {"model", std::string(to_string(s.model_kind))},
+          {"strokes", s.strokes},
+          {"windows", s.windows},
+          {"residuals", s.residuals},
+          {"free_parameters", s.free_parameters},
+          {"converged", s.converged},
+          {"termination", s.termination},
+          {"iterations", s.iterations},
+          {"solve_time_s", s.solve_time_s},
+          {"total_time_s", s.total_time_s},
+          {"residual_variance", s.residual_variance},
+          {"parameters", parameters},
+          {"correlations_above_threshold", correlations},
+          {"undetermined", s.undetermined},
+          {"fitted", metrics_json(s.fitted)},
+          {"held_out", s.held_out ? metrics_json(*s.held_out) : nlohmann::ordered_json(nullptr)},
+          {"folds", s.folds},
+          {"excluded_segments", excluded},
+          {"notes", s.notes}};
+}
+
+// Measured against simulated (window by window) rate and angle, the force–angle loops, and
+// the rate residual against angle and speed.
+std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
+                                         const PreparedData& data, const FitOptions& options) {
+  WindowOptions window_options;
+  window_options.window_s = options.window_s;
+  window_options.substeps_per_sample = options.substeps_per_sample;
+  const WindowSimulation simulated = simulate_windows(model, data, window_options);
+  std::vector<std::vector<double>> time_s, measured_deg_s, simulated_deg_s, angle_deg,
+      residual_deg_s, speed_deg_s, force_N;
+  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+    const Stroke& stroke = data.strokes[s];
+    time_s.push_back(stroke.time_s);
+    std::vector<double> m, sim, a, r, v;
+    for (std::size_t i = 0; i < stroke.size(); ++i) {
+      m.push_back(stroke.omega_rad_s[i] * kDegPerRad);
+      sim.push_back(simulated.omega_rad_s[s][i] * kDegPerRad);
+      a.push_back(stroke.theta_rad[i] * kDegPerRad);
+      r.push_back((stroke.omega_rad_s[i] - simulated.omega_rad_s[s][i]) * kDegPerRad);
+      v.push_back(stroke.omega_rad_s[i] * kDegPerRad);
+    }
+    measured_deg_s.push_back(std::move(m));
+    simulated_deg_s.push_back(std::move(sim));
+    angle_deg.push_back(std::move(a));
+    residual_deg_s.push_back(std::move(r));
+    speed_deg_s.push_back(std::move(v));
+    force_N.push_back(stroke.force_N);
+  }
+  std::vector<PlotSeries> rate, loops, residual_angle, residual_speed;
+  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+    const bool opening = data.strokes[s].direction == StrokeDirection::kOpening;
+    rate.push_back({s == 0 ? "measured" : "", time_s[s], measured_deg_s[s], "#1f77b4"});
+    rate.push_back({s == 0 ? "simulated (windows)" : "", time_s[s], simulated_deg_s[s], "#d62728"});
+    loops.push_back(
+        {s == 0 ? "strokes" : "", angle_deg[s], force_N[s], opening ? "#1f77b4" : "#d62728"});
+    residual_angle.push_back(
+        {"", angle_deg[s], residual_deg_s[s], opening ? "#1f77b4" : "#d62728"});
+    residual_speed.push_back(
+        {"", speed_deg_s[s], residual_deg_s[s], opening ? "#1f77b4" : "#d62728"});
+  }
+  if (!residual_angle.empty()) {
+    residual_angle[0].label = "openings blue, closings red";
+    residual_speed[0].label = "openings blue, closings red";
+    loops[0].label = "openings blue, closings red";
+  }
+  std::vector<std::string> files = {"rate.svg", "force-angle.svg", "residual-angle.svg",
+                                    "residual-speed.svg"};
+  write_svg_plot((dir / files[0]).string(),
+                 {"Door rate: measured and simulated window by window", "time (s)", "rate (deg/s)"},
+                 rate);
+  write_svg_plot((dir / files[1]).string(),
+                 {"Force-angle loops (measured)", "angle (deg)", "hand force (N)"}, loops);
+  write_svg_plot((dir / files[2]).string(),
+                 {"Rate residual against angle", "angle (deg)", "measured - simulated (deg/s)"},
+                 residual_angle);
+  write_svg_plot((dir / files[3]).string(),
+                 {"Rate residual against speed", "rate (deg/s)", "measured - simulated (deg/s)"},
+                 residual_speed);
+  return files;
+}
+
+}  // namespace doorbench::app
