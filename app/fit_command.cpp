@@ -19,8 +19,7 @@ namespace doorbench::app {
 namespace {
 
 struct FitCommandOptions {
-  std::string data_path;
-  ModelOptions model;
+  FitDataOptions input;
   std::string free;
   std::string fixed;
   std::string objective = "windows";
@@ -41,12 +40,9 @@ std::vector<std::string> split_names(const std::string& list) {
 
 void run_fit(const FitCommandOptions& options) {
   std::filesystem::create_directories(options.out_dir);
-  std::cerr << "preparing " << options.data_path << "\n";
-  const PreparedData data = load_prepared_data(options.data_path);
-  std::cerr << "  " << data.strokes.size() << " strokes, " << data.excluded.size()
-            << " segments excluded\n";
-  const DoorModel start =
-      start_model(options.model.model, options.model.params_path, options.model.effects_path);
+  const FitInputs inputs = load_fit_inputs(options.input);
+  const PreparedData& data = inputs.data;
+  const DoorModel& start = inputs.start;
 
   FitOptions fit_options;
   fit_options.free_parameters = split_names(options.free);
@@ -55,7 +51,7 @@ void run_fit(const FitCommandOptions& options) {
     fit_options.objective = FitOptions::Objective::kWholeStrokeMax;
   }
   fit_options.cross_validation_folds = options.folds;
-  std::cerr << "fitting the " << options.model.model << " model"
+  std::cerr << "fitting the " << options.input.model.model << " model"
             << (options.folds > 0
                     ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
                     : "")
@@ -70,7 +66,7 @@ void run_fit(const FitCommandOptions& options) {
   }
   const std::vector<std::string> plots = write_fit_plots(dir, result.model, data, fit_options);
   std::ofstream report(dir / "report.md");
-  report << "# Fit of the " << options.model.model << " model to " << data.source << "\n\n"
+  report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n"
          << "```\n"
          << result.summary.full_report() << "```\n\n";
   for (const std::string& plot : plots) report << "![" << plot << "](" << plot << ")\n\n";
@@ -87,14 +83,8 @@ void add_fit_command(CLI::App& app, Action& action) {
       "Fit a door model to a session or a CSV recording: multiple shooting on short windows "
       "started from measured states (docs/fitting.md), with uncertainties, held-out metrics, "
       "a report and plots");
-  fit->add_option("DATA", options->data_path, "Session (HDF5) or recording (CSV)")->required();
-  fit->add_option("--model", options->model.model, "Which door model")
-      ->check(CLI::IsMember({"sensory", "physical"}))
-      ->capture_default_str();
-  fit->add_option("--params", options->model.params_path,
-                  "Start values and bounds (parameter file); default: the reference door");
-  fit->add_option(
-      "--effects", options->model.effects_path,
+  add_fit_data_options(
+      *fit, options->input,
       "Effects to add: an effects file (*.json) or names, e.g. stribeck,viscous_damping");
   fit->add_option("--free", options->free,
                   "Free parameters, comma-separated (default: docs/fitting.md)");

@@ -1,6 +1,7 @@
 #include "app/fit_inputs.h"
 
 #include <fstream>
+#include <iostream>
 #include <stdexcept>
 
 #include "acquisition/recording_csv.h"
@@ -68,6 +69,27 @@ DoorModel start_model(const std::string& model_kind, const std::string& params_p
     model = model.with_effect(std::move(effect));
   }
   return model;
+}
+
+void add_fit_data_options(CLI::App& command, FitDataOptions& options,
+                          const std::string& effects_help) {
+  command.add_option("DATA", options.data_path, "Session (HDF5) or recording (CSV)")->required();
+  command.add_option("--model", options.model.model, "Which door model")
+      ->check(CLI::IsMember({"sensory", "physical"}))
+      ->capture_default_str();
+  command.add_option("--params", options.model.params_path,
+                     "Start values and bounds (parameter file); default: the reference door");
+  command.add_option("--effects", options.model.effects_path, effects_help);
+}
+
+FitInputs load_fit_inputs(const FitDataOptions& options) {
+  std::cerr << "preparing " << options.data_path << "\n";
+  PreparedData data = load_prepared_data(options.data_path);
+  std::cerr << "  " << data.strokes.size() << " strokes, " << data.excluded.size()
+            << " segments excluded\n";
+  DoorModel start =
+      start_model(options.model.model, options.model.params_path, options.model.effects_path);
+  return {std::move(data), std::move(start)};
 }
 
 }  // namespace doorbench::app

@@ -1,9 +1,11 @@
 #pragma once
 // What `doorbench fit` (and later `loop`) read: the data, prepared, and the start model.
+#include <CLI/CLI.hpp>
 #include <string>
 
 #include "analysis/door_model.h"
 #include "analysis/strokes.h"
+#include "app/commands.h"
 
 namespace doorbench::app {
 
@@ -18,5 +20,20 @@ std::vector<EffectSetting> effects_from_argument(const std::string& argument);
 // The start model: the parameter file (or the reference door) plus the effects.
 DoorModel start_model(const std::string& model_kind, const std::string& params_path,
                       const std::string& effects_argument);
+
+// The options `fit` and `loop` share: DATA, --model, --params, --effects.
+struct FitDataOptions {
+  std::string data_path;
+  ModelOptions model;
+};
+void add_fit_data_options(CLI::App& command, FitDataOptions& options,
+                          const std::string& effects_help);
+
+struct FitInputs {
+  PreparedData data;
+  DoorModel start;
+};
+// Prepares DATA and builds the start model, reporting progress on stderr.
+FitInputs load_fit_inputs(const FitDataOptions& options);
 
 }  // namespace doorbench::app

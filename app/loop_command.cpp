@@ -17,8 +17,7 @@ namespace doorbench::app {
 namespace {
 
 struct LoopCommandOptions {
-  std::string data_path;
-  ModelOptions model;
+  FitDataOptions input;
   int folds = 3;
   int max_steps = 4;
   std::string out_dir;
@@ -90,12 +89,9 @@ std::string steps_table(const LoopResult& result) {
 
 void run_loop(const LoopCommandOptions& options) {
   std::filesystem::create_directories(options.out_dir);
-  std::cerr << "preparing " << options.data_path << "\n";
-  const PreparedData data = load_prepared_data(options.data_path);
-  std::cerr << "  " << data.strokes.size() << " strokes, " << data.excluded.size()
-            << " segments excluded\n";
-  const DoorModel start =
-      start_model(options.model.model, options.model.params_path, options.model.effects_path);
+  const FitInputs inputs = load_fit_inputs(options.input);
+  const PreparedData& data = inputs.data;
+  const DoorModel& start = inputs.start;
   LoopOptions loop_options;
   loop_options.fit.cross_validation_folds = options.folds;
   loop_options.max_steps = options.max_steps;
@@ -110,7 +106,8 @@ void run_loop(const LoopCommandOptions& options) {
       write_fit_plots(dir, result.model(), data, loop_options.fit);
   const std::string table = steps_table(result);
   std::ofstream report(dir / "report.md");
-  report << "# Residual loop: the " << options.model.model << " model on " << data.source << "\n\n"
+  report << "# Residual loop: the " << options.input.model.model << " model on " << data.source
+         << "\n\n"
          << table << "\n```\n"
          << result.full_report() << "```\n\n"
          << "Plots of the final model:\n\n";
@@ -129,14 +126,8 @@ void add_loop_command(CLI::App& app, Action& action) {
       "Close the loop: fit, rank the effects of the catalogue by how much of the residual each "
       "explains, add the best only if it lowers the held-out error by more than 2% and BIC, "
       "refit, repeat (docs/residual-loop.md)");
-  loop->add_option("DATA", options->data_path, "Session (HDF5) or recording (CSV)")->required();
-  loop->add_option("--model", options->model.model, "Which door model")
-      ->check(CLI::IsMember({"sensory", "physical"}))
-      ->capture_default_str();
-  loop->add_option("--params", options->model.params_path,
-                   "Start values and bounds (parameter file); default: the reference door");
-  loop->add_option("--effects", options->model.effects_path,
-                   "Effects the start model already has (a *.json file or names)");
+  add_fit_data_options(*loop, options->input,
+                       "Effects the start model already has (a *.json file or names)");
   loop->add_option("--folds", options->folds, "Cross-validation folds over strokes (>= 3)")
       ->check(CLI::Range(3, 1000))
       ->capture_default_str();
