@@ -5,36 +5,27 @@
 #include <string>
 
 #include "analysis/fitting.h"
+#include "analysis/text_format.h"
 
 namespace doorbench {
 
 namespace {
 
-std::string format(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* pattern, ...) {
-  char buffer[1024];
-  va_list arguments;
-  va_start(arguments, pattern);
-  std::vsnprintf(buffer, sizeof buffer, pattern, arguments);
-  va_end(arguments);
-  return buffer;
-}
-
 std::string number(double value) {
   if (std::isnan(value)) return "-";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  return format("%.6g", value);
+  return printf_text("%.6g", value);
 }
 
 std::string short_number(double value) {
   if (std::isnan(value)) return "-";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  return format("%.3g", value);
+  return printf_text("%.3g", value);
 }
 
 std::string percent(double value) {
   if (!std::isfinite(value)) return "-";
-  return format("%.2f%%", value);
+  return printf_text("%.2f%%", value);
 }
 
 std::string objective_name(const FitOptions& options) {
@@ -51,12 +42,12 @@ std::string direction_name(StrokeDirection direction) {
 
 void metric_rows(std::string& out, const FitMetrics& fitted, const FitMetrics* held_out) {
   auto row = [&](const char* name, double fitted_value, double held_value, const char* unit) {
-    out += format("  %-36s %-12s %-12s %s\n", name, short_number(fitted_value).c_str(),
-                  held_out ? short_number(held_value).c_str() : "-", unit);
+    out += printf_text("  %-36s %-12s %-12s %s\n", name, short_number(fitted_value).c_str(),
+                       held_out ? short_number(held_value).c_str() : "-", unit);
   };
   auto percent_row = [&](const char* name, double fitted_value, double held_value) {
-    out += format("  %-36s %-12s %-12s\n", name, percent(fitted_value).c_str(),
-                  held_out ? percent(held_value).c_str() : "-");
+    out += printf_text("  %-36s %-12s %-12s\n", name, percent(fitted_value).c_str(),
+                       held_out ? percent(held_value).c_str() : "-");
   };
   const double nan = std::nan("");
   row("windows: RMSE of omega", fitted.window.rmse(), held_out ? held_out->window.rmse() : nan,
@@ -76,7 +67,7 @@ void metric_rows(std::string& out, const FitMetrics& fitted, const FitMetrics* h
 }  // namespace
 
 std::string FitSummary::brief_report() const {
-  std::string out = format(
+  std::string out = printf_text(
       "Fit of the %s model (%d free parameters) to %zu strokes, %zu windows: %s after %d "
       "iterations, %.2f s.\n",
       std::string(to_string(model_kind)).c_str(), free_parameters, strokes, windows,
@@ -103,29 +94,31 @@ std::string FitSummary::full_report() const {
   for (const StrokeFitMetrics& stroke : fitted.strokes) {
     if (stroke.direction == StrokeDirection::kOpening) ++openings;
   }
-  out += format("Data       %s: %zu strokes (%d opening, %d closing)\n",
-                source.empty() ? "(unnamed)" : source.c_str(), strokes, openings,
-                static_cast<int>(fitted.strokes.size()) - openings);
-  out += format("Model      %s, %d of %zu parameters free\n",
-                std::string(to_string(model_kind)).c_str(), free_parameters, parameters.size());
-  out += format(
+  out += printf_text("Data       %s: %zu strokes (%d opening, %d closing)\n",
+                     source.empty() ? "(unnamed)" : source.c_str(), strokes, openings,
+                     static_cast<int>(fitted.strokes.size()) - openings);
+  out +=
+      printf_text("Model      %s, %d of %zu parameters free\n",
+                  std::string(to_string(model_kind)).c_str(), free_parameters, parameters.size());
+  out += printf_text(
       "Windows    %zu of %g s, each started from the state at its first sample (%s); "
       "RK4, %d sub-steps per sample%s\n",
       windows, options.window_s,
       options.estimate_window_states ? "estimated, measured state as its prior" : "as measured",
       options.substeps_per_sample, options.coarse_first ? " (1 in a first pass)" : "");
-  out += format(
+  out += printf_text(
       "Residuals  %zu: omega / %s rad/s%s\n", residuals, short_number(rate_noise_rad_s).c_str(),
       options.angle_residuals ? (" and theta / " + short_number(angle_noise_rad) + " rad").c_str()
                               : "");
   out += "Objective  " + objective_name(options) + "\n\n";
 
   if (options.equation_error_start) {
-    out += format("Start      equation error: %d iterations; %s\n", equation_error_iterations,
-                  equation_error_termination.c_str());
+    out += printf_text("Start      equation error: %d iterations; %s\n", equation_error_iterations,
+                       equation_error_termination.c_str());
   }
-  out += format("Solver     Levenberg-Marquardt (Ceres), %d iterations, %.3f s (total %.3f s)\n",
-                iterations, solve_time_s, total_time_s);
+  out +=
+      printf_text("Solver     Levenberg-Marquardt (Ceres), %d iterations, %.3f s (total %.3f s)\n",
+                  iterations, solve_time_s, total_time_s);
   out += "           " + termination + "\n";
   out += "           cost 1/2 sum r^2: " + short_number(initial_cost) + " -> " +
          short_number(final_cost) +
@@ -135,43 +128,43 @@ std::string FitSummary::full_report() const {
     out += "           ceres::Covariance agrees with the fit's (J'J)^-1 to " +
            short_number(ceres_covariance_difference) + " (relative)\n";
   }
-  out += format(
+  out += printf_text(
       "Time       start %.3f s, equation error %.3f s, windows %.3f s, statistics %.3f s, "
       "metrics %.3f s, held out %.3f s\n\n",
       times.start_s, times.equation_error_s, times.windows_s, times.statistics_s, times.metrics_s,
       times.held_out_s);
 
-  out += format(
+  out += printf_text(
       "Parameters (u: standard uncertainty, %s; rank %d of %d; n_eff: windows the "
       "robust u rests on)\n",
       options.uncertainty == FitOptions::Uncertainty::kWindowRobust
           ? "window jackknife"
           : "classical, (J'J)^-1 x SSR/(n-p)",
       covariance_rank, free_parameters);
-  out += format("  %-16s %-13s %-11s %-8s %-11s %-11s %-6s %-13s %-13s %-21s %s\n", "name", "value",
-                "u", "u/|v|", "u robust", "u classic", "n_eff", "start", "eq. error", "bounds",
-                "status");
+  out += printf_text("  %-16s %-13s %-11s %-8s %-11s %-11s %-6s %-13s %-13s %-21s %s\n", "name",
+                     "value", "u", "u/|v|", "u robust", "u classic", "n_eff", "start", "eq. error",
+                     "bounds", "status");
   for (const FittedParameter& p : parameters) {
-    const std::string bounds = format("[%s, %s]", short_number(p.bounds.lower).c_str(),
-                                      short_number(p.bounds.upper).c_str());
+    const std::string bounds = printf_text("[%s, %s]", short_number(p.bounds.lower).c_str(),
+                                           short_number(p.bounds.upper).c_str());
     std::string status = p.free ? "free" : "fixed";
     if (p.free && !p.determined) status += ", UNDETERMINED";
     if (p.at_bound) status += ", at bound";
     if (p.start_origin != "start model") status += ", start " + p.start_origin;
     const double relative = p.uncertainty / std::abs(p.value);
-    out += format(
+    out += printf_text(
         "  %-16s %-13s %-11s %-8s %-11s %-11s %-6s %-13s %-13s %-21s %s\n", p.name.c_str(),
         number(p.value).c_str(), short_number(p.uncertainty).c_str(),
         p.free ? percent(100.0 * relative).c_str() : "-",
         short_number(p.robust_uncertainty).c_str(), short_number(p.classical_uncertainty).c_str(),
-        p.free ? format("%.1f", p.effective_windows).c_str() : "-", number(p.start).c_str(),
+        p.free ? printf_text("%.1f", p.effective_windows).c_str() : "-", number(p.start).c_str(),
         p.free ? number(p.equation_error).c_str() : "-", bounds.c_str(), status.c_str());
   }
-  out += format("\nCorrelations above %g:", options.correlation_threshold);
+  out += printf_text("\nCorrelations above %g:", options.correlation_threshold);
   if (strong_correlations.empty()) out += " none";
   out += "\n";
   for (const ParameterCorrelation& c : strong_correlations) {
-    out += format("  %-16s %-16s %+.3f\n", c.first.c_str(), c.second.c_str(), c.value);
+    out += printf_text("  %-16s %-16s %+.3f\n", c.first.c_str(), c.second.c_str(), c.value);
   }
   out += "Undetermined (rank-deficient direction or u/|value| above " +
          short_number(options.undetermined_relative_uncertainty) + "):";
@@ -180,10 +173,10 @@ std::string FitSummary::full_report() const {
   out += "\n";
 
   if (latch_start.opening_strokes + latch_start.closing_strokes > 0) {
-    out += format("\nLatch start read off the data (%d opening, %d closing strokes):\n",
-                  latch_start.opening_strokes, latch_start.closing_strokes);
+    out += printf_text("\nLatch start read off the data (%d opening, %d closing strokes):\n",
+                       latch_start.opening_strokes, latch_start.closing_strokes);
     auto reading = [&](const char* name, const std::optional<double>& value, const char* unit) {
-      if (value) out += format("  %-8s %-12s %s\n", name, number(*value).c_str(), unit);
+      if (value) out += printf_text("  %-8s %-12s %s\n", name, number(*value).c_str(), unit);
     };
     reading("theta0", latch_start.theta0_rad, "rad");
     reading("theta1", latch_start.theta1_rad, "rad");
@@ -193,14 +186,15 @@ std::string FitSummary::full_report() const {
     reading("k_lock", latch_start.k_lock_Nm_per_rad, "N*m/rad");
   }
 
-  out += format("\nMetrics                                %-12s %-12s\n", "fitted",
-                held_out ? ("held out (" + std::to_string(folds) + " folds)").c_str() : "held out");
+  out += printf_text(
+      "\nMetrics                                %-12s %-12s\n", "fitted",
+      held_out ? ("held out (" + std::to_string(folds) + " folds)").c_str() : "held out");
   metric_rows(out, fitted, held_out ? &*held_out : nullptr);
 
   out += "\nPer stroke (omega errors in rad/s; held out: by the fold that left the stroke out)\n";
-  out += format("  %-7s %-6s %-8s %-8s %-10s %-10s %-8s %-11s %-10s %-11s\n", "stroke", "dir",
-                "samples", "windows", "win RMSE", "win max", "win FIT%", "replay max", "held RMSE",
-                "held replay");
+  out += printf_text("  %-7s %-6s %-8s %-8s %-10s %-10s %-8s %-11s %-10s %-11s\n", "stroke", "dir",
+                     "samples", "windows", "win RMSE", "win max", "win FIT%", "replay max",
+                     "held RMSE", "held replay");
   for (std::size_t i = 0; i < fitted.strokes.size(); ++i) {
     const StrokeFitMetrics& s = fitted.strokes[i];
     const StrokeFitMetrics* h = nullptr;
@@ -214,12 +208,12 @@ std::string FitSummary::full_report() const {
         s.replay_ok ? short_number(s.replay.max_abs_error) : std::string("failed");
     const std::string held_replay =
         h == nullptr ? "-" : (h->replay_ok ? short_number(h->replay.max_abs_error) : "failed");
-    out +=
-        format("  %-7d %-6s %-8zu %-8zu %-10s %-10s %-8s %-11s %-10s %-11s\n", s.stroke_id,
-               direction_name(s.direction).c_str(), s.window.count, s.windows,
-               short_number(s.window.rmse()).c_str(), short_number(s.window.max_abs_error).c_str(),
-               percent(s.window.fit_percent()).c_str(), replay.c_str(),
-               h ? short_number(h->window.rmse()).c_str() : "-", held_replay.c_str());
+    out += printf_text("  %-7d %-6s %-8zu %-8zu %-10s %-10s %-8s %-11s %-10s %-11s\n", s.stroke_id,
+                       direction_name(s.direction).c_str(), s.window.count, s.windows,
+                       short_number(s.window.rmse()).c_str(),
+                       short_number(s.window.max_abs_error).c_str(),
+                       percent(s.window.fit_percent()).c_str(), replay.c_str(),
+                       h ? short_number(h->window.rmse()).c_str() : "-", held_replay.c_str());
   }
   if (!notes.empty()) {
     out += "\nNotes\n";

@@ -15,6 +15,7 @@
 #include "analysis/fit_windows.h"
 #include "analysis/physical_model.h"
 #include "analysis/sensory_model.h"
+#include "analysis/text_format.h"
 
 namespace doorbench {
 
@@ -33,30 +34,20 @@ double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-std::string format(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
-std::string format(const char* pattern, ...) {
-  char buffer[1024];
-  va_list arguments;
-  va_start(arguments, pattern);
-  std::vsnprintf(buffer, sizeof buffer, pattern, arguments);
-  va_end(arguments);
-  return buffer;
-}
-
 std::string number(double value) {
   if (std::isnan(value)) return "-";
   if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
-  return format("%.4g", value);
+  return printf_text("%.4g", value);
 }
 
 std::string percent(double fraction) {
   if (!std::isfinite(fraction)) return "-";
-  return format("%.1f%%", 100.0 * fraction);
+  return printf_text("%.1f%%", 100.0 * fraction);
 }
 
 std::string signed_percent(double fraction) {
   if (!std::isfinite(fraction)) return "-";
-  return format("%+.1f%%", 100.0 * fraction);
+  return printf_text("%+.1f%%", 100.0 * fraction);
 }
 
 bool finite_in(double value, double lower, double upper) {
@@ -659,7 +650,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   FitResult start_fit = fit_model(start, data, options.fit);
   ++fits;
   say("start model: " + describe_figures(model_figures(start_fit.summary)) +
-      format(" [%.1f s]", start_fit.summary.total_time_s));
+      printf_text(" [%.1f s]", start_fit.summary.total_time_s));
 
   FitResult current = start_fit;
   FitOptions current_options = options.fit;  // the options current was fitted with
@@ -681,7 +672,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
       if (k > 0) ranking += ", ";
       ranking += examination.candidates[k].name + " (" +
                  percent(examination.candidates[k].explained_fraction) +
-                 format(", z %.3g)", examination.candidates[k].score_z);
+                 printf_text(", z %.3g)", examination.candidates[k].score_z);
     }
     say(ranking);
 
@@ -702,8 +693,8 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
         continue;
       }
       if (candidate.score_z < options.min_score_z) {
-        candidate.verdict = "not refitted: score z = " + format("%.2g", candidate.score_z) +
-                            " (needs " + format("%.2g", options.min_score_z) + ")";
+        candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
+                            " (needs " + printf_text("%.2g", options.min_score_z) + ")";
         continue;
       }
       ++refitted;
@@ -730,7 +721,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
       const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) +
                                         " -> " + number(after.held_out_rmse_rad_s) + " rad/s (" +
                                         signed_percent(-candidate.held_out_improvement) + ")";
-      const std::string bic_text = "BIC " + format("%+.4g", candidate.bic_change);
+      const std::string bic_text = "BIC " + printf_text("%+.4g", candidate.bic_change);
       if (candidate.qualifies) {
         candidate.verdict = "qualifies: " + held_out_text + ", " + bic_text;
       } else if (!held_out_ok) {
@@ -741,8 +732,8 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
                             number(options.min_bic_decrease) + "), " + held_out_text;
       }
       say("  " + candidate.name + ": " + candidate.verdict +
-          format(" [refit from %s, %.1f s]", candidate.refit_start.c_str(),
-                 seconds_since(refit_began)));
+          printf_text(" [refit from %s, %.1f s]", candidate.refit_start.c_str(),
+                      seconds_since(refit_began)));
     }
 
     int chosen = -1;
@@ -810,9 +801,9 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
 namespace {
 
 void figures_table(std::string& out, const ModelFigures& before, const ModelFigures& after) {
-  out += format("    %-30s %-12s %-12s\n", "", "before", "after");
+  out += printf_text("    %-30s %-12s %-12s\n", "", "before", "after");
   auto row = [&](const char* name, double a, double b) {
-    out += format("    %-30s %-12s %-12s\n", name, number(a).c_str(), number(b).c_str());
+    out += printf_text("    %-30s %-12s %-12s\n", name, number(a).c_str(), number(b).c_str());
   };
   row("window RMSE fitted (rad/s)", before.fitted_rmse_rad_s, after.fitted_rmse_rad_s);
   row("window RMSE held out (rad/s)", before.held_out_rmse_rad_s, after.held_out_rmse_rad_s);
@@ -824,18 +815,18 @@ void figures_table(std::string& out, const ModelFigures& before, const ModelFigu
 }
 
 void candidate_table(std::string& out, const std::vector<CandidateEvidence>& candidates) {
-  out += format("    %-4s %-19s %-9s %-6s %-13s %-10s %s\n", "rank", "effect", "explains", "z",
-                "held-out RMSE", "BIC change", "verdict");
+  out += printf_text("    %-4s %-19s %-9s %-6s %-13s %-10s %s\n", "rank", "effect", "explains", "z",
+                     "held-out RMSE", "BIC change", "verdict");
   for (const CandidateEvidence& candidate : candidates) {
-    out += format("    %-4d %-19s %-9s %-6.3g %-13s %-10s %s\n", candidate.rank,
-                  candidate.name.c_str(), percent(candidate.explained_fraction).c_str(),
-                  candidate.score_z,
-                  candidate.after ? signed_percent(-candidate.held_out_improvement).c_str() : "-",
-                  candidate.after ? format("%+.4g", candidate.bic_change).c_str() : "-",
-                  candidate.verdict.c_str());
-    if (!candidate.scan.empty()) out += format("         scan: %s\n", candidate.scan.c_str());
+    out += printf_text(
+        "    %-4d %-19s %-9s %-6.3g %-13s %-10s %s\n", candidate.rank, candidate.name.c_str(),
+        percent(candidate.explained_fraction).c_str(), candidate.score_z,
+        candidate.after ? signed_percent(-candidate.held_out_improvement).c_str() : "-",
+        candidate.after ? printf_text("%+.4g", candidate.bic_change).c_str() : "-",
+        candidate.verdict.c_str());
+    if (!candidate.scan.empty()) out += printf_text("         scan: %s\n", candidate.scan.c_str());
     if (!candidate.refit_start.empty()) {
-      out += format("         refit from %s\n", candidate.refit_start.c_str());
+      out += printf_text("         refit from %s\n", candidate.refit_start.c_str());
     }
   }
 }
@@ -852,16 +843,18 @@ std::string LoopResult::brief_report() const {
   const ModelFigures first = model_figures(start_fit.summary);
   const ModelFigures last = model_figures(final_fit.summary);
   std::string out;
-  out += format("Residual loop: %zu effect%s added%s; %d fits, %.2f s.\n", steps.size(),
-                steps.size() == 1 ? "" : "s",
-                steps.empty() ? "" : (" (" + effect_list(steps) + ")").c_str(), fits, total_time_s);
+  out += printf_text("Residual loop: %zu effect%s added%s; %d fits, %.2f s.\n", steps.size(),
+                     steps.size() == 1 ? "" : "s",
+                     steps.empty() ? "" : (" (" + effect_list(steps) + ")").c_str(), fits,
+                     total_time_s);
   out += "Window RMSE of omega, held out: " + number(first.held_out_rmse_rad_s) + " -> " +
          number(last.held_out_rmse_rad_s) + " rad/s; fitted: " + number(first.fitted_rmse_rad_s) +
          " -> " + number(last.fitted_rmse_rad_s) + " rad/s.\n";
   for (const LoopStep& step : steps) {
-    out += format("Step %d: %s (explains %s of the residual, z %.3g, rank %d of %zu):", step.number,
-                  step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z,
-                  step.rank, step.candidates.size());
+    out += printf_text(
+        "Step %d: %s (explains %s of the residual, z %.3g, rank %d of %zu):", step.number,
+        step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z, step.rank,
+        step.candidates.size());
     for (const FittedParameter& parameter : step.parameters) {
       if (!parameter.free) continue;
       out += ' ';
@@ -869,7 +862,7 @@ std::string LoopResult::brief_report() const {
       out += ';';
     }
     out += " held-out RMSE " + signed_percent(-step.held_out_improvement) + ", BIC " +
-           format("%+.4g", step.bic_change) + ".\n";
+           printf_text("%+.4g", step.bic_change) + ".\n";
   }
   out += "Stopped: " + stop_reason + ".\n";
   return out;
@@ -884,9 +877,9 @@ std::string LoopResult::full_report() const {
       "sensitivity, free parameters\nprojected out), refits the best that are significant, and "
       "accepts the one with the lowest\nheld-out RMSE among those that lower it by more than "
       "the threshold and lower BIC.\n";
-  out += format("  cross-validation folds %d, window %.3g s\n", fit.cross_validation_folds,
-                fit.window_s);
-  out += format(
+  out += printf_text("  cross-validation folds %d, window %.3g s\n", fit.cross_validation_folds,
+                     fit.window_s);
+  out += printf_text(
       "  refit at most %d per step if it explains >= %s and z >= %.3g; accept if the "
       "held-out RMSE falls > %s and BIC falls > %.3g\n",
       options.refit_candidates, percent(options.min_explained_fraction).c_str(),
@@ -896,7 +889,7 @@ std::string LoopResult::full_report() const {
          describe_figures(model_figures(start_fit.summary)) + ", BIC " +
          number(model_figures(start_fit.summary).bic) + "\n";
   for (const LoopStep& step : steps) {
-    out += format("\nStep %d: added %s\n", step.number, step.effect_name.c_str());
+    out += printf_text("\nStep %d: added %s\n", step.number, step.effect_name.c_str());
     out += "  parameters (standard uncertainty):\n";
     for (const FittedParameter& parameter : step.parameters) {
       out += "    " + parameter_text(parameter) + "\n";
