@@ -209,11 +209,13 @@ class RelativeStepCheck final : public ceres::IterationCallback {
 // (window states eliminated) moves no determined parameter by more than `tolerance` of its
 // standard uncertainty (of the kind the fit reports): further iterations would change the
 // result by less than the statistics can tell. Also stops when three accepted steps in a
-// row each moved every parameter by less than that: the cost is rough at this scale (the
+// row each moved every parameter by less than that and lowered the cost by less than
+// kRoughCostChange of itself: the cost is rough at this scale (the
 // latch switches below their width, contact with a stop) and Levenberg–Marquardt would only
 // crawl.
 class PredictedStepCheck final : public ceres::IterationCallback {
  public:
+  static constexpr double kRoughCostChange = 1e-3;  // relative, per step
   PredictedStepCheck(const WindowProblem& problem, double tolerance, bool robust)
       : problem_(problem), tolerance_(tolerance), robust_(robust), previous_(problem.x()) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
@@ -233,7 +235,11 @@ class PredictedStepCheck final : public ceres::IterationCallback {
       taken = std::max(taken, std::abs(x[k] - previous_[k]) / sigma(k));
     }
     previous_ = x;
-    if (summary.iteration > 0) small_steps_ = taken <= tolerance_ ? small_steps_ + 1 : 0;
+    // A step that still lowers the cost markedly is progress however small it is against
+    // σ: far from the data (a model lacking an effect) σ is inflated by the residual.
+    const bool small =
+        taken <= tolerance_ && summary.cost_change <= kRoughCostChange * summary.cost;
+    if (summary.iteration > 0) small_steps_ = small ? small_steps_ + 1 : 0;
     if (tracing()) {
       std::fprintf(stderr, "step taken %.3g, predicted %.3g standard uncertainties\n", taken,
                    predicted);

@@ -10,6 +10,7 @@
 #include "analysis/constraint_check.h"
 #include "analysis/fit_problem.h"
 #include "analysis/sensory_model.h"
+#include "analysis/text_format.h"
 
 namespace doorbench {
 
@@ -257,7 +258,7 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
 FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
                           const ParameterMap& map, const std::vector<double>& x,
                           const FitOptions& options, const FitWeights& weights, int folds,
-                          std::vector<std::string>& notes) {
+                          std::vector<std::string>& notes, std::vector<DoorModel>& fold_models) {
   const int stroke_count = static_cast<int>(data.strokes.size());
   std::vector<StrokeFitMetrics> per_stroke(stroke_count);
   std::vector<char> have(stroke_count, 0);
@@ -288,6 +289,7 @@ FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
       continue;
     }
     const DoorModel fold_model = fitted.with_parameter_values(fold_map.values(problem.x().data()));
+    fold_models.push_back(fold_model);
     const FitMetrics metrics =
         compute_fit_metrics(fold_model, data, metric_windows(options, fitted), held);
     for (std::size_t i = 0; i < held.size() && i < metrics.strokes.size(); ++i) {
@@ -309,7 +311,13 @@ FitMetrics evaluate_model(const DoorModel& model, const PreparedData& data,
   return compute_fit_metrics(model, data, metric_windows(options, model));
 }
 
-FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
+namespace {
+
+// A fold must fit every stroke at least this much better (RMSE ratio) to restart from it.
+constexpr double kFoldRestartGain = 0.9;
+
+FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOptions& options,
+                   std::vector<DoorModel>& fold_models) {
   const Clock::time_point began = Clock::now();
   if (const std::string message = options.validate(); !message.empty()) {
     throw std::invalid_argument(message);
@@ -540,7 +548,7 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitO
   if (options.cross_validation_folds > 0 && stroke_count >= 2) {
     summary.folds = std::min(options.cross_validation_folds, stroke_count);
     summary.held_out = cross_validate(result.model, data, map, problem.x(), options, weights,
-                                      summary.folds, summary.notes);
+                                      summary.folds, summary.notes, fold_models);
   } else if (options.cross_validation_folds > 0) {
     summary.notes.push_back("one stroke only: no held-out metrics");
   }
@@ -551,6 +559,60 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitO
   summary.total_time_s = seconds_since(began);
   result.summary = std::move(summary);
   return result;
+}
+
+}  // namespace
+
+FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
+  const Clock::time_point began = Clock::now();
+  std::vector<DoorModel> fold_models;
+  FitResult result = fit_once(start, data, options, fold_models);
+  // Each cross-validation fold is refitted from the full fit on fewer strokes. When one of
+  // them fits *all* the strokes clearly better than the full fit does, the full fit stopped
+  // in a local minimum (an output-error cost is not convex: a window can settle on the
+  // wrong side of a latch barrier). Restart once from the best such fold.
+  const double fitted_rmse = result.summary.fitted.window.rmse();
+  const DoorModel* best = nullptr;
+  double best_rmse = kFoldRestartGain * fitted_rmse;
+  for (const DoorModel& fold_model : fold_models) {
+    const double rmse = evaluate_model(fold_model, data, options).window.rmse();
+    if (rmse < best_rmse) {
+      best_rmse = rmse;
+      best = &fold_model;
+    }
+  }
+  if (best == nullptr) return result;
+  FitOptions restart = options;
+  restart.latch_start_from_data = false;  // start exactly at the fold's values
+  restart.equation_error_start = false;
+  std::vector<DoorModel> unused;
+  FitResult second = fit_once(*best, data, restart, unused);
+  if (!(second.summary.fitted.window.rmse() < fitted_rmse)) {
+    result.summary.notes.push_back(
+        "a cross-validation fold fitted all strokes better; a restart from it did not improve");
+    return result;
+  }
+  // Report the parameters' starts as the user gave them, and how the result was reached.
+  for (std::size_t i = 0;
+       i < second.summary.parameters.size() && i < result.summary.parameters.size(); ++i) {
+    second.summary.parameters[i].start = result.summary.parameters[i].start;
+    second.summary.parameters[i].start_origin = result.summary.parameters[i].start_origin;
+    second.summary.parameters[i].equation_error = result.summary.parameters[i].equation_error;
+  }
+  second.summary.latch_start = result.summary.latch_start;
+  second.summary.iterations += result.summary.iterations;
+  second.summary.initial_cost = result.summary.initial_cost;
+  second.summary.options = options;
+  second.summary.notes.insert(second.summary.notes.begin(),
+                              "the full fit stopped in a local minimum (window RMSE " +
+                                  printf_text("%.4g", fitted_rmse) +
+                                  " rad/s); a cross-validation fold's solution fitted every "
+                                  "stroke better (" +
+                                  printf_text("%.4g", best_rmse) +
+                                  " rad/s), and the fit was "
+                                  "restarted from it");
+  second.summary.total_time_s = seconds_since(began);
+  return second;
 }
 
 WindowOptions metric_window_options(const FitOptions& options, const DoorModel& model) {

@@ -105,8 +105,9 @@ double median(std::vector<double> values) {
                    values.end());
   double result = values[middle];
   if (values.size() % 2 == 0) {
-    result = 0.5 * (result + *std::max_element(values.begin(),
-                                                values.begin() + static_cast<std::ptrdiff_t>(middle)));
+    result =
+        0.5 * (result + *std::max_element(values.begin(),
+                                          values.begin() + static_cast<std::ptrdiff_t>(middle)));
   }
   return result;
 }
@@ -227,7 +228,8 @@ std::vector<Range> find_still_periods(const std::vector<double>& time_s,
     if (run_start < end_exclusive) {
       // Trimmed by the guard at both ends (a motion that starts gently passes the test for
       // a while), then long enough?
-      const std::size_t first = first_at_or_after(time_s, time_s[run_start] + options.still_guard_s);
+      const std::size_t first =
+          first_at_or_after(time_s, time_s[run_start] + options.still_guard_s);
       const std::size_t last =
           last_at_or_before(time_s, time_s[end_exclusive - 1] - options.still_guard_s);
       if (first < last && time_s[last] - time_s[first] >= options.still_min_duration_s) {
@@ -326,9 +328,9 @@ std::vector<Candidate> segment_strokes(const std::vector<double>& time_s,
         std::abs(angle) < options.min_stroke_angle_rad) {
       excluded.push_back({time_s[run.lo], time_s[run.hi],
                           "movement too short for a stroke (" + text(duration_s) + " s, " +
-                              text(angle / kDeg) + " deg; a stroke needs >= " +
-                              text(options.min_stroke_duration_s) + " s and >= " +
-                              text(options.min_stroke_angle_rad / kDeg) + " deg)"});
+                              text(angle / kDeg) +
+                              " deg; a stroke needs >= " + text(options.min_stroke_duration_s) +
+                              " s and >= " + text(options.min_stroke_angle_rad / kDeg) + " deg)"});
     } else {
       kept.push_back(run);
     }
@@ -420,8 +422,8 @@ std::string PreprocessingOptions::validate() const {
       {"fallback_rate_noise_rad_s", fallback_rate_noise_rad_s, true},
   };
   for (const Rule& rule : rules) {
-    const std::string head = std::string("preprocessing ") + rule.name + " = " +
-                             format_number(rule.value) + " must be ";
+    const std::string head =
+        std::string("preprocessing ") + rule.name + " = " + format_number(rule.value) + " must be ";
     if (!std::isfinite(rule.value)) return head + "finite";
     if (rule.strictly_positive && !(rule.value > 0)) return head + "> 0";
     if (!rule.strictly_positive && !(rule.value >= 0)) return head + ">= 0";
@@ -636,16 +638,17 @@ Stillness find_stillness(const Input& in, const std::vector<double>& rate,
                          const PreprocessingOptions& options) {
   Stillness still;
   still.noise_estimate = robust_noise(rate, in.fault);
-  still.rate_std_limit = std::max(
-      options.still_noise_factor * (std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0),
-      options.still_rate_std_floor_rad_s);
+  still.rate_std_limit =
+      std::max(options.still_noise_factor *
+                   (std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0),
+               options.still_rate_std_floor_rad_s);
   still.periods =
       find_still_periods(in.t, rate, in.force, in.fault, still.rate_std_limit, in.rate_hz, options);
   still.rule = "still: over " + text(options.still_window_s) + " s windows the rate's std < " +
                text(still.rate_std_limit / kDeg) + " deg/s, |mean rate| < " +
                text(options.still_rate_limit_rad_s / kDeg) + " deg/s and mean |force| < " +
-               text(options.still_force_N) + " N, for >= " +
-               text(options.still_min_duration_s) + " s";
+               text(options.still_force_N) + " N, for >= " + text(options.still_min_duration_s) +
+               " s";
   return still;
 }
 
@@ -678,11 +681,10 @@ std::vector<Anchor> find_anchors(const Input& in, const Stillness& still,
       if (valid) anchors.push_back(make_anchor(period, region));
     }
     if (anchors.empty()) {
-      throw PreprocessingError(in.source + ": no still period with the inclinometer (" +
-                               in.inclinometer_name + ") inside +-" + text(limit / kDeg) +
-                               " deg to anchor the integrated gyroscope to (" +
-                               std::to_string(still.periods.size()) + " still periods found; " +
-                               still.rule + ")");
+      throw PreprocessingError(
+          in.source + ": no still period with the inclinometer (" + in.inclinometer_name +
+          ") inside +-" + text(limit / kDeg) + " deg to anchor the integrated gyroscope to (" +
+          std::to_string(still.periods.size()) + " still periods found; " + still.rule + ")");
     }
   } else if (in.mode == Mode::kAngleAndRate) {
     for (const Range& period : still.periods) anchors.push_back(make_anchor(period, period));
@@ -807,44 +809,91 @@ void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor
   // Before the first anchor and after the last the angle is only as good as the rate between
   // the stroke and that anchor (with the rate only, that is everywhere).
   const bool anchored = in.mode == Mode::kFused || in.mode == Mode::kRateOnly;
-  const std::size_t first_anchor = anchored ? anchors.front().index : 0;
-  const std::size_t last_anchor = anchored ? anchors.back().index : n - 1;
+  // Whether the angle on [first, last] is known: joined to an anchor by a known rate.
+  auto angle_known = [&](std::size_t first, std::size_t last) {
+    if (!anchored) return true;
+    const Anchor* left = nullptr;
+    const Anchor* right = nullptr;
+    for (const Anchor& anchor : anchors) {
+      if (anchor.index <= first) left = &anchor;
+      if (anchor.index >= last && right == nullptr) right = &anchor;
+    }
+    return (left != nullptr && in.unknown[last] == in.unknown[left->index]) ||
+           (right != nullptr && in.unknown[right->index] == in.unknown[first]);
+  };
   for (const Candidate& candidate : candidates) {
-    const Range& r = candidate.range;
+    Range r = candidate.range;
     for (std::size_t i = r.first; i <= r.last; ++i) covered[i] = true;
     const double net = motion.theta[r.last] - motion.theta[r.first];
-    const double duration_s = t[r.last] - t[r.first];
     const StrokeDirection direction =
         net > 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing;
     const std::string name = "stroke " + std::to_string(candidate.id) + " (" +
                              (direction == StrokeDirection::kOpening ? "opening" : "closing") + ")";
     std::uint8_t kinds = 0;
     std::size_t fault_count = 0, first_fault = n;
+    // A gap before the first sample is outside the stroke.
+    auto fault_at = [&](std::size_t i) {
+      return i == r.first ? static_cast<std::uint8_t>(in.fault[i] & ~kGapBefore) : in.fault[i];
+    };
     for (std::size_t i = r.first; i <= r.last; ++i) {
-      // A gap before the first sample is outside the stroke.
-      const std::uint8_t f = i == r.first ? in.fault[i] & ~kGapBefore : in.fault[i];
+      const std::uint8_t f = fault_at(i);
       if (f == 0) continue;
       kinds |= f;
       ++fault_count;
       first_fault = std::min(first_fault, i);
     }
-    const bool angle_unknown =
-        anchored && ((r.first < first_anchor && in.unknown[first_anchor] > in.unknown[r.first]) ||
-                     (r.last > last_anchor && in.unknown[r.last] > in.unknown[last_anchor]));
+    auto long_enough = [&](const Range& piece) {
+      return t[piece.last] - t[piece.first] >= options.min_stroke_duration_s &&
+             std::abs(motion.theta[piece.last] - motion.theta[piece.first]) >=
+                 options.min_stroke_angle_rad;
+    };
     std::string reason;
     if (kinds != 0) {
-      reason = name + ": " + describe_faults(kinds, in.saturation_limit) + " in " +
-               std::to_string(fault_count) + " samples from " + seconds(t[first_fault]);
-    } else if (angle_unknown) {
-      reason = name + ": angle unknown: the gyroscope's rate is unknown (saturated, non-finite "
-                      "or a gap) between this stroke and the " +
+      // A brisk stroke saturates the gyroscope for part of its course: keep its longest
+      // fault-free part whose angle is known (before the faults, from the anchor before
+      // it; after them, from the anchor after it), and list the rest.
+      const std::string faults = describe_faults(kinds, in.saturation_limit) + " in " +
+                                 std::to_string(fault_count) + " samples from " +
+                                 seconds(t[first_fault]);
+      std::optional<Range> best;
+      std::size_t i = r.first;
+      while (i <= r.last) {
+        if (fault_at(i) != 0 && !(i > r.first && in.fault[i] == kGapBefore)) {
+          ++i;
+          continue;
+        }
+        // A gap before i ends the previous piece but i itself is a good sample.
+        Range piece{i, i};
+        while (piece.last + 1 <= r.last && in.fault[piece.last + 1] == 0) ++piece.last;
+        if (angle_known(piece.first, piece.last) && long_enough(piece) &&
+            (!best || piece.last - piece.first > best->last - best->first)) {
+          best = piece;
+        }
+        i = piece.last + 1;
+      }
+      if (!best) {
+        excluded.push_back({t[r.first], t[r.last], name + ": " + faults});
+        continue;
+      }
+      if (best->first > r.first) {
+        excluded.push_back(
+            {t[r.first], t[best->first - 1], name + ", before the part kept: " + faults});
+      }
+      if (best->last < r.last) {
+        excluded.push_back(
+            {t[best->last + 1], t[r.last], name + ", after the part kept: " + faults});
+      }
+      r = *best;
+    } else if (!angle_known(r.first, r.last)) {
+      reason = name +
+               ": angle unknown: the gyroscope's rate is unknown (saturated, non-finite "
+               "or a gap) between this stroke and the " +
                std::string(in.mode == Mode::kFused ? "nearest inclinometer anchor"
                                                    : "still period where theta = 0");
-    } else if (duration_s < options.min_stroke_duration_s ||
-               std::abs(net) < options.min_stroke_angle_rad) {
-      reason = name + ": too short (" + text(duration_s) + " s, " + text(net / kDeg) +
-               " deg; a stroke needs >= " + text(options.min_stroke_duration_s) + " s and >= " +
-               text(options.min_stroke_angle_rad / kDeg) + " deg)";
+    } else if (!long_enough(r)) {
+      reason = name + ": too short (" + text(t[r.last] - t[r.first]) + " s, " + text(net / kDeg) +
+               " deg; a stroke needs >= " + text(options.min_stroke_duration_s) +
+               " s and >= " + text(options.min_stroke_angle_rad / kDeg) + " deg)";
     }
     if (!reason.empty()) {
       excluded.push_back({t[r.first], t[r.last], reason});
@@ -873,8 +922,8 @@ void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor
     std::uint8_t kinds = f;
     while (last + 1 < n && !covered[last + 1] && in.fault[last + 1] != 0) kinds |= in.fault[++last];
     const std::size_t first = (f & kGapBefore) && i > 0 ? i - 1 : i;  // a gap starts before
-    excluded.push_back({t[first], t[last],
-                        "outside the strokes: " + describe_faults(kinds, in.saturation_limit)});
+    excluded.push_back(
+        {t[first], t[last], "outside the strokes: " + describe_faults(kinds, in.saturation_limit)});
     i = last + 1;
   }
 }
@@ -985,10 +1034,9 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
     candidates = segment_strokes(in.t, motion.theta, motion.omega, edge, options, excluded);
   }
   cut_strokes(in, motion, anchors, candidates, options, data, excluded);
-  std::stable_sort(excluded.begin(), excluded.end(),
-                   [](const ExcludedSegment& a, const ExcludedSegment& b) {
-                     return a.start_s < b.start_s;
-                   });
+  std::stable_sort(
+      excluded.begin(), excluded.end(),
+      [](const ExcludedSegment& a, const ExcludedSegment& b) { return a.start_s < b.start_s; });
   data.excluded = std::move(excluded);
   return data;
 }

@@ -71,7 +71,7 @@ void minimum_jerk(double time, double start, double end, double from, double to,
 
 }  // namespace
 
-VirtualHand::Reference VirtualHand::reference(double time_s) const {
+VirtualHand::Reference VirtualHand::reference(double time_s, double closing_from_rad) const {
   Reference ref{0.0, 0.0, 1.0};
   const double closed = -options_.closing_overshoot_rad;
   if (time_s < closing_start_s_) {
@@ -79,8 +79,8 @@ VirtualHand::Reference VirtualHand::reference(double time_s) const {
                  ref.theta_rad, ref.omega_rad_s);
     return ref;
   }
-  minimum_jerk(time_s, closing_start_s_, closing_end_s_, options_.target_angle_rad, closed,
-               ref.theta_rad, ref.omega_rad_s);
+  minimum_jerk(time_s, closing_start_s_, closing_end_s_, closing_from_rad, closed, ref.theta_rad,
+               ref.omega_rad_s);
   const double release_start = closing_end_s_ + hold_s_;
   if (time_s > release_start) {
     const double s = std::clamp((time_s - release_start) / release_s_, 0.0, 1.0);
@@ -89,8 +89,9 @@ VirtualHand::Reference VirtualHand::reference(double time_s) const {
   return ref;
 }
 
-double VirtualHand::force_N(double time_s, double theta_rad, double omega_rad_s) const {
-  const Reference ref = reference(time_s);
+double VirtualHand::force_N(double time_s, double theta_rad, double omega_rad_s,
+                            double closing_from_rad) const {
+  const Reference ref = reference(time_s, closing_from_rad);
   if (ref.grip <= 0.0) return 0.0;
   // Impedance along the handle's arc: arc length = r_h θ.
   const double arc_error_m = handle_radius_m_ * (ref.theta_rad - theta_rad);

@@ -38,8 +38,15 @@ class VirtualHand final : public UserForce {
     double omega_rad_s;
     double grip;  // 1 while the hand holds the handle, falling to 0 as it lets go
   };
-  Reference reference(double time_s) const;
-  double force_N(double time_s, double theta_rad, double omega_rad_s) const override;
+  Reference reference(double time_s) const { return reference(time_s, options_.target_angle_rad); }
+  double force_N(double time_s, double theta_rad, double omega_rad_s) const override {
+    return force_N(time_s, theta_rad, omega_rad_s, options_.target_angle_rad);
+  }
+  // The same with the closing planned from `closing_from_rad` instead of the target: a
+  // person starts closing from where the door is (it may have run past the target).
+  Reference reference(double time_s, double closing_from_rad) const;
+  double force_N(double time_s, double theta_rad, double omega_rad_s,
+                 double closing_from_rad) const;
   // 1 during the opening, 2 during the closing (through the hold), 0 otherwise.
   int stroke_at(double time_s) const;
   double duration_s() const { return options_.duration_s; }

@@ -1,17 +1,13 @@
 // doorbench loop: fit, look at the residual, add the effect the model lacks, refit, and
 // report the error before and after each step (analysis/residual_loop.h).
-#include <cmath>
-#include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
-#include "analysis/parameter_file.h"
 #include "analysis/residual_loop.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
-#include "app/fit_output.h"
+#include "app/loop_output.h"
 
 namespace doorbench::app {
 namespace {
@@ -23,98 +19,19 @@ struct LoopCommandOptions {
   std::string out_dir;
 };
 
-nlohmann::ordered_json figures_json(const ModelFigures& f) {
-  return {{"fitted_rmse_rad_s", f.fitted_rmse_rad_s},
-          {"fitted_fit_percent", f.fitted_fit_percent},
-          {"held_out_rmse_rad_s", f.held_out_rmse_rad_s},
-          {"held_out_fit_percent", f.held_out_fit_percent},
-          {"bic", f.bic}};
-}
-
-nlohmann::ordered_json loop_json(const LoopResult& result, const PreparedData& data) {
-  nlohmann::ordered_json steps = nlohmann::ordered_json::array();
-  for (const LoopStep& step : result.steps) {
-    nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
-    for (const FittedParameter& p : step.parameters) {
-      parameters.push_back({{"name", p.name},
-                            {"unit", p.unit},
-                            {"value", p.value},
-                            {"standard_uncertainty", std::isfinite(p.uncertainty)
-                                                         ? nlohmann::ordered_json(p.uncertainty)
-                                                         : nlohmann::ordered_json(nullptr)}});
-    }
-    steps.push_back({{"step", step.number},
-                     {"effect", step.effect_name},
-                     {"evidence",
-                      {{"explained_fraction", step.explained_fraction},
-                       {"score_z", step.score_z},
-                       {"rank", step.rank}}},
-                     {"parameters", parameters},
-                     {"before", figures_json(step.before)},
-                     {"after", figures_json(step.after)},
-                     {"held_out_improvement", step.held_out_improvement},
-                     {"bic_change", step.bic_change}});
-  }
-  return {{"source", data.source},
-          {"steps", steps},
-          {"start_fit", fit_result_json(result.start_fit, data)},
-          {"final_fit", fit_result_json(result.final_fit, data)}};
-}
-
-std::string steps_table(const LoopResult& result) {
-  std::string table =
-      "| step | effect | parameters | window RMSE fitted (rad/s) | held out (rad/s) |\n"
-      "|---|---|---|---|---|\n";
-  char row[512];
-  const ModelFigures start = model_figures(result.start_fit.summary);
-  std::snprintf(row, sizeof row, "| 0 | (start model) | | %.4g | %.4g |\n", start.fitted_rmse_rad_s,
-                start.held_out_rmse_rad_s);
-  table += row;
-  for (const LoopStep& step : result.steps) {
-    std::string parameters;
-    for (const FittedParameter& p : step.parameters) {
-      char text[128];
-      std::snprintf(text, sizeof text, "%s%s = %.4g ± %.2g %s", parameters.empty() ? "" : ", ",
-                    p.name.c_str(), p.value, p.uncertainty, p.unit.c_str());
-      parameters += text;
-    }
-    std::snprintf(row, sizeof row, "| %d | %s | %s | %.4g → %.4g | %.4g → %.4g |\n", step.number,
-                  step.effect_name.c_str(), parameters.c_str(), step.before.fitted_rmse_rad_s,
-                  step.after.fitted_rmse_rad_s, step.before.held_out_rmse_rad_s,
-                  step.after.held_out_rmse_rad_s);
-    table += row;
-  }
-  return table;
-}
-
 void run_loop(const LoopCommandOptions& options) {
   std::filesystem::create_directories(options.out_dir);
   const FitInputs inputs = load_fit_inputs(options.input);
-  const PreparedData& data = inputs.data;
-  const DoorModel& start = inputs.start;
   LoopOptions loop_options;
   loop_options.fit.cross_validation_folds = options.folds;
   loop_options.max_steps = options.max_steps;
   loop_options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
-  const LoopResult result = run_residual_loop(start, data, loop_options);
-
-  const std::filesystem::path dir = options.out_dir;
-  std::ofstream(dir / "result.json") << loop_json(result, data).dump(2) << "\n";
-  std::ofstream(dir / "fitted-params.json") << to_parameter_json(result.model());
-  std::ofstream(dir / "fitted-effects.json") << to_effects_json(result.model());
-  const std::vector<std::string> plots =
-      write_fit_plots(dir, result.model(), data, loop_options.fit);
-  const std::string table = steps_table(result);
-  std::ofstream report(dir / "report.md");
-  report << "# Residual loop: the " << options.input.model.model << " model on " << data.source
-         << "\n\n"
-         << table << "\n```\n"
-         << result.full_report() << "```\n\n"
-         << "Plots of the final model:\n\n";
-  for (const std::string& plot : plots) report << "![" << plot << "](" << plot << ")\n\n";
+  const LoopResult result = run_residual_loop(inputs.start, inputs.data, loop_options);
+  const std::string table = write_loop_outputs(options.out_dir, result, inputs.data,
+                                               options.input.model.model, loop_options.fit);
   std::cout << result.brief_report() << "\n"
             << table << "\nresult.json, report.md, the fitted "
-            << "parameter and effects files and plots are in " << dir.string() << "/\n";
+            << "parameter and effects files and plots are in " << options.out_dir << "/\n";
 }
 
 }  // namespace

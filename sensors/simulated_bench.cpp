@@ -39,14 +39,25 @@ VirtualHandOptions hand_options(const RigSimulation& simulation) {
 
 }  // namespace
 
-CyclingHand::CyclingHand(const VirtualHandOptions& one_cycle, double handle_radius_m, int cycles)
-    : hand_(one_cycle, handle_radius_m), cycles_(cycles) {
+CyclingHand::CyclingHand(const VirtualHandOptions& one_cycle, double handle_radius_m, int cycles,
+                         bool push_only)
+    : hand_(one_cycle, handle_radius_m),
+      cycles_(cycles),
+      push_only_(push_only),
+      closing_from_rad_(one_cycle.target_angle_rad) {
   if (cycles < 1) throw std::invalid_argument("the virtual hand needs at least one cycle");
 }
 
 double CyclingHand::force_N(double time_s, double theta_rad, double omega_rad_s) const {
   if (time_s < 0 || time_s >= cycles_ * period_s()) return 0.0;
-  return hand_.force_N(std::fmod(time_s, period_s()), theta_rad, omega_rad_s);
+  const double force =
+      hand_.force_N(std::fmod(time_s, period_s()), theta_rad, omega_rad_s, closing_from_rad_);
+  if (!push_only_) return force;
+  return mounting_at(time_s) * force > 0.0 ? force : 0.0;
+}
+
+void CyclingHand::stroke_started(double time_s, double theta_rad) {
+  if (push_only_ && stroke_at(time_s) == 2) closing_from_rad_ = std::max(theta_rad, 0.0);
 }
 
 int CyclingHand::stroke_at(double time_s) const {
@@ -94,8 +105,14 @@ std::unique_ptr<StrokeForce> simulated_hand(const RigDefinition& rig, const Door
   if (!rig.simulation->force.empty()) {
     return std::make_unique<ScriptedForce>(read_recording_csv(rig.resolve(rig.simulation->force)));
   }
-  return std::make_unique<CyclingHand>(
-      hand_options(*rig.simulation), model.geometry().handle_radius_m, rig.simulation->hand_cycles);
+  const bool compression_only_cell =
+      std::any_of(rig.channels.begin(), rig.channels.end(), [](const RigChannel& channel) {
+        return channel.sensor == "load_cell" &&
+               parameters_of<LoadCellParameters>(channel).compression_only != 0;
+      });
+  return std::make_unique<CyclingHand>(hand_options(*rig.simulation),
+                                       model.geometry().handle_radius_m,
+                                       rig.simulation->hand_cycles, compression_only_cell);
 }
 
 DoorModel simulated_door_model(const RigDefinition& rig) {
@@ -236,6 +253,7 @@ std::size_t SimulatedBench::read(ScanBlock& block) {
       if (previous_stroke_ != 0) block.events.push_back({scan_time_s, "stroke_end", "", ""});
       if (stroke != 0) {
         mounting_sign_ = hand_->mounting_at(scan_time_s);
+        hand_->stroke_started(scan_time_s, state_.theta_rad);
         block.events.push_back(
             {scan_time_s, "stroke_start", "", mounting_sign_ > 0 ? "opening" : "closing"});
       }

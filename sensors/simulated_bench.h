@@ -36,21 +36,40 @@ class StrokeForce : public UserForce {
   // During a stroke: +1 if it is an opening (the cell is pressed by +F_u), −1 a closing.
   virtual int mounting_at(double time_s) const = 0;
   virtual double natural_duration_s() const = 0;  // how long it has something to do
+  // The bench calls this when a stroke starts, with the door's angle then (a person sees
+  // where the door is before pushing it).
+  virtual void stroke_started(double /*time_s*/, double /*theta_rad*/) {}
 };
 
 // The virtual hand's open-close repeated `cycles` times, then no force.
+//
+// push_only: the hand acts on the door through a compression-only load cell (the bench's
+// mounting), so it can push the cell but never pull it: during an opening its force is
+// max(F, 0), during a closing min(F, 0). Where the tracking controller would brake the
+// door (a door that falls open, the end of a fast stroke) it lets go instead, as a person
+// pushing a handle through the cell must. Without this, the cell would read 0 while the
+// door felt a pull, and the recorded force would not be the force that moved the door.
+// A push-only hand plans each closing from where the door is when the closing starts
+// (the door may have run past the target).
 class CyclingHand final : public StrokeForce {
  public:
-  CyclingHand(const VirtualHandOptions& one_cycle, double handle_radius_m, int cycles);
+  CyclingHand(const VirtualHandOptions& one_cycle, double handle_radius_m, int cycles,
+              bool push_only = false);
   double force_N(double time_s, double theta_rad, double omega_rad_s) const override;
   int stroke_at(double time_s) const override;  // 1 opening, 2 closing, 0 between
   int mounting_at(double time_s) const override { return stroke_at(time_s) == 2 ? -1 : 1; }
-  double natural_duration_s() const override { return cycles_ * period_s(); }
+  // The cycles and then kFinalRestS at rest, so that the recording ends on a still
+  // period (preprocessing anchors the last closing's angle to it).
+  double natural_duration_s() const override { return cycles_ * period_s() + kFinalRestS; }
+  static constexpr double kFinalRestS = 1.0;
   double period_s() const { return hand_.duration_s(); }
+  void stroke_started(double time_s, double theta_rad) override;
 
  private:
   VirtualHand hand_;
   int cycles_;
+  bool push_only_;
+  double closing_from_rad_;
 };
 
 // A scripted force: a recording's force_N (linearly interpolated) and its strokes; each
@@ -71,7 +90,8 @@ class ScriptedForce final : public StrokeForce {
   std::vector<int> mounting_;  // per sample, from its stroke's mean force
 };
 
-// The force a rig's [simulation] table names: its scripted force file, or the virtual hand.
+// The force a rig's [simulation] table names: its scripted force file, or the virtual hand
+// (push-only when the rig's load cell is compression-only).
 std::unique_ptr<StrokeForce> simulated_hand(const RigDefinition& rig, const DoorModel& model);
 
 // The door model a rig's [simulation] table names (the built-in reference door, or a

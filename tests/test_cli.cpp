@@ -868,6 +868,13 @@ TEST_CASE("CLI: demo summarizes both models and writes their runs", "[cli]") {
   CHECK_THAT(result.out, Contains("sensory model ("));
   CHECK_THAT(result.out, Contains("physical model ("));
   CHECK(result.out.find("sensory model (") < result.out.find("physical model ("));
+  // The loop closed on a recording with an undeclared gravity imbalance: the table of
+  // steps names it, with the error before and after, and the report is on disk.
+  CHECK_THAT(result.out, Contains("closing the loop"));
+  CHECK_THAT(result.out, Contains("| step | effect | parameters |"));
+  CHECK_THAT(result.out, Contains("| 1 | gravity_imbalance | gravity_imbalance.g1 = "));
+  CHECK(fs::exists(dir / "loop" / "report.md"));
+  CHECK(fs::exists(dir / "loop" / "result.json"));
 
   const std::vector<double> unlatch = numbers_after(result.out, "peak force to unlatch");
   REQUIRE(unlatch.size() == 2);

@@ -46,10 +46,12 @@ std::filesystem::path fresh_path(const std::string& name) {
 }
 
 // Three openings and closings of the reference door on the built-in simulated bench (18 s
-// of the virtual hand, then rest), recorded through the real session writer.
-std::filesystem::path record(const std::string& name, double duration_s, std::uint64_t seed) {
+// of the virtual hand, then rest), recorded through the real session writer. The sensory
+// door stays inside every sensor's range (tests/simulated_session.h).
+std::filesystem::path record(const std::string& name, double duration_s, std::uint64_t seed,
+                             const std::string& model_kind = "sensory") {
   const auto path = fresh_path(name);
-  doorbench::testing::record_built_in_session(path, duration_s, seed);
+  doorbench::testing::record_built_in_session(path, duration_s, seed, model_kind);
   return path;
 }
 
@@ -212,16 +214,18 @@ TEST_CASE("Preprocessing: the fused angle, the rate and the bias match the bench
     CHECK(stroke.size() == stroke.theta_rad.size());
     CHECK(stroke.size() == stroke.omega_rad_s.size());
   }
-  // The door goes to 80°; over whole strokes the fused angle is within a few thousandths
-  // of a degree of the truth (measured: 0.002° RMS, 0.005° at most), the rate within the
-  // gyroscope's 0.05 °/s noise.
+  // The door goes to 80°; over whole strokes the fused angle is within a few hundredths
+  // of a degree of the truth (measured: 0.035° RMS, 0.081° at most), the rate within the
+  // gyroscope's 0.05 °/s noise. The worst is the first cycle: the hand holds the door at 80°
+  // (not a still period: it pushes), so the gyroscope's bias wanders for 5 s between two
+  // anchors at the closed door, and only its mean change is removed.
   const Errors e = errors_against_truth(s, data.strokes);
   INFO("fused theta: RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg
                            << " deg; omega RMS " << e.omega_rms / kDeg << " deg/s over " << e.n
                            << " samples");
   CHECK(e.n > 13000);
-  CHECK(e.theta_rms < 0.02 * kDeg);
-  CHECK(e.theta_max < 0.05 * kDeg);
+  CHECK(e.theta_rms < 0.05 * kDeg);
+  CHECK(e.theta_max < 0.12 * kDeg);
   CHECK(e.omega_rms < 0.06 * kDeg);
 
   // The bias removed is the gyroscope's 0.2 °/s as it wandered during this session: the
@@ -275,13 +279,13 @@ TEST_CASE("Preprocessing: strokes found without the stroke column", "[preprocess
     CHECK(std::abs(stroke.omega_rad_s.front()) < 0.3 * kDeg);
   }
   // The door springs back by 0.3° when the hand lets go after each closing: listed, too
-  // short for a stroke.
+  // short for a stroke (measured: about 0.3 s, with the margins).
   REQUIRE(data.excluded.size() == 3);
   for (const ExcludedSegment& segment : data.excluded) {
     CHECK(contains(segment.reason, "too short"));
-    CHECK(segment.end_s - segment.start_s < 0.2);
+    CHECK(segment.end_s - segment.start_s < 0.4);
   }
-  CHECK(errors_against_truth(s, data.strokes).theta_rms < 0.02 * kDeg);
+  CHECK(errors_against_truth(s, data.strokes).theta_rms < 0.05 * kDeg);
 }
 
 TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed",
@@ -295,21 +299,28 @@ TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed"
     const std::size_t first = index_at(recording, 7.8);
     for (std::size_t i = first; i < first + 40; ++i) (*recording.rate_rad_s)[i] = 100.0 * kDeg;
     const PreparedData data = prepare(recording);
+    // The part before the saturation is kept (its angle is known from the anchor before
+    // it); the rest is listed.
     REQUIRE(data.excluded.size() == 1);
     const ExcludedSegment& segment = data.excluded.front();
     INFO(segment.reason);
-    CHECK(contains(segment.reason, "stroke 3 (opening)"));
+    CHECK(contains(segment.reason, "stroke 3 (opening), after the part kept"));
     CHECK(contains(segment.reason, "gyroscope saturated"));
     CHECK(contains(segment.reason, "40 samples from 7.800 s"));
-    CHECK(segment.start_s == Approx(6.601).margin(0.001));
+    CHECK(segment.start_s == Approx(7.800).margin(0.001));
     CHECK(segment.end_s == Approx(8.700).margin(0.001));
-    REQUIRE(data.strokes.size() == 5);
-    for (const Stroke& stroke : data.strokes) CHECK(stroke.id != 3);
-    // The angle the bad samples added stays with them: the closing in the same interval
-    // between anchors (stroke 4) is as accurate as the others (measured: 0.0016° RMS).
+    REQUIRE(data.strokes.size() == 6);
+    const Stroke& third = data.strokes[2];
+    CHECK(third.id == 3);
+    CHECK(third.time_s.front() == Approx(6.601).margin(0.001));
+    CHECK(third.time_s.back() == Approx(7.799).margin(0.001));
+    // The angle the bad samples added stays with them, but between the two anchors around
+    // them the gyroscope's drift is no longer removed (the anchors' difference is put on the
+    // lost samples): measured 0.11° RMS, 0.34° at most, on stroke 4.
     const Errors e = errors_against_truth(s, data.strokes);
     INFO("theta RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg);
-    CHECK(e.theta_max < 0.05 * kDeg);
+    CHECK(e.theta_rms < 0.2 * kDeg);
+    CHECK(e.theta_max < 0.5 * kDeg);
   }
   SECTION("a negative saturation between strokes") {
     const std::size_t at = index_at(recording, 6.2);
@@ -320,23 +331,34 @@ TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed"
     CHECK(data.excluded.front().start_s == Approx(6.2).margin(1e-9));
     CHECK(data.excluded.front().end_s == Approx(6.204).margin(1e-9));
     REQUIRE(data.strokes.size() == 6);
-    CHECK(errors_against_truth(s, data.strokes).theta_max < 0.05 * kDeg);
+    // As above: no drift removed between the anchors around the lost samples (measured
+    // 0.49° at most).
+    CHECK(errors_against_truth(s, data.strokes).theta_max < 0.7 * kDeg);
   }
   SECTION("a non-finite force") {
     (*recording.rate_rad_s).at(index_at(recording, 13.0)) = 0.0;  // a plain value
     recording.force_N.at(index_at(recording, 16.0)) = std::nan("");
     const PreparedData data = prepare(recording);
+    // The longer part, after the bad sample, is kept.
     REQUIRE(data.excluded.size() == 1);
-    CHECK(contains(data.excluded.front().reason, "stroke 6 (closing): non-finite force_N"));
-    CHECK(data.strokes.size() == 5);
+    INFO(data.excluded.front().reason);
+    CHECK(contains(data.excluded.front().reason,
+                   "stroke 6 (closing), before the part kept: non-finite force_N"));
+    REQUIRE(data.strokes.size() == 6);
+    CHECK(data.strokes[5].time_s.front() == Approx(16.001).margin(1e-6));
   }
   SECTION("a gap in the samples") {
     erase_rows(recording, index_at(recording, 4.0), 100);  // 0.1 s missing in stroke 2
     const PreparedData data = prepare(recording);
     REQUIRE(data.excluded.size() == 1);
-    CHECK(contains(data.excluded.front().reason, "stroke 2 (closing): gap in time_s"));
-    REQUIRE(data.strokes.size() == 5);
-    CHECK(errors_against_truth(s, data.strokes).theta_max < 0.05 * kDeg);
+    INFO(data.excluded.front().reason);
+    CHECK(contains(data.excluded.front().reason,
+                   "stroke 2 (closing), before the part kept: gap in time_s"));
+    REQUIRE(data.strokes.size() == 6);
+    CHECK(data.strokes[1].time_s.front() >= 4.0);
+    const Errors e = errors_against_truth(s, data.strokes);
+    INFO("theta RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg);
+    CHECK(e.theta_max < 0.7 * kDeg);
   }
 }
 
@@ -349,11 +371,11 @@ TEST_CASE("Preprocessing: rate only integrates from theta = 0 at the first still
   CHECK(has_note(data, "angle noise: the fallback figure"));
   CHECK(data.angle_noise_rad == Approx(0.01 * kDeg));
   // Without an absolute angle the bias's wandering between still periods adds up: measured
-  // 0.023° RMS, 0.036° at most over 18 s.
+  // 0.14° RMS, 0.28° at most over 18 s (the hand holds the door open between strokes).
   const Errors e = errors_against_truth(s, data.strokes);
   INFO("rate only: theta RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg);
-  CHECK(e.theta_rms < 0.1 * kDeg);
-  CHECK(e.omega_rms < 0.06 * kDeg);
+  CHECK(e.theta_rms < 0.2 * kDeg);
+  CHECK(e.omega_rms < 0.08 * kDeg);
 }
 
 TEST_CASE("Preprocessing: a CSV of an exact simulator run (full-range angle_rad)",

@@ -76,8 +76,11 @@ TEST_CASE("Simulated bench: signals through the nominal calibration match the tr
   SECTION("gyroscope: the bias plus white noise") {
     const std::vector<double> rate = session.physical("rate", session.read("rate"));
     std::vector<double> error;
-    for (std::size_t i = 0; i < rate.size(); ++i)
-      error.push_back((rate[i] - truth_omega[i]) / kDeg);
+    // The door falls open by its weight faster than the gyroscope's ±100 °/s: leave out
+    // the clipped samples.
+    for (std::size_t i = 0; i < rate.size(); ++i) {
+      if (std::abs(truth_omega[i]) < 95 * kDeg) error.push_back((rate[i] - truth_omega[i]) / kDeg);
+    }
     const Stats s = stats(error);
     INFO("rate error: mean " << s.mean << " deg/s, std " << s.stddev << " deg/s");
     CHECK(std::abs(s.mean - 0.2) < 0.05);  // the reference gyro's 0.2 °/s bias
