@@ -63,6 +63,9 @@ struct RigDefinition {
   std::string source;              // the path (or name) it was read from
   std::string text;                // the whole file, stored in every session
   std::filesystem::path base_dir;  // relative paths inside resolve against this
+  // Where channels' calibration ids are looked up (not a key of the file): empty means
+  // $DOORBENCH_CALIBRATIONS, else base_dir/calibrations (docs/calibration.md).
+  std::filesystem::path calibration_store;
 
   std::string name;
   std::string description;

@@ -45,6 +45,37 @@ std::string column_name(const ChannelInfo& channel) {
   return column;
 }
 
+// A channel whose calibration record states a delay (a low-pass sensor lags) is shifted
+// back on read: the value at t is the one recorded at t + delay, linearly interpolated
+// (held at the ends). The samples in the file are not changed.
+std::vector<double> correct_delay(const SessionReader& session, const ChannelInfo& channel,
+                                  const std::vector<double>& time_s, std::vector<double> values) {
+  if (channel.calibration_id.empty() || values.size() < 2) return values;
+  double delay_s = 0.0;
+  for (const calibration::CalibrationRecord& record : session.calibrations()) {
+    if (record.id == channel.calibration_id) delay_s = record.delay_s;
+  }
+  if (delay_s == 0.0) return values;
+  std::vector<double> shifted(values.size());
+  std::size_t j = 0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const double t = time_s[i] + delay_s;
+    if (t <= time_s.front()) {
+      shifted[i] = values.front();
+      continue;
+    }
+    if (t >= time_s.back()) {
+      shifted[i] = values.back();
+      continue;
+    }
+    while (j + 1 < time_s.size() && time_s[j + 1] <= t) ++j;
+    while (j > 0 && time_s[j] > t) --j;
+    const double w = (t - time_s[j]) / (time_s[j + 1] - time_s[j]);
+    shifted[i] = values[j] + w * (values[j + 1] - values[j]);
+  }
+  return shifted;
+}
+
 bool is_signed_by_mounting(const ChannelInfo& channel) {
   return channel.sensor_kind == "load_cell";
 }
@@ -89,7 +120,8 @@ Recording session_to_recording(const SessionReader& session) {
       throw SessionError(where + ": channel " + channel.name + " is not on the clock of " +
                          force->name + " (export needs one clock)");
     }
-    return session.physical(channel.name, slice);
+    std::vector<double> values = session.physical(channel.name, slice);
+    return correct_delay(session, channel, slice.time_s, std::move(values));
   };
 
   // Strokes from events; the load cell's mounting from each stroke's detail.

@@ -10,6 +10,9 @@
 // share one uniform clock; the time column is the first exported channel's (converter skews of a
 // few µs are not resampled). Strokes come from stroke_start/stroke_end events.
 //
+// A channel whose calibration record states a delay (delay_s, a lagging inclinometer) is
+// shifted back by it on export, so that every column describes the same instant.
+//
 // Import makes a session of a recording: one float64 channel per column, in the column's
 // unit, with no calibration (the values already are physical); times become a sample
 // clock only when that clock gives every time back exactly, else they are stored as

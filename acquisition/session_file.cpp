@@ -391,6 +391,26 @@ std::string number(double value) {
   return std::string(text, result.ptr);
 }
 
+// /calibrations/<id>: the record's JSON (authoritative) and its fields as attributes.
+void write_record_group(hid_t calibrations, const CalibrationRecord& record,
+                        const std::string& json) {
+  const Handle group = make_group(calibrations, record.id);
+  const hid_t g = group.get();
+  write_text_attribute(g, "record", json);
+  write_int_attribute(g, "version", record.version);
+  write_text_attribute(g, "sensor_kind", record.sensor_kind);
+  write_text_attribute(g, "sensor_serial", record.sensor_serial);
+  write_text_attribute(g, "input_unit", record.input_unit);
+  write_text_attribute(g, "unit", record.unit);
+  write_doubles_attribute(g, "coefficients", record.coefficients);
+  write_double_attribute(g, "standard_uncertainty", record.standard_uncertainty);
+  write_text_attribute(g, "method", record.method);
+  write_text_attribute(g, "date_utc", record.date_utc);
+  write_text_attribute(g, "operator", record.operator_name);
+  write_text_attribute(g, "valid_until_utc", record.valid_until_utc);
+  write_text_attribute(g, "notes", record.notes);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------
@@ -608,21 +628,7 @@ struct SessionWriter::Impl {
     for (const Channel& channel : channels) {
       if (channel.info.calibration_id == record.id) check_units(channel.info, record);
     }
-    const Handle group = make_group(calibrations_group.get(), record.id);
-    const hid_t g = group.get();
-    write_text_attribute(g, "record", json);
-    write_int_attribute(g, "version", record.version);
-    write_text_attribute(g, "sensor_kind", record.sensor_kind);
-    write_text_attribute(g, "sensor_serial", record.sensor_serial);
-    write_text_attribute(g, "input_unit", record.input_unit);
-    write_text_attribute(g, "unit", record.unit);
-    write_doubles_attribute(g, "coefficients", record.coefficients);
-    write_double_attribute(g, "standard_uncertainty", record.standard_uncertainty);
-    write_text_attribute(g, "method", record.method);
-    write_text_attribute(g, "date_utc", record.date_utc);
-    write_text_attribute(g, "operator", record.operator_name);
-    write_text_attribute(g, "valid_until_utc", record.valid_until_utc);
-    write_text_attribute(g, "notes", record.notes);
+    write_record_group(calibrations_group.get(), record, json);
     calibrations.emplace_back(record.id, std::move(json));
   }
 
@@ -1375,6 +1381,74 @@ std::string SessionReader::read_group_attribute(const std::string& group,
     }
     return read_text_attribute(g.get(), name, group);
   });
+}
+
+// ---------------------------------------------------------------------------------------
+// Applying a record to an existing session
+
+std::string apply_calibration(const fs::path& path, const std::string& channel,
+                              const CalibrationRecord& record, const std::string& note) {
+  const std::string prefix = path.string() + ": ";
+  std::string previous;
+  {
+    // The reader checks the whole file and the channel first.
+    const SessionReader reader(path);
+    const ChannelInfo& info = reader.channel(channel);
+    previous = info.calibration_id;
+    if (std::string problem = record.validate(); !problem.empty()) {
+      throw SessionError(prefix + problem);
+    }
+    if (!valid_link_name(record.id)) {
+      throw SessionError(prefix + "calibration record id " + in_quotes(record.id) +
+                         " cannot name an HDF5 group (no /)");
+    }
+    if (!info.unit.empty() && !record.unit.empty() && info.unit != record.unit) {
+      throw SessionError(prefix + "channel " + channel + " has unit " + in_quotes(info.unit) +
+                         " but calibration record " + record.id + " gives " +
+                         in_quotes(record.unit));
+    }
+    for (const CalibrationRecord& known : reader.calibrations()) {
+      if (known.id == record.id && calibration::to_json(known) != calibration::to_json(record)) {
+        throw SessionError(prefix + "the session already holds a different calibration record " +
+                           record.id + " (records are never changed: make a new version)");
+      }
+    }
+  }
+  const Hdf5Quiet quiet;
+  try {
+    const Handle file = checked(H5Fopen(path.c_str(), H5F_ACC_RDWR, H5P_DEFAULT), H5Fclose,
+                                "cannot open for writing");
+    const Handle calibrations = open_group(file.get(), "calibrations");
+    if (!has_link(calibrations.get(), record.id)) {
+      write_record_group(calibrations.get(), record, calibration::to_json(record));
+    }
+    const Handle group = open_group(file.get(), "/channels/" + channel);
+    check(H5Adelete(group.get(), "calibration_id"), "cannot change /channels/" + channel);
+    write_text_attribute(group.get(), "calibration_id", record.id);
+
+    // One more event, at the end of the four parallel datasets.
+    const Handle events = open_group(file.get(), "events");
+    const Handle time = open_dataset(events.get(), "time_s");
+    const Handle kind = open_dataset(events.get(), "kind");
+    const Handle event_channel = open_dataset(events.get(), "channel");
+    const Handle detail = open_dataset(events.get(), "detail");
+    const hsize_t at = dataset_length(time.get(), "/events/time_s");
+    const double zero = 0.0;
+    const std::string detail_text = "applied " + record.id + " (was " +
+                                    (previous.empty() ? "none" : previous) + ")" +
+                                    (note.empty() ? "" : "; " + note);
+    const char* kind_text = "calibration";
+    const char* channel_text = channel.c_str();
+    const char* detail_pointer = detail_text.c_str();
+    const Handle text = text_type();
+    write_range(time.get(), H5T_NATIVE_DOUBLE, at, 1, &zero, "/events/time_s");
+    write_range(kind.get(), text.get(), at, 1, &kind_text, "/events/kind");
+    write_range(event_channel.get(), text.get(), at, 1, &channel_text, "/events/channel");
+    write_range(detail.get(), text.get(), at, 1, &detail_pointer, "/events/detail");
+  } catch (const Failure& failure) {
+    throw SessionError(prefix + failure.what());
+  }
+  return previous;
 }
 
 }  // namespace doorbench

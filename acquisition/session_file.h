@@ -45,18 +45,18 @@ struct SessionMetadata {
 enum class RawType { kCounts, kValues };  // int32 DAQ counts, or float64 values
 
 struct ChannelInfo {
-  std::string name;           // unique, [A-Za-z0-9_]+
-  std::string sensor_kind;    // load_cell | inclinometer | gyroscope | imported | ...
+  std::string name;         // unique, [A-Za-z0-9_]+
+  std::string sensor_kind;  // load_cell | inclinometer | gyroscope | imported | ...
   std::string sensor_serial;
   RawType raw_type = RawType::kCounts;
   std::string raw_unit = "counts";  // "counts", "V", or a physical unit for imports
   // signal (V, or raw_unit for values) = raw_offset + raw_scale · raw
   double raw_offset = 0.0;
   double raw_scale = 1.0;
-  double range_min = -10.0;   // the signal's valid range (V for DAQ channels)
+  double range_min = -10.0;  // the signal's valid range (V for DAQ channels)
   double range_max = 10.0;
-  std::string unit;           // physical unit after calibration
-  std::string calibration_id; // empty: the signal already is the physical value
+  std::string unit;            // physical unit after calibration
+  std::string calibration_id;  // empty: the signal already is the physical value
   // Sample times: uniform, time of sample i = first_sample_time_s + i / sample_rate_hz
   // (first_sample_time_s includes the converter's skew); or, when sample_rate_hz is 0,
   // explicit times appended with the samples.
@@ -177,5 +177,15 @@ class SessionReader {
   struct Impl;
   std::unique_ptr<Impl> impl_;
 };
+
+// Makes `channel` of an existing session use `record` from now on: the record is added to
+// /calibrations (in full; an id already there must hold the same record), the channel's
+// calibration_id is changed, and an event of kind "calibration" for the channel says what
+// was applied and what it replaced. Raw samples and every earlier record stay as they
+// were, so the change can be undone by applying the earlier record again. The record must
+// give the channel's unit. Returns the id the channel used before. Throws SessionError.
+std::string apply_calibration(const std::filesystem::path& path, const std::string& channel,
+                              const calibration::CalibrationRecord& record,
+                              const std::string& note = "");
 
 }  // namespace doorbench

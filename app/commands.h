@@ -24,6 +24,8 @@ void add_demo_command(CLI::App& app, Action& action);
 void add_session_commands(CLI::App& app, Action& action);
 void add_fit_command(CLI::App& app, Action& action);
 void add_loop_command(CLI::App& app, Action& action);
+void add_calibrate_command(CLI::App& app, Action& action);
+void add_calibration_command(CLI::App& app, Action& action);
 
 // The options every verb that builds a model shares.
 struct ModelOptions {

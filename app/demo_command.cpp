@@ -1,6 +1,7 @@
 // doorbench demo: the main job on the simulated bench. The reference door opened and
 // closed by the virtual hand with both models, a summary each, the runs on disk; a
-// session recorded on the simulated bench; and the residual loop closed on a recording
+// session recorded on the simulated bench; its sensors calibrated (app/calibration_demo.h);
+// and the residual loop closed on a recording
 // whose door has an effect the sensory model does not declare.
 #include <cmath>
 #include <cstdio>
@@ -17,6 +18,7 @@
 #include "analysis/run_summary.h"
 #include "analysis/svg_plot.h"
 #include "analysis/trajectory_io.h"
+#include "app/calibration_demo.h"
 #include "app/commands.h"
 #include "app/hand_run.h"
 #include "app/loop_output.h"
@@ -202,6 +204,8 @@ void run_demo(const DemoOptions& options) {
   }
   write_plots(dir, runs);
   record_demo_session(dir);
+  std::cout << "\n";
+  run_calibration_demo(std::cout);
   close_the_loop(dir);
   std::cout << "\nruns, parameter files and plots (angle.svg, hand-force.svg, "
                "force-angle-latch.svg) are in "

@@ -48,6 +48,8 @@ int main(int argc, char** argv) {
   doorbench::app::add_fit_command(app, action);
   doorbench::app::add_loop_command(app, action);
   doorbench::app::add_demo_command(app, action);
+  doorbench::app::add_calibrate_command(app, action);
+  doorbench::app::add_calibration_command(app, action);
 
   try {
     app.parse(argc, argv);

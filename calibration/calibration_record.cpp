@@ -6,6 +6,13 @@
 
 namespace doorbench::calibration {
 
+const CalibrationQuantity* CalibrationRecord::quantity(std::string_view name) const {
+  for (const CalibrationQuantity& q : quantities) {
+    if (q.name == name) return &q;
+  }
+  return nullptr;
+}
+
 double CalibrationRecord::apply(double input) const {
   double value = 0.0;  // Horner, from the highest power down
   for (auto it = coefficients.rbegin(); it != coefficients.rend(); ++it)
@@ -24,6 +31,18 @@ std::string CalibrationRecord::validate() const {
   }
   if (!(standard_uncertainty >= 0)) {
     return "calibration record " + id + ": standard_uncertainty must be >= 0";
+  }
+  if (!std::isfinite(delay_s)) return "calibration record " + id + ": delay_s is not finite";
+  if (!(delay_standard_uncertainty_s >= 0)) {
+    return "calibration record " + id + ": delay_standard_uncertainty_s must be >= 0";
+  }
+  if (std::isnan(valid_min) || std::isnan(valid_max) || !(valid_min < valid_max)) {
+    return "calibration record " + id + ": valid_min must be below valid_max";
+  }
+  for (const CalibrationPoint& p : points) {
+    if (!std::isfinite(p.reference) || !std::isfinite(p.signal)) {
+      return "calibration record " + id + ": a point's reference or signal is not finite";
+    }
   }
   return "";
 }
@@ -44,6 +63,39 @@ std::string to_json(const CalibrationRecord& r) {
       {"valid_until_utc", r.valid_until_utc},
       {"notes", r.notes},
   };
+  // The fields added with the procedures only when set, so that records made before them
+  // (and nominal ones) keep their short form.
+  if (!r.supersedes.empty()) json["supersedes"] = r.supersedes;
+  if (!r.references.empty()) json["references"] = r.references;
+  if (!r.points.empty()) {
+    nlohmann::ordered_json points = nlohmann::ordered_json::array();
+    for (const CalibrationPoint& p : r.points) {
+      points.push_back({{"reference", p.reference},
+                        {"signal", p.signal},
+                        {"signal_std", p.signal_std},
+                        {"samples", p.samples},
+                        {"residual", p.residual},
+                        {"branch", p.branch}});
+    }
+    json["points"] = std::move(points);
+  }
+  if (!r.quantities.empty()) {
+    nlohmann::ordered_json quantities = nlohmann::ordered_json::array();
+    for (const CalibrationQuantity& q : r.quantities) {
+      quantities.push_back({{"name", q.name},
+                            {"value", q.value},
+                            {"standard_uncertainty", q.standard_uncertainty},
+                            {"unit", q.unit}});
+    }
+    json["quantities"] = std::move(quantities);
+  }
+  if (r.delay_s != 0.0 || r.delay_standard_uncertainty_s != 0.0) {
+    json["delay_s"] = r.delay_s;
+    json["delay_standard_uncertainty_s"] = r.delay_standard_uncertainty_s;
+  }
+  // JSON has no infinity: an unstated end of the range is left out.
+  if (std::isfinite(r.valid_min)) json["valid_min"] = r.valid_min;
+  if (std::isfinite(r.valid_max)) json["valid_max"] = r.valid_max;
   return json.dump(2);
 }
 
@@ -93,6 +145,60 @@ CalibrationRecord calibration_record_from_json(std::string_view json_text,
       throw std::runtime_error(where + ": standard_uncertainty must be a number");
     }
     r.standard_uncertainty = json["standard_uncertainty"].get<double>();
+  }
+  text("supersedes", r.supersedes, false);
+  text("references", r.references, false);
+  auto number = [&](const nlohmann::json& object, const char* key, double& into,
+                    const std::string& path) {
+    if (!object.contains(key)) return;
+    if (!object[key].is_number())
+      throw std::runtime_error(where + ": " + path + key + " must be a number");
+    into = object[key].get<double>();
+  };
+  number(json, "delay_s", r.delay_s, "");
+  number(json, "delay_standard_uncertainty_s", r.delay_standard_uncertainty_s, "");
+  number(json, "valid_min", r.valid_min, "");
+  number(json, "valid_max", r.valid_max, "");
+  auto array_of_objects = [&](const char* key) {
+    if (!json.contains(key)) return nlohmann::json::array();
+    if (!json[key].is_array()) throw std::runtime_error(where + ": " + key + " must be an array");
+    for (const auto& element : json[key]) {
+      if (!element.is_object()) {
+        throw std::runtime_error(where + ": " + key + " must be an array of objects");
+      }
+    }
+    return json[key];
+  };
+  auto element_text = [&](const nlohmann::json& object, const char* key, std::string& into,
+                          const std::string& path) {
+    if (!object.contains(key)) return;
+    if (!object[key].is_string())
+      throw std::runtime_error(where + ": " + path + key + " must be text");
+    into = object[key].get<std::string>();
+  };
+  const nlohmann::json points = array_of_objects("points");
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const std::string path = "points[" + std::to_string(i) + "].";
+    CalibrationPoint p;
+    double samples = 0.0;
+    number(points[i], "reference", p.reference, path);
+    number(points[i], "signal", p.signal, path);
+    number(points[i], "signal_std", p.signal_std, path);
+    number(points[i], "samples", samples, path);
+    number(points[i], "residual", p.residual, path);
+    element_text(points[i], "branch", p.branch, path);
+    p.samples = static_cast<int>(samples);
+    r.points.push_back(std::move(p));
+  }
+  const nlohmann::json quantities = array_of_objects("quantities");
+  for (std::size_t i = 0; i < quantities.size(); ++i) {
+    const std::string path = "quantities[" + std::to_string(i) + "].";
+    CalibrationQuantity q;
+    element_text(quantities[i], "name", q.name, path);
+    number(quantities[i], "value", q.value, path);
+    number(quantities[i], "standard_uncertainty", q.standard_uncertainty, path);
+    element_text(quantities[i], "unit", q.unit, path);
+    r.quantities.push_back(std::move(q));
   }
   if (std::string problem = r.validate(); !problem.empty()) {
     throw std::runtime_error(where + ": " + problem);

@@ -4,18 +4,44 @@
 // every record they use, in full; raw samples never change, physical values are computed
 // on read from raw and the record.
 //
-// This library holds only the record (no dependency on sessions) so that acquisition can
-// store records; calibration procedures, which read sessions, come in their own library.
+// A record is versioned: a newer calibration of the same sensor is a new record with a
+// new id and a higher version (`supersedes` names the one it replaces); records are never
+// edited once stored. Besides the polynomial it keeps the procedure's evidence: the
+// reference points with their residuals, named results with their uncertainties, the
+// channel's delay (corrected on read) and the range in which it holds.
+//
+// This library holds only the record and the store (no dependency on sessions) so that
+// acquisition can store records; the procedures, which read sessions, are in
+// doorbench_calibration.
+#include <limits>
 #include <string>
 #include <string_view>
 #include <vector>
 
 namespace doorbench::calibration {
 
+// One reference point of a multi-point calibration.
+struct CalibrationPoint {
+  double reference = 0.0;   // the reference value, in the record's `unit`
+  double signal = 0.0;      // the mean reading, in `input_unit`
+  double signal_std = 0.0;  // the readings' standard deviation over the window
+  int samples = 0;          // readings averaged
+  double residual = 0.0;    // calibrated(signal) − reference, in `unit`
+  std::string branch;       // "loading" | "unloading" | "" (no direction)
+};
+
+// A named result of the procedure (gain, offset, bias, drift, delay, non-linearity …).
+struct CalibrationQuantity {
+  std::string name;  // with its unit in the name where it has one: "gain_N_per_V"
+  double value = 0.0;
+  double standard_uncertainty = 0.0;  // 0 when not estimated
+  std::string unit;
+};
+
 struct CalibrationRecord {
-  std::string id;           // unique, e.g. "loadcell-LC445-0193-2026-11-21"
+  std::string id;           // unique, e.g. "load_cell-LC445-0193-v2"
   int version = 1;          // a newer calibration of the same sensor gets a new id
-  std::string sensor_kind;  // load_cell | inclinometer | gyroscope | ...
+  std::string sensor_kind;  // load_cell | inclinometer | gyroscope | geometry | ...
   std::string sensor_serial;
   std::string input_unit = "V";  // what the polynomial takes
   std::string unit;              // what it gives: N, rad, rad/s
@@ -28,7 +54,22 @@ struct CalibrationRecord {
   std::string valid_until_utc;  // empty: no expiry
   std::string notes;
 
+  // --- added with the calibration procedures (all optional in JSON) ---
+  std::string supersedes{};  // id of the record this one replaces ("" for a first one)
+  std::string references{};  // what the references were: masses and their class, tilt table …
+  std::vector<CalibrationPoint> points{};
+  std::vector<CalibrationQuantity> quantities{};
+  // The channel's samples describe the physical quantity delay_s earlier than their time
+  // stamps (a low-pass sensor lags); readers shift them back by this much.
+  double delay_s = 0.0;
+  double delay_standard_uncertainty_s = 0.0;
+  // The physical range (in `unit`) in which the calibration holds; ±inf: not stated.
+  double valid_min = -std::numeric_limits<double>::infinity();
+  double valid_max = std::numeric_limits<double>::infinity();
+
   double apply(double input) const;
+  // The quantity of that name, or nullptr.
+  const CalibrationQuantity* quantity(std::string_view name) const;
 
   // Empty when usable, else a one-line message naming the field.
   std::string validate() const;

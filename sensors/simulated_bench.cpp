@@ -9,6 +9,7 @@
 
 #include "analysis/constraint_check.h"
 #include "analysis/parameter_file.h"
+#include "calibration/calibration_store.h"
 
 namespace doorbench::sensors {
 
@@ -147,7 +148,7 @@ calibration::CalibrationRecord nominal_calibration(const RigChannel& channel) {
   } else if (channel.sensor == "gyroscope") {
     const auto p = parameters_of<GyroscopeParameters>(channel);
     record.coefficients = {0.0, kRadPerDeg / p.output_V_per_dps};
-    record.standard_uncertainty = p.bias_dps * kRadPerDeg;
+    record.standard_uncertainty = std::abs(p.bias_dps) * kRadPerDeg;
   } else {
     throw std::invalid_argument("channel " + channel.name + ": no sensor model for " +
                                 channel.sensor);
@@ -199,12 +200,20 @@ SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
     } else {
       throw std::invalid_argument("channel " + rc.name + ": no sensor model for " + rc.sensor);
     }
-    if (rc.calibration != "nominal") {
-      throw std::invalid_argument(
-          rig.source + ": channel " + rc.name + " names calibration " + rc.calibration +
-          "; the calibration store arrives with the calibration issue, use \"nominal\"");
+    // "nominal": the sensor model's datasheet figures; otherwise a record of the store.
+    calibration::CalibrationRecord record;
+    if (rc.calibration == "nominal") {
+      record = nominal_calibration(rc);
+    } else {
+      try {
+        record = calibration::resolve_channel_record(
+            calibration::CalibrationStore(
+                calibration::calibration_store_directory(rig.calibration_store, rig.base_dir)),
+            rc.calibration, rc.name, rc.sensor, rc.serial, rc.unit);
+      } catch (const std::runtime_error& error) {
+        throw std::invalid_argument(rig.source + ": " + error.what());
+      }
     }
-    const calibration::CalibrationRecord record = nominal_calibration(rc);
     calibrations_.push_back(record);
     ChannelInfo info;
     info.name = rc.name;

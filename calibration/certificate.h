@@ -1,0 +1,16 @@
+#pragma once
+// The calibration certificate: one self-contained HTML page per record (print it to PDF
+// from a browser): who, what, when and how; the coefficients; the results with their
+// uncertainties; the reference points with their residuals and a residual plot (SVG);
+// and the uncertainty statement.
+#include <filesystem>
+#include <string>
+
+#include "calibration/calibration_record.h"
+
+namespace doorbench::calibration {
+
+std::string certificate_html(const CalibrationRecord& record);
+void write_certificate(const std::filesystem::path& path, const CalibrationRecord& record);
+
+}  // namespace doorbench::calibration
