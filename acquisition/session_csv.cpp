@@ -4,6 +4,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "acquisition/interpolation.h"
+
 namespace doorbench {
 namespace {
 
@@ -57,21 +59,8 @@ std::vector<double> correct_delay(const SessionReader& session, const ChannelInf
   }
   if (delay_s == 0.0) return values;
   std::vector<double> shifted(values.size());
-  std::size_t j = 0;
   for (std::size_t i = 0; i < values.size(); ++i) {
-    const double t = time_s[i] + delay_s;
-    if (t <= time_s.front()) {
-      shifted[i] = values.front();
-      continue;
-    }
-    if (t >= time_s.back()) {
-      shifted[i] = values.back();
-      continue;
-    }
-    while (j + 1 < time_s.size() && time_s[j + 1] <= t) ++j;
-    while (j > 0 && time_s[j] > t) --j;
-    const double w = (t - time_s[j]) / (time_s[j + 1] - time_s[j]);
-    shifted[i] = values[j] + w * (values[j + 1] - values[j]);
+    shifted[i] = interpolate_held(time_s, values, time_s[i] + delay_s);
   }
   return shifted;
 }

@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <optional>
 
+#include "acquisition/interpolation.h"
 #include "acquisition/session_csv.h"
 #include "acquisition/session_file.h"
 #include "analysis/constraint_check.h"
@@ -86,17 +87,6 @@ bool fill_non_finite(std::vector<double>& values, const std::vector<double>& tim
     i = next;
   }
   return true;
-}
-
-// Piecewise-linear through (x_k, y_k) (x increasing), constant beyond the ends; 0 when empty.
-double interpolate(const std::vector<double>& x, const std::vector<double>& y, double at) {
-  if (x.empty()) return 0.0;
-  if (at <= x.front()) return y.front();
-  if (at >= x.back()) return y.back();
-  const auto upper = std::upper_bound(x.begin(), x.end(), at);
-  const std::size_t k = static_cast<std::size_t>(upper - x.begin());
-  const double s = (at - x[k - 1]) / (x[k] - x[k - 1]);
-  return y[k - 1] + s * (y[k] - y[k - 1]);
 }
 
 double median(std::vector<double> values) {
@@ -744,7 +734,7 @@ Motion integrate_and_anchor(const Input& in, std::vector<Anchor>& anchors) {
   motion.omega.resize(n);
   std::vector<double> bias(n), integrated(n, 0.0);
   for (std::size_t i = 0; i < n; ++i) {
-    bias[i] = interpolate(bias_t, bias_v, t[i]);
+    bias[i] = interpolate_held(bias_t, bias_v, t[i]);
     motion.omega[i] = in.rate[i] - bias[i];
     if (i > 0) {
       integrated[i] =

@@ -23,6 +23,7 @@
 #include "app/hand_run.h"
 #include "app/loop_output.h"
 #include "app/session_recording.h"
+#include "sensors/sensor_models.h"
 
 namespace doorbench::app {
 namespace {
@@ -32,7 +33,6 @@ struct DemoOptions {
 };
 
 constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-constexpr double kGyroRangeDegPerS = 100.0;  // the reference bench's gyroscope
 
 // The samples of one stroke (1 opening, 2 closing) below an angle, as degrees and newtons.
 struct Curve {
@@ -83,6 +83,18 @@ void write_plots(const std::filesystem::path& dir, const std::vector<ModelRun>& 
       {"Force-angle near closed: unlatching and latching", "angle (deg)", "hand force (N)"}, loops);
 }
 
+// The rig's gyroscope range (°/s): its channel's range_dps, or the sensor model's default.
+double gyro_range_dps(const RigDefinition& rig) {
+  double range_dps = sensors::GyroscopeParameters{}.range_dps;
+  for (const RigChannel& channel : rig.channels) {
+    if (channel.sensor != "gyroscope") continue;
+    for (const auto& [name, value] : channel.parameters) {
+      if (name == "range_dps") range_dps = value;
+    }
+  }
+  return range_dps;
+}
+
 // Records the built-in simulated bench into DIR/session.h5, exports it as CSV and compares
 // what the sensors measured with the simulator's truth.
 void record_demo_session(const std::filesystem::path& dir) {
@@ -107,6 +119,7 @@ void record_demo_session(const std::filesystem::path& dir) {
   // alternate from an opening: odd ids open (+F_u presses), even ids close (−F_u).
   double force_sq = 0.0, rate_sum = 0.0, rate_sq = 0.0;
   std::size_t force_n = 0, saturated = 0;
+  const double gyro_limit_dps = gyro_range_dps(rig);
   const std::size_t n = std::min(exported.size(), truth_force.size());
   for (std::size_t i = 0; i < n; ++i) {
     const int stroke = exported.stroke ? (*exported.stroke)[i] : 0;
@@ -115,8 +128,8 @@ void record_demo_session(const std::filesystem::path& dir) {
       force_sq += std::pow(exported.force_N[i] - truth_force[i], 2);
       ++force_n;
     }
-    // The door falls open faster than the gyroscope's ±100 °/s: those samples are clipped.
-    if (std::abs(truth_rate[i]) * kDegPerRad >= kGyroRangeDegPerS) {
+    // The door falls open faster than the gyroscope's range: those samples are clipped.
+    if (std::abs(truth_rate[i]) * kDegPerRad >= gyro_limit_dps) {
       ++saturated;
       continue;
     }

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "acquisition/interpolation.h"
 #include "calibration/least_squares.h"
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
@@ -227,7 +228,7 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
     const bool same_clock = inclinometer.time_s.size() == gyro.time_s.size();
     for (std::size_t i = 0; i < rate_dps.size(); ++i) {
       inclinometer_deg[i] =
-          same_clock ? masked[i] : interpolate(inclinometer.time_s, masked, gyro.time_s[i]);
+          same_clock ? masked[i] : interpolate_held(inclinometer.time_s, masked, gyro.time_s[i]);
     }
   }
 

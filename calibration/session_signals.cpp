@@ -62,14 +62,4 @@ std::optional<RigDefinition> session_rig(const SessionReader& session) {
   }
 }
 
-double interpolate(const std::vector<double>& t, const std::vector<double>& v, double time) {
-  if (t.empty()) return 0.0;
-  if (time <= t.front()) return v.front();
-  if (time >= t.back()) return v.back();
-  const auto after = std::upper_bound(t.begin(), t.end(), time);
-  const std::size_t i = static_cast<std::size_t>(after - t.begin());
-  const double w = (time - t[i - 1]) / (t[i] - t[i - 1]);
-  return v[i - 1] + w * (v[i] - v[i - 1]);
-}
-
 }  // namespace doorbench::calibration

@@ -31,7 +31,5 @@ std::string find_session_channel(const SessionReader& session, const std::string
 // parses.
 std::optional<RigDefinition> session_rig(const SessionReader& session);
 
-// Linear interpolation of (t, v) at `time` (held at the ends).
-double interpolate(const std::vector<double>& t, const std::vector<double>& v, double time);
 
 }  // namespace doorbench::calibration

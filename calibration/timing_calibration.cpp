@@ -4,6 +4,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "acquisition/interpolation.h"
 #include "calibration/least_squares.h"
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
@@ -229,7 +230,7 @@ Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_t
     std::vector<double> w;
     for (std::size_t j = s.begin; j < s.end; ++j) {
       const double t = inclinometer_time_s[j] - result.delay_s;
-      w.push_back(interpolate(gyro_time_s, gyro_rad_s, t));
+      w.push_back(interpolate_held(gyro_time_s, gyro_rad_s, t));
       mean += w.back();
     }
     mean /= static_cast<double>(w.size());
