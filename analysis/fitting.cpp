@@ -178,6 +178,27 @@ void apply_latch_read_off(const DoorModel& start, const LatchReadOff& read,
     replaced.push_back(index);
   }
   if (replaced.empty()) return;
+  // When only one side of the latch was read (no stroke unlatched from closed, say), the
+  // angles not read keep their proportion to those read: a start latch scaled to the data
+  // instead of one that crosses it (θ1 above the θ2 read off, and the reading discarded).
+  const bool opening_read = read.theta1_rad.has_value();
+  std::vector<int> scaled;
+  const bool closing_read = read.theta2_rad.has_value();
+  const auto scale_free = [&](std::initializer_list<int> indices, double factor) {
+    for (int index : indices) {
+      if (std::find(free_index.begin(), free_index.end(), index) == free_index.end()) continue;
+      trial[index] = std::clamp(values[index] * factor, bounds[index].lower, bounds[index].upper);
+      scaled.push_back(index);
+    }
+  };
+  if (closing_read && !opening_read && !(trial[sensory::kTheta1] < trial[sensory::kTheta2])) {
+    scale_free({sensory::kTheta0, sensory::kTheta1},
+               trial[sensory::kTheta2] / values[sensory::kTheta2]);
+  } else if (opening_read && !closing_read &&
+             !(trial[sensory::kTheta1] < trial[sensory::kTheta2])) {
+    scale_free({sensory::kTheta2, sensory::kTheta3},
+               trial[sensory::kTheta1] / values[sensory::kTheta1]);
+  }
   try {
     (void)start.with_parameter_values(trial);
   } catch (const std::invalid_argument& error) {
@@ -186,6 +207,7 @@ void apply_latch_read_off(const DoorModel& start, const LatchReadOff& read,
   }
   values = trial;
   for (int index : replaced) origin[index] = "read off the data";
+  for (int index : scaled) origin[index] = "start scaled to the latch read off";
 }
 
 // Free values of a model, scaled.

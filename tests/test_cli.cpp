@@ -94,7 +94,9 @@ class ScratchDir {
 };
 
 // Runs DOORBENCH_EXECUTABLE with `args` in folder `cwd` (stdin from /dev/null, stdout and
-// stderr to files in `scratch`), waits at most 60 s, and returns its status and output.
+// stderr to files in `scratch`), waits at most 15 min, and returns its status and output.
+// The limit only stops a hung run: these machines are shared, and the demo alone takes
+// 35 s on an idle one.
 RunResult run_doorbench(const std::vector<std::string>& args, const ScratchDir& scratch,
                         std::optional<fs::path> cwd = std::nullopt) {
   static int run_count = 0;
@@ -127,7 +129,7 @@ RunResult run_doorbench(const std::vector<std::string>& args, const ScratchDir& 
   }
 
   int status = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::minutes(15);
   for (;;) {
     const pid_t done = ::waitpid(pid, &status, WNOHANG);
     if (done == pid) break;
@@ -135,7 +137,7 @@ RunResult run_doorbench(const std::vector<std::string>& args, const ScratchDir& 
     if (std::chrono::steady_clock::now() > deadline) {
       ::kill(pid, SIGKILL);
       ::waitpid(pid, &status, 0);
-      FAIL("doorbench did not finish within 60 s");
+      FAIL("doorbench did not finish within 15 min");
     }
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
   }
