@@ -5,34 +5,20 @@
 // the metrics (whole strokes replayed).
 #include <benchmark/benchmark.h>
 
-#include "analysis/fit_synthetic.h"
 #include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/sensory_model.h"
+#include "bench/fit_benchmark_data.h"
 
 namespace {
 
 using namespace doorbench;
 
 const PreparedData& twelve_strokes() {
-  static const PreparedData data = [] {
-    SyntheticStrokeOptions options;
-    // The virtual hand's opening and closing each take 0.35 of the run: 2.6 to 3.3 s.
-    options.runs = {{0.5, 7.5}, {0.7, 8.0}, {0.9, 8.5}, {1.1, 9.0}, {1.25, 8.5}, {1.4, 9.5}};
-    options.seed = 7;
-    return synthetic_strokes(reference_model(ModelKind::kSensory), options);
-  }();
+  static const PreparedData data = bench::fit_benchmark_strokes();
   return data;
 }
 
 DoorModel thirty_percent_off() {
-  const DoorModel truth = reference_model(ModelKind::kSensory);
-  std::vector<double> values(truth.parameter_values().begin(), truth.parameter_values().end());
-  for (int i = 0; i <= sensory::kTheta4; ++i) values[i] *= i % 2 == 1 ? 1.3 : 0.7;
-  for (int i = sensory::kTheta0; i <= sensory::kTheta3; ++i) {
-    values[i] = truth.parameter_values()[i] * 1.3;
-  }
-  return truth.with_parameter_values(values);
+  return bench::fit_benchmark_start();
 }
 
 void fit_sensory_12_strokes(benchmark::State& state) {
