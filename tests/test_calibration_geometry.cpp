@@ -183,6 +183,23 @@ TEST_CASE("CLI: geometry applied to a session, shown by info and used by fit",
   CHECK_THAT(out, Catch::Contains("fit and loop use its handle radius (not the door file's)"));
   std::tie(code, out, err) = run("calibration show s.h5");
   CHECK_THAT(out, Catch::Contains("uses nominal-SIM-LC445-0001, geometry " + id));
+  // fit builds its start model with the record's radius, not the door file's 0.55 m.
+  {
+    std::ifstream door(std::string(DOORBENCH_SOURCE_DIR) + "/analysis/data/reference-door.json");
+    std::stringstream text;
+    text << door.rdbuf();
+    std::string json = text.str();
+    const std::string key = "\"handle_radius_m\": 0.58";
+    REQUIRE(json.find(key) != std::string::npos);
+    json.replace(json.find(key), key.size(), "\"handle_radius_m\": 0.55");
+    std::ofstream(dir / "door055.json") << json;
+  }
+  std::tie(code, out, err) = run("fit s.h5 --model sensory --params door055.json --out fit");
+  INFO(err);
+  REQUIRE(code == 0);
+  CHECK_THAT(err, Catch::Contains("the door file's handle radius 0.55 m is replaced"));
+  CHECK_THAT(read_file(dir / "fit" / "report.md"),
+             Catch::Contains("handle radius 0.58 m, from geometry record " + id));
 
   // The physical door falls open faster than the gyroscope's ±100 °/s: saturated.
   testing::record_built_in_session(dir / "physical.h5", 6.0, 6, "physical");
