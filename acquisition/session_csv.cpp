@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <stdexcept>
 
 #include "acquisition/interpolation.h"
@@ -63,6 +64,29 @@ std::vector<double> correct_delay(const SessionReader& session, const ChannelInf
     shifted[i] = interpolate_held(time_s, values, time_s[i] + delay_s);
   }
   return shifted;
+}
+
+// The force channel's geometry record (handle radius, the cell's mounting angle), if the
+// session applies one: the cell, turned by α from the handle's tangent, reads F · cos α, and
+// the record's polynomial ({0, 1/cos α}) gives back the tangential force F.
+std::optional<calibration::CalibrationRecord> geometry_record(const SessionReader& session,
+                                                              const ChannelInfo& channel) {
+  if (channel.geometry_calibration_id.empty()) return std::nullopt;
+  for (calibration::CalibrationRecord& record : session.calibrations()) {
+    if (record.id == channel.geometry_calibration_id) {
+      if (record.sensor_kind != "geometry" || record.input_unit != channel.unit ||
+          record.unit != channel.unit) {
+        throw SessionError(session.path().string() + ": channel " + channel.name +
+                           "'s geometry record " + record.id + " is a " + record.sensor_kind +
+                           " record from " + record.input_unit + " to " + record.unit +
+                           ", not a geometry record in " + channel.unit);
+      }
+      return std::move(record);
+    }
+  }
+  throw SessionError(session.path().string() + ": channel " + channel.name +
+                     " uses geometry record " + channel.geometry_calibration_id +
+                     ", which is not in the session's /calibrations");
 }
 
 bool is_signed_by_mounting(const ChannelInfo& channel) {
@@ -156,6 +180,10 @@ Recording session_to_recording(const SessionReader& session) {
   }
 
   recording.force_N = column(*force);
+  const std::optional<calibration::CalibrationRecord> geometry = geometry_record(session, *force);
+  if (geometry) {
+    for (double& value : recording.force_N) value = geometry->apply(value);
+  }
   if (is_signed_by_mounting(*force)) {
     for (std::size_t i = 0; i < count; ++i) recording.force_N[i] *= sign[i];
   }
@@ -174,6 +202,14 @@ Recording session_to_recording(const SessionReader& session) {
       break;
     } catch (const std::exception&) {
       // not in this group
+    }
+  }
+  // The geometry record's radius is the bench's as calibrated: it comes before the truth's
+  // or the import's.
+  if (geometry) {
+    recording.metadata.emplace_back(std::string(kGeometryCalibrationKey), geometry->id);
+    if (const calibration::CalibrationQuantity* radius = geometry->quantity("handle_radius_m")) {
+      recording.handle_radius_m = radius->value;
     }
   }
   return recording;

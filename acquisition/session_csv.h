@@ -13,6 +13,11 @@
 // A channel whose calibration record states a delay (delay_s, a lagging inclinometer) is
 // shifted back by it on export, so that every column describes the same instant.
 //
+// A load cell whose channel names a geometry record (geometry_calibration_id) has its force
+// corrected by it (the record maps the reading to the tangential force: / cos of the
+// mounting angle), and the record's handle_radius_m becomes the recording's handle radius
+// (before the truth's or the import's); the metadata key geometry_calibration names it.
+//
 // Import makes a session of a recording: one float64 channel per column, in the column's
 // unit, with no calibration (the values already are physical); times become a sample
 // clock only when that clock gives every time back exactly, else they are stored as
@@ -21,11 +26,15 @@
 // "inclinometer" becomes an inclinometer channel (narrow range, not the door angle).
 #include <filesystem>
 #include <string>
+#include <string_view>
 
 #include "acquisition/recording_csv.h"
 #include "acquisition/session_file.h"
 
 namespace doorbench {
+
+// The metadata key that names the geometry record applied to the force (export adds it).
+inline constexpr std::string_view kGeometryCalibrationKey = "geometry_calibration";
 
 Recording session_to_recording(const SessionReader& session);
 

@@ -602,6 +602,10 @@ struct SessionWriter::Impl {
     write_double_attribute(g, "range_max", info.range_max);
     write_text_attribute(g, "unit", info.unit);
     write_text_attribute(g, "calibration_id", info.calibration_id);
+    // Written only when set, so that sessions without a geometry record keep their layout.
+    if (!info.geometry_calibration_id.empty()) {
+      write_text_attribute(g, "geometry_calibration_id", info.geometry_calibration_id);
+    }
     write_double_attribute(g, "sample_rate_hz", info.sample_rate_hz);
     write_double_attribute(g, "first_sample_time_s", info.first_sample_time_s);
     const hsize_t chunk = options.chunk_samples;
@@ -1089,6 +1093,9 @@ struct SessionReader::Impl {
       info.range_max = read_double_attribute(id, "range_max", where);
       info.unit = read_text_attribute(id, "unit", where);
       info.calibration_id = read_text_attribute(id, "calibration_id", where);
+      if (has_attribute(id, "geometry_calibration_id")) {
+        info.geometry_calibration_id = read_text_attribute(id, "geometry_calibration_id", where);
+      }
       info.sample_rate_hz = read_double_attribute(id, "sample_rate_hz", where);
       info.first_sample_time_s = read_double_attribute(id, "first_sample_time_s", where);
       if (!(info.sample_rate_hz >= 0) || !std::isfinite(info.sample_rate_hz)) {
@@ -1389,12 +1396,20 @@ std::string SessionReader::read_group_attribute(const std::string& group,
 std::string apply_calibration(const fs::path& path, const std::string& channel,
                               const CalibrationRecord& record, const std::string& note) {
   const std::string prefix = path.string() + ": ";
+  // A geometry record corrects the load cell's calibrated force; it does not replace the
+  // cell's own record, so it has an attribute of its own.
+  const bool geometry = record.sensor_kind == "geometry";
+  const char* attribute = geometry ? "geometry_calibration_id" : "calibration_id";
   std::string previous;
   {
     // The reader checks the whole file and the channel first.
     const SessionReader reader(path);
     const ChannelInfo& info = reader.channel(channel);
-    previous = info.calibration_id;
+    if (geometry && info.sensor_kind != "load_cell") {
+      throw SessionError(prefix + "channel " + channel + " is a " + info.sensor_kind +
+                         "; geometry record " + record.id + " applies to a load cell");
+    }
+    previous = geometry ? info.geometry_calibration_id : info.calibration_id;
     if (std::string problem = record.validate(); !problem.empty()) {
       throw SessionError(prefix + problem);
     }
@@ -1423,8 +1438,10 @@ std::string apply_calibration(const fs::path& path, const std::string& channel,
       write_record_group(calibrations.get(), record, calibration::to_json(record));
     }
     const Handle group = open_group(file.get(), "/channels/" + channel);
-    check(H5Adelete(group.get(), "calibration_id"), "cannot change /channels/" + channel);
-    write_text_attribute(group.get(), "calibration_id", record.id);
+    if (has_attribute(group.get(), attribute)) {
+      check(H5Adelete(group.get(), attribute), "cannot change /channels/" + channel);
+    }
+    write_text_attribute(group.get(), attribute, record.id);
 
     // One more event, at the end of the four parallel datasets.
     const Handle events = open_group(file.get(), "events");

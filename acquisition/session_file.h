@@ -62,6 +62,9 @@ struct ChannelInfo {
   // explicit times appended with the samples.
   double sample_rate_hz = 1000.0;
   double first_sample_time_s = 0.0;
+  // Load cells: the geometry record (sensor_kind "geometry": handle radius and the cell's
+  // mounting angle) that readers of the session for analysis apply on top; empty: none.
+  std::string geometry_calibration_id{};
 };
 
 struct SessionEvent {
@@ -180,10 +183,12 @@ class SessionReader {
 
 // Makes `channel` of an existing session use `record` from now on: the record is added to
 // /calibrations (in full; an id already there must hold the same record), the channel's
-// calibration_id is changed, and an event of kind "calibration" for the channel says what
-// was applied and what it replaced. Raw samples and every earlier record stay as they
-// were, so the change can be undone by applying the earlier record again. The record must
-// give the channel's unit. Returns the id the channel used before. Throws SessionError.
+// calibration_id is changed (for a record of sensor_kind "geometry": its
+// geometry_calibration_id, and the channel must be a load cell), and an event of kind
+// "calibration" for the channel says what was applied and what it replaced. Raw samples
+// and every earlier record stay as they were, so the change can be undone by applying the
+// earlier record again. The record must give the channel's unit. Returns the id the
+// channel used before. Throws SessionError.
 std::string apply_calibration(const std::filesystem::path& path, const std::string& channel,
                               const calibration::CalibrationRecord& record,
                               const std::string& note = "");

@@ -928,6 +928,9 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
   PreparedData data;
   data.source = recording.source;
   data.handle_radius_m = recording.handle_radius_m.value_or(0.0);
+  for (const auto& [key, value] : recording.metadata) {
+    if (key == kGeometryCalibrationKey) data.geometry_calibration_id = value;
+  }
   data.sample_rate_hz = recording.sample_rate_hz.value_or(in.rate_hz);
   switch (in.mode) {
     case Mode::kFused:

@@ -29,6 +29,9 @@ struct ExcludedSegment {
 struct PreparedData {
   std::string source;            // the session or CSV it came from
   double handle_radius_m = 0.0;  // from the data's metadata, when known (else 0)
+  // The geometry record whose handle radius this is (and which corrected the force for the
+  // load cell's mounting angle); empty when there is none.
+  std::string geometry_calibration_id;
   double sample_rate_hz = 0.0;
   std::vector<Stroke> strokes;
   std::vector<ExcludedSegment> excluded;

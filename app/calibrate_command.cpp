@@ -182,11 +182,53 @@ void run_load_cell(const CalibrateOptions& o) {
   finish(o, store, result.record, channel.name);
 }
 
+// From a recording of the reference angles held in order (docs/calibration.md).
+void run_inclinometer_from(const CalibrateOptions& o) {
+  const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
+  std::string channel;
+  cal::InclinometerCalibration result;
+  {
+    const SessionReader session(o.from_session);  // closed before the record is applied
+    channel = cal::find_session_channel(session, "inclinometer", o.channel);
+    const ChannelInfo& info = session.channel(channel);
+    const cal::InclinometerRecordingPoints holds =
+        cal::inclinometer_points_from_recording(session, channel, o.angles_deg);
+    std::cerr << holds.brief_report();
+    // The range and the nominal output: the session's rig, else --inclinometer-range-deg and
+    // the channel's current record.
+    cal::InclinometerCalibrationOptions options;
+    options.references = "reference angles held in a recording (" + o.from_session + ")";
+    const std::optional<RigDefinition> rig = cal::session_rig(session);
+    const RigChannel* rc = rig ? rig->find_channel(channel) : nullptr;
+    if (o.inclinometer_range_deg > 0) {
+      options.range_deg = o.inclinometer_range_deg;
+    } else if (rc) {
+      options.range_deg = cal::inclinometer_parameters(*rc).range_deg;
+    } else {
+      throw UsageError(o.from_session + ": the session has no rig with inclinometer " + channel +
+                       "; give its range with --inclinometer-range-deg");
+    }
+    if (rc) {
+      options.output_V_per_deg = cal::inclinometer_parameters(*rc).output_V_per_deg;
+    } else {
+      for (const cal::CalibrationRecord& r : session.calibrations()) {
+        if (r.id == info.calibration_id && r.coefficients.size() >= 2 && r.coefficients[1] != 0) {
+          options.output_V_per_deg = std::abs(1.0 / (r.coefficients[1] * 180.0 / std::numbers::pi));
+        }
+      }
+    }
+    result = cal::calibrate_inclinometer(
+        holds.points(), options,
+        header_for(o, store, "inclinometer", info.sensor_serial, info.calibration_id));
+  }
+  std::cerr << result.brief_report();
+  finish(o, store, result.record, channel);
+}
+
 void run_inclinometer(const CalibrateOptions& o) {
   if (!o.from_session.empty()) {
-    throw UsageError(
-        "calibrate inclinometer works on the live bench (reference angles); "
-        "for its delay use `calibrate timing --from SESSION`");
+    run_inclinometer_from(o);
+    return;
   }
   RigDefinition rig = load_rig(o.rig_path);
   const RigChannel& channel = cal::find_rig_channel(rig, "inclinometer", o.channel);
@@ -229,42 +271,48 @@ std::string recording_for(CalibrateOptions& o) {
   return o.out_session;
 }
 
-void run_gyro(CalibrateOptions o) {
+// Gyroscope and timing share their frame: the recording (--from, or one recorded now), the
+// session's channel of `sensor_kind`, a header that supersedes the channel's current record,
+// and the record stored and applied. `calibrate` runs the procedure on the open session,
+// which is closed again before the record is applied to it.
+template <typename Result, typename Procedure>
+void run_from_recording(CalibrateOptions o, const std::string& sensor_kind,
+                        const Procedure& calibrate) {
   const std::string path = recording_for(o);
   const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
   std::string channel;
-  cal::GyroCalibration result;
+  Result result;
   {
-    const SessionReader session(path);  // closed before the record is applied to it
-    channel = cal::find_session_channel(session, "gyroscope", o.channel);
+    const SessionReader session(path);
+    channel = cal::find_session_channel(session, sensor_kind, o.channel);
     const ChannelInfo& info = session.channel(channel);
-    cal::GyroCalibrationOptions options;
-    options.inclinometer_range_deg = o.inclinometer_range_deg;
-    result = cal::calibrate_gyroscope(
-        session, channel, o.inclinometer_channel, options,
-        header_for(o, store, "gyroscope", info.sensor_serial, info.calibration_id));
+    result = calibrate(session, channel,
+                       header_for(o, store, sensor_kind, info.sensor_serial, info.calibration_id));
   }
   std::cerr << result.brief_report();
   finish(o, store, result.record, channel);
 }
 
-void run_timing(CalibrateOptions o) {
-  const std::string path = recording_for(o);
-  const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
-  std::string channel;
-  cal::TimingCalibration result;
-  {
-    const SessionReader session(path);  // closed before the record is applied to it
-    channel = cal::find_session_channel(session, "inclinometer", o.channel);
-    const ChannelInfo& info = session.channel(channel);
-    cal::TimingCalibrationOptions options;
-    options.gyro.inclinometer_range_deg = o.inclinometer_range_deg;
-    result = cal::calibrate_timing(
-        session, channel, "", options,
-        header_for(o, store, "inclinometer", info.sensor_serial, info.calibration_id));
-  }
-  std::cerr << result.brief_report();
-  finish(o, store, result.record, channel);
+void run_gyro(const CalibrateOptions& o) {
+  run_from_recording<cal::GyroCalibration>(
+      o, "gyroscope",
+      [&o](const SessionReader& session, const std::string& channel,
+           const cal::RecordHeader& header) {
+        cal::GyroCalibrationOptions options;
+        options.inclinometer_range_deg = o.inclinometer_range_deg;
+        return cal::calibrate_gyroscope(session, channel, o.inclinometer_channel, options, header);
+      });
+}
+
+void run_timing(const CalibrateOptions& o) {
+  run_from_recording<cal::TimingCalibration>(
+      o, "inclinometer",
+      [&o](const SessionReader& session, const std::string& channel,
+           const cal::RecordHeader& header) {
+        cal::TimingCalibrationOptions options;
+        options.gyro.inclinometer_range_deg = o.inclinometer_range_deg;
+        return cal::calibrate_timing(session, channel, "", options, header);
+      });
 }
 
 void run_geometry(const CalibrateOptions& o) {
@@ -335,12 +383,16 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   loadcell->callback([o, &action] { action = [o] { run_load_cell(*o); }; });
 
   CLI::App* inclinometer = calibrate->add_subcommand(
-      "inclinometer", "Inclinometer: offset and gain against reference angles across its range");
+      "inclinometer",
+      "Inclinometer: offset and gain against reference angles across its range (guided, or "
+      "--from a recording of the angles held in the order of --angles-deg)");
   add_common(inclinometer, *o, true, true);
   inclinometer->add_option("--angles-deg", o->angles_deg, "Reference angles, comma-separated")
       ->delimiter(',');
   inclinometer->add_option("--window-s", o->window_s, "Stable window averaged per point")
       ->check(CLI::Range(0.01, 600.0));
+  inclinometer->add_option("--inclinometer-range-deg", o->inclinometer_range_deg,
+                           "With --from: the inclinometer's range when the session has no rig");
   inclinometer->callback([o, &action] { action = [o] { run_inclinometer(*o); }; });
 
   CLI::App* gyro = calibrate->add_subcommand(

@@ -9,8 +9,8 @@
 #include "app/commands.h"
 #include "calibration/calibration_store.h"
 #include "calibration/certificate.h"
-#include "calibration/inclinometer_calibration.h"
 #include "calibration/procedure.h"
+#include "calibration/range_warnings.h"
 
 namespace doorbench::app {
 namespace {
@@ -94,15 +94,13 @@ void run_show(const CalibrationCommandOptions& o) {
   std::cout << "session " << o.what << "\n";
   for (const ChannelInfo& c : session.channels()) {
     std::cout << "  channel " << c.name << " (" << c.sensor_kind << " " << c.sensor_serial
-              << ") uses " << (c.calibration_id.empty() ? "no record" : c.calibration_id) << "\n";
-    if (c.sensor_kind == "inclinometer") {
-      try {
-        const std::string warning = cal::inclinometer_range_warning(session, c.name);
-        if (!warning.empty()) std::cout << "  warning: " << warning << "\n";
-      } catch (const std::exception& error) {
-        std::cout << "  (range not checked: " << error.what() << ")\n";
-      }
-    }
+              << ") uses " << (c.calibration_id.empty() ? "no record" : c.calibration_id)
+              << (c.geometry_calibration_id.empty() ? ""
+                                                    : ", geometry " + c.geometry_calibration_id)
+              << "\n";
+  }
+  for (const std::string& warning : cal::range_warnings(session)) {
+    std::cout << "  warning: " << warning << "\n";
   }
   for (const SessionEvent& e : session.events()) {
     if (e.kind == "calibration") std::cout << "  event: " << e.channel << ": " << e.detail << "\n";
@@ -113,36 +111,40 @@ void run_show(const CalibrationCommandOptions& o) {
 void run_apply(const CalibrationCommandOptions& o) {
   const cal::CalibrationRecord record = store_of(o).get(o.record_id);
   std::string channel = o.channel;
+  // A geometry record belongs to the load cell's mounting (its serial names the bench).
+  const bool geometry = record.sensor_kind == "geometry";
+  const std::string kind = geometry ? "load_cell" : record.sensor_kind;
+  const std::string serial = geometry ? "" : record.sensor_serial;
   {
     const SessionReader session(o.what);
     if (channel.empty()) {
       std::vector<std::string> candidates;
       for (const ChannelInfo& c : session.channels()) {
-        if (c.sensor_kind == record.sensor_kind &&
-            (record.sensor_serial.empty() || c.sensor_serial == record.sensor_serial)) {
+        if (c.sensor_kind == kind && (serial.empty() || c.sensor_serial == serial)) {
           candidates.push_back(c.name);
         }
       }
       if (candidates.size() != 1) {
         throw std::runtime_error(o.what + ": " + std::to_string(candidates.size()) +
-                                 " channels of " + record.sensor_kind + " " + record.sensor_serial +
+                                 " channels of " + kind + (serial.empty() ? "" : " " + serial) +
                                  " for record " + record.id + "; name one with --channel");
       }
       channel = candidates.front();
     }
     const ChannelInfo& info = session.channel(channel);
-    if (info.sensor_kind != record.sensor_kind) {
+    if (info.sensor_kind != kind) {
       throw std::runtime_error(o.what + ": channel " + channel + " is a " + info.sensor_kind +
-                               ", record " + record.id + " calibrates a " + record.sensor_kind);
+                               ", record " + record.id + " calibrates a " + kind);
     }
-    if (!record.sensor_serial.empty() && info.sensor_serial != record.sensor_serial) {
+    if (!serial.empty() && info.sensor_serial != serial) {
       throw std::runtime_error(o.what + ": channel " + channel + " has sensor " +
                                info.sensor_serial + ", record " + record.id + " calibrates " +
                                record.sensor_serial);
     }
   }
   const std::string previous = apply_calibration(o.what, channel, record);
-  std::cout << o.what << ": channel " << channel << " now uses " << record.id << " (was "
+  std::cout << o.what << ": channel " << channel << " now uses " << record.id
+            << (geometry ? " for its geometry" : "") << " (was "
             << (previous.empty() ? "none" : previous) << "); raw samples unchanged\n";
 }
 

@@ -67,6 +67,7 @@ void run_fit(const FitCommandOptions& options) {
   const std::vector<std::string> plots = write_fit_plots(dir, result.model, data, fit_options);
   std::ofstream report(dir / "report.md");
   report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n"
+         << handle_radius_line(data, result.model) << ".\n\n"
          << "```\n"
          << result.summary.full_report() << "```\n\n";
   for (const std::string& plot : plots) report << "![" << plot << "](" << plot << ")\n\n";

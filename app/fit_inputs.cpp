@@ -2,6 +2,7 @@
 
 #include <fstream>
 #include <iostream>
+#include <sstream>
 #include <stdexcept>
 
 #include "acquisition/recording_csv.h"
@@ -89,7 +90,33 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
             << " segments excluded\n";
   DoorModel start =
       start_model(options.model.model, options.model.params_path, options.model.effects_path);
+  if (!data.geometry_calibration_id.empty() && data.handle_radius_m > 0) {
+    // The bench's calibrated geometry, not the door file's nominal radius.
+    DoorGeometry geometry = start.geometry();
+    std::cerr << "  the door file's handle radius " << geometry.handle_radius_m
+              << " m is replaced\n";
+    geometry.handle_radius_m = data.handle_radius_m;
+    const std::span<const double> values = start.parameter_values();
+    const std::span<const Bounds> bounds = start.parameter_bounds();
+    const auto base = static_cast<std::size_t>(start.base_parameter_count());
+    start = DoorModel(start.kind(), geometry, {values.begin(), values.begin() + base},
+                      {bounds.begin(), bounds.begin() + base},
+                      {start.effects().begin(), start.effects().end()});
+  }
+  std::cerr << "  " << handle_radius_line(data, start) << "\n";
   return {std::move(data), std::move(start)};
+}
+
+std::string handle_radius_line(const PreparedData& data, const DoorModel& model) {
+  std::ostringstream line;
+  line << "handle radius " << model.geometry().handle_radius_m << " m, from ";
+  if (!data.geometry_calibration_id.empty() && data.handle_radius_m > 0) {
+    line << "geometry record " << data.geometry_calibration_id
+         << " (the force corrected for the load cell's mounting angle)";
+  } else {
+    line << "the door parameter file";
+  }
+  return line.str();
 }
 
 }  // namespace doorbench::app

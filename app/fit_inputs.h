@@ -33,7 +33,13 @@ struct FitInputs {
   PreparedData data;
   DoorModel start;
 };
-// Prepares DATA and builds the start model, reporting progress on stderr.
+// Prepares DATA and builds the start model, reporting progress on stderr. When the data
+// carries a geometry record (a session's load cell with geometry_calibration_id), the
+// record's handle radius replaces the door file's in the start model.
 FitInputs load_fit_inputs(const FitDataOptions& options);
+
+// Which handle radius `model` has and where it came from, one line for reports: "handle
+// radius 0.62 m, from geometry record geometry-B1-v2" or "…, from the door parameter file".
+std::string handle_radius_line(const PreparedData& data, const DoorModel& model);
 
 }  // namespace doorbench::app

@@ -6,6 +6,7 @@
 #include <fstream>
 
 #include "analysis/parameter_file.h"
+#include "app/fit_inputs.h"
 #include "app/fit_output.h"
 
 namespace doorbench::app {
@@ -87,6 +88,7 @@ std::string write_loop_outputs(const std::filesystem::path& dir, const LoopResul
   const std::string table = steps_table(result);
   std::ofstream report(dir / "report.md");
   report << "# Residual loop: the " << model_name << " model on " << data.source << "\n\n"
+         << handle_radius_line(data, result.model()) << ".\n\n"
          << table << "\n```\n"
          << result.full_report() << "```\n\n"
          << "Plots of the final model:\n\n";

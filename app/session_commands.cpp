@@ -14,6 +14,7 @@
 #include "acquisition/session_csv.h"
 #include "app/commands.h"
 #include "app/session_recording.h"
+#include "calibration/range_warnings.h"
 #include "sensors/simulated_bench.h"
 
 namespace doorbench::app {
@@ -103,6 +104,41 @@ std::string format_seconds(double seconds) {
   return text;
 }
 
+// The geometry analysis uses: a load cell's geometry record (its handle radius replaces the
+// door parameter file's in fit and loop, its mounting angle corrects the force on read).
+void print_geometry(const SessionReader& session) {
+  bool any = false;
+  for (const ChannelInfo& c : session.channels()) {
+    if (c.geometry_calibration_id.empty()) continue;
+    any = true;
+    std::cout << "geometry: " << c.name << " uses " << c.geometry_calibration_id;
+    for (const calibration::CalibrationRecord& r : session.calibrations()) {
+      if (r.id != c.geometry_calibration_id) continue;
+      for (const char* name : {"handle_radius_m", "mounting_angle_deg"}) {
+        if (const calibration::CalibrationQuantity* q = r.quantity(name)) {
+          std::cout << ", " << name << " " << q->value << " ± " << q->standard_uncertainty;
+        }
+      }
+    }
+    std::cout << "\n  fit and loop use its handle radius (not the door file's); the force is "
+                 "divided by cos(mounting angle) on read\n";
+  }
+  if (!any) {
+    std::cout << "geometry: no geometry record; fit and loop take the handle radius from the "
+                 "door parameter file\n";
+  }
+}
+
+// The calibration's range warnings (docs/calibration.md): where a sensor left its range.
+void print_range_warnings(const SessionReader& session) {
+  try {
+    const std::vector<std::string> warnings = calibration::range_warnings(session);
+    for (const std::string& warning : warnings) std::cout << "warning: " << warning << "\n";
+  } catch (const std::exception& error) {
+    std::cout << "warning: ranges not checked: " << error.what() << "\n";
+  }
+}
+
 void run_info(const std::string& session_path) {
   const SessionReader session(session_path);
   const SessionMetadata& m = session.metadata();
@@ -121,11 +157,15 @@ void run_info(const std::string& session_path) {
               "raw", "unit", "calibration");
   std::fflush(stdout);
   for (const ChannelInfo& c : session.channels()) {
-    std::printf("  %-14s %-13s %10zu %10g %-7s %-6s %s\n", c.name.c_str(), c.sensor_kind.c_str(),
-                session.sample_count(c.name), c.sample_rate_hz, c.raw_unit.c_str(), c.unit.c_str(),
-                c.calibration_id.empty() ? "(values are physical)" : c.calibration_id.c_str());
+    std::printf(
+        "  %-14s %-13s %10zu %10g %-7s %-6s %s%s%s\n", c.name.c_str(), c.sensor_kind.c_str(),
+        session.sample_count(c.name), c.sample_rate_hz, c.raw_unit.c_str(), c.unit.c_str(),
+        c.calibration_id.empty() ? "(values are physical)" : c.calibration_id.c_str(),
+        c.geometry_calibration_id.empty() ? "" : ", geometry ", c.geometry_calibration_id.c_str());
   }
   std::fflush(stdout);
+  print_geometry(session);
+  print_range_warnings(session);
   const std::vector<SessionEvent> events = session.events();
   std::map<std::string, int> by_kind;
   for (const SessionEvent& e : events) ++by_kind[e.kind];

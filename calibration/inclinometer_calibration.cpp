@@ -188,3 +188,158 @@ std::string inclinometer_range_warning(const SessionReader& session, const std::
 }
 
 }  // namespace doorbench::calibration
+
+namespace doorbench::calibration {
+
+std::string InclinometerRecordingOptions::validate() const {
+  if (std::string problem = stillness.validate(); !problem.empty()) return problem;
+  if (!(max_drift_deg > 0)) {
+    return "inclinometer recording max_drift_deg = " + shortest(max_drift_deg) + " must be > 0";
+  }
+  if (!(merge_deg >= 0)) {
+    return "inclinometer recording merge_deg = " + shortest(merge_deg) + " must be >= 0";
+  }
+  return "";
+}
+
+std::vector<CalibrationPoint> InclinometerRecordingPoints::points() const {
+  std::vector<CalibrationPoint> result;
+  for (const InclinometerHold& h : holds) result.push_back(h.point);
+  return result;
+}
+
+std::string InclinometerRecordingPoints::brief_report() const {
+  std::string text = "inclinometer holds found in the recording (noise " + fixed(noise_deg, 4) +
+                     "° per sample):\n";
+  for (const InclinometerHold& h : holds) {
+    text += "  " + fixed(h.point.reference * kDegPerRad, 3) + "°: " + fixed(h.start_s, 3) + "–" +
+            fixed(h.end_s, 3) + " s, " + std::to_string(h.samples) + " samples, reads " +
+            fixed(h.mean_deg, 4) + "°, sd " + fixed(h.point.signal_std, 5) + " V, drift " +
+            fixed(h.drift_deg, 4) + "°\n";
+  }
+  return text;
+}
+
+InclinometerRecordingPoints inclinometer_points_from_recording(
+    const SessionReader& session, const std::string& channel, std::span<const double> angles_deg,
+    const InclinometerRecordingOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
+  const std::string where = session.path().string() + ": ";
+  const std::string name = find_session_channel(session, "inclinometer", channel);
+  const ChannelSignal s = read_channel_signal(session, name);
+  if (s.info.sample_rate_hz <= 0 || s.signal.size() < 100) {
+    throw CalibrationError(where + "inclinometer " + name +
+                           " needs a uniform clock and at least 100 samples");
+  }
+  if (!s.record) {
+    throw CalibrationError(where + "inclinometer " + name +
+                           " has no calibration record to read angles for the stillness test; "
+                           "apply its nominal record first");
+  }
+  if (angles_deg.empty()) throw CalibrationError("no reference angles (--angles-deg)");
+
+  std::vector<double> angle_deg(s.physical.size());
+  for (std::size_t i = 0; i < angle_deg.size(); ++i) angle_deg[i] = s.physical[i] * kDegPerRad;
+  InclinometerRecordingPoints result;
+  const std::vector<StillPeriod> periods =
+      find_still_periods(s.time_s, angle_deg, angle_deg, options.stillness, &result.noise_deg);
+
+  // Sample ranges of the periods; consecutive ones at the same angle are one hold.
+  const double t0 = s.time_s.front(), rate_hz = s.info.sample_rate_hz;
+  auto index_of = [&](double t) {
+    return static_cast<std::size_t>(std::llround((t - t0) * rate_hz));
+  };
+  std::vector<std::vector<std::pair<std::size_t, std::size_t>>> ranges;  // [a, b) per hold
+  std::vector<double> means;
+  for (const StillPeriod& p : periods) {
+    const std::pair<std::size_t, std::size_t> range{index_of(p.start_s), index_of(p.end_s) + 1};
+    if (!means.empty() && std::abs(p.mean_rate_dps - means.back()) < options.merge_deg) {
+      ranges.back().push_back(range);
+      continue;
+    }
+    ranges.push_back({range});
+    means.push_back(p.mean_rate_dps);
+  }
+  for (const auto& hold_ranges : ranges) {
+    InclinometerHold h;
+    h.start_s = s.time_s[hold_ranges.front().first];
+    h.end_s = s.time_s[hold_ranges.back().second - 1];
+    std::vector<double> volts, degrees;
+    for (const auto& [a, b] : hold_ranges) {
+      volts.insert(volts.end(), s.signal.begin() + a, s.signal.begin() + b);
+      degrees.insert(degrees.end(), angle_deg.begin() + a, angle_deg.begin() + b);
+    }
+    h.samples = volts.size();
+    h.mean_deg = mean_of(degrees);
+    const std::span<const double> all(degrees);
+    h.drift_deg =
+        std::abs(mean_of(all.subspan(all.size() / 2)) - mean_of(all.first(all.size() / 2)));
+    h.point.signal = mean_of(volts);
+    h.point.signal_std = std_of(volts);
+    h.point.samples = static_cast<int>(volts.size());
+    result.holds.push_back(h);
+  }
+
+  auto list_holds = [&] {
+    std::string text;
+    for (std::size_t k = 0; k < result.holds.size(); ++k) {
+      const InclinometerHold& h = result.holds[k];
+      text += (k ? "; " : "") + fixed(h.start_s, 2) + "–" + fixed(h.end_s, 2) + " s reads " +
+              fixed(h.mean_deg, 2) + "°";
+    }
+    return text.empty() ? std::string("none") : text;
+  };
+  std::string references;
+  for (double a : angles_deg) references += (references.empty() ? "" : ",") + shortest(a);
+  if (result.holds.size() != angles_deg.size()) {
+    throw CalibrationError(
+        where + "found " + std::to_string(result.holds.size()) + " still " +
+        (result.holds.size() == 1 ? "window" : "windows") + " in inclinometer " + name + " where " +
+        std::to_string(angles_deg.size()) + " reference angles were given (" + references +
+        "°): " + list_holds() + ". Each still stretch of at least " +
+        shortest(options.stillness.min_duration_s + 2 * options.stillness.guard_s +
+                 options.stillness.window_s) +
+        " s counts as one hold: hold each reference once, in the order given, without resting "
+        "between them (or give --angles-deg for the holds recorded)");
+  }
+  // The holds must follow the references: a step between references moves the reading the
+  // same way as the overall gain (its sign from the correlation of readings and references).
+  const std::size_t n = angles_deg.size();
+  double mean_ref = 0.0, mean_read = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    mean_ref += angles_deg[k] / n;
+    mean_read += result.holds[k].mean_deg / n;
+  }
+  double covariance = 0.0;
+  for (std::size_t k = 0; k < n; ++k) {
+    covariance += (angles_deg[k] - mean_ref) * (result.holds[k].mean_deg - mean_read);
+  }
+  const double sign = covariance < 0 ? -1.0 : 1.0;
+  for (std::size_t k = 1; k < n; ++k) {
+    const double step_ref = angles_deg[k] - angles_deg[k - 1];
+    const double step_read = result.holds[k].mean_deg - result.holds[k - 1].mean_deg;
+    if (step_ref != 0 && !(sign * step_read * step_ref > 0)) {
+      throw CalibrationError(where + "the holds do not follow the reference angles (" + references +
+                             "°) in order: from " + shortest(angles_deg[k - 1]) + "° to " +
+                             shortest(angles_deg[k]) + "° the reading went from " +
+                             fixed(result.holds[k - 1].mean_deg, 2) + "° to " +
+                             fixed(result.holds[k].mean_deg, 2) + "° (holds at " + list_holds() +
+                             "); give --angles-deg in the order they were held");
+    }
+  }
+  for (std::size_t k = 0; k < n; ++k) {
+    InclinometerHold& h = result.holds[k];
+    if (h.drift_deg > options.max_drift_deg) {
+      throw CalibrationError(where + "the reading did not settle at hold " + std::to_string(k + 1) +
+                             " of " + std::to_string(n) + " (" + shortest(angles_deg[k]) + "°, " +
+                             fixed(h.start_s, 2) + "–" + fixed(h.end_s, 2) +
+                             " s): the means of its halves differ by " + fixed(h.drift_deg, 4) +
+                             "°, limit " + fixed(options.max_drift_deg, 4) +
+                             "°; steady the reference (no touching) and record again");
+    }
+    h.point.reference = angles_deg[k] / kDegPerRad;
+  }
+  return result;
+}
+
+}  // namespace doorbench::calibration

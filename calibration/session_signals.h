@@ -31,5 +31,4 @@ std::string find_session_channel(const SessionReader& session, const std::string
 // parses.
 std::optional<RigDefinition> session_rig(const SessionReader& session);
 
-
 }  // namespace doorbench::calibration
