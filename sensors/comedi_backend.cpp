@@ -375,7 +375,7 @@ ComediBackend::ComediBackend(const RigDefinition& rig, const ComediApi& api,
     if (options_.duration_s > 0) {
       command_.stop_src = TRIG_COUNT;
       command_.stop_arg = static_cast<unsigned>(
-          std::max(1LL, std::llround(options_.duration_s * rig.sample_rate_hz)));
+          std::clamp(std::llround(options_.duration_s * rig.sample_rate_hz), 1LL, 0xffffffffLL));
     } else {
       command_.stop_src = TRIG_NONE;
       command_.stop_arg = 0;
@@ -386,14 +386,25 @@ ComediBackend::ComediBackend(const RigDefinition& rig, const ComediApi& api,
     setup_.achieved_scan_rate_hz = 1e9 / command_.scan_begin_arg;
     // The stop count from the rate the board will really run at.
     if (options_.duration_s > 0) {
-      const auto scans = static_cast<unsigned>(
-          std::max(1LL, std::llround(options_.duration_s * setup_.achieved_scan_rate_hz)));
-      if (scans != command_.stop_arg) {
-        command_.stop_arg = scans;
+      const long long wanted =
+          std::max(1LL, std::llround(options_.duration_s * setup_.achieved_scan_rate_hz));
+      if (wanted <= 0xffffffffLL && command_.stop_arg != wanted) {
+        command_.stop_arg = static_cast<unsigned>(wanted);
         settle_command(2);
-        setup_.achieved_scan_rate_hz = 1e9 / command_.scan_begin_arg;
       }
-      setup_.stop_scans = command_.stop_arg;
+      if (wanted > 0xffffffffLL || command_.stop_arg < wanted) {
+        // The board counts fewer scans than asked (NI boards: 2^24 − 1): acquire
+        // continuously; the recorder stops after its duration and stop() cancels.
+        setup_.warnings.push_back("the board's stop count holds at most " +
+                                  std::to_string(command_.stop_arg) + " scans, fewer than the " +
+                                  std::to_string(wanted) +
+                                  " asked for: acquiring with stop TRIG_NONE instead");
+        command_.stop_src = TRIG_NONE;
+        command_.stop_arg = 0;
+        settle_command(3);
+      }
+      setup_.achieved_scan_rate_hz = 1e9 / command_.scan_begin_arg;
+      setup_.stop_scans = command_.stop_src == TRIG_COUNT ? command_.stop_arg : 0;
     }
     setup_.achieved_convert_interval_s =
         command_.convert_src == TRIG_TIMER ? command_.convert_arg * 1e-9 : 0.0;

@@ -598,3 +598,25 @@ TEST_CASE("rig keys for comedi: aref and daq.start_trigger", "[comedi][rig]") {
   REQUIRE_THROWS_WITH(doorbench::parse_rig(simulated, "sim.toml", "."),
                       Contains("channels[0].aref: only comedi channels have an aref"));
 }
+
+TEST_CASE("comedi: a duration beyond the board's stop count acquires with TRIG_NONE", "[comedi]") {
+  TempDir dir("comedi");
+  const auto device = dir.write("comedi0", "min_convert_ns = 1000\n");
+  RigSpec spec;
+  spec.device = device.string();
+  spec.channels = 1;
+  spec.rate_hz = 50000;
+  ComediOptions options;
+  options.duration_s = 400;  // 20 million scans; the board counts at most 2^24 − 1
+  ComediBackend backend(make_rig(spec), emulator(), options);
+  CHECK(backend.setup().stop_scans == 0);
+  REQUIRE(backend.setup().warnings.size() == 1);
+  CHECK(backend.setup().warnings[0] ==
+        "the board's stop count holds at most 16777215 scans, fewer than the 20000000 asked "
+        "for: acquiring with stop TRIG_NONE instead");
+  CHECK_THAT(joined(backend.setup().tests), Contains("round 3, test 1: comedi_command_test "
+                                                     "returned 0 (valid)"));
+  options.duration_s = 300;  // 15 million: fits
+  ComediBackend fits(make_rig(spec), emulator(), options);
+  CHECK(fits.setup().stop_scans == 15000000);
+}
