@@ -5,7 +5,7 @@
 // reproduces and what it does not.
 //
 // An emulated device is a text file (the path given to comedi_open) of `key = value`
-// lines describing the board; see tests/comedi_emulator/README.md. Samples are made on
+// lines describing the board; docs/comedi.md lists the keys. Samples are made on
 // demand from the time elapsed since the start trigger (CLOCK_MONOTONIC), so the emulated
 // card runs in real time: reads block until the board would have transferred the data,
 // the kernel buffer overruns when the reader falls behind by more than its size (read
