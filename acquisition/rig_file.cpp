@@ -28,6 +28,7 @@ constexpr std::string_view kSensorKinds[] = {"load_cell", "inclinometer", "gyros
 constexpr std::string_view kChannelBackends[] = {"simulated", "comedi", "modbus"};
 constexpr std::string_view kDaqBackends[] = {"simulated", "comedi"};
 constexpr std::string_view kTriggerKinds[] = {"software", "external"};
+constexpr std::string_view kArefs[] = {"ground", "common", "diff", "other"};
 constexpr std::string_view kDoorModels[] = {"sensory", "physical"};
 constexpr int kMinResolutionBits = 8;
 constexpr int kMaxResolutionBits = 24;
@@ -364,7 +365,7 @@ void read_clock(const Section& root, RigDefinition& rig) {
 void read_daq(const Section& root, RigDefinition& rig, const Failer& failer) {
   const std::optional<Section> daq = root.table("daq");
   if (!daq) failer.fail(1, "daq", "missing required table [daq]");
-  daq->allow_only({"backend", "device", "range_V", "resolution_bits"});
+  daq->allow_only({"backend", "device", "range_V", "resolution_bits", "start_trigger"});
   rig.daq_backend = daq->choice("backend", kDaqBackends, "a DAQ backend", rig.daq_backend);
   rig.daq_device = daq->required_string("device");
   if (const auto range = daq->range("range_V")) {
@@ -379,6 +380,8 @@ void read_daq(const Section& root, RigDefinition& rig, const Failer& failer) {
     }
     rig.daq_resolution_bits = static_cast<int>(*bits);
   }
+  // Checked against the triggers once they are read (check_start_trigger).
+  rig.daq_start_trigger = daq->string("start_trigger").value_or("");
 }
 
 ParsedChannels read_channels(const Section& root, const RigDefinition& rig, const Failer& failer) {
@@ -389,8 +392,8 @@ ParsedChannels read_channels(const Section& root, const RigDefinition& rig, cons
   }
   ParsedChannels parsed;
   for (const Section& table : tables) {
-    table.allow_only({"name", "sensor", "serial", "backend", "address", "range_V", "calibration",
-                      "unit", "parameters"});
+    table.allow_only({"name", "sensor", "serial", "backend", "address", "range_V", "aref",
+                      "calibration", "unit", "parameters"});
     RigChannel channel;
     channel.line = table.line();
 
@@ -437,6 +440,12 @@ ParsedChannels read_channels(const Section& root, const RigDefinition& rig, cons
       }
       channel.range_min_V = range->first;
       channel.range_max_V = range->second;
+    }
+
+    if (channel.backend == "comedi") {
+      channel.aref = table.choice("aref", kArefs, "an aref", "ground");
+    } else if (table.find("aref")) {
+      table.fail("aref", "only comedi channels have an aref");
     }
 
     channel.calibration = table.required_string("calibration");
@@ -528,6 +537,21 @@ std::vector<RigTrigger> read_triggers(const Section& root) {
     triggers.push_back(std::move(trigger));
   }
   return triggers;
+}
+
+void check_start_trigger(const Section& root, const RigDefinition& rig) {
+  if (rig.daq_start_trigger.empty()) return;
+  for (const RigTrigger& trigger : rig.triggers) {
+    if (trigger.name == rig.daq_start_trigger) return;
+  }
+  std::string names;
+  for (const RigTrigger& trigger : rig.triggers) {
+    names.append(names.empty() ? "" : ", ").append(trigger.name);
+  }
+  root.table("daq")->fail("start_trigger",
+                          in_quotes(rig.daq_start_trigger) + " is not the name of a [[triggers]] " +
+                              "table (" + (names.empty() ? "there are none" : "they are " + names) +
+                              ")");
 }
 
 // A file named in [simulation] must exist (relative paths resolve against the rig's folder).
@@ -653,6 +677,7 @@ RigDefinition parse_rig(std::string_view text, std::string_view source,
   rig.channels = parsed.channels;
   check_scan_fits(root, rig, failer);
   rig.triggers = read_triggers(root);
+  check_start_trigger(root, rig);
   read_simulation(root, rig, parsed, failer);
   return rig;
 }

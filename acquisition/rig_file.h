@@ -31,6 +31,8 @@ struct RigChannel {
   std::string calibration;  // "nominal" (datasheet figures) or a calibration record id
   std::string unit;         // physical unit after calibration: N (load_cell), rad
                             // (inclinometer), rad/s (gyroscope)
+  std::string aref;         // comedi channels: ground | common | diff | other (default
+                            // ground); empty for other backends
   // Sensor-model parameters by the names of sensors::*Parameters::fields(), file order.
   std::vector<std::pair<std::string, double>> parameters;
   int line = 0;  // of this channel's [[channels]] header
@@ -76,6 +78,8 @@ struct RigDefinition {
   double daq_range_min_V = -10.0;
   double daq_range_max_V = 10.0;
   int daq_resolution_bits = 16;
+  // The [[triggers]] entry that starts the DAQ's acquisition; empty: software start.
+  std::string daq_start_trigger;
   std::vector<RigChannel> channels;
   std::vector<RigTrigger> triggers;
   std::optional<RigSimulation> simulation;  // required when a channel is simulated

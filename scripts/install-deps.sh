@@ -14,6 +14,7 @@ packages=(
   libhdf5-dev hdf5-tools      # session files; h5dump reads them in tests
   python3-h5py                # tests read sessions without doorbench
   libtomlplusplus-dev         # rig files
+  libcomedi-dev               # comedi DAQ cards (sensors/comedi_backend.h)
 )
 
 missing=()

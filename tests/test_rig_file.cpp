@@ -273,10 +273,10 @@ TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
         "rig.toml:2: bench.nmae: unknown key; valid keys: name, description");
   CHECK(error_of(edit(minimal(), "device = \"sim0\"", "device = \"sim0\"\nbits = 16")) ==
         "rig.toml:5: daq.bits: unknown key; valid keys: backend, device, range_V, "
-        "resolution_bits");
+        "resolution_bits, start_trigger");
   CHECK(error_of(edit(minimal(), "sensor = ", "sensr = ")) ==
         "rig.toml:7: channels[0].sensr: unknown key; valid keys: name, sensor, serial, backend, "
-        "address, range_V, calibration, unit, parameters");
+        "address, range_V, aref, calibration, unit, parameters");
   CHECK(error_of(minimal() + "door_model = \"physical\"\n") ==
         "rig.toml:14: simulation.door_model: unknown key; valid keys: door, model, effects, "
         "force, seed, realtime, hand");
@@ -378,7 +378,7 @@ TEST_CASE("Rig file: at least one channel", "[rig_file]") {
         "rig.toml:1: channels: at least one [[channels]] table is required");
   CHECK(error_of(no_channels + "channels = 3\n") ==
         "rig.toml:5: daq.channels: unknown key; valid keys: backend, device, range_V, "
-        "resolution_bits");
+        "resolution_bits, start_trigger");
   CHECK(error_of("channels = 3\n" + no_channels) ==
         "rig.toml:1: channels: must be an array of tables ([[channels]]), not an integer");
   CHECK(error_of("channels = [3]\n" + no_channels) ==
