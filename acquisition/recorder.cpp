@@ -380,7 +380,14 @@ RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata&
   ConvertOptions convert;
   convert.writer = options.writer;
   convert.extras = [&backend](SessionWriter& writer) { backend.write_extras(writer); };
-  convert_journal(journal_path, path, convert);
+  try {
+    convert_journal(journal_path, path, convert);
+  } catch (const std::exception& error) {
+    // E.g. the disk filled up during the conversion: the journal is whole and synced.
+    throw SessionError(std::string(error.what()) + "; the recording is kept in " +
+                       journal_path.string() + " (free space, then: doorbench recover " +
+                       journal_path.string() + ")");
+  }
   if (read_error) std::rethrow_exception(read_error);
   return summary;
 }

@@ -1,6 +1,7 @@
 #include "acquisition/recovery.h"
 
 #include <fcntl.h>
+#include <hdf5.h>
 #include <sys/file.h>
 #include <unistd.h>
 
@@ -14,6 +15,12 @@
 namespace doorbench {
 
 namespace {
+
+// HDF5 1.10 keeps a file whose close failed (e.g. a full disk while converting) in its
+// tables and crashes (SIGSEGV) retrying that close when it shuts down at exit. Without
+// its atexit hook the process just exits; every SessionWriter and SessionReader closes
+// its own file, so nothing relies on the hook. Runs before main(), before HDF5 starts.
+[[maybe_unused]] const herr_t kNoHdf5AtExit = H5dont_atexit();
 
 void sync_path(const std::filesystem::path& path, bool folder) {
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | (folder ? O_DIRECTORY : 0));

@@ -716,3 +716,28 @@ TEST_CASE(
                                       dir.path);
   check_write_failure(child, mount_point / "s.h5", "No space left on device", dir / "recovered.h5");
 }
+
+TEST_CASE("Crash: a write failure while converting keeps the whole journal", "[crash][disk]") {
+  testing::TempDir dir("crash");
+  // The journal of 1 s (about 22 kB) fits under the limit; the session, with a 64 kB chunk
+  // per channel, does not.
+  ChildSetup setup;
+  setup.file_size_limit = 100000;
+  const fs::path session = dir / "s.h5";
+  const Child child =
+      start_doorbench({"record", "--duration-s", "1", "--out", session.string()}, dir.path, setup);
+  REQUIRE(wait_child(child) == 1);
+  const std::string said = read_text(child.err);
+  INFO(said);
+  const fs::path journal = journal_path_for(session);
+  CHECK_THAT(said, Contains("doorbench: " + session.string() + ".partial: "));
+  CHECK_THAT(said, Contains("; the recording is kept in " + journal.string() +
+                            " (free space, then: doorbench recover " + journal.string() + ")\n"));
+  CHECK(!fs::exists(session));
+  CHECK(!fs::exists(dir / "s.h5.partial"));
+  const ConvertResult result = recover_session(journal);
+  CHECK(result.ended_cleanly);
+  CHECK(result.scans == 1000);
+  CHECK(result.bytes_dropped == 0);
+  CHECK(SessionReader(session).sample_count("rate") == 1000);
+}
