@@ -1,20 +1,53 @@
 #pragma once
-// Records a session from a backend: channels, calibration records and metadata first,
-// then scans in blocks until the duration is reached, then the backend's extras.
+// Records a session from a backend, in two threads (docs/crash-safety.md):
+//
+// - the reading thread starts the backend, reads blocks of scans and copies them, and
+//   the events they bring, into preallocated lock-free rings (ring_buffer.h). After the
+//   start it allocates nothing, takes no lock and does no I/O;
+// - the writer thread (the caller's) drains the rings into the recording journal
+//   (journal.h, "SESSION.journal"), syncs it every flush interval, and when recording
+//   ends converts it into the HDF5 session, which appears under its name only once it
+//   is complete and closed; then the journal is removed.
+//
+// A recording killed at any moment (SIGKILL, power loss) leaves the journal, from which
+// recover_session() (recovery.h) makes the session with every synced scan.
+#include <atomic>
+#include <cstdint>
+#include <exception>
 #include <filesystem>
 #include <functional>
 #include <string>
 
 #include "acquisition/backend.h"
+#include "acquisition/ring_buffer.h"
 #include "acquisition/session_file.h"
 
 namespace doorbench {
 
+// What the reading thread does when the ring is full (the writer fell behind).
+enum class RingFullPolicy {
+  // A source that runs on its own clock (a DAQ): the block is dropped and a fault event
+  // recorded; the session marks the lost scans as a gap (docs/session-format.md).
+  kDropAndRecordFault,
+  // A source that computes scans on demand (the simulated bench unpaced): wait for room.
+  kWait,
+};
+
 struct RecordOptions {
   double duration_s = 10.0;
-  std::size_t block_scans = 100;  // scans per read: 0.1 s at 1 kHz
+  std::size_t block_scans = 0;  // scans per read; 0: about 10 ms of scans (at least 1)
+  // The journal is synced (fdatasync) at least this often while scans arrive: a power
+  // loss costs at most this plus one block and one writer poll (docs/crash-safety.md).
+  double flush_interval_s = 0.05;
+  double ring_s = 2.0;  // seconds of scans the ring holds between the threads
+  std::size_t ring_events = 1024;
+  RingFullPolicy when_ring_full = RingFullPolicy::kWait;
   SessionWriterOptions writer;
-  // Called after each block with the recorded time and scan count (for a status line).
+  // Set (e.g. by a SIGINT handler) to end the recording early; it still ends cleanly
+  // with a complete session and a "stop" event.
+  const std::atomic<bool>* stop_requested = nullptr;
+  // Called by the writer thread after it wrote blocks, with the scans recorded (for a
+  // status line). It may take its time: the reading thread does not wait for it.
   std::function<void(double recorded_s, std::size_t scans)> progress;
   std::string validate() const;  // empty when usable
 };
@@ -23,9 +56,79 @@ struct RecordSummary {
   std::size_t scans = 0;
   std::size_t events = 0;
   double duration_s = 0.0;
+  std::size_t dropped_scans = 0;   // lost to ring overflows (each one a fault event)
+  std::size_t dropped_events = 0;  // lost to a full event ring (one fault event says so)
+  bool stopped_by_request = false;
+  std::uint64_t journal_bytes = 0;
+  std::uint64_t journal_syncs = 0;
+  std::string brief_report() const;
 };
 
+// Records until `options.duration_s`, the end of the backend's scans, or a stop request.
+// `path` must not exist (nor its journal). Throws std::invalid_argument for options,
+// JournalError/SessionError naming the file when writing fails: a failed journal write
+// (e.g. a full disk) stops the recording and keeps the journal, which the message says
+// how to recover.
 RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata& metadata,
                              const std::filesystem::path& path, const RecordOptions& options);
+
+// ---------------------------------------------------------------------------------------
+// The parts shared by the two threads, public so that tests can drive the reading side
+// on its own (tests/test_recorder_realtime.cpp proves it allocates nothing).
+
+// One block of scans in the ring: counts[c * capacity + s].
+struct ScanSlot {
+  std::uint64_t first_scan = 0;
+  std::size_t scan_count = 0;
+  std::size_t capacity = 0;
+  std::vector<std::int32_t> counts;
+};
+
+// One event in the ring: texts cut to fit (a cut detail ends in "...").
+struct EventSlot {
+  double time_s = 0.0;
+  char kind[32] = {};
+  char channel[64] = {};
+  char detail[256] = {};
+};
+
+struct RecorderRings {
+  RecorderRings(std::size_t channels, std::size_t block_scans, std::size_t scan_slots,
+                std::size_t event_slots);
+  SpscRing<ScanSlot> scans;
+  SpscRing<EventSlot> events;
+  std::atomic<std::int64_t> start_monotonic_ns{-1};  // set once the backend started
+  std::atomic<std::uint64_t> scans_read{0};
+  std::atomic<std::uint64_t> dropped_scans{0};
+  std::atomic<std::uint64_t> dropped_events{0};
+  std::atomic<std::uint64_t> overflows{0};
+  std::atomic<bool> stop{false};  // writer → reader: stop reading
+  std::atomic<bool> done{false};  // reader → writer: nothing more will come
+};
+
+// The reading side: start() once, then step() until it returns false.
+class RealtimeReader {
+ public:
+  RealtimeReader(AcquisitionBackend& backend, RecorderRings& rings, std::size_t channels,
+                 std::size_t block_scans, std::uint64_t total_scans, RingFullPolicy when_full);
+  void start();  // starts the backend and notes the monotonic time
+  // One read of the backend and its copy into the rings; false when recording is over
+  // (duration reached, backend exhausted, stop requested). Never allocates, locks or
+  // does I/O itself (the backend's read must not either).
+  bool step();
+  std::uint64_t scans() const { return scans_; }
+
+ private:
+  void push_event(double time_s, const char* kind, const char* channel, const char* detail);
+  AcquisitionBackend& backend_;
+  RecorderRings& rings_;
+  ScanBlock block_;
+  std::size_t channels_;
+  std::uint64_t total_scans_;
+  RingFullPolicy when_full_;
+  double scan_rate_hz_;
+  std::uint64_t scans_ = 0;
+  bool overflowing_ = false;
+};
 
 }  // namespace doorbench

@@ -1,7 +1,9 @@
-// doorbench record, info, export and import: sessions on the command line.
+// doorbench record, recover, info, export and import: sessions on the command line.
+#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +13,7 @@
 #include <memory>
 
 #include "acquisition/recorder.h"
+#include "acquisition/recovery.h"
 #include "acquisition/rig_file.h"
 #include "acquisition/session_csv.h"
 #include "app/commands.h"
@@ -65,6 +68,12 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
 
   RecordOptions record;
   record.duration_s = duration_s;
+  record.flush_interval_s = options.flush_interval_s;
+  record.stop_requested = options.stop_requested;
+  // An unpaced simulated bench computes scans on demand and can wait for the writer; a
+  // paced one stands for a DAQ that cannot (a full ring is then a recorded fault).
+  const bool paced = rig.simulation && rig.simulation->realtime;
+  record.when_ring_full = paced ? RingFullPolicy::kDropAndRecordFault : RingFullPolicy::kWait;
   const bool terminal = isatty(STDERR_FILENO) != 0;
   double next_report_s = 0.0;
   if (options.show_progress) {
@@ -112,6 +121,8 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
   // Blocks of about 20 ms, whatever the rate.
   record.block_scans =
       std::max<std::size_t>(1, static_cast<std::size_t>(backend.scan_rate_hz() / 50));
+  record.flush_interval_s = options.flush_interval_s;
+  record.stop_requested = options.stop_requested;
   const RecordSummary summary = record_session(backend, metadata, out_path, record);
   if (backend.overran()) {
     std::cerr << "doorbench: " << out_path.string() << ": " << backend.end_reason()
@@ -126,15 +137,74 @@ struct RecordCommandOptions {
   SessionRecordingOptions recording;
 };
 
+// Set by SIGINT/SIGTERM while recording; the recorder polls it (a lock-free atomic is
+// async-signal-safe).
+std::atomic<bool> g_stop_recording{false};
+
+extern "C" void request_stop(int signal_number) {
+  g_stop_recording.store(true);
+  // A second Ctrl-C ends doorbench at once; the journal keeps what was recorded.
+  ::signal(signal_number, SIG_DFL);
+}
+
+// Recovers every unfinished session (a journal no running recording holds) in `folder`.
+void recover_unfinished_sessions(const std::filesystem::path& folder) {
+  for (const std::filesystem::path& journal : find_unfinished_sessions(folder)) {
+    std::cerr << "found an unfinished session: " << journal.string() << "\n";
+    try {
+      const ConvertResult result = recover_session(journal);
+      std::cerr << "recovered " << result.brief_report() << "\n";
+    } catch (const std::exception& error) {
+      std::cerr << "could not recover it: " << error.what() << "\n";
+    }
+  }
+}
+
 void run_record(const RecordCommandOptions& options) {
   const RigDefinition rig = load_rig(options.rig_path);
-  const RecordSummary summary =
-      rig.daq_backend == "comedi"
-          ? record_comedi_session(rig, options.recording, options.out_path)
-          : record_simulated_session(rig, options.recording, options.out_path);
+  const std::filesystem::path out(options.out_path);
+  recover_unfinished_sessions(out.parent_path().empty() ? std::filesystem::path(".")
+                                                        : out.parent_path());
+  SessionRecordingOptions recording = options.recording;
+  recording.stop_requested = &g_stop_recording;
+  struct sigaction action {};
+  action.sa_handler = request_stop;
+  sigemptyset(&action.sa_mask);
+  struct sigaction old_int {
+  }, old_term{};
+  ::sigaction(SIGINT, &action, &old_int);
+  ::sigaction(SIGTERM, &action, &old_term);
+  struct Restore {
+    const struct sigaction &old_int, &old_term;
+    ~Restore() {
+      ::sigaction(SIGINT, &old_int, nullptr);
+      ::sigaction(SIGTERM, &old_term, nullptr);
+    }
+  } restore{old_int, old_term};
+  const RecordSummary summary = rig.daq_backend == "comedi"
+                                    ? record_comedi_session(rig, recording, options.out_path)
+                                    : record_simulated_session(rig, recording, options.out_path);
+  if (summary.stopped_by_request) {
+    std::cerr << "stopped by request after " << summary.duration_s << " s\n";
+  }
+  if (summary.dropped_scans > 0 || summary.dropped_events > 0) {
+    std::cerr << "faults: " << summary.brief_report() << "\n";
+  }
   std::cerr << "wrote " << options.out_path << ": " << rig.channels.size() << " channels, "
             << summary.scans << " scans (" << summary.duration_s << " s), " << summary.events
             << " events\n";
+}
+
+struct RecoverCommandOptions {
+  std::string file;
+  std::string out_path;
+};
+
+void run_recover(const RecoverCommandOptions& options) {
+  RecoverOptions recover;
+  recover.out = options.out_path;
+  const ConvertResult result = recover_session(options.file, recover);
+  std::cerr << "recovered " << result.brief_report() << "\n";
 }
 
 std::string format_seconds(double seconds) {
@@ -280,7 +350,26 @@ void add_session_commands(CLI::App& app, Action& action) {
   record_command->add_option("--operator", record->recording.operator_name, "Who records");
   record_command->add_option("--product", record->recording.product_id, "The door or product");
   record_command->add_option("--notes", record->recording.notes, "Free text kept in the session");
+  record_command
+      ->add_option("--flush-interval-s", record->recording.flush_interval_s,
+                   "How often the recording journal is synced to disk: at most about this much "
+                   "is lost if the machine dies (docs/crash-safety.md)")
+      ->capture_default_str()
+      ->check(CLI::Range(0.001, 10.0));
   record_command->callback([record, &action] { action = [record] { run_record(*record); }; });
+
+  auto recover = std::make_shared<RecoverCommandOptions>();
+  CLI::App* recover_command = app.add_subcommand(
+      "recover",
+      "Make the session of a recording that was killed, lost power or ran out of disk from "
+      "its journal (S.h5.journal); `record` does this by itself for its output folder");
+  recover_command
+      ->add_option("FILE", recover->file, "The journal (S.h5.journal), or the session S.h5")
+      ->required();
+  recover_command->add_option("--out", recover->out_path,
+                              "The session to write; default: the journal's name without "
+                              ".journal");
+  recover_command->callback([recover, &action] { action = [recover] { run_recover(*recover); }; });
 
   auto info_path = std::make_shared<std::string>();
   CLI::App* info = app.add_subcommand(

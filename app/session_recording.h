@@ -1,5 +1,6 @@
 #pragma once
 // Recording a session from a rig, shared by `doorbench record` and the demo.
+#include <atomic>
 #include <filesystem>
 #include <string>
 
@@ -14,6 +15,8 @@ struct SessionRecordingOptions {
   std::string product_id;
   std::string notes;
   bool show_progress = true;
+  double flush_interval_s = 0.05;                     // RecordOptions::flush_interval_s
+  const std::atomic<bool>* stop_requested = nullptr;  // RecordOptions::stop_requested
 };
 
 // The rig file, or the built-in simulated-dishwasher rig when `rig_path` is empty.

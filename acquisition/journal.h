@@ -1,0 +1,140 @@
+#pragma once
+// The recording journal: an append-only file written while a session is recorded and
+// converted to the HDF5 session when the recording ends (docs/crash-safety.md; the byte
+// layout is in docs/session-format.md, "The recording journal").
+//
+// A header (magic, the session's description as JSON, its CRC-32) is followed by framed
+// blocks, each with its type, length and CRC-32: the clock's start, scans, events, and
+// an end mark. A writer killed at any moment leaves a valid prefix of frames, possibly
+// followed by one torn frame; the reader stops at the first frame that is incomplete or
+// fails its checksum and says how many bytes it did not use.
+//
+// Errors: JournalError, message starting with "PATH: ".
+#include <atomic>
+#include <cstdint>
+#include <filesystem>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "acquisition/session_file.h"
+#include "calibration/calibration_record.h"
+
+namespace doorbench {
+
+class JournalError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+inline constexpr int kJournalFormatVersion = 1;
+inline constexpr char kJournalSuffix[] = ".journal";
+inline constexpr char kJournalMagic[] = "DBJRNL\r\n";  // the first 8 bytes
+
+// The journal beside a session: "PATH.journal".
+std::filesystem::path journal_path_for(const std::filesystem::path& session_path);
+
+// CRC-32 (IEEE 802.3, the one of zlib and Python's zlib.crc32), continuing from `crc`.
+std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
+
+// What the journal's header holds: everything the HDF5 session needs besides samples
+// and events.
+struct JournalHeader {
+  SessionMetadata metadata;
+  std::vector<ChannelInfo> channels;  // counts channels on one uniform clock
+  std::vector<calibration::CalibrationRecord> calibrations;
+  double scan_rate_hz = 0.0;
+  std::string session_name;  // the session file's name (no folder) when recording began
+  double flush_interval_s = 0.0;
+  std::string backend;  // the backend's description
+};
+
+enum class FrameType : std::uint32_t { kStart = 1, kScans = 2, kEvent = 3, kEnd = 4 };
+
+// Writes a journal. One thread appends; sync(), bytes_written() and syncs() may also be
+// called from one other thread (the recorder's sync thread) while it does.
+class JournalWriter {
+ public:
+  // Creates `path` (it must not exist), takes an exclusive lock on it (flock, released
+  // when the process ends however it ends), writes the header and syncs file and folder.
+  // `max_block_scans` sizes the frame buffer, so appending does not allocate.
+  JournalWriter(const std::filesystem::path& path, const JournalHeader& header,
+                std::size_t max_block_scans);
+  ~JournalWriter();  // closes (without syncing; call sync() first to keep the tail)
+  JournalWriter(const JournalWriter&) = delete;
+  JournalWriter& operator=(const JournalWriter&) = delete;
+
+  // CLOCK_MONOTONIC time (ns) at which scan 0 was acquired.
+  void append_start(std::int64_t monotonic_ns);
+  // `scan_count` scans from scan `first_scan`; counts[c * stride + s] is channel c, scan s.
+  void append_scans(std::uint64_t first_scan, std::size_t scan_count, const std::int32_t* counts,
+                    std::size_t stride);
+  void append_event(double time_s, std::string_view kind, std::string_view channel,
+                    std::string_view detail);
+  void append_end(std::uint64_t total_scans);
+  // fdatasync: everything appended so far survives a power loss.
+  void sync();
+  void close();  // syncs and closes; idempotent
+
+  const std::filesystem::path& path() const { return path_; }
+  std::uint64_t bytes_written() const { return bytes_.load(std::memory_order_acquire); }
+  std::uint64_t syncs() const { return syncs_.load(); }
+
+ private:
+  void write_frame(FrameType type, std::size_t payload_bytes);
+  void write_all(const std::uint8_t* data, std::size_t size);
+
+  std::filesystem::path path_;
+  int fd_ = -1;
+  std::size_t channels_;
+  std::vector<std::uint8_t> frame_;  // 16-byte frame header + payload
+  std::atomic<std::uint64_t> bytes_{0};
+  std::atomic<std::uint64_t> syncs_{0};
+};
+
+// One frame as read back.
+struct JournalFrame {
+  FrameType type = FrameType::kScans;
+  std::uint64_t offset = 0;  // of the frame in the file
+  // kStart
+  std::int64_t monotonic_ns = 0;
+  // kScans: counts[c * scan_count + s]; kEnd: total scans in first_scan
+  std::uint64_t first_scan = 0;
+  std::size_t scan_count = 0;
+  std::vector<std::int32_t> counts;
+  // kEvent
+  SessionEvent event;
+};
+
+// Reads a journal frame by frame, without loading it whole.
+class JournalReader {
+ public:
+  // Opens and reads the header; throws JournalError ("not a doorbench journal", "its
+  // header is damaged", a newer version).
+  explicit JournalReader(const std::filesystem::path& path);
+  ~JournalReader();
+  JournalReader(const JournalReader&) = delete;
+  JournalReader& operator=(const JournalReader&) = delete;
+
+  const JournalHeader& header() const { return header_; }
+  // The next frame, or false at the end of the valid frames. After false, bytes_dropped()
+  // and stop_reason() say what (if anything) followed the last valid frame.
+  bool next(JournalFrame& frame);
+  std::uint64_t valid_bytes() const { return offset_; }
+  std::uint64_t file_bytes() const { return file_bytes_; }
+  std::uint64_t bytes_dropped() const { return file_bytes_ - offset_; }
+  const std::string& stop_reason() const { return stop_reason_; }  // "" at a clean end
+
+ private:
+  bool fail(std::string reason);
+  std::filesystem::path path_;
+  int fd_ = -1;
+  JournalHeader header_;
+  std::uint64_t offset_ = 0;
+  std::uint64_t file_bytes_ = 0;
+  std::string stop_reason_;
+  std::vector<std::uint8_t> payload_;
+};
+
+}  // namespace doorbench

@@ -1,0 +1,338 @@
+#include "acquisition/recovery.h"
+
+#include <fcntl.h>
+#include <hdf5.h>
+#include <sys/file.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <set>
+
+namespace doorbench {
+
+namespace {
+
+// HDF5 1.10 keeps a file whose close failed (e.g. a full disk while converting) in its
+// tables and crashes (SIGSEGV) retrying that close when it shuts down at exit. Without
+// its atexit hook the process just exits; every SessionWriter and SessionReader closes
+// its own file, so nothing relies on the hook. Runs before main(), before HDF5 starts.
+[[maybe_unused]] const herr_t kNoHdf5AtExit = H5dont_atexit();
+
+void sync_path(const std::filesystem::path& path, bool folder) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC | (folder ? O_DIRECTORY : 0));
+  if (fd < 0) return;
+  const int result = ::fsync(fd);
+  const int error = errno;
+  ::close(fd);
+  if (result != 0 && !folder) {
+    throw SessionError(path.string() + ": cannot sync the file: " + std::strerror(error));
+  }
+}
+
+std::filesystem::path folder_of(const std::filesystem::path& path) {
+  return path.parent_path().empty() ? std::filesystem::path(".") : path.parent_path();
+}
+
+// An exclusive, non-blocking flock on `path`, held while the object lives.
+class JournalLock {
+ public:
+  explicit JournalLock(const std::filesystem::path& path) {
+    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) {
+      const int error = errno;
+      throw JournalError(path.string() + ": " +
+                         (error == ENOENT ? std::string("no such file") : std::strerror(error)));
+    }
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      ::close(fd_);
+      fd_ = -1;
+      throw JournalError(path.string() +
+                         ": a running recording is writing this journal (it holds it locked); "
+                         "not touching it");
+    }
+  }
+  ~JournalLock() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  JournalLock(const JournalLock&) = delete;
+  JournalLock& operator=(const JournalLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+bool ends_with(const std::string& text, const std::string& suffix) {
+  return text.size() >= suffix.size() &&
+         text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
+}
+
+// True when `journal` ends before its header does: the recording died while creating it,
+// before any scan.
+bool header_incomplete(const std::filesystem::path& journal) {
+  const int fd = ::open(journal.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) return false;
+  std::array<std::uint8_t, 20> head{};
+  const ssize_t got = ::pread(fd, head.data(), head.size(), 0);
+  const auto size = static_cast<std::uint64_t>(::lseek(fd, 0, SEEK_END));
+  ::close(fd);
+  if (got < 0) return false;
+  const auto have = static_cast<std::size_t>(got);
+  if (std::memcmp(head.data(), kJournalMagic, std::min<std::size_t>(have, 8)) != 0) return false;
+  if (have < head.size()) return true;
+  std::uint32_t header_bytes = 0;
+  std::memcpy(&header_bytes, head.data() + 12, 4);
+  return size < head.size() + header_bytes;
+}
+
+}  // namespace
+
+std::string ConvertResult::brief_report() const {
+  char text[512];
+  const double seconds = scan_rate_hz > 0 ? static_cast<double>(scans) / scan_rate_hz : 0.0;
+  std::snprintf(text, sizeof text, "%s: %llu scans (%.3f s) of %zu channels, %zu events",
+                session.c_str(), static_cast<unsigned long long>(scans), seconds, channels, events);
+  std::string report = text;
+  if (gap_scans > 0) {
+    report += "; " + std::to_string(gap_scans) + " scans lost to ring overflows (marked as gaps)";
+  }
+  if (already_complete) report += "; the session was already complete, the journal is removed";
+  if (bytes_dropped > 0) {
+    report += "; " + std::to_string(bytes_dropped) + " bytes after the last whole block dropped (" +
+              drop_reason + ")";
+  } else if (!already_complete) {
+    report += ", nothing dropped";
+  }
+  return report;
+}
+
+ConvertResult convert_journal(const std::filesystem::path& journal,
+                              const std::filesystem::path& session, const ConvertOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) {
+    throw std::invalid_argument(session.string() + ": " + problem);
+  }
+  if (std::filesystem::exists(session)) {
+    throw SessionError(session.string() + ": already exists (sessions are never overwritten)");
+  }
+  JournalReader reader(journal);
+  const JournalHeader& header = reader.header();
+  ConvertResult result;
+  result.journal = journal;
+  result.session = session;
+  result.channels = header.channels.size();
+  result.scan_rate_hz = header.scan_rate_hz;
+
+  std::filesystem::path partial = session;
+  partial += ".partial";
+  // A partial file is a conversion that died; whoever converts holds the journal.
+  std::filesystem::remove(partial);
+  try {
+    {
+      SessionWriter writer(partial, header.metadata, options.writer);
+      std::set<std::string> names;
+      for (const ChannelInfo& channel : header.channels) {
+        writer.add_channel(channel);
+        names.insert(channel.name);
+      }
+      for (const calibration::CalibrationRecord& record : header.calibrations) {
+        writer.add_calibration(record);
+      }
+      const auto channel_count = static_cast<int>(header.channels.size());
+      std::vector<std::int32_t> fill;
+      JournalFrame frame;
+      while (reader.next(frame)) {
+        switch (frame.type) {
+          case FrameType::kStart:
+            result.start_monotonic_ns = frame.monotonic_ns;
+            break;
+          case FrameType::kEnd:
+            result.ended_cleanly = true;
+            break;
+          case FrameType::kEvent: {
+            SessionEvent event = frame.event;
+            if (!event.channel.empty() && names.count(event.channel) == 0) {
+              event.detail = "(channel " + event.channel + ") " + event.detail;
+              event.channel.clear();
+            }
+            if (event.kind.empty()) event.kind = "mark";
+            writer.add_event(event);
+            ++result.events;
+            break;
+          }
+          case FrameType::kScans: {
+            if (frame.first_scan < result.scans) {
+              throw JournalError(journal.string() + ": block at byte " +
+                                 std::to_string(frame.offset) + " starts at scan " +
+                                 std::to_string(frame.first_scan) + ", before scan " +
+                                 std::to_string(result.scans) + " that the journal already has");
+            }
+            if (frame.first_scan > result.scans) {
+              // Scans the writer never got (ring overflow): keep the clock, mark the gap.
+              const std::uint64_t missing = frame.first_scan - result.scans;
+              char detail[200];
+              std::snprintf(detail, sizeof detail,
+                            "%llu scans from scan %llu lost (ring buffer overflow); their raw "
+                            "values are %d",
+                            static_cast<unsigned long long>(missing),
+                            static_cast<unsigned long long>(result.scans), kGapFillCount);
+              writer.add_event(
+                  {static_cast<double>(result.scans) / header.scan_rate_hz, "gap", "", detail});
+              ++result.events;
+              fill.assign(static_cast<std::size_t>(std::min<std::uint64_t>(missing, 65536)),
+                          kGapFillCount);
+              for (std::uint64_t left = missing; left > 0;) {
+                const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(left, fill.size()));
+                for (int c = 0; c < channel_count; ++c) {
+                  writer.append_counts(c, std::span<const std::int32_t>(fill.data(), n));
+                }
+                left -= n;
+              }
+              result.gap_scans += missing;
+              result.scans = frame.first_scan;
+            }
+            for (int c = 0; c < channel_count; ++c) {
+              writer.append_counts(
+                  c, std::span<const std::int32_t>(frame.counts.data() + c * frame.scan_count,
+                                                   frame.scan_count));
+            }
+            result.scans += frame.scan_count;
+            break;
+          }
+        }
+      }
+      result.journal_bytes = reader.file_bytes();
+      result.bytes_dropped = reader.bytes_dropped();
+      result.drop_reason = reader.stop_reason();
+      if (options.closing_events) {
+        for (const SessionEvent& event : options.closing_events(result)) {
+          writer.add_event(event);
+          ++result.events;
+        }
+      }
+      if (options.extras) options.extras(writer);
+      writer.close();
+    }
+    sync_path(partial, false);
+    std::error_code error;
+    std::filesystem::rename(partial, session, error);
+    if (error) {
+      throw SessionError(session.string() + ": cannot rename " + partial.string() +
+                         " to it: " + error.message());
+    }
+    sync_path(folder_of(session), true);
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw;
+  }
+  std::filesystem::remove(journal);
+  sync_path(folder_of(journal), true);
+  return result;
+}
+
+ConvertResult recover_session(const std::filesystem::path& file, const RecoverOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) {
+    throw std::invalid_argument(file.string() + ": " + problem);
+  }
+  std::filesystem::path journal = file;
+  if (!ends_with(file.filename().string(), kJournalSuffix)) {
+    journal = journal_path_for(file);
+    if (!std::filesystem::exists(journal)) {
+      throw JournalError(file.string() + ": nothing to recover (" + journal.string() +
+                         " does not exist)");
+    }
+  }
+  const JournalLock lock(journal);
+  if (header_incomplete(journal)) {
+    std::filesystem::remove(journal);
+    throw JournalError(journal.string() +
+                       ": the recording died while creating this journal, before its first "
+                       "scan; there is nothing to recover, so it is removed");
+  }
+  std::filesystem::path session = options.out;
+  if (session.empty()) {
+    const std::string name = journal.filename().string();
+    if (ends_with(name, kJournalSuffix)) {
+      session = journal.parent_path() / name.substr(0, name.size() - std::strlen(kJournalSuffix));
+    } else {
+      session = journal.parent_path() / JournalReader(journal).header().session_name;
+    }
+  }
+
+  if (std::filesystem::exists(session)) {
+    // Killed between the rename of the complete session and the journal's removal?
+    JournalReader reader(journal);
+    JournalFrame frame;
+    std::uint64_t scans = 0;
+    bool ended = false;
+    while (reader.next(frame)) {
+      if (frame.type == FrameType::kScans) scans = frame.first_scan + frame.scan_count;
+      if (frame.type == FrameType::kEnd) ended = true;
+    }
+    const SessionReader existing(session);
+    const std::size_t has =
+        existing.channels().empty() ? 0 : existing.sample_count(existing.channels().front().name);
+    if (!ended || has != scans) {
+      throw JournalError(journal.string() + ": " + session.string() +
+                         " already exists and does not hold this journal's " +
+                         std::to_string(scans) + " scans (it has " + std::to_string(has) +
+                         "); move one of them away, or recover with another output path");
+    }
+    std::filesystem::remove(journal);
+    ConvertResult result;
+    result.journal = journal;
+    result.session = session;
+    result.channels = existing.channels().size();
+    result.scans = scans;
+    result.events = existing.events().size();
+    result.scan_rate_hz = reader.header().scan_rate_hz;
+    result.ended_cleanly = true;
+    result.already_complete = true;
+    return result;
+  }
+
+  ConvertOptions convert;
+  convert.writer = options.writer;
+  const std::string journal_name = journal.filename().string();
+  convert.closing_events = [journal_name](const ConvertResult& so_far) {
+    std::string detail = "recovered from " + journal_name;
+    detail += so_far.ended_cleanly ? " (the recording had ended; its conversion was interrupted)"
+                                   : " after the recording was interrupted";
+    detail += ": " + std::to_string(so_far.scans) + " scans";
+    if (so_far.bytes_dropped > 0) {
+      detail += "; " + std::to_string(so_far.bytes_dropped) +
+                " bytes after the last whole block dropped (" + so_far.drop_reason + ")";
+    }
+    const double time_s =
+        so_far.scan_rate_hz > 0 ? static_cast<double>(so_far.scans) / so_far.scan_rate_hz : 0.0;
+    return std::vector<SessionEvent>{{time_s, "recovered", "", detail}};
+  };
+  return convert_journal(journal, session, convert);
+}
+
+std::vector<std::filesystem::path> find_unfinished_sessions(const std::filesystem::path& folder) {
+  std::vector<std::filesystem::path> found;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(folder, error)) {
+    if (!entry.is_regular_file() || !ends_with(entry.path().filename().string(), kJournalSuffix)) {
+      continue;
+    }
+    const int fd = ::open(entry.path().c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd < 0) continue;
+    std::array<char, 8> magic{};
+    const ssize_t got = ::pread(fd, magic.data(), magic.size(), 0);
+    // A journal cut before its magic was complete is ours too (header_incomplete).
+    const bool ours =
+        got >= 0 && std::memcmp(magic.data(), kJournalMagic, static_cast<std::size_t>(got)) == 0;
+    const bool free = ::flock(fd, LOCK_EX | LOCK_NB) == 0;
+    ::close(fd);
+    if (ours && free) found.push_back(entry.path());
+  }
+  std::sort(found.begin(), found.end());
+  return found;
+}
+
+}  // namespace doorbench
