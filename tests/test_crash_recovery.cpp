@@ -576,8 +576,8 @@ TEST_CASE("Crash: 24 recordings SIGKILLed at random moments (slow)", "[crash][.s
 }
 
 TEST_CASE(
-    "Crash: `doorbench record` recovers an unfinished session on its next start; "
-    "`doorbench recover` by hand",
+    "Crash: doorbench record recovers an unfinished session on its next start, and "
+    "doorbench recover by hand",
     "[crash][cli]") {
   testing::TempDir dir("crash");
   const fs::path rig = dir.write("paced.toml", test_rig_text(true));

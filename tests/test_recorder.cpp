@@ -138,7 +138,7 @@ long h5py_length(const std::filesystem::path& session, const std::string& channe
 
 }  // namespace
 
-TEST_CASE("Recorder: every scan and event reaches the session; the journal is removed",
+TEST_CASE("Recorder: every scan and event reaches the session, and the journal is removed",
           "[recorder]") {
   testing::TempDir dir("recorder");
   CountingBackend backend(4, 5000.0);

@@ -47,7 +47,7 @@ TEST_CASE("SpscRing: capacity 0 is refused", "[ring]") {
   CHECK_THROWS_WITH((SpscRing<int>(0, 0)), "ring buffer capacity must be >= 1");
 }
 
-TEST_CASE("SpscRing: slots are built once; using the ring allocates nothing", "[ring]") {
+TEST_CASE("SpscRing: slots are built once, and using the ring allocates nothing", "[ring]") {
   struct Slot {
     std::vector<double> data;
   };
