@@ -123,6 +123,9 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
       std::max<std::size_t>(1, static_cast<std::size_t>(backend.scan_rate_hz() / 50));
   record.flush_interval_s = options.flush_interval_s;
   record.stop_requested = options.stop_requested;
+  // The card runs on its own clock: a writer that falls behind must cost a recorded gap,
+  // never a stalled read that overruns the card's buffer.
+  record.when_ring_full = RingFullPolicy::kDropAndRecordFault;
   const RecordSummary summary = record_session(backend, metadata, out_path, record);
   if (backend.overran()) {
     std::cerr << "doorbench: " << out_path.string() << ": " << backend.end_reason()
