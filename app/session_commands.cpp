@@ -41,6 +41,20 @@ RigDefinition load_rig(const std::string& rig_path) {
   return read_rig_file(rig_path);
 }
 
+// What every new recording's session says about itself, whichever backend records it.
+SessionMetadata new_session_metadata(const RigDefinition& rig,
+                                     const SessionRecordingOptions& options) {
+  SessionMetadata metadata;
+  metadata.rig_name = rig.name;
+  metadata.rig_definition = rig.text;
+  metadata.operator_name = options.operator_name;
+  metadata.product_id = options.product_id;
+  metadata.start_time_utc = utc_now_iso8601();
+  metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
+  metadata.notes = options.notes;
+  return metadata;
+}
+
 RecordSummary record_simulated_session(const RigDefinition& rig,
                                        const SessionRecordingOptions& options,
                                        const std::filesystem::path& out_path) {
@@ -57,14 +71,7 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
       options.duration_s > 0 ? options.duration_s : hand->natural_duration_s();
   sensors::SimulatedBench bench(rig, model, std::move(hand), duration_s);
 
-  SessionMetadata metadata;
-  metadata.rig_name = rig.name;
-  metadata.rig_definition = rig.text;
-  metadata.operator_name = options.operator_name;
-  metadata.product_id = options.product_id;
-  metadata.start_time_utc = utc_now_iso8601();
-  metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
-  metadata.notes = options.notes;
+  const SessionMetadata metadata = new_session_metadata(rig, options);
 
   RecordOptions record;
   record.duration_s = duration_s;
@@ -107,14 +114,7 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
   sensors::ComediBackend backend(rig, sensors::selected_comedi_api(), comedi);
   if (options.show_progress) std::cerr << backend.setup().brief_report();
 
-  SessionMetadata metadata;
-  metadata.rig_name = rig.name;
-  metadata.rig_definition = rig.text;
-  metadata.operator_name = options.operator_name;
-  metadata.product_id = options.product_id;
-  metadata.start_time_utc = utc_now_iso8601();
-  metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
-  metadata.notes = options.notes;
+  const SessionMetadata metadata = new_session_metadata(rig, options);
 
   RecordOptions record;
   record.duration_s = options.duration_s;
