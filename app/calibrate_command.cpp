@@ -21,6 +21,7 @@
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "sensors/rig_channel.h"
 #include "sensors/simulated_bench.h"
 
 namespace doorbench::app {

@@ -18,6 +18,7 @@
 #include "calibration/load_cell_calibration.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "sensors/rig_channel.h"
 #include "sensors/simulated_bench.h"
 
 namespace doorbench::app {

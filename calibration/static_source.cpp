@@ -4,23 +4,20 @@
 #include <stdexcept>
 
 #include "calibration/procedure.h"
+#include "sensors/rig_channel.h"
 
 namespace doorbench::calibration {
 
 namespace {
 
+// The sensor model's parameters, with errors of this library's kind.
 template <typename Parameters>
 Parameters parameters_of(const RigChannel& channel) {
-  Parameters parameters;
-  for (const auto& [name, value] : channel.parameters) {
-    if (!parameters.set(name, value)) {
-      throw CalibrationError("channel " + channel.name + ": unknown parameter " + name);
-    }
+  try {
+    return sensors::parameters_of<Parameters>(channel);
+  } catch (const std::invalid_argument& error) {
+    throw CalibrationError(error.what());
   }
-  if (std::string problem = parameters.validate(); !problem.empty()) {
-    throw CalibrationError("channel " + channel.name + ": " + problem);
-  }
-  return parameters;
 }
 
 sensors::Daq daq_of(const RigDefinition& rig, const RigChannel& channel) {

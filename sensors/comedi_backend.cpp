@@ -8,8 +8,7 @@
 #include <cstring>
 #include <sstream>
 
-#include "calibration/calibration_store.h"
-#include "sensors/simulated_bench.h"
+#include "sensors/rig_channel.h"
 
 namespace doorbench::sensors {
 
@@ -89,18 +88,6 @@ bool parse_address(const std::string& address, unsigned& subdevice, unsigned& ch
   if (slash == std::string::npos) return false;
   return parse_unsigned(std::string_view(address).substr(0, slash), subdevice) &&
          parse_unsigned(std::string_view(address).substr(slash + 1), channel);
-}
-
-calibration::CalibrationRecord channel_record(const RigDefinition& rig, const RigChannel& rc) {
-  if (rc.calibration == "nominal") return nominal_calibration(rc);
-  try {
-    return calibration::resolve_channel_record(
-        calibration::CalibrationStore(
-            calibration::calibration_store_directory(rig.calibration_store, rig.base_dir)),
-        rc.calibration, rc.name, rc.sensor, rc.serial, rc.unit);
-  } catch (const std::runtime_error& error) {
-    throw std::invalid_argument(rig.source + ": " + error.what());
-  }
 }
 
 }  // namespace
@@ -418,23 +405,16 @@ ComediBackend::ComediBackend(const RigDefinition& rig, const ComediApi& api,
   for (std::size_t i = 0; i < rig.channels.size(); ++i) {
     const RigChannel& rc = rig.channels[i];
     const ComediSetup::Channel& c = setup_.channels[i];
-    calibration::CalibrationRecord record = channel_record(rig, rc);
+    const calibration::CalibrationRecord record = rig_channel_calibration(rig, rc);
     calibrations_.push_back(record);
-    ChannelInfo info;
-    info.name = rc.name;
-    info.sensor_kind = rc.sensor;
-    info.sensor_serial = rc.serial;
-    info.raw_type = RawType::kCounts;
-    info.raw_unit = "counts";
-    info.raw_offset = c.raw_offset_V;
-    info.raw_scale = c.raw_scale_V;
-    info.range_min = c.range_min_V;
-    info.range_max = c.range_max_V;
-    info.unit = rc.unit;
-    info.calibration_id = record.id;
-    info.sample_rate_hz = setup_.achieved_scan_rate_hz;
-    info.first_sample_time_s = static_cast<double>(i) * setup_.achieved_convert_interval_s;
-    channels_.push_back(info);
+    channels_.push_back(counts_channel_info(
+        rc, record,
+        {.raw_offset_V = c.raw_offset_V,
+         .raw_scale_V = c.raw_scale_V,
+         .range_min_V = c.range_min_V,
+         .range_max_V = c.range_max_V,
+         .sample_rate_hz = setup_.achieved_scan_rate_hz,
+         .first_sample_time_s = static_cast<double>(i) * setup_.achieved_convert_interval_s}));
   }
   scan_bytes_ = static_cast<std::size_t>(setup_.sample_bytes) * chanlist_.size();
   // At least one scan, and whole samples (a read never splits one).

@@ -9,27 +9,13 @@
 
 #include "analysis/constraint_check.h"
 #include "analysis/parameter_file.h"
-#include "calibration/calibration_store.h"
+#include "sensors/rig_channel.h"
 
 namespace doorbench::sensors {
 
 namespace {
 
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-
-template <typename Parameters>
-Parameters parameters_of(const RigChannel& channel) {
-  Parameters parameters;
-  for (const auto& [name, value] : channel.parameters) {
-    if (!parameters.set(name, value)) {
-      throw std::invalid_argument("channel " + channel.name + ": unknown parameter " + name);
-    }
-  }
-  if (std::string problem = parameters.validate(); !problem.empty()) {
-    throw std::invalid_argument("channel " + channel.name + ": " + problem);
-  }
-  return parameters;
-}
 
 VirtualHandOptions hand_options(const RigSimulation& simulation) {
   VirtualHandOptions options;
@@ -129,34 +115,6 @@ DoorModel simulated_door_model(const RigDefinition& rig) {
   return load_model(*kind, params, effects);
 }
 
-calibration::CalibrationRecord nominal_calibration(const RigChannel& channel) {
-  calibration::CalibrationRecord record;
-  record.id = "nominal-" + (channel.serial.empty() ? channel.name : channel.serial);
-  record.sensor_kind = channel.sensor;
-  record.sensor_serial = channel.serial;
-  record.unit = channel.unit;
-  record.method = "nominal (datasheet figures of the sensor model)";
-  if (channel.sensor == "load_cell") {
-    const auto p = parameters_of<LoadCellParameters>(channel);
-    record.coefficients = {0.0, 1.0 / p.volts_per_newton()};
-    record.standard_uncertainty =
-        (p.nonlinearity_fraction_fs + p.hysteresis_fraction_fs) * p.full_scale_N / std::sqrt(3.0);
-  } else if (channel.sensor == "inclinometer") {
-    const auto p = parameters_of<InclinometerParameters>(channel);
-    record.coefficients = {0.0, kRadPerDeg / p.output_V_per_deg};
-    record.standard_uncertainty = p.noise_rms_deg * kRadPerDeg;
-  } else if (channel.sensor == "gyroscope") {
-    const auto p = parameters_of<GyroscopeParameters>(channel);
-    record.coefficients = {0.0, kRadPerDeg / p.output_V_per_dps};
-    record.standard_uncertainty = std::abs(p.bias_dps) * kRadPerDeg;
-  } else {
-    throw std::invalid_argument("channel " + channel.name + ": no sensor model for " +
-                                channel.sensor);
-  }
-  record.notes = "Before any calibration: the sensor's datasheet sensitivity, no offset.";
-  return record;
-}
-
 SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
                                double expected_duration_s)
     : SimulatedBench(rig, model, simulated_hand(rig, model), expected_duration_s) {}
@@ -200,36 +158,16 @@ SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
     } else {
       throw std::invalid_argument("channel " + rc.name + ": no sensor model for " + rc.sensor);
     }
-    // "nominal": the sensor model's datasheet figures; otherwise a record of the store.
-    calibration::CalibrationRecord record;
-    if (rc.calibration == "nominal") {
-      record = nominal_calibration(rc);
-    } else {
-      try {
-        record = calibration::resolve_channel_record(
-            calibration::CalibrationStore(
-                calibration::calibration_store_directory(rig.calibration_store, rig.base_dir)),
-            rc.calibration, rc.name, rc.sensor, rc.serial, rc.unit);
-      } catch (const std::runtime_error& error) {
-        throw std::invalid_argument(rig.source + ": " + error.what());
-      }
-    }
+    const calibration::CalibrationRecord record = rig_channel_calibration(rig, rc);
     calibrations_.push_back(record);
-    ChannelInfo info;
-    info.name = rc.name;
-    info.sensor_kind = rc.sensor;
-    info.sensor_serial = rc.serial;
-    info.raw_type = RawType::kCounts;
-    info.raw_unit = "counts";
-    info.raw_offset = rc.range_min_V;
-    info.raw_scale = daq.volts_per_count();
-    info.range_min = rc.range_min_V;
-    info.range_max = rc.range_max_V;
-    info.unit = rc.unit;
-    info.calibration_id = record.id;
-    info.sample_rate_hz = scan_rate_hz_;
-    info.first_sample_time_s = daq.channel_time_offset_s(static_cast<int>(index));
-    channels_.push_back(info);
+    channels_.push_back(counts_channel_info(
+        rc, record,
+        {.raw_offset_V = rc.range_min_V,
+         .raw_scale_V = daq.volts_per_count(),
+         .range_min_V = rc.range_min_V,
+         .range_max_V = rc.range_max_V,
+         .sample_rate_hz = scan_rate_hz_,
+         .first_sample_time_s = daq.channel_time_offset_s(static_cast<int>(index))}));
   }
   const auto scans = static_cast<std::size_t>(std::ceil(expected_duration_s * scan_rate_hz_)) + 1;
   for (auto* truth : {&truth_time_s_, &truth_theta_rad_, &truth_omega_rad_s_, &truth_force_N_}) {

@@ -98,9 +98,6 @@ std::unique_ptr<StrokeForce> simulated_hand(const RigDefinition& rig, const Door
 // parameter file relative to the rig, with an optional effects file).
 DoorModel simulated_door_model(const RigDefinition& rig);
 
-// The datasheet calibration of a channel's sensor model (volts → its unit).
-calibration::CalibrationRecord nominal_calibration(const RigChannel& channel);
-
 class SimulatedBench final : public AcquisitionBackend {
  public:
   // Every channel of the rig must use the simulated backend. `expected_duration_s`

@@ -11,6 +11,7 @@
 #include "calibration/inclinometer_calibration.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "sensors/rig_channel.h"
 #include "simulated_session.h"
 #include "temp_dir.h"
 

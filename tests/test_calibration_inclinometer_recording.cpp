@@ -15,6 +15,7 @@
 #include "acquisition/rig_file.h"
 #include "calibration/inclinometer_calibration.h"
 #include "calibration/static_source.h"
+#include "sensors/rig_channel.h"
 #include "sensors/simulated_bench.h"
 #include "temp_dir.h"
 

@@ -11,6 +11,7 @@
 #include "acquisition/session_csv.h"
 #include "calibration/calibration_store.h"
 #include "calibration/certificate.h"
+#include "sensors/rig_channel.h"
 #include "simulated_session.h"
 #include "temp_dir.h"
 
