@@ -268,7 +268,7 @@ TEST_CASE("Rig file: [bench] and its name are required", "[rig_file]") {
 TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
   CHECK(error_of("colour = 1\n" + minimal()) ==
         "rig.toml:1: colour: unknown key; valid keys: bench, clock, daq, channels, triggers, "
-        "simulation");
+        "recording, simulation");
   CHECK(error_of(edit(minimal(), "name = \"test bench\"", "nmae = \"test bench\"")) ==
         "rig.toml:2: bench.nmae: unknown key; valid keys: name, description");
   CHECK(error_of(edit(minimal(), "device = \"sim0\"", "device = \"sim0\"\nbits = 16")) ==
@@ -284,7 +284,8 @@ TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
         "rig.toml:15: simulation.hand.cycle: unknown key; valid keys: cycles, target_deg, "
         "cycle_duration_s");
   CHECK(error_of(minimal() + "[[triggers]]\nname = \"go\"\nkind = \"software\"\nline = 1\n") ==
-        "rig.toml:17: triggers[0].line: unknown key; valid keys: name, kind, source");
+        "rig.toml:17: triggers[0].line: unknown key; valid keys: name, kind, source, channel, "
+        "direction, level, hysteresis, hold_s, absolute, unit");
   CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nrate_hz = 500\n[daq]")) ==
         "rig.toml:4: clock.rate_hz: unknown key; valid keys: sample_rate_hz, convert_interval_s");
 }
@@ -547,11 +548,11 @@ TEST_CASE("Rig file: parameters must pass the sensor model's validation", "[rig_
 }
 
 // --- [[triggers]] -------------------------------------------------------------------------
-TEST_CASE("Rig file: trigger kind is software or external", "[rig_file]") {
+TEST_CASE("Rig file: trigger kind is software, external, level or manual", "[rig_file]") {
   const std::string rig = minimal() + "[[triggers]]\nname = \"start\"\nkind = \"hardware\"\n";
   CHECK(error_of(rig) ==
         "rig.toml:16: triggers[0].kind: \"hardware\" is not a trigger kind; valid: software, "
-        "external");
+        "external, level, manual");
   CHECK(error_of(minimal() + "[[triggers]]\nname = \"start\"\n") ==
         "rig.toml:14: triggers[0].kind: missing required key");
 }
