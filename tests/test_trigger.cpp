@@ -579,6 +579,69 @@ TEST_CASE("Trigger: events wait for the trigger; faults pass at once; none after
   CHECK(sink.counts[0].size() == 1500);
 }
 
+TEST_CASE("Trigger: a gap while armed restarts the pre-trigger buffer; gaps stay gaps",
+          "[trigger]") {
+  const std::size_t n = 3000;
+  std::vector<std::int32_t> step(n, 0);
+  for (std::size_t i = 1050; i < n; ++i) step[i] = 5;
+  std::vector<std::vector<std::int32_t>> data{scan_index(n), step};
+  TriggerOptions options;
+  options.start = TriggerOptions::Start::kLevel;
+  options.start_level = level("step", 2.0, 0.5);
+  options.pre_trigger_s = 0.2;
+  Sink sink(2);
+  const std::vector<ChannelInfo> channels{counts_channel("index", "counts"),
+                                          counts_channel("step")};
+  TriggerStage stage(options, channels, kRateHz, 100, {}, {}, sink);
+  feed(stage, data, 100, 0, 900);
+  feed(stage, data, 100, 1000, 2000);  // scans 900 … 999 lost
+  feed(stage, data, 100, 2100, n);     // and 2000 … 2099, after the trigger
+  // Only 50 scans of history after the gap, not 200.
+  CHECK(*stage.first_forwarded_scan() == 1000);
+  REQUIRE(sink.counts[0].size() == 1000 + 900);
+  CHECK(sink.counts[0].front() == 1000);
+  CHECK(sink.scan_numbers[999] == 999);
+  CHECK(sink.scan_numbers[1000] == 1100);  // the lost scans stay a gap for the sink
+  CHECK(sink.counts[0][1000] == 2100);
+}
+
+TEST_CASE("Trigger: a session of polled channels only: level start, duration stop", "[trigger]") {
+  TriggerOptions options;
+  options.start = TriggerOptions::Start::kLevel;
+  options.start_level = level("angle", 0.1, 0.02);
+  options.duration_s = 1.0;
+  options.pre_trigger_s = 0.5;
+  Sink sink(0);
+  const std::vector<ChannelInfo> polled{polled_channel("angle", "rad"),
+                                        polled_channel("rate", "rad/s")};
+  TriggerStage stage(options, {}, 0.0, 0, polled, {}, sink);
+  for (int k = 0; k < 400; ++k) {  // 100 Hz, both channels; angle steps to 0.2 at 2.005 s
+    const double t[] = {k * 0.01 + 0.005}, latency[] = {0.002};
+    const double angle[] = {k >= 200 ? 0.2 : 0.0}, rate[] = {static_cast<double>(k)};
+    stage.timed_samples(0, t, latency, angle);
+    stage.timed_samples(1, t, latency, rate);
+  }
+  REQUIRE(sink.of_kind("trigger").size() == 1);
+  CHECK(sink.of_kind("trigger")[0].time_s == Approx(2.005));
+  REQUIRE(sink.of_kind("stop").size() == 1);
+  CHECK(sink.of_kind("stop")[0].time_s == Approx(3.005));
+  CHECK(stage.finished());
+  CHECK_FALSE(stage.first_forwarded_scan());
+  // Each channel from 1.505 s (0.5 s before) to before 3.005 s: 150 samples.
+  std::size_t angle_samples = 0, rate_samples = 0;
+  double first_rate = 1e9;
+  for (const auto& sample : sink.timed) {
+    (sample.channel == 0 ? angle_samples : rate_samples) += 1;
+    if (sample.channel == 1) first_rate = std::min(first_rate, sample.raw);
+    CHECK(sample.time_s >= 1.5);
+    CHECK(sample.time_s < 3.005);
+  }
+  CHECK(angle_samples == 150);
+  CHECK(first_rate == 150.0);
+  // rate's samples of k = 150 … 199 came before the trigger, 200 … 299 after.
+  CHECK(rate_samples == 150);
+}
+
 TEST_CASE("Trigger: the per-block path allocates nothing after construction", "[trigger]") {
   // Counts what it gets, without keeping it.
   struct CountingSink : RecordingSink {
