@@ -802,7 +802,8 @@ const std::string kTriggerRig =
     "strokes = \"moving\"\n";
 }  // namespace
 
-TEST_CASE("Rig file: level and manual triggers, [recording], and their errors", "[rig_file]") {
+TEST_CASE("Rig file: level and manual triggers, the recording table, and their errors",
+          "[rig_file]") {
   CHECK(error_of(edit(kTriggerRig, "channel = \"force\"\nlevel = 2.0",
                       "channel = \"forse\"\nlevel = 2.0")) ==
         "rig.toml:30: triggers[1].channel: \"forse\" is not a channel of the rig (they are force, "

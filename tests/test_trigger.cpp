@@ -511,7 +511,7 @@ TEST_CASE("Trigger: a level on a calibrated counts channel fires at the physical
                     "the session (channels: force)");
 }
 
-TEST_CASE("Trigger: a polled channel's level starts the recording; scans ahead are kept",
+TEST_CASE("Trigger: a polled channel's level starts the recording, scans ahead are kept",
           "[trigger]") {
   const std::size_t n = 2000;
   std::vector<std::vector<std::int32_t>> data{scan_index(n)};
@@ -547,7 +547,7 @@ TEST_CASE("Trigger: a polled channel's level starts the recording; scans ahead a
   CHECK(sink.timed.size() == 30);
 }
 
-TEST_CASE("Trigger: events wait for the trigger; faults pass at once; none after the stop",
+TEST_CASE("Trigger: events wait for the trigger, faults pass at once, none after the stop",
           "[trigger]") {
   std::atomic<bool> start{false};
   TriggerOptions options;
@@ -579,7 +579,7 @@ TEST_CASE("Trigger: events wait for the trigger; faults pass at once; none after
   CHECK(sink.counts[0].size() == 1500);
 }
 
-TEST_CASE("Trigger: a gap while armed restarts the pre-trigger buffer; gaps stay gaps",
+TEST_CASE("Trigger: a gap while armed restarts the pre-trigger buffer, gaps stay gaps",
           "[trigger]") {
   const std::size_t n = 3000;
   std::vector<std::int32_t> step(n, 0);
@@ -761,7 +761,8 @@ const std::string kRig =
 
 }  // namespace
 
-TEST_CASE("Trigger: level and manual triggers and [recording] from a rig file", "[trigger]") {
+TEST_CASE("Trigger: level and manual triggers and the recording table from a rig file",
+          "[trigger]") {
   const doorbench::RigDefinition rig = doorbench::parse_rig(kRig, "rig.toml", {});
   REQUIRE(rig.triggers.size() == 5);
   CHECK(rig.triggers[1].kind == "level");
