@@ -4,8 +4,10 @@
 // block; and the rig keys that configure it.
 #include <atomic>
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -812,4 +814,55 @@ TEST_CASE("Trigger: level and manual triggers and the recording table from a rig
       plain + "[recording]\nstart = \"enter\"\nstop = \"enter\"\n", "rig.toml", {}));
   CHECK(manual.start == TriggerOptions::Start::kManual);
   CHECK(manual.stop == TriggerOptions::Stop::kManual);
+}
+
+// Not run by default: the stage's cost at the issue's rate (docs/triggering.md quotes it).
+TEST_CASE("Trigger: throughput at 8 channels x 50 kS/s", "[.benchmark][trigger]") {
+  struct NullSink : RecordingSink {
+    std::uint64_t scans_seen = 0;
+    void scans(std::uint64_t, std::size_t count, const std::int32_t*, std::size_t) override {
+      scans_seen += count;
+    }
+    void timed_samples(std::uint32_t, std::span<const double>, std::span<const double>,
+                       std::span<const double>) override {}
+    void event(double, std::string_view, std::string_view, std::string_view) override {}
+  } sink;
+  const double rate_hz = 50000;
+  const std::size_t block = 500, channels = 8, blocks = 6000;  // 60 s of data
+  std::vector<ChannelInfo> infos;
+  for (std::size_t c = 0; c < channels; ++c) {
+    ChannelInfo info = counts_channel("ch" + std::to_string(c));
+    info.raw_scale = 20.0 / 65536;
+    info.raw_offset = -10;
+    infos.push_back(info);
+  }
+  TriggerOptions options;
+  options.start = TriggerOptions::Start::kLevel;
+  options.start_level = level("ch0", 2.0, 0.5);
+  options.stop = TriggerOptions::Stop::kLevel;
+  options.stop_level = level("ch2", -5.0, 0.5, LevelCondition::Direction::kFalling);
+  options.strokes = level("ch1", 2.0, 0.5);
+  options.min_stroke_s = 0.001;  // a stroke every 4 ms: far more events than a door makes
+  options.pre_trigger_s = 1.0;
+  TriggerStage stage(options, infos, rate_hz, block, {}, {}, sink);
+  std::vector<std::int32_t> counts(channels * block, 32768);
+  for (const bool triggered : {false, true}) {
+    for (std::size_t s = 0; s < block; ++s) {
+      counts[0 * block + s] = triggered ? 45000 : 32768;  // ch0 above 2 V once triggered
+      counts[1 * block + s] = (s / 100) % 2 ? 45000 : 32768;
+    }
+    const auto start = std::chrono::steady_clock::now();
+    for (std::size_t b = 0; b < blocks; ++b) {
+      const std::size_t first = (triggered ? blocks : 0) * block + b * block;
+      stage.scans(first, block, counts.data(), block);
+    }
+    const double elapsed_s =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    const double data_s = blocks * block / rate_hz;
+    std::printf("trigger stage %s: %.0f s of 8 x 50 kS/s in %.3f s (%.2f %% of real time)\n",
+                triggered ? "triggered (strokes, stop level)" : "armed (buffering, level)", data_s,
+                elapsed_s, 100 * elapsed_s / data_s);
+  }
+  CHECK(stage.state() == TriggerStage::State::kTriggered);
+  CHECK(stage.summary().strokes > 1000);
 }
