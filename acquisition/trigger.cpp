@@ -136,7 +136,14 @@ TriggerOptions trigger_options_from_rig(const RigDefinition& rig) {
   options.pre_trigger_s = recording.pre_trigger_s;
   options.duration_s = recording.duration_s;
   options.min_stroke_s = recording.min_stroke_s;
-  if (recording.start != "immediate") {
+  if (recording.start == "immediate" && !rig.daq_start_trigger.empty()) {
+    // The DAQ itself waits for its start line, so "at once" is at that line.
+    const RigTrigger& daq_start = find(rig.daq_start_trigger);
+    if (daq_start.kind == "external") {
+      options.start = TriggerOptions::Start::kExternal;
+      options.external_source = daq_start.source;
+    }
+  } else if (recording.start != "immediate") {
     const RigTrigger& start = find(recording.start);
     if (start.kind == "level") {
       options.start = TriggerOptions::Start::kLevel;

@@ -797,11 +797,17 @@ TEST_CASE("Trigger: level and manual triggers and the recording table from a rig
   CHECK(options.strokes->absolute);
   CHECK(options.validate() == "");
 
-  // Without [recording]: immediate, no stop, 1 s pre-trigger.
+  // Without [recording]: at once, no stop, 1 s pre-trigger. "At once" is at the DAQ's
+  // external start line when [daq] start_trigger names one.
   const std::string plain = kRig.substr(0, kRig.find("[recording]"));
   const TriggerOptions defaults =
       doorbench::trigger_options_from_rig(doorbench::parse_rig(plain, "rig.toml", {}));
-  CHECK(defaults.start == TriggerOptions::Start::kImmediate);
+  CHECK(defaults.start == TriggerOptions::Start::kExternal);
+  CHECK(defaults.external_source == "PFI0");
+  const std::string software_start =
+      plain.substr(0, plain.find("start_trigger")) + plain.substr(plain.find("[[channels]]"));
+  CHECK(doorbench::trigger_options_from_rig(doorbench::parse_rig(software_start, "rig.toml", {}))
+            .start == TriggerOptions::Start::kImmediate);
   CHECK(defaults.stop == TriggerOptions::Stop::kNone);
   CHECK(defaults.pre_trigger_s == 1.0);
   CHECK_FALSE(defaults.strokes);
