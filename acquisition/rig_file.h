@@ -40,9 +40,27 @@ struct RigChannel {
 
 struct RigTrigger {
   std::string name;
-  std::string kind;    // software | external
+  std::string kind;    // software | external | level | manual
   std::string source;  // for external: the digital line, e.g. "PFI0"
+  // For level (docs/triggering.md): a channel's physical value crossing `level`.
+  std::string channel;
+  std::string direction;  // rising | falling
+  double level = 0.0;
+  double hysteresis = 0.0;
+  double hold_s = 0.0;    // only for the stop trigger
+  bool absolute = false;  // compare |value|
   int line = 0;
+};
+
+// [recording]: which triggers start and stop a recording (docs/triggering.md).
+struct RigRecording {
+  std::string start = "immediate";  // "immediate" or a [[triggers]] name
+  std::string stop;                 // a level or manual trigger's name, or empty
+  double duration_s = 0.0;          // after the trigger; 0: no duration
+  double pre_trigger_s = 1.0;
+  std::string strokes;  // a level trigger's name for stroke markers, or empty
+  double min_stroke_s = 0.2;
+  int line = 0;  // of the [recording] header (0: the table is absent)
 };
 
 // The simulated backend's door and virtual hand.
@@ -82,6 +100,7 @@ struct RigDefinition {
   std::string daq_start_trigger;
   std::vector<RigChannel> channels;
   std::vector<RigTrigger> triggers;
+  RigRecording recording;                   // defaults when [recording] is absent
   std::optional<RigSimulation> simulation;  // required when a channel is simulated
 
   const RigChannel* find_channel(std::string_view name) const;

@@ -268,7 +268,7 @@ TEST_CASE("Rig file: [bench] and its name are required", "[rig_file]") {
 TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
   CHECK(error_of("colour = 1\n" + minimal()) ==
         "rig.toml:1: colour: unknown key; valid keys: bench, clock, daq, channels, triggers, "
-        "simulation");
+        "recording, simulation");
   CHECK(error_of(edit(minimal(), "name = \"test bench\"", "nmae = \"test bench\"")) ==
         "rig.toml:2: bench.nmae: unknown key; valid keys: name, description");
   CHECK(error_of(edit(minimal(), "device = \"sim0\"", "device = \"sim0\"\nbits = 16")) ==
@@ -284,7 +284,8 @@ TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
         "rig.toml:15: simulation.hand.cycle: unknown key; valid keys: cycles, target_deg, "
         "cycle_duration_s");
   CHECK(error_of(minimal() + "[[triggers]]\nname = \"go\"\nkind = \"software\"\nline = 1\n") ==
-        "rig.toml:17: triggers[0].line: unknown key; valid keys: name, kind, source");
+        "rig.toml:17: triggers[0].line: unknown key; valid keys: name, kind, source, channel, "
+        "direction, level, hysteresis, hold_s, absolute, unit");
   CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nrate_hz = 500\n[daq]")) ==
         "rig.toml:4: clock.rate_hz: unknown key; valid keys: sample_rate_hz, convert_interval_s");
 }
@@ -547,11 +548,11 @@ TEST_CASE("Rig file: parameters must pass the sensor model's validation", "[rig_
 }
 
 // --- [[triggers]] -------------------------------------------------------------------------
-TEST_CASE("Rig file: trigger kind is software or external", "[rig_file]") {
+TEST_CASE("Rig file: trigger kind is software, external, level or manual", "[rig_file]") {
   const std::string rig = minimal() + "[[triggers]]\nname = \"start\"\nkind = \"hardware\"\n";
   CHECK(error_of(rig) ==
         "rig.toml:16: triggers[0].kind: \"hardware\" is not a trigger kind; valid: software, "
-        "external");
+        "external, level, manual");
   CHECK(error_of(minimal() + "[[triggers]]\nname = \"start\"\n") ==
         "rig.toml:14: triggers[0].kind: missing required key");
 }
@@ -737,4 +738,121 @@ TEST_CASE("Rig file: the example in docs/rig-format.md parses", "[rig_file]") {
   CHECK(rig.channels[1].backend == "modbus");
   CHECK(rig.triggers.at(0).source == "PFI0");
   CHECK_FALSE(rig.simulation.has_value());
+}
+
+// --- level and manual triggers, [recording] (docs/triggering.md) -------------------------
+namespace {
+// A comedi rig with every kind of trigger and a [recording] table.
+const std::string kTriggerRig =
+    "[bench]\n"                          // 1
+    "name = \"b\"\n"                     // 2
+    "[daq]\n"                            // 3
+    "backend = \"comedi\"\n"             // 4
+    "device = \"/dev/comedi0\"\n"        // 5
+    "start_trigger = \"door_switch\"\n"  // 6
+    "[[channels]]\n"                     // 7
+    "name = \"force\"\n"                 // 8
+    "sensor = \"load_cell\"\n"           // 9
+    "serial = \"LC-1\"\n"                // 10
+    "backend = \"comedi\"\n"             // 11
+    "address = \"0/0\"\n"                // 12
+    "calibration = \"nominal\"\n"        // 13
+    "unit = \"N\"\n"                     // 14
+    "[[channels]]\n"                     // 15
+    "name = \"rate\"\n"                  // 16
+    "sensor = \"gyroscope\"\n"           // 17
+    "serial = \"G-1\"\n"                 // 18
+    "backend = \"comedi\"\n"             // 19
+    "address = \"0/1\"\n"                // 20
+    "calibration = \"nominal\"\n"        // 21
+    "unit = \"rad/s\"\n"                 // 22
+    "[[triggers]]\n"                     // 23
+    "name = \"door_switch\"\n"           // 24
+    "kind = \"external\"\n"              // 25
+    "source = \"PFI0\"\n"                // 26
+    "[[triggers]]\n"                     // 27
+    "name = \"push\"\n"                  // 28
+    "kind = \"level\"\n"                 // 29
+    "channel = \"force\"\n"              // 30
+    "level = 2.0\n"                      // 31
+    "hysteresis = 0.5\n"                 // 32
+    "unit = \"N\"\n"                     // 33
+    "[[triggers]]\n"                     // 34
+    "name = \"release\"\n"               // 35
+    "kind = \"level\"\n"                 // 36
+    "channel = \"force\"\n"              // 37
+    "direction = \"falling\"\n"          // 38
+    "level = 0.5\n"                      // 39
+    "hold_s = 1.5\n"                     // 40
+    "[[triggers]]\n"                     // 41
+    "name = \"moving\"\n"                // 42
+    "kind = \"level\"\n"                 // 43
+    "channel = \"rate\"\n"               // 44
+    "level = 0.2\n"                      // 45
+    "hysteresis = 0.05\n"                // 46
+    "absolute = true\n"                  // 47
+    "[[triggers]]\n"                     // 48
+    "name = \"enter\"\n"                 // 49
+    "kind = \"manual\"\n"                // 50
+    "[recording]\n"                      // 51
+    "start = \"push\"\n"                 // 52
+    "stop = \"release\"\n"               // 53
+    "duration_s = 30\n"                  // 54
+    "pre_trigger_s = 2\n"                // 55
+    "strokes = \"moving\"\n";
+}  // namespace
+
+TEST_CASE("Rig file: level and manual triggers, the recording table, and their errors",
+          "[rig_file]") {
+  CHECK(error_of(edit(kTriggerRig, "channel = \"force\"\nlevel = 2.0",
+                      "channel = \"forse\"\nlevel = 2.0")) ==
+        "rig.toml:30: triggers[1].channel: \"forse\" is not a channel of the rig (they are force, "
+        "rate)");
+  CHECK(error_of(edit(kTriggerRig, "level = 2.0\n", "")) ==
+        "rig.toml:27: triggers[1].level: missing required key (in the channel's unit, N)");
+  CHECK(error_of(edit(kTriggerRig, "hysteresis = 0.5", "hysteresis = -0.5")) ==
+        "rig.toml:32: triggers[1].hysteresis: must be >= 0 (got -0.5)");
+  CHECK(error_of(edit(kTriggerRig, "hold_s = 1.5", "hold_s = -1")) ==
+        "rig.toml:40: triggers[2].hold_s: must be >= 0 (got -1)");
+  CHECK(error_of(edit(kTriggerRig, "unit = \"N\"\n[[triggers]]", "unit = \"kN\"\n[[triggers]]")) ==
+        "rig.toml:33: triggers[1].unit: \"kN\" is not the unit of channel force, which is \"N\"");
+  CHECK(error_of(edit(kTriggerRig, "direction = \"falling\"", "direction = \"down\"")) ==
+        "rig.toml:38: triggers[2].direction: \"down\" is not a direction; valid: rising, falling");
+  CHECK(error_of(edit(kTriggerRig, "hysteresis = 0.05", "hysteresis = 0.2")) ==
+        "rig.toml:46: triggers[3].hysteresis: must be below level 0.2 for an absolute rising "
+        "level (got 0.2)");
+  CHECK(error_of(edit(kTriggerRig, "kind = \"manual\"\n", "kind = \"manual\"\nlevel = 3\n")) ==
+        "rig.toml:51: triggers[4].level: only level triggers have a level");
+  CHECK(error_of(edit(kTriggerRig, "name = \"enter\"", "name = \"immediate\"")) ==
+        "rig.toml:49: triggers[4].name: \"immediate\" is reserved (recording.start = "
+        "\"immediate\")");
+  CHECK(error_of(edit(kTriggerRig, "start = \"push\"", "start = \"pusch\"")) ==
+        "rig.toml:52: recording.start: \"pusch\" is not the name of a [[triggers]] table (they "
+        "are door_switch, push, release, moving, enter)");
+  CHECK(error_of(edit(kTriggerRig, "start = \"push\"", "start = \"release\"")) ==
+        "rig.toml:52: recording.start: \"release\" has hold_s (line 34), which only a stop "
+        "trigger uses");
+  CHECK(error_of(edit(kTriggerRig, "stop = \"release\"", "stop = \"push\"")) ==
+        "rig.toml:53: recording.stop: \"push\" is also recording.start; a level stop needs a "
+        "trigger of its own (e.g. the falling edge)");
+  CHECK(error_of(edit(kTriggerRig, "stop = \"release\"", "stop = \"door_switch\"")) ==
+        "rig.toml:53: recording.stop: \"door_switch\" is an external trigger; a stop must be a "
+        "level or manual trigger");
+  CHECK(error_of(edit(kTriggerRig, "duration_s = 30", "duration_s = 0")) ==
+        "rig.toml:54: recording.duration_s: must be > 0 (got 0)");
+  CHECK(error_of(edit(kTriggerRig, "pre_trigger_s = 2", "pre_trigger_s = 61")) ==
+        "rig.toml:55: recording.pre_trigger_s: must be from 0 to 60 s (got 61)");
+  CHECK(error_of(edit(kTriggerRig, "strokes = \"moving\"", "strokes = \"enter\"")) ==
+        "rig.toml:56: recording.strokes: \"enter\" is a manual trigger; stroke markers need a "
+        "level trigger");
+  CHECK(error_of(kTriggerRig + "min_stroke_s = -0.1\n") ==
+        "rig.toml:57: recording.min_stroke_s: must be >= 0 (got -0.1)");
+  CHECK(error_of(kTriggerRig + "begin = \"push\"\n") ==
+        "rig.toml:57: recording.begin: unknown key; valid keys: start, stop, duration_s, "
+        "pre_trigger_s, strokes, min_stroke_s");
+  // An external start must be the DAQ's start trigger too.
+  CHECK(error_of(edit(edit(kTriggerRig, "start_trigger = \"door_switch\"\n", ""),
+                      "start = \"push\"", "start = \"door_switch\"")) ==
+        "rig.toml:51: recording.start: \"door_switch\" is an external trigger: it must also be "
+        "daq.start_trigger, so that the DAQ starts on its line");
 }
