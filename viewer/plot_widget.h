@@ -1,0 +1,37 @@
+#pragma once
+// The plot widget of our own, drawn with ImDrawList from a PlotView (viewer/plot_view.h):
+// series, legend with units, grid with ticks, wheel zoom (about the cursor; x only on time
+// series unless Shift is held), drag pan (left), box zoom (right drag), double click to fit
+// everything, and a crosshair with the nearest samples' readout.
+#include <string>
+#include <vector>
+
+#include "viewer/plot_view.h"
+
+namespace doorbench::viewer {
+
+// Where a plot was drawn in the last frame, and what it showed (for the screenshot's
+// companion file and the tests that check pixels against it).
+struct PlotRecord {
+  std::string title;
+  Rect area;  // the data area in window pixels, y downwards
+  Range x, y;
+  std::vector<std::string> series;
+  std::vector<Rgba> colours;
+};
+
+struct PlotWidgetState {
+  bool box_active = false;
+  double box_x0 = 0.0, box_y0 = 0.0;
+  DrawData draw;  // reused frame after frame
+};
+
+// Draws `view` at the cursor in a box of width × height pixels (0: fill what remains).
+// Returns where it went.
+PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, float width,
+                       float height);
+
+// Series colour to ImGui's packed colour.
+unsigned int to_imgui_colour(Rgba c);
+
+}  // namespace doorbench::viewer

@@ -1,0 +1,259 @@
+#include "viewer/viewer_app.h"
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace doorbench::viewer {
+
+namespace {
+
+const char* raw_type_name(RawType t) {
+  return t == RawType::kCounts ? "counts" : "values";
+}
+
+void text_row(const char* name, const std::string& value) {
+  ImGui::TableNextRow();
+  ImGui::TableNextColumn();
+  ImGui::TextUnformatted(name);
+  ImGui::TableNextColumn();
+  ImGui::TextUnformatted(value.empty() ? "-" : value.c_str());
+}
+
+constexpr ImGuiTableFlags kTableFlags =
+    ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp;
+
+}  // namespace
+
+std::string check_layout(const std::string& name) {
+  const auto& names = layout_names();
+  if (std::find(names.begin(), names.end(), name) != names.end()) return "";
+  std::string message = std::string("unknown layout '").append(name).append("' (expected ");
+  for (std::size_t i = 0; i < names.size(); ++i) message += (i ? ", " : "") + names[i];
+  return message + ")";
+}
+
+Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitComparison>> fits) {
+  for (std::size_t i = 0; i < sessions.size(); ++i) {
+    SessionView view;
+    view.data = std::move(sessions[i]);
+    view.channels = channel_plots(view.data);
+    view.channel_states.resize(view.channels.size());
+    view.loop = loop_plot(view.data);
+    if (i < fits.size() && fits[i]) {
+      view.fit = std::move(fits[i]);
+      view.fit_plots = fit_plots(*view.fit);
+      view.fit_states.resize(view.fit_plots.size());
+    }
+    sessions_.push_back(std::move(view));
+  }
+}
+
+void Viewer::frame(float width, float height, const std::string& layout) {
+  if (!layout.empty()) {
+    const std::string problem = check_layout(layout);
+    if (!problem.empty()) throw std::invalid_argument(problem);
+  }
+  plots_.clear();
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImVec2(width, height));
+  ImGui::Begin("doorbench view", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoBringToFrontOnFocus | ImGuiWindowFlags_NoSavedSettings);
+  if (sessions_.empty()) {
+    ImGui::TextUnformatted("No session: doorbench view SESSION.h5 ...");
+    ImGui::End();
+    return;
+  }
+  current_ = std::clamp(current_, 0, int(sessions_.size()) - 1);
+  SessionView& s = sessions_[std::size_t(current_)];
+  if (layout.empty()) {
+    if (sessions_.size() > 1) {
+      ImGui::SetNextItemWidth(500.0f);
+      const std::string label = s.data.path.filename().string();
+      if (ImGui::BeginCombo("session", label.c_str())) {
+        for (std::size_t i = 0; i < sessions_.size(); ++i) {
+          const std::string name = sessions_[i].data.path.string();
+          if (ImGui::Selectable(name.c_str(), int(i) == current_)) current_ = int(i);
+        }
+        ImGui::EndCombo();
+      }
+    } else {
+      ImGui::Text("%s", s.data.path.string().c_str());
+    }
+    if (ImGui::BeginTabBar("layouts")) {
+      for (const std::string& name : layout_names()) {
+        if (ImGui::BeginTabItem(name.c_str())) {
+          layout_body(s, name);
+          ImGui::EndTabItem();
+        }
+      }
+      ImGui::EndTabBar();
+    }
+  } else {
+    layout_body(s, layout);
+  }
+  ImGui::End();
+}
+
+void Viewer::layout_body(SessionView& s, const std::string& layout) {
+  if (layout == "browser") browser(s);
+  if (layout == "channels") channels(s);
+  if (layout == "loop") loop(s);
+  if (layout == "fit") fit(s);
+}
+
+void Viewer::browser(SessionView& s) {
+  const SessionData& d = s.data;
+  ImGui::BeginChild("browser");
+  if (ImGui::CollapsingHeader("Metadata", ImGuiTreeNodeFlags_DefaultOpen) &&
+      ImGui::BeginTable("metadata", 2, kTableFlags)) {
+    text_row("file", d.path.string());
+    text_row("rig", d.metadata.rig_name);
+    text_row("operator", d.metadata.operator_name);
+    text_row("product", d.metadata.product_id);
+    text_row("start (UTC)", d.metadata.start_time_utc);
+    text_row("software", d.metadata.software_version);
+    text_row("notes", d.metadata.notes);
+    ImGui::EndTable();
+  }
+  if (ImGui::CollapsingHeader("Channels", ImGuiTreeNodeFlags_DefaultOpen) &&
+      ImGui::BeginTable("channels", 8, kTableFlags)) {
+    for (const char* h :
+         {"name", "sensor", "serial", "raw", "unit", "rate [Hz]", "samples", "calibration"}) {
+      ImGui::TableSetupColumn(h);
+    }
+    ImGui::TableHeadersRow();
+    for (std::size_t i = 0; i < d.channels.size(); ++i) {
+      const ChannelInfo& c = d.channels[i];
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.name.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.sensor_kind.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.sensor_serial.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%s (%s)", raw_type_name(c.raw_type), c.raw_unit.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.unit.c_str());
+      ImGui::TableNextColumn();
+      if (c.sample_rate_hz > 0) {
+        ImGui::Text("%g", c.sample_rate_hz);
+      } else {
+        ImGui::TextUnformatted("explicit times");
+      }
+      ImGui::TableNextColumn();
+      ImGui::Text("%zu", d.sample_counts[i]);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.calibration_id.empty() ? "-" : c.calibration_id.c_str());
+    }
+    ImGui::EndTable();
+  }
+  if (ImGui::CollapsingHeader("Events", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::Text("%zu events", d.events.size());
+    if (!d.events.empty() &&
+        ImGui::BeginTable("events", 4, kTableFlags | ImGuiTableFlags_ScrollY, ImVec2(0, 220))) {
+      for (const char* h : {"time [s]", "kind", "channel", "detail"}) ImGui::TableSetupColumn(h);
+      ImGui::TableSetupScrollFreeze(0, 1);
+      ImGui::TableHeadersRow();
+      ImGuiListClipper clipper;
+      clipper.Begin(int(d.events.size()));
+      while (clipper.Step()) {
+        for (int i = clipper.DisplayStart; i < clipper.DisplayEnd; ++i) {
+          const SessionEvent& e = d.events[std::size_t(i)];
+          ImGui::TableNextRow();
+          ImGui::TableNextColumn();
+          ImGui::Text("%.4f", e.time_s);
+          ImGui::TableNextColumn();
+          ImGui::TextUnformatted(e.kind.c_str());
+          ImGui::TableNextColumn();
+          ImGui::TextUnformatted(e.channel.c_str());
+          ImGui::TableNextColumn();
+          ImGui::TextUnformatted(e.detail.c_str());
+        }
+      }
+      ImGui::EndTable();
+    }
+  }
+  if (ImGui::CollapsingHeader("Calibration records", ImGuiTreeNodeFlags_DefaultOpen) &&
+      ImGui::BeginTable("calibrations", 6, kTableFlags)) {
+    for (const char* h : {"id", "sensor", "unit", "coefficients", "method", "date"}) {
+      ImGui::TableSetupColumn(h);
+    }
+    ImGui::TableHeadersRow();
+    for (const auto& r : d.calibrations) {
+      std::string coefficients;
+      char number[32];
+      for (double c : r.coefficients) {
+        std::snprintf(number, sizeof number, "%s%.6g", coefficients.empty() ? "" : ", ", c);
+        coefficients += number;
+      }
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r.id.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%s %s", r.sensor_kind.c_str(), r.sensor_serial.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%s -> %s", r.input_unit.c_str(), r.unit.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(coefficients.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r.method.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r.date_utc.c_str());
+    }
+    ImGui::EndTable();
+  }
+  if (ImGui::CollapsingHeader("Strokes", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (!d.prepared) {
+      ImGui::TextWrapped("Not prepared: %s", d.prepare_message.c_str());
+    } else {
+      int opening = 0;
+      for (const Stroke& st : d.data.strokes) opening += st.direction == StrokeDirection::kOpening;
+      ImGui::Text("%zu strokes (%d opening, %zu closing), %zu segments left out; angle: %s",
+                  d.data.strokes.size(), opening, d.data.strokes.size() - std::size_t(opening),
+                  d.data.excluded.size(), d.data.angle_source.c_str());
+    }
+  }
+  ImGui::EndChild();
+}
+
+void Viewer::channels(SessionView& s) {
+  if (s.channels.empty()) {
+    ImGui::TextUnformatted("The session has no channels.");
+    return;
+  }
+  const float avail = ImGui::GetContentRegionAvail().y;
+  const float each = std::max(140.0f, std::floor(avail / float(s.channels.size())));
+  ImGui::BeginChild("channels");
+  for (std::size_t i = 0; i < s.channels.size(); ++i) {
+    const std::string id = "channel" + std::to_string(i);
+    plots_.push_back(plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each));
+  }
+  ImGui::EndChild();
+}
+
+void Viewer::loop(SessionView& s) {
+  if (!s.data.prepared) ImGui::TextWrapped("No strokes: %s", s.data.prepare_message.c_str());
+  plots_.push_back(plot_widget("loop", s.loop, s.loop_state, 0.0f, 0.0f));
+}
+
+void Viewer::fit(SessionView& s) {
+  if (!s.fit) {
+    ImGui::TextWrapped(
+        "No model to compare with: start the viewer with --params FILE (a fitted parameter "
+        "file, e.g. the one `doorbench fit` wrote) and --model.");
+    return;
+  }
+  ImGui::Text("%s: rate RMSE %.4g rad/s over windows (as the fit sees them)",
+              s.fit->model_description.c_str(), s.fit->rmse_rad_s);
+  const float avail = ImGui::GetContentRegionAvail().y;
+  plots_.push_back(
+      plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f, std::floor(avail * 0.65f)));
+  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f, 0.0f));
+}
+
+}  // namespace doorbench::viewer

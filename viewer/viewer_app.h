@@ -1,0 +1,61 @@
+#pragma once
+// The viewer's views and layouts on ImGui (no window: viewer/window.h runs them):
+//   browser   the session's metadata, channels, events, calibration records, strokes
+//   channels  every channel over time, time axes linked
+//   loop      force against angle, opening and closing strokes in their colours
+//   fit       measured rate against a door model's simulation, the residual below
+// The interactive window shows them as tabs with a session selector; a screenshot shows
+// one layout over the whole window.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "viewer/plot_widget.h"
+#include "viewer/session_data.h"
+
+namespace doorbench::viewer {
+
+inline const std::vector<std::string>& layout_names() {
+  static const std::vector<std::string> names = {"browser", "channels", "loop", "fit"};
+  return names;
+}
+
+class Viewer {
+ public:
+  // fits[i] (optional) compares session i with a model.
+  Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitComparison>> fits);
+
+  // Builds one frame's ImGui windows over a display of width × height pixels: the layout
+  // named (one of layout_names()), or every layout as tabs when it is empty. Between
+  // ImGui::NewFrame() and ImGui::Render(). Throws std::invalid_argument for an unknown name.
+  void frame(float width, float height, const std::string& layout = "");
+  // The plots drawn in the last frame.
+  const std::vector<PlotRecord>& plots() const { return plots_; }
+  std::size_t session_count() const { return sessions_.size(); }
+
+ private:
+  struct SessionView {
+    SessionData data;
+    std::vector<PlotView> channels;
+    PlotView loop;
+    std::optional<FitComparison> fit;
+    std::vector<PlotView> fit_plots;
+    std::vector<PlotWidgetState> channel_states;
+    PlotWidgetState loop_state;
+    std::vector<PlotWidgetState> fit_states;
+  };
+  void browser(SessionView& s);
+  void channels(SessionView& s);
+  void loop(SessionView& s);
+  void fit(SessionView& s);
+  void layout_body(SessionView& s, const std::string& layout);
+
+  std::vector<SessionView> sessions_;
+  int current_ = 0;
+  std::vector<PlotRecord> plots_;
+};
+
+// Checks a layout name: "" when known, else a message listing the names.
+std::string check_layout(const std::string& name);
+
+}  // namespace doorbench::viewer
