@@ -26,7 +26,10 @@ void run_view(const ViewOptions& options) {
     throw UsageError("--layout chooses what --screenshot shows; the window shows every layout");
   }
   if (!options.screenshot.empty()) {
-    if (options.sessions.size() != 1) throw UsageError("--screenshot takes exactly one SESSION");
+    const std::size_t wanted = options.layout == "overlay" ? 2 : 1;
+    if (options.sessions.size() != wanted) {
+      throw UsageError("--screenshot takes one SESSION (two, A and B, for --layout overlay)");
+    }
     if (options.layout.empty()) throw UsageError("--screenshot needs --layout");
     const std::string problem = viewer::check_layout(options.layout);
     if (!problem.empty()) throw UsageError("--layout: " + problem);
@@ -82,7 +85,7 @@ void add_view_command(CLI::App& app, Action& action) {
   view->add_option("--screenshot", options->screenshot,
                    "Render --layout of the one SESSION offscreen to this PNG and exit (also "
                    "writes PNG.json: where each plot is and its ranges)");
-  view->add_option("--layout", options->layout, "browser, channels, loop or fit");
+  view->add_option("--layout", options->layout, "browser, channels, loop, fit or overlay");
   view->add_option("--width", options->width_px, "Window width in pixels")->capture_default_str();
   view->add_option("--height", options->height_px, "Window height in pixels")
       ->capture_default_str();

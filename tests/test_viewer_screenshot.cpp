@@ -3,6 +3,8 @@
 // the series colour along the curve, and nowhere else in the plot's data area. Also the
 // session-loading model behind the views, on the same session. PNGs are read with stb_image
 // (libstb).
+#include <stb_image.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
@@ -13,8 +15,6 @@
 #include <sstream>
 #include <string>
 #include <vector>
-
-#include <stb_image.h>
 
 #include "acquisition/session_file.h"
 #include "analysis/parameter_file.h"
@@ -36,8 +36,9 @@ double known_force(double t) {
   return kAmplitudeN * std::sin(2.0 * std::numbers::pi * kFrequencyHz * (t - kFirstSampleS));
 }
 
-// A session with one channel, "force", holding the known sine (values in N, no calibration).
-void write_sine_session(const fs::path& path) {
+// A session with one channel, "force", holding the known sine (values in N, no calibration),
+// delayed by delay_s, with an opening stroke_start event at stroke_s when it is >= 0.
+void write_sine_session(const fs::path& path, double delay_s = 0.0, double stroke_s = -1.0) {
   doorbench::SessionMetadata metadata;
   metadata.rig_name = "viewer-test";
   metadata.operator_name = "test";
@@ -55,10 +56,14 @@ void write_sine_session(const fs::path& path) {
   const int index = writer.add_channel(channel);
   std::vector<double> values(std::size_t(kDurationS * kRateHz));
   for (std::size_t i = 0; i < values.size(); ++i) {
-    values[i] = known_force(kFirstSampleS + double(i) / kRateHz);
+    values[i] = known_force(kFirstSampleS + double(i) / kRateHz - delay_s);
   }
   writer.append_values(index, values);
   writer.add_event({1.0, "mark", "", "a mark"});
+  if (stroke_s >= 0.0) {
+    writer.add_event({stroke_s + 0.7, "stroke_start", "", "closing"});  // not the first
+    writer.add_event({stroke_s, "stroke_start", "", "opening"});
+  }
   writer.close();
 }
 
@@ -180,7 +185,8 @@ TEST_CASE("view refuses a screenshot without a layout or with an unknown one", "
   REQUIRE_THAT(r.err, Contains("--screenshot needs --layout"));
   r = run("view --screenshot " + png.string() + " --layout nope " + session.string(), dir.path);
   REQUIRE(r.exit_code == 2);
-  REQUIRE_THAT(r.err, Contains("unknown layout 'nope' (expected browser, channels, loop, fit)"));
+  REQUIRE_THAT(r.err,
+               Contains("unknown layout 'nope' (expected browser, channels, loop, fit, overlay)"));
   r = run("view --layout loop " + session.string(), dir.path);
   REQUIRE(r.exit_code == 2);
   REQUIRE_THAT(r.err, Contains("--layout chooses what --screenshot shows"));
@@ -212,4 +218,44 @@ TEST_CASE("the viewer's session model: channels in physical units, events, linke
   REQUIRE(plots.size() == 1);
   REQUIRE(plots[0].y.min < -kAmplitudeN);
   REQUIRE(plots[0].y.max > kAmplitudeN);
+}
+
+TEST_CASE("the A/B overlay aligns two sessions on their first stroke start", "[viewer]") {
+  doorbench::testing::TempDir dir("viewer_overlay");
+  // B is A delayed by 1.25 s, and its stroke starts 1.25 s later: aligned, they coincide.
+  write_sine_session(dir.path / "a.h5", 0.0, 1.5);
+  write_sine_session(dir.path / "b.h5", 1.25, 2.75);
+  const auto a = doorbench::viewer::load_session(dir.path / "a.h5", {false});
+  const auto b = doorbench::viewer::load_session(dir.path / "b.h5", {false});
+  REQUIRE(doorbench::viewer::first_stroke_start_s(a) == 1.5);
+  REQUIRE(doorbench::viewer::first_stroke_start_s(b, "closing") == Approx(3.45));
+  const auto overlay = doorbench::viewer::overlay_plots(a, b);
+  REQUIRE(overlay.a_start_s == 1.5);
+  REQUIRE(overlay.b_start_s == 2.75);
+  REQUIRE(overlay.plots.size() == 1);
+  const auto& plot = overlay.plots[0];
+  REQUIRE(plot.series.size() == 2);
+  REQUIRE(plot.series[0]->name() == "A a.h5");
+  REQUIRE(plot.series[1]->name() == "B b.h5");
+  // Where both have samples, A and B read the same at the same time since stroke start.
+  for (double x : {-0.5, 0.0, 0.3, 1.1, 1.6}) {
+    INFO("x " << x);
+    const auto& sa = *plot.series[0];
+    const auto& sb = *plot.series[1];
+    const std::size_t ia = sa.nearest(x), ib = sb.nearest(x);
+    REQUIRE(sa.x(ia) == Approx(x).margin(1e-9));
+    REQUIRE(sb.x(ib) == Approx(x).margin(1e-9));
+    REQUIRE(sa.y(ia) == Approx(sb.y(ib)).margin(1e-9));
+  }
+  // Without stroke events there is nothing to align on: the message names the session.
+  write_sine_session(dir.path / "c.h5");
+  const auto c = doorbench::viewer::load_session(dir.path / "c.h5", {false});
+  REQUIRE_THROWS_WITH(doorbench::viewer::overlay_plots(a, c),
+                      Contains("c.h5: no stroke_start event to align on"));
+  // Events become markers on the time axis: the mark and both stroke starts.
+  const auto markers = doorbench::viewer::event_markers(a, "force");
+  REQUIRE(markers.size() == 3);
+  REQUIRE(markers[0].x == 1.0);
+  REQUIRE(markers[0].label == "mark a mark");
+  REQUIRE(markers[2].label == "stroke_start opening");
 }

@@ -135,6 +135,17 @@ Series Series::xy(std::string name, std::string x_unit, std::string unit, std::v
   return s;
 }
 
+Series Series::shifted(double dx, std::string name) const {
+  Series s = *this;
+  s.name_ = std::move(name);
+  if (kind_ == Kind::kUniform) {
+    s.x0_ += dx;
+  } else {
+    for (double& v : s.x_) v += dx;
+  }
+  return s;
+}
+
 void Series::build() {
   pyramid_ = MinMaxPyramid(y_);
 }

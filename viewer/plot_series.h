@@ -61,6 +61,9 @@ class Series {
   double x(std::size_t i) const { return kind_ == Kind::kUniform ? x0_ + double(i) * dx_ : x_[i]; }
   double y(std::size_t i) const { return y_[i]; }
   const std::vector<double>& ys() const { return y_; }
+  // A copy with x moved by dx (time series: the same samples on a shifted clock) and a new
+  // name; the colour is kept.
+  Series shifted(double dx, std::string name) const;
 
   Rgba colour{};
   // Samples with x in [x_min, x_max], as [begin, end) (time series only).

@@ -54,6 +54,13 @@ struct Readout {
   double x = 0.0, y = 0.0;
 };
 
+// A vertical line at x (an event on a time axis), drawn behind the curves.
+struct Marker {
+  double x = 0.0;
+  Rgba colour;
+  std::string label;  // the tooltip: e.g. "stroke_start opening"
+};
+
 class PlotView {
  public:
   std::string title;
@@ -63,6 +70,7 @@ class PlotView {
   // Shared between plots whose time axes are linked (link_x_to).
   std::shared_ptr<Range> x = std::make_shared<Range>();
   Range y;
+  std::vector<Marker> markers;
 
   bool is_xy() const { return !series.empty() && series.front()->is_xy(); }
   // Adds a series; a plot holds time series or x–y series, not both (std::invalid_argument).

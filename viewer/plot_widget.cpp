@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <vector>
 
 namespace doorbench::viewer {
 
@@ -113,8 +114,15 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     draw->AddText(ImVec2(a0.x - w - 4.0f, py - 7.0f), kTextColour, label.c_str());
   }
 
-  // Curves, clipped to the data area.
+  // Event markers behind the curves, clipped to the data area like them.
   draw->PushClipRect(a0, a1, true);
+  std::vector<const Marker*> near_mouse;
+  for (const Marker& m : view.markers) {
+    if (m.x < view.x->min || m.x > view.x->max) continue;
+    const float px = std::round(float(view.to_px_x(m.x, area)));
+    draw->AddLine(ImVec2(px, a0.y), ImVec2(px, a1.y), to_imgui_colour(m.colour));
+    if (hovered && std::abs(px - float(mx)) <= 3.0f) near_mouse.push_back(&m);
+  }
   view.build_draw_data(area, state.draw);
   for (const DrawData::Strip& strip : state.draw.strips) {
     draw->AddPolyline(reinterpret_cast<const ImVec2*>(state.draw.points.data() + strip.begin),
@@ -131,6 +139,7 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     draw->AddLine(ImVec2(a0.x, float(my)), ImVec2(a1.x, float(my)), IM_COL32(200, 200, 200, 120));
     const auto readouts = view.readout(mx, my, area);
     ImGui::BeginTooltip();
+    for (const Marker* m : near_mouse) ImGui::Text("event at %.4f: %s", m->x, m->label.c_str());
     for (const Readout& r : readouts) {
       ImGui::Text("%s: x = %.6g %s, y = %.6g %s (sample %zu)", r.series.c_str(), r.x,
                   r.x_unit.c_str(), r.y, r.unit.c_str(), r.index);

@@ -1,5 +1,6 @@
 #include "viewer/session_data.h"
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -144,6 +145,7 @@ std::vector<PlotView> channel_plots(const SessionData& session) {
     plot.x_label = "time";
     plot.y_label = session.channels[i].name;
     plot.add(session.channel_series[i]);
+    plot.markers = event_markers(session, session.channels[i].name);
     if (!plots.empty()) plot.link_x_to(plots.front());
     plots.push_back(std::move(plot));
   }
@@ -180,6 +182,80 @@ std::vector<PlotView> fit_plots(const FitComparison& comparison) {
   plots[0].fit();
   plots[1].fit_y();
   return plots;
+}
+
+}  // namespace doorbench::viewer
+
+namespace doorbench::viewer {
+
+std::vector<Marker> event_markers(const SessionData& session, const std::string& channel) {
+  std::vector<Marker> markers;
+  for (const SessionEvent& e : session.events) {
+    if (!e.channel.empty() && e.channel != channel) continue;
+    Rgba colour;
+    if (e.kind == "stroke_start" || e.kind == "stroke_end") {
+      colour = e.detail == "closing" ? Rgba{40, 140, 230, 110} : Rgba{230, 90, 40, 110};
+      if (e.kind == "stroke_end") colour = {170, 170, 170, 90};
+    } else if (e.kind == "fault" || e.kind == "gap") {
+      colour = {255, 0, 255, 200};
+    } else if (e.kind == "trigger") {
+      colour = {255, 255, 255, 160};
+    } else if (e.kind == "mark") {
+      colour = {200, 200, 120, 160};
+    } else {
+      continue;
+    }
+    std::string label = e.kind;
+    if (!e.detail.empty()) label.append(" ").append(e.detail);
+    markers.push_back({e.time_s, colour, std::move(label)});
+  }
+  return markers;
+}
+
+double first_stroke_start_s(const SessionData& session, const std::string& direction) {
+  double first = std::numeric_limits<double>::infinity();
+  for (const SessionEvent& e : session.events) {
+    if (e.kind == "stroke_start" && (direction.empty() || e.detail == direction)) {
+      first = std::min(first, e.time_s);
+    }
+  }
+  if (!std::isfinite(first)) {
+    throw std::invalid_argument(std::string(session.path.string())
+                                    .append(": no stroke_start event")
+                                    .append(direction.empty() ? "" : " of direction " + direction)
+                                    .append(" to align on"));
+  }
+  return first;
+}
+
+Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::string& direction) {
+  Overlay overlay;
+  overlay.a_start_s = first_stroke_start_s(a, direction);
+  overlay.b_start_s = first_stroke_start_s(b, direction);
+  for (std::size_t i = 0; i < a.channels.size(); ++i) {
+    for (std::size_t j = 0; j < b.channels.size(); ++j) {
+      if (a.channels[i].name != b.channels[j].name) continue;
+      PlotView plot;
+      plot.title = a.channels[i].name + ": A and B, aligned on stroke start";
+      plot.x_label = "time since stroke start";
+      plot.y_label = a.channels[i].name;
+      auto sa = std::make_shared<Series>(
+          a.channel_series[i]->shifted(-overlay.a_start_s, "A " + a.path.filename().string()));
+      auto sb = std::make_shared<Series>(
+          b.channel_series[j]->shifted(-overlay.b_start_s, "B " + b.path.filename().string()));
+      sa->colour = palette(1);
+      sb->colour = palette(0);
+      plot.add(sa);
+      plot.add(sb);
+      if (!overlay.plots.empty()) plot.link_x_to(overlay.plots.front());
+      overlay.plots.push_back(std::move(plot));
+    }
+  }
+  if (!overlay.plots.empty()) {
+    overlay.plots.front().fit_x();
+    for (PlotView& plot : overlay.plots) plot.fit_y();
+  }
+  return overlay;
 }
 
 }  // namespace doorbench::viewer

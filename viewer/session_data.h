@@ -61,6 +61,23 @@ struct FitComparison {
 FitComparison compare_with_model(const SessionData& session, const DoorModel& model,
                                  const std::string& description);
 
+// The session's events as markers on a time axis: triggers, strokes, faults, gaps and
+// marks, for the whole session or for `channel` ("" : whole-session events only).
+std::vector<Marker> event_markers(const SessionData& session, const std::string& channel);
+
+// The time of the first stroke_start event of `direction` ("opening", "closing"; "" any).
+// Throws std::invalid_argument naming the session when there is none.
+double first_stroke_start_s(const SessionData& session, const std::string& direction = "");
+
+// The A/B overlay: for each channel both sessions have (by name), A's and B's series on
+// time since their first stroke start (of `direction`), so that the strokes line up.
+struct Overlay {
+  double a_start_s = 0.0, b_start_s = 0.0;  // the stroke starts aligned to 0
+  std::vector<PlotView> plots;              // time axes linked
+};
+Overlay overlay_plots(const SessionData& a, const SessionData& b,
+                      const std::string& direction = "");
+
 // A plot of each channel over time, their time axes linked to the first.
 std::vector<PlotView> channel_plots(const SessionData& session);
 // Force against angle, opening and closing in their colours (empty series: not prepared).

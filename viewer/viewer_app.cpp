@@ -22,6 +22,13 @@ void text_row(const char* name, const std::string& value) {
   ImGui::TextUnformatted(value.empty() ? "-" : value.c_str());
 }
 
+// The height of each of n plots stacked in `avail` pixels (ImGui puts item spacing after
+// each), at least 140.
+float stacked_height(float avail, std::size_t n) {
+  const float spacing = ImGui::GetStyle().ItemSpacing.y;
+  return std::max(140.0f, std::floor((avail - spacing * float(n)) / float(n)));
+}
+
 constexpr ImGuiTableFlags kTableFlags =
     ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp;
 
@@ -48,6 +55,17 @@ Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitC
       view.fit_states.resize(view.fit_plots.size());
     }
     sessions_.push_back(std::move(view));
+  }
+  if (sessions_.size() < 2) {
+    overlay_message_ = "The A/B overlay needs two sessions: doorbench view A.h5 B.h5";
+  } else {
+    try {
+      overlay_ = overlay_plots(sessions_[0].data, sessions_[1].data);
+      overlay_states_.resize(overlay_->plots.size());
+      if (overlay_->plots.empty()) overlay_message_ = "The two sessions share no channel name.";
+    } catch (const std::invalid_argument& error) {
+      overlay_message_ = error.what();
+    }
   }
 }
 
@@ -103,6 +121,7 @@ void Viewer::layout_body(SessionView& s, const std::string& layout) {
   if (layout == "channels") channels(s);
   if (layout == "loop") loop(s);
   if (layout == "fit") fit(s);
+  if (layout == "overlay") overlay();
 }
 
 void Viewer::browser(SessionView& s) {
@@ -227,7 +246,7 @@ void Viewer::channels(SessionView& s) {
     return;
   }
   const float avail = ImGui::GetContentRegionAvail().y;
-  const float each = std::max(140.0f, std::floor(avail / float(s.channels.size())));
+  const float each = stacked_height(avail, s.channels.size());
   ImGui::BeginChild("channels");
   for (std::size_t i = 0; i < s.channels.size(); ++i) {
     const std::string id = "channel" + std::to_string(i);
@@ -254,6 +273,24 @@ void Viewer::fit(SessionView& s) {
   plots_.push_back(
       plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f, std::floor(avail * 0.65f)));
   plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f, 0.0f));
+}
+
+void Viewer::overlay() {
+  if (!overlay_ || overlay_->plots.empty()) {
+    ImGui::TextWrapped("%s", overlay_message_.c_str());
+    return;
+  }
+  ImGui::Text("A: %s (stroke at %.4f s)   B: %s (stroke at %.4f s)",
+              sessions_[0].data.path.string().c_str(), overlay_->a_start_s,
+              sessions_[1].data.path.string().c_str(), overlay_->b_start_s);
+  const float avail = ImGui::GetContentRegionAvail().y;
+  const float each = stacked_height(avail, overlay_->plots.size());
+  ImGui::BeginChild("overlay");
+  for (std::size_t i = 0; i < overlay_->plots.size(); ++i) {
+    const std::string id = "overlay" + std::to_string(i);
+    plots_.push_back(plot_widget(id.c_str(), overlay_->plots[i], overlay_states_[i], 0.0f, each));
+  }
+  ImGui::EndChild();
 }
 
 }  // namespace doorbench::viewer

@@ -4,6 +4,7 @@
 //   channels  every channel over time, time axes linked
 //   loop      force against angle, opening and closing strokes in their colours
 //   fit       measured rate against a door model's simulation, the residual below
+//   overlay   A/B: the first two sessions' common channels aligned on their first stroke
 // The interactive window shows them as tabs with a session selector; a screenshot shows
 // one layout over the whole window.
 #include <optional>
@@ -16,7 +17,7 @@
 namespace doorbench::viewer {
 
 inline const std::vector<std::string>& layout_names() {
-  static const std::vector<std::string> names = {"browser", "channels", "loop", "fit"};
+  static const std::vector<std::string> names = {"browser", "channels", "loop", "fit", "overlay"};
   return names;
 }
 
@@ -48,10 +49,14 @@ class Viewer {
   void channels(SessionView& s);
   void loop(SessionView& s);
   void fit(SessionView& s);
+  void overlay();
   void layout_body(SessionView& s, const std::string& layout);
 
   std::vector<SessionView> sessions_;
   int current_ = 0;
+  std::optional<Overlay> overlay_;
+  std::string overlay_message_;
+  std::vector<PlotWidgetState> overlay_states_;
   std::vector<PlotRecord> plots_;
 };
 
