@@ -238,3 +238,24 @@ TEST_CASE("axis ticks are round steps inside the range", "[viewer]") {
   REQUIRE(tick_label(250, 50) == "250");
   REQUIRE(nice_ticks(1.0, 1.0).empty());
 }
+
+TEST_CASE("a plot's visible data exports to CSV, only what is in view", "[viewer]") {
+  PlotView view;
+  view.add(std::make_shared<Series>(Series::uniform("force", "N", 0.0, 0.5, {1, 2, 3, 4, 5})));
+  *view.x = {0.4, 1.5};
+  view.y = {0, 10};
+  REQUIRE(visible_csv(view) ==
+          "series,x,y,x_unit,y_unit\n"
+          "force,0.5,2,s,N\n"
+          "force,1,3,s,N\n"
+          "force,1.5,4,s,N\n");
+  PlotView loop;
+  loop.add(
+      std::make_shared<Series>(Series::xy("opening", "rad", "N", {0.1, 0.2, 0.9}, {1, 50, 2})));
+  *loop.x = {0, 1};
+  loop.y = {0, 10};  // (0.2, 50) is above the box
+  REQUIRE(visible_csv(loop) ==
+          "series,x,y,x_unit,y_unit\n"
+          "opening,0.10000000000000001,1,rad,N\n"
+          "opening,0.90000000000000002,2,rad,N\n");
+}

@@ -210,6 +210,39 @@ void PlotView::build_draw_data(const Rect& r, DrawData& out) const {
   }
 }
 
+std::string visible_csv(const PlotView& view) {
+  std::string csv = "series,x,y,x_unit,y_unit\n";
+  char row[160];
+  for (const auto& s : view.series) {
+    std::size_t begin = 0, end = s->size();
+    if (!s->is_xy()) s->index_range(view.x->min, view.x->max, begin, end);
+    // Names and units are written as they are: [A-Za-z0-9_ /.] in doorbench; quote if not.
+    auto field = [](const std::string& text) {
+      if (text.find_first_of(",\"\n") == std::string::npos) return text;
+      std::string quoted(1, '"');
+      for (char c : text) {
+        if (c == '"') quoted.push_back('"');
+        quoted.push_back(c);
+      }
+      quoted.push_back('"');
+      return quoted;
+    };
+    std::string suffix(1, ',');
+    suffix.append(field(s->x_unit())).append(1, ',').append(field(s->unit())).append(1, '\n');
+    const std::string name = field(s->name());
+    for (std::size_t i = begin; i < end; ++i) {
+      const double xv = s->x(i), yv = s->y(i);
+      if (s->is_xy() &&
+          !(xv >= view.x->min && xv <= view.x->max && yv >= view.y.min && yv <= view.y.max)) {
+        continue;
+      }
+      std::snprintf(row, sizeof row, ",%.17g,%.17g", xv, yv);
+      csv.append(name).append(row).append(suffix);
+    }
+  }
+  return csv;
+}
+
 std::vector<double> nice_ticks(double min, double max, int target) {
   std::vector<double> ticks;
   const double span = max - min;

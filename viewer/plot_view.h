@@ -110,6 +110,11 @@ class PlotView {
   void build_draw_data(const Rect& r, DrawData& out) const;
 };
 
+// The plot's visible data as CSV: a header `series,x,y,x_unit,y_unit`, then one row per
+// sample: time series, every sample with x in the visible x-range; x–y series, every
+// finite sample inside the visible box. Numbers with 17 significant digits.
+std::string visible_csv(const PlotView& view);
+
 // Tick values for an axis from min to max: steps of 1, 2 or 5 × 10^k, about `target` of
 // them, every tick inside [min, max].
 std::vector<double> nice_ticks(double min, double max, int target = 6);

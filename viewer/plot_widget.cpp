@@ -33,7 +33,8 @@ unsigned int to_imgui_colour(Rgba c) {
 }
 
 PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, float width,
-                       float height) {
+                       float height, bool controls) {
+  PlotRecord record;
   static_assert(sizeof(Point) == sizeof(ImVec2), "Point is drawn as ImVec2");
   ImGui::PushID(id);
   const ImVec2 avail = ImGui::GetContentRegionAvail();
@@ -61,6 +62,13 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
   if (!view.series.empty()) {
     const std::string x_unit = "x: " + with_unit(view.x_label, view.series.front()->x_unit());
     draw->AddText(ImVec2(hx + 8.0f, hy), IM_COL32(160, 160, 160, 255), x_unit.c_str());
+  }
+
+  if (controls) {
+    ImGui::SetCursorScreenPos(ImVec2(origin.x + width - 80.0f, origin.y));
+    record.want_csv = ImGui::SmallButton("CSV");
+    ImGui::SameLine();
+    record.want_png = ImGui::SmallButton("PNG");
   }
 
   const Rect area{origin.x + kLeftMargin, origin.y + kHeaderHeight, width - kLeftMargin - 8.0f,
@@ -158,8 +166,9 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
   ImGui::Dummy(ImVec2(width, 0.0f));
   ImGui::PopID();
 
-  PlotRecord record;
   record.title = view.title;
+  record.view = &view;
+  record.widget = {origin.x, origin.y, width, height};
   record.area = area;
   record.x = *view.x;
   record.y = view.y;

@@ -18,6 +18,10 @@ struct PlotRecord {
   Range x, y;
   std::vector<std::string> series;
   std::vector<Rgba> colours;
+  const PlotView* view = nullptr;
+  Rect widget;            // the whole widget: header, axes and data area
+  bool want_csv = false;  // its CSV or PNG button was pressed this frame
+  bool want_png = false;
 };
 
 struct PlotWidgetState {
@@ -27,9 +31,9 @@ struct PlotWidgetState {
 };
 
 // Draws `view` at the cursor in a box of width × height pixels (0: fill what remains).
-// Returns where it went.
+// Returns where it went. With `controls`, CSV and PNG export buttons sit in the header.
 PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, float width,
-                       float height);
+                       float height, bool controls = false);
 
 // Series colour to ImGui's packed colour.
 unsigned int to_imgui_colour(Rgba c);

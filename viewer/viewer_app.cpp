@@ -3,7 +3,9 @@
 #include <imgui.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <fstream>
 #include <stdexcept>
 
 namespace doorbench::viewer {
@@ -75,6 +77,7 @@ void Viewer::frame(float width, float height, const std::string& layout) {
     if (!problem.empty()) throw std::invalid_argument(problem);
   }
   plots_.clear();
+  controls_ = layout.empty();
   ImGui::SetNextWindowPos(ImVec2(0, 0));
   ImGui::SetNextWindowSize(ImVec2(width, height));
   ImGui::Begin("doorbench view", nullptr,
@@ -101,6 +104,10 @@ void Viewer::frame(float width, float height, const std::string& layout) {
     } else {
       ImGui::Text("%s", s.data.path.string().c_str());
     }
+    if (!status_.empty()) {
+      ImGui::SameLine();
+      ImGui::TextDisabled("   %s", status_.c_str());
+    }
     if (ImGui::BeginTabBar("layouts")) {
       for (const std::string& name : layout_names()) {
         if (ImGui::BeginTabItem(name.c_str())) {
@@ -114,6 +121,39 @@ void Viewer::frame(float width, float height, const std::string& layout) {
     layout_body(s, layout);
   }
   ImGui::End();
+  handle_exports();
+}
+
+std::filesystem::path Viewer::export_path(const std::string& title, const std::string& extension) {
+  std::string stem;
+  for (char c : title) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
+    if (keep)
+      stem += c;
+    else if (!stem.empty() && stem.back() != '-')
+      stem += '-';
+  }
+  if (stem.empty()) stem = "plot";
+  return export_dir / (stem + "-" + std::to_string(++exports_) + extension);
+}
+
+void Viewer::handle_exports() {
+  for (const PlotRecord& record : plots_) {
+    if (record.want_csv && record.view != nullptr) {
+      const std::filesystem::path path = export_path(record.title, ".csv");
+      std::ofstream out(path);
+      out << visible_csv(*record.view);
+      status_ = out ? "wrote " + path.string() : "cannot write " + path.string();
+    }
+    if (record.want_png)
+      png_request_ = PngRequest{record.widget, export_path(record.title, ".png")};
+  }
+}
+
+std::optional<Viewer::PngRequest> Viewer::take_png_request() {
+  std::optional<PngRequest> request = std::move(png_request_);
+  png_request_.reset();
+  return request;
 }
 
 void Viewer::layout_body(SessionView& s, const std::string& layout) {
@@ -250,14 +290,15 @@ void Viewer::channels(SessionView& s) {
   ImGui::BeginChild("channels");
   for (std::size_t i = 0; i < s.channels.size(); ++i) {
     const std::string id = "channel" + std::to_string(i);
-    plots_.push_back(plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each));
+    plots_.push_back(
+        plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each, controls_));
   }
   ImGui::EndChild();
 }
 
 void Viewer::loop(SessionView& s) {
   if (!s.data.prepared) ImGui::TextWrapped("No strokes: %s", s.data.prepare_message.c_str());
-  plots_.push_back(plot_widget("loop", s.loop, s.loop_state, 0.0f, 0.0f));
+  plots_.push_back(plot_widget("loop", s.loop, s.loop_state, 0.0f, 0.0f, controls_));
 }
 
 void Viewer::fit(SessionView& s) {
@@ -270,9 +311,9 @@ void Viewer::fit(SessionView& s) {
   ImGui::Text("%s: rate RMSE %.4g rad/s over windows (as the fit sees them)",
               s.fit->model_description.c_str(), s.fit->rmse_rad_s);
   const float avail = ImGui::GetContentRegionAvail().y;
-  plots_.push_back(
-      plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f, std::floor(avail * 0.65f)));
-  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f, 0.0f));
+  plots_.push_back(plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f,
+                               std::floor(avail * 0.65f), controls_));
+  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f, 0.0f, controls_));
 }
 
 void Viewer::overlay() {
@@ -288,7 +329,8 @@ void Viewer::overlay() {
   ImGui::BeginChild("overlay");
   for (std::size_t i = 0; i < overlay_->plots.size(); ++i) {
     const std::string id = "overlay" + std::to_string(i);
-    plots_.push_back(plot_widget(id.c_str(), overlay_->plots[i], overlay_states_[i], 0.0f, each));
+    plots_.push_back(
+        plot_widget(id.c_str(), overlay_->plots[i], overlay_states_[i], 0.0f, each, controls_));
   }
   ImGui::EndChild();
 }

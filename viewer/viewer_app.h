@@ -7,6 +7,7 @@
 //   overlay   A/B: the first two sessions' common channels aligned on their first stroke
 // The interactive window shows them as tabs with a session selector; a screenshot shows
 // one layout over the whole window.
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -34,6 +35,16 @@ class Viewer {
   const std::vector<PlotRecord>& plots() const { return plots_; }
   std::size_t session_count() const { return sessions_.size(); }
 
+  // Export: a plot's CSV button writes its visible data to export_dir at once; its PNG
+  // button leaves a request that the window fulfils after rendering the frame.
+  std::filesystem::path export_dir = ".";
+  struct PngRequest {
+    Rect rect;  // in display pixels
+    std::filesystem::path path;
+  };
+  std::optional<PngRequest> take_png_request();
+  void set_status(std::string status) { status_ = std::move(status); }
+
  private:
   struct SessionView {
     SessionData data;
@@ -57,6 +68,12 @@ class Viewer {
   std::optional<Overlay> overlay_;
   std::string overlay_message_;
   std::vector<PlotWidgetState> overlay_states_;
+  bool controls_ = false;  // export buttons (interactive window only)
+  std::optional<PngRequest> png_request_;
+  std::string status_;
+  int exports_ = 0;
+  void handle_exports();
+  std::filesystem::path export_path(const std::string& title, const std::string& extension);
   std::vector<PlotRecord> plots_;
 };
 

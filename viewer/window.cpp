@@ -8,6 +8,8 @@
 #include <imgui_impl_opengl3.h>
 #include <stb_image_write.h>
 
+#include <algorithm>
+#include <cmath>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
@@ -84,6 +86,50 @@ class GlSession {
   GLFWwindow* window_ = nullptr;
 };
 
+// Reads the rectangle (x, y, w, h; framebuffer pixels, y downwards) of the back buffer and
+// writes it as an RGB PNG.
+void write_framebuffer_png(int fb_height, int x, int y, int w, int h,
+                           const std::filesystem::path& png) {
+  std::vector<unsigned char> pixels(std::size_t(w) * std::size_t(h) * 3);
+  glFinish();
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadBuffer(GL_BACK);
+  // OpenGL counts rows from the bottom.
+  glReadPixels(x, fb_height - y - h, w, h, GL_RGB, GL_UNSIGNED_BYTE, pixels.data());
+  if (const GLenum error = glGetError(); error != GL_NO_ERROR) {
+    throw std::runtime_error("glReadPixels failed (GL error " + std::to_string(error) + ")");
+  }
+  // OpenGL's rows go bottom-up; PNG's top-down.
+  const std::size_t row = std::size_t(w) * 3;
+  std::vector<unsigned char> flipped(pixels.size());
+  for (int r = 0; r < h; ++r) {
+    std::copy_n(pixels.data() + std::size_t(h - 1 - r) * row, row,
+                flipped.data() + std::size_t(r) * row);
+  }
+  if (stbi_write_png(png.string().c_str(), w, h, 3, flipped.data(), int(row)) == 0) {
+    throw std::runtime_error(png.string() + ": cannot write the PNG");
+  }
+}
+
+// A plot's PNG button: its widget's rectangle of the frame just rendered.
+void fulfil_png_request(Viewer& viewer, int fb_width, int fb_height) {
+  const auto request = viewer.take_png_request();
+  if (!request) return;
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const double sx = display.x > 0 ? fb_width / double(display.x) : 1.0;
+  const double sy = display.y > 0 ? fb_height / double(display.y) : 1.0;
+  const int x = std::clamp(int(std::lround(request->rect.x * sx)), 0, fb_width - 1);
+  const int y = std::clamp(int(std::lround(request->rect.y * sy)), 0, fb_height - 1);
+  const int w = std::clamp(int(std::lround(request->rect.width * sx)), 1, fb_width - x);
+  const int h = std::clamp(int(std::lround(request->rect.height * sy)), 1, fb_height - y);
+  try {
+    write_framebuffer_png(fb_height, x, y, w, h, request->path);
+    viewer.set_status("wrote " + request->path.string());
+  } catch (const std::exception& error) {
+    viewer.set_status(error.what());
+  }
+}
+
 }  // namespace
 
 std::string WindowOptions::validate() const {
@@ -100,6 +146,7 @@ void run_window(Viewer& viewer, const WindowOptions& options) {
     glfwPollEvents();
     int w = 0, h = 0;
     session.render(viewer, "", w, h);
+    fulfil_png_request(viewer, w, h);
     glfwSwapBuffers(session.window());
   }
 }
@@ -117,25 +164,7 @@ void screenshot(Viewer& viewer, const std::string& layout, const std::filesystem
     session.render(viewer, layout, w, h);
     if (i < 2) glfwSwapBuffers(session.window());
   }
-  glFinish();
-  std::vector<unsigned char> pixels(std::size_t(w) * std::size_t(h) * 3);
-  glPixelStorei(GL_PACK_ALIGNMENT, 1);
-  glReadBuffer(GL_BACK);
-  glReadPixels(0, 0, w, h, GL_RGB, GL_UNSIGNED_BYTE, pixels.data());
-  if (const GLenum error = glGetError(); error != GL_NO_ERROR) {
-    throw std::runtime_error("screenshot: glReadPixels failed (GL error " + std::to_string(error) +
-                             ")");
-  }
-  // OpenGL's rows go bottom-up; PNG's top-down.
-  const std::size_t row = std::size_t(w) * 3;
-  std::vector<unsigned char> flipped(pixels.size());
-  for (int y = 0; y < h; ++y) {
-    std::copy_n(pixels.data() + std::size_t(h - 1 - y) * row, row,
-                flipped.data() + std::size_t(y) * row);
-  }
-  if (stbi_write_png(png.string().c_str(), w, h, 3, flipped.data(), int(row)) == 0) {
-    throw std::runtime_error(png.string() + ": cannot write the PNG");
-  }
+  write_framebuffer_png(h, 0, 0, w, h, png);
   // Where each plot is, in the PNG's pixels (the framebuffer may be scaled on HiDPI).
   const ImVec2 display = ImGui::GetIO().DisplaySize;
   const double sx = display.x > 0 ? w / double(display.x) : 1.0;
