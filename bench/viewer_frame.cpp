@@ -95,7 +95,13 @@ void BM_OverlayImGuiFrame(benchmark::State& state) {
   int tw = 0, th = 0;
   io.Fonts->GetTexDataAsRGBA32(&texels, &tw, &th);
   std::size_t vertices = 0;
+  const Range start = *o.top.x;
+  bool nudge = false;
   for (auto _ : state) {
+    // A plot that did not move reuses last frame's draw data; move it by a hair every frame
+    // so that each frame decimates and builds afresh (the cost while zooming or panning).
+    nudge = !nudge;
+    *o.top.x = {start.min + (nudge ? 1e-9 : 0.0), start.max};
     ImGui::NewFrame();
     ImGui::SetNextWindowPos(ImVec2(0, 0));
     ImGui::SetNextWindowSize(io.DisplaySize);
@@ -111,6 +117,29 @@ void BM_OverlayImGuiFrame(benchmark::State& state) {
   ImGui::DestroyContext();
 }
 BENCHMARK(BM_OverlayImGuiFrame)->Arg(1000)->Arg(100)->Arg(1)->Unit(benchmark::kMillisecond);
+
+// A force–angle loop is drawn point by point (x–y series cannot be decimated by column):
+// 1 million points, consecutive points in one pixel merged.
+void BM_LoopDrawData(benchmark::State& state) {
+  const std::size_t n = std::size_t(state.range(0));
+  std::vector<double> angle(n), force(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double t = double(i) / double(n) * 60.0;
+    angle[i] = 0.8 * (1.0 - std::cos(t));
+    force[i] = 10.0 * std::sin(t) + 0.3 * std::sin(97.0 * t);
+  }
+  PlotView loop;
+  loop.add(std::make_shared<Series>(Series::xy("loop", "rad", "N", angle, force)));
+  loop.fit();
+  const Rect r{64, 20, 1840, 1000};
+  DrawData data;
+  for (auto _ : state) {
+    loop.build_draw_data(r, data);
+    benchmark::DoNotOptimize(data.points.data());
+  }
+  state.counters["points"] = double(data.points.size());
+}
+BENCHMARK(BM_LoopDrawData)->Arg(100'000)->Arg(1'000'000)->Unit(benchmark::kMillisecond);
 
 // One-off cost when a session is opened: the min/max pyramid of 10 million samples.
 void BM_BuildPyramid(benchmark::State& state) {

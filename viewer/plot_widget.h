@@ -28,6 +28,12 @@ struct PlotWidgetState {
   bool box_active = false;
   double box_x0 = 0.0, box_y0 = 0.0;
   DrawData draw;  // reused frame after frame
+  // What `draw` was built for: rebuilt only when the ranges, the area or the series change
+  // (series are immutable once made), so a still plot costs nothing per frame.
+  Range drawn_x, drawn_y;
+  Rect drawn_area;
+  std::size_t drawn_series = 0;
+  bool drawn = false;
 };
 
 // Draws `view` at the cursor in a box of width × height pixels (0: fill what remains).
