@@ -1,5 +1,6 @@
 // doorbench view: the interactive viewer (viewer/, docs/viewer.md), or one headless
 // screenshot of a layout for reports and tests.
+#include <filesystem>
 #include <iostream>
 #include <optional>
 
@@ -18,6 +19,7 @@ struct ViewOptions {
   int width_px = 1400;
   int height_px = 900;
   bool compare = false;
+  std::string loop_dir;
   ModelOptions model;
 };
 
@@ -27,8 +29,9 @@ void run_view(const ViewOptions& options) {
   }
   if (!options.screenshot.empty()) {
     const std::size_t wanted = options.layout == "overlay" ? 2 : 1;
-    if (options.sessions.size() != wanted) {
-      throw UsageError("--screenshot takes one SESSION (two, A and B, for --layout overlay)");
+    if (options.layout != "steps" && options.sessions.size() != wanted) {
+      throw UsageError(
+          "--screenshot takes one SESSION (two, A and B, for --layout overlay; any for steps)");
     }
     if (options.layout.empty()) throw UsageError("--screenshot needs --layout");
     const std::string problem = viewer::check_layout(options.layout);
@@ -40,15 +43,29 @@ void run_view(const ViewOptions& options) {
   if (const std::string problem = window.validate(); !problem.empty()) {
     throw UsageError("--width/--height: " + problem);
   }
+  std::optional<viewer::LoopSteps> steps;
+  ModelOptions model_options = options.model;
+  if (!options.loop_dir.empty()) {
+    steps = viewer::read_loop_steps(options.loop_dir);
+    // The loop's final model, unless a model is given.
+    const std::filesystem::path dir = options.loop_dir;
+    if (model_options.params_path.empty() && model_options.effects_path.empty() &&
+        std::filesystem::exists(dir / "fitted-params.json")) {
+      model_options.params_path = (dir / "fitted-params.json").string();
+      if (std::filesystem::exists(dir / "fitted-effects.json")) {
+        model_options.effects_path = (dir / "fitted-effects.json").string();
+      }
+    }
+  }
   const bool compare =
-      options.compare || !options.model.params_path.empty() || !options.model.effects_path.empty();
+      options.compare || !model_options.params_path.empty() || !model_options.effects_path.empty();
   std::optional<DoorModel> model;
   std::string description;
   if (compare) {
-    model = load_model(options.model);
-    description = options.model.model + " model (" +
-                  (options.model.params_path.empty() ? std::string("reference door")
-                                                     : options.model.params_path) +
+    model = load_model(model_options);
+    description = model_options.model + " model (" +
+                  (model_options.params_path.empty() ? std::string("reference door")
+                                                     : model_options.params_path) +
                   ")";
   }
 
@@ -65,6 +82,7 @@ void run_view(const ViewOptions& options) {
     }
   }
   viewer::Viewer view(std::move(sessions), std::move(fits));
+  if (steps) view.set_loop_steps(std::move(*steps));
   if (!options.screenshot.empty()) {
     viewer::screenshot(view, options.layout, options.screenshot, window);
     std::cout << options.screenshot << "\n";
@@ -85,10 +103,14 @@ void add_view_command(CLI::App& app, Action& action) {
   view->add_option("--screenshot", options->screenshot,
                    "Render --layout of the one SESSION offscreen to this PNG and exit (also "
                    "writes PNG.json: where each plot is and its ranges)");
-  view->add_option("--layout", options->layout, "browser, channels, loop, fit or overlay");
+  view->add_option("--layout", options->layout, "browser, channels, loop, fit, overlay or steps");
   view->add_option("--width", options->width_px, "Window width in pixels")->capture_default_str();
   view->add_option("--height", options->height_px, "Window height in pixels")
       ->capture_default_str();
+  view->add_option("--loop", options->loop_dir,
+                   "A `doorbench loop` folder: its steps (layout steps) and its final model "
+                   "for the fit layout (unless --params/--effects say otherwise)")
+      ->check(CLI::ExistingDirectory);
   view->add_flag("--compare", options->compare,
                  "Compare each session with the model (implied by --params or --effects)");
   add_model_options(*view, options->model);

@@ -2,13 +2,17 @@
 // keeps the point under the cursor, linked time axes follow each other, crosshair readout.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
 #include <limits>
 #include <random>
 
+#include "temp_dir.h"
+#include "viewer/loop_steps.h"
 #include "viewer/plot_series.h"
 #include "viewer/plot_view.h"
 
 using namespace doorbench::viewer;
+using Catch::Matchers::Contains;
 
 namespace {
 
@@ -258,4 +262,43 @@ TEST_CASE("a plot's visible data exports to CSV, only what is in view", "[viewer
           "series,x,y,x_unit,y_unit\n"
           "opening,0.10000000000000001,1,rad,N\n"
           "opening,0.90000000000000002,2,rad,N\n");
+}
+
+TEST_CASE("the residual loop's steps are read from the loop's result.json", "[viewer]") {
+  doorbench::testing::TempDir dir("viewer_steps");
+  {
+    std::ofstream out(dir.path / "result.json");
+    out << R"({"source": "s.h5", "steps": [
+      {"step": 1, "effect": "gravity_imbalance", "evidence": {"explained_fraction": 0.8},
+       "parameters": [{"name": "imbalance_Nm", "unit": "N m", "value": 1.5,
+                       "standard_uncertainty": 0.02}],
+       "before": {"fitted_rmse_rad_s": 0.30, "held_out_rmse_rad_s": 0.35, "bic": 10},
+       "after": {"fitted_rmse_rad_s": 0.05, "held_out_rmse_rad_s": 0.06, "bic": 2},
+       "held_out_improvement": 0.83, "bic_change": -8},
+      {"step": 2, "effect": "stribeck", "parameters": [],
+       "before": {"fitted_rmse_rad_s": 0.05, "held_out_rmse_rad_s": 0.06},
+       "after": {"fitted_rmse_rad_s": 0.04, "held_out_rmse_rad_s": null},
+       "held_out_improvement": 0.1, "bic_change": -1}]})";
+  }
+  const LoopSteps steps = read_loop_steps(dir.path);  // the folder, as `loop --out` made it
+  REQUIRE(steps.source == "s.h5");
+  REQUIRE(steps.steps.size() == 2);
+  REQUIRE(steps.steps[0].effect == "gravity_imbalance");
+  REQUIRE(steps.steps[0].parameters == "imbalance_Nm = 1.5 ± 0.02 N m");
+  REQUIRE(steps.steps[0].held_out_before_rad_s == 0.35);
+  REQUIRE(steps.steps[0].held_out_after_rad_s == 0.06);
+  REQUIRE(std::isnan(steps.steps[1].held_out_after_rad_s));
+  const PlotView plot = loop_steps_plot(steps);
+  REQUIRE(plot.series.size() == 2);
+  REQUIRE(plot.series[0]->size() == 3);  // start model, step 1, step 2
+  REQUIRE(plot.series[0]->y(0) == 0.30);
+  REQUIRE(plot.series[0]->y(2) == 0.04);
+  REQUIRE(plot.y.min == 0.0);
+
+  {
+    std::ofstream out(dir.path / "bad.json");
+    out << R"({"steps": [{"step": 1, "effect": "x", "before": {}}]})";
+  }
+  REQUIRE_THROWS_WITH(read_loop_steps(dir.path / "bad.json"),
+                      Contains("bad.json: steps[0]: no field 'after'"));
 }

@@ -84,8 +84,13 @@ void Viewer::frame(float width, float height, const std::string& layout) {
                ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
                    ImGuiWindowFlags_NoBringToFrontOnFocus | ImGuiWindowFlags_NoSavedSettings);
   if (sessions_.empty()) {
-    ImGui::TextUnformatted("No session: doorbench view SESSION.h5 ...");
+    if (steps_ || layout == "steps") {
+      steps();
+    } else {
+      ImGui::TextUnformatted("No session: doorbench view SESSION.h5 ...");
+    }
     ImGui::End();
+    handle_exports();
     return;
   }
   current_ = std::clamp(current_, 0, int(sessions_.size()) - 1);
@@ -162,6 +167,7 @@ void Viewer::layout_body(SessionView& s, const std::string& layout) {
   if (layout == "loop") loop(s);
   if (layout == "fit") fit(s);
   if (layout == "overlay") overlay();
+  if (layout == "steps") steps();
 }
 
 void Viewer::browser(SessionView& s) {
@@ -333,6 +339,46 @@ void Viewer::overlay() {
         plot_widget(id.c_str(), overlay_->plots[i], overlay_states_[i], 0.0f, each, controls_));
   }
   ImGui::EndChild();
+}
+
+void Viewer::set_loop_steps(LoopSteps steps) {
+  steps_plot_ = loop_steps_plot(steps);
+  steps_ = std::move(steps);
+}
+
+void Viewer::steps() {
+  if (!steps_) {
+    ImGui::TextWrapped(
+        "No residual loop: start the viewer with --loop DIR (the folder `doorbench loop` wrote).");
+    return;
+  }
+  ImGui::Text("%s (loop on %s)", steps_->path.string().c_str(), steps_->source.c_str());
+  if (ImGui::BeginTable("steps", 7, kTableFlags)) {
+    for (const char* h : {"step", "effect", "parameters", "fitted RMSE [rad/s]",
+                          "held out RMSE [rad/s]", "held-out improvement", "BIC change"}) {
+      ImGui::TableSetupColumn(h);
+    }
+    ImGui::TableHeadersRow();
+    for (const LoopStep& s : steps_->steps) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::Text("%d", s.number);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(s.effect.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextWrapped("%s", s.parameters.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g -> %.4g", s.fitted_before_rad_s, s.fitted_after_rad_s);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g -> %.4g", s.held_out_before_rad_s, s.held_out_after_rad_s);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g", s.held_out_improvement);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g", s.bic_change);
+    }
+    ImGui::EndTable();
+  }
+  plots_.push_back(plot_widget("steps", steps_plot_, steps_state_, 0.0f, 0.0f, controls_));
 }
 
 }  // namespace doorbench::viewer

@@ -5,6 +5,7 @@
 //   loop      force against angle, opening and closing strokes in their colours
 //   fit       measured rate against a door model's simulation, the residual below
 //   overlay   A/B: the first two sessions' common channels aligned on their first stroke
+//   steps     the residual loop's steps (a `doorbench loop` folder): error before and after
 // The interactive window shows them as tabs with a session selector; a screenshot shows
 // one layout over the whole window.
 #include <filesystem>
@@ -12,13 +13,15 @@
 #include <string>
 #include <vector>
 
+#include "viewer/loop_steps.h"
 #include "viewer/plot_widget.h"
 #include "viewer/session_data.h"
 
 namespace doorbench::viewer {
 
 inline const std::vector<std::string>& layout_names() {
-  static const std::vector<std::string> names = {"browser", "channels", "loop", "fit", "overlay"};
+  static const std::vector<std::string> names = {"browser", "channels", "loop",
+                                                 "fit",     "overlay",  "steps"};
   return names;
 }
 
@@ -34,6 +37,7 @@ class Viewer {
   // The plots drawn in the last frame.
   const std::vector<PlotRecord>& plots() const { return plots_; }
   std::size_t session_count() const { return sessions_.size(); }
+  void set_loop_steps(LoopSteps steps);
 
   // Export: a plot's CSV button writes its visible data to export_dir at once; its PNG
   // button leaves a request that the window fulfils after rendering the frame.
@@ -61,6 +65,7 @@ class Viewer {
   void loop(SessionView& s);
   void fit(SessionView& s);
   void overlay();
+  void steps();
   void layout_body(SessionView& s, const std::string& layout);
 
   std::vector<SessionView> sessions_;
@@ -68,6 +73,9 @@ class Viewer {
   std::optional<Overlay> overlay_;
   std::string overlay_message_;
   std::vector<PlotWidgetState> overlay_states_;
+  std::optional<LoopSteps> steps_;
+  PlotView steps_plot_;
+  PlotWidgetState steps_state_;
   bool controls_ = false;  // export buttons (interactive window only)
   std::optional<PngRequest> png_request_;
   std::string status_;
