@@ -83,6 +83,7 @@ void run_view(const ViewOptions& options) {
   }
   viewer::Viewer view(std::move(sessions), std::move(fits));
   if (steps) view.set_loop_steps(std::move(*steps));
+  if (model) view.set_tuning_model(*model);
   if (!options.screenshot.empty()) {
     viewer::screenshot(view, options.layout, options.screenshot, window);
     std::cout << options.screenshot << "\n";
@@ -103,7 +104,8 @@ void add_view_command(CLI::App& app, Action& action) {
   view->add_option("--screenshot", options->screenshot,
                    "Render --layout of the one SESSION offscreen to this PNG and exit (also "
                    "writes PNG.json: where each plot is and its ranges)");
-  view->add_option("--layout", options->layout, "browser, channels, loop, fit, overlay or steps");
+  view->add_option("--layout", options->layout,
+                   "browser, channels, loop, fit, overlay, steps or tuning");
   view->add_option("--width", options->width_px, "Window width in pixels")->capture_default_str();
   view->add_option("--height", options->height_px, "Window height in pixels")
       ->capture_default_str();

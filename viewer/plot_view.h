@@ -2,6 +2,7 @@
 // One plot's state and geometry (no GL, no ImGui): which series it shows, the visible
 // ranges, zoom / pan / box zoom, time axes linked across plots, the crosshair readout, the
 // axis ticks, and the draw data (polylines in pixels) the ImGui widget hands to ImDrawList.
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <vector>
@@ -71,6 +72,8 @@ class PlotView {
   std::shared_ptr<Range> x = std::make_shared<Range>();
   Range y;
   std::vector<Marker> markers;
+  // Bumped by whoever replaces a series' data, so that cached draw data are rebuilt.
+  std::uint64_t revision = 0;
 
   bool is_xy() const { return !series.empty() && series.front()->is_xy(); }
   // Adds a series; a plot holds time series or x–y series, not both (std::invalid_argument).

@@ -131,18 +131,19 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     draw->AddLine(ImVec2(px, a0.y), ImVec2(px, a1.y), to_imgui_colour(m.colour));
     if (hovered && std::abs(px - float(mx)) <= 3.0f) near_mouse.push_back(&m);
   }
-  const bool same = state.drawn && state.drawn_x.min == view.x->min &&
-                    state.drawn_x.max == view.x->max && state.drawn_y.min == view.y.min &&
-                    state.drawn_y.max == view.y.max && state.drawn_area.x == area.x &&
-                    state.drawn_area.y == area.y && state.drawn_area.width == area.width &&
-                    state.drawn_area.height == area.height &&
-                    state.drawn_series == view.series.size();
+  const bool same =
+      state.drawn && state.drawn_x.min == view.x->min && state.drawn_x.max == view.x->max &&
+      state.drawn_y.min == view.y.min && state.drawn_y.max == view.y.max &&
+      state.drawn_area.x == area.x && state.drawn_area.y == area.y &&
+      state.drawn_area.width == area.width && state.drawn_area.height == area.height &&
+      state.drawn_series == view.series.size() && state.drawn_revision == view.revision;
   if (!same) {
     view.build_draw_data(area, state.draw);
     state.drawn_x = *view.x;
     state.drawn_y = view.y;
     state.drawn_area = area;
     state.drawn_series = view.series.size();
+    state.drawn_revision = view.revision;
     state.drawn = true;
   }
   for (const DrawData::Strip& strip : state.draw.strips) {

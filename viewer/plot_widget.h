@@ -33,6 +33,7 @@ struct PlotWidgetState {
   Range drawn_x, drawn_y;
   Rect drawn_area;
   std::size_t drawn_series = 0;
+  std::uint64_t drawn_revision = 0;
   bool drawn = false;
 };
 

@@ -168,6 +168,7 @@ void Viewer::layout_body(SessionView& s, const std::string& layout) {
   if (layout == "fit") fit(s);
   if (layout == "overlay") overlay();
   if (layout == "steps") steps();
+  if (layout == "tuning") tuning(s);
 }
 
 void Viewer::browser(SessionView& s) {
@@ -379,6 +380,96 @@ void Viewer::steps() {
     ImGui::EndTable();
   }
   plots_.push_back(plot_widget("steps", steps_plot_, steps_state_, 0.0f, 0.0f, controls_));
+}
+
+void Viewer::tuning(SessionView& s) {
+  if (!tuning_model_) {
+    ImGui::TextWrapped(
+        "No model to tune: start the viewer with --params FILE (or --compare, or "
+        "--loop DIR).");
+    return;
+  }
+  if (!s.tuning && s.tuning_message.empty()) {
+    try {
+      if (!s.data.prepared) throw std::invalid_argument(s.data.prepare_message);
+      s.tuning.emplace(s.data.data, *tuning_model_);
+    } catch (const std::exception& error) {
+      s.tuning_message = std::string("Cannot tune on this session: ").append(error.what());
+    }
+  }
+  if (!s.tuning) {
+    ImGui::TextWrapped("%s", s.tuning_message.c_str());
+    return;
+  }
+  Tuning& t = *s.tuning;
+  bool changed = false;
+  ImGui::BeginChild("sliders", ImVec2(500.0f, 0.0f), true);
+  if (ImGui::Button("Reset to fitted")) {
+    t.reset();
+    changed = true;
+  }
+  ImGui::SetNextItemWidth(260.0f);
+  ImGui::InputText("##save", save_path_, sizeof save_path_);
+  ImGui::SameLine();
+  if (ImGui::Button("Save as")) {
+    try {
+      const auto written = t.save(save_path_);
+      status_ = "wrote " + written.front().string();
+    } catch (const std::exception& error) {
+      status_ = error.what();
+    }
+  }
+  if (t.model().kind() == ModelKind::kSensory) {
+    ImGui::Separator();
+    ImGui::TextUnformatted("Perceptual controls (spec 2)");
+    for (const perceptual::ControlInfo& info : perceptual::controls()) {
+      double value = perceptual::read(t.model(), info.control);
+      const std::string label = std::string(info.name).append(" [").append(info.unit).append("]");
+      const float speed = float(std::max(std::abs(value) * 0.003, 1e-6));
+      if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &value, speed, nullptr, nullptr,
+                            "%.5g")) {
+        const std::string problem = t.set_control(info.control, value);
+        if (problem.empty())
+          changed = true;
+        else
+          status_ = problem;
+      }
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", std::string(info.meaning).c_str());
+    }
+  }
+  ImGui::Separator();
+  ImGui::TextUnformatted("Parameters");
+  for (int i = 0; i < t.model().parameter_count(); ++i) {
+    double value = t.model().parameter_values()[std::size_t(i)];
+    const Bounds bounds = t.model().parameter_bounds()[std::size_t(i)];
+    std::string label = t.model().parameter_name(i);
+    const std::string_view unit = t.model().parameter_unit(i);
+    if (!unit.empty()) label.append(" [").append(unit).append("]");
+    bool moved = false;
+    if (std::isfinite(bounds.lower) && std::isfinite(bounds.upper) && bounds.upper > bounds.lower) {
+      moved = ImGui::SliderScalar(label.c_str(), ImGuiDataType_Double, &value, &bounds.lower,
+                                  &bounds.upper, "%.5g");
+    } else {
+      const float speed = float(std::max(std::abs(value) * 0.003, 1e-6));
+      moved = ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &value, speed, nullptr,
+                                nullptr, "%.5g");
+    }
+    if (moved) {
+      const std::string problem = t.set_parameter(i, value);
+      if (problem.empty())
+        changed = true;
+      else
+        status_ = problem;
+    }
+  }
+  ImGui::EndChild();
+  if (changed) t.resimulate();
+  ImGui::SameLine();
+  ImGui::BeginChild("tuned");
+  ImGui::Text("%zu strokes replayed in %.1f ms; largest |w_meas - w_sim| %.4g rad/s",
+              t.stroke_count(), t.last_resimulate_ms(), t.max_error_rad_s());
+  plots_.push_back(plot_widget("tuning", t.plot, s.tuning_state, 0.0f, 0.0f, controls_));
+  ImGui::EndChild();
 }
 
 }  // namespace doorbench::viewer

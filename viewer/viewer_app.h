@@ -6,6 +6,7 @@
 //   fit       measured rate against a door model's simulation, the residual below
 //   overlay   A/B: the first two sessions' common channels aligned on their first stroke
 //   steps     the residual loop's steps (a `doorbench loop` folder): error before and after
+//   tuning    sliders for the model's parameters and perceptual controls; strokes replayed
 // The interactive window shows them as tabs with a session selector; a screenshot shows
 // one layout over the whole window.
 #include <filesystem>
@@ -16,12 +17,13 @@
 #include "viewer/loop_steps.h"
 #include "viewer/plot_widget.h"
 #include "viewer/session_data.h"
+#include "viewer/tuning.h"
 
 namespace doorbench::viewer {
 
 inline const std::vector<std::string>& layout_names() {
-  static const std::vector<std::string> names = {"browser", "channels", "loop",
-                                                 "fit",     "overlay",  "steps"};
+  static const std::vector<std::string> names = {"browser", "channels", "loop",  "fit",
+                                                 "overlay", "steps",    "tuning"};
   return names;
 }
 
@@ -38,6 +40,8 @@ class Viewer {
   const std::vector<PlotRecord>& plots() const { return plots_; }
   std::size_t session_count() const { return sessions_.size(); }
   void set_loop_steps(LoopSteps steps);
+  // The model the tuning layout starts from (the fitted one).
+  void set_tuning_model(DoorModel model) { tuning_model_ = std::move(model); }
 
   // Export: a plot's CSV button writes its visible data to export_dir at once; its PNG
   // button leaves a request that the window fulfils after rendering the frame.
@@ -59,6 +63,9 @@ class Viewer {
     std::vector<PlotWidgetState> channel_states;
     PlotWidgetState loop_state;
     std::vector<PlotWidgetState> fit_states;
+    std::optional<Tuning> tuning;  // made when the tuning layout is first shown
+    std::string tuning_message;
+    PlotWidgetState tuning_state;
   };
   void browser(SessionView& s);
   void channels(SessionView& s);
@@ -66,6 +73,7 @@ class Viewer {
   void fit(SessionView& s);
   void overlay();
   void steps();
+  void tuning(SessionView& s);
   void layout_body(SessionView& s, const std::string& layout);
 
   std::vector<SessionView> sessions_;
@@ -76,6 +84,8 @@ class Viewer {
   std::optional<LoopSteps> steps_;
   PlotView steps_plot_;
   PlotWidgetState steps_state_;
+  std::optional<DoorModel> tuning_model_;
+  char save_path_[512] = "tuned-params.json";
   bool controls_ = false;  // export buttons (interactive window only)
   std::optional<PngRequest> png_request_;
   std::string status_;
