@@ -98,8 +98,8 @@ PlotView loop_steps_plot(const LoopSteps& steps) {
     fitted.push_back(s.fitted_after_rad_s);
     held_out.push_back(s.held_out_after_rad_s);
   }
-  auto fitted_series = std::make_shared<Series>(Series::xy("fitted", "step", "rad/s", x, fitted));
-  auto held_series = std::make_shared<Series>(Series::xy("held out", "step", "rad/s", x, held_out));
+  auto fitted_series = std::make_shared<Series>(Series::xy("fitted", "", "rad/s", x, fitted));
+  auto held_series = std::make_shared<Series>(Series::xy("held out", "", "rad/s", x, held_out));
   fitted_series->colour = {40, 140, 230, 255};
   held_series->colour = {230, 90, 40, 255};
   PlotView plot;

@@ -60,8 +60,8 @@ Tuning::Tuning(const PreparedData& data, DoorModel fitted, std::vector<int> stro
   plot.add(replay(fitted_, "fitted", {40, 140, 230, 255}, &ignored));
   const auto start = std::chrono::steady_clock::now();
   plot.add(replay(model_, "tuned", {230, 90, 40, 255}, &max_error_));
-  last_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
-                 .count();
+  last_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   plot.fit();
 }
 
