@@ -15,6 +15,9 @@ packages=(
   python3-h5py                # tests read sessions without doorbench
   libtomlplusplus-dev         # rig files
   libcomedi-dev               # comedi DAQ cards (sensors/comedi_backend.h)
+  libimgui-dev libstb-dev     # the viewer: Dear ImGui (+ its backends' sources), PNG writing
+  libglfw3-dev libgl-dev      # the viewer's window and OpenGL
+  xvfb libgl1-mesa-dri libglx-mesa0 xauth  # headless screenshots: Xvfb + Mesa software GL
 )
 
 missing=()

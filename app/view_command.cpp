@@ -1,0 +1,122 @@
+// doorbench view: the interactive viewer (viewer/, docs/viewer.md), or one headless
+// screenshot of a layout for reports and tests.
+#include <filesystem>
+#include <iostream>
+#include <optional>
+
+#include "app/commands.h"
+#include "viewer/viewer_app.h"
+#include "viewer/window.h"
+
+namespace doorbench::app {
+
+namespace {
+
+struct ViewOptions {
+  std::vector<std::string> sessions;
+  std::string screenshot;
+  std::string layout;
+  int width_px = 1400;
+  int height_px = 900;
+  bool compare = false;
+  std::string loop_dir;
+  ModelOptions model;
+};
+
+void run_view(const ViewOptions& options) {
+  if (!options.layout.empty() && options.screenshot.empty()) {
+    throw UsageError("--layout chooses what --screenshot shows; the window shows every layout");
+  }
+  if (!options.screenshot.empty()) {
+    const std::size_t wanted = options.layout == "overlay" ? 2 : 1;
+    if (options.layout != "steps" && options.sessions.size() != wanted) {
+      throw UsageError(
+          "--screenshot takes one SESSION (two, A and B, for --layout overlay; any for steps)");
+    }
+    if (options.layout.empty()) throw UsageError("--screenshot needs --layout");
+    const std::string problem = viewer::check_layout(options.layout);
+    if (!problem.empty()) throw UsageError("--layout: " + problem);
+  }
+  viewer::WindowOptions window;
+  window.width_px = options.width_px;
+  window.height_px = options.height_px;
+  if (const std::string problem = window.validate(); !problem.empty()) {
+    throw UsageError("--width/--height: " + problem);
+  }
+  std::optional<viewer::LoopSteps> steps;
+  ModelOptions model_options = options.model;
+  if (!options.loop_dir.empty()) {
+    steps = viewer::read_loop_steps(options.loop_dir);
+    // The loop's final model, unless a model is given.
+    const std::filesystem::path dir = options.loop_dir;
+    if (model_options.params_path.empty() && model_options.effects_path.empty() &&
+        std::filesystem::exists(dir / "fitted-params.json")) {
+      model_options.params_path = (dir / "fitted-params.json").string();
+      if (std::filesystem::exists(dir / "fitted-effects.json")) {
+        model_options.effects_path = (dir / "fitted-effects.json").string();
+      }
+    }
+  }
+  const bool compare =
+      options.compare || !model_options.params_path.empty() || !model_options.effects_path.empty();
+  std::optional<DoorModel> model;
+  std::string description;
+  if (compare) {
+    model = load_model(model_options);
+    description = model_options.model + " model (" +
+                  (model_options.params_path.empty() ? std::string("reference door")
+                                                     : model_options.params_path) +
+                  ")";
+  }
+
+  std::vector<viewer::SessionData> sessions;
+  std::vector<std::optional<viewer::FitComparison>> fits;
+  for (const std::string& path : options.sessions) {
+    sessions.push_back(viewer::load_session(path));
+    if (!sessions.back().prepared) {
+      std::cerr << path << ": no strokes (" << sessions.back().prepare_message << ")\n";
+    }
+    fits.emplace_back();
+    if (model && sessions.back().prepared && !sessions.back().data.strokes.empty()) {
+      fits.back() = viewer::compare_with_model(sessions.back(), *model, description);
+    }
+  }
+  viewer::Viewer view(std::move(sessions), std::move(fits));
+  if (steps) view.set_loop_steps(std::move(*steps));
+  if (model) view.set_tuning_model(*model);
+  if (!options.screenshot.empty()) {
+    viewer::screenshot(view, options.layout, options.screenshot, window);
+    std::cout << options.screenshot << "\n";
+    return;
+  }
+  viewer::run_window(view, window);
+}
+
+}  // namespace
+
+void add_view_command(CLI::App& app, Action& action) {
+  auto options = std::make_shared<ViewOptions>();
+  CLI::App* view = app.add_subcommand(
+      "view",
+      "Look at sessions: metadata, channels over time, force-angle loops, measured against a "
+      "model's simulation (Dear ImGui window; --screenshot renders one layout to PNG)");
+  view->add_option("SESSION", options->sessions, "Session files (HDF5)")->check(CLI::ExistingFile);
+  view->add_option("--screenshot", options->screenshot,
+                   "Render --layout of the one SESSION offscreen to this PNG and exit (also "
+                   "writes PNG.json: where each plot is and its ranges)");
+  view->add_option("--layout", options->layout,
+                   "browser, channels, loop, fit, overlay, steps or tuning");
+  view->add_option("--width", options->width_px, "Window width in pixels")->capture_default_str();
+  view->add_option("--height", options->height_px, "Window height in pixels")
+      ->capture_default_str();
+  view->add_option("--loop", options->loop_dir,
+                   "A `doorbench loop` folder: its steps (layout steps) and its final model "
+                   "for the fit layout (unless --params/--effects say otherwise)")
+      ->check(CLI::ExistingDirectory);
+  view->add_flag("--compare", options->compare,
+                 "Compare each session with the model (implied by --params or --effects)");
+  add_model_options(*view, options->model);
+  view->callback([options, &action] { action = [options] { run_view(*options); }; });
+}
+
+}  // namespace doorbench::app

@@ -1,0 +1,261 @@
+#include "viewer/session_data.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "analysis/fit_metrics.h"
+#include "analysis/fitting.h"
+#include "analysis/preprocessing.h"
+
+namespace doorbench::viewer {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+
+std::shared_ptr<Series> channel_series(const SessionReader& reader, const ChannelInfo& info) {
+  const ChannelSlice slice = reader.read(info.name);
+  std::vector<double> values = reader.physical(info.name, slice);
+  std::shared_ptr<Series> series;
+  if (info.sample_rate_hz > 0.0) {
+    const double t0 = info.first_sample_time_s + double(slice.first_index) / info.sample_rate_hz;
+    series = std::make_shared<Series>(
+        Series::uniform(info.name, info.unit, t0, 1.0 / info.sample_rate_hz, std::move(values)));
+  } else {
+    series = std::make_shared<Series>(
+        Series::timed(info.name, info.unit, slice.time_s, std::move(values)));
+  }
+  return series;
+}
+
+std::shared_ptr<Series> loop_series(const PreparedData& data, StrokeDirection direction,
+                                    const std::string& name, Rgba colour) {
+  std::vector<double> angle, force;
+  for (const Stroke& stroke : data.strokes) {
+    if (stroke.direction != direction) continue;
+    if (!angle.empty()) {
+      angle.push_back(kNaN);
+      force.push_back(kNaN);
+    }
+    angle.insert(angle.end(), stroke.theta_rad.begin(), stroke.theta_rad.end());
+    force.insert(force.end(), stroke.force_N.begin(), stroke.force_N.end());
+  }
+  auto series =
+      std::make_shared<Series>(Series::xy(name, "rad", "N", std::move(angle), std::move(force)));
+  series->colour = colour;
+  return series;
+}
+
+}  // namespace
+
+Rgba palette(std::size_t index) {
+  static constexpr Rgba colours[] = {{230, 90, 40, 255},   {40, 140, 230, 255}, {60, 180, 75, 255},
+                                     {220, 190, 30, 255},  {170, 80, 200, 255}, {30, 200, 200, 255},
+                                     {240, 120, 180, 255}, {150, 150, 150, 255}};
+  return colours[index % (sizeof colours / sizeof colours[0])];
+}
+
+SessionData load_session(const std::filesystem::path& path, const LoadOptions& options) {
+  const SessionReader reader(path);
+  SessionData session;
+  session.path = path;
+  session.metadata = reader.metadata();
+  session.channels = reader.channels();
+  session.events = reader.events();
+  session.calibrations = reader.calibrations();
+  for (std::size_t i = 0; i < session.channels.size(); ++i) {
+    const ChannelInfo& info = session.channels[i];
+    session.sample_counts.push_back(reader.sample_count(info.name));
+    session.channel_series.push_back(channel_series(reader, info));
+    session.channel_series.back()->colour = palette(i);
+  }
+  if (options.prepare) {
+    try {
+      session.data = prepare_session(path);
+      session.prepared = true;
+    } catch (const std::exception& error) {
+      session.prepare_message = error.what();
+    }
+  } else {
+    session.prepare_message = "strokes not prepared";
+  }
+  session.opening_loop =
+      loop_series(session.data, StrokeDirection::kOpening, "opening", kOpeningColour);
+  session.closing_loop =
+      loop_series(session.data, StrokeDirection::kClosing, "closing", kClosingColour);
+  return session;
+}
+
+FitComparison compare_with_model(const SessionData& session, const DoorModel& model,
+                                 const std::string& description) {
+  if (!session.prepared || session.data.strokes.empty()) {
+    throw std::invalid_argument(
+        std::string(session.path.string())
+            .append(": no strokes to compare the model with (")
+            .append(session.prepared ? "none found" : session.prepare_message)
+            .append(")"));
+  }
+  const WindowOptions windows = metric_window_options(FitOptions{}, model);
+  const WindowSimulation sim = simulate_windows(model, session.data, windows);
+  std::vector<double> t, measured, simulated, residual;
+  double sum_sq = 0.0;
+  std::size_t count = 0;
+  for (std::size_t k = 0; k < session.data.strokes.size(); ++k) {
+    const Stroke& stroke = session.data.strokes[k];
+    if (!t.empty()) {
+      // A NaN between strokes breaks the lines; its time sits between them.
+      t.push_back(0.5 * (t.back() + stroke.time_s.front()));
+      measured.push_back(kNaN);
+      simulated.push_back(kNaN);
+      residual.push_back(kNaN);
+    }
+    for (std::size_t i = 0; i < stroke.size(); ++i) {
+      const double hat = sim.omega_rad_s[k][i];
+      t.push_back(stroke.time_s[i]);
+      measured.push_back(stroke.omega_rad_s[i]);
+      simulated.push_back(hat);
+      residual.push_back(stroke.omega_rad_s[i] - hat);
+      if (std::isfinite(hat)) {
+        sum_sq += residual.back() * residual.back();
+        ++count;
+      }
+    }
+  }
+  FitComparison comparison;
+  comparison.model_description = description;
+  comparison.measured = std::make_shared<Series>(Series::timed("measured", "rad/s", t, measured));
+  comparison.simulated =
+      std::make_shared<Series>(Series::timed("simulated", "rad/s", t, simulated));
+  comparison.residual =
+      std::make_shared<Series>(Series::timed("residual", "rad/s", std::move(t), residual));
+  comparison.measured->colour = palette(1);
+  comparison.simulated->colour = palette(0);
+  comparison.residual->colour = palette(2);
+  comparison.rmse_rad_s = count > 0 ? std::sqrt(sum_sq / double(count)) : kNaN;
+  return comparison;
+}
+
+std::vector<PlotView> channel_plots(const SessionData& session) {
+  std::vector<PlotView> plots;
+  for (std::size_t i = 0; i < session.channels.size(); ++i) {
+    PlotView plot;
+    plot.title = session.channels[i].name;
+    plot.x_label = "time";
+    plot.y_label = session.channels[i].name;
+    plot.add(session.channel_series[i]);
+    plot.markers = event_markers(session, session.channels[i].name);
+    if (!plots.empty()) plot.link_x_to(plots.front());
+    plots.push_back(std::move(plot));
+  }
+  if (!plots.empty()) {
+    plots.front().fit_x();
+    for (PlotView& plot : plots) plot.fit_y();
+  }
+  return plots;
+}
+
+PlotView loop_plot(const SessionData& session) {
+  PlotView plot;
+  plot.title = "force against angle";
+  plot.x_label = "angle";
+  plot.y_label = "force";
+  plot.add(session.opening_loop);
+  plot.add(session.closing_loop);
+  plot.fit();
+  return plot;
+}
+
+std::vector<PlotView> fit_plots(const FitComparison& comparison) {
+  std::vector<PlotView> plots(2);
+  plots[0].title = "rate: measured and " + comparison.model_description;
+  plots[0].x_label = "time";
+  plots[0].y_label = "rate";
+  plots[0].add(comparison.measured);
+  plots[0].add(comparison.simulated);
+  plots[1].title = "residual (measured - simulated)";
+  plots[1].x_label = "time";
+  plots[1].y_label = "residual";
+  plots[1].add(comparison.residual);
+  plots[1].link_x_to(plots[0]);
+  plots[0].fit();
+  plots[1].fit_y();
+  return plots;
+}
+
+}  // namespace doorbench::viewer
+
+namespace doorbench::viewer {
+
+std::vector<Marker> event_markers(const SessionData& session, const std::string& channel) {
+  std::vector<Marker> markers;
+  for (const SessionEvent& e : session.events) {
+    if (!e.channel.empty() && e.channel != channel) continue;
+    Rgba colour;
+    if (e.kind == "stroke_start" || e.kind == "stroke_end") {
+      colour = e.detail == "closing" ? Rgba{40, 140, 230, 110} : Rgba{230, 90, 40, 110};
+      if (e.kind == "stroke_end") colour = {170, 170, 170, 90};
+    } else if (e.kind == "fault" || e.kind == "gap") {
+      colour = {255, 0, 255, 200};
+    } else if (e.kind == "trigger") {
+      colour = {255, 255, 255, 160};
+    } else if (e.kind == "mark") {
+      colour = {200, 200, 120, 160};
+    } else {
+      continue;
+    }
+    std::string label = e.kind;
+    if (!e.detail.empty()) label.append(" ").append(e.detail);
+    markers.push_back({e.time_s, colour, std::move(label)});
+  }
+  return markers;
+}
+
+double first_stroke_start_s(const SessionData& session, const std::string& direction) {
+  double first = std::numeric_limits<double>::infinity();
+  for (const SessionEvent& e : session.events) {
+    if (e.kind == "stroke_start" && (direction.empty() || e.detail == direction)) {
+      first = std::min(first, e.time_s);
+    }
+  }
+  if (!std::isfinite(first)) {
+    throw std::invalid_argument(std::string(session.path.string())
+                                    .append(": no stroke_start event")
+                                    .append(direction.empty() ? "" : " of direction " + direction)
+                                    .append(" to align on"));
+  }
+  return first;
+}
+
+Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::string& direction) {
+  Overlay overlay;
+  overlay.a_start_s = first_stroke_start_s(a, direction);
+  overlay.b_start_s = first_stroke_start_s(b, direction);
+  for (std::size_t i = 0; i < a.channels.size(); ++i) {
+    for (std::size_t j = 0; j < b.channels.size(); ++j) {
+      if (a.channels[i].name != b.channels[j].name) continue;
+      PlotView plot;
+      plot.title = a.channels[i].name + ": A and B, aligned on stroke start";
+      plot.x_label = "time since stroke start";
+      plot.y_label = a.channels[i].name;
+      auto sa = std::make_shared<Series>(
+          a.channel_series[i]->shifted(-overlay.a_start_s, "A " + a.path.filename().string()));
+      auto sb = std::make_shared<Series>(
+          b.channel_series[j]->shifted(-overlay.b_start_s, "B " + b.path.filename().string()));
+      sa->colour = palette(1);
+      sb->colour = palette(0);
+      plot.add(sa);
+      plot.add(sb);
+      if (!overlay.plots.empty()) plot.link_x_to(overlay.plots.front());
+      overlay.plots.push_back(std::move(plot));
+    }
+  }
+  if (!overlay.plots.empty()) {
+    overlay.plots.front().fit_x();
+    for (PlotView& plot : overlay.plots) plot.fit_y();
+  }
+  return overlay;
+}
+
+}  // namespace doorbench::viewer

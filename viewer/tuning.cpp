@@ -1,0 +1,145 @@
+#include "viewer/tuning.h"
+
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <limits>
+#include <stdexcept>
+
+#include "analysis/fit_metrics.h"
+#include "analysis/fitting.h"
+#include "analysis/parameter_file.h"
+
+namespace doorbench::viewer {
+
+namespace {
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr std::size_t kDefaultStrokes = 12;
+}  // namespace
+
+Tuning::Tuning(const PreparedData& data, DoorModel fitted, std::vector<int> strokes)
+    : fitted_(fitted), model_(std::move(fitted)) {
+  if (data.strokes.empty()) {
+    throw std::invalid_argument(data.source + ": no strokes to tune against");
+  }
+  if (strokes.empty()) {
+    for (std::size_t i = 0; i < data.strokes.size() && i < kDefaultStrokes; ++i) {
+      strokes.push_back(int(i));
+    }
+  }
+  data_ = data;
+  data_.strokes.clear();
+  for (int index : strokes) {
+    if (index < 0 || std::size_t(index) >= data.strokes.size()) {
+      throw std::invalid_argument(std::string(data.source)
+                                      .append(": stroke index ")
+                                      .append(std::to_string(index))
+                                      .append(" out of range (")
+                                      .append(std::to_string(data.strokes.size()))
+                                      .append(" strokes)"));
+    }
+    data_.strokes.push_back(data.strokes[std::size_t(index)]);
+  }
+  // Measured ω and the fitted model's replay are fixed; the tuned one follows each change.
+  std::vector<double> t, omega;
+  for (const Stroke& stroke : data_.strokes) {
+    if (!t.empty()) {
+      t.push_back(0.5 * (t.back() + stroke.time_s.front()));
+      omega.push_back(kNaN);
+    }
+    t.insert(t.end(), stroke.time_s.begin(), stroke.time_s.end());
+    omega.insert(omega.end(), stroke.omega_rad_s.begin(), stroke.omega_rad_s.end());
+  }
+  auto measured = std::make_shared<Series>(Series::timed("measured", "rad/s", t, omega));
+  measured->colour = {200, 200, 200, 255};
+  plot.title = "rate: measured, fitted and tuned (strokes replayed open-loop)";
+  plot.x_label = "time";
+  plot.y_label = "rate";
+  plot.add(measured);
+  double ignored = 0.0;
+  plot.add(replay(fitted_, "fitted", {40, 140, 230, 255}, &ignored));
+  const auto start = std::chrono::steady_clock::now();
+  plot.add(replay(model_, "tuned", {230, 90, 40, 255}, &max_error_));
+  last_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  plot.fit();
+}
+
+std::shared_ptr<Series> Tuning::replay(const DoorModel& model, const std::string& name, Rgba colour,
+                                       double* max_error) {
+  WindowOptions options = metric_window_options(FitOptions{}, model);
+  options.whole_strokes = true;
+  const WindowSimulation sim = simulate_windows(model, data_, options);
+  std::vector<double> t, omega;
+  *max_error = 0.0;
+  for (std::size_t k = 0; k < data_.strokes.size(); ++k) {
+    const Stroke& stroke = data_.strokes[k];
+    if (!t.empty()) {
+      t.push_back(0.5 * (t.back() + stroke.time_s.front()));
+      omega.push_back(kNaN);
+    }
+    for (std::size_t i = 0; i < stroke.size(); ++i) {
+      const double hat = sim.omega_rad_s[k][i];
+      t.push_back(stroke.time_s[i]);
+      omega.push_back(hat);
+      const double error = std::abs(stroke.omega_rad_s[i] - hat);
+      if (std::isfinite(error)) *max_error = std::max(*max_error, error);
+    }
+  }
+  auto series = std::make_shared<Series>(Series::timed(name, "rad/s", std::move(t), omega));
+  series->colour = colour;
+  return series;
+}
+
+std::string Tuning::set_parameter(int index, double value) {
+  if (index < 0 || index >= model_.parameter_count()) {
+    return "parameter index " + std::to_string(index) + " out of range";
+  }
+  std::vector<double> values(model_.parameter_values().begin(), model_.parameter_values().end());
+  values[std::size_t(index)] = value;
+  try {
+    model_ = model_.with_parameter_values(std::move(values));
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "";
+}
+
+std::string Tuning::set_control(perceptual::Control control, double value) {
+  try {
+    model_ = perceptual::set(model_, control, value);
+  } catch (const std::invalid_argument& error) {
+    return error.what();
+  }
+  return "";
+}
+
+double Tuning::resimulate() {
+  const auto start = std::chrono::steady_clock::now();
+  auto tuned = replay(model_, "tuned", {230, 90, 40, 255}, &max_error_);
+  plot.series.back() = std::move(tuned);
+  ++plot.revision;
+  last_ms_ =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  return last_ms_;
+}
+
+std::vector<std::filesystem::path> Tuning::save(const std::filesystem::path& params_path) const {
+  std::vector<std::filesystem::path> written;
+  auto write = [&written](const std::filesystem::path& path, const std::string& text) {
+    std::ofstream out(path);
+    out << text;
+    out.close();
+    if (!out) throw std::runtime_error(path.string() + ": cannot write");
+    written.push_back(path);
+  };
+  write(params_path, to_parameter_json(model_));
+  if (!model_.effects().empty()) {
+    std::filesystem::path effects = params_path;
+    effects.replace_filename(params_path.stem().string() + "-effects.json");
+    write(effects, to_effects_json(model_));
+  }
+  return written;
+}
+
+}  // namespace doorbench::viewer

@@ -1,0 +1,475 @@
+#include "viewer/viewer_app.h"
+
+#include <imgui.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <fstream>
+#include <stdexcept>
+
+namespace doorbench::viewer {
+
+namespace {
+
+const char* raw_type_name(RawType t) {
+  return t == RawType::kCounts ? "counts" : "values";
+}
+
+void text_row(const char* name, const std::string& value) {
+  ImGui::TableNextRow();
+  ImGui::TableNextColumn();
+  ImGui::TextUnformatted(name);
+  ImGui::TableNextColumn();
+  ImGui::TextUnformatted(value.empty() ? "-" : value.c_str());
+}
+
+// The height of each of n plots stacked in `avail` pixels (ImGui puts item spacing after
+// each), at least 140.
+float stacked_height(float avail, std::size_t n) {
+  const float spacing = ImGui::GetStyle().ItemSpacing.y;
+  return std::max(140.0f, std::floor((avail - spacing * float(n)) / float(n)));
+}
+
+constexpr ImGuiTableFlags kTableFlags =
+    ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp;
+
+}  // namespace
+
+std::string check_layout(const std::string& name) {
+  const auto& names = layout_names();
+  if (std::find(names.begin(), names.end(), name) != names.end()) return "";
+  std::string message = std::string("unknown layout '").append(name).append("' (expected ");
+  for (std::size_t i = 0; i < names.size(); ++i) message += (i ? ", " : "") + names[i];
+  return message + ")";
+}
+
+Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitComparison>> fits) {
+  for (std::size_t i = 0; i < sessions.size(); ++i) {
+    SessionView view;
+    view.data = std::move(sessions[i]);
+    view.channels = channel_plots(view.data);
+    view.channel_states.resize(view.channels.size());
+    view.loop = loop_plot(view.data);
+    if (i < fits.size() && fits[i]) {
+      view.fit = std::move(fits[i]);
+      view.fit_plots = fit_plots(*view.fit);
+      view.fit_states.resize(view.fit_plots.size());
+    }
+    sessions_.push_back(std::move(view));
+  }
+  if (sessions_.size() < 2) {
+    overlay_message_ = "The A/B overlay needs two sessions: doorbench view A.h5 B.h5";
+  } else {
+    try {
+      overlay_ = overlay_plots(sessions_[0].data, sessions_[1].data);
+      overlay_states_.resize(overlay_->plots.size());
+      if (overlay_->plots.empty()) overlay_message_ = "The two sessions share no channel name.";
+    } catch (const std::invalid_argument& error) {
+      overlay_message_ = error.what();
+    }
+  }
+}
+
+void Viewer::frame(float width, float height, const std::string& layout) {
+  if (!layout.empty()) {
+    const std::string problem = check_layout(layout);
+    if (!problem.empty()) throw std::invalid_argument(problem);
+  }
+  plots_.clear();
+  controls_ = layout.empty();
+  ImGui::SetNextWindowPos(ImVec2(0, 0));
+  ImGui::SetNextWindowSize(ImVec2(width, height));
+  ImGui::Begin("doorbench view", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoBringToFrontOnFocus | ImGuiWindowFlags_NoSavedSettings);
+  if (sessions_.empty()) {
+    if (steps_ || layout == "steps") {
+      steps();
+    } else {
+      ImGui::TextUnformatted("No session: doorbench view SESSION.h5 ...");
+    }
+    ImGui::End();
+    handle_exports();
+    return;
+  }
+  current_ = std::clamp(current_, 0, int(sessions_.size()) - 1);
+  SessionView& s = sessions_[std::size_t(current_)];
+  if (layout.empty()) {
+    if (sessions_.size() > 1) {
+      ImGui::SetNextItemWidth(500.0f);
+      const std::string label = s.data.path.filename().string();
+      if (ImGui::BeginCombo("session", label.c_str())) {
+        for (std::size_t i = 0; i < sessions_.size(); ++i) {
+          const std::string name = sessions_[i].data.path.string();
+          if (ImGui::Selectable(name.c_str(), int(i) == current_)) current_ = int(i);
+        }
+        ImGui::EndCombo();
+      }
+    } else {
+      ImGui::Text("%s", s.data.path.string().c_str());
+    }
+    if (!status_.empty()) {
+      ImGui::SameLine();
+      ImGui::TextDisabled("   %s", status_.c_str());
+    }
+    if (ImGui::BeginTabBar("layouts")) {
+      for (const std::string& name : layout_names()) {
+        if (ImGui::BeginTabItem(name.c_str())) {
+          layout_body(s, name);
+          ImGui::EndTabItem();
+        }
+      }
+      ImGui::EndTabBar();
+    }
+  } else {
+    layout_body(s, layout);
+  }
+  ImGui::End();
+  handle_exports();
+}
+
+std::filesystem::path Viewer::export_path(const std::string& title, const std::string& extension) {
+  std::string stem;
+  for (char c : title) {
+    const bool keep = std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_';
+    if (keep)
+      stem += c;
+    else if (!stem.empty() && stem.back() != '-')
+      stem += '-';
+  }
+  if (stem.empty()) stem = "plot";
+  return export_dir / (stem + "-" + std::to_string(++exports_) + extension);
+}
+
+void Viewer::handle_exports() {
+  for (const PlotRecord& record : plots_) {
+    if (record.want_csv && record.view != nullptr) {
+      const std::filesystem::path path = export_path(record.title, ".csv");
+      std::ofstream out(path);
+      out << visible_csv(*record.view);
+      status_ = out ? "wrote " + path.string() : "cannot write " + path.string();
+    }
+    if (record.want_png)
+      png_request_ = PngRequest{record.widget, export_path(record.title, ".png")};
+  }
+}
+
+std::optional<Viewer::PngRequest> Viewer::take_png_request() {
+  std::optional<PngRequest> request = std::move(png_request_);
+  png_request_.reset();
+  return request;
+}
+
+void Viewer::layout_body(SessionView& s, const std::string& layout) {
+  if (layout == "browser") browser(s);
+  if (layout == "channels") channels(s);
+  if (layout == "loop") loop(s);
+  if (layout == "fit") fit(s);
+  if (layout == "overlay") overlay();
+  if (layout == "steps") steps();
+  if (layout == "tuning") tuning(s);
+}
+
+void Viewer::browser(SessionView& s) {
+  const SessionData& d = s.data;
+  ImGui::BeginChild("browser");
+  if (ImGui::CollapsingHeader("Metadata", ImGuiTreeNodeFlags_DefaultOpen) &&
+      ImGui::BeginTable("metadata", 2, kTableFlags)) {
+    text_row("file", d.path.string());
+    text_row("rig", d.metadata.rig_name);
+    text_row("operator", d.metadata.operator_name);
+    text_row("product", d.metadata.product_id);
+    text_row("start (UTC)", d.metadata.start_time_utc);
+    text_row("software", d.metadata.software_version);
+    text_row("notes", d.metadata.notes);
+    ImGui::EndTable();
+  }
+  if (ImGui::CollapsingHeader("Channels", ImGuiTreeNodeFlags_DefaultOpen) &&
+      ImGui::BeginTable("channels", 8, kTableFlags)) {
+    for (const char* h :
+         {"name", "sensor", "serial", "raw", "unit", "rate [Hz]", "samples", "calibration"}) {
+      ImGui::TableSetupColumn(h);
+    }
+    ImGui::TableHeadersRow();
+    for (std::size_t i = 0; i < d.channels.size(); ++i) {
+      const ChannelInfo& c = d.channels[i];
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.name.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.sensor_kind.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.sensor_serial.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%s (%s)", raw_type_name(c.raw_type), c.raw_unit.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.unit.c_str());
+      ImGui::TableNextColumn();
+      if (c.sample_rate_hz > 0) {
+        ImGui::Text("%g", c.sample_rate_hz);
+      } else {
+        ImGui::TextUnformatted("explicit times");
+      }
+      ImGui::TableNextColumn();
+      ImGui::Text("%zu", d.sample_counts[i]);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(c.calibration_id.empty() ? "-" : c.calibration_id.c_str());
+    }
+    ImGui::EndTable();
+  }
+  if (ImGui::CollapsingHeader("Events", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::Text("%zu events", d.events.size());
+    if (!d.events.empty() &&
+        ImGui::BeginTable("events", 4, kTableFlags | ImGuiTableFlags_ScrollY, ImVec2(0, 220))) {
+      for (const char* h : {"time [s]", "kind", "channel", "detail"}) ImGui::TableSetupColumn(h);
+      ImGui::TableSetupScrollFreeze(0, 1);
+      ImGui::TableHeadersRow();
+      ImGuiListClipper clipper;
+      clipper.Begin(int(d.events.size()));
+      while (clipper.Step()) {
+        for (int i = clipper.DisplayStart; i < clipper.DisplayEnd; ++i) {
+          const SessionEvent& e = d.events[std::size_t(i)];
+          ImGui::TableNextRow();
+          ImGui::TableNextColumn();
+          ImGui::Text("%.4f", e.time_s);
+          ImGui::TableNextColumn();
+          ImGui::TextUnformatted(e.kind.c_str());
+          ImGui::TableNextColumn();
+          ImGui::TextUnformatted(e.channel.c_str());
+          ImGui::TableNextColumn();
+          ImGui::TextUnformatted(e.detail.c_str());
+        }
+      }
+      ImGui::EndTable();
+    }
+  }
+  if (ImGui::CollapsingHeader("Calibration records", ImGuiTreeNodeFlags_DefaultOpen) &&
+      ImGui::BeginTable("calibrations", 6, kTableFlags)) {
+    for (const char* h : {"id", "sensor", "unit", "coefficients", "method", "date"}) {
+      ImGui::TableSetupColumn(h);
+    }
+    ImGui::TableHeadersRow();
+    for (const auto& r : d.calibrations) {
+      std::string coefficients;
+      char number[32];
+      for (double c : r.coefficients) {
+        std::snprintf(number, sizeof number, "%s%.6g", coefficients.empty() ? "" : ", ", c);
+        coefficients += number;
+      }
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r.id.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%s %s", r.sensor_kind.c_str(), r.sensor_serial.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%s -> %s", r.input_unit.c_str(), r.unit.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(coefficients.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r.method.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(r.date_utc.c_str());
+    }
+    ImGui::EndTable();
+  }
+  if (ImGui::CollapsingHeader("Strokes", ImGuiTreeNodeFlags_DefaultOpen)) {
+    if (!d.prepared) {
+      ImGui::TextWrapped("Not prepared: %s", d.prepare_message.c_str());
+    } else {
+      int opening = 0;
+      for (const Stroke& st : d.data.strokes) opening += st.direction == StrokeDirection::kOpening;
+      ImGui::Text("%zu strokes (%d opening, %zu closing), %zu segments left out; angle: %s",
+                  d.data.strokes.size(), opening, d.data.strokes.size() - std::size_t(opening),
+                  d.data.excluded.size(), d.data.angle_source.c_str());
+    }
+  }
+  ImGui::EndChild();
+}
+
+void Viewer::channels(SessionView& s) {
+  if (s.channels.empty()) {
+    ImGui::TextUnformatted("The session has no channels.");
+    return;
+  }
+  const float avail = ImGui::GetContentRegionAvail().y;
+  const float each = stacked_height(avail, s.channels.size());
+  ImGui::BeginChild("channels");
+  for (std::size_t i = 0; i < s.channels.size(); ++i) {
+    const std::string id = "channel" + std::to_string(i);
+    plots_.push_back(
+        plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each, controls_));
+  }
+  ImGui::EndChild();
+}
+
+void Viewer::loop(SessionView& s) {
+  if (!s.data.prepared) ImGui::TextWrapped("No strokes: %s", s.data.prepare_message.c_str());
+  plots_.push_back(plot_widget("loop", s.loop, s.loop_state, 0.0f, 0.0f, controls_));
+}
+
+void Viewer::fit(SessionView& s) {
+  if (!s.fit) {
+    ImGui::TextWrapped(
+        "No model to compare with: start the viewer with --params FILE (a fitted parameter "
+        "file, e.g. the one `doorbench fit` wrote) and --model.");
+    return;
+  }
+  ImGui::Text("%s: rate RMSE %.4g rad/s over windows (as the fit sees them)",
+              s.fit->model_description.c_str(), s.fit->rmse_rad_s);
+  const float avail = ImGui::GetContentRegionAvail().y;
+  plots_.push_back(plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f,
+                               std::floor(avail * 0.65f), controls_));
+  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f, 0.0f, controls_));
+}
+
+void Viewer::overlay() {
+  if (!overlay_ || overlay_->plots.empty()) {
+    ImGui::TextWrapped("%s", overlay_message_.c_str());
+    return;
+  }
+  ImGui::Text("A: %s (stroke at %.4f s)   B: %s (stroke at %.4f s)",
+              sessions_[0].data.path.string().c_str(), overlay_->a_start_s,
+              sessions_[1].data.path.string().c_str(), overlay_->b_start_s);
+  const float avail = ImGui::GetContentRegionAvail().y;
+  const float each = stacked_height(avail, overlay_->plots.size());
+  ImGui::BeginChild("overlay");
+  for (std::size_t i = 0; i < overlay_->plots.size(); ++i) {
+    const std::string id = "overlay" + std::to_string(i);
+    plots_.push_back(
+        plot_widget(id.c_str(), overlay_->plots[i], overlay_states_[i], 0.0f, each, controls_));
+  }
+  ImGui::EndChild();
+}
+
+void Viewer::set_loop_steps(LoopSteps steps) {
+  steps_plot_ = loop_steps_plot(steps);
+  steps_ = std::move(steps);
+}
+
+void Viewer::steps() {
+  if (!steps_) {
+    ImGui::TextWrapped(
+        "No residual loop: start the viewer with --loop DIR (the folder `doorbench loop` wrote).");
+    return;
+  }
+  ImGui::Text("%s (loop on %s)", steps_->path.string().c_str(), steps_->source.c_str());
+  if (ImGui::BeginTable("steps", 7, kTableFlags)) {
+    for (const char* h : {"step", "effect", "parameters", "fitted RMSE [rad/s]",
+                          "held out RMSE [rad/s]", "held-out improvement", "BIC change"}) {
+      ImGui::TableSetupColumn(h);
+    }
+    ImGui::TableHeadersRow();
+    for (const LoopStep& s : steps_->steps) {
+      ImGui::TableNextRow();
+      ImGui::TableNextColumn();
+      ImGui::Text("%d", s.number);
+      ImGui::TableNextColumn();
+      ImGui::TextUnformatted(s.effect.c_str());
+      ImGui::TableNextColumn();
+      ImGui::TextWrapped("%s", s.parameters.c_str());
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g -> %.4g", s.fitted_before_rad_s, s.fitted_after_rad_s);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g -> %.4g", s.held_out_before_rad_s, s.held_out_after_rad_s);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g", s.held_out_improvement);
+      ImGui::TableNextColumn();
+      ImGui::Text("%.4g", s.bic_change);
+    }
+    ImGui::EndTable();
+  }
+  plots_.push_back(plot_widget("steps", steps_plot_, steps_state_, 0.0f, 0.0f, controls_));
+}
+
+void Viewer::tuning(SessionView& s) {
+  if (!tuning_model_) {
+    ImGui::TextWrapped(
+        "No model to tune: start the viewer with --params FILE (or --compare, or "
+        "--loop DIR).");
+    return;
+  }
+  if (!s.tuning && s.tuning_message.empty()) {
+    try {
+      if (!s.data.prepared) throw std::invalid_argument(s.data.prepare_message);
+      s.tuning.emplace(s.data.data, *tuning_model_);
+    } catch (const std::exception& error) {
+      s.tuning_message = std::string("Cannot tune on this session: ").append(error.what());
+    }
+  }
+  if (!s.tuning) {
+    ImGui::TextWrapped("%s", s.tuning_message.c_str());
+    return;
+  }
+  Tuning& t = *s.tuning;
+  bool changed = false;
+  ImGui::BeginChild("sliders", ImVec2(500.0f, 0.0f), true);
+  if (ImGui::Button("Reset to fitted")) {
+    t.reset();
+    changed = true;
+  }
+  ImGui::SetNextItemWidth(260.0f);
+  ImGui::InputText("##save", save_path_, sizeof save_path_);
+  ImGui::SameLine();
+  if (ImGui::Button("Save as")) {
+    try {
+      const auto written = t.save(save_path_);
+      status_ = "wrote " + written.front().string();
+    } catch (const std::exception& error) {
+      status_ = error.what();
+    }
+  }
+  if (t.model().kind() == ModelKind::kSensory) {
+    ImGui::Separator();
+    ImGui::TextUnformatted("Perceptual controls (spec 2)");
+    for (const perceptual::ControlInfo& info : perceptual::controls()) {
+      double value = perceptual::read(t.model(), info.control);
+      const std::string label = std::string(info.name).append(" [").append(info.unit).append("]");
+      const float speed = float(std::max(std::abs(value) * 0.003, 1e-6));
+      if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &value, speed, nullptr, nullptr,
+                            "%.5g")) {
+        const std::string problem = t.set_control(info.control, value);
+        if (problem.empty())
+          changed = true;
+        else
+          status_ = problem;
+      }
+      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", std::string(info.meaning).c_str());
+    }
+  }
+  ImGui::Separator();
+  ImGui::TextUnformatted("Parameters");
+  for (int i = 0; i < t.model().parameter_count(); ++i) {
+    double value = t.model().parameter_values()[std::size_t(i)];
+    const Bounds bounds = t.model().parameter_bounds()[std::size_t(i)];
+    std::string label = t.model().parameter_name(i);
+    const std::string_view unit = t.model().parameter_unit(i);
+    if (!unit.empty()) label.append(" [").append(unit).append("]");
+    bool moved = false;
+    if (std::isfinite(bounds.lower) && std::isfinite(bounds.upper) && bounds.upper > bounds.lower) {
+      moved = ImGui::SliderScalar(label.c_str(), ImGuiDataType_Double, &value, &bounds.lower,
+                                  &bounds.upper, "%.5g");
+    } else {
+      const float speed = float(std::max(std::abs(value) * 0.003, 1e-6));
+      moved = ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &value, speed, nullptr,
+                                nullptr, "%.5g");
+    }
+    if (moved) {
+      const std::string problem = t.set_parameter(i, value);
+      if (problem.empty())
+        changed = true;
+      else
+        status_ = problem;
+    }
+  }
+  ImGui::EndChild();
+  if (changed) t.resimulate();
+  ImGui::SameLine();
+  ImGui::BeginChild("tuned");
+  ImGui::Text("%zu strokes replayed in %.1f ms; largest |w_meas - w_sim| %.4g rad/s",
+              t.stroke_count(), t.last_resimulate_ms(), t.max_error_rad_s());
+  plots_.push_back(plot_widget("tuning", t.plot, s.tuning_state, 0.0f, 0.0f, controls_));
+  ImGui::EndChild();
+}
+
+}  // namespace doorbench::viewer
