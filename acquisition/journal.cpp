@@ -200,7 +200,8 @@ std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc) {
 
 JournalWriter::JournalWriter(const std::filesystem::path& path, const JournalHeader& header,
                              std::size_t max_block_scans, std::size_t max_timed_samples)
-    : path_(path), channels_(scan_channel_count(header)), all_channels_(header.channels.size()) {
+    : path_(path), channels_(scan_channel_count(header)), all_channels_(header.channels.size()),
+      max_timed_(max_timed_samples) {
   if (header.channels.empty()) throw std::invalid_argument(path.string() + ": no channels");
   for (std::size_t c = channels_; c < all_channels_; ++c) {
     if (header.channels[c].sample_rate_hz != 0) {
@@ -296,7 +297,7 @@ void JournalWriter::append_timed(std::uint32_t channel, std::size_t count,
     throw std::invalid_argument(path_.string() + ": channel index " + std::to_string(channel) +
                                 " is not an explicit-time channel of the journal");
   }
-  if (kFrameHeaderBytes + payload > frame_.size()) {
+  if (count > max_timed_ || kFrameHeaderBytes + payload > frame_.size()) {
     throw std::invalid_argument(path_.string() + ": a block of " + std::to_string(count) +
                                 " timed samples is larger than the journal was made for");
   }

@@ -114,6 +114,7 @@ class JournalWriter {
   int fd_ = -1;
   std::size_t channels_;        // in scans frames
   std::size_t all_channels_;
+  std::size_t max_timed_;  // samples per timed frame
   std::vector<std::uint8_t> frame_;  // 16-byte frame header + payload
   std::atomic<std::uint64_t> bytes_{0};
   std::atomic<std::uint64_t> syncs_{0};

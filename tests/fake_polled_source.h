@@ -53,8 +53,9 @@ class FakePolledSource : public PolledSource {
       channel.sensor_kind = "fake";
       channel.sensor_serial = "F1";
       channel.raw_type = RawType::kValues;
-      channel.raw_unit = "V";
-      channel.unit = "V";
+      // Copied, not assigned from literals: GCC 12 warns falsely (-Wrestrict) on those here.
+      channel.raw_unit = volts_;
+      channel.unit = volts_;
       channel.range_min = -1e9;
       channel.range_max = 1e9;
       channel.sample_rate_hz = 0.0;
@@ -148,6 +149,7 @@ class FakePolledSource : public PolledSource {
   }
 
   FakePolledOptions options_;
+  std::string volts_ = std::string(1, 'V');
   SpscRing<PolledSample> samples_;
   SpscRing<PolledEvent> events_;
   std::atomic<bool> running_{false};
