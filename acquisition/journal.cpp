@@ -7,12 +7,12 @@
 
 #include <algorithm>
 #include <array>
-#include <ctime>
 #include <bit>
 #include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <nlohmann/json.hpp>
 
 namespace doorbench {
@@ -200,7 +200,9 @@ std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc) {
 
 JournalWriter::JournalWriter(const std::filesystem::path& path, const JournalHeader& header,
                              std::size_t max_block_scans, std::size_t max_timed_samples)
-    : path_(path), channels_(scan_channel_count(header)), all_channels_(header.channels.size()),
+    : path_(path),
+      channels_(scan_channel_count(header)),
+      all_channels_(header.channels.size()),
       max_timed_(max_timed_samples) {
   if (header.channels.empty()) throw std::invalid_argument(path.string() + ": no channels");
   for (std::size_t c = channels_; c < all_channels_; ++c) {

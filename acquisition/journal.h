@@ -5,9 +5,9 @@
 //
 // A header (magic, the session's description as JSON, its CRC-32) is followed by framed
 // blocks, each with its type, length and CRC-32: the clock's start, scans, timed samples
-// of polled channels (version 2), events, and an end mark. A writer killed at any moment leaves a valid prefix of frames, possibly
-// followed by one torn frame; the reader stops at the first frame that is incomplete or
-// fails its checksum and says how many bytes it did not use.
+// of polled channels (version 2), events, and an end mark. A writer killed at any moment leaves a
+// valid prefix of frames, possibly followed by one torn frame; the reader stops at the first frame
+// that is incomplete or fails its checksum and says how many bytes it did not use.
 //
 // Errors: JournalError, message starting with "PATH: ".
 #include <atomic>
@@ -112,9 +112,9 @@ class JournalWriter {
 
   std::filesystem::path path_;
   int fd_ = -1;
-  std::size_t channels_;        // in scans frames
+  std::size_t channels_;  // in scans frames
   std::size_t all_channels_;
-  std::size_t max_timed_;  // samples per timed frame
+  std::size_t max_timed_;            // samples per timed frame
   std::vector<std::uint8_t> frame_;  // 16-byte frame header + payload
   std::atomic<std::uint64_t> bytes_{0};
   std::atomic<std::uint64_t> syncs_{0};

@@ -239,7 +239,8 @@ LiveConversion live_conversion(const ChannelInfo& channel,
   for (const calibration::CalibrationRecord& record : records) {
     if (record.id == channel.calibration_id) conversion.record = &record;
   }
-  if (conversion.record == nullptr) unit = channel.raw_type == RawType::kCounts ? "V" : channel.raw_unit;
+  if (conversion.record == nullptr)
+    unit = channel.raw_type == RawType::kCounts ? "V" : channel.raw_unit;
   return conversion;
 }
 
@@ -356,8 +357,7 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
       : options.block_scans > 0
           ? options.block_scans
           : std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(rate_hz * 0.01)));
-  const auto total_scans =
-      static_cast<std::uint64_t>(std::llround(options.duration_s * rate_hz));
+  const auto total_scans = static_cast<std::uint64_t>(std::llround(options.duration_s * rate_hz));
   const auto duration_ns = static_cast<std::int64_t>(std::llround(options.duration_s * 1e9));
   const std::filesystem::path journal_path = journal_path_for(path);
   // Refused before recording, not after it.
@@ -395,7 +395,8 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
       ChannelStatus channel;
       channel.name = channels[batch.journal_channel].name;
       channel.polled = true;
-      batch.conversion = live_conversion(channels[batch.journal_channel], calibrations, channel.unit);
+      batch.conversion =
+          live_conversion(channels[batch.journal_channel], calibrations, channel.unit);
       batch.status_index = status.channels.size();
       status.channels.push_back(channel);
     }
@@ -553,8 +554,8 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
     if (live.samples == 0) batch.first_time_s = static_cast<double>(batch.time_ns[0]) * 1e-9;
     live.samples += batch.count;
     live.latest = batch.conversion(batch.raw[batch.count - 1]);
-    const double span_s = static_cast<double>(batch.time_ns[batch.count - 1]) * 1e-9 -
-                          batch.first_time_s;
+    const double span_s =
+        static_cast<double>(batch.time_ns[batch.count - 1]) * 1e-9 - batch.first_time_s;
     if (live.samples > 1 && span_s > 0) {
       live.achieved_rate_hz = static_cast<double>(live.samples - 1) / span_s;
     }
@@ -607,10 +608,9 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
     for (;;) {
       // Read before draining: everything published before `done` is drained below; the
       // polled sources are stopped (joined) before their last drain.
-      const bool done = backend != nullptr
-                            ? rings.done.load(std::memory_order_acquire)
-                            : monotonic_now_ns() - origin_ns >= duration_ns ||
-                                  summary.stopped_by_request;
+      const bool done = backend != nullptr ? rings.done.load(std::memory_order_acquire)
+                                           : monotonic_now_ns() - origin_ns >= duration_ns ||
+                                                 summary.stopped_by_request;
       if (done) stop_polled();
       bool wrote = false;
       if (!start_written) {
@@ -632,8 +632,8 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
         written_scans = slot->first_scan + slot->scan_count;
         if (slot->scan_count > 0) {
           for (std::size_t c = 0; c < scan_channels; ++c) {
-            status.channels[c].latest = scan_conversion[c](
-                slot->counts[c * slot->capacity + slot->scan_count - 1]);
+            status.channels[c].latest =
+                scan_conversion[c](slot->counts[c * slot->capacity + slot->scan_count - 1]);
           }
         }
         rings.scans.release();

@@ -45,7 +45,7 @@ enum class RingFullPolicy {
 // The live state of a recording, for a status display.
 struct ChannelStatus {
   std::string name;
-  std::string unit;    // of `latest`: the physical unit, else the signal's unit
+  std::string unit;     // of `latest`: the physical unit, else the signal's unit
   double latest = 0.0;  // the latest sample, physical where a record or scale gives it
   std::uint64_t samples = 0;
   double achieved_rate_hz = 0.0;  // scan channels: the scans'; polled: its own samples'
@@ -55,7 +55,7 @@ struct ChannelStatus {
 struct RecordStatus {
   double recorded_s = 0.0;  // session time written so far
   std::uint64_t scans = 0;
-  double achieved_scan_rate_hz = 0.0;  // scans / monotonic time since the origin (0: none)
+  double achieved_scan_rate_hz = 0.0;   // scans / monotonic time since the origin (0: none)
   std::vector<ChannelStatus> channels;  // scan channels, then polled (no latency channels)
   std::uint64_t faults = 0;             // fault events recorded so far
 };

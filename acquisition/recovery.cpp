@@ -158,7 +158,8 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
       // Each polled channel's latency channel ("<name>_latency"), -1 when none; and the
       // last time written, to keep explicit times strictly increasing.
       std::vector<int> latency_channel(header.channels.size(), -1);
-      std::vector<std::int64_t> last_time_ns(header.channels.size(), std::numeric_limits<std::int64_t>::min());
+      std::vector<std::int64_t> last_time_ns(header.channels.size(),
+                                             std::numeric_limits<std::int64_t>::min());
       for (std::size_t c = 0; c < header.channels.size(); ++c) {
         for (std::size_t l = 0; l < header.channels.size(); ++l) {
           if (header.channels[l].sensor_kind == "poll_latency" &&

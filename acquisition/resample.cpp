@@ -63,7 +63,8 @@ std::vector<double> uniform_axis(double start_s, double end_s, double rate_hz) {
   if (!(end_s >= start_s)) return axis;
   const auto count = static_cast<std::size_t>(std::floor((end_s - start_s) * rate_hz + 1e-9)) + 1;
   axis.reserve(count);
-  for (std::size_t i = 0; i < count; ++i) axis.push_back(start_s + static_cast<double>(i) / rate_hz);
+  for (std::size_t i = 0; i < count; ++i)
+    axis.push_back(start_s + static_cast<double>(i) / rate_hz);
   while (!axis.empty() && axis.back() > end_s) axis.pop_back();
   return axis;
 }

@@ -138,7 +138,8 @@ Recording session_to_recording(const SessionReader& session) {
   for (const ChannelInfo* channel : exported) {
     const ChannelSlice slice = session.read(channel->name);
     std::vector<double> values = session.physical(channel->name, slice);
-    own.push_back({slice.time_s, correct_delay(session, *channel, slice.time_s, std::move(values))});
+    own.push_back(
+        {slice.time_s, correct_delay(session, *channel, slice.time_s, std::move(values))});
   }
   const auto same_clock = [&](std::size_t i, std::size_t j) {
     const ChannelInfo& a = *exported[i];
@@ -188,8 +189,8 @@ Recording session_to_recording(const SessionReader& session) {
       const double rate_hz = 1.0 / median_interval_s(own[0].time_s);
       recording.time_s = uniform_axis(first_s, last_s, rate_hz);
       recording.sample_rate_hz = rate_hz;
-      placed = "on a common clock of " + format_csv_number(rate_hz) + " Hz (1 / the median interval of " +
-               force->name + ")";
+      placed = "on a common clock of " + format_csv_number(rate_hz) +
+               " Hz (1 / the median interval of " + force->name + ")";
     }
     placed += " from " + format_csv_number(first_s) + " s to " + format_csv_number(last_s) + " s";
     std::vector<bool> keep(recording.time_s.size(), true);

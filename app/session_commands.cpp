@@ -69,23 +69,13 @@ class StatusDisplay {
   void show(const RecordStatus& status) {
     const auto now = std::chrono::steady_clock::now();
     if (terminal_) {
-      if (now < next_draw_) return;
-      next_draw_ = now + std::chrono::milliseconds(100);
-      std::string text;
-      if (lines_ > 0) text += "\r\033[" + std::to_string(lines_) + "A\033[J";
-      text += status_line(status) + "\n";
-      lines_ = 1;
-      for (const ChannelStatus& channel : status.channels) {
-        char line[192];
-        std::snprintf(line, sizeof line, "  %-20s %12.5g %-6s %10llu samples %9.2f Hz%s\n",
-                      channel.name.c_str(), channel.latest, channel.unit.c_str(),
-                      static_cast<unsigned long long>(channel.samples), channel.achieved_rate_hz,
-                      channel.polled ? " (polled)" : "");
-        text += line;
-        ++lines_;
+      if (now < next_draw_) {
+        last_ = status;
+        pending_ = true;
+        return;
       }
-      std::fputs(text.c_str(), stderr);
-      shown_ = true;
+      next_draw_ = now + std::chrono::milliseconds(100);
+      draw(status);
       return;
     }
     if (status.recorded_s < next_report_s_) return;
@@ -100,12 +90,31 @@ class StatusDisplay {
     std::fprintf(stderr, "%s\n", text.c_str());
   }
 
-  // Leaves the last status on screen.
+  // Shows the last status if it was held back.
   void finish() {
-    if (terminal_ && shown_) std::fflush(stderr);
+    if (terminal_ && pending_) draw(last_);
+    std::fflush(stderr);
   }
 
  private:
+  void draw(const RecordStatus& status) {
+    pending_ = false;
+    std::string text;
+    if (lines_ > 0) text += "\r\033[" + std::to_string(lines_) + "A\033[J";
+    text += status_line(status) + "\n";
+    lines_ = 1;
+    for (const ChannelStatus& channel : status.channels) {
+      char line[192];
+      std::snprintf(line, sizeof line, "  %-20s %12.5g %-6s %10llu samples %9.2f Hz%s\n",
+                    channel.name.c_str(), channel.latest, channel.unit.c_str(),
+                    static_cast<unsigned long long>(channel.samples), channel.achieved_rate_hz,
+                    channel.polled ? " (polled)" : "");
+      text += line;
+      ++lines_;
+    }
+    std::fputs(text.c_str(), stderr);
+  }
+
   std::string status_line(const RecordStatus& status) const {
     char line[320];
     std::snprintf(line, sizeof line,
@@ -119,7 +128,8 @@ class StatusDisplay {
   double duration_s_;
   bool terminal_;
   int lines_ = 0;
-  bool shown_ = false;
+  bool pending_ = false;
+  RecordStatus last_;
   double next_report_s_ = 0.0;
   std::chrono::steady_clock::time_point next_draw_{};
 };

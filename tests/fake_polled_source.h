@@ -21,10 +21,10 @@ namespace doorbench::testing {
 
 struct FakePolledOptions {
   std::vector<std::string> names = {"fake"};
-  double period_s = 0.002;      // between polls of the same channel
-  double latency_s = 0.0003;    // request to reply
-  bool counter = false;         // raw = the channel's poll index instead of the sine
-  double amplitude = 1.0;       // raw = offset + amplitude · sin(2π f t), t monotonic in s
+  double period_s = 0.002;    // between polls of the same channel
+  double latency_s = 0.0003;  // request to reply
+  bool counter = false;       // raw = the channel's poll index instead of the sine
+  double amplitude = 1.0;     // raw = offset + amplitude · sin(2π f t), t monotonic in s
   double frequency_hz = 1.0;
   double offset = 0.0;
   std::size_t fault_every = 0;  // a fault event every N polls of channel 0; 0: none

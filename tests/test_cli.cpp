@@ -1176,8 +1176,7 @@ TEST_CASE("CLI: record with a broken rig file names its file, line and key", "[c
   }
 }
 
-TEST_CASE("CLI: record on a comedi rig refuses addresses that are not comedi's",
-          "[cli][session]") {
+TEST_CASE("CLI: record on a comedi rig refuses addresses that are not comedi's", "[cli][session]") {
   ScratchDir scratch;
   std::string text =
       replace_all(shipped_rig_text(), "backend = \"simulated\"", "backend = \"comedi\"");

@@ -685,8 +685,10 @@ TEST_CASE("Crash: killed mixed recordings (DAQ and polled) keep every written po
     CHECK(lost_s <= 0.1);
     max_lost_s = std::max(max_lost_s, lost_s);
   }
-  WARN("mixed recordings: " << recovered << " of 5 kills recovered mid-recording; the polled "
-                            "samples' largest loss " << max_lost_s * 1000 << " ms");
+  WARN("mixed recordings: " << recovered
+                            << " of 5 kills recovered mid-recording; the polled "
+                               "samples' largest loss "
+                            << max_lost_s * 1000 << " ms");
   CHECK(recovered >= 2);
 }
 

@@ -144,7 +144,8 @@ TEST_CASE("Recorder sources: a DAQ and a polled source on one clock, latency and
       CHECK(latency.raw[i] >= 0.0005);
       CHECK(latency.raw[i] < 0.05);
       // The value is the sine at its absolute midpoint: session time + origin gives it back.
-      const auto midpoint_ns = origin + static_cast<std::int64_t>(std::llround(values.time_s[i] * 1e9));
+      const auto midpoint_ns =
+          origin + static_cast<std::int64_t>(std::llround(values.time_s[i] * 1e9));
       worst = std::max(worst, std::abs(values.raw[i] - testing::fake_sine(fake, midpoint_ns)));
     }
     CHECK(worst < 1e-6);
@@ -199,7 +200,8 @@ TEST_CASE("Recorder sources: polled sources alone, time 0 at their start", "[rec
   CHECK(!session.read_group_attribute("clock", "origin_utc").empty());
 }
 
-TEST_CASE("Recorder sources: what cannot be recorded is refused, naming it", "[recorder][sources]") {
+TEST_CASE("Recorder sources: what cannot be recorded is refused, naming it",
+          "[recorder][sources]") {
   TempDir dir("sources");
   RecordOptions options;
   CHECK_THROWS_WITH(record_session(RecordSources{}, SessionMetadata{}, dir / "a.h5", options),
@@ -305,7 +307,8 @@ void append_raw_frame(const std::filesystem::path& path, std::uint32_t type,
   crc = crc32({frame.data() + 16, payload.size()}, crc);
   std::memcpy(frame.data() + 12, &crc, 4);
   std::ofstream out(path, std::ios::binary | std::ios::app);
-  out.write(reinterpret_cast<const char*>(frame.data()), static_cast<std::streamsize>(frame.size()));
+  out.write(reinterpret_cast<const char*>(frame.data()),
+            static_cast<std::streamsize>(frame.size()));
 }
 
 }  // namespace
@@ -372,7 +375,7 @@ TEST_CASE("Journal v1 (scans only, no UTC in the start frame) is still read and 
   TempDir dir("journal");
   const auto journal_path = dir / "old.h5.journal";
   JournalHeader header = mixed_header();
-  header.channels.resize(1);  // version 1: counts channels only
+  header.channels.resize(1);                           // version 1: counts channels only
   { JournalWriter journal(journal_path, header, 4); }  // the header only
   {
     // Make it a version 1 journal: the version field follows the 8-byte magic.

@@ -22,7 +22,8 @@ TEST_CASE("Resample: a linear signal comes back exactly, samples at their own ti
   const std::vector<double> at = {0.0, 0.005, 0.021, 0.030, 0.050, 0.055};
   const std::vector<double> out = resample_linear(t, v, at, 1.0);
   REQUIRE(out.size() == at.size());
-  for (std::size_t i = 0; i < at.size(); ++i) CHECK(out[i] == Approx(3.0 - 2.0 * at[i]).margin(1e-15));
+  for (std::size_t i = 0; i < at.size(); ++i)
+    CHECK(out[i] == Approx(3.0 - 2.0 * at[i]).margin(1e-15));
   CHECK(out[2] == v[2]);  // a sample's own time gives the sample exactly
 }
 
@@ -62,8 +63,8 @@ TEST_CASE("Resample: no extrapolation, gaps are marked (NaN), not bridged", "[re
   CHECK(median_interval_s(t) == Approx(0.1));
   CHECK(median_interval_s(std::vector<double>{0.0, 1.0, 3.0}) == Approx(1.5));
   CHECK(std::isnan(median_interval_s(std::vector<double>{1.0})));
-  CHECK_THROWS_WITH(resample_linear(std::vector<double>{0.0, 0.0}, std::vector<double>{1, 2},
-                                    at, 1.0, "channel q"),
+  CHECK_THROWS_WITH(resample_linear(std::vector<double>{0.0, 0.0}, std::vector<double>{1, 2}, at,
+                                    1.0, "channel q"),
                     Contains("channel q: sample times do not increase at sample 1"));
   CHECK(uniform_axis(0.0, 0.01, 1000.0).size() == 11);
 }

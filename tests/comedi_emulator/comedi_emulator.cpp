@@ -155,8 +155,8 @@ lsampl_t sample_counts(const comedi_t* it, std::uint64_t scan, unsigned k) {
     const std::int64_t t_ns =
         it->t0_ns + static_cast<std::int64_t>(scan * it->cmd.scan_begin_arg) +
         (it->cmd.convert_src == TRIG_TIMER ? std::int64_t{k} * it->cmd.convert_arg : 0);
-    volts += signal.amplitude_V *
-             std::sin(2 * std::numbers::pi * signal.frequency_hz * (static_cast<double>(t_ns) * 1e-9));
+    volts += signal.amplitude_V * std::sin(2 * std::numbers::pi * signal.frequency_hz *
+                                           (static_cast<double>(t_ns) * 1e-9));
   } else if (signal.kind == "sine") {
     const double period_s = it->cmd.scan_begin_arg * 1e-9;
     const double skew_s = it->cmd.convert_src == TRIG_TIMER ? k * it->cmd.convert_arg * 1e-9 : 0;
