@@ -141,19 +141,22 @@ Recording session_to_recording(const SessionReader& session) {
     own.push_back(
         {slice.time_s, correct_delay(session, *channel, slice.time_s, std::move(values))});
   }
+  // One clock: the same uniform rate and sample count, or the very same explicit times.
   const auto same_clock = [&](std::size_t i, std::size_t j) {
     const ChannelInfo& a = *exported[i];
     const ChannelInfo& b = *exported[j];
-    return a.sample_rate_hz > 0 && b.sample_rate_hz > 0 &&
-           own[i].time_s.size() == own[j].time_s.size() &&
-           std::abs(a.sample_rate_hz - b.sample_rate_hz) <= 1e-9 * a.sample_rate_hz;
+    if (own[i].time_s.size() != own[j].time_s.size()) return false;
+    if (a.sample_rate_hz > 0 && b.sample_rate_hz > 0) {
+      return std::abs(a.sample_rate_hz - b.sample_rate_hz) <= 1e-9 * a.sample_rate_hz;
+    }
+    return a.sample_rate_hz == 0 && b.sample_rate_hz == 0 && own[i].time_s == own[j].time_s;
   };
   bool one_clock = true;
   for (std::size_t i = 1; i < exported.size(); ++i) one_clock = one_clock && same_clock(0, i);
   std::vector<std::vector<double>> columns(exported.size());
   if (one_clock) {
     // All on the force channel's clock: its times (converter skews of a few µs are not
-    // resampled).
+    // resampled; explicit times shared by every channel, as imports have them, are kept).
     recording.time_s = own[0].time_s;
     for (std::size_t i = 0; i < exported.size(); ++i) columns[i] = std::move(own[i].values);
   } else {
