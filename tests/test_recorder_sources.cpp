@@ -10,6 +10,7 @@
 #include <iostream>
 #include <numbers>
 #include <sstream>
+#include <thread>
 
 #include "acquisition/journal.h"
 #include "acquisition/recorder.h"
@@ -216,6 +217,32 @@ TEST_CASE("Recorder sources: what cannot be recorded is refused, naming it",
   options.polled_batch = 0;
   CHECK(options.validate() == "record polled_batch must be >= 1 and <= 1048576");
   CHECK(!std::filesystem::exists(dir / "a.h5.journal"));
+
+  // A source that cannot start: the recording does not begin, the others are stopped, and
+  // no journal is left behind.
+  struct Unreachable : FakePolledSource {
+    using FakePolledSource::FakePolledSource;
+    std::string description() const override { return "modbus tcp 192.0.2.1:502"; }
+    void start() override {
+      throw std::runtime_error("modbus tcp 192.0.2.1:502: cannot connect: timed out");
+    }
+  };
+  FakePolledOptions first_options;
+  first_options.names = {"first"};
+  FakePolledSource first(first_options);
+  FakePolledOptions second_options;
+  second_options.names = {"second"};
+  Unreachable second(second_options);
+  RecordSources two;
+  two.polled = {&first, &second};
+  CHECK_THROWS_WITH(record_session(two, SessionMetadata{}, dir / "b.h5", RecordOptions{}),
+                    Contains("192.0.2.1:502: cannot connect"));
+  CHECK(first.statistics().polls < 100);  // stopped at once, not left polling
+  const auto polls = first.statistics().polls;
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  CHECK(first.statistics().polls == polls);
+  CHECK(!std::filesystem::exists(dir / "b.h5.journal"));
+  CHECK(!std::filesystem::exists(dir / "b.h5"));
 }
 
 TEST_CASE("Timing: one signal of CLOCK_MONOTONIC on a DAQ channel and a polled channel agrees",
