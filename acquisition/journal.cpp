@@ -5,11 +5,14 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cerrno>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
+#include <ctime>
 #include <nlohmann/json.hpp>
 
 namespace doorbench {
@@ -156,6 +159,29 @@ JournalHeader parse_header(const std::string& text, const std::string& source) {
 
 }  // namespace
 
+std::string utc_iso8601_ns(std::int64_t realtime_ns) {
+  std::int64_t seconds = realtime_ns / 1000000000;
+  std::int64_t nanoseconds = realtime_ns % 1000000000;
+  if (nanoseconds < 0) {
+    nanoseconds += 1000000000;
+    --seconds;
+  }
+  const auto time = static_cast<std::time_t>(seconds);
+  std::tm utc{};
+  gmtime_r(&time, &utc);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%S", &utc);
+  char text[48];
+  std::snprintf(text, sizeof text, "%s.%09lldZ", date, static_cast<long long>(nanoseconds));
+  return text;
+}
+
+std::size_t scan_channel_count(const JournalHeader& header) {
+  std::size_t count = 0;
+  while (count < header.channels.size() && header.channels[count].sample_rate_hz > 0) ++count;
+  return count;
+}
+
 std::filesystem::path journal_path_for(const std::filesystem::path& session_path) {
   std::filesystem::path journal = session_path;
   journal += kJournalSuffix;
@@ -173,9 +199,18 @@ std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc) {
 // Writer
 
 JournalWriter::JournalWriter(const std::filesystem::path& path, const JournalHeader& header,
-                             std::size_t max_block_scans)
-    : path_(path), channels_(header.channels.size()) {
+                             std::size_t max_block_scans, std::size_t max_timed_samples)
+    : path_(path),
+      channels_(scan_channel_count(header)),
+      all_channels_(header.channels.size()),
+      max_timed_(max_timed_samples) {
   if (header.channels.empty()) throw std::invalid_argument(path.string() + ": no channels");
+  for (std::size_t c = channels_; c < all_channels_; ++c) {
+    if (header.channels[c].sample_rate_hz != 0) {
+      throw std::invalid_argument(path.string() + ": channel " + header.channels[c].name +
+                                  " has a sample clock but follows explicit-time channels");
+    }
+  }
   fd_ = ::open(path.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0644);
   if (fd_ < 0) {
     const int error = errno;
@@ -187,7 +222,8 @@ JournalWriter::JournalWriter(const std::filesystem::path& path, const JournalHea
     }
     const std::size_t largest_event = 8 + 3 * 4 + 4096;
     frame_.resize(kFrameHeaderBytes +
-                  std::max(16 + max_block_scans * channels_ * sizeof(std::int32_t), largest_event));
+                  std::max({16 + max_block_scans * channels_ * sizeof(std::int32_t),
+                            8 + max_timed_samples * 24, largest_event}));
     const std::string json = header_json(header);
     std::vector<std::uint8_t> head(kMagic.size() + 12 + json.size());
     std::uint8_t* out = head.data();
@@ -248,10 +284,34 @@ void JournalWriter::write_frame(FrameType type, std::size_t payload_bytes) {
   write_all(frame_.data(), kFrameHeaderBytes + payload_bytes);
 }
 
-void JournalWriter::append_start(std::int64_t monotonic_ns) {
+void JournalWriter::append_start(std::int64_t monotonic_ns, std::int64_t realtime_ns) {
   std::uint8_t* out = frame_.data() + kFrameHeaderBytes;
   put<std::int64_t>(out, monotonic_ns);
-  write_frame(FrameType::kStart, 8);
+  put<std::int64_t>(out, realtime_ns);
+  write_frame(FrameType::kStart, 16);
+}
+
+void JournalWriter::append_timed(std::uint32_t channel, std::size_t count,
+                                 const std::int64_t* time_ns, const std::int64_t* latency_ns,
+                                 const double* raw) {
+  const std::size_t payload = 8 + count * 24;
+  if (channel < channels_ || channel >= all_channels_) {
+    throw std::invalid_argument(path_.string() + ": channel index " + std::to_string(channel) +
+                                " is not an explicit-time channel of the journal");
+  }
+  if (count > max_timed_ || kFrameHeaderBytes + payload > frame_.size()) {
+    throw std::invalid_argument(path_.string() + ": a block of " + std::to_string(count) +
+                                " timed samples is larger than the journal was made for");
+  }
+  std::uint8_t* out = frame_.data() + kFrameHeaderBytes;
+  put<std::uint32_t>(out, channel);
+  put<std::uint32_t>(out, static_cast<std::uint32_t>(count));
+  std::memcpy(out, time_ns, count * 8);
+  out += count * 8;
+  std::memcpy(out, latency_ns, count * 8);
+  out += count * 8;
+  std::memcpy(out, raw, count * 8);
+  write_frame(FrameType::kTimed, payload);
 }
 
 void JournalWriter::append_scans(std::uint64_t first_scan, std::size_t scan_count,
@@ -359,6 +419,7 @@ JournalReader::JournalReader(const std::filesystem::path& path) : path_(path) {
   } catch (const std::exception& error) {
     throw damaged(std::string("the journal's header is not valid: ") + error.what());
   }
+  version_ = static_cast<int>(version);
   offset_ = head.size() + json_bytes;
 }
 
@@ -409,9 +470,28 @@ bool JournalReader::next(JournalFrame& frame) {
   const auto has = [&](std::size_t bytes) { return static_cast<std::size_t>(end - in) >= bytes; };
   switch (frame.type) {
     case FrameType::kStart:
-      if (payload_bytes != 8) return fail("malformed start frame" + at);
+      // Version 1: the monotonic time only.
+      if (payload_bytes != 8 && payload_bytes != 16) return fail("malformed start frame" + at);
       frame.monotonic_ns = get<std::int64_t>(in);
+      frame.realtime_ns = payload_bytes == 16 ? get<std::int64_t>(in) : 0;
       break;
+    case FrameType::kTimed: {
+      if (!has(8)) return fail("malformed timed frame" + at);
+      frame.channel = get<std::uint32_t>(in);
+      frame.scan_count = get<std::uint32_t>(in);
+      const std::size_t scan_channels = scan_channel_count(header_);
+      if (frame.channel < scan_channels || frame.channel >= header_.channels.size() ||
+          payload_bytes != 8 + std::uint64_t{frame.scan_count} * 24) {
+        return fail("malformed timed frame" + at);
+      }
+      frame.time_ns.resize(frame.scan_count);
+      frame.latency_ns.resize(frame.scan_count);
+      frame.raw.resize(frame.scan_count);
+      std::memcpy(frame.time_ns.data(), in, frame.scan_count * 8);
+      std::memcpy(frame.latency_ns.data(), in + frame.scan_count * 8, frame.scan_count * 8);
+      std::memcpy(frame.raw.data(), in + frame.scan_count * 16, frame.scan_count * 8);
+      break;
+    }
     case FrameType::kEnd:
       if (payload_bytes != 8) return fail("malformed end frame" + at);
       frame.first_scan = get<std::uint64_t>(in);
@@ -421,7 +501,7 @@ bool JournalReader::next(JournalFrame& frame) {
       frame.first_scan = get<std::uint64_t>(in);
       frame.scan_count = get<std::uint32_t>(in);
       const auto channels = get<std::uint32_t>(in);
-      if (channels != header_.channels.size() ||
+      if (channels != scan_channel_count(header_) ||
           payload_bytes != 16 + std::uint64_t{channels} * frame.scan_count * 4) {
         return fail("malformed scans frame" + at);
       }

@@ -7,6 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <optional>
+#include <set>
 #include <stdexcept>
 #include <thread>
 
@@ -27,6 +29,9 @@ std::string RecordOptions::validate() const {
   }
   if (!(ring_s > 0) || !std::isfinite(ring_s)) return "record ring_s must be > 0";
   if (ring_events == 0) return "record ring_events must be >= 1";
+  if (polled_batch == 0 || polled_batch > (1u << 20)) {
+    return "record polled_batch must be >= 1 and <= 1048576";
+  }
   return writer.validate();
 }
 
@@ -36,6 +41,8 @@ std::string RecordSummary::brief_report() const {
                 scans, duration_s, events, journal_bytes / 1000.0,
                 static_cast<unsigned long long>(journal_syncs));
   std::string report = text;
+  if (polled_samples > 0) report += "; " + std::to_string(polled_samples) + " polled samples";
+  if (faults > 0) report += "; " + std::to_string(faults) + " faults";
   if (stopped_by_request) report += "; stopped by request";
   if (dropped_scans > 0) {
     report += "; " + std::to_string(dropped_scans) + " scans lost to ring overflows";
@@ -71,12 +78,34 @@ RealtimeReader::RealtimeReader(AcquisitionBackend& backend, RecorderRings& rings
   }
 }
 
+namespace {
+
+std::int64_t clock_ns(clockid_t clock) {
+  timespec now{};
+  ::clock_gettime(clock, &now);
+  return std::int64_t{now.tv_sec} * 1000000000 + now.tv_nsec;
+}
+
+// CLOCK_MONOTONIC and CLOCK_REALTIME of one moment: the realtime clock read on either side
+// of the monotonic one, averaged (both reads take well under a microsecond).
+struct ClockOrigin {
+  std::int64_t monotonic_ns = 0;
+  std::int64_t realtime_ns = 0;
+};
+ClockOrigin sample_clock_origin() {
+  const std::int64_t before = clock_ns(CLOCK_REALTIME);
+  const std::int64_t monotonic = clock_ns(CLOCK_MONOTONIC);
+  const std::int64_t after = clock_ns(CLOCK_REALTIME);
+  return {monotonic, before + (after - before) / 2};
+}
+
+}  // namespace
+
 void RealtimeReader::start() {
   backend_.start();
-  timespec now{};
-  ::clock_gettime(CLOCK_MONOTONIC, &now);
-  rings_.start_monotonic_ns.store(std::int64_t{now.tv_sec} * 1000000000 + now.tv_nsec,
-                                  std::memory_order_release);
+  const ClockOrigin origin = sample_clock_origin();
+  rings_.start_realtime_ns.store(origin.realtime_ns, std::memory_order_relaxed);
+  rings_.start_monotonic_ns.store(origin.monotonic_ns, std::memory_order_release);
 }
 
 namespace {
@@ -176,28 +205,160 @@ bool RealtimeReader::step() {
 // ---------------------------------------------------------------------------------------
 // The writer side
 
+// ---------------------------------------------------------------------------------------
+// The writer side
+
+namespace {
+
+// signal = raw_offset + raw_scale · raw, then the channel's calibration record (if the
+// recording has it): the value a status display shows.
+struct LiveConversion {
+  double offset = 0.0;
+  double scale = 1.0;
+  const calibration::CalibrationRecord* record = nullptr;
+  double operator()(double raw) const {
+    const double signal = offset + scale * raw;
+    if (record == nullptr) return signal;
+    try {
+      return record->apply(signal);
+    } catch (const std::exception&) {
+      return std::nan("");
+    }
+  }
+};
+
+LiveConversion live_conversion(const ChannelInfo& channel,
+                               const std::vector<calibration::CalibrationRecord>& records,
+                               std::string& unit) {
+  LiveConversion conversion{channel.raw_offset, channel.raw_scale, nullptr};
+  unit = channel.unit;
+  if (channel.calibration_id.empty()) {
+    if (unit.empty()) unit = channel.raw_type == RawType::kCounts ? "V" : channel.raw_unit;
+    return conversion;
+  }
+  for (const calibration::CalibrationRecord& record : records) {
+    if (record.id == channel.calibration_id) conversion.record = &record;
+  }
+  if (conversion.record == nullptr)
+    unit = channel.raw_type == RawType::kCounts ? "V" : channel.raw_unit;
+  return conversion;
+}
+
+// One polled channel's samples waiting for their timed frame.
+struct TimedBatch {
+  std::uint32_t journal_channel = 0;
+  std::size_t status_index = 0;
+  std::vector<std::int64_t> time_ns;
+  std::vector<std::int64_t> latency_ns;
+  std::vector<double> raw;
+  std::size_t count = 0;
+  double first_time_s = 0.0;
+  LiveConversion conversion;
+};
+
+struct PolledState {
+  PolledSource* source = nullptr;
+  std::vector<TimedBatch> batches;  // per channel of the source
+};
+
+}  // namespace
+
 RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata& metadata,
+                             const std::filesystem::path& path, const RecordOptions& options) {
+  RecordSources sources;
+  sources.scans = &backend;
+  return record_session(sources, metadata, path, options);
+}
+
+RecordSummary record_session(const RecordSources& sources, const SessionMetadata& metadata,
                              const std::filesystem::path& path, const RecordOptions& options) {
   if (std::string problem = options.validate(); !problem.empty()) {
     throw std::invalid_argument(problem);
   }
-  const std::vector<ChannelInfo> channels = backend.channels();
-  if (channels.empty()) throw std::invalid_argument(backend.description() + ": no channels");
-  const double rate_hz = backend.scan_rate_hz();
-  if (!(rate_hz > 0) || !std::isfinite(rate_hz)) {
-    throw std::invalid_argument(backend.description() + ": scan rate must be > 0");
+  AcquisitionBackend* const backend = sources.scans;
+  if (backend == nullptr && sources.polled.empty()) {
+    throw std::invalid_argument(path.string() +
+                                ": nothing to record (no scan backend and no polled source)");
   }
-  for (const ChannelInfo& channel : channels) {
-    if (channel.raw_type != RawType::kCounts) {
-      throw std::invalid_argument(backend.description() + ": channel " + channel.name +
-                                  " holds values; the recorder records counts");
+  std::vector<ChannelInfo> channels;
+  std::vector<calibration::CalibrationRecord> calibrations;
+  std::string description;
+  double rate_hz = 0.0;
+  std::size_t scan_channels = 0;
+  if (backend != nullptr) {
+    channels = backend->channels();
+    if (channels.empty()) throw std::invalid_argument(backend->description() + ": no channels");
+    rate_hz = backend->scan_rate_hz();
+    if (!(rate_hz > 0) || !std::isfinite(rate_hz)) {
+      throw std::invalid_argument(backend->description() + ": scan rate must be > 0");
+    }
+    for (const ChannelInfo& channel : channels) {
+      if (channel.raw_type != RawType::kCounts) {
+        throw std::invalid_argument(backend->description() + ": channel " + channel.name +
+                                    " holds values; the recorder records counts");
+      }
+    }
+    scan_channels = channels.size();
+    calibrations = backend->calibrations();
+    description = backend->description();
+  }
+  // Polled channels, each followed by its latency channel.
+  std::vector<PolledState> polled;
+  for (PolledSource* source : sources.polled) {
+    if (source == nullptr) throw std::invalid_argument(path.string() + ": a polled source is null");
+    PolledState state;
+    state.source = source;
+    const std::vector<ChannelInfo> source_channels = source->channels();
+    if (source_channels.empty()) {
+      throw std::invalid_argument(source->description() + ": no channels");
+    }
+    for (const ChannelInfo& channel : source_channels) {
+      if (channel.sample_rate_hz != 0 || channel.raw_type != RawType::kValues) {
+        throw std::invalid_argument(source->description() + ": channel " + channel.name +
+                                    " must hold values at explicit times (sample_rate_hz 0)");
+      }
+      TimedBatch batch;
+      batch.journal_channel = static_cast<std::uint32_t>(channels.size());
+      channels.push_back(channel);
+      ChannelInfo latency;
+      latency.name = channel.name + "_latency";
+      latency.sensor_kind = "poll_latency";
+      latency.sensor_serial = channel.sensor_serial;
+      latency.raw_type = RawType::kValues;
+      latency.raw_unit = "s";
+      latency.unit = "s";
+      latency.range_min = 0.0;
+      latency.range_max = 3600.0;
+      latency.sample_rate_hz = 0.0;
+      channels.push_back(latency);
+      batch.time_ns.resize(options.polled_batch);
+      batch.latency_ns.resize(options.polled_batch);
+      batch.raw.resize(options.polled_batch);
+      state.batches.push_back(std::move(batch));
+    }
+    for (calibration::CalibrationRecord& record : source->calibrations()) {
+      calibrations.push_back(std::move(record));
+    }
+    if (!description.empty()) description += "; ";
+    description += source->description();
+    polled.push_back(std::move(state));
+  }
+  {
+    std::set<std::string> names;
+    for (const ChannelInfo& channel : channels) {
+      if (!names.insert(channel.name).second) {
+        throw std::invalid_argument(path.string() + ": channel name " + channel.name +
+                                    " is used twice among the sources");
+      }
     }
   }
   const std::size_t block_scans =
-      options.block_scans > 0
+      backend == nullptr ? 1
+      : options.block_scans > 0
           ? options.block_scans
           : std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(rate_hz * 0.01)));
   const auto total_scans = static_cast<std::uint64_t>(std::llround(options.duration_s * rate_hz));
+  const auto duration_ns = static_cast<std::int64_t>(std::llround(options.duration_s * 1e9));
   const std::filesystem::path journal_path = journal_path_for(path);
   // Refused before recording, not after it.
   if (std::filesystem::exists(path)) {
@@ -213,43 +374,125 @@ RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata&
   JournalHeader header;
   header.metadata = metadata;
   header.channels = channels;
-  header.calibrations = backend.calibrations();
+  header.calibrations = calibrations;
   header.scan_rate_hz = rate_hz;
   header.session_name = path.filename().string();
   header.flush_interval_s = options.flush_interval_s;
-  header.backend = backend.description();
-  JournalWriter journal(journal_path, header, block_scans);
+  header.backend = description;
+  JournalWriter journal(journal_path, header, block_scans, options.polled_batch);
 
-  const auto scan_slots = std::max<std::size_t>(
-      4, static_cast<std::size_t>(std::ceil(options.ring_s * rate_hz / block_scans)));
-  RecorderRings rings(channels.size(), block_scans, scan_slots, options.ring_events);
-  RealtimeReader reader(backend, rings, channels.size(), block_scans, total_scans,
-                        options.when_ring_full);
+  // The live status: scan channels, then polled value channels.
+  RecordStatus status;
+  std::vector<LiveConversion> scan_conversion;
+  for (std::size_t c = 0; c < scan_channels; ++c) {
+    ChannelStatus channel;
+    channel.name = channels[c].name;
+    scan_conversion.push_back(live_conversion(channels[c], calibrations, channel.unit));
+    status.channels.push_back(channel);
+  }
+  for (PolledState& state : polled) {
+    for (TimedBatch& batch : state.batches) {
+      ChannelStatus channel;
+      channel.name = channels[batch.journal_channel].name;
+      channel.polled = true;
+      batch.conversion =
+          live_conversion(channels[batch.journal_channel], calibrations, channel.unit);
+      batch.status_index = status.channels.size();
+      status.channels.push_back(channel);
+    }
+  }
+
+  // Polled sources start first (a source that cannot start stops the recording before it
+  // began); without a scan backend their start is the session's time 0.
+  std::int64_t origin_ns = -1;
+  std::int64_t origin_realtime_ns = 0;
+  std::size_t started = 0;
+  const auto stop_polled = [&] {
+    std::exception_ptr first;
+    for (; started > 0; --started) {
+      try {
+        polled[started - 1].source->stop();
+      } catch (...) {
+        if (!first) first = std::current_exception();
+      }
+    }
+    if (first) std::rethrow_exception(first);
+  };
+  try {
+    if (backend == nullptr) {
+      const ClockOrigin origin = sample_clock_origin();
+      origin_ns = origin.monotonic_ns;
+      origin_realtime_ns = origin.realtime_ns;
+    }
+    for (PolledState& state : polled) {
+      state.source->start();
+      ++started;
+    }
+  } catch (...) {
+    try {
+      stop_polled();
+    } catch (...) {
+      // The start's error is the one to report.
+    }
+    journal.close();
+    std::filesystem::remove(journal_path);
+    throw;
+  }
+  // Whatever happens below, the polling threads end with this function.
+  struct PolledGuard {
+    const std::function<void()> stop;
+    ~PolledGuard() {
+      try {
+        stop();
+      } catch (...) {
+        // Already ending with another error, or stopped before.
+      }
+    }
+  } polled_guard{stop_polled};
+
+  const auto scan_slots =
+      backend == nullptr
+          ? std::size_t{4}
+          : std::max<std::size_t>(
+                4, static_cast<std::size_t>(std::ceil(options.ring_s * rate_hz / block_scans)));
+  RecorderRings rings(std::max<std::size_t>(scan_channels, 1), block_scans, scan_slots,
+                      options.ring_events);
+  std::optional<RealtimeReader> reader;
+  if (backend != nullptr) {
+    reader.emplace(*backend, rings, scan_channels, block_scans, total_scans,
+                   options.when_ring_full);
+  }
 
   std::exception_ptr read_error;
   std::string read_error_text;
-  std::thread reading([&] {
-    try {
-      reader.start();
-      while (reader.step()) {
-      }
-    } catch (const std::exception& error) {
-      read_error = std::current_exception();
-      read_error_text = error.what();
-    } catch (...) {
-      read_error = std::current_exception();
-      read_error_text = "unknown error";
-    }
-    try {
-      backend.stop();
-    } catch (const std::exception& error) {
-      if (!read_error) {
+  std::thread reading;
+  if (backend != nullptr) {
+    reading = std::thread([&] {
+      try {
+        reader->start();
+        while (reader->step()) {
+        }
+      } catch (const std::exception& error) {
         read_error = std::current_exception();
         read_error_text = error.what();
+      } catch (...) {
+        read_error = std::current_exception();
+        read_error_text = "unknown error";
       }
-    }
-    rings.done.store(true, std::memory_order_release);
-  });
+      try {
+        backend->stop();
+      } catch (const std::exception& error) {
+        if (!read_error) {
+          read_error = std::current_exception();
+          read_error_text = error.what();
+        }
+      }
+      rings.done.store(true, std::memory_order_release);
+    });
+  }
+  const auto join_reading = [&] {
+    if (reading.joinable()) reading.join();
+  };
 
   RecordSummary summary;
   std::uint64_t written_scans = 0;
@@ -288,38 +531,120 @@ RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata&
     sync_stop.store(true, std::memory_order_relaxed);
     if (syncing.joinable()) syncing.join();
   };
+  // Session time now / at the end: the scans' clock, or the monotonic clock without scans.
+  const auto elapsed_s = [&] {
+    return origin_ns < 0 ? 0.0 : static_cast<double>(monotonic_now_ns() - origin_ns) * 1e-9;
+  };
+  const auto recorded_s = [&] {
+    return backend != nullptr ? static_cast<double>(written_scans) / rate_hz : elapsed_s();
+  };
+  std::vector<PolledSample> samples(options.polled_batch);
+  std::vector<PolledEvent> polled_events(64);
+  const auto write_event = [&](double time_s, std::string_view kind, std::string_view channel,
+                               std::string_view detail) {
+    journal.append_event(time_s, kind, channel, detail);
+    ++summary.events;
+    if (kind == "fault") ++summary.faults;
+  };
+  const auto flush_batch = [&](TimedBatch& batch) {
+    if (batch.count == 0) return;
+    journal.append_timed(batch.journal_channel, batch.count, batch.time_ns.data(),
+                         batch.latency_ns.data(), batch.raw.data());
+    ChannelStatus& live = status.channels[batch.status_index];
+    if (live.samples == 0) batch.first_time_s = static_cast<double>(batch.time_ns[0]) * 1e-9;
+    live.samples += batch.count;
+    live.latest = batch.conversion(batch.raw[batch.count - 1]);
+    const double span_s =
+        static_cast<double>(batch.time_ns[batch.count - 1]) * 1e-9 - batch.first_time_s;
+    if (live.samples > 1 && span_s > 0) {
+      live.achieved_rate_hz = static_cast<double>(live.samples - 1) / span_s;
+    }
+    summary.polled_samples += batch.count;
+    batch.count = 0;
+  };
+  // Takes every polled source's samples and events into the journal; true if any.
+  const auto drain_polled = [&] {
+    bool any = false;
+    for (PolledState& state : polled) {
+      for (;;) {
+        const std::size_t got = state.source->take_events(polled_events);
+        for (std::size_t e = 0; e < got; ++e) {
+          const PolledEvent& event = polled_events[e];
+          write_event(static_cast<double>(event.monotonic_ns - origin_ns) * 1e-9,
+                      event.kind[0] != '\0' ? event.kind : "mark", event.channel, event.detail);
+        }
+        any |= got > 0;
+        if (got < polled_events.size()) break;
+      }
+      for (;;) {
+        const std::size_t got = state.source->take_samples(samples);
+        for (std::size_t i = 0; i < got; ++i) {
+          const PolledSample& sample = samples[i];
+          if (sample.channel >= state.batches.size()) continue;  // not the source's
+          const std::int64_t time_ns = sample.midpoint_ns() - origin_ns;
+          if (time_ns < 0) {
+            ++summary.polled_before_origin;
+            continue;
+          }
+          TimedBatch& batch = state.batches[sample.channel];
+          batch.time_ns[batch.count] = time_ns;
+          batch.latency_ns[batch.count] = sample.latency_ns();
+          batch.raw[batch.count] = sample.raw;
+          if (++batch.count == batch.raw.size()) flush_batch(batch);
+        }
+        any |= got > 0;
+        if (got < samples.size()) break;
+      }
+      for (TimedBatch& batch : state.batches) flush_batch(batch);
+    }
+    return any;
+  };
   try {
     bool start_written = false;
+    if (backend == nullptr) {
+      journal.append_start(origin_ns, origin_realtime_ns);
+      start_written = true;
+    }
     for (;;) {
-      // Read before draining: everything published before `done` is drained below.
-      const bool done = rings.done.load(std::memory_order_acquire);
+      // Read before draining: everything published before `done` is drained below; the
+      // polled sources are stopped (joined) before their last drain.
+      const bool done = backend != nullptr ? rings.done.load(std::memory_order_acquire)
+                                           : monotonic_now_ns() - origin_ns >= duration_ns ||
+                                                 summary.stopped_by_request;
+      if (done) stop_polled();
       bool wrote = false;
       if (!start_written) {
         const std::int64_t start_ns = rings.start_monotonic_ns.load(std::memory_order_acquire);
         if (start_ns >= 0) {
-          journal.append_start(start_ns);
+          origin_ns = start_ns;
+          journal.append_start(start_ns, rings.start_realtime_ns.load(std::memory_order_relaxed));
           start_written = true;
         }
       }
       while (const EventSlot* event = rings.events.consumer_slot()) {
-        journal.append_event(event->time_s, event->kind, event->channel, event->detail);
+        write_event(event->time_s, event->kind, event->channel, event->detail);
         rings.events.release();
-        ++summary.events;
         wrote = true;
       }
       while (const ScanSlot* slot = rings.scans.consumer_slot()) {
         journal.append_scans(slot->first_scan, slot->scan_count, slot->counts.data(),
                              slot->capacity);
         written_scans = slot->first_scan + slot->scan_count;
+        if (slot->scan_count > 0) {
+          for (std::size_t c = 0; c < scan_channels; ++c) {
+            status.channels[c].latest =
+                scan_conversion[c](slot->counts[c * slot->capacity + slot->scan_count - 1]);
+          }
+        }
         rings.scans.release();
         wrote = true;
       }
+      if (start_written) wrote |= drain_polled();
       const std::uint64_t dropped_events = rings.dropped_events.load(std::memory_order_relaxed);
       if (dropped_events > reported_dropped_events) {
-        journal.append_event(static_cast<double>(written_scans) / rate_hz, "fault", "",
-                             std::to_string(dropped_events - reported_dropped_events) +
-                                 " events lost: the event ring was full");
-        ++summary.events;
+        write_event(recorded_s(), "fault", "",
+                    std::to_string(dropped_events - reported_dropped_events) +
+                        " events lost: the event ring was full");
         reported_dropped_events = dropped_events;
       }
       if (sync_failed.load(std::memory_order_acquire)) throw JournalError(sync_error);
@@ -329,47 +654,75 @@ RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata&
         rings.stop.store(true, std::memory_order_relaxed);
       }
       if (wrote && options.progress) {
-        options.progress(static_cast<double>(written_scans) / rate_hz,
-                         static_cast<std::size_t>(written_scans));
+        status.recorded_s = recorded_s();
+        status.scans = written_scans;
+        const double elapsed = elapsed_s();
+        if (backend != nullptr && elapsed > 0) {
+          status.achieved_scan_rate_hz = static_cast<double>(written_scans) / elapsed;
+        }
+        for (std::size_t c = 0; c < scan_channels; ++c) {
+          status.channels[c].samples = written_scans;
+          status.channels[c].achieved_rate_hz = status.achieved_scan_rate_hz;
+        }
+        status.faults = summary.faults;
+        options.progress(status);
       }
       if (done) break;
       if (!wrote) std::this_thread::sleep_for(poll);
     }
-    const double end_s = static_cast<double>(written_scans) / rate_hz;
+    const double end_s = recorded_s();
+    for (const PolledState& state : polled) {
+      const PolledStatistics statistics = state.source->statistics();
+      if (statistics.dropped_samples > 0) {
+        write_event(end_s, "fault", "",
+                    state.source->description() + ": " +
+                        std::to_string(statistics.dropped_samples) +
+                        " polled samples lost (not taken in time)");
+      }
+    }
+    if (summary.polled_before_origin > 0) {
+      write_event(0.0, "mark", "",
+                  std::to_string(summary.polled_before_origin) +
+                      " polled samples from before time 0 (the first scan) not kept");
+    }
     if (summary.stopped_by_request) {
       char detail[96];
       std::snprintf(detail, sizeof detail, "recording stopped by hand after %.3f s", end_s);
-      journal.append_event(end_s, "stop", "", detail);
-      ++summary.events;
+      write_event(end_s, "stop", "", detail);
     }
     if (read_error) {
-      journal.append_event(end_s, "fault", "", "the recording stopped: " + read_error_text);
-      ++summary.events;
+      write_event(end_s, "fault", "", "the recording stopped: " + read_error_text);
     }
+    summary.duration_s = end_s;
     journal.append_end(written_scans);
     stop_syncing();
     journal.sync();
   } catch (const std::exception& error) {
     rings.stop.store(true, std::memory_order_relaxed);
-    reading.join();
+    join_reading();
     stop_syncing();
+    try {
+      stop_polled();
+    } catch (const std::exception&) {
+      // The write error is the one to report.
+    }
     try {
       journal.sync();
     } catch (const std::exception&) {
       // The write error is the one to report.
     }
-    char kept[160];
-    std::snprintf(kept, sizeof kept, "; the recording stopped after %.3f s: the %llu scans ",
-                  static_cast<double>(written_scans) / rate_hz,
-                  static_cast<unsigned long long>(written_scans));
+    char kept[200];
+    std::snprintf(kept, sizeof kept,
+                  "; the recording stopped after %.3f s: the %llu scans and %llu polled samples ",
+                  recorded_s(), static_cast<unsigned long long>(written_scans),
+                  static_cast<unsigned long long>(summary.polled_samples));
     throw JournalError(std::string(error.what()) + kept + "written so far are kept in " +
                        journal_path.string() + " (free space, then: doorbench recover " +
                        journal_path.string() + ")");
   }
-  reading.join();
+  join_reading();
 
   summary.scans = static_cast<std::size_t>(written_scans);
-  summary.duration_s = static_cast<double>(written_scans) / rate_hz;
   summary.dropped_scans = rings.dropped_scans.load();
   summary.dropped_events = rings.dropped_events.load();
   summary.journal_bytes = journal.bytes_written();
@@ -379,7 +732,9 @@ RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata&
   // doorbench does not take it for an unfinished recording meanwhile.
   ConvertOptions convert;
   convert.writer = options.writer;
-  convert.extras = [&backend](SessionWriter& writer) { backend.write_extras(writer); };
+  if (backend != nullptr) {
+    convert.extras = [backend](SessionWriter& writer) { backend->write_extras(writer); };
+  }
   try {
     convert_journal(journal_path, path, convert);
   } catch (const std::exception& error) {

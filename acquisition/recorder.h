@@ -1,5 +1,6 @@
 #pragma once
-// Records a session from a backend, in two threads (docs/crash-safety.md):
+// Records a session from a scan backend and/or polled sources, in two threads
+// (docs/crash-safety.md, docs/synchronization.md):
 //
 // - the reading thread starts the backend, reads blocks of scans and copies them, and
 //   the events they bring, into preallocated lock-free rings (ring_buffer.h). After the
@@ -9,6 +10,12 @@
 //   ends converts it into the HDF5 session, which appears under its name only once it
 //   is complete and closed; then the journal is removed.
 //
+// Polled sources (polled_source.h) poll on their own threads; the writer thread takes
+// their samples every poll (a few ms) and journals them as timed frames. Every part is on
+// one session clock, CLOCK_MONOTONIC: time 0 is scan 0 of the scan backend or, without
+// one, the moment the polled sources were started; polled samples sit at the midpoint of
+// request and reply, their latency kept in "<name>_latency".
+//
 // A recording killed at any moment (SIGKILL, power loss) leaves the journal, from which
 // recover_session() (recovery.h) makes the session with every synced scan.
 #include <atomic>
@@ -17,8 +24,10 @@
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "acquisition/backend.h"
+#include "acquisition/polled_source.h"
 #include "acquisition/ring_buffer.h"
 #include "acquisition/session_file.h"
 
@@ -31,6 +40,24 @@ enum class RingFullPolicy {
   kDropAndRecordFault,
   // A source that computes scans on demand (the simulated bench unpaced): wait for room.
   kWait,
+};
+
+// The live state of a recording, for a status display.
+struct ChannelStatus {
+  std::string name;
+  std::string unit;     // of `latest`: the physical unit, else the signal's unit
+  double latest = 0.0;  // the latest sample, physical where a record or scale gives it
+  std::uint64_t samples = 0;
+  double achieved_rate_hz = 0.0;  // scan channels: the scans'; polled: its own samples'
+  bool polled = false;
+};
+
+struct RecordStatus {
+  double recorded_s = 0.0;  // session time written so far
+  std::uint64_t scans = 0;
+  double achieved_scan_rate_hz = 0.0;   // scans / monotonic time since the origin (0: none)
+  std::vector<ChannelStatus> channels;  // scan channels, then polled (no latency channels)
+  std::uint64_t faults = 0;             // fault events recorded so far
 };
 
 struct RecordOptions {
@@ -46,9 +73,11 @@ struct RecordOptions {
   // Set (e.g. by a SIGINT handler) to end the recording early; it still ends cleanly
   // with a complete session and a "stop" event.
   const std::atomic<bool>* stop_requested = nullptr;
-  // Called by the writer thread after it wrote blocks, with the scans recorded (for a
-  // status line). It may take its time: the reading thread does not wait for it.
-  std::function<void(double recorded_s, std::size_t scans)> progress;
+  // Called by the writer thread after it wrote blocks or samples (for a status line). It
+  // may take its time: the reading thread and the polling threads do not wait for it.
+  std::function<void(const RecordStatus& status)> progress;
+  // Timed samples per journal frame and per take_samples() call.
+  std::size_t polled_batch = 1024;
   std::string validate() const;  // empty when usable
 };
 
@@ -61,7 +90,17 @@ struct RecordSummary {
   bool stopped_by_request = false;
   std::uint64_t journal_bytes = 0;
   std::uint64_t journal_syncs = 0;
+  std::uint64_t polled_samples = 0;
+  std::uint64_t polled_before_origin = 0;  // polled samples from before time 0: not kept
+  std::uint64_t faults = 0;                // fault events recorded
   std::string brief_report() const;
+};
+
+// The sources of one recording: zero or one scan backend, any number of polled sources;
+// at least one source.
+struct RecordSources {
+  AcquisitionBackend* scans = nullptr;
+  std::vector<PolledSource*> polled;
 };
 
 // Records until `options.duration_s`, the end of the backend's scans, or a stop request.
@@ -69,6 +108,11 @@ struct RecordSummary {
 // JournalError/SessionError naming the file when writing fails: a failed journal write
 // (e.g. a full disk) stops the recording and keeps the journal, which the message says
 // how to recover.
+// With a scan backend the recording ends with its scans; polled sources only, after
+// duration_s of monotonic time. Polled channels must be explicit-time value channels
+// (sample_rate_hz 0); names must be unique over all sources (with "<name>_latency").
+RecordSummary record_session(const RecordSources& sources, const SessionMetadata& metadata,
+                             const std::filesystem::path& path, const RecordOptions& options);
 RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata& metadata,
                              const std::filesystem::path& path, const RecordOptions& options);
 
@@ -98,6 +142,7 @@ struct RecorderRings {
   SpscRing<ScanSlot> scans;
   SpscRing<EventSlot> events;
   std::atomic<std::int64_t> start_monotonic_ns{-1};  // set once the backend started
+  std::atomic<std::int64_t> start_realtime_ns{0};    // CLOCK_REALTIME at that moment
   std::atomic<std::uint64_t> scans_read{0};
   std::atomic<std::uint64_t> dropped_scans{0};
   std::atomic<std::uint64_t> dropped_events{0};
@@ -111,7 +156,7 @@ class RealtimeReader {
  public:
   RealtimeReader(AcquisitionBackend& backend, RecorderRings& rings, std::size_t channels,
                  std::size_t block_scans, std::uint64_t total_scans, RingFullPolicy when_full);
-  void start();  // starts the backend and notes the monotonic time
+  void start();  // starts the backend and notes the monotonic (and UTC) time
   // One read of the backend and its copy into the rings; false when recording is over
   // (duration reached, backend exhausted, stop requested). Never allocates, locks or
   // does I/O itself (the backend's read must not either).

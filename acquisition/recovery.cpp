@@ -10,6 +10,7 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <set>
 
 namespace doorbench {
@@ -96,6 +97,7 @@ std::string ConvertResult::brief_report() const {
   std::snprintf(text, sizeof text, "%s: %llu scans (%.3f s) of %zu channels, %zu events",
                 session.c_str(), static_cast<unsigned long long>(scans), seconds, channels, events);
   std::string report = text;
+  if (timed_samples > 0) report += ", " + std::to_string(timed_samples) + " polled samples";
   if (gap_scans > 0) {
     report += "; " + std::to_string(gap_scans) + " scans lost to ring overflows (marked as gaps)";
   }
@@ -129,9 +131,21 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
   partial += ".partial";
   // A partial file is a conversion that died; whoever converts holds the journal.
   std::filesystem::remove(partial);
+  // The origin's UTC time (start frame, normally the first) is the session's start time.
+  SessionMetadata metadata = header.metadata;
+  {
+    JournalReader first(journal);
+    JournalFrame frame;
+    for (int n = 0; n < 8 && first.next(frame); ++n) {
+      if (frame.type == FrameType::kStart) {
+        if (frame.realtime_ns != 0) metadata.start_time_utc = utc_iso8601_ns(frame.realtime_ns);
+        break;
+      }
+    }
+  }
   try {
     {
-      SessionWriter writer(partial, header.metadata, options.writer);
+      SessionWriter writer(partial, metadata, options.writer);
       std::set<std::string> names;
       for (const ChannelInfo& channel : header.channels) {
         writer.add_channel(channel);
@@ -140,14 +154,51 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
       for (const calibration::CalibrationRecord& record : header.calibrations) {
         writer.add_calibration(record);
       }
-      const auto channel_count = static_cast<int>(header.channels.size());
+      const auto channel_count = static_cast<int>(scan_channel_count(header));
+      // Each polled channel's latency channel ("<name>_latency"), -1 when none; and the
+      // last time written, to keep explicit times strictly increasing.
+      std::vector<int> latency_channel(header.channels.size(), -1);
+      std::vector<std::int64_t> last_time_ns(header.channels.size(),
+                                             std::numeric_limits<std::int64_t>::min());
+      for (std::size_t c = 0; c < header.channels.size(); ++c) {
+        for (std::size_t l = 0; l < header.channels.size(); ++l) {
+          if (header.channels[l].sensor_kind == "poll_latency" &&
+              header.channels[l].name == header.channels[c].name + "_latency") {
+            latency_channel[c] = static_cast<int>(l);
+          }
+        }
+      }
+      std::vector<double> times_s, latencies_s, raws;
       std::vector<std::int32_t> fill;
       JournalFrame frame;
       while (reader.next(frame)) {
         switch (frame.type) {
           case FrameType::kStart:
             result.start_monotonic_ns = frame.monotonic_ns;
+            result.start_realtime_ns = frame.realtime_ns;
             break;
+          case FrameType::kTimed: {
+            times_s.clear();
+            latencies_s.clear();
+            raws.clear();
+            std::int64_t& last = last_time_ns[frame.channel];
+            for (std::size_t i = 0; i < frame.scan_count; ++i) {
+              if (frame.time_ns[i] <= last) {
+                ++result.unordered_samples;
+                continue;
+              }
+              last = frame.time_ns[i];
+              times_s.push_back(static_cast<double>(frame.time_ns[i]) * 1e-9);
+              latencies_s.push_back(static_cast<double>(frame.latency_ns[i]) * 1e-9);
+              raws.push_back(frame.raw[i]);
+            }
+            writer.append_timed_values(static_cast<int>(frame.channel), times_s, raws);
+            if (latency_channel[frame.channel] >= 0) {
+              writer.append_timed_values(latency_channel[frame.channel], times_s, latencies_s);
+            }
+            result.timed_samples += times_s.size();
+            break;
+          }
           case FrameType::kEnd:
             result.ended_cleanly = true;
             break;
@@ -201,6 +252,25 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
             result.scans += frame.scan_count;
             break;
           }
+        }
+      }
+      if (result.unordered_samples > 0) {
+        writer.add_event({0.0, "fault", "",
+                          std::to_string(result.unordered_samples) +
+                              " polled samples dropped: their time was not after the one "
+                              "before on their channel"});
+        ++result.events;
+      }
+      if (result.start_monotonic_ns >= 0) {
+        // Session time t is CLOCK_MONOTONIC origin_monotonic_ns + t·1e9 and UTC
+        // origin_utc + t (docs/session-format.md).
+        writer.write_group_attribute("clock", "origin_monotonic_ns",
+                                     std::to_string(result.start_monotonic_ns));
+        if (result.start_realtime_ns != 0) {
+          writer.write_group_attribute("clock", "origin_realtime_ns",
+                                       std::to_string(result.start_realtime_ns));
+          writer.write_group_attribute("clock", "origin_utc",
+                                       utc_iso8601_ns(result.start_realtime_ns));
         }
       }
       result.journal_bytes = reader.file_bytes();
@@ -273,8 +343,10 @@ ConvertResult recover_session(const std::filesystem::path& file, const RecoverOp
       if (frame.type == FrameType::kEnd) ended = true;
     }
     const SessionReader existing(session);
-    const std::size_t has =
-        existing.channels().empty() ? 0 : existing.sample_count(existing.channels().front().name);
+    // Scans of the first channel on the scan clock (a polled-only session has none).
+    const std::size_t has = scan_channel_count(reader.header()) == 0 || existing.channels().empty()
+                                ? 0
+                                : existing.sample_count(existing.channels().front().name);
     if (!ended || has != scans) {
       throw JournalError(journal.string() + ": " + session.string() +
                          " already exists and does not hold this journal's " +

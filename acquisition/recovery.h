@@ -5,7 +5,9 @@
 // The session is written as "SESSION.partial", flushed, synced and only then renamed to
 // its name, so a session file under its own name is always complete; the journal is
 // removed after that. Scans missing between blocks (ring overflows) are stored as
-// kGapFillCount with a "gap" event, so the uniform clock stays right.
+// kGapFillCount with a "gap" event, so the uniform clock stays right. Timed samples of
+// polled channels become explicit-time values (and their latencies the companion
+// "<name>_latency" channel); the start frame's origin goes into the group "clock".
 #include <cstdint>
 #include <filesystem>
 #include <functional>
@@ -34,6 +36,9 @@ struct ConvertResult {
   bool already_complete = false;    // the session existed: only the journal was left
   double scan_rate_hz = 0.0;
   std::int64_t start_monotonic_ns = -1;  // from the journal's start frame; -1 when none
+  std::int64_t start_realtime_ns = 0;    // UTC at that moment (ns since 1970); 0: unknown
+  std::uint64_t timed_samples = 0;       // of the polled (explicit-time) channels
+  std::uint64_t unordered_samples = 0;   // timed samples dropped: not after the one before
   std::string brief_report() const;
 };
 

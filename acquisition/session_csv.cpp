@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
 #include "acquisition/interpolation.h"
+#include "acquisition/resample.h"
 
 namespace doorbench {
 namespace {
@@ -123,18 +125,118 @@ Recording session_to_recording(const SessionReader& session) {
   Recording recording;
   recording.source = where;
   recording.metadata.emplace_back("source", "doorbench export " + where);
-  const ChannelSlice clock = session.read(force->name);
-  const std::size_t count = clock.time_s.size();
-  recording.time_s = clock.time_s;
-  auto column = [&](const ChannelInfo& channel) {
-    const ChannelSlice slice = session.read(channel.name);
-    if (slice.raw.size() != count ||
-        std::abs(channel.sample_rate_hz - force->sample_rate_hz) > 1e-9 * force->sample_rate_hz) {
-      throw SessionError(where + ": channel " + channel.name + " is not on the clock of " +
-                         force->name + " (export needs one clock)");
+
+  // Every exported channel on its own clock, delay-corrected (docs/synchronization.md).
+  std::vector<const ChannelInfo*> exported{force};
+  if (rate) exported.push_back(rate);
+  if (angle) exported.push_back(angle);
+  exported.insert(exported.end(), extras.begin(), extras.end());
+  struct Own {
+    std::vector<double> time_s, values;
+  };
+  std::vector<Own> own;
+  for (const ChannelInfo* channel : exported) {
+    const ChannelSlice slice = session.read(channel->name);
+    std::vector<double> values = session.physical(channel->name, slice);
+    own.push_back(
+        {slice.time_s, correct_delay(session, *channel, slice.time_s, std::move(values))});
+  }
+  // One clock: the same uniform rate and sample count, or the very same explicit times.
+  const auto same_clock = [&](std::size_t i, std::size_t j) {
+    const ChannelInfo& a = *exported[i];
+    const ChannelInfo& b = *exported[j];
+    if (own[i].time_s.size() != own[j].time_s.size()) return false;
+    if (a.sample_rate_hz > 0 && b.sample_rate_hz > 0) {
+      return std::abs(a.sample_rate_hz - b.sample_rate_hz) <= 1e-9 * a.sample_rate_hz;
     }
-    std::vector<double> values = session.physical(channel.name, slice);
-    return correct_delay(session, channel, slice.time_s, std::move(values));
+    return a.sample_rate_hz == 0 && b.sample_rate_hz == 0 && own[i].time_s == own[j].time_s;
+  };
+  bool one_clock = true;
+  for (std::size_t i = 1; i < exported.size(); ++i) one_clock = one_clock && same_clock(0, i);
+  std::vector<std::vector<double>> columns(exported.size());
+  if (one_clock) {
+    // All on the force channel's clock: its times (converter skews of a few µs are not
+    // resampled; explicit times shared by every channel, as imports have them, are kept).
+    recording.time_s = own[0].time_s;
+    for (std::size_t i = 0; i < exported.size(); ++i) columns[i] = std::move(own[i].values);
+  } else {
+    // The axis: the force channel's clock if uniform, else the first uniform exported
+    // channel's, else a common rate of 1 / the force channel's median interval; only
+    // where every channel has samples.
+    double first_s = -std::numeric_limits<double>::infinity();
+    double last_s = std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < exported.size(); ++i) {
+      if (own[i].time_s.size() < 2) {
+        throw SessionError(where + ": channel " + exported[i]->name + " has " +
+                           std::to_string(own[i].time_s.size()) +
+                           " samples, too few to place on a common clock");
+      }
+      first_s = std::max(first_s, own[i].time_s.front());
+      last_s = std::min(last_s, own[i].time_s.back());
+    }
+    if (!(last_s > first_s)) {
+      throw SessionError(where + ": the exported channels have no time span in common");
+    }
+    std::optional<std::size_t> reference;
+    for (std::size_t i = 0; i < exported.size() && !reference; ++i) {
+      if (exported[i]->sample_rate_hz > 0) reference = i;
+    }
+    std::string placed;
+    if (reference) {
+      for (double t : own[*reference].time_s) {
+        if (t >= first_s && t <= last_s) recording.time_s.push_back(t);
+      }
+      recording.sample_rate_hz = exported[*reference]->sample_rate_hz;
+      placed = "on the clock of " + exported[*reference]->name;
+    } else {
+      const double rate_hz = 1.0 / median_interval_s(own[0].time_s);
+      recording.time_s = uniform_axis(first_s, last_s, rate_hz);
+      recording.sample_rate_hz = rate_hz;
+      placed = "on a common clock of " + format_csv_number(rate_hz) +
+               " Hz (1 / the median interval of " + force->name + ")";
+    }
+    placed += " from " + format_csv_number(first_s) + " s to " + format_csv_number(last_s) + " s";
+    std::vector<bool> keep(recording.time_s.size(), true);
+    std::string gaps;
+    for (std::size_t i = 0; i < exported.size(); ++i) {
+      const ChannelInfo& channel = *exported[i];
+      const double interval_s = channel.sample_rate_hz > 0 ? 1.0 / channel.sample_rate_hz
+                                                           : median_interval_s(own[i].time_s);
+      columns[i] = resample_linear(own[i].time_s, own[i].values, recording.time_s,
+                                   kGapIntervals * interval_s, where + ": channel " + channel.name);
+      // Runs of times that fall in this channel's gaps.
+      for (std::size_t j = 0; j < columns[i].size(); ++j) {
+        if (!std::isnan(columns[i][j])) continue;
+        std::size_t end = j;
+        while (end + 1 < columns[i].size() && std::isnan(columns[i][end + 1])) ++end;
+        for (std::size_t k = j; k <= end; ++k) keep[k] = false;
+        if (!gaps.empty()) gaps += "; ";
+        gaps += channel.name + " " + format_csv_number(recording.time_s[j]) + "-" +
+                format_csv_number(recording.time_s[end]) + " s";
+        j = end;
+      }
+    }
+    if (!gaps.empty()) {
+      // Times inside a gap of any channel are left out: a jump in the time column.
+      const auto compact = [&](std::vector<double>& values) {
+        std::size_t n = 0;
+        for (std::size_t j = 0; j < values.size(); ++j) {
+          if (keep[j]) values[n++] = values[j];
+        }
+        values.resize(n);
+      };
+      compact(recording.time_s);
+      for (std::vector<double>& column : columns) compact(column);
+      recording.metadata.emplace_back("resample_gaps", gaps);
+    }
+    recording.metadata.emplace_back("resampled", "linear interpolation " + placed);
+  }
+  const std::size_t count = recording.time_s.size();
+  auto column = [&](const ChannelInfo& channel) {
+    for (std::size_t i = 0; i < exported.size(); ++i) {
+      if (exported[i] == &channel) return columns[i];
+    }
+    throw std::logic_error("not exported: " + channel.name);
   };
 
   // Strokes from events; the load cell's mounting from each stroke's detail.
@@ -194,7 +296,9 @@ Recording session_to_recording(const SessionReader& session) {
     recording.extra_names.push_back(column_name(*extra));
     recording.extra_columns.push_back(column(*extra));
   }
-  if (force->sample_rate_hz > 0) recording.sample_rate_hz = force->sample_rate_hz;
+  if (!recording.sample_rate_hz && force->sample_rate_hz > 0) {
+    recording.sample_rate_hz = force->sample_rate_hz;
+  }
   for (const std::string group : {"truth", "import"}) {
     try {
       const std::string radius = session.read_group_attribute(group, "handle_radius_m");

@@ -6,9 +6,14 @@
 // the first in rad/s gives rate_rad_s, the first in rad that is not an inclinometer gives
 // angle_rad; every other channel (the narrow-range inclinometer among them) becomes an
 // extra column <name>_<unit> (prefixed with its sensor kind if that would take a main
-// column's name: the inclinometer "angle" gives inclinometer_angle_rad). All exported channels must
-// share one uniform clock; the time column is the first exported channel's (converter skews of a
-// few µs are not resampled). Strokes come from stroke_start/stroke_end events.
+// column's name: the inclinometer "angle" gives inclinometer_angle_rad). When all exported
+// channels share one uniform clock, the time column is the force channel's (converter skews of
+// a few µs are not resampled). Otherwise (polled channels with explicit times, other rates)
+// every channel is linearly interpolated onto the force channel's clock (if uniform; else the
+// first uniform channel's; else 1 / the force channel's median interval), only where every
+// channel has samples, and times inside a channel's gap (> 3 of its median intervals) are
+// left out; metadata "resampled" and "resample_gaps" say so (docs/synchronization.md).
+// Strokes come from stroke_start/stroke_end events.
 //
 // A channel whose calibration record states a delay (delay_s, a lagging inclinometer) is
 // shifted back by it on export, so that every column describes the same instant.

@@ -55,6 +55,87 @@ SessionMetadata new_session_metadata(const RigDefinition& rig,
   return metadata;
 }
 
+namespace {
+
+// A recording's live status on stderr. On a terminal: one group of lines (the status line,
+// then each channel's latest value) rewritten in place at most 10 times a second; when
+// stderr is not a terminal (a log), one line with every value at each quarter of the
+// duration, so that logs stay short.
+class StatusDisplay {
+ public:
+  StatusDisplay(std::string path, double duration_s)
+      : path_(std::move(path)), duration_s_(duration_s), terminal_(isatty(STDERR_FILENO) != 0) {}
+
+  void show(const RecordStatus& status) {
+    const auto now = std::chrono::steady_clock::now();
+    if (terminal_) {
+      if (now < next_draw_) {
+        last_ = status;
+        pending_ = true;
+        return;
+      }
+      next_draw_ = now + std::chrono::milliseconds(100);
+      draw(status);
+      return;
+    }
+    if (status.recorded_s < next_report_s_) return;
+    next_report_s_ = status.recorded_s + std::max(duration_s_ / 4, 1.0);
+    std::string text = status_line(status);
+    for (const ChannelStatus& channel : status.channels) {
+      char value[128];
+      std::snprintf(value, sizeof value, "; %s %.5g %s", channel.name.c_str(), channel.latest,
+                    channel.unit.c_str());
+      text += value;
+    }
+    std::fprintf(stderr, "%s\n", text.c_str());
+  }
+
+  // Shows the last status if it was held back.
+  void finish() {
+    if (terminal_ && pending_) draw(last_);
+    std::fflush(stderr);
+  }
+
+ private:
+  void draw(const RecordStatus& status) {
+    pending_ = false;
+    std::string text;
+    if (lines_ > 0) text += "\r\033[" + std::to_string(lines_) + "A\033[J";
+    text += status_line(status) + "\n";
+    lines_ = 1;
+    for (const ChannelStatus& channel : status.channels) {
+      char line[192];
+      std::snprintf(line, sizeof line, "  %-20s %12.5g %-6s %10llu samples %9.2f Hz%s\n",
+                    channel.name.c_str(), channel.latest, channel.unit.c_str(),
+                    static_cast<unsigned long long>(channel.samples), channel.achieved_rate_hz,
+                    channel.polled ? " (polled)" : "");
+      text += line;
+      ++lines_;
+    }
+    std::fputs(text.c_str(), stderr);
+  }
+
+  std::string status_line(const RecordStatus& status) const {
+    char line[320];
+    std::snprintf(line, sizeof line,
+                  "recording %s: %.1f / %.1f s, %llu scans at %.2f Hz, %llu faults", path_.c_str(),
+                  status.recorded_s, duration_s_, static_cast<unsigned long long>(status.scans),
+                  status.achieved_scan_rate_hz, static_cast<unsigned long long>(status.faults));
+    return line;
+  }
+
+  std::string path_;
+  double duration_s_;
+  bool terminal_;
+  int lines_ = 0;
+  bool pending_ = false;
+  RecordStatus last_;
+  double next_report_s_ = 0.0;
+  std::chrono::steady_clock::time_point next_draw_{};
+};
+
+}  // namespace
+
 RecordSummary record_simulated_session(const RigDefinition& rig,
                                        const SessionRecordingOptions& options,
                                        const std::filesystem::path& out_path) {
@@ -81,22 +162,12 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
   // paced one stands for a DAQ that cannot (a full ring is then a recorded fault).
   const bool paced = rig.simulation && rig.simulation->realtime;
   record.when_ring_full = paced ? RingFullPolicy::kDropAndRecordFault : RingFullPolicy::kWait;
-  const bool terminal = isatty(STDERR_FILENO) != 0;
-  double next_report_s = 0.0;
+  StatusDisplay display(out_path.string(), duration_s);
   if (options.show_progress) {
-    record.progress = [&](double recorded_s, std::size_t scans) {
-      if (terminal) {
-        std::fprintf(stderr, "\rrecording %s: %.1f / %.1f s, %zu scans", out_path.c_str(),
-                     recorded_s, duration_s, scans);
-      } else if (recorded_s >= next_report_s) {
-        std::fprintf(stderr, "recording %s: %.1f / %.1f s, %zu scans\n", out_path.c_str(),
-                     recorded_s, duration_s, scans);
-        next_report_s += duration_s / 4;
-      }
-    };
+    record.progress = [&display](const RecordStatus& status) { display.show(status); };
   }
   const RecordSummary summary = record_session(bench, metadata, out_path, record);
-  if (options.show_progress && terminal) std::fprintf(stderr, "\n");
+  if (options.show_progress) display.finish();
   return summary;
 }
 
@@ -126,7 +197,12 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
   // The card runs on its own clock: a writer that falls behind must cost a recorded gap,
   // never a stalled read that overruns the card's buffer.
   record.when_ring_full = RingFullPolicy::kDropAndRecordFault;
+  StatusDisplay display(out_path.string(), options.duration_s);
+  if (options.show_progress) {
+    record.progress = [&display](const RecordStatus& status) { display.show(status); };
+  }
   const RecordSummary summary = record_session(backend, metadata, out_path, record);
+  if (options.show_progress) display.finish();
   if (backend.overran()) {
     std::cerr << "doorbench: " << out_path.string() << ": " << backend.end_reason()
               << "; the session keeps what was read before it\n";

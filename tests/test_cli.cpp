@@ -1075,8 +1075,10 @@ TEST_CASE("CLI: record with the built-in rig writes a session of force, angle an
   CHECK(metadata.rig_name == "simulated-dishwasher");
   CHECK(metadata.rig_definition == shipped_rig_text());
   CHECK_THAT(metadata.software_version, StartsWith("doorbench "));
-  CHECK(metadata.start_time_utc.size() == 20);  // 2026-11-21T10:30:00Z
+  // The UTC time of session time 0, to the nanosecond: 2026-11-21T10:30:00.123456789Z.
+  CHECK(metadata.start_time_utc.size() == 30);
   CHECK_THAT(metadata.start_time_utc, EndsWith("Z"));
+  CHECK(reader.read_group_attribute("clock", "origin_utc") == metadata.start_time_utc);
 
   // Every channel's calibration record is in the session, in full.
   const auto records = reader.calibrations();
@@ -1174,8 +1176,7 @@ TEST_CASE("CLI: record with a broken rig file names its file, line and key", "[c
   }
 }
 
-TEST_CASE("CLI: record on a comedi rig refuses addresses that are not comedi's",
-          "[cli][session]") {
+TEST_CASE("CLI: record on a comedi rig refuses addresses that are not comedi's", "[cli][session]") {
   ScratchDir scratch;
   std::string text =
       replace_all(shipped_rig_text(), "backend = \"simulated\"", "backend = \"comedi\"");

@@ -571,6 +571,10 @@ TEST_CASE("doorbench devices and record on the emulated card", "[comedi][cli]") 
   CHECK(record.status == 0);
   CHECK_THAT(record.err, Contains("scan rate 1000 Hz (requested 1000 Hz)"));
   CHECK_THAT(record.err, Contains("300 scans"));
+  // Not a terminal: sparse status lines with the live values of every channel.
+  CHECK_THAT(record.err, Contains(" faults; ch0 "));
+  CHECK_THAT(record.err, Contains("; ch2 "));
+  CHECK_THAT(record.err, Contains(" scans at "));
   const SessionReader reader(session);
   CHECK(reader.sample_count("ch0") == 300);
 

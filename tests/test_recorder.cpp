@@ -146,7 +146,7 @@ TEST_CASE("Recorder: every scan and event reaches the session, and the journal i
   options.duration_s = 2.0;
   const std::filesystem::path path = dir / "s.h5";
   std::size_t progress_calls = 0;
-  options.progress = [&](double, std::size_t) { ++progress_calls; };
+  options.progress = [&](const doorbench::RecordStatus&) { ++progress_calls; };
   const RecordSummary summary = record_session(backend, SessionMetadata{}, path, options);
   CHECK(summary.scans == 10000);
   CHECK(summary.duration_s == 2.0);
@@ -267,7 +267,7 @@ TEST_CASE("Recorder: a writer that falls behind is a fault and a gap, never sile
   options.when_ring_full = RingFullPolicy::kDropAndRecordFault;
   // A writer stalled by its disk: 60 ms per drain while blocks arrive every 10 ms.
   int stalls = 0;
-  options.progress = [&](double, std::size_t) {
+  options.progress = [&](const doorbench::RecordStatus&) {
     if (stalls++ < 3) std::this_thread::sleep_for(std::chrono::milliseconds(60));
   };
   const std::filesystem::path path = dir / "s.h5";
@@ -303,7 +303,7 @@ TEST_CASE("Recorder: an unpaced source waits for a slow writer and loses nothing
   options.ring_s = 0.04;
   options.when_ring_full = RingFullPolicy::kWait;
   int stalls = 0;
-  options.progress = [&](double, std::size_t) {
+  options.progress = [&](const doorbench::RecordStatus&) {
     if (stalls++ < 3) std::this_thread::sleep_for(std::chrono::milliseconds(30));
   };
   const RecordSummary summary = record_session(backend, SessionMetadata{}, dir / "s.h5", options);
@@ -320,8 +320,8 @@ TEST_CASE("Recorder: a stop request ends the recording with a complete session",
   RecordOptions options;
   options.duration_s = 30.0;
   options.stop_requested = &stop;
-  options.progress = [&](double recorded_s, std::size_t) {
-    if (recorded_s >= 0.3) stop.store(true);
+  options.progress = [&](const doorbench::RecordStatus& status) {
+    if (status.recorded_s >= 0.3) stop.store(true);
   };
   const auto begun = std::chrono::steady_clock::now();
   const RecordSummary summary = record_session(backend, SessionMetadata{}, dir / "s.h5", options);

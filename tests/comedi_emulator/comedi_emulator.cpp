@@ -40,7 +40,7 @@ struct comedi_t_struct {
   double external_delay_s = 0.1;  // < 0: the line never fires
   std::string calibration_file;
   struct Signal {
-    std::string kind = "sine";                               // sine | counter | constant
+    std::string kind = "sine";  // sine | monotonic_sine | counter | constant
     double amplitude_V = 1, frequency_hz = 0, offset_V = 0;  // frequency 0: channel + 1 Hz
   };
   std::vector<Signal> signals;
@@ -148,7 +148,16 @@ lsampl_t sample_counts(const comedi_t* it, std::uint64_t scan, unsigned k) {
     return static_cast<lsampl_t>(1 + (scan + 7 * channel) % (it->maxdata - 1));
   }
   double volts = signal.offset_V;
-  if (signal.kind == "sine") {
+  if (signal.kind == "monotonic_sine") {
+    // The phase runs on absolute CLOCK_MONOTONIC time: scan k's conversion k·period (+ the
+    // converter's skew) after the acquisition began (t0, the trigger), so that a test can
+    // compare it with another source of the same signal of the same clock.
+    const std::int64_t t_ns =
+        it->t0_ns + static_cast<std::int64_t>(scan * it->cmd.scan_begin_arg) +
+        (it->cmd.convert_src == TRIG_TIMER ? std::int64_t{k} * it->cmd.convert_arg : 0);
+    volts += signal.amplitude_V * std::sin(2 * std::numbers::pi * signal.frequency_hz *
+                                           (static_cast<double>(t_ns) * 1e-9));
+  } else if (signal.kind == "sine") {
     const double period_s = it->cmd.scan_begin_arg * 1e-9;
     const double skew_s = it->cmd.convert_src == TRIG_TIMER ? k * it->cmd.convert_arg * 1e-9 : 0;
     const double t = static_cast<double>(scan) * period_s + skew_s;
@@ -309,12 +318,14 @@ bool parse_device(comedi_t* it, std::istream& in) {
       const unsigned channel = static_cast<unsigned>(std::atoi(key.c_str() + 7));
       comedi_t::Signal signal;
       v >> signal.kind;
-      if (signal.kind == "sine") {
+      if (signal.kind == "sine" || signal.kind == "monotonic_sine") {
         v >> signal.amplitude_V >> signal.frequency_hz >> signal.offset_V;
       } else if (signal.kind == "constant") {
         v >> signal.offset_V;
       } else if (signal.kind != "counter") {
-        return bad("signal: sine AMPLITUDE_V FREQUENCY_HZ OFFSET_V | constant V | counter");
+        return bad(
+            "signal: sine AMPLITUDE_V FREQUENCY_HZ OFFSET_V | monotonic_sine AMPLITUDE_V "
+            "FREQUENCY_HZ OFFSET_V | constant V | counter");
       }
       if (v.fail()) return bad("signal: missing numbers");
       if (it->signals.size() <= channel) it->signals.resize(channel + 1);
