@@ -32,6 +32,9 @@ std::string RecordOptions::validate() const {
   if (polled_batch == 0 || polled_batch > (1u << 20)) {
     return "record polled_batch must be >= 1 and <= 1048576";
   }
+  if (trigger) {
+    if (std::string problem = trigger->validate(); !problem.empty()) return problem;
+  }
   return writer.validate();
 }
 
@@ -44,6 +47,7 @@ std::string RecordSummary::brief_report() const {
   if (polled_samples > 0) report += "; " + std::to_string(polled_samples) + " polled samples";
   if (faults > 0) report += "; " + std::to_string(faults) + " faults";
   if (stopped_by_request) report += "; stopped by request";
+  if (!trigger_report.empty()) report += "; " + trigger_report;
   if (dropped_scans > 0) {
     report += "; " + std::to_string(dropped_scans) + " scans lost to ring overflows";
   }
@@ -247,6 +251,7 @@ LiveConversion live_conversion(const ChannelInfo& channel,
 // One polled channel's samples waiting for their timed frame.
 struct TimedBatch {
   std::uint32_t journal_channel = 0;
+  std::uint32_t stage_index = 0;  // among every polled value channel (the trigger stage's)
   std::size_t status_index = 0;
   std::vector<std::int64_t> time_ns;
   std::vector<std::int64_t> latency_ns;
@@ -259,6 +264,118 @@ struct TimedBatch {
 struct PolledState {
   PolledSource* source = nullptr;
   std::vector<TimedBatch> batches;  // per channel of the source
+};
+
+// Where the trigger stage's output goes: the journal, on a session clock whose time 0 is
+// the first kept sample. The start frame is written when the stage fired (the first kept
+// sample's time is known only then); faults forwarded while armed wait for it in
+// preallocated slots.
+class JournalSink final : public RecordingSink {
+ public:
+  using WriteEvent =
+      std::function<void(double, std::string_view, std::string_view, std::string_view)>;
+  JournalSink(JournalWriter& journal, std::vector<std::uint32_t> journal_channels,
+              std::size_t batch, double pre_trigger_s, WriteEvent write_event)
+      : journal_(journal),
+        journal_channels_(std::move(journal_channels)),
+        time_ns_(batch),
+        latency_ns_(batch),
+        held_(kHeldEvents),
+        pre_trigger_s_(pre_trigger_s),
+        write_event_(std::move(write_event)) {}
+
+  void attach(const TriggerStage& stage, std::int64_t origin_ns, std::int64_t origin_realtime_ns) {
+    stage_ = &stage;
+    origin_ns_ = origin_ns;
+    origin_realtime_ns_ = origin_realtime_ns;
+  }
+  bool begun() const { return begun_; }
+  double offset_s() const { return offset_s_; }
+  std::uint64_t written_scans() const { return written_scans_; }
+  std::uint64_t samples() const { return samples_; }
+
+  // Writes the start frame: at the first kept sample once the stage fired, else (the
+  // recording ends armed) at the acquisition's start. Then the events held back.
+  void begin() {
+    if (begun_) return;
+    if (stage_->state() != TriggerStage::State::kArmed) {
+      if (const std::optional<double> first = stage_->first_forwarded_time_s()) {
+        offset_s_ = *first;
+      } else if (const std::optional<double> trigger = stage_->trigger_time_s()) {
+        offset_s_ = std::max(0.0, *trigger - pre_trigger_s_);
+      }
+    }
+    const auto offset_ns = static_cast<std::int64_t>(std::llround(offset_s_ * 1e9));
+    journal_.append_start(origin_ns_ + offset_ns,
+                          origin_realtime_ns_ == 0 ? 0 : origin_realtime_ns_ + offset_ns);
+    begun_ = true;
+    for (std::size_t i = 0; i < held_count_; ++i) {
+      const EventSlot& event = held_[i];
+      write_event_(event.time_s - offset_s_, event.kind, event.channel, event.detail);
+    }
+    if (held_lost_ > 0) {
+      write_event_(0.0, "fault", "",
+                   std::to_string(held_lost_) + " faults while armed not kept (too many)");
+    }
+    held_count_ = 0;
+  }
+
+  void scans(std::uint64_t first_scan, std::size_t count, const std::int32_t* counts,
+             std::size_t stride) override {
+    begin();
+    journal_.append_scans(first_scan, count, counts, stride);
+    written_scans_ = first_scan + count;
+  }
+  void timed_samples(std::uint32_t channel, std::span<const double> time_s,
+                     std::span<const double> latency_s, std::span<const double> raw) override {
+    begin();
+    for (std::size_t from = 0; from < time_s.size();) {
+      const std::size_t n = std::min(time_s.size() - from, time_ns_.size());
+      for (std::size_t i = 0; i < n; ++i) {
+        time_ns_[i] = std::llround((time_s[from + i] - offset_s_) * 1e9);
+        latency_ns_[i] = std::llround(latency_s[from + i] * 1e9);
+      }
+      journal_.append_timed(journal_channels_[channel], n, time_ns_.data(), latency_ns_.data(),
+                            raw.data() + from);
+      samples_ += n;
+      from += n;
+    }
+  }
+  void event(double time_s, std::string_view kind, std::string_view channel,
+             std::string_view detail) override {
+    if (!begun_ && stage_->state() != TriggerStage::State::kArmed) begin();
+    if (begun_) {
+      write_event_(time_s - offset_s_, kind, channel, detail);
+      return;
+    }
+    if (held_count_ == held_.size()) {
+      ++held_lost_;
+      return;
+    }
+    EventSlot& slot = held_[held_count_++];
+    slot.time_s = time_s;
+    copy_text(slot.kind, sizeof slot.kind, kind.data(), kind.size());
+    copy_text(slot.channel, sizeof slot.channel, channel.data(), channel.size());
+    copy_text(slot.detail, sizeof slot.detail, detail.data(), detail.size());
+  }
+
+ private:
+  static constexpr std::size_t kHeldEvents = 256;
+  JournalWriter& journal_;
+  std::vector<std::uint32_t> journal_channels_;  // stage's polled index → journal channel
+  std::vector<std::int64_t> time_ns_, latency_ns_;
+  std::vector<EventSlot> held_;
+  std::size_t held_count_ = 0;
+  std::uint64_t held_lost_ = 0;
+  double pre_trigger_s_;
+  WriteEvent write_event_;
+  const TriggerStage* stage_ = nullptr;
+  std::int64_t origin_ns_ = 0;
+  std::int64_t origin_realtime_ns_ = 0;
+  bool begun_ = false;
+  double offset_s_ = 0.0;
+  std::uint64_t written_scans_ = 0;
+  std::uint64_t samples_ = 0;
 };
 
 }  // namespace
@@ -402,6 +519,34 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
     }
   }
 
+  // Triggering: the stage between the sources and the journal, and its sink.
+  std::vector<ChannelInfo> polled_value_channels;
+  std::vector<std::uint32_t> stage_to_journal;
+  for (PolledState& state : polled) {
+    for (TimedBatch& batch : state.batches) {
+      batch.stage_index = static_cast<std::uint32_t>(polled_value_channels.size());
+      polled_value_channels.push_back(channels[batch.journal_channel]);
+      stage_to_journal.push_back(batch.journal_channel);
+    }
+  }
+  RecordSummary summary;
+  const auto write_event = [&](double time_s, std::string_view kind, std::string_view channel,
+                               std::string_view detail) {
+    journal.append_event(time_s, kind, channel, detail);
+    ++summary.events;
+    if (kind == "fault") ++summary.faults;
+  };
+  std::optional<JournalSink> sink;
+  std::optional<TriggerStage> stage;
+  if (options.trigger) {
+    sink.emplace(journal, stage_to_journal, options.polled_batch, options.trigger->pre_trigger_s,
+                 write_event);
+    stage.emplace(*options.trigger, std::span<const ChannelInfo>(channels.data(), scan_channels),
+                  rate_hz, block_scans, polled_value_channels, calibrations, *sink);
+  }
+  std::vector<double> stage_time_s(stage ? options.polled_batch : 0);
+  std::vector<double> stage_latency_s(stage ? options.polled_batch : 0);
+
   // Polled sources start first (a source that cannot start stops the recording before it
   // began); without a scan backend their start is the session's time 0.
   std::int64_t origin_ns = -1;
@@ -494,8 +639,8 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
     if (reading.joinable()) reading.join();
   };
 
-  RecordSummary summary;
   std::uint64_t written_scans = 0;
+  std::uint64_t acquired_scans = 0;
   std::uint64_t reported_dropped_events = 0;
   const auto flush_interval = std::chrono::duration<double>(options.flush_interval_s);
   const auto poll = std::chrono::duration<double>(std::min(0.005, options.flush_interval_s / 4));
@@ -536,20 +681,26 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
     return origin_ns < 0 ? 0.0 : static_cast<double>(monotonic_now_ns() - origin_ns) * 1e-9;
   };
   const auto recorded_s = [&] {
-    return backend != nullptr ? static_cast<double>(written_scans) / rate_hz : elapsed_s();
+    if (backend != nullptr) return static_cast<double>(written_scans) / rate_hz;
+    return elapsed_s() - (sink ? sink->offset_s() : 0.0);
   };
   std::vector<PolledSample> samples(options.polled_batch);
   std::vector<PolledEvent> polled_events(64);
-  const auto write_event = [&](double time_s, std::string_view kind, std::string_view channel,
-                               std::string_view detail) {
-    journal.append_event(time_s, kind, channel, detail);
-    ++summary.events;
-    if (kind == "fault") ++summary.faults;
-  };
   const auto flush_batch = [&](TimedBatch& batch) {
     if (batch.count == 0) return;
-    journal.append_timed(batch.journal_channel, batch.count, batch.time_ns.data(),
-                         batch.latency_ns.data(), batch.raw.data());
+    if (stage) {
+      for (std::size_t i = 0; i < batch.count; ++i) {
+        stage_time_s[i] = static_cast<double>(batch.time_ns[i]) * 1e-9;
+        stage_latency_s[i] = static_cast<double>(batch.latency_ns[i]) * 1e-9;
+      }
+      stage->timed_samples(batch.stage_index,
+                           std::span<const double>(stage_time_s.data(), batch.count),
+                           std::span<const double>(stage_latency_s.data(), batch.count),
+                           std::span<const double>(batch.raw.data(), batch.count));
+    } else {
+      journal.append_timed(batch.journal_channel, batch.count, batch.time_ns.data(),
+                           batch.latency_ns.data(), batch.raw.data());
+    }
     ChannelStatus& live = status.channels[batch.status_index];
     if (live.samples == 0) batch.first_time_s = static_cast<double>(batch.time_ns[0]) * 1e-9;
     live.samples += batch.count;
@@ -570,8 +721,13 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
         const std::size_t got = state.source->take_events(polled_events);
         for (std::size_t e = 0; e < got; ++e) {
           const PolledEvent& event = polled_events[e];
-          write_event(static_cast<double>(event.monotonic_ns - origin_ns) * 1e-9,
-                      event.kind[0] != '\0' ? event.kind : "mark", event.channel, event.detail);
+          const double time_s = static_cast<double>(event.monotonic_ns - origin_ns) * 1e-9;
+          const char* kind = event.kind[0] != '\0' ? event.kind : "mark";
+          if (stage) {
+            stage->event(time_s, kind, event.channel, event.detail);
+          } else {
+            write_event(time_s, kind, event.channel, event.detail);
+          }
         }
         any |= got > 0;
         if (got < polled_events.size()) break;
@@ -602,34 +758,55 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
   try {
     bool start_written = false;
     if (backend == nullptr) {
-      journal.append_start(origin_ns, origin_realtime_ns);
+      // With a trigger stage the journal's start waits for the first kept sample.
+      if (sink) {
+        sink->attach(*stage, origin_ns, origin_realtime_ns);
+      } else {
+        journal.append_start(origin_ns, origin_realtime_ns);
+      }
       start_written = true;
     }
     for (;;) {
       // Read before draining: everything published before `done` is drained below; the
       // polled sources are stopped (joined) before their last drain.
-      const bool done = backend != nullptr ? rings.done.load(std::memory_order_acquire)
-                                           : monotonic_now_ns() - origin_ns >= duration_ns ||
-                                                 summary.stopped_by_request;
+      const bool done = backend != nullptr
+                            ? rings.done.load(std::memory_order_acquire)
+                            : monotonic_now_ns() - origin_ns >= duration_ns ||
+                                  summary.stopped_by_request || (stage && stage->finished());
       if (done) stop_polled();
       bool wrote = false;
       if (!start_written) {
         const std::int64_t start_ns = rings.start_monotonic_ns.load(std::memory_order_acquire);
         if (start_ns >= 0) {
           origin_ns = start_ns;
-          journal.append_start(start_ns, rings.start_realtime_ns.load(std::memory_order_relaxed));
+          const std::int64_t realtime_ns = rings.start_realtime_ns.load(std::memory_order_relaxed);
+          if (sink) {
+            sink->attach(*stage, start_ns, realtime_ns);
+          } else {
+            journal.append_start(start_ns, realtime_ns);
+          }
           start_written = true;
         }
       }
       while (const EventSlot* event = rings.events.consumer_slot()) {
-        write_event(event->time_s, event->kind, event->channel, event->detail);
+        if (stage) {
+          stage->event(event->time_s, event->kind, event->channel, event->detail);
+        } else {
+          write_event(event->time_s, event->kind, event->channel, event->detail);
+        }
         rings.events.release();
         wrote = true;
       }
       while (const ScanSlot* slot = rings.scans.consumer_slot()) {
-        journal.append_scans(slot->first_scan, slot->scan_count, slot->counts.data(),
-                             slot->capacity);
-        written_scans = slot->first_scan + slot->scan_count;
+        acquired_scans = slot->first_scan + slot->scan_count;
+        if (stage) {
+          stage->scans(slot->first_scan, slot->scan_count, slot->counts.data(), slot->capacity);
+          written_scans = sink->written_scans();
+        } else {
+          journal.append_scans(slot->first_scan, slot->scan_count, slot->counts.data(),
+                               slot->capacity);
+          written_scans = acquired_scans;
+        }
         if (slot->scan_count > 0) {
           for (std::size_t c = 0; c < scan_channels; ++c) {
             status.channels[c].latest =
@@ -653,15 +830,21 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
         summary.stopped_by_request = true;
         rings.stop.store(true, std::memory_order_relaxed);
       }
+      if (stage && stage->finished()) rings.stop.store(true, std::memory_order_relaxed);
       if (wrote && options.progress) {
-        status.recorded_s = recorded_s();
+        status.recorded_s = stage && !sink->begun() ? 0.0 : recorded_s();
         status.scans = written_scans;
         const double elapsed = elapsed_s();
         if (backend != nullptr && elapsed > 0) {
-          status.achieved_scan_rate_hz = static_cast<double>(written_scans) / elapsed;
+          status.achieved_scan_rate_hz = static_cast<double>(acquired_scans) / elapsed;
+        }
+        if (stage) {
+          status.trigger_state = stage->state() == TriggerStage::State::kArmed ? "armed"
+                                 : stage->finished()                           ? "stopped"
+                                                                               : "triggered";
         }
         for (std::size_t c = 0; c < scan_channels; ++c) {
-          status.channels[c].samples = written_scans;
+          status.channels[c].samples = acquired_scans;
           status.channels[c].achieved_rate_hz = status.achieved_scan_rate_hz;
         }
         status.faults = summary.faults;
@@ -669,6 +852,17 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
       }
       if (done) break;
       if (!wrote) std::this_thread::sleep_for(poll);
+    }
+    if (stage) {
+      summary.triggered = stage->state() != TriggerStage::State::kArmed;
+      summary.trigger_report = stage->summary().brief_report();
+      if (!sink->begun()) {
+        sink->begin();
+        write_event(
+            0.0, "mark", "",
+            "the start condition never fired: no samples kept (" + summary.trigger_report + ")");
+      }
+      summary.polled_samples = sink->samples();
     }
     const double end_s = recorded_s();
     for (const PolledState& state : polled) {

@@ -23,6 +23,7 @@
 #include <exception>
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,7 @@
 #include "acquisition/polled_source.h"
 #include "acquisition/ring_buffer.h"
 #include "acquisition/session_file.h"
+#include "acquisition/trigger.h"
 
 namespace doorbench {
 
@@ -58,6 +60,7 @@ struct RecordStatus {
   double achieved_scan_rate_hz = 0.0;   // scans / monotonic time since the origin (0: none)
   std::vector<ChannelStatus> channels;  // scan channels, then polled (no latency channels)
   std::uint64_t faults = 0;             // fault events recorded so far
+  std::string trigger_state;            // with a trigger: armed | triggered | stopped
 };
 
 struct RecordOptions {
@@ -78,6 +81,12 @@ struct RecordOptions {
   std::function<void(const RecordStatus& status)> progress;
   // Timed samples per journal frame and per take_samples() call.
   std::size_t polled_batch = 1024;
+  // Triggering (docs/triggering.md). When set, a TriggerStage between the sources and the
+  // journal decides what is kept: the start condition (with `pre_trigger_s` before it),
+  // the stop condition, stroke markers. duration_s then bounds the whole acquisition,
+  // armed time included, and session time 0 is the first kept sample (not the
+  // acquisition's start). Unset: everything from the start is kept.
+  std::optional<TriggerOptions> trigger;
   std::string validate() const;  // empty when usable
 };
 
@@ -93,6 +102,9 @@ struct RecordSummary {
   std::uint64_t polled_samples = 0;
   std::uint64_t polled_before_origin = 0;  // polled samples from before time 0: not kept
   std::uint64_t faults = 0;                // fault events recorded
+  // With RecordOptions::trigger: whether the start condition fired, and what the stage did.
+  bool triggered = false;
+  std::string trigger_report;
   std::string brief_report() const;
 };
 

@@ -11,6 +11,8 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <string>
+#include <thread>
 
 #include "acquisition/recorder.h"
 #include "acquisition/recovery.h"
@@ -117,10 +119,12 @@ class StatusDisplay {
 
   std::string status_line(const RecordStatus& status) const {
     char line[320];
-    std::snprintf(line, sizeof line,
-                  "recording %s: %.1f / %.1f s, %llu scans at %.2f Hz, %llu faults", path_.c_str(),
-                  status.recorded_s, duration_s_, static_cast<unsigned long long>(status.scans),
-                  status.achieved_scan_rate_hz, static_cast<unsigned long long>(status.faults));
+    std::snprintf(
+        line, sizeof line, "recording %s: %.1f / %.1f s, %llu scans at %.2f Hz, %llu faults%s%s%s",
+        path_.c_str(), status.recorded_s, duration_s_,
+        static_cast<unsigned long long>(status.scans), status.achieved_scan_rate_hz,
+        static_cast<unsigned long long>(status.faults), status.trigger_state.empty() ? "" : " [",
+        status.trigger_state.c_str(), status.trigger_state.empty() ? "" : "]");
     return line;
   }
 
@@ -133,6 +137,51 @@ class StatusDisplay {
   double next_report_s_ = 0.0;
   std::chrono::steady_clock::time_point next_draw_{};
 };
+
+// Set by the Enter key for a rig with a manual trigger: the first Enter starts, the next
+// one stops (docs/triggering.md). The key reader is a detached thread blocked on stdin.
+std::atomic<bool> g_manual_start{false};
+std::atomic<bool> g_manual_stop{false};
+
+void start_manual_keys(const TriggerOptions& trigger) {
+  static std::atomic<bool> started{false};
+  if (started.exchange(true)) return;
+  g_manual_start.store(trigger.start != TriggerOptions::Start::kManual);
+  std::thread([] {
+    std::string line;
+    while (std::getline(std::cin, line)) {
+      if (!g_manual_start.exchange(true)) continue;
+      g_manual_stop.store(true);
+    }
+  }).detach();
+}
+
+// A rig with a [recording] table records through a trigger stage: its start and stop
+// conditions, pre-trigger buffer and stroke markers. --duration-s then counts from the
+// trigger. Returns the time the acquisition may take in all (armed wait included), or 0
+// when the rig has no [recording] table.
+double configure_triggering(const RigDefinition& rig, const SessionRecordingOptions& options,
+                            RecordOptions& record) {
+  if (rig.recording.line == 0) return 0.0;
+  TriggerOptions trigger = trigger_options_from_rig(rig);
+  if (options.duration_s > 0) trigger.duration_s = options.duration_s;
+  if (trigger.start == TriggerOptions::Start::kManual ||
+      trigger.stop == TriggerOptions::Stop::kManual) {
+    start_manual_keys(trigger);
+    trigger.manual_start = &g_manual_start;
+    trigger.manual_stop = &g_manual_stop;
+    if (trigger.start == TriggerOptions::Start::kManual) {
+      std::cerr << "armed: press Enter to start recording"
+                << (trigger.stop == TriggerOptions::Stop::kManual ? ", Enter again to stop\n"
+                                                                  : "\n");
+    } else {
+      std::cerr << "press Enter to stop recording\n";
+    }
+  }
+  record.trigger = trigger;
+  // Without a duration the stop condition or Ctrl-C ends it; an hour bounds it.
+  return options.max_wait_s + (trigger.duration_s > 0 ? trigger.duration_s : 3600.0);
+}
 
 }  // namespace
 
@@ -162,7 +211,11 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
   // paced one stands for a DAQ that cannot (a full ring is then a recorded fault).
   const bool paced = rig.simulation && rig.simulation->realtime;
   record.when_ring_full = paced ? RingFullPolicy::kDropAndRecordFault : RingFullPolicy::kWait;
-  StatusDisplay display(out_path.string(), duration_s);
+  // The bench plays its hand cycles whatever the trigger keeps of them.
+  configure_triggering(rig, options, record);
+  StatusDisplay display(out_path.string(), record.trigger && record.trigger->duration_s > 0
+                                               ? record.trigger->duration_s
+                                               : duration_s);
   if (options.show_progress) {
     record.progress = [&display](const RecordStatus& status) { display.show(status); };
   }
@@ -177,18 +230,21 @@ namespace {
 RecordSummary record_comedi_session(const RigDefinition& rig,
                                     const SessionRecordingOptions& options,
                                     const std::filesystem::path& out_path) {
-  if (!(options.duration_s > 0)) {
-    throw UsageError("a comedi rig records for a set time: give --duration-s");
+  RecordOptions record;
+  const double triggered_limit_s = configure_triggering(rig, options, record);
+  if (!(options.duration_s > 0) && triggered_limit_s == 0) {
+    throw UsageError(
+        "a comedi rig records for a set time: give --duration-s (or a [recording] table with "
+        "its triggers)");
   }
+  record.duration_s = triggered_limit_s > 0 ? triggered_limit_s : options.duration_s;
   sensors::ComediOptions comedi;
-  comedi.duration_s = options.duration_s;
+  comedi.duration_s = record.duration_s;
   sensors::ComediBackend backend(rig, sensors::selected_comedi_api(), comedi);
   if (options.show_progress) std::cerr << backend.setup().brief_report();
 
   const SessionMetadata metadata = new_session_metadata(rig, options);
 
-  RecordOptions record;
-  record.duration_s = options.duration_s;
   // Blocks of about 20 ms, whatever the rate.
   record.block_scans =
       std::max<std::size_t>(1, static_cast<std::size_t>(backend.scan_rate_hz() / 50));
@@ -197,7 +253,8 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
   // The card runs on its own clock: a writer that falls behind must cost a recorded gap,
   // never a stalled read that overruns the card's buffer.
   record.when_ring_full = RingFullPolicy::kDropAndRecordFault;
-  StatusDisplay display(out_path.string(), options.duration_s);
+  StatusDisplay display(out_path.string(),
+                        options.duration_s > 0 ? options.duration_s : record.duration_s);
   if (options.show_progress) {
     record.progress = [&display](const RecordStatus& status) { display.show(status); };
   }
@@ -269,6 +326,7 @@ void run_record(const RecordCommandOptions& options) {
   if (summary.dropped_scans > 0 || summary.dropped_events > 0) {
     std::cerr << "faults: " << summary.brief_report() << "\n";
   }
+  if (!summary.trigger_report.empty()) std::cerr << "trigger: " << summary.trigger_report << "\n";
   std::cerr << "wrote " << options.out_path << ": " << rig.channels.size() << " channels, "
             << summary.scans << " scans (" << summary.duration_s << " s), " << summary.events
             << " events\n";
@@ -423,8 +481,14 @@ void add_session_commands(CLI::App& app, Action& action) {
                              "Rig file (TOML); default: the built-in simulated-dishwasher rig");
   record_command
       ->add_option("--duration-s", record->recording.duration_s,
-                   "How long to record; default: the rig's hand cycles")
+                   "How long to record (from the trigger when the rig has a [recording] "
+                   "table); default: the rig's hand cycles")
       ->check(CLI::Range(0.001, 86400.0));
+  record_command
+      ->add_option("--max-wait-s", record->recording.max_wait_s,
+                   "With a rig trigger: how long to wait, armed, for the start condition")
+      ->capture_default_str()
+      ->check(CLI::Range(0.0, 86400.0));
   record_command->add_option("--out", record->out_path, "The new session file (HDF5)")->required();
   record_command->add_option("--operator", record->recording.operator_name, "Who records");
   record_command->add_option("--product", record->recording.product_id, "The door or product");

@@ -17,6 +17,9 @@ struct SessionRecordingOptions {
   bool show_progress = true;
   double flush_interval_s = 0.05;                     // RecordOptions::flush_interval_s
   const std::atomic<bool>* stop_requested = nullptr;  // RecordOptions::stop_requested
+  // With a rig [recording] table (a trigger): how long the acquisition may wait, armed,
+  // for its start condition; --duration-s then counts from the trigger.
+  double max_wait_s = 600.0;
 };
 
 // The rig file, or the built-in simulated-dishwasher rig when `rig_path` is empty.
