@@ -15,6 +15,9 @@ packages=(
   python3-h5py                # tests read sessions without doorbench
   libtomlplusplus-dev         # rig files
   libcomedi-dev               # comedi DAQ cards (sensors/comedi_backend.h)
+  libmodbus-dev               # Modbus sensors (sensors/modbus_source.h)
+  python3-pymodbus python3-serial python3-serial-asyncio  # the Modbus test server (tests/modbus)
+  socat                       # RTU tests over a pseudo-terminal pair
 )
 
 missing=()

@@ -1,0 +1,354 @@
+// ModbusSource against real Modbus servers: tests/modbus/transmitter_server.py (Debian's
+// pymodbus 3.0.0) on loopback TCP, and on a socat pseudo-terminal pair for RTU. The server
+// computes its registers from CLOCK_MONOTONIC on every read, so each decoded value can be
+// checked against the formula at the sample's time.
+#include <algorithm>
+#include <array>
+#include <catch2/catch.hpp>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numbers>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "acquisition/rig_file.h"
+#include "modbus/modbus_test_server.h"
+#include "sensors/modbus_source.h"
+#include "temp_dir.h"
+
+using doorbench::PolledEvent;
+using doorbench::PolledSample;
+using doorbench::sensors::ModbusError;
+using doorbench::sensors::ModbusSource;
+using namespace doorbench::testing;
+
+namespace {
+
+std::string tcp_device(int port, const std::string& extra = "") {
+  return "[[modbus.devices]]\nname = \"transmitters\"\ntransport = \"tcp\"\nhost = "
+         "\"127.0.0.1\"\nport = " +
+         std::to_string(port) + "\n" + extra;
+}
+
+std::string rtu_device(const std::string& tty, const std::string& extra = "") {
+  return "[[modbus.devices]]\nname = \"serial_line\"\ntransport = \"rtu\"\ndevice = \"" + tty +
+         "\"\nbaud = 115200\nparity = \"none\"\n" + extra;
+}
+
+// A [[channels]] table of a modbus channel; `modbus` is the body of [channels.modbus].
+std::string channel(const std::string& name, const std::string& sensor, const std::string& unit,
+                    const std::string& modbus) {
+  return "[[channels]]\nname = \"" + name + "\"\nsensor = \"" + sensor + "\"\nserial = \"S-" +
+         name + "\"\nbackend = \"modbus\"\nunit = \"" + unit + "\"\n[channels.modbus]\n" + modbus;
+}
+
+doorbench::RigDefinition rig_of(const std::string& devices, const std::string& channels) {
+  const std::string text =
+      "[bench]\nname = \"modbus-test\"\n[daq]\nbackend = \"none\"\n" + devices + channels;
+  return doorbench::parse_rig(text, "test.toml", "");
+}
+
+std::string force_channel(const std::string& name, int address, const std::string& bytes,
+                          const std::string& words, double rate_hz,
+                          const std::string& device = "transmitters") {
+  return channel(
+      name, "load_cell", "N",
+      "device = \"" + device +
+          "\"\nunit_id = 1\nregister = \"holding\"\naddress = " + std::to_string(address) +
+          "\ntype = \"float32\"\nbyte_order = \"" + bytes + "\"\nword_order = \"" + words +
+          "\"\nrange = [-500.0, 500.0]\npoll_rate_hz = " + std::to_string(rate_hz) + "\n");
+}
+
+struct Collected {
+  std::vector<PolledSample> samples;
+  std::vector<PolledEvent> events;
+};
+
+// Runs `source` for `seconds`, taking samples and events every 20 ms like a recorder.
+Collected run_for(ModbusSource& source, double seconds) {
+  Collected got;
+  std::array<PolledSample, 256> samples{};
+  std::array<PolledEvent, 64> events{};
+  source.start();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::duration<double>(seconds);
+  auto drain = [&] {
+    for (std::size_t n; (n = source.take_samples(samples)) > 0;) {
+      got.samples.insert(got.samples.end(), samples.begin(), samples.begin() + n);
+    }
+    for (std::size_t n; (n = source.take_events(events)) > 0;) {
+      got.events.insert(got.events.end(), events.begin(), events.begin() + n);
+    }
+  };
+  while (std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    drain();
+  }
+  source.stop();
+  drain();
+  return got;
+}
+
+std::vector<PolledSample> of_channel(const Collected& got, std::uint32_t channel) {
+  std::vector<PolledSample> result;
+  for (const PolledSample& s : got.samples) {
+    if (s.channel == channel) result.push_back(s);
+  }
+  return result;
+}
+
+std::size_t count_events(const Collected& got, const std::string& kind, const std::string& text) {
+  return static_cast<std::size_t>(
+      std::count_if(got.events.begin(), got.events.end(), [&](const PolledEvent& e) {
+        return kind == e.kind && std::string(e.detail).find(text) != std::string::npos;
+      }));
+}
+
+// Every digit of `value`, for rig texts.
+std::string num(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.17g", value);
+  return text;
+}
+
+double seconds(std::int64_t ns) {
+  return static_cast<double>(ns) * 1e-9;
+}
+
+// Time stamps increase, latency is positive, and the value is the server's formula at
+// some instant between request and reply.
+template <class Formula>
+void check_values(const std::vector<PolledSample>& samples, double scale, double offset,
+                  Formula formula, double slope, double resolution) {
+  REQUIRE(!samples.empty());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const PolledSample& s = samples[i];
+    INFO("sample " << i << " latency " << s.latency_ns() << " ns");
+    CHECK(s.latency_ns() > 0);
+    if (i > 0) CHECK(s.request_ns > samples[i - 1].response_ns);
+    const double value = offset + scale * s.raw;
+    const double expected = formula(seconds(s.midpoint_ns()));
+    CHECK(std::abs(value - expected) <= slope * seconds(s.latency_ns()) / 2 + resolution);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over TCP", "[modbus]") {
+  TcpTransmitterServer server;
+  const double deg = std::numbers::pi / 180;
+  const std::string channels =
+      force_channel("force_abcd", 0, "big", "big", 50) +
+      force_channel("force_cdab", 2, "big", "little", 50) +
+      force_channel("force_badc", 4, "little", "big", 50) +
+      force_channel("force_dcba", 6, "little", "little", 50) +
+      channel("angle", "inclinometer", "rad",
+              "device = \"transmitters\"\nunit_id = 2\nregister = \"input\"\naddress = 8\n"
+              "type = \"int16\"\nbyte_order = \"big\"\nscale = " +
+                  num(0.01 * deg) + "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n") +
+      channel("force_mN", "load_cell", "N",
+              "device = \"transmitters\"\nunit_id = 3\nregister = \"holding\"\naddress = 12\n"
+              "type = \"int32\"\nbyte_order = \"big\"\nword_order = \"little\"\nscale = 0.001\n"
+              "range = [-500.0, 500.0]\npoll_rate_hz = 50\n") +
+      channel("angle_shifted", "inclinometer", "rad",
+              "device = \"transmitters\"\nregister = \"holding\"\naddress = 14\n"
+              "type = \"uint16\"\nbyte_order = \"little\"\nscale = " +
+                  num(0.01 * deg) + "\noffset = " + num(-100 * deg) +
+                  "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n");
+  ModbusSource source(rig_of(tcp_device(server.port), channels));
+  const auto infos = source.channels();
+  REQUIRE(infos.size() == 7);
+  CHECK(infos[4].name == "angle");
+  CHECK(infos[4].sample_rate_hz == 0.0);
+  CHECK(infos[4].raw_type == doorbench::RawType::kValues);
+  CHECK(infos[4].unit == "rad");
+  CHECK(infos[4].calibration_id.empty());
+  CHECK(infos[4].raw_scale == Approx(0.01 * deg));
+  CHECK(source.description() == "Modbus: modbus device transmitters (tcp 127.0.0.1:" +
+                                    std::to_string(server.port) + ") 7 channels");
+
+  const Collected got = run_for(source, 1.5);
+  CHECK(got.events.empty());
+  const double float_resolution = 1e-5;  // float32 near 90 N
+  for (std::uint32_t c = 0; c < 4; ++c) {
+    INFO("channel " << infos[c].name);
+    check_values(of_channel(got, c), 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s,
+                 float_resolution);
+  }
+  const auto angle_rad = [&](double t) { return server_angle_deg(t) * deg; };
+  check_values(of_channel(got, 4), 0.01 * deg, 0.0, angle_rad, kAngleMaxSlope_deg_per_s * deg,
+               0.006 * deg);
+  check_values(of_channel(got, 5), 0.001, 0.0, server_force_N, kForceMaxSlope_N_per_s, 0.0006);
+  check_values(of_channel(got, 6), 0.01 * deg, -100 * deg, angle_rad,
+               kAngleMaxSlope_deg_per_s * deg, 0.006 * deg);
+  const auto stats = source.statistics();
+  CHECK(stats.samples == got.samples.size());
+  CHECK(stats.polls == stats.samples);
+  CHECK(stats.faults == 0);
+}
+
+TEST_CASE("modbus source: the achieved poll rate is the requested one", "[modbus]") {
+  TcpTransmitterServer server;
+  ModbusSource source(
+      rig_of(tcp_device(server.port), force_channel("force", 0, "big", "big", 200) +
+                                          force_channel("slow", 2, "big", "little", 20)));
+  const Collected got = run_for(source, 2.0);
+  const auto fast = of_channel(got, 0);
+  const auto slow = of_channel(got, 1);
+  REQUIRE(fast.size() > 10);
+  REQUIRE(slow.size() > 10);
+  const auto rate = [](const std::vector<PolledSample>& s) {
+    return static_cast<double>(s.size() - 1) / seconds(s.back().request_ns - s.front().request_ns);
+  };
+  CHECK(rate(fast) == Approx(200).epsilon(0.05));
+  CHECK(rate(slow) == Approx(20).epsilon(0.05));
+  // Absolute deadlines: requests keep to the 5 ms grid of the first one (no drift from
+  // reply times; a slow reply skips grid points rather than shifting the grid).
+  // Each request less its whole periods since the first: the grid's origin plus a delay
+  // (the earliest of them is the origin).
+  constexpr std::int64_t kPeriodNs = 5000000;
+  std::vector<std::int64_t> origins;
+  for (const PolledSample& s : fast) {
+    const std::int64_t periods =
+        (s.request_ns - fast.front().request_ns + kPeriodNs / 2) / kPeriodNs;
+    origins.push_back(s.request_ns - periods * kPeriodNs);
+  }
+  const std::int64_t origin = *std::min_element(origins.begin(), origins.end());
+  const auto on_grid = std::count_if(origins.begin(), origins.end(),
+                                     [&](std::int64_t o) { return o - origin < 1000000; });
+  CHECK(static_cast<double>(on_grid) >= 0.9 * static_cast<double>(fast.size()));
+}
+
+TEST_CASE("modbus source: exception replies are faults naming the channel; polling goes on",
+          "[modbus]") {
+  TcpTransmitterServer server({"--exception-every", "5"});
+  // Address 99 holds one register only: a float32 there is an illegal data address.
+  ModbusSource source(
+      rig_of(tcp_device(server.port), force_channel("force", 0, "big", "big", 100) +
+                                          force_channel("beyond", 99, "big", "big", 10)));
+  const Collected got = run_for(source, 1.0);
+  const std::size_t failures = count_events(got, "fault", "exception reply");
+  const auto stats = source.statistics();
+  CHECK(failures == stats.faults);
+  CHECK(stats.polls == stats.samples + failures);
+  CHECK(failures >= stats.polls / 5);
+  CHECK(count_events(got, "fault", "Illegal data address") >= 5);
+  CHECK(count_events(got, "fault", "Slave device or server failure") >= 10);
+  bool named = false;
+  for (const PolledEvent& e : got.events) {
+    if (std::string(e.channel) == "beyond") {
+      named = true;
+      CHECK(std::string(e.detail).find("modbus device transmitters (tcp 127.0.0.1:") == 0);
+      CHECK(std::string(e.detail).find("unit 1 holding register 99: exception reply") !=
+            std::string::npos);
+    }
+  }
+  CHECK(named);
+  CHECK(of_channel(got, 0).size() >= 70);  // 100 Hz less every fifth request
+  CHECK(of_channel(got, 1).empty());
+  CHECK(stats.reconnects == 0);
+}
+
+TEST_CASE("modbus source: a server that stops answering gives one timeout fault, then a mark",
+          "[modbus]") {
+  TcpTransmitterServer server({"--silent-after", "20", "--silent-for", "0.6"});
+  ModbusSource source(rig_of(tcp_device(server.port, "response_timeout_s = 0.05\n"),
+                             force_channel("force", 0, "big", "big", 50)));
+  const Collected got = run_for(source, 2.0);
+  CHECK(count_events(got, "fault", "timeout") == 1);
+  CHECK(count_events(got, "mark", "answers again after") == 1);
+  const auto samples = of_channel(got, 0);
+  REQUIRE(samples.size() > 40);
+  // A gap of about the silence, then samples again, still right.
+  std::int64_t longest_gap = 0;
+  for (std::size_t i = 1; i < samples.size(); ++i) {
+    longest_gap = std::max(longest_gap, samples[i].request_ns - samples[i - 1].request_ns);
+  }
+  CHECK(seconds(longest_gap) > 0.5);
+  CHECK(seconds(longest_gap) < 0.8);
+  check_values(samples, 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
+}
+
+TEST_CASE("modbus source: a dropped connection is a fault; it reconnects and goes on", "[modbus]") {
+  TcpTransmitterServer server({"--drop-every", "25"});
+  ModbusSource source(rig_of(tcp_device(server.port, "reconnect_min_s = 0.02\n"),
+                             force_channel("force", 0, "big", "big", 100)));
+  const Collected got = run_for(source, 1.5);
+  const auto stats = source.statistics();
+  CHECK(stats.reconnects >= 2);
+  CHECK(count_events(got, "fault", "connection lost") >= 2);
+  CHECK(count_events(got, "mark", "reconnected") == stats.reconnects);
+  const auto samples = of_channel(got, 0);
+  // Samples after the last reconnection: it went on.
+  std::int64_t last_mark = 0;
+  for (const PolledEvent& e : got.events) {
+    if (std::string(e.kind) == "mark") last_mark = e.monotonic_ns;
+  }
+  CHECK(std::count_if(samples.begin(), samples.end(),
+                      [&](const PolledSample& s) { return s.request_ns > last_mark; }) > 0);
+  CHECK(samples.size() > 100);
+  check_values(samples, 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
+}
+
+TEST_CASE("modbus source: a device that cannot be reached fails start() naming it", "[modbus]") {
+  int port = 0;
+  {
+    TcpTransmitterServer server;
+    port = server.port;
+  }  // killed: nothing listens on the port now
+  ModbusSource source(rig_of(tcp_device(port), force_channel("force", 0, "big", "big", 10)));
+  CHECK_THROWS_MATCHES(source.start(), ModbusError,
+                       Catch::Message("modbus device transmitters (tcp 127.0.0.1:" +
+                                      std::to_string(port) + "): connection refused"));
+}
+
+TEST_CASE("modbus source: a rig without modbus channels is refused", "[modbus]") {
+  const auto rig = doorbench::parse_rig(
+      "[bench]\nname = \"x\"\n[daq]\nbackend = \"comedi\"\ndevice = \"/dev/comedi0\"\n"
+      "[[channels]]\nname = \"f\"\nsensor = \"load_cell\"\nserial = \"s\"\nbackend = "
+      "\"comedi\"\naddress = \"0/0\"\ncalibration = \"nominal\"\nunit = \"N\"\n",
+      "plain.toml", "");
+  CHECK_THROWS_MATCHES(ModbusSource(rig), ModbusError,
+                       Catch::Message("plain.toml: the rig has no modbus channels"));
+}
+
+TEST_CASE("modbus source: RTU over a pseudo-terminal pair", "[modbus]") {
+  TempDir dir("modbus_rtu");
+  PtyPair pty(dir.path);
+  RtuTransmitterServer server(pty);
+  const double deg = std::numbers::pi / 180;
+  ModbusSource source(rig_of(
+      rtu_device(pty.client_end.string(), "response_timeout_s = 0.2\n"),
+      force_channel("force", 0, "big", "big", 20, "serial_line") +
+          channel("rate", "gyroscope", "rad/s",
+                  "device = \"serial_line\"\nunit_id = 2\nregister = \"input\"\naddress = 9\n"
+                  "type = \"int16\"\nbyte_order = \"big\"\nscale = " +
+                      num(0.01 * deg) + "\nrange = [-2.0, 2.0]\npoll_rate_hz = 20\n")));
+  const Collected got = run_for(source, 1.5);
+  CHECK(got.events.empty());
+  const auto force = of_channel(got, 0);
+  const auto rate = of_channel(got, 1);
+  CHECK(force.size() >= 25);
+  CHECK(rate.size() >= 25);
+  check_values(force, 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
+  const double rate_slope_dps2 = 5.0 * std::pow(2 * std::numbers::pi * 0.2, 2);
+  check_values(
+      rate, 0.01 * deg, 0.0, [&](double t) { return server_rate_dps(t) * deg; },
+      rate_slope_dps2 * deg, 0.006 * deg);
+}
+
+TEST_CASE("modbus source: RTU replies with a wrong CRC are faults; polling goes on", "[modbus]") {
+  TempDir dir("modbus_crc");
+  PtyPair pty(dir.path);
+  RtuTransmitterServer server(pty, {"--bad-crc-every", "4"});
+  ModbusSource source(rig_of(rtu_device(pty.client_end.string(), "response_timeout_s = 0.2\n"),
+                             force_channel("force", 0, "big", "big", 20, "serial_line")));
+  const Collected got = run_for(source, 1.5);
+  const auto stats = source.statistics();
+  CHECK(count_events(got, "fault", "CRC error") >= 3);
+  CHECK(stats.samples >= 15);
+  CHECK(stats.reconnects == 0);
+  check_values(of_channel(got, 0), 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
+}
