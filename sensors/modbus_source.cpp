@@ -317,11 +317,13 @@ struct ModbusSource::Device {
       sleep_until_ns(due->next_ns);
       if (stop.load(std::memory_order_relaxed)) break;
       poll(*due, connected);
-      // The next deadline on the channel's grid after now: a slow reply skips polls.
+      // The next deadline on the channel's grid. After a slow reply, the latest deadline
+      // that has passed is polled at once and any before it are skipped: no burst of
+      // catch-up requests, and the grid does not drift.
       const std::int64_t now = monotonic_now_ns();
       due->next_ns += due->period_ns;
       if (due->next_ns <= now) {
-        due->next_ns += ((now - due->next_ns) / due->period_ns + 1) * due->period_ns;
+        due->next_ns += ((now - due->next_ns) / due->period_ns) * due->period_ns;
       }
     }
   }

@@ -3,8 +3,8 @@
 // as a doorbench::PolledSource (acquisition/polled_source.h). docs/modbus.md.
 //
 // One polling thread per device (connection). Each channel is polled at its own rate on
-// absolute deadlines (clock_nanosleep, CLOCK_MONOTONIC); a request that makes a channel
-// miss deadlines skips them rather than polling in a burst. Every sample is stamped just
+// absolute deadlines (clock_nanosleep, CLOCK_MONOTONIC); after a slow reply the latest
+// missed deadline is polled at once and earlier ones are skipped (no catch-up burst). Every sample is stamped just
 // before the request and just after the reply. Timeouts, exception replies, CRC and
 // framing errors become fault events (one per run of the same error on a channel, and a
 // mark when the channel answers again); a lost connection is a fault, the thread

@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "acquisition/rig_file.h"
+#include "allocation_counter.h"
 #include "modbus/modbus_test_server.h"
 #include "sensors/modbus_source.h"
 #include "temp_dir.h"
@@ -27,13 +28,16 @@ using namespace doorbench::testing;
 
 namespace {
 
-std::string tcp_device(int port, const std::string& extra = "") {
+// Generous timeouts by default: the test machines are shared and sometimes loaded, and
+// only the timeout test is about timeouts.
+std::string tcp_device(int port, const std::string& extra = "response_timeout_s = 1.0\n") {
   return "[[modbus.devices]]\nname = \"transmitters\"\ntransport = \"tcp\"\nhost = "
          "\"127.0.0.1\"\nport = " +
          std::to_string(port) + "\n" + extra;
 }
 
-std::string rtu_device(const std::string& tty, const std::string& extra = "") {
+std::string rtu_device(const std::string& tty,
+                       const std::string& extra = "response_timeout_s = 1.0\n") {
   return "[[modbus.devices]]\nname = \"serial_line\"\ntransport = \"rtu\"\ndevice = \"" + tty +
          "\"\nbaud = 115200\nparity = \"none\"\n" + extra;
 }
@@ -191,10 +195,10 @@ TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over T
 
 TEST_CASE("modbus source: the achieved poll rate is the requested one", "[modbus]") {
   TcpTransmitterServer server;
-  ModbusSource source(
-      rig_of(tcp_device(server.port), force_channel("force", 0, "big", "big", 200) +
-                                          force_channel("slow", 2, "big", "little", 20)));
-  const Collected got = run_for(source, 2.0);
+  ModbusSource source(rig_of(
+      tcp_device(server.port),
+      force_channel("force", 0, "big", "big", 50) + force_channel("slow", 2, "big", "little", 10)));
+  const Collected got = run_for(source, 3.0);
   const auto fast = of_channel(got, 0);
   const auto slow = of_channel(got, 1);
   REQUIRE(fast.size() > 10);
@@ -202,23 +206,26 @@ TEST_CASE("modbus source: the achieved poll rate is the requested one", "[modbus
   const auto rate = [](const std::vector<PolledSample>& s) {
     return static_cast<double>(s.size() - 1) / seconds(s.back().request_ns - s.front().request_ns);
   };
-  CHECK(rate(fast) == Approx(200).epsilon(0.05));
-  CHECK(rate(slow) == Approx(20).epsilon(0.05));
-  // Absolute deadlines: requests keep to the 5 ms grid of the first one (no drift from
-  // reply times; a slow reply skips grid points rather than shifting the grid).
-  // Each request less its whole periods since the first: the grid's origin plus a delay
-  // (the earliest of them is the origin).
-  constexpr std::int64_t kPeriodNs = 5000000;
-  std::vector<std::int64_t> origins;
+  // Modest rates, so that a loaded shared machine still keeps up (bench/modbus_poll.cpp
+  // measures 100 and 1000 Hz).
+  CHECK(rate(fast) == Approx(50).epsilon(0.05));
+  CHECK(rate(slow) == Approx(10).epsilon(0.05));
+  // Absolute deadlines: requests keep to a 20 ms grid (no drift from reply times).
+  // Each request's phase on the grid; the most requests in any 2 ms window of phase.
+  constexpr std::int64_t kPeriodNs = 20000000;
+  std::vector<std::int64_t> phases;
   for (const PolledSample& s : fast) {
-    const std::int64_t periods =
-        (s.request_ns - fast.front().request_ns + kPeriodNs / 2) / kPeriodNs;
-    origins.push_back(s.request_ns - periods * kPeriodNs);
+    phases.push_back((s.request_ns - fast.front().request_ns) % kPeriodNs);
   }
-  const std::int64_t origin = *std::min_element(origins.begin(), origins.end());
-  const auto on_grid = std::count_if(origins.begin(), origins.end(),
-                                     [&](std::int64_t o) { return o - origin < 1000000; });
-  CHECK(static_cast<double>(on_grid) >= 0.9 * static_cast<double>(fast.size()));
+  std::ptrdiff_t on_grid = 0;
+  for (std::int64_t window = 0; window < kPeriodNs; window += 100000) {
+    on_grid = std::max(on_grid, std::count_if(phases.begin(), phases.end(), [&](std::int64_t p) {
+                         return (p - window + kPeriodNs) % kPeriodNs < 2000000;
+                       }));
+  }
+  // Relative deadlines (next = reply + period) would drift off it: ~10 % within 2 ms. The
+  // machines are shared, so late wake-ups happen; most requests must still be on the grid.
+  CHECK(static_cast<double>(on_grid) >= 0.6 * static_cast<double>(fast.size()));
 }
 
 TEST_CASE("modbus source: exception replies are faults naming the channel; polling goes on",
@@ -251,14 +258,19 @@ TEST_CASE("modbus source: exception replies are faults naming the channel; polli
   CHECK(stats.reconnects == 0);
 }
 
-TEST_CASE("modbus source: a server that stops answering gives one timeout fault, then a mark",
+TEST_CASE("modbus source: a server that stops answering gives a timeout fault, then a mark",
           "[modbus]") {
   TcpTransmitterServer server({"--silent-after", "20", "--silent-for", "0.6"});
-  ModbusSource source(rig_of(tcp_device(server.port, "response_timeout_s = 0.05\n"),
+  ModbusSource source(rig_of(tcp_device(server.port, "response_timeout_s = 0.2\n"),
                              force_channel("force", 0, "big", "big", 50)));
   const Collected got = run_for(source, 2.0);
-  CHECK(count_events(got, "fault", "timeout") == 1);
-  CHECK(count_events(got, "mark", "answers again after") == 1);
+  // One fault for the run of timeouts (3 or 4 requests), not one per request; each run
+  // ends with a mark. (A loaded machine may add a run of its own.)
+  const std::size_t timeouts = count_events(got, "fault", "timeout (no reply)");
+  CHECK(timeouts >= 1);
+  CHECK(timeouts <= 2);
+  CHECK(count_events(got, "mark", "answers again after") == timeouts);
+  CHECK(source.statistics().polls - source.statistics().samples >= 3);
   const auto samples = of_channel(got, 0);
   REQUIRE(samples.size() > 40);
   // A gap of about the silence, then samples again, still right.
@@ -267,14 +279,15 @@ TEST_CASE("modbus source: a server that stops answering gives one timeout fault,
     longest_gap = std::max(longest_gap, samples[i].request_ns - samples[i - 1].request_ns);
   }
   CHECK(seconds(longest_gap) > 0.5);
-  CHECK(seconds(longest_gap) < 0.8);
+  CHECK(seconds(longest_gap) < 1.2);
   check_values(samples, 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
 }
 
 TEST_CASE("modbus source: a dropped connection is a fault; it reconnects and goes on", "[modbus]") {
   TcpTransmitterServer server({"--drop-every", "25"});
-  ModbusSource source(rig_of(tcp_device(server.port, "reconnect_min_s = 0.02\n"),
-                             force_channel("force", 0, "big", "big", 100)));
+  ModbusSource source(
+      rig_of(tcp_device(server.port, "reconnect_min_s = 0.02\nresponse_timeout_s = 1.0\n"),
+             force_channel("force", 0, "big", "big", 100)));
   const Collected got = run_for(source, 1.5);
   const auto stats = source.statistics();
   CHECK(stats.reconnects >= 2);
@@ -320,7 +333,7 @@ TEST_CASE("modbus source: RTU over a pseudo-terminal pair", "[modbus]") {
   RtuTransmitterServer server(pty);
   const double deg = std::numbers::pi / 180;
   ModbusSource source(rig_of(
-      rtu_device(pty.client_end.string(), "response_timeout_s = 0.2\n"),
+      rtu_device(pty.client_end.string()),
       force_channel("force", 0, "big", "big", 20, "serial_line") +
           channel("rate", "gyroscope", "rad/s",
                   "device = \"serial_line\"\nunit_id = 2\nregister = \"input\"\naddress = 9\n"
@@ -330,8 +343,8 @@ TEST_CASE("modbus source: RTU over a pseudo-terminal pair", "[modbus]") {
   CHECK(got.events.empty());
   const auto force = of_channel(got, 0);
   const auto rate = of_channel(got, 1);
-  CHECK(force.size() >= 25);
-  CHECK(rate.size() >= 25);
+  CHECK(force.size() >= 20);  // 30 at 20 Hz on an idle machine
+  CHECK(rate.size() >= 20);
   check_values(force, 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
   const double rate_slope_dps2 = 5.0 * std::pow(2 * std::numbers::pi * 0.2, 2);
   check_values(
@@ -343,7 +356,7 @@ TEST_CASE("modbus source: RTU replies with a wrong CRC are faults; polling goes 
   TempDir dir("modbus_crc");
   PtyPair pty(dir.path);
   RtuTransmitterServer server(pty, {"--bad-crc-every", "4"});
-  ModbusSource source(rig_of(rtu_device(pty.client_end.string(), "response_timeout_s = 0.2\n"),
+  ModbusSource source(rig_of(rtu_device(pty.client_end.string()),
                              force_channel("force", 0, "big", "big", 20, "serial_line")));
   const Collected got = run_for(source, 1.5);
   const auto stats = source.statistics();
@@ -351,4 +364,27 @@ TEST_CASE("modbus source: RTU replies with a wrong CRC are faults; polling goes 
   CHECK(stats.samples >= 15);
   CHECK(stats.reconnects == 0);
   check_values(of_channel(got, 0), 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
+}
+
+TEST_CASE("modbus source: polling (samples and faults) allocates nothing", "[modbus]") {
+  TcpTransmitterServer server({"--exception-every", "3"});
+  ModbusSource source(
+      rig_of(tcp_device(server.port), force_channel("force", 0, "big", "big", 200) +
+                                          force_channel("beyond", 99, "big", "big", 50)));
+  std::array<PolledSample, 512> samples{};
+  std::array<PolledEvent, 128> events{};
+  source.start();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));  // settled
+  const long long before = doorbench::testing::allocations();
+  std::size_t taken_samples = 0, taken_events = 0;
+  for (int i = 0; i < 50; ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    taken_samples += source.take_samples(samples);
+    taken_events += source.take_events(events);
+  }
+  const long long during = doorbench::testing::allocations() - before;
+  source.stop();
+  CHECK(during == 0);
+  CHECK(taken_samples > 20);
+  CHECK(taken_events > 50);
 }
