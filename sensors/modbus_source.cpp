@@ -41,6 +41,17 @@ void sleep_until_ns(std::int64_t deadline_ns) {
   }
 }
 
+// Sleeps until `deadline_ns`, waking at least every 50 ms to see `stop` (a slow channel or a
+// long back-off must not hold up stop()); false when stopped.
+bool sleep_unless_stopped(std::int64_t deadline_ns, const std::atomic<bool>& stop) {
+  constexpr std::int64_t kSliceNs = 50000000;
+  for (std::int64_t now = monotonic_now_ns(); now < deadline_ns; now = monotonic_now_ns()) {
+    if (stop.load(std::memory_order_relaxed)) return false;
+    sleep_until_ns(std::min(deadline_ns, now + kSliceNs));
+  }
+  return !stop.load(std::memory_order_relaxed);
+}
+
 bool is_exception_reply(int error) {
   return error >= EMBXILFUN && error <= EMBXGTAR;
 }
@@ -277,12 +288,7 @@ struct ModbusSource::Device {
     char detail[256];
     while (!stop.load(std::memory_order_relaxed)) {
       const std::int64_t wake_ns = monotonic_now_ns() + std::llround(backoff_s * 1e9);
-      // Sleep in short slices so that stop() is not held up by a long back-off.
-      for (std::int64_t now = monotonic_now_ns();
-           now < wake_ns && !stop.load(std::memory_order_relaxed); now = monotonic_now_ns()) {
-        sleep_until_ns(std::min(wake_ns, now + 50000000));
-      }
-      if (stop.load(std::memory_order_relaxed)) return;
+      if (!sleep_unless_stopped(wake_ns, stop)) return;
       if (modbus_connect(context.ctx) == 0) {
         reconnects.fetch_add(1, std::memory_order_relaxed);
         std::snprintf(detail, sizeof detail, "%s: reconnected", label.c_str());
@@ -314,8 +320,7 @@ struct ModbusSource::Device {
       for (ChannelPlan& plan : plans) {
         if (plan.next_ns < due->next_ns) due = &plan;
       }
-      sleep_until_ns(due->next_ns);
-      if (stop.load(std::memory_order_relaxed)) break;
+      if (!sleep_unless_stopped(due->next_ns, stop)) break;
       poll(*due, connected);
       // The next deadline on the channel's grid. After a slow reply, the latest deadline
       // that has passed is polled at once and any before it are skipped: no burst of
