@@ -209,8 +209,13 @@ TEST_CASE("modbus source: the achieved poll rate is the requested one", "[modbus
   };
   // Modest rates, so that a loaded shared machine still keeps up (bench/modbus_poll.cpp
   // measures 100 and 1000 Hz).
-  CHECK(rate(fast) == Approx(50).epsilon(0.05));
-  CHECK(rate(slow) == Approx(10).epsilon(0.05));
+  // Never above the requested rate (no catch-up bursts); below it only by the polls that
+  // slow replies made the poller skip: 50.0 and 10.0 Hz on an idle machine, down to 46.6 Hz
+  // seen while the whole suite ran at load 10 on 2 cores.
+  CHECK(rate(fast) <= 50.5);
+  CHECK(rate(fast) >= 42.5);
+  CHECK(rate(slow) <= 10.1);
+  CHECK(rate(slow) >= 8.5);
   // Absolute deadlines: requests keep to a 20 ms grid (no drift from reply times).
   // Each request's phase on the grid; the most requests in any 2 ms window of phase.
   constexpr std::int64_t kPeriodNs = 20000000;
