@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "acquisition/rig_file.h"
+#include "acquisition/session_file.h"
 #include "allocation_counter.h"
 #include "modbus/modbus_test_server.h"
 #include "sensors/modbus_source.h"
@@ -435,4 +436,49 @@ TEST_CASE("modbus source: stop() is prompt with a slow channel and during a long
   const std::size_t n = source.take_events(events);
   REQUIRE(n >= 1);
   CHECK(std::string(events[0].detail).find("connection lost") != std::string::npos);
+}
+
+TEST_CASE(
+    "modbus source: its channels and samples make a session whose physical values are "
+    "the server's",
+    "[modbus]") {
+  TcpTransmitterServer server;
+  const double deg = std::numbers::pi / 180;
+  ModbusSource source(rig_of(
+      tcp_device(server.port),
+      channel("angle", "inclinometer", "rad",
+              "device = \"transmitters\"\nregister = \"input\"\naddress = 8\ntype = \"int16\"\n"
+              "byte_order = \"big\"\nscale = " +
+                  num(0.01 * deg) + "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n")));
+  const Collected got = run_for(source, 0.5);
+  const auto samples = of_channel(got, 0);
+  REQUIRE(samples.size() >= 10);
+
+  TempDir dir("modbus_session");
+  const auto path = dir / "s.h5";
+  const std::int64_t origin_ns = samples.front().midpoint_ns();
+  {
+    doorbench::SessionMetadata metadata;
+    metadata.rig_name = "modbus-test";
+    metadata.start_time_utc = "2026-11-21T00:00:00Z";
+    doorbench::SessionWriter writer(path, metadata);
+    const int index = writer.add_channel(source.channels()[0]);
+    std::vector<double> times, values;
+    for (const PolledSample& s : samples) {
+      times.push_back(seconds(s.midpoint_ns() - origin_ns));
+      values.push_back(s.raw);
+    }
+    writer.append_timed_values(index, times, values);
+    writer.close();
+  }
+  const doorbench::SessionReader reader(path);
+  const doorbench::ChannelSlice slice = reader.read("angle");
+  const std::vector<double> physical = reader.physical("angle", slice);
+  REQUIRE(physical.size() == samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    const double t = seconds(samples[i].midpoint_ns());
+    CHECK(slice.time_s[i] == Approx(t - seconds(origin_ns)).margin(1e-9));
+    CHECK(std::abs(physical[i] - server_angle_deg(t) * deg) <=
+          kAngleMaxSlope_deg_per_s * deg * seconds(samples[i].latency_ns()) / 2 + 0.006 * deg);
+  }
 }
