@@ -195,44 +195,75 @@ TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over T
   CHECK(stats.faults == 0);
 }
 
+namespace {
+
+// Deadline grid analysis of one channel's requests: the grid's phase is the densest 2 ms
+// window of request phases (requests never come before their deadline); each request's
+// grid index is the last deadline at or before it.
+struct GridCheck {
+  double on_grid_fraction = 0;   // requests within 2 ms after a deadline
+  bool one_per_deadline = true;  // no deadline polled twice (no catch-up bursts)
+  double polled_fraction = 0;    // requests / deadlines from the first to the last
+};
+
+GridCheck grid_check(const std::vector<PolledSample>& samples, std::int64_t period_ns) {
+  constexpr std::int64_t kWindowNs = 2000000;
+  std::vector<std::int64_t> phases;
+  for (const PolledSample& s : samples) {
+    phases.push_back((s.request_ns - samples.front().request_ns) % period_ns);
+  }
+  std::ptrdiff_t best = -1;
+  std::int64_t best_window = 0;
+  for (std::int64_t window = 0; window < period_ns; window += 100000) {
+    const auto count = std::count_if(phases.begin(), phases.end(), [&](std::int64_t p) {
+      return (p - window + period_ns) % period_ns < kWindowNs;
+    });
+    if (count > best) {
+      best = count;
+      best_window = window;
+    }
+  }
+  GridCheck result;
+  result.on_grid_fraction = static_cast<double>(best) / static_cast<double>(samples.size());
+  const std::int64_t origin = samples.front().request_ns + best_window - 200000 - period_ns;
+  std::int64_t previous = -1;
+  for (const PolledSample& s : samples) {
+    const std::int64_t index = (s.request_ns - origin) / period_ns;
+    if (index <= previous) result.one_per_deadline = false;
+    previous = index;
+  }
+  const std::int64_t first = (samples.front().request_ns - origin) / period_ns;
+  result.polled_fraction =
+      static_cast<double>(samples.size()) / static_cast<double>(previous - first + 1);
+  return result;
+}
+
+}  // namespace
+
 TEST_CASE("modbus source: the achieved poll rate is the requested one", "[modbus]") {
   TcpTransmitterServer server;
   ModbusSource source(rig_of(
       tcp_device(server.port),
       force_channel("force", 0, "big", "big", 50) + force_channel("slow", 2, "big", "little", 10)));
   const Collected got = run_for(source, 3.0);
-  const auto fast = of_channel(got, 0);
-  const auto slow = of_channel(got, 1);
-  REQUIRE(fast.size() > 10);
-  REQUIRE(slow.size() > 10);
-  const auto rate = [](const std::vector<PolledSample>& s) {
-    return static_cast<double>(s.size() - 1) / seconds(s.back().request_ns - s.front().request_ns);
-  };
-  // Modest rates, so that a loaded shared machine still keeps up (bench/modbus_poll.cpp
-  // measures 100 and 1000 Hz).
-  // Never above the requested rate (no catch-up bursts); below it only by the polls that
-  // slow replies made the poller skip: 50.0 and 10.0 Hz on an idle machine, down to 46.6 Hz
-  // seen while the whole suite ran at load 10 on 2 cores.
-  CHECK(rate(fast) <= 50.5);
-  CHECK(rate(fast) >= 42.5);
-  CHECK(rate(slow) <= 10.1);
-  CHECK(rate(slow) >= 8.5);
-  // Absolute deadlines: requests keep to a 20 ms grid (no drift from reply times).
-  // Each request's phase on the grid; the most requests in any 2 ms window of phase.
-  constexpr std::int64_t kPeriodNs = 20000000;
-  std::vector<std::int64_t> phases;
-  for (const PolledSample& s : fast) {
-    phases.push_back((s.request_ns - fast.front().request_ns) % kPeriodNs);
+  for (std::uint32_t c = 0; c < 2; ++c) {
+    const auto samples = of_channel(got, c);
+    REQUIRE(samples.size() > 10);
+    const std::int64_t period_ns = c == 0 ? 20000000 : 100000000;
+    const GridCheck grid = grid_check(samples, period_ns);
+    INFO("channel " << c << ": " << grid.on_grid_fraction << " on the grid, "
+                    << grid.polled_fraction << " of the deadlines polled");
+    // Each deadline is polled at most once, so the rate is never above the requested one.
+    CHECK(grid.one_per_deadline);
+    // Absolute deadlines keep requests on the grid; relative ones (reply + period) would
+    // drift off it (~10 % in a 2 ms window of a 20 ms period).
+    CHECK(grid.on_grid_fraction >= 0.6);
+    // Every deadline polled on an idle machine (bench/modbus_poll.cpp: 100 Hz reached). On
+    // the shared test machines, loaded to 10 on 2 cores while the whole suite runs,
+    // scheduling delays longer than a period skip deadlines: 85 % of 50 Hz was seen.
+    CHECK(grid.polled_fraction >= 0.75);
+    CHECK(grid.polled_fraction <= 1.0);
   }
-  std::ptrdiff_t on_grid = 0;
-  for (std::int64_t window = 0; window < kPeriodNs; window += 100000) {
-    on_grid = std::max(on_grid, std::count_if(phases.begin(), phases.end(), [&](std::int64_t p) {
-                         return (p - window + kPeriodNs) % kPeriodNs < 2000000;
-                       }));
-  }
-  // Relative deadlines (next = reply + period) would drift off it: ~10 % within 2 ms. The
-  // machines are shared, so late wake-ups happen; most requests must still be on the grid.
-  CHECK(static_cast<double>(on_grid) >= 0.6 * static_cast<double>(fast.size()));
 }
 
 TEST_CASE("modbus source: exception replies are faults naming the channel, and polling goes on",
