@@ -20,6 +20,41 @@ class RigError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// A Modbus device (one connection: a TCP server or a serial line), `[[modbus.devices]]`.
+struct RigModbusDevice {
+  std::string name;             // unique, [A-Za-z0-9_]+; channels name it
+  std::string transport;        // tcp | rtu
+  std::string host;             // tcp
+  int port = 502;               // tcp
+  std::string device;           // rtu: the serial device, e.g. /dev/ttyUSB0
+  int baud = 19200;             // rtu
+  std::string parity = "none";  // rtu: none | even | odd
+  int data_bits = 8;            // rtu: 5..8
+  int stop_bits = 1;            // rtu: 1 | 2
+  double response_timeout_s = 0.1;
+  double reconnect_min_s = 0.1;  // back-off after a lost connection, doubling up to max
+  double reconnect_max_s = 5.0;
+  int line = 0;
+};
+
+// Where a Modbus channel's value is and how to read it, `[channels.modbus]`.
+// signal (the channel's unit) = offset + scale · decoded register value.
+struct RigModbusChannel {
+  std::string device;      // a [[modbus.devices]] name
+  int unit_id = 1;         // 0..247
+  std::string kind;        // holding | input (the register table)
+  int address = 0;         // first register, 0-based as on the wire
+  std::string type;        // int16 | uint16 | int32 | uint32 | float32
+  std::string byte_order;  // big | little: the bytes within each register
+  std::string word_order;  // big | little: the registers of a 32-bit value ("" for 16-bit)
+  double scale = 1.0;
+  double offset = 0.0;
+  double range_min = 0.0;  // the signal's valid range, in the channel's unit
+  double range_max = 0.0;
+  double poll_rate_hz = 0.0;
+  int line = 0;
+};
+
 struct RigChannel {
   std::string name;            // unique within the rig, [A-Za-z0-9_]+
   std::string sensor;          // load_cell | inclinometer | gyroscope
@@ -28,14 +63,16 @@ struct RigChannel {
   std::string address;         // device address in the backend's own notation
   double range_min_V = -10.0;  // the DAQ input range used for this channel
   double range_max_V = 10.0;
-  std::string calibration;  // "nominal" (datasheet figures) or a calibration record id
+  std::string calibration;  // "nominal" (datasheet figures) or a calibration record id;
+                            // "" for modbus channels (scale/offset give the physical value)
   std::string unit;         // physical unit after calibration: N (load_cell), rad
                             // (inclinometer), rad/s (gyroscope)
   std::string aref;         // comedi channels: ground | common | diff | other (default
                             // ground); empty for other backends
   // Sensor-model parameters by the names of sensors::*Parameters::fields(), file order.
   std::vector<std::pair<std::string, double>> parameters;
-  int line = 0;  // of this channel's [[channels]] header
+  std::optional<RigModbusChannel> modbus;  // modbus channels only
+  int line = 0;                            // of this channel's [[channels]] header
 };
 
 struct RigTrigger {
@@ -91,7 +128,7 @@ struct RigDefinition {
   std::string description;
   double sample_rate_hz = 1000.0;         // [clock]
   double convert_interval_s = 10e-6;      // [clock], the multiplexed converter's skew step
-  std::string daq_backend = "simulated";  // [daq]
+  std::string daq_backend = "simulated";  // [daq]; "none" when every channel is modbus
   std::string daq_device;
   double daq_range_min_V = -10.0;
   double daq_range_max_V = 10.0;
@@ -100,10 +137,12 @@ struct RigDefinition {
   std::string daq_start_trigger;
   std::vector<RigChannel> channels;
   std::vector<RigTrigger> triggers;
-  RigRecording recording;                   // defaults when [recording] is absent
-  std::optional<RigSimulation> simulation;  // required when a channel is simulated
+  RigRecording recording;                       // defaults when [recording] is absent
+  std::vector<RigModbusDevice> modbus_devices;  // [[modbus.devices]]
+  std::optional<RigSimulation> simulation;      // required when a channel is simulated
 
   const RigChannel* find_channel(std::string_view name) const;
+  const RigModbusDevice* find_modbus_device(std::string_view name) const;
   // `path` as written in the file, resolved against base_dir unless absolute.
   std::filesystem::path resolve(const std::string& path) const;
 };

@@ -1,12 +1,15 @@
 // doorbench devices: the comedi DAQ devices this machine has, with their subdevices,
 // channels, maxdata and ranges. Run with $DOORBENCH_COMEDI_LIBRARY naming the device
-// emulator (tests/comedi_emulator) and --dev-dir its device files, it lists those.
+// emulator (tests/comedi_emulator) and --dev-dir its device files, it lists those. With
+// --rig it also probes the rig's Modbus devices: each channel read once (docs/modbus.md).
 #include <iostream>
 #include <memory>
 
+#include "acquisition/rig_file.h"
 #include "app/commands.h"
 #include "sensors/comedi_api.h"
 #include "sensors/comedi_devices.h"
+#include "sensors/modbus_source.h"
 
 namespace doorbench::app {
 
@@ -14,13 +17,20 @@ namespace {
 
 struct DevicesOptions {
   std::string dev_dir = "/dev";
+  std::string rig_path;  // empty: no Modbus probing
 };
 
 void run_devices(const DevicesOptions& options) {
   const sensors::ComediApi& api = sensors::selected_comedi_api();
   std::cout << "comedi devices in " << options.dev_dir << " (through " << api.name << "):\n"
-            << sensors::comedi_devices_report(api, options.dev_dir)
-            << "Modbus sensors: not probed (doorbench has no Modbus backend yet)\n";
+            << sensors::comedi_devices_report(api, options.dev_dir);
+  if (options.rig_path.empty()) {
+    std::cout << "Modbus sensors: not probed (give --rig FILE to probe the rig's)\n";
+    return;
+  }
+  const RigDefinition rig = read_rig_file(options.rig_path);
+  std::cout << "Modbus sensors of " << options.rig_path << ":\n"
+            << sensors::modbus_probe_report(rig);
 }
 
 }  // namespace
@@ -30,9 +40,12 @@ void add_devices_command(CLI::App& app, Action& action) {
   CLI::App* command = app.add_subcommand(
       "devices",
       "List the comedi DAQ devices (/dev/comedi*) with their subdevices, channels, maxdata and "
-      "ranges");
+      "ranges; with --rig, read each of the rig's Modbus sensors once");
   command->add_option("--dev-dir", options->dev_dir,
                       "Where to look for comedi0, comedi1, ... (default /dev)");
+  command->add_option("--rig", options->rig_path,
+                      "A rig file whose Modbus devices to probe: each channel is read once and "
+                      "its value, unit and latency (or the error) printed");
   command->callback([options, &action] { action = [options] { run_devices(*options); }; });
 }
 

@@ -298,6 +298,11 @@ void recover_unfinished_sessions(const std::filesystem::path& folder) {
 
 void run_record(const RecordCommandOptions& options) {
   const RigDefinition rig = load_rig(options.rig_path);
+  if (rig.daq_backend == "none") {
+    throw UsageError(options.rig_path +
+                     ": a rig of Modbus channels only cannot be recorded yet (the recorder does "
+                     "not take polled sources yet); doorbench devices --rig probes it");
+  }
   const std::filesystem::path out(options.out_path);
   recover_unfinished_sessions(out.parent_path().empty() ? std::filesystem::path(".")
                                                         : out.parent_path());

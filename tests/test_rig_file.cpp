@@ -267,8 +267,8 @@ TEST_CASE("Rig file: [bench] and its name are required", "[rig_file]") {
 
 TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
   CHECK(error_of("colour = 1\n" + minimal()) ==
-        "rig.toml:1: colour: unknown key; valid keys: bench, clock, daq, channels, triggers, "
-        "recording, simulation");
+        "rig.toml:1: colour: unknown key; valid keys: bench, clock, daq, modbus, channels, "
+        "triggers, recording, simulation");
   CHECK(error_of(edit(minimal(), "name = \"test bench\"", "nmae = \"test bench\"")) ==
         "rig.toml:2: bench.nmae: unknown key; valid keys: name, description");
   CHECK(error_of(edit(minimal(), "device = \"sim0\"", "device = \"sim0\"\nbits = 16")) ==
@@ -276,7 +276,7 @@ TEST_CASE("Rig file: unknown keys are errors everywhere", "[rig_file]") {
         "resolution_bits, start_trigger");
   CHECK(error_of(edit(minimal(), "sensor = ", "sensr = ")) ==
         "rig.toml:7: channels[0].sensr: unknown key; valid keys: name, sensor, serial, backend, "
-        "address, range_V, aref, calibration, unit, parameters");
+        "address, range_V, aref, calibration, unit, parameters, modbus");
   CHECK(error_of(minimal() + "door_model = \"physical\"\n") ==
         "rig.toml:14: simulation.door_model: unknown key; valid keys: door, model, effects, "
         "force, seed, realtime, hand");
@@ -337,7 +337,8 @@ TEST_CASE("Rig file: [daq] and its device are required", "[rig_file]") {
 
 TEST_CASE("Rig file: daq.backend is simulated or comedi", "[rig_file]") {
   CHECK(error_of(edit(minimal(), "device = \"sim0\"", "device = \"sim0\"\nbackend = \"modbus\"")) ==
-        "rig.toml:5: daq.backend: \"modbus\" is not a DAQ backend; valid: simulated, comedi");
+        "rig.toml:5: daq.backend: \"modbus\" is not a DAQ backend; valid: simulated, comedi, "
+        "none");
 }
 
 TEST_CASE("Rig file: daq.resolution_bits is an integer from 8 to 24", "[rig_file]") {
@@ -428,9 +429,15 @@ TEST_CASE("Rig file: analog channels use the DAQ's backend", "[rig_file]") {
         "rig.toml:9: channels[0].backend: \"comedi\" does not match daq.backend \"simulated\" "
         "(simulated and comedi channels are sampled by the rig's DAQ)");
   // A Modbus sensor is read on its own, beside any DAQ.
-  const RigDefinition rig =
-      parse(edit(two_channels(), "backend = \"simulated\"\naddress = \"sim0/ai1\"",
-                 "backend = \"modbus\"\naddress = \"/dev/ttyUSB0:1\""));
+  const RigDefinition rig = parse(
+      "[modbus]\n[[modbus.devices]]\nname = \"line\"\ntransport = \"rtu\"\ndevice = "
+      "\"/dev/ttyUSB0\"\n" +
+      edit(edit(two_channels(), "backend = \"simulated\"\naddress = \"sim0/ai1\"",
+                "backend = \"modbus\""),
+           "calibration = \"nominal\"\nunit = \"rad\"\n",
+           "unit = \"rad\"\n[channels.modbus]\ndevice = \"line\"\nregister = \"input\"\n"
+           "address = 0\ntype = \"int16\"\nbyte_order = \"big\"\nrange = [-1, 1]\n"
+           "poll_rate_hz = 10\n"));
   CHECK(rig.channels[1].backend == "modbus");
 }
 
@@ -855,4 +862,205 @@ TEST_CASE("Rig file: level and manual triggers, the recording table, and their e
                       "start = \"push\"", "start = \"door_switch\"")) ==
         "rig.toml:51: recording.start: \"door_switch\" is an external trigger: it must also be "
         "daq.start_trigger, so that the DAQ starts on its line");
+}
+
+// ---------------------------------------------------------------------------------------
+// Modbus devices and channels (docs/modbus.md)
+
+namespace {
+
+// A rig of Modbus channels only; line numbers in the expected messages refer to it.
+constexpr std::string_view kModbusRig =
+    "[bench]\n"                  // 1
+    "name = \"mb\"\n"            // 2
+    "[daq]\n"                    // 3
+    "backend = \"none\"\n"       // 4
+    "[[modbus.devices]]\n"       // 5
+    "name = \"tx\"\n"            // 6
+    "transport = \"tcp\"\n"      // 7
+    "host = \"10.0.0.5\"\n"      // 8
+    "[[channels]]\n"             // 9
+    "name = \"force\"\n"         // 10
+    "sensor = \"load_cell\"\n"   // 11
+    "serial = \"LC-1\"\n"        // 12
+    "backend = \"modbus\"\n"     // 13
+    "unit = \"N\"\n"             // 14
+    "[channels.modbus]\n"        // 15
+    "device = \"tx\"\n"          // 16
+    "unit_id = 3\n"              // 17
+    "register = \"holding\"\n"   // 18
+    "address = 100\n"            // 19
+    "type = \"float32\"\n"       // 20
+    "byte_order = \"big\"\n"     // 21
+    "word_order = \"little\"\n"  // 22
+    "range = [-700.0, 700.0]\n"  // 23
+    "poll_rate_hz = 100\n";      // 24
+
+std::string modbus_rig() {
+  return std::string(kModbusRig);
+}
+
+}  // namespace
+
+TEST_CASE("Rig file: a Modbus rig with its defaults", "[rig_file][modbus]") {
+  const RigDefinition rig = parse(modbus_rig());
+  CHECK(rig.daq_backend == "none");
+  CHECK(rig.daq_device.empty());
+  REQUIRE(rig.modbus_devices.size() == 1);
+  const doorbench::RigModbusDevice& device = rig.modbus_devices[0];
+  CHECK(device.name == "tx");
+  CHECK(device.transport == "tcp");
+  CHECK(device.host == "10.0.0.5");
+  CHECK(device.port == 502);
+  CHECK(device.response_timeout_s == 0.1);
+  CHECK(device.reconnect_min_s == 0.1);
+  CHECK(device.reconnect_max_s == 5.0);
+  CHECK(device.line == 5);
+  CHECK(rig.find_modbus_device("tx") == &device);
+  CHECK(rig.find_modbus_device("rx") == nullptr);
+  const doorbench::RigChannel& channel = rig.channels[0];
+  CHECK(channel.calibration.empty());
+  CHECK(channel.address == "tx/3/holding/100");
+  REQUIRE(channel.modbus);
+  CHECK(channel.modbus->device == "tx");
+  CHECK(channel.modbus->unit_id == 3);
+  CHECK(channel.modbus->kind == "holding");
+  CHECK(channel.modbus->address == 100);
+  CHECK(channel.modbus->type == "float32");
+  CHECK(channel.modbus->byte_order == "big");
+  CHECK(channel.modbus->word_order == "little");
+  CHECK(channel.modbus->scale == 1.0);
+  CHECK(channel.modbus->offset == 0.0);
+  CHECK(channel.modbus->range_min == -700.0);
+  CHECK(channel.modbus->range_max == 700.0);
+  CHECK(channel.modbus->poll_rate_hz == 100.0);
+  CHECK(channel.modbus->line == 15);
+  // "none" says the same as leaving calibration out.
+  CHECK(parse(edit(modbus_rig(), "unit = \"N\"\n", "unit = \"N\"\ncalibration = \"none\"\n"))
+            .channels[0]
+            .calibration.empty());
+}
+
+TEST_CASE("Rig file: an RTU device's serial settings", "[rig_file][modbus]") {
+  const RigDefinition rig =
+      parse(edit(modbus_rig(), "transport = \"tcp\"\nhost = \"10.0.0.5\"\n",
+                 "transport = \"rtu\"\ndevice = \"/dev/ttyUSB0\"\nbaud = 9600\nparity = \"even\"\n"
+                 "data_bits = 7\nstop_bits = 2\nresponse_timeout_s = 0.5\nreconnect_min_s = 1\n"
+                 "reconnect_max_s = 30\n"));
+  const doorbench::RigModbusDevice& device = rig.modbus_devices[0];
+  CHECK(device.device == "/dev/ttyUSB0");
+  CHECK(device.baud == 9600);
+  CHECK(device.parity == "even");
+  CHECK(device.data_bits == 7);
+  CHECK(device.stop_bits == 2);
+  CHECK(device.response_timeout_s == 0.5);
+  CHECK(device.reconnect_min_s == 1.0);
+  CHECK(device.reconnect_max_s == 30.0);
+}
+
+TEST_CASE("Rig file: Modbus device errors name file, line and key", "[rig_file][modbus]") {
+  CHECK(error_of(edit(modbus_rig(), "host = ", "hots = ")) ==
+        "rig.toml:8: modbus.devices[0].hots: unknown key; valid keys: name, transport, host, "
+        "port, device, baud, parity, data_bits, stop_bits, response_timeout_s, reconnect_min_s, "
+        "reconnect_max_s");
+  CHECK(error_of(edit(modbus_rig(), "transport = \"tcp\"", "transport = \"udp\"")) ==
+        "rig.toml:7: modbus.devices[0].transport: \"udp\" is not a transport; valid: tcp, rtu");
+  CHECK(error_of(edit(modbus_rig(), "host = \"10.0.0.5\"\n", "")) ==
+        "rig.toml:5: modbus.devices[0].host: missing required key");
+  CHECK(error_of(edit(modbus_rig(), "host = \"10.0.0.5\"", "host = \"h\"\nport = 70000")) ==
+        "rig.toml:9: modbus.devices[0].port: must be an integer from 1 to 65535 (got 70000)");
+  CHECK(error_of(edit(modbus_rig(), "host = \"10.0.0.5\"", "host = \"h\"\nbaud = 9600")) ==
+        "rig.toml:9: modbus.devices[0].baud: only rtu devices have a baud");
+  CHECK(error_of(edit(modbus_rig(), "transport = \"tcp\"\nhost = \"10.0.0.5\"",
+                      "transport = \"rtu\"\nhost = \"10.0.0.5\"")) ==
+        "rig.toml:8: modbus.devices[0].host: only tcp devices have a host");
+  CHECK(error_of(edit(modbus_rig(), "transport = \"tcp\"\nhost = \"10.0.0.5\"",
+                      "transport = \"rtu\"\ndevice = \"/dev/ttyS0\"\nparity = \"mark\"")) ==
+        "rig.toml:9: modbus.devices[0].parity: \"mark\" is not a parity; valid: none, even, odd");
+  CHECK(
+      error_of(edit(modbus_rig(), "host = \"10.0.0.5\"", "host = \"h\"\nresponse_timeout_s = 0")) ==
+      "rig.toml:9: modbus.devices[0].response_timeout_s: must be > 0 (got 0)");
+  CHECK(error_of(edit(modbus_rig(), "host = \"10.0.0.5\"",
+                      "host = \"h\"\nreconnect_min_s = 2\nreconnect_max_s = 1")) ==
+        "rig.toml:10: modbus.devices[0].reconnect_max_s: must be >= reconnect_min_s 2 (got 1)");
+  CHECK(error_of(edit(modbus_rig(), "[[channels]]",
+                      "[[modbus.devices]]\nname = \"tx\"\ntransport = \"tcp\"\nhost = \"b\"\n"
+                      "[[channels]]")) ==
+        "rig.toml:10: modbus.devices[1].name: \"tx\" is already the name of the device at line 5");
+  CHECK(error_of(edit(modbus_rig(), "backend = \"none\"", "backend = \"none\"\ndevice = \"x\"")) ==
+        "rig.toml:5: daq.device: a rig without a DAQ (backend \"none\") has no device");
+}
+
+TEST_CASE("Rig file: Modbus channel errors name file, line and key", "[rig_file][modbus]") {
+  CHECK(error_of(edit(modbus_rig(), "[channels.modbus]\n", "")) !=
+        "(parsed)");  // the keys would land in [[channels]] itself
+  CHECK(error_of(edit(modbus_rig(), "unit = \"N\"\n", "unit = \"N\"\naddress = \"x\"\n")) ==
+        "rig.toml:15: channels[0].address: modbus channels give it in [channels.modbus] (device, "
+        "unit_id, register, address; range)");
+  CHECK(error_of(edit(modbus_rig(), "device = \"tx\"", "device = \"rx\"")) ==
+        "rig.toml:16: channels[0].modbus.device: \"rx\" is not the name of a [[modbus.devices]] "
+        "table (they are tx)");
+  CHECK(error_of(edit(modbus_rig(), "unit_id = 3", "unit_id = 300")) ==
+        "rig.toml:17: channels[0].modbus.unit_id: must be an integer from 0 to 247 (got 300)");
+  CHECK(error_of(edit(modbus_rig(), "register = \"holding\"", "register = \"coil\"")) ==
+        "rig.toml:18: channels[0].modbus.register: \"coil\" is not a register kind; valid: "
+        "holding, input");
+  CHECK(error_of(edit(modbus_rig(), "address = 100\n", "")) ==
+        "rig.toml:15: channels[0].modbus.address: missing required key");
+  CHECK(error_of(edit(modbus_rig(), "address = 100", "address = 65535")) ==
+        "rig.toml:19: channels[0].modbus.address: a 32-bit value needs two registers; 65535 is "
+        "the last one");
+  CHECK(error_of(edit(modbus_rig(), "type = \"float32\"", "type = \"float64\"")) ==
+        "rig.toml:20: channels[0].modbus.type: \"float64\" is not a register type; valid: int16, "
+        "uint16, int32, uint32, float32");
+  CHECK(error_of(edit(modbus_rig(), "byte_order = \"big\"\n", "")) ==
+        "rig.toml:15: channels[0].modbus.byte_order: missing required key");
+  CHECK(error_of(edit(modbus_rig(), "word_order = \"little\"", "word_order = \"middle\"")) ==
+        "rig.toml:22: channels[0].modbus.word_order: \"middle\" is not a word order; valid: big, "
+        "little");
+  CHECK(error_of(edit(modbus_rig(), "word_order = \"little\"\n", "")) ==
+        "rig.toml:15: channels[0].modbus.word_order: missing required key");
+  CHECK(error_of(edit(modbus_rig(), "type = \"float32\"", "type = \"int16\"")) ==
+        "rig.toml:22: channels[0].modbus.word_order: only 32-bit types (int32, uint32, float32) "
+        "have a word order");
+  CHECK(error_of(edit(modbus_rig(), "range = [-700.0, 700.0]\n", "scale = 0\n")) ==
+        "rig.toml:23: channels[0].modbus.scale: must not be 0");
+  CHECK(error_of(edit(modbus_rig(), "range = [-700.0, 700.0]", "range = [1, -1]")) ==
+        "rig.toml:23: channels[0].modbus.range: min 1 must be below max -1");
+  CHECK(error_of(edit(modbus_rig(), "poll_rate_hz = 100", "poll_rate_hz = 0")) ==
+        "rig.toml:24: channels[0].modbus.poll_rate_hz: must be > 0 (got 0)");
+  CHECK(
+      error_of(edit(modbus_rig(), "unit = \"N\"\n", "unit = \"N\"\ncalibration = \"nominal\"\n")) ==
+      "rig.toml:15: channels[0].calibration: \"nominal\": modbus channels take no calibration "
+      "record (scale and offset in [channels.modbus] give the physical value); write \"none\" "
+      "or leave the key out");
+  CHECK(error_of(edit(modbus_rig(), "backend = \"modbus\"", "backend = \"comedi\"")) ==
+        "rig.toml:13: channels[0].backend: \"comedi\" does not match daq.backend \"none\" "
+        "(simulated and comedi channels are sampled by the rig's DAQ)");
+  CHECK(error_of(minimal() + "[channels.modbus]\ndevice = \"x\"\n") ==
+        "rig.toml:14: channels[0].modbus: only modbus channels have a [channels.modbus]");
+  // Two channels on the same register of the same unit.
+  const std::string second(kModbusRig.substr(kModbusRig.find("[[channels]]")));
+  CHECK(error_of(modbus_rig() + edit(second, "name = \"force\"", "name = \"force2\"")) ==
+        "rig.toml:25: channels[1].address: \"tx/3/holding/100\" is already the address of "
+        "channels[0] (line 9)");
+}
+
+TEST_CASE("Rig file: rigs/modbus-bench.toml parses", "[rig_file][modbus]") {
+  const RigDefinition rig =
+      read_rig_file(fs::path(DOORBENCH_SOURCE_DIR) / "rigs" / "modbus-bench.toml");
+  CHECK(rig.name == "modbus-bench");
+  CHECK(rig.daq_backend == "none");
+  REQUIRE(rig.modbus_devices.size() == 1);
+  CHECK(rig.modbus_devices[0].transport == "tcp");
+  REQUIRE(rig.channels.size() == 3);
+  for (const auto& channel : rig.channels) {
+    INFO(channel.name);
+    CHECK(channel.backend == "modbus");
+    REQUIRE(channel.modbus);
+    CHECK(channel.modbus->device == rig.modbus_devices[0].name);
+  }
+  CHECK(rig.channels[0].sensor == "load_cell");
+  CHECK(rig.channels[1].sensor == "inclinometer");
+  CHECK(rig.channels[2].sensor == "gyroscope");
 }
