@@ -22,6 +22,7 @@
 #include "app/session_recording.h"
 #include "calibration/range_warnings.h"
 #include "sensors/comedi_backend.h"
+#include "sensors/modbus_source.h"
 #include "sensors/simulated_bench.h"
 
 namespace doorbench::app {
@@ -156,6 +157,12 @@ void start_manual_keys(const TriggerOptions& trigger) {
   }).detach();
 }
 
+// The duration a status line counts towards: the trigger's, else the recording's.
+double display_duration_s(const SessionRecordingOptions& options, const RecordOptions& record) {
+  if (record.trigger && record.trigger->duration_s > 0) return record.trigger->duration_s;
+  return options.duration_s > 0 ? options.duration_s : record.duration_s;
+}
+
 // A rig with a [recording] table records through a trigger stage: its start and stop
 // conditions, pre-trigger buffer and stroke markers. --duration-s then counts from the
 // trigger. Returns the time the acquisition may take in all (armed wait included), or 0
@@ -187,7 +194,8 @@ double configure_triggering(const RigDefinition& rig, const SessionRecordingOpti
 
 RecordSummary record_simulated_session(const RigDefinition& rig,
                                        const SessionRecordingOptions& options,
-                                       const std::filesystem::path& out_path) {
+                                       const std::filesystem::path& out_path,
+                                       const std::vector<PolledSource*>& polled) {
   for (const RigChannel& channel : rig.channels) {
     if (channel.backend != "simulated") {
       throw std::runtime_error(rig.source + ": channel " + channel.name + " uses backend " +
@@ -219,7 +227,10 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
   if (options.show_progress) {
     record.progress = [&display](const RecordStatus& status) { display.show(status); };
   }
-  const RecordSummary summary = record_session(bench, metadata, out_path, record);
+  RecordSources sources;
+  sources.scans = &bench;
+  sources.polled = polled;
+  const RecordSummary summary = record_session(sources, metadata, out_path, record);
   if (options.show_progress) display.finish();
   return summary;
 }
@@ -229,7 +240,8 @@ namespace {
 // A rig whose DAQ is a comedi card: a hardware-timed command for a set duration.
 RecordSummary record_comedi_session(const RigDefinition& rig,
                                     const SessionRecordingOptions& options,
-                                    const std::filesystem::path& out_path) {
+                                    const std::filesystem::path& out_path,
+                                    const std::vector<PolledSource*>& polled) {
   RecordOptions record;
   const double triggered_limit_s = configure_triggering(rig, options, record);
   if (!(options.duration_s > 0) && triggered_limit_s == 0) {
@@ -253,17 +265,47 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
   // The card runs on its own clock: a writer that falls behind must cost a recorded gap,
   // never a stalled read that overruns the card's buffer.
   record.when_ring_full = RingFullPolicy::kDropAndRecordFault;
-  StatusDisplay display(out_path.string(),
-                        options.duration_s > 0 ? options.duration_s : record.duration_s);
+  StatusDisplay display(out_path.string(), display_duration_s(options, record));
   if (options.show_progress) {
     record.progress = [&display](const RecordStatus& status) { display.show(status); };
   }
-  const RecordSummary summary = record_session(backend, metadata, out_path, record);
+  RecordSources sources;
+  sources.scans = &backend;
+  sources.polled = polled;
+  const RecordSummary summary = record_session(sources, metadata, out_path, record);
   if (options.show_progress) display.finish();
   if (backend.overran()) {
     std::cerr << "doorbench: " << out_path.string() << ": " << backend.end_reason()
               << "; the session keeps what was read before it\n";
   }
+  return summary;
+}
+
+// A rig without a DAQ (daq.backend "none"): its polled sensors alone, for a set time or
+// through its triggers.
+RecordSummary record_polled_session(const RigDefinition& rig,
+                                    const SessionRecordingOptions& options,
+                                    const std::filesystem::path& out_path,
+                                    const std::vector<PolledSource*>& polled) {
+  RecordOptions record;
+  const double triggered_limit_s = configure_triggering(rig, options, record);
+  if (!(options.duration_s > 0) && triggered_limit_s == 0) {
+    throw UsageError(
+        "a rig of polled sensors records for a set time: give --duration-s (or a [recording] "
+        "table with its triggers)");
+  }
+  record.duration_s = triggered_limit_s > 0 ? triggered_limit_s : options.duration_s;
+  record.flush_interval_s = options.flush_interval_s;
+  record.stop_requested = options.stop_requested;
+  const SessionMetadata metadata = new_session_metadata(rig, options);
+  StatusDisplay display(out_path.string(), display_duration_s(options, record));
+  if (options.show_progress) {
+    record.progress = [&display](const RecordStatus& status) { display.show(status); };
+  }
+  RecordSources sources;
+  sources.polled = polled;
+  const RecordSummary summary = record_session(sources, metadata, out_path, record);
+  if (options.show_progress) display.finish();
   return summary;
 }
 
@@ -298,11 +340,17 @@ void recover_unfinished_sessions(const std::filesystem::path& folder) {
 
 void run_record(const RecordCommandOptions& options) {
   const RigDefinition rig = load_rig(options.rig_path);
-  if (rig.daq_backend == "none") {
-    throw UsageError(options.rig_path +
-                     ": a rig of Modbus channels only cannot be recorded yet (the recorder does "
-                     "not take polled sources yet); doorbench devices --rig probes it");
+  // The rig's Modbus sensors are polled beside its DAQ (if it has one), which sees only
+  // its own channels.
+  std::unique_ptr<sensors::ModbusSource> modbus;
+  RigDefinition daq_rig = rig;
+  std::erase_if(daq_rig.channels,
+                [](const RigChannel& channel) { return channel.backend == "modbus"; });
+  if (daq_rig.channels.size() < rig.channels.size()) {
+    modbus = std::make_unique<sensors::ModbusSource>(rig);
   }
+  std::vector<PolledSource*> polled;
+  if (modbus) polled.push_back(modbus.get());
   const std::filesystem::path out(options.out_path);
   recover_unfinished_sessions(out.parent_path().empty() ? std::filesystem::path(".")
                                                         : out.parent_path());
@@ -322,9 +370,11 @@ void run_record(const RecordCommandOptions& options) {
       ::sigaction(SIGTERM, &old_term, nullptr);
     }
   } restore{old_int, old_term};
-  const RecordSummary summary = rig.daq_backend == "comedi"
-                                    ? record_comedi_session(rig, recording, options.out_path)
-                                    : record_simulated_session(rig, recording, options.out_path);
+  const RecordSummary summary =
+      rig.daq_backend == "none" ? record_polled_session(rig, recording, options.out_path, polled)
+      : rig.daq_backend == "comedi"
+          ? record_comedi_session(daq_rig, recording, options.out_path, polled)
+          : record_simulated_session(daq_rig, recording, options.out_path, polled);
   if (summary.stopped_by_request) {
     std::cerr << "stopped by request after " << summary.duration_s << " s\n";
   }
@@ -333,8 +383,9 @@ void run_record(const RecordCommandOptions& options) {
   }
   if (!summary.trigger_report.empty()) std::cerr << "trigger: " << summary.trigger_report << "\n";
   std::cerr << "wrote " << options.out_path << ": " << rig.channels.size() << " channels, "
-            << summary.scans << " scans (" << summary.duration_s << " s), " << summary.events
-            << " events\n";
+            << summary.scans << " scans";
+  if (summary.polled_samples > 0) std::cerr << ", " << summary.polled_samples << " polled samples";
+  std::cerr << " (" << summary.duration_s << " s), " << summary.events << " events\n";
 }
 
 struct RecoverCommandOptions {

@@ -3,6 +3,7 @@
 #include <atomic>
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "acquisition/recorder.h"
 #include "acquisition/rig_file.h"
@@ -24,9 +25,11 @@ struct SessionRecordingOptions {
 
 // The rig file, or the built-in simulated-dishwasher rig when `rig_path` is empty.
 RigDefinition load_rig(const std::string& rig_path);
+// `polled`: sources recorded beside the bench (a rig's Modbus sensors), may be empty.
 RecordSummary record_simulated_session(const RigDefinition& rig,
                                        const SessionRecordingOptions& options,
-                                       const std::filesystem::path& out_path);
+                                       const std::filesystem::path& out_path,
+                                       const std::vector<PolledSource*>& polled = {});
 std::string utc_now_iso8601();
 
 }  // namespace doorbench::app
