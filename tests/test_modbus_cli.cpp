@@ -104,10 +104,11 @@ TEST_CASE("doorbench devices --rig probes the rig's Modbus sensors", "[modbus][c
   CHECK(refused.status == 0);
   CHECK_THAT(refused.out, Contains("modbus device gateway (tcp 127.0.0.1:" + std::to_string(port) +
                                    "): cannot connect: connection refused\n"));
-  // record refuses a Modbus-only rig until the recorder takes polled sources.
+  // A Modbus-only rig records for a set time or through its triggers.
   const Run record = run_doorbench(
       "record --rig '" + (dir / "rig.toml").string() + "' --out '" + (dir / "s.h5").string() + "'",
       dir);
   CHECK(record.status == 2);
-  CHECK_THAT(record.err, Contains("a rig of Modbus channels only cannot be recorded yet"));
+  CHECK_THAT(record.err, Contains("a rig of polled sensors records for a set time: give "
+                                  "--duration-s (or a [recording] table with its triggers)"));
 }
