@@ -36,7 +36,12 @@ class AcquisitionBackend {
   virtual std::size_t read(ScanBlock& block) = 0;
   virtual void stop() = 0;
   // Side data for the session once recording ends (the simulated bench's truth).
-  virtual void write_extras(SessionWriter& writer) { (void)writer; }
+  // `session_origin_s`: the time on the backend's clock that became session time 0 (not
+  // 0 when a trigger kept only part of the acquisition), for side data with times.
+  virtual void write_extras(SessionWriter& writer, double session_origin_s) {
+    (void)writer;
+    (void)session_origin_s;
+  }
 };
 
 }  // namespace doorbench

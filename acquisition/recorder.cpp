@@ -927,7 +927,10 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
   ConvertOptions convert;
   convert.writer = options.writer;
   if (backend != nullptr) {
-    convert.extras = [backend](SessionWriter& writer) { backend->write_extras(writer); };
+    const double session_origin_s = sink ? sink->offset_s() : 0.0;
+    convert.extras = [backend, session_origin_s](SessionWriter& writer) {
+      backend->write_extras(writer, session_origin_s);
+    };
   }
   try {
     convert_journal(journal_path, path, convert);

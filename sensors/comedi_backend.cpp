@@ -679,7 +679,7 @@ void ComediBackend::stop() {
   }
 }
 
-void ComediBackend::write_extras(SessionWriter& writer) {
+void ComediBackend::write_extras(SessionWriter& writer, double /*session_origin_s*/) {
   const std::string group = "acquisition/comedi";
   auto joined = [](const std::vector<std::string>& lines) {
     std::string text;

@@ -102,7 +102,7 @@ class ComediBackend final : public AcquisitionBackend {
   void start() override;  // comedi_command, then the internal trigger for a software start
   std::size_t read(ScanBlock& block) override;
   void stop() override;  // comedi_cancel
-  void write_extras(SessionWriter& writer) override;
+  void write_extras(SessionWriter& writer, double session_origin_s) override;
 
   const ComediSetup& setup() const { return setup_; }
   std::size_t scans_read() const { return scans_read_; }

@@ -4,8 +4,8 @@
 //
 // One polling thread per device (connection). Each channel is polled at its own rate on
 // absolute deadlines (clock_nanosleep, CLOCK_MONOTONIC); after a slow reply the latest
-// missed deadline is polled at once and earlier ones are skipped (no catch-up burst). Every sample is stamped just
-// before the request and just after the reply. Timeouts, exception replies, CRC and
+// missed deadline is polled at once and earlier ones are skipped (no catch-up burst). Every sample
+// is stamped just before the request and just after the reply. Timeouts, exception replies, CRC and
 // framing errors become fault events (one per run of the same error on a channel, and a
 // mark when the channel answers again); a lost connection is a fault, the thread
 // reconnects with exponential back-off (reconnect_min_s doubling up to reconnect_max_s)

@@ -240,7 +240,7 @@ std::size_t SimulatedBench::read(ScanBlock& block) {
   return scans;
 }
 
-void SimulatedBench::write_extras(SessionWriter& writer) {
+void SimulatedBench::write_extras(SessionWriter& writer, double session_origin_s) {
   const std::string group = "truth";
   writer.write_group_attribute(group, "about",
                                "noise-free truth of the simulated bench at each scan's start: "
@@ -252,7 +252,10 @@ void SimulatedBench::write_extras(SessionWriter& writer) {
   writer.write_group_attribute(group, "seed", std::to_string(simulation_.seed));
   writer.write_group_attribute(group, "handle_radius_m",
                                format_number(model_.geometry().handle_radius_m));
-  writer.write_group_dataset(group, "time_s", truth_time_s_);
+  // On the session's clock (a trigger may have moved its origin).
+  std::vector<double> time_s = truth_time_s_;
+  for (double& t : time_s) t -= session_origin_s;
+  writer.write_group_dataset(group, "time_s", time_s);
   writer.write_group_dataset(group, "theta_rad", truth_theta_rad_);
   writer.write_group_dataset(group, "omega_rad_s", truth_omega_rad_s_);
   writer.write_group_dataset(group, "force_N", truth_force_N_);

@@ -116,7 +116,7 @@ class SimulatedBench final : public AcquisitionBackend {
   void start() override;
   std::size_t read(ScanBlock& block) override;
   void stop() override {}
-  void write_extras(SessionWriter& writer) override;
+  void write_extras(SessionWriter& writer, double session_origin_s) override;
 
  private:
   using Sensor = std::variant<LoadCell, Inclinometer, Gyroscope>;
