@@ -86,4 +86,19 @@ TEST_CASE("a fit with cross-validation is the same bit for bit on 1, 2 and 3 thr
   CHECK(one.summary.iterations > 2);
   require_identical(one, two);
   require_identical(one, three);
+
+  // Each fold's refit is reported: which strokes it left out, how it ended, how it did.
+  REQUIRE(one.summary.fold_fits.size() == 3);
+  std::size_t held_out_strokes = 0;
+  for (const doorbench::FoldFit& fold : one.summary.fold_fits) {
+    CHECK_FALSE(fold.held_out_strokes.empty());
+    held_out_strokes += fold.held_out_strokes.size();
+    CHECK(fold.iterations > 0);
+    CHECK_FALSE(fold.termination.empty());
+    CHECK(fold.fitted_rmse_rad_s > 0);
+    CHECK(fold.held_out_rmse_rad_s > 0);
+  }
+  CHECK(held_out_strokes == data.strokes.size());
+  CHECK_THAT(one.summary.full_report(), Catch::Matchers::Contains("fold 1 (leaves out 1,4): ") &&
+                                            Catch::Matchers::Contains(" held out\n"));
 }
