@@ -94,6 +94,7 @@ TEST_CASE("a fit with cross-validation is the same bit for bit on 1, 2 and 3 thr
     CHECK_FALSE(fold.held_out_strokes.empty());
     held_out_strokes += fold.held_out_strokes.size();
     CHECK(fold.iterations > 0);
+    CHECK(fold.converged);  // the right model on synthetic strokes: a well-posed fit
     CHECK_FALSE(fold.termination.empty());
     CHECK(fold.fitted_rmse_rad_s > 0);
     CHECK(fold.held_out_rmse_rad_s > 0);
