@@ -2,11 +2,14 @@
 // blocks are evaluated in parallel, but every sum is formed on one thread in a fixed order
 // (docs/fitting.md, "Threads and determinism"). Compared bit for bit: any difference in the
 // last bit would grow through the stopping rule and the cross-validation folds.
+#include <atomic>
 #include <catch2/catch.hpp>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
+#include "analysis/fit_problem.h"
 #include "analysis/fit_synthetic.h"
 #include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
@@ -102,4 +105,22 @@ TEST_CASE("a fit with cross-validation is the same bit for bit on 1, 2 and 3 thr
   CHECK(held_out_strokes == data.strokes.size());
   CHECK_THAT(one.summary.full_report(), Catch::Matchers::Contains("fold 1 (leaves out 1,4): ") &&
                                             Catch::Matchers::Contains(" held out\n"));
+}
+
+TEST_CASE("parallel_for runs every index once and passes a task's exception on",
+          "[fitting][determinism]") {
+  for (int threads : {1, 2, 5}) {
+    INFO(threads << " threads");
+    std::vector<std::atomic<int>> runs(1000);
+    doorbench::parallel_for(static_cast<int>(runs.size()), threads, [&](int i) { ++runs[i]; });
+    int wrong = 0;
+    for (const std::atomic<int>& count : runs) wrong += count.load() == 1 ? 0 : 1;
+    CHECK(wrong == 0);
+    doorbench::parallel_for(0, threads, [](int) { throw std::logic_error("never called"); });
+    CHECK_THROWS_WITH(doorbench::parallel_for(50, threads,
+                                              [](int i) {
+                                                if (i == 17) throw std::runtime_error("task 17");
+                                              }),
+                      "task 17");
+  }
 }
