@@ -4,11 +4,16 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
+#include <functional>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
+#include <system_error>
 #include <thread>
 
 #include "analysis/fit_equation_error.h"
@@ -32,33 +37,42 @@ int fit_thread_count(const FitOptions& options) {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
-// Checks the model's constraints once per evaluation point: a trial step that breaks one
-// fails to evaluate, and Levenberg–Marquardt shrinks its step.
-class FeasibilityCheck final : public ceres::EvaluationCallback {
- public:
-  FeasibilityCheck(const DoorModel& model, const ParameterMap& map, const double* x)
-      : model_(model), map_(map), x_(x) {}
-  void PrepareForEvaluation(bool /*evaluate_jacobians*/, bool new_evaluation_point) override {
-    if (!new_evaluation_point) return;
-    try {
-      (void)model_.with_parameter_values(map_.values(x_));
-      feasible_ = true;
-    } catch (const std::invalid_argument&) {
-      feasible_ = false;
-    }
+void parallel_for(int count, int threads, const std::function<void(int)>& task) {
+  threads = std::clamp(threads, 1, std::max(1, count));
+  if (threads == 1) {
+    for (int i = 0; i < count; ++i) task(i);
+    return;
   }
-  const bool* flag() const { return &feasible_; }
+  std::atomic<int> next{0};
+  std::mutex error_mutex;
+  std::exception_ptr error;
+  const auto work = [&] {
+    for (int i = next.fetch_add(1); i < count; i = next.fetch_add(1)) {
+      try {
+        task(i);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (!error) error = std::current_exception();
+      }
+    }
+  };
+  std::vector<std::thread> workers;
+  workers.reserve(static_cast<std::size_t>(threads - 1));
+  try {
+    for (int t = 1; t < threads; ++t) workers.emplace_back(work);
+  } catch (const std::system_error&) {
+    // No more threads: the caller's own loop below still runs every index.
+  }
+  work();
+  for (std::thread& worker : workers) worker.join();
+  if (error) std::rethrow_exception(error);
+}
 
- private:
-  const DoorModel& model_;
-  const ParameterMap& map_;
-  const double* x_;
-  bool feasible_ = true;
-};
-
-// Keeps the residuals and Jacobians of the last evaluation that asked for every Jacobian.
-// The trust-region solver evaluates the Jacobian at each accepted point, so the cache holds
-// it at the current iterate: the stopping rule and the statistics need no new evaluation.
+// Keeps the results of the last evaluations at one point: residuals and every Jacobian
+// (`full_`), and residuals alone (`values_`, a trial point). prepare() fills them on our
+// own threads before Ceres asks (EvaluationPreparer); Evaluate() then only copies. The
+// trust-region solver evaluates the Jacobian at each accepted point, so `full_` holds it at
+// the current iterate: the stopping rule and the statistics need no new evaluation.
 class CachingCost final : public ceres::CostFunction {
  public:
   explicit CachingCost(ceres::CostFunction* inner) : inner_(inner) {
@@ -66,63 +80,152 @@ class CachingCost final : public ceres::CostFunction {
     *mutable_parameter_block_sizes() = inner->parameter_block_sizes();
   }
 
-  bool Evaluate(double const* const* parameters, double* residuals,
-                double** jacobians) const override {
-    if (!inner_->Evaluate(parameters, residuals, jacobians)) return false;
-    const std::vector<int32_t>& sizes = parameter_block_sizes();
-    bool every = jacobians != nullptr;
-    for (std::size_t b = 0; every && b < sizes.size(); ++b) every = jacobians[b] != nullptr;
-    if (!every) return true;
-    at_.clear();
-    jacobians_.resize(sizes.size());
-    for (std::size_t b = 0; b < sizes.size(); ++b) {
-      at_.insert(at_.end(), parameters[b], parameters[b] + sizes[b]);
-      jacobians_[b].assign(jacobians[b], jacobians[b] + num_residuals() * sizes[b]);
+  // Evaluates at `parameters` into the cache unless it holds the result there already.
+  // Touches this cost only: costs may be prepared on different threads at once.
+  void prepare(double const* const* parameters, bool with_jacobians) const {
+    if (holds(full_, parameters)) return;
+    if (with_jacobians) {
+      fill(full_, parameters, true);
+    } else if (!holds(values_, parameters)) {
+      fill(values_, parameters, false);
     }
-    residuals_.assign(residuals, residuals + num_residuals());
-    return true;
   }
 
-  bool cached_at(double const* const* parameters) const {
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
     const std::vector<int32_t>& sizes = parameter_block_sizes();
-    if (at_.empty()) return false;
-    for (std::size_t b = 0, at = 0; b < sizes.size(); ++b) {
-      for (int i = 0; i < sizes[b]; ++i, ++at) {
-        if (at_[at] != parameters[b][i]) return false;
+    bool any_jacobian = false;
+    for (std::size_t b = 0; jacobians != nullptr && b < sizes.size(); ++b) {
+      any_jacobian = any_jacobian || jacobians[b] != nullptr;
+    }
+    const Slot* slot = nullptr;
+    if (holds(full_, parameters)) {
+      slot = &full_;
+    } else if (any_jacobian) {
+      fill(full_, parameters, true);
+      slot = &full_;
+    } else {
+      if (!holds(values_, parameters)) fill(values_, parameters, false);
+      slot = &values_;
+    }
+    if (!slot->ok) return false;
+    std::copy(slot->residuals.begin(), slot->residuals.end(), residuals);
+    for (std::size_t b = 0; any_jacobian && b < sizes.size(); ++b) {
+      if (jacobians[b] != nullptr) {
+        std::copy(slot->jacobians[b].begin(), slot->jacobians[b].end(), jacobians[b]);
       }
     }
     return true;
   }
+
+  bool cached_at(double const* const* parameters) const { return holds(full_, parameters); }
 
   // Residuals and row-major Jacobians (one per parameter block) at `parameters`: the cached
   // ones when taken there, else evaluated now.
   bool evaluate_at(double const* const* parameters, const std::vector<double>** residuals,
                    const std::vector<std::vector<double>>** jacobians) const {
-    if (!cached_at(parameters)) {
-      const std::vector<int32_t>& sizes = parameter_block_sizes();
-      std::vector<double*> pointers(sizes.size());
-      jacobians_.resize(sizes.size());
-      for (std::size_t b = 0; b < sizes.size(); ++b) {
-        jacobians_[b].resize(static_cast<std::size_t>(num_residuals()) * sizes[b]);
-        pointers[b] = jacobians_[b].data();
-      }
-      residuals_.resize(num_residuals());
-      at_.clear();
-      if (!inner_->Evaluate(parameters, residuals_.data(), pointers.data())) return false;
-      for (std::size_t b = 0; b < sizes.size(); ++b) {
-        at_.insert(at_.end(), parameters[b], parameters[b] + sizes[b]);
-      }
-    }
-    *residuals = &residuals_;
-    *jacobians = &jacobians_;
-    return true;
+    if (!holds(full_, parameters)) fill(full_, parameters, true);
+    *residuals = &full_.residuals;
+    *jacobians = &full_.jacobians;
+    return full_.ok;
   }
 
  private:
+  struct Slot {
+    bool valid = false;
+    bool ok = false;
+    std::vector<double> at;  // the parameter blocks' values, concatenated
+    std::vector<double> residuals;
+    std::vector<std::vector<double>> jacobians;
+  };
+
+  bool holds(const Slot& slot, double const* const* parameters) const {
+    if (!slot.valid) return false;
+    const std::vector<int32_t>& sizes = parameter_block_sizes();
+    for (std::size_t b = 0, at = 0; b < sizes.size(); ++b) {
+      for (int i = 0; i < sizes[b]; ++i, ++at) {
+        if (slot.at[at] != parameters[b][i]) return false;
+      }
+    }
+    return true;
+  }
+
+  void fill(Slot& slot, double const* const* parameters, bool with_jacobians) const {
+    const std::vector<int32_t>& sizes = parameter_block_sizes();
+    slot.at.clear();
+    for (std::size_t b = 0; b < sizes.size(); ++b) {
+      slot.at.insert(slot.at.end(), parameters[b], parameters[b] + sizes[b]);
+    }
+    slot.residuals.resize(static_cast<std::size_t>(num_residuals()));
+    std::vector<double*> pointers;
+    if (with_jacobians) {
+      slot.jacobians.resize(sizes.size());
+      for (std::size_t b = 0; b < sizes.size(); ++b) {
+        slot.jacobians[b].resize(static_cast<std::size_t>(num_residuals()) * sizes[b]);
+        pointers.push_back(slot.jacobians[b].data());
+      }
+    }
+    slot.ok = inner_->Evaluate(parameters, slot.residuals.data(),
+                               with_jacobians ? pointers.data() : nullptr);
+    slot.valid = true;
+  }
+
   std::unique_ptr<ceres::CostFunction> inner_;
-  mutable std::vector<double> at_;
-  mutable std::vector<double> residuals_;
-  mutable std::vector<std::vector<double>> jacobians_;
+  mutable Slot full_;
+  mutable Slot values_;
+};
+
+// Before every evaluation: checks the model's constraints at the new point (a trial step
+// that breaks one fails to evaluate everywhere, and Levenberg–Marquardt shrinks its step),
+// then evaluates every residual block on our own threads into its CachingCost. Ceres itself
+// runs on one thread and only sums what was prepared, in the blocks' fixed order: the
+// result does not depend on which thread evaluated which block. (Ceres' own threads sum
+// cost, gradient and Schur complement in the order the threads happen to finish.)
+class EvaluationPreparer final : public ceres::EvaluationCallback {
+ public:
+  EvaluationPreparer(const DoorModel& model, const ParameterMap& map, const double* x)
+      : model_(model), map_(map), x_(x) {}
+
+  void add(const CachingCost* cost, std::vector<const double*> blocks) {
+    costs_.push_back(cost);
+    blocks_.push_back(std::move(blocks));
+  }
+  void set_threads(int threads) { threads_ = std::max(1, threads); }
+
+  void PrepareForEvaluation(bool evaluate_jacobians, bool new_evaluation_point) override {
+    if (new_evaluation_point) check();
+    if (feasible_) prepare(evaluate_jacobians);
+  }
+
+  // At the parameter blocks' current values, outside the solver.
+  void prepare_here(bool jacobians) {
+    check();
+    if (feasible_) prepare(jacobians);
+  }
+
+  const bool* flag() const { return &feasible_; }
+
+ private:
+  void check() {
+    try {
+      (void)model_.with_parameter_values(map_.values(x_));
+      feasible_ = true;
+    } catch (const std::invalid_argument&) {
+      feasible_ = false;
+    }
+  }
+  void prepare(bool jacobians) const {
+    parallel_for(static_cast<int>(costs_.size()), threads_,
+                 [&](int i) { costs_[i]->prepare(blocks_[i].data(), jacobians); });
+  }
+
+  const DoorModel& model_;
+  const ParameterMap& map_;
+  const double* x_;
+  bool feasible_ = true;
+  int threads_ = 1;
+  std::vector<const CachingCost*> costs_;
+  std::vector<std::vector<const double*>> blocks_;
 };
 
 namespace {
@@ -147,7 +250,9 @@ ceres::Solver::Options solver_options(const FitOptions& options, int max_iterati
   solver.function_tolerance = options.function_tolerance;
   solver.parameter_tolerance = options.parameter_tolerance;
   solver.gradient_tolerance = options.gradient_tolerance;
-  solver.num_threads = fit_thread_count(options);
+  // One thread: the residual blocks are evaluated in parallel by EvaluationPreparer, and
+  // Ceres' own threads would sum them in scheduling order (results differing run to run).
+  solver.num_threads = 1;
   solver.logging_type = tracing() ? ceres::PER_MINIMIZER_ITERATION : ceres::SILENT;
   solver.minimizer_progress_to_stdout = tracing();
   // With bounds, Ceres follows each trust-region step with a projected line search that
@@ -361,7 +466,7 @@ WindowProblem::WindowProblem(const DoorModel& model, const PreparedData& data,
                              const ParameterMap& map, const ProblemKind& kind,
                              const FitWeights& weights, std::vector<double> x0)
     : map_(map), x_(std::move(x0)) {
-  feasibility_ = std::make_unique<FeasibilityCheck>(model, map_, x_.data());
+  preparer_ = std::make_unique<EvaluationPreparer>(model, map_, x_.data());
   setup_.model = &model;
   setup_.data = &data;
   setup_.map = &map_;
@@ -371,11 +476,11 @@ WindowProblem::WindowProblem(const DoorModel& model, const PreparedData& data,
   setup_.angle_residuals = weights.angle_residuals;
   setup_.estimate_start_state = kind.estimate_start_states;
   setup_.residual_power = kind.residual_power;
-  setup_.feasible = feasibility_->flag();
+  setup_.feasible = preparer_->flag();
   windows_ = split_windows(data, kind.windows);
   z_.assign(kind.estimate_start_states ? 2 * windows_.size() : 0, 0.0);
   ceres::Problem::Options problem_options;
-  problem_options.evaluation_callback = feasibility_.get();
+  problem_options.evaluation_callback = preparer_.get();
   problem_ = std::make_unique<ceres::Problem>(problem_options);
   add_free_block(*problem_, x_.data(), model, map_);
   for (std::size_t w = 0; w < windows_.size(); ++w) {
@@ -383,8 +488,10 @@ WindowProblem::WindowProblem(const DoorModel& model, const PreparedData& data,
     costs_.push_back(cost);
     if (kind.estimate_start_states) {
       problem_->AddResidualBlock(cost, nullptr, x_.data(), z_.data() + 2 * w);
+      preparer_->add(cost, {x_.data(), z_.data() + 2 * w});
     } else {
       problem_->AddResidualBlock(cost, nullptr, x_.data());
+      preparer_->add(cost, {x_.data()});
     }
   }
 }
@@ -400,6 +507,7 @@ int WindowProblem::residual_count() const {
 WindowProblem::Outcome WindowProblem::solve(const FitOptions& options, int max_iterations,
                                             double uncertainty_tolerance) {
   ceres::Solver::Options solver = solver_options(options, max_iterations);
+  preparer_->set_threads(fit_thread_count(options));
   if (!z_.empty()) {
     // The window states are eliminated first (Schur complement): each appears in one
     // window only, so the reduced system is the size of x.
@@ -442,6 +550,7 @@ bool WindowProblem::reduce(bool cached_only, ReducedSystem& out) const {
   out.window_scores.reserve(windows_.size());
   out.windows = static_cast<int>(windows_.size());
   out.window_parameters = static_cast<int>(z_.size());
+  if (!cached_only) preparer_->prepare_here(/*jacobians=*/true);
   for (std::size_t w = 0; w < windows_.size(); ++w) {
     const double* blocks[2] = {x_.data(), states ? z_.data() + 2 * w : nullptr};
     if (cached_only && !costs_[w]->cached_at(blocks)) return false;
@@ -475,24 +584,26 @@ EquationErrorOutcome solve_equation_error(const DoorModel& model, const Prepared
                                           std::vector<double> x0) {
   EquationErrorOutcome outcome;
   outcome.x = std::move(x0);
-  FeasibilityCheck feasibility(model, map, outcome.x.data());
+  EvaluationPreparer preparer(model, map, outcome.x.data());
+  preparer.set_threads(fit_thread_count(options));
   EquationErrorSetup setup;
   setup.model = &model;
   setup.data = &data;
   setup.map = &map;
   setup.rate_derivative_rad_s2 = rate_derivatives(data);
-  setup.feasible = feasibility.flag();
+  setup.feasible = preparer.flag();
   ceres::Problem::Options problem_options;
-  problem_options.evaluation_callback = &feasibility;
+  problem_options.evaluation_callback = &preparer;
   ceres::Problem problem(problem_options);
   add_free_block(problem, outcome.x.data(), model, map);
   constexpr int kChunk = 200;
   for (std::size_t s = 0; s < data.strokes.size(); ++s) {
     const int n = static_cast<int>(data.strokes[s].size());
     for (int first = 0; first < n; first += kChunk) {
-      problem.AddResidualBlock(
-          make_equation_error_cost(setup, static_cast<int>(s), first, std::min(kChunk, n - first)),
-          nullptr, outcome.x.data());
+      auto* cost = new CachingCost(
+          make_equation_error_cost(setup, static_cast<int>(s), first, std::min(kChunk, n - first)));
+      problem.AddResidualBlock(cost, nullptr, outcome.x.data());
+      preparer.add(cost, {outcome.x.data()});
     }
   }
   ceres::Solver::Options solver = solver_options(options, options.max_iterations);

@@ -5,6 +5,7 @@
 // parameters with the window states eliminated, from which the uncertainties follow.
 // Internal to the fit; documented in docs/fitting.md.
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -86,7 +87,7 @@ RobustCovariance robust_covariance(const ReducedSystem& system, const Eigen::Mat
 Eigen::VectorXd standard_uncertainties(const ReducedSystem& system, bool robust);
 
 class CachingCost;
-class FeasibilityCheck;
+class EvaluationPreparer;
 
 // One least-squares problem over windows: a ceres::Problem with the scaled free
 // parameters x (bounded by the parameter file's bounds) and, when the start states are
@@ -131,7 +132,7 @@ class WindowProblem {
   ParameterMap map_;
   std::vector<double> x_;
   std::vector<double> z_;
-  std::unique_ptr<FeasibilityCheck> feasibility_;
+  std::unique_ptr<EvaluationPreparer> preparer_;
   WindowResidualSetup setup_;
   std::vector<FitWindow> windows_;
   std::vector<CachingCost*> costs_;          // owned by the problem
@@ -156,5 +157,10 @@ double compare_with_ceres_covariance(WindowProblem& problem, const Eigen::Matrix
                                      int num_threads);
 
 int fit_thread_count(const FitOptions& options);
+
+// Runs task(i) once for every i in [0, count) on up to `threads` threads, the caller's among
+// them. Which thread runs which index changes from call to call, so each task must write
+// only its own results; the first exception a task throws is rethrown here.
+void parallel_for(int count, int threads, const std::function<void(int)>& task);
 
 }  // namespace doorbench

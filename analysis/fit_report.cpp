@@ -215,6 +215,22 @@ std::string FitSummary::full_report() const {
                        percent(s.window.fit_percent()).c_str(), replay.c_str(),
                        h ? short_number(h->window.rmse()).c_str() : "-", held_replay.c_str());
   }
+  if (!fold_fits.empty()) {
+    out += "\nCross-validation folds (each refitted from the full fit without its strokes)\n";
+    for (std::size_t f = 0; f < fold_fits.size(); ++f) {
+      const FoldFit& fold = fold_fits[f];
+      std::string strokes;
+      for (int id : fold.held_out_strokes) {
+        strokes.append(strokes.empty() ? "" : ",").append(std::to_string(id));
+      }
+      out += printf_text(
+          "  fold %zu (leaves out %s): %d iterations, %s; window RMSE %s fitted, %s "
+          "held out\n",
+          f + 1, strokes.c_str(), fold.iterations, fold.converged ? "converged" : "NOT converged",
+          short_number(fold.fitted_rmse_rad_s).c_str(),
+          short_number(fold.held_out_rmse_rad_s).c_str());
+    }
+  }
   if (!notes.empty()) {
     out += "\nNotes\n";
     for (const std::string& note : notes) out += "  - " + note + "\n";

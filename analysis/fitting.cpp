@@ -280,7 +280,8 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
 FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
                           const ParameterMap& map, const std::vector<double>& x,
                           const FitOptions& options, const FitWeights& weights, int folds,
-                          std::vector<std::string>& notes, std::vector<DoorModel>& fold_models) {
+                          std::vector<std::string>& notes, std::vector<DoorModel>& fold_models,
+                          std::vector<FoldFit>& fold_fits) {
   const int stroke_count = static_cast<int>(data.strokes.size());
   std::vector<StrokeFitMetrics> per_stroke(stroke_count);
   std::vector<char> have(stroke_count, 0);
@@ -303,6 +304,8 @@ FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
     }
     WindowProblem problem(fitted, training, fold_map, window_fit_kind(options, fitted), weights, x);
     if (problem.windows().empty()) continue;
+    // Coarse pass first, window states from the measured states: see docs/fitting.md
+    // ("Held out") for why the folds do not start from the full fit's window states.
     const WindowProblem::Outcome outcome = solve_coarse_to_fine(
         problem, fitted, training, fold_map, options, weights, options.held_out_max_iterations);
     if (!outcome.usable) {
@@ -314,10 +317,36 @@ FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
     fold_models.push_back(fold_model);
     const FitMetrics metrics =
         compute_fit_metrics(fold_model, data, metric_windows(options, fitted), held);
+    FoldFit fold_fit;
+    for (int s : held) fold_fit.held_out_strokes.push_back(data.strokes[s].id);
+    fold_fit.converged = outcome.converged;
+    fold_fit.termination = outcome.termination;
+    fold_fit.iterations = outcome.iterations;
+    fold_fit.fitted_rmse_rad_s =
+        compute_fit_metrics(fold_model, training, metric_windows(options, fitted)).window.rmse();
+    fold_fit.held_out_rmse_rad_s = metrics.window.rmse();
+    const auto bounds = fitted.parameter_bounds();
+    for (int index : fold_map.free_index) {
+      const double value = fold_model.parameter_values()[index];
+      const double width = bounds[index].upper - bounds[index].lower;
+      if (std::abs(value - bounds[index].lower) <= 1e-6 * width ||
+          std::abs(bounds[index].upper - value) <= 1e-6 * width) {
+        fold_fit.at_bound.push_back(fitted.parameter_name(index));
+      }
+    }
+    fold_fits.push_back(std::move(fold_fit));
     for (std::size_t i = 0; i < held.size() && i < metrics.strokes.size(); ++i) {
       per_stroke[held[i]] = metrics.strokes[i];
       have[held[i]] = 1;
     }
+  }
+  int unconverged = 0;
+  for (const FoldFit& fold_fit : fold_fits) unconverged += fold_fit.converged ? 0 : 1;
+  if (unconverged > 0) {
+    notes.push_back(std::to_string(unconverged) + " of " + std::to_string(fold_fits.size()) +
+                    " cross-validation folds stopped at held_out_max_iterations (" +
+                    std::to_string(options.held_out_max_iterations) +
+                    ") before converging: the held-out figures are where they stopped");
   }
   FitMetrics held_out;
   for (int s = 0; s < stroke_count; ++s) {
@@ -570,7 +599,7 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   if (options.cross_validation_folds > 0 && stroke_count >= 2) {
     summary.folds = std::min(options.cross_validation_folds, stroke_count);
     summary.held_out = cross_validate(result.model, data, map, problem.x(), options, weights,
-                                      summary.folds, summary.notes, fold_models);
+                                      summary.folds, summary.notes, fold_models, summary.fold_fits);
   } else if (options.cross_validation_folds > 0) {
     summary.notes.push_back("one stroke only: no held-out metrics");
   }

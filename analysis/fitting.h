@@ -145,6 +145,18 @@ struct ParameterCorrelation {
   double value = 0.0;
 };
 
+// One cross-validation fold's refit (held-out metrics): how it ended, and how well it did
+// on the strokes it fitted and on those it left out.
+struct FoldFit {
+  std::vector<int> held_out_strokes;  // stroke ids
+  bool converged = false;
+  std::string termination;
+  int iterations = 0;
+  double fitted_rmse_rad_s = 0.0;     // window RMSE of ω on its own strokes
+  double held_out_rmse_rad_s = 0.0;   // on the strokes it left out
+  std::vector<std::string> at_bound;  // free parameters that ended on a bound
+};
+
 struct FitSummary {
   ModelKind model_kind = ModelKind::kSensory;
   std::string source;
@@ -199,6 +211,7 @@ struct FitSummary {
   FitMetrics fitted;                   // on the strokes fitted (all of them)
   std::optional<FitMetrics> held_out;  // each stroke by the fit that left it out
   int folds = 0;
+  std::vector<FoldFit> fold_fits;  // one per fold refitted
 
   std::vector<std::string> notes;  // anything the reader should know
 

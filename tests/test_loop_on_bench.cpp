@@ -87,10 +87,13 @@ TEST_CASE(
   REQUIRE(loop.steps.size() == 1);
   const doorbench::LoopStep& step = loop.steps.front();
   CHECK(step.effect_name == "gravity_imbalance");
-  // Measured: held-out window RMSE of ω 0.135 → 0.064 rad/s (−53%; the acceptance threshold
-  // is 2%); what is left is mostly the latch and the seal, which the sensory model draws
-  // differently.
-  CHECK(step.after.held_out_rmse_rad_s < 0.7 * step.before.held_out_rmse_rad_s);
+  // Measured: held-out window RMSE of ω 0.1351 → 0.0466 rad/s (−65.5%; the acceptance
+  // threshold is 2%), the same on every run and any number of threads (docs/fitting.md,
+  // "Threads and determinism"). Before, Ceres' threads made it 0.047 to 0.117 from run to
+  // run. The figure is still sensitive to the data (σ_ω × (1 + 1e-12) gave 0.063, −54%): the
+  // folds of this wrong-model fit stop unconverged ("When the folds do not converge"). What
+  // is left is mostly the latch and the seal, which the sensory model draws differently.
+  CHECK(step.after.held_out_rmse_rad_s < 0.5 * step.before.held_out_rmse_rad_s);
   CHECK(step.after.bic < step.before.bic);
   REQUIRE(step.parameters.size() == 1);
   const doorbench::FittedParameter& g1 = step.parameters.front();
