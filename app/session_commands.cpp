@@ -190,6 +190,24 @@ double configure_triggering(const RigDefinition& rig, const SessionRecordingOpti
   return options.max_wait_s + (trigger.duration_s > 0 ? trigger.duration_s : 3600.0);
 }
 
+// Records `sources` with the common options of every rig (flush interval, Ctrl-C, the live
+// status display) added to `record`.
+RecordSummary record_with_status(const RecordSources& sources, const RigDefinition& rig,
+                                 const SessionRecordingOptions& options,
+                                 const std::filesystem::path& out_path, RecordOptions record,
+                                 double display_s) {
+  record.flush_interval_s = options.flush_interval_s;
+  record.stop_requested = options.stop_requested;
+  StatusDisplay display(out_path.string(), display_s);
+  if (options.show_progress) {
+    record.progress = [&display](const RecordStatus& status) { display.show(status); };
+  }
+  const RecordSummary summary =
+      record_session(sources, new_session_metadata(rig, options), out_path, record);
+  if (options.show_progress) display.finish();
+  return summary;
+}
+
 }  // namespace
 
 RecordSummary record_simulated_session(const RigDefinition& rig,
@@ -209,30 +227,20 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
       options.duration_s > 0 ? options.duration_s : hand->natural_duration_s();
   sensors::SimulatedBench bench(rig, model, std::move(hand), duration_s);
 
-  const SessionMetadata metadata = new_session_metadata(rig, options);
-
   RecordOptions record;
   record.duration_s = duration_s;
-  record.flush_interval_s = options.flush_interval_s;
-  record.stop_requested = options.stop_requested;
   // An unpaced simulated bench computes scans on demand and can wait for the writer; a
   // paced one stands for a DAQ that cannot (a full ring is then a recorded fault).
   const bool paced = rig.simulation && rig.simulation->realtime;
   record.when_ring_full = paced ? RingFullPolicy::kDropAndRecordFault : RingFullPolicy::kWait;
   // The bench plays its hand cycles whatever the trigger keeps of them.
   configure_triggering(rig, options, record);
-  StatusDisplay display(out_path.string(), record.trigger && record.trigger->duration_s > 0
-                                               ? record.trigger->duration_s
-                                               : duration_s);
-  if (options.show_progress) {
-    record.progress = [&display](const RecordStatus& status) { display.show(status); };
-  }
   RecordSources sources;
   sources.scans = &bench;
   sources.polled = polled;
-  const RecordSummary summary = record_session(sources, metadata, out_path, record);
-  if (options.show_progress) display.finish();
-  return summary;
+  const double display_s =
+      record.trigger && record.trigger->duration_s > 0 ? record.trigger->duration_s : duration_s;
+  return record_with_status(sources, rig, options, out_path, record, display_s);
 }
 
 namespace {
@@ -255,25 +263,17 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
   sensors::ComediBackend backend(rig, sensors::selected_comedi_api(), comedi);
   if (options.show_progress) std::cerr << backend.setup().brief_report();
 
-  const SessionMetadata metadata = new_session_metadata(rig, options);
-
   // Blocks of about 20 ms, whatever the rate.
   record.block_scans =
       std::max<std::size_t>(1, static_cast<std::size_t>(backend.scan_rate_hz() / 50));
-  record.flush_interval_s = options.flush_interval_s;
-  record.stop_requested = options.stop_requested;
   // The card runs on its own clock: a writer that falls behind must cost a recorded gap,
   // never a stalled read that overruns the card's buffer.
   record.when_ring_full = RingFullPolicy::kDropAndRecordFault;
-  StatusDisplay display(out_path.string(), display_duration_s(options, record));
-  if (options.show_progress) {
-    record.progress = [&display](const RecordStatus& status) { display.show(status); };
-  }
   RecordSources sources;
   sources.scans = &backend;
   sources.polled = polled;
-  const RecordSummary summary = record_session(sources, metadata, out_path, record);
-  if (options.show_progress) display.finish();
+  const RecordSummary summary = record_with_status(sources, rig, options, out_path, record,
+                                                   display_duration_s(options, record));
   if (backend.overran()) {
     std::cerr << "doorbench: " << out_path.string() << ": " << backend.end_reason()
               << "; the session keeps what was read before it\n";
@@ -295,18 +295,10 @@ RecordSummary record_polled_session(const RigDefinition& rig,
         "table with its triggers)");
   }
   record.duration_s = triggered_limit_s > 0 ? triggered_limit_s : options.duration_s;
-  record.flush_interval_s = options.flush_interval_s;
-  record.stop_requested = options.stop_requested;
-  const SessionMetadata metadata = new_session_metadata(rig, options);
-  StatusDisplay display(out_path.string(), display_duration_s(options, record));
-  if (options.show_progress) {
-    record.progress = [&display](const RecordStatus& status) { display.show(status); };
-  }
   RecordSources sources;
   sources.polled = polled;
-  const RecordSummary summary = record_session(sources, metadata, out_path, record);
-  if (options.show_progress) display.finish();
-  return summary;
+  return record_with_status(sources, rig, options, out_path, record,
+                            display_duration_s(options, record));
 }
 
 struct RecordCommandOptions {
