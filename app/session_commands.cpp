@@ -190,6 +190,19 @@ double configure_triggering(const RigDefinition& rig, const SessionRecordingOpti
   return options.max_wait_s + (trigger.duration_s > 0 ? trigger.duration_s : 3600.0);
 }
 
+// A source that runs until stopped (a card, polled sensors) records for --duration-s, or
+// through the rig's triggers (then bounded by the armed wait plus their duration).
+void set_timed_recording(const RigDefinition& rig, const SessionRecordingOptions& options,
+                         const std::string& what, RecordOptions& record) {
+  const double triggered_limit_s = configure_triggering(rig, options, record);
+  if (!(options.duration_s > 0) && triggered_limit_s == 0) {
+    throw UsageError(what +
+                     " records for a set time: give --duration-s (or a [recording] "
+                     "table with its triggers)");
+  }
+  record.duration_s = triggered_limit_s > 0 ? triggered_limit_s : options.duration_s;
+}
+
 // Records `sources` with the common options of every rig (flush interval, Ctrl-C, the live
 // status display) added to `record`.
 RecordSummary record_with_status(const RecordSources& sources, const RigDefinition& rig,
@@ -251,13 +264,7 @@ RecordSummary record_comedi_session(const RigDefinition& rig,
                                     const std::filesystem::path& out_path,
                                     const std::vector<PolledSource*>& polled) {
   RecordOptions record;
-  const double triggered_limit_s = configure_triggering(rig, options, record);
-  if (!(options.duration_s > 0) && triggered_limit_s == 0) {
-    throw UsageError(
-        "a comedi rig records for a set time: give --duration-s (or a [recording] table with "
-        "its triggers)");
-  }
-  record.duration_s = triggered_limit_s > 0 ? triggered_limit_s : options.duration_s;
+  set_timed_recording(rig, options, "a comedi rig", record);
   sensors::ComediOptions comedi;
   comedi.duration_s = record.duration_s;
   sensors::ComediBackend backend(rig, sensors::selected_comedi_api(), comedi);
@@ -288,13 +295,7 @@ RecordSummary record_polled_session(const RigDefinition& rig,
                                     const std::filesystem::path& out_path,
                                     const std::vector<PolledSource*>& polled) {
   RecordOptions record;
-  const double triggered_limit_s = configure_triggering(rig, options, record);
-  if (!(options.duration_s > 0) && triggered_limit_s == 0) {
-    throw UsageError(
-        "a rig of polled sensors records for a set time: give --duration-s (or a [recording] "
-        "table with its triggers)");
-  }
-  record.duration_s = triggered_limit_s > 0 ? triggered_limit_s : options.duration_s;
+  set_timed_recording(rig, options, "a rig of polled sensors", record);
   RecordSources sources;
   sources.polled = polled;
   return record_with_status(sources, rig, options, out_path, record,

@@ -13,10 +13,12 @@
 
 #include "acquisition/session_file.h"
 #include "tests/modbus/modbus_test_server.h"
+#include "tests/sine_phase.h"
 #include "tests/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using namespace doorbench;
+using doorbench::testing::sine_phase;
 using doorbench::testing::TempDir;
 
 namespace {
@@ -72,26 +74,6 @@ double absolute_s(std::int64_t origin, double session_time_s) {
   return static_cast<double>(origin) * 1e-9 + session_time_s;
 }
 
-// Least-squares phase φ of y ≈ R·sin(ωt + φ) + c.
-double sine_phase(const std::vector<double>& t, const std::vector<double>& y, double omega) {
-  double m[3][4] = {};
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    const double f[3] = {std::sin(omega * t[i]), std::cos(omega * t[i]), 1.0};
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) m[r][c] += f[r] * f[c];
-      m[r][3] += f[r] * y[i];
-    }
-  }
-  for (int p = 0; p < 3; ++p) {
-    for (int r = 0; r < 3; ++r) {
-      if (r == p) continue;
-      const double k = m[r][p] / m[p][p];
-      for (int c = p; c < 4; ++c) m[r][c] -= k * m[p][c];
-    }
-  }
-  return std::atan2(m[1][3] / m[1][1], m[0][3] / m[0][0]);
-}
-
 }  // namespace
 
 TEST_CASE(
@@ -122,10 +104,12 @@ TEST_CASE(
   for (const SessionEvent& e : session.events()) {
     if (e.kind == "trigger") trigger_s = e.time_s;
   }
-  CHECK(trigger_s == Approx(0.2).margin(0.02));
   const std::int64_t origin = origin_ns(session);
   const ChannelSlice force = session.read("mb_force");
   REQUIRE(force.raw.size() > 40);  // about 70 polls at 100 Hz
+  // 0.2 s of pre-trigger, or all there was when the force crossed sooner after the start.
+  CHECK(trigger_s <= 0.22);
+  if (trigger_s < 0.18) CHECK(force.time_s.front() < 0.02);
   CHECK(session.sample_count("mb_force_latency") == force.raw.size());
   for (std::size_t i = 0; i < force.raw.size(); ++i) {
     // The server's formula at each sample's time on the session clock (the midpoint):

@@ -18,12 +18,14 @@
 #include "acquisition/rig_file.h"
 #include "sensors/comedi_backend.h"
 #include "tests/fake_polled_source.h"
+#include "tests/sine_phase.h"
 #include "tests/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using namespace doorbench;
 using doorbench::testing::FakePolledOptions;
 using doorbench::testing::FakePolledSource;
+using doorbench::testing::sine_phase;
 using doorbench::testing::TempDir;
 
 namespace {
@@ -51,29 +53,6 @@ const sensors::ComediApi& emulator() {
 
 std::int64_t origin_ns(const SessionReader& session) {
   return std::stoll(session.read_group_attribute("clock", "origin_monotonic_ns"));
-}
-
-// Least-squares fit of y = a·sin(ωt) + b·cos(ωt) + c; returns the phase φ of
-// R·sin(ωt + φ).
-double sine_phase(const std::vector<double>& t, const std::vector<double>& y, double omega) {
-  // Normal equations of the three basis functions.
-  double m[3][4] = {};
-  for (std::size_t i = 0; i < t.size(); ++i) {
-    const double f[3] = {std::sin(omega * t[i]), std::cos(omega * t[i]), 1.0};
-    for (int r = 0; r < 3; ++r) {
-      for (int c = 0; c < 3; ++c) m[r][c] += f[r] * f[c];
-      m[r][3] += f[r] * y[i];
-    }
-  }
-  for (int p = 0; p < 3; ++p) {  // Gauss-Jordan (the matrix is well conditioned)
-    for (int r = 0; r < 3; ++r) {
-      if (r == p) continue;
-      const double k = m[r][p] / m[p][p];
-      for (int c = p; c < 4; ++c) m[r][c] -= k * m[p][c];
-    }
-  }
-  const double a = m[0][3] / m[0][0], b = m[1][3] / m[1][1];
-  return std::atan2(b, a);
 }
 
 // How much later on the session axis signal 2 places the same signal instant than
