@@ -2,12 +2,20 @@
 // JournalWriter (the recorder's own) writes at the same time, in another thread or byte by
 // byte, sees every frame once and in order, waits at a torn last frame, notices the end
 // frame and the journal's conversion, and keeps its memory bounded.
+#include <stb_image.h>
+#include <sys/wait.h>
+
 #include <atomic>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
 #include <iterator>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <numbers>
+#include <sstream>
 #include <thread>
 
 #include "acquisition/journal.h"
@@ -400,4 +408,110 @@ TEST_CASE("Live: options are checked", "[viewer][live]") {
   options = {};
   options.capacity_samples = 1;
   CHECK(options.validate() == "capacity_samples must be at least 2");
+}
+
+TEST_CASE("view --live draws a journal being written: the last seconds, where they belong",
+          "[viewer][live][xvfb]") {
+  testing::TempDir dir("live_screenshot");
+  const fs::path journal_path = dir.path / "sine.h5.journal";
+  // One channel: a 2 N sine at 0.5 Hz, 1 mV per count, 4 s at 1 kHz; a trigger at 2.5 s; no
+  // end frame: the recording is still running when the viewer looks.
+  JournalHeader header = live_header();
+  header.channels.resize(1);
+  header.channels[0].calibration_id.clear();
+  header.calibrations.clear();
+  const auto known = [](double t) { return 2.0 * std::sin(2.0 * std::numbers::pi * 0.5 * t); };
+  JournalWriter journal(journal_path, header, 100);
+  journal.append_start(1, 2);
+  std::vector<std::int32_t> counts(100);
+  for (std::uint64_t first = 0; first < 4000; first += 100) {
+    for (std::size_t s = 0; s < 100; ++s) {
+      counts[s] = static_cast<std::int32_t>(std::lround(1000.0 * known((first + s) * 1e-3)));
+    }
+    journal.append_scans(first, 100, counts.data(), 100);
+  }
+  journal.append_event(2.5, "trigger", "", "level");
+  journal.sync();
+
+  const fs::path png = dir.path / "live.png";
+  const std::string command = std::string("xvfb-run -a -s '-screen 0 1024x768x24' ")
+                                  .append(DOORBENCH_EXECUTABLE)
+                                  .append(" view --live ")
+                                  .append(journal_path.string())
+                                  .append(" --window-s 2 --screenshot ")
+                                  .append(png.string())
+                                  .append(" --width 900 --height 600 >")
+                                  .append((dir.path / "out.txt").string())
+                                  .append(" 2>")
+                                  .append((dir.path / "err.txt").string());
+  const int status = std::system(command.c_str());
+  std::ifstream err_file(dir.path / "err.txt"), out_file(dir.path / "out.txt");
+  std::ostringstream err, out;
+  err << err_file.rdbuf();
+  out << out_file.rdbuf();
+  INFO("stderr: " << err.str());
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+  CHECK_THAT(out.str(), Catch::Contains("recording: 3.999 s, 4000 scans, 42 frames, 1 events"));
+
+  int w = 0, h = 0, n = 0;
+  unsigned char* pixels = stbi_load(png.string().c_str(), &w, &h, &n, 3);
+  REQUIRE(pixels != nullptr);
+  std::unique_ptr<unsigned char, void (*)(void*)> owner(pixels, stbi_image_free);
+  REQUIRE(w == 900);
+  REQUIRE(h == 600);
+  std::ifstream info_file(png.string() + ".json");
+  const nlohmann::json info = nlohmann::json::parse(info_file);
+  REQUIRE(info["layout"] == "live");
+  REQUIRE(info["plots"].size() == 1);
+  const auto& plot = info["plots"][0];
+  REQUIRE(plot["title"] == "force");
+  const std::vector<int> rgb = plot["series"][0]["rgb"];
+  const std::vector<double> area = plot["area_px"];
+  const std::vector<double> xr = plot["x_range"], yr = plot["y_range"];
+  // The last 2 s up to the newest sample, the whole amplitude.
+  REQUIRE(xr[0] == Approx(1.999));
+  REQUIRE(xr[1] == Approx(3.999));
+  REQUIRE(yr[0] < -1.99);
+  REQUIRE(yr[1] > 1.99);
+  REQUIRE(area[2] > 700);
+
+  auto pixel = [&](int x, int y) { return pixels + (std::size_t(y) * std::size_t(w) + x) * 3; };
+  auto row_of = [&](double value) {
+    return area[1] + area[3] - (value - yr[0]) / (yr[1] - yr[0]) * area[3];
+  };
+  auto time_of = [&](double px) {
+    return xr[0] + (px + 0.5 - area[0]) / area[2] * (xr[1] - xr[0]);
+  };
+  auto near_colour = [&](const unsigned char* p) {
+    return std::abs(p[0] - rgb[0]) + std::abs(p[1] - rgb[1]) + std::abs(p[2] - rgb[2]) <= 60;
+  };
+  const int top = int(std::ceil(area[1])) + 1, bottom = int(std::floor(area[1] + area[3])) - 2;
+  for (int k = 1; k <= 24; ++k) {
+    const int px = int(area[0] + area[2] * k / 25.0);
+    double lo = 1e9, hi = -1e9;
+    for (double dx = -1.5; dx <= 1.5; dx += 0.25) {
+      const double row = row_of(known(time_of(px + dx)));
+      lo = std::min(lo, row);
+      hi = std::max(hi, row);
+    }
+    bool on_curve = false;
+    for (int y = top; y <= bottom; ++y) {
+      const bool coloured = near_colour(pixel(px, y));
+      const bool near = y >= lo - 3.0 && y <= hi + 3.0;
+      INFO("column " << px << ", row " << y << ", curve rows " << lo << ".." << hi);
+      if (coloured) REQUIRE(near);
+      on_curve = on_curve || (coloured && near);
+    }
+    INFO("column " << px);
+    REQUIRE(on_curve);
+  }
+  // The trigger's marker: a light vertical line at 2.5 s, in the rows where the curve is not.
+  const int marker_px = int(std::lround(area[0] + (2.5 - xr[0]) / (xr[1] - xr[0]) * area[2]));
+  int light = 0;
+  for (int x = marker_px - 1; x <= marker_px + 1; ++x) {
+    const unsigned char* p = pixel(x, top + 5);
+    if (p[0] > 90 && p[1] > 90 && p[2] > 90) ++light;
+  }
+  CHECK(light > 0);
 }
