@@ -515,3 +515,57 @@ TEST_CASE("view --live draws a journal being written: the last seconds, where th
   }
   CHECK(light > 0);
 }
+
+TEST_CASE("Live: a long window is plotted as min and max per bucket; a spike stays",
+          "[viewer][live]") {
+  testing::TempDir dir("live_buckets");
+  const fs::path path = dir.path / "b.h5.journal";
+  LiveOptions options;
+  options.window_s = 100.0;  // everything
+  options.max_plot_samples = 100;
+  LiveJournal live(path, options);
+  JournalWriter journal(path, live_header(), 1000);
+  journal.append_start(1, 2);
+  std::vector<std::int32_t> counts(2 * 1000, 0);
+  for (std::uint64_t first = 0; first < 5000; first += 1000) {
+    for (std::size_t s = 0; s < 1000; ++s) {
+      const std::uint64_t scan = first + s;
+      counts[s] =
+          scan == 1234 ? 5000 : (scan == 3001 ? -5000 : static_cast<std::int32_t>(scan % 7));
+      counts[1000 + s] = static_cast<std::int32_t>(scan);
+    }
+    journal.append_scans(first, 1000, counts.data(), 1000);
+  }
+  // A gap of 500 scans: the line breaks there.
+  journal.append_scans(5500, 1000, counts.data(), 1000);
+  live.poll();
+  std::vector<PlotView> plots;
+  REQUIRE(live.update_plots(plots));
+  const Series& force = *plots[0].series[0];
+  CHECK(force.size() <= 100 + 2);
+  CHECK(force.size() >= 90);
+  double highest = -1e9, lowest = 1e9, at_highest = 0, at_lowest = 0;
+  std::size_t nans = 0;
+  for (std::size_t i = 0; i < force.size(); ++i) {
+    if (std::isnan(force.y(i))) {
+      ++nans;
+      continue;
+    }
+    if (i > 0) REQUIRE(force.x(i) >= force.x(i - 1));
+    if (force.y(i) > highest) highest = force.y(i), at_highest = force.x(i);
+    if (force.y(i) < lowest) lowest = force.y(i), at_lowest = force.x(i);
+  }
+  // The spike and the dip, each one sample, at their own times (1 + 2 · 1 mV · count).
+  CHECK(highest == Approx(1.0 + 2e-3 * 5000));
+  CHECK(at_highest == Approx(1.234));
+  CHECK(lowest == Approx(1.0 - 2e-3 * 5000));
+  CHECK(at_lowest == Approx(3.001));
+  CHECK(nans == 1);  // the gap
+  // The second channel rises steadily: its last point is the newest sample.
+  const Series& angle = *plots[1].series[0];
+  // The re-sent buffer: scan 6499 holds count 4999.
+  CHECK(angle.y(angle.size() - 1) == Approx(1e-3 * 4999));
+  CHECK(angle.x(angle.size() - 1) == Approx(6.499));
+  options.max_plot_samples = 3;
+  CHECK(options.validate() == "max_plot_samples must be at least 4");
+}

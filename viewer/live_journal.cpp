@@ -21,6 +21,7 @@ std::string LiveOptions::validate() const {
   }
   if (capacity_samples < 2) return "capacity_samples must be at least 2";
   if (max_events < 1) return "max_events must be at least 1";
+  if (max_plot_samples < 4) return "max_plot_samples must be at least 4";
   return "";
 }
 
@@ -322,12 +323,57 @@ bool LiveJournal::update_plots(std::vector<PlotView>& plots) const {
       }
     }
     const std::size_t first = low > 0 ? low - 1 : 0;
+    const std::size_t n = ring.size() - first;
     std::vector<double> x, y;
-    x.reserve(ring.size() - first);
-    y.reserve(ring.size() - first);
-    for (std::size_t i = first; i < ring.size(); ++i) {
-      x.push_back(ring.time(i));
-      y.push_back(ring.value(i));
+    x.reserve(std::min(n, options_.max_plot_samples) + 2);
+    y.reserve(x.capacity());
+    // Walks the storage from the window's first sample, wrapping at the end (no division
+    // per sample: this runs over every plotted sample at every update).
+    const std::vector<double>& times = ring.time_storage();
+    const std::vector<double>& values = ring.value_storage();
+    const std::size_t capacity = ring.capacity();
+    std::size_t p = n > 0 ? ring.slot(first) : 0;
+    const auto advance = [&] { p = p + 1 == capacity ? 0 : p + 1; };
+    if (n <= options_.max_plot_samples) {
+      for (std::size_t i = 0; i < n; ++i, advance()) {
+        x.push_back(times[p]);
+        y.push_back(values[p]);
+      }
+    } else {
+      // Buckets of samples: each gives its min and max in the order they came, and a NaN
+      // (a gap) in a bucket breaks the line after them.
+      const std::size_t buckets = options_.max_plot_samples / 2 - 1;
+      const std::size_t per = (n + buckets - 1) / buckets;
+      for (std::size_t b = 0; b < n; b += per) {
+        const std::size_t count = std::min(n - b, per);
+        double low = std::numeric_limits<double>::infinity(), high = -low;
+        std::size_t low_p = 0, high_p = 0, low_i = 0, high_i = 0, last_p = p;
+        bool gap = false, any = false;
+        for (std::size_t i = 0; i < count; ++i, advance()) {
+          const double v = values[p];
+          last_p = p;
+          if (std::isnan(v)) {
+            gap = true;
+            continue;
+          }
+          any = true;
+          if (v < low) low = v, low_p = p, low_i = i;
+          if (v > high) high = v, high_p = p, high_i = i;
+        }
+        if (any) {
+          const bool low_first = low_i <= high_i;
+          x.push_back(times[low_first ? low_p : high_p]);
+          y.push_back(low_first ? low : high);
+          if (low_i != high_i) {
+            x.push_back(times[low_first ? high_p : low_p]);
+            y.push_back(low_first ? high : low);
+          }
+        }
+        if (gap) {
+          x.push_back(times[last_p]);
+          y.push_back(std::numeric_limits<double>::quiet_NaN());
+        }
+      }
     }
     auto series = std::make_shared<Series>(Series::timed(
         info.name, calib_[c] || info.calibration_id.empty() ? info.unit : info.raw_unit,

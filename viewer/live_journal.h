@@ -26,7 +26,10 @@ struct LiveOptions {
   double window_s = 10.0;                  // the plots show the last window_s seconds
   std::size_t capacity_samples = 200'000;  // kept per channel (older ones are dropped)
   std::size_t max_events = 1000;           // kept (the oldest dropped first)
-  std::string validate() const;            // "" or one line naming the option
+  // A channel's window with more samples than this is plotted as each bucket's min and max
+  // (in time order), so a spike stays visible and a fast rig's update stays cheap.
+  std::size_t max_plot_samples = 20'000;
+  std::string validate() const;  // "" or one line naming the option
 };
 
 enum class LiveState { kWaiting, kRecording, kEnded, kGone };
@@ -43,6 +46,10 @@ class SampleRing {
   double time(std::size_t i) const { return time_[(begin_ + i) % time_.size()]; }
   double value(std::size_t i) const { return value_[(begin_ + i) % time_.size()]; }
   std::uint64_t pushed() const { return pushed_; }  // ever, including dropped ones
+  // Where the i-th oldest sample is in the storage below (which wraps at capacity()).
+  std::size_t slot(std::size_t i) const { return (begin_ + i) % time_.size(); }
+  const std::vector<double>& time_storage() const { return time_; }
+  const std::vector<double>& value_storage() const { return value_; }
 
  private:
   std::vector<double> time_, value_;
@@ -91,9 +98,9 @@ class LiveJournal {
   std::size_t memory_bytes() const;
 
   // One plot per channel (time axes linked) showing the last window_s seconds up to the
-  // newest sample, events as markers. Rebuilds `plots` when a poll brought something new
-  // (bumping each plot's revision) and keeps the user's y-range otherwise. Returns whether
-  // it changed anything.
+  // newest sample, events as markers; at most max_plot_samples points per channel. Rebuilds `plots`
+  // when a poll brought something new (bumping each plot's revision) and keeps the user's y-range
+  // otherwise. Returns whether it changed anything.
   bool update_plots(std::vector<PlotView>& plots) const;
 
  private:

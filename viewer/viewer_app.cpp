@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -315,8 +316,17 @@ void Viewer::channels(SessionView& s) {
 }
 
 void Viewer::live() {
-  live_->poll();
-  if (live_->update_plots(live_plots_)) live_states_.resize(live_plots_.size());
+  const LivePoll poll = live_->poll();
+  // The plots are rebuilt at most 20 times a second (a fast rig's 10 s window costs about
+  // 10 ms to rebuild: docs/PERFORMANCE.md), and at once when the state changes.
+  const auto now = std::chrono::steady_clock::now();
+  if (poll.state_changed || live_plots_.empty() ||
+      now - live_rebuilt_ >= std::chrono::milliseconds(50)) {
+    if (live_->update_plots(live_plots_)) {
+      live_states_.resize(live_plots_.size());
+      live_rebuilt_ = now;
+    }
+  }
   ImGui::Text("live: %s", live_->journal_path().string().c_str());
   ImGui::SameLine();
   // The state in colour: recording green, ended or gone amber, waiting grey.

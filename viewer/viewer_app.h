@@ -9,6 +9,7 @@
 //   tuning    sliders for the model's parameters and perceptual controls; strokes replayed
 // The interactive window shows them as tabs with a session selector; a screenshot shows
 // one layout over the whole window.
+#include <chrono>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -102,6 +103,7 @@ class Viewer {
   std::unique_ptr<LiveJournal> live_;
   std::vector<PlotView> live_plots_;
   std::vector<PlotWidgetState> live_states_;
+  std::chrono::steady_clock::time_point live_rebuilt_{};
 };
 
 // Checks a layout name: "" when known, else a message listing the names.
