@@ -279,7 +279,7 @@ TEST_CASE("Live: damage (not a torn end) is reported and nothing after it is use
   CHECK_THROWS_WITH(wrong.poll(), Catch::Contains("not a doorbench journal"));
 }
 
-TEST_CASE("Live: memory stays bounded; the last samples and events are kept", "[viewer][live]") {
+TEST_CASE("Live: memory stays bounded, the last samples and events are kept", "[viewer][live]") {
   testing::TempDir dir("live_bounded");
   const fs::path path = dir.path / "long.h5.journal";
   LiveOptions options;
@@ -516,7 +516,7 @@ TEST_CASE("view --live draws a journal being written: the last seconds, where th
   CHECK(light > 0);
 }
 
-TEST_CASE("Live: a long window is plotted as min and max per bucket; a spike stays",
+TEST_CASE("Live: a long window is plotted as min and max per bucket, a spike stays",
           "[viewer][live]") {
   testing::TempDir dir("live_buckets");
   const fs::path path = dir.path / "b.h5.journal";
