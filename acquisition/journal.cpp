@@ -427,13 +427,22 @@ JournalReader::~JournalReader() {
   if (fd_ >= 0) ::close(fd_);
 }
 
+std::uint64_t JournalReader::refresh() {
+  struct stat status {};
+  if (fd_ >= 0 && ::fstat(fd_, &status) == 0) {
+    file_bytes_ = static_cast<std::uint64_t>(status.st_size);
+  }
+  stop_reason_.clear();
+  return file_bytes_;
+}
+
 bool JournalReader::fail(std::string reason) {
   stop_reason_ = std::move(reason);
   return false;
 }
 
 bool JournalReader::next(JournalFrame& frame) {
-  if (offset_ == file_bytes_) return false;
+  if (offset_ >= file_bytes_) return false;
   const std::string at = " at byte " + std::to_string(offset_);
   if (file_bytes_ - offset_ < kFrameHeaderBytes) return fail("incomplete frame header" + at);
   std::array<std::uint8_t, kFrameHeaderBytes> head{};

@@ -155,6 +155,10 @@ class JournalReader {
   // The next frame, or false at the end of the valid frames. After false, bytes_dropped()
   // and stop_reason() say what (if anything) followed the last valid frame.
   bool next(JournalFrame& frame);
+  // Takes the file's current size, for a reader following a journal that is still being
+  // written: next() then resumes at the end of the last valid frame (a frame that was
+  // incomplete before may be whole now). Returns the size.
+  std::uint64_t refresh();
   std::uint64_t valid_bytes() const { return offset_; }
   std::uint64_t file_bytes() const { return file_bytes_; }
   std::uint64_t bytes_dropped() const { return file_bytes_ - offset_; }

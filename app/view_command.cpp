@@ -20,10 +20,43 @@ struct ViewOptions {
   int height_px = 900;
   bool compare = false;
   std::string loop_dir;
+  std::string live;  // a journal, or the session being recorded
+  viewer::LiveOptions live_options;
   ModelOptions model;
 };
 
+// --live: follow a running recording (its journal) instead of showing sessions.
+void run_live(const ViewOptions& options, const viewer::WindowOptions& window) {
+  if (!options.sessions.empty()) {
+    throw UsageError("--live follows one recording; give no SESSION besides it");
+  }
+  if (!options.layout.empty() && options.layout != "live") {
+    throw UsageError("--live shows the live layout only (--layout live or none)");
+  }
+  if (const std::string problem = options.live_options.validate(); !problem.empty()) {
+    throw UsageError("--window-s/--live-samples: " + problem);
+  }
+  viewer::Viewer view({}, {});
+  view.set_live(std::make_unique<viewer::LiveJournal>(options.live, options.live_options));
+  if (!options.screenshot.empty()) {
+    viewer::screenshot(view, "live", options.screenshot, window);
+    std::cout << options.screenshot << "\n" << view.live_journal()->status() << "\n";
+    return;
+  }
+  viewer::run_window(view, window);
+}
+
 void run_view(const ViewOptions& options) {
+  if (!options.live.empty()) {
+    viewer::WindowOptions window;
+    window.width_px = options.width_px;
+    window.height_px = options.height_px;
+    if (const std::string problem = window.validate(); !problem.empty()) {
+      throw UsageError("--width/--height: " + problem);
+    }
+    run_live(options, window);
+    return;
+  }
   if (!options.layout.empty() && options.screenshot.empty()) {
     throw UsageError("--layout chooses what --screenshot shows; the window shows every layout");
   }
@@ -113,6 +146,15 @@ void add_view_command(CLI::App& app, Action& action) {
                    "A `doorbench loop` folder: its steps (layout steps) and its final model "
                    "for the fit layout (unless --params/--effects say otherwise)")
       ->check(CLI::ExistingDirectory);
+  view->add_option("--live", options->live,
+                   "Follow a running recording: its journal (S.h5.journal) or the session it "
+                   "records (S.h5); the channels scroll as they arrive");
+  view->add_option("--window-s", options->live_options.window_s,
+                   "--live: seconds of the recording shown")
+      ->capture_default_str();
+  view->add_option("--live-samples", options->live_options.capacity_samples,
+                   "--live: samples kept per channel (older ones are dropped)")
+      ->capture_default_str();
   view->add_flag("--compare", options->compare,
                  "Compare each session with the model (implied by --params or --effects)");
   add_model_options(*view, options->model);

@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
+#include "analysis/fit_metrics.h"
+#include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
 #include "analysis/preprocessing.h"
 #include "simulated_session.h"
@@ -72,4 +74,61 @@ TEST_CASE("tuning re-simulates the strokes, resets, refuses bad values and saves
   REQUIRE(tuning.max_error_rad_s() == fitted_error);
 
   REQUIRE_THROWS_WITH(Tuning(data, reference, {99}), Contains("stroke index 99 out of range"));
+}
+
+TEST_CASE("tuning replays strokes in parallel with the same result as one thread", "[viewer]") {
+  doorbench::testing::TempDir dir("viewer_tuning_threads");
+  const auto session = dir.path / "bench.h5";
+  doorbench::testing::record_built_in_session(session, 19.0, 5, "sensory");
+  const doorbench::PreparedData data = doorbench::prepare_session(session);
+  REQUIRE(data.strokes.size() >= 3);
+  const doorbench::DoorModel reference = doorbench::reference_model(ModelKind::kSensory);
+  Tuning one(data, reference);
+  Tuning three(data, reference);
+  one.set_threads(1);
+  three.set_threads(3);
+  using doorbench::perceptual::Control;
+  const double j = doorbench::perceptual::read(reference, Control::kHeaviness);
+  REQUIRE(one.set_control(Control::kHeaviness, 1.3 * j) == "");
+  REQUIRE(three.set_control(Control::kHeaviness, 1.3 * j) == "");
+  one.resimulate();
+  three.resimulate();
+  const auto& a = *one.plot.series[2];
+  const auto& b = *three.plot.series[2];
+  REQUIRE(a.size() == b.size());
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    INFO("sample " << i);
+    REQUIRE(a.x(i) == b.x(i));
+    if (std::isnan(a.y(i))) {
+      REQUIRE(std::isnan(b.y(i)));
+    } else {
+      REQUIRE(a.y(i) == b.y(i));  // bit for bit: each stroke's replay is independent
+      ++finite;
+    }
+  }
+  REQUIRE(finite > a.size() / 2);
+  REQUIRE(one.max_error_rad_s() == three.max_error_rad_s());
+
+  // And the same as one simulate_windows over all the strokes together (what it replaced).
+  doorbench::PreparedData selected = data;
+  selected.strokes.resize(std::min<std::size_t>(12, data.strokes.size()));
+  doorbench::WindowOptions options =
+      doorbench::metric_window_options(doorbench::FitOptions{}, one.model());
+  options.whole_strokes = true;
+  const auto together = doorbench::simulate_windows(one.model(), selected, options);
+  std::size_t i = 0;
+  for (std::size_t k = 0; k < selected.strokes.size(); ++k) {
+    if (k > 0) ++i;  // the NaN between strokes
+    for (double expected : together.omega_rad_s[k]) {
+      INFO("stroke " << k << " sample " << i);
+      if (std::isnan(expected)) {
+        REQUIRE(std::isnan(b.y(i)));
+      } else {
+        REQUIRE(b.y(i) == expected);
+      }
+      ++i;
+    }
+  }
+  REQUIRE(i == b.size());
 }

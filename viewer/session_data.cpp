@@ -188,28 +188,30 @@ std::vector<PlotView> fit_plots(const FitComparison& comparison) {
 
 namespace doorbench::viewer {
 
-std::vector<Marker> event_markers(const SessionData& session, const std::string& channel) {
-  std::vector<Marker> markers;
-  for (const SessionEvent& e : session.events) {
-    if (!e.channel.empty() && e.channel != channel) continue;
-    Rgba colour;
-    if (e.kind == "stroke_start" || e.kind == "stroke_end") {
-      colour = e.detail == "closing" ? Rgba{40, 140, 230, 110} : Rgba{230, 90, 40, 110};
-      if (e.kind == "stroke_end") colour = {170, 170, 170, 90};
-    } else if (e.kind == "fault" || e.kind == "gap") {
-      colour = {255, 0, 255, 200};
-    } else if (e.kind == "trigger") {
-      colour = {255, 255, 255, 160};
-    } else if (e.kind == "mark") {
-      colour = {200, 200, 120, 160};
-    } else {
-      continue;
-    }
-    std::string label = e.kind;
-    if (!e.detail.empty()) label.append(" ").append(e.detail);
-    markers.push_back({e.time_s, colour, std::move(label)});
+bool event_marker(const SessionEvent& e, Marker& marker) {
+  Rgba colour;
+  if (e.kind == "stroke_start" || e.kind == "stroke_end") {
+    colour = e.detail == "closing" ? Rgba{40, 140, 230, 110} : Rgba{230, 90, 40, 110};
+    if (e.kind == "stroke_end") colour = {170, 170, 170, 90};
+  } else if (e.kind == "fault" || e.kind == "gap") {
+    colour = {255, 0, 255, 200};
+  } else if (e.kind == "trigger") {
+    colour = {255, 255, 255, 160};
+  } else if (e.kind == "mark") {
+    colour = {200, 200, 120, 160};
+  } else if (e.kind == "stop") {
+    colour = {255, 60, 60, 200};
+  } else {
+    return false;
   }
-  return markers;
+  std::string label = e.kind;
+  if (!e.detail.empty()) label.append(" ").append(e.detail);
+  marker = {e.time_s, colour, std::move(label)};
+  return true;
+}
+
+std::vector<Marker> event_markers(const SessionData& session, const std::string& channel) {
+  return event_markers_of(session.events, channel);
 }
 
 double first_stroke_start_s(const SessionData& session, const std::string& direction) {

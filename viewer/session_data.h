@@ -64,6 +64,21 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
 // The session's events as markers on a time axis: triggers, strokes, faults, gaps and
 // marks, for the whole session or for `channel` ("" : whole-session events only).
 std::vector<Marker> event_markers(const SessionData& session, const std::string& channel);
+// The same for any list of events (a live recording's); also `stop` (red).
+template <typename Events>
+std::vector<Marker> event_markers_of(const Events& events, const std::string& channel);
+// The marker of one event, or false for kinds that are not marked.
+bool event_marker(const SessionEvent& event, Marker& marker);
+template <typename Events>
+std::vector<Marker> event_markers_of(const Events& events, const std::string& channel) {
+  std::vector<Marker> markers;
+  Marker marker;
+  for (const SessionEvent& e : events) {
+    if (!e.channel.empty() && e.channel != channel) continue;
+    if (event_marker(e, marker)) markers.push_back(marker);
+  }
+  return markers;
+}
 
 // The time of the first stroke_start event of `direction` ("opening", "closing"; "" any).
 // Throws std::invalid_argument naming the session when there is none.

@@ -35,6 +35,10 @@ class Tuning {
   // wall time it took in ms. A stroke whose replay fails shows as a gap.
   double resimulate();
   double last_resimulate_ms() const { return last_ms_; }
+  // Strokes are replayed in parallel on up to this many threads (default: the cores);
+  // each stroke's replay is independent, so the result does not depend on it.
+  void set_threads(int threads) { threads_ = threads < 1 ? 1 : threads; }
+  int threads() const { return threads_; }
   // Largest |ω_meas − ω_sim| over the replayed strokes (the study's objective), rad/s.
   double max_error_rad_s() const { return max_error_; }
 
@@ -49,6 +53,9 @@ class Tuning {
   std::shared_ptr<Series> replay(const DoorModel& model, const std::string& name, Rgba colour,
                                  double* max_error);
   PreparedData data_;  // the selected strokes only
+  // The same strokes one per PreparedData, so that each replays on its own thread.
+  std::vector<PreparedData> singles_;
+  int threads_ = 1;
   DoorModel fitted_;
   DoorModel model_;
   double last_ms_ = 0.0;

@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cmath>
 #include <fstream>
 #include <stdexcept>
@@ -38,10 +39,11 @@ constexpr ImGuiTableFlags kTableFlags =
 
 std::string check_layout(const std::string& name) {
   const auto& names = layout_names();
-  if (std::find(names.begin(), names.end(), name) != names.end()) return "";
+  // "live" is not a tab: the viewer follows a journal instead of showing sessions.
+  if (name == "live" || std::find(names.begin(), names.end(), name) != names.end()) return "";
   std::string message = std::string("unknown layout '").append(name).append("' (expected ");
   for (std::size_t i = 0; i < names.size(); ++i) message += (i ? ", " : "") + names[i];
-  return message + ")";
+  return message + " or live)";
 }
 
 Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitComparison>> fits) {
@@ -83,6 +85,16 @@ void Viewer::frame(float width, float height, const std::string& layout) {
   ImGui::Begin("doorbench view", nullptr,
                ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
                    ImGuiWindowFlags_NoBringToFrontOnFocus | ImGuiWindowFlags_NoSavedSettings);
+  if (live_ || layout == "live") {
+    if (live_) {
+      live();
+    } else {
+      ImGui::TextUnformatted("Not following a recording: doorbench view --live SESSION.h5");
+    }
+    ImGui::End();
+    handle_exports();
+    return;
+  }
   if (sessions_.empty()) {
     if (steps_ || layout == "steps") {
       steps();
@@ -299,6 +311,41 @@ void Viewer::channels(SessionView& s) {
     const std::string id = "channel" + std::to_string(i);
     plots_.push_back(
         plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each, controls_));
+  }
+  ImGui::EndChild();
+}
+
+void Viewer::live() {
+  const LivePoll poll = live_->poll();
+  // The plots are rebuilt at most 20 times a second (a fast rig's 10 s window costs about
+  // 10 ms to rebuild: docs/PERFORMANCE.md), and at once when the state changes.
+  const auto now = std::chrono::steady_clock::now();
+  if (poll.state_changed || live_plots_.empty() ||
+      now - live_rebuilt_ >= std::chrono::milliseconds(50)) {
+    if (live_->update_plots(live_plots_)) {
+      live_states_.resize(live_plots_.size());
+      live_rebuilt_ = now;
+    }
+  }
+  ImGui::Text("live: %s", live_->journal_path().string().c_str());
+  ImGui::SameLine();
+  // The state in colour: recording green, ended or gone amber, waiting grey.
+  const LiveState state = live_->state();
+  const ImVec4 colour = state == LiveState::kRecording ? ImVec4(0.3f, 0.9f, 0.3f, 1.0f)
+                        : state == LiveState::kWaiting ? ImVec4(0.6f, 0.6f, 0.6f, 1.0f)
+                                                       : ImVec4(1.0f, 0.7f, 0.2f, 1.0f);
+  ImGui::TextColored(colour, "   %s", live_->status().c_str());
+  if (live_plots_.empty()) {
+    ImGui::TextUnformatted("Waiting for the recording's journal.");
+    return;
+  }
+  const float avail = ImGui::GetContentRegionAvail().y;
+  const float each = stacked_height(avail, live_plots_.size());
+  ImGui::BeginChild("live");
+  for (std::size_t i = 0; i < live_plots_.size(); ++i) {
+    const std::string id = "live" + std::to_string(i);
+    plots_.push_back(
+        plot_widget(id.c_str(), live_plots_[i], live_states_[i], 0.0f, each, controls_));
   }
   ImGui::EndChild();
 }

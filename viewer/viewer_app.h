@@ -9,11 +9,13 @@
 //   tuning    sliders for the model's parameters and perceptual controls; strokes replayed
 // The interactive window shows them as tabs with a session selector; a screenshot shows
 // one layout over the whole window.
+#include <chrono>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "viewer/live_journal.h"
 #include "viewer/loop_steps.h"
 #include "viewer/plot_widget.h"
 #include "viewer/session_data.h"
@@ -52,6 +54,10 @@ class Viewer {
   };
   std::optional<PngRequest> take_png_request();
   void set_status(std::string status) { status_ = std::move(status); }
+  // Live: follow a running recording's journal instead of showing sessions; every frame
+  // polls it and the channels scroll (the `live` layout).
+  void set_live(std::unique_ptr<LiveJournal> live) { live_ = std::move(live); }
+  const LiveJournal* live_journal() const { return live_.get(); }
 
  private:
   struct SessionView {
@@ -93,6 +99,11 @@ class Viewer {
   void handle_exports();
   std::filesystem::path export_path(const std::string& title, const std::string& extension);
   std::vector<PlotRecord> plots_;
+  void live();
+  std::unique_ptr<LiveJournal> live_;
+  std::vector<PlotView> live_plots_;
+  std::vector<PlotWidgetState> live_states_;
+  std::chrono::steady_clock::time_point live_rebuilt_{};
 };
 
 // Checks a layout name: "" when known, else a message listing the names.
