@@ -17,6 +17,7 @@
 #include "sensors/comedi_backend.h"
 #include "sensors/comedi_devices.h"
 #include "tests/allocation_counter.h"
+#include "tests/run_doorbench.h"
 #include "tests/temp_dir.h"
 
 using Catch::Matchers::Contains;
@@ -521,30 +522,12 @@ TEST_CASE("comedi devices lists the emulated boards", "[comedi]") {
 
 namespace {
 
-struct Run {
-  int status = -1;
-  std::string out, err;
-};
+using Run = doorbench::testing::DoorbenchRun;
 
-// The doorbench executable through the shell, with the emulator in place of libcomedi
-// when `emulated`.
+// The doorbench executable with the emulator in place of libcomedi when `emulated`.
 Run run_doorbench(const std::string& args, const TempDir& dir, bool emulated) {
-  const auto out = dir / "stdout.txt";
-  const auto err = dir / "stderr.txt";
-  const std::string command =
-      std::string(emulated ? "DOORBENCH_COMEDI_LIBRARY='" DOORBENCH_COMEDI_EMULATOR "' " : "") +
-      "'" DOORBENCH_EXECUTABLE "' " + args + " > '" + out.string() + "' 2> '" + err.string() +
-      "' < /dev/null";
-  Run run;
-  const int status = std::system(command.c_str());
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream o(out), e(err);
-  std::stringstream os, es;
-  os << o.rdbuf();
-  es << e.rdbuf();
-  run.out = os.str();
-  run.err = es.str();
-  return run;
+  return doorbench::testing::run_doorbench_shell(
+      args, dir, emulated ? doorbench::testing::comedi_emulator_environment() : "");
 }
 
 }  // namespace

@@ -10,6 +10,7 @@
 
 #include "modbus/modbus_test_server.h"
 #include "temp_dir.h"
+#include "tests/run_doorbench.h"
 
 using Catch::Matchers::Contains;
 using doorbench::testing::TcpTransmitterServer;
@@ -17,31 +18,10 @@ using doorbench::testing::TempDir;
 
 namespace {
 
-struct Run {
-  int status = -1;
-  std::string out, err;
-};
+using Run = doorbench::testing::DoorbenchRun;
 
 Run run_doorbench(const std::string& args, const TempDir& dir) {
-  const auto out = dir / "stdout.txt";
-  const auto err = dir / "stderr.txt";
-  const std::string command = std::string("'" DOORBENCH_EXECUTABLE "' ")
-                                  .append(args)
-                                  .append(" > '")
-                                  .append(out.string())
-                                  .append("' 2> '")
-                                  .append(err.string())
-                                  .append("' < /dev/null");
-  Run run;
-  const int status = std::system(command.c_str());
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream o(out), e(err);
-  std::stringstream os, es;
-  os << o.rdbuf();
-  es << e.rdbuf();
-  run.out = os.str();
-  run.err = es.str();
-  return run;
+  return doorbench::testing::run_doorbench_shell(args, dir);
 }
 
 // rigs/modbus-bench.toml's channels, pointed at the test server: force (unit 1, float32

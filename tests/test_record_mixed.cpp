@@ -13,6 +13,7 @@
 
 #include "acquisition/session_file.h"
 #include "tests/modbus/modbus_test_server.h"
+#include "tests/run_doorbench.h"
 #include "tests/sine_phase.h"
 #include "tests/temp_dir.h"
 
@@ -23,29 +24,14 @@ using doorbench::testing::TempDir;
 
 namespace {
 
-struct Run {
-  int status = -1;
-  std::string err;
-};
+using Run = doorbench::testing::DoorbenchRun;
 
-// The doorbench executable through the shell, with the comedi emulator in place of
-// libcomedi.
-// `keys`: a shell command whose output is doorbench's stdin (the Enter key).
+// With the comedi emulator in place of libcomedi; `keys`: a shell command whose output is
+// doorbench's stdin (the Enter key).
 Run run_doorbench(const std::string& args, const TempDir& dir,
                   const std::string& keys = "cat /dev/null") {
-  const auto err = dir / "stderr.txt";
-  const std::string command = "(" + keys +
-                              ") | DOORBENCH_COMEDI_LIBRARY='" DOORBENCH_COMEDI_EMULATOR
-                              "' '" DOORBENCH_EXECUTABLE "' " +
-                              args + " > /dev/null 2> '" + err.string() + "'";
-  Run run;
-  const int status = std::system(command.c_str());
-  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  std::ifstream e(err);
-  std::stringstream es;
-  es << e.rdbuf();
-  run.err = es.str();
-  return run;
+  return doorbench::testing::run_doorbench_shell(
+      args, dir, doorbench::testing::comedi_emulator_environment(), keys);
 }
 
 // The server's transmitter channels: force (float32 ABCD at 0) and angle (int16 0.01° at 8).
