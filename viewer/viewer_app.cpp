@@ -475,7 +475,7 @@ void Viewer::tuning(SessionView& s) {
                                          .append(" of ")
                                          .append(std::to_string(t.session_stroke_count()))
                                          .append(" replayed)###strokes");
-  if (ImGui::CollapsingHeader(strokes_header.c_str())) {
+  if (ImGui::CollapsingHeader(strokes_header.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
     auto select = [this, &t](std::vector<int> strokes) {
       if (std::string problem = t.select_strokes(std::move(strokes)); !problem.empty())
         status_ = problem;
