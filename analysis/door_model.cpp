@@ -131,6 +131,14 @@ DoorModel::DoorModel(ModelKind kind, const DoorGeometry& geometry, std::vector<d
         "effect inertia_error.delta_J = " + format_number(values_[inertia_error_offset_]) +
         " makes the inertia J + delta_J not positive");
   }
+  if (!sensory_model) {
+    latch_shape_ = physical::latch_shape(physical::Parameters<double>::from(values_.data()));
+    using StateJet = ceres::Jet<double, 2>;
+    std::array<StateJet, physical::kParameterCount> jets;
+    for (int i = 0; i < physical::kParameterCount; ++i) jets[i] = StateJet(values_[i]);
+    const auto shape = physical::latch_shape(physical::Parameters<StateJet>::from(jets.data()));
+    latch_shape_jet_ = {shape.tan_o.a, shape.tan_c.a, shape.x1.a, shape.x2.a};
+  }
 }
 
 std::optional<int> DoorModel::find_parameter(std::string_view name) const {
@@ -181,7 +189,7 @@ DoorModel DoorModel::with_effect(EffectSetting effect) const {
 
 double DoorModel::torque_Nm(double theta_rad, double omega_rad_s) const {
   std::array<double, kMaxTerms> terms;
-  return evaluate(values_.data(), theta_rad, omega_rad_s, terms.data());
+  return evaluate_with(values_.data(), &latch_shape_, theta_rad, omega_rad_s, terms.data());
 }
 
 double DoorModel::torque_Nm(double theta_rad, double omega_rad_s, std::span<double> terms) const {
@@ -190,7 +198,7 @@ double DoorModel::torque_Nm(double theta_rad, double omega_rad_s, std::span<doub
                                 " values, the model has " + std::to_string(term_count()) +
                                 " terms");
   }
-  return evaluate(values_.data(), theta_rad, omega_rad_s, terms.data());
+  return evaluate_with(values_.data(), &latch_shape_, theta_rad, omega_rad_s, terms.data());
 }
 
 TorqueDerivatives DoorModel::torque_derivatives(double theta_rad, double omega_rad_s) const {
@@ -198,8 +206,13 @@ TorqueDerivatives DoorModel::torque_derivatives(double theta_rad, double omega_r
   std::array<StateJet, kMaxParameters> parameters;
   for (int i = 0; i < parameter_count(); ++i) parameters[i] = StateJet(values_[i]);
   std::array<StateJet, kMaxTerms> terms;
-  const StateJet torque =
-      evaluate(parameters.data(), StateJet(theta_rad, 0), StateJet(omega_rad_s, 1), terms.data());
+  // The parameters are constants here (no derivative part): the cached shape is exactly
+  // what the Jet arithmetic would compute per call.
+  const physical::LatchShape<StateJet> shape{
+      StateJet(latch_shape_jet_.tan_o), StateJet(latch_shape_jet_.tan_c),
+      StateJet(latch_shape_jet_.x1), StateJet(latch_shape_jet_.x2)};
+  const StateJet torque = evaluate_with(parameters.data(), &shape, StateJet(theta_rad, 0),
+                                        StateJet(omega_rad_s, 1), terms.data());
   return {torque.a, torque.v[0], torque.v[1]};
 }
 

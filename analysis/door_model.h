@@ -89,6 +89,12 @@ class DoorModel {
   T inertia(const T* parameters) const;
 
  private:
+  // `shape`: the physical latch's parameter-only values for `parameters` (the cache when
+  // they are values_), or null to compute them here (any other parameter array).
+  template <typename T>
+  T evaluate_with(const T* parameters, const physical::LatchShape<T>* shape, const T& theta,
+                  const T& omega, T* terms) const;
+
   struct ActiveEffect {
     effects::Kind kind;
     int parameter_offset;
@@ -107,17 +113,31 @@ class DoorModel {
   std::vector<EffectSetting> effects_;
   std::vector<ActiveEffect> active_;
   int inertia_error_offset_ = -1;
+  // For the physical model: latch_shape(values_), computed once in the constructor so that
+  // torque_Nm does not take tan per call (the values never change after it).
+  physical::LatchShape<double> latch_shape_{};
+  // The same computed in Ceres Jet arithmetic (its division multiplies by the reciprocal,
+  // so the last bit can differ): what torque_derivatives used before the cache.
+  physical::LatchShape<double> latch_shape_jet_{};
 };
 
 template <typename T>
 T DoorModel::evaluate(const T* parameters, const T& theta, const T& omega, T* terms) const {
+  return evaluate_with<T>(parameters, nullptr, theta, omega, terms);
+}
+
+template <typename T>
+T DoorModel::evaluate_with(const T* parameters, const physical::LatchShape<T>* shape,
+                           const T& theta, const T& omega, T* terms) const {
   T total;
   effects::BaseFriction<T> friction;
   if (kind_ == ModelKind::kSensory) {
     total = sensory::evaluate(parameters, geometry_.theta_max_rad, theta, omega, terms);
     friction = {parameters[sensory::kD1], parameters[sensory::kS]};
   } else {
-    total = physical::evaluate(parameters, geometry_.theta_max_rad, theta, omega, terms);
+    total =
+        shape ? physical::evaluate(parameters, *shape, geometry_.theta_max_rad, theta, omega, terms)
+              : physical::evaluate(parameters, geometry_.theta_max_rad, theta, omega, terms);
     friction = {parameters[physical::kTh], T(1.0) / parameters[physical::kWf]};
   }
   for (const ActiveEffect& effect : active_) {

@@ -105,13 +105,10 @@ struct SpringState {
   T torque_Nm;
 };
 
+// θ's sine and cosine are given: the gravity term needs the sine too.
 template <typename T>
-SpringState<T> balancing_spring(const Parameters<T>& p, const T& theta) {
-  using std::cos;
-  using std::sin;
+SpringState<T> balancing_spring(const Parameters<T>& p, const T& sin_theta, const T& cos_theta) {
   using std::sqrt;
-  const T sin_theta = sin(theta);
-  const T cos_theta = cos(theta);
   // B(θ) = B_u (sin θ, cos θ) + B_v (cos θ, −sin θ)
   const T b_x = p.B_u * sin_theta + p.B_v * cos_theta;
   const T b_y = p.B_u * cos_theta - p.B_v * sin_theta;
@@ -126,47 +123,88 @@ SpringState<T> balancing_spring(const Parameters<T>& p, const T& theta) {
   return {tension, -(b_x * force_y - b_y * force_x)};
 }
 
-// The latch of §3.1: force along the striker's travel (N, positive = opening).
 template <typename T>
-T latch_force_N(const Parameters<T>& p, const T& theta, const T& omega) {
+SpringState<T> balancing_spring(const Parameters<T>& p, const T& theta) {
+  using std::cos;
+  using std::sin;
+  return balancing_spring(p, T(sin(theta)), T(cos(theta)));
+}
+
+// The latch cam's corners, which depend on the parameters alone (tan is the costliest
+// part of an evaluation): a DoorModel computes them once per parameter set. The same
+// expressions as before they were hoisted, so the torque is the same to the bit.
+template <typename T>
+struct LatchShape {
+  T tan_o;  // tan α_o
+  T tan_c;  // tan α_c
+  T x1;     // travel at the cam's top: h / tan α_o
+  T x2;     // travel where the cam ends: x1 + h / tan α_c
+};
+
+template <typename T>
+LatchShape<T> latch_shape(const Parameters<T>& p) {
   using std::tan;
-  using std::tanh;
-  const T travel = p.r_l * theta;
   const T tan_o = tan(p.alpha_o);
   const T tan_c = tan(p.alpha_c);
   const T x1 = p.h / tan_o;
-  const T x2 = x1 + p.h / tan_c;
-  const T rising = travel * tan_o;
-  const T falling = (x2 - travel) * tan_c;
+  return {tan_o, tan_c, x1, x1 + p.h / tan_c};
+}
+
+// The latch of §3.1: force along the striker's travel (N, positive = opening).
+// `friction_shape` is tanh(ω / w_f), which the hinge and guide frictions share.
+template <typename T>
+T latch_force_N(const Parameters<T>& p, const LatchShape<T>& shape, const T& theta,
+                const T& friction_shape) {
+  const T travel = p.r_l * theta;
+  const T rising = travel * shape.tan_o;
+  const T falling = (shape.x2 - travel) * shape.tan_c;
   const T cam = softmin(rising, falling, p.e);
   const T deflection = softplus(cam, p.e);
   // dy/dx by the chain rule: softplus' = logistic(z/e); softmin's weights are logistics.
   const T weight_rising = logistic((falling - rising) / p.e);
-  const T slope = logistic(cam / p.e) * (weight_rising * tan_o - (T(1.0) - weight_rising) * tan_c);
-  const T gate = window(travel, T(0.0), x2, T(1.0) / p.e);
+  const T slope =
+      logistic(cam / p.e) * (weight_rising * shape.tan_o - (T(1.0) - weight_rising) * shape.tan_c);
+  const T gate = window(travel, T(0.0), shape.x2, T(1.0) / p.e);
   const T normal = (p.F_l0 + p.k_l * deflection) * gate;
-  const T friction = p.mu_l * tanh(omega / p.w_f);
+  const T friction = p.mu_l * friction_shape;
   return -normal * (slope + friction) / (T(1.0) - slope * friction);
 }
 
 template <typename T>
-T evaluate(const T* parameter_values, double theta_max_rad, const T& theta, const T& omega,
-           T* terms) {
+T latch_force_N(const Parameters<T>& p, const T& theta, const T& omega) {
+  using std::tanh;
+  return latch_force_N(p, latch_shape(p), theta, T(tanh(omega / p.w_f)));
+}
+
+// τ_m with the latch's shape already computed for these parameter values (DoorModel's
+// cache); every transcendental of θ and ω is taken once.
+template <typename T>
+T evaluate(const T* parameter_values, const LatchShape<T>& shape, double theta_max_rad,
+           const T& theta, const T& omega, T* terms) {
+  using std::cos;
   using std::sin;
   using std::tanh;
   const Parameters<T> p = Parameters<T>::from(parameter_values);
-  const SpringState<T> spring = balancing_spring(p, theta);
+  const T sin_theta = sin(theta);
+  const SpringState<T> spring = balancing_spring(p, sin_theta, T(cos(theta)));
   const T friction_shape = tanh(omega / p.w_f);
-  terms[kGravityTerm] = p.m_d * T(kGravity_m_s2) * p.l_c * sin(theta);
+  terms[kGravityTerm] = p.m_d * T(kGravity_m_s2) * p.l_c * sin_theta;
   terms[kSpring] = spring.torque_Nm;
   terms[kHingeFriction] = -p.T_h * friction_shape - p.b_h * omega;
   terms[kGuideFriction] = -p.mu_g * spring.tension_N * friction_shape;
-  terms[kLatch] = p.r_l * latch_force_N(p, theta, omega);
+  terms[kLatch] = p.r_l * latch_force_N(p, shape, theta, friction_shape);
   terms[kSeal] = theta < p.theta_seal ? p.k_seal * (p.theta_seal - theta) : T(0.0);
   terms[kStops] = sensory::end_stop_torque(theta, omega, p.k_stop, p.c_stop, theta_max_rad);
   T total = terms[0];
   for (int i = 1; i < kTermCount; ++i) total += terms[i];
   return total;
+}
+
+template <typename T>
+T evaluate(const T* parameter_values, double theta_max_rad, const T& theta, const T& omega,
+           T* terms) {
+  return evaluate(parameter_values, latch_shape(Parameters<T>::from(parameter_values)),
+                  theta_max_rad, theta, omega, terms);
 }
 
 std::string validate(const std::array<double, kParameterCount>& values,

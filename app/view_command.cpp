@@ -5,6 +5,7 @@
 #include <optional>
 
 #include "app/commands.h"
+#include "viewer/fit_result.h"
 #include "viewer/viewer_app.h"
 #include "viewer/window.h"
 
@@ -20,7 +21,8 @@ struct ViewOptions {
   int height_px = 900;
   bool compare = false;
   std::string loop_dir;
-  std::string live;  // a journal, or the session being recorded
+  std::string fit_dir;  // a `doorbench fit` output folder
+  std::string live;     // a journal, or the session being recorded
   viewer::LiveOptions live_options;
   ModelOptions model;
 };
@@ -94,7 +96,16 @@ void run_view(const ViewOptions& options) {
       options.compare || !model_options.params_path.empty() || !model_options.effects_path.empty();
   std::optional<DoorModel> model;
   std::string description;
-  if (compare) {
+  if (!options.fit_dir.empty()) {
+    // A fit result: its fitted model, of the kind result.json names.
+    if (compare || !options.loop_dir.empty()) {
+      throw UsageError(
+          "--fit gives the model: no --params, --effects, --compare or --loop with it");
+    }
+    viewer::FitResultFolder fit = viewer::read_fit_result(options.fit_dir);
+    description = fit.description();
+    model = std::move(fit.model);
+  } else if (compare) {
     model = load_model(model_options);
     description = model_options.model + " model (" +
                   (model_options.params_path.empty() ? std::string("reference door")
@@ -145,6 +156,10 @@ void add_view_command(CLI::App& app, Action& action) {
   view->add_option("--loop", options->loop_dir,
                    "A `doorbench loop` folder: its steps (layout steps) and its final model "
                    "for the fit layout (unless --params/--effects say otherwise)")
+      ->check(CLI::ExistingDirectory);
+  view->add_option("--fit", options->fit_dir,
+                   "A `doorbench fit` folder: its fitted model (result.json, fitted-params.json, "
+                   "fitted-effects.json) for the fit and tuning layouts")
       ->check(CLI::ExistingDirectory);
   view->add_option("--live", options->live,
                    "Follow a running recording: its journal (S.h5.journal) or the session it "

@@ -1,5 +1,7 @@
 // The detailed physical model of door-models.md §3 and §3.1 on the reference door, each
 // part worked out by hand from the spec's geometry and formulas.
+#include <ceres/jet.h>
+
 #include <array>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -291,4 +293,53 @@ TEST_CASE("Physical: other constraint messages", "[physical]") {
   CHECK_THROWS_WITH(model_with(kMuG, -0.001),
                     M("physical parameter mu_g = -0.001 breaks mu_g >= 0"));
   CHECK_THROWS_AS(model_with(kMd, 0.0), std::invalid_argument);
+}
+
+TEST_CASE("Physical: the cached latch shape gives what the per-call evaluation gives, to the bit",
+          "[physical]") {
+  // DoorModel keeps tan(alpha_o), tan(alpha_c) and the cam's corners from its constructor;
+  // the generic evaluate() computes them from the parameter array each call. Both must agree
+  // exactly, also after with_parameter_values (which must refresh the cache).
+  const DoorModel reference = doorbench::reference_model(ModelKind::kPhysical);
+  std::vector<double> values(reference.parameter_values().begin(),
+                             reference.parameter_values().end());
+  values[doorbench::physical::kAlphaO] *= 1.2;
+  values[doorbench::physical::kAlphaC] *= 0.8;
+  values[doorbench::physical::kH] *= 1.1;
+  const DoorModel changed = reference.with_parameter_values(values);
+  for (const DoorModel* model : {&reference, &changed}) {
+    std::array<double, DoorModel::kMaxTerms> cached{}, generic{};
+    int compared = 0;
+    for (double theta = -0.02; theta < 1.6; theta += 0.0007) {
+      for (double omega : {-2.0, -0.3, 0.0, 0.01, 0.7, 2.5}) {
+        const double a = model->torque_Nm(theta, omega, cached);
+        const double b =
+            model->evaluate(model->parameter_values().data(), theta, omega, generic.data());
+        INFO("theta " << theta << " omega " << omega);
+        REQUIRE(a == b);
+        for (int i = 0; i < model->term_count(); ++i) REQUIRE(cached[i] == generic[i]);
+        ++compared;
+      }
+    }
+    REQUIRE(compared > 10000);
+    // torque_derivatives (cached shape) against Jets through the generic evaluate.
+    using StateJet = ceres::Jet<double, 2>;
+    std::array<StateJet, DoorModel::kMaxParameters> parameters;
+    for (int i = 0; i < model->parameter_count(); ++i) {
+      parameters[std::size_t(i)] = StateJet(model->parameter_values()[std::size_t(i)]);
+    }
+    std::array<StateJet, DoorModel::kMaxTerms> terms;
+    for (double theta = -0.02; theta < 1.6; theta += 0.0031) {
+      const double omega = 0.4 - theta;
+      const auto d = model->torque_derivatives(theta, omega);
+      const StateJet jet =
+          model->evaluate(parameters.data(), StateJet(theta, 0), StateJet(omega, 1), terms.data());
+      INFO("theta " << theta);
+      REQUIRE(d.torque_Nm == jet.a);
+      REQUIRE(d.dtorque_dtheta_Nm_per_rad == jet.v[0]);
+      REQUIRE(d.dtorque_domega_Nm_s_per_rad == jet.v[1]);
+    }
+  }
+  // And the cache is the changed model's own: another latch, another torque in the latch.
+  REQUIRE(changed.torque_Nm(0.02, 0.1) != reference.torque_Nm(0.02, 0.1));
 }

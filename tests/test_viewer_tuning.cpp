@@ -132,3 +132,85 @@ TEST_CASE("tuning replays strokes in parallel with the same result as one thread
   }
   REQUIRE(i == b.size());
 }
+
+TEST_CASE("tuning re-simulates exactly the selected strokes", "[viewer]") {
+  doorbench::testing::TempDir dir("viewer_tuning_selection");
+  const auto session = dir.path / "bench.h5";
+  doorbench::testing::record_built_in_session(session, 19.0, 5, "sensory");
+  const doorbench::PreparedData data = doorbench::prepare_session(session);
+  REQUIRE(data.strokes.size() >= 4);
+  const doorbench::DoorModel reference = doorbench::reference_model(ModelKind::kSensory);
+  Tuning tuning(data, reference);
+  // Default: the first 12 (or all when fewer).
+  const std::size_t first = std::min<std::size_t>(12, data.strokes.size());
+  REQUIRE(tuning.stroke_count() == first);
+  REQUIRE(tuning.session_stroke_count() == data.strokes.size());
+  REQUIRE(tuning.selected_strokes().front() == 0);
+  REQUIRE(tuning.selected_strokes().back() == int(first) - 1);
+
+  // Strokes 3 and 1 (given out of order): the plot holds those two, in time order.
+  const auto before = tuning.plot.revision;
+  REQUIRE(tuning.select_strokes({3, 1}) == "");
+  REQUIRE(tuning.selected_strokes() == std::vector<int>{1, 3});
+  REQUIRE(tuning.stroke_count() == 2);
+  REQUIRE(tuning.plot.revision > before);
+  REQUIRE(tuning.plot.series.size() == 3);
+
+  using doorbench::perceptual::Control;
+  const double j = doorbench::perceptual::read(reference, Control::kHeaviness);
+  REQUIRE(tuning.set_control(Control::kHeaviness, 1.4 * j) == "");
+  tuning.resimulate();
+
+  // What a replay of exactly strokes 1 and 3 gives, and nothing else.
+  doorbench::PreparedData selected = data;
+  selected.strokes = {data.strokes[1], data.strokes[3]};
+  doorbench::WindowOptions options =
+      doorbench::metric_window_options(doorbench::FitOptions{}, tuning.model());
+  options.whole_strokes = true;
+  const auto expected = doorbench::simulate_windows(tuning.model(), selected, options);
+  const auto& measured = *tuning.plot.series[0];
+  const auto& tuned = *tuning.plot.series[2];
+  REQUIRE(tuned.size() == selected.strokes[0].size() + 1 + selected.strokes[1].size());
+  REQUIRE(measured.size() == tuned.size());
+  std::size_t i = 0;
+  double max_error = 0.0;
+  for (std::size_t k = 0; k < selected.strokes.size(); ++k) {
+    if (k > 0) {
+      REQUIRE(std::isnan(tuned.y(i)));  // the break between the strokes
+      ++i;
+    }
+    const doorbench::Stroke& stroke = selected.strokes[k];
+    for (std::size_t n = 0; n < stroke.size(); ++n, ++i) {
+      INFO("stroke " << k << " sample " << n);
+      REQUIRE(tuned.x(i) == stroke.time_s[n]);
+      REQUIRE(measured.y(i) == stroke.omega_rad_s[n]);
+      const double hat = expected.omega_rad_s[k][n];
+      if (std::isnan(hat)) {
+        REQUIRE(std::isnan(tuned.y(i)));
+      } else {
+        REQUIRE(tuned.y(i) == hat);
+        max_error = std::max(max_error, std::abs(stroke.omega_rad_s[n] - hat));
+      }
+    }
+  }
+  REQUIRE(tuning.max_error_rad_s() == max_error);
+
+  // A checkbox: stroke 2 added, then 1 removed.
+  REQUIRE(tuning.toggle_stroke(2) == "");
+  REQUIRE(tuning.selected_strokes() == std::vector<int>{1, 2, 3});
+  REQUIRE(tuning.is_selected(2));
+  REQUIRE(tuning.toggle_stroke(1) == "");
+  REQUIRE(tuning.selected_strokes() == std::vector<int>{2, 3});
+  REQUIRE(!tuning.is_selected(1));
+  REQUIRE(tuning.plot.series[2]->size() == data.strokes[2].size() + 1 + data.strokes[3].size());
+
+  // Refused selections leave the selection as it was.
+  REQUIRE_THAT(tuning.select_strokes({}), Contains("at least one stroke"));
+  REQUIRE_THAT(tuning.select_strokes({2, 2}), Contains("stroke index 2 given twice"));
+  REQUIRE_THAT(tuning.select_strokes({0, 99}), Contains("stroke index 99 out of range"));
+  REQUIRE(tuning.toggle_stroke(2) == "");
+  REQUIRE_THAT(tuning.toggle_stroke(3), Contains("at least one stroke"));
+  REQUIRE(tuning.selected_strokes() == std::vector<int>{3});
+  REQUIRE(tuning.plot.series[2]->size() == data.strokes[3].size());
+  REQUIRE_THROWS_WITH(Tuning(data, reference, {1, 1}), Contains("stroke index 1 given twice"));
+}

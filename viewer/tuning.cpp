@@ -1,5 +1,6 @@
 #include "viewer/tuning.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <fstream>
@@ -20,7 +21,7 @@ constexpr std::size_t kDefaultStrokes = 12;
 }  // namespace
 
 Tuning::Tuning(const PreparedData& data, DoorModel fitted, std::vector<int> strokes)
-    : fitted_(fitted), model_(std::move(fitted)) {
+    : all_(data), fitted_(fitted), model_(std::move(fitted)) {
   if (data.strokes.empty()) {
     throw std::invalid_argument(data.source + ": no strokes to tune against");
   }
@@ -29,27 +30,67 @@ Tuning::Tuning(const PreparedData& data, DoorModel fitted, std::vector<int> stro
       strokes.push_back(int(i));
     }
   }
-  data_ = data;
-  data_.strokes.clear();
-  for (int index : strokes) {
-    if (index < 0 || std::size_t(index) >= data.strokes.size()) {
-      throw std::invalid_argument(std::string(data.source)
-                                      .append(": stroke index ")
-                                      .append(std::to_string(index))
-                                      .append(" out of range (")
-                                      .append(std::to_string(data.strokes.size()))
-                                      .append(" strokes)"));
-    }
-    data_.strokes.push_back(data.strokes[std::size_t(index)]);
+  std::sort(strokes.begin(), strokes.end());
+  if (std::string problem = check_selection(strokes); !problem.empty()) {
+    throw std::invalid_argument(std::string(data.source).append(": ").append(problem));
   }
+  threads_ = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+  apply_selection(std::move(strokes));
+}
+
+bool Tuning::is_selected(int index) const {
+  return std::binary_search(selected_.begin(), selected_.end(), index);
+}
+
+std::string Tuning::check_selection(const std::vector<int>& strokes) const {
+  if (strokes.empty()) return "select at least one stroke to replay";
+  for (std::size_t i = 0; i < strokes.size(); ++i) {
+    const int index = strokes[i];
+    if (index < 0 || std::size_t(index) >= all_.strokes.size()) {
+      return std::string("stroke index ")
+          .append(std::to_string(index))
+          .append(" out of range (")
+          .append(std::to_string(all_.strokes.size()))
+          .append(" strokes)");
+    }
+    if (i > 0 && strokes[i - 1] == index) {
+      return std::string("stroke index ").append(std::to_string(index)).append(" given twice");
+    }
+  }
+  return "";
+}
+
+std::string Tuning::select_strokes(std::vector<int> strokes) {
+  std::sort(strokes.begin(), strokes.end());
+  if (std::string problem = check_selection(strokes); !problem.empty()) return problem;
+  apply_selection(std::move(strokes));
+  return "";
+}
+
+std::string Tuning::toggle_stroke(int index) {
+  std::vector<int> strokes = selected_;
+  const auto at = std::lower_bound(strokes.begin(), strokes.end(), index);
+  if (at != strokes.end() && *at == index)
+    strokes.erase(at);
+  else
+    strokes.insert(at, index);
+  return select_strokes(std::move(strokes));
+}
+
+void Tuning::apply_selection(std::vector<int> strokes) {
+  selected_ = std::move(strokes);
+  data_ = all_;
+  data_.strokes.clear();
+  for (int index : selected_) data_.strokes.push_back(all_.strokes[std::size_t(index)]);
   PreparedData single = data_;
   single.strokes.clear();
+  singles_.clear();
   for (const Stroke& stroke : data_.strokes) {
     singles_.push_back(single);
     singles_.back().strokes = {stroke};
   }
-  threads_ = static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-  // Measured ω and the fitted model's replay are fixed; the tuned one follows each change.
+  // Measured ω and the fitted model's replay are fixed until the selection changes; the
+  // tuned one follows each change of the model.
   std::vector<double> t, omega;
   for (const Stroke& stroke : data_.strokes) {
     if (!t.empty()) {
@@ -61,6 +102,7 @@ Tuning::Tuning(const PreparedData& data, DoorModel fitted, std::vector<int> stro
   }
   auto measured = std::make_shared<Series>(Series::timed("measured", "rad/s", t, omega));
   measured->colour = {200, 200, 200, 255};
+  plot.series.clear();
   plot.title = "rate: measured, fitted and tuned (strokes replayed open-loop)";
   plot.x_label = "time";
   plot.y_label = "rate";
@@ -71,6 +113,7 @@ Tuning::Tuning(const PreparedData& data, DoorModel fitted, std::vector<int> stro
   plot.add(replay(model_, "tuned", {230, 90, 40, 255}, &max_error_));
   last_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  ++plot.revision;
   plot.fit();
 }
 

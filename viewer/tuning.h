@@ -19,12 +19,25 @@ namespace doorbench::viewer {
 class Tuning {
  public:
   // `strokes`: indices into data.strokes to re-simulate (empty: at most the first 12).
-  // Throws std::invalid_argument when there is no stroke or an index is out of range.
+  // Throws std::invalid_argument when there is no stroke or an index is out of range or
+  // given twice.
   Tuning(const PreparedData& data, DoorModel fitted, std::vector<int> strokes = {});
 
   const DoorModel& fitted() const { return fitted_; }
   const DoorModel& model() const { return model_; }
+  // The strokes replayed (the selection's size) and the session's strokes to choose from.
   std::size_t stroke_count() const { return data_.strokes.size(); }
+  std::size_t session_stroke_count() const { return all_.strokes.size(); }
+  // The selection: indices into the session's strokes, ascending.
+  const std::vector<int>& selected_strokes() const { return selected_; }
+  bool is_selected(int index) const;
+  // Replays exactly these strokes from now on (in ascending order whatever the order
+  // given): the plot's measured, fitted and tuned curves are rebuilt for them with the
+  // current model. "" when done; otherwise why (empty, out of range, given twice) and the
+  // selection stays as it was.
+  std::string select_strokes(std::vector<int> strokes);
+  // The selection with one stroke added or removed (what a checkbox does).
+  std::string toggle_stroke(int index);
 
   // "" when the change was made; otherwise the model's one-line reason, and nothing changes.
   std::string set_parameter(int index, double value);
@@ -52,6 +65,12 @@ class Tuning {
  private:
   std::shared_ptr<Series> replay(const DoorModel& model, const std::string& name, Rgba colour,
                                  double* max_error);
+  // "" or why `strokes` (sorted) is not a selection of all_'s strokes.
+  std::string check_selection(const std::vector<int>& strokes) const;
+  // Takes a checked, sorted selection: data_, singles_ and the plot's three curves.
+  void apply_selection(std::vector<int> strokes);
+  PreparedData all_;  // every stroke of the session
+  std::vector<int> selected_;
   PreparedData data_;  // the selected strokes only
   // The same strokes one per PreparedData, so that each replays on its own thread.
   std::vector<PreparedData> singles_;

@@ -6,6 +6,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <stdexcept>
 
@@ -465,6 +466,63 @@ void Viewer::tuning(SessionView& s) {
     } catch (const std::exception& error) {
       status_ = error.what();
     }
+  }
+  // Which strokes each change replays: a checkbox per stroke of the session. The
+  // selection re-simulates at once (measured, fitted and tuned curves for those strokes).
+  ImGui::Separator();
+  const std::string strokes_header = std::string("Strokes (")
+                                         .append(std::to_string(t.stroke_count()))
+                                         .append(" of ")
+                                         .append(std::to_string(t.session_stroke_count()))
+                                         .append(" replayed)###strokes");
+  if (ImGui::CollapsingHeader(strokes_header.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
+    auto select = [this, &t](std::vector<int> strokes) {
+      if (std::string problem = t.select_strokes(std::move(strokes)); !problem.empty())
+        status_ = problem;
+    };
+    if (ImGui::Button("First 12")) {
+      std::vector<int> first;
+      for (int i = 0; i < int(t.session_stroke_count()) && i < 12; ++i) first.push_back(i);
+      select(std::move(first));
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("All")) {
+      std::vector<int> all(t.session_stroke_count());
+      for (std::size_t i = 0; i < all.size(); ++i) all[i] = int(i);
+      select(std::move(all));
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Openings")) {
+      std::vector<int> openings;
+      for (std::size_t i = 0; i < s.data.data.strokes.size(); ++i) {
+        if (s.data.data.strokes[i].direction == StrokeDirection::kOpening)
+          openings.push_back(int(i));
+      }
+      select(std::move(openings));
+    }
+    ImGui::SameLine();
+    if (ImGui::Button("Closings")) {
+      std::vector<int> closings;
+      for (std::size_t i = 0; i < s.data.data.strokes.size(); ++i) {
+        if (s.data.data.strokes[i].direction == StrokeDirection::kClosing)
+          closings.push_back(int(i));
+      }
+      select(std::move(closings));
+    }
+    ImGui::BeginChild("stroke list", ImVec2(0.0f, 160.0f), true);
+    for (std::size_t i = 0; i < s.data.data.strokes.size(); ++i) {
+      const Stroke& stroke = s.data.data.strokes[i];
+      char label[96];
+      std::snprintf(label, sizeof label, "%zu: stroke %d, %s, %.2f-%.2f s", i, stroke.id,
+                    stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
+                    stroke.time_s.empty() ? 0.0 : stroke.time_s.front(),
+                    stroke.time_s.empty() ? 0.0 : stroke.time_s.back());
+      bool on = t.is_selected(int(i));
+      if (ImGui::Checkbox(label, &on)) {
+        if (std::string problem = t.toggle_stroke(int(i)); !problem.empty()) status_ = problem;
+      }
+    }
+    ImGui::EndChild();
   }
   if (t.model().kind() == ModelKind::kSensory) {
     ImGui::Separator();
