@@ -1,0 +1,90 @@
+#pragma once
+// The haptic device interface: what the render loop needs from any device that renders the
+// door (the HapticMaster over its TCP protocol, the simulated HapticMaster, a 1-DOF rotary
+// device on the door's own axis).
+//
+// Two kinds of call:
+//  - set-up calls (start, stop, name, limits) run outside the real-time loop; they may block,
+//    allocate and do I/O, and throw DeviceError with a message that names the device;
+//  - real-time calls (read, command_force, command_inertia) are made by the render loop's
+//    tick at 1-4 kHz. They never block, allocate, lock or do I/O: a driver that talks to
+//    hardware exchanges with its own I/O thread through lock-free slots, so read() returns
+//    the newest sample that thread has and command_force() leaves a value for it to send.
+//
+// Coordinates: a Cartesian device (kCartesian3) reports positions in m, velocities in m/s
+// and forces in N in its own frame. A rotary device (kRotary1) uses only x: the angle about
+// its axis in rad, the rate in rad/s and the torque in N*m (positive = the door's opening
+// direction); y and z are 0.
+//
+// Thread safety: one thread makes the set-up calls; one thread (the tick) makes the
+// real-time calls; the two may overlap only as stated on each call.
+#include <Eigen/Core>
+#include <cstdint>
+#include <stdexcept>
+#include <string>
+
+namespace doorbench::haptic {
+
+using Vec3 = Eigen::Vector3d;
+
+class DeviceError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;  // messages start with the device's name
+};
+
+enum class Kinematics { kCartesian3, kRotary1 };
+
+// One reading of the device.
+struct DeviceSample {
+  // Seconds on the host's CLOCK_MONOTONIC (or the simulated clock) when the reading was
+  // taken: for a networked device, when its reply arrived.
+  double time_s = 0.0;
+  Vec3 position = Vec3::Zero();        // m (rotary: x = rad)
+  Vec3 velocity = Vec3::Zero();        // m/s (rotary: x = rad/s)
+  Vec3 measured_force = Vec3::Zero();  // N, the user's force on the end-effector (rotary: N*m)
+  // Increments with every new reading; unchanged between two read() calls = stale (the
+  // device or its link stalled). The watchdog counts stale ticks.
+  std::uint64_t sequence = 0;
+  // False once the link is lost (connection closed, error reply, timeout): the render loop
+  // then ramps down and stops.
+  bool link_ok = true;
+};
+
+// What the device can do; the safety layer takes the smaller of these and its own options.
+struct DeviceLimits {
+  Kinematics kinematics = Kinematics::kCartesian3;
+  double max_force = 100.0;                   // N (rotary: N*m), continuous
+  double max_force_rate = 20000.0;            // N/s (rotary: N*m/s)
+  double max_velocity = 1.0;                  // m/s (rotary: rad/s)
+  Vec3 workspace_min = Vec3::Constant(-0.2);  // m (rotary: x in rad)
+  Vec3 workspace_max = Vec3::Constant(0.2);
+  // The inertia the device can render by admittance: kg (rotary: kg*m^2). 0/0 for an
+  // impedance device that renders no inertia (the host then renders it).
+  double min_inertia = 0.0;
+  double max_inertia = 0.0;
+};
+
+class HapticDevice {
+ public:
+  virtual ~HapticDevice() = default;
+
+  // Set-up calls (not real-time).
+  virtual std::string name() const = 0;  // "hapticmaster://10.0.0.5:7654", "sim:hapticmaster"
+  virtual DeviceLimits limits() const = 0;
+  // Connects, sets the inertia the device renders (kg; ignored by devices whose limits give
+  // max_inertia 0), zeroes the commanded force and enters the force-controlled state.
+  virtual void start(double inertia) = 0;
+  // Zero force and leave the force-controlled state; safe to call more than once and after a
+  // lost link. Never throws.
+  virtual void stop() noexcept = 0;
+
+  // Real-time calls (the tick): never block, allocate, lock or do I/O.
+  virtual DeviceSample read() noexcept = 0;
+  // The force (N; rotary: torque N*m) the device adds to the user's, in its frame. The
+  // safety layer has limited it already; a device may clamp it again to its own limits.
+  virtual void command_force(const Vec3& force) noexcept = 0;
+  // A new inertia for an admittance device (heaviness tuned live), sent by its I/O thread.
+  virtual void command_inertia(double inertia) noexcept = 0;
+};
+
+}  // namespace doorbench::haptic

@@ -1,0 +1,158 @@
+#pragma once
+// The safety layer, always on (docs/haptic-safety.md): it stands between the model and the
+// device and is the last thing the tick does before command_force().
+//
+//  - force limit (magnitude of the commanded vector) and force-rate limit, each the smaller of
+//    the device's and the options';
+//  - a start-up ramp: the force is scaled from 0 to 1 over startup_ramp_s;
+//  - trips: velocity above velocity_trip, position outside the workspace less its margin, a
+//    missed deadline (time since the previous tick above max_tick_interval_s), a stalled
+//    device (sample sequence unchanged for max_stale_ticks ticks), a lost link. A trip ramps
+//    the force to zero within shutdown_ramp_s and then holds it at zero (state kStopped);
+//    nothing restarts the layer but a new SafetyLayer (a new run);
+//  - the passivity observer and controller (PassivityController below) on the model's active
+//    terms (the snap zone's negative damping injects energy);
+//  - parameter sets are checked before they reach the tick (check_parameter_set).
+// Whatever the inputs (NaN, infinities, huge values), the force it returns is finite and its
+// magnitude never exceeds the force limit, and between two ticks it never changes by more
+// than the rate limit times the tick interval (except to go to zero on a NaN input).
+//
+// Each step reports the events that began in that tick as bits, so that the tick can record
+// them without building text; event_name() gives their names for the session.
+//
+// Thread safety: one SafetyLayer per render loop, used by its tick only. Its step is
+// noexcept and never allocates.
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include "analysis/door_model.h"
+#include "haptic/device.h"
+#include "haptic/door_mapping.h"
+
+namespace doorbench::haptic {
+
+struct SafetyOptions {
+  double max_force = 60.0;            // N (rotary: N*m); the device's own limit also applies
+  double max_force_rate = 5000.0;     // N/s (rotary: N*m/s)
+  double velocity_trip = 1.0;         // m/s (rotary: rad/s)
+  double workspace_margin_m = 0.005;  // trip this far inside the device's workspace box
+  double startup_ramp_s = 0.5;
+  double shutdown_ramp_s = 0.02;       // a trip brings the force to zero within this
+  double max_tick_interval_s = 0.005;  // a longer gap between ticks is a missed deadline
+  int max_stale_ticks = 50;            // ticks without a new device sample: stalled
+  std::string validate() const;        // empty when usable, else one line naming the option
+};
+
+enum class SafetyState { kStarting, kRunning, kRampingDown, kStopped };
+std::string_view to_string(SafetyState state);
+
+// Event bits (a tick may raise several).
+enum SafetyEvent : std::uint32_t {
+  kEventStartRampDone = 1u << 0,
+  kEventForceLimited = 1u << 1,      // the limit started clipping (not raised again until
+  kEventForceRateLimited = 1u << 2,  //   it has stopped clipping for a while)
+  kEventVelocityTrip = 1u << 3,
+  kEventWorkspaceTrip = 1u << 4,
+  kEventDeadlineMiss = 1u << 5,
+  kEventDeviceStalled = 1u << 6,
+  kEventLinkLost = 1u << 7,
+  kEventNonFiniteInput = 1u << 8,
+  kEventPassivityActive = 1u << 9,  // the passivity controller started damping
+  kEventStopRequested = 1u << 10,   // stop() asked for the ramp down
+  kEventStopped = 1u << 11,         // the force has reached zero after a trip or stop
+};
+// "velocity_trip", "deadline_miss", ... for a single bit; "" otherwise.
+std::string_view event_name(std::uint32_t single_event_bit);
+// A sentence for the session's event detail, e.g. what the limit is.
+std::string_view event_meaning(std::uint32_t single_event_bit);
+
+struct SafetyInput {
+  double time_s = 0.0;                // this tick's time
+  DeviceSample sample;                // this tick's reading
+  Vec3 desired_force = Vec3::Zero();  // model + constraint, device frame
+};
+
+struct SafetyOutput {
+  Vec3 force = Vec3::Zero();  // what to command
+  double scale = 0.0;         // the ramp's factor now, 0..1
+  std::uint32_t events = 0;   // SafetyEvent bits that began this tick
+  SafetyState state = SafetyState::kStarting;
+  bool clipped = false;  // force or rate limit acted this tick
+};
+
+class SafetyLayer {
+ public:
+  // Throws std::invalid_argument with validate()'s message.
+  SafetyLayer(const SafetyOptions& options, const DeviceLimits& limits);
+
+  SafetyOutput step(const SafetyInput& input) noexcept;
+  // Ramp down and stop (the user pressed stop, the run's time is up); raises
+  // kEventStopRequested once.
+  void request_stop() noexcept;
+  SafetyState state() const noexcept { return state_; }
+  double force_limit() const noexcept { return force_limit_; }
+  double force_rate_limit() const noexcept { return force_rate_limit_; }
+
+ private:
+  SafetyOptions options_;
+  DeviceLimits limits_;
+  double force_limit_ = 0.0;
+  double force_rate_limit_ = 0.0;
+  SafetyState state_ = SafetyState::kStarting;
+  // Implementation state (helper fills in).
+  bool have_previous_ = false;
+  double previous_time_s_ = 0.0;
+  double start_time_s_ = 0.0;
+  double ramp_down_start_s_ = 0.0;
+  double ramp_down_from_scale_ = 1.0;
+  double scale_ = 0.0;
+  Vec3 previous_force_ = Vec3::Zero();
+  std::uint64_t previous_sequence_ = 0;
+  int stale_ticks_ = 0;
+  int clipping_quiet_ticks_ = 0;
+  bool clipping_ = false;
+  bool stop_requested_ = false;
+  bool stop_reported_ = false;
+};
+
+// Passivity observer and controller on the active terms (after Hannaford and Ryu). The
+// observer integrates the energy the active terms put into the door (τ_active · ω dt); the
+// energy they may inject is bounded by a budget that drains back at a set rate (so one snap
+// per stroke is allowed, a limit cycle is not). When the observed energy exceeds the budget,
+// the controller adds damping that dissipates the excess, bounded by max_damping.
+struct PassivityOptions {
+  bool enabled = true;
+  double energy_budget_J = 0.5;    // what the active terms may inject before damping
+  double budget_recovery_W = 0.5;  // the observed energy drains by this (not below 0)
+  double max_damping_Nm_s_per_rad = 20.0;
+  std::string validate() const;
+};
+
+class PassivityController {
+ public:
+  explicit PassivityController(const PassivityOptions& options);  // throws invalid_argument
+  // `active_torque_Nm`: the sum of the model's active terms this tick; returns the damping
+  // torque to add (N*m, opposing ω). Raises kEventPassivityActive in `events` when it starts.
+  double step(double active_torque_Nm, double omega_rad_s, double dt_s,
+              std::uint32_t& events) noexcept;
+  double observed_energy_J() const noexcept { return energy_J_; }
+  double dissipated_energy_J() const noexcept { return dissipated_J_; }
+
+ private:
+  PassivityOptions options_;
+  double energy_J_ = 0.0;
+  double dissipated_J_ = 0.0;
+  bool active_ = false;
+};
+
+// Checks a parameter set before it may reach the tick: every value finite and inside its
+// bounds, and the stiffest restoring slope of τ_m over [θ_lo, θ_hi] (including the latch's
+// switch edges), as device stiffness, below what the loop can render stably at its period
+// with the device's inertia (the bound and its derivation in docs/haptic-safety.md).
+// Returns "" when the set may be played, else one line naming the parameter or the slope.
+std::string check_parameter_set(const DoorModel& model, const DoorMapping& mapping,
+                                double device_inertia, double tick_period_s, double theta_lo_rad,
+                                double theta_hi_rad);
+
+}  // namespace doorbench::haptic
