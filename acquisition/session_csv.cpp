@@ -299,7 +299,7 @@ Recording session_to_recording(const SessionReader& session) {
   if (!recording.sample_rate_hz && force->sample_rate_hz > 0) {
     recording.sample_rate_hz = force->sample_rate_hz;
   }
-  for (const std::string group : {"truth", "import"}) {
+  for (const std::string group : {"truth", "import", "haptic"}) {
     try {
       const std::string radius = session.read_group_attribute(group, "handle_radius_m");
       recording.handle_radius_m = std::stod(radius);

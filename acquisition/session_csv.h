@@ -21,7 +21,8 @@
 // A load cell whose channel names a geometry record (geometry_calibration_id) has its force
 // corrected by it (the record maps the reading to the tangential force: / cos of the
 // mounting angle), and the record's handle_radius_m becomes the recording's handle radius
-// (before the truth's or the import's); the metadata key geometry_calibration names it.
+// (before the truth's, the import's or the haptic playback's); the metadata key
+// geometry_calibration names it.
 //
 // Import makes a session of a recording: one float64 channel per column, in the column's
 // unit, with no calibration (the values already are physical); times become a sample

@@ -1,0 +1,170 @@
+#include "haptic/playback.h"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+#include <thread>
+
+namespace doorbench::haptic {
+
+std::string PlaybackOptions::validate() const {
+  if (std::string problem = loop.validate(); !problem.empty()) return problem;
+  if (std::string problem = arc.validate(); !problem.empty()) return "arc: " + problem;
+  if (std::string problem = real_time.validate(); !problem.empty()) return problem;
+  if (!(duration_s > 0.0) || !std::isfinite(duration_s)) return "duration_s must be > 0";
+  return "";
+}
+
+std::string PlaybackSummary::brief_report() const {
+  std::ostringstream text;
+  text.precision(4);
+  text << ticks << " ticks over " << duration_s << " s into " << session_path.string()
+       << "; max commanded force " << max_commanded_force << ", arc error radial/axial max "
+       << max_radial_error_m * 1e3 << "/" << max_axial_error_m * 1e3 << " mm; " << parameter_changes
+       << " parameter changes; " << clipped_ticks << " ticks clipped; " << records_dropped
+       << " records dropped; safety " << to_string(final_state);
+  if (!safety_events.empty()) {
+    text << " (events:";
+    for (const std::string& event : safety_events) text << " " << event;
+    text << ")";
+  }
+  if (timing) text << "\ntiming: " << timing->brief_report();
+  if (!warning.empty()) text << "\nwarning: " << warning;
+  return text.str();
+}
+
+Playback::Playback(HapticDevice& device, const DoorModel& model, const PlaybackOptions& options,
+                   const std::filesystem::path& session_path, const SessionMetadata& metadata,
+                   const PlaybackSetup& setup)
+    : device_(device), options_(options), current_model_(playable_model(model)) {
+  if (std::string problem = options_.validate(); !problem.empty()) {
+    throw std::invalid_argument("playback: " + problem);
+  }
+  const DeviceLimits limits = device_.limits();
+  mapping_ = std::make_unique<DoorMapping>(limits.kinematics, options_.arc,
+                                           model.geometry().handle_radius_m);
+  if (std::string problem =
+          mapping_->check_workspace(limits, -0.02, model.geometry().theta_max_rad + 0.02,
+                                    options_.loop.safety.workspace_margin_m);
+      !problem.empty()) {
+    throw std::invalid_argument("playback on " + device_.name() + ": " + problem);
+  }
+  auto first = std::make_unique<PlaybackParameters>(current_model_, *mapping_,
+                                                    "start: " + setup.model_source);
+  const std::string description = first->description;
+  const double inertia = first->device_inertia;
+  device_.start(inertia);
+  device_started_ = true;
+  loop_ = std::make_unique<RenderLoop>(device_, *mapping_, std::move(first), options_.loop);
+  recorder_ = std::make_unique<TickRecorder>(session_path, metadata, *loop_, current_model_, setup);
+  recorder_->note_parameter_set(loop_->mailbox().in_use(), description, current_model_);
+}
+
+Playback::~Playback() {
+  try {
+    if (!finished_ && recorder_) recorder_->close();
+  } catch (...) {
+    // the recorder reports its own failure on stderr
+  }
+  if (device_started_) device_.stop();
+}
+
+std::string Playback::change_parameters(const DoorModel& model, const std::string& description) {
+  DoorModel playable = playable_model(model);
+  if (playable.kind() != current_model_.kind() ||
+      playable.term_count() != current_model_.term_count()) {
+    return "a live change keeps the model and its effects (only values change); play another "
+           "model in a new run";
+  }
+  auto parameters = std::make_unique<PlaybackParameters>(playable, *mapping_, description);
+  if (std::string problem = loop_->check(*parameters); !problem.empty()) {
+    recorder_->add_event({loop_->status().time_s, "parameters_refused", "",
+                          std::string(description).append(": ").append(problem)});
+    return problem;
+  }
+  // Noted under the id it will get before the tick can take it, so that the session names
+  // the set from its first tick.
+  recorder_->note_parameter_set(loop_->mailbox().next_id(), description, playable);
+  if (std::string problem = loop_->publish(std::move(parameters)); !problem.empty()) {
+    return problem;  // cannot happen: checked above
+  }
+  current_model_ = std::move(playable);
+  return "";
+}
+
+PlaybackSummary Playback::run_simulated(const std::function<void(double)>& advance_device_to,
+                                        const std::function<void(double)>& between_ticks) {
+  if (finished_) throw std::logic_error("playback: already run");
+  const double period = loop_->period_s();
+  const auto tick_count = static_cast<std::uint64_t>(std::llround(options_.duration_s / period));
+  // After the duration, the stop ramp: at most a second more.
+  const std::uint64_t limit = tick_count + static_cast<std::uint64_t>(std::ceil(1.0 / period));
+  for (std::uint64_t tick = 0; tick < limit; ++tick) {
+    const double time_s = static_cast<double>(tick) * period;
+    if (tick == tick_count) loop_->request_stop();
+    advance_device_to(time_s);
+    loop_->tick(time_s);
+    if (between_ticks) between_ticks(time_s);
+    if (loop_->records().size() > loop_->records().capacity() / 2) recorder_->drain();
+    if (loop_->stopped()) break;
+  }
+  return finish(std::nullopt, "");
+}
+
+PlaybackSummary Playback::run_real_time(
+    const std::function<bool(const RenderLoop::Status&)>& every_status, double status_interval_s) {
+  if (finished_) throw std::logic_error("playback: already run");
+  RealTimeOptions real_time = options_.real_time;
+  real_time.duration_s = options_.duration_s;
+  RealTimeRunner runner(*loop_, real_time);
+  recorder_->start();
+  runner.start();
+  while (!runner.finished()) {
+    std::this_thread::sleep_for(std::chrono::duration<double>(status_interval_s));
+    if (every_status && !every_status(loop_->status())) break;
+  }
+  runner.stop();
+  return finish(runner.report(), runner.warning());
+}
+
+PlaybackSummary Playback::finish(std::optional<TimingReport> timing, const std::string& warning) {
+  recorder_->close();
+  finished_ = true;
+  device_.stop();
+  device_started_ = false;
+  PlaybackSummary summary;
+  summary.session_path = recorder_->path();
+  const RenderLoopCounters counters = loop_->counters();
+  summary.ticks = counters.ticks;
+  summary.clipped_ticks = counters.clipped_ticks;
+  summary.records_dropped = counters.records_dropped;
+  summary.parameter_changes = counters.parameter_changes;
+  summary.final_state = loop_->safety_state();
+  summary.timing = std::move(timing);
+  summary.warning = warning;
+  // The figures come from the session as written: what was recorded is what is reported.
+  const SessionReader session(summary.session_path);
+  const ChannelSlice x = session.read("commanded_force_x");
+  const ChannelSlice y = session.read("commanded_force_y");
+  const ChannelSlice z = session.read("commanded_force_z");
+  for (std::size_t i = 0; i < x.raw.size(); ++i) {
+    summary.max_commanded_force =
+        std::max(summary.max_commanded_force,
+                 std::sqrt(x.raw[i] * x.raw[i] + y.raw[i] * y.raw[i] + z.raw[i] * z.raw[i]));
+  }
+  if (!x.time_s.empty()) summary.duration_s = x.time_s.back() - x.time_s.front();
+  for (const double error : session.read("radial_error").raw) {
+    summary.max_radial_error_m = std::max(summary.max_radial_error_m, std::abs(error));
+  }
+  for (const double error : session.read("axial_error").raw) {
+    summary.max_axial_error_m = std::max(summary.max_axial_error_m, std::abs(error));
+  }
+  for (const SessionEvent& event : session.events()) {
+    if (event.kind == "safety")
+      summary.safety_events.push_back(event.detail.substr(0, event.detail.find(':')));
+  }
+  return summary;
+}
+
+}  // namespace doorbench::haptic

@@ -1,0 +1,94 @@
+#pragma once
+// One playback run: a door model rendered on a device by the render loop, every tick
+// recorded into a session. What `doorbench play`, the A/B trials and the demo share.
+//
+// Two ways to run:
+//  - real time (run_real_time): the RealTimeRunner's thread ticks at the loop's rate on the
+//    device's real clock, a writer thread streams the ticks into the session, and the calling
+//    thread shows status and takes live parameter changes;
+//  - simulated time (run_simulated, simulated devices only): one thread advances the device's
+//    simulated clock by one period, ticks, and drains the records, as fast as it can. Used by
+//    tests, the demo and benchmarks: the same tick, deterministic, independent of load.
+//
+// Thread safety: a Playback is driven by one control thread; change_parameters() may be called
+// from that thread while run_real_time() is in its status callback.
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "haptic/realtime_runner.h"
+#include "haptic/render_loop.h"
+#include "haptic/tick_recorder.h"
+
+namespace doorbench::haptic {
+
+struct PlaybackOptions {
+  RenderLoopOptions loop;
+  ArcGeometry arc;
+  RealTimeOptions real_time;
+  double duration_s = 10.0;  // > 0
+  std::string validate() const;
+};
+
+struct PlaybackSummary {
+  std::filesystem::path session_path;
+  std::uint64_t ticks = 0;
+  double duration_s = 0.0;
+  double max_commanded_force = 0.0;  // N (rotary: N*m)
+  double max_radial_error_m = 0.0, max_axial_error_m = 0.0;
+  std::uint64_t clipped_ticks = 0, records_dropped = 0, parameter_changes = 0;
+  SafetyState final_state = SafetyState::kStarting;
+  std::vector<std::string> safety_events;  // names, in order, e.g. "start_ramp_done"
+  std::optional<TimingReport> timing;      // real time only
+  std::string warning;                     // e.g. no SCHED_FIFO
+  std::string brief_report() const;
+};
+
+class Playback {
+ public:
+  // Starts the device with the model's inertia, builds the loop and creates the session.
+  // Throws DeviceError (the device), std::invalid_argument (options, an unplayable model: the
+  // message says why) or SessionError (the file).
+  Playback(HapticDevice& device, const DoorModel& model, const PlaybackOptions& options,
+           const std::filesystem::path& session_path, const SessionMetadata& metadata,
+           const PlaybackSetup& setup);
+  ~Playback();
+
+  const DoorMapping& mapping() const { return *mapping_; }
+  RenderLoop& loop() { return *loop_; }
+  TickRecorder& recorder() { return *recorder_; }
+  const DoorModel& current_model() const { return current_model_; }
+
+  // Control side: a new parameter set, checked, recorded and handed to the tick at its next
+  // boundary. Returns "" or the reason it was refused (then nothing changes).
+  std::string change_parameters(const DoorModel& model, const std::string& description);
+
+  // Simulated time: before each tick `advance_device_to(t)` brings the simulated device to the
+  // tick's time; `between_ticks(t)` (optional) runs on the same thread after each tick, e.g. to
+  // change parameters at a scripted time. Ends after duration_s (then the safety layer's
+  // stop ramp) or when the safety layer stops.
+  PlaybackSummary run_simulated(const std::function<void(double)>& advance_device_to,
+                                const std::function<void(double)>& between_ticks = {});
+  // Real time: `every_status(status)` is called about every status_interval_s on this thread;
+  // returning false stops the run (the safety ramp-down, then the end).
+  PlaybackSummary run_real_time(const std::function<bool(const RenderLoop::Status&)>& every_status,
+                                double status_interval_s = 0.1);
+
+ private:
+  PlaybackSummary finish(std::optional<TimingReport> timing, const std::string& warning);
+
+  HapticDevice& device_;
+  PlaybackOptions options_;
+  std::unique_ptr<DoorMapping> mapping_;
+  std::unique_ptr<RenderLoop> loop_;
+  std::unique_ptr<TickRecorder> recorder_;
+  DoorModel current_model_;
+  bool device_started_ = false;
+  bool finished_ = false;
+  // Tracked by the recorder's side from the records it drains.
+  double max_force_ = 0.0, max_radial_ = 0.0, max_axial_ = 0.0;
+};
+
+}  // namespace doorbench::haptic
