@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <vector>
 
@@ -200,6 +201,27 @@ TEST_CASE("sim hapticmaster: the virtual hand drives the end-effector along the 
   // The sensor measures the hand (the grip's force, noise aside).
   CHECK((device.read().measured_force - device.truth().user_force).norm() < 1.0);
   CHECK(device.truth().hand_grip == 1.0);
+}
+
+TEST_CASE("sim hapticmaster: a scripted external force is measured and moves the free device",
+          "[haptic][sim]") {
+  SimulatedHapticMaster device(quiet_options());
+  device.set_external_force([](double t, const Vec3&, const Vec3&) {
+    return t < 0.5 ? Vec3(0.0, 6.0, 0.0) : Vec3::Zero();
+  });
+  device.start(3.0);
+  device.advance_to(0.2);
+  const DeviceSample a = device.read();
+  CHECK(a.measured_force.isApprox(Vec3(0.0, 6.0, 0.0)));
+  device.advance_to(0.4);
+  const DeviceSample b = device.read();
+  CHECK((b.velocity.y() - a.velocity.y()) / 0.2 == Approx(2.0).epsilon(1e-9));
+  device.advance_to(0.8);  // let go: it coasts (no friction by default)
+  const DeviceSample c = device.read();
+  CHECK(c.measured_force.isZero());
+  device.advance_to(1.0);
+  CHECK(device.read().velocity.y() == Approx(c.velocity.y()).epsilon(1e-12));
+  CHECK(device.truth().hand_force.isZero());
 }
 
 TEST_CASE("sim hapticmaster: the same seed gives the same run, another seed another",
@@ -550,4 +572,31 @@ TEST_CASE("sim rotary: the hand opens the reference door in a closed loop",
   CHECK(max_theta < 1.5708);
   CHECK(device.truth().position.x() < 0.05);  // closed again
   CHECK(device.truth().pushes > 5);
+}
+
+// Not a check: the cost of the simulation (docs/haptic-devices.md). Run with [.bench].
+TEST_CASE("sim hapticmaster: cost of a servo step and of a tick", "[.bench][haptic][sim]") {
+  const DoorModel model = reference_model(ModelKind::kSensory);
+  const DoorMapping& mapping = reference_mapping();
+  SimulatedHapticMaster device;
+  SimulatedHandOptions hand;
+  hand.pushes.rate_hz = 2.0;
+  device.set_hand(hand, mapping);
+  device.start(mapping.inertia_on_device(model.inertia_kg_m2()));
+  const int ticks = 10000;
+  const double begin_s = monotonic_now_s();
+  for (int tick = 1; tick <= ticks; ++tick) {
+    device.advance_to(tick * 0.001);
+    const DeviceSample sample = device.read();
+    const DoorPoint door = mapping.to_door(sample);
+    device.command_force(
+        mapping.to_device(model.torque_Nm(door.theta_rad, door.omega_rad_s), sample));
+  }
+  const double elapsed_s = monotonic_now_s() - begin_s;
+  std::printf(
+      "%d ticks at 1 kHz (%llu servo steps at 2.5 kHz, hand and pushes, reference "
+      "sensory door): %.3f s wall, %.0f ns per tick, %.0fx real time\n",
+      ticks, static_cast<unsigned long long>(device.truth().steps), elapsed_s,
+      elapsed_s / ticks * 1e9, ticks * 0.001 / elapsed_s);
+  CHECK(elapsed_s > 0.0);
 }
