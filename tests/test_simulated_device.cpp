@@ -468,7 +468,7 @@ TEST_CASE(
     }
   }
   INFO("mass " << mass_kg << " kg: worst distance after 2 s " << worst_after_2s * 1000.0 << " mm");
-  CHECK(worst_after_2s < 0.0005);
+  CHECK(worst_after_2s < 0.0001);
 }
 
 // ---------------------------------------------------------------- rotary
