@@ -354,7 +354,7 @@ Vec3 SimulatedHapticMaster::push_force(double t_s, const Vec3& position) noexcep
   if (push_direction_ != 1) {
     const Vec3 offset = position - geometry.hinge_point_m;
     Vec3 radial = offset - offset.dot(axis) * axis;
-    radial = radial.norm() > 1e-9 ? Vec3(radial.normalized()) : mapping_.point_at(0.0);
+    radial = radial.norm() > 1e-9 ? Vec3(radial.normalized()) : geometry.closed_direction;
     direction = push_direction_ == 0 ? radial : Vec3(axis.cross(radial));
   }
   return push_sign_ * pushes_.amplitude_N * std::sin(std::numbers::pi * phase) * direction;

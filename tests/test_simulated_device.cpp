@@ -224,6 +224,50 @@ TEST_CASE("sim hapticmaster: a scripted external force is measured and moves the
   CHECK(device.truth().hand_force.isZero());
 }
 
+TEST_CASE("sim hapticmaster: pushes go in the enabled directions", "[haptic][sim]") {
+  const DoorMapping& mapping = reference_mapping();
+  PushOptions pushes;
+  pushes.rate_hz = 5.0;
+  pushes.amplitude_N = 20.0;
+  pushes.radial = GENERATE(true, false);
+  pushes.axial = !pushes.radial;
+  SimulatedHapticMasterOptions options = quiet_options();
+  options.initial_position = mapping.point_at(0.7);
+  SimulatedHapticMaster device(options);
+  device.set_pushes(pushes, mapping);
+  device.start(20.0);
+  const Vec3 radial = (options.initial_position - mapping.geometry().hinge_point_m).normalized();
+  const Vec3 axis = mapping.geometry().hinge_axis;
+  double largest_push = 0.0;
+  for (int tick = 1; tick <= 3000; ++tick) {
+    device.advance_to(tick * 0.001);
+    const Vec3 push = device.truth().push_force;
+    largest_push = std::max(largest_push, push.norm());
+    const Vec3 expected = pushes.radial ? radial : axis;
+    REQUIRE((push - push.dot(expected) * expected).norm() < 1e-6 * (1.0 + push.norm()) + 0.02);
+    device.command_force(Vec3::Zero());
+  }
+  CHECK(device.truth().pushes >= 5);
+  CHECK(largest_push == Approx(20.0).margin(0.5));
+  CHECK(device.truth().hand_force.isZero());
+}
+
+TEST_CASE("sim hapticmaster: stop() drops the commanded force", "[haptic][sim]") {
+  SimulatedHapticMaster device(quiet_options());
+  device.start(5.0);
+  device.command_force(Vec3(5.0, 0.0, 0.0));
+  device.advance_to(0.1);
+  CHECK(device.truth().applied_command.x() == 5.0);
+  device.stop();
+  device.stop();                              // twice is fine
+  device.command_force(Vec3(5.0, 0.0, 0.0));  // ignored when stopped
+  device.advance_to(0.2);
+  CHECK(device.truth().applied_command.isZero());
+  const double rate = device.truth().velocity.x();
+  device.advance_to(0.3);
+  CHECK(device.truth().velocity.x() == rate);  // coasting, no force
+}
+
 TEST_CASE("sim hapticmaster: the same seed gives the same run, another seed another",
           "[haptic][sim]") {
   auto run = [](std::uint64_t seed) {
@@ -544,6 +588,37 @@ TEST_CASE("sim rotary: the end stop, misbehaviour and the inertia check", "[hapt
   CHECK(device.read().sequence == sequence);
   device.lose_link();
   CHECK_FALSE(device.read().link_ok);
+}
+
+TEST_CASE("sim rotary: deterministic with a seed, and the real-time clock",
+          "[haptic][sim][rotary]") {
+  auto run = [](std::uint64_t seed) {
+    SimulatedRotaryOptions options;
+    options.device.seed = seed;
+    SimulatedRotaryDevice device(options);
+    RotaryHandOptions hand;
+    hand.pushes.rate_hz = 5.0;
+    device.set_hand(hand);
+    device.start(0.95);
+    std::vector<double> trace;
+    for (int tick = 1; tick <= 2000; ++tick) {
+      device.advance_to(tick * 0.001);
+      const DeviceSample sample = device.read();
+      trace.push_back(sample.position.x());
+      trace.push_back(sample.measured_force.x());
+    }
+    return trace;
+  };
+  CHECK(run(5) == run(5));
+  CHECK(run(5) != run(6));
+
+  SimulatedRotaryOptions options;
+  options.device.clock = SimClock::kRealTime;
+  SimulatedRotaryDevice device(options);
+  device.start(0.95);
+  sleep_s(0.02);
+  CHECK(device.read().time_s > monotonic_now_s() - 0.005);
+  CHECK(device.truth().steps >= 40);
 }
 
 TEST_CASE("sim rotary: the hand opens the reference door in a closed loop",
