@@ -427,8 +427,9 @@ struct LoopResult {
 };
 
 LoopResult run_closed_loop(const ArcGeometry& geometry, double push_amplitude_N,
-                           double push_rate_hz, std::uint64_t seed) {
-  const DoorModel model = reference_model(ModelKind::kSensory);
+                           double push_rate_hz, std::uint64_t seed,
+                           ModelKind kind = ModelKind::kSensory) {
+  const DoorModel model = reference_model(kind);
   const DoorMapping mapping(Kinematics::kCartesian3, geometry, model.geometry().handle_radius_m);
   SimulatedHapticMasterOptions options;
   options.device.seed = seed;
@@ -467,10 +468,12 @@ LoopResult run_closed_loop(const ArcGeometry& geometry, double push_amplitude_N,
 TEST_CASE("closed loop: the arc constraint holds the end-effector near the arc under pushes",
           "[haptic][sim][closed-loop]") {
   const std::uint64_t seed = GENERATE(1, 2, 3);
-  const LoopResult result = run_closed_loop(ArcGeometry{}, 20.0, 2.0, seed);
-  INFO("seed " << seed << ": max distance from the arc " << result.max_off_arc_m * 1000.0
-               << " mm over " << result.pushes << " pushes; θ at the opening's end "
-               << result.theta_at_opening_end_rad << " rad");
+  const ModelKind kind = GENERATE(ModelKind::kSensory, ModelKind::kPhysical);
+  const LoopResult result = run_closed_loop(ArcGeometry{}, 20.0, 2.0, seed, kind);
+  INFO(to_string(kind) << " door, seed " << seed << ": max distance from the arc "
+                       << result.max_off_arc_m * 1000.0 << " mm over " << result.pushes
+                       << " pushes; θ at the opening's end " << result.theta_at_opening_end_rad
+                       << " rad");
   CHECK(result.pushes >= 10);
   CHECK(result.max_off_arc_m < 0.003);  // the stated bound (docs/haptic-devices.md)
   // The hand opens the door to its target, and closes it again.
