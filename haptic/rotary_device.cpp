@@ -115,7 +115,8 @@ void SimulatedRotaryDevice::reset_state() noexcept {
 void SimulatedRotaryDevice::integrate_step(double t_s, double dt_s) noexcept {
   double hand_torque = 0.0, push_torque = 0.0;
   if (has_hand_) {
-    const double hand_time_s = t_s - start_time_s();
+    double hand_time_s = t_s - start_time_s();
+    if (hand_options_.repeat) hand_time_s = std::fmod(hand_time_s, hand_.duration_s());
     const VirtualHand::Reference ref = hand_.reference(hand_time_s);
     truth_.hand_theta_ref_rad = ref.theta_rad;
     truth_.hand_omega_ref_rad_s = ref.omega_rad_s;

@@ -40,7 +40,8 @@ struct SimulatedRotaryOptions {
 struct RotaryHandOptions {
   VirtualHandOptions hand;
   double handle_radius_m = 0.58;
-  PushOptions pushes;  // only the amplitude, duration and rate count: along the arc
+  bool repeat = false;  // repeat the open-close cycle every hand.duration_s
+  PushOptions pushes;   // only the amplitude, duration and rate count: along the arc
   std::string validate() const;
 };
 

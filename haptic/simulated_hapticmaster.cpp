@@ -306,6 +306,7 @@ void SimulatedHapticMaster::reset_state() noexcept {
 Vec3 SimulatedHapticMaster::hand_force(double hand_time_s, const Vec3& position,
                                        const Vec3& velocity) noexcept {
   if (!has_hand_) return Vec3::Zero();
+  if (hand_options_.repeat) hand_time_s = std::fmod(hand_time_s, hand_.duration_s());
   const VirtualHand::Reference ref = hand_.reference(hand_time_s);
   truth_.hand_theta_ref_rad = ref.theta_rad;
   truth_.hand_omega_ref_rad_s = ref.omega_rad_s;

@@ -85,6 +85,9 @@ struct SimulatedHandOptions {
   // is this fraction of that: 0 = the hand goes wherever the handle goes off the arc (the
   // worst case for the arc constraint).
   double lateral_grip_fraction = 0.0;
+  // Repeat the open-close cycle every hand.duration_s (a user who keeps opening and closing),
+  // instead of letting go after one.
+  bool repeat = false;
   PushOptions pushes;
   std::string validate() const;
 };

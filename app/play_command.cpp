@@ -1,0 +1,91 @@
+// doorbench play: a door model rendered on a haptic device, every tick recorded as a session.
+#include <iostream>
+#include <memory>
+
+#include "app/commands.h"
+#include "app/fit_inputs.h"
+#include "app/play_run.h"
+
+namespace doorbench::app {
+namespace {
+
+struct PlayOptions {
+  ModelOptions model;
+  std::string device = "sim";
+  std::string out;
+  double duration_s = 20.0;
+  double rate_hz = 1000.0;
+  bool simulated_time = false;
+  bool no_fifo = false;
+  double hand_cycle_s = 10.0;
+  double pushes_hz = 0.0;
+  double push_N = 20.0;
+  std::uint64_t seed = 1;
+};
+
+void run_play(const PlayOptions& options) {
+  const DoorModel model =
+      start_model(options.model.model, options.model.params_path, options.model.effects_path);
+  PlayRequest request;
+  request.device.uri = options.device;
+  request.device.simulated_time = options.simulated_time;
+  request.device.hand.duration_s = options.hand_cycle_s;
+  request.device.pushes.rate_hz = options.pushes_hz;
+  request.device.pushes.amplitude_N = options.push_N;
+  request.device.seed = options.seed;
+  request.playback.duration_s = options.duration_s;
+  request.playback.loop.rate_hz = options.rate_hz;
+  request.playback.real_time.request_fifo = !options.no_fifo;
+  request.session_path = options.out;
+  request.model_source =
+      options.model.params_path.empty() ? "reference door" : options.model.params_path;
+  request.effects = options.model.effects_path;
+  if (std::filesystem::exists(request.session_path)) {
+    throw UsageError("--out " + options.out + ": exists (sessions are never overwritten)");
+  }
+  std::cerr << "playing the " << to_string(model.kind()) << " model (" << request.model_source
+            << ") on " << options.device << " at " << options.rate_hz << " Hz for "
+            << options.duration_s << " s" << (options.simulated_time ? " of simulated time" : "")
+            << "\n";
+  const haptic::PlaybackSummary summary = play_model(model, request);
+  std::cout << summary.brief_report() << "\n";
+}
+
+}  // namespace
+
+void add_play_command(CLI::App& app, Action& action) {
+  auto options = std::make_shared<PlayOptions>();
+  CLI::App* play = app.add_subcommand(
+      "play", "Render a door model on a haptic device and record every tick as a session");
+  add_model_options(*play, options->model);
+  play->add_option("--device", options->device,
+                   "sim (simulated HapticMaster with a virtual user), sim:rotary, or "
+                   "hapticmaster://HOST[:PORT]")
+      ->capture_default_str();
+  play->add_option("--out", options->out, "The session to write (must not exist)")->required();
+  play->add_option("--duration-s", options->duration_s, "How long to play")
+      ->check(CLI::Range(0.01, 86400.0))
+      ->capture_default_str();
+  play->add_option("--rate-hz", options->rate_hz, "Render loop rate (100 to 4000 Hz)")
+      ->check(CLI::Range(100.0, 4000.0))
+      ->capture_default_str();
+  play->add_flag("--simulated-time", options->simulated_time,
+                 "Run a simulated device in simulated time, as fast as possible");
+  play->add_flag("--no-fifo", options->no_fifo, "Do not ask for SCHED_FIFO");
+  play->add_option("--hand-cycle-s", options->hand_cycle_s,
+                   "Simulated devices: the virtual user's open-close cycle")
+      ->check(CLI::Range(1.0, 600.0))
+      ->capture_default_str();
+  play->add_option("--pushes-hz", options->pushes_hz,
+                   "Simulated devices: mean rate of the virtual user's pushes off the arc")
+      ->check(CLI::Range(0.0, 50.0))
+      ->capture_default_str();
+  play->add_option("--push-N", options->push_N, "Simulated devices: the pushes' amplitude")
+      ->check(CLI::Range(0.0, 200.0))
+      ->capture_default_str();
+  play->add_option("--seed", options->seed, "Simulated devices: noise and pushes")
+      ->capture_default_str();
+  play->callback([options, &action] { action = [options] { run_play(*options); }; });
+}
+
+}  // namespace doorbench::app

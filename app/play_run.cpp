@@ -1,0 +1,64 @@
+#include "app/play_run.h"
+
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+
+#include "app/session_recording.h"
+
+namespace doorbench::app {
+
+haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request) {
+  haptic::OpenedDevice opened =
+      haptic::open_device(request.device, request.playback.arc, model.geometry().handle_radius_m);
+  if (request.device.simulated_time && !opened.simulated) {
+    throw std::invalid_argument("--simulated-time needs a simulated device (got --device " +
+                                request.device.uri + ")");
+  }
+  SessionMetadata metadata;
+  metadata.rig_name = "haptic playback on " + opened.device->name();
+  metadata.operator_name = request.operator_name;
+  metadata.product_id = request.product_id;
+  metadata.start_time_utc = utc_now_iso8601();
+  metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
+  metadata.notes = "model: " + request.model_source +
+                   (request.effects.empty() ? "" : ", effects: " + request.effects);
+  haptic::Playback playback(
+      *opened.device, model, request.playback, request.session_path, metadata,
+      haptic::PlaybackSetup{opened.device->name(), request.model_source, request.effects});
+  if (request.device.simulated_time) {
+    haptic::SimulatedDevice* device = opened.simulated;
+    int ticks = 0;
+    return playback.run_simulated([device](double t) { device->advance_to(t); },
+                                  [&](double) {
+                                    if (request.control && ++ticks % 100 == 0) {
+                                      request.control(playback);
+                                    }
+                                  });
+  }
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  int calls = 0;
+  haptic::PlaybackSummary summary =
+      playback.run_real_time([&](const haptic::RenderLoop::Status& status) {
+        ++calls;
+        if (request.show_status && (tty || calls % 10 == 0)) {
+          const haptic::RenderLoopCounters counters = playback.loop().counters();
+          const double rate_hz = status.time_s > 0 ? counters.ticks / status.time_s : 0.0;
+          std::fprintf(stderr,
+                       "%s%6.1f s  %7.1f Hz  θ %6.1f°  ω %6.1f°/s  hand %6.1f N  command %6.1f "
+                       "N  set %d  safety %s%s",
+                       tty ? "\r" : "", status.time_s, rate_hz, status.theta_rad * 180.0 / M_PI,
+                       status.omega_rad_s * 180.0 / M_PI, status.user_force_N,
+                       status.commanded_force_N, status.parameter_set,
+                       std::string(haptic::to_string(playback.loop().safety_state())).c_str(),
+                       tty ? "   " : "\n");
+        }
+        return request.control ? request.control(playback) : true;
+      });
+  if (request.show_status && tty) std::fprintf(stderr, "\n");
+  return summary;
+}
+
+}  // namespace doorbench::app

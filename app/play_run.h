@@ -1,0 +1,32 @@
+#pragma once
+// One playback run from the command line's point of view: open the device, play a model on
+// it into a session, show status, report. Shared by `doorbench play`, `doorbench ab` and the
+// demo.
+#include <filesystem>
+#include <functional>
+#include <string>
+
+#include "analysis/door_model.h"
+#include "haptic/device_factory.h"
+#include "haptic/playback.h"
+
+namespace doorbench::app {
+
+struct PlayRequest {
+  haptic::DeviceRequest device;
+  haptic::PlaybackOptions playback;
+  std::filesystem::path session_path;
+  std::string model_source;  // for the session: the --params path or "reference door"
+  std::string effects;       // as given
+  std::string operator_name = "doorbench play";
+  std::string product_id = "virtual door";
+  bool show_status = true;  // a status line on stderr while playing in real time
+  // Live tuning: called about every 0.1 s (real time) on the control thread; it may call
+  // playback.change_parameters(). Returning false ends the run early.
+  std::function<bool(haptic::Playback&)> control;
+};
+
+// Throws std::runtime_error (device, session) or std::invalid_argument (options, model).
+haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request);
+
+}  // namespace doorbench::app
