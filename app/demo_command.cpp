@@ -12,6 +12,7 @@
 
 #include "acquisition/recording_csv.h"
 #include "acquisition/session_csv.h"
+#include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
 #include "analysis/preprocessing.h"
 #include "analysis/residual_loop.h"
@@ -22,6 +23,7 @@
 #include "app/commands.h"
 #include "app/hand_run.h"
 #include "app/loop_output.h"
+#include "app/play_run.h"
 #include "app/session_recording.h"
 #include "sensors/sensor_models.h"
 
@@ -161,7 +163,7 @@ constexpr const char* kUndeclaredEffectJson = R"({"gravity_imbalance": {"g1": 3.
 
 // Records the reference door with the undeclared effect on the simulated bench, fits the
 // sensory model and runs the residual loop; prints the table of steps.
-void close_the_loop(const std::filesystem::path& dir) {
+DoorModel close_the_loop(const std::filesystem::path& dir) {
   const std::filesystem::path effects_path =
       std::filesystem::absolute(dir / "undeclared-effect.json");
   std::ofstream(effects_path) << kUndeclaredEffectJson << "\n";
@@ -187,6 +189,61 @@ void close_the_loop(const std::filesystem::path& dir) {
   const std::string table = write_loop_outputs(loop_dir, loop, data, "sensory", options.fit);
   std::cout << loop.brief_report() << "\n"
             << table << "  (report: " << (loop_dir / "report.md").string() << ")\n";
+  return loop.model();
+}
+
+// Plays the loop's fitted door on the simulated HapticMaster with the virtual user opening and
+// closing it, records it, and fits the recording back from the reference door (with the same
+// effects at their catalogue defaults): the played parameters should come back.
+void play_and_fit_back(const std::filesystem::path& dir, const DoorModel& fitted) {
+  const std::filesystem::path session_path = dir / "haptic-playback.h5";
+  std::filesystem::remove(session_path);
+  PlayRequest request;
+  request.device.uri = "sim";
+  request.device.simulated_time = true;
+  request.device.hand.duration_s = 10.0;
+  request.playback.duration_s = 30.0;
+  // The simulated HapticMaster's continuous force: the virtual user pushes the door into its
+  // closed stop, and a force clipped by the safety limit would bias the fit (docs/haptic.md).
+  request.playback.loop.safety.max_force = 100.0;
+  request.session_path = session_path;
+  request.model_source = "the residual loop's fitted door (" + (dir / "loop").string() + ")";
+  request.operator_name = "doorbench demo";
+  request.show_status = false;
+  std::cout << "\nhaptic playback: the fitted door on the simulated HapticMaster (admittance, 1 ms "
+               "control delay, force-sensor noise), the virtual user opening and closing it "
+               "three times; 30 s at 1 kHz in simulated time\n";
+  const haptic::PlaybackSummary summary = play_model(fitted, request);
+  std::cout << "  " << summary.brief_report() << "\n";
+  std::vector<EffectSetting> start_effects;
+  for (const EffectSetting& effect : fitted.effects()) {
+    EffectSetting setting{effect.kind, {}, effect.bounds};
+    for (const effects::EffectParameter& parameter : effects::info(effect.kind).parameters) {
+      setting.values.push_back(parameter.default_value);
+    }
+    start_effects.push_back(std::move(setting));
+  }
+  const DoorModel reference = reference_model(ModelKind::kSensory);
+  const auto values = reference.parameter_values();
+  const auto bounds = reference.parameter_bounds();
+  const DoorModel start(ModelKind::kSensory, reference.geometry(),
+                        std::vector<double>(values.begin(), values.end()),
+                        std::vector<Bounds>(bounds.begin(), bounds.end()), start_effects);
+  const PreparedData data = prepare_session(session_path);
+  FitOptions fit_options;
+  fit_options.cross_validation_folds = 0;
+  const FitResult fit = fit_model(start, data, fit_options);
+  std::cout << "  fitted back (" << data.strokes.size() << " strokes, from the reference door):\n"
+            << "    parameter          played      recovered   u           change\n";
+  for (const FittedParameter& parameter : fit.summary.parameters) {
+    if (!parameter.free) continue;
+    const double played = fitted.parameter_values()[*fitted.find_parameter(parameter.name)];
+    char line[160];
+    std::snprintf(line, sizeof line, "    %-18s %-11.5g %-11.5g %-11.3g %+.2f%%\n",
+                  parameter.name.c_str(), played, parameter.value, parameter.uncertainty,
+                  100.0 * (parameter.value - played) / std::abs(played));
+    std::cout << line;
+  }
 }
 
 void run_demo(const DemoOptions& options) {
@@ -219,7 +276,8 @@ void run_demo(const DemoOptions& options) {
   record_demo_session(dir);
   std::cout << "\n";
   run_calibration_demo(std::cout);
-  close_the_loop(dir);
+  const DoorModel fitted = close_the_loop(dir);
+  play_and_fit_back(dir, fitted);
   std::cout << "\nruns, parameter files and plots (angle.svg, hand-force.svg, "
                "force-angle-latch.svg) are in "
             << dir.string() << "/\n";
