@@ -47,6 +47,7 @@ int ParameterMailbox::publish(std::unique_ptr<PlaybackParameters> parameters) {
   if (!parameters) throw std::invalid_argument("ParameterMailbox::publish: no parameter set");
   parameters->id = next_id_++;
   parameters->published_time_s = monotonic_now_s();
+  last_published_time_s_ = parameters->published_time_s;
   PlaybackParameters* raw = parameters.get();
   kept_.push_back(std::move(parameters));
   PlaybackParameters* dropped = pending_.exchange(raw, std::memory_order_acq_rel);

@@ -51,6 +51,8 @@ class ParameterMailbox {
   // Control side: gives the set its id and hands it over; a set published earlier that the
   // tick never took is dropped (the newest wins). Returns the id.
   int publish(std::unique_ptr<PlaybackParameters> parameters);
+  // Control side: CLOCK_MONOTONIC (s) of the last publish().
+  double last_published_time_s() const { return last_published_time_s_; }
   // Control side: the id the next publish() will give.
   int next_id() const { return next_id_; }
   // Control side: frees the sets older than the one the tick uses. Returns how many are kept.
@@ -73,6 +75,7 @@ class ParameterMailbox {
   // Control side only: every set not yet freed, in id order.
   std::vector<std::unique_ptr<PlaybackParameters>> kept_;
   int next_id_ = 1;
+  double last_published_time_s_ = 0.0;
 };
 
 // CLOCK_MONOTONIC in seconds.
