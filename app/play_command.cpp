@@ -2,6 +2,7 @@
 #include <iostream>
 #include <memory>
 
+#include "analysis/parameter_file.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/play_run.h"
@@ -21,6 +22,54 @@ struct PlayOptions {
   double pushes_hz = 0.0;
   double push_N = 20.0;
   std::uint64_t seed = 1;
+  std::string watch_params;
+};
+
+// Live tuning from another program (the viewer's tuning layout saves a parameter file): when
+// the watched file changes, its base section replaces the playing model's (the effects stay).
+class ParameterFileWatcher {
+ public:
+  explicit ParameterFileWatcher(std::string path) : path_(std::move(path)) {
+    std::error_code error;
+    if (!path_.empty()) last_ = std::filesystem::last_write_time(path_, error);
+    if (error) last_ = std::filesystem::file_time_type::min();
+  }
+
+  void poll(haptic::Playback& playback) {
+    if (path_.empty() || !changed()) return;
+    try {
+      const DoorModel& current = playback.current_model();
+      const DoorModel base = load_model(current.kind(), path_, "");
+      const auto values = base.parameter_values();
+      const auto bounds = base.parameter_bounds();
+      std::vector<EffectSetting> effects(current.effects().begin(), current.effects().end());
+      const DoorModel next(current.kind(), current.geometry(),
+                           std::vector<double>(values.begin(), values.end()),
+                           std::vector<Bounds>(bounds.begin(), bounds.end()), effects);
+      const std::string problem = playback.change_parameters(next, "file " + path_);
+      if (problem.empty()) {
+        std::cerr << "\n"
+                  << path_ << ": applied as parameter set "
+                  << playback.loop().mailbox().next_id() - 1 << "\n";
+      } else {
+        std::cerr << "\n" << path_ << ": not applied: " << problem << "\n";
+      }
+    } catch (const std::exception& error) {
+      std::cerr << "\n" << path_ << ": not applied: " << error.what() << "\n";
+    }
+  }
+
+ private:
+  // True when the file's modification time differs from the last seen (created, rewritten).
+  bool changed() {
+    std::error_code error;
+    const auto time = std::filesystem::last_write_time(path_, error);
+    if (error || time == last_) return false;
+    last_ = time;
+    return true;
+  }
+  std::string path_;
+  std::filesystem::file_time_type last_{};
 };
 
 void run_play(const PlayOptions& options) {
@@ -47,6 +96,13 @@ void run_play(const PlayOptions& options) {
             << ") on " << options.device << " at " << options.rate_hz << " Hz for "
             << options.duration_s << " s" << (options.simulated_time ? " of simulated time" : "")
             << "\n";
+  auto watcher = std::make_shared<ParameterFileWatcher>(options.watch_params);
+  if (!options.watch_params.empty()) {
+    request.control = [watcher](haptic::Playback& playback) {
+      watcher->poll(playback);
+      return true;
+    };
+  }
   const haptic::PlaybackSummary summary = play_model(model, request);
   std::cout << summary.brief_report() << "\n";
 }
@@ -85,6 +141,9 @@ void add_play_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   play->add_option("--seed", options->seed, "Simulated devices: noise and pushes")
       ->capture_default_str();
+  play->add_option("--watch-params", options->watch_params,
+                   "A parameter file to watch: whenever it changes (the viewer's tuning layout "
+                   "saves it), its values are played from the next tick");
   play->callback([options, &action] { action = [options] { run_play(*options); }; });
 }
 

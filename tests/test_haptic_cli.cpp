@@ -1,0 +1,79 @@
+// doorbench play through the real executable.
+#include <catch2/catch.hpp>
+#include <fstream>
+
+#include "acquisition/session_file.h"
+#include "analysis/parameter_file.h"
+#include "analysis/perceptual_controls.h"
+#include "tests/run_doorbench.h"
+
+using namespace doorbench;
+using doorbench::testing::run_doorbench_shell;
+using doorbench::testing::TempDir;
+
+TEST_CASE("play: the simulated HapticMaster in simulated time writes a session and a summary",
+          "[haptic][cli]") {
+  TempDir dir("play_cli");
+  const auto session = dir / "played.h5";
+  const auto run = run_doorbench_shell(
+      "play --device sim --simulated-time --duration-s 12 --out '" + session.string() + "'", dir);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.out, Catch::Contains("12001 ticks over 12 s into"));
+  CHECK_THAT(run.out, Catch::Contains("0 records dropped"));
+  const SessionReader reader(session);
+  CHECK(reader.sample_count("force") == 12001);
+  CHECK(reader.read_group_attribute("haptic", "device") == "sim:hapticmaster");
+
+  // Sessions are never overwritten.
+  const auto again = run_doorbench_shell(
+      "play --device sim --simulated-time --duration-s 1 --out '" + session.string() + "'", dir);
+  CHECK(again.status == 2);
+  CHECK_THAT(again.err, Catch::Contains("exists (sessions are never overwritten)"));
+}
+
+TEST_CASE("play: bad devices and options are refused by name", "[haptic][cli]") {
+  TempDir dir("play_cli_errors");
+  const auto bogus = run_doorbench_shell(
+      "play --device telepathy --duration-s 1 --out '" + (dir / "x.h5").string() + "'", dir);
+  CHECK(bogus.status == 1);
+  CHECK_THAT(bogus.err, Catch::Contains("--device 'telepathy': not a device (use sim, "
+                                        "sim:hapticmaster, sim:rotary or "
+                                        "hapticmaster://HOST[:PORT])"));
+  const auto rate =
+      run_doorbench_shell("play --rate-hz 8000 --out '" + (dir / "y.h5").string() + "'", dir);
+  CHECK(rate.status != 0);
+  CHECK_THAT(rate.err, Catch::Contains("--rate-hz"));
+}
+
+TEST_CASE("play --watch-params: a parameter file saved during a real-time run is played live",
+          "[haptic][cli]") {
+  TempDir dir("play_watch");
+  const DoorModel reference = reference_model(ModelKind::kSensory);
+  const DoorModel heavier = perceptual::set(reference, perceptual::Control::kHeaviness, 1.2);
+  std::ofstream(dir / "heavier.json") << to_parameter_json(heavier);
+  const auto watched = dir / "tuned.json";
+  const auto session = dir / "live.h5";
+  // The file appears one second into a three-second run (as the viewer's "save" would).
+  const std::string writer =
+      "sleep 1; cp '" + (dir / "heavier.json").string() + "' '" + watched.string() + "'; sleep 4";
+  const auto run =
+      run_doorbench_shell("play --device sim --duration-s 3 --no-fifo --watch-params '" +
+                              watched.string() + "' --out '" + session.string() + "'",
+                          dir, "", writer);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.err, Catch::Contains("applied as parameter set 2"));
+  const SessionReader reader(session);
+  bool applied = false;
+  for (const SessionEvent& event : reader.events()) {
+    if (event.kind == "parameters" && event.detail.find("set 2: file ") == 0) {
+      applied = true;
+      CHECK(event.time_s > 0.8);
+      CHECK(event.time_s < 2.5);
+    }
+  }
+  CHECK(applied);
+  CHECK_THAT(reader.read_group_attribute("haptic/parameter_sets/set_2", "parameters"),
+             Catch::Contains("\"J\""));
+}
