@@ -10,6 +10,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "analysis/parameter_file.h"
 #include "app/commands.h"
@@ -31,6 +32,7 @@ struct AbCommandOptions {
   double presentation_s = 10.0;
   std::string out_dir;
   std::string answers_path;
+  std::vector<std::string> labels{"1", "2"};
 };
 
 // "preference", "identify-real", "rating" (K = 7) or "rating:K".
@@ -114,6 +116,7 @@ void run_ab_command(const AbCommandOptions& options) {
   inputs.options.seed = options.seed ? *options.seed : std::random_device{}();
   inputs.options.presentation_s = options.presentation_s;
   inputs.options.a_is_real = !options.real_rig.empty();
+  inputs.options.labels = {options.labels.at(0), options.labels.at(1)};
   if (const std::string problem = inputs.options.validate(); !problem.empty()) {
     throw UsageError(problem);
   }
@@ -177,6 +180,9 @@ void add_ab_command(CLI::App& app, Action& action) {
   ab->add_option("--out", options->out_dir,
                  "Folder for the sessions, answers.csv and ab-summary.{json,txt}")
       ->required();
+  ab->add_option("--labels", options->labels,
+                 "The two words the presentations are called and answered by (default 1 2)")
+      ->expected(2);
   ab->add_option("--answers", options->answers_path,
                  "Answers one per line for a scripted run (default: read from stdin)");
   ab->callback([options, &action] { action = [options] { run_ab_command(*options); }; });

@@ -420,10 +420,14 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
     return summary;
   };
 
-  const std::string question_text =
-      options.question == AbQuestion::kPreference     ? "Which felt better"
-      : options.question == AbQuestion::kIdentifyReal ? "Which was the real door"
-                                                      : "Rate each presentation";
+  const std::string& l1 = options.labels[0];
+  const std::string& l2 = options.labels[1];
+  const std::string prompt =
+      options.question == AbQuestion::kPreference ? "which felt better, " + l1 + " or " + l2 + "? "
+      : options.question == AbQuestion::kIdentifyReal
+          ? "which was the real door, " + l1 + " or " + l2 + "? "
+          : "rate " + l1 + " and " + l2 + ", each 1 to " + std::to_string(options.rating_scale) +
+                " (e.g. \"" + std::to_string(options.rating_scale) + " 1\"): ";
   int line = 0;
   for (const AbTrial& trial : plan) {
     AbTrialOutcome outcome;
@@ -444,11 +448,11 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
       player(request);
     }
     for (;;) {
-      prompts << question_text << "? ("
-              << answer_expectation(options.question, options.rating_scale, options.labels)
-              << "): " << std::flush;
+      prompts << prompt << std::flush;
       const std::optional<std::string> text = answers.next_line();
       ++line;
+      // A terminal echoes what was typed; a script's answer is shown so the log reads whole.
+      if (text && !answers.interactive) prompts << *text << "\n";
       if (!text) {
         prompts << "\n";
         outcomes.push_back(outcome);

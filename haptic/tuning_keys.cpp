@@ -6,6 +6,7 @@
 #include <stdexcept>
 
 #include "analysis/constraint_check.h"
+#include "analysis/parameter_file.h"
 
 namespace doorbench::haptic {
 namespace {
@@ -243,6 +244,13 @@ const TuningLogEntry& KeyTuner::press(char key, double time_s) {
   entry.parameter_set_id = current_id_;
   log_.record(std::move(entry));
   return log_.entries().back();
+}
+
+void KeyTuner::write_to_session(SessionWriter& writer) const {
+  log_.write_to_session(writer);
+  writer.write_group_attribute("tuning", "start_parameters_json", to_parameter_json(start_));
+  writer.write_group_attribute("tuning", "final_parameters_json", to_parameter_json(current_));
+  writer.write_group_attribute("tuning", "final_parameter_set", current_id_);
 }
 
 }  // namespace doorbench::haptic

@@ -91,6 +91,10 @@ class KeyTuner {
   const DoorModel& model() const { return current_; }
   const std::string& parameter_set_id() const { return current_id_; }
   const TuningLog& log() const { return log_; }
+  // The log (TuningLog::write_to_session), and the starting and current parameter sets as
+  // parameter files (attributes tuning/start_parameters_json, tuning/final_parameters_json)
+  // with the current set's id (tuning/final_parameter_set): the feel the tuning ended on.
+  void write_to_session(SessionWriter& writer) const;
 
  private:
   DoorModel start_, current_;

@@ -107,15 +107,17 @@ TEST_CASE("doorbench ab: the real door (simulated rig) vs the model, answers on 
   const auto plan = haptic::make_plan(options);
   // Right in both trials.
   std::string answers;
-  for (const auto& trial : plan) answers += trial.variant[0] == "real" ? "1\\n" : "2\\n";
-  const auto run = run_doorbench_shell("ab --real-rig '" + kRig + "' --b '" + kReference +
-                                           "' --question identify-real --trials 2 --seed 5 " +
-                                           "--presentation-s 1 --out '" + out.string() + "'",
-                                       dir, "", "printf '" + answers + "'");
+  for (const auto& trial : plan) answers += trial.variant[0] == "real" ? "L\\n" : "R\\n";
+  const auto run =
+      run_doorbench_shell("ab --real-rig '" + kRig + "' --b '" + kReference +
+                              "' --question identify-real --trials 2 --seed 5 " +
+                              "--presentation-s 1 --labels L R --out '" + out.string() + "'",
+                          dir, "", "printf '" + answers + "'");
   INFO(run.err);
   REQUIRE(run.status == 0);
   CHECK_THAT(run.out, Contains("real door identified: 2 right, 0 wrong"));
   CHECK_THAT(run.out, Contains("2 of 2 the real door identified, p = 0.5"));
+  CHECK_THAT(run.err, Contains("trial 2 of 2: presentation R\nwhich was the real door, L or R? "));
   for (int position = 1; position <= 2; ++position) {
     const doorbench::SessionReader session(out / ("trial-01-" + std::to_string(position) + ".h5"));
     const bool real = plan[0].variant[position - 1] == "real";

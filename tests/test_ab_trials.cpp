@@ -377,7 +377,9 @@ TEST_CASE("A/B run: presentations in plan order, answers and summary on disk", "
     CHECK(summary.b_preferred == 6);
     CHECK_THAT(summary.p_value, WithinRel(2.0 / 64.0, 1e-12));
     // The screen is told positions only, never a variant.
-    CHECK_THAT(prompts.str(), Contains("trial 3 of 6: presentation 2"));
+    CHECK_THAT(prompts.str(), Contains("trial 3 of 6: presentation 2\nwhich felt better, 1 or "
+                                       "2? " +
+                                       answers[2] + "\n"));
     CHECK_THAT(prompts.str(), !Contains("B") && !Contains("A"));
     const std::string csv = read_file(inputs.out_dir / "answers.csv");
     CHECK_THAT(csv, StartsWith("trial,answer,first_session,second_session,answered_utc\n"));

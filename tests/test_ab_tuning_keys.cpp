@@ -161,7 +161,7 @@ TEST_CASE("Tuning: the log written into a session", "[ab][tuning]") {
     doorbench::SessionMetadata metadata;
     metadata.rig_name = "test";
     doorbench::SessionWriter writer(path, metadata);
-    tuner.log().write_to_session(writer);
+    tuner.write_to_session(writer);
     writer.close();
   }
   const doorbench::SessionReader session(path);
@@ -172,4 +172,16 @@ TEST_CASE("Tuning: the log written into a session", "[ab][tuning]") {
   CHECK(events[0].detail == "key +: heavier: heaviness 0.95 -> 1.045 kg*m^2 (set ref-1)");
   CHECK_THAT(events[1].detail, StartsWith("key x: key 'x' does nothing"));
   CHECK(session.read_group_attribute("tuning", "log_csv") == tuner.log().to_csv());
+  CHECK(session.read_group_attribute("tuning", "final_parameter_set") == "ref-1");
+  // The parameter file stored reads back as the tuned door.
+  const doorbench::ParameterFile start = doorbench::parse_parameter_file(
+      session.read_group_attribute("tuning", "start_parameters_json"), "start");
+  const doorbench::ParameterFile final_set = doorbench::parse_parameter_file(
+      session.read_group_attribute("tuning", "final_parameters_json"), "final");
+  REQUIRE(start.sensory);
+  REQUIRE(final_set.sensory);
+  CHECK(start.sensory->values[doorbench::sensory::kJ] == 0.95);
+  CHECK_THAT(final_set.sensory->values[doorbench::sensory::kJ], WithinRel(1.045, 1e-15));
+  CHECK(final_set.sensory->values[doorbench::sensory::kK] ==
+        start.sensory->values[doorbench::sensory::kK]);
 }
