@@ -238,6 +238,15 @@ AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>&
     if (!outcome.answer) continue;
     ++summary.trials_answered;
     const AbAnswer& answer = *outcome.answer;
+    // Answers made by hand rather than by parse_answer: refuse what it would have refused.
+    const bool choice_ok = answer.choice == 1 || answer.choice == 2;
+    const bool ratings_ok = std::all_of(answer.rating.begin(), answer.rating.end(),
+                                        [&](int r) { return r >= 1 && r <= options.rating_scale; });
+    if (options.question == AbQuestion::kRating ? !ratings_ok : !choice_ok) {
+      throw std::invalid_argument("A/B summary: trial " + std::to_string(outcome.plan.trial) +
+                                  ": the answer " + in_quotes(answer.text) + " is not one of " +
+                                  std::string(to_string(options.question)));
+    }
     switch (options.question) {
       case AbQuestion::kPreference:
         if (outcome.plan.variant[answer.choice - 1] == "B") {
@@ -445,7 +454,16 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
       request.duration_s = options.presentation_s;
       prompts << "trial " << trial.trial << " of " << options.trials << ": presentation "
               << options.labels[position - 1] << std::endl;
-      player(request);
+      try {
+        player(request);
+      } catch (const std::exception& failure) {
+        // The device or the recording failed: keep what was answered, say where it stopped.
+        outcomes.push_back(outcome);
+        finish();
+        throw std::runtime_error("trial " + std::to_string(trial.trial) + ", presentation " +
+                                 options.labels[position - 1] + ": " + failure.what() +
+                                 " (results so far in " + inputs.out_dir.string() + ")");
+      }
     }
     for (;;) {
       prompts << prompt << std::flush;

@@ -143,8 +143,9 @@ struct AbRunInputs {
 // trial-NN-1.h5 and trial-NN-2.h5 in out_dir), then the answer, appended to answers.csv at
 // once (blind: trial, answer, sessions, time). At the end, or when the answers run out,
 // ab-summary.json and ab-summary.txt (with the key). Prompts go to `prompts`. Throws
-// std::runtime_error naming the file and line for a wrong scripted answer (the results so
-// far are written first) and for an output folder that already holds results.
+// std::runtime_error naming the file and line for a wrong scripted answer, the trial and
+// presentation when the player throws (in both cases the results so far are written
+// first), and for an output folder that already holds results.
 AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
                  const AnswerSource& answers, std::ostream& prompts);
 

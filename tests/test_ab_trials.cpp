@@ -279,6 +279,12 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
     CHECK_THAT(json, Contains("\"a_preferred\": 1"));
     CHECK_THAT(json, Contains("\"answer\": null"));
   }
+  SECTION("an answer that parse_answer would refuse") {
+    AbAnswer none;
+    none.text = "?";
+    CHECK_THROWS_WITH(haptic::summarize(options, {trial(1, "A", "B", none)}),
+                      Equals("A/B summary: trial 1: the answer \"?\" is not one of preference"));
+  }
   SECTION("identify-real") {
     options.question = AbQuestion::kIdentifyReal;
     options.a_is_real = true;
@@ -406,6 +412,18 @@ TEST_CASE("A/B run: presentations in plan order, answers and summary on disk", "
     CHECK(summary.trials_answered == 6);
     CHECK(summary.b_preferred == 6);
     CHECK_THAT(prompts.str(), Contains("got \"3\"; again please"));
+  }
+  SECTION("the player fails: the trial and presentation named, results so far kept") {
+    const haptic::PresentationPlayer failing = [&](const haptic::PresentationRequest& request) {
+      if (request.trial == 2 && request.position == 2) {
+        throw std::runtime_error("device link lost");
+      }
+      player(request);
+    };
+    CHECK_THROWS_WITH(haptic::run_ab(inputs, failing, scripted(answers), prompts),
+                      StartsWith("trial 2, presentation 2: device link lost (results so far in "));
+    CHECK_THAT(read_file(inputs.out_dir / "ab-summary.txt"), Contains("1 of 6 trials answered"));
+    CHECK(played.size() == 3);
   }
   SECTION("the answers end early") {
     answers.resize(4);
