@@ -1,6 +1,13 @@
 #include "haptic/tuning_keys.h"
 
+#include <poll.h>
+#include <termios.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
@@ -251,6 +258,51 @@ void KeyTuner::write_to_session(SessionWriter& writer) const {
   writer.write_group_attribute("tuning", "start_parameters_json", to_parameter_json(start_));
   writer.write_group_attribute("tuning", "final_parameters_json", to_parameter_json(current_));
   writer.write_group_attribute("tuning", "final_parameter_set", current_id_);
+}
+
+TerminalKeys::TerminalKeys(int fd, const std::string& name) : fd_(fd), name_(name) {
+  termios settings{};
+  if (::isatty(fd) != 1 || ::tcgetattr(fd, &settings) != 0) {
+    throw std::runtime_error(name_ +
+                             " is not a terminal: live tuning keys need one (a keypad or "
+                             "keyboard on the operator's console)");
+  }
+  saved_.resize(sizeof settings);
+  std::memcpy(saved_.data(), &settings, sizeof settings);
+  // Each key as it is pressed, not echoed; Ctrl-C still interrupts (ISIG kept).
+  settings.c_lflag &= ~static_cast<tcflag_t>(ICANON | ECHO);
+  settings.c_cc[VMIN] = 0;
+  settings.c_cc[VTIME] = 0;
+  if (::tcsetattr(fd, TCSANOW, &settings) != 0) {
+    throw std::runtime_error(name_ + ": cannot set the terminal's mode: " + std::strerror(errno));
+  }
+}
+
+TerminalKeys::~TerminalKeys() {
+  termios settings{};
+  std::memcpy(&settings, saved_.data(), sizeof settings);
+  ::tcsetattr(fd_, TCSANOW, &settings);
+}
+
+std::optional<char> TerminalKeys::poll(double timeout_s) {
+  pollfd request{fd_, POLLIN, 0};
+  const int timeout_ms =
+      timeout_s <= 0 ? 0 : static_cast<int>(std::ceil(std::min(timeout_s, 3600.0) * 1000.0));
+  const int ready = ::poll(&request, 1, timeout_ms);
+  if (ready < 0) {
+    if (errno == EINTR) return std::nullopt;
+    throw std::runtime_error(name_ + ": cannot wait for a key: " + std::strerror(errno));
+  }
+  if (ready == 0) return std::nullopt;
+  if ((request.revents & POLLIN) == 0) {
+    throw std::runtime_error(name_ + ": the terminal is gone (hung up)");
+  }
+  char key = 0;
+  const ssize_t got = ::read(fd_, &key, 1);
+  if (got == 1) return key;
+  if (got == 0) throw std::runtime_error(name_ + ": end of input");
+  if (errno == EINTR || errno == EAGAIN) return std::nullopt;
+  throw std::runtime_error(name_ + ": cannot read a key: " + std::strerror(errno));
 }
 
 }  // namespace doorbench::haptic

@@ -104,4 +104,26 @@ class KeyTuner {
   TuningLog log_;
 };
 
+// Single key presses from a terminal (the keypad is a USB keyboard) without waiting for
+// Enter: for the object's lifetime the terminal is in non-canonical mode without echo, and
+// its settings are restored afterwards (also when the program ends by an exception). Not
+// for the tick: poll() is a system call; call it from the operator's thread and hand the
+// resulting parameter set to the loop.
+class TerminalKeys {
+ public:
+  // Throws std::runtime_error when `fd` is not a terminal ("`name` is not a terminal: ...").
+  explicit TerminalKeys(int fd, const std::string& name = "stdin");
+  ~TerminalKeys();
+  TerminalKeys(const TerminalKeys&) = delete;
+  TerminalKeys& operator=(const TerminalKeys&) = delete;
+  // The next key, waiting at most timeout_s (0: only what is already there); nullopt when
+  // none came. Throws std::runtime_error when the terminal is gone (end of input, error).
+  std::optional<char> poll(double timeout_s = 0.0);
+
+ private:
+  int fd_;
+  std::string name_;
+  std::vector<unsigned char> saved_;  // the terminal's settings before (a struct termios)
+};
+
 }  // namespace doorbench::haptic

@@ -2,9 +2,14 @@
 // documented step and leaves the others alone; steps out of the parameter set's bounds or
 // the model's constraints are refused naming the control and the limit; the tuner's ids,
 // reset and log, and the log written into a real session file.
+#include <pty.h>
+#include <termios.h>
+#include <unistd.h>
+
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <map>
+#include <optional>
 #include <string>
 
 #include "acquisition/session_file.h"
@@ -184,4 +189,49 @@ TEST_CASE("Tuning: the log written into a session", "[ab][tuning]") {
   CHECK_THAT(final_set.sensory->values[doorbench::sensory::kJ], WithinRel(1.045, 1e-15));
   CHECK(final_set.sensory->values[doorbench::sensory::kK] ==
         start.sensory->values[doorbench::sensory::kK]);
+}
+
+TEST_CASE("Tuning: keys read one by one from a real pseudo-terminal, its mode restored",
+          "[ab][tuning]") {
+  int master = -1, slave = -1;
+  REQUIRE(::openpty(&master, &slave, nullptr, nullptr, nullptr) == 0);
+  termios before{};
+  REQUIRE(::tcgetattr(slave, &before) == 0);
+  REQUIRE((before.c_lflag & ICANON) != 0);
+  {
+    haptic::TerminalKeys keys(slave, "keypad");
+    termios during{};
+    REQUIRE(::tcgetattr(slave, &during) == 0);
+    CHECK((during.c_lflag & ICANON) == 0);
+    CHECK((during.c_lflag & ECHO) == 0);
+    CHECK_FALSE(keys.poll());
+    // No Enter: in canonical mode these would wait for a newline.
+    REQUIRE(::write(master, "+u", 2) == 2);
+    CHECK(keys.poll(1.0) == '+');
+    CHECK(keys.poll(1.0) == 'u');
+    CHECK_FALSE(keys.poll(0.05));
+    // Through a tuner: the keys as the keypad sends them.
+    haptic::KeyTuner tuner(reference(), "ref");
+    REQUIRE(::write(master, "UUr-", 4) == 4);
+    for (int i = 0; i < 4; ++i) {
+      const std::optional<char> key = keys.poll(1.0);
+      REQUIRE(key);
+      tuner.press(*key, 0.1 * i);
+    }
+    CHECK(tuner.parameter_set_id() == "ref-3");
+    CHECK_THAT(perceptual::read(tuner.model(), Control::kHeaviness), WithinRel(0.95 / 1.1, 1e-12));
+  }
+  termios after{};
+  REQUIRE(::tcgetattr(slave, &after) == 0);
+  CHECK(after.c_lflag == before.c_lflag);
+  CHECK(after.c_cc[VMIN] == before.c_cc[VMIN]);
+  ::close(master);
+  ::close(slave);
+
+  int pipe_fds[2];
+  REQUIRE(::pipe(pipe_fds) == 0);
+  CHECK_THROWS_WITH(haptic::TerminalKeys(pipe_fds[0]),
+                    StartsWith("stdin is not a terminal: live tuning keys need one"));
+  ::close(pipe_fds[0]);
+  ::close(pipe_fds[1]);
 }
