@@ -366,6 +366,13 @@ std::string AbSummary::to_json() const {
     row["first"] = t.plan.variant[0];
     row["second"] = t.plan.variant[1];
     row["answer"] = t.answer ? nlohmann::ordered_json(t.answer->text) : nlohmann::ordered_json();
+    // The answer through the key: the variant chosen, or each variant's rating.
+    if (t.answer && question == AbQuestion::kRating) {
+      row["rating"] = {{t.plan.variant[0], t.answer->rating[0]},
+                       {t.plan.variant[1], t.answer->rating[1]}};
+    } else if (t.answer && (t.answer->choice == 1 || t.answer->choice == 2)) {
+      row["chosen"] = t.plan.variant[t.answer->choice - 1];
+    }
     row["sessions"] = {t.session_files[0], t.session_files[1]};
     row["answered_utc"] = t.answered_utc;
     key.push_back(row);

@@ -278,6 +278,7 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
     const std::string json = summary.to_json();
     CHECK_THAT(json, Contains("\"a_preferred\": 1"));
     CHECK_THAT(json, Contains("\"answer\": null"));
+    CHECK_THAT(json, Contains("\"answer\": \"2\",\n      \"chosen\": \"B\""));
   }
   SECTION("an answer that parse_answer would refuse") {
     AbAnswer none;
@@ -320,6 +321,9 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
     CHECK(summary.rating_ties == 1);
     CHECK(summary.test_trials == 2);
     CHECK_THAT(summary.p_value, WithinRel(0.5, 1e-12));
+    CHECK_THAT(summary.to_json(),
+               Contains("\"answer\": \"7 3\",\n      \"rating\": {\n        \"B\": 7,\n"
+                        "        \"A\": 3\n      }"));
   }
 }
 
