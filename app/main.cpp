@@ -53,6 +53,7 @@ int main(int argc, char** argv) {
   doorbench::app::add_devices_command(app, action);
   doorbench::app::add_view_command(app, action);
   doorbench::app::add_play_command(app, action);
+  doorbench::app::add_ab_command(app, action);
 
   try {
     app.parse(argc, argv);

@@ -1,0 +1,191 @@
+// doorbench ab: a blinded A/B comparison (docs/ab-testing.md). Variant A against variant B
+// on the device, or the real door on the bench against a virtual one; the plan, answers and
+// statistics are haptic/ab_trials.h, the playing of one presentation is a
+// PresentationPlayer (make_presentation_player below).
+#include <unistd.h>
+
+#include <fstream>
+#include <iostream>
+#include <map>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "analysis/parameter_file.h"
+#include "app/commands.h"
+#include "app/session_recording.h"
+#include "haptic/ab_trials.h"
+
+namespace doorbench::app {
+namespace {
+
+struct AbCommandOptions {
+  std::string params_a;
+  std::string params_b;
+  std::string real_rig;
+  std::string model = "sensory";
+  std::string device = "sim";
+  int trials = 10;
+  std::string question = "preference";
+  std::optional<std::uint64_t> seed;
+  double presentation_s = 10.0;
+  std::string out_dir;
+  std::string answers_path;
+  std::vector<std::string> labels{"1", "2"};
+};
+
+// "preference", "identify-real", "rating" (K = 7) or "rating:K".
+void parse_question(const std::string& text, haptic::AbOptions& options) {
+  if (text == "preference") {
+    options.question = haptic::AbQuestion::kPreference;
+  } else if (text == "identify-real") {
+    options.question = haptic::AbQuestion::kIdentifyReal;
+  } else if (text == "rating") {
+    options.question = haptic::AbQuestion::kRating;
+  } else if (text.rfind("rating:", 0) == 0) {
+    options.question = haptic::AbQuestion::kRating;
+    const std::string scale = text.substr(7);
+    const bool digits = !scale.empty() && scale.size() <= 3 &&
+                        scale.find_first_not_of("0123456789") == std::string::npos;
+    if (!digits) throw UsageError("--question rating:K needs a whole number K, got " + text);
+    options.rating_scale = std::stoi(scale);
+  } else {
+    throw UsageError("--question must be preference, identify-real, rating or rating:K, not " +
+                     text);
+  }
+}
+
+// The presentation player for --device. The simulated device (sim) plays a virtual variant
+// as the virtual hand on the model (analysis' simulator) and the real door as a recording of
+// the rig when the rig is simulated. Device playback (hapticmaster://HOST) comes with the
+// render loop: this is where it plugs in.
+haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& options) {
+  if (options.device != "sim") {
+    if (options.device.rfind("hapticmaster://", 0) == 0) {
+      throw std::runtime_error("--device " + options.device +
+                               ": playback on a HapticMaster is not in this build yet (use "
+                               "--device sim)");
+    }
+    throw UsageError("--device must be sim or hapticmaster://HOST, not " + options.device);
+  }
+  const std::optional<ModelKind> kind = parse_model_kind(options.model);
+  if (!kind) throw UsageError("--model must be sensory or physical, not " + options.model);
+  // Loaded once, before the first trial, so that a bad file stops the run at once.
+  auto models = std::make_shared<std::map<std::string, DoorModel>>();
+  models->emplace("B", doorbench::load_model(*kind, options.params_b, ""));
+  std::shared_ptr<RigDefinition> rig;
+  if (options.real_rig.empty()) {
+    models->emplace("A", doorbench::load_model(*kind, options.params_a, ""));
+  } else {
+    rig = std::make_shared<RigDefinition>(load_rig(options.real_rig));
+    for (const RigChannel& channel : rig->channels) {
+      if (channel.backend != "simulated") {
+        throw std::runtime_error(options.real_rig + ": channel " + channel.name + " uses backend " +
+                                 channel.backend +
+                                 "; with --device sim the real door can only be a simulated rig");
+      }
+    }
+  }
+  return [models, rig](const haptic::PresentationRequest& request) {
+    if (request.variant == "real") {
+      SessionRecordingOptions recording;
+      recording.duration_s = request.duration_s;
+      recording.show_progress = false;
+      recording.notes = "doorbench ab: trial " + std::to_string(request.trial) + ", presentation " +
+                        std::to_string(request.position) + ", variant real (" +
+                        request.params_path + ")";
+      record_simulated_session(*rig, recording, request.session_path);
+      return;
+    }
+    SessionMetadata metadata;
+    metadata.rig_name = "simulated haptic device";
+    metadata.start_time_utc = utc_now_iso8601();
+    metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
+    haptic::write_simulated_presentation(models->at(request.variant), request, metadata);
+  };
+}
+
+void run_ab_command(const AbCommandOptions& options) {
+  if (options.params_a.empty() == options.real_rig.empty()) {
+    throw UsageError("ab needs exactly one of --a PARAMS.json and --real-rig RIG.toml");
+  }
+  haptic::AbRunInputs inputs;
+  inputs.options.trials = options.trials;
+  parse_question(options.question, inputs.options);
+  inputs.options.seed = options.seed ? *options.seed : std::random_device{}();
+  inputs.options.presentation_s = options.presentation_s;
+  inputs.options.a_is_real = !options.real_rig.empty();
+  inputs.options.labels = {options.labels.at(0), options.labels.at(1)};
+  if (const std::string problem = inputs.options.validate(); !problem.empty()) {
+    throw UsageError(problem);
+  }
+  inputs.params_a = options.real_rig.empty() ? options.params_a : options.real_rig;
+  inputs.params_b = options.params_b;
+  inputs.out_dir = options.out_dir;
+  const haptic::PresentationPlayer player = make_presentation_player(options);
+
+  haptic::AnswerSource answers;
+  std::shared_ptr<std::ifstream> file;
+  if (!options.answers_path.empty()) {
+    file = std::make_shared<std::ifstream>(options.answers_path);
+    if (!*file) throw std::runtime_error(options.answers_path + ": cannot open the answers file");
+    answers.name = options.answers_path;
+  } else {
+    answers.name = "stdin";
+    answers.interactive = ::isatty(STDIN_FILENO) == 1;
+  }
+  answers.next_line = [file]() -> std::optional<std::string> {
+    std::string line;
+    std::istream& in = file ? static_cast<std::istream&>(*file) : std::cin;
+    if (!std::getline(in, line)) return std::nullopt;
+    return line;
+  };
+  std::cerr << "doorbench ab: " << inputs.options.trials << " trials, "
+            << haptic::to_string(inputs.options.question) << ", presentations of "
+            << inputs.options.presentation_s << " s on " << options.device << "\n";
+  const haptic::AbSummary summary = haptic::run_ab(inputs, player, answers, std::cerr);
+  std::cout << summary.brief_report() << "results in " << options.out_dir
+            << " (answers.csv, ab-summary.json, ab-summary.txt, one session per presentation)\n";
+}
+
+}  // namespace
+
+void add_ab_command(CLI::App& app, Action& action) {
+  auto options = std::make_shared<AbCommandOptions>();
+  CLI::App* ab = app.add_subcommand(
+      "ab",
+      "Blinded A/B comparison: variant A vs B on the device, or the real door vs a virtual one; "
+      "N trials in a balanced random order, answers per trial, counts and an exact binomial "
+      "test.");
+  auto* a = ab->add_option("--a", options->params_a, "Variant A's parameter file (JSON)");
+  auto* real = ab->add_option("--real-rig", options->real_rig,
+                              "A is the real door on this rig (TOML) instead of a parameter file");
+  a->excludes(real);
+  ab->add_option("--b", options->params_b, "Variant B's parameter file (JSON)")->required();
+  ab->add_option("--model", options->model, "Model of the parameter files: sensory or physical")
+      ->capture_default_str();
+  ab->add_option("--device", options->device, "sim, or hapticmaster://HOST")->capture_default_str();
+  ab->add_option("--trials", options->trials, "Number of trials N")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  ab->add_option("--question", options->question,
+                 "preference (which felt better), identify-real (which was the real door) or "
+                 "rating[:K] (each presentation rated 1..K, default K 7)")
+      ->capture_default_str();
+  ab->add_option("--seed", options->seed,
+                 "Seed of the presentation order (default: a random one, kept in the results)");
+  ab->add_option("--presentation-s", options->presentation_s, "Length of each presentation (s)")
+      ->capture_default_str();
+  ab->add_option("--out", options->out_dir,
+                 "Folder for the sessions, answers.csv and ab-summary.{json,txt}")
+      ->required();
+  ab->add_option("--labels", options->labels,
+                 "The two words the presentations are called and answered by (default 1 2)")
+      ->expected(2);
+  ab->add_option("--answers", options->answers_path,
+                 "Answers one per line for a scripted run (default: read from stdin)");
+  ab->callback([options, &action] { action = [options] { run_ab_command(*options); }; });
+}
+
+}  // namespace doorbench::app

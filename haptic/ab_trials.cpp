@@ -1,0 +1,519 @@
+#include "haptic/ab_trials.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <fstream>
+#include <iomanip>
+#include <limits>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <random>
+#include <sstream>
+#include <stdexcept>
+
+#include "acquisition/session_csv.h"
+#include "analysis/constraint_check.h"
+#include "analysis/simulator.h"
+#include "analysis/trajectory_io.h"
+#include "analysis/virtual_hand.h"
+
+namespace doorbench::haptic {
+namespace {
+
+constexpr int kMaxTrials = 10000;
+
+std::string_view trim(std::string_view text) {
+  const auto first = text.find_first_not_of(" \t\r\n");
+  if (first == std::string_view::npos) return {};
+  const auto last = text.find_last_not_of(" \t\r\n");
+  return text.substr(first, last - first + 1);
+}
+
+std::string in_quotes(std::string_view text) {
+  return std::string("\"").append(text).append("\"");
+}
+
+// A uniform draw from 0..bound−1 without the modulo bias (rejects the low 2^64 mod bound).
+std::uint64_t draw_below(std::mt19937_64& random, std::uint64_t bound) {
+  const std::uint64_t threshold = (0 - bound) % bound;
+  for (;;) {
+    const std::uint64_t x = random();
+    if (x >= threshold) return x % bound;
+  }
+}
+
+std::string utc_now() {
+  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
+  std::tm parts{};
+  gmtime_r(&now, &parts);
+  std::ostringstream text;
+  text << std::put_time(&parts, "%Y-%m-%dT%H:%M:%SZ");
+  return text.str();
+}
+
+std::string two_digits(int trial) {
+  std::string text = std::to_string(trial);
+  if (text.size() < 2) text.insert(0, 2 - text.size(), '0');
+  return text;
+}
+
+std::string answer_expectation(AbQuestion question, int rating_scale,
+                               const std::array<std::string, 2>& labels) {
+  switch (question) {
+    case AbQuestion::kPreference:
+      return "expected " + in_quotes(labels[0]) + " or " + in_quotes(labels[1]) +
+             " (which felt better)";
+    case AbQuestion::kIdentifyReal:
+      return "expected " + in_quotes(labels[0]) + " or " + in_quotes(labels[1]) +
+             " (which was the real door)";
+    case AbQuestion::kRating:
+      return "expected two ratings from 1 to " + std::to_string(rating_scale) +
+             ", one per presentation (e.g. \"" + std::to_string(rating_scale) + " 1\")";
+  }
+  return "";
+}
+
+int position_of(const AbTrial& trial, const std::string& variant) {
+  return trial.variant[0] == variant ? 0 : 1;
+}
+
+std::string format_p(double p) {
+  std::ostringstream text;
+  text << std::setprecision(4) << p;
+  return text.str();
+}
+
+}  // namespace
+
+std::string_view to_string(AbQuestion question) {
+  switch (question) {
+    case AbQuestion::kPreference:
+      return "preference";
+    case AbQuestion::kIdentifyReal:
+      return "identify-real";
+    case AbQuestion::kRating:
+      return "rating";
+  }
+  return "?";
+}
+
+std::string AbOptions::validate() const {
+  if (trials < 1 || trials > kMaxTrials) {
+    return "trials must be 1 to " + std::to_string(kMaxTrials) + ", got " + std::to_string(trials);
+  }
+  if (question == AbQuestion::kRating && (rating_scale < 2 || rating_scale > 100)) {
+    return "rating scale K must be 2 to 100, got " + std::to_string(rating_scale);
+  }
+  if (!std::isfinite(presentation_s) || presentation_s <= 0 || presentation_s > 3600) {
+    return "presentation time must be above 0 and at most 3600 s, got " +
+           format_number(presentation_s) + " s";
+  }
+  if (question == AbQuestion::kIdentifyReal && !a_is_real) {
+    return "question identify-real needs the real door as one variant (A is not the real door)";
+  }
+  if (labels[0].empty() || labels[1].empty() || labels[0] == labels[1]) {
+    return "blinding labels must be two different, non-empty words, got " + in_quotes(labels[0]) +
+           " and " + in_quotes(labels[1]);
+  }
+  for (const std::string& label : labels) {
+    if (label.find_first_of(" \t\r\n,") != std::string::npos) {
+      return "blinding label " + in_quotes(label) + " must not hold spaces or commas";
+    }
+  }
+  return "";
+}
+
+std::vector<AbTrial> make_plan(const AbOptions& options) {
+  if (const std::string problem = options.validate(); !problem.empty()) {
+    throw std::invalid_argument("A/B options: " + problem);
+  }
+  std::mt19937_64 random(options.seed);
+  const int n = options.trials;
+  // true: A first. Balanced list first, then shuffled (Fisher–Yates).
+  std::vector<bool> a_first;
+  a_first.reserve(n);
+  for (int i = 0; i < n / 2; ++i) a_first.push_back(true);
+  for (int i = 0; i < n / 2; ++i) a_first.push_back(false);
+  if (n % 2 == 1) a_first.push_back(draw_below(random, 2) == 0);
+  for (int i = n - 1; i > 0; --i) {
+    const auto j = static_cast<int>(draw_below(random, static_cast<std::uint64_t>(i) + 1));
+    const bool swap = a_first[i];
+    a_first[i] = a_first[j];
+    a_first[j] = swap;
+  }
+  std::vector<AbTrial> plan(n);
+  const std::string a = options.variant_a();
+  for (int i = 0; i < n; ++i) {
+    plan[i].trial = i + 1;
+    plan[i].variant =
+        a_first[i] ? std::array<std::string, 2>{a, "B"} : std::array<std::string, 2>{"B", a};
+  }
+  return plan;
+}
+
+AbAnswer parse_answer(AbQuestion question, int rating_scale, std::string_view text,
+                      const std::array<std::string, 2>& labels) {
+  const std::string_view answer = trim(text);
+  const std::string expected = answer_expectation(question, rating_scale, labels);
+  if (answer.empty()) throw std::invalid_argument("no answer: " + expected);
+  AbAnswer result;
+  result.text = std::string(answer);
+  if (question != AbQuestion::kRating) {
+    if (answer == labels[0]) {
+      result.choice = 1;
+    } else if (answer == labels[1]) {
+      result.choice = 2;
+    } else {
+      throw std::invalid_argument(expected + ", got " + in_quotes(answer));
+    }
+    return result;
+  }
+  std::vector<std::string> words;
+  std::string word;
+  for (char c : answer) {
+    if (c == ' ' || c == '\t' || c == ',') {
+      if (!word.empty()) words.push_back(word);
+      word.clear();
+    } else {
+      word += c;
+    }
+  }
+  if (!word.empty()) words.push_back(word);
+  if (words.size() != 2) throw std::invalid_argument(expected + ", got " + in_quotes(answer));
+  for (int i = 0; i < 2; ++i) {
+    const std::string& w = words[i];
+    const bool digits = !w.empty() && w.size() <= 3 && std::all_of(w.begin(), w.end(), [](char c) {
+      return c >= '0' && c <= '9';
+    });
+    if (!digits) {
+      throw std::invalid_argument(in_quotes(w) + " is not a whole number: " + expected + ", got " +
+                                  in_quotes(answer));
+    }
+    const int value = std::stoi(w);
+    if (value < 1 || value > rating_scale) {
+      throw std::invalid_argument("rating " + w + " is outside 1.." + std::to_string(rating_scale) +
+                                  ": " + expected + ", got " + in_quotes(answer));
+    }
+    result.rating[i] = value;
+  }
+  return result;
+}
+
+double binomial_two_sided_p(long k, long n) {
+  if (n < 0 || k < 0 || k > n) {
+    throw std::invalid_argument("binomial test: need 0 <= k <= n, got k = " + std::to_string(k) +
+                                ", n = " + std::to_string(n));
+  }
+  const long m = std::min(k, n - k);
+  // At the centre every outcome is at least as far from n/2: p = 1.
+  if (2 * m == n || n == 0) return 1.0;
+  // P(X <= m) = t_m (1 + t_{m−1}/t_m + …), t_i = C(n, i) / 2^n; the ratio of neighbours is
+  // t_{i−1}/t_i = i / (n − i + 1) < 1 below the centre, so the sum is summed from its
+  // largest term and stops once the terms no longer change it.
+  const double dn = static_cast<double>(n);
+  const double dm = static_cast<double>(m);
+  const double log_t_m =
+      std::lgamma(dn + 1) - std::lgamma(dm + 1) - std::lgamma(dn - dm + 1) - dn * std::log(2.0);
+  double sum = 1.0, term = 1.0;
+  for (long i = m; i >= 1; --i) {
+    term *= static_cast<double>(i) / static_cast<double>(n - i + 1);
+    sum += term;
+    if (term < sum * 1e-17) break;
+  }
+  const double p = 2.0 * std::exp(log_t_m + std::log(sum));
+  return std::min(p, 1.0);
+}
+
+AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>& trials) {
+  AbSummary summary;
+  summary.question = options.question;
+  summary.variant_a = options.variant_a();
+  summary.trials_planned = options.trials;
+  summary.seed = options.seed;
+  summary.trials = trials;
+  double sum_a = 0.0, sum_b = 0.0;
+  for (const AbTrialOutcome& outcome : trials) {
+    if (!outcome.answer) continue;
+    ++summary.trials_answered;
+    const AbAnswer& answer = *outcome.answer;
+    // Answers made by hand rather than by parse_answer: refuse what it would have refused.
+    const bool choice_ok = answer.choice == 1 || answer.choice == 2;
+    const bool ratings_ok = std::all_of(answer.rating.begin(), answer.rating.end(),
+                                        [&](int r) { return r >= 1 && r <= options.rating_scale; });
+    if (options.question == AbQuestion::kRating ? !ratings_ok : !choice_ok) {
+      throw std::invalid_argument("A/B summary: trial " + std::to_string(outcome.plan.trial) +
+                                  ": the answer " + in_quotes(answer.text) + " is not one of " +
+                                  std::string(to_string(options.question)));
+    }
+    switch (options.question) {
+      case AbQuestion::kPreference:
+        if (outcome.plan.variant[answer.choice - 1] == "B") {
+          ++summary.b_preferred;
+        } else {
+          ++summary.a_preferred;
+        }
+        break;
+      case AbQuestion::kIdentifyReal:
+        if (outcome.plan.variant[answer.choice - 1] == "real") {
+          ++summary.real_identified;
+        } else {
+          ++summary.real_missed;
+        }
+        break;
+      case AbQuestion::kRating: {
+        const int a = answer.rating[position_of(outcome.plan, summary.variant_a)];
+        const int b = answer.rating[position_of(outcome.plan, "B")];
+        sum_a += a;
+        sum_b += b;
+        if (a > b) {
+          ++summary.a_rated_higher;
+        } else if (b > a) {
+          ++summary.b_rated_higher;
+        } else {
+          ++summary.rating_ties;
+        }
+        break;
+      }
+    }
+  }
+  switch (options.question) {
+    case AbQuestion::kPreference:
+      summary.successes = summary.b_preferred;
+      summary.test_trials = summary.trials_answered;
+      summary.test_meaning = "B preferred over " + summary.variant_a;
+      break;
+    case AbQuestion::kIdentifyReal:
+      summary.successes = summary.real_identified;
+      summary.test_trials = summary.trials_answered;
+      summary.test_meaning = "the real door identified";
+      break;
+    case AbQuestion::kRating:
+      summary.successes = summary.b_rated_higher;
+      summary.test_trials = summary.a_rated_higher + summary.b_rated_higher;
+      summary.test_meaning = "B rated higher than " + summary.variant_a + " (ties left out)";
+      if (summary.trials_answered > 0) {
+        summary.mean_rating_a = sum_a / summary.trials_answered;
+        summary.mean_rating_b = sum_b / summary.trials_answered;
+      }
+      break;
+  }
+  summary.p_value = binomial_two_sided_p(summary.successes, summary.test_trials);
+  return summary;
+}
+
+std::string AbSummary::brief_report() const {
+  std::ostringstream text;
+  text << "A/B " << to_string(question) << ": " << variant_a << " vs " << variant_b << ", "
+       << trials_answered << " of " << trials_planned << " trials answered (seed " << seed << ")\n";
+  switch (question) {
+    case AbQuestion::kPreference:
+      text << "  preferred: " << variant_a << " " << a_preferred << ", B " << b_preferred << "\n";
+      break;
+    case AbQuestion::kIdentifyReal:
+      text << "  real door identified: " << real_identified << " right, " << real_missed
+           << " wrong\n";
+      break;
+    case AbQuestion::kRating:
+      text << "  mean rating: " << variant_a << " " << format_p(mean_rating_a) << ", B "
+           << format_p(mean_rating_b) << "; rated higher: " << variant_a << " " << a_rated_higher
+           << ", B " << b_rated_higher << ", ties " << rating_ties << "\n";
+      break;
+  }
+  text << "  exact binomial test (two-sided, chance 0.5): " << successes << " of " << test_trials
+       << " " << test_meaning << ", p = " << format_p(p_value) << "\n";
+  text << "  key (trial: first, second -> answer):";
+  for (std::size_t i = 0; i < trials.size(); ++i) {
+    const AbTrialOutcome& t = trials[i];
+    text << (i % 5 == 0 ? "\n    " : "  ") << t.plan.trial << ": " << t.plan.variant[0] << ","
+         << t.plan.variant[1] << " -> " << (t.answer ? t.answer->text : "-");
+  }
+  text << "\n";
+  return text.str();
+}
+
+std::string AbSummary::to_json() const {
+  nlohmann::ordered_json json;
+  json["question"] = std::string(to_string(question));
+  json["variant_a"] = variant_a;
+  json["variant_b"] = variant_b;
+  json["seed"] = seed;
+  json["trials_planned"] = trials_planned;
+  json["trials_answered"] = trials_answered;
+  switch (question) {
+    case AbQuestion::kPreference:
+      json["counts"] = {{"a_preferred", a_preferred}, {"b_preferred", b_preferred}};
+      break;
+    case AbQuestion::kIdentifyReal:
+      json["counts"] = {{"real_identified", real_identified}, {"real_missed", real_missed}};
+      break;
+    case AbQuestion::kRating:
+      json["counts"] = {{"mean_rating_a", mean_rating_a},
+                        {"mean_rating_b", mean_rating_b},
+                        {"a_rated_higher", a_rated_higher},
+                        {"b_rated_higher", b_rated_higher},
+                        {"ties", rating_ties}};
+      break;
+  }
+  json["binomial_test"] = {
+      {"successes", successes}, {"trials", test_trials}, {"success_means", test_meaning},
+      {"chance", 0.5},          {"sided", "two"},        {"p_value", p_value}};
+  nlohmann::ordered_json key = nlohmann::ordered_json::array();
+  for (const AbTrialOutcome& t : trials) {
+    nlohmann::ordered_json row;
+    row["trial"] = t.plan.trial;
+    row["first"] = t.plan.variant[0];
+    row["second"] = t.plan.variant[1];
+    row["answer"] = t.answer ? nlohmann::ordered_json(t.answer->text) : nlohmann::ordered_json();
+    // The answer through the key: the variant chosen, or each variant's rating.
+    if (t.answer && question == AbQuestion::kRating) {
+      row["rating"] = {{t.plan.variant[0], t.answer->rating[0]},
+                       {t.plan.variant[1], t.answer->rating[1]}};
+    } else if (t.answer && (t.answer->choice == 1 || t.answer->choice == 2)) {
+      row["chosen"] = t.plan.variant[t.answer->choice - 1];
+    }
+    row["sessions"] = {t.session_files[0], t.session_files[1]};
+    row["answered_utc"] = t.answered_utc;
+    key.push_back(row);
+  }
+  json["key"] = key;
+  return json.dump(2) + "\n";
+}
+
+void write_simulated_presentation(const DoorModel& model, const PresentationRequest& request,
+                                  SessionMetadata metadata) {
+  VirtualHandOptions hand_options;
+  hand_options.duration_s = request.duration_s;
+  const VirtualHand hand(hand_options, model.geometry().handle_radius_m);
+  constexpr double kRateHz = 1000.0;
+  const auto samples = static_cast<std::size_t>(std::floor(request.duration_s * kRateHz)) + 1;
+  std::vector<double> times(samples);
+  for (std::size_t i = 0; i < samples; ++i) times[i] = static_cast<double>(i) / kRateHz;
+  Trajectory run = simulate(model, hand, DoorState{}, times);
+  run.stroke.resize(samples);
+  for (std::size_t i = 0; i < samples; ++i) run.stroke[i] = hand.stroke_at(times[i]);
+  std::string note = "doorbench ab: trial " + std::to_string(request.trial) + ", presentation " +
+                     std::to_string(request.position) + ", variant " + request.variant + " (" +
+                     request.params_path + "), simulated player: the virtual hand on the model";
+  metadata.notes = metadata.notes.empty() ? note : metadata.notes + "; " + note;
+  recording_to_session(to_recording(run, note), request.session_path, metadata);
+}
+
+AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
+                 const AnswerSource& answers, std::ostream& prompts) {
+  const AbOptions& options = inputs.options;
+  const std::vector<AbTrial> plan = make_plan(options);
+  namespace fs = std::filesystem;
+  const fs::path answers_path = inputs.out_dir / "answers.csv";
+  for (const char* name : {"answers.csv", "ab-summary.json", "ab-summary.txt"}) {
+    if (fs::exists(inputs.out_dir / name)) {
+      throw std::runtime_error((inputs.out_dir / name).string() +
+                               ": already there; A/B results are never overwritten (use another "
+                               "--out folder)");
+    }
+  }
+  std::error_code error;
+  fs::create_directories(inputs.out_dir, error);
+  if (error) {
+    throw std::runtime_error(inputs.out_dir.string() +
+                             ": cannot create folder: " + error.message());
+  }
+  std::ofstream csv(answers_path);
+  if (!csv) throw std::runtime_error(answers_path.string() + ": cannot create");
+  csv << "trial,answer,first_session,second_session,answered_utc\n" << std::flush;
+
+  std::vector<AbTrialOutcome> outcomes;
+  auto finish = [&] {
+    AbSummary summary = summarize(options, outcomes);
+    for (const auto& [name, text] :
+         {std::pair<std::string, std::string>{"ab-summary.json", summary.to_json()},
+          std::pair<std::string, std::string>{"ab-summary.txt", summary.brief_report()}}) {
+      std::ofstream file(inputs.out_dir / name);
+      file << text;
+      if (!file) throw std::runtime_error((inputs.out_dir / name).string() + ": cannot write");
+    }
+    return summary;
+  };
+
+  const std::string& l1 = options.labels[0];
+  const std::string& l2 = options.labels[1];
+  const std::string prompt =
+      options.question == AbQuestion::kPreference ? "which felt better, " + l1 + " or " + l2 + "? "
+      : options.question == AbQuestion::kIdentifyReal
+          ? "which was the real door, " + l1 + " or " + l2 + "? "
+          : "rate " + l1 + " and " + l2 + ", each 1 to " + std::to_string(options.rating_scale) +
+                " (e.g. \"" + std::to_string(options.rating_scale) + " 1\"): ";
+  int line = 0;
+  for (const AbTrial& trial : plan) {
+    AbTrialOutcome outcome;
+    outcome.plan = trial;
+    for (int position = 1; position <= 2; ++position) {
+      const std::string file =
+          "trial-" + two_digits(trial.trial) + "-" + std::to_string(position) + ".h5";
+      outcome.session_files[position - 1] = file;
+      PresentationRequest request;
+      request.trial = trial.trial;
+      request.position = position;
+      request.variant = trial.variant[position - 1];
+      request.params_path = request.variant == "B" ? inputs.params_b : inputs.params_a;
+      request.session_path = inputs.out_dir / file;
+      request.duration_s = options.presentation_s;
+      prompts << "trial " << trial.trial << " of " << options.trials << ": presentation "
+              << options.labels[position - 1] << std::endl;
+      try {
+        player(request);
+      } catch (const std::exception& failure) {
+        // The device or the recording failed: keep what was answered, say where it stopped.
+        outcomes.push_back(outcome);
+        finish();
+        throw std::runtime_error("trial " + std::to_string(trial.trial) + ", presentation " +
+                                 options.labels[position - 1] + ": " + failure.what() +
+                                 " (results so far in " + inputs.out_dir.string() + ")");
+      }
+    }
+    for (;;) {
+      prompts << prompt << std::flush;
+      const std::optional<std::string> text = answers.next_line();
+      ++line;
+      // A terminal echoes what was typed; a script's answer is shown so the log reads whole.
+      if (text && !answers.interactive) prompts << *text << "\n";
+      if (!text) {
+        prompts << "\n";
+        outcomes.push_back(outcome);
+        finish();
+        throw std::runtime_error(answers.name + ": the answers ended after " +
+                                 std::to_string(trial.trial - 1) + " of " +
+                                 std::to_string(options.trials) + " trials (results so far in " +
+                                 inputs.out_dir.string() + ")");
+      }
+      try {
+        outcome.answer =
+            parse_answer(options.question, options.rating_scale, *text, options.labels);
+        break;
+      } catch (const std::invalid_argument& wrong) {
+        if (!answers.interactive) {
+          outcomes.push_back(outcome);
+          finish();
+          throw std::runtime_error(answers.name + ":" + std::to_string(line) + ": trial " +
+                                   std::to_string(trial.trial) + ": " + wrong.what());
+        }
+        prompts << wrong.what() << "; again please\n";
+      }
+    }
+    outcome.answered_utc = utc_now();
+    std::string answer_field = outcome.answer->text;
+    if (answer_field.find_first_of(",\"") != std::string::npos) {
+      answer_field = std::to_string(outcome.answer->rating[0]) + " " +
+                     std::to_string(outcome.answer->rating[1]);
+    }
+    csv << trial.trial << "," << answer_field << "," << outcome.session_files[0] << ","
+        << outcome.session_files[1] << "," << outcome.answered_utc << "\n"
+        << std::flush;
+    if (!csv) throw std::runtime_error(answers_path.string() + ": cannot write");
+    outcomes.push_back(outcome);
+  }
+  return finish();
+}
+
+}  // namespace doorbench::haptic

@@ -1,0 +1,152 @@
+#pragma once
+// Blinded A/B comparisons (docs/ab-testing.md): variant A against variant B on the device,
+// or the real door on the bench against a virtual one. Each trial presents both, in an order
+// drawn from a seed and balanced over the run; the participant and the operator's screen see
+// only "1" and "2". The key that maps them to the variants stays in the results.
+//
+// This part is the plan, the answers and the statistics, plus the run's bookkeeping around
+// a PresentationPlayer, which plays one presentation and records it as a session (the render
+// loop's playback on a device, or a simulated stand-in).
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "acquisition/session_file.h"
+#include "analysis/door_model.h"
+
+namespace doorbench::haptic {
+
+enum class AbQuestion {
+  kPreference,    // which of the two felt better: "1" or "2"
+  kIdentifyReal,  // which of the two was the real door: "1" or "2"
+  kRating,        // each of the two rated on 1..K: "R1 R2"
+};
+std::string_view to_string(AbQuestion question);  // preference | identify-real | rating
+
+struct AbOptions {
+  int trials = 10;
+  AbQuestion question = AbQuestion::kPreference;
+  int rating_scale = 7;  // K: ratings 1..K (rating only)
+  std::uint64_t seed = 1;
+  double presentation_s = 10.0;  // how long each presentation plays
+  bool a_is_real = false;        // A is the real door on the bench (identify-real needs it)
+  // What the participant and the screen are told for the first and second presentation.
+  std::array<std::string, 2> labels{"1", "2"};
+
+  // Empty when usable, else one line naming the option.
+  std::string validate() const;
+  // "real" when A is the real door, else "A"; B is always "B".
+  std::string variant_a() const { return a_is_real ? "real" : "A"; }
+};
+
+// One trial: which variant is presented first (position 1) and second (position 2).
+struct AbTrial {
+  int trial = 0;  // 1-based
+  std::array<std::string, 2> variant;
+  bool a_first() const { return variant[0] != "B"; }
+};
+
+// N trials, each order N/2 times (N even; one order once more when N is odd, chosen by the
+// seed), in a shuffled order: the same seed gives the same plan on any platform (the
+// generator is std::mt19937_64, whose output the standard fixes, and the bounded draws are
+// done here, not by a library distribution). Throws std::invalid_argument on bad options.
+std::vector<AbTrial> make_plan(const AbOptions& options);
+
+struct AbAnswer {
+  int choice = 0;               // 1 or 2 (preference, identify-real)
+  std::array<int, 2> rating{};  // ratings of presentations 1 and 2 (rating)
+  std::string text;             // as given, trimmed
+};
+
+// Parses one answer line. Throws std::invalid_argument with a message that says what was
+// expected and quotes the text, e.g. `expected "1" or "2" (which felt better), got "3"`.
+// `labels` are the words the participant answers with ("1" and "2" unless changed).
+AbAnswer parse_answer(AbQuestion question, int rating_scale, std::string_view text,
+                      const std::array<std::string, 2>& labels = {"1", "2"});
+
+// The exact two-sided binomial test against chance 0.5: the probability, under chance, of
+// an outcome at least as far from n/2 as k. Computed from the tail's largest term down by
+// the ratio of neighbouring terms, scaled so that it neither under- nor overflows for any
+// n (tested to n = 10^7). k > n or negative throws std::invalid_argument.
+double binomial_two_sided_p(long k, long n);
+
+struct AbTrialOutcome {
+  AbTrial plan;
+  std::optional<AbAnswer> answer;  // nullopt: not answered (the run stopped)
+  std::array<std::string, 2> session_files;
+  std::string answered_utc;
+};
+
+struct AbSummary {
+  AbQuestion question = AbQuestion::kPreference;
+  std::string variant_a = "A", variant_b = "B";
+  int trials_planned = 0;
+  int trials_answered = 0;
+  std::uint64_t seed = 0;
+  // preference: A and B preferred; identify-real: identified correctly or not.
+  int a_preferred = 0, b_preferred = 0;
+  int real_identified = 0, real_missed = 0;
+  // rating: the mean of each variant's ratings, and which was rated higher (ties apart).
+  double mean_rating_a = 0.0, mean_rating_b = 0.0;
+  int a_rated_higher = 0, b_rated_higher = 0, rating_ties = 0;
+  // The binomial test: `successes` of `test_trials` against chance 0.5.
+  long successes = 0, test_trials = 0;
+  double p_value = 1.0;
+  std::string test_meaning;            // what a success is
+  std::vector<AbTrialOutcome> trials;  // with the unblinding key
+
+  std::string brief_report() const;  // counts, p-value, key, several lines
+  std::string to_json() const;
+};
+
+AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>& trials);
+
+// --- Running a comparison ----------------------------------------------------------------
+
+struct PresentationRequest {
+  int trial = 0;
+  int position = 1;                    // 1 or 2
+  std::string variant;                 // "A", "B" or "real"
+  std::string params_path;             // the variant's parameter file (the rig file for "real")
+  std::filesystem::path session_path;  // where to record the presentation (must not exist)
+  double duration_s = 0.0;
+};
+using PresentationPlayer = std::function<void(const PresentationRequest&)>;
+
+// A stand-in for the device: the model opened and closed by the virtual hand for the
+// presentation's duration (analysis' simulator at 1 kHz), recorded as a session with
+// `metadata` (its notes get the trial, position and variant appended).
+void write_simulated_presentation(const DoorModel& model, const PresentationRequest& request,
+                                  SessionMetadata metadata);
+
+// Where answers come from: the next line, or nullopt at the end of the input.
+struct AnswerSource {
+  std::function<std::optional<std::string>()> next_line;
+  std::string name;          // "stdin" or the answers file, for messages
+  bool interactive = false;  // a wrong answer is asked again instead of ending the run
+};
+
+struct AbRunInputs {
+  AbOptions options;
+  std::string params_a;  // the rig file when A is the real door
+  std::string params_b;
+  std::filesystem::path out_dir;
+};
+
+// Runs the plan: for each trial both presentations through `player` (sessions
+// trial-NN-1.h5 and trial-NN-2.h5 in out_dir), then the answer, appended to answers.csv at
+// once (blind: trial, answer, sessions, time). At the end, or when the answers run out,
+// ab-summary.json and ab-summary.txt (with the key). Prompts go to `prompts`. Throws
+// std::runtime_error naming the file and line for a wrong scripted answer, the trial and
+// presentation when the player throws (in both cases the results so far are written
+// first), and for an output folder that already holds results.
+AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
+                 const AnswerSource& answers, std::ostream& prompts);
+
+}  // namespace doorbench::haptic
