@@ -795,3 +795,42 @@ TEST_CASE(
   // With less damping than the bound assumes, even 0.8 K_max grows: the bound rests on it.
   CHECK(delayed_spring_growth(mass, 0.3 * damping, 0.8 * bound, period_s, 3.0) > 1.0);
 }
+
+TEST_CASE("Sets within their fit bounds that the loop cannot render are refused",
+          "[haptic][safety]") {
+  // The fit bounds are wider than what a 1 kHz loop on the HapticMaster can render: one value
+  // at its bound is enough. (Measured one parameter at a time: docs/haptic-safety.md.)
+  const DoorMapping mapping = hapticmaster_mapping();
+  const double mass = mapping.inertia_on_device(0.95);
+  struct Case {
+    ModelKind kind;
+    const char* name;
+    double value;
+    const char* slope;
+  };
+  const Case cases[] = {
+      {ModelKind::kSensory, "k_inf", 20000.0, "-dtau/dtheta = 2.19e+04 N*m/rad"},
+      {ModelKind::kSensory, "k_lock", 20000.0, "-dtau/dtheta = 2.2e+04 N*m/rad"},
+      {ModelKind::kSensory, "k_stop", 100000.0, "-dtau/dtheta = 1e+05 N*m/rad"},
+      {ModelKind::kPhysical, "e", 5e-05, "is 2.94e+05 N/m on the device"},
+      {ModelKind::kPhysical, "alpha_c", 1.2, "is 4.7e+05 N/m on the device"},
+  };
+  for (const Case& c : cases) {
+    const DoorModel reference = reference_model(c.kind);
+    std::vector<double> values(reference.parameter_values().begin(),
+                               reference.parameter_values().end());
+    values[static_cast<std::size_t>(*reference.find_parameter(c.name))] = c.value;
+    INFO(to_string(c.kind) << " " << c.name << " = " << c.value);
+    const std::string message =
+        check_parameter_values(reference, values, mapping, mass, 0.001, -0.02, 1.5908);
+    CHECK_THAT(message, Contains(c.slope));
+    CHECK_THAT(message, Contains("above the stability bound 1.94e+05 N/m"));
+  }
+  // β at its upper bound (20000 1/rad) only sharpens the edge at θ0; its peak restoring slope
+  // stays near k + 1.1 k_inf, so β alone cannot make the sensory door too stiff.
+  const DoorModel sensory_door = reference_model(ModelKind::kSensory);
+  std::vector<double> values(sensory_door.parameter_values().begin(),
+                             sensory_door.parameter_values().end());
+  values[sensory::kBeta] = 20000.0;
+  CHECK(check_parameter_values(sensory_door, values, mapping, mass, 0.001, -0.02, 1.5908).empty());
+}
