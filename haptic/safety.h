@@ -23,6 +23,7 @@
 // Thread safety: one SafetyLayer per render loop, used by its tick only. Its step is
 // noexcept and never allocates.
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 
@@ -114,6 +115,15 @@ class SafetyLayer {
   bool clipping_ = false;
   bool stop_requested_ = false;
   bool stop_reported_ = false;
+  // The rate limit's own clipping episode (force and rate are reported separately).
+  int rate_quiet_ticks_ = 0;
+  bool rate_clipping_ = false;
+  double velocity_trip_ = 0.0;  // the smaller of the option and the device's max_velocity
+  Vec3 ramp_down_from_force_ = Vec3::Zero();  // the force when the ramp down began
+  double ramp_down_remaining_ = 1.0;          // only decreases, even if the clock steps back
+
+  void begin_ramp_down(double time_s, std::uint32_t event, SafetyOutput& output) noexcept;
+  SafetyOutput stopped_output(std::uint32_t events) noexcept;
 };
 
 // Passivity observer and controller on the active terms (after Hannaford and Ryu). The
@@ -125,7 +135,9 @@ struct PassivityOptions {
   bool enabled = true;
   double energy_budget_J = 0.5;    // what the active terms may inject before damping
   double budget_recovery_W = 0.5;  // the observed energy drains by this (not below 0)
-  double max_damping_Nm_s_per_rad = 20.0;
+  // Must exceed the largest negative damping a model may have (the snap's c, bounds up to
+  // 50 N*m*s/rad), or the damping cannot cancel it and the energy is not bounded.
+  double max_damping_Nm_s_per_rad = 60.0;
   std::string validate() const;
 };
 
@@ -151,8 +163,30 @@ class PassivityController {
 // switch edges), as device stiffness, below what the loop can render stably at its period
 // with the device's inertia (the bound and its derivation in docs/haptic-safety.md).
 // Returns "" when the set may be played, else one line naming the parameter or the slope.
+// Throws std::invalid_argument naming the argument when device_inertia or tick_period_s is
+// not > 0 or the angle range is empty or not finite.
 std::string check_parameter_set(const DoorModel& model, const DoorMapping& mapping,
                                 double device_inertia, double tick_period_s, double theta_lo_rad,
                                 double theta_hi_rad);
+// The same for new values of `model`'s parameters (what live tuning sends), checked before a
+// model is built from them: `values` in parameter_values()'s order.
+std::string check_parameter_values(const DoorModel& model, std::span<const double> values,
+                                   const DoorMapping& mapping, double device_inertia,
+                                   double tick_period_s, double theta_lo_rad, double theta_hi_rad);
+
+// The stiffest restoring slope of τ_m at ω = 0 over [θ_lo, θ_hi] (a grid refined where the
+// slope or the torque changes fast, so that switch edges of width 1/β are resolved).
+struct RestoringSlope {
+  double slope_Nm_per_rad = 0.0;  // max(−∂τ/∂θ), 0 when τ_m nowhere restores
+  double theta_rad = 0.0;         // where
+  int evaluations = 0;            // how many points the search took
+};
+RestoringSlope stiffest_restoring_slope(const DoorModel& model, double theta_lo_rad,
+                                        double theta_hi_rad);
+// The largest device stiffness (N/m; rotary: N*m/rad) the tick can render on an admittance
+// device of inertia `device_inertia` (kg; rotary: kg*m^2) at `tick_period_s` (derivation in
+// docs/haptic-safety.md): K_max = (4 ζ_max / 3)² m / T² with ζ_max = kMaxRequiredDampingRatio.
+inline constexpr double kMaxRequiredDampingRatio = 0.1;
+double stiffness_bound(double device_inertia, double tick_period_s) noexcept;
 
 }  // namespace doorbench::haptic
