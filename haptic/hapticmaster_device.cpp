@@ -35,8 +35,8 @@ int millis_left(Clock::time_point deadline) {
 }
 
 Clock::time_point after(double seconds) {
-  return Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                            std::chrono::duration<double>(seconds));
+  return Clock::now() +
+         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 // The HapticMaster's published figures where found, else assumed (docs/hapticmaster.md).
@@ -71,8 +71,8 @@ class HapticMasterDevice::Connection {
     }
     std::string why = "no address";
     for (addrinfo* a = found; a != nullptr && fd_ < 0; a = a->ai_next) {
-      const int fd = ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC,
-                              a->ai_protocol);
+      const int fd =
+          ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol);
       if (fd < 0) {
         why = std::strerror(errno);
         continue;
@@ -106,8 +106,7 @@ class HapticMasterDevice::Connection {
   Connection& operator=(const Connection&) = delete;
 
   // Sends the joined commands and returns one reply text per command.
-  std::vector<std::string> round_trip(const std::vector<std::string>& commands,
-                                      double timeout_s) {
+  std::vector<std::string> round_trip(const std::vector<std::string>& commands, double timeout_s) {
     const auto deadline = after(timeout_s);
     const std::string bytes = hm::frame(hm::join_commands(commands));
     std::size_t sent = 0;
@@ -165,9 +164,9 @@ std::string HapticMasterOptions::validate() const {
     return "reply_timeout_s must be > 0";
   }
   if (!(io_rate_hz > 0) || !(io_rate_hz <= 10000)) return "io_rate_hz must be in (0, 10000]";
-  if (bias_object.empty() ||
-      !std::all_of(bias_object.begin(), bias_object.end(),
-                   [](char c) { return std::isalnum(static_cast<unsigned char>(c)) || c == '_'; })) {
+  if (bias_object.empty() || !std::all_of(bias_object.begin(), bias_object.end(), [](char c) {
+        return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+      })) {
     return "bias_object must be a non-empty name of letters, digits and '_'";
   }
   return "";
@@ -217,8 +216,9 @@ void HapticMasterDevice::start(double inertia) {
   if (io_thread_.joinable() || connection_) throw DeviceError(name() + ": already started");
   const DeviceLimits limits = hapticmaster_limits();
   if (!(inertia >= limits.min_inertia && inertia <= limits.max_inertia)) {
-    throw DeviceError(name() + ": inertia " + hm::format_number(std::isfinite(inertia) ? inertia : 0) +
-                      " kg is outside " + hm::format_number(limits.min_inertia) + ".." +
+    throw DeviceError(name() + ": inertia " +
+                      hm::format_number(std::isfinite(inertia) ? inertia : 0) + " kg is outside " +
+                      hm::format_number(limits.min_inertia) + ".." +
                       hm::format_number(limits.max_inertia) + " kg");
   }
   try {

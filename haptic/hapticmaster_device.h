@@ -37,8 +37,8 @@ class TripleBuffer {
   // Takes the newest published value if there is one; returns whether it did.
   bool update() {
     if ((middle_.load(std::memory_order_relaxed) & kFresh) == 0) return false;
-    front_ = static_cast<std::uint8_t>(middle_.exchange(front_, std::memory_order_acq_rel) &
-                                       kIndex);
+    front_ =
+        static_cast<std::uint8_t>(middle_.exchange(front_, std::memory_order_acq_rel) & kIndex);
     return true;
   }
   const T& front() const { return slots_[front_]; }

@@ -51,9 +51,9 @@ std::string join_commands(const std::vector<std::string>& commands) {
     if (trim(command).empty()) throw std::invalid_argument("join_commands: an empty command");
     for (char c : command) {
       if (c == ';' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f) {
-        throw std::invalid_argument(
-            std::string("join_commands: command '").append(command).append(
-                "' contains ';' or a control character"));
+        throw std::invalid_argument(std::string("join_commands: command '")
+                                        .append(command)
+                                        .append("' contains ';' or a control character"));
       }
     }
     if (!joined.empty()) joined += ';';
@@ -146,8 +146,7 @@ Reply parse_reply(std::string_view raw) {
   reply.text = std::string(text);
   const std::size_t error_at = text.find("ERROR");
   // "--- ERROR: ..." (public examples), tolerated with fewer dashes or none.
-  if (error_at != std::string_view::npos &&
-      text.find_first_not_of("- ") == error_at) {
+  if (error_at != std::string_view::npos && text.find_first_not_of("- ") == error_at) {
     std::string_view message = text.substr(error_at + 5);
     if (!message.empty() && message.front() == ':') message.remove_prefix(1);
     reply.kind = Reply::Kind::kError;

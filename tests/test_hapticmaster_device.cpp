@@ -30,8 +30,9 @@ struct Emulator {
   explicit Emulator(const std::vector<std::string>& options = {})
       : process([&] {
           std::vector<std::string> args = {
-              "/usr/bin/python3", std::string(DOORBENCH_SOURCE_DIR)
-                                      .append("/tests/hapticmaster_emulator/hapticmaster_emulator.py")};
+              "/usr/bin/python3",
+              std::string(DOORBENCH_SOURCE_DIR)
+                  .append("/tests/hapticmaster_emulator/hapticmaster_emulator.py")};
           args.insert(args.end(), options.begin(), options.end());
           return args;
         }()) {
@@ -51,8 +52,7 @@ std::vector<std::string> lines_of(const std::filesystem::path& file) {
 }
 
 double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
 }
 
 // Polls read() (as a tick would, every 1 ms) until `done` or `timeout_s`.
@@ -121,7 +121,8 @@ TEST_CASE("hapticmaster device: the exact command sequence at start, in the loop
   {
     HapticMasterDevice device(emulator.address());
     device.start(5.0);
-    const DeviceSample s = poll_until(device, [](const DeviceSample& s) { return s.sequence >= 5; });
+    const DeviceSample s =
+        poll_until(device, [](const DeviceSample& s) { return s.sequence >= 5; });
     CHECK(s.sequence >= 5);
     CHECK(s.link_ok);
     device.stop();
