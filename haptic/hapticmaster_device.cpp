@@ -106,9 +106,10 @@ class HapticMasterDevice::Connection {
   Connection& operator=(const Connection&) = delete;
 
   // Sends the joined commands and returns one reply text per command.
-  std::vector<std::string> round_trip(const std::vector<std::string>& commands, double timeout_s) {
+  std::vector<std::string> round_trip(const std::vector<std::string>& commands, double timeout_s,
+                                      bool joined) {
     const auto deadline = after(timeout_s);
-    const std::string bytes = hm::frame(hm::join_commands(commands));
+    const std::string bytes = hm::request(commands, joined);
     std::size_t sent = 0;
     while (sent < bytes.size()) {
       const ssize_t n = ::send(fd_, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL);
@@ -201,7 +202,7 @@ DeviceLimits HapticMasterDevice::limits() const {
 std::string HapticMasterDevice::expect_ok(const std::string& command) {
   std::vector<std::string> replies;
   try {
-    replies = connection_->round_trip({command}, options_.reply_timeout_s);
+    replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
   } catch (const std::exception& e) {
     throw DeviceError(name() + ": '" + command + "': " + e.what());
   }
@@ -293,7 +294,7 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     std::string problem;
     try {
       const std::vector<std::string> replies =
-          connection_->round_trip(commands, options_.reply_timeout_s);
+          connection_->round_trip(commands, options_.reply_timeout_s, options_.join_commands);
       const double now_s = monotonic_s();
       Vec3 vectors[3];
       for (std::size_t i = 0; i < replies.size() && problem.empty(); ++i) {
@@ -349,7 +350,7 @@ void HapticMasterDevice::stop() noexcept {
          {"set " + options_.bias_object + " force " + hm::format_vector(Vec3::Zero()),
           std::string("set state stop"), "remove " + options_.bias_object}) {
       try {
-        const auto replies = connection_->round_trip({command}, options_.reply_timeout_s);
+        const auto replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
         const hm::Reply reply = hm::parse_reply(replies.front());
         if (reply.kind == hm::Reply::Kind::kError) fail("'" + command + "' failed: " + reply.text);
       } catch (const std::exception& e) {

@@ -21,6 +21,10 @@ struct HapticMasterOptions {
   double io_rate_hz = 1000.0;      // round trips per second (at most; the link may be slower)
   // The name of the bias force object the driver creates on the device.
   std::string bias_object = "doorbench_bias";
+  // One round trip's commands as one ';'-joined message (true), or as one message each,
+  // sent together (false): the fallback if a device answers a joined message with a single
+  // reply instead of one per command (docs/hapticmaster.md, assumptions).
+  bool join_commands = true;
   std::string validate() const;  // "" or one line naming the option
 };
 

@@ -77,6 +77,13 @@ std::string frame(std::string_view text) {
   return bytes;
 }
 
+std::string request(const std::vector<std::string>& commands, bool joined) {
+  if (joined) return frame(join_commands(commands));
+  std::string bytes;
+  for (const std::string& command : commands) bytes += frame(join_commands({command}));
+  return bytes;
+}
+
 bool ReplySplitter::feed(std::string_view bytes) {
   if (corrupt()) return false;
   // Drop what next() has consumed before the buffer grows (amortised, no per-byte copies).

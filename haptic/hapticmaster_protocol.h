@@ -36,6 +36,11 @@ std::string join_commands(const std::vector<std::string>& commands);
 // The bytes to send for `text`: header + text. Throws std::invalid_argument if too long.
 std::string frame(std::string_view text);
 
+// The bytes for one round trip of `commands`, each answered by one reply: one frame of the
+// ';'-joined commands (`joined`), or one frame per command sent back to back. Throws
+// std::invalid_argument as join_commands and frame do.
+std::string request(const std::vector<std::string>& commands, bool joined);
+
 // Splits a byte stream into message texts. Feed it whatever recv() returned; it keeps a
 // partial message until the rest arrives.
 class ReplySplitter {

@@ -6,8 +6,10 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
+#include <cmath>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -344,4 +346,31 @@ TEST_CASE("hapticmaster device: the tick's calls never allocate", "[hapticmaster
   poll_until(device, [](const DeviceSample& s) { return s.sequence >= 3; });
   device.stop();
   CHECK(exercise() == 0);
+}
+
+TEST_CASE("hapticmaster device: commands as separate messages, forces clamped to the limit",
+          "[hapticmaster]") {
+  TempDir dir("hm_separate");
+  const auto log = dir / "commands.log";
+  Emulator emulator({"--log", log.string()});
+  HapticMasterOptions options;
+  options.join_commands = false;
+  HapticMasterDevice device(emulator.address(), options);
+  device.start(5.0);
+  DeviceSample s = poll_until(device, [](const DeviceSample& s) { return s.sequence >= 2; });
+  device.command_force(Vec3(300.0, 400.0, 0.0));  // |F| = 500 N -> 250 N, same direction
+  s = poll_until(device, [&](const DeviceSample& x) { return x.sequence >= s.sequence + 3; });
+  device.command_force(Vec3(std::nan(""), 1.0, 0.0));  // not finite -> zero
+  s = poll_until(device, [&](const DeviceSample& x) { return x.sequence >= s.sequence + 3; });
+  CHECK(s.link_ok);
+  CHECK(s.position.x() > 0.0);
+  device.stop();
+  const std::vector<std::string> lines = lines_of(log);
+  const auto count = [&](const std::string& line) {
+    return std::count(lines.begin(), lines.end(), line);
+  };
+  CHECK(count("set doorbench_bias force [150,200,0]") >= 1);
+  CHECK(count("set doorbench_bias force [300,400,0]") == 0);
+  CHECK(count("get measpos") >= 8);
+  CHECK(lines.back() == "remove doorbench_bias");
 }

@@ -162,3 +162,11 @@ TEST_CASE("hapticmaster: addresses are host[:port]", "[hapticmaster]") {
   CHECK_THROWS_WITH(parse_address("h:70000"), Catch::Contains("port '70000'"));
   CHECK_THROWS_WITH(parse_address("h:12a"), Catch::Contains("port '12a'"));
 }
+
+TEST_CASE("hapticmaster: a request is one joined frame or one frame per command",
+          "[hapticmaster]") {
+  CHECK(request({"get measpos", "get modelvel"}, true) == frame("get measpos;get modelvel"));
+  CHECK(request({"get measpos", "get modelvel"}, false) ==
+        frame("get measpos") + frame("get modelvel"));
+  CHECK_THROWS_WITH(request({"a;b"}, false), Catch::Contains("contains ';'"));
+}
