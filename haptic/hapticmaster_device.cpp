@@ -134,9 +134,9 @@ class HapticMasterDevice::Connection {
       }
       if (splitter_.corrupt()) throw std::runtime_error(splitter_.error());
       if (replies.size() == commands.size()) break;
+      // The deadline is checked here too: a device trickling bytes must not extend it.
       pollfd p{fd_, POLLIN, 0};
-      const int ready = ::poll(&p, 1, millis_left(deadline));
-      if (ready == 0) {
+      if (Clock::now() >= deadline || ::poll(&p, 1, millis_left(deadline)) == 0) {
         throw std::runtime_error("no reply within " + hm::format_number(timeout_s) + " s (got " +
                                  std::to_string(replies.size()) + " of " +
                                  std::to_string(commands.size()) + ")");
