@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -52,6 +53,25 @@ DeviceLimits hapticmaster_limits() {
   limits.min_inertia = 2.0;    // kg (assumed: the admittance model needs a mass)
   limits.max_inertia = 100.0;  // kg (assumed)
   return limits;
+}
+
+// "" if `replies` answer `commands` without error, else what went wrong: the first error
+// reply (named by its command) or a wrong count.
+std::string check_replies(const std::vector<std::string>& commands,
+                          const std::vector<std::string>& replies) {
+  for (std::size_t i = 0; i < replies.size(); ++i) {
+    const hm::Reply reply = hm::parse_reply(replies[i]);
+    if (reply.kind == hm::Reply::Kind::kError) {
+      const std::string& command = i < commands.size() ? commands[i] : commands.back();
+      return "'" + command + "' failed: " + reply.text;
+    }
+  }
+  if (replies.size() != commands.size()) {
+    return std::to_string(commands.size()) + " command(s) '" + hm::join_commands(commands) +
+           "' answered with " + std::to_string(replies.size()) + " repl" +
+           (replies.size() == 1 ? "y" : "ies");
+  }
+  return "";
 }
 
 }  // namespace
@@ -105,7 +125,9 @@ class HapticMasterDevice::Connection {
   Connection(const Connection&) = delete;
   Connection& operator=(const Connection&) = delete;
 
-  // Sends the joined commands and returns one reply text per command.
+  // Sends `commands` (as one joined message or one message each) and returns the replies
+  // in order. Normally one per command; fewer if the device skipped some (the caller looks
+  // for an error reply first, then at the count).
   std::vector<std::string> round_trip(const std::vector<std::string>& commands, double timeout_s,
                                       bool joined) {
     const auto deadline = after(timeout_s);
@@ -123,23 +145,24 @@ class HapticMasterDevice::Connection {
       pollfd p{fd_, POLLOUT, 0};
       if (::poll(&p, 1, millis_left(deadline)) == 0) throw std::runtime_error("send timed out");
     }
+    const std::size_t messages_expected = joined ? 1 : commands.size();
+    std::size_t messages = 0;
     std::vector<std::string> replies;
     replies.reserve(commands.size());
     char buffer[4096];
-    while (replies.size() < commands.size()) {
-      while (replies.size() < commands.size()) {
-        auto reply = splitter_.next();
-        if (!reply) break;
-        replies.push_back(std::move(*reply));
+    for (;;) {
+      while (messages < messages_expected) {
+        auto message = splitter_.next();
+        if (!message) break;
+        ++messages;
+        for (std::string& reply : hm::split_replies(*message)) replies.push_back(std::move(reply));
       }
       if (splitter_.corrupt()) throw std::runtime_error(splitter_.error());
-      if (replies.size() == commands.size()) break;
+      if (messages == messages_expected) break;
       // The deadline is checked here too: a device trickling bytes must not extend it.
       pollfd p{fd_, POLLIN, 0};
       if (Clock::now() >= deadline || ::poll(&p, 1, millis_left(deadline)) == 0) {
-        throw std::runtime_error("no reply within " + hm::format_number(timeout_s) + " s (got " +
-                                 std::to_string(replies.size()) + " of " +
-                                 std::to_string(commands.size()) + ")");
+        throw std::runtime_error("no reply within " + hm::format_number(timeout_s) + " s");
       }
       const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
       if (n == 0) throw std::runtime_error("connection closed by the device");
@@ -206,11 +229,10 @@ std::string HapticMasterDevice::expect_ok(const std::string& command) {
   } catch (const std::exception& e) {
     throw DeviceError(name() + ": '" + command + "': " + e.what());
   }
-  const hm::Reply reply = hm::parse_reply(replies.front());
-  if (reply.kind == hm::Reply::Kind::kError) {
-    throw DeviceError(name() + ": '" + command + "' failed: " + reply.text);
+  if (const std::string problem = check_replies({command}, replies); !problem.empty()) {
+    throw DeviceError(name() + ": " + problem);
   }
-  return reply.text;
+  return replies.front();
 }
 
 void HapticMasterDevice::start(double inertia) {
@@ -228,11 +250,15 @@ void HapticMasterDevice::start(double inertia) {
     throw DeviceError(name() + ": " + e.what());
   }
   try {
-    // Does it answer at all, and with a state? (A wrong server fails here.)
+    // Does it answer at all, and with a state name, quoted or not? (A wrong server fails.)
     const hm::Reply state = hm::parse_reply(expect_ok("get state"));
-    if (state.kind != hm::Reply::Kind::kString) {
+    const std::string word = state.kind == hm::Reply::Kind::kString ? state.string : state.text;
+    if ((state.kind != hm::Reply::Kind::kString && state.kind != hm::Reply::Kind::kMessage) ||
+        word.empty() || !std::all_of(word.begin(), word.end(), [](char c) {
+          return std::isalpha(static_cast<unsigned char>(c)) || c == '_';
+        })) {
       throw DeviceError(name() + ": 'get state' answered '" + state.text +
-                        "', not a quoted state: is this a HapticMaster?");
+                        "', not a state name: is this a HapticMaster?");
     }
     const std::string bias = options_.bias_object;
     expect_ok("set inertia " + hm::format_number(inertia));
@@ -296,17 +322,15 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
       const std::vector<std::string> replies =
           connection_->round_trip(commands, options_.reply_timeout_s, options_.join_commands);
       const double now_s = monotonic_s();
+      problem = check_replies(commands, replies);
       Vec3 vectors[3];
-      for (std::size_t i = 0; i < replies.size() && problem.empty(); ++i) {
+      for (std::size_t k = 0; k < 3 && problem.empty(); ++k) {
+        const std::size_t i = commands.size() - 3 + k;
         const hm::Reply reply = hm::parse_reply(replies[i]);
-        if (reply.kind == hm::Reply::Kind::kError) {
-          problem = "'" + commands[i] + "' failed: " + reply.text;
-        } else if (i + 3 >= replies.size()) {
-          if (reply.kind != hm::Reply::Kind::kVector) {
-            problem = "'" + commands[i] + "' answered '" + reply.text + "', not [x,y,z]";
-          } else {
-            vectors[i + 3 - replies.size()] = reply.vector;
-          }
+        if (reply.kind != hm::Reply::Kind::kVector) {
+          problem = "'" + commands[i] + "' answered '" + reply.text + "', not [x,y,z]";
+        } else {
+          vectors[k] = reply.vector;
         }
       }
       if (problem.empty()) {
@@ -351,8 +375,9 @@ void HapticMasterDevice::stop() noexcept {
           std::string("set state stop"), "remove " + options_.bias_object}) {
       try {
         const auto replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
-        const hm::Reply reply = hm::parse_reply(replies.front());
-        if (reply.kind == hm::Reply::Kind::kError) fail("'" + command + "' failed: " + reply.text);
+        if (const std::string problem = check_replies({command}, replies); !problem.empty()) {
+          fail(problem);
+        }
       } catch (const std::exception& e) {
         fail("'" + command + "': " + e.what());
         break;

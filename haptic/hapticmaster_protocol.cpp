@@ -120,6 +120,21 @@ void ReplySplitter::clear() {
   error_.clear();
 }
 
+std::vector<std::string> split_replies(std::string_view message) {
+  std::vector<std::string> replies;
+  bool quoted = false;
+  std::size_t begin = 0;
+  for (std::size_t i = 0; i <= message.size(); ++i) {
+    if (i < message.size() && message[i] == '"') quoted = !quoted;
+    if (i == message.size() || (message[i] == ';' && !quoted)) {
+      const std::string_view piece = trim(message.substr(begin, i - begin));
+      if (i < message.size() || !piece.empty()) replies.emplace_back(piece);
+      begin = i + 1;
+    }
+  }
+  return replies;
+}
+
 std::optional<double> parse_number(std::string_view text) {
   text = trim(text);
   if (text.empty()) return std::nullopt;

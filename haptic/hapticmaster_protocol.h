@@ -2,9 +2,11 @@
 // The HapticMaster's TCP text protocol, all its framing in one place (docs/hapticmaster.md
 // says which parts are verified from public sources and which are assumed):
 //  - a command is ASCII text ("set inertia 3.5", "get measpos", "set b force [1,0,-2]");
-//    several can be joined with ';' and are answered in order;
-//  - on the wire every message (command or reply) is an 8-byte header followed by its text:
+//    several can be joined with ';' into one request;
+//  - on the wire every message (request or reply) is an 8-byte header followed by its text:
 //    bytes 0-3 the text's length as a big-endian unsigned 32-bit number, bytes 4-7 zero;
+//  - each request message is answered by one reply message whose text holds one reply per
+//    command, each ended by ';' ("[0.1,0,0.2];[0,0,0];" for two commands);
 //  - a reply is a vector "[x,y,z]", a number, a quoted string "\"force\"", a plain message
 //    ("Inertia set") or an error that starts with "--- ERROR:".
 // Everything here is a pure function of its arguments (no I/O), so it is unit-tested alone.
@@ -59,6 +61,11 @@ class ReplySplitter {
   std::size_t consumed_ = 0;
   std::string error_;
 };
+
+// The replies in one reply message's text: split at each ';' outside double quotes, each
+// trimmed; the empty piece after the last ';' is dropped ("a;b;" and "a;b" -> {"a","b"},
+// "" -> {}).
+std::vector<std::string> split_replies(std::string_view message);
 
 // One reply, classified.
 struct Reply {

@@ -374,3 +374,35 @@ TEST_CASE("hapticmaster device: commands as separate messages, forces clamped to
   CHECK(count("get measpos") >= 8);
   CHECK(lines.back() == "remove doorbench_bias");
 }
+
+TEST_CASE("hapticmaster device: wrong answers to 'get state' or to a round trip",
+          "[hapticmaster]") {
+  {
+    Emulator emulator({"--answer", "get state=[1,2,3]"});
+    HapticMasterDevice device(emulator.address());
+    CHECK_THROWS_WITH(device.start(5.0),
+                      emulator.name() +
+                          ": 'get state' answered '[1,2,3]', not a state name: is this a "
+                          "HapticMaster?");
+  }
+  {
+    // Unquoted state names are taken too (the HapticAPI examples show "stop;").
+    Emulator emulator({"--answer", "get state=off"});
+    HapticMasterDevice device(emulator.address());
+    CHECK_NOTHROW(device.start(5.0));
+    device.stop();
+  }
+  {
+    // One reply too many in the loop's reply message: the link is declared lost.
+    Emulator emulator({"--answer", "get measforce=[1,2,3];[4,5,6]"});
+    HapticMasterDevice device(emulator.address());
+    device.start(5.0);
+    const DeviceSample s = poll_until(device, [](const DeviceSample& s) { return !s.link_ok; });
+    CHECK_FALSE(s.link_ok);
+    CHECK(device.last_error() ==
+          emulator.name() +
+              ": 4 command(s) 'set doorbench_bias force [0,0,0];get measpos;get modelvel;get "
+              "measforce' answered with 5 replies");
+    device.stop();
+  }
+}

@@ -43,11 +43,19 @@ class RawClient {
   std::vector<std::string> send(const std::vector<std::string>& commands, bool joined = true) {
     const std::string bytes = hm::request(commands, joined);
     REQUIRE(::write(fd_, bytes.data(), bytes.size()) == static_cast<ssize_t>(bytes.size()));
+    // One reply message per request message, holding one reply per command.
+    const std::size_t expected = joined ? 1 : commands.size();
+    std::size_t messages = 0;
     std::vector<std::string> replies;
     char buffer[4096];
-    while (replies.size() < commands.size()) {
-      while (auto reply = splitter_.next()) replies.push_back(*reply);
-      if (replies.size() >= commands.size()) break;
+    while (messages < expected) {
+      while (messages < expected) {
+        auto message = splitter_.next();
+        if (!message) break;
+        ++messages;
+        for (auto& reply : hm::split_replies(*message)) replies.push_back(reply);
+      }
+      if (messages >= expected) break;
       pollfd p{fd_, POLLIN, 0};
       if (::poll(&p, 1, 5000) <= 0) throw std::runtime_error("emulator: no reply");
       const ssize_t n = ::read(fd_, buffer, sizeof buffer);
@@ -57,6 +65,7 @@ class RawClient {
     REQUIRE(replies.size() == commands.size());
     return replies;
   }
+  int fd() const { return fd_; }
   std::string one(const std::string& command) { return send({command}).front(); }
   Vec3 vector(const std::string& command) {
     const hm::Reply r = hm::parse_reply(one(command));
@@ -101,6 +110,19 @@ TEST_CASE("hapticmaster emulator: joined and separate commands, each answered in
   CHECK(joined == std::vector<std::string>{"\"init\"", "Inertia set", "4.0", "[0.0,0.0,0.0]"});
   const auto separate = client.send({"set state force", "get state"}, false);
   CHECK(separate == std::vector<std::string>{"state set to 'force'", "\"force\""});
+  // On the wire: one reply message, each reply ended by ';'.
+  const std::string request = hm::request({"get state", "get inertia"}, true);
+  REQUIRE(::write(client.fd(), request.data(), request.size()) ==
+          static_cast<ssize_t>(request.size()));
+  const std::string expected = hm::frame("\"force\";4.0;");
+  std::string got(expected.size(), '\0');
+  std::size_t have = 0;
+  while (have < got.size()) {
+    const ssize_t n = ::read(client.fd(), got.data() + have, got.size() - have);
+    REQUIRE(n > 0);
+    have += static_cast<std::size_t>(n);
+  }
+  CHECK(got == expected);
 }
 
 TEST_CASE("hapticmaster emulator: unknown commands and bad arguments are error replies",

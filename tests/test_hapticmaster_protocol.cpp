@@ -53,7 +53,7 @@ TEST_CASE("hapticmaster: a frame is a big-endian length, 4 zero bytes, the text"
   CHECK_THROWS_AS(frame(std::string(kMaxMessageSize + 1, 'x')), std::invalid_argument);
 }
 
-TEST_CASE("hapticmaster: the splitter waits for partial replies and splits joined ones",
+TEST_CASE("hapticmaster: the splitter waits for partial messages and splits a burst",
           "[hapticmaster]") {
   ReplySplitter splitter;
   const std::string stream = frame("[1,2,3]") + frame("Inertia set") + frame("");
@@ -169,4 +169,17 @@ TEST_CASE("hapticmaster: a request is one joined frame or one frame per command"
   CHECK(request({"get measpos", "get modelvel"}, false) ==
         frame("get measpos") + frame("get modelvel"));
   CHECK_THROWS_WITH(request({"a;b"}, false), Catch::Contains("contains ';'"));
+}
+
+TEST_CASE("hapticmaster: a reply message holds one reply per command, each ended by ';'",
+          "[hapticmaster]") {
+  using V = std::vector<std::string>;
+  CHECK(split_replies("[0.1,0,0.2];[0,0,0];") == V{"[0.1,0,0.2]", "[0,0,0]"});
+  CHECK(split_replies("Inertia set") == V{"Inertia set"});
+  CHECK(split_replies("stop;") == V{"stop"});
+  CHECK(split_replies(" a ; b ;\n") == V{"a", "b"});
+  CHECK(split_replies("") == V{});
+  CHECK(split_replies(";") == V{""});
+  CHECK(split_replies("\"a;b\";c;") == V{"\"a;b\"", "c"});  // ';' inside quotes stays
+  CHECK(split_replies("--- ERROR: bad;[1,2,3];") == V{"--- ERROR: bad", "[1,2,3]"});
 }

@@ -5,8 +5,9 @@ Run with Debian's /usr/bin/python3 (standard library only). It listens on 127.0.
 (--port 0 = a free port), prints "PORT <n>" on stdout, and serves one client at a time.
 
 Framing (docs/hapticmaster.md): every message is an 8-byte header (big-endian 32-bit length,
-then 4 zero bytes) followed by ASCII text; a command text may hold several commands joined
-with ';', each answered by its own reply message, in order.
+then 4 zero bytes) followed by ASCII text; a request may hold several commands joined with
+';'. Each request is answered by one reply message holding one reply per command, each
+ended by ';' ("Inertia set;[0.0,0.0,0.1];").
 
 Device model: state (init/off/force/position/home/stop), the inertia m, and effect objects
 (biasforce, spring, damper, cylinder, torus) with their properties. In state "force" the
@@ -273,14 +274,16 @@ def serve(conn, device, args, counter, log_file):
                 device.advance()
                 if command in args.fail:
                     reply = "--- ERROR: " + args.fail[command]
+                elif command in args.answer:
+                    reply = args.answer[command]
                 else:
                     try:
                         reply = device.execute(command)
                     except Error as e:
                         reply = "--- ERROR: " + str(e)
-            replies.append(frame(reply))
+            replies.append(reply + ";")
         if replies:
-            conn.sendall(b"".join(replies))
+            conn.sendall(frame("".join(replies)))
 
 
 def main():
@@ -292,12 +295,10 @@ def main():
     parser.add_argument("--stall-after", type=int)
     parser.add_argument("--garbage-after", type=int)
     parser.add_argument("--fail", action="append", default=[], metavar="COMMAND=TEXT")
+    parser.add_argument("--answer", action="append", default=[], metavar="COMMAND=TEXT")
     args = parser.parse_args()
-    fails = {}
-    for item in args.fail:
-        command, _, text = item.partition("=")
-        fails[command] = text
-    args.fail = fails
+    args.fail = dict(item.partition("=")[::2] for item in args.fail)
+    args.answer = dict(item.partition("=")[::2] for item in args.answer)
 
     device = Device(parse_vector(args.ext_force))
     server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
