@@ -40,18 +40,19 @@ Clock::time_point after(double seconds) {
          std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
-// The HapticMaster's published figures where found, else assumed (docs/hapticmaster.md).
+// The HapticMaster's figures: where each comes from is in docs/hapticmaster.md (limits).
 DeviceLimits hapticmaster_limits() {
   DeviceLimits limits;
   limits.kinematics = Kinematics::kCartesian3;
-  limits.max_force = 250.0;       // N (van der Linde et al. 2002: 250 N)
-  limits.max_velocity = 1.0;      // m/s (assumed from the same paper's order of magnitude)
-  limits.max_force_rate = 20000;  // N/s (assumed)
-  // A box inside the cylindrical workspace (~80 l; van der Linde et al. 2002): assumed.
-  limits.workspace_min = Vec3(-0.18, -0.18, -0.18);
-  limits.workspace_max = Vec3(0.18, 0.18, 0.18);
-  limits.min_inertia = 2.0;    // kg (assumed: the admittance model needs a mass)
-  limits.max_inertia = 100.0;  // kg (assumed)
+  limits.max_force = 250.0;         // N: assumed (recalled datasheet figure, not verified here)
+  limits.max_velocity = 1.0;        // m/s: assumed
+  limits.max_force_rate = 20000.0;  // N/s: assumed (the interface's default)
+  // A box inside the workspace a public example describes (radius 0.28..0.64 m about the
+  // base axis, 0.45 m behind the origin; +-0.5 rad; z +-0.2 m), x taken as radial: derived.
+  limits.workspace_min = Vec3(-0.14, -0.16, -0.2);
+  limits.workspace_max = Vec3(0.16, 0.16, 0.2);
+  limits.min_inertia = 2.0;    // kg: the smallest value public examples set; assumed
+  limits.max_inertia = 100.0;  // kg: assumed
   return limits;
 }
 

@@ -101,6 +101,18 @@ TEST_CASE("hapticmaster device: name, address and option checks", "[hapticmaster
   CHECK(limits.kinematics == Kinematics::kCartesian3);
   CHECK(limits.max_force == 250.0);
   CHECK(limits.min_inertia > 0);
+  // The workspace box's corners lie inside the cylindrical sector it is derived from
+  // (radius 0.28..0.64 m about an axis 0.45 m behind the origin, +-0.5 rad, z +-0.2 m).
+  for (const double x : {limits.workspace_min.x(), limits.workspace_max.x()}) {
+    for (const double y : {limits.workspace_min.y(), limits.workspace_max.y()}) {
+      const double r = std::hypot(x + 0.45, y);
+      CHECK(r >= 0.28);
+      CHECK(r <= 0.64);
+      CHECK(std::abs(std::atan2(y, x + 0.45)) <= 0.5);
+    }
+  }
+  CHECK(limits.workspace_min.z() >= -0.2);
+  CHECK(limits.workspace_max.z() <= 0.2);
   device.stop();  // never started: harmless
   device.stop();
 }
