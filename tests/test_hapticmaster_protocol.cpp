@@ -2,6 +2,7 @@
 // framing, splitting a reply stream (partial, several at once, corrupt) and parsing replies.
 #include <catch2/catch.hpp>
 #include <clocale>
+#include <locale>
 #include <stdexcept>
 #include <string>
 
@@ -23,8 +24,21 @@ TEST_CASE("hapticmaster: numbers are fixed-point with '.', trimmed", "[hapticmas
   CHECK(format_vector(Vec3(1, -0.5, 0)) == "[1,-0.5,0]");
 }
 
-TEST_CASE("hapticmaster: formatting ignores the C locale", "[hapticmaster]") {
-  // de_DE would print "3,5"; if that locale is not installed the check still holds.
+namespace {
+struct CommaDecimal : std::numpunct<char> {
+  char do_decimal_point() const override { return ','; }
+};
+}  // namespace
+
+TEST_CASE("hapticmaster: formatting ignores the C and C++ locales", "[hapticmaster]") {
+  // A C++ global locale with ',' as the decimal point (always available, unlike de_DE).
+  const std::locale saved_cpp =
+      std::locale::global(std::locale(std::locale::classic(), new CommaDecimal));
+  CHECK(format_number(3.5) == "3.5");
+  CHECK(format_vector(Vec3(0.25, 0, -1)) == "[0.25,0,-1]");
+  CHECK(parse_number("3.5") == Approx(3.5));
+  std::locale::global(saved_cpp);
+  // de_DE would print "3,5" with printf; if that locale is not installed this checks "C".
   const char* old = std::setlocale(LC_NUMERIC, nullptr);
   const std::string saved = old ? old : "C";
   std::setlocale(LC_NUMERIC, "de_DE.UTF-8");
