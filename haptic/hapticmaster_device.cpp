@@ -75,6 +75,25 @@ std::string check_replies(const std::vector<std::string>& commands,
   return "";
 }
 
+// The readings at the end of a round trip: checks the replies, then takes the last three
+// (measpos, modelvel, measforce) into `sample`. Returns "" or what went wrong.
+std::string take_readings(const std::vector<std::string>& commands,
+                          const std::vector<std::string>& replies, DeviceSample& sample) {
+  if (std::string problem = check_replies(commands, replies); !problem.empty()) return problem;
+  Vec3* fields[3] = {&sample.position, &sample.velocity, &sample.measured_force};
+  for (std::size_t k = 0; k < 3; ++k) {
+    const std::size_t i = commands.size() - 3 + k;
+    const hm::Reply reply = hm::parse_reply(replies[i]);
+    if (reply.kind != hm::Reply::Kind::kVector) {
+      return "'" + commands[i] + "' answered '" + reply.text + "', not [x,y,z]";
+    }
+    *fields[k] = reply.vector;
+  }
+  return "";
+}
+
+const std::vector<std::string> kReadings = {"get measpos", "get modelvel", "get measforce"};
+
 }  // namespace
 
 // The socket, owned by whichever thread currently talks to the device (start/stop or the
@@ -250,6 +269,12 @@ void HapticMasterDevice::start(double inertia) {
   } catch (const std::exception& e) {
     throw DeviceError(name() + ": " + e.what());
   }
+  {
+    std::lock_guard<std::mutex> lock(error_mutex_);
+    last_error_.clear();
+  }
+  bool created = false;
+  DeviceSample first;
   try {
     // Does it answer at all, and with a state name, quoted or not? (A wrong server fails.)
     const hm::Reply state = hm::parse_reply(expect_ok("get state"));
@@ -263,11 +288,38 @@ void HapticMasterDevice::start(double inertia) {
     }
     const std::string bias = options_.bias_object;
     expect_ok("set inertia " + hm::format_number(inertia));
+    // A bias object left by a session that ended without stop() would make create fail;
+    // removing one that is not there is an error reply, which does not matter here.
+    try {
+      connection_->round_trip({"remove " + bias}, options_.reply_timeout_s, true);
+    } catch (const std::exception& e) {
+      throw DeviceError(name() + ": 'remove " + bias + "': " + e.what());
+    }
     expect_ok("create biasforce " + bias);
+    created = true;
     expect_ok("set " + bias + " force " + hm::format_vector(Vec3::Zero()));
     expect_ok("set " + bias + " enable");
     expect_ok("set state force");
+    // The first reading, so the tick's first read() has a real position (sequence 1).
+    std::vector<std::string> replies;
+    try {
+      replies =
+          connection_->round_trip(kReadings, options_.reply_timeout_s, options_.join_commands);
+    } catch (const std::exception& e) {
+      throw DeviceError(name() + ": first reading: " + e.what());
+    }
+    first.time_s = monotonic_s();
+    if (const std::string problem = take_readings(kReadings, replies, first); !problem.empty()) {
+      throw DeviceError(name() + ": " + problem);
+    }
+    first.sequence = 1;
+    first.link_ok = true;
   } catch (...) {
+    if (created) {
+      link_ok_.store(true);
+      send_shutdown();  // best effort: leave the device as stop() would
+    }
+    link_ok_.store(false);
     connection_.reset();
     throw;
   }
@@ -275,16 +327,9 @@ void HapticMasterDevice::start(double inertia) {
   staged_ = Command{Vec3::Zero(), inertia};
   commands_.back() = staged_;
   commands_.publish();
-  DeviceSample first;
-  first.time_s = monotonic_s();
-  first.link_ok = true;
   samples_.back() = first;
   samples_.publish();
   last_read_ = first;
-  {
-    std::lock_guard<std::mutex> lock(error_mutex_);
-    last_error_.clear();
-  }
   round_trips_.store(0);
   stop_requested_.store(false);
   link_ok_.store(true);
@@ -315,31 +360,18 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     commands.push_back(set_force + hm::format_vector(force));
     const bool new_inertia = command.inertia != sent_inertia;
     if (new_inertia) commands.push_back("set inertia " + hm::format_number(command.inertia));
-    commands.push_back("get measpos");
-    commands.push_back("get modelvel");
-    commands.push_back("get measforce");
+    commands.insert(commands.end(), kReadings.begin(), kReadings.end());
     std::string problem;
     try {
       const std::vector<std::string> replies =
           connection_->round_trip(commands, options_.reply_timeout_s, options_.join_commands);
       const double now_s = monotonic_s();
-      problem = check_replies(commands, replies);
-      Vec3 vectors[3];
-      for (std::size_t k = 0; k < 3 && problem.empty(); ++k) {
-        const std::size_t i = commands.size() - 3 + k;
-        const hm::Reply reply = hm::parse_reply(replies[i]);
-        if (reply.kind != hm::Reply::Kind::kVector) {
-          problem = "'" + commands[i] + "' answered '" + reply.text + "', not [x,y,z]";
-        } else {
-          vectors[k] = reply.vector;
-        }
-      }
+      DeviceSample reading = sample;
+      problem = take_readings(commands, replies, reading);
       if (problem.empty()) {
         if (new_inertia) sent_inertia = command.inertia;
+        sample = reading;
         sample.time_s = now_s;
-        sample.position = vectors[0];
-        sample.velocity = vectors[1];
-        sample.measured_force = vectors[2];
         ++sample.sequence;
         sample.link_ok = true;
         samples_.back() = sample;
@@ -369,24 +401,26 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
 void HapticMasterDevice::stop() noexcept {
   stop_requested_.store(true, std::memory_order_release);
   if (io_thread_.joinable()) io_thread_.join();
-  if (connection_ && link_ok_.load()) {
-    // Best effort, each on its own so one failing does not skip the others.
-    for (const std::string& command :
-         {"set " + options_.bias_object + " force " + hm::format_vector(Vec3::Zero()),
-          std::string("set state stop"), "remove " + options_.bias_object}) {
-      try {
-        const auto replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
-        if (const std::string problem = check_replies({command}, replies); !problem.empty()) {
-          fail(problem);
-        }
-      } catch (const std::exception& e) {
-        fail("'" + command + "': " + e.what());
-        break;
-      }
-    }
-  }
+  if (connection_ && link_ok_.load()) send_shutdown();
   connection_.reset();
   link_ok_.store(false);
+}
+
+void HapticMasterDevice::send_shutdown() noexcept {
+  // Each on its own so one failing does not skip the others; a lost link skips the rest.
+  for (const std::string& command :
+       {"set " + options_.bias_object + " force " + hm::format_vector(Vec3::Zero()),
+        std::string("set state stop"), "remove " + options_.bias_object}) {
+    try {
+      const auto replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
+      if (const std::string problem = check_replies({command}, replies); !problem.empty()) {
+        fail(problem);
+      }
+    } catch (const std::exception& e) {
+      fail("'" + command + "': " + e.what());
+      break;
+    }
+  }
 }
 
 DeviceSample HapticMasterDevice::read() noexcept {

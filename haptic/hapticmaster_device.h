@@ -90,6 +90,8 @@ class HapticMasterDevice : public HapticDevice {
   // Runs on the I/O thread; its arguments are what start() sent and published.
   void io_loop(double sent_inertia, DeviceSample sample);
   void fail(const std::string& reason);
+  // Zero force, "set state stop", remove the bias object: best effort, errors to fail().
+  void send_shutdown() noexcept;
   // A round trip in the set-up phase: throws DeviceError with the reply's text on error.
   std::string expect_ok(const std::string& command);
 

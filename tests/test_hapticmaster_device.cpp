@@ -11,11 +11,13 @@
 #include <chrono>
 #include <cmath>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "haptic/hapticmaster_device.h"
+#include "haptic/hapticmaster_protocol.h"
 #include "tests/allocation_counter.h"
 #include "tests/modbus/modbus_test_server.h"  // ChildProcess
 #include "tests/temp_dir.h"
@@ -82,6 +84,28 @@ int closed_port() {
   return ntohs(a.sin_port);
 }
 
+// One command on its own connection, as another client would send it; the reply's text.
+std::string send_raw(int port, const std::string& command) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in a{};
+  a.sin_family = AF_INET;
+  a.sin_port = htons(static_cast<std::uint16_t>(port));
+  a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+  REQUIRE(::connect(fd, reinterpret_cast<sockaddr*>(&a), sizeof a) == 0);
+  const std::string bytes = hm::frame(command);
+  REQUIRE(::write(fd, bytes.data(), bytes.size()) == static_cast<ssize_t>(bytes.size()));
+  hm::ReplySplitter splitter;
+  std::optional<std::string> reply;
+  char buffer[1024];
+  while (!(reply = splitter.next())) {
+    const ssize_t n = ::read(fd, buffer, sizeof buffer);
+    if (n <= 0) break;
+    splitter.feed(std::string_view(buffer, static_cast<std::size_t>(n)));
+  }
+  ::close(fd);
+  return reply.value_or("<no reply>");
+}
+
 }  // namespace
 
 TEST_CASE("hapticmaster device: name, address and option checks", "[hapticmaster]") {
@@ -144,18 +168,22 @@ TEST_CASE("hapticmaster device: the exact command sequence at start, in the loop
     CHECK_FALSE(device.read().sequence < s.sequence);
   }
   const std::vector<std::string> lines = lines_of(log);
-  REQUIRE(lines.size() >= 6 + 4 * 5 + 3);
+  REQUIRE(lines.size() >= 10 + 4 * 4 + 3);
   const std::vector<std::string> start = {"get state",
                                           "set inertia 5",
+                                          "remove doorbench_bias",
                                           "create biasforce doorbench_bias",
                                           "set doorbench_bias force [0,0,0]",
                                           "set doorbench_bias enable",
-                                          "set state force"};
-  CHECK(std::vector<std::string>(lines.begin(), lines.begin() + 6) == start);
+                                          "set state force",
+                                          "get measpos",
+                                          "get modelvel",
+                                          "get measforce"};
+  CHECK(std::vector<std::string>(lines.begin(), lines.begin() + 10) == start);
   // Every round trip: the force, then the three readings.
   const std::size_t loop_end = lines.size() - 3;
-  CHECK((loop_end - 6) % 4 == 0);
-  for (std::size_t i = 6; i < loop_end; i += 4) {
+  CHECK((loop_end - 10) % 4 == 0);
+  for (std::size_t i = 10; i < loop_end; i += 4) {
     INFO(i);
     CHECK(lines[i] == "set doorbench_bias force [0,0,0]");
     CHECK(lines[i + 1] == "get measpos");
@@ -179,10 +207,16 @@ TEST_CASE("hapticmaster device: an error reply at start is a DeviceError with it
   Emulator plain;
   HapticMasterDevice first(plain.address());
   first.start(3.0);
-  first.stop();  // removes the object, so a new start works again
+  first.stop();
   HapticMasterDevice again(plain.address());
   CHECK_NOTHROW(again.start(3.0));
   again.stop();
+  // A session that ended without stop() left its bias object; the next start removes it.
+  CHECK(send_raw(plain.port, "create biasforce doorbench_bias") ==
+        "Effect biasforce with name doorbench_bias created;");
+  HapticMasterDevice after_crash(plain.address());
+  CHECK_NOTHROW(after_crash.start(3.0));
+  after_crash.stop();
 }
 
 TEST_CASE("hapticmaster device: samples flow and the position follows the commanded force",
@@ -325,14 +359,30 @@ TEST_CASE("hapticmaster device: garbage and error replies in the loop clear link
     device.stop();
   }
   {
-    Emulator emulator({"--fail", "get modelvel=Not in state force"});
+    Emulator emulator({"--fail", "set doorbench_bias force [1,0,0]=Force too large"});
     HapticMasterDevice device(emulator.address());
     device.start(5.0);
+    device.command_force(Vec3(1, 0, 0));
     const DeviceSample s = poll_until(device, [](const DeviceSample& s) { return !s.link_ok; });
     CHECK_FALSE(s.link_ok);
-    CHECK(s.sequence == 0);
-    CHECK(device.last_error() == emulator.name() + ": 'get modelvel' failed: Not in state force");
+    CHECK(s.sequence >= 1);
+    CHECK(device.last_error() ==
+          emulator.name() + ": 'set doorbench_bias force [1,0,0]' failed: Force too large");
     device.stop();
+  }
+  {
+    // An error reply to the first reading fails start(), which leaves the device stopped.
+    TempDir dir("hm_first_reading");
+    const auto log = dir / "commands.log";
+    Emulator emulator({"--fail", "get modelvel=Not in state force", "--log", log.string()});
+    HapticMasterDevice device(emulator.address());
+    CHECK_THROWS_WITH(device.start(5.0),
+                      emulator.name() + ": 'get modelvel' failed: Not in state force");
+    const std::vector<std::string> lines = lines_of(log);
+    REQUIRE(lines.size() >= 3);
+    CHECK(std::vector<std::string>(lines.end() - 3, lines.end()) ==
+          std::vector<std::string>{"set doorbench_bias force [0,0,0]", "set state stop",
+                                   "remove doorbench_bias"});
   }
 }
 
@@ -406,15 +456,23 @@ TEST_CASE("hapticmaster device: wrong answers to 'get state' or to a round trip"
   }
   {
     // One reply too many in the loop's reply message: the link is declared lost.
-    Emulator emulator({"--answer", "get measforce=[1,2,3];[4,5,6]"});
+    Emulator emulator({"--answer", "set doorbench_bias force [2,0,0]=ok;[4,5,6]"});
     HapticMasterDevice device(emulator.address());
     device.start(5.0);
+    device.command_force(Vec3(2, 0, 0));
     const DeviceSample s = poll_until(device, [](const DeviceSample& s) { return !s.link_ok; });
     CHECK_FALSE(s.link_ok);
     CHECK(device.last_error() ==
           emulator.name() +
-              ": 4 command(s) 'set doorbench_bias force [0,0,0];get measpos;get modelvel;get "
+              ": 4 command(s) 'set doorbench_bias force [2,0,0];get measpos;get modelvel;get "
               "measforce' answered with 5 replies");
     device.stop();
+  }
+  {
+    // A reading that is not a vector fails start().
+    Emulator emulator({"--answer", "get measpos=\"none\""});
+    HapticMasterDevice device(emulator.address());
+    CHECK_THROWS_WITH(device.start(5.0),
+                      emulator.name() + ": 'get measpos' answered '\"none\"', not [x,y,z]");
   }
 }
