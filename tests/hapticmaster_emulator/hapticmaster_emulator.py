@@ -1,0 +1,328 @@
+#!/usr/bin/python3
+"""An emulator of the HapticMaster's TCP text protocol, for doorbench's driver tests.
+
+Run with Debian's /usr/bin/python3 (standard library only). It listens on 127.0.0.1
+(--port 0 = a free port), prints "PORT <n>" on stdout, and serves one client at a time.
+
+Framing (docs/hapticmaster.md): every message is an 8-byte header (big-endian 32-bit length,
+then 4 zero bytes) followed by ASCII text; a request may hold several commands joined with
+';'. Each request is answered by one reply message holding one reply per command, each
+ended by ';' ("Inertia set;[0.0,0.0,0.1];").
+
+Device model: state (init/off/force/position/home/stop), the inertia m, and effect objects
+(biasforce, spring, damper, cylinder, torus) with their properties. In state "force" the
+end-effector moves as m*a = bias forces + springs + dampers + the external (user) force,
+integrated in real time at 1 kHz inside a box (+-0.3 m) whose walls stop it. Cylinders and
+tori keep their properties but add no force (enough for the protocol tests).
+
+Test-only commands (not the device's): "emulator extforce [x,y,z]" sets the user's force;
+"emulator log" returns the commands logged so far.
+
+Misbehaviour for tests: --drop-after N closes the connection after the N-th command;
+--stall-after N stops answering (connection stays open) after N commands; --garbage-after N
+answers with a corrupt header after N commands; --fail COMMAND=TEXT answers the exact
+command COMMAND with "--- ERROR: TEXT". --log FILE appends every command received, one a line.
+"""
+
+import argparse
+import math
+import socket
+import struct
+import sys
+import threading
+import time
+
+STATES = ("init", "off", "force", "position", "home", "stop")
+OBJECT_TYPES = ("biasforce", "spring", "damper", "cylinder", "torus")
+VECTOR_PROPS = {
+    "biasforce": ("force",),
+    "spring": ("pos", "direction"),
+    "damper": ("dampcoef",),
+    "cylinder": ("pos", "att"),
+    "torus": ("pos", "att"),
+}
+NUMBER_PROPS = {
+    "biasforce": (),
+    "spring": ("stiffness", "dampfactor", "maxforce", "deadband"),
+    "damper": (),
+    "cylinder": ("stiffness", "dampfactor", "maxforce", "radius", "length"),
+    "torus": ("stiffness", "dampfactor", "maxforce", "ringradius", "tuberadius"),
+}
+MIN_INERTIA, MAX_INERTIA = 0.1, 1000.0
+WALL = 0.3
+DT = 0.001
+
+
+class Error(Exception):
+    pass
+
+
+def fmt(x):
+    return repr(float(x))
+
+
+def fmt_vec(v):
+    return "[" + ",".join(fmt(x) for x in v) + "]"
+
+
+def parse_number(text):
+    try:
+        x = float(text)
+    except ValueError:
+        raise Error("'%s' is not a number" % text)
+    if not math.isfinite(x):
+        raise Error("'%s' is not a finite number" % text)
+    return x
+
+
+def parse_vector(text):
+    text = text.strip()
+    if not (text.startswith("[") and text.endswith("]")):
+        raise Error("'%s' is not a vector [x,y,z]" % text)
+    parts = text[1:-1].split(",")
+    if len(parts) != 3:
+        raise Error("'%s' is not a vector of 3 numbers" % text)
+    return [parse_number(p.strip()) for p in parts]
+
+
+class Device:
+    def __init__(self, ext_force):
+        self.lock = threading.Lock()
+        self.state = "init"
+        self.inertia = 3.0
+        self.objects = {}  # name -> dict(type=..., enabled=bool, props)
+        self.pos = [0.0, 0.0, 0.0]
+        self.vel = [0.0, 0.0, 0.0]
+        self.ext = list(ext_force)
+        self.last_time = time.monotonic()
+        self.log = []
+
+    def object_forces(self):
+        total = [0.0, 0.0, 0.0]
+        for obj in self.objects.values():
+            if not obj["enabled"]:
+                continue
+            kind = obj["type"]
+            if kind == "biasforce":
+                f = obj["force"]
+            elif kind == "spring":
+                k, c = obj["stiffness"], obj["dampfactor"]
+                f = [-k * (self.pos[i] - obj["pos"][i]) - c * self.vel[i] for i in range(3)]
+                n = math.sqrt(sum(x * x for x in f))
+                if obj["maxforce"] > 0 and n > obj["maxforce"]:
+                    f = [x * obj["maxforce"] / n for x in f]
+            elif kind == "damper":
+                f = [-obj["dampcoef"][i] * self.vel[i] for i in range(3)]
+            else:
+                continue
+            total = [total[i] + f[i] for i in range(3)]
+        return total
+
+    def advance(self):
+        """Integrates the admittance model up to now (semi-implicit Euler, 1 kHz)."""
+        now = time.monotonic()
+        steps = int((now - self.last_time) / DT)
+        steps = min(steps, 5000)  # after a long pause, do not spin
+        self.last_time = now if steps == 5000 else self.last_time + steps * DT
+        if self.state != "force":
+            self.vel = [0.0, 0.0, 0.0]
+            return
+        for _ in range(steps):
+            f = self.object_forces()
+            for i in range(3):
+                self.vel[i] += (f[i] + self.ext[i]) / self.inertia * DT
+                self.pos[i] += self.vel[i] * DT
+                if abs(self.pos[i]) > WALL:
+                    self.pos[i] = math.copysign(WALL, self.pos[i])
+                    self.vel[i] = 0.0
+
+    def new_object(self, kind):
+        obj = {"type": kind, "enabled": False}
+        for p in VECTOR_PROPS[kind]:
+            obj[p] = [0.0, 0.0, 0.0]
+        for p in NUMBER_PROPS[kind]:
+            obj[p] = 0.0
+        if kind == "spring":
+            obj["direction"] = [0.0, 0.0, 1.0]
+        return obj
+
+    def execute(self, command):
+        words = command.split(None, 3)
+        if not words:
+            raise Error("empty command")
+        verb = words[0]
+        if verb == "get" and len(words) == 2:
+            what = words[1]
+            if what == "state":
+                return '"%s"' % self.state
+            if what == "inertia":
+                return fmt(self.inertia)
+            if what in ("measpos", "modelpos"):
+                return fmt_vec(self.pos)
+            if what == "modelvel":
+                return fmt_vec(self.vel)
+            if what == "measforce":
+                return fmt_vec(self.ext)
+            raise Error("Unknown parameter '%s'" % what)
+        if verb == "get" and len(words) == 3:
+            obj = self.objects.get(words[1])
+            if obj is None:
+                raise Error("No effect with name '%s'" % words[1])
+            prop = words[2]
+            if prop == "enabled":
+                return "true" if obj["enabled"] else "false"
+            if prop not in obj or prop == "type":
+                raise Error("Effect '%s' has no property '%s'" % (words[1], prop))
+            value = obj[prop]
+            return fmt_vec(value) if isinstance(value, list) else fmt(value)
+        if verb == "set" and len(words) >= 3 and words[1] == "state" and len(words) == 3:
+            if words[2] not in STATES:
+                raise Error("Unknown state '%s'" % words[2])
+            self.state = words[2]
+            return "state set to '%s'" % self.state
+        if verb == "set" and words[1] == "inertia" and len(words) == 3:
+            value = parse_number(words[2])
+            if not MIN_INERTIA <= value <= MAX_INERTIA:
+                raise Error("Inertia %s out of range" % words[2])
+            self.inertia = value
+            return "Inertia set"
+        if verb == "set" and len(words) >= 3:
+            name, prop = words[1], words[2]
+            obj = self.objects.get(name)
+            if obj is None:
+                raise Error("No effect with name '%s'" % name)
+            if prop in ("enable", "disable") and len(words) == 3:
+                obj["enabled"] = prop == "enable"
+                return "Effect %s %sd" % (name, prop)
+            if len(words) != 4:
+                raise Error("'set %s %s' needs a value" % (name, prop))
+            if prop in VECTOR_PROPS[obj["type"]]:
+                obj[prop] = parse_vector(words[3])
+            elif prop in NUMBER_PROPS[obj["type"]]:
+                obj[prop] = parse_number(words[3])
+            else:
+                raise Error("Effect %s has no property '%s'" % (obj["type"], prop))
+            return "Effect %s's %s set" % (name, prop)
+        if verb == "create" and len(words) == 3:
+            kind, name = words[1], words[2]
+            if kind not in OBJECT_TYPES:
+                raise Error("Unknown effect type '%s'" % kind)
+            if name in self.objects:
+                raise Error("An effect with name '%s' already exists" % name)
+            self.objects[name] = self.new_object(kind)
+            return "Effect %s with name %s created" % (kind, name)
+        if verb == "remove" and len(words) == 2:
+            if words[1] == "all":
+                self.objects.clear()
+                return "All effects removed"
+            if self.objects.pop(words[1], None) is None:
+                raise Error("No effect with name '%s'" % words[1])
+            return "Effect %s removed" % words[1]
+        if verb == "emulator" and len(words) >= 2:
+            if words[1] == "extforce" and len(words) >= 3:
+                self.ext = parse_vector(command.split(None, 2)[2])
+                return "External force set"
+            if words[1] == "log" and len(words) == 2:
+                return '"%s"' % "|".join(self.log)
+        raise Error("Unknown command '%s'" % command)
+
+
+def frame(text):
+    data = text.encode("ascii", "replace")
+    return struct.pack(">II", len(data), 0) + data
+
+
+def recv_exact(conn, n):
+    data = b""
+    while len(data) < n:
+        chunk = conn.recv(n - len(data))
+        if not chunk:
+            return None
+        data += chunk
+    return data
+
+
+def serve(conn, device, args, counter, log_file):
+    conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    while True:
+        header = recv_exact(conn, 8)
+        if header is None:
+            return
+        (length, _) = struct.unpack(">II", header)
+        body = recv_exact(conn, length)
+        if body is None:
+            return
+        replies = []
+        for command in body.decode("ascii", "replace").split(";"):
+            command = command.strip()
+            if not command:
+                continue
+            counter[0] += 1
+            if log_file:
+                log_file.write(command + "\n")
+                log_file.flush()
+            if args.drop_after is not None and counter[0] > args.drop_after:
+                conn.close()
+                return
+            if args.stall_after is not None and counter[0] > args.stall_after:
+                time.sleep(3600)
+            if args.garbage_after is not None and counter[0] > args.garbage_after:
+                conn.sendall(b"\xff\xff\xff\xffgarbage")
+                continue
+            with device.lock:
+                device.log.append(command)
+                device.advance()
+                if command in args.fail:
+                    reply = "--- ERROR: " + args.fail[command]
+                elif command in args.answer:
+                    reply = args.answer[command]
+                else:
+                    try:
+                        reply = device.execute(command)
+                    except Error as e:
+                        reply = "--- ERROR: " + str(e)
+            replies.append(reply + ";")
+        if replies:
+            conn.sendall(frame("".join(replies)))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--port", type=int, default=0)
+    parser.add_argument("--ext-force", default="[0,0,0]", help="the user's force [x,y,z] in N")
+    parser.add_argument("--log", help="append every command received to this file")
+    parser.add_argument("--drop-after", type=int)
+    parser.add_argument("--stall-after", type=int)
+    parser.add_argument("--garbage-after", type=int)
+    parser.add_argument("--fail", action="append", default=[], metavar="COMMAND=TEXT")
+    parser.add_argument("--answer", action="append", default=[], metavar="COMMAND=TEXT")
+    args = parser.parse_args()
+    args.fail = dict(item.partition("=")[::2] for item in args.fail)
+    args.answer = dict(item.partition("=")[::2] for item in args.answer)
+
+    device = Device(parse_vector(args.ext_force))
+    server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    server.bind(("127.0.0.1", args.port))
+    server.listen(1)
+    print("PORT %d" % server.getsockname()[1], flush=True)
+    log_file = open(args.log, "a") if args.log else None
+    counter = [0]
+    while True:
+        conn, _ = server.accept()
+        try:
+            serve(conn, device, args, counter, log_file)
+        except OSError:
+            pass
+        finally:
+            try:
+                conn.close()
+            except OSError:
+                pass
+
+
+if __name__ == "__main__":
+    try:
+        main()
+    except KeyboardInterrupt:
+        sys.exit(0)
