@@ -203,9 +203,11 @@ void play_and_fit_back(const std::filesystem::path& dir, const DoorModel& fitted
   request.device.simulated_time = true;
   request.device.hand.duration_s = 10.0;
   request.playback.duration_s = 30.0;
-  // The simulated HapticMaster's continuous force: the virtual user pushes the door into its
-  // closed stop, and a force clipped by the safety limit would bias the fit (docs/haptic.md).
+  // The simulated HapticMaster's continuous force and force rate: the virtual user pushes the door
+  // into its closed stop, and a force clipped by the safety limit would bias the fit
+  // (docs/haptic.md).
   request.playback.loop.safety.max_force = 100.0;
+  request.playback.loop.safety.max_force_rate = 20000.0;
   request.session_path = session_path;
   request.model_source = "the residual loop's fitted door (" + (dir / "loop").string() + ")";
   request.operator_name = "doorbench demo";

@@ -23,6 +23,8 @@ struct PlayOptions {
   double push_N = 20.0;
   std::uint64_t seed = 1;
   std::string watch_params;
+  double max_force_N = 60.0;
+  double max_force_rate_N_per_s = 5000.0;
 };
 
 // Live tuning from another program (the viewer's tuning layout saves a parameter file): when
@@ -85,6 +87,8 @@ void run_play(const PlayOptions& options) {
   request.playback.duration_s = options.duration_s;
   request.playback.loop.rate_hz = options.rate_hz;
   request.playback.real_time.request_fifo = !options.no_fifo;
+  request.playback.loop.safety.max_force = options.max_force_N;
+  request.playback.loop.safety.max_force_rate = options.max_force_rate_N_per_s;
   request.session_path = options.out;
   request.model_source =
       options.model.params_path.empty() ? "reference door" : options.model.params_path;
@@ -140,6 +144,15 @@ void add_play_command(CLI::App& app, Action& action) {
       ->check(CLI::Range(0.0, 200.0))
       ->capture_default_str();
   play->add_option("--seed", options->seed, "Simulated devices: noise and pushes")
+      ->capture_default_str();
+  play->add_option("--max-force-N", options->max_force_N,
+                   "The safety layer's force limit (the device's own limit also applies; rotary "
+                   "devices: N*m)")
+      ->check(CLI::Range(0.1, 1000.0))
+      ->capture_default_str();
+  play->add_option("--max-force-rate", options->max_force_rate_N_per_s,
+                   "The safety layer's force-rate limit, N/s (rotary: N*m/s)")
+      ->check(CLI::Range(1.0, 1e6))
       ->capture_default_str();
   play->add_option("--watch-params", options->watch_params,
                    "A parameter file to watch: whenever it changes (the viewer's tuning layout "

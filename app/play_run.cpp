@@ -17,6 +17,12 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
     throw std::invalid_argument("--simulated-time needs a simulated device (got --device " +
                                 request.device.uri + ")");
   }
+  haptic::PlaybackOptions options = request.playback;
+  if (request.velocity_trip) {
+    options.loop.safety.velocity_trip = *request.velocity_trip;
+  } else if (opened.device->limits().kinematics == haptic::Kinematics::kRotary1) {
+    options.loop.safety.velocity_trip = 6.0;
+  }
   SessionMetadata metadata;
   metadata.rig_name = "haptic playback on " + opened.device->name();
   metadata.operator_name = request.operator_name;
@@ -26,7 +32,7 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
   metadata.notes = "model: " + request.model_source +
                    (request.effects.empty() ? "" : ", effects: " + request.effects);
   haptic::Playback playback(
-      *opened.device, model, request.playback, request.session_path, metadata,
+      *opened.device, model, options, request.session_path, metadata,
       haptic::PlaybackSetup{opened.device->name(), request.model_source, request.effects});
   if (request.device.simulated_time) {
     haptic::SimulatedDevice* device = opened.simulated;

@@ -4,6 +4,7 @@
 // demo.
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <string>
 
 #include "analysis/door_model.h"
@@ -20,6 +21,9 @@ struct PlayRequest {
   std::string effects;       // as given
   std::string operator_name = "doorbench play";
   std::string product_id = "virtual door";
+  // The safety layer's velocity trip in the device's units; unset: its default (1 m/s) for a
+  // Cartesian device, 6 rad/s (twice a brisk slam) for a rotary one.
+  std::optional<double> velocity_trip;
   bool show_status = true;  // a status line on stderr while playing in real time
   // Live tuning: called about every 0.1 s (real time) on the control thread; it may call
   // playback.change_parameters(). Returning false ends the run early.

@@ -2,6 +2,7 @@
 
 #include <stdexcept>
 
+#include "haptic/hapticmaster_device.h"
 #include "haptic/rotary_device.h"
 
 namespace doorbench::haptic {
@@ -42,6 +43,15 @@ OpenedDevice open_device(const DeviceRequest& request, const ArcGeometry& arc,
     device->set_hand(hand);
     opened.simulated = device.get();
     opened.device = std::move(device);
+    return opened;
+  }
+  constexpr std::string_view kHapticMaster = "hapticmaster://";
+  if (uri.rfind(kHapticMaster, 0) == 0) {
+    const std::string address = uri.substr(kHapticMaster.size());
+    if (address.empty()) {
+      throw std::invalid_argument("--device '" + uri + "': no host (hapticmaster://HOST[:PORT])");
+    }
+    opened.device = std::make_unique<HapticMasterDevice>(address, request.hapticmaster);
     return opened;
   }
   throw std::invalid_argument("--device '" + uri +

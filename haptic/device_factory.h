@@ -12,6 +12,7 @@
 #include "analysis/virtual_hand.h"
 #include "haptic/device.h"
 #include "haptic/door_mapping.h"
+#include "haptic/hapticmaster_device.h"
 #include "haptic/simulated_hapticmaster.h"
 
 namespace doorbench::haptic {
@@ -25,7 +26,8 @@ struct DeviceRequest {
   bool repeat_hand = true;
   PushOptions pushes;
   std::uint64_t seed = 1;
-  double force_noise_rms = 0.1;  // N on the simulated force sensor
+  double force_noise_rms = 0.1;      // N on the simulated force sensor
+  HapticMasterOptions hapticmaster;  // timeouts and I/O rate of the real device's driver
 };
 
 struct OpenedDevice {

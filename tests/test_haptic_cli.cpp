@@ -19,10 +19,12 @@ TEST_CASE("play: the simulated HapticMaster in simulated time writes a session a
       "play --device sim --simulated-time --duration-s 12 --out '" + session.string() + "'", dir);
   INFO(run.err);
   REQUIRE(run.status == 0);
-  CHECK_THAT(run.out, Catch::Contains("12001 ticks over 12 s into"));
+  // 12 s of ticks, then the safety layer's stop ramp (20 ms).
+  CHECK_THAT(run.out, Catch::Contains("12022 ticks over 12.02 s into"));
   CHECK_THAT(run.out, Catch::Contains("0 records dropped"));
+  CHECK_THAT(run.out, Catch::Contains("safety stopped (events: start_ramp_done"));
   const SessionReader reader(session);
-  CHECK(reader.sample_count("force") == 12001);
+  CHECK(reader.sample_count("force") == 12022);
   CHECK(reader.read_group_attribute("haptic", "device") == "sim:hapticmaster");
 
   // Sessions are never overwritten.

@@ -32,7 +32,10 @@ TEST_CASE("playback followed by a fit recovers the played door", "[haptic][fit]"
   request.hand.duration_s = 10.0;
   PlaybackOptions options;
   options.duration_s = 30.0;  // three open-close cycles
+  // The simulated HapticMaster's own force and rate limits: the virtual user pushes the door into
+  // its closed stop, and a force the safety layer clips is a force the fit does not see.
   options.loop.safety.max_force = 100.0;
+  options.loop.safety.max_force_rate = 20000.0;
   OpenedDevice opened = open_device(request, options.arc, played.geometry().handle_radius_m);
   const std::filesystem::path path = dir.path / "played.h5";
   SessionMetadata metadata;

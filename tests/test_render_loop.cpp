@@ -23,6 +23,13 @@ double reference_angle(double time_s) {
   return 0.25 * (1.0 - std::cos(2.0 * 3.14159265358979 * (time_s - 0.5) / 3.0));
 }
 
+// The test device is rotary: its velocity trip is in rad/s (a brisk door swings at 2 rad/s).
+RenderLoopOptions rotary_options() {
+  RenderLoopOptions options;
+  options.safety.velocity_trip = 6.0;
+  return options;
+}
+
 SessionMetadata metadata() {
   SessionMetadata metadata;
   metadata.rig_name = "test rotary device";
@@ -40,7 +47,7 @@ TEST_CASE("render loop: a tick allocates nothing and a parameter change lands at
   const DoorMapping mapping(Kinematics::kRotary1, ArcGeometry{}, model.geometry().handle_radius_m);
   device.start(mapping.inertia_on_device(model.inertia_kg_m2()));
   RenderLoop loop(device, mapping, std::make_unique<PlaybackParameters>(model, mapping, "start"),
-                  RenderLoopOptions{});
+                  rotary_options());
   CHECK(loop.mailbox().in_use() == 1);
 
   // Warm up past the start ramp, then count allocations over many ticks.
@@ -91,7 +98,7 @@ TEST_CASE("render loop: the model's torque is what the device gets, and the hand
   const DoorMapping mapping(Kinematics::kRotary1, ArcGeometry{}, model.geometry().handle_radius_m);
   device.start(1.0);
   RenderLoop loop(device, mapping, std::make_unique<PlaybackParameters>(model, mapping, "start"),
-                  RenderLoopOptions{});
+                  rotary_options());
   // Held at 0.3 rad (free movement) after the start ramp: the command is the model's torque.
   device.reference_angle_rad = [](double) { return 0.3; };
   double time_s = 0.0;
@@ -112,7 +119,7 @@ TEST_CASE("render loop: refuses a parameter set it cannot play, naming the reaso
   const DoorMapping mapping(Kinematics::kRotary1, ArcGeometry{}, model.geometry().handle_radius_m);
   device.start(1.0);
   RenderLoop loop(device, mapping, std::make_unique<PlaybackParameters>(model, mapping, "start"),
-                  RenderLoopOptions{});
+                  rotary_options());
   // J = 20 kg*m^2 is beyond what this device renders (max 10).
   const DoorModel too_heavy = perceptual::set(model, perceptual::Control::kHeaviness, 4.9);
   CHECK(loop.publish(std::make_unique<PlaybackParameters>(too_heavy, mapping, "x")) == "");
@@ -125,7 +132,7 @@ TEST_CASE("render loop: refuses a parameter set it cannot play, naming the reaso
   CHECK_THAT(loop.publish(std::make_unique<PlaybackParameters>(heavy, mapping, "y")),
              Catch::Contains("needs 20 kg on the device, outside its range [0.01, 10] kg"));
 
-  RenderLoopOptions fast;
+  RenderLoopOptions fast = rotary_options();
   fast.rate_hz = 5000.0;
   CHECK_THROWS_WITH(RenderLoop(device, mapping,
                                std::make_unique<PlaybackParameters>(model, mapping, "start"), fast),
@@ -139,6 +146,7 @@ TEST_CASE("playback: ticks, parameter changes and events stream into a session a
   device.reference_angle_rad = reference_angle;
   const DoorModel model = reference_model(ModelKind::kSensory);
   PlaybackOptions options;
+  options.loop = rotary_options();
   options.duration_s = 4.0;
   const std::filesystem::path path = dir.path / "played.h5";
   PlaybackSummary summary;
