@@ -4,6 +4,7 @@
 // PresentationPlayer (make_presentation_player below).
 #include <unistd.h>
 
+#include <algorithm>
 #include <fstream>
 #include <iostream>
 #include <map>
@@ -14,6 +15,7 @@
 
 #include "analysis/parameter_file.h"
 #include "app/commands.h"
+#include "app/play_run.h"
 #include "app/session_recording.h"
 #include "haptic/ab_trials.h"
 
@@ -61,16 +63,13 @@ void parse_question(const std::string& text, haptic::AbOptions& options) {
 // the rig when the rig is simulated. Device playback (hapticmaster://HOST) comes with the
 // render loop: this is where it plugs in.
 haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& options) {
-  if (options.device != "sim") {
-    if (options.device.rfind("hapticmaster://", 0) == 0) {
-      throw std::runtime_error("--device " + options.device +
-                               ": playback on a HapticMaster is not in this build yet (use "
-                               "--device sim)");
-    }
-    throw UsageError("--device must be sim or hapticmaster://HOST, not " + options.device);
-  }
   const std::optional<ModelKind> kind = parse_model_kind(options.model);
   if (!kind) throw UsageError("--model must be sensory or physical, not " + options.model);
+  const bool simulated = options.device.rfind("sim", 0) == 0;
+  if (!simulated && options.device.rfind("hapticmaster://", 0) != 0) {
+    throw UsageError("--device must be sim, sim:rotary or hapticmaster://HOST[:PORT], not " +
+                     options.device);
+  }
   // Loaded once, before the first trial, so that a bad file stops the run at once.
   auto models = std::make_shared<std::map<std::string, DoorModel>>();
   models->emplace("B", doorbench::load_model(*kind, options.params_b, ""));
@@ -79,30 +78,44 @@ haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& opti
     models->emplace("A", doorbench::load_model(*kind, options.params_a, ""));
   } else {
     rig = std::make_shared<RigDefinition>(load_rig(options.real_rig));
-    for (const RigChannel& channel : rig->channels) {
-      if (channel.backend != "simulated") {
-        throw std::runtime_error(options.real_rig + ": channel " + channel.name + " uses backend " +
-                                 channel.backend +
-                                 "; with --device sim the real door can only be a simulated rig");
-      }
-    }
   }
-  return [models, rig](const haptic::PresentationRequest& request) {
+  const std::string device = options.device;
+  return [models, rig, device, simulated](const haptic::PresentationRequest& request) {
+    const std::string notes = "doorbench ab: trial " + std::to_string(request.trial) +
+                              ", presentation " + std::to_string(request.position);
     if (request.variant == "real") {
+      // The real door on the bench, recorded from the rig for the presentation's time.
       SessionRecordingOptions recording;
       recording.duration_s = request.duration_s;
       recording.show_progress = false;
-      recording.notes = "doorbench ab: trial " + std::to_string(request.trial) + ", presentation " +
-                        std::to_string(request.position) + ", variant real (" +
-                        request.params_path + ")";
-      record_simulated_session(*rig, recording, request.session_path);
+      recording.operator_name = "doorbench ab";
+      recording.notes = notes + ", variant real (" + request.params_path + ")";
+      record_rig_session(*rig, recording, request.session_path);
       return;
     }
-    SessionMetadata metadata;
-    metadata.rig_name = "simulated haptic device";
-    metadata.start_time_utc = utc_now_iso8601();
-    metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
-    haptic::write_simulated_presentation(models->at(request.variant), request, metadata);
+    // The virtual door rendered on the device. A simulated device (with its virtual user)
+    // runs in simulated time; a HapticMaster in real time, with the person at its handle.
+    PlayRequest play;
+    play.device.uri = device;
+    play.device.simulated_time = simulated;
+    // The virtual user's open-close cycle: the presentation's, between 4 s (faster would be a
+    // slam the velocity trip stops) and 10 s.
+    play.device.hand.duration_s = std::clamp(request.duration_s, 4.0, 10.0);
+    play.device.seed = static_cast<std::uint64_t>(1000 * request.trial + request.position);
+    play.playback.duration_s = request.duration_s;
+    play.session_path = request.session_path;
+    play.model_source = request.params_path;
+    play.operator_name = "doorbench ab";
+    play.product_id = "virtual door";
+    play.notes = notes + ", variant " + request.variant + " (" + request.params_path + ")";
+    play.show_status = false;
+    const haptic::PlaybackSummary summary = play_model(models->at(request.variant), play);
+    if (summary.final_state == haptic::SafetyState::kStopped &&
+        summary.duration_s + 0.05 < request.duration_s) {
+      throw std::runtime_error("the safety layer stopped the presentation after " +
+                               std::to_string(summary.duration_s) +
+                               " s: " + summary.brief_report());
+    }
   };
 }
 

@@ -25,6 +25,7 @@ struct PlayOptions {
   std::string watch_params;
   double max_force_N = 60.0;
   double max_force_rate_N_per_s = 5000.0;
+  double max_tick_interval_ms = 5.0;
 };
 
 // Live tuning from another program (the viewer's tuning layout saves a parameter file): when
@@ -89,6 +90,7 @@ void run_play(const PlayOptions& options) {
   request.playback.real_time.request_fifo = !options.no_fifo;
   request.playback.loop.safety.max_force = options.max_force_N;
   request.playback.loop.safety.max_force_rate = options.max_force_rate_N_per_s;
+  request.playback.loop.safety.max_tick_interval_s = 1e-3 * options.max_tick_interval_ms;
   request.session_path = options.out;
   request.model_source =
       options.model.params_path.empty() ? "reference door" : options.model.params_path;
@@ -153,6 +155,11 @@ void add_play_command(CLI::App& app, Action& action) {
   play->add_option("--max-force-rate", options->max_force_rate_N_per_s,
                    "The safety layer's force-rate limit, N/s (rotary: N*m/s)")
       ->check(CLI::Range(1.0, 1e6))
+      ->capture_default_str();
+  play->add_option("--max-tick-interval-ms", options->max_tick_interval_ms,
+                   "A longer gap between two ticks is a missed deadline: the safety layer ramps "
+                   "the force down and stops")
+      ->check(CLI::Range(0.5, 1000.0))
       ->capture_default_str();
   play->add_option("--watch-params", options->watch_params,
                    "A parameter file to watch: whenever it changes (the viewer's tuning layout "

@@ -29,7 +29,8 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
   metadata.product_id = request.product_id;
   metadata.start_time_utc = utc_now_iso8601();
   metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
-  metadata.notes = "model: " + request.model_source +
+  metadata.notes = (request.notes.empty() ? "" : request.notes + "; ") +
+                   "model: " + request.model_source +
                    (request.effects.empty() ? "" : ", effects: " + request.effects);
   haptic::Playback playback(
       *opened.device, model, options, request.session_path, metadata,

@@ -21,6 +21,7 @@ struct PlayRequest {
   std::string effects;       // as given
   std::string operator_name = "doorbench play";
   std::string product_id = "virtual door";
+  std::string notes;  // put before the model's source in the session's notes
   // The safety layer's velocity trip in the device's units; unset: its default (1 m/s) for a
   // Cartesian device, 6 rad/s (twice a brisk slam) for a rotary one.
   std::optional<double> velocity_trip;

@@ -331,8 +331,10 @@ void recover_unfinished_sessions(const std::filesystem::path& folder) {
   }
 }
 
-void run_record(const RecordCommandOptions& options) {
-  const RigDefinition rig = load_rig(options.rig_path);
+}  // namespace
+
+RecordSummary record_rig_session(const RigDefinition& rig, const SessionRecordingOptions& options,
+                                 const std::filesystem::path& out_path) {
   // The rig's Modbus sensors are polled beside its DAQ (if it has one), which sees only
   // its own channels.
   std::unique_ptr<sensors::ModbusSource> modbus;
@@ -344,6 +346,16 @@ void run_record(const RecordCommandOptions& options) {
   }
   std::vector<PolledSource*> polled;
   if (modbus) polled.push_back(modbus.get());
+  return rig.daq_backend == "none" ? record_polled_session(rig, options, out_path, polled)
+         : rig.daq_backend == "comedi"
+             ? record_comedi_session(daq_rig, options, out_path, polled)
+             : record_simulated_session(daq_rig, options, out_path, polled);
+}
+
+namespace {
+
+void run_record(const RecordCommandOptions& options) {
+  const RigDefinition rig = load_rig(options.rig_path);
   const std::filesystem::path out(options.out_path);
   recover_unfinished_sessions(out.parent_path().empty() ? std::filesystem::path(".")
                                                         : out.parent_path());
@@ -363,11 +375,7 @@ void run_record(const RecordCommandOptions& options) {
       ::sigaction(SIGTERM, &old_term, nullptr);
     }
   } restore{old_int, old_term};
-  const RecordSummary summary =
-      rig.daq_backend == "none" ? record_polled_session(rig, recording, options.out_path, polled)
-      : rig.daq_backend == "comedi"
-          ? record_comedi_session(daq_rig, recording, options.out_path, polled)
-          : record_simulated_session(daq_rig, recording, options.out_path, polled);
+  const RecordSummary summary = record_rig_session(rig, recording, options.out_path);
   if (summary.stopped_by_request) {
     std::cerr << "stopped by request after " << summary.duration_s << " s\n";
   }

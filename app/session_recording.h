@@ -30,6 +30,10 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
                                        const SessionRecordingOptions& options,
                                        const std::filesystem::path& out_path,
                                        const std::vector<PolledSource*>& polled = {});
+// Any rig: the simulated bench, a comedi card, Modbus sensors, or a DAQ with Modbus sensors
+// beside it, on one session clock.
+RecordSummary record_rig_session(const RigDefinition& rig, const SessionRecordingOptions& options,
+                                 const std::filesystem::path& out_path);
 std::string utc_now_iso8601();
 
 }  // namespace doorbench::app

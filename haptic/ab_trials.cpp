@@ -381,25 +381,6 @@ std::string AbSummary::to_json() const {
   return json.dump(2) + "\n";
 }
 
-void write_simulated_presentation(const DoorModel& model, const PresentationRequest& request,
-                                  SessionMetadata metadata) {
-  VirtualHandOptions hand_options;
-  hand_options.duration_s = request.duration_s;
-  const VirtualHand hand(hand_options, model.geometry().handle_radius_m);
-  constexpr double kRateHz = 1000.0;
-  const auto samples = static_cast<std::size_t>(std::floor(request.duration_s * kRateHz)) + 1;
-  std::vector<double> times(samples);
-  for (std::size_t i = 0; i < samples; ++i) times[i] = static_cast<double>(i) / kRateHz;
-  Trajectory run = simulate(model, hand, DoorState{}, times);
-  run.stroke.resize(samples);
-  for (std::size_t i = 0; i < samples; ++i) run.stroke[i] = hand.stroke_at(times[i]);
-  std::string note = "doorbench ab: trial " + std::to_string(request.trial) + ", presentation " +
-                     std::to_string(request.position) + ", variant " + request.variant + " (" +
-                     request.params_path + "), simulated player: the virtual hand on the model";
-  metadata.notes = metadata.notes.empty() ? note : metadata.notes + "; " + note;
-  recording_to_session(to_recording(run, note), request.session_path, metadata);
-}
-
 AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
                  const AnswerSource& answers, std::ostream& prompts) {
   const AbOptions& options = inputs.options;

@@ -119,12 +119,6 @@ struct PresentationRequest {
 };
 using PresentationPlayer = std::function<void(const PresentationRequest&)>;
 
-// A stand-in for the device: the model opened and closed by the virtual hand for the
-// presentation's duration (analysis' simulator at 1 kHz), recorded as a session with
-// `metadata` (its notes get the trial, position and variant appended).
-void write_simulated_presentation(const DoorModel& model, const PresentationRequest& request,
-                                  SessionMetadata metadata);
-
 // Where answers come from: the next line, or nullopt at the end of the input.
 struct AnswerSource {
   std::function<std::optional<std::string>()> next_line;

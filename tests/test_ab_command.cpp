@@ -86,7 +86,9 @@ TEST_CASE("doorbench ab: A vs B with scripted answers leaves sessions, answers a
       const std::string& variant = plan[trial - 1].variant[position - 1];
       CHECK_THAT(session.metadata().notes,
                  Contains("variant " + variant + " (" + (variant == "A" ? heavier : kReference)));
-      CHECK(session.sample_count("force") == 2001);
+      // 2 s of ticks at 1 kHz, then the safety layer's 20 ms stop ramp.
+      CHECK(session.sample_count("force") == 2021);
+      CHECK(session.read_group_attribute("haptic", "device") == "sim:hapticmaster");
     }
   }
   const std::string csv = read_file(out / "answers.csv");
@@ -128,7 +130,7 @@ TEST_CASE("doorbench ab: the real door (simulated rig) vs the model, answers on 
     const doorbench::SessionReader session(out / ("trial-01-" + std::to_string(position) + ".h5"));
     const bool real = plan[0].variant[position - 1] == "real";
     CHECK(session.metadata().rig_name ==
-          (real ? "simulated-dishwasher" : "simulated haptic device"));
+          (real ? "simulated-dishwasher" : "haptic playback on sim:hapticmaster"));
   }
 }
 
@@ -153,11 +155,16 @@ TEST_CASE("doorbench ab: refusals by their text", "[ab][cli]") {
            "'");
   CHECK(run.status == 2);
   CHECK_THAT(run.err, Contains("rating scale K must be 2 to 100, got 1"));
+  // Nobody listens on loopback port 1: the first presentation fails naming the device.
   run = ab("--a '" + kReference + "' --b '" + kReference +
-           "' --device hapticmaster://10.0.0.2 --out '" + out + "'");
+           "' --device hapticmaster://127.0.0.1:1 --out '" + out + "-hm'");
   CHECK(run.status == 1);
-  CHECK_THAT(run.err, Contains("--device hapticmaster://10.0.0.2: playback on a HapticMaster is "
-                               "not in this build yet"));
+  CHECK_THAT(run.err, Contains("trial 1, presentation 1: hapticmaster://127.0.0.1:1: "));
+  run = ab("--a '" + kReference + "' --b '" + kReference + "' --device telepathy --out '" + out +
+           "-x'");
+  CHECK(run.status == 2);
+  CHECK_THAT(run.err, Contains("--device must be sim, sim:rotary or hapticmaster://HOST[:PORT], "
+                               "not telepathy"));
   run = ab("--a '" + kReference + "' --b missing.json --out '" + out + "'");
   CHECK(run.status == 1);
   CHECK_THAT(run.err, Contains("missing.json"));

@@ -436,32 +436,3 @@ TEST_CASE("A/B run: presentations in plan order, answers and summary on disk", "
     CHECK_THAT(read_file(inputs.out_dir / "ab-summary.json"), Contains("\"trials_answered\": 4"));
   }
 }
-
-TEST_CASE("A/B simulated presentation: the model under the virtual hand as a session", "[ab]") {
-  doorbench::testing::TempDir dir("ab_present");
-  haptic::PresentationRequest request;
-  request.trial = 3;
-  request.position = 2;
-  request.variant = "B";
-  request.params_path = "b.json";
-  request.session_path = dir.path / "trial-03-2.h5";
-  request.duration_s = 4.0;
-  doorbench::SessionMetadata metadata;
-  metadata.rig_name = "simulated haptic device";
-  haptic::write_simulated_presentation(doorbench::reference_model(doorbench::ModelKind::kSensory),
-                                       request, metadata);
-  const doorbench::SessionReader session(request.session_path);
-  CHECK_THAT(session.metadata().notes, Contains("trial 3, presentation 2, variant B (b.json)"));
-  CHECK(session.sample_count("angle") == 4001);
-  const auto slice = session.read("angle");
-  const auto angle = session.physical("angle", slice);
-  // The hand opens to 80 degrees (1.396 rad) and closes again.
-  CHECK_THAT(*std::max_element(angle.begin(), angle.end()), WithinAbs(1.3963, 0.05));
-  CHECK_THAT(angle.back(), WithinAbs(0.0, 0.01));
-  int stroke_starts = 0;
-  for (const auto& event : session.events()) stroke_starts += event.kind == "stroke_start";
-  CHECK(stroke_starts == 2);
-  // An existing session is never overwritten.
-  CHECK_THROWS(haptic::write_simulated_presentation(
-      doorbench::reference_model(doorbench::ModelKind::kSensory), request, metadata));
-}
