@@ -1,4 +1,6 @@
 // doorbench play: a door model rendered on a haptic device, every tick recorded as a session.
+#include <unistd.h>
+
 #include <iostream>
 #include <memory>
 
@@ -6,6 +8,7 @@
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/play_run.h"
+#include "haptic/tuning_keys.h"
 
 namespace doorbench::app {
 namespace {
@@ -26,6 +29,39 @@ struct PlayOptions {
   double max_force_N = 60.0;
   double max_force_rate_N_per_s = 5000.0;
   double max_tick_interval_ms = 5.0;
+  bool keys = false;
+};
+
+// Live tuning from the keypad (haptic/tuning_keys.h): every key press moves one perceptual
+// control; an applied change is played from the next tick, and every press (refused ones
+// too) becomes a "tuning" event of the session.
+class KeypadTuning {
+ public:
+  explicit KeypadTuning(const DoorModel& start)
+      : keys_(STDIN_FILENO, "stdin"), tuner_(start, "start") {
+    std::cerr << "tuning keys (the session records every press):\n" << haptic::key_map_text();
+  }
+
+  void poll(haptic::Playback& playback) {
+    while (const std::optional<char> key = keys_.poll(0.0)) {
+      const double time_s = playback.loop().status().time_s;
+      const haptic::TuningLogEntry& entry = tuner_.press(*key, time_s);
+      std::string outcome = entry.message;
+      if (entry.applied) {
+        const std::string description =
+            std::string("key ").append(1, *key).append(": ").append(entry.message);
+        const std::string problem = playback.change_parameters(tuner_.model(), description);
+        if (!problem.empty()) outcome = "not played: " + problem;
+      }
+      playback.recorder().add_event(
+          {time_s, "tuning", "", std::string("key ").append(1, *key).append(": ").append(outcome)});
+      std::cerr << "\nkey " << *key << ": " << outcome << "\n";
+    }
+  }
+
+ private:
+  haptic::TerminalKeys keys_;
+  haptic::KeyTuner tuner_;
 };
 
 // Live tuning from another program (the viewer's tuning layout saves a parameter file): when
@@ -103,9 +139,18 @@ void run_play(const PlayOptions& options) {
             << options.duration_s << " s" << (options.simulated_time ? " of simulated time" : "")
             << "\n";
   auto watcher = std::make_shared<ParameterFileWatcher>(options.watch_params);
-  if (!options.watch_params.empty()) {
-    request.control = [watcher](haptic::Playback& playback) {
+  std::shared_ptr<KeypadTuning> keypad;
+  if (options.keys) {
+    if (options.simulated_time) throw UsageError("--keys needs real time (not --simulated-time)");
+    if (model.kind() != ModelKind::kSensory) {
+      throw UsageError("--keys tunes the sensory model's perceptual controls (--model sensory)");
+    }
+    keypad = std::make_shared<KeypadTuning>(model);
+  }
+  if (!options.watch_params.empty() || keypad) {
+    request.control = [watcher, keypad](haptic::Playback& playback) {
       watcher->poll(playback);
+      if (keypad) keypad->poll(playback);
       return true;
     };
   }
@@ -161,6 +206,9 @@ void add_play_command(CLI::App& app, Action& action) {
                    "the force down and stops")
       ->check(CLI::Range(0.5, 1000.0))
       ->capture_default_str();
+  play->add_flag("--keys", options->keys,
+                 "Live tuning from the keypad (stdin must be a terminal): + - heavier/lighter, "
+                 "u U unlatch, c C closing, s S smoothness, n N snap, r reset");
   play->add_option("--watch-params", options->watch_params,
                    "A parameter file to watch: whenever it changes (the viewer's tuning layout "
                    "saves it), its values are played from the next tick");
