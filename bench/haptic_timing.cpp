@@ -64,6 +64,9 @@ int run_realtime(double seconds, double rate_hz) {
   options.duration_s = seconds;
   options.loop.rate_hz = rate_hz;
   options.loop.safety.max_force = 100.0;
+  options.loop.safety.max_force_rate = 20000.0;
+  // A measurement of the timing: a late tick is counted (intervals over 5 ms), not tripped on.
+  options.loop.safety.max_tick_interval_s = 1.0;
   haptic::OpenedDevice opened =
       haptic::open_device(request, options.arc, model.geometry().handle_radius_m);
   const std::filesystem::path path =

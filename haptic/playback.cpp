@@ -1,5 +1,6 @@
 #include "haptic/playback.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -25,8 +26,17 @@ std::string PlaybackSummary::brief_report() const {
        << " parameter changes; " << clipped_ticks << " ticks clipped; " << records_dropped
        << " records dropped; safety " << to_string(final_state);
   if (!safety_events.empty()) {
+    // Each kind once, in order of first appearance, with its count.
     text << " (events:";
-    for (const std::string& event : safety_events) text << " " << event;
+    std::vector<std::string> kinds;
+    for (const std::string& event : safety_events) {
+      if (std::find(kinds.begin(), kinds.end(), event) == kinds.end()) kinds.push_back(event);
+    }
+    for (const std::string& kind : kinds) {
+      const auto count = std::count(safety_events.begin(), safety_events.end(), kind);
+      text << " " << kind;
+      if (count > 1) text << " x" << count;
+    }
     text << ")";
   }
   if (timing) text << "\ntiming: " << timing->brief_report();

@@ -3,6 +3,7 @@
 #include <pthread.h>
 #include <sched.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cmath>
 #include <cstring>
@@ -65,6 +66,12 @@ TimingStatistics RealTimeRunner::Histogram::statistics() const {
   return statistics;
 }
 
+std::uint64_t RealTimeRunner::Histogram::count_at_least(int microseconds) const {
+  std::uint64_t total = 0;
+  for (int bin = std::min(microseconds, kBins - 1); bin < kBins; ++bin) total += bins[bin];
+  return total;
+}
+
 std::string TimingReport::brief_report() const {
   std::ostringstream text;
   text.precision(4);
@@ -73,7 +80,8 @@ std::string TimingReport::brief_report() const {
        << "/" << interval.p99_us << "/" << interval.max_us << " µs; lateness p50/p99/max "
        << lateness.p50_us << "/" << lateness.p99_us << "/" << lateness.max_us
        << " µs; tick cost p50/p99/max " << tick_cost.p50_us << "/" << tick_cost.p99_us << "/"
-       << tick_cost.max_us << " µs; " << skipped_deadlines << " deadlines skipped";
+       << tick_cost.max_us << " µs; " << intervals_over_5ms << " intervals over 5 ms; "
+       << skipped_deadlines << " deadlines skipped";
   return text.str();
 }
 
@@ -178,6 +186,7 @@ TimingReport RealTimeRunner::report() const {
   report.lateness = lateness_->statistics();
   report.interval = interval_->statistics();
   report.tick_cost = cost_->statistics();
+  report.intervals_over_5ms = interval_->count_at_least(5000);
   report.fifo = fifo_;
   return report;
 }

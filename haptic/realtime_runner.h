@@ -44,6 +44,9 @@ struct TimingReport {
   TimingStatistics lateness;   // tick start − deadline
   TimingStatistics interval;   // between tick starts
   TimingStatistics tick_cost;  // time spent inside tick()
+  // Intervals between tick starts longer than 5 ms (what the safety layer's default
+  // max_tick_interval_s calls a missed deadline).
+  std::uint64_t intervals_over_5ms = 0;
   bool fifo = false;
   std::string brief_report() const;
 };
@@ -76,6 +79,7 @@ class RealTimeRunner {
     double max_us = 0.0, sum_us = 0.0;
     void add(double us) noexcept;
     TimingStatistics statistics() const;
+    std::uint64_t count_at_least(int microseconds) const;
   };
   void run() noexcept;
 
