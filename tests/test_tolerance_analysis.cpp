@@ -101,7 +101,9 @@ TEST_CASE("Tolerance Monte Carlo: wider tolerance, wider spread; the large one m
   WARN(mixed.brief_report());
   CHECK(mixed.failed == 0);
   CHECK(mixed.most_important[quantity("peak_unlatch_force_N")] == "F_l0");
-  CHECK(mixed.explained[quantity("peak_unlatch_force_N")][1] > 0.8);
+  const auto& unlatch = mixed.explained[quantity("peak_unlatch_force_N")];
+  CHECK(unlatch[1] > 0.6);  // measured 0.81 (the peak is not linear in F_l0 over ±40 %)
+  for (std::size_t p : {0u, 2u, 3u}) CHECK(unlatch[p] < unlatch[1] / 3);
   CHECK_THAT(mixed.brief_report(), Contains("F_l0"));
 }
 
