@@ -71,7 +71,7 @@ TEST_CASE("Tolerance Monte Carlo is the same for any thread count", "[tolerance]
   CHECK(doorbench::tolerance_analysis(door, spec, other).draws[0] != one.draws[0]);
 }
 
-TEST_CASE("Tolerance Monte Carlo: wider tolerance, wider spread; the large one matters most",
+TEST_CASE("Tolerance Monte Carlo: wider tolerance, wider spread, and the large one matters most",
           "[tolerance]") {
   const DoorModel door = doorbench::reference_model(ModelKind::kPhysical);
   auto only = [](std::vector<ParameterTolerance> list) { return ToleranceSpec{std::move(list)}; };
