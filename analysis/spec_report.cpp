@@ -264,6 +264,10 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
   root["tobe_sources"] = e.tobe_sources;
   root["feasible"] = design.feasible;
   root["infeasibility"] = design.infeasibility;
+  // When infeasible: the binding parameters as the data ask for them (bounds widened).
+  json requested = json::array();
+  for (const DesignParameter& p : design.requested) requested.push_back(parameter_json(p));
+  root["requested"] = requested;
   root["notes"] = design.notes;
   json parameters = json::array();
   for (const DesignParameter& p : best.parameters) parameters.push_back(parameter_json(p));

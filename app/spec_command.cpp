@@ -25,7 +25,7 @@ struct SpecCommandOptions {
   int samples = 1000;
   int threads = 0;
   unsigned long long seed = 1;
-  double regularization = 1.0;
+  double regularization = InverseDesignOptions{}.regularization;
   int starts = 3;
   bool no_pdf = false;
   bool no_tolerances = false;

@@ -97,6 +97,7 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
 
   const auto json = nlohmann::json::parse(read(files.json));
   CHECK(json["feasible"] == true);
+  CHECK(json["requested"].empty());
   CHECK(json["tobe_sources"][0] == "tobe <1>.h5");
   REQUIRE(json["parameters"].size() == static_cast<std::size_t>(asis.parameter_count()));
   const auto& f_l0 = json["parameters"][doorbench::physical::kFl0];
