@@ -21,6 +21,7 @@ packages=(
   libmodbus-dev               # Modbus sensors (sensors/modbus_source.h)
   python3-pymodbus python3-serial python3-serial-asyncio  # the Modbus test server (tests/modbus)
   socat                       # RTU tests over a pseudo-terminal pair
+  weasyprint                  # doorbench spec renders spec.html to spec.pdf
 )
 
 missing=()

@@ -1,0 +1,176 @@
+// doorbench spec: the design specification from TO-BE recordings and the AS-IS door —
+// inverse design, felt quantities before/after, the check, tolerances, spec.json/html/pdf.
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <thread>
+
+#include "analysis/inverse_design.h"
+#include "analysis/parameter_file.h"
+#include "analysis/spec_report.h"
+#include "analysis/tolerance_analysis.h"
+#include "app/commands.h"
+#include "app/fit_inputs.h"
+
+namespace doorbench::app {
+namespace {
+
+struct SpecCommandOptions {
+  std::vector<std::string> tobe_paths;
+  std::string asis_path;
+  std::string out_dir;
+  std::string fixed;  // empty: the inverse design's default fixed set
+  bool fixed_given = false;
+  std::string tolerances_path;
+  int samples = 1000;
+  int threads = 0;
+  unsigned long long seed = 1;
+  double regularization = InverseDesignOptions{}.regularization;
+  int starts = 3;
+  bool no_pdf = false;
+  bool no_tolerances = false;
+};
+
+std::vector<std::string> split_names(const std::string& list) {
+  std::vector<std::string> names;
+  std::size_t start = 0;
+  while (start < list.size()) {
+    const std::size_t comma = std::min(list.find(',', start), list.size());
+    if (comma > start) names.push_back(list.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return names;
+}
+
+std::string describe(const SpecCommandOptions& o) {
+  std::string text = "doorbench spec";
+  for (const std::string& path : o.tobe_paths) text += " " + path;
+  text += " --asis " + o.asis_path + " --out " + o.out_dir;
+  if (o.fixed_given) text += " --fixed " + (o.fixed.empty() ? std::string("''") : o.fixed);
+  if (!o.tolerances_path.empty()) text += " --tolerances " + o.tolerances_path;
+  text += " --samples " + std::to_string(o.samples) + " --seed " + std::to_string(o.seed);
+  return text;
+}
+
+void run_spec(const SpecCommandOptions& options) {
+  if (options.samples < 2) throw UsageError("--samples must be >= 2");
+  if (options.threads < 0) throw UsageError("--threads must be >= 0");
+  if (std::filesystem::exists(options.out_dir) && !std::filesystem::is_directory(options.out_dir)) {
+    throw UsageError("--out " + options.out_dir + " is a file, not a folder");
+  }
+  // ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
+  std::filesystem::path asis_file = options.asis_path;
+  if (std::filesystem::is_directory(asis_file)) asis_file /= "fitted-params.json";
+  if (!std::filesystem::exists(asis_file)) {
+    throw std::runtime_error(asis_file.string() +
+                             ": no such file (--asis takes a physical "
+                             "parameter file or a doorbench fit folder)");
+  }
+  const DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
+  std::cerr << "AS-IS door: " << asis_file.string() << "\n";
+
+  std::vector<PreparedData> tobe;
+  for (const std::string& path : options.tobe_paths) {
+    std::cerr << "preparing " << path << "\n";
+    tobe.push_back(load_prepared_data(path));
+  }
+  // Tolerances are read before the long fit, so that a bad file fails at once.
+  ToleranceSpec tolerances;
+  if (!options.tolerances_path.empty()) {
+    tolerances = parse_tolerance_file(read_text_file(options.tolerances_path),
+                                      options.tolerances_path, asis);
+  }
+
+  InverseDesignOptions design_options;
+  if (options.fixed_given) design_options.fixed = split_names(options.fixed);
+  design_options.regularization = options.regularization;
+  design_options.starts = options.starts;
+  if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
+  std::cerr << "inverse design: fitting the physical model to " << tobe.size()
+            << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
+  const InverseDesignResult design = inverse_design(asis, tobe, design_options);
+  if (design.solutions.empty()) throw std::runtime_error("inverse design found no solution");
+
+  SpecEvaluationOptions evaluation_options;
+  evaluation_options.run_tolerances = !options.no_tolerances;
+  evaluation_options.tolerances = tolerances;
+  evaluation_options.monte_carlo.samples = options.samples;
+  evaluation_options.monte_carlo.threads = options.threads;
+  evaluation_options.monte_carlo.seed = options.seed;
+  evaluation_options.monte_carlo.progress = [](int done, int total) {
+    std::cerr << "\rtolerance Monte Carlo: " << done << " / " << total << " samples"
+              << (done == total ? "\n" : "") << std::flush;
+  };
+  if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
+  std::cerr << "felt quantities and the check; tolerance analysis of " << options.samples
+            << " samples on "
+            << (options.threads > 0 ? options.threads
+                                    : static_cast<int>(std::thread::hardware_concurrency()))
+            << " thread(s)\n";
+  SpecEvaluation evaluation = evaluate_spec(asis, design, tobe, evaluation_options);
+  evaluation.command = describe(options);
+  evaluation.asis_source = asis_file.string();
+
+  std::filesystem::create_directories(options.out_dir);
+  const SpecReportFiles files =
+      write_spec_report(options.out_dir, design, evaluation, options.no_pdf ? "none" : "");
+  const std::filesystem::path params = std::filesystem::path(options.out_dir) / "tobe-params.json";
+  std::ofstream(params) << to_parameter_json(design.solutions.front().model);
+
+  std::cout << design.brief_report() << "\nfelt, AS-IS door:\n"
+            << evaluation.felt_before.brief_report() << "felt, TO-BE design:\n"
+            << evaluation.felt_after.brief_report()
+            << "check of the TO-BE design against the TO-BE recordings:\n"
+            << evaluation.check_after.brief_report();
+  if (evaluation.tolerances) {
+    std::cout << "tolerances:\n" << evaluation.tolerances->brief_report();
+  }
+  std::cout << "wrote " << files.json.string() << ", " << files.html.string() << ", "
+            << params.string() << "\n"
+            << files.pdf_note << "\n";
+}
+
+}  // namespace
+
+void add_spec_command(CLI::App& app, Action& action) {
+  auto options = std::make_shared<SpecCommandOptions>();
+  CLI::App* command = app.add_subcommand(
+      "spec",
+      "Design specification: the physical door that feels like the TO-BE recordings with the "
+      "smallest change to the AS-IS door, checked, with its tolerances (spec.json, spec.html, "
+      "spec.pdf when weasyprint is installed)");
+  command
+      ->add_option("TOBE_SESSIONS", options->tobe_paths,
+                   "TO-BE recordings (sessions or CSV), e.g. haptic playback sessions")
+      ->required()
+      ->check(CLI::ExistingFile);
+  command
+      ->add_option("--asis", options->asis_path,
+                   "AS-IS door: a physical parameter file or a `doorbench fit` folder")
+      ->required();
+  command->add_option("--out", options->out_dir, "folder for the report")->required();
+  command
+      ->add_option("--fixed", options->fixed,
+                   "comma-separated parameters kept at their AS-IS values (default: m_d, l_c, "
+                   "J_d and the modelling devices k_stop, c_stop, e, w_f)")
+      ->each([options](const std::string&) { options->fixed_given = true; });
+  command
+      ->add_option("--tolerances", options->tolerances_path,
+                   "tolerance file overriding the defaults (docs/design-spec.md)")
+      ->check(CLI::ExistingFile);
+  command->add_option("--samples", options->samples, "Monte Carlo samples")->capture_default_str();
+  command->add_option("--threads", options->threads, "threads for the Monte Carlo (0: all cores)")
+      ->capture_default_str();
+  command->add_option("--seed", options->seed, "Monte Carlo seed")->capture_default_str();
+  command
+      ->add_option("--lambda", options->regularization,
+                   "how strongly the smallest change is preferred")
+      ->capture_default_str();
+  command->add_option("--starts", options->starts, "inverse fits from different starts")
+      ->capture_default_str();
+  command->add_flag("--no-pdf", options->no_pdf, "do not render spec.pdf");
+  command->add_flag("--no-tolerances", options->no_tolerances, "skip the tolerance analysis");
+  command->callback([options, &action] { action = [options] { run_spec(*options); }; });
+}
+
+}  // namespace doorbench::app
