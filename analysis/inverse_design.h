@@ -1,0 +1,135 @@
+#pragma once
+// The inverse design fit (issue 9, docs/inverse-design.md): which physical door produces
+// the TO-BE feel, recorded by haptic playback, with the smallest change to the AS-IS door.
+//
+//   doorbench::InverseDesignOptions options;      // default costs of change, λ, fixed set
+//   doorbench::InverseDesignResult result =
+//       doorbench::inverse_design(asis_physical_model, {tobe_prepared}, options);
+//   std::cout << result.brief_report();
+//   result.solutions.front().model;               // the smallest change that fits
+//
+// The method: the physical model is fitted to the TO-BE strokes with fit_model's
+// machinery (multiple shooting on windows), plus one prior residual per free parameter
+// pulling it toward its AS-IS value,
+//   r_i = sqrt(λ · w_i) · (p_i − p_asis_i) / s_i,
+// with w_i the parameter's cost of change and s_i its scale: the width of its bounds
+// (upper − lower). With λ = 0 the fit is the plain fit of the TO-BE data; the larger λ,
+// the more a change must be paid for by a better fit before it is made. The residuals of
+// the data are in units of their noise (σ_ω, σ_θ), so λ·w_i compares a change of one
+// bound width with one noise-level of error on one sample.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "analysis/door_model.h"
+#include "analysis/fitting.h"
+#include "analysis/strokes.h"
+
+namespace doorbench {
+
+// The default cost of changing each physical parameter (relative weights w_i; 1 is a
+// cheap change). Cheap: the spring preload F0 and the anchor A_x/A_y (a screw, a hole),
+// friction (lubricant, bushing): T_h, b_h, mu_g, mu_l; the latch's catch spring k_l and
+// preload F_l0 (a spring part); the seal's stiffness k_seal. Moderate: the spring rate k_s
+// and free length L0, the lever point B_u/B_v, the seal's extent theta_seal. Expensive:
+// the latch's geometry r_l, h, alpha_o, alpha_c (new tooling); the door's mass m_d, l_c,
+// J_d (a new door). A parameter not in the map costs 1.
+std::map<std::string, double> default_costs_of_change();
+
+// The parameters the engineering fixes by default: m_d, l_c, J_d (known from CAD), and
+// k_stop, c_stop, e, w_f (end stops and smoothing lengths: modelling devices, not design
+// parameters).
+std::vector<std::string> default_fixed_design_parameters();
+
+struct InverseDesignOptions {
+  // Parameters kept exactly at their AS-IS values. Empty is allowed (every parameter of
+  // fit.free_parameters, or of the default free set, is free); the default set is
+  // default_fixed_design_parameters().
+  std::vector<std::string> fixed = default_fixed_design_parameters();
+  // Cost of change per parameter (w_i ≥ 0); missing parameters take 1; 0 makes a change
+  // free.
+  std::map<std::string, double> weights = default_costs_of_change();
+  // λ: how strongly the smallest change is preferred (see above). ≥ 0.
+  double regularization = 1.0;
+  // Fits in all: one from AS-IS, the others from starts perturbed along the directions the
+  // data determine least (eigenvectors of the information matrix's smallest eigenvalues),
+  // to find distinct designs that fit equally well. ≥ 1.
+  int starts = 3;
+  double perturbation = 0.15;  // the perturbed starts' step, in scaled units (bound widths)
+  // Two solutions are distinct when some free parameter differs by more than this, in
+  // scaled units (fraction of the bound width). > 0.
+  double distinct_threshold = 0.02;
+  // A solution is kept when its data cost is within this fraction of the best one's
+  // (the data cannot tell them apart). ≥ 0.
+  double equivalent_cost_tolerance = 0.05;
+  // Infeasible: the best solution has a parameter on a bound and its window RMSE of ω is
+  // above this many times the data's rate noise. > 1.
+  double infeasible_noise_factor = 1.5;
+  // The fit's options (windows, solver, uncertainties). Its free_parameters are the
+  // candidates (empty: the default free set); fixed_parameters are added to `fixed`.
+  // Cross-validation is off by default here (it refits per fold, per start).
+  FitOptions fit = default_fit_options();
+
+  static FitOptions default_fit_options();
+  // Empty when usable, else a one-line message naming the option.
+  std::string validate() const;
+};
+
+struct DesignParameter {
+  std::string name;
+  std::string unit;
+  bool free = false;
+  double as_is = 0.0;
+  double to_be = 0.0;
+  double change = 0.0;           // to_be − as_is
+  double relative_change = 0.0;  // change / |as_is| (NaN when as_is is 0)
+  double uncertainty = 0.0;      // the fit's standard uncertainty of to_be (NaN when fixed)
+  double weight = 0.0;           // its cost of change
+  Bounds bounds;
+  bool at_bound = false;
+};
+
+struct DesignSolution {
+  DoorModel model;                          // the TO-BE physical door (checked)
+  std::vector<DesignParameter> parameters;  // every parameter, in the model's order
+  // Fit of the TO-BE data by this model (the data part only, without the priors).
+  FitMetrics fit;
+  double data_cost = 0.0;   // ½ Σ r² of the data residuals
+  double prior_cost = 0.0;  // ½ Σ r² of the prior residuals
+  // √(Σ w_i ((p_i − p_asis_i)/s_i)²): the weighted size of the change.
+  double size_of_change = 0.0;
+  int start_index = 0;  // which start found it (0: from AS-IS)
+  bool converged = false;
+  std::vector<std::string> at_bound;  // free parameters on a bound
+  FitSummary summary;                 // the underlying fit's summary
+};
+
+struct InverseDesignResult {
+  // Distinct solutions that fit the TO-BE data equally well, smallest size_of_change first.
+  std::vector<DesignSolution> solutions;
+  bool feasible = true;
+  // When infeasible: which parameters bind at which bound and which way the data pushed
+  // them; the first solution is then the nearest feasible design.
+  std::string infeasibility;
+  double rate_noise_rad_s = 0.0;  // the TO-BE data's σ_ω
+  int starts_run = 0;
+  double total_time_s = 0.0;
+  std::vector<std::string> notes;
+
+  std::string brief_report() const;  // a few lines: feasible?, biggest changes
+  std::string full_report() const;   // every solution, every parameter, the fit metrics
+};
+
+// Merges several prepared recordings into one (strokes renumbered so that ids stay unique,
+// noise levels the largest of theirs). Throws std::invalid_argument when their handle
+// radii differ (naming the sources) or `data` is empty.
+PreparedData merge_prepared(const std::vector<PreparedData>& data);
+
+// `asis` must be a physical model (its values are the AS-IS design and the start, its
+// bounds the feasible range). Throws std::invalid_argument for a sensory model, an empty
+// `tobe`, unusable options (the validate() message), unknown parameter names in fixed or
+// weights, or TO-BE data whose handle radius differs from the model's.
+InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<PreparedData>& tobe,
+                                   const InverseDesignOptions& options = {});
+
+}  // namespace doorbench
