@@ -49,8 +49,10 @@ struct InverseDesignOptions {
   // Cost of change per parameter (w_i ≥ 0); missing parameters take 1; 0 makes a change
   // free.
   std::map<std::string, double> weights = default_costs_of_change();
-  // λ: how strongly the smallest change is preferred (see above). ≥ 0.
-  double regularization = 1.0;
+  // λ: how strongly the smallest change is preferred (see above). ≥ 0. The default makes a
+  // change by a whole bound width of a cheap parameter cost as much as 1000 samples missed
+  // by one noise level; docs/inverse-design.md shows what it does on synthetic data.
+  double regularization = 1000.0;
   // Fits in all: one from AS-IS, the others from starts perturbed along the directions the
   // data determine least (eigenvectors of the information matrix's smallest eigenvalues),
   // to find distinct designs that fit equally well. ≥ 1.
@@ -59,12 +61,16 @@ struct InverseDesignOptions {
   // Two solutions are distinct when some free parameter differs by more than this, in
   // scaled units (fraction of the bound width). > 0.
   double distinct_threshold = 0.02;
-  // A solution is kept when its data cost is within this fraction of the best one's
-  // (the data cannot tell them apart). ≥ 0.
+  // A solution is kept when its data cost (½ Σ r² of the data residuals, the fit's
+  // objective without the priors) is within this fraction of the best one's (the data
+  // cannot tell them apart). ≥ 0.
   double equivalent_cost_tolerance = 0.05;
-  // Infeasible: the best solution has a parameter on a bound and its window RMSE of ω is
-  // above this many times the data's rate noise. > 1.
-  double infeasible_noise_factor = 1.5;
+  // Feasibility check: when the best solution holds free parameters on a bound, the fit is
+  // repeated with those bounds moved outward by this many bound widths (not below 0 for a
+  // parameter whose lower bound is ≥ 0). The request is infeasible when that fit misses
+  // the data clearly better (data cost lower by more than equivalent_cost_tolerance):
+  // the data ask for more than the bounds allow. > 0.
+  double bound_widening = 1.0;
   // The fit's options (windows, solver, uncertainties). Its free_parameters are the
   // candidates (empty: the default free set); fixed_parameters are added to `fixed`.
   // Cross-validation is off by default here (it refits per fold, per start).
@@ -108,10 +114,15 @@ struct InverseDesignResult {
   // Distinct solutions that fit the TO-BE data equally well, smallest size_of_change first.
   std::vector<DesignSolution> solutions;
   bool feasible = true;
-  // When infeasible: which parameters bind at which bound and which way the data pushed
-  // them; the first solution is then the nearest feasible design.
+  // When infeasible: which parameters bind at which bound and what the data asked for
+  // (the fit with widened bounds); the first solution is then the nearest feasible design.
   std::string infeasibility;
-  double rate_noise_rad_s = 0.0;  // the TO-BE data's σ_ω
+  // The binding parameters as the fit with widened bounds has them (to_be: what the data
+  // ask for); empty when no bound binds.
+  std::vector<DesignParameter> requested;
+  double requested_rmse_rad_s = 0.0;  // that fit's window RMSE of ω (0 when not run)
+  double requested_data_cost = 0.0;   // and its data cost
+  double rate_noise_rad_s = 0.0;      // the TO-BE data's σ_ω
   int starts_run = 0;
   double total_time_s = 0.0;
   std::vector<std::string> notes;
