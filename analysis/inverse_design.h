@@ -67,7 +67,7 @@ struct InverseDesignOptions {
   double equivalent_cost_tolerance = 0.05;
   // Feasibility check: when the best solution holds free parameters on a bound, the fit is
   // repeated with those bounds moved outward by this many bound widths (not below 0 for a
-  // parameter whose lower bound is ≥ 0). The request is infeasible when that fit misses
+  // parameter whose lower bound is ≥ 0). The request is infeasible when that fit fits
   // the data clearly better (data cost lower by more than equivalent_cost_tolerance):
   // the data ask for more than the bounds allow. > 0.
   double bound_widening = 1.0;
