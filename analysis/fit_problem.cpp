@@ -242,6 +242,32 @@ void add_free_block(ceres::Problem& problem, double* x, const DoorModel& model,
   }
 }
 
+// The priors as one residual block on x: r_i = (x_k − c_i) / s_i (linear).
+class PriorCost final : public ceres::CostFunction {
+ public:
+  PriorCost(std::vector<PriorResidual> priors, int free_count) : priors_(std::move(priors)) {
+    set_num_residuals(static_cast<int>(priors_.size()));
+    mutable_parameter_block_sizes()->push_back(free_count);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const int p = parameter_block_sizes()[0];
+    for (std::size_t i = 0; i < priors_.size(); ++i) {
+      const PriorResidual& prior = priors_[i];
+      residuals[i] = (parameters[0][prior.free_position] - prior.center_x) / prior.sigma_x;
+      if (jacobians != nullptr && jacobians[0] != nullptr) {
+        double* row = jacobians[0] + i * static_cast<std::size_t>(p);
+        std::fill(row, row + p, 0.0);
+        row[prior.free_position] = 1.0 / prior.sigma_x;
+      }
+    }
+    return true;
+  }
+
+ private:
+  std::vector<PriorResidual> priors_;
+};
+
 ceres::Solver::Options solver_options(const FitOptions& options, int max_iterations) {
   ceres::Solver::Options solver;
   solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
@@ -494,6 +520,10 @@ WindowProblem::WindowProblem(const DoorModel& model, const PreparedData& data,
       preparer_->add(cost, {x_.data()});
     }
   }
+  priors_ = weights.priors;
+  if (!priors_.empty()) {
+    problem_->AddResidualBlock(new PriorCost(priors_, map_.free_count()), nullptr, x_.data());
+  }
 }
 
 WindowProblem::~WindowProblem() = default;
@@ -575,6 +605,15 @@ bool WindowProblem::reduce(bool cached_only, ReducedSystem& out) const {
     out.window_scores.push_back(std::move(score));
     out.sum_of_squares += r.squaredNorm();
     out.residuals += count;
+  }
+  for (const PriorResidual& prior : priors_) {
+    const int k = prior.free_position;
+    const double r = (x_[k] - prior.center_x) / prior.sigma_x;
+    const double a = 1.0 / prior.sigma_x;
+    out.information(k, k) += a * a;
+    out.gradient(k) += a * r;
+    out.sum_of_squares += r * r;
+    out.residuals += 1;
   }
   return true;
 }

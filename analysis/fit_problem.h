@@ -23,10 +23,19 @@ namespace doorbench {
 
 struct FitOptions;
 
+// A prior on one free parameter in solver units: the residual (x_k − center_x) / sigma_x.
+struct PriorResidual {
+  int free_position = 0;  // k, the position in x
+  double center_x = 0.0;
+  double sigma_x = 1.0;
+};
+
 struct FitWeights {
   double rate_noise_rad_s = 1.0;  // σ_ω
   double angle_noise_rad = 1.0;   // σ_θ
   bool angle_residuals = true;
+  // FitOptions::priors on free parameters (none: the problem is exactly the plain fit's).
+  std::vector<PriorResidual> priors;
 };
 
 // How a window problem is posed.
@@ -115,7 +124,8 @@ class WindowProblem {
   };
   Outcome solve(const FitOptions& options, int max_iterations, double uncertainty_tolerance);
 
-  // The reduced system at the current x and z; from the Jacobians the solver last computed
+  // The reduced system at the current x and z (the priors' residuals included in H, g and
+  // Σ r², as observations outside every window); from the Jacobians the solver last computed
   // when they were taken here, else evaluated now (unless cached_only). False when a
   // window cannot be evaluated (or, with cached_only, is not cached here).
   bool reduce(bool cached_only, ReducedSystem& out) const;
@@ -135,7 +145,8 @@ class WindowProblem {
   std::unique_ptr<EvaluationPreparer> preparer_;
   WindowResidualSetup setup_;
   std::vector<FitWindow> windows_;
-  std::vector<CachingCost*> costs_;          // owned by the problem
+  std::vector<CachingCost*> costs_;  // owned by the problem
+  std::vector<PriorResidual> priors_;
   std::unique_ptr<ceres::Problem> problem_;  // last: destroyed first
 };
 

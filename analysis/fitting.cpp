@@ -58,6 +58,12 @@ std::string FitOptions::validate() const {
   if (!finite_positive(undetermined_relative_uncertainty)) {
     return "fit undetermined_relative_uncertainty must be > 0";
   }
+  for (const ParameterPrior& prior : priors) {
+    if (!std::isfinite(prior.center) || !finite_positive(prior.sigma)) {
+      return "fit priors: the prior on '" + prior.parameter +
+             "' needs a finite center and a sigma > 0";
+    }
+  }
   return "";
 }
 
@@ -379,7 +385,7 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   summary.source = data.source;
   summary.options = options;
   summary.strokes = data.strokes.size();
-  const FitWeights weights = resolve_weights(options, data, summary.notes);
+  FitWeights weights = resolve_weights(options, data, summary.notes);
   summary.rate_noise_rad_s = weights.rate_noise_rad_s;
   summary.angle_noise_rad = weights.angle_noise_rad;
 
@@ -418,6 +424,14 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   for (int index : free_index) map.scale.push_back(parameter_scale(values[index], bounds[index]));
   summary.free_parameters = map.free_count();
   for (int index : free_index) summary.free_names.push_back(start.parameter_name(index));
+  for (const ParameterPrior& prior : options.priors) {
+    const int index = find_or_throw(start, prior.parameter, "priors");
+    const auto position = std::find(free_index.begin(), free_index.end(), index);
+    if (position == free_index.end()) continue;
+    const std::size_t k = static_cast<std::size_t>(position - free_index.begin());
+    weights.priors.push_back(
+        {static_cast<int>(k), prior.center / map.scale[k], prior.sigma / map.scale[k]});
+  }
 
   // The window problem (built first: it tells whether there is enough data).
   const Clock::time_point solve_began = Clock::now();

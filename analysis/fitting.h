@@ -31,6 +31,15 @@ namespace doorbench {
 inline constexpr double kBenchRateNoise_rad_s = 0.05 * 3.14159265358979323846 / 180.0;
 inline constexpr double kBenchAngleNoise_rad = 0.01 * 3.14159265358979323846 / 180.0;
 
+// A Gaussian prior on one parameter: the residual (value − center) / sigma joins the data's
+// (which are in units of their noise). The inverse design (analysis/inverse_design.h) uses
+// them to pull each parameter toward the AS-IS door.
+struct ParameterPrior {
+  std::string parameter;  // its name ("F0", "stribeck.d_s")
+  double center = 0.0;    // in the parameter's unit
+  double sigma = 1.0;     // > 0, in the parameter's unit
+};
+
 struct FitOptions {
   // --- Windows (multiple shooting) ---
   double window_s = 0.2;        // each window's length on the recording's clock
@@ -58,6 +67,10 @@ struct FitOptions {
   // Fit the equation of motion sample by sample first (analysis/fit_equation_error.h) and
   // start the windows from its result.
   bool equation_error_start = true;
+  // Priors on free parameters (those on fixed parameters are ignored). They act in the
+  // window fit and its statistics, not in the equation-error stage (only a start). None:
+  // the fit is exactly the plain one.
+  std::vector<ParameterPrior> priors;
 
   // --- Objective ---
   enum class Objective {

@@ -1,0 +1,552 @@
+#include "analysis/inverse_design.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <set>
+#include <stdexcept>
+
+#include "analysis/constraint_check.h"
+#include "analysis/fit_problem.h"
+#include "analysis/text_format.h"
+
+namespace doorbench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A best fit missing the data by more than this many rate-noise levels gets a note.
+constexpr double kMissedFeelFactor = 10.0;
+// A perturbed start that breaks a constraint is retried this many times at half the step.
+constexpr int kStartShrinks = 4;
+
+bool finite_positive(double value) {
+  return std::isfinite(value) && value > 0;
+}
+
+// s_i: the width of the parameter's bounds; its AS-IS magnitude (or 1) when the bounds
+// have no usable width.
+double change_scale(double as_is, const Bounds& bounds) {
+  const double width = bounds.upper - bounds.lower;
+  if (std::isfinite(width) && width > 0) return width;
+  return std::abs(as_is) > 0 ? std::abs(as_is) : 1.0;
+}
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+int find_or_throw(const DoorModel& model, const std::string& name, const char* option) {
+  const std::optional<int> index = model.find_parameter(name);
+  if (!index) {
+    throw std::invalid_argument(std::string("inverse design: ").append(option) + " names '" + name +
+                                "', which the physical model does not have");
+  }
+  return *index;
+}
+
+bool on_bound(double value, const Bounds& bounds) {
+  const double width = bounds.upper - bounds.lower;
+  return std::abs(value - bounds.lower) <= 1e-6 * width ||
+         std::abs(bounds.upper - value) <= 1e-6 * width;
+}
+
+}  // namespace
+
+std::map<std::string, double> default_costs_of_change() {
+  return {
+      // Cheap: adjustments, lubricant, a spring part.
+      {"F0", 1.0},
+      {"A_x", 1.0},
+      {"A_y", 1.0},
+      {"T_h", 1.0},
+      {"b_h", 1.0},
+      {"mu_g", 1.0},
+      {"mu_l", 1.0},
+      {"k_l", 1.0},
+      {"F_l0", 1.0},
+      {"k_seal", 1.0},
+      // Moderate: another spring, a changed bracket or seal profile.
+      {"k_s", 3.0},
+      {"L0", 3.0},
+      {"B_u", 3.0},
+      {"B_v", 3.0},
+      {"theta_seal", 3.0},
+      // Expensive: new latch tooling, a new door.
+      {"r_l", 10.0},
+      {"h", 10.0},
+      {"alpha_o", 10.0},
+      {"alpha_c", 10.0},
+      {"m_d", 30.0},
+      {"l_c", 30.0},
+      {"J_d", 30.0},
+  };
+}
+
+std::vector<std::string> default_fixed_design_parameters() {
+  return {"m_d", "l_c", "J_d", "k_stop", "c_stop", "e", "w_f"};
+}
+
+FitOptions InverseDesignOptions::default_fit_options() {
+  FitOptions fit;
+  fit.cross_validation_folds = 0;
+  return fit;
+}
+
+std::string InverseDesignOptions::validate() const {
+  if (!std::isfinite(regularization) || regularization < 0) {
+    return "inverse design regularization must be >= 0";
+  }
+  if (starts < 1 || starts > 32) return "inverse design starts must be between 1 and 32";
+  if (!finite_positive(perturbation)) return "inverse design perturbation must be > 0";
+  if (!finite_positive(distinct_threshold)) {
+    return "inverse design distinct_threshold must be > 0";
+  }
+  if (!std::isfinite(equivalent_cost_tolerance) || equivalent_cost_tolerance < 0) {
+    return "inverse design equivalent_cost_tolerance must be >= 0";
+  }
+  if (!finite_positive(bound_widening)) return "inverse design bound_widening must be > 0";
+  for (const auto& [name, weight] : weights) {
+    if (!std::isfinite(weight) || weight < 0) {
+      return "inverse design weights: the cost of change of '" + name + "' must be >= 0";
+    }
+  }
+  if (!fit.priors.empty()) {
+    return "inverse design fit.priors must be empty (the priors are the AS-IS design's)";
+  }
+  if (fit.objective != FitOptions::Objective::kWindows) {
+    return "inverse design fit.objective must be the window objective";
+  }
+  return fit.validate();
+}
+
+PreparedData merge_prepared(const std::vector<PreparedData>& data) {
+  if (data.empty()) throw std::invalid_argument("inverse design: no TO-BE data");
+  if (data.size() == 1) return data.front();
+  PreparedData merged;
+  const PreparedData* radius_source = nullptr;
+  for (const PreparedData& part : data) {
+    if (part.handle_radius_m > 0) {
+      if (radius_source == nullptr) {
+        radius_source = &part;
+      } else if (std::abs(part.handle_radius_m - radius_source->handle_radius_m) >
+                 1e-6 * radius_source->handle_radius_m) {
+        throw std::invalid_argument(
+            "inverse design: the TO-BE recordings' handle radii differ: '" + radius_source->source +
+            "' has " + format_number(radius_source->handle_radius_m) + " m, '" + part.source +
+            "' has " + format_number(part.handle_radius_m) + " m");
+      }
+    }
+    merged.source += (merged.source.empty() ? "" : " + ") + part.source;
+    merged.sample_rate_hz = std::max(merged.sample_rate_hz, part.sample_rate_hz);
+    merged.angle_noise_rad = std::max(merged.angle_noise_rad, part.angle_noise_rad);
+    merged.rate_noise_rad_s = std::max(merged.rate_noise_rad_s, part.rate_noise_rad_s);
+    for (const Stroke& stroke : part.strokes) {
+      merged.strokes.push_back(stroke);
+      merged.strokes.back().id = static_cast<int>(merged.strokes.size());  // unique ids
+    }
+    for (const ExcludedSegment& segment : part.excluded) merged.excluded.push_back(segment);
+    for (const std::string& note : part.notes) merged.notes.push_back(part.source + ": " + note);
+  }
+  if (radius_source != nullptr) {
+    merged.handle_radius_m = radius_source->handle_radius_m;
+    merged.geometry_calibration_id = radius_source->geometry_calibration_id;
+  }
+  merged.angle_source = data.front().angle_source;
+  merged.notes.push_back(std::to_string(data.size()) +
+                         " recordings merged; strokes renumbered 1.." +
+                         std::to_string(merged.strokes.size()) + " in order");
+  return merged;
+}
+
+namespace {
+
+struct Setup {
+  std::vector<int> free_index;  // model order
+  std::vector<double> as_is;    // every parameter
+  std::vector<double> scale;    // s_i, every parameter
+  std::vector<double> weight;   // w_i, every parameter
+};
+
+DesignSolution make_solution(const FitResult& fit, const DoorModel& asis, const Setup& setup,
+                             double lambda, int start_index) {
+  DesignSolution solution{fit.model, {},          fit.summary.fitted,    0.0, 0.0,
+                          0.0,       start_index, fit.summary.converged, {},  fit.summary};
+  const auto values = fit.model.parameter_values();
+  const auto bounds = asis.parameter_bounds();
+  double weighted = 0.0;
+  for (int i = 0; i < asis.parameter_count(); ++i) {
+    DesignParameter parameter;
+    parameter.name = asis.parameter_name(i);
+    parameter.unit = std::string(asis.parameter_unit(i));
+    parameter.free =
+        std::find(setup.free_index.begin(), setup.free_index.end(), i) != setup.free_index.end();
+    parameter.as_is = setup.as_is[i];
+    parameter.to_be = values[i];
+    parameter.change = parameter.to_be - parameter.as_is;
+    parameter.relative_change =
+        parameter.as_is != 0 ? parameter.change / std::abs(parameter.as_is) : kNaN;
+    parameter.uncertainty = parameter.free ? fit.summary.parameters[i].uncertainty : kNaN;
+    parameter.weight = setup.weight[i];
+    parameter.bounds = bounds[i];
+    parameter.at_bound = parameter.free && on_bound(parameter.to_be, bounds[i]);
+    if (parameter.at_bound) solution.at_bound.push_back(parameter.name);
+    const double scaled = parameter.change / setup.scale[i];
+    weighted += parameter.weight * scaled * scaled;
+    if (parameter.free) solution.prior_cost += 0.5 * lambda * parameter.weight * scaled * scaled;
+    solution.parameters.push_back(std::move(parameter));
+  }
+  solution.size_of_change = std::sqrt(weighted);
+  solution.data_cost = std::max(0.0, fit.summary.final_cost - solution.prior_cost);
+  return solution;
+}
+
+// The directions the data determines least, in scaled units (s_i), most poorly first: the
+// eigenvectors of the information matrix H (window states eliminated, the priors
+// included) with the smallest eigenvalues, at `model`. H itself rather than the fit's
+// covariance: a pseudo-inverse would hide exactly the directions the data cannot see.
+std::vector<Eigen::VectorXd> weak_directions(const DoorModel& model, const PreparedData& data,
+                                             const FitOptions& fit, const FitSummary& summary,
+                                             const Setup& setup, int count) {
+  if (count <= 0) return {};
+  ParameterMap map;
+  map.base_values.assign(model.parameter_values().begin(), model.parameter_values().end());
+  map.free_index = setup.free_index;
+  for (int index : setup.free_index) map.scale.push_back(setup.scale[index]);
+  ProblemKind kind;
+  kind.windows = metric_window_options(fit, model);
+  kind.windows.disjoint = fit.estimate_window_states;
+  kind.estimate_start_states = fit.estimate_window_states;
+  FitWeights weights;
+  weights.rate_noise_rad_s = summary.rate_noise_rad_s;
+  weights.angle_noise_rad = summary.angle_noise_rad;
+  weights.angle_residuals = fit.angle_residuals;
+  for (const ParameterPrior& prior : fit.priors) {
+    const int index = *model.find_parameter(prior.parameter);
+    const auto position = std::find(setup.free_index.begin(), setup.free_index.end(), index);
+    if (position == setup.free_index.end()) continue;
+    weights.priors.push_back({static_cast<int>(position - setup.free_index.begin()),
+                              prior.center / setup.scale[index], prior.sigma / setup.scale[index]});
+  }
+  WindowProblem problem(model, data, map, kind, weights, map.scaled(map.base_values));
+  ReducedSystem system;
+  if (!problem.reduce(/*cached_only=*/false, system)) return {};
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(system.information);
+  if (eigen.info() != Eigen::Success) return {};
+  std::vector<Eigen::VectorXd> directions;
+  const int p = static_cast<int>(system.information.rows());
+  for (int j = 0; j < p && static_cast<int>(directions.size()) < count; ++j) {
+    directions.push_back(eigen.eigenvectors().col(j).normalized());  // ascending eigenvalues
+  }
+  return directions;
+}
+
+// The largest difference between two solutions' free parameters, in scaled units.
+double scaled_distance(const DesignSolution& a, const DesignSolution& b, const Setup& setup) {
+  double largest = 0.0;
+  for (int index : setup.free_index) {
+    largest = std::max(largest, std::abs(a.parameters[index].to_be - b.parameters[index].to_be) /
+                                    setup.scale[index]);
+  }
+  return largest;
+}
+
+// Refits with the bounds on which `best` holds parameters moved outward by
+// options.bound_widening widths and decides feasibility (see InverseDesignOptions).
+void check_bounds(const DoorModel& asis, const PreparedData& data, const FitOptions& fit,
+                  const InverseDesignOptions& options, const Setup& setup, double lambda,
+                  const DesignSolution& best, InverseDesignResult& result) {
+  const int base = asis.base_parameter_count();
+  // From AS-IS, with the equation-error stage: from `best` the fit tends to stay in the
+  // valley the bound pushed it into (the latch's shape parameters making up for k_l).
+  std::vector<double> values(asis.parameter_values().begin(),
+                             asis.parameter_values().begin() + base);
+  std::vector<Bounds> bounds(asis.parameter_bounds().begin(),
+                             asis.parameter_bounds().begin() + base);
+  std::vector<int> binding;
+  for (int i = 0; i < asis.parameter_count(); ++i) {
+    const DesignParameter& parameter = best.parameters[i];
+    if (!parameter.at_bound) continue;
+    binding.push_back(i);
+    if (i >= base) continue;  // effect parameters keep their bounds
+    const double width = parameter.bounds.upper - parameter.bounds.lower;
+    const bool upper = std::abs(parameter.bounds.upper - parameter.to_be) <=
+                       std::abs(parameter.to_be - parameter.bounds.lower);
+    if (upper) {
+      bounds[i].upper += options.bound_widening * width;
+    } else {
+      const double lower = bounds[i].lower - options.bound_widening * width;
+      bounds[i].lower = bounds[i].lower >= 0 ? std::max(0.0, lower) : lower;
+    }
+  }
+  FitResult widened_fit = [&] {
+    const DoorModel widened(
+        ModelKind::kPhysical, asis.geometry(), values, bounds,
+        std::vector<EffectSetting>(asis.effects().begin(), asis.effects().end()));
+    return fit_model(widened, data, fit);
+  }();
+  const DesignSolution widened = make_solution(widened_fit, asis, setup, lambda, -1);
+  const double best_rmse = best.fit.window.rmse();
+  result.requested_rmse_rad_s = widened.fit.window.rmse();
+  result.requested_data_cost = widened.data_cost;
+  std::string binding_text;
+  for (int i : binding) {
+    DesignParameter requested = widened.parameters[i];
+    requested.bounds = i < base ? bounds[i] : best.parameters[i].bounds;
+    requested.at_bound = on_bound(requested.to_be, requested.bounds);
+    const DesignParameter& held = best.parameters[i];
+    const bool upper =
+        std::abs(held.bounds.upper - held.to_be) <= std::abs(held.to_be - held.bounds.lower);
+    binding_text += (binding_text.empty() ? "" : "; ") + held.name + " held at its " +
+                    (upper ? "upper" : "lower") + " bound " + format_number(held.to_be) + " " +
+                    held.unit + " (AS-IS " + format_number(held.as_is) + "); the data ask for " +
+                    (requested.at_bound ? (upper ? "at least " : "at most ") : "") +
+                    printf_text("%.5g", requested.to_be) + " " + held.unit;
+    result.requested.push_back(std::move(requested));
+  }
+  if (widened.data_cost < best.data_cost / (1.0 + options.equivalent_cost_tolerance)) {
+    result.feasible = false;
+    result.infeasibility =
+        binding_text +
+        printf_text(
+            ". Within the bounds the data cost is %.5g (window RMSE of omega %.4g rad/s), "
+            "beyond them %.5g (%.4g rad/s): the TO-BE feel lies outside the bounds; the "
+            "first solution is the nearest feasible design.",
+            best.data_cost, best_rmse, widened.data_cost, result.requested_rmse_rad_s);
+  } else {
+    result.notes.push_back(
+        binding_text + printf_text(" (beyond the bounds the fit is not clearly better: data cost "
+                                   "%.5g against %.5g; feasible)",
+                                   widened.data_cost, best.data_cost));
+  }
+}
+
+}  // namespace
+
+InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<PreparedData>& tobe,
+                                   const InverseDesignOptions& options) {
+  const auto began = std::chrono::steady_clock::now();
+  if (asis.kind() != ModelKind::kPhysical) {
+    throw std::invalid_argument(
+        "inverse design: the AS-IS model must be the physical model (its parameters are the "
+        "design), not the sensory one");
+  }
+  if (tobe.empty()) throw std::invalid_argument("inverse design: no TO-BE data");
+  if (const std::string message = options.validate(); !message.empty()) {
+    throw std::invalid_argument(message);
+  }
+  const PreparedData data = merge_prepared(tobe);
+  const double radius = asis.geometry().handle_radius_m;
+  if (data.handle_radius_m > 0 && std::abs(data.handle_radius_m - radius) > 1e-6 * radius) {
+    throw std::invalid_argument(
+        "inverse design: the TO-BE data's handle radius (" + format_number(data.handle_radius_m) +
+        " m) differs from the AS-IS model's (" + format_number(radius) + " m)");
+  }
+
+  // The free set: the fit's candidates less the fixed parameters.
+  const int n = asis.parameter_count();
+  std::vector<char> free(n, 0);
+  const std::vector<std::string> candidates = options.fit.free_parameters.empty()
+                                                  ? default_free_parameters(asis)
+                                                  : options.fit.free_parameters;
+  for (const std::string& name : candidates) {
+    free[find_or_throw(asis, name, "fit.free_parameters")] = 1;
+  }
+  FitOptions fit = options.fit;
+  for (const std::string& name : options.fixed) {
+    free[find_or_throw(asis, name, "fixed")] = 0;
+    fit.fixed_parameters.push_back(name);
+  }
+  for (const std::string& name : options.fit.fixed_parameters) {
+    free[find_or_throw(asis, name, "fit.fixed_parameters")] = 0;
+  }
+  Setup setup;
+  setup.as_is.assign(asis.parameter_values().begin(), asis.parameter_values().end());
+  const auto bounds = asis.parameter_bounds();
+  for (int i = 0; i < n; ++i) {
+    if (free[i]) setup.free_index.push_back(i);
+    setup.scale.push_back(change_scale(setup.as_is[i], bounds[i]));
+    setup.weight.push_back(1.0);
+  }
+  if (setup.free_index.empty()) {
+    throw std::invalid_argument("inverse design: every parameter is fixed; nothing to design");
+  }
+  for (const auto& [name, weight] : options.weights) {
+    setup.weight[find_or_throw(asis, name, "weights")] = weight;
+  }
+  // r_i = sqrt(λ w_i) (p_i − p_asis_i) / s_i, i.e. a prior centred on AS-IS with
+  // σ_i = s_i / sqrt(λ w_i); a change that costs nothing gets no prior.
+  const double lambda = options.regularization;
+  for (int index : setup.free_index) {
+    const double strength = lambda * setup.weight[index];
+    if (!(strength > 0)) continue;
+    fit.priors.push_back(
+        {asis.parameter_name(index), setup.as_is[index], setup.scale[index] / std::sqrt(strength)});
+  }
+
+  InverseDesignResult result;
+  std::vector<DesignSolution> found;
+  const FitResult first = fit_model(asis, data, fit);
+  found.push_back(make_solution(first, asis, setup, lambda, 0));
+  result.rate_noise_rad_s = first.summary.rate_noise_rad_s;
+  result.starts_run = 1;
+
+  // Perturbed starts: ± `perturbation` along the weakest directions, from the first
+  // solution. The equation-error stage stays on: a start off in a determined direction
+  // inflates the robust uncertainties so much that the window fit's stopping rule would
+  // end it at once, and the stage cannot move the start along a direction the data do not
+  // determine.
+  const int extra = options.starts - 1;
+  const std::vector<Eigen::VectorXd> directions =
+      weak_directions(first.model, data, fit, first.summary, setup, (extra + 1) / 2);
+  const FitOptions& perturbed_fit = fit;
+  for (int j = 0; j < extra && j / 2 < static_cast<int>(directions.size()); ++j) {
+    const Eigen::VectorXd& direction = directions[j / 2];
+    const double sign = j % 2 == 0 ? 1.0 : -1.0;
+    std::optional<DoorModel> start;
+    double step = options.perturbation;
+    for (int attempt = 0; attempt <= kStartShrinks && !start; ++attempt, step *= 0.5) {
+      std::vector<double> values(first.model.parameter_values().begin(),
+                                 first.model.parameter_values().end());
+      for (std::size_t k = 0; k < setup.free_index.size(); ++k) {
+        const int index = setup.free_index[k];
+        values[index] = std::clamp(values[index] + sign * step * direction(k) * setup.scale[index],
+                                   bounds[index].lower, bounds[index].upper);
+      }
+      try {
+        start = asis.with_parameter_values(values);
+      } catch (const std::invalid_argument&) {
+        // breaks a constraint: try a smaller step
+      }
+    }
+    if (!start) {
+      result.notes.push_back("perturbed start " + std::to_string(j + 1) +
+                             " broke a constraint at every step tried; skipped");
+      continue;
+    }
+    try {
+      found.push_back(
+          make_solution(fit_model(*start, data, perturbed_fit), asis, setup, lambda, j + 1));
+    } catch (const std::runtime_error& error) {
+      result.notes.push_back("the fit from perturbed start " + std::to_string(j + 1) +
+                             " failed: " + error.what());
+    }
+    ++result.starts_run;
+  }
+
+  // Solutions the data cannot tell from the best fit, distinct from each other, smallest
+  // change first.
+  double best_cost = std::numeric_limits<double>::infinity();
+  const DesignSolution* best = nullptr;
+  for (const DesignSolution& solution : found) {
+    if (solution.data_cost < best_cost) {
+      best_cost = solution.data_cost;
+      best = &solution;
+    }
+  }
+  const double best_rmse = best != nullptr ? best->fit.window.rmse() : kNaN;
+  std::vector<const DesignSolution*> order;
+  for (const DesignSolution& solution : found) {
+    if (solution.data_cost <= (1.0 + options.equivalent_cost_tolerance) * best_cost) {
+      order.push_back(&solution);
+    }
+  }
+  std::stable_sort(order.begin(), order.end(), [](const auto* a, const auto* b) {
+    return a->size_of_change < b->size_of_change;
+  });
+  for (const DesignSolution* candidate : order) {
+    bool distinct = true;
+    for (const DesignSolution& kept : result.solutions) {
+      distinct = distinct && scaled_distance(*candidate, kept, setup) > options.distinct_threshold;
+    }
+    if (distinct) result.solutions.push_back(*candidate);
+  }
+  for (const DesignSolution& solution : found) {
+    const bool kept =
+        std::any_of(result.solutions.begin(), result.solutions.end(),
+                    [&](const DesignSolution& s) { return s.start_index == solution.start_index; });
+    const bool equivalent =
+        solution.data_cost <= (1.0 + options.equivalent_cost_tolerance) * best_cost;
+    result.notes.push_back(
+        printf_text("start %d: data cost %.6g, size of change %.4g: %s", solution.start_index,
+                    solution.data_cost, solution.size_of_change,
+                    kept         ? "kept"
+                    : equivalent ? "dropped (the same design as one kept)"
+                                 : "dropped (fits clearly worse than the best)"));
+  }
+
+  // Feasible unless the best fit holds parameters on bounds and the data would be fitted
+  // clearly better beyond them: refit with the binding bounds moved outward.
+  const double noise = result.rate_noise_rad_s;
+  if (best != nullptr && !best->at_bound.empty()) {
+    check_bounds(asis, data, fit, options, setup, lambda, *best, result);
+  }
+  if (best != nullptr && result.feasible && best_rmse > kMissedFeelFactor * noise) {
+    result.notes.push_back(printf_text(
+        "the best design misses the TO-BE data by %.3g times the rate noise (%.3g rad/s; the "
+        "force noise integrated by the model adds to it: compare with the AS-IS fit's figure)",
+        best_rmse / noise, best_rmse));
+  }
+  result.total_time_s = seconds_since(began);
+  return result;
+}
+
+namespace {
+
+std::string parameter_table(const DesignSolution& solution, bool changed_only) {
+  std::string text =
+      "    parameter        AS-IS          TO-BE          change     rel      +-          w\n";
+  for (const DesignParameter& p : solution.parameters) {
+    if (!p.free && changed_only) continue;
+    if (changed_only && std::abs(p.change) <= 1e-3 * std::abs(p.bounds.upper - p.bounds.lower)) {
+      continue;
+    }
+    text += printf_text(
+        "    %-12s %12.5g %14.5g %14.4g %6s %11.3g %6.3g%s%s\n", p.name.c_str(), p.as_is, p.to_be,
+        p.change,
+        std::isfinite(p.relative_change) ? printf_text("%+.0f%%", 100 * p.relative_change).c_str()
+                                         : "",
+        p.uncertainty, p.weight, p.free ? "" : "  not free", p.at_bound ? "  AT BOUND" : "");
+  }
+  return text;
+}
+
+std::string solution_header(const DesignSolution& solution, int rank) {
+  return printf_text(
+      "Solution %d (start %d): size of change %.4g; window RMSE of omega %.4g rad/s, FIT %.1f%%; "
+      "data cost %.4g, prior cost %.4g%s\n",
+      rank, solution.start_index, solution.size_of_change, solution.fit.window.rmse(),
+      solution.fit.window.fit_percent(), solution.data_cost, solution.prior_cost,
+      solution.converged ? "" : " (not converged)");
+}
+
+}  // namespace
+
+std::string InverseDesignResult::brief_report() const {
+  std::string text = feasible ? "Inverse design: feasible" : "Inverse design: INFEASIBLE";
+  text += printf_text(", %zu distinct solution(s) from %d start(s), %.1f s.\n", solutions.size(),
+                      starts_run, total_time_s);
+  if (!feasible) text += std::string("  ").append(infeasibility).append("\n");
+  if (!solutions.empty()) {
+    text += solution_header(solutions.front(), 1);
+    text += parameter_table(solutions.front(), /*changed_only=*/true);
+  }
+  return text;
+}
+
+std::string InverseDesignResult::full_report() const {
+  std::string text = brief_report();
+  text += printf_text("TO-BE rate noise: %.4g rad/s\n", rate_noise_rad_s);
+  for (std::size_t s = 0; s < solutions.size(); ++s) {
+    text += std::string("\n").append(solution_header(solutions[s], static_cast<int>(s + 1)));
+    text += parameter_table(solutions[s], /*changed_only=*/false);
+    for (const std::string& note : solutions[s].summary.notes)
+      text += std::string("    note: ").append(note).append("\n");
+  }
+  for (const std::string& note : notes) text += std::string("Note: ").append(note).append("\n");
+  return text;
+}
+
+}  // namespace doorbench
