@@ -30,7 +30,6 @@ void add_devices_command(CLI::App& app, Action& action);
 void add_view_command(CLI::App& app, Action& action);
 void add_play_command(CLI::App& app, Action& action);
 void add_ab_command(CLI::App& app, Action& action);
-// Built when analysis/inverse_design.cpp is in the tree (app/CMakeLists.txt).
 void add_spec_command(CLI::App& app, Action& action);
 
 // The options every verb that builds a model shares.

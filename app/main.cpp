@@ -54,9 +54,7 @@ int main(int argc, char** argv) {
   doorbench::app::add_view_command(app, action);
   doorbench::app::add_play_command(app, action);
   doorbench::app::add_ab_command(app, action);
-#ifdef DOORBENCH_HAS_SPEC_COMMAND
   doorbench::app::add_spec_command(app, action);
-#endif
 
   try {
     app.parse(argc, argv);

@@ -1,7 +1,5 @@
 // doorbench spec end to end: TO-BE recordings simulated from a known door (the reference
 // door with a softer latch catch), the AS-IS reference door, the report written.
-// Tagged [.needs-inverse]: the verb is built only once analysis/inverse_design.cpp is merged
-// (app/CMakeLists.txt); untag it then.
 #include <catch2/catch.hpp>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -25,7 +23,7 @@ std::string read(const std::filesystem::path& path) {
 
 }  // namespace
 
-TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec][.needs-inverse]") {
+TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   TempDir dir("spec_cli");
   const doorbench::DoorModel asis = doorbench::reference_model(doorbench::ModelKind::kPhysical);
   std::vector<double> values(asis.parameter_values().begin(), asis.parameter_values().end());
