@@ -167,7 +167,7 @@ TEST_CASE("a strong preference for small changes keeps the AS-IS door", "[invers
   CHECK(held.solutions.front().fit.window.rmse() > free_fit.solutions.front().fit.window.rmse());
 }
 
-TEST_CASE("several TO-BE sessions merge; different handle radii are refused", "[inverse]") {
+TEST_CASE("several TO-BE sessions merge and different handle radii are refused", "[inverse]") {
   const DoorModel tobe = changed(as_is(), {{"F0", 1.2}});
   doorbench::SyntheticStrokeOptions first_runs;
   first_runs.runs = {{0.6, 3.0}, {1.0, 4.0}};
@@ -289,7 +289,7 @@ TEST_CASE("inverse design options and inputs are checked by name", "[inverse]") 
                     "inverse design regularization must be >= 0");
 }
 
-TEST_CASE("a fit prior pulls its parameter; bad priors are refused by name", "[inverse]") {
+TEST_CASE("a fit prior pulls its parameter and bad priors are refused by name", "[inverse]") {
   const DoorModel truth = changed(as_is(), {{"T_h", 1.4}});
   const PreparedData data = doorbench::synthetic_strokes(truth, {});
   doorbench::FitOptions options;
