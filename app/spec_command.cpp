@@ -11,25 +11,10 @@
 #include "analysis/tolerance_analysis.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
+#include "app/spec_run.h"
 
 namespace doorbench::app {
 namespace {
-
-struct SpecCommandOptions {
-  std::vector<std::string> tobe_paths;
-  std::string asis_path;
-  std::string out_dir;
-  std::string fixed;  // empty: the inverse design's default fixed set
-  bool fixed_given = false;
-  std::string tolerances_path;
-  int samples = 1000;
-  int threads = 0;
-  unsigned long long seed = 1;
-  double regularization = InverseDesignOptions{}.regularization;
-  int starts = 3;
-  bool no_pdf = false;
-  bool no_tolerances = false;
-};
 
 std::vector<std::string> split_names(const std::string& list) {
   std::vector<std::string> names;
@@ -51,6 +36,8 @@ std::string describe(const SpecCommandOptions& o) {
   text += " --samples " + std::to_string(o.samples) + " --seed " + std::to_string(o.seed);
   return text;
 }
+
+}  // namespace
 
 void run_spec(const SpecCommandOptions& options) {
   if (options.samples < 2) throw UsageError("--samples must be >= 2");
@@ -129,8 +116,6 @@ void run_spec(const SpecCommandOptions& options) {
             << params.string() << "\n"
             << files.pdf_note << "\n";
 }
-
-}  // namespace
 
 void add_spec_command(CLI::App& app, Action& action) {
   auto options = std::make_shared<SpecCommandOptions>();

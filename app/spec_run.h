@@ -1,0 +1,31 @@
+#pragma once
+// What `doorbench spec` does, for the command and the demo: TO-BE recordings and the AS-IS door
+// in, the specification (inverse design, felt quantities, check, tolerances) out as
+// spec.json, spec.html (spec.pdf) and tobe-params.json, and a summary on stdout.
+#include <string>
+#include <vector>
+
+#include "analysis/inverse_design.h"
+
+namespace doorbench::app {
+
+struct SpecCommandOptions {
+  std::vector<std::string> tobe_paths;
+  std::string asis_path;
+  std::string out_dir;
+  std::string fixed;  // empty: the inverse design's default fixed set
+  bool fixed_given = false;
+  std::string tolerances_path;
+  int samples = 1000;
+  int threads = 0;
+  unsigned long long seed = 1;
+  double regularization = InverseDesignOptions{}.regularization;
+  int starts = 3;
+  bool no_pdf = false;
+  bool no_tolerances = false;
+};
+
+// Throws UsageError for bad options, std::runtime_error for files and failures.
+void run_spec(const SpecCommandOptions& options);
+
+}  // namespace doorbench::app
