@@ -193,26 +193,34 @@ DoorModel close_the_loop(const std::filesystem::path& dir) {
   return loop.model();
 }
 
-// Plays the loop's fitted door on the simulated HapticMaster with the virtual user opening and
-// closing it, records it, and fits the recording back from the reference door (with the same
-// effects at their catalogue defaults): the played parameters should come back.
-void play_and_fit_back(const std::filesystem::path& dir, const DoorModel& fitted) {
-  const std::filesystem::path session_path = dir / "haptic-playback.h5";
+// A playback for measurement on the simulated HapticMaster: 30 s of simulated time, the virtual
+// user opening and closing the door every 10 s, and the device's own force and force-rate
+// limits (the virtual user pushes the door into its closed stop, and a force the safety layer
+// clipped is a force a fit would not see: docs/haptic.md).
+PlayRequest measurement_playback(const std::filesystem::path& session_path,
+                                 const std::string& model_source) {
   std::filesystem::remove(session_path);
   PlayRequest request;
   request.device.uri = "sim";
   request.device.simulated_time = true;
   request.device.hand.duration_s = 10.0;
   request.playback.duration_s = 30.0;
-  // The simulated HapticMaster's continuous force and force rate: the virtual user pushes the door
-  // into its closed stop, and a force clipped by the safety limit would bias the fit
-  // (docs/haptic.md).
   request.playback.loop.safety.max_force = 100.0;
   request.playback.loop.safety.max_force_rate = 20000.0;
   request.session_path = session_path;
-  request.model_source = "the residual loop's fitted door (" + (dir / "loop").string() + ")";
+  request.model_source = model_source;
   request.operator_name = "doorbench demo";
   request.show_status = false;
+  return request;
+}
+
+// Plays the loop's fitted door on the simulated HapticMaster with the virtual user opening and
+// closing it, records it, and fits the recording back from the reference door (with the same
+// effects at their catalogue defaults): the played parameters should come back.
+void play_and_fit_back(const std::filesystem::path& dir, const DoorModel& fitted) {
+  const std::filesystem::path session_path = dir / "haptic-playback.h5";
+  const PlayRequest request = measurement_playback(
+      session_path, "the residual loop's fitted door (" + (dir / "loop").string() + ")");
   std::cout << "\nhaptic playback: the fitted door on the simulated HapticMaster (admittance, 1 ms "
                "control delay, force-sensor noise), the virtual user opening and closing it "
                "three times; 30 s at 1 kHz in simulated time\n";
@@ -261,18 +269,8 @@ void specify_tuned_variant(const std::filesystem::path& dir) {
   values[*asis.find_parameter("J_d")] *= 1.2;
   const DoorModel tuned = asis.with_parameter_values(values);
   const std::filesystem::path session_path = dir / "tobe-tuned.h5";
-  std::filesystem::remove(session_path);
-  PlayRequest request;
-  request.device.uri = "sim";
-  request.device.simulated_time = true;
-  request.device.hand.duration_s = 10.0;
-  request.playback.duration_s = 30.0;
-  request.playback.loop.safety.max_force = 100.0;
-  request.playback.loop.safety.max_force_rate = 20000.0;
-  request.session_path = session_path;
-  request.model_source = "the AS-IS physical door tuned: k_l and F_l0 x0.7, J_d x1.2";
-  request.operator_name = "doorbench demo";
-  request.show_status = false;
+  const PlayRequest request = measurement_playback(
+      session_path, "the AS-IS physical door tuned: k_l and F_l0 x0.7, J_d x1.2");
   std::cout << "\nthe TO-BE feel: the AS-IS physical door tuned 30 % easier to unlatch (k_l, F_l0 "
                "x0.7) and 20 % heavier (J_d x1.2), played on the simulated HapticMaster and "
                "recorded (30 s)\n";

@@ -1,11 +1,6 @@
 // doorbench ab run as a program: scripted answers from a file and from stdin, variant A vs B
 // and the (simulated) real door vs a virtual one, the files it leaves and their counts
 // (checked against the plan the same seed gives), and its refusals by their text.
-#include <fcntl.h>
-#include <poll.h>
-#include <pty.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -18,6 +13,7 @@
 #include "acquisition/session_file.h"
 #include "haptic/ab_trials.h"
 #include "tests/run_doorbench.h"
+#include "tests/run_on_terminal.h"
 #include "tests/temp_dir.h"
 
 using Catch::Matchers::Contains;
@@ -187,46 +183,15 @@ TEST_CASE("doorbench ab: on a terminal a wrong answer is asked again", "[ab][cli
   // stdin is a real pseudo-terminal (openpty), so doorbench takes it as interactive.
   TempDir dir("ab_cli_tty");
   const auto out = dir.path / "out";
-  int master = -1, slave = -1;
-  REQUIRE(::openpty(&master, &slave, nullptr, nullptr, nullptr) == 0);
-  const std::string err_path = (dir.path / "stderr.txt").string();
-  const std::string out_path = (dir.path / "stdout.txt").string();
-  const pid_t child = ::fork();
-  REQUIRE(child >= 0);
-  if (child == 0) {
-    ::dup2(slave, STDIN_FILENO);
-    ::close(master);
-    ::close(slave);
-    const int out_fd = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int err_fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(out_fd, STDOUT_FILENO);
-    ::dup2(err_fd, STDERR_FILENO);
-    ::execl(DOORBENCH_EXECUTABLE, DOORBENCH_EXECUTABLE, "ab", "--a", kReference.c_str(), "--b",
-            kReference.c_str(), "--trials", "2", "--seed", "4", "--presentation-s", "1", "--out",
-            out.c_str(), static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  ::close(slave);
-  const std::string typed = "3\n1\n2\n";
-  REQUIRE(::write(master, typed.data(), typed.size()) == static_cast<ssize_t>(typed.size()));
-  // Drain the terminal's echo until doorbench has exited (so it never blocks on it).
-  int status = 0;
-  for (int waited_ms = 0; waited_ms < 60000; waited_ms += 10) {
-    char echo[256];
-    pollfd request{master, POLLIN, 0};
-    if (::poll(&request, 1, 10) > 0 && (request.revents & POLLIN)) {
-      if (::read(master, echo, sizeof echo) <= 0) break;
-    }
-    if (::waitpid(child, &status, WNOHANG) == child) break;
-  }
-  if (::waitpid(child, &status, WNOHANG) == 0) ::waitpid(child, &status, 0);
-  ::close(master);
-  const std::string err = read_file(err_path);
+  const doorbench::testing::DoorbenchRun run = doorbench::testing::run_doorbench_on_terminal(
+      {"ab", "--a", kReference, "--b", kReference, "--trials", "2", "--seed", "4",
+       "--presentation-s", "1", "--out", out.string()},
+      dir, "3\n1\n2\n");
+  const std::string& err = run.err;
   INFO(err);
-  REQUIRE(WIFEXITED(status));
-  CHECK(WEXITSTATUS(status) == 0);
+  CHECK(run.status == 0);
   CHECK_THAT(err, Contains("expected \"1\" or \"2\" (which felt better), got \"3\"; again please"));
-  CHECK_THAT(read_file(out_path), Contains("2 of 2 trials answered"));
+  CHECK_THAT(run.out, Contains("2 of 2 trials answered"));
   const std::string csv = read_file(out / "answers.csv");
   CHECK_THAT(csv, Contains("\n1,1,trial-01-1.h5"));
   CHECK_THAT(csv, Contains("\n2,2,trial-02-1.h5"));

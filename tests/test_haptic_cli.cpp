@@ -1,19 +1,12 @@
 // doorbench play through the real executable.
-#include <fcntl.h>
-#include <poll.h>
-#include <pty.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <catch2/catch.hpp>
-#include <chrono>
 #include <fstream>
-#include <thread>
 
 #include "acquisition/session_file.h"
 #include "analysis/parameter_file.h"
 #include "analysis/perceptual_controls.h"
 #include "tests/run_doorbench.h"
+#include "tests/run_on_terminal.h"
 
 using namespace doorbench;
 using doorbench::testing::run_doorbench_shell;
@@ -94,45 +87,14 @@ TEST_CASE("play --keys: keypad presses on a terminal tune the door live, each on
   // stdin is a real pseudo-terminal (openpty), as the operator's keypad would be.
   TempDir dir("play_keys");
   const auto session = dir / "keys.h5";
-  const std::string err_path = (dir / "stderr.txt").string();
-  int master = -1, slave = -1;
-  REQUIRE(::openpty(&master, &slave, nullptr, nullptr, nullptr) == 0);
-  const pid_t child = ::fork();
-  REQUIRE(child >= 0);
-  if (child == 0) {
-    ::dup2(slave, STDIN_FILENO);
-    ::close(master);
-    ::close(slave);
-    const int err_fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    const int out_fd = ::open((dir / "stdout.txt").c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-    ::dup2(out_fd, STDOUT_FILENO);
-    ::dup2(err_fd, STDERR_FILENO);
-    ::execl(DOORBENCH_EXECUTABLE, DOORBENCH_EXECUTABLE, "play", "--device", "sim", "--duration-s",
-            "3", "--max-tick-interval-ms", "200", "--keys", "--out", session.c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  ::close(slave);
   // Heavier, then an unknown key, one second into the run.
-  std::this_thread::sleep_for(std::chrono::milliseconds(1000));
-  const std::string typed = "+x";
-  REQUIRE(::write(master, typed.data(), typed.size()) == static_cast<ssize_t>(typed.size()));
-  int status = 0;
-  for (int waited_ms = 0; waited_ms < 60000; waited_ms += 10) {
-    char echo[256];
-    pollfd request{master, POLLIN, 0};
-    if (::poll(&request, 1, 10) > 0 && (request.revents & POLLIN)) {
-      if (::read(master, echo, sizeof echo) <= 0) break;
-    }
-    if (::waitpid(child, &status, WNOHANG) == child) break;
-  }
-  if (::waitpid(child, &status, WNOHANG) == 0) ::waitpid(child, &status, 0);
-  ::close(master);
-  std::ifstream err_file(err_path);
-  const std::string err((std::istreambuf_iterator<char>(err_file)), {});
+  const testing::DoorbenchRun run = testing::run_doorbench_on_terminal(
+      {"play", "--device", "sim", "--duration-s", "3", "--max-tick-interval-ms", "200", "--keys",
+       "--out", session.string()},
+      dir, "+x", 1000);
+  const std::string& err = run.err;
   INFO(err);
-  REQUIRE(WIFEXITED(status));
-  REQUIRE(WEXITSTATUS(status) == 0);
+  REQUIRE(run.status == 0);
   CHECK_THAT(err, Catch::Contains("key +: heavier: heaviness 0.95 -> 1.045 kg*m^2"));
   const SessionReader reader(session);
   int tuning_events = 0;

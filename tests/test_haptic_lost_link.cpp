@@ -7,7 +7,7 @@
 #include "analysis/parameter_file.h"
 #include "haptic/hapticmaster_device.h"
 #include "haptic/playback.h"
-#include "tests/modbus/modbus_test_server.h"  // ChildProcess
+#include "tests/hapticmaster_emulator_process.h"
 #include "tests/temp_dir.h"
 
 using namespace doorbench;

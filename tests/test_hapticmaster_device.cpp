@@ -19,34 +19,15 @@
 #include "haptic/hapticmaster_device.h"
 #include "haptic/hapticmaster_protocol.h"
 #include "tests/allocation_counter.h"
-#include "tests/modbus/modbus_test_server.h"  // ChildProcess
+#include "tests/hapticmaster_emulator_process.h"
 #include "tests/temp_dir.h"
 
 using namespace doorbench::haptic;
-using doorbench::testing::ChildProcess;
 using doorbench::testing::TempDir;
 
 namespace {
 
-struct Emulator {
-  ChildProcess process;
-  int port = 0;
-  explicit Emulator(const std::vector<std::string>& options = {})
-      : process([&] {
-          std::vector<std::string> args = {
-              "/usr/bin/python3",
-              std::string(DOORBENCH_SOURCE_DIR)
-                  .append("/tests/hapticmaster_emulator/hapticmaster_emulator.py")};
-          args.insert(args.end(), options.begin(), options.end());
-          return args;
-        }()) {
-    const std::string line = process.read_line();
-    if (line.rfind("PORT ", 0) != 0) throw std::runtime_error("emulator said: " + line);
-    port = std::stoi(line.substr(5));
-  }
-  std::string address() const { return "127.0.0.1:" + std::to_string(port); }
-  std::string name() const { return "hapticmaster://" + address(); }
-};
+using Emulator = doorbench::testing::HapticMasterEmulator;
 
 std::vector<std::string> lines_of(const std::filesystem::path& file) {
   std::ifstream in(file);

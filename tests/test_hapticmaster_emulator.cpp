@@ -17,10 +17,9 @@
 #include <vector>
 
 #include "haptic/hapticmaster_protocol.h"
-#include "tests/modbus/modbus_test_server.h"  // ChildProcess
+#include "tests/hapticmaster_emulator_process.h"
 
 using namespace doorbench::haptic;
-using doorbench::testing::ChildProcess;
 
 namespace {
 
@@ -78,23 +77,7 @@ class RawClient {
   hm::ReplySplitter splitter_;
 };
 
-struct Emulator {
-  ChildProcess process;
-  int port = 0;
-  explicit Emulator(const std::vector<std::string>& options = {})
-      : process([&] {
-          std::vector<std::string> args = {
-              "/usr/bin/python3",
-              std::string(DOORBENCH_SOURCE_DIR)
-                  .append("/tests/hapticmaster_emulator/hapticmaster_emulator.py")};
-          args.insert(args.end(), options.begin(), options.end());
-          return args;
-        }()) {
-    const std::string line = process.read_line();
-    if (line.rfind("PORT ", 0) != 0) throw std::runtime_error("emulator said: " + line);
-    port = std::stoi(line.substr(5));
-  }
-};
+using Emulator = doorbench::testing::HapticMasterEmulator;
 
 void sleep_s(double s) {
   std::this_thread::sleep_for(std::chrono::duration<double>(s));
