@@ -285,6 +285,7 @@ void specify_tuned_variant(const std::filesystem::path& dir) {
   spec.out_dir = (dir / "spec").string();
   spec.fixed = "m_d,l_c,k_stop,c_stop,e,w_f";
   spec.fixed_given = true;
+  spec.show_progress = false;
   run_spec(spec);
   const DoorModel specified =
       load_model(ModelKind::kPhysical, dir / "spec" / "tobe-params.json", "");

@@ -27,17 +27,6 @@ struct FitCommandOptions {
   std::string out_dir;
 };
 
-std::vector<std::string> split_names(const std::string& list) {
-  std::vector<std::string> names;
-  std::size_t start = 0;
-  while (start < list.size()) {
-    const std::size_t comma = std::min(list.find(',', start), list.size());
-    if (comma > start) names.push_back(list.substr(start, comma - start));
-    start = comma + 1;
-  }
-  return names;
-}
-
 void run_fit(const FitCommandOptions& options) {
   std::filesystem::create_directories(options.out_dir);
   const FitInputs inputs = load_fit_inputs(options.input);

@@ -30,6 +30,17 @@ PreparedData load_prepared_data(const std::string& path) {
   return prepare(read_recording_csv(path));
 }
 
+std::vector<std::string> split_names(const std::string& list) {
+  std::vector<std::string> names;
+  std::size_t start = 0;
+  while (start < list.size()) {
+    const std::size_t comma = std::min(list.find(',', start), list.size());
+    if (comma > start) names.push_back(list.substr(start, comma - start));
+    start = comma + 1;
+  }
+  return names;
+}
+
 std::vector<EffectSetting> effects_from_argument(const std::string& argument) {
   if (argument.empty()) return {};
   if (argument.size() > 5 && argument.ends_with(".json")) {

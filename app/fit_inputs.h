@@ -13,6 +13,9 @@ namespace doorbench::app {
 // into strokes (analysis/preprocessing.h).
 PreparedData load_prepared_data(const std::string& path);
 
+// "a,b,,c" -> {"a", "b", "c"}: the parameter lists of --free and --fixed (empty items dropped).
+std::vector<std::string> split_names(const std::string& list);
+
 // --effects takes an effects file (*.json) or a comma-separated list of catalogue names,
 // each switched on at its catalogue default values and bounds.
 std::vector<EffectSetting> effects_from_argument(const std::string& argument);

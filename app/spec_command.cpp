@@ -16,15 +16,10 @@
 namespace doorbench::app {
 namespace {
 
-std::vector<std::string> split_names(const std::string& list) {
-  std::vector<std::string> names;
-  std::size_t start = 0;
-  while (start < list.size()) {
-    const std::size_t comma = std::min(list.find(',', start), list.size());
-    if (comma > start) names.push_back(list.substr(start, comma - start));
-    start = comma + 1;
-  }
-  return names;
+// Where progress goes when it is not wanted.
+std::ostream& null_stream() {
+  static std::ostream sink(nullptr);
+  return sink;
 }
 
 std::string describe(const SpecCommandOptions& o) {
@@ -54,11 +49,12 @@ void run_spec(const SpecCommandOptions& options) {
                              "parameter file or a doorbench fit folder)");
   }
   const DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
-  std::cerr << "AS-IS door: " << asis_file.string() << "\n";
+  std::ostream& progress = options.show_progress ? std::cerr : null_stream();
+  progress << "AS-IS door: " << asis_file.string() << "\n";
 
   std::vector<PreparedData> tobe;
   for (const std::string& path : options.tobe_paths) {
-    std::cerr << "preparing " << path << "\n";
+    progress << "preparing " << path << "\n";
     tobe.push_back(load_prepared_data(path));
   }
   // Tolerances are read before the long fit, so that a bad file fails at once.
@@ -73,8 +69,8 @@ void run_spec(const SpecCommandOptions& options) {
   design_options.regularization = options.regularization;
   design_options.starts = options.starts;
   if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
-  std::cerr << "inverse design: fitting the physical model to " << tobe.size()
-            << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
+  progress << "inverse design: fitting the physical model to " << tobe.size()
+           << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
   const InverseDesignResult design = inverse_design(asis, tobe, design_options);
   if (design.solutions.empty()) throw std::runtime_error("inverse design found no solution");
 
@@ -84,16 +80,16 @@ void run_spec(const SpecCommandOptions& options) {
   evaluation_options.monte_carlo.samples = options.samples;
   evaluation_options.monte_carlo.threads = options.threads;
   evaluation_options.monte_carlo.seed = options.seed;
-  evaluation_options.monte_carlo.progress = [](int done, int total) {
-    std::cerr << "\rtolerance Monte Carlo: " << done << " / " << total << " samples"
-              << (done == total ? "\n" : "") << std::flush;
+  evaluation_options.monte_carlo.progress = [&progress](int done, int total) {
+    progress << "\rtolerance Monte Carlo: " << done << " / " << total << " samples"
+             << (done == total ? "\n" : "") << std::flush;
   };
   if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
-  std::cerr << "felt quantities and the check; tolerance analysis of " << options.samples
-            << " samples on "
-            << (options.threads > 0 ? options.threads
-                                    : static_cast<int>(std::thread::hardware_concurrency()))
-            << " thread(s)\n";
+  progress << "felt quantities and the check; tolerance analysis of " << options.samples
+           << " samples on "
+           << (options.threads > 0 ? options.threads
+                                   : static_cast<int>(std::thread::hardware_concurrency()))
+           << " thread(s)\n";
   SpecEvaluation evaluation = evaluate_spec(asis, design, tobe, evaluation_options);
   evaluation.command = describe(options);
   evaluation.asis_source = asis_file.string();

@@ -23,6 +23,7 @@ struct SpecCommandOptions {
   int starts = 3;
   bool no_pdf = false;
   bool no_tolerances = false;
+  bool show_progress = true;  // progress lines on stderr
 };
 
 // Throws UsageError for bad options, std::runtime_error for files and failures.
