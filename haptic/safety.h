@@ -7,15 +7,17 @@
 //  - a start-up ramp: the force is scaled from 0 to 1 over startup_ramp_s;
 //  - trips: velocity above velocity_trip, position outside the workspace less its margin, a
 //    missed deadline (time since the previous tick above max_tick_interval_s), a stalled
-//    device (sample sequence unchanged for max_stale_ticks ticks), a lost link. A trip ramps
-//    the force to zero within shutdown_ramp_s and then holds it at zero (state kStopped);
-//    nothing restarts the layer but a new SafetyLayer (a new run);
+//    device (sample sequence unchanged for max_stale_ticks ticks), a lost link, a NaN or
+//    infinite reading or desired force. A trip (or request_stop) takes the force of the last
+//    tick and scales it linearly to zero over shutdown_ramp_s, then holds zero (state
+//    kStopped); nothing restarts the layer but a new SafetyLayer (a new run);
 //  - the passivity observer and controller (PassivityController below) on the model's active
 //    terms (the snap zone's negative damping injects energy);
 //  - parameter sets are checked before they reach the tick (check_parameter_set).
 // Whatever the inputs (NaN, infinities, huge values), the force it returns is finite and its
 // magnitude never exceeds the force limit, and between two ticks it never changes by more
-// than the rate limit times the tick interval (except to go to zero on a NaN input).
+// than the rate limit times the tick interval (except to go to zero at once when the tick's
+// time itself is NaN or infinite: without a clock there is no ramp).
 //
 // Each step reports the events that began in that tick as bits, so that the tick can record
 // them without building text; event_name() gives their names for the session.
