@@ -660,6 +660,79 @@ EquationErrorOutcome solve_equation_error(const DoorModel& model, const Prepared
   return outcome;
 }
 
+TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& data,
+                                  const ParameterMap& map, const FitOptions& options,
+                                  std::vector<double> x0, const std::vector<PriorResidual>& priors,
+                                  double torque_scale_Nm) {
+  TorqueMapOutcome outcome;
+  outcome.x = std::move(x0);
+  EvaluationPreparer preparer(model, map, outcome.x.data());
+  preparer.set_threads(fit_thread_count(options));
+  EquationErrorSetup setup;
+  setup.model = &model;
+  setup.data = &data;
+  setup.map = &map;
+  for (const Stroke& stroke : data.strokes) {
+    setup.rate_derivative_rad_s2.emplace_back(stroke.size(), 0.0);  // J drops out
+  }
+  setup.torque_scale_Nm = torque_scale_Nm;
+  setup.feasible = preparer.flag();
+  ceres::Problem::Options problem_options;
+  problem_options.evaluation_callback = &preparer;
+  ceres::Problem problem(problem_options);
+  add_free_block(problem, outcome.x.data(), model, map);
+  constexpr int kChunk = 200;
+  std::vector<ceres::ResidualBlockId> data_blocks;
+  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+    const int n = static_cast<int>(data.strokes[s].size());
+    for (int first = 0; first < n; first += kChunk) {
+      auto* cost = new CachingCost(
+          make_equation_error_cost(setup, static_cast<int>(s), first, std::min(kChunk, n - first)));
+      data_blocks.push_back(problem.AddResidualBlock(cost, nullptr, outcome.x.data()));
+      preparer.add(cost, {outcome.x.data()});
+      outcome.residuals += std::min(kChunk, n - first);
+    }
+  }
+  if (!priors.empty()) {
+    problem.AddResidualBlock(new PriorCost(priors, map.free_count()), nullptr, outcome.x.data());
+  }
+  // The commanded torque is exact (its best cost is ~0), so the fit's relative tolerances,
+  // made for noisy data, are replaced by tight ones: the valley is followed to the end.
+  ceres::Solver::Options solver = solver_options(options, std::max(options.max_iterations, 500));
+  solver.function_tolerance = 1e-14;
+  solver.parameter_tolerance = 1e-12;
+  solver.gradient_tolerance = 1e-14;
+  ceres::Solver::Summary summary;
+  ceres::Solve(solver, &problem, &summary);
+  trace_summary(summary);
+  outcome.usable = summary.IsSolutionUsable();
+  outcome.converged = summary.termination_type == ceres::CONVERGENCE;
+  outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;
+  outcome.termination = termination_text(summary);
+  if (!outcome.usable) return outcome;
+
+  ceres::Problem::EvaluateOptions evaluate;
+  evaluate.residual_blocks = data_blocks;
+  std::vector<double> residuals;
+  problem.Evaluate(evaluate, nullptr, &residuals, nullptr, nullptr);
+  for (double r : residuals) outcome.sum_of_squares += r * r;
+  evaluate.residual_blocks.clear();  // every block: the priors' information too
+  ceres::CRSMatrix jacobian;
+  problem.Evaluate(evaluate, nullptr, nullptr, nullptr, &jacobian);
+  const int p = map.free_count();
+  outcome.information = Eigen::MatrixXd::Zero(p, p);
+  Eigen::VectorXd row(p);
+  for (int r = 0; r < jacobian.num_rows; ++r) {
+    row.setZero();
+    for (int k = jacobian.rows[r]; k < jacobian.rows[r + 1]; ++k) {
+      row(jacobian.cols[k]) = jacobian.values[k];
+    }
+    outcome.information.selfadjointView<Eigen::Lower>().rankUpdate(row);
+  }
+  outcome.information = outcome.information.selfadjointView<Eigen::Lower>();
+  return outcome;
+}
+
 double compare_with_ceres_covariance(WindowProblem& problem, const Eigen::MatrixXd& inverse,
                                      int num_threads) {
   const int p = static_cast<int>(problem.x().size());

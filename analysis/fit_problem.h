@@ -162,6 +162,26 @@ EquationErrorOutcome solve_equation_error(const DoorModel& model, const Prepared
                                           const ParameterMap& map, const FitOptions& options,
                                           std::vector<double> x0);
 
+// The commanded-torque problem (analysis/commanded_torque.h): the equation-error residuals
+// with dω/dt = 0 on strokes whose force is −τ_cmd / r_h, i.e. (τ_cmd − τ_m(θ, ω)) /
+// torque_scale at every sample, plus `priors`; solved to Ceres' own convergence from x0.
+// `information` is JᵀJ at the result (priors included) in solver units, `sum_of_squares`
+// the data residuals' Σ r² (priors excluded).
+struct TorqueMapOutcome {
+  bool usable = false;
+  bool converged = false;
+  int iterations = 0;
+  std::string termination;
+  std::vector<double> x;
+  double sum_of_squares = 0.0;
+  int residuals = 0;
+  Eigen::MatrixXd information;
+};
+TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& data,
+                                  const ParameterMap& map, const FitOptions& options,
+                                  std::vector<double> x0, const std::vector<PriorResidual>& priors,
+                                  double torque_scale_Nm);
+
 // The largest element-wise difference between ceres::Covariance's (JᵀJ)⁻¹ for x over the
 // whole problem and `inverse`, relative to √(C_ii C_jj); NaN when Ceres cannot compute it.
 double compare_with_ceres_covariance(WindowProblem& problem, const Eigen::MatrixXd& inverse,

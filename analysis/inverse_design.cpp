@@ -4,10 +4,12 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <set>
 #include <stdexcept>
 
+#include "analysis/commanded_torque.h"
 #include "analysis/constraint_check.h"
 #include "analysis/fit_problem.h"
 #include "analysis/text_format.h"
@@ -21,6 +23,11 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kMissedFeelFactor = 10.0;
 // A perturbed start that breaks a constraint is retried this many times at half the step.
 constexpr int kStartShrinks = 4;
+// The physical model's inertia: the commanded torque does not contain it.
+constexpr const char* kInertiaParameter = "J_d";
+// The unit of the commanded-torque residuals before φ rescales the priors: the torque is
+// exact, so any unit well below what is felt serves (0.01 N*m is 0.017 N at the handle).
+constexpr double kCommandedTorqueScale_Nm = 0.01;
 
 bool finite_positive(double value) {
   return std::isfinite(value) && value > 0;
@@ -108,6 +115,10 @@ std::string InverseDesignOptions::validate() const {
     return "inverse design equivalent_cost_tolerance must be >= 0";
   }
   if (!finite_positive(bound_widening)) return "inverse design bound_widening must be > 0";
+  if (!std::isfinite(infeasibility_cost_tolerance) || infeasibility_cost_tolerance < 0) {
+    return "inverse design infeasibility_cost_tolerance must be >= 0";
+  }
+  if (fewest_changes_refits < 0) return "inverse design fewest_changes_refits must be >= 0";
   for (const auto& [name, weight] : weights) {
     if (!std::isfinite(weight) || weight < 0) {
       return "inverse design weights: the cost of change of '" + name + "' must be >= 0";
@@ -170,11 +181,15 @@ struct Setup {
   std::vector<double> weight;   // w_i, every parameter
 };
 
-DesignSolution make_solution(const FitResult& fit, const DoorModel& asis, const Setup& setup,
-                             double lambda, int start_index) {
-  DesignSolution solution{fit.model, {},          fit.summary.fitted,    0.0, 0.0,
-                          0.0,       start_index, fit.summary.converged, {},  fit.summary};
-  const auto values = fit.model.parameter_values();
+// A design at `model`: every parameter against AS-IS, the size of the change and the prior
+// cost; the caller sets data_cost and reduced_data_cost.
+DesignSolution describe_design(const DoorModel& model, const std::vector<double>& uncertainty,
+                               const FitMetrics& metrics, bool converged, const FitSummary& summary,
+                               const DoorModel& asis, const Setup& setup, double lambda,
+                               int start_index) {
+  DesignSolution solution{model,       {}, metrics, 0.0,       1.0, 0.0,    0.0,
+                          start_index, 0,  {},      converged, {},  summary};
+  const auto values = model.parameter_values();
   const auto bounds = asis.parameter_bounds();
   double weighted = 0.0;
   for (int i = 0; i < asis.parameter_count(); ++i) {
@@ -188,7 +203,7 @@ DesignSolution make_solution(const FitResult& fit, const DoorModel& asis, const 
     parameter.change = parameter.to_be - parameter.as_is;
     parameter.relative_change =
         parameter.as_is != 0 ? parameter.change / std::abs(parameter.as_is) : kNaN;
-    parameter.uncertainty = parameter.free ? fit.summary.parameters[i].uncertainty : kNaN;
+    parameter.uncertainty = parameter.free ? uncertainty[i] : kNaN;
     parameter.weight = setup.weight[i];
     parameter.bounds = bounds[i];
     parameter.at_bound = parameter.free && on_bound(parameter.to_be, bounds[i]);
@@ -199,8 +214,92 @@ DesignSolution make_solution(const FitResult& fit, const DoorModel& asis, const 
     solution.parameters.push_back(std::move(parameter));
   }
   solution.size_of_change = std::sqrt(weighted);
-  solution.data_cost = std::max(0.0, fit.summary.final_cost - solution.prior_cost);
   return solution;
+}
+
+// A design from a fit of the TO-BE motion.
+DesignSolution make_solution(const FitResult& fit, const DoorModel& asis, const Setup& setup,
+                             double lambda, int start_index) {
+  std::vector<double> uncertainty;
+  for (const FittedParameter& parameter : fit.summary.parameters) {
+    uncertainty.push_back(parameter.uncertainty);
+  }
+  DesignSolution solution =
+      describe_design(fit.model, uncertainty, fit.summary.fitted, fit.summary.converged,
+                      fit.summary, asis, setup, lambda, start_index);
+  solution.data_cost = std::max(0.0, fit.summary.final_cost - solution.prior_cost);
+  const double dof = static_cast<double>(fit.summary.residuals) - fit.summary.free_parameters -
+                     fit.summary.window_state_parameters;
+  solution.reduced_data_cost = dof > 0 ? 2.0 * solution.data_cost / dof : 1.0;
+  solution.data_residuals = static_cast<int>(fit.summary.residuals);
+  return solution;
+}
+
+// A design from the commanded torques of playback recordings: every free parameter but the
+// inertia from the torque map (fit_commanded_torque), then the inertia, when free, from the
+// motion with the others held. The data cost and φ are the torque fit's.
+DesignSolution fit_commanded_design(const DoorModel& start,
+                                    const std::vector<CommandedTorque>& commanded,
+                                    const PreparedData& data, const FitOptions& fit,
+                                    const DoorModel& asis, const Setup& setup, double lambda,
+                                    int start_index, const std::vector<std::string>& held) {
+  std::vector<std::string> torque_free;
+  bool inertia_free = false;
+  for (int index : setup.free_index) {
+    const std::string name = asis.parameter_name(index);
+    if (std::find(held.begin(), held.end(), name) != held.end()) continue;
+    if (name == kInertiaParameter) {
+      inertia_free = true;
+    } else {
+      torque_free.push_back(name);
+    }
+  }
+  std::vector<ParameterPrior> torque_priors;
+  std::vector<ParameterPrior> inertia_priors;
+  for (const ParameterPrior& prior : fit.priors) {
+    if (std::find(held.begin(), held.end(), prior.parameter) != held.end()) continue;
+    (prior.parameter == kInertiaParameter ? inertia_priors : torque_priors).push_back(prior);
+  }
+  CommandedTorqueFit torque =
+      torque_free.empty() ? CommandedTorqueFit(start)
+                          : fit_commanded_torque(start, commanded, torque_free, torque_priors, fit,
+                                                 kCommandedTorqueScale_Nm);
+  std::vector<double> uncertainty = torque.uncertainty;
+  uncertainty.resize(asis.parameter_count(), kNaN);
+  DoorModel model = torque.model;
+  FitSummary summary;
+  FitMetrics metrics;
+  bool converged = torque.converged || torque_free.empty();
+  if (inertia_free) {
+    FitOptions inertia_fit = fit;
+    inertia_fit.free_parameters = {kInertiaParameter};
+    inertia_fit.fixed_parameters.clear();
+    inertia_fit.priors = inertia_priors;
+    const FitResult motion = fit_model(model, data, inertia_fit);
+    model = motion.model;
+    const int index = *asis.find_parameter(kInertiaParameter);
+    uncertainty[index] = motion.summary.parameters[index].uncertainty;
+    summary = motion.summary;
+    metrics = motion.summary.fitted;
+    converged = converged && motion.summary.converged;
+  } else {
+    metrics = evaluate_model(model, data, fit);
+  }
+  summary.notes.push_back(printf_text(
+      "fitted to the commanded torque of %d samples: RMS error %.4g N*m, %d iterations (%s)%s",
+      torque.samples, torque.rms_error_Nm, torque.iterations, torque.termination.c_str(),
+      inertia_free ? "; the inertia from the motion with the other parameters held" : ""));
+  DesignSolution solution = describe_design(model, uncertainty, metrics, converged, summary, asis,
+                                            setup, lambda, start_index);
+  solution.data_cost = torque.data_cost;
+  solution.reduced_data_cost = torque_free.empty() ? 1.0 : torque.reduced_data_cost;
+  solution.data_residuals = torque.samples;
+  return solution;
+}
+
+// φ: the reduced data cost, 1 when the model misses the data by their noise only.
+double misfit_factor(const DesignSolution& solution) {
+  return std::isfinite(solution.reduced_data_cost) ? solution.reduced_data_cost : 1.0;
 }
 
 // The directions the data determines least, in scaled units (s_i), most poorly first: the
@@ -208,8 +307,9 @@ DesignSolution make_solution(const FitResult& fit, const DoorModel& asis, const 
 // included) with the smallest eigenvalues, at `model`. H itself rather than the fit's
 // covariance: a pseudo-inverse would hide exactly the directions the data cannot see.
 std::vector<Eigen::VectorXd> weak_directions(const DoorModel& model, const PreparedData& data,
-                                             const FitOptions& fit, const FitSummary& summary,
-                                             const Setup& setup, int count) {
+                                             const FitOptions& fit, double rate_noise_rad_s,
+                                             double angle_noise_rad, const Setup& setup,
+                                             int count) {
   if (count <= 0) return {};
   ParameterMap map;
   map.base_values.assign(model.parameter_values().begin(), model.parameter_values().end());
@@ -220,8 +320,8 @@ std::vector<Eigen::VectorXd> weak_directions(const DoorModel& model, const Prepa
   kind.windows.disjoint = fit.estimate_window_states;
   kind.estimate_start_states = fit.estimate_window_states;
   FitWeights weights;
-  weights.rate_noise_rad_s = summary.rate_noise_rad_s;
-  weights.angle_noise_rad = summary.angle_noise_rad;
+  weights.rate_noise_rad_s = rate_noise_rad_s;
+  weights.angle_noise_rad = angle_noise_rad;
   weights.angle_residuals = fit.angle_residuals;
   for (const ParameterPrior& prior : fit.priors) {
     const int index = *model.find_parameter(prior.parameter);
@@ -253,11 +353,23 @@ double scaled_distance(const DesignSolution& a, const DesignSolution& b, const S
   return largest;
 }
 
+// Fits a design from a start model (its bounds are the fit's); the int is the start's index,
+// the names are free parameters held at their start values.
+using DesignFitter =
+    std::function<DesignSolution(const DoorModel&, int, const std::vector<std::string>&)>;
+
+// Whether a design's data cost is one the data cannot tell from the best: within `tolerance`
+// of it, or above it by less than a hundredth of a noise level's variance per residual (so
+// that exact data, whose best cost is ~0, have a usable test).
+bool equivalent_cost(double cost, double best_cost, int residuals, double tolerance) {
+  return cost <= (1.0 + tolerance) * best_cost + 0.005 * residuals;
+}
+
 // Refits with the bounds on which `best` holds parameters moved outward by
 // options.bound_widening widths and decides feasibility (see InverseDesignOptions).
-void check_bounds(const DoorModel& asis, const PreparedData& data, const FitOptions& fit,
-                  const InverseDesignOptions& options, const Setup& setup, double lambda,
-                  const DesignSolution& best, InverseDesignResult& result) {
+void check_bounds(const DoorModel& asis, const DesignFitter& fit_design,
+                  const InverseDesignOptions& options, const DesignSolution& best,
+                  InverseDesignResult& result) {
   const int base = asis.base_parameter_count();
   // From AS-IS, with the equation-error stage: from `best` the fit tends to stay in the
   // valley the bound pushed it into (the latch's shape parameters making up for k_l).
@@ -281,13 +393,10 @@ void check_bounds(const DoorModel& asis, const PreparedData& data, const FitOpti
       bounds[i].lower = bounds[i].lower >= 0 ? std::max(0.0, lower) : lower;
     }
   }
-  FitResult widened_fit = [&] {
-    const DoorModel widened(
-        ModelKind::kPhysical, asis.geometry(), values, bounds,
-        std::vector<EffectSetting>(asis.effects().begin(), asis.effects().end()));
-    return fit_model(widened, data, fit);
-  }();
-  const DesignSolution widened = make_solution(widened_fit, asis, setup, lambda, -1);
+  const DesignSolution widened = fit_design(
+      DoorModel(ModelKind::kPhysical, asis.geometry(), values, bounds,
+                std::vector<EffectSetting>(asis.effects().begin(), asis.effects().end())),
+      -1, {});
   const double best_rmse = best.fit.window.rmse();
   result.requested_rmse_rad_s = widened.fit.window.rmse();
   result.requested_data_cost = widened.data_cost;
@@ -306,7 +415,8 @@ void check_bounds(const DoorModel& asis, const PreparedData& data, const FitOpti
                     printf_text("%.5g", requested.to_be) + " " + held.unit;
     result.requested.push_back(std::move(requested));
   }
-  if (widened.data_cost < best.data_cost / (1.0 + options.equivalent_cost_tolerance)) {
+  if (!equivalent_cost(best.data_cost, widened.data_cost, best.data_residuals,
+                       options.infeasibility_cost_tolerance)) {
     result.feasible = false;
     result.infeasibility =
         binding_text +
@@ -323,10 +433,71 @@ void check_bounds(const DoorModel& asis, const PreparedData& data, const FitOpti
   }
 }
 
+// The fewest-changes alternative (InverseDesignOptions::fewest_changes_refits), added to
+// result.solutions when distinct; the solutions are then ranked by size of change again.
+void add_fewest_changes(const DoorModel& asis, const DesignFitter& fit_design,
+                        const InverseDesignOptions& options, const Setup& setup, double best_cost,
+                        int residuals, bool commanded_torque, InverseDesignResult& result) {
+  DesignSolution current = result.solutions.front();
+  std::vector<std::pair<double, int>> candidates;  // (scaled change, index)
+  for (int index : setup.free_index) {
+    const double scaled = std::abs(current.parameters[index].change) / setup.scale[index];
+    if (scaled <= 1e-3) continue;  // unchanged already
+    if (commanded_torque && asis.parameter_name(index) == kInertiaParameter) continue;
+    candidates.emplace_back(scaled, index);
+  }
+  std::sort(candidates.begin(), candidates.end());
+  std::vector<std::string> held;
+  int refits = 0;
+  for (const auto& [scaled, index] : candidates) {
+    if (refits >= options.fewest_changes_refits) break;
+    std::vector<std::string> trial = held;
+    trial.push_back(asis.parameter_name(index));
+    std::vector<double> values(current.model.parameter_values().begin(),
+                               current.model.parameter_values().end());
+    values[index] = setup.as_is[index];
+    std::optional<DoorModel> start;
+    try {
+      start = asis.with_parameter_values(values);
+    } catch (const std::invalid_argument&) {
+      continue;  // the AS-IS value breaks a constraint with the others as they are
+    }
+    ++refits;
+    try {
+      DesignSolution refit = fit_design(*start, -2, trial);
+      if (equivalent_cost(refit.data_cost, best_cost, residuals,
+                          options.equivalent_cost_tolerance)) {
+        current = std::move(refit);
+        held = std::move(trial);
+      }
+    } catch (const std::runtime_error&) {
+      // that hold does not fit: keep the parameter changed
+    }
+  }
+  std::string held_text;
+  for (const std::string& name : held) held_text += (held_text.empty() ? "" : ", ") + name;
+  if (held.empty()) {
+    result.notes.push_back(printf_text(
+        "fewest changes: no changed parameter can be left at its AS-IS value (%d refits)", refits));
+    return;
+  }
+  // Distinct by construction: the smallest-change solution changes every held parameter.
+  result.notes.push_back(printf_text(
+      "fewest changes: %s left at AS-IS, the same fit (data cost %.6g, size of change %.4g; %d "
+      "refits)",
+      held_text.c_str(), current.data_cost, current.size_of_change, refits));
+  result.solutions.push_back(std::move(current));
+  std::stable_sort(result.solutions.begin(), result.solutions.end(),
+                   [](const DesignSolution& a, const DesignSolution& b) {
+                     return a.size_of_change < b.size_of_change;
+                   });
+}
+
 }  // namespace
 
 InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<PreparedData>& tobe,
-                                   const InverseDesignOptions& options) {
+                                   const InverseDesignOptions& options,
+                                   const std::vector<CommandedTorque>& commanded) {
   const auto began = std::chrono::steady_clock::now();
   if (asis.kind() != ModelKind::kPhysical) {
     throw std::invalid_argument(
@@ -378,63 +549,121 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
   }
   // r_i = sqrt(λ w_i) (p_i − p_asis_i) / s_i, i.e. a prior centred on AS-IS with
   // σ_i = s_i / sqrt(λ w_i); a change that costs nothing gets no prior.
-  const double lambda = options.regularization;
-  for (int index : setup.free_index) {
-    const double strength = lambda * setup.weight[index];
-    if (!(strength > 0)) continue;
-    fit.priors.push_back(
-        {asis.parameter_name(index), setup.as_is[index], setup.scale[index] / std::sqrt(strength)});
-  }
+  const auto set_priors = [&](double lambda) {
+    fit.priors.clear();
+    for (int index : setup.free_index) {
+      const double strength = lambda * setup.weight[index];
+      if (!(strength > 0)) continue;
+      fit.priors.push_back({asis.parameter_name(index), setup.as_is[index],
+                            setup.scale[index] / std::sqrt(strength)});
+    }
+  };
+  double lambda = options.regularization;
+  set_priors(lambda);
 
   InverseDesignResult result;
-  std::vector<DesignSolution> found;
-  const FitResult first = fit_model(asis, data, fit);
-  found.push_back(make_solution(first, asis, setup, lambda, 0));
-  result.rate_noise_rad_s = first.summary.rate_noise_rad_s;
-  result.starts_run = 1;
+  result.rate_noise_rad_s = fit.rate_noise_rad_s > 0 ? fit.rate_noise_rad_s : data.rate_noise_rad_s;
+  const double angle_noise_rad =
+      fit.angle_noise_rad > 0 ? fit.angle_noise_rad : data.angle_noise_rad;
+  result.commanded_torque = options.use_commanded_torque && !commanded.empty();
+  const DesignFitter fit_design = [&](const DoorModel& start, int start_index,
+                                      const std::vector<std::string>& held) {
+    DesignSolution solution = [&] {
+      if (result.commanded_torque) {
+        return fit_commanded_design(start, commanded, data, fit, asis, setup, lambda, start_index,
+                                    held);
+      }
+      if (held.empty()) {
+        return make_solution(fit_model(start, data, fit), asis, setup, lambda, start_index);
+      }
+      FitOptions held_fit = fit;
+      held_fit.fixed_parameters.insert(held_fit.fixed_parameters.end(), held.begin(), held.end());
+      std::erase_if(held_fit.priors, [&](const ParameterPrior& prior) {
+        return std::find(held.begin(), held.end(), prior.parameter) != held.end();
+      });
+      return make_solution(fit_model(start, data, held_fit), asis, setup, lambda, start_index);
+    }();
+    solution.held_at_as_is = held;
+    return solution;
+  };
 
-  // Perturbed starts: ± `perturbation` along the weakest directions, from the first
-  // solution. The equation-error stage stays on: a start off in a determined direction
-  // inflates the robust uncertainties so much that the window fit's stopping rule would
-  // end it at once, and the stage cannot move the start along a direction the data do not
-  // determine.
-  const int extra = options.starts - 1;
-  const std::vector<Eigen::VectorXd> directions =
-      weak_directions(first.model, data, fit, first.summary, setup, (extra + 1) / 2);
-  const FitOptions& perturbed_fit = fit;
-  for (int j = 0; j < extra && j / 2 < static_cast<int>(directions.size()); ++j) {
-    const Eigen::VectorXd& direction = directions[j / 2];
-    const double sign = j % 2 == 0 ? 1.0 : -1.0;
-    std::optional<DoorModel> start;
-    double step = options.perturbation;
-    for (int attempt = 0; attempt <= kStartShrinks && !start; ++attempt, step *= 0.5) {
-      std::vector<double> values(first.model.parameter_values().begin(),
-                                 first.model.parameter_values().end());
-      for (std::size_t k = 0; k < setup.free_index.size(); ++k) {
-        const int index = setup.free_index[k];
-        values[index] = std::clamp(values[index] + sign * step * direction(k) * setup.scale[index],
-                                   bounds[index].lower, bounds[index].upper);
+  // One pass: a fit from `origin`, then the perturbed starts around its result.
+  std::vector<std::string> start_notes;
+  const auto run_starts = [&](const DoorModel& origin) {
+    std::vector<DesignSolution> found;
+    start_notes.clear();
+    found.push_back(fit_design(origin, 0, {}));
+    result.starts_run = 1;
+    const DoorModel first_model = found.front().model;
+
+    // Perturbed starts: ± `perturbation` along the weakest directions, from the first
+    // solution. The equation-error stage stays on: a start off in a determined direction
+    // inflates the robust uncertainties so much that the window fit's stopping rule would
+    // end it at once, and the stage cannot move the start along a direction the data do
+    // not determine.
+    const int extra = options.starts - 1;
+    const std::vector<Eigen::VectorXd> directions = weak_directions(
+        first_model, data, fit, result.rate_noise_rad_s, angle_noise_rad, setup, (extra + 1) / 2);
+    for (int j = 0; j < extra && j / 2 < static_cast<int>(directions.size()); ++j) {
+      const Eigen::VectorXd& direction = directions[j / 2];
+      const double sign = j % 2 == 0 ? 1.0 : -1.0;
+      std::optional<DoorModel> start;
+      double step = options.perturbation;
+      for (int attempt = 0; attempt <= kStartShrinks && !start; ++attempt, step *= 0.5) {
+        std::vector<double> values(first_model.parameter_values().begin(),
+                                   first_model.parameter_values().end());
+        for (std::size_t k = 0; k < setup.free_index.size(); ++k) {
+          const int index = setup.free_index[k];
+          values[index] =
+              std::clamp(values[index] + sign * step * direction(k) * setup.scale[index],
+                         bounds[index].lower, bounds[index].upper);
+        }
+        try {
+          start = asis.with_parameter_values(values);
+        } catch (const std::invalid_argument&) {
+          // breaks a constraint: try a smaller step
+        }
+      }
+      if (!start) {
+        start_notes.push_back("perturbed start " + std::to_string(j + 1) +
+                              " broke a constraint at every step tried; skipped");
+        continue;
       }
       try {
-        start = asis.with_parameter_values(values);
-      } catch (const std::invalid_argument&) {
-        // breaks a constraint: try a smaller step
+        found.push_back(fit_design(*start, j + 1, {}));
+      } catch (const std::runtime_error& error) {
+        start_notes.push_back("the fit from perturbed start " + std::to_string(j + 1) +
+                              " failed: " + error.what());
       }
+      ++result.starts_run;
     }
-    if (!start) {
-      result.notes.push_back("perturbed start " + std::to_string(j + 1) +
-                             " broke a constraint at every step tried; skipped");
-      continue;
-    }
-    try {
-      found.push_back(
-          make_solution(fit_model(*start, data, perturbed_fit), asis, setup, lambda, j + 1));
-    } catch (const std::runtime_error& error) {
-      result.notes.push_back("the fit from perturbed start " + std::to_string(j + 1) +
-                             " failed: " + error.what());
-    }
-    ++result.starts_run;
+    return found;
+  };
+  const auto best_of = [](const std::vector<DesignSolution>& found) {
+    return std::min_element(found.begin(), found.end(),
+                            [](const auto& a, const auto& b) { return a.data_cost < b.data_cost; });
+  };
+
+  // The first pass starts from AS-IS with the priors as given. When its best design misses
+  // the data by more than their noise (φ > 1), the priors are strengthened by φ and a second
+  // pass starts from that best design.
+  std::vector<DesignSolution> found = run_starts(asis);
+  result.misfit_factor = misfit_factor(*best_of(found));
+  if (options.scale_priors_by_misfit && lambda > 0 && result.misfit_factor > 1.0) {
+    const DesignSolution first_best = *best_of(found);
+    lambda *= result.misfit_factor;
+    set_priors(lambda);
+    found = run_starts(first_best.model);
+    result.notes.push_back(printf_text(
+        "the first pass's best design missed the TO-BE data by %.3g times their %s (reduced "
+        "data cost phi %.4g, data cost %.6g): the priors were strengthened by phi (effective "
+        "lambda %.4g) and the design fitted again, from that design",
+        std::sqrt(result.misfit_factor),
+        result.commanded_torque ? "torque scale (0.01 N*m)" : "noise", result.misfit_factor,
+        first_best.data_cost, lambda));
   }
+  result.effective_regularization = lambda;
+  result.notes.insert(result.notes.end(), start_notes.begin(), start_notes.end());
 
   // Solutions the data cannot tell from the best fit, distinct from each other, smallest
   // change first.
@@ -449,7 +678,8 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
   const double best_rmse = best != nullptr ? best->fit.window.rmse() : kNaN;
   std::vector<const DesignSolution*> order;
   for (const DesignSolution& solution : found) {
-    if (solution.data_cost <= (1.0 + options.equivalent_cost_tolerance) * best_cost) {
+    if (equivalent_cost(solution.data_cost, best_cost, best->data_residuals,
+                        options.equivalent_cost_tolerance)) {
       order.push_back(&solution);
     }
   }
@@ -467,8 +697,8 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
     const bool kept =
         std::any_of(result.solutions.begin(), result.solutions.end(),
                     [&](const DesignSolution& s) { return s.start_index == solution.start_index; });
-    const bool equivalent =
-        solution.data_cost <= (1.0 + options.equivalent_cost_tolerance) * best_cost;
+    const bool equivalent = equivalent_cost(solution.data_cost, best_cost, best->data_residuals,
+                                            options.equivalent_cost_tolerance);
     result.notes.push_back(
         printf_text("start %d: data cost %.6g, size of change %.4g: %s", solution.start_index,
                     solution.data_cost, solution.size_of_change,
@@ -477,13 +707,25 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
                                  : "dropped (fits clearly worse than the best)"));
   }
 
+  if (best != nullptr && !result.solutions.empty() && options.fewest_changes_refits > 0) {
+    add_fewest_changes(asis, fit_design, options, setup, best_cost, best->data_residuals,
+                       result.commanded_torque, result);
+  }
+
   // Feasible unless the best fit holds parameters on bounds and the data would be fitted
   // clearly better beyond them: refit with the binding bounds moved outward.
   const double noise = result.rate_noise_rad_s;
   if (best != nullptr && !best->at_bound.empty()) {
-    check_bounds(asis, data, fit, options, setup, lambda, *best, result);
+    check_bounds(asis, fit_design, options, *best, result);
   }
-  if (best != nullptr && result.feasible && best_rmse > kMissedFeelFactor * noise) {
+  if (best != nullptr && result.commanded_torque) {
+    result.notes.push_back(printf_text(
+        "fitted to the torque the playback commanded; the recorded motion differs from the "
+        "design's by a window RMSE of omega of %.3g rad/s (%.3g times the rate noise): the "
+        "device's rendering (control delay, admittance, servo) is in the motion, not in the "
+        "commanded torque",
+        best_rmse, best_rmse / noise));
+  } else if (best != nullptr && result.feasible && best_rmse > kMissedFeelFactor * noise) {
     result.notes.push_back(printf_text(
         "the best design misses the TO-BE data by %.3g times the rate noise (%.3g rad/s; the "
         "force noise integrated by the model adds to it: compare with the AS-IS fit's figure)",
@@ -514,10 +756,15 @@ std::string parameter_table(const DesignSolution& solution, bool changed_only) {
 }
 
 std::string solution_header(const DesignSolution& solution, int rank) {
+  std::string origin = printf_text("start %d", solution.start_index);
+  if (!solution.held_at_as_is.empty()) {
+    origin = "fewest changes, AS-IS kept for";
+    for (const std::string& name : solution.held_at_as_is) origin += " " + name;
+  }
   return printf_text(
-      "Solution %d (start %d): size of change %.4g; window RMSE of omega %.4g rad/s, FIT %.1f%%; "
+      "Solution %d (%s): size of change %.4g; window RMSE of omega %.4g rad/s, FIT %.1f%%; "
       "data cost %.4g, prior cost %.4g%s\n",
-      rank, solution.start_index, solution.size_of_change, solution.fit.window.rmse(),
+      rank, origin.c_str(), solution.size_of_change, solution.fit.window.rmse(),
       solution.fit.window.fit_percent(), solution.data_cost, solution.prior_cost,
       solution.converged ? "" : " (not converged)");
 }
@@ -538,7 +785,9 @@ std::string InverseDesignResult::brief_report() const {
 
 std::string InverseDesignResult::full_report() const {
   std::string text = brief_report();
-  text += printf_text("TO-BE rate noise: %.4g rad/s\n", rate_noise_rad_s);
+  text += printf_text(
+      "TO-BE rate noise: %.4g rad/s; misfit factor phi %.4g; effective regularization %.4g\n",
+      rate_noise_rad_s, misfit_factor, effective_regularization);
   for (std::size_t s = 0; s < solutions.size(); ++s) {
     text += std::string("\n").append(solution_header(solutions[s], static_cast<int>(s + 1)));
     text += parameter_table(solutions[s], /*changed_only=*/false);

@@ -21,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/commanded_torque.h"
 #include "analysis/door_model.h"
 #include "analysis/fitting.h"
 #include "analysis/strokes.h"
@@ -53,6 +54,18 @@ struct InverseDesignOptions {
   // change by a whole bound width of a cheap parameter cost as much as 1000 samples missed
   // by one noise level; docs/inverse-design.md shows what it does on synthetic data.
   double regularization = 1000.0;
+  // Measure the data residuals in units of the misfit the fit actually leaves rather than
+  // of the recording's noise: after a first fit from AS-IS, when its reduced data cost
+  // φ = Σ r² / (n − p) exceeds 1, every prior is strengthened by φ (σ_i → σ_i / √φ) and
+  // the design is fitted again. Without it λ's meaning would hang on the noise level: a
+  // haptic playback recording (noise 100 times below the bench's, missed by 40 noise
+  // levels where the device renders the latch) made the priors 1600 times weaker than on
+  // bench data, and cheap parameters drifted to absorb rendering effects.
+  bool scale_priors_by_misfit = true;
+  // With commanded torques given (playback recordings, analysis/commanded_torque.h): fit
+  // every free parameter but the inertia to them, and the inertia to the motion. Off: the
+  // motion alone, as for a recording of a real door.
+  bool use_commanded_torque = true;
   // Fits in all: one from AS-IS, the others from starts perturbed along the directions the
   // data determine least (eigenvectors of the information matrix's smallest eigenvalues),
   // to find distinct designs that fit equally well. ≥ 1.
@@ -71,6 +84,18 @@ struct InverseDesignOptions {
   // the data clearly better (data cost lower by more than equivalent_cost_tolerance):
   // the data ask for more than the bounds allow. > 0.
   double bound_widening = 1.0;
+  // ... and the request is infeasible when the within-bounds design's data cost is more than
+  // this fraction above the widened fit's. ≥ 0.
+  double infeasibility_cost_tolerance = 0.01;
+  // Fewest changes: from the smallest-change solution, the changed parameters are held at
+  // their AS-IS values one at a time (the smallest change first) and the design refitted,
+  // keeping each hold after which it still fits equivalently. The result, when distinct, is
+  // reported beside the others: the same feel with fewer parts changed (the smallest change
+  // spreads a change over every parameter that can share it, such as a preload over the
+  // spring's free length and anchor). At most `fewest_changes_refits` refits; 0 turns it
+  // off. The inertia is never held when fitted from commanded torques (its evidence is the
+  // motion).
+  int fewest_changes_refits = 10;
   // The fit's options (windows, solver, uncertainties). Its free_parameters are the
   // candidates (empty: the default free set); fixed_parameters are added to `fixed`.
   // Cross-validation is off by default here (it refits per fold, per start).
@@ -100,11 +125,17 @@ struct DesignSolution {
   std::vector<DesignParameter> parameters;  // every parameter, in the model's order
   // Fit of the TO-BE data by this model (the data part only, without the priors).
   FitMetrics fit;
-  double data_cost = 0.0;   // ½ Σ r² of the data residuals
+  double data_cost = 0.0;  // ½ Σ r² of the data residuals
+  // Σ r² / (n − p) of the data residuals: 1 when the design misses the data by their noise
+  // (or, fitted to commanded torques, by the torque scale) only.
+  double reduced_data_cost = 1.0;
   double prior_cost = 0.0;  // ½ Σ r² of the prior residuals
   // √(Σ w_i ((p_i − p_asis_i)/s_i)²): the weighted size of the change.
   double size_of_change = 0.0;
-  int start_index = 0;  // which start found it (0: from AS-IS)
+  int start_index = 0;     // which start found it (0: from AS-IS; −2: the fewest-changes search)
+  int data_residuals = 0;  // n of the data cost
+  // Free parameters held at their AS-IS values (the fewest-changes alternative).
+  std::vector<std::string> held_at_as_is;
   bool converged = false;
   std::vector<std::string> at_bound;  // free parameters on a bound
   FitSummary summary;                 // the underlying fit's summary
@@ -123,6 +154,12 @@ struct InverseDesignResult {
   double requested_rmse_rad_s = 0.0;  // that fit's window RMSE of ω (0 when not run)
   double requested_data_cost = 0.0;   // and its data cost
   double rate_noise_rad_s = 0.0;      // the TO-BE data's σ_ω
+  // φ: the first fit's reduced data cost Σ r² / (n − p) (1 for a model that misses the data
+  // by their noise only); the priors were strengthened by it when it is above 1 and
+  // scale_priors_by_misfit is on. λ·φ is the effective regularization.
+  double misfit_factor = 1.0;
+  bool commanded_torque = false;  // the design was fitted to commanded torques
+  double effective_regularization = 0.0;
   int starts_run = 0;
   double total_time_s = 0.0;
   std::vector<std::string> notes;
@@ -140,7 +177,11 @@ PreparedData merge_prepared(const std::vector<PreparedData>& data);
 // bounds the feasible range). Throws std::invalid_argument for a sensory model, an empty
 // `tobe`, unusable options (the validate() message), unknown parameter names in fixed or
 // weights, or TO-BE data whose handle radius differs from the model's.
+//
+// `commanded`: the commanded torques of the TO-BE recordings when they are haptic
+// playbacks (read_commanded_torque); empty for recordings of a real door.
 InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<PreparedData>& tobe,
-                                   const InverseDesignOptions& options = {});
+                                   const InverseDesignOptions& options = {},
+                                   const std::vector<CommandedTorque>& commanded = {});
 
 }  // namespace doorbench

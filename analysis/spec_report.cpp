@@ -274,6 +274,9 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
   root["parameters"] = parameters;
   root["fit"] = {{"window_rmse_rad_s", number(best.fit.window.rmse())},
                  {"rate_noise_rad_s", number(design.rate_noise_rad_s)},
+                 {"misfit_factor", number(design.misfit_factor)},
+                 {"commanded_torque", design.commanded_torque},
+                 {"effective_regularization", number(design.effective_regularization)},
                  {"data_cost", number(best.data_cost)},
                  {"size_of_change", number(best.size_of_change)},
                  {"converged", best.converged}};
@@ -328,6 +331,7 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
                   {"size_of_change", number(alt.size_of_change)},
                   {"data_cost", number(alt.data_cost)},
                   {"window_rmse_rad_s", number(alt.fit.window.rmse())},
+                  {"held_at_as_is", alt.held_at_as_is},
                   {"changes", changes}};
     if (s - 1 < e.felt_alternatives.size()) entry["felt"] = felt_json(e.felt_alternatives[s - 1]);
     alternatives.push_back(entry);
@@ -419,6 +423,11 @@ std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& e
     for (std::size_t s = 1; s < design.solutions.size(); ++s) {
       const DesignSolution& alt = design.solutions[s];
       std::string changes;
+      if (!alt.held_at_as_is.empty()) {
+        changes = "<em>fewest changes; AS-IS kept for";
+        for (const std::string& name : alt.held_at_as_is) changes += " " + escape(name);
+        changes += "</em>: ";
+      }
       for (const DesignParameter& p : alt.parameters) {
         if (p.free && changed(p)) {
           changes += escape(p.name) + printf_text(" %.4g&rarr;%.4g; ", p.as_is, p.to_be);

@@ -278,7 +278,9 @@ void specify_tuned_variant(const std::filesystem::path& dir) {
   std::cout << "\nthe design specification: the AS-IS physical door ("
             << (dir / "physical-params.json").string()
             << ") changed as little as possible to feel like the TO-BE recording (J_d left free: "
-               "the variant is heavier)\n";
+               "the variant is heavier). The playback recorded the torque it commanded, so the "
+               "design is fitted to that torque (the device's rendering is not in it) and the "
+               "inertia to the recorded motion\n";
   SpecCommandOptions spec;
   spec.tobe_paths = {session_path.string()};
   spec.asis_path = (dir / "physical-params.json").string();
@@ -289,13 +291,17 @@ void specify_tuned_variant(const std::filesystem::path& dir) {
   run_spec(spec);
   const DoorModel specified =
       load_model(ModelKind::kPhysical, dir / "spec" / "tobe-params.json", "");
-  std::cout << "  played vs specified (the changed parameters):\n";
+  std::cout << "  played vs specified (the changed parameters; the inertia comes from the motion, "
+               "where the device's own dynamics add a little):\n";
   for (const char* name : {"J_d", "k_l", "F_l0"}) {
     const int index = *asis.find_parameter(name);
-    char line[160];
-    std::snprintf(line, sizeof line, "    %-6s AS-IS %-10.5g played %-10.5g specified %-10.5g\n",
-                  name, asis.parameter_values()[index], tuned.parameter_values()[index],
-                  specified.parameter_values()[index]);
+    const double played = tuned.parameter_values()[index];
+    const double value = specified.parameter_values()[index];
+    char line[200];
+    std::snprintf(line, sizeof line,
+                  "    %-6s AS-IS %-10.5g played %-10.5g specified %-10.5g (%+.1f %% of played)\n",
+                  name, asis.parameter_values()[index], played, value,
+                  100.0 * (value - played) / std::abs(played));
     std::cout << line;
   }
 }

@@ -11,7 +11,6 @@
 #include "app/commands.h"
 
 namespace doorbench::app {
-namespace {
 
 bool is_hdf5_file(const std::string& path) {
   // Every HDF5 file starts with this signature (at offset 0 for files HDF5 itself made).
@@ -22,8 +21,6 @@ bool is_hdf5_file(const std::string& path) {
   in.read(head, sizeof head);
   return in.gcount() == 8 && std::equal(head, head + 8, kSignature);
 }
-
-}  // namespace
 
 PreparedData load_prepared_data(const std::string& path) {
   if (is_hdf5_file(path)) return prepare_session(path);

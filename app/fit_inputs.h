@@ -9,6 +9,10 @@
 
 namespace doorbench::app {
 
+// Whether `path` is an HDF5 file (a session), by its signature. Throws std::runtime_error
+// when it cannot be opened.
+bool is_hdf5_file(const std::string& path);
+
 // A session (HDF5: by its signature) or a recording in the CSV exchange format, prepared
 // into strokes (analysis/preprocessing.h).
 PreparedData load_prepared_data(const std::string& path);

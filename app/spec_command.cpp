@@ -1,10 +1,15 @@
 // doorbench spec: the design specification from TO-BE recordings and the AS-IS door —
 // inverse design, felt quantities before/after, the check, tolerances, spec.json/html/pdf.
+#include <unistd.h>
+
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <thread>
 
+#include "analysis/commanded_torque.h"
 #include "analysis/inverse_design.h"
 #include "analysis/parameter_file.h"
 #include "analysis/spec_report.h"
@@ -53,9 +58,23 @@ void run_spec(const SpecCommandOptions& options) {
   progress << "AS-IS door: " << asis_file.string() << "\n";
 
   std::vector<PreparedData> tobe;
+  std::vector<CommandedTorque> commanded;
+  bool all_commanded = true;
   for (const std::string& path : options.tobe_paths) {
     progress << "preparing " << path << "\n";
     tobe.push_back(load_prepared_data(path));
+    std::optional<CommandedTorque> torque;
+    if (!options.motion_only && is_hdf5_file(path)) torque = read_commanded_torque(path);
+    if (torque) {
+      commanded.push_back(std::move(*torque));
+    } else {
+      all_commanded = false;
+    }
+  }
+  if (!all_commanded) commanded.clear();
+  if (!commanded.empty()) {
+    progress << "the TO-BE recordings are haptic playbacks: the design is fitted to the torque "
+                "they commanded, the inertia to their motion (--motion-only: the motion alone)\n";
   }
   // Tolerances are read before the long fit, so that a bad file fails at once.
   ToleranceSpec tolerances;
@@ -71,7 +90,7 @@ void run_spec(const SpecCommandOptions& options) {
   if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
   progress << "inverse design: fitting the physical model to " << tobe.size()
            << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
-  const InverseDesignResult design = inverse_design(asis, tobe, design_options);
+  const InverseDesignResult design = inverse_design(asis, tobe, design_options, commanded);
   if (design.solutions.empty()) throw std::runtime_error("inverse design found no solution");
 
   SpecEvaluationOptions evaluation_options;
@@ -80,9 +99,14 @@ void run_spec(const SpecCommandOptions& options) {
   evaluation_options.monte_carlo.samples = options.samples;
   evaluation_options.monte_carlo.threads = options.threads;
   evaluation_options.monte_carlo.seed = options.seed;
-  evaluation_options.monte_carlo.progress = [&progress](int done, int total) {
-    progress << "\rtolerance Monte Carlo: " << done << " / " << total << " samples"
-             << (done == total ? "\n" : "") << std::flush;
+  const bool terminal = isatty(fileno(stderr)) != 0;
+  evaluation_options.monte_carlo.progress = [&progress, terminal](int done, int total) {
+    if (terminal) {
+      progress << "\rtolerance Monte Carlo: " << done << " / " << total << " samples"
+               << (done == total ? "\n" : "") << std::flush;
+    } else if (done == total || (done * 10 / total) != ((done - 1) * 10 / total)) {
+      progress << "tolerance Monte Carlo: " << done << " / " << total << " samples\n";
+    }
   };
   if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
   progress << "felt quantities and the check; tolerance analysis of " << options.samples
@@ -149,6 +173,9 @@ void add_spec_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   command->add_option("--starts", options->starts, "inverse fits from different starts")
       ->capture_default_str();
+  command->add_flag("--motion-only", options->motion_only,
+                    "fit the recorded motion even when the sessions carry the torque a haptic "
+                    "playback commanded");
   command->add_flag("--no-pdf", options->no_pdf, "do not render spec.pdf");
   command->add_flag("--no-tolerances", options->no_tolerances, "skip the tolerance analysis");
   command->callback([options, &action] { action = [options] { run_spec(*options); }; });

@@ -21,6 +21,7 @@ struct SpecCommandOptions {
   unsigned long long seed = 1;
   double regularization = InverseDesignOptions{}.regularization;
   int starts = 3;
+  bool motion_only = false;  // ignore the commanded torque of playback sessions
   bool no_pdf = false;
   bool no_tolerances = false;
   bool show_progress = true;  // progress lines on stderr

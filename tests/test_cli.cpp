@@ -884,6 +884,20 @@ TEST_CASE("CLI: demo summarizes both models and writes their runs", "[cli]") {
   CHECK_THAT(result.out, Contains("fitted back (6 strokes, from the reference door)"));
   CHECK_THAT(result.out, Contains("the design specification: the AS-IS physical door"));
   CHECK_THAT(result.out, Contains("played vs specified"));
+  // The specification names what was played: k_l and F_l0 x0.7 from the commanded torque,
+  // J_d x1.2 from the motion (within 5 %: the device's own dynamics are in it).
+  for (const auto& [name, tolerance] :
+       std::vector<std::pair<std::string, double>>{{"k_l", 0.5}, {"F_l0", 0.5}, {"J_d", 5.0}}) {
+    const std::string line_start = "    " + name + std::string(7 - name.size(), ' ') + "AS-IS";
+    const auto line = result.out.find(line_start);
+    REQUIRE(line != std::string::npos);
+    const auto end = result.out.find('\n', line);
+    const std::string text = result.out.substr(line, end - line);
+    const std::vector<double> percent = numbers_after(text, "(");
+    INFO(text);
+    REQUIRE(percent.size() == 1);
+    CHECK(std::abs(percent.front()) <= tolerance);
+  }
   CHECK(fs::exists(dir / "haptic-playback.h5"));
   CHECK(fs::exists(dir / "tobe-tuned.h5"));
   CHECK(fs::exists(dir / "spec" / "spec.json"));

@@ -30,8 +30,12 @@ DoorModel scaled(const DoorModel& model, const char* name, double factor) {
 }
 
 DesignSolution solution_of(const DoorModel& asis, const DoorModel& tobe) {
-  DesignSolution solution{
-      .model = tobe, .parameters = {}, .fit = {}, .at_bound = {}, .summary = {}};
+  DesignSolution solution{.model = tobe,
+                          .parameters = {},
+                          .fit = {},
+                          .held_at_as_is = {},
+                          .at_bound = {},
+                          .summary = {}};
   for (int i = 0; i < tobe.parameter_count(); ++i) {
     DesignParameter p;
     p.name = tobe.parameter_name(i);
