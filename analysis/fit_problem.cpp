@@ -618,33 +618,66 @@ bool WindowProblem::reduce(bool cached_only, ReducedSystem& out) const {
   return true;
 }
 
+namespace {
+
+// The equation-error problem (analysis/fit_equation_error.h) over every sample of `data`, in
+// chunks of 200 samples, on the free parameters `x` (bounds from the model). `x` and the
+// arguments must outlive it; it does not move (the cost functions point into it).
+class EquationErrorProblem {
+ public:
+  EquationErrorProblem(const DoorModel& model, const PreparedData& data, const ParameterMap& map,
+                       const FitOptions& options, std::vector<double>& x,
+                       std::vector<std::vector<double>> rate_derivatives, double torque_scale_Nm)
+      : preparer_(model, map, x.data()) {
+    preparer_.set_threads(fit_thread_count(options));
+    setup_.model = &model;
+    setup_.data = &data;
+    setup_.map = &map;
+    setup_.rate_derivative_rad_s2 = std::move(rate_derivatives);
+    setup_.torque_scale_Nm = torque_scale_Nm;
+    setup_.feasible = preparer_.flag();
+    ceres::Problem::Options problem_options;
+    problem_options.evaluation_callback = &preparer_;
+    problem_ = std::make_unique<ceres::Problem>(problem_options);
+    add_free_block(*problem_, x.data(), model, map);
+    constexpr int kChunk = 200;
+    for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+      const int n = static_cast<int>(data.strokes[s].size());
+      for (int first = 0; first < n; first += kChunk) {
+        const int count = std::min(kChunk, n - first);
+        auto* cost =
+            new CachingCost(make_equation_error_cost(setup_, static_cast<int>(s), first, count));
+        data_blocks_.push_back(problem_->AddResidualBlock(cost, nullptr, x.data()));
+        preparer_.add(cost, {x.data()});
+        residuals_ += count;
+      }
+    }
+  }
+  EquationErrorProblem(const EquationErrorProblem&) = delete;
+  EquationErrorProblem& operator=(const EquationErrorProblem&) = delete;
+
+  ceres::Problem& problem() { return *problem_; }
+  const std::vector<ceres::ResidualBlockId>& data_blocks() const { return data_blocks_; }
+  int residuals() const { return residuals_; }
+
+ private:
+  EvaluationPreparer preparer_;
+  EquationErrorSetup setup_;
+  std::vector<ceres::ResidualBlockId> data_blocks_;
+  int residuals_ = 0;
+  std::unique_ptr<ceres::Problem> problem_;  // last: destroyed first
+};
+
+}  // namespace
+
 EquationErrorOutcome solve_equation_error(const DoorModel& model, const PreparedData& data,
                                           const ParameterMap& map, const FitOptions& options,
                                           std::vector<double> x0) {
   EquationErrorOutcome outcome;
   outcome.x = std::move(x0);
-  EvaluationPreparer preparer(model, map, outcome.x.data());
-  preparer.set_threads(fit_thread_count(options));
-  EquationErrorSetup setup;
-  setup.model = &model;
-  setup.data = &data;
-  setup.map = &map;
-  setup.rate_derivative_rad_s2 = rate_derivatives(data);
-  setup.feasible = preparer.flag();
-  ceres::Problem::Options problem_options;
-  problem_options.evaluation_callback = &preparer;
-  ceres::Problem problem(problem_options);
-  add_free_block(problem, outcome.x.data(), model, map);
-  constexpr int kChunk = 200;
-  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
-    const int n = static_cast<int>(data.strokes[s].size());
-    for (int first = 0; first < n; first += kChunk) {
-      auto* cost = new CachingCost(
-          make_equation_error_cost(setup, static_cast<int>(s), first, std::min(kChunk, n - first)));
-      problem.AddResidualBlock(cost, nullptr, outcome.x.data());
-      preparer.add(cost, {outcome.x.data()});
-    }
-  }
+  EquationErrorProblem equation_error(model, data, map, options, outcome.x, rate_derivatives(data),
+                                      1.0);
+  ceres::Problem& problem = equation_error.problem();
   ceres::Solver::Options solver = solver_options(options, options.max_iterations);
   RelativeStepCheck check(outcome.x, options.equation_error_step_tolerance);
   solver.callbacks.push_back(&check);
@@ -666,33 +699,12 @@ TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& da
                                   double torque_scale_Nm) {
   TorqueMapOutcome outcome;
   outcome.x = std::move(x0);
-  EvaluationPreparer preparer(model, map, outcome.x.data());
-  preparer.set_threads(fit_thread_count(options));
-  EquationErrorSetup setup;
-  setup.model = &model;
-  setup.data = &data;
-  setup.map = &map;
-  for (const Stroke& stroke : data.strokes) {
-    setup.rate_derivative_rad_s2.emplace_back(stroke.size(), 0.0);  // J drops out
-  }
-  setup.torque_scale_Nm = torque_scale_Nm;
-  setup.feasible = preparer.flag();
-  ceres::Problem::Options problem_options;
-  problem_options.evaluation_callback = &preparer;
-  ceres::Problem problem(problem_options);
-  add_free_block(problem, outcome.x.data(), model, map);
-  constexpr int kChunk = 200;
-  std::vector<ceres::ResidualBlockId> data_blocks;
-  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
-    const int n = static_cast<int>(data.strokes[s].size());
-    for (int first = 0; first < n; first += kChunk) {
-      auto* cost = new CachingCost(
-          make_equation_error_cost(setup, static_cast<int>(s), first, std::min(kChunk, n - first)));
-      data_blocks.push_back(problem.AddResidualBlock(cost, nullptr, outcome.x.data()));
-      preparer.add(cost, {outcome.x.data()});
-      outcome.residuals += std::min(kChunk, n - first);
-    }
-  }
+  std::vector<std::vector<double>> no_acceleration;  // J drops out
+  for (const Stroke& stroke : data.strokes) no_acceleration.emplace_back(stroke.size(), 0.0);
+  EquationErrorProblem torque_map(model, data, map, options, outcome.x, std::move(no_acceleration),
+                                  torque_scale_Nm);
+  ceres::Problem& problem = torque_map.problem();
+  outcome.residuals = torque_map.residuals();
   if (!priors.empty()) {
     problem.AddResidualBlock(new PriorCost(priors, map.free_count()), nullptr, outcome.x.data());
   }
@@ -712,7 +724,7 @@ TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& da
   if (!outcome.usable) return outcome;
 
   ceres::Problem::EvaluateOptions evaluate;
-  evaluate.residual_blocks = data_blocks;
+  evaluate.residual_blocks = torque_map.data_blocks();
   std::vector<double> residuals;
   problem.Evaluate(evaluate, nullptr, &residuals, nullptr, nullptr);
   for (double r : residuals) outcome.sum_of_squares += r * r;

@@ -464,6 +464,11 @@ void add_fewest_changes(const DoorModel& asis, const DesignFitter& fit_design,
     }
     ++refits;
     try {
+      if (options.progress) {
+        options.progress(printf_text("fewest changes: refit %d of at most %d, %s at AS-IS", refits,
+                                     options.fewest_changes_refits,
+                                     asis.parameter_name(index).c_str()));
+      }
       DesignSolution refit = fit_design(*start, -2, trial);
       if (equivalent_cost(refit.data_cost, best_cost, residuals,
                           options.equivalent_cost_tolerance)) {
@@ -588,10 +593,17 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
   };
 
   // One pass: a fit from `origin`, then the perturbed starts around its result.
+  int pass = 1;
   std::vector<std::string> start_notes;
   const auto run_starts = [&](const DoorModel& origin) {
     std::vector<DesignSolution> found;
     start_notes.clear();
+    const auto report = [&](int start) {
+      if (options.progress) {
+        options.progress(printf_text("pass %d, start %d of %d", pass, start + 1, options.starts));
+      }
+    };
+    report(0);
     found.push_back(fit_design(origin, 0, {}));
     result.starts_run = 1;
     const DoorModel first_model = found.front().model;
@@ -630,6 +642,7 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
         continue;
       }
       try {
+        report(j + 1);
         found.push_back(fit_design(*start, j + 1, {}));
       } catch (const std::runtime_error& error) {
         start_notes.push_back("the fit from perturbed start " + std::to_string(j + 1) +
@@ -653,6 +666,7 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
     const DesignSolution first_best = *best_of(found);
     lambda *= result.misfit_factor;
     set_priors(lambda);
+    pass = 2;
     found = run_starts(first_best.model);
     result.notes.push_back(printf_text(
         "the first pass's best design missed the TO-BE data by %.3g times their %s (reduced "

@@ -17,6 +17,7 @@
 // the more a change must be paid for by a better fit before it is made. The residuals of
 // the data are in units of their noise (σ_ω, σ_θ), so λ·w_i compares a change of one
 // bound width with one noise-level of error on one sample.
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -96,6 +97,9 @@ struct InverseDesignOptions {
   // off. The inertia is never held when fitted from commanded torques (its evidence is the
   // motion).
   int fewest_changes_refits = 10;
+  // Called before each fit with a line saying which (pass, start, refit); may be empty. Called
+  // on the calling thread.
+  std::function<void(const std::string&)> progress;
   // The fit's options (windows, solver, uncertainties). Its free_parameters are the
   // candidates (empty: the default free set); fixed_parameters are added to `fixed`.
   // Cross-validation is off by default here (it refits per fold, per start).

@@ -2,6 +2,7 @@
 // inverse design, felt quantities before/after, the check, tolerances, spec.json/html/pdf.
 #include <unistd.h>
 
+#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -88,6 +89,12 @@ void run_spec(const SpecCommandOptions& options) {
   design_options.regularization = options.regularization;
   design_options.starts = options.starts;
   if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
+  const auto design_began = std::chrono::steady_clock::now();
+  design_options.progress = [&progress, design_began](const std::string& step) {
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - design_began).count();
+    progress << "  [" << static_cast<int>(seconds) << " s] " << step << "\n" << std::flush;
+  };
   progress << "inverse design: fitting the physical model to " << tobe.size()
            << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
   const InverseDesignResult design = inverse_design(asis, tobe, design_options, commanded);
