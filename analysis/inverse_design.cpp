@@ -23,6 +23,9 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr double kMissedFeelFactor = 10.0;
 // A perturbed start that breaks a constraint is retried this many times at half the step.
 constexpr int kStartShrinks = 4;
+// A parameter counts as a changed part when it moves by more than this fraction of its
+// scale (the bound width).
+constexpr double kChangedFraction = 1e-3;
 // The physical model's inertia: the commanded torque does not contain it.
 constexpr const char* kInertiaParameter = "J_d";
 // The unit of the commanded-torque residuals before φ rescales the priors: the torque is
@@ -187,8 +190,8 @@ DesignSolution describe_design(const DoorModel& model, const std::vector<double>
                                const FitMetrics& metrics, bool converged, const FitSummary& summary,
                                const DoorModel& asis, const Setup& setup, double lambda,
                                int start_index) {
-  DesignSolution solution{model,       {}, metrics, 0.0,       1.0, 0.0,    0.0,
-                          start_index, 0,  {},      converged, {},  summary};
+  DesignSolution solution{model, {},          metrics, 0.0, 1.0,       0.0, 0.0,
+                          0.0,   start_index, 0,       {},  converged, {},  summary};
   const auto values = model.parameter_values();
   const auto bounds = asis.parameter_bounds();
   double weighted = 0.0;
@@ -210,6 +213,7 @@ DesignSolution describe_design(const DoorModel& model, const std::vector<double>
     if (parameter.at_bound) solution.at_bound.push_back(parameter.name);
     const double scaled = parameter.change / setup.scale[i];
     weighted += parameter.weight * scaled * scaled;
+    if (std::abs(scaled) > kChangedFraction) solution.parts_changed_cost += parameter.weight;
     if (parameter.free) solution.prior_cost += 0.5 * lambda * parameter.weight * scaled * scaled;
     solution.parameters.push_back(std::move(parameter));
   }
@@ -433,8 +437,20 @@ void check_bounds(const DoorModel& asis, const DesignFitter& fit_design,
   }
 }
 
+// The ranking of equivalent designs: fewest parts changed (weighted by their costs of
+// change) first, then the smallest weighted size of the change.
+void rank_solutions(std::vector<DesignSolution>& solutions) {
+  std::stable_sort(solutions.begin(), solutions.end(),
+                   [](const DesignSolution& a, const DesignSolution& b) {
+                     if (a.parts_changed_cost != b.parts_changed_cost) {
+                       return a.parts_changed_cost < b.parts_changed_cost;
+                     }
+                     return a.size_of_change < b.size_of_change;
+                   });
+}
+
 // The fewest-changes alternative (InverseDesignOptions::fewest_changes_refits), added to
-// result.solutions when distinct; the solutions are then ranked by size of change again.
+// result.solutions; the solutions are then ranked again.
 void add_fewest_changes(const DoorModel& asis, const DesignFitter& fit_design,
                         const InverseDesignOptions& options, const Setup& setup, double best_cost,
                         int residuals, bool commanded_torque, InverseDesignResult& result) {
@@ -442,7 +458,7 @@ void add_fewest_changes(const DoorModel& asis, const DesignFitter& fit_design,
   std::vector<std::pair<double, int>> candidates;  // (scaled change, index)
   for (int index : setup.free_index) {
     const double scaled = std::abs(current.parameters[index].change) / setup.scale[index];
-    if (scaled <= 1e-3) continue;  // unchanged already
+    if (scaled <= kChangedFraction) continue;  // unchanged already
     if (commanded_torque && asis.parameter_name(index) == kInertiaParameter) continue;
     candidates.emplace_back(scaled, index);
   }
@@ -492,10 +508,7 @@ void add_fewest_changes(const DoorModel& asis, const DesignFitter& fit_design,
       "refits)",
       held_text.c_str(), current.data_cost, current.size_of_change, refits));
   result.solutions.push_back(std::move(current));
-  std::stable_sort(result.solutions.begin(), result.solutions.end(),
-                   [](const DesignSolution& a, const DesignSolution& b) {
-                     return a.size_of_change < b.size_of_change;
-                   });
+  rank_solutions(result.solutions);
 }
 
 }  // namespace
@@ -707,6 +720,7 @@ InverseDesignResult inverse_design(const DoorModel& asis, const std::vector<Prep
     }
     if (distinct) result.solutions.push_back(*candidate);
   }
+  rank_solutions(result.solutions);
   for (const DesignSolution& solution : found) {
     const bool kept =
         std::any_of(result.solutions.begin(), result.solutions.end(),
@@ -776,11 +790,12 @@ std::string solution_header(const DesignSolution& solution, int rank) {
     for (const std::string& name : solution.held_at_as_is) origin += " " + name;
   }
   return printf_text(
-      "Solution %d (%s): size of change %.4g; window RMSE of omega %.4g rad/s, FIT %.1f%%; "
+      "Solution %d (%s): parts changed (cost) %.4g, size of change %.4g; window RMSE of omega %.4g "
+      "rad/s, FIT %.1f%%; "
       "data cost %.4g, prior cost %.4g%s\n",
-      rank, origin.c_str(), solution.size_of_change, solution.fit.window.rmse(),
-      solution.fit.window.fit_percent(), solution.data_cost, solution.prior_cost,
-      solution.converged ? "" : " (not converged)");
+      rank, origin.c_str(), solution.parts_changed_cost, solution.size_of_change,
+      solution.fit.window.rmse(), solution.fit.window.fit_percent(), solution.data_cost,
+      solution.prior_cost, solution.converged ? "" : " (not converged)");
 }
 
 }  // namespace

@@ -136,6 +136,9 @@ struct DesignSolution {
   double prior_cost = 0.0;  // ½ Σ r² of the prior residuals
   // √(Σ w_i ((p_i − p_asis_i)/s_i)²): the weighted size of the change.
   double size_of_change = 0.0;
+  // Σ w_i over the parameters changed by more than 0.1 % of their bound width: what the
+  // change costs in parts (a spring changed by 5 % or by 10 % is one new spring).
+  double parts_changed_cost = 0.0;
   int start_index = 0;     // which start found it (0: from AS-IS; −2: the fewest-changes search)
   int data_residuals = 0;  // n of the data cost
   // Free parameters held at their AS-IS values (the fewest-changes alternative).
@@ -146,7 +149,8 @@ struct DesignSolution {
 };
 
 struct InverseDesignResult {
-  // Distinct solutions that fit the TO-BE data equally well, smallest size_of_change first.
+  // Distinct solutions that fit the TO-BE data equally well, ranked by the size of the
+  // change: the fewest parts first (parts_changed_cost), then the smallest size_of_change.
   std::vector<DesignSolution> solutions;
   bool feasible = true;
   // When infeasible: which parameters bind at which bound and what the data asked for

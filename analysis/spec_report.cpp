@@ -279,6 +279,8 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
                  {"effective_regularization", number(design.effective_regularization)},
                  {"data_cost", number(best.data_cost)},
                  {"size_of_change", number(best.size_of_change)},
+                 {"parts_changed_cost", number(best.parts_changed_cost)},
+                 {"held_at_as_is", best.held_at_as_is},
                  {"converged", best.converged}};
   root["felt"] = {{"before", felt_json(e.felt_before)},
                   {"after", felt_json(e.felt_after)},
@@ -329,6 +331,7 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
     }
     json entry = {{"index", s},
                   {"size_of_change", number(alt.size_of_change)},
+                  {"parts_changed_cost", number(alt.parts_changed_cost)},
                   {"data_cost", number(alt.data_cost)},
                   {"window_rmse_rad_s", number(alt.fit.window.rmse())},
                   {"held_at_as_is", alt.held_at_as_is},

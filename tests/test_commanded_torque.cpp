@@ -2,7 +2,6 @@
 // door with known changes is played on the simulated HapticMaster (1 ms control delay,
 // admittance, force-sensor noise, the virtual user), recorded, and the inverse design must
 // name the changes it was played with, whatever the device added to the motion.
-#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 
@@ -133,13 +132,13 @@ TEST_CASE("a played TO-BE door is specified from its playback: the changes, and 
   REQUIRE(result.feasible);
   // The preload's change can be shared by the spring's free length and anchor (the torque is
   // the same): the smallest change spreads it, the fewest-changes alternative puts it back
-  // on F0 alone, which is the played door.
+  // on F0 alone, which is the played door, and is ranked first (fewer parts changed).
   REQUIRE(result.solutions.size() == 2);
-  CHECK(result.solutions[0].size_of_change <= result.solutions[1].size_of_change);
-  const auto fewest =
-      std::find_if(result.solutions.begin(), result.solutions.end(),
-                   [](const DesignSolution& s) { return !s.held_at_as_is.empty(); });
-  REQUIRE(fewest != result.solutions.end());
+  const DesignSolution* fewest = &result.solutions.front();
+  CHECK_FALSE(fewest->held_at_as_is.empty());
+  CHECK(fewest->parts_changed_cost < result.solutions[1].parts_changed_cost);
+  CHECK(result.solutions[1].held_at_as_is.empty());
+  CHECK(result.solutions[1].size_of_change < fewest->size_of_change);
   for (const DesignParameter& p : fewest->parameters) {
     const double truth = played.parameter_values()[*played.find_parameter(p.name)];
     INFO(p.name << ": AS-IS " << p.as_is << ", played " << truth << ", specified " << p.to_be

@@ -222,7 +222,14 @@ TEST_CASE("designs the data cannot tell apart are reported as distinct solutions
   const double moment = 7.5 * 1.1 * 0.3;
   for (std::size_t i = 0; i < result.solutions.size(); ++i) {
     const doorbench::DesignSolution& solution = result.solutions[i];
-    if (i > 0) CHECK(solution.size_of_change >= result.solutions[i - 1].size_of_change);
+    if (i > 0) {
+      // Ranked: fewest parts changed first, then the smallest size of change.
+      const doorbench::DesignSolution& before = result.solutions[i - 1];
+      CHECK(solution.parts_changed_cost >= before.parts_changed_cost);
+      if (solution.parts_changed_cost == before.parts_changed_cost) {
+        CHECK(solution.size_of_change >= before.size_of_change);
+      }
+    }
     CHECK(solution.data_cost <= 1.05 * result.solutions.front().data_cost);
     CHECK(parameter(solution, "m_d").to_be * parameter(solution, "l_c").to_be ==
           Approx(moment).epsilon(0.01));
@@ -329,10 +336,10 @@ TEST_CASE("a fit prior pulls its parameter and bad priors are refused by name", 
                     Contains("fit: priors names 'T_hh'"));
 }
 
-TEST_CASE("the default free set: 19 parameters, 3 starts", "[inverse][.slow]") {
-  // With the spring's geometry free, F0 and the anchor A_y (both cheap) trade against each
-  // other and the other spring parameters follow: the smallest change that fits is not the
-  // one the TO-BE door was made with, but fits as well (docs/inverse-design.md).
+TEST_CASE("the default free set: 19 parameters, 3 starts", "[inverse]") {
+  // With the spring's geometry free, F0 and the anchor A_y (both cheap) can share the preload's
+  // change; the smallest change spreads it over the spring's parameters, the fewest-changes
+  // search puts it back on F0 and is ranked first (docs/inverse-design.md).
   const DoorModel tobe = changed(as_is(), {{"F0", 1.2}, {"k_l", 0.7}, {"T_h", 1.4}});
   const PreparedData data = doorbench::synthetic_strokes(tobe, {});
   const auto began = std::chrono::steady_clock::now();
@@ -341,9 +348,24 @@ TEST_CASE("the default free set: 19 parameters, 3 starts", "[inverse][.slow]") {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
   INFO(result.full_report());
   CHECK(result.feasible);
-  REQUIRE(!result.solutions.empty());
+  REQUIRE(result.solutions.size() >= 2);
   const doorbench::DesignSolution& solution = result.solutions.front();
-  CHECK(parameter(solution, "k_l").to_be == Approx(4200.0).epsilon(0.03));
+  CHECK_FALSE(solution.held_at_as_is.empty());
   CHECK(solution.fit.window.fit_percent() > 99);
+  for (const DesignParameter& p : solution.parameters) {
+    const double truth = tobe.parameter_values()[*tobe.find_parameter(p.name)];
+    INFO(p.name << ": AS-IS " << p.as_is << ", true " << truth << ", specified " << p.to_be
+                << " +- " << p.uncertainty);
+    if (truth != p.as_is) {
+      // Changed: within two standard uncertainties and 3 % of the true value (measured: F0
+      // 298.3 +- 28.9 N, T_h 0.837 +- 0.027 N*m, k_l 4203 +- 30 N/m).
+      CHECK(std::abs(p.to_be - truth) <= 2.0 * p.uncertainty);
+      CHECK(std::abs(p.to_be - truth) <= 0.03 * std::abs(truth));
+    } else {
+      // Unchanged: within 0.5 % of the bound width (measured: A_y 0.27 %, the rest below
+      // 0.1 %).
+      CHECK(std::abs(p.change) <= 0.005 * width(p));
+    }
+  }
   std::cout << result.brief_report() << "(" << seconds << " s)\n";
 }
