@@ -369,8 +369,22 @@ std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& e
   }
   html += printf_text(
       "<p>Fit of the TO-BE recordings by the design: window RMS error of the rate %.4g rad/s "
-      "(the data's rate noise %.4g rad/s); weighted size of the change %.4g.</p>\n",
-      best.fit.window.rmse(), design.rate_noise_rad_s, best.size_of_change);
+      "(the data's rate noise %.4g rad/s); weighted size of the change %.4g; parts changed "
+      "(cost) %.4g.</p>\n",
+      best.fit.window.rmse(), design.rate_noise_rad_s, best.size_of_change,
+      best.parts_changed_cost);
+  if (design.commanded_torque) {
+    html +=
+        "<p>The TO-BE recordings are haptic playbacks: the design was fitted to the torque "
+        "they commanded (the device's rendering is not in it), the inertia to their "
+        "motion.</p>\n";
+  }
+  if (!best.held_at_as_is.empty()) {
+    std::string held;
+    for (const std::string& name : best.held_at_as_is) held += " " + escape(name);
+    html += "<p>The design with the fewest changes: AS-IS kept for" + held +
+            " (the same fit as the smallest change, which is among the alternatives).</p>\n";
+  }
 
   html +=
       "<h2>Parameters</h2><table><tr><th>parameter</th><th>unit</th><th>AS-IS</th>"
@@ -421,7 +435,8 @@ std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& e
     html += "<p>No other design fits the recordings equally well.</p>\n";
   } else {
     html +=
-        "<table><tr><th>#</th><th>size of change</th><th>window RMS (rad/s)</th>"
+        "<table><tr><th>#</th><th>parts (cost)</th><th>size of change</th>"
+        "<th>window RMS (rad/s)</th>"
         "<th>changes</th><th>peak unlatch (N)</th><th>balance (N)</th></tr>\n";
     for (std::size_t s = 1; s < design.solutions.size(); ++s) {
       const DesignSolution& alt = design.solutions[s];
@@ -437,8 +452,8 @@ std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& e
         }
       }
       const bool have_felt = s - 1 < e.felt_alternatives.size();
-      html += printf_text("<tr><td>%zu</td><td>%.4g</td><td>%.4g</td><td>", s, alt.size_of_change,
-                          alt.fit.window.rmse()) +
+      html += printf_text("<tr><td>%zu</td><td>%.4g</td><td>%.4g</td><td>%.4g</td><td>", s,
+                          alt.parts_changed_cost, alt.size_of_change, alt.fit.window.rmse()) +
               changes + "</td><td>" +
               cell(have_felt ? e.felt_alternatives[s - 1].peak_unlatch_force_N : kNaN, "%.2f") +
               "</td><td>" +

@@ -73,7 +73,10 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
 
   InverseDesignResult design;
   design.solutions.push_back(solution_of(asis, tobe));
+  design.solutions.front().held_at_as_is = {"k_s", "L0"};  // a fewest-changes design
+  design.solutions.front().parts_changed_cost = 2.0;
   design.solutions.push_back(solution_of(asis, alternative));
+  design.commanded_torque = true;
   design.rate_noise_rad_s = 0.001;
   design.notes = {"made by hand for the test"};
 
@@ -123,7 +126,11 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
   REQUIRE(json["tolerances"]["spreads"].size() == doorbench::kFeltQuantities.size());
   CHECK(json["tolerances"]["spreads"][0]["sd"].get<double>() > 0);
   CHECK(json["tolerances"]["spreads"][0]["explained_variance"].contains("F_l0"));
+  CHECK(json["fit"]["commanded_torque"] == true);
+  CHECK(json["fit"]["parts_changed_cost"].get<double>() == 2.0);
+  CHECK(json["fit"]["held_at_as_is"] == nlohmann::json::array({"k_s", "L0"}));
   REQUIRE(json["alternatives"].size() == 1);
+  CHECK(json["alternatives"][0]["held_at_as_is"].empty());
   CHECK(json["alternatives"][0]["changes"].size() == 1);
   CHECK(json["alternatives"][0]["changes"][0]["name"] == "k_l");
 
@@ -131,6 +138,8 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
   CHECK_THAT(html, Contains("<h2>Parameters</h2>"));
   CHECK_THAT(html, Contains("<tr class=\"changed\"><td>F_l0</td>"));
   CHECK_THAT(html, Contains("<svg"));
+  CHECK_THAT(html, Contains("fitted to the torque they commanded"));
+  CHECK_THAT(html, Contains("The design with the fewest changes: AS-IS kept for k_s L0"));
   CHECK_THAT(html, Contains("TO-BE design, opening"));
   CHECK_THAT(html, Contains("spread of peak force to unlatch"));
   CHECK_THAT(html, Contains("tobe &lt;1&gt;.h5"));
