@@ -1,9 +1,7 @@
 // doorbench spec end to end: TO-BE recordings simulated from a known door (the reference
 // door with a softer latch catch), the AS-IS reference door, the report written.
 #include <catch2/catch.hpp>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "analysis/parameter_file.h"
 #include "tests/run_doorbench.h"
@@ -11,17 +9,6 @@
 using Catch::Matchers::Contains;
 using doorbench::testing::run_doorbench_shell;
 using doorbench::testing::TempDir;
-
-namespace {
-
-std::string read(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-}  // namespace
 
 TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   TempDir dir("spec_cli");
@@ -58,7 +45,7 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   CHECK_THAT(run.err, Contains("tolerance Monte Carlo: 8 / 8 samples"));
   CHECK_THAT(run.out, Contains("felt, TO-BE design:"));
   CHECK_THAT(run.out, Contains("no PDF (not asked for)"));
-  const auto json = nlohmann::json::parse(read(dir / "spec" / "spec.json"));
+  const auto json = nlohmann::json::parse(doorbench::read_text_file(dir / "spec" / "spec.json"));
   CHECK(json["tobe_sources"].size() == 2);
   CHECK(json["tolerances"]["samples"] == 8);
   CHECK(std::filesystem::exists(dir / "spec" / "spec.html"));

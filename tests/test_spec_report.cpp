@@ -4,9 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 
 #include "analysis/fit_synthetic.h"
 #include "analysis/parameter_file.h"
@@ -53,13 +51,6 @@ DesignSolution solution_of(const DoorModel& asis, const DoorModel& tobe) {
   return solution;
 }
 
-std::string read(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 }  // namespace
 
 TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[spec]") {
@@ -102,7 +93,7 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
   REQUIRE(std::filesystem::exists(files.json));
   REQUIRE(std::filesystem::exists(files.html));
 
-  const auto json = nlohmann::json::parse(read(files.json));
+  const auto json = nlohmann::json::parse(doorbench::read_text_file(files.json));
   CHECK(json["feasible"] == true);
   CHECK(json["requested"].empty());
   CHECK(json["tobe_sources"][0] == "tobe <1>.h5");
@@ -134,7 +125,7 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
   CHECK(json["alternatives"][0]["changes"].size() == 1);
   CHECK(json["alternatives"][0]["changes"][0]["name"] == "k_l");
 
-  const std::string html = read(files.html);
+  const std::string html = doorbench::read_text_file(files.html);
   CHECK_THAT(html, Contains("<h2>Parameters</h2>"));
   CHECK_THAT(html, Contains("<tr class=\"changed\"><td>F_l0</td>"));
   CHECK_THAT(html, Contains("<svg"));
@@ -148,7 +139,7 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
   if (std::system("command -v weasyprint > /dev/null 2>&1") == 0) {
     INFO(files.pdf_note);
     REQUIRE(!files.pdf.empty());
-    CHECK(read(files.pdf).rfind("%PDF", 0) == 0);
+    CHECK(doorbench::read_text_file(files.pdf).rfind("%PDF", 0) == 0);
   } else {
     WARN("weasyprint not installed: " << files.pdf_note);
     CHECK(files.pdf.empty());
