@@ -19,17 +19,6 @@ bool is_inertia(const std::string& name) {
   return name == "J_d" || name == "J";
 }
 
-// The solver's unit of a free parameter: its start's magnitude, or a tenth of its bounds'
-// width when it starts at (nearly) zero.
-double solver_scale(double start, const Bounds& bounds) {
-  const double width = bounds.upper - bounds.lower;
-  const bool usable_width = std::isfinite(width) && width > 0;
-  if (std::abs(start) > 0 && (!usable_width || std::abs(start) >= 1e-3 * width)) {
-    return std::abs(start);
-  }
-  return usable_width ? 0.1 * width : 1.0;
-}
-
 }  // namespace
 
 std::optional<CommandedTorque> read_commanded_torque(const std::filesystem::path& session_path,
@@ -113,7 +102,7 @@ CommandedTorqueFit fit_commanded_torque(const DoorModel& start,
                                   "' is the inertia, which the commanded torque does not contain");
     }
     map.free_index.push_back(*index);
-    map.scale.push_back(solver_scale(map.base_values[*index], bounds[*index]));
+    map.scale.push_back(parameter_scale(map.base_values[*index], bounds[*index]));
   }
   if (map.free_index.empty()) {
     throw std::invalid_argument("commanded-torque fit: no free parameter");

@@ -189,6 +189,10 @@ double compare_with_ceres_covariance(WindowProblem& problem, const Eigen::Matrix
 
 int fit_thread_count(const FitOptions& options);
 
+// The solver's unit for a free parameter: its start's magnitude, or a tenth of its bounds'
+// width when the start is (nearly) zero (analysis/fitting.cpp).
+double parameter_scale(double start, const Bounds& bounds);
+
 // Runs task(i) once for every i in [0, count) on up to `threads` threads, the caller's among
 // them. Which thread runs which index changes from call to call, so each task must write
 // only its own results; the first exception a task throws is rethrown here.

@@ -78,6 +78,16 @@ std::vector<std::string> default_free_parameters(const DoorModel& model) {
   return names;
 }
 
+double parameter_scale(double start, const Bounds& bounds) {
+  const double width = bounds.upper - bounds.lower;
+  const bool usable_width = std::isfinite(width) && width > 0;
+  if (std::abs(start) > 0 && (!usable_width || std::abs(start) >= 1e-3 * width)) {
+    return std::abs(start);
+  }
+  if (usable_width) return 0.1 * width;
+  return 1.0;
+}
+
 namespace {
 
 using Clock = std::chrono::steady_clock;
@@ -150,18 +160,6 @@ void check_data(const PreparedData& data, const DoorModel& model) {
                                 " m) differs from the model's (" + format_number(model_radius) +
                                 " m); build the model with the bench's geometry");
   }
-}
-
-// The solver's unit for each free parameter: its start's magnitude, or a tenth of its
-// bounds' width when the start is (nearly) zero.
-double parameter_scale(double start, const Bounds& bounds) {
-  const double width = bounds.upper - bounds.lower;
-  const bool usable_width = std::isfinite(width) && width > 0;
-  if (std::abs(start) > 0 && (!usable_width || std::abs(start) >= 1e-3 * width)) {
-    return std::abs(start);
-  }
-  if (usable_width) return 0.1 * width;
-  return 1.0;
 }
 
 // Replaces the start's free latch values with those read off the data, when they keep
