@@ -37,6 +37,21 @@ SessionMetadata metadata() {
   return metadata;
 }
 
+// The reference sensory door's render loop on a started rotary test device (unit device
+// inertia). Built in place: the loop holds the device and the mapping by reference.
+struct ReferenceDoorLoop {
+  testing::RotaryTestDevice device;
+  const DoorModel model = reference_model(ModelKind::kSensory);
+  const DoorMapping mapping{Kinematics::kRotary1, ArcGeometry{}, model.geometry().handle_radius_m};
+  RenderLoop loop{started(device), mapping,
+                  std::make_unique<PlaybackParameters>(model, mapping, "start"), rotary_options()};
+
+  static testing::RotaryTestDevice& started(testing::RotaryTestDevice& device) {
+    device.start(1.0);
+    return device;
+  }
+};
+
 }  // namespace
 
 TEST_CASE("render loop: a tick allocates nothing and a parameter change lands at the next tick",
@@ -93,12 +108,8 @@ TEST_CASE("render loop: a tick allocates nothing and a parameter change lands at
 
 TEST_CASE("render loop: the model's torque is what the device gets, and the hand feels the door",
           "[haptic][loop]") {
-  testing::RotaryTestDevice device;
-  const DoorModel model = reference_model(ModelKind::kSensory);
-  const DoorMapping mapping(Kinematics::kRotary1, ArcGeometry{}, model.geometry().handle_radius_m);
-  device.start(1.0);
-  RenderLoop loop(device, mapping, std::make_unique<PlaybackParameters>(model, mapping, "start"),
-                  rotary_options());
+  ReferenceDoorLoop rig;
+  auto& [device, model, mapping, loop] = rig;
   // Held at 0.3 rad (free movement) after the start ramp: the command is the model's torque.
   device.reference_angle_rad = [](double) { return 0.3; };
   double time_s = 0.0;
@@ -114,12 +125,8 @@ TEST_CASE("render loop: the model's torque is what the device gets, and the hand
 
 TEST_CASE("render loop: refuses a parameter set it cannot play, naming the reason",
           "[haptic][loop]") {
-  testing::RotaryTestDevice device;
-  const DoorModel model = reference_model(ModelKind::kSensory);
-  const DoorMapping mapping(Kinematics::kRotary1, ArcGeometry{}, model.geometry().handle_radius_m);
-  device.start(1.0);
-  RenderLoop loop(device, mapping, std::make_unique<PlaybackParameters>(model, mapping, "start"),
-                  rotary_options());
+  ReferenceDoorLoop rig;
+  auto& [device, model, mapping, loop] = rig;
   // J = 20 kg*m^2 is beyond what this device renders (max 10).
   const DoorModel too_heavy = perceptual::set(model, perceptual::Control::kHeaviness, 4.9);
   CHECK(loop.publish(std::make_unique<PlaybackParameters>(too_heavy, mapping, "x")) == "");
