@@ -29,6 +29,7 @@ struct PlayOptions {
   double max_force_N = 60.0;
   double max_force_rate_N_per_s = 5000.0;
   double max_tick_interval_ms = 5.0;
+  double max_tick_stall_ms = 100.0;
   bool keys = false;
 };
 
@@ -127,6 +128,11 @@ void run_play(const PlayOptions& options) {
   request.playback.loop.safety.max_force = options.max_force_N;
   request.playback.loop.safety.max_force_rate = options.max_force_rate_N_per_s;
   request.playback.loop.safety.max_tick_interval_s = 1e-3 * options.max_tick_interval_ms;
+  request.playback.loop.safety.max_tick_stall_s = 1e-3 * options.max_tick_stall_ms;
+  request.device.hapticmaster.command_watchdog_s = 1e-3 * options.max_tick_stall_ms;
+  request.device.hapticmaster.progress = [](const std::string& line) {
+    std::cerr << line << "\n";
+  };
   request.session_path = options.out;
   request.model_source =
       options.model.params_path.empty() ? "reference door" : options.model.params_path;
@@ -202,9 +208,14 @@ void add_play_command(CLI::App& app, Action& action) {
       ->check(CLI::Range(1.0, 1e6))
       ->capture_default_str();
   play->add_option("--max-tick-interval-ms", options->max_tick_interval_ms,
-                   "A longer gap between two ticks is a missed deadline: the safety layer ramps "
-                   "the force down and stops")
+                   "A longer gap between two ticks is a late tick: counted in the summary, the "
+                   "device holds the last force meanwhile and playback goes on")
       ->check(CLI::Range(0.5, 1000.0))
+      ->capture_default_str();
+  play->add_option("--max-tick-stall-ms", options->max_tick_stall_ms,
+                   "A longer gap between two ticks is a stall: the safety layer ramps the force "
+                   "down and stops (the HapticMaster's I/O watchdog stops the device itself)")
+      ->check(CLI::Range(1.0, 1000.0))
       ->capture_default_str();
   play->add_flag("--keys", options->keys,
                  "Live tuning from the keypad (stdin must be a terminal): + - heavier/lighter, "

@@ -1,7 +1,9 @@
 #include "app/play_run.h"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -9,6 +11,42 @@
 #include "app/session_recording.h"
 
 namespace doorbench::app {
+namespace {
+
+// Set by SIGINT/SIGTERM during a real-time playback; the control thread polls it and ends the
+// run through the safety layer's ramp-down and the device's stop (a lock-free atomic is
+// async-signal-safe). A second signal takes the default action.
+std::atomic<int> g_stop_signal{0};
+extern "C" void on_stop_signal(int signal_number) {
+  g_stop_signal.store(signal_number);
+  ::signal(signal_number, SIG_DFL);
+}
+
+// Installs the handlers for its lifetime and restores the old ones after.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_stop_signal.store(0);
+    struct sigaction action {};
+    action.sa_handler = on_stop_signal;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(SIGINT, &action, &old_int_);
+    ::sigaction(SIGTERM, &action, &old_term_);
+  }
+  ~StopSignals() {
+    ::sigaction(SIGINT, &old_int_, nullptr);
+    ::sigaction(SIGTERM, &old_term_, nullptr);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+  int received() const { return g_stop_signal.load(); }
+
+ private:
+  struct sigaction old_int_ {};
+  struct sigaction old_term_ {};
+};
+
+}  // namespace
 
 haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request) {
   haptic::OpenedDevice opened =
@@ -47,8 +85,18 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
   }
   const bool tty = isatty(STDERR_FILENO) != 0;
   int calls = 0;
+  const StopSignals signals;
+  bool signal_reported = false;
   haptic::PlaybackSummary summary =
       playback.run_real_time([&](const haptic::RenderLoop::Status& status) {
+        if (const int signal_number = signals.received(); signal_number != 0) {
+          if (!signal_reported) {
+            std::fprintf(stderr, "%s%s: ramping the force down and stopping the device\n",
+                         tty ? "\n" : "", signal_number == SIGINT ? "Ctrl-C" : "SIGTERM");
+            signal_reported = true;
+          }
+          return false;
+        }
         ++calls;
         if (request.show_status && (tty || calls % 10 == 0)) {
           const haptic::RenderLoopCounters counters = playback.loop().counters();

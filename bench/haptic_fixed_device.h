@@ -39,6 +39,7 @@ class FixedPathDevice final : public haptic::HapticDevice {
   }
   void command_force(const haptic::Vec3& force) noexcept override { last_ = force; }
   void command_inertia(double) noexcept override {}
+  void brake() noexcept override {}
   haptic::Vec3 last_command() const { return last_; }
 
  private:

@@ -85,6 +85,12 @@ class HapticDevice {
   virtual void command_force(const Vec3& force) noexcept = 0;
   // A new inertia for an admittance device (heaviness tuned live), sent by its I/O thread.
   virtual void command_inertia(double inertia) noexcept = 0;
+  // Stops the end-effector's motion at once: zero force and the device's own brake (the
+  // HapticMaster: "set state stop", sent by its I/O thread with the next exchange). An
+  // admittance device whose force is merely zeroed keeps a free virtual mass moving; this is
+  // what the safety layer's velocity and workspace trips, and every final stop, call. The
+  // device stays braked until stop() and a new start(). Real-time safe, idempotent.
+  virtual void brake() noexcept = 0;
 };
 
 }  // namespace doorbench::haptic

@@ -9,6 +9,8 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <array>
+#include <optional>
 #include <cctype>
 #include <cerrno>
 #include <chrono>
@@ -93,6 +95,38 @@ std::string take_readings(const std::vector<std::string>& commands,
 }
 
 const std::vector<std::string> kReadings = {"get measpos", "get modelvel", "get measforce"};
+
+// The base axis (about which r and φ are measured) lies this far behind the end-effector's
+// origin along x: the centre offset of the public example's workspace constants (source 2 in
+// docs/hapticmaster.md); assumed to hold for every device, since no reply gives it.
+constexpr double kBaseAxisBehindOrigin_m = 0.45;
+
+// The largest box (symmetric in y) inside the cylindrical sector r ∈ [r0, r1], φ ∈ [φ0, φ1],
+// z ∈ [z0, z1] about the base axis, in the device frame (x radial at φ = 0, assumed). Scans
+// the box's half width: its corners must keep r0 <= r <= r1 and |φ| <= the smaller |φ| bound.
+void workspace_box(const Vec3& r_phi_z_min, const Vec3& r_phi_z_max, DeviceLimits& limits) {
+  const double r0 = r_phi_z_min.x(), r1 = r_phi_z_max.x();
+  const double phi = std::min(std::abs(r_phi_z_min.y()), std::abs(r_phi_z_max.y()));
+  double best_area = -1.0, best_half = 0.0, best_x0 = 0.0, best_x1 = 0.0;
+  for (int k = 1; k < 1000; ++k) {
+    const double half = r1 * static_cast<double>(k) / 1000.0;
+    if (half >= r1) break;
+    const double x1 = std::sqrt(r1 * r1 - half * half);
+    double x0 = std::sqrt(std::max(0.0, r0 * r0 - half * half));
+    if (phi < 1.5707) x0 = std::max(x0, half / std::tan(std::max(phi, 1e-6)));
+    if (!(x1 > x0)) continue;
+    const double area = (x1 - x0) * 2.0 * half;
+    if (area > best_area) {
+      best_area = area;
+      best_half = half;
+      best_x0 = x0;
+      best_x1 = x1;
+    }
+  }
+  if (best_area <= 0.0) return;  // no box fits: keep the assumed one (the caller checks)
+  limits.workspace_min = Vec3(best_x0 - kBaseAxisBehindOrigin_m, -best_half, r_phi_z_min.z());
+  limits.workspace_max = Vec3(best_x1 - kBaseAxisBehindOrigin_m, best_half, r_phi_z_max.z());
+}
 
 }  // namespace
 
@@ -213,11 +247,20 @@ std::string HapticMasterOptions::validate() const {
       })) {
     return "bias_object must be a non-empty name of letters, digits and '_'";
   }
+  if (!(emergency_timeout_s > 0) || !(emergency_timeout_s <= 5)) {
+    return "emergency_timeout_s must be in (0, 5] s";
+  }
+  if (!(command_watchdog_s >= 0) || !std::isfinite(command_watchdog_s)) {
+    return "command_watchdog_s must be >= 0 (0 = off)";
+  }
+  if (!(homing_timeout_s > 0) || !std::isfinite(homing_timeout_s)) {
+    return "homing_timeout_s must be > 0";
+  }
   return "";
 }
 
 HapticMasterDevice::HapticMasterDevice(const std::string& address, HapticMasterOptions options)
-    : options_(std::move(options)) {
+    : options_(std::move(options)), limits_(hapticmaster_limits()) {
   try {
     const hm::Address parsed = hm::parse_address(address);
     host_ = parsed.host;
@@ -228,6 +271,8 @@ HapticMasterDevice::HapticMasterDevice(const std::string& address, HapticMasterO
   if (const std::string problem = options_.validate(); !problem.empty()) {
     throw DeviceError(name() + ": option " + problem);
   }
+  startup_.workspace_source = "assumed (not started)";
+  round_trip_times_s_.reserve(kRoundTripLog);
 }
 
 HapticMasterDevice::~HapticMasterDevice() {
@@ -239,7 +284,7 @@ std::string HapticMasterDevice::name() const {
 }
 
 DeviceLimits HapticMasterDevice::limits() const {
-  return hapticmaster_limits();
+  return limits_;
 }
 
 std::string HapticMasterDevice::expect_ok(const std::string& command) {
@@ -247,6 +292,7 @@ std::string HapticMasterDevice::expect_ok(const std::string& command) {
   try {
     replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
   } catch (const std::exception& e) {
+    connection_intact_ = false;
     throw DeviceError(name() + ": '" + command + "': " + e.what());
   }
   if (const std::string problem = check_replies({command}, replies); !problem.empty()) {
@@ -255,72 +301,230 @@ std::string HapticMasterDevice::expect_ok(const std::string& command) {
   return replies.front();
 }
 
+std::string HapticMasterDevice::exchange(const std::string& command) {
+  if (io_thread_.joinable()) throw DeviceError(name() + ": exchange() while the I/O thread runs");
+  if (!connection_ || !connection_intact_) throw DeviceError(name() + ": not connected");
+  return expect_ok(command);
+}
+
+namespace {
+
+// The reply's word: a quoted string's content, else the plain text.
+std::string word_of(const hm::Reply& reply) {
+  return reply.kind == hm::Reply::Kind::kString ? reply.string : reply.text;
+}
+
+// "true"/"false" (quoted or not, any case; also 1/0) -> bool; nullopt otherwise.
+std::optional<bool> parse_flag(const std::string& reply_text) {
+  std::string word = word_of(hm::parse_reply(reply_text));
+  std::transform(word.begin(), word.end(), word.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (word == "true" || word == "1") return true;
+  if (word == "false" || word == "0") return false;
+  return std::nullopt;
+}
+
+}  // namespace
+
+void HapticMasterDevice::identify() {
+  // Does it answer at all, and with a state name, quoted or not? (A wrong server fails.)
+  const hm::Reply state = hm::parse_reply(expect_ok("get state"));
+  const std::string word = word_of(state);
+  if ((state.kind != hm::Reply::Kind::kString && state.kind != hm::Reply::Kind::kMessage) ||
+      word.empty() || !std::all_of(word.begin(), word.end(), [](char c) {
+        return std::isalpha(static_cast<unsigned char>(c)) || c == '_';
+      })) {
+    throw DeviceError(name() + ": 'get state' answered '" + state.text +
+                      "', not a state name: is this a HapticMaster?");
+  }
+  startup_.initial_state = word;
+}
+
+void HapticMasterDevice::check_emergency_signals() {
+  const auto flag = [&](const std::string& command) {
+    const std::string reply = expect_ok(command);
+    const std::optional<bool> value = parse_flag(reply);
+    if (!value) {
+      throw DeviceError(name() + ": '" + command + "' answered '" + reply +
+                        "', not true or false");
+    }
+    return *value;
+  };
+  startup_.emergency_button = flag("get emergencybuttonpushed");
+  if (startup_.emergency_button) {
+    throw DeviceError(name() +
+                      ": the emergency button is pushed: release it, then start again");
+  }
+  startup_.emergency_relay = flag("get emergencyrelay");
+  if (startup_.emergency_relay) {
+    throw DeviceError(name() +
+                      ": the emergency relay is open (the device's safety circuit has cut the "
+                      "motor power): check the emergency button and the cabling, reset the "
+                      "relay, then start again");
+  }
+}
+
+void HapticMasterDevice::ensure_calibrated() {
+  const auto calibrated = [&] {
+    const std::string reply = expect_ok("get position_calibrated");
+    const std::optional<bool> value = parse_flag(reply);
+    if (!value) {
+      throw DeviceError(name() + ": 'get position_calibrated' answered '" + reply +
+                        "', not true or false");
+    }
+    return *value;
+  };
+  startup_.was_calibrated = calibrated();
+  if (startup_.was_calibrated) return;
+  // Homing: the device moves to its end stops by itself; keep hands off the end-effector.
+  const auto say = [&](const std::string& line) {
+    if (options_.progress) options_.progress(line);
+  };
+  say(name() + ": position not calibrated: homing (set state init); keep clear of the arm");
+  const double began_s = monotonic_s();
+  expect_ok("set state init");
+  double next_report_s = began_s + 1.0;
+  for (;;) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const double now = monotonic_s();
+    if (calibrated()) break;
+    if (now - began_s > options_.homing_timeout_s) {
+      throw DeviceError(name() + ": homing did not end within " +
+                        hm::format_number(options_.homing_timeout_s) +
+                        " s (position_calibrated still false)");
+    }
+    if (now >= next_report_s) {
+      say(name() + ": homing ... " + hm::format_number(std::round(now - began_s)) + " s");
+      next_report_s += 1.0;
+    }
+  }
+  startup_.homing_s = monotonic_s() - began_s;
+  say(name() + ": homing done in " + hm::format_number(std::round(startup_.homing_s * 10) / 10) +
+      " s");
+}
+
+void HapticMasterDevice::clear_effects() {
+  // Effects left by another program (or a session that ended without stop()) would add their
+  // forces to ours: remove every one.
+  expect_ok("remove all");
+}
+
+void HapticMasterDevice::read_workspace() {
+  // Each reply holds three numbers (docs/hapticmaster.md): the lower and upper bound and a
+  // third value the driver does not use. r is about the base axis, which sits `r_offset`
+  // behind the end-effector's origin; x is taken as radial (assumed).
+  std::array<std::vector<double>, 3> values;
+  const char* names[3] = {"workspace_r", "workspace_phi", "workspace_z"};
+  for (int k = 0; k < 3; ++k) {
+    const std::string command = std::string("get ") + names[k];
+    const std::string reply = expect_ok(command);
+    std::optional<std::vector<double>> numbers = hm::parse_numbers(reply);
+    if (!numbers || numbers->size() < 2 || !((*numbers)[0] < (*numbers)[1])) {
+      throw DeviceError(name() + ": '" + command + "' answered '" + reply +
+                        "', not [low,high,...] with low < high");
+    }
+    values[k] = *numbers;
+  }
+  startup_.workspace_r_phi_z_min = Vec3(values[0][0], values[1][0], values[2][0]);
+  startup_.workspace_r_phi_z_max = Vec3(values[0][1], values[1][1], values[2][1]);
+  DeviceLimits read = hapticmaster_limits();
+  read.workspace_min = read.workspace_max = Vec3::Zero();
+  workspace_box(startup_.workspace_r_phi_z_min, startup_.workspace_r_phi_z_max, read);
+  if (!(read.workspace_max.array() > read.workspace_min.array()).all()) {
+    throw DeviceError(name() + ": the workspace the device reports (r " +
+                      hm::format_number(values[0][0]) + ".." + hm::format_number(values[0][1]) +
+                      " m, phi " + hm::format_number(values[1][0]) + ".." +
+                      hm::format_number(values[1][1]) + " rad, z " +
+                      hm::format_number(values[2][0]) + ".." + hm::format_number(values[2][1]) +
+                      " m) holds no box");
+  }
+  limits_ = read;
+  startup_.workspace_source = "device";
+}
+
+void HapticMasterDevice::set_inertia_checked(double inertia) {
+  expect_ok("set inertia " + hm::format_number(inertia));
+  const std::string reply = expect_ok("get inertia");
+  const hm::Reply value = hm::parse_reply(reply);
+  if (value.kind != hm::Reply::Kind::kNumber) {
+    throw DeviceError(name() + ": 'get inertia' answered '" + reply + "', not a number");
+  }
+  startup_.inertia_read_back_kg = value.number;
+  // The number was sent with 6 decimals at most.
+  if (std::abs(value.number - inertia) > 1e-6 + 1e-6 * std::abs(inertia)) {
+    throw DeviceError(name() + ": 'set inertia " + hm::format_number(inertia) +
+                      "' was accepted but the device reports " + value.text + " kg");
+  }
+}
+
+void HapticMasterDevice::create_bias_and_enter_force() {
+  const std::string bias = options_.bias_object;
+  expect_ok("create biasforce " + bias);
+  bias_created_ = true;
+  expect_ok("set " + bias + " force " + hm::format_vector(Vec3::Zero()));
+  expect_ok("set " + bias + " enable");
+  expect_ok("set state force");
+}
+
+DeviceSample HapticMasterDevice::first_reading() {
+  // The first reading, so the tick's first read() has a real position (sequence 1).
+  std::vector<std::string> replies;
+  try {
+    replies = connection_->round_trip(kReadings, options_.reply_timeout_s, options_.join_commands);
+  } catch (const std::exception& e) {
+    connection_intact_ = false;
+    throw DeviceError(name() + ": first reading: " + e.what());
+  }
+  DeviceSample first;
+  first.time_s = monotonic_s();
+  if (const std::string problem = take_readings(kReadings, replies, first); !problem.empty()) {
+    throw DeviceError(name() + ": " + problem);
+  }
+  first.sequence = 1;
+  first.link_ok = true;
+  return first;
+}
+
 void HapticMasterDevice::start(double inertia) {
   if (io_thread_.joinable() || connection_) throw DeviceError(name() + ": already started");
-  const DeviceLimits limits = hapticmaster_limits();
-  if (!(inertia >= limits.min_inertia && inertia <= limits.max_inertia)) {
+  const DeviceLimits assumed = hapticmaster_limits();
+  if (!(inertia >= assumed.min_inertia && inertia <= assumed.max_inertia)) {
     throw DeviceError(name() + ": inertia " +
                       hm::format_number(std::isfinite(inertia) ? inertia : 0) + " kg is outside " +
-                      hm::format_number(limits.min_inertia) + ".." +
-                      hm::format_number(limits.max_inertia) + " kg");
+                      hm::format_number(assumed.min_inertia) + ".." +
+                      hm::format_number(assumed.max_inertia) + " kg");
   }
   try {
     connection_ = std::make_unique<Connection>(host_, port_, options_.connect_timeout_s);
   } catch (const std::exception& e) {
     throw DeviceError(name() + ": " + e.what());
   }
+  connection_intact_ = true;
+  bias_created_ = false;
+  device_stopped_.store(false);
+  brake_requested_.store(false);
   {
     std::lock_guard<std::mutex> lock(error_mutex_);
     last_error_.clear();
   }
-  bool created = false;
+  startup_ = HapticMasterStartup{};
+  startup_.workspace_source = "assumed (start failed before the workspace was read)";
   DeviceSample first;
   try {
-    // Does it answer at all, and with a state name, quoted or not? (A wrong server fails.)
-    const hm::Reply state = hm::parse_reply(expect_ok("get state"));
-    const std::string word = state.kind == hm::Reply::Kind::kString ? state.string : state.text;
-    if ((state.kind != hm::Reply::Kind::kString && state.kind != hm::Reply::Kind::kMessage) ||
-        word.empty() || !std::all_of(word.begin(), word.end(), [](char c) {
-          return std::isalpha(static_cast<unsigned char>(c)) || c == '_';
-        })) {
-      throw DeviceError(name() + ": 'get state' answered '" + state.text +
-                        "', not a state name: is this a HapticMaster?");
-    }
-    const std::string bias = options_.bias_object;
-    expect_ok("set inertia " + hm::format_number(inertia));
-    // A bias object left by a session that ended without stop() would make create fail;
-    // removing one that is not there is an error reply, which does not matter here.
-    try {
-      connection_->round_trip({"remove " + bias}, options_.reply_timeout_s, true);
-    } catch (const std::exception& e) {
-      throw DeviceError(name() + ": 'remove " + bias + "': " + e.what());
-    }
-    expect_ok("create biasforce " + bias);
-    created = true;
-    expect_ok("set " + bias + " force " + hm::format_vector(Vec3::Zero()));
-    expect_ok("set " + bias + " enable");
-    expect_ok("set state force");
-    // The first reading, so the tick's first read() has a real position (sequence 1).
-    std::vector<std::string> replies;
-    try {
-      replies =
-          connection_->round_trip(kReadings, options_.reply_timeout_s, options_.join_commands);
-    } catch (const std::exception& e) {
-      throw DeviceError(name() + ": first reading: " + e.what());
-    }
-    first.time_s = monotonic_s();
-    if (const std::string problem = take_readings(kReadings, replies, first); !problem.empty()) {
-      throw DeviceError(name() + ": " + problem);
-    }
-    first.sequence = 1;
-    first.link_ok = true;
+    identify();
+    check_emergency_signals();
+    ensure_calibrated();
+    clear_effects();
+    read_workspace();
+    set_inertia_checked(inertia);
+    create_bias_and_enter_force();
+    first = first_reading();
   } catch (...) {
-    if (created) {
-      link_ok_.store(true);
-      send_shutdown();  // best effort: leave the device as stop() would
-    }
+    // Leave the device as stop() would: zero force and "stop", whatever step failed.
+    send_shutdown();
     link_ok_.store(false);
     connection_.reset();
+    connection_intact_ = false;
     throw;
   }
 
@@ -331,6 +535,8 @@ void HapticMasterDevice::start(double inertia) {
   samples_.publish();
   last_read_ = first;
   round_trips_.store(0);
+  round_trip_times_s_.clear();
+  round_trip_next_ = 0;
   stop_requested_.store(false);
   link_ok_.store(true);
   io_thread_ = std::thread([this, inertia, first] { io_loop(inertia, first); });
@@ -342,15 +548,89 @@ void HapticMasterDevice::fail(const std::string& reason) {
   if (last_error_.empty()) last_error_ = name() + ": " + reason;
 }
 
+std::string HapticMasterDevice::emergency_stop(bool connection_intact) noexcept {
+  const std::vector<std::string> commands = {
+      "set " + options_.bias_object + " force " + hm::format_vector(Vec3::Zero()),
+      "set state stop"};
+  // "set state stop" answered without error is what counts: the zero force may fail if the
+  // bias object is gone (another program removed it), and then there is no force to zero.
+  const auto stopped_by = [&](const std::vector<std::string>& replies) {
+    return replies.size() == commands.size() &&
+           hm::parse_reply(replies[1]).kind != hm::Reply::Kind::kError;
+  };
+  std::string why;
+  if (connection_ && connection_intact) {
+    try {
+      if (stopped_by(connection_->round_trip(commands, options_.emergency_timeout_s,
+                                             options_.join_commands))) {
+        device_stopped_.store(true);
+        return "";
+      }
+      why = "the open connection: 'set state stop' was refused";
+    } catch (const std::exception& e) {
+      why = std::string("the open connection: ").append(e.what());
+      connection_intact_ = false;
+    }
+  }
+  // A fresh connection: close the old one first (a device may take one client at a time).
+  connection_.reset();
+  connection_intact_ = false;
+  try {
+    Connection fresh(host_, port_, options_.emergency_timeout_s);
+    if (stopped_by(fresh.round_trip(commands, options_.emergency_timeout_s,
+                                    options_.join_commands))) {
+      device_stopped_.store(true);
+      return "";
+    }
+    why += (why.empty() ? "" : "; ") + std::string("a fresh connection: 'set state stop' was refused");
+  } catch (const std::exception& e) {
+    why += (why.empty() ? "" : "; ") + std::string("a fresh connection: ").append(e.what());
+  }
+  return why;
+}
+
+void HapticMasterDevice::lose_link(const std::string& reason, bool connection_intact,
+                                   DeviceSample sample) noexcept {
+  const std::string unreached = emergency_stop(connection_intact);
+  fail(reason + (unreached.empty()
+                     ? "; the device was stopped (zero force, state stop)"
+                     : "; the emergency stop did not reach the device (" + unreached +
+                           "): it may still apply its last force"));
+  sample.link_ok = false;
+  samples_.back() = sample;
+  samples_.publish();
+}
+
 void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
-  const DeviceLimits limits = hapticmaster_limits();
+  const DeviceLimits limits = limits_;
   const std::string set_force = "set " + options_.bias_object + " force ";
   std::vector<std::string> commands;
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / options_.io_rate_hz));
   auto next = Clock::now();
+  double last_command_s = monotonic_s();
   while (!stop_requested_.load(std::memory_order_acquire)) {
-    commands_.update();
+    if (commands_.update()) last_command_s = monotonic_s();
+    if (brake_requested_.load(std::memory_order_acquire)) {
+      // The safety layer tripped on motion (or stopped): zero force and the device's brake,
+      // then no more exchanges; stop() removes the bias object later.
+      if (const std::string unreached = emergency_stop(connection_intact_); !unreached.empty()) {
+        fail("brake: the emergency stop did not reach the device (" + unreached + ")");
+      }
+      sample.link_ok = false;
+      samples_.back() = sample;
+      samples_.publish();
+      link_ok_.store(false);
+      return;
+    }
+    const double silent_s = monotonic_s() - last_command_s;
+    if (options_.command_watchdog_s > 0 && silent_s > options_.command_watchdog_s) {
+      lose_link("watchdog: the render loop sent no command for " +
+                    hm::format_number(std::round(silent_s * 1000) / 1000) + " s (limit " +
+                    hm::format_number(options_.command_watchdog_s) + " s)",
+                connection_intact_, sample);
+      return;
+    }
     const Command command = commands_.front();
     Vec3 force = command.force;
     if (!force.allFinite()) force = Vec3::Zero();
@@ -362,7 +642,9 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     if (new_inertia) commands.push_back("set inertia " + hm::format_number(command.inertia));
     commands.insert(commands.end(), kReadings.begin(), kReadings.end());
     std::string problem;
+    bool intact = true;
     try {
+      const double sent_s = monotonic_s();
       const std::vector<std::string> replies =
           connection_->round_trip(commands, options_.reply_timeout_s, options_.join_commands);
       const double now_s = monotonic_s();
@@ -377,15 +659,20 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
         samples_.back() = sample;
         samples_.publish();
         round_trips_.fetch_add(1, std::memory_order_relaxed);
+        if (round_trip_times_s_.size() < kRoundTripLog) {
+          round_trip_times_s_.push_back(now_s - sent_s);
+        } else {
+          round_trip_times_s_[round_trip_next_] = now_s - sent_s;
+        }
+        round_trip_next_ = (round_trip_next_ + 1) % kRoundTripLog;
       }
     } catch (const std::exception& e) {
       problem = e.what();
+      intact = false;  // closed, corrupt or silent: this stream cannot be trusted again
     }
     if (!problem.empty()) {
-      fail(problem);
-      sample.link_ok = false;
-      samples_.back() = sample;
-      samples_.publish();
+      if (!intact) connection_intact_ = false;
+      lose_link(problem, intact, sample);
       return;  // the render loop ramps down and stops; no reconnecting mid-session
     }
     next += period;
@@ -401,25 +688,43 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
 void HapticMasterDevice::stop() noexcept {
   stop_requested_.store(true, std::memory_order_release);
   if (io_thread_.joinable()) io_thread_.join();
-  if (connection_ && link_ok_.load()) send_shutdown();
+  if (connection_ || bias_created_) send_shutdown();
   connection_.reset();
+  connection_intact_ = false;
   link_ok_.store(false);
 }
 
 void HapticMasterDevice::send_shutdown() noexcept {
-  // Each on its own so one failing does not skip the others; a lost link skips the rest.
-  for (const std::string& command :
-       {"set " + options_.bias_object + " force " + hm::format_vector(Vec3::Zero()),
-        std::string("set state stop"), "remove " + options_.bias_object}) {
+  if (!connection_ && !bias_created_) return;
+  const std::string bias = options_.bias_object;
+  const std::vector<std::string> commands = {
+      "set " + bias + " force " + hm::format_vector(Vec3::Zero()), "set state stop",
+      "remove " + bias};
+  if (connection_ && connection_intact_) {
     try {
-      const auto replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
-      if (const std::string problem = check_replies({command}, replies); !problem.empty()) {
+      const auto replies =
+          connection_->round_trip(commands, options_.reply_timeout_s, options_.join_commands);
+      // The force (if the object still exists) and the state are what matter.
+      if (replies.size() == commands.size() &&
+          hm::parse_reply(replies[1]).kind != hm::Reply::Kind::kError) {
+        device_stopped_.store(true);
+        bias_created_ = false;
+        if (const std::string problem = check_replies(commands, replies); !problem.empty()) {
+          fail(problem);
+        }
+        return;
+      }
+      if (const std::string problem = check_replies(commands, replies); !problem.empty()) {
         fail(problem);
       }
     } catch (const std::exception& e) {
-      fail("'" + command + "': " + e.what());
-      break;
+      fail("stop: " + std::string(e.what()));
+      connection_intact_ = false;
     }
+  }
+  if (device_stopped_.load()) return;  // a failure already stopped it
+  if (const std::string unreached = emergency_stop(false); !unreached.empty()) {
+    fail("stop: the device could not be reached to zero its force (" + unreached + ")");
   }
 }
 
@@ -435,11 +740,23 @@ void HapticMasterDevice::command_force(const Vec3& force) noexcept {
 }
 
 void HapticMasterDevice::command_inertia(double inertia) noexcept {
-  const DeviceLimits limits = hapticmaster_limits();
   if (!std::isfinite(inertia)) return;
-  staged_.inertia = std::clamp(inertia, limits.min_inertia, limits.max_inertia);
+  staged_.inertia = std::clamp(inertia, limits_.min_inertia, limits_.max_inertia);
   commands_.back() = staged_;
   commands_.publish();
+}
+
+void HapticMasterDevice::brake() noexcept {
+  brake_requested_.store(true, std::memory_order_release);
+}
+
+std::vector<double> HapticMasterDevice::round_trip_times_s() const {
+  if (round_trip_times_s_.size() < kRoundTripLog) return round_trip_times_s_;
+  std::vector<double> ordered(round_trip_times_s_.begin() + static_cast<long>(round_trip_next_),
+                              round_trip_times_s_.end());
+  ordered.insert(ordered.end(), round_trip_times_s_.begin(),
+                 round_trip_times_s_.begin() + static_cast<long>(round_trip_next_));
+  return ordered;
 }
 
 std::string HapticMasterDevice::last_error() const {

@@ -4,12 +4,26 @@
 // owns it, sends the newest commanded force (a bias force object on the device) with
 // "get measpos;get modelvel;get measforce" in one round trip per period, and publishes each
 // reply as a DeviceSample through a lock-free triple buffer that read() takes.
+//
+// Fail-safe (docs/haptic-safety.md, "the HapticMaster's fail-safe"): a bias force stays on the
+// device until a new one is sent, so no failure may end with the link merely closed. On every
+// failure of a round trip (error reply, corrupt or closed stream, no reply), on brake(), when
+// the tick stops publishing commands for command_watchdog_s, and in stop(), the driver sends
+// zero force and "set state stop" in one request: on the open connection while its stream is
+// intact, else on a fresh connection, each attempt within emergency_timeout_s. Only then is
+// the link reported lost.
+//
+// Start-up follows the device's own checks: the state, both emergency signals, the position
+// calibration (homing by "set state init" when needed), "remove all", the workspace read from
+// the device, the inertia set and read back (start(); startup_report()).
 #include <atomic>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "haptic/device.h"
 
@@ -25,7 +39,31 @@ struct HapticMasterOptions {
   // sent together (false): the fallback if a device answers a joined message with a single
   // reply instead of one per command (docs/hapticmaster.md, assumptions).
   bool join_commands = true;
+  // The fail-safe: each attempt to send zero force and "set state stop" (on the open
+  // connection, then on a fresh one) gives up after this long.
+  double emergency_timeout_s = 0.1;
+  // The I/O thread's watchdog on the tick: no new command for this long and it zeroes the
+  // force and stops the device itself. The safety layer's max_tick_stall_s (the same default
+  // and derivation, docs/haptic-safety.md). 0 turns it off (tests that command by hand).
+  double command_watchdog_s = 0.1;
+  // Homing ("set state init") when the device reports its position uncalibrated: how long to
+  // wait for it to end, and who hears about its progress (one line every second or so).
+  double homing_timeout_s = 60.0;
+  std::function<void(const std::string&)> progress;
   std::string validate() const;  // "" or one line naming the option
+};
+
+// What start() found and did, for the bring-up check and the session's notes.
+struct HapticMasterStartup {
+  std::string initial_state;       // the reply to "get state", without quotes
+  bool emergency_button = false;   // "get emergencybuttonpushed"
+  bool emergency_relay = false;    // "get emergencyrelay"
+  bool was_calibrated = true;      // "get position_calibrated" before homing
+  double homing_s = 0.0;           // how long homing took (0 when not needed)
+  std::string workspace_source;    // "device" (read back) or why the assumed box is used
+  Vec3 workspace_r_phi_z_min = Vec3::Zero();  // as read: r (m), φ (rad), z (m)
+  Vec3 workspace_r_phi_z_max = Vec3::Zero();
+  double inertia_read_back_kg = 0.0;  // "get inertia" after "set inertia"
 };
 
 // A single-producer single-consumer triple buffer: the writer fills back() and publishes
@@ -58,6 +96,7 @@ class TripleBuffer {
 
 class HapticMasterDevice : public HapticDevice {
  public:
+  static constexpr std::size_t kRoundTripLog = 65536;
   // `address` is "host[:port]" (port 7654 by default). Throws DeviceError for a bad
   // address or options; does not connect (start() does).
   explicit HapticMasterDevice(const std::string& address, HapticMasterOptions options = {});
@@ -66,13 +105,30 @@ class HapticMasterDevice : public HapticDevice {
   HapticMasterDevice& operator=(const HapticMasterDevice&) = delete;
 
   std::string name() const override;  // "hapticmaster://host:port"
+  // The assumed figures until start() has read the workspace from the device; then its box.
   DeviceLimits limits() const override;
+  // Throws DeviceError naming the step: a pushed emergency button or an open emergency relay
+  // ("... emergency button is pushed: release it ..."), homing that does not end, an inertia
+  // the device does not take, an error reply. On failure the device is left stopped.
   void start(double inertia) override;
   void stop() noexcept override;
+  const HapticMasterStartup& startup_report() const { return startup_; }
 
   DeviceSample read() noexcept override;
   void command_force(const Vec3& force) noexcept override;
   void command_inertia(double inertia) noexcept override;
+  void brake() noexcept override;
+
+  // Round-trip times of the I/O thread's exchanges (s), newest last, up to the last 65536;
+  // set-up thread only, once the I/O thread has ended (stop()) or for a snapshot.
+  std::vector<double> round_trip_times_s() const;
+  // True when the last failure or stop left the device at zero force in state "stop"
+  // (confirmed by its replies); false when the emergency stop could not reach it.
+  bool device_stopped() const { return device_stopped_.load(); }
+  // Set-up-thread helper for the bring-up check: one command on the open connection, its
+  // reply text (throws DeviceError on an error reply or a broken link). Not while the I/O
+  // thread runs.
+  std::string exchange(const std::string& command);
 
   // Why the link was lost (first reason, prefixed with name()), or "" while it is fine.
   // Set-up thread only; not for the tick.
@@ -90,10 +146,26 @@ class HapticMasterDevice : public HapticDevice {
   // Runs on the I/O thread; its arguments are what start() sent and published.
   void io_loop(double sent_inertia, DeviceSample sample);
   void fail(const std::string& reason);
-  // Zero force, "set state stop", remove the bias object: best effort, errors to fail().
+  // The fail-safe: zero force and "set state stop" in one request, on the open connection if
+  // `connection_intact`, else (or if that fails) on a fresh one. Returns "" or why it could
+  // not reach the device. Sets device_stopped_. Any thread that owns the connection.
+  std::string emergency_stop(bool connection_intact) noexcept;
+  // Fails with `reason`, runs the fail-safe, then publishes the lost link (I/O thread).
+  void lose_link(const std::string& reason, bool connection_intact, DeviceSample sample) noexcept;
+  // Zero force, "set state stop", remove the bias object, in one request; the fail-safe if
+  // that does not go through.
   void send_shutdown() noexcept;
   // A round trip in the set-up phase: throws DeviceError with the reply's text on error.
   std::string expect_ok(const std::string& command);
+  // start()'s stages, in order.
+  void identify();
+  void check_emergency_signals();
+  void ensure_calibrated();
+  void clear_effects();
+  void read_workspace();
+  void set_inertia_checked(double inertia);
+  void create_bias_and_enter_force();
+  DeviceSample first_reading();
 
   std::string host_;
   int port_ = 0;
@@ -101,7 +173,15 @@ class HapticMasterDevice : public HapticDevice {
   std::unique_ptr<Connection> connection_;
   std::thread io_thread_;
   std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> brake_requested_{false};
   std::atomic<bool> link_ok_{false};
+  std::atomic<bool> device_stopped_{false};
+  bool connection_intact_ = false;  // the open connection's stream is in step (owner thread)
+  bool bias_created_ = false;
+  HapticMasterStartup startup_;
+  DeviceLimits limits_;
+  std::vector<double> round_trip_times_s_;  // ring of the last kRoundTripLog (I/O thread)
+  std::size_t round_trip_next_ = 0;
   std::atomic<std::uint64_t> round_trips_{0};
 
   TripleBuffer<DeviceSample> samples_;  // I/O thread -> tick

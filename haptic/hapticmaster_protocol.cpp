@@ -162,6 +162,22 @@ std::optional<Vec3> parse_vector(std::string_view text) {
   return v;
 }
 
+std::optional<std::vector<double>> parse_numbers(std::string_view text) {
+  text = trim(text);
+  if (text.size() < 2 || text.front() != '[' || text.back() != ']') return std::nullopt;
+  text = text.substr(1, text.size() - 2);
+  std::vector<double> numbers;
+  for (;;) {
+    const std::size_t comma = text.find(',');
+    const auto value = parse_number(text.substr(0, comma));
+    if (!value || numbers.size() == 16) return std::nullopt;
+    numbers.push_back(*value);
+    if (comma == std::string_view::npos) break;
+    text.remove_prefix(comma + 1);
+  }
+  return numbers;
+}
+
 Reply parse_reply(std::string_view raw) {
   Reply reply;
   const std::string_view text = trim(raw);

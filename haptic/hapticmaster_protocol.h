@@ -82,6 +82,8 @@ Reply parse_reply(std::string_view text);
 
 // Parses a vector reply; nullopt unless `text` is exactly "[x,y,z]" (spaces allowed).
 std::optional<Vec3> parse_vector(std::string_view text);
+// Parses a list of 1 to 16 numbers "[a,b,...]" (the workspace replies); nullopt otherwise.
+std::optional<std::vector<double>> parse_numbers(std::string_view text);
 // Parses a number; nullopt unless the whole `text` (trimmed) is one finite number.
 std::optional<double> parse_number(std::string_view text);
 

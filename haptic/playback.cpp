@@ -139,10 +139,11 @@ PlaybackSummary Playback::run_real_time(
 }
 
 PlaybackSummary Playback::finish(std::optional<TimingReport> timing, const std::string& warning) {
-  recorder_->close();
-  finished_ = true;
+  // The device first (zero force, its own stop state), then the file.
   device_.stop();
   device_started_ = false;
+  recorder_->close();
+  finished_ = true;
   PlaybackSummary summary;
   summary.session_path = recorder_->path();
   const RenderLoopCounters counters = loop_->counters();

@@ -120,6 +120,13 @@ void RenderLoop::tick(double time_s) noexcept {
   const SafetyOutput output = safety_.step(SafetyInput{time_s, sample, desired});
   device_.command_force(output.force);
   events |= output.events;
+  // A free virtual mass keeps moving when its force is only zeroed: a trip on motion brakes
+  // the device at once, and every stop ends braked.
+  if (!braked_ && ((output.events & (kEventVelocityTrip | kEventWorkspaceTrip)) != 0 ||
+                   output.state == SafetyState::kStopped)) {
+    device_.brake();
+    braked_ = true;
+  }
 
   have_previous_ = true;
   previous_time_s_ = time_s;

@@ -129,6 +129,7 @@ class RenderLoop {
   std::array<double, DoorModel::kMaxTerms> terms_{};
   std::atomic<bool> stop_requested_{false};
   bool stop_forwarded_ = false;
+  bool braked_ = false;  // device_.brake() called (velocity or workspace trip, or stopped)
   std::atomic<SafetyState> safety_state_{SafetyState::kStarting};
   std::atomic<std::uint64_t> ticks_{0}, dropped_{0}, changes_{0}, clipped_{0};
   std::atomic<double> status_time_s_{0.0}, status_theta_{0.0}, status_omega_{0.0},

@@ -167,6 +167,13 @@ void SimulatedRotaryDevice::integrate_step(double t_s, double dt_s) noexcept {
 
   // Admittance: the rotor follows J_r under the sensed torque plus the command. Impedance: the
   // bare rotor under the true hand torque plus the motor's.
+  if (braked()) {  // the device's brake holds the rotor
+    rate_rad_s_ = 0.0;
+    estimated_rate_rad_s_ = 0.0;
+    truth_.position = Vec3(angle_rad_, 0.0, 0.0);
+    truth_.velocity = Vec3::Zero();
+    return;
+  }
   const bool admittance = options_.render_inertia_by_admittance;
   const double inertia = admittance ? truth_.inertia : options_.rotor_inertia_kg_m2;
   const double drive = (admittance ? measured : user_torque) + truth_.applied_command.x() + stop -

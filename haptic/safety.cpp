@@ -63,6 +63,9 @@ std::string SafetyOptions::validate() const {
   if (!positive_finite(max_tick_interval_s)) {
     return option_problem("max_tick_interval_s", max_tick_interval_s, "must be > 0");
   }
+  if (!positive_finite(max_tick_stall_s)) {
+    return option_problem("max_tick_stall_s", max_tick_stall_s, "must be > 0");
+  }
   if (max_stale_ticks < 1) {
     return std::string("max_stale_ticks = ")
         .append(std::to_string(max_stale_ticks))
@@ -99,6 +102,8 @@ std::string_view event_name(std::uint32_t single_event_bit) {
       return "workspace_trip";
     case kEventDeadlineMiss:
       return "deadline_miss";
+    case kEventLateTick:
+      return "late_tick";
     case kEventDeviceStalled:
       return "device_stalled";
     case kEventLinkLost:
@@ -131,7 +136,10 @@ std::string_view event_meaning(std::uint32_t single_event_bit) {
     case kEventWorkspaceTrip:
       return "trip: the device left its workspace less workspace_margin_m";
     case kEventDeadlineMiss:
-      return "trip: the time between two ticks exceeded max_tick_interval_s (or went backwards)";
+      return "trip: the time between two ticks exceeded max_tick_stall_s (or went backwards)";
+    case kEventLateTick:
+      return "a tick came more than max_tick_interval_s after the previous one: the device held "
+             "the last force meanwhile; counted, playback goes on";
     case kEventDeviceStalled:
       return "trip: the device's sample did not change for max_stale_ticks ticks";
     case kEventLinkLost:
@@ -238,8 +246,10 @@ SafetyOutput SafetyLayer::step(const SafetyInput& input) noexcept {
   if (state_ != SafetyState::kRampingDown) {
     const bool is_rotary = limits_.kinematics == Kinematics::kRotary1;
     const DeviceSample& sample = input.sample;
-    if (!first_tick && (dt_s > options_.max_tick_interval_s || dt_s < 0.0)) {
+    if (!first_tick && (dt_s > options_.max_tick_stall_s || dt_s < 0.0)) {
       begin_ramp_down(time_s, kEventDeadlineMiss, output);
+    } else if (!first_tick && dt_s > options_.max_tick_interval_s) {
+      output.events |= kEventLateTick;
     }
     if (!sample.link_ok) begin_ramp_down(time_s, kEventLinkLost, output);
     if (!first_tick) {
@@ -314,7 +324,9 @@ SafetyOutput SafetyLayer::step(const SafetyInput& input) noexcept {
     force_clipped = true;
   }
   target *= scale_;
-  const double max_change = force_rate_limit_ * dt_s;
+  // After a late tick the force still changes no faster than over max_tick_interval_s: it
+  // ramps from what the device held towards the new target over the next ticks.
+  const double max_change = force_rate_limit_ * std::min(dt_s, options_.max_tick_interval_s);
   const Vec3 change = target - previous_force_;
   const double change_size = safe_norm(change);
   bool rate_clipped = false;

@@ -109,6 +109,7 @@ void SimulatedDevice::start(double inertia) {
   link_lost_ = false;
   lose_link_at_s_ = 1e300;
   frozen_valid_ = false;
+  brake_requested_ = false;
   measured_force_ = Vec3::Zero();
   reset_state();
   started_ = true;
@@ -169,7 +170,11 @@ void SimulatedDevice::step_once() noexcept {
     delay_head_ = (delay_head_ + 1) % kDelayLineSize;
     --delay_count_;
   }
-  if (!started_ || link_lost_) truth_.applied_command = Vec3::Zero();
+  if (brake_requested_ && !truth_.braked) {
+    truth_.braked = true;
+    truth_.braked_at_s = t;
+  }
+  if (!started_ || link_lost_ || truth_.braked) truth_.applied_command = Vec3::Zero();
   // The device's own clamp on the magnitude.
   const double max_force = device_limits().max_force;
   const double magnitude = truth_.applied_command.norm();
@@ -389,6 +394,12 @@ void SimulatedHapticMaster::integrate_step(double t_s, double dt_s) noexcept {
   // measures plus the command (the sensor's noise moves it, too, as on the real device).
   const Vec3 total = measured_force_ + truth_.applied_command + truth_.wall_force -
                      options_.viscous_friction_N_s_per_m * velocity_;
+  if (braked()) {  // the device's brake holds the end-effector
+    velocity_ = Vec3::Zero();
+    truth_.position = position_;
+    truth_.velocity = velocity_;
+    return;
+  }
   // Semi-implicit (symplectic) Euler.
   velocity_ += dt_s * total / truth_.inertia;
   position_ += dt_s * velocity_;

@@ -59,6 +59,8 @@ struct SimulatedTruth {
   std::uint64_t skipped_steps = 0;     // real-time mode: steps skipped by the work cap
   std::uint64_t pushes = 0;            // push pulses begun
   std::uint64_t dropped_commands = 0;  // commands lost to a full delay line or a stalled link
+  bool braked = false;                 // brake() acted: zero command, the end-effector held
+  double braked_at_s = -1.0;           // when (simulated time), -1 while not braked
 };
 
 // Pulses of force off the arc (or along it): a person's hand is not a perfect guide. Pulses
@@ -107,6 +109,9 @@ class SimulatedDevice : public HapticDevice {
   DeviceSample read() noexcept override;
   void command_force(const Vec3& force) noexcept override;
   void command_inertia(double inertia) noexcept override;
+  // Brakes like the real device's "stop" state: from the next servo step the command is zero
+  // and the end-effector stands still (velocity zero) until stop() and start().
+  void brake() noexcept override { brake_requested_ = true; }
 
   // Manual time: integrate up to `time_s` (no-op when it is not ahead). Also usable in
   // real-time mode to catch up explicitly; the work cap does not apply here.
@@ -143,6 +148,8 @@ class SimulatedDevice : public HapticDevice {
     return external_ ? external_(t_s, position, velocity) : Vec3::Zero();
   }
   double start_time_s() const noexcept { return start_time_s_; }
+  // True once brake() has acted: integrate_step must hold the end-effector still.
+  bool braked() const noexcept { return truth_.braked; }
 
   SimulatedTruth truth_;
   Vec3 measured_force_ = Vec3::Zero();  // the sensor's latest (with noise)
@@ -180,6 +187,7 @@ class SimulatedDevice : public HapticDevice {
   double lose_link_at_s_ = 1e300;
   bool frozen_valid_ = false;
   DeviceSample frozen_;
+  bool brake_requested_ = false;
 };
 
 struct SimulatedHapticMasterOptions {

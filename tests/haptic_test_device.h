@@ -48,10 +48,20 @@ class RotaryTestDevice final : public haptic::HapticDevice {
     inertia_ = inertia;
     ++inertia_commands;
   }
+  // Counts the calls and holds the rotor still from then on, as a device's brake would.
+  void brake() noexcept override {
+    ++brake_calls;
+    braked = true;
+  }
 
   void advance_to(double time_s) {
     constexpr double kStep = 1e-4;
     while (time_s_ + 0.5 * kStep < time_s) {
+      if (braked) {
+        omega_ = 0.0;
+        time_s_ += kStep;
+        continue;
+      }
       const double acceleration = (command_ + hand_torque()) / inertia_;
       omega_ += acceleration * kStep;
       theta_ += omega_ * kStep;
@@ -61,7 +71,8 @@ class RotaryTestDevice final : public haptic::HapticDevice {
   double inertia() const { return inertia_; }
   double command() const { return command_; }
 
-  bool started = false, stopped = false;
+  bool started = false, stopped = false, braked = false;
+  int brake_calls = 0;
   int inertia_commands = 0;
 
  private:

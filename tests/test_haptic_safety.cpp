@@ -117,7 +117,7 @@ TEST_CASE("Safety limits are the smaller of the device's and the options'", "[ha
 }
 
 TEST_CASE("Every event bit has a name and a meaning", "[haptic][safety]") {
-  for (std::uint32_t bit = 1; bit <= kEventStopped; bit <<= 1) {
+  for (std::uint32_t bit = 1; bit <= kEventLateTick; bit <<= 1) {
     CHECK_FALSE(event_name(bit).empty());
     CHECK_FALSE(event_meaning(bit).empty());
   }
@@ -269,19 +269,46 @@ TEST_CASE("Adversarial inputs never break the limits (property test)", "[haptic]
   CHECK(trips_seen > 20);  // the adversity did trip layers, so the ramp downs were exercised
 }
 
-TEST_CASE("A missed deadline ramps the force to zero within shutdown_ramp_s", "[haptic][safety]") {
+TEST_CASE("A late tick is counted and played on; the force after it ramps at the rate limit",
+          "[haptic][safety]") {
   SafetyOptions options;
   SafetyLayer layer(options, DeviceLimits{});
   const Vec3 desired(0.0, 30.0, 40.0);
   const int running_at = run_until_running(layer, desired);
-  // The next tick comes 8 ms late (the limit is 5 ms).
-  SafetyInput late = input_at(running_at, desired);
+  // The next tick comes 8 ms late (late above 5 ms, a stall only above 100 ms) and asks for
+  // the opposite force: the layer goes on, and the change is limited as over 5 ms, not 8.
+  SafetyInput late = input_at(running_at, -desired);
   late.time_s += 0.008;
+  const SafetyOutput output = layer.step(late);
+  CHECK(output.events == (kEventLateTick | kEventForceRateLimited));
+  CHECK(output.state == SafetyState::kRunning);
+  const double allowed_change = layer.force_rate_limit() * options.max_tick_interval_s;
+  CHECK((output.force - desired).norm() == Approx(allowed_change));
+  // The ticks after it are on time: no more late events, and the force reaches the target.
+  SafetyOutput next;
+  for (int k = 1; k <= 40; ++k) {
+    SafetyInput on_time = input_at(running_at + k, -desired);
+    on_time.time_s += 0.008;
+    next = layer.step(on_time);
+    CHECK((next.events & (kEventLateTick | kEventDeadlineMiss)) == 0);
+  }
+  CHECK(next.state == SafetyState::kRunning);
+  CHECK(next.force.isApprox(-desired));
+}
+
+TEST_CASE("A stalled tick ramps the force to zero within shutdown_ramp_s", "[haptic][safety]") {
+  SafetyOptions options;
+  SafetyLayer layer(options, DeviceLimits{});
+  const Vec3 desired(0.0, 30.0, 40.0);
+  const int running_at = run_until_running(layer, desired);
+  // The next tick comes 120 ms late: past max_tick_stall_s (100 ms).
+  SafetyInput late = input_at(running_at, desired);
+  late.time_s += 0.120;
   const SafetyOutput trip = layer.step(late);
   CHECK(trip.events == kEventDeadlineMiss);
   CHECK(trip.state == SafetyState::kRampingDown);
   CHECK(trip.force.norm() == Approx(50.0));  // the trip tick itself holds the force
-  const RampDown ramp = watch_ramp_down(layer, running_at + 1, late.time_s, 0.008, desired);
+  const RampDown ramp = watch_ramp_down(layer, running_at + 1, late.time_s, 0.120, desired);
   CHECK(ramp.monotonic);
   CHECK(ramp.stopped_events == 1);
   CHECK(ramp.zero_after_s > 0.0);

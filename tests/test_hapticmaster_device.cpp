@@ -29,6 +29,34 @@ namespace {
 
 using Emulator = doorbench::testing::HapticMasterEmulator;
 
+// Options for tests that command by hand, not every tick: the I/O thread's watchdog on the
+// tick (which has its own test) is off.
+HapticMasterOptions by_hand() {
+  HapticMasterOptions options;
+  options.command_watchdog_s = 0.0;
+  return options;
+}
+
+// What start() sends before the loop's first round trip.
+const std::vector<std::string> kStartSequence = {"get state",
+                                                 "get emergencybuttonpushed",
+                                                 "get emergencyrelay",
+                                                 "get position_calibrated",
+                                                 "remove all",
+                                                 "get workspace_r",
+                                                 "get workspace_phi",
+                                                 "get workspace_z",
+                                                 "set inertia 5",
+                                                 "get inertia",
+                                                 "create biasforce doorbench_bias",
+                                                 "set doorbench_bias force [0,0,0]",
+                                                 "set doorbench_bias enable",
+                                                 "set state force",
+                                                 "get measpos",
+                                                 "get modelvel",
+                                                 "get measforce"};
+const std::size_t kStartCommands = kStartSequence.size();
+
 std::vector<std::string> lines_of(const std::filesystem::path& file) {
   std::ifstream in(file);
   std::vector<std::string> lines;
@@ -138,7 +166,7 @@ TEST_CASE("hapticmaster device: the exact command sequence at start, in the loop
   const auto log = dir / "commands.log";
   Emulator emulator({"--log", log.string()});
   {
-    HapticMasterDevice device(emulator.address());
+    HapticMasterDevice device(emulator.address(), by_hand());
     device.start(5.0);
     const DeviceSample s =
         poll_until(device, [](const DeviceSample& s) { return s.sequence >= 5; });
@@ -149,22 +177,13 @@ TEST_CASE("hapticmaster device: the exact command sequence at start, in the loop
     CHECK_FALSE(device.read().sequence < s.sequence);
   }
   const std::vector<std::string> lines = lines_of(log);
-  REQUIRE(lines.size() >= 10 + 4 * 4 + 3);
-  const std::vector<std::string> start = {"get state",
-                                          "set inertia 5",
-                                          "remove doorbench_bias",
-                                          "create biasforce doorbench_bias",
-                                          "set doorbench_bias force [0,0,0]",
-                                          "set doorbench_bias enable",
-                                          "set state force",
-                                          "get measpos",
-                                          "get modelvel",
-                                          "get measforce"};
-  CHECK(std::vector<std::string>(lines.begin(), lines.begin() + 10) == start);
+  REQUIRE(lines.size() >= kStartCommands + 4 * 4 + 3);
+  CHECK(std::vector<std::string>(lines.begin(), lines.begin() + kStartCommands) ==
+        kStartSequence);
   // Every round trip: the force, then the three readings.
   const std::size_t loop_end = lines.size() - 3;
-  CHECK((loop_end - 10) % 4 == 0);
-  for (std::size_t i = 10; i < loop_end; i += 4) {
+  CHECK((loop_end - kStartCommands) % 4 == 0);
+  for (std::size_t i = kStartCommands; i < loop_end; i += 4) {
     INFO(i);
     CHECK(lines[i] == "set doorbench_bias force [0,0,0]");
     CHECK(lines[i + 1] == "get measpos");
@@ -203,7 +222,7 @@ TEST_CASE("hapticmaster device: an error reply at start is a DeviceError with it
 TEST_CASE("hapticmaster device: samples flow and the position follows the commanded force",
           "[hapticmaster]") {
   Emulator emulator({"--ext-force", "[0,0,1.5]"});
-  HapticMasterDevice device(emulator.address());
+  HapticMasterDevice device(emulator.address(), by_hand());
   device.start(4.0);
   DeviceSample s = poll_until(device, [](const DeviceSample& s) { return s.sequence >= 3; });
   REQUIRE(s.sequence >= 3);
@@ -246,7 +265,7 @@ TEST_CASE("hapticmaster device: command_inertia reaches the device", "[hapticmas
   TempDir dir("hm_inertia");
   const auto log = dir / "commands.log";
   Emulator emulator({"--log", log.string()});
-  HapticMasterDevice device(emulator.address());
+  HapticMasterDevice device(emulator.address(), by_hand());
   device.start(5.0);
   poll_until(device, [](const DeviceSample& s) { return s.sequence >= 2; });
   device.command_inertia(12.5);
@@ -275,9 +294,9 @@ TEST_CASE("hapticmaster device: command_inertia reaches the device", "[hapticmas
 }
 
 TEST_CASE("hapticmaster device: a dropped connection clears link_ok at once", "[hapticmaster]") {
-  // 6 start commands + 4 per round trip: dropped in the 26th round trip.
-  Emulator emulator({"--drop-after", "106"});
-  HapticMasterOptions options;
+  // 17 start commands + 4 per round trip: dropped in the 25th round trip.
+  Emulator emulator({"--drop-after", std::to_string(kStartCommands + 4 * 24)});
+  HapticMasterOptions options = by_hand();
   options.reply_timeout_s = 0.5;
   HapticMasterDevice device(emulator.address(), options);
   device.start(5.0);
@@ -308,8 +327,9 @@ TEST_CASE("hapticmaster device: a dropped connection clears link_ok at once", "[
 
 TEST_CASE("hapticmaster device: a silent device clears link_ok after the reply timeout",
           "[hapticmaster]") {
-  Emulator emulator({"--stall-after", "46"});  // answers 10 round trips, then nothing
-  HapticMasterOptions options;
+  // Answers 10 round trips (the first reading and 9 more), then nothing.
+  Emulator emulator({"--stall-after", std::to_string(kStartCommands + 4 * 9)});
+  HapticMasterOptions options = by_hand();
   options.reply_timeout_s = 0.2;
   HapticMasterDevice device(emulator.address(), options);
   device.start(5.0);
@@ -324,15 +344,15 @@ TEST_CASE("hapticmaster device: a silent device clears link_ok after the reply t
   CHECK(detect_s < 0.2 + 0.2);
   CHECK_THAT(device.last_error(), Catch::Contains("no reply within 0.2 s"));
   const double stop_t0 = now_s();
-  device.stop();  // the link is lost: no commands, no waiting
+  device.stop();  // the device was stopped on a fresh connection already: no waiting
   CHECK(now_s() - stop_t0 < 0.1);
 }
 
 TEST_CASE("hapticmaster device: garbage and error replies in the loop clear link_ok",
           "[hapticmaster]") {
   {
-    Emulator emulator({"--garbage-after", "14"});
-    HapticMasterDevice device(emulator.address());
+    Emulator emulator({"--garbage-after", std::to_string(kStartCommands + 4)});
+    HapticMasterDevice device(emulator.address(), by_hand());
     device.start(5.0);
     const DeviceSample s = poll_until(device, [](const DeviceSample& s) { return !s.link_ok; });
     CHECK_FALSE(s.link_ok);
@@ -341,14 +361,16 @@ TEST_CASE("hapticmaster device: garbage and error replies in the loop clear link
   }
   {
     Emulator emulator({"--fail", "set doorbench_bias force [1,0,0]=Force too large"});
-    HapticMasterDevice device(emulator.address());
+    HapticMasterDevice device(emulator.address(), by_hand());
     device.start(5.0);
     device.command_force(Vec3(1, 0, 0));
     const DeviceSample s = poll_until(device, [](const DeviceSample& s) { return !s.link_ok; });
     CHECK_FALSE(s.link_ok);
     CHECK(s.sequence >= 1);
     CHECK(device.last_error() ==
-          emulator.name() + ": 'set doorbench_bias force [1,0,0]' failed: Force too large");
+          emulator.name() +
+              ": 'set doorbench_bias force [1,0,0]' failed: Force too large; the device was "
+              "stopped (zero force, state stop)");
     device.stop();
   }
   {
@@ -356,7 +378,7 @@ TEST_CASE("hapticmaster device: garbage and error replies in the loop clear link
     TempDir dir("hm_first_reading");
     const auto log = dir / "commands.log";
     Emulator emulator({"--fail", "get modelvel=Not in state force", "--log", log.string()});
-    HapticMasterDevice device(emulator.address());
+    HapticMasterDevice device(emulator.address(), by_hand());
     CHECK_THROWS_WITH(device.start(5.0),
                       emulator.name() + ": 'get modelvel' failed: Not in state force");
     const std::vector<std::string> lines = lines_of(log);
@@ -371,7 +393,7 @@ TEST_CASE("hapticmaster device: the tick's calls never allocate", "[hapticmaster
   // No I/O thread may run while counting (the counter is process-wide): the calls are
   // measured on a device before start and after a full start/stop with the emulator.
   Emulator emulator;
-  HapticMasterDevice device(emulator.address());
+  HapticMasterDevice device(emulator.address(), by_hand());
   const auto exercise = [&] {
     const long long before = doorbench::testing::allocations();
     double sum = 0;
@@ -396,7 +418,7 @@ TEST_CASE("hapticmaster device: commands as separate messages, forces clamped to
   TempDir dir("hm_separate");
   const auto log = dir / "commands.log";
   Emulator emulator({"--log", log.string()});
-  HapticMasterOptions options;
+  HapticMasterOptions options = by_hand();
   options.join_commands = false;
   HapticMasterDevice device(emulator.address(), options);
   device.start(5.0);
@@ -431,14 +453,14 @@ TEST_CASE("hapticmaster device: wrong answers to 'get state' or to a round trip"
   {
     // Unquoted state names are taken too (the HapticAPI examples show "stop;").
     Emulator emulator({"--answer", "get state=off"});
-    HapticMasterDevice device(emulator.address());
+    HapticMasterDevice device(emulator.address(), by_hand());
     CHECK_NOTHROW(device.start(5.0));
     device.stop();
   }
   {
     // One reply too many in the loop's reply message: the link is declared lost.
     Emulator emulator({"--answer", "set doorbench_bias force [2,0,0]=ok;[4,5,6]"});
-    HapticMasterDevice device(emulator.address());
+    HapticMasterDevice device(emulator.address(), by_hand());
     device.start(5.0);
     device.command_force(Vec3(2, 0, 0));
     const DeviceSample s = poll_until(device, [](const DeviceSample& s) { return !s.link_ok; });
@@ -446,7 +468,8 @@ TEST_CASE("hapticmaster device: wrong answers to 'get state' or to a round trip"
     CHECK(device.last_error() ==
           emulator.name() +
               ": 4 command(s) 'set doorbench_bias force [2,0,0];get measpos;get modelvel;get "
-              "measforce' answered with 5 replies");
+              "measforce' answered with 5 replies; the device was stopped (zero force, state "
+              "stop)");
     device.stop();
   }
   {

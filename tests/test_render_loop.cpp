@@ -106,6 +106,60 @@ TEST_CASE("render loop: a tick allocates nothing and a parameter change lands at
   CHECK(loop.counters().records_dropped == 0);
 }
 
+TEST_CASE("render loop: a velocity trip brakes the device in the same tick, a stop ends braked",
+          "[haptic][loop][failsafe]") {
+  const DoorModel model = reference_model(ModelKind::kSensory);
+  const DoorMapping mapping(Kinematics::kRotary1, ArcGeometry{}, model.geometry().handle_radius_m);
+  SECTION("velocity trip") {
+    testing::RotaryTestDevice device;
+    device.reference_angle_rad = reference_angle;  // peaks near 0.26 rad/s
+    device.start(mapping.inertia_on_device(model.inertia_kg_m2()));
+    RenderLoopOptions options = rotary_options();
+    options.safety.velocity_trip = 0.1;  // rad/s: the gentle opening trips it
+    RenderLoop loop(device, mapping, std::make_unique<PlaybackParameters>(model, mapping, "start"),
+                    options);
+    double time_s = 0.0;
+    int trip_tick = -1;
+    for (int i = 0; i < 4000 && trip_tick < 0; ++i, time_s += 1e-3) {
+      device.advance_to(time_s);
+      loop.tick(time_s);
+      while (const TickRecord* record = loop.records().consumer_slot()) {
+        if (record->events & kEventVelocityTrip) trip_tick = i;
+        loop.records().release();
+      }
+      if (trip_tick < 0) CHECK(device.brake_calls == 0);
+    }
+    REQUIRE(trip_tick > 0);
+    CHECK(device.brake_calls == 1);  // in the trip's own tick, not after the 20 ms ramp
+    // The ramp down and the stop that follow do not brake again.
+    for (int i = 0; i < 100; ++i, time_s += 1e-3) {
+      device.advance_to(time_s);
+      loop.tick(time_s);
+    }
+    CHECK(loop.stopped());
+    CHECK(device.brake_calls == 1);
+  }
+  SECTION("a requested stop ends braked") {
+    testing::RotaryTestDevice device;
+    device.start(mapping.inertia_on_device(model.inertia_kg_m2()));
+    RenderLoop loop(device, mapping, std::make_unique<PlaybackParameters>(model, mapping, "start"),
+                    rotary_options());
+    double time_s = 0.0;
+    for (int i = 0; i < 700; ++i, time_s += 1e-3) {
+      device.advance_to(time_s);
+      loop.tick(time_s);
+    }
+    CHECK(device.brake_calls == 0);
+    loop.request_stop();
+    for (int i = 0; i < 100 && !loop.stopped(); ++i, time_s += 1e-3) {
+      device.advance_to(time_s);
+      loop.tick(time_s);
+    }
+    CHECK(loop.stopped());
+    CHECK(device.brake_calls == 1);
+  }
+}
+
 TEST_CASE("render loop: the model's torque is what the device gets, and the hand feels the door",
           "[haptic][loop]") {
   ReferenceDoorLoop rig;

@@ -2,7 +2,9 @@
 """An emulator of the HapticMaster's TCP text protocol, for doorbench's driver tests.
 
 Run with Debian's /usr/bin/python3 (standard library only). It listens on 127.0.0.1
-(--port 0 = a free port), prints "PORT <n>" on stdout, and serves one client at a time.
+(--port 0 = a free port), prints "PORT <n>" on stdout, and serves every client that connects,
+each on its own thread, all on the one device (a second connection is how a driver reaches a
+device whose first connection broke).
 
 Framing (docs/hapticmaster.md): every message is an 8-byte header (big-endian 32-bit length,
 then 4 zero bytes) followed by ASCII text; a request may hold several commands joined with
@@ -12,20 +14,36 @@ ended by ';' ("Inertia set;[0.0,0.0,0.1];").
 Device model: state (init/off/force/position/home/stop), the inertia m, and effect objects
 (biasforce, spring, damper, cylinder, torus) with their properties. In state "force" the
 end-effector moves as m*a = bias forces + springs + dampers + the external (user) force,
-integrated in real time at 1 kHz inside a box (+-0.3 m) whose walls stop it. Cylinders and
-tori keep their properties but add no force (enough for the protocol tests).
+integrated at 1 kHz by its own thread, whether or not messages arrive, inside a box
+(+-0.3 m) whose walls stop it. Effects persist when a client disconnects (a bias force stays
+applied until a new one is set). A spring with a non-zero direction acts along that
+direction only; its dampfactor is dimensionless, a fraction of critical damping
+(c = dampfactor * 2 sqrt(k m)). State "stop" holds the end-effector still. Cylinders and tori
+keep their properties but add no force (enough for the protocol tests).
+
+Start-up facts: "get position_calibrated" (false with --uncalibrated until "set state init"
+has homed for --homing-s seconds; the state is "init" meanwhile, then "off"),
+"get emergencybuttonpushed", "get emergencyrelay" (--emergency-button, --emergency-relay),
+"get workspace_r|phi|z" (three numbers each), "get inertia". --leftover NAME leaves an
+enabled bias force of 5 N named NAME, as another program would.
 
 Test-only commands (not the device's): "emulator extforce [x,y,z]" sets the user's force;
 "emulator log" returns the commands logged so far.
 
-Misbehaviour for tests: --drop-after N closes the connection after the N-th command;
---stall-after N stops answering (connection stays open) after N commands; --garbage-after N
-answers with a corrupt header after N commands; --fail COMMAND=TEXT answers the exact
-command COMMAND with "--- ERROR: TEXT". --log FILE appends every command received, one a line.
+Misbehaviour for tests (each happens once, on the connection that reaches it; later
+connections are served normally): --drop-after N closes the connection at the (N+1)-th
+command; --stall-after N stops answering it (the connection stays open); --garbage-after N
+answers it with a corrupt header; --fail COMMAND=TEXT answers the exact command COMMAND with
+"--- ERROR: TEXT" (every time). --latency-ms L [--jitter-ms J] delays each request by
+(L + U(0, J))/2 before it acts and its reply by as much again: a network's round trip.
+--log FILE appends every command received, one a line. --events FILE appends time-stamped
+lines (CLOCK_MONOTONIC seconds): "<t> cmd <command>", "<t> fault <drop|stall|garbage|fail>",
+and "<t> device state=<s> bias=<|sum of enabled bias forces| N>" whenever either changes.
 """
 
 import argparse
 import math
+import random
 import socket
 import struct
 import sys
@@ -49,6 +67,13 @@ NUMBER_PROPS = {
     "torus": ("stiffness", "dampfactor", "maxforce", "ringradius", "tuberadius"),
 }
 MIN_INERTIA, MAX_INERTIA = 0.1, 1000.0
+# r (m) about the base axis, phi (rad), z (m): lower bound, upper bound, and a third value
+# (assumed: the centre of the range) - the public example's workspace constants.
+WORKSPACE = {
+    "workspace_r": (0.28, 0.64, 0.46),
+    "workspace_phi": (-0.5, 0.5, 0.0),
+    "workspace_z": (-0.2, 0.2, 0.0),
+}
 WALL = 0.3
 DT = 0.001
 
@@ -86,9 +111,16 @@ def parse_vector(text):
 
 
 class Device:
-    def __init__(self, ext_force):
+    def __init__(self, ext_force, args=None):
         self.lock = threading.Lock()
-        self.state = "init"
+        self.args = args
+        self.state = "off"
+        self.calibrated = not (args and args.uncalibrated)
+        self.homing_until = None
+        self.emergency_button = bool(args and args.emergency_button)
+        self.emergency_relay = bool(args and args.emergency_relay)
+        self.events = open(args.events, "a") if (args and args.events) else None
+        self.reported = None
         self.inertia = 3.0
         self.objects = {}  # name -> dict(type=..., enabled=bool, props)
         self.pos = [0.0, 0.0, 0.0]
@@ -106,8 +138,17 @@ class Device:
             if kind == "biasforce":
                 f = obj["force"]
             elif kind == "spring":
-                k, c = obj["stiffness"], obj["dampfactor"]
-                f = [-k * (self.pos[i] - obj["pos"][i]) - c * self.vel[i] for i in range(3)]
+                k = obj["stiffness"]
+                c = obj["dampfactor"] * 2.0 * math.sqrt(max(k, 0.0) * self.inertia)
+                d = obj["direction"]
+                dn = math.sqrt(sum(x * x for x in d))
+                if dn > 0:  # along the direction only
+                    u = [x / dn for x in d]
+                    dx = sum((self.pos[i] - obj["pos"][i]) * u[i] for i in range(3))
+                    dv = sum(self.vel[i] * u[i] for i in range(3))
+                    f = [(-k * dx - c * dv) * u[i] for i in range(3)]
+                else:
+                    f = [-k * (self.pos[i] - obj["pos"][i]) - c * self.vel[i] for i in range(3)]
                 n = math.sqrt(sum(x * x for x in f))
                 if obj["maxforce"] > 0 and n > obj["maxforce"]:
                     f = [x * obj["maxforce"] / n for x in f]
@@ -118,12 +159,43 @@ class Device:
             total = [total[i] + f[i] for i in range(3)]
         return total
 
+    def event(self, text):
+        if self.events:
+            self.events.write("%.6f %s\n" % (time.monotonic(), text))
+            self.events.flush()
+
+    def bias_total(self):
+        total = [0.0, 0.0, 0.0]
+        for obj in self.objects.values():
+            if obj["enabled"] and obj["type"] == "biasforce":
+                total = [total[i] + obj["force"][i] for i in range(3)]
+        return math.sqrt(sum(x * x for x in total))
+
+    def report(self):
+        """Logs the state and the applied bias force whenever either changed."""
+        now = (self.state, round(self.bias_total(), 6))
+        if now != self.reported:
+            self.reported = now
+            self.event("device state=%s bias=%s" % now)
+
+    def run(self):
+        """The device's own control loop: the model runs whether or not messages arrive."""
+        while True:
+            time.sleep(DT)
+            with self.lock:
+                self.advance()
+
     def advance(self):
         """Integrates the admittance model up to now (semi-implicit Euler, 1 kHz)."""
         now = time.monotonic()
         steps = int((now - self.last_time) / DT)
         steps = min(steps, 5000)  # after a long pause, do not spin
         self.last_time = now if steps == 5000 else self.last_time + steps * DT
+        if self.homing_until is not None and now >= self.homing_until:
+            self.homing_until = None
+            self.calibrated = True
+            self.state = "off"
+            self.report()
         if self.state != "force":
             self.vel = [0.0, 0.0, 0.0]
             return
@@ -142,8 +214,6 @@ class Device:
             obj[p] = [0.0, 0.0, 0.0]
         for p in NUMBER_PROPS[kind]:
             obj[p] = 0.0
-        if kind == "spring":
-            obj["direction"] = [0.0, 0.0, 1.0]
         return obj
 
     def execute(self, command):
@@ -157,6 +227,14 @@ class Device:
                 return '"%s"' % self.state
             if what == "inertia":
                 return fmt(self.inertia)
+            if what == "position_calibrated":
+                return "true" if self.calibrated else "false"
+            if what == "emergencybuttonpushed":
+                return "true" if self.emergency_button else "false"
+            if what == "emergencyrelay":
+                return "true" if self.emergency_relay else "false"
+            if what in WORKSPACE:
+                return fmt_vec(WORKSPACE[what])
             if what in ("measpos", "modelpos"):
                 return fmt_vec(self.pos)
             if what == "modelvel":
@@ -178,7 +256,13 @@ class Device:
         if verb == "set" and len(words) >= 3 and words[1] == "state" and len(words) == 3:
             if words[2] not in STATES:
                 raise Error("Unknown state '%s'" % words[2])
+            if words[2] == "force" and not self.calibrated:
+                raise Error("Position not calibrated: set state init first")
+            if words[2] == "force" and (self.emergency_button or self.emergency_relay):
+                raise Error("Emergency stop active")
             self.state = words[2]
+            if self.state == "init":
+                self.homing_until = time.monotonic() + (self.args.homing_s if self.args else 1.0)
             return "state set to '%s'" % self.state
         if verb == "set" and words[1] == "inertia" and len(words) == 3:
             value = parse_number(words[2])
@@ -242,7 +326,14 @@ def recv_exact(conn, n):
     return data
 
 
-def serve(conn, device, args, counter, log_file):
+def delay(args):
+    if not args.latency_ms and not args.jitter_ms:
+        return
+    total = (args.latency_ms + random.uniform(0.0, args.jitter_ms)) / 1000.0
+    time.sleep(total / 2.0)
+
+
+def serve(conn, device, args, faults, log_file):
     conn.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     while True:
         header = recv_exact(conn, 8)
@@ -252,27 +343,35 @@ def serve(conn, device, args, counter, log_file):
         body = recv_exact(conn, length)
         if body is None:
             return
+        delay(args)  # the request travels to the device
         replies = []
         for command in body.decode("ascii", "replace").split(";"):
             command = command.strip()
             if not command:
                 continue
-            counter[0] += 1
-            if log_file:
-                log_file.write(command + "\n")
-                log_file.flush()
-            if args.drop_after is not None and counter[0] > args.drop_after:
+            fault = faults.next(command)
+            if fault == "drop":
+                device.event("fault drop")
                 conn.close()
                 return
-            if args.stall_after is not None and counter[0] > args.stall_after:
-                time.sleep(3600)
-            if args.garbage_after is not None and counter[0] > args.garbage_after:
+            if fault == "stall":
+                device.event("fault stall")
+                while True:  # this connection never answers again; others still do
+                    if recv_exact(conn, 8) is None:
+                        return
+            if fault == "garbage":
+                device.event("fault garbage")
                 conn.sendall(b"\xff\xff\xff\xffgarbage")
                 continue
             with device.lock:
+                if log_file:
+                    log_file.write(command + "\n")
+                    log_file.flush()
+                device.event("cmd " + command)
                 device.log.append(command)
                 device.advance()
                 if command in args.fail:
+                    device.event("fault fail")
                     reply = "--- ERROR: " + args.fail[command]
                 elif command in args.answer:
                     reply = args.answer[command]
@@ -281,9 +380,33 @@ def serve(conn, device, args, counter, log_file):
                         reply = device.execute(command)
                     except Error as e:
                         reply = "--- ERROR: " + str(e)
+                device.report()
             replies.append(reply + ";")
         if replies:
+            delay(args)  # and the reply back
             conn.sendall(frame("".join(replies)))
+
+
+class Faults:
+    """Counts commands over every connection; each fault fires once, at its count."""
+
+    def __init__(self, args):
+        self.lock = threading.Lock()
+        self.count = 0
+        self.pending = {}
+        for name in ("drop", "stall", "garbage"):
+            after = getattr(args, name + "_after")
+            if after is not None:
+                self.pending[name] = after
+
+    def next(self, command):
+        with self.lock:
+            self.count += 1
+            for name, after in list(self.pending.items()):
+                if self.count > after:
+                    del self.pending[name]
+                    return name
+        return None
 
 
 def main():
@@ -296,22 +419,37 @@ def main():
     parser.add_argument("--garbage-after", type=int)
     parser.add_argument("--fail", action="append", default=[], metavar="COMMAND=TEXT")
     parser.add_argument("--answer", action="append", default=[], metavar="COMMAND=TEXT")
+    parser.add_argument("--events", help="append time-stamped events to this file")
+    parser.add_argument("--latency-ms", type=float, default=0.0)
+    parser.add_argument("--jitter-ms", type=float, default=0.0)
+    parser.add_argument("--uncalibrated", action="store_true")
+    parser.add_argument("--homing-s", type=float, default=1.0)
+    parser.add_argument("--emergency-button", action="store_true")
+    parser.add_argument("--emergency-relay", action="store_true")
+    parser.add_argument("--leftover", action="append", default=[], metavar="NAME")
     args = parser.parse_args()
     args.fail = dict(item.partition("=")[::2] for item in args.fail)
     args.answer = dict(item.partition("=")[::2] for item in args.answer)
 
-    device = Device(parse_vector(args.ext_force))
+    device = Device(parse_vector(args.ext_force), args)
+    for name in args.leftover:  # effects another program left behind
+        obj = device.new_object("biasforce")
+        obj["force"] = [5.0, 0.0, 0.0]
+        obj["enabled"] = True
+        device.objects[name] = obj
+    device.report()
+    threading.Thread(target=device.run, daemon=True).start()
     server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     server.bind(("127.0.0.1", args.port))
-    server.listen(1)
+    server.listen(8)
     print("PORT %d" % server.getsockname()[1], flush=True)
     log_file = open(args.log, "a") if args.log else None
-    counter = [0]
-    while True:
-        conn, _ = server.accept()
+    faults = Faults(args)
+
+    def client(conn):
         try:
-            serve(conn, device, args, counter, log_file)
+            serve(conn, device, args, faults, log_file)
         except OSError:
             pass
         finally:
@@ -319,6 +457,10 @@ def main():
                 conn.close()
             except OSError:
                 pass
+
+    while True:
+        conn, _ = server.accept()
+        threading.Thread(target=client, args=(conn,), daemon=True).start()
 
 
 if __name__ == "__main__":

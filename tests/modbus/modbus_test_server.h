@@ -79,6 +79,29 @@ class ChildProcess {
     }
   }
 
+  pid_t pid() const { return pid_; }
+  // Sends `signal_number` to the child.
+  void send_signal(int signal_number) {
+    if (pid_ > 0) ::kill(pid_, signal_number);
+  }
+  // Waits up to `timeout_s` for the child to end; its exit status (128 + signal when a signal
+  // ended it), or -1 if it is still running.
+  int wait_exit(double timeout_s) {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(timeout_s);
+    while (pid_ > 0) {
+      int status = 0;
+      const pid_t done = ::waitpid(pid_, &status, WNOHANG);
+      if (done == pid_) {
+        pid_ = -1;
+        return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+      }
+      if (std::chrono::steady_clock::now() > deadline) return -1;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return -1;
+  }
+
   void kill() {
     if (pid_ > 0) {
       ::kill(pid_, SIGKILL);
