@@ -31,6 +31,7 @@ void add_view_command(CLI::App& app, Action& action);
 void add_play_command(CLI::App& app, Action& action);
 void add_ab_command(CLI::App& app, Action& action);
 void add_spec_command(CLI::App& app, Action& action);
+void add_hapticmaster_command(CLI::App& app, Action& action);
 
 // The options every verb that builds a model shares.
 struct ModelOptions {

@@ -55,6 +55,7 @@ int main(int argc, char** argv) {
   doorbench::app::add_play_command(app, action);
   doorbench::app::add_ab_command(app, action);
   doorbench::app::add_spec_command(app, action);
+  doorbench::app::add_hapticmaster_command(app, action);
 
   try {
     app.parse(argc, argv);

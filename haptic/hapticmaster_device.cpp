@@ -694,6 +694,27 @@ void HapticMasterDevice::stop() noexcept {
   link_ok_.store(false);
 }
 
+void HapticMasterDevice::connect_only() {
+  if (io_thread_.joinable() || connection_) throw DeviceError(name() + ": already connected");
+  try {
+    connection_ = std::make_unique<Connection>(host_, port_, options_.connect_timeout_s);
+  } catch (const std::exception& e) {
+    throw DeviceError(name() + ": " + e.what());
+  }
+  connection_intact_ = true;
+  bias_created_ = true;  // whatever a crashed session left: stop() zeroes and removes it
+  device_stopped_.store(false);
+}
+
+void HapticMasterDevice::abandon_connection_for_test() noexcept {
+  stop_requested_.store(true, std::memory_order_release);
+  if (io_thread_.joinable()) io_thread_.join();
+  connection_.reset();
+  connection_intact_ = false;
+  bias_created_ = false;
+  link_ok_.store(false);
+}
+
 void HapticMasterDevice::send_shutdown() noexcept {
   if (!connection_ && !bias_created_) return;
   const std::string bias = options_.bias_object;

@@ -129,6 +129,13 @@ class HapticMasterDevice : public HapticDevice {
   // reply text (throws DeviceError on an error reply or a broken link). Not while the I/O
   // thread runs.
   std::string exchange(const std::string& command);
+  // The bring-up check's disconnect test only: ends the I/O thread and closes the socket as
+  // a crashed host would, sending nothing (no fail-safe). The device is then in whatever
+  // state a crash would leave it; the caller must stop it on a new connection.
+  void abandon_connection_for_test() noexcept;
+  // Opens a connection without the start-up (for exchange() only; the check reads back what
+  // a device kept after a disconnect). stop() then stops the device as usual.
+  void connect_only();
 
   // Why the link was lost (first reason, prefixed with name()), or "" while it is fine.
   // Set-up thread only; not for the tick.

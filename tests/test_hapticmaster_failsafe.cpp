@@ -21,6 +21,7 @@
 #include "haptic/hapticmaster_device.h"
 #include "haptic/hapticmaster_protocol.h"
 #include "tests/hapticmaster_emulator_process.h"
+#include "tests/run_doorbench.h"
 #include "tests/temp_dir.h"
 
 using namespace doorbench::haptic;
@@ -405,4 +406,52 @@ TEST_CASE("hapticmaster start-up: homing, emergency signals, other programs' eff
                       emulator.name() +
                           ": 'set inertia 5' was accepted but the device reports 3.0 kg");
   }
+}
+
+TEST_CASE("doorbench hapticmaster check: start-up, latency, stiffness limit and disconnect",
+          "[hapticmaster][cli]") {
+  TempDir dir("hm_check");
+  Emulator emulator({"--uncalibrated", "--homing-s", "0.3", "--leftover", "their_push"});
+  const auto json = dir / "check.json";
+  const auto run = doorbench::testing::run_doorbench_shell(
+      "hapticmaster check hapticmaster://" + emulator.address() +
+          " --exchanges 500 --yes --json '" + json.string() + "'",
+      dir);
+  INFO(run.out << run.err);
+  CHECK(run.status == 0);
+  for (const std::string name :
+       {"device answers", "emergency button", "emergency relay", "position calibration",
+        "effects of other programs", "workspace", "inertia", "round-trip time",
+        "host-loop stiffness limit", "disconnect leaves zero force"}) {
+    CHECK_THAT(run.out, Catch::Contains("  " + name + " "));
+  }
+  CHECK_THAT(run.out, Catch::Contains("was not calibrated: homed in"));
+  CHECK_THAT(run.out, Catch::Contains("over 500"));
+  // The emulator keeps a bias force after a disconnect, as the public record says the device
+  // does: a warning, with the fact.
+  CHECK_THAT(run.out, Catch::Contains("disconnect leaves zero force  warn    the device kept 2 N "
+                                      "in state force"));
+  CHECK_THAT(run.out, Catch::EndsWith("result: passed\n"));
+  std::ifstream in(json);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  CHECK_THAT(text, Catch::Contains("\"p99_ms\""));
+  CHECK_THAT(text, Catch::Contains("\"stiffness_limit_N_per_m\""));
+  CHECK_THAT(text, Catch::Contains("\"force_after_N\": 2.0"));
+
+  // Refusals name the step; without a terminal or --yes the disconnect test is skipped.
+  Emulator pushed({"--emergency-button"});
+  const auto refused = doorbench::testing::run_doorbench_shell(
+      "hapticmaster check hapticmaster://" + pushed.address(), dir);
+  CHECK(refused.status == 1);
+  CHECK(refused.err.find("doorbench: hapticmaster://" + pushed.address() +
+                         ": the emergency button is pushed: release it, then start again\n") !=
+        std::string::npos);
+  Emulator plain;
+  const auto skipped = doorbench::testing::run_doorbench_shell(
+      "hapticmaster check hapticmaster://" + plain.address() + " --exchanges 200", dir);
+  CHECK(skipped.status == 0);
+  CHECK_THAT(skipped.out, Catch::Contains("disconnect leaves zero force  skipped"));
+  const auto bad = doorbench::testing::run_doorbench_shell("hapticmaster check sim", dir);
+  CHECK(bad.status == 2);
+  CHECK_THAT(bad.err, Catch::Contains("'sim' is not hapticmaster://HOST[:PORT]"));
 }
