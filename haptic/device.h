@@ -26,6 +26,7 @@
 namespace doorbench::haptic {
 
 using Vec3 = Eigen::Vector3d;
+class DoorMapping;
 
 class DeviceError : public std::runtime_error {
  public:
@@ -91,6 +92,20 @@ class HapticDevice {
   // what the safety layer's velocity and workspace trips, and every final stop, call. The
   // device stays braked until stop() and a new start(). Real-time safe, idempotent.
   virtual void brake() noexcept = 0;
+
+  // Stiff parts on the device (set-up call, before start()): a device that can render
+  // springs and dampers at its own servo rate holds the end-effector on the door's arc
+  // (`mapping`), stops it at the ends of the door's range [theta_min, theta_max] and adds a
+  // permanent damper, all with its own elements, from start() on; the host then sends only the
+  // door's torque (DoorMapping::torque_to_device). Returns false when the device cannot (the
+  // host renders the constraint, as before). `mapping` must outlive the device's run.
+  virtual bool render_stiff_parts_on_device(const DoorMapping& mapping, double theta_min_rad,
+                                            double theta_max_rad) {
+    (void)mapping;
+    (void)theta_min_rad;
+    (void)theta_max_rad;
+    return false;
+  }
 };
 
 }  // namespace doorbench::haptic

@@ -129,6 +129,16 @@ Vec3 DoorMapping::to_device(double door_torque_Nm, const DeviceSample& sample) c
   return door_torque_Nm / handle_radius_m_ * tangent_at(point.theta_rad) + constraint_force(sample);
 }
 
+Vec3 DoorMapping::torque_to_device(double door_torque_Nm, const DeviceSample& sample) const noexcept {
+  if (kinematics_ == Kinematics::kRotary1) return Vec3(door_torque_Nm, 0.0, 0.0);
+  return door_torque_Nm / handle_radius_m_ * tangent_at(to_door(sample).theta_rad);
+}
+
+Vec3 DoorMapping::radial_at(double theta_rad) const noexcept {
+  if (kinematics_ == Kinematics::kRotary1) return Vec3(1.0, 0.0, 0.0);
+  return (point_at(theta_rad) - geometry_.hinge_point_m) / geometry_.arc_radius_m;
+}
+
 double DoorMapping::inertia_on_device(double door_inertia_kg_m2) const noexcept {
   if (kinematics_ == Kinematics::kRotary1) return door_inertia_kg_m2;
   return door_inertia_kg_m2 / (handle_radius_m_ * geometry_.arc_radius_m);

@@ -67,6 +67,11 @@ class DoorMapping {
   Vec3 to_device(double door_torque_Nm, const DeviceSample& sample) const noexcept;
   // The constraint force alone (zero for a rotary device).
   Vec3 constraint_force(const DeviceSample& sample) const noexcept;
+  // The door torque's part alone: τ / r_h along the arc's tangent (what the host sends when the
+  // device holds the end-effector on the arc with its own elements).
+  Vec3 torque_to_device(double door_torque_Nm, const DeviceSample& sample) const noexcept;
+  // The unit vector from the hinge axis to the arc at θ (Cartesian; rotary: x).
+  Vec3 radial_at(double theta_rad) const noexcept;
 
   // Positions on the arc (Cartesian: m; rotary: x = θ).
   Vec3 point_at(double theta_rad) const noexcept;

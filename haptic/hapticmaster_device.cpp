@@ -19,6 +19,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "haptic/door_mapping.h"
 #include "haptic/hapticmaster_protocol.h"
 
 namespace doorbench::haptic {
@@ -256,6 +257,18 @@ std::string HapticMasterOptions::validate() const {
   if (!(homing_timeout_s > 0) || !std::isfinite(homing_timeout_s)) {
     return "homing_timeout_s must be > 0";
   }
+  if (!(device_damping_N_s_per_m >= 0) || !(device_damping_N_s_per_m <= 1000)) {
+    return "device_damping_N_s_per_m must be in [0, 1000]";
+  }
+  if (!(end_stop_stiffness_N_per_m > 0) || !(end_stop_stiffness_N_per_m <= 1e6)) {
+    return "end_stop_stiffness_N_per_m must be in (0, 1e6]";
+  }
+  if (!(end_stop_damping_ratio >= 0) || !(end_stop_damping_ratio <= 2)) {
+    return "end_stop_damping_ratio must be in [0, 2]";
+  }
+  if (!(element_max_force_N > 0) || !(element_max_force_N <= 250)) {
+    return "element_max_force_N must be in (0, 250]";
+  }
   return "";
 }
 
@@ -463,7 +476,79 @@ void HapticMasterDevice::create_bias_and_enter_force() {
   bias_created_ = true;
   expect_ok("set " + bias + " force " + hm::format_vector(Vec3::Zero()));
   expect_ok("set " + bias + " enable");
+  if (arc_) create_device_elements();
   expect_ok("set state force");
+}
+
+bool HapticMasterDevice::render_stiff_parts_on_device(const DoorMapping& mapping,
+                                                      double theta_min_rad, double theta_max_rad) {
+  if (io_thread_.joinable()) throw DeviceError(name() + ": stiff parts must be set before start");
+  arc_ = &mapping;
+  stop_theta_min_rad_ = theta_min_rad;
+  stop_theta_max_rad_ = theta_max_rad;
+  return true;
+}
+
+namespace {
+
+// A spring's dampfactor for damping `c` (N*s/m) at stiffness k and mass m: the fraction of
+// critical damping c / (2 sqrt(k m)) (dimensionless, docs/hapticmaster.md).
+double damp_factor(double c, double k, double m) {
+  return k > 0 && m > 0 ? c / (2.0 * std::sqrt(k * m)) : 0.0;
+}
+
+// How far a wall's spring sits behind its wall: the deadband that makes a symmetric spring
+// one-sided (its other side lies this far beyond, outside the workspace).
+constexpr double kStopDeadband_m = 0.5;
+
+}  // namespace
+
+std::vector<std::string> HapticMasterDevice::radial_spring_at(double theta_rad) const {
+  return {"set doorbench_radial pos " + hm::format_vector(arc_->point_at(theta_rad)),
+          "set doorbench_radial direction " + hm::format_vector(arc_->radial_at(theta_rad))};
+}
+
+void HapticMasterDevice::create_device_elements() {
+  const ArcGeometry& g = arc_->geometry();
+  const double m = startup_.inertia_read_back_kg;
+  const std::string max_force = hm::format_number(options_.element_max_force_N);
+  // Where the end-effector is now decides the radial spring's first angle.
+  DeviceSample here;
+  const hm::Reply position = hm::parse_reply(expect_ok("get measpos"));
+  if (position.kind == hm::Reply::Kind::kVector) here.position = position.vector;
+  const double theta =
+      std::clamp(arc_->to_door(here).theta_rad, stop_theta_min_rad_, stop_theta_max_rad_);
+  const auto spring = [&](const std::string& object, const Vec3& pos, const Vec3& direction,
+                          double k, double factor, double deadband) {
+    expect_ok("create spring " + object);
+    elements_created_ = true;
+    expect_ok("set " + object + " pos " + hm::format_vector(pos));
+    expect_ok("set " + object + " direction " + hm::format_vector(direction));
+    expect_ok("set " + object + " stiffness " + hm::format_number(k));
+    expect_ok("set " + object + " dampfactor " + hm::format_number(factor));
+    expect_ok("set " + object + " deadband " + hm::format_number(deadband));
+    expect_ok("set " + object + " maxforce " + max_force);
+    expect_ok("set " + object + " enable");
+  };
+  spring("doorbench_axial", g.hinge_point_m, g.hinge_axis.normalized(), g.axial_stiffness_N_per_m,
+         damp_factor(g.axial_damping_N_s_per_m, g.axial_stiffness_N_per_m, m), 0.0);
+  spring("doorbench_radial", arc_->point_at(theta), arc_->radial_at(theta),
+         g.radial_stiffness_N_per_m,
+         damp_factor(g.radial_damping_N_s_per_m, g.radial_stiffness_N_per_m, m), 0.0);
+  // The walls: past θ_min the end-effector is pushed back along the arc's tangent there (its
+  // spring sits kStopDeadband_m beyond the wall, inside the door's range), likewise at θ_max.
+  const Vec3 t_closed = arc_->tangent_at(stop_theta_min_rad_);
+  const Vec3 t_open = arc_->tangent_at(stop_theta_max_rad_);
+  spring("doorbench_stop_closed", arc_->point_at(stop_theta_min_rad_) + kStopDeadband_m * t_closed,
+         t_closed, options_.end_stop_stiffness_N_per_m, options_.end_stop_damping_ratio,
+         kStopDeadband_m);
+  spring("doorbench_stop_open", arc_->point_at(stop_theta_max_rad_) - kStopDeadband_m * t_open,
+         t_open, options_.end_stop_stiffness_N_per_m, options_.end_stop_damping_ratio,
+         kStopDeadband_m);
+  expect_ok("create damper doorbench_damper");
+  expect_ok("set doorbench_damper dampcoef " +
+            hm::format_vector(Vec3::Constant(options_.device_damping_N_s_per_m)));
+  expect_ok("set doorbench_damper enable");
 }
 
 DeviceSample HapticMasterDevice::first_reading() {
@@ -501,6 +586,7 @@ void HapticMasterDevice::start(double inertia) {
   }
   connection_intact_ = true;
   bias_created_ = false;
+  elements_created_ = false;
   device_stopped_.store(false);
   brake_requested_.store(false);
   {
@@ -609,6 +695,7 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
       std::chrono::duration<double>(1.0 / options_.io_rate_hz));
   auto next = Clock::now();
   double last_command_s = monotonic_s();
+  double radial_theta = arc_ ? arc_->to_door(sample).theta_rad : 0.0;
   while (!stop_requested_.load(std::memory_order_acquire)) {
     if (commands_.update()) last_command_s = monotonic_s();
     if (brake_requested_.load(std::memory_order_acquire)) {
@@ -640,6 +727,14 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     commands.push_back(set_force + hm::format_vector(force));
     const bool new_inertia = command.inertia != sent_inertia;
     if (new_inertia) commands.push_back("set inertia " + hm::format_number(command.inertia));
+    if (arc_) {  // the radial spring follows the door (a milliradian moves it)
+      const double theta = std::clamp(arc_->to_door(sample).theta_rad,
+                                      stop_theta_min_rad_ - 0.05, stop_theta_max_rad_ + 0.05);
+      if (std::abs(theta - radial_theta) > 1e-3) {
+        for (std::string& move : radial_spring_at(theta)) commands.push_back(std::move(move));
+        radial_theta = theta;
+      }
+    }
     commands.insert(commands.end(), kReadings.begin(), kReadings.end());
     std::string problem;
     bool intact = true;
@@ -718,9 +813,14 @@ void HapticMasterDevice::abandon_connection_for_test() noexcept {
 void HapticMasterDevice::send_shutdown() noexcept {
   if (!connection_ && !bias_created_) return;
   const std::string bias = options_.bias_object;
-  const std::vector<std::string> commands = {
-      "set " + bias + " force " + hm::format_vector(Vec3::Zero()), "set state stop",
-      "remove " + bias};
+  std::vector<std::string> commands = {"set " + bias + " force " + hm::format_vector(Vec3::Zero()),
+                                       "set state stop", "remove " + bias};
+  if (elements_created_) {
+    for (const char* object : {"doorbench_axial", "doorbench_radial", "doorbench_stop_closed",
+                               "doorbench_stop_open", "doorbench_damper"}) {
+      commands.push_back(std::string("remove ") + object);
+    }
+  }
   if (connection_ && connection_intact_) {
     try {
       const auto replies =
@@ -730,6 +830,7 @@ void HapticMasterDevice::send_shutdown() noexcept {
           hm::parse_reply(replies[1]).kind != hm::Reply::Kind::kError) {
         device_stopped_.store(true);
         bias_created_ = false;
+        elements_created_ = false;
         if (const std::string problem = check_replies(commands, replies); !problem.empty()) {
           fail(problem);
         }

@@ -50,6 +50,12 @@ struct HapticMasterOptions {
   // wait for it to end, and who hears about its progress (one line every second or so).
   double homing_timeout_s = 60.0;
   std::function<void(const std::string&)> progress;
+  // Stiff parts on the device (render_stiff_parts_on_device): the arc constraint's springs
+  // take the ArcGeometry's stiffness and damping; these are the rest (docs/hapticmaster.md).
+  double device_damping_N_s_per_m = 5.0;      // the permanent damper, each axis
+  double end_stop_stiffness_N_per_m = 10000;  // the walls at the ends of the door's range
+  double end_stop_damping_ratio = 0.7;        // their dampfactor (fraction of critical)
+  double element_max_force_N = 60.0;          // each element's maxforce
   std::string validate() const;  // "" or one line naming the option
 };
 
@@ -118,6 +124,12 @@ class HapticMasterDevice : public HapticDevice {
   void command_force(const Vec3& force) noexcept override;
   void command_inertia(double inertia) noexcept override;
   void brake() noexcept override;
+  // Creates, at start(), springs "doorbench_axial" (along the hinge axis, through the arc's
+  // plane) and "doorbench_radial" (along the radius at the door's angle, moved by the I/O
+  // thread as the door turns), end stops "doorbench_stop_closed"/"doorbench_stop_open" (one-
+  // sided walls: springs with a deadband) and the damper "doorbench_damper". Always true.
+  bool render_stiff_parts_on_device(const DoorMapping& mapping, double theta_min_rad,
+                                    double theta_max_rad) override;
 
   // Round-trip times of the I/O thread's exchanges (s), newest last, up to the last 65536;
   // set-up thread only, once the I/O thread has ended (stop()) or for a snapshot.
@@ -172,6 +184,9 @@ class HapticMasterDevice : public HapticDevice {
   void read_workspace();
   void set_inertia_checked(double inertia);
   void create_bias_and_enter_force();
+  void create_device_elements();
+  // The commands that put the radial spring at the door's angle θ.
+  std::vector<std::string> radial_spring_at(double theta_rad) const;
   DeviceSample first_reading();
 
   std::string host_;
@@ -185,6 +200,9 @@ class HapticMasterDevice : public HapticDevice {
   std::atomic<bool> device_stopped_{false};
   bool connection_intact_ = false;  // the open connection's stream is in step (owner thread)
   bool bias_created_ = false;
+  const DoorMapping* arc_ = nullptr;  // set: stiff parts on the device
+  double stop_theta_min_rad_ = 0.0, stop_theta_max_rad_ = 0.0;
+  bool elements_created_ = false;
   HapticMasterStartup startup_;
   DeviceLimits limits_;
   std::vector<double> round_trip_times_s_;  // ring of the last kRoundTripLog (I/O thread)

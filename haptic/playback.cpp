@@ -39,6 +39,7 @@ std::string PlaybackSummary::brief_report() const {
     }
     text << ")";
   }
+  if (constraint_on_device) text << "\narc constraint, end stops and damper: on the device";
   if (timing) text << "\ntiming: " << timing->brief_report();
   if (!warning.empty()) text << "\nwarning: " << warning;
   return text.str();
@@ -64,6 +65,10 @@ Playback::Playback(HapticDevice& device, const DoorModel& model, const PlaybackO
                                                     "start: " + setup.model_source);
   const std::string description = first->description;
   const double inertia = first->device_inertia;
+  if (options_.stiff_parts_on_device) {
+    options_.loop.constraint_on_device = device_.render_stiff_parts_on_device(
+        *mapping_, -0.02, model.geometry().theta_max_rad + 0.02);
+  }
   device_.start(inertia);
   device_started_ = true;
   loop_ = std::make_unique<RenderLoop>(device_, *mapping_, std::move(first), options_.loop);
@@ -148,6 +153,7 @@ PlaybackSummary Playback::finish(std::optional<TimingReport> timing, const std::
   summary.session_path = recorder_->path();
   const RenderLoopCounters counters = loop_->counters();
   summary.ticks = counters.ticks;
+  summary.constraint_on_device = options_.loop.constraint_on_device;
   summary.clipped_ticks = counters.clipped_ticks;
   summary.records_dropped = counters.records_dropped;
   summary.parameter_changes = counters.parameter_changes;

@@ -29,6 +29,10 @@ struct PlaybackOptions {
   ArcGeometry arc;
   RealTimeOptions real_time;
   double duration_s = 10.0;  // > 0
+  // Ask the device to render the arc constraint, the ends of the door's range and a damper
+  // with its own elements (HapticDevice::render_stiff_parts_on_device); a device that cannot
+  // (the simulated ones) gets them from the host as before.
+  bool stiff_parts_on_device = true;
   std::string validate() const;
 };
 
@@ -43,6 +47,7 @@ struct PlaybackSummary {
   std::vector<std::string> safety_events;  // names, in order, e.g. "start_ramp_done"
   std::optional<TimingReport> timing;      // real time only
   std::string warning;                     // e.g. no SCHED_FIFO
+  bool constraint_on_device = false;       // the device held the arc with its own elements
   std::string brief_report() const;
 };
 

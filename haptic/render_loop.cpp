@@ -110,7 +110,9 @@ void RenderLoop::tick(double time_s) noexcept {
   const double passivity_torque =
       passivity_.step(active_torque, door.omega_rad_s, dt_s > 0.0 ? dt_s : period_s(), events);
 
-  Vec3 desired = mapping_.to_device(model_torque + passivity_torque, sample);
+  Vec3 desired = options_.constraint_on_device
+                     ? mapping_.torque_to_device(model_torque + passivity_torque, sample)
+                     : mapping_.to_device(model_torque + passivity_torque, sample);
   if (host_renders_inertia_ && have_previous_ && dt_s > 0.0) {
     // The device has no admittance: the host adds the inertia's reaction along the arc.
     const Vec3 tangent = mapping_.tangent_at(door.theta_rad);

@@ -39,6 +39,9 @@ struct RenderLoopOptions {
   SafetyOptions safety;
   PassivityOptions passivity;
   std::size_t record_ring_ticks = 65536;  // tick records buffered for the recorder (65 s at 1 kHz)
+  // The device holds the end-effector on the arc with its own elements
+  // (HapticDevice::render_stiff_parts_on_device): the tick sends only the door's torque.
+  bool constraint_on_device = false;
   std::string validate() const;           // empty when usable, else one line naming the option
 };
 

@@ -17,7 +17,8 @@ end-effector moves as m*a = bias forces + springs + dampers + the external (user
 integrated at 1 kHz by its own thread, whether or not messages arrive, inside a box
 (+-0.3 m) whose walls stop it. Effects persist when a client disconnects (a bias force stays
 applied until a new one is set). A spring with a non-zero direction acts along that
-direction only; its dampfactor is dimensionless, a fraction of critical damping
+direction only, and not at all within +-deadband of its position (beyond, it pulls the
+stretch past the deadband back); its dampfactor is dimensionless, a fraction of critical damping
 (c = dampfactor * 2 sqrt(k m)). State "stop" holds the end-effector still. Cylinders and tori
 keep their properties but add no force (enough for the protocol tests).
 
@@ -146,7 +147,12 @@ class Device:
                     u = [x / dn for x in d]
                     dx = sum((self.pos[i] - obj["pos"][i]) * u[i] for i in range(3))
                     dv = sum(self.vel[i] * u[i] for i in range(3))
-                    f = [(-k * dx - c * dv) * u[i] for i in range(3)]
+                    band = obj["deadband"]
+                    if abs(dx) <= band:  # no force inside the deadband, none of its damping
+                        f = [0.0, 0.0, 0.0]
+                    else:
+                        stretch = dx - math.copysign(band, dx)
+                        f = [(-k * stretch - c * dv) * u[i] for i in range(3)]
                 else:
                     f = [-k * (self.pos[i] - obj["pos"][i]) - c * self.vel[i] for i in range(3)]
                 n = math.sqrt(sum(x * x for x in f))
