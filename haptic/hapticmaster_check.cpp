@@ -88,7 +88,9 @@ std::string HapticMasterCheckReport::json() const {
   j["passed"] = passed();
   j["startup"] = {{"initial_state", startup.initial_state},
                   {"emergency_button", startup.emergency_button},
-                  {"emergency_relay", startup.emergency_relay},
+                  {"emergency_relay_closed", startup.emergency_relay_closed},
+                  {"emergency_signals_reported", startup.emergency_signals_reported},
+                  {"base_axis_offset_m", startup.base_axis_offset_m},
                   {"was_calibrated", startup.was_calibrated},
                   {"homing_s", startup.homing_s},
                   {"workspace_source", startup.workspace_source},
@@ -138,8 +140,13 @@ HapticMasterCheckReport run_hapticmaster_check(const std::string& address,
   report.limits = device.limits();
   const HapticMasterStartup& s = report.startup;
   add("device answers", "pass", "state '" + s.initial_state + "' before start");
-  add("emergency button", "pass", "not pushed");
-  add("emergency relay", "pass", "closed");
+  if (s.emergency_signals_reported) {
+    add("emergency button", "pass", "not pushed");
+    add("emergency relay", "pass", "closed (the device was started)");
+  } else {
+    add("emergency button", "warn", "the device does not report it (error reply)");
+    add("emergency relay", "warn", "the device does not report it (error reply)");
+  }
   add("position calibration", "pass",
       s.was_calibrated ? "calibrated"
                        : "was not calibrated: homed in " +
@@ -151,7 +158,9 @@ HapticMasterCheckReport run_hapticmaster_check(const std::string& address,
           hm::format_number(s.workspace_r_phi_z_min.y()) + ".." +
           hm::format_number(s.workspace_r_phi_z_max.y()) + " rad, z " +
           hm::format_number(s.workspace_r_phi_z_min.z()) + ".." +
-          hm::format_number(s.workspace_r_phi_z_max.z()) + " m (" + s.workspace_source + ")");
+          hm::format_number(s.workspace_r_phi_z_max.z()) + " m about an axis " +
+          hm::format_number(s.base_axis_offset_m) + " m behind the origin (" +
+          s.workspace_source + ")");
   add("inertia", "pass",
       "set " + hm::format_number(options.inertia_kg) + " kg, read back " +
           hm::format_number(s.inertia_read_back_kg) + " kg");

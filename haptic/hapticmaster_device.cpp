@@ -97,15 +97,12 @@ std::string take_readings(const std::vector<std::string>& commands,
 
 const std::vector<std::string> kReadings = {"get measpos", "get modelvel", "get measforce"};
 
-// The base axis (about which r and φ are measured) lies this far behind the end-effector's
-// origin along x: the centre offset of the public example's workspace constants (source 2 in
-// docs/hapticmaster.md); assumed to hold for every device, since no reply gives it.
-constexpr double kBaseAxisBehindOrigin_m = 0.45;
-
 // The largest box (symmetric in y) inside the cylindrical sector r ∈ [r0, r1], φ ∈ [φ0, φ1],
-// z ∈ [z0, z1] about the base axis, in the device frame (x radial at φ = 0, assumed). Scans
+// z ∈ [z0, z1] about the base axis `axis_behind_origin_m` behind the origin along x, in the
+// device frame (x radial at φ = 0, as the public client draws it). Scans
 // the box's half width: its corners must keep r0 <= r <= r1 and |φ| <= the smaller |φ| bound.
-void workspace_box(const Vec3& r_phi_z_min, const Vec3& r_phi_z_max, DeviceLimits& limits) {
+void workspace_box(const Vec3& r_phi_z_min, const Vec3& r_phi_z_max, double axis_behind_origin_m,
+                   DeviceLimits& limits) {
   const double r0 = r_phi_z_min.x(), r1 = r_phi_z_max.x();
   const double phi = std::min(std::abs(r_phi_z_min.y()), std::abs(r_phi_z_max.y()));
   double best_area = -1.0, best_half = 0.0, best_x0 = 0.0, best_x1 = 0.0;
@@ -125,8 +122,8 @@ void workspace_box(const Vec3& r_phi_z_min, const Vec3& r_phi_z_max, DeviceLimit
     }
   }
   if (best_area <= 0.0) return;  // no box fits: keep the assumed one (the caller checks)
-  limits.workspace_min = Vec3(best_x0 - kBaseAxisBehindOrigin_m, -best_half, r_phi_z_min.z());
-  limits.workspace_max = Vec3(best_x1 - kBaseAxisBehindOrigin_m, best_half, r_phi_z_max.z());
+  limits.workspace_min = Vec3(best_x0 - axis_behind_origin_m, -best_half, r_phi_z_min.z());
+  limits.workspace_max = Vec3(best_x1 - axis_behind_origin_m, best_half, r_phi_z_max.z());
 }
 
 }  // namespace
@@ -354,26 +351,44 @@ void HapticMasterDevice::identify() {
 }
 
 void HapticMasterDevice::check_emergency_signals() {
-  const auto flag = [&](const std::string& command) {
-    const std::string reply = expect_ok(command);
-    const std::optional<bool> value = parse_flag(reply);
+  // Each signal is "true" or "false"; a device that does not know the query (the public
+  // clients ask only devices that report a Linux controller) answers with an error, which
+  // is kept as "not reported" rather than refused.
+  const auto flag = [&](const std::string& command) -> std::optional<bool> {
+    std::vector<std::string> replies;
+    try {
+      replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
+    } catch (const std::exception& e) {
+      connection_intact_ = false;
+      throw DeviceError(name() + ": '" + command + "': " + e.what());
+    }
+    if (replies.size() != 1) {
+      throw DeviceError(name() + ": " + check_replies({command}, replies));
+    }
+    if (hm::parse_reply(replies.front()).kind == hm::Reply::Kind::kError) return std::nullopt;
+    const std::optional<bool> value = parse_flag(replies.front());
     if (!value) {
-      throw DeviceError(name() + ": '" + command + "' answered '" + reply +
+      throw DeviceError(name() + ": '" + command + "' answered '" + replies.front() +
                         "', not true or false");
     }
-    return *value;
+    return value;
   };
-  startup_.emergency_button = flag("get emergencybuttonpushed");
+  const std::optional<bool> button = flag("get emergencybuttonpushed");
+  startup_.emergency_button = button.value_or(false);
+  startup_.emergency_signals_reported = button.has_value();
   if (startup_.emergency_button) {
     throw DeviceError(name() +
                       ": the emergency button is pushed: release it, then start again");
   }
-  startup_.emergency_relay = flag("get emergencyrelay");
-  if (startup_.emergency_relay) {
+  // The relay is "true" while the device's power stage is armed; "false": it was not started
+  // with its start button (or an emergency stop opened it).
+  const std::optional<bool> relay = flag("get emergencyrelay");
+  startup_.emergency_relay_closed = relay.value_or(true);
+  startup_.emergency_signals_reported = startup_.emergency_signals_reported && relay.has_value();
+  if (!startup_.emergency_relay_closed) {
     throw DeviceError(name() +
-                      ": the emergency relay is open (the device's safety circuit has cut the "
-                      "motor power): check the emergency button and the cabling, reset the "
-                      "relay, then start again");
+                      ": the emergency relay is open: the HapticMaster is not started (push its "
+                      "start button), then start again");
   }
 }
 
@@ -389,7 +404,9 @@ void HapticMasterDevice::ensure_calibrated() {
   };
   startup_.was_calibrated = calibrated();
   if (startup_.was_calibrated) return;
-  // Homing: the device moves to its end stops by itself; keep hands off the end-effector.
+  // Homing: the device moves to its end stops by itself; keep hands off the end-effector. It
+  // has ended when the state is "stop" (what the public clients wait for) and the position is
+  // calibrated.
   const auto say = [&](const std::string& line) {
     if (options_.progress) options_.progress(line);
   };
@@ -400,11 +417,11 @@ void HapticMasterDevice::ensure_calibrated() {
   for (;;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
     const double now = monotonic_s();
-    if (calibrated()) break;
+    if (word_of(hm::parse_reply(expect_ok("get state"))) == "stop" && calibrated()) break;
     if (now - began_s > options_.homing_timeout_s) {
       throw DeviceError(name() + ": homing did not end within " +
                         hm::format_number(options_.homing_timeout_s) +
-                        " s (position_calibrated still false)");
+                        " s (no state 'stop' with the position calibrated)");
     }
     if (now >= next_report_s) {
       say(name() + ": homing ... " + hm::format_number(std::round(now - began_s)) + " s");
@@ -423,32 +440,58 @@ void HapticMasterDevice::clear_effects() {
 }
 
 void HapticMasterDevice::read_workspace() {
-  // Each reply holds three numbers (docs/hapticmaster.md): the lower and upper bound and a
-  // third value the driver does not use. r is about the base axis, which sits `r_offset`
-  // behind the end-effector's origin; x is taken as radial (assumed).
+  // The replies as the public client that draws the workspace reads them
+  // (docs/hapticmaster.md): workspace_r [x low stop, distance from the origin to the base
+  // axis, x high stop] (m), workspace_phi [left, -, right] (rad), workspace_z [one height,
+  // -, the other] (m; the sources disagree on which comes first, so the smaller is the lower).
   std::array<std::vector<double>, 3> values;
   const char* names[3] = {"workspace_r", "workspace_phi", "workspace_z"};
   for (int k = 0; k < 3; ++k) {
     const std::string command = std::string("get ") + names[k];
-    const std::string reply = expect_ok(command);
+    // Not expect_ok(): a list of 2 numbers is a valid reply here, not a malformed vector.
+    std::vector<std::string> replies;
+    try {
+      replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
+    } catch (const std::exception& e) {
+      connection_intact_ = false;
+      throw DeviceError(name() + ": '" + command + "': " + e.what());
+    }
+    const std::string reply = replies.size() == 1 ? replies.front() : "";
     std::optional<std::vector<double>> numbers = hm::parse_numbers(reply);
-    if (!numbers || numbers->size() < 2 || !((*numbers)[0] < (*numbers)[1])) {
-      throw DeviceError(name() + ": '" + command + "' answered '" + reply +
-                        "', not [low,high,...] with low < high");
+    if (!numbers && replies.size() == 1 &&
+        hm::parse_reply(reply).kind == hm::Reply::Kind::kError) {
+      throw DeviceError(name() + ": '" + command + "' failed: " + hm::parse_reply(reply).text);
+    }
+    const std::size_t need = k == 0 ? 3 : 2;
+    if (!numbers || numbers->size() < need || numbers->size() > 3) {
+      throw DeviceError(name() + ": '" + command + "' answered '" + reply + "', not " +
+                        (k == 0 ? "[low,axis,high]" : "[a,b] or [a,-,b]"));
     }
     values[k] = *numbers;
   }
-  startup_.workspace_r_phi_z_min = Vec3(values[0][0], values[1][0], values[2][0]);
-  startup_.workspace_r_phi_z_max = Vec3(values[0][1], values[1][1], values[2][1]);
+  const double axis_m = values[0][1];
+  const double r_low = axis_m + values[0][0], r_high = axis_m + values[0][2];
+  const double phi_a = values[1].front(), phi_b = values[1].back();
+  const double z_a = values[2].front(), z_b = values[2].back();
+  startup_.base_axis_offset_m = axis_m;
+  startup_.workspace_r_phi_z_min = Vec3(r_low, std::min(phi_a, phi_b), std::min(z_a, z_b));
+  startup_.workspace_r_phi_z_max = Vec3(r_high, std::max(phi_a, phi_b), std::max(z_a, z_b));
   DeviceLimits read = hapticmaster_limits();
   read.workspace_min = read.workspace_max = Vec3::Zero();
-  workspace_box(startup_.workspace_r_phi_z_min, startup_.workspace_r_phi_z_max, read);
-  if (!(read.workspace_max.array() > read.workspace_min.array()).all()) {
+  const bool usable = axis_m > 0 && r_low >= 0 && r_high > r_low &&
+                      startup_.workspace_r_phi_z_max.y() > startup_.workspace_r_phi_z_min.y() &&
+                      startup_.workspace_r_phi_z_max.z() > startup_.workspace_r_phi_z_min.z();
+  if (usable) {
+    workspace_box(startup_.workspace_r_phi_z_min, startup_.workspace_r_phi_z_max, axis_m, read);
+  }
+  if (!usable || !(read.workspace_max.array() > read.workspace_min.array()).all()) {
     throw DeviceError(name() + ": the workspace the device reports (r " +
-                      hm::format_number(values[0][0]) + ".." + hm::format_number(values[0][1]) +
-                      " m, phi " + hm::format_number(values[1][0]) + ".." +
-                      hm::format_number(values[1][1]) + " rad, z " +
-                      hm::format_number(values[2][0]) + ".." + hm::format_number(values[2][1]) +
+                      hm::format_number(r_low) + ".." + hm::format_number(r_high) +
+                      " m about an axis " + hm::format_number(axis_m) + " m behind, phi " +
+                      hm::format_number(startup_.workspace_r_phi_z_min.y()) + ".." +
+                      hm::format_number(startup_.workspace_r_phi_z_max.y()) + " rad, z " +
+                      hm::format_number(startup_.workspace_r_phi_z_min.z()) + ".." +
+                      hm::format_number(startup_.workspace_r_phi_z_max.z()) +
                       " m) holds no box");
   }
   limits_ = read;

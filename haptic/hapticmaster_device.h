@@ -62,11 +62,13 @@ struct HapticMasterOptions {
 // What start() found and did, for the bring-up check and the session's notes.
 struct HapticMasterStartup {
   std::string initial_state;       // the reply to "get state", without quotes
-  bool emergency_button = false;   // "get emergencybuttonpushed"
-  bool emergency_relay = false;    // "get emergencyrelay"
+  bool emergency_button = false;        // "get emergencybuttonpushed": true = pushed
+  bool emergency_relay_closed = true;   // "get emergencyrelay": false = not started
+  bool emergency_signals_reported = true;  // false: the device answered them with errors
   bool was_calibrated = true;      // "get position_calibrated" before homing
   double homing_s = 0.0;           // how long homing took (0 when not needed)
   std::string workspace_source;    // "device" (read back) or why the assumed box is used
+  double base_axis_offset_m = 0.0;  // the base axis behind the origin (workspace_r's middle)
   Vec3 workspace_r_phi_z_min = Vec3::Zero();  // as read: r (m), φ (rad), z (m)
   Vec3 workspace_r_phi_z_max = Vec3::Zero();
   double inertia_read_back_kg = 0.0;  // "get inertia" after "set inertia"

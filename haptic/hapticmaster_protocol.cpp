@@ -182,10 +182,15 @@ Reply parse_reply(std::string_view raw) {
   Reply reply;
   const std::string_view text = trim(raw);
   reply.text = std::string(text);
-  const std::size_t error_at = text.find("ERROR");
+  // An error may come quoted like any other text: look inside the quotes too.
+  std::string_view unquoted = text;
+  if (unquoted.size() >= 2 && unquoted.front() == '"' && unquoted.back() == '"') {
+    unquoted = trim(unquoted.substr(1, unquoted.size() - 2));
+  }
   // "--- ERROR: ..." (public examples), tolerated with fewer dashes or none.
-  if (error_at != std::string_view::npos && text.find_first_not_of("- ") == error_at) {
-    std::string_view message = text.substr(error_at + 5);
+  const std::size_t error_at = unquoted.find("ERROR");
+  if (error_at != std::string_view::npos && unquoted.find_first_not_of("- ") == error_at) {
+    std::string_view message = unquoted.substr(error_at + 5);
     if (!message.empty() && message.front() == ':') message.remove_prefix(1);
     reply.kind = Reply::Kind::kError;
     reply.text = std::string(trim(message));

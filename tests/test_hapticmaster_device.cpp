@@ -213,7 +213,7 @@ TEST_CASE("hapticmaster device: an error reply at start is a DeviceError with it
   again.stop();
   // A session that ended without stop() left its bias object; the next start removes it.
   CHECK(send_raw(plain.port, "create biasforce doorbench_bias") ==
-        "Effect biasforce with name doorbench_bias created;");
+        "\"Effect biasforce with name doorbench_bias created\"");
   HapticMasterDevice after_crash(plain.address());
   CHECK_NOTHROW(after_crash.start(3.0));
   after_crash.stop();

@@ -14,6 +14,7 @@
 #include <chrono>
 #include <string>
 #include <thread>
+#include <utility>
 #include <vector>
 
 #include "haptic/hapticmaster_protocol.h"
@@ -90,10 +91,28 @@ TEST_CASE("hapticmaster emulator: joined and separate commands, each answered in
   Emulator emulator;
   RawClient client(emulator.port);
   const auto joined = client.send({"get state", "set inertia 4", "get inertia", "get measpos"});
-  CHECK(joined == std::vector<std::string>{"\"off\"", "Inertia set", "4.0", "[0.0,0.0,0.0]"});
+  CHECK(joined ==
+        std::vector<std::string>{"\"off\"", "\"Inertia set\"", "4.0", "[0.0,0.0,0.0]"});
   const auto separate = client.send({"set state force", "get state"}, false);
-  CHECK(separate == std::vector<std::string>{"state set to 'force'", "\"force\""});
-  // On the wire: one reply message, each reply ended by ';'.
+  CHECK(separate == std::vector<std::string>{"\"state set to 'force'\"", "\"force\""});
+  // On the wire, a single command's reply has no ';' (texts quoted, numbers bare)...
+  for (const auto& [command, reply] : std::vector<std::pair<std::string, std::string>>{
+           {"get state", "\"force\""}, {"get inertia", "4.0"}, {"get position_calibrated",
+           "\"true\""}, {"get workspace_r", "[-0.17,0.45,0.19]"}}) {
+    const std::string single = hm::request({command}, true);
+    REQUIRE(::write(client.fd(), single.data(), single.size()) ==
+            static_cast<ssize_t>(single.size()));
+    const std::string framed = hm::frame(reply);
+    std::string got(framed.size(), '\0');
+    std::size_t have = 0;
+    while (have < got.size()) {
+      const ssize_t n = ::read(client.fd(), got.data() + have, got.size() - have);
+      REQUIRE(n > 0);
+      have += static_cast<std::size_t>(n);
+    }
+    CHECK(got == framed);
+  }
+  // ... and a joined request's replies each end with ';'.
   const std::string request = hm::request({"get state", "get inertia"}, true);
   REQUIRE(::write(client.fd(), request.data(), request.size()) ==
           static_cast<ssize_t>(request.size()));
@@ -119,7 +138,7 @@ TEST_CASE("hapticmaster emulator: unknown commands and bad arguments are error r
   CHECK(client.one("get nothing") == "--- ERROR: Unknown parameter 'nothing'");
   CHECK(client.one("create blob b") == "--- ERROR: Unknown effect type 'blob'");
   CHECK(client.one("set b force [0,0,0]") == "--- ERROR: No effect with name 'b'");
-  CHECK(client.one("create biasforce b") == "Effect biasforce with name b created");
+  CHECK(client.one("create biasforce b") == "\"Effect biasforce with name b created\"");
   CHECK(client.one("create spring b") == "--- ERROR: An effect with name 'b' already exists");
   CHECK(client.one("set b force [1,2]") == "--- ERROR: '[1,2]' is not a vector of 3 numbers");
   CHECK(client.one("set b force [1,x,2]") == "--- ERROR: 'x' is not a number");
@@ -129,7 +148,8 @@ TEST_CASE("hapticmaster emulator: unknown commands and bad arguments are error r
   CHECK(client.one("remove nothing") == "--- ERROR: No effect with name 'nothing'");
   // An error in the middle of a joined message does not stop the rest.
   CHECK(client.send({"get b force", "bogus", "get b enabled"}) ==
-        std::vector<std::string>{"[0.0,0.0,0.0]", "--- ERROR: Unknown command 'bogus'", "false"});
+        std::vector<std::string>{"[0.0,0.0,0.0]", "--- ERROR: Unknown command 'bogus'",
+                                 "\"false\""});
 }
 
 TEST_CASE("hapticmaster emulator: effect objects keep their properties", "[hapticmaster]") {
@@ -137,23 +157,23 @@ TEST_CASE("hapticmaster emulator: effect objects keep their properties", "[hapti
   RawClient client(emulator.port);
   for (const char* kind : {"spring", "damper", "cylinder", "torus", "biasforce"}) {
     CHECK(client.one(std::string("create ").append(kind).append(" o_").append(kind)) ==
-          std::string("Effect ")
+          std::string("\"Effect ")
               .append(kind)
               .append(" with name o_")
               .append(kind)
-              .append(" created"));
+              .append(" created\""));
   }
-  CHECK(client.one("set o_spring stiffness 250.5") == "Effect o_spring's stiffness set");
+  CHECK(client.one("set o_spring stiffness 250.5") == "\"Spring's stiffness set\"");
   CHECK(client.one("get o_spring stiffness") == "250.5");
   CHECK(client.vector("get o_spring direction").isZero(0.0));  // no direction: all three axes
-  CHECK(client.one("set o_damper dampcoef [1,2,3]") == "Effect o_damper's dampcoef set");
+  CHECK(client.one("set o_damper dampcoef [1,2,3]") == "\"Damper's damp coefficient set\"");
   CHECK(client.vector("get o_damper dampcoef").isApprox(Vec3(1, 2, 3)));
-  CHECK(client.one("set o_cylinder radius 0.1") == "Effect o_cylinder's radius set");
-  CHECK(client.one("set o_torus ringradius 0.2") == "Effect o_torus's ringradius set");
+  CHECK(client.one("set o_cylinder radius 0.1") == "\"Cylinder's radius set\"");
+  CHECK(client.one("set o_torus ringradius 0.2") == "\"Torus's ringradius set\"");
   CHECK(client.one("get o_torus ringradius") == "0.2");
-  CHECK(client.one("set o_cylinder enable") == "Effect o_cylinder enabled");
-  CHECK(client.one("get o_cylinder enabled") == "true");
-  CHECK(client.one("remove all") == "All effects removed");
+  CHECK(client.one("set o_cylinder enable") == "\"Effect enabled\"");
+  CHECK(client.one("get o_cylinder enabled") == "\"true\"");
+  CHECK(client.one("remove all") == "\"All effects Removed\"");
   CHECK(client.one("get o_spring stiffness") == "--- ERROR: No effect with name 'o_spring'");
 }
 

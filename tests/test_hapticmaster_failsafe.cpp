@@ -346,11 +346,21 @@ TEST_CASE("hapticmaster start-up: homing, emergency signals, other programs' eff
     CHECK(text.find("create biasforce") == std::string::npos);
     CHECK(text.find("set state force") == std::string::npos);
   }
-  SECTION("an open emergency relay is refused by name") {
-    Emulator emulator({"--emergency-relay"});
+  SECTION("an open emergency relay (the device not started) is refused by name") {
+    Emulator emulator({"--relay-off"});
     HapticMasterDevice device(emulator.address());
     CHECK_THROWS_WITH(device.start(5.0),
-                      Catch::StartsWith(emulator.name() + ": the emergency relay is open"));
+                      emulator.name() +
+                          ": the emergency relay is open: the HapticMaster is not started (push "
+                          "its start button), then start again");
+  }
+  SECTION("a device that does not report the emergency signals starts, and says so") {
+    Emulator emulator({"--answer", "get emergencybuttonpushed=--- ERROR: Unknown parameter",
+                       "--answer", "get emergencyrelay=--- ERROR: Unknown parameter"});
+    HapticMasterDevice device(emulator.address());
+    device.start(5.0);
+    CHECK_FALSE(device.startup_report().emergency_signals_reported);
+    device.stop();
   }
   SECTION("effects another program left are removed before the force state") {
     TempDir dir("hm_startup_leftover");
@@ -378,6 +388,7 @@ TEST_CASE("hapticmaster start-up: homing, emergency signals, other programs' eff
     CHECK(report.workspace_source == "device");
     CHECK(report.workspace_r_phi_z_min.isApprox(Vec3(0.28, -0.5, -0.2)));
     CHECK(report.workspace_r_phi_z_max.isApprox(Vec3(0.64, 0.5, 0.2)));
+    CHECK(report.base_axis_offset_m == 0.45);
     CHECK(report.inertia_read_back_kg == 7.25);
     const DeviceLimits read = device.limits();
     // The box lies inside the sector: every corner within r 0.28..0.64 m and |phi| <= 0.5
@@ -405,6 +416,13 @@ TEST_CASE("hapticmaster start-up: homing, emergency signals, other programs' eff
     CHECK_THROWS_WITH(device.start(5.0),
                       emulator.name() +
                           ": 'set inertia 5' was accepted but the device reports 3.0 kg");
+  }
+  SECTION("workspace replies of another shape are refused by name") {
+    Emulator emulator({"--answer", "get workspace_r=[0.28,0.64]"});
+    HapticMasterDevice device(emulator.address());
+    CHECK_THROWS_WITH(device.start(5.0),
+                      emulator.name() +
+                          ": 'get workspace_r' answered '[0.28,0.64]', not [low,axis,high]");
   }
 }
 

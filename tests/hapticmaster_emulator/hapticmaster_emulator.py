@@ -8,8 +8,11 @@ device whose first connection broke).
 
 Framing (docs/hapticmaster.md): every message is an 8-byte header (big-endian 32-bit length,
 then 4 zero bytes) followed by ASCII text; a request may hold several commands joined with
-';'. Each request is answered by one reply message holding one reply per command, each
-ended by ';' ("Inertia set;[0.0,0.0,0.1];").
+';'. Each request is answered by one reply message. A single command's reply has no ';'
+(as the public raw-TCP client's tests imply); a joined request's replies each end with ';'
+('"Inertia set";[0.0,0.0,0.1];', assumed). Texts with letters come quoted ('"force"',
+'"Inertia set"', '"true"'); numbers and vectors bare ('2.3', '[0.0,0.0,0.1]'); errors as
+'--- ERROR: <text>'.
 
 Device model: state (init/off/force/position/home/stop), the inertia m, and effect objects
 (biasforce, spring, damper, cylinder, torus) with their properties. In state "force" the
@@ -23,10 +26,13 @@ stretch past the deadband back); its dampfactor is dimensionless, a fraction of 
 keep their properties but add no force (enough for the protocol tests).
 
 Start-up facts: "get position_calibrated" (false with --uncalibrated until "set state init"
-has homed for --homing-s seconds; the state is "init" meanwhile, then "off"),
-"get emergencybuttonpushed", "get emergencyrelay" (--emergency-button, --emergency-relay),
-"get workspace_r|phi|z" (three numbers each), "get inertia". --leftover NAME leaves an
-enabled bias force of 5 N named NAME, as another program would.
+has homed for --homing-s seconds; the state is "init" meanwhile, then "stop", which is what
+the public clients wait for), "get emergencybuttonpushed" (true with --emergency-button),
+"get emergencyrelay" (false with --relay-off: the device was not started with its start
+button), "get workspace_r" ([x low stop, distance to the base axis, x high stop], m),
+"get workspace_phi" ([left, 0, right], rad), "get workspace_z" ([upper, 0, lower], m), "get
+inertia". --leftover NAME leaves an enabled bias force of 5 N named NAME, as another program
+would.
 
 Test-only commands (not the device's): "emulator extforce [x,y,z]" sets the user's force;
 "emulator log" returns the commands logged so far.
@@ -68,12 +74,19 @@ NUMBER_PROPS = {
     "torus": ("stiffness", "dampfactor", "maxforce", "ringradius", "tuberadius"),
 }
 MIN_INERTIA, MAX_INERTIA = 0.1, 1000.0
-# r (m) about the base axis, phi (rad), z (m): lower bound, upper bound, and a third value
-# (assumed: the centre of the range) - the public example's workspace constants.
+# How the replies to "set <name> <property> <value>" name things (the public client's texts).
+TYPE_TEXT = {"biasforce": "Bias force", "spring": "Spring", "damper": "Damper",
+             "cylinder": "Cylinder", "torus": "Torus"}
+PROP_TEXT = {"dampfactor": "damp factor", "maxforce": "maximum force",
+             "dampcoef": "damp coefficient", "pos": "position"}
+# The public example's workspace constants (radius 0.28..0.64 m about a base axis 0.45 m
+# behind the origin, +-0.5 rad, z +-0.2 m) in the order the public clients read the replies:
+# r as [x low stop, distance to the base axis, x high stop], phi as [left, -, right], z as
+# [upper, -, lower].
 WORKSPACE = {
-    "workspace_r": (0.28, 0.64, 0.46),
-    "workspace_phi": (-0.5, 0.5, 0.0),
-    "workspace_z": (-0.2, 0.2, 0.0),
+    "workspace_r": (-0.17, 0.45, 0.19),
+    "workspace_phi": (-0.5, 0.0, 0.5),
+    "workspace_z": (0.2, 0.0, -0.2),
 }
 WALL = 0.3
 DT = 0.001
@@ -119,7 +132,7 @@ class Device:
         self.calibrated = not (args and args.uncalibrated)
         self.homing_until = None
         self.emergency_button = bool(args and args.emergency_button)
-        self.emergency_relay = bool(args and args.emergency_relay)
+        self.relay_closed = not (args and args.relay_off)
         self.events = open(args.events, "a") if (args and args.events) else None
         self.reported = None
         self.inertia = 3.0
@@ -200,7 +213,7 @@ class Device:
         if self.homing_until is not None and now >= self.homing_until:
             self.homing_until = None
             self.calibrated = True
-            self.state = "off"
+            self.state = "stop"
             self.report()
         if self.state != "force":
             self.vel = [0.0, 0.0, 0.0]
@@ -230,7 +243,7 @@ class Device:
         if verb == "get" and len(words) == 2:
             what = words[1]
             if what == "state":
-                return '"%s"' % self.state
+                return self.state
             if what == "inertia":
                 return fmt(self.inertia)
             if what == "position_calibrated":
@@ -238,7 +251,7 @@ class Device:
             if what == "emergencybuttonpushed":
                 return "true" if self.emergency_button else "false"
             if what == "emergencyrelay":
-                return "true" if self.emergency_relay else "false"
+                return "true" if self.relay_closed else "false"
             if what in WORKSPACE:
                 return fmt_vec(WORKSPACE[what])
             if what in ("measpos", "modelpos"):
@@ -264,7 +277,7 @@ class Device:
                 raise Error("Unknown state '%s'" % words[2])
             if words[2] == "force" and not self.calibrated:
                 raise Error("Position not calibrated: set state init first")
-            if words[2] == "force" and (self.emergency_button or self.emergency_relay):
+            if words[2] == "force" and (self.emergency_button or not self.relay_closed):
                 raise Error("Emergency stop active")
             self.state = words[2]
             if self.state == "init":
@@ -283,7 +296,7 @@ class Device:
                 raise Error("No effect with name '%s'" % name)
             if prop in ("enable", "disable") and len(words) == 3:
                 obj["enabled"] = prop == "enable"
-                return "Effect %s %sd" % (name, prop)
+                return "Effect %sd" % prop
             if len(words) != 4:
                 raise Error("'set %s %s' needs a value" % (name, prop))
             if prop in VECTOR_PROPS[obj["type"]]:
@@ -292,7 +305,7 @@ class Device:
                 obj[prop] = parse_number(words[3])
             else:
                 raise Error("Effect %s has no property '%s'" % (obj["type"], prop))
-            return "Effect %s's %s set" % (name, prop)
+            return "%s's %s set" % (TYPE_TEXT[obj["type"]], PROP_TEXT.get(prop, prop))
         if verb == "create" and len(words) == 3:
             kind, name = words[1], words[2]
             if kind not in OBJECT_TYPES:
@@ -304,17 +317,28 @@ class Device:
         if verb == "remove" and len(words) == 2:
             if words[1] == "all":
                 self.objects.clear()
-                return "All effects removed"
+                return "All effects Removed"
             if self.objects.pop(words[1], None) is None:
                 raise Error("No effect with name '%s'" % words[1])
-            return "Effect %s removed" % words[1]
+            return "Effect Removed"
         if verb == "emulator" and len(words) >= 2:
             if words[1] == "extforce" and len(words) >= 3:
                 self.ext = parse_vector(command.split(None, 2)[2])
                 return "External force set"
             if words[1] == "log" and len(words) == 2:
-                return '"%s"' % "|".join(self.log)
+                return "|".join(self.log)
         raise Error("Unknown command '%s'" % command)
+
+
+def styled(reply):
+    """Texts with letters quoted, numbers and vectors bare, errors as they are."""
+    if reply.startswith("--- ERROR") or reply.startswith('"') or reply.startswith("["):
+        return reply
+    try:
+        float(reply)
+        return reply
+    except ValueError:
+        return '"%s"' % reply
 
 
 def frame(text):
@@ -386,11 +410,13 @@ def serve(conn, device, args, faults, log_file):
                         reply = device.execute(command)
                     except Error as e:
                         reply = "--- ERROR: " + str(e)
+                    reply = styled(reply)
                 device.report()
-            replies.append(reply + ";")
+            replies.append(reply)
         if replies:
             delay(args)  # and the reply back
-            conn.sendall(frame("".join(replies)))
+            text = replies[0] if len(replies) == 1 else "".join(r + ";" for r in replies)
+            conn.sendall(frame(text))
 
 
 class Faults:
@@ -431,7 +457,7 @@ def main():
     parser.add_argument("--uncalibrated", action="store_true")
     parser.add_argument("--homing-s", type=float, default=1.0)
     parser.add_argument("--emergency-button", action="store_true")
-    parser.add_argument("--emergency-relay", action="store_true")
+    parser.add_argument("--relay-off", action="store_true")
     parser.add_argument("--leftover", action="append", default=[], metavar="NAME")
     args = parser.parse_args()
     args.fail = dict(item.partition("=")[::2] for item in args.fail)
