@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
 #include <sstream>
 
 #include "analysis/parameter_file.h"
@@ -111,4 +112,55 @@ TEST_CASE("hapticmaster latency: device-side stiff parts hold the arc at 3 and 2
       std::find(events.begin(), events.end(), "velocity_trip") != events.end() ||
       std::find(events.begin(), events.end(), "workspace_trip") != events.end();
   CHECK((host_20.axial_swing_m > 10e-3 || host_20.radial_swing_m > 10e-3 || tripped));
+}
+
+TEST_CASE("hapticmaster fail-safe: a velocity trip in playback brakes the device before the "
+          "shutdown",
+          "[hapticmaster][failsafe]") {
+  testing::TempDir dir("hm_velocity_trip");
+  const auto events = dir.path / "events.log";
+  // The user pushes the door open along the arc's tangent at the closed end (+x) hard enough
+  // to pass 0.05 m/s within a fraction of a second.
+  testing::HapticMasterEmulator emulator({"--events", events.string(), "--ext-force", "[25,0,0]"});
+  HapticMasterDevice device(emulator.address());
+  const DoorModel model = reference_model(ModelKind::kSensory);
+  PlaybackOptions options;
+  options.duration_s = 5.0;
+  options.real_time.request_fifo = false;
+  options.loop.safety.velocity_trip = 0.05;  // m/s
+  options.loop.safety.max_tick_stall_s = 1.0;
+  options.loop.safety.max_stale_ticks = 5000;
+  SessionMetadata metadata;
+  metadata.rig_name = "HapticMaster emulator";
+  PlaybackSummary summary;
+  {
+    Playback playback(device, model, options, dir.path / "trip.h5", metadata,
+                      PlaybackSetup{device.name(), "reference door", ""});
+    summary = playback.run_real_time([](const RenderLoop::Status&) { return true; }, 0.02);
+  }
+  INFO(summary.brief_report());
+  const auto& names = summary.safety_events;
+  REQUIRE(std::find(names.begin(), names.end(), "velocity_trip") != names.end());
+  CHECK(summary.duration_s < 4.0);
+  // In the device's own log: zero force and state stop came first from the brake (a "set
+  // state stop" of its own), and only later from the shutdown, which then removes the
+  // objects; nothing brought the force state back in between.
+  std::ifstream in(events);
+  double stopped_s = -1.0, removed_s = -1.0;
+  int stop_commands = 0;
+  bool force_after_stop = false;
+  for (std::string line; std::getline(in, line);) {
+    const double t = std::stod(line);
+    const std::string text = line.substr(line.find(' ') + 1);
+    if (stopped_s < 0 && text == "device state=stop bias=0.0") stopped_s = t;
+    if (removed_s < 0 && text == "cmd remove doorbench_bias") removed_s = t;
+    if (text == "cmd set state stop") ++stop_commands;
+    if (stopped_s >= 0 && text.rfind("device state=force", 0) == 0) force_after_stop = true;
+  }
+  REQUIRE(stopped_s > 0.0);
+  REQUIRE(removed_s > 0.0);
+  CHECK(stop_commands == 2);  // the brake's, then the shutdown's
+  CHECK(removed_s - stopped_s > 0.015);  // the brake came at the trip, before the 20 ms ramp
+  CHECK_FALSE(force_after_stop);
+  CHECK(device.last_error() == "");
 }
