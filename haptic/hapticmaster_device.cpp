@@ -297,14 +297,17 @@ DeviceLimits HapticMasterDevice::limits() const {
   return limits_;
 }
 
-std::string HapticMasterDevice::expect_ok(const std::string& command) {
-  std::vector<std::string> replies;
+std::vector<std::string> HapticMasterDevice::round_trip_one(const std::string& command) {
   try {
-    replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
+    return connection_->round_trip({command}, options_.reply_timeout_s, true);
   } catch (const std::exception& e) {
     connection_intact_ = false;
     throw DeviceError(name() + ": '" + command + "': " + e.what());
   }
+}
+
+std::string HapticMasterDevice::expect_ok(const std::string& command) {
+  const std::vector<std::string> replies = round_trip_one(command);
   if (const std::string problem = check_replies({command}, replies); !problem.empty()) {
     throw DeviceError(name() + ": " + problem);
   }
@@ -355,13 +358,7 @@ void HapticMasterDevice::check_emergency_signals() {
   // clients ask only devices that report a Linux controller) answers with an error, which
   // is kept as "not reported" rather than refused.
   const auto flag = [&](const std::string& command) -> std::optional<bool> {
-    std::vector<std::string> replies;
-    try {
-      replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
-    } catch (const std::exception& e) {
-      connection_intact_ = false;
-      throw DeviceError(name() + ": '" + command + "': " + e.what());
-    }
+    const std::vector<std::string> replies = round_trip_one(command);
     if (replies.size() != 1) {
       throw DeviceError(name() + ": " + check_replies({command}, replies));
     }
@@ -449,13 +446,7 @@ void HapticMasterDevice::read_workspace() {
   for (int k = 0; k < 3; ++k) {
     const std::string command = std::string("get ") + names[k];
     // Not expect_ok(): a list of 2 numbers is a valid reply here, not a malformed vector.
-    std::vector<std::string> replies;
-    try {
-      replies = connection_->round_trip({command}, options_.reply_timeout_s, true);
-    } catch (const std::exception& e) {
-      connection_intact_ = false;
-      throw DeviceError(name() + ": '" + command + "': " + e.what());
-    }
+    const std::vector<std::string> replies = round_trip_one(command);
     const std::string reply = replies.size() == 1 ? replies.front() : "";
     std::optional<std::vector<double>> numbers = hm::parse_numbers(reply);
     if (!numbers && replies.size() == 1 &&

@@ -176,7 +176,10 @@ class HapticMasterDevice : public HapticDevice {
   // Zero force, "set state stop", remove the bias object, in one request; the fail-safe if
   // that does not go through.
   void send_shutdown() noexcept;
-  // A round trip in the set-up phase: throws DeviceError with the reply's text on error.
+  // One command's round trip in the set-up phase: its replies; throws DeviceError naming the
+  // command when the link fails (then the connection is no longer intact).
+  std::vector<std::string> round_trip_one(const std::string& command);
+  // The same, and throws DeviceError with the reply's text on an error reply.
   std::string expect_ok(const std::string& command);
   // start()'s stages, in order.
   void identify();

@@ -95,36 +95,28 @@ TEST_CASE("hapticmaster emulator: joined and separate commands, each answered in
         std::vector<std::string>{"\"off\"", "\"Inertia set\"", "4.0", "[0.0,0.0,0.0]"});
   const auto separate = client.send({"set state force", "get state"}, false);
   CHECK(separate == std::vector<std::string>{"\"state set to 'force'\"", "\"force\""});
-  // On the wire, a single command's reply has no ';' (texts quoted, numbers bare)...
-  for (const auto& [command, reply] : std::vector<std::pair<std::string, std::string>>{
-           {"get state", "\"force\""}, {"get inertia", "4.0"}, {"get position_calibrated",
-           "\"true\""}, {"get workspace_r", "[-0.17,0.45,0.19]"}}) {
-    const std::string single = hm::request({command}, true);
-    REQUIRE(::write(client.fd(), single.data(), single.size()) ==
-            static_cast<ssize_t>(single.size()));
-    const std::string framed = hm::frame(reply);
-    std::string got(framed.size(), '\0');
+  // The exact bytes on the wire for `commands` joined in one request.
+  const auto wire_reply = [&](const std::vector<std::string>& commands, const std::string& text) {
+    const std::string request = hm::request(commands, true);
+    REQUIRE(::write(client.fd(), request.data(), request.size()) ==
+            static_cast<ssize_t>(request.size()));
+    const std::string expected = hm::frame(text);
+    std::string got(expected.size(), '\0');
     std::size_t have = 0;
     while (have < got.size()) {
       const ssize_t n = ::read(client.fd(), got.data() + have, got.size() - have);
       REQUIRE(n > 0);
       have += static_cast<std::size_t>(n);
     }
-    CHECK(got == framed);
-  }
+    CHECK(got == expected);
+  };
+  // A single command's reply has no ';' (texts quoted, numbers bare)...
+  wire_reply({"get state"}, "\"force\"");
+  wire_reply({"get inertia"}, "4.0");
+  wire_reply({"get position_calibrated"}, "\"true\"");
+  wire_reply({"get workspace_r"}, "[-0.17,0.45,0.19]");
   // ... and a joined request's replies each end with ';'.
-  const std::string request = hm::request({"get state", "get inertia"}, true);
-  REQUIRE(::write(client.fd(), request.data(), request.size()) ==
-          static_cast<ssize_t>(request.size()));
-  const std::string expected = hm::frame("\"force\";4.0;");
-  std::string got(expected.size(), '\0');
-  std::size_t have = 0;
-  while (have < got.size()) {
-    const ssize_t n = ::read(client.fd(), got.data() + have, got.size() - have);
-    REQUIRE(n > 0);
-    have += static_cast<std::size_t>(n);
-  }
-  CHECK(got == expected);
+  wire_reply({"get state", "get inertia"}, "\"force\";4.0;");
 }
 
 TEST_CASE("hapticmaster emulator: unknown commands and bad arguments are error replies",

@@ -127,7 +127,7 @@ const std::size_t kStartCommands = 17;  // what start() sends (test_hapticmaster
 
 }  // namespace
 
-TEST_CASE("hapticmaster fail-safe: an error reply stops the device on the open connection",
+TEST_CASE("hapticmaster fail-safe: an error reply at start stops the device on the open connection",
           "[hapticmaster][failsafe]") {
   TempDir dir("hm_failsafe_error");
   const auto events = dir / "events.log";
