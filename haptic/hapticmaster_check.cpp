@@ -122,7 +122,11 @@ std::string HapticMasterCheckReport::json() const {
 
 HapticMasterCheckReport run_hapticmaster_check(const std::string& address,
                                                const HapticMasterCheckOptions& options) {
-  HapticMasterDevice device(address, options.driver);  // checks the address and driver options
+  // The check's own thread plays the tick at zero force; on a loaded machine it may sleep
+  // longer than a render loop would, and at zero force a longer watchdog is safe.
+  HapticMasterOptions driver = options.driver;
+  driver.command_watchdog_s = std::max(driver.command_watchdog_s, 1.0);
+  HapticMasterDevice device(address, driver);  // checks the address and driver options
   if (const std::string problem = options.validate(); !problem.empty()) {
     throw DeviceError(device.name() + ": option " + problem);
   }

@@ -400,6 +400,7 @@ TEST_CASE("hapticmaster device: the tick's calls never allocate", "[hapticmaster
     for (int i = 0; i < 20000; ++i) {
       device.command_force(Vec3(i * 1e-3, 0, -1));
       if (i % 100 == 0) device.command_inertia(5.0 + i * 1e-4);
+      if (i % 1000 == 0) device.brake();  // a trip's call from the tick
       const DeviceSample s = device.read();
       sum += s.position.x() + static_cast<double>(s.sequence);
     }

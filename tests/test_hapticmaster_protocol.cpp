@@ -185,7 +185,7 @@ TEST_CASE("hapticmaster: a request is one joined frame or one frame per command"
   CHECK_THROWS_WITH(request({"a;b"}, false), Catch::Contains("contains ';'"));
 }
 
-TEST_CASE("hapticmaster: a reply message holds one reply per command, each ended by ';'",
+TEST_CASE("hapticmaster: a reply message holds one reply per command, split at semicolons outside quotes",
           "[hapticmaster]") {
   using V = std::vector<std::string>;
   CHECK(split_replies("[0.1,0,0.2];[0,0,0];") == V{"[0.1,0,0.2]", "[0,0,0]"});
@@ -196,4 +196,23 @@ TEST_CASE("hapticmaster: a reply message holds one reply per command, each ended
   CHECK(split_replies(";") == V{""});
   CHECK(split_replies("\"a;b\";c;") == V{"\"a;b\"", "c"});  // ';' inside quotes stays
   CHECK(split_replies("--- ERROR: bad;[1,2,3];") == V{"--- ERROR: bad", "[1,2,3]"});
+  // A single reply as the raw-TCP client sees it: quoted, no ';'.
+  CHECK(split_replies("\"state set to 'force'\"") == V{"\"state set to 'force'\""});
+}
+
+TEST_CASE("hapticmaster: quoted replies, quoted errors and number lists", "[hapticmaster]") {
+  const Reply quoted_error = parse_reply("\"--- ERROR: Unknown parameter 'x'\"");
+  CHECK(quoted_error.kind == Reply::Kind::kError);
+  CHECK(quoted_error.text == "Unknown parameter 'x'");
+  const Reply state = parse_reply("\"stop\"");
+  CHECK(state.kind == Reply::Kind::kString);
+  CHECK(state.string == "stop");
+  CHECK(parse_reply("2.3").kind == Reply::Kind::kNumber);
+  // Quoted text that merely mentions an error is not one.
+  CHECK(parse_reply("\"no ERROR here\"").kind == Reply::Kind::kString);
+  CHECK(parse_numbers("[-0.17,0.45,0.19]") == std::vector<double>{-0.17, 0.45, 0.19});
+  CHECK(parse_numbers("[0.5,-0.5]") == std::vector<double>{0.5, -0.5});
+  CHECK_FALSE(parse_numbers("[0.5,,1]"));
+  CHECK_FALSE(parse_numbers("0.5,1"));
+  CHECK_FALSE(parse_numbers("[]"));
 }
