@@ -1252,6 +1252,10 @@ struct SessionReader::Impl {
       }
     }
     for (std::size_t i = 0; i < values.size(); ++i) {
+      if (is_lost_sample(info, slice.raw[i])) {
+        values[i] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
       const double signal = info.raw_offset + info.raw_scale * slice.raw[i];
       values[i] = record ? record->apply(signal) : signal;
     }
@@ -1334,6 +1338,20 @@ std::vector<CalibrationRecord> SessionReader::calibrations() const {
 
 ChannelSlice SessionReader::read(const std::string& channel, double start_s, double end_s) const {
   return impl_->guarded([&] { return impl_->read(channel, start_s, end_s); });
+}
+
+std::vector<LostRun> lost_runs(const ChannelInfo& channel, const ChannelSlice& slice) {
+  std::vector<LostRun> runs;
+  for (std::size_t i = 0; i < slice.raw.size(); ++i) {
+    if (!is_lost_sample(channel, slice.raw[i])) continue;
+    if (!runs.empty() && runs.back().first_index + runs.back().count == slice.first_index + i) {
+      ++runs.back().count;
+      runs.back().last_time_s = slice.time_s[i];
+    } else {
+      runs.push_back({slice.first_index + i, 1, slice.time_s[i], slice.time_s[i]});
+    }
+  }
+  return runs;
 }
 
 std::vector<double> SessionReader::physical(const std::string& channel,

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <string>
 
+#include "acquisition/output_file.h"
 #include "app/commands.h"
 
 namespace {
@@ -76,6 +77,9 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const doorbench::app::UsageError& error) {
     std::cerr << "doorbench: " << error.what() << " (see doorbench --help)\n";
+    return 2;
+  } catch (const doorbench::OutputRefused& error) {  // an existing output, or an input
+    std::cerr << "doorbench: " << error.what() << "\n";
     return 2;
   } catch (const std::exception& error) {
     std::cerr << "doorbench: " << error.what() << "\n";

@@ -14,6 +14,7 @@
 #include <string>
 #include <thread>
 
+#include "acquisition/output_file.h"
 #include "acquisition/recorder.h"
 #include "acquisition/recovery.h"
 #include "acquisition/rig_file.h"
@@ -442,6 +443,44 @@ void print_range_warnings(const SessionReader& session) {
   }
 }
 
+// Samples lost in recording (a recovered ring overflow, an imported empty cell): every run
+// of each channel, runs at the same place in several channels on one line.
+void print_gaps(const SessionReader& session) {
+  struct Gap {
+    LostRun run;
+    std::string channels;
+  };
+  std::vector<Gap> gaps;
+  for (const ChannelInfo& c : session.channels()) {
+    for (const LostRun& run : lost_runs(c, session.read(c.name))) {
+      auto same = std::find_if(gaps.begin(), gaps.end(), [&](const Gap& g) {
+        // The same scans: channels on one clock differ only by the converter's skew.
+        return g.run.first_index == run.first_index && g.run.count == run.count &&
+               std::abs(g.run.first_time_s - run.first_time_s) < 1e-3;
+      });
+      if (same == gaps.end()) {
+        gaps.push_back({run, c.name});
+      } else {
+        same->channels += ", " + c.name;
+      }
+    }
+  }
+  std::sort(gaps.begin(), gaps.end(),
+            [](const Gap& a, const Gap& b) { return a.run.first_time_s < b.run.first_time_s; });
+  std::uint64_t samples = 0;
+  for (const Gap& g : gaps) samples += g.run.count;
+  std::cout << "gaps: " << gaps.size();
+  if (!gaps.empty()) std::cout << " (" << samples << " samples lost; they read as missing)";
+  std::cout << "\n";
+  for (std::size_t i = 0; i < gaps.size() && i < 20; ++i) {
+    const LostRun& r = gaps[i].run;
+    std::printf("  %10.3f s to %10.3f s  %8zu samples  %s\n", r.first_time_s, r.last_time_s,
+                r.count, gaps[i].channels.c_str());
+  }
+  if (gaps.size() > 20) std::printf("  ... %zu more\n", gaps.size() - 20);
+  std::fflush(stdout);
+}
+
 void run_info(const std::string& session_path) {
   const SessionReader session(session_path);
   const SessionMetadata& m = session.metadata();
@@ -469,6 +508,7 @@ void run_info(const std::string& session_path) {
   std::fflush(stdout);
   print_geometry(session);
   print_range_warnings(session);
+  print_gaps(session);
   const std::vector<SessionEvent> events = session.events();
   std::map<std::string, int> by_kind;
   for (const SessionEvent& e : events) ++by_kind[e.kind];
@@ -500,7 +540,16 @@ void run_info(const std::string& session_path) {
   }
 }
 
-void run_export(const std::string& session_path, const std::string& csv_path) {
+struct ExportOptions {
+  std::string session_path;
+  std::string csv_path;
+  bool overwrite = false;
+};
+
+void run_export(const ExportOptions& options) {
+  const std::string& session_path = options.session_path;
+  const std::string& csv_path = options.csv_path;
+  check_output_file(csv_path, {session_path}, options.overwrite);
   const SessionReader session(session_path);
   const Recording recording = session_to_recording(session);
   write_recording_csv_file(csv_path, recording);
@@ -514,7 +563,8 @@ struct ImportOptions {
 };
 
 void run_import(const ImportOptions& options) {
-  const Recording recording = read_recording_csv(options.csv_path);
+  check_output_session(options.out_path, {options.csv_path});
+  const Recording recording = read_recording_csv(options.csv_path, EmptyCells::kMissing);
   SessionMetadata metadata;
   metadata.rig_name = "imported";
   metadata.operator_name = options.operator_name;
@@ -577,15 +627,18 @@ void add_session_commands(CLI::App& app, Action& action) {
   info->add_option("SESSION", *info_path, "Session file (HDF5)")->required();
   info->callback([info_path, &action] { action = [info_path] { run_info(*info_path); }; });
 
-  auto export_paths = std::make_shared<std::pair<std::string, std::string>>();
+  auto export_options = std::make_shared<ExportOptions>();
   CLI::App* export_command = app.add_subcommand(
       "export",
       "Write a session as CSV (the exchange format: physical units, strokes marked, the force "
       "signed by the load cell's mounting)");
-  export_command->add_option("SESSION", export_paths->first, "Session file (HDF5)")->required();
-  export_command->add_option("--csv", export_paths->second, "The CSV file to write")->required();
-  export_command->callback([export_paths, &action] {
-    action = [export_paths] { run_export(export_paths->first, export_paths->second); };
+  export_command->add_option("SESSION", export_options->session_path, "Session file (HDF5)")
+      ->required();
+  export_command->add_option("--csv", export_options->csv_path, "The CSV file to write")
+      ->required();
+  export_command->add_flag("--overwrite", export_options->overwrite, "Replace an existing CSV file");
+  export_command->callback([export_options, &action] {
+    action = [export_options] { run_export(*export_options); };
   });
 
   auto import = std::make_shared<ImportOptions>();
