@@ -10,6 +10,8 @@
 #include <system_error>
 #include <unordered_set>
 
+#include "acquisition/printable.h"
+
 namespace doorbench {
 namespace {
 
@@ -29,9 +31,10 @@ std::string_view trim(std::string_view text) {
 
 std::string quoted(std::string_view text) {
   // Built with append: GCC 12 warns falsely (-Wrestrict) on "'" + std::string(...).
+  // Control characters are shown escaped (acquisition/printable.h).
   std::string result("'");
-  if (text.size() <= kMaxQuotedChars) return result.append(text).append("'");
-  return result.append(text.substr(0, kMaxQuotedChars)).append("...'");
+  if (text.size() <= kMaxQuotedChars) return result.append(printable(text)).append("'");
+  return result.append(printable(text.substr(0, kMaxQuotedChars))).append("...'");
 }
 
 bool is_metadata_key_char(char c) {

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "acquisition/output_file.h"
+#include "acquisition/printable.h"
 #include "acquisition/recorder.h"
 #include "acquisition/recovery.h"
 #include "acquisition/rig_file.h"
@@ -415,7 +416,7 @@ void print_geometry(const SessionReader& session) {
   for (const ChannelInfo& c : session.channels()) {
     if (c.geometry_calibration_id.empty()) continue;
     any = true;
-    std::cout << "geometry: " << c.name << " uses " << c.geometry_calibration_id;
+    std::cout << "geometry: " << c.name << " uses " << printable(c.geometry_calibration_id);
     for (const calibration::CalibrationRecord& r : session.calibrations()) {
       if (r.id != c.geometry_calibration_id) continue;
       for (const char* name : {"handle_radius_m", "mounting_angle_deg"}) {
@@ -437,7 +438,7 @@ void print_geometry(const SessionReader& session) {
 void print_range_warnings(const SessionReader& session) {
   try {
     const std::vector<std::string> warnings = calibration::range_warnings(session);
-    for (const std::string& warning : warnings) std::cout << "warning: " << warning << "\n";
+    for (const std::string& warning : warnings) std::cout << "warning: " << printable(warning) << "\n";
   } catch (const std::exception& error) {
     std::cout << "warning: ranges not checked: " << error.what() << "\n";
   }
@@ -485,25 +486,27 @@ void run_info(const std::string& session_path) {
   const SessionReader session(session_path);
   const SessionMetadata& m = session.metadata();
   std::cout << "session " << session_path << "\n"
-            << "  rig        " << m.rig_name << "\n"
-            << "  operator   " << m.operator_name << "\n"
-            << "  product    " << m.product_id << "\n"
-            << "  started    " << m.start_time_utc << "\n"
-            << "  software   " << m.software_version << "\n"
+            << "  rig        " << printable(m.rig_name) << "\n"
+            << "  operator   " << printable(m.operator_name) << "\n"
+            << "  product    " << printable(m.product_id) << "\n"
+            << "  started    " << printable(m.start_time_utc) << "\n"
+            << "  software   " << printable(m.software_version) << "\n"
             << "  duration   " << format_seconds(session.end_time_s() - session.start_time_s())
             << " (" << format_seconds(session.start_time_s()) << " to "
             << format_seconds(session.end_time_s()) << ")\n";
-  if (!m.notes.empty()) std::cout << "  notes      " << m.notes << "\n";
+  if (!m.notes.empty()) std::cout << "  notes      " << printable(m.notes) << "\n";
   std::cout << "channels:\n";
   std::printf("  %-14s %-13s %10s %10s %-7s %-6s %s\n", "name", "sensor", "samples", "rate Hz",
               "raw", "unit", "calibration");
   std::fflush(stdout);
   for (const ChannelInfo& c : session.channels()) {
     std::printf(
-        "  %-14s %-13s %10zu %10g %-7s %-6s %s%s%s\n", c.name.c_str(), c.sensor_kind.c_str(),
-        session.sample_count(c.name), c.sample_rate_hz, c.raw_unit.c_str(), c.unit.c_str(),
-        c.calibration_id.empty() ? "(values are physical)" : c.calibration_id.c_str(),
-        c.geometry_calibration_id.empty() ? "" : ", geometry ", c.geometry_calibration_id.c_str());
+        "  %-14s %-13s %10zu %10g %-7s %-6s %s%s%s\n", c.name.c_str(),
+        printable(c.sensor_kind).c_str(), session.sample_count(c.name), c.sample_rate_hz,
+        printable(c.raw_unit).c_str(), printable(c.unit).c_str(),
+        c.calibration_id.empty() ? "(values are physical)" : printable(c.calibration_id).c_str(),
+        c.geometry_calibration_id.empty() ? "" : ", geometry ",
+        printable(c.geometry_calibration_id).c_str());
   }
   std::fflush(stdout);
   print_geometry(session);
@@ -515,28 +518,28 @@ void run_info(const std::string& session_path) {
   std::cout << "events: " << events.size();
   std::string separator = " (";
   for (const auto& [kind, count] : by_kind) {
-    std::cout << separator << kind << " " << count;
+    std::cout << separator << printable(kind) << " " << count;
     separator = ", ";
   }
   std::cout << (events.empty() ? "" : ")") << "\n";
   for (std::size_t i = 0; i < events.size() && i < 12; ++i) {
-    std::printf("  %10.3f s  %-13s %s%s%s\n", events[i].time_s, events[i].kind.c_str(),
-                events[i].channel.c_str(), events[i].channel.empty() ? "" : " ",
-                events[i].detail.c_str());
+    std::printf("  %10.3f s  %-13s %s%s%s\n", events[i].time_s, printable(events[i].kind).c_str(),
+                printable(events[i].channel).c_str(), events[i].channel.empty() ? "" : " ",
+                printable(events[i].detail).c_str());
   }
   if (events.size() > 12) std::printf("  ... %zu more\n", events.size() - 12);
   std::fflush(stdout);
   std::cout << "calibrations:\n";
   for (const calibration::CalibrationRecord& r : session.calibrations()) {
-    std::cout << "  " << r.id << "  " << r.sensor_kind << " " << r.sensor_serial << "  " << r.unit
-              << " = ";
+    std::cout << "  " << printable(r.id) << "  " << printable(r.sensor_kind) << " "
+              << printable(r.sensor_serial) << "  " << printable(r.unit) << " = ";
     for (std::size_t k = 0; k < r.coefficients.size(); ++k) {
       std::cout << (k ? " + " : "") << r.coefficients[k]
                 << (k == 0   ? ""
                     : k == 1 ? "·x"
                              : "·x^" + std::to_string(k));
     }
-    std::cout << "  (" << r.method << ")\n";
+    std::cout << "  (" << printable(r.method) << ")\n";
   }
 }
 
