@@ -1213,7 +1213,15 @@ struct SessionReader::Impl {
     ChannelSlice slice;
     hsize_t first = 0, last = 0;  // [first, last)
     std::vector<double> all_times;
+    auto check_size = [&](hsize_t samples, const char* dataset) {
+      if (samples > kMaxReadSamples) {
+        throw Failure("/channels/" + name + "/" + dataset + ": " + std::to_string(samples) +
+                      " samples to read at once; at most " + std::to_string(kMaxReadSamples) +
+                      " are (read a shorter time range)");
+      }
+    };
     if (channel.time) {
+      check_size(count, "time_s");
       all_times.resize(count);
       read_range(channel.time.get(), H5T_NATIVE_DOUBLE, 0, count, all_times.data(),
                  "/channels/" + name + "/time_s");
@@ -1251,6 +1259,7 @@ struct SessionReader::Impl {
     slice.first_index = first;
     if (last <= first) return slice;
     const hsize_t size = last - first;
+    check_size(size, "raw");
     slice.raw.resize(size);
     read_range(channel.raw.get(), H5T_NATIVE_DOUBLE, first, size, slice.raw.data(),
                "/channels/" + name + "/raw");

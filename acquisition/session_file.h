@@ -185,6 +185,10 @@ class SessionReader {
   std::vector<SessionEvent> events() const;  // in the order they were added
   std::vector<calibration::CalibrationRecord> calibrations() const;
 
+  // At most this many samples are read by one call (2^28: 2 GiB of values and 2 GiB of
+  // times); a longer range is a SessionError naming the dataset, not an allocation failure.
+  static constexpr std::uint64_t kMaxReadSamples = std::uint64_t{1} << 28;
+
   // Samples with start_s <= time <= end_s (NaN: std::invalid_argument). Uniform
   // channels: the index range comes from the clock and only it is read; time_s[i] is
   // first_sample_time_s + (first_index + i) / sample_rate_hz. Explicit-time channels:

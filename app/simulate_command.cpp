@@ -73,6 +73,14 @@ void run_simulate(const SimulateOptions& options) {
     run = simulate(model, recorded_force(recording), initial_state(recording), recording.time_s);
     if (recording.stroke) run.stroke = *recording.stroke;
   } else {
+    // A bound on the output: 10 million samples (about 1 GB of CSV with every term).
+    constexpr double kMaxSamples = 1e7;
+    if (options.duration_s * options.rate_hz > kMaxSamples) {
+      throw UsageError("--duration-s " + format_csv_number(options.duration_s) + " at --rate-hz " +
+                       format_csv_number(options.rate_hz) + " gives " +
+                       format_csv_number(options.duration_s * options.rate_hz) +
+                       " samples; at most 10000000");
+    }
     VirtualHandOptions hand;
     hand.target_angle_rad = options.target_deg * std::numbers::pi / 180.0;
     hand.duration_s = options.duration_s;
