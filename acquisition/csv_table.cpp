@@ -5,9 +5,12 @@
 #include <cmath>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <sstream>
 #include <system_error>
 #include <unordered_set>
+
+#include "acquisition/printable.h"
 
 namespace doorbench {
 namespace {
@@ -28,9 +31,10 @@ std::string_view trim(std::string_view text) {
 
 std::string quoted(std::string_view text) {
   // Built with append: GCC 12 warns falsely (-Wrestrict) on "'" + std::string(...).
+  // Control characters are shown escaped (acquisition/printable.h).
   std::string result("'");
-  if (text.size() <= kMaxQuotedChars) return result.append(text).append("'");
-  return result.append(text.substr(0, kMaxQuotedChars)).append("...'");
+  if (text.size() <= kMaxQuotedChars) return result.append(printable(text)).append("'");
+  return result.append(printable(text.substr(0, kMaxQuotedChars))).append("...'");
 }
 
 bool is_metadata_key_char(char c) {
@@ -164,7 +168,7 @@ void read_header(std::string_view line, int line_number, std::string_view source
 }
 
 void read_data_row(std::string_view line, int line_number, std::string_view source,
-                   CsvTable& table) {
+                   EmptyCells empty_cells, CsvTable& table) {
   const std::size_t column_count = table.column_names.size();
   const std::size_t field_count = 1 + std::count(line.begin(), line.end(), ',');
   if (field_count != column_count) {
@@ -177,7 +181,11 @@ void read_data_row(std::string_view line, int line_number, std::string_view sour
     const auto comma = line.find(',', start);
     const std::string_view cell = line.substr(start, comma - start);
     double value = 0.0;
-    const CellProblem problem = parse_cell(cell, value);
+    CellProblem problem = parse_cell(cell, value);
+    if (problem == CellProblem::kEmpty && empty_cells == EmptyCells::kMissing) {
+      value = std::numeric_limits<double>::quiet_NaN();  // a missing sample
+      problem = CellProblem::kNone;
+    }
     if (problem != CellProblem::kNone) {
       std::string detail = "column " + table.column_names[column] + ": ";
       switch (problem) {
@@ -254,7 +262,8 @@ void check_columns_for_writing(const std::vector<std::string>& column_names,
                 " values, column '" + column_names[0] + "' has " +
                 std::to_string(columns[0]->size()));
     for (std::size_t row = 0; row < columns[c]->size(); ++row) {
-      if (!std::isfinite((*columns[c])[row])) {
+      if (std::isinf((*columns[c])[row]) ||
+          (column_names.size() == 1 && std::isnan((*columns[c])[row]))) {  // a blank line
         reject("column '" + name + "' row " + std::to_string(row) + " is not finite");
       }
     }
@@ -311,7 +320,8 @@ std::string format_csv_number(double value) {
   return std::string(buffer, end);
 }
 
-CsvTable parse_csv_table(std::string_view text, std::string_view source) {
+CsvTable parse_csv_table(std::string_view text, std::string_view source,
+                         EmptyCells empty_cells) {
   CsvTable table;
   LineReader reader(text, source);
   std::string_view line;
@@ -338,12 +348,12 @@ CsvTable parse_csv_table(std::string_view text, std::string_view source) {
       throw CsvError(source, reader.line_number(),
                      "'#' line after the header (metadata must come before the header row)");
     }
-    read_data_row(line, reader.line_number(), source, table);
+    read_data_row(line, reader.line_number(), source, empty_cells, table);
   }
   return table;
 }
 
-CsvTable read_csv_file(const std::filesystem::path& path) {
+CsvTable read_csv_file(const std::filesystem::path& path, EmptyCells empty_cells) {
   const std::string source = path.string();
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) {
@@ -354,7 +364,7 @@ CsvTable read_csv_file(const std::filesystem::path& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw CsvError(source, 0, "read error");
-  return parse_csv_table(text.str(), source);
+  return parse_csv_table(text.str(), source, empty_cells);
 }
 
 void write_csv(std::ostream& out, const CsvMetadata& metadata,
@@ -384,8 +394,9 @@ void write_csv(std::ostream& out, const CsvMetadata& metadata,
   for (std::size_t row = 0; row < row_count; ++row) {
     for (std::size_t c = 0; c < columns.size(); ++c) {
       if (c > 0) text += ',';
-      const auto [end, error] =
-          std::to_chars(std::begin(number), std::end(number), (*columns[c])[row]);
+      const double value = (*columns[c])[row];
+      if (std::isnan(value)) continue;  // a missing sample: an empty cell
+      const auto [end, error] = std::to_chars(std::begin(number), std::end(number), value);
       if (error != std::errc()) throw std::logic_error("write_csv: number buffer too small");
       text.append(number, end);
     }

@@ -51,12 +51,20 @@ struct CsvTable {
   std::size_t row_count() const { return line_numbers.size(); }
 };
 
+// What an empty (or blank) data cell is. kRefuse: an error ("column X: empty cell"), for
+// tables that must be complete (a grid to evaluate, a force to replay). kMissing: a missing
+// sample, read as NaN (a recording's lost scans, docs/csv-format.md#missing-samples); the
+// caller decides which columns may hold one.
+enum class EmptyCells { kRefuse, kMissing };
+
 // Parses `text`; `source` names it in error messages (usually the file's path).
-CsvTable parse_csv_table(std::string_view text, std::string_view source);
+CsvTable parse_csv_table(std::string_view text, std::string_view source,
+                         EmptyCells empty_cells = EmptyCells::kRefuse);
 
 // Reads and parses a file; the path is the source in messages. A file that cannot be read
 // throws CsvError "PATH: cannot open for reading".
-CsvTable read_csv_file(const std::filesystem::path& path);
+CsvTable read_csv_file(const std::filesystem::path& path,
+                       EmptyCells empty_cells = EmptyCells::kRefuse);
 
 // Parses `text` (spaces and tabs around it allowed) as a whole, finite double the way data
 // cells are parsed; nullopt when it is anything else.
@@ -71,7 +79,8 @@ std::string format_csv_number(double value);
 // as given: column count or lengths that differ, a null column, no columns, names that
 // are empty, duplicated, padded with spaces, numbers, start with `#` or contain `,` `"`
 // `;`, tabs or line breaks, invalid or duplicated metadata keys, values with line breaks
-// or edge spaces, notes that would read back as metadata, non-finite numbers.
+// or edge spaces, notes that would read back as metadata, infinities. A NaN is a missing
+// sample and is written as an empty cell (read back as NaN with EmptyCells::kMissing).
 void write_csv(std::ostream& out, const CsvMetadata& metadata,
                const std::vector<std::string>& column_names,
                const std::vector<const std::vector<double>*>& columns);

@@ -6,6 +6,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "acquisition/output_file.h"
+
 namespace doorbench {
 namespace {
 
@@ -155,6 +157,14 @@ Recording recording_from_table(const CsvTable& table, std::string_view source) {
   const std::vector<double>& time_s = table.columns[*time_column];
   for (std::size_t row = 0; row < table.row_count(); ++row) {
     const int line = table.line_numbers[row];
+    for (const auto& [column, name] :
+         {std::pair{time_column, kTimeColumn}, std::pair{stroke_column, kStrokeColumn}}) {
+      if (column && std::isnan(table.columns[*column][row])) {  // only as a missing sample
+        throw CsvError(source, line,
+                       "column " + std::string(name) + ": empty cell (" + std::string(name) +
+                           " is never missing)");
+      }
+    }
     if (row > 0 && !(time_s[row] > time_s[row - 1])) {
       throw CsvError(source, line,
                      "time_s " + format_csv_number(time_s[row]) +
@@ -182,12 +192,13 @@ Recording recording_from_table(const CsvTable& table, std::string_view source) {
   return recording;
 }
 
-Recording parse_recording_csv(std::string_view text, std::string_view source) {
-  return recording_from_table(parse_csv_table(text, source), source);
+Recording parse_recording_csv(std::string_view text, std::string_view source,
+                              EmptyCells empty_cells) {
+  return recording_from_table(parse_csv_table(text, source, empty_cells), source);
 }
 
-Recording read_recording_csv(const std::filesystem::path& path) {
-  return recording_from_table(read_csv_file(path), path.string());
+Recording read_recording_csv(const std::filesystem::path& path, EmptyCells empty_cells) {
+  return recording_from_table(read_csv_file(path, empty_cells), path.string());
 }
 
 void write_recording_csv(std::ostream& out, const Recording& recording) {
@@ -228,11 +239,7 @@ void write_recording_csv(std::ostream& out, const Recording& recording) {
 void write_recording_csv_file(const std::filesystem::path& path, const Recording& recording) {
   // Checked before the file is created, so a bad recording leaves no half-written file.
   check_recording_for_writing(recording);
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw CsvError(path.string(), 0, "cannot open for writing");
-  write_recording_csv(out, recording);
-  out.close();
-  if (!out) throw CsvError(path.string(), 0, "writing failed");
+  write_file_atomically(path, [&](std::ostream& out) { write_recording_csv(out, recording); });
 }
 
 }  // namespace doorbench

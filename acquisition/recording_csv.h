@@ -50,19 +50,27 @@ inline constexpr std::string_view kSampleRateKey = "sample_rate_hz";
 // True when `name` ends in a unit suffix: an underscore with text on both sides ("tau_Nm").
 bool has_unit_suffix(std::string_view name);
 
-// `source` names the text in messages (usually its path).
-Recording parse_recording_csv(std::string_view text, std::string_view source);
+// `source` names the text in messages (usually its path). With EmptyCells::kMissing an
+// empty cell of force_N, angle_rad, rate_rad_s or an extra column is a missing sample
+// (NaN: a lost scan, a gap); time_s and stroke are never missing ("column time_s: empty
+// cell"). With kRefuse (for a force to replay) every empty cell is an error.
+Recording parse_recording_csv(std::string_view text, std::string_view source,
+                              EmptyCells empty_cells = EmptyCells::kRefuse);
 Recording recording_from_table(const CsvTable& table, std::string_view source);
 // Errors name the path; "PATH: cannot open for reading" when the file cannot be read.
-Recording read_recording_csv(const std::filesystem::path& path);
+Recording read_recording_csv(const std::filesystem::path& path,
+                             EmptyCells empty_cells = EmptyCells::kRefuse);
 
 // Writes typed metadata (handle_radius_m, sample_rate_hz), the other metadata, then the
 // columns time_s, force_N, angle_rad, rate_rad_s, stroke (those present) and the extra
-// columns. Numbers are written so that reading gives back identical doubles. Throws
+// columns. Numbers are written so that reading gives back identical doubles; a NaN (a
+// missing sample) is an empty cell. Throws
 // std::invalid_argument when the recording breaks a rule the reader enforces (sizes,
 // order of time_s, stroke ids, names, non-finite values, empty recording, ...).
 void write_recording_csv(std::ostream& out, const Recording& recording);
-// Throws CsvError "PATH: cannot open for writing" when the file cannot be created.
+// Writes the file whole or not at all (acquisition/output_file.h: through a temporary file
+// renamed into place); throws OutputError "PATH: cannot write: SYSTEM ERROR". It does not
+// check whether `path` exists: callers apply the output rule (check_output_file) first.
 void write_recording_csv_file(const std::filesystem::path& path, const Recording& recording);
 
 }  // namespace doorbench

@@ -19,9 +19,6 @@
 
 namespace doorbench {
 
-// Raw value of scans lost to an overflow (outside every DAQ's range of counts).
-inline constexpr std::int32_t kGapFillCount = INT32_MIN;
-
 struct ConvertResult {
   std::filesystem::path journal;
   std::filesystem::path session;

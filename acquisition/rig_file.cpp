@@ -35,6 +35,14 @@ constexpr std::string_view kModbusOrders[] = {"big", "little"};
 constexpr std::string_view kTriggerKinds[] = {"software", "external", "level", "manual"};
 constexpr std::string_view kDirections[] = {"rising", "falling"};
 constexpr double kMaxPreTriggerS = 60.0;  // TriggerOptions::kMaxPreTriggerS
+// Upper bounds on what a rig can ask for (docs/rig-format.md, "Limits"): beyond them a
+// recording would exhaust memory or disk, or run for longer than anyone records a door.
+constexpr double kMinSampleRateHz = 1.0;
+constexpr double kMaxSampleRateHz = 200000.0;  // scans per second
+constexpr double kMaxRecordingS = 86400.0;     // a day, as `record --duration-s`
+constexpr double kMaxHoldS = 3600.0;
+// A bound as written in the docs: 200000, not 2e+05.
+std::string whole_number_text(double value) { return std::to_string(static_cast<long long>(value)); }
 constexpr std::string_view kArefs[] = {"ground", "common", "diff", "other"};
 constexpr std::string_view kDoorModels[] = {"sensory", "physical"};
 constexpr int kMinResolutionBits = 8;
@@ -359,13 +367,15 @@ void read_clock(const Section& root, RigDefinition& rig) {
   if (!clock) return;
   clock->allow_only({"sample_rate_hz", "convert_interval_s"});
   rig.sample_rate_hz = clock->number("sample_rate_hz").value_or(rig.sample_rate_hz);
-  if (!(rig.sample_rate_hz > 0)) {
-    clock->fail("sample_rate_hz", "must be > 0 (got " + number_text(rig.sample_rate_hz) + ")");
+  if (!(rig.sample_rate_hz >= kMinSampleRateHz && rig.sample_rate_hz <= kMaxSampleRateHz)) {
+    clock->fail("sample_rate_hz", "must be from " + whole_number_text(kMinSampleRateHz) + " to " +
+                                      whole_number_text(kMaxSampleRateHz) + " Hz (got " +
+                                      number_text(rig.sample_rate_hz) + ")");
   }
   rig.convert_interval_s = clock->number("convert_interval_s").value_or(rig.convert_interval_s);
-  if (!(rig.convert_interval_s >= 0)) {
+  if (!(rig.convert_interval_s >= 0 && rig.convert_interval_s <= 1.0 / kMinSampleRateHz)) {
     clock->fail("convert_interval_s",
-                "must be >= 0 (got " + number_text(rig.convert_interval_s) + ")");
+                "must be from 0 to 1 s (got " + number_text(rig.convert_interval_s) + ")");
   }
 }
 
@@ -701,8 +711,9 @@ void read_level(const Section& table, const RigDefinition& rig, RigTrigger& trig
     table.fail("hysteresis", "must be >= 0 (got " + number_text(trigger.hysteresis) + ")");
   }
   trigger.hold_s = table.number("hold_s").value_or(0.0);
-  if (trigger.hold_s < 0) {
-    table.fail("hold_s", "must be >= 0 (got " + number_text(trigger.hold_s) + ")");
+  if (!(trigger.hold_s >= 0 && trigger.hold_s <= kMaxHoldS)) {
+    table.fail("hold_s", "must be from 0 to " + whole_number_text(kMaxHoldS) + " s (got " +
+                             number_text(trigger.hold_s) + ")");
   }
   trigger.absolute = table.boolean("absolute").value_or(false);
   if (trigger.absolute && !(trigger.level > 0)) {
@@ -815,8 +826,10 @@ void read_recording(const Section& root, RigDefinition& rig) {
     recording.stop = *stop;
   }
   if (const auto duration = table->number("duration_s")) {
-    if (!(*duration > 0))
-      table->fail("duration_s", "must be > 0 (got " + number_text(*duration) + ")");
+    if (!(*duration > 0 && *duration <= kMaxRecordingS)) {
+      table->fail("duration_s", "must be > 0 and <= " + whole_number_text(kMaxRecordingS) + " s (got " +
+                                    number_text(*duration) + ")");
+    }
     recording.duration_s = *duration;
   }
   recording.pre_trigger_s = table->number("pre_trigger_s").value_or(recording.pre_trigger_s);
@@ -835,8 +848,9 @@ void read_recording(const Section& root, RigDefinition& rig) {
     recording.strokes = *strokes;
   }
   recording.min_stroke_s = table->number("min_stroke_s").value_or(recording.min_stroke_s);
-  if (recording.min_stroke_s < 0) {
-    table->fail("min_stroke_s", "must be >= 0 (got " + number_text(recording.min_stroke_s) + ")");
+  if (!(recording.min_stroke_s >= 0 && recording.min_stroke_s <= kMaxRecordingS)) {
+    table->fail("min_stroke_s", "must be from 0 to " + whole_number_text(kMaxRecordingS) + " s (got " +
+                                    number_text(recording.min_stroke_s) + ")");
   }
 }
 
@@ -934,6 +948,14 @@ void read_simulation(const Section& root, RigDefinition& rig, const ParsedChanne
     if (!(simulation.hand_cycle_duration_s > 0)) {
       hand->fail("cycle_duration_s",
                  "must be > 0 (got " + number_text(simulation.hand_cycle_duration_s) + ")");
+    }
+    const double total_s = simulation.hand_cycles * simulation.hand_cycle_duration_s;
+    if (!(total_s <= kMaxRecordingS)) {
+      hand->fail(hand->find("cycle_duration_s") ? "cycle_duration_s" : "cycles",
+                 "cycles * cycle_duration_s = " + std::to_string(simulation.hand_cycles) + " * " +
+                     number_text(simulation.hand_cycle_duration_s) + " s = " +
+                     number_text(total_s) + " s must be <= " + whole_number_text(kMaxRecordingS) +
+                     " s (a day)");
     }
   }
   rig.simulation = std::move(simulation);

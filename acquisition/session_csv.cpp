@@ -4,9 +4,11 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <system_error>
 #include <stdexcept>
 
 #include "acquisition/interpolation.h"
+#include "acquisition/output_file.h"
 #include "acquisition/resample.h"
 
 namespace doorbench {
@@ -319,8 +321,10 @@ Recording session_to_recording(const SessionReader& session) {
   return recording;
 }
 
-void recording_to_session(const Recording& recording, const std::filesystem::path& path,
-                          const SessionMetadata& metadata) {
+namespace {
+
+void write_recording_session(const Recording& recording, const std::filesystem::path& path,
+                             const SessionMetadata& metadata) {
   const std::size_t count = recording.size();
   if (count == 0) throw std::invalid_argument(recording.source + ": no samples to import");
   // A uniform clock only when it gives back every time exactly (as the reader computes
@@ -394,6 +398,30 @@ void recording_to_session(const Recording& recording, const std::filesystem::pat
     if (!key.empty()) writer.write_group_attribute("import", "csv_" + key, value);
   }
   writer.close();
+}
+
+}  // namespace
+
+void recording_to_session(const Recording& recording, const std::filesystem::path& path,
+                          const SessionMetadata& metadata) {
+  if (std::filesystem::exists(path)) {
+    throw SessionError(path.string() + ": already exists (sessions are never overwritten)");
+  }
+  // Whole or not at all (acquisition/output_file.h): the session is written beside its
+  // name and renamed into place once closed.
+  const std::filesystem::path partial = partial_path_for(path);
+  try {
+    write_recording_session(recording, partial, metadata);
+  } catch (const SessionError& error) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw SessionError(path.string() + ": cannot write: " + error.what());
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw;
+  }
+  commit_partial_file(partial, path);
 }
 
 }  // namespace doorbench

@@ -15,6 +15,8 @@
 #include <iterator>
 #include <utility>
 
+#include "acquisition/printable.h"
+
 namespace doorbench {
 
 namespace fs = std::filesystem;
@@ -36,6 +38,13 @@ class Failure : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
+
+// A time as it reads back (shortest round-trip form; "nan", "inf").
+std::string format_time(double t) {
+  char text[32];
+  const auto result = std::to_chars(std::begin(text), std::end(text), t);
+  return std::string(text, result.ptr);
+}
 
 // Switches HDF5's automatic error printing off for the current thread while it lives.
 class Hdf5Quiet {
@@ -1071,6 +1080,12 @@ struct SessionReader::Impl {
   void load_channels() {
     const Handle group = open_group(file.get(), "channels");
     for (const std::string& name : link_names(group.get())) {
+      // The documented rule (docs/session-format.md), also for files made elsewhere: such a
+      // name reaches terminals, CSV headers and HDF5 paths.
+      if (!valid_channel_name(name)) {
+        throw Failure("/channels/" + printable(name) +
+                      ": a channel name is letters, digits and _ only");
+      }
       const std::string where = "/channels/" + name;
       const Handle g = open_group(group.get(), name);
       const hid_t id = g.get();
@@ -1198,10 +1213,29 @@ struct SessionReader::Impl {
     ChannelSlice slice;
     hsize_t first = 0, last = 0;  // [first, last)
     std::vector<double> all_times;
+    auto check_size = [&](hsize_t samples, const char* dataset) {
+      if (samples > kMaxReadSamples) {
+        throw Failure("/channels/" + name + "/" + dataset + ": " + std::to_string(samples) +
+                      " samples to read at once; at most " + std::to_string(kMaxReadSamples) +
+                      " are (read a shorter time range)");
+      }
+    };
     if (channel.time) {
+      check_size(count, "time_s");
       all_times.resize(count);
       read_range(channel.time.get(), H5T_NATIVE_DOUBLE, 0, count, all_times.data(),
                  "/channels/" + name + "/time_s");
+      // The writer keeps them finite and increasing; a file made elsewhere may not.
+      for (hsize_t i = 0; i < count; ++i) {
+        if (!std::isfinite(all_times[i]) || (i > 0 && !(all_times[i] > all_times[i - 1]))) {
+          throw Failure("/channels/" + name + "/time_s: sample " + std::to_string(i) + " (" +
+                        format_time(all_times[i]) + " s) is " +
+                        (std::isfinite(all_times[i]) ? "not after the one before (" +
+                                                           format_time(all_times[i - 1]) + " s)"
+                                                     : "not finite") +
+                        "; times must be finite and increasing");
+        }
+      }
       first = static_cast<hsize_t>(std::lower_bound(all_times.begin(), all_times.end(), start_s) -
                                    all_times.begin());
       last = static_cast<hsize_t>(std::upper_bound(all_times.begin(), all_times.end(), end_s) -
@@ -1225,6 +1259,7 @@ struct SessionReader::Impl {
     slice.first_index = first;
     if (last <= first) return slice;
     const hsize_t size = last - first;
+    check_size(size, "raw");
     slice.raw.resize(size);
     read_range(channel.raw.get(), H5T_NATIVE_DOUBLE, first, size, slice.raw.data(),
                "/channels/" + name + "/raw");
@@ -1252,6 +1287,10 @@ struct SessionReader::Impl {
       }
     }
     for (std::size_t i = 0; i < values.size(); ++i) {
+      if (is_lost_sample(info, slice.raw[i])) {
+        values[i] = std::numeric_limits<double>::quiet_NaN();
+        continue;
+      }
       const double signal = info.raw_offset + info.raw_scale * slice.raw[i];
       values[i] = record ? record->apply(signal) : signal;
     }
@@ -1334,6 +1373,20 @@ std::vector<CalibrationRecord> SessionReader::calibrations() const {
 
 ChannelSlice SessionReader::read(const std::string& channel, double start_s, double end_s) const {
   return impl_->guarded([&] { return impl_->read(channel, start_s, end_s); });
+}
+
+std::vector<LostRun> lost_runs(const ChannelInfo& channel, const ChannelSlice& slice) {
+  std::vector<LostRun> runs;
+  for (std::size_t i = 0; i < slice.raw.size(); ++i) {
+    if (!is_lost_sample(channel, slice.raw[i])) continue;
+    if (!runs.empty() && runs.back().first_index + runs.back().count == slice.first_index + i) {
+      ++runs.back().count;
+      runs.back().last_time_s = slice.time_s[i];
+    } else {
+      runs.push_back({slice.first_index + i, 1, slice.time_s[i], slice.time_s[i]});
+    }
+  }
+  return runs;
 }
 
 std::vector<double> SessionReader::physical(const std::string& channel,

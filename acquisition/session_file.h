@@ -12,6 +12,7 @@
 // Thread safety: a writer or reader is used by one thread at a time. Different writers
 // and readers may be used from different threads (Debian's HDF5 is built thread-safe and
 // serializes them). Reading a session while its writer has it open is not supported.
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -43,6 +44,11 @@ struct SessionMetadata {
 };
 
 enum class RawType { kCounts, kValues };  // int32 DAQ counts, or float64 values
+
+// The raw count that marks a lost scan (a ring overflow kept on the clock by the recorder,
+// docs/crash-safety.md): outside every DAQ's range of counts. It is never a measurement:
+// every reader gives such a sample as missing (NaN), never as a number.
+inline constexpr std::int32_t kGapFillCount = std::numeric_limits<std::int32_t>::min();
 
 struct ChannelInfo {
   std::string name;         // unique, [A-Za-z0-9_]+
@@ -139,6 +145,25 @@ struct ChannelSlice {
   std::vector<double> raw;  // counts are exact in a double
 };
 
+// True when `raw` of a sample of `channel` is missing: a counts channel's mark of a lost
+// scan (kGapFillCount), or a values channel's NaN (an imported empty cell). Readers give
+// such a sample as NaN.
+inline bool is_lost_sample(const ChannelInfo& channel, double raw) {
+  return channel.raw_type == RawType::kCounts ? raw == static_cast<double>(kGapFillCount)
+                                              : std::isnan(raw);
+}
+
+// A run of lost samples of one channel: indices [first_index, first_index + count), times
+// of the first and last lost sample.
+struct LostRun {
+  std::size_t first_index = 0;
+  std::size_t count = 0;
+  double first_time_s = 0.0;
+  double last_time_s = 0.0;
+};
+// The runs of lost samples in a slice of `channel`, in order.
+std::vector<LostRun> lost_runs(const ChannelInfo& channel, const ChannelSlice& slice);
+
 class SessionReader {
  public:
   // Opens read-only and loads metadata, channel infos, events and calibration records
@@ -160,6 +185,10 @@ class SessionReader {
   std::vector<SessionEvent> events() const;  // in the order they were added
   std::vector<calibration::CalibrationRecord> calibrations() const;
 
+  // At most this many samples are read by one call (2^28: 2 GiB of values and 2 GiB of
+  // times); a longer range is a SessionError naming the dataset, not an allocation failure.
+  static constexpr std::uint64_t kMaxReadSamples = std::uint64_t{1} << 28;
+
   // Samples with start_s <= time <= end_s (NaN: std::invalid_argument). Uniform
   // channels: the index range comes from the clock and only it is read; time_s[i] is
   // first_sample_time_s + (first_index + i) / sample_rate_hz. Explicit-time channels:
@@ -169,6 +198,7 @@ class SessionReader {
                     double end_s = std::numeric_limits<double>::infinity()) const;
   // Physical values of a slice of this channel: signal = raw_offset + raw_scale · raw,
   // then the channel's calibration record (none: the signal is the physical value).
+  // A lost sample (is_lost_sample) is NaN: a gap, never a number.
   std::vector<double> physical(const std::string& channel, const ChannelSlice& slice) const;
 
   // Names of the datasets directly in `group` ("truth", "results/fit-1"), by name.

@@ -15,7 +15,7 @@
 namespace doorbench {
 namespace {
 
-constexpr std::int32_t kGapCount = std::numeric_limits<std::int32_t>::min();
+constexpr std::int32_t kGapCount = kGapFillCount;
 
 std::string number_text(double value) {
   char buffer[32];

@@ -569,6 +569,20 @@ WindowProblem::Outcome WindowProblem::solve(const FitOptions& options, int max_i
   return outcome;
 }
 
+int WindowProblem::first_non_finite_window() const {
+  const bool states = estimates_states();
+  std::vector<double> residuals;
+  for (std::size_t w = 0; w < windows_.size(); ++w) {
+    const double* blocks[2] = {x_.data(), states ? z_.data() + 2 * w : nullptr};
+    residuals.assign(static_cast<std::size_t>(costs_[w]->num_residuals()), 0.0);
+    if (!costs_[w]->Evaluate(blocks, residuals.data(), nullptr)) return static_cast<int>(w);
+    for (double r : residuals) {
+      if (!std::isfinite(r)) return static_cast<int>(w);
+    }
+  }
+  return -1;
+}
+
 bool WindowProblem::reduce(bool cached_only, ReducedSystem& out) const {
   using RowMajor = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
   const int p = static_cast<int>(x_.size());

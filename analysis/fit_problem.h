@@ -130,6 +130,10 @@ class WindowProblem {
   // window cannot be evaluated (or, with cached_only, is not cached here).
   bool reduce(bool cached_only, ReducedSystem& out) const;
 
+  // The first window whose residuals at the current x and z cannot be evaluated or are not
+  // finite (a blow-up the solver could not start from); -1 when every window is finite.
+  int first_non_finite_window() const;
+
   std::vector<double>& x() { return x_; }
   const std::vector<double>& x() const { return x_; }
   std::vector<double>& z() { return z_; }

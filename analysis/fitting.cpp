@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -446,6 +447,30 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
                                 ")");
   }
 
+  // A fit never runs on non-finite residuals: a start whose simulation blows up is refused
+  // with the window that did (the data there, or the start values, are to be checked).
+  auto describe_window = [&](int w) {
+    const FitWindow& window = problem.windows()[static_cast<std::size_t>(w)];
+    const Stroke& stroke = data.strokes[static_cast<std::size_t>(window.stroke)];
+    const auto first = static_cast<std::size_t>(window.first);
+    const auto last = first + static_cast<std::size_t>(window.count) - 1;
+    double largest_force_N = 0.0;
+    for (std::size_t i = first; i <= last; ++i) {
+      largest_force_N = std::max(largest_force_N, std::abs(stroke.force_N[i]));
+    }
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "stroke %d (%s), the window from %.3f s to %.3f s (largest |force| there %.4g N)",
+                  stroke.id, stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
+                  stroke.time_s[first], stroke.time_s[last], largest_force_N);
+    return std::string(text);
+  };
+  if (const int w = problem.first_non_finite_window(); w >= 0) {
+    throw std::runtime_error("fit: the start model's simulation is not finite in " +
+                             describe_window(w) +
+                             "; check that window's data and the start parameters");
+  }
+
   summary.times.start_s = seconds_since(began);
 
   // The equation-error stage, then the windows.
@@ -456,6 +481,11 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
     summary.equation_error_termination = equation_error.termination;
     if (equation_error.usable) {
       problem.x() = equation_error.x;
+      if (const int w = problem.first_non_finite_window(); w >= 0) {
+        problem.x() = x_start;  // its result blows up where the start did not
+        summary.notes.push_back("the equation-error result's simulation is not finite in " +
+                                describe_window(w) + "; the windows started from the start values");
+      }
     } else {
       summary.notes.push_back("the equation-error stage failed (" + equation_error.termination +
                               "); the windows started from the start values");

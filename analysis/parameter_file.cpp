@@ -1,5 +1,6 @@
 #include "analysis/parameter_file.h"
 
+#include <algorithm>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -24,6 +25,23 @@ json parse_json(std::string_view text, std::string_view source) {
     std::string what = error.what();
     const auto tag_end = what.find("] ");
     fail(source, tag_end == std::string::npos ? what : what.substr(tag_end + 2));
+  } catch (const json::exception& error) {
+    // A number beyond a double (out_of_range.406: "number overflow parsing '1e999'") comes
+    // without a place: the line is that of the number's first appearance.
+    std::string what = error.what();
+    const auto tag_end = what.find("] ");
+    if (tag_end != std::string::npos) what = what.substr(tag_end + 2);
+    const auto open = what.find('\'');
+    const auto close = what.rfind('\'');
+    if (open != std::string::npos && close > open + 1) {
+      const std::string token = what.substr(open + 1, close - open - 1);
+      const auto at = text.find(token);
+      if (at != std::string_view::npos) {
+        const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+        fail(source, "line " + std::to_string(line) + ": " + what + " (beyond the range of a double)");
+      }
+    }
+    fail(source, what);
   }
 }
 

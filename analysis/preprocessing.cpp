@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <optional>
 
 #include "acquisition/interpolation.h"
@@ -45,6 +46,8 @@ enum Fault : std::uint8_t {
   kAngleNonFinite = 4,
   kForceNonFinite = 8,
   kGapBefore = 16,  // the interval ending at this sample is a gap
+  kLost = 32,       // every measured column missing: a scan lost in recording (a gap)
+  kImpossible = 64,  // a value beyond the physical limits (PreprocessingOptions::max_abs_*)
 };
 
 std::string describe_faults(std::uint8_t kinds, double gyro_limit_rad_s) {
@@ -57,6 +60,8 @@ std::string describe_faults(std::uint8_t kinds, double gyro_limit_rad_s) {
   if (kinds & kAngleNonFinite) add("non-finite angle_rad");
   if (kinds & kForceNonFinite) add("non-finite force_N");
   if (kinds & kGapBefore) add("gap in time_s");
+  if (kinds & kLost) add("recording gap (samples lost)");
+  if (kinds & kImpossible) add("physically impossible values");
   return out;
 }
 
@@ -408,6 +413,10 @@ std::string PreprocessingOptions::validate() const {
       {"min_stroke_duration_s", min_stroke_duration_s, false},
       {"min_stroke_angle_rad", min_stroke_angle_rad, false},
       {"max_gap_factor", max_gap_factor, true},
+      {"max_bridged_loss_s", max_bridged_loss_s, false},
+      {"max_abs_force_N", max_abs_force_N, true},
+      {"max_abs_angle_rad", max_abs_angle_rad, true},
+      {"impossible_factor", impossible_factor, true},
       {"fallback_angle_noise_rad", fallback_angle_noise_rad, true},
       {"fallback_rate_noise_rad_s", fallback_rate_noise_rad_s, true},
   };
@@ -511,6 +520,8 @@ struct Input {
   std::vector<double> t, force, rate, angle, incl;  // rate, angle, incl: empty when absent
   std::string inclinometer_name;
   std::vector<std::uint8_t> fault;
+  std::vector<std::string> warnings;  // physically impossible samples, per channel
+  std::vector<std::uint8_t> motion_fault;  // fault without a bad force alone (stillness test)
   // unknown[i] counts the intervals in (0, i] over which the rate is unknown: saturated or
   // non-finite at either end, or a gap.
   std::vector<std::size_t> unknown;
@@ -591,13 +602,65 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
   if (recording.angle_rad) in.angle = *recording.angle_rad;
   in.saturation_limit = (1.0 - options.gyro_saturation_fraction) * options.gyro_range_rad_s;
   in.fault.assign(n, 0);
+  // Physically impossible values: never used, always said (channel, time, value).
+  std::vector<bool> motion_impossible(n, false);  // in the rate or the angle
+  auto exclude_impossible = [&](std::vector<double>& values, const std::string& name,
+                                double limit, const char* unit, bool motion) {
+    std::size_t count = 0, first = 0;
+    double largest = 0.0;
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      if (!std::isfinite(values[i]) || std::abs(values[i]) <= limit) continue;
+      if (count++ == 0) first = i;
+      if (std::abs(values[i]) > std::abs(largest)) largest = values[i];
+      values[i] = std::numeric_limits<double>::quiet_NaN();
+      in.fault[i] |= kImpossible;
+      if (motion) motion_impossible[i] = true;
+    }
+    if (count == 0) return;
+    char line[300];
+    std::snprintf(line, sizeof line,
+                  "%s: %zu physically impossible sample%s (|value| > %.6g %s) from %.3f s, "
+                  "the largest %.6g %s: not used",
+                  name.c_str(), count, count == 1 ? "" : "s", limit, unit, t[first], largest,
+                  unit);
+    in.warnings.emplace_back(line);
+  };
+  exclude_impossible(in.force, "force_N", options.max_abs_force_N, "N", false);
+  if (in.has_rate) {
+    exclude_impossible(in.rate, "rate_rad_s", options.impossible_factor * options.gyro_range_rad_s,
+                       "rad/s", true);
+  }
+  if (!in.angle.empty()) {
+    exclude_impossible(in.angle, "angle_rad", options.max_abs_angle_rad, "rad", true);
+  }
+  if (!in.incl.empty()) {
+    const std::vector<std::uint8_t> before = in.fault;
+    exclude_impossible(in.incl, in.inclinometer_name,
+                       options.impossible_factor * options.inclinometer_range_rad, "rad", false);
+    in.fault = before;  // an inclinometer sample is no stroke's fault: it only anchors
+  }
   for (std::size_t i = 0; i < n; ++i) {
     std::uint8_t& f = in.fault[i];
-    if (!std::isfinite(in.force[i])) f |= kForceNonFinite;
-    if (in.has_rate && !std::isfinite(in.rate[i])) f |= kRateNonFinite;
+    // An impossible value (now NaN) counts as unknown like a non-finite one, and is
+    // described as impossible.
+    const bool impossible = (f & kImpossible) != 0;
+    if (!std::isfinite(in.force[i]) && !(impossible && std::isfinite(recording.force_N[i]))) {
+      f |= kForceNonFinite;
+    }
+    if (in.has_rate && !std::isfinite(in.rate[i])) {
+      f |= impossible && std::isfinite((*recording.rate_rad_s)[i]) ? kImpossible : kRateNonFinite;
+    }
     if (in.has_rate && std::abs(in.rate[i]) >= in.saturation_limit) f |= kSaturated;
-    if (!in.angle.empty() && !std::isfinite(in.angle[i])) f |= kAngleNonFinite;
+    if (!in.angle.empty() && !std::isfinite(in.angle[i]) &&
+        !(impossible && std::isfinite((*recording.angle_rad)[i]))) {
+      f |= kAngleNonFinite;
+    }
     if (i > 0 && t[i] - t[i - 1] > options.max_gap_factor * in.median_interval_s) f |= kGapBefore;
+    // A lost scan (a session's gap, an export's empty cells) is missing on every channel.
+    const bool lost = !std::isfinite(in.force[i]) && (!in.has_rate || !std::isfinite(in.rate[i])) &&
+                      (in.angle.empty() || !std::isfinite(in.angle[i])) &&
+                      (in.incl.empty() || !std::isfinite(in.incl[i]));
+    if (lost) f |= kLost;
   }
   if (!fill_non_finite(in.force, t)) throw PreprocessingError(source + ": no finite force_N value");
   if (in.has_rate && !fill_non_finite(in.rate, t)) {
@@ -606,11 +669,45 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
   if (!in.angle.empty() && !fill_non_finite(in.angle, t)) {
     throw PreprocessingError(source + ": no finite angle_rad value");
   }
+  // A short run of lost scans (a ring overflow of a few blocks) is bridged: the rate
+  // interpolated across it stands for the rate, so the drift between the anchors around it
+  // is still removed and the strokes beside it keep their accuracy. (The strokes holding it
+  // are left out all the same.) A longer loss, like any other fault, makes the rate unknown.
+  std::vector<bool> bridged(n, false);
+  for (std::size_t i = 0; i < n;) {
+    if (!(in.fault[i] & kLost)) {
+      ++i;
+      continue;
+    }
+    std::size_t end = i;
+    while (end < n && (in.fault[end] & kLost)) ++end;
+    const double lost_s = (end < n ? t[end] : t[n - 1]) - (i > 0 ? t[i - 1] : t[0]);
+    if (i > 0 && end < n && lost_s <= options.max_bridged_loss_s + 0.5 * in.median_interval_s) {
+      for (std::size_t k = i; k < end; ++k) bridged[k] = true;
+    }
+    i = end;
+  }
+  // What the stillness test may not look through: every fault but a missing or impossible
+  // force alone (the rate still says whether the door moves; the force there is bridged).
+  in.motion_fault = in.fault;
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::uint8_t others = in.fault[i] & ~(kForceNonFinite | kImpossible);
+    if (others == 0 && !motion_impossible[i]) in.motion_fault[i] = 0;
+  }
   in.unknown.assign(n, 0);
   if (in.has_rate) {
+    std::vector<bool> rate_impossible(n, false);
+    for (std::size_t i = 0; i < n; ++i) {
+      rate_impossible[i] = std::isfinite((*recording.rate_rad_s)[i]) &&
+                           std::abs((*recording.rate_rad_s)[i]) >
+                               options.impossible_factor * options.gyro_range_rad_s;
+    }
     const std::uint8_t rate_faults = kSaturated | kRateNonFinite;
+    auto rate_fault = [&](std::size_t i) {
+      return ((in.fault[i] & rate_faults) || rate_impossible[i]) && !bridged[i];
+    };
     for (std::size_t i = 1; i < n; ++i) {
-      const bool u = (in.fault[i] & (rate_faults | kGapBefore)) || (in.fault[i - 1] & rate_faults);
+      const bool u = rate_fault(i) || (in.fault[i] & kGapBefore) || rate_fault(i - 1);
       in.unknown[i] = in.unknown[i - 1] + (u ? 1 : 0);
     }
   }
@@ -627,13 +724,14 @@ struct Stillness {
 Stillness find_stillness(const Input& in, const std::vector<double>& rate,
                          const PreprocessingOptions& options) {
   Stillness still;
-  still.noise_estimate = robust_noise(rate, in.fault);
+  still.noise_estimate = robust_noise(rate, in.motion_fault);
   still.rate_std_limit =
       std::max(options.still_noise_factor *
                    (std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0),
                options.still_rate_std_floor_rad_s);
   still.periods =
-      find_still_periods(in.t, rate, in.force, in.fault, still.rate_std_limit, in.rate_hz, options);
+      find_still_periods(in.t, rate, in.force, in.motion_fault, still.rate_std_limit, in.rate_hz,
+                         options);
   still.rule = "still: over " + text(options.still_window_s) + " s windows the rate's std < " +
                text(still.rate_std_limit / kDeg) + " deg/s, |mean rate| < " +
                text(options.still_rate_limit_rad_s / kDeg) + " deg/s and mean |force| < " +
@@ -838,6 +936,25 @@ void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor
                  options.min_stroke_angle_rad;
     };
     std::string reason;
+    if (kinds & kLost) {
+      // Scans lost in recording: the stroke is cut there, and neither part is fitted, so
+      // that a fit sees the recording as if the stroke had not been made.
+      std::size_t first_lost = r.first, lost_count = 0;
+      while (!(fault_at(first_lost) & kLost)) ++first_lost;
+      std::size_t last_lost = first_lost;
+      for (std::size_t i = r.first; i <= r.last; ++i) {
+        if (!(fault_at(i) & kLost)) continue;
+        ++lost_count;
+        last_lost = i;
+      }
+      excluded.push_back({t[r.first], t[r.last],
+                          name + ": recording gap: " + std::to_string(lost_count) +
+                              " samples lost from " + seconds(t[first_lost]) + " to " +
+                              seconds(t[last_lost]) +
+                              "; the stroke is cut there and neither part is fitted",
+                          true});
+      continue;
+    }
     if (kinds != 0) {
       // A brisk stroke saturates the gyroscope for part of its course: keep its longest
       // fault-free part whose angle is known (before the faults, from the anchor before
@@ -912,8 +1029,9 @@ void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor
     std::uint8_t kinds = f;
     while (last + 1 < n && !covered[last + 1] && in.fault[last + 1] != 0) kinds |= in.fault[++last];
     const std::size_t first = (f & kGapBefore) && i > 0 ? i - 1 : i;  // a gap starts before
-    excluded.push_back(
-        {t[first], t[last], "outside the strokes: " + describe_faults(kinds, in.saturation_limit)});
+    excluded.push_back({t[first], t[last],
+                        "outside the strokes: " + describe_faults(kinds, in.saturation_limit),
+                        (kinds & kLost) != 0});
     i = last + 1;
   }
 }
@@ -927,6 +1045,7 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
   Input in = read_input(recording, options);
   PreparedData data;
   data.source = recording.source;
+  data.warnings = in.warnings;
   data.handle_radius_m = recording.handle_radius_m.value_or(0.0);
   for (const auto& [key, value] : recording.metadata) {
     if (key == kGeometryCalibrationKey) data.geometry_calibration_id = value;

@@ -104,6 +104,22 @@ struct PreprocessingOptions {
   // An interval between samples longer than max_gap_factor × the median interval is a
   // gap: the rate across it is unknown.
   double max_gap_factor = 10.0;
+  // Scans lost in recording (rows where every measured column is missing): a stroke holding
+  // one is left out whole. A run of them lasting at most max_bridged_loss_s (from the last
+  // sample before to the first after) is bridged for the angle: the interpolated rate
+  // stands in, so the drift between the anchors around it is still removed; a longer one
+  // makes the rate unknown there, as any fault does. 0: never bridged.
+  double max_bridged_loss_s = 0.05;
+
+  // Physically impossible samples: a value beyond these limits (or, for the rate and the
+  // inclinometer, beyond impossible_factor × the sensor's range: no reading of that sensor
+  // can be there) is not a measurement. It is left out like a non-finite value (a stroke
+  // holding one keeps its longest good part) and PreparedData::warnings names the channel,
+  // the count, the first time and the largest value. 10 kN is fifty times what a hand
+  // pushes on a door; 2π rad is a whole turn of a door that opens 90°.
+  double max_abs_force_N = 1e4;
+  double max_abs_angle_rad = 2.0 * std::numbers::pi;
+  double impossible_factor = 10.0;
 
   // Noise levels when there is no still period to estimate them from: the reference
   // bench's inclinometer (0.01°) and gyroscope (0.05 °/s). Estimates never go below 1% of

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 
 #include "analysis/constraint_check.h"
@@ -40,6 +41,7 @@ std::string SimulationOptions::validate() const {
     return "simulation option min_step_s must be > 0 and at most max_step_s";
   }
   if (!positive(fixed_step_s)) return "simulation option fixed_step_s must be > 0";
+  if (!positive(max_steps_per_s)) return "simulation option max_steps_per_s must be > 0";
   return "";
 }
 
@@ -120,9 +122,73 @@ double DoorStepper::try_step(const DoorState& s, const Derivative& k1, double h,
                   std::abs(error(&Derivative::omega)) / omega_scale);
 }
 
+namespace {
+// Four significant digits: for messages about where and why a run stopped.
+std::string brief(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", value);
+  return text;
+}
+}  // namespace
+
+std::string stiffness_diagnosis(const DoorModel& model, double theta_rad, double omega_rad_s) {
+  const int terms = model.term_count();
+  std::vector<double> base(static_cast<std::size_t>(terms)), moved(base.size());
+  model.torque_Nm(theta_rad, omega_rad_s, base);
+  // The rate of each term's linearized dynamics: |∂τ/∂ω| / J and √(|∂τ/∂θ| / J), 1/s.
+  const double inertia = model.inertia_kg_m2();
+  const double d_omega = 1e-6 * std::max(1.0, std::abs(omega_rad_s));
+  const double d_theta = 1e-7;
+  std::vector<double> rate(base.size(), 0.0);
+  model.torque_Nm(theta_rad, omega_rad_s + d_omega, moved);
+  for (std::size_t t = 0; t < base.size(); ++t) {
+    rate[t] = std::abs(moved[t] - base[t]) / d_omega / inertia;
+  }
+  model.torque_Nm(theta_rad + d_theta, omega_rad_s, moved);
+  for (std::size_t t = 0; t < base.size(); ++t) {
+    rate[t] = std::max(rate[t], std::sqrt(std::abs(moved[t] - base[t]) / d_theta / inertia));
+  }
+  std::string text;
+  if (!rate.empty()) {
+    const auto stiffest = static_cast<int>(std::max_element(rate.begin(), rate.end()) - rate.begin());
+    const double rate_t = rate[static_cast<std::size_t>(stiffest)];
+    text = "the stiffest term is " + model.term_name(stiffest) + " (time constant " +
+           (rate_t > 0 && std::isfinite(rate_t) ? brief(1.0 / rate_t) + " s" : "unknown") +
+           ")";
+  }
+  std::string outside;
+  const auto values = model.parameter_values();
+  const auto bounds = model.parameter_bounds();
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (values[i] >= bounds[i].lower && values[i] <= bounds[i].upper) continue;
+    outside += (outside.empty() ? "" : ", ") + model.parameter_name(static_cast<int>(i)) + " = " +
+               format_number(values[i]) + " (bounds " + format_number(bounds[i].lower) + " to " +
+               format_number(bounds[i].upper) + ")";
+  }
+  if (!outside.empty()) text += "; parameters outside their bounds: " + outside;
+  return text;
+}
+
 void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& hand) {
   const bool fixed = options_.method == SimulationOptions::Method::kFixedStep;
+  if (!started_) {
+    started_ = true;
+    first_time_s_ = state.time_s;
+  }
   while (state.time_s < end_time_s) {
+    if (!fixed) {
+      const double budget =
+          options_.max_steps_per_s * std::max(1.0, state.time_s - first_time_s_);
+      if (static_cast<double>(stats_.accepted_steps + stats_.rejected_steps) > budget) {
+        throw std::runtime_error(
+            "simulation stopped at t = " + brief(state.time_s) + " s, theta = " +
+            brief(state.theta_rad) + " rad after " +
+            std::to_string(stats_.accepted_steps + stats_.rejected_steps) +
+            " steps (more than max_steps_per_s = " + brief(options_.max_steps_per_s) +
+            " per second of door): the equation is too stiff; " +
+            stiffness_diagnosis(model_, state.theta_rad, state.omega_rad_s));
+      }
+    }
     const bool same_start =
         have_derivative_ && k1_hand_ == &hand && k1_state_.time_s == state.time_s &&
         k1_state_.theta_rad == state.theta_rad && k1_state_.omega_rad_s == state.omega_rad_s;
@@ -175,7 +241,8 @@ void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& 
       throw std::runtime_error("simulation needs a step below " +
                                format_number(options_.min_step_s) +
                                " s at t = " + format_number(state.time_s) +
-                               " s, theta = " + format_number(state.theta_rad) + " rad");
+                               " s, theta = " + format_number(state.theta_rad) + " rad; " +
+                               stiffness_diagnosis(model_, state.theta_rad, state.omega_rad_s));
     }
   }
 }

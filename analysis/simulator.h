@@ -48,6 +48,12 @@ struct SimulationOptions {
   double rate_tolerance_rad_s = 1e-7;
   double max_step_s = 1e-3;   // also never beyond the next output time
   double min_step_s = 1e-10;  // below this the run fails rather than crawl
+  // Below this average step the run fails rather than crawl (adaptive): at most this many
+  // steps (accepted and rejected) per second of door, counted from the stepper's first
+  // advance (at least one second's worth). The reference door needs about 1400; a door
+  // whose parameters make the equation stiff (an out-of-bounds friction of 1e6 N·m) would
+  // otherwise take minutes for a minute of door.
+  double max_steps_per_s = 1e5;
   // Fixed-step method: the step, shortened where needed to land on output times.
   double fixed_step_s = 1e-4;
 
@@ -79,7 +85,9 @@ class DoorStepper {
   DoorStepper(const DoorModel& model, const SimulationOptions& options);
 
   // Advances `state` to `end_time_s` under `hand`. Throws std::runtime_error when the
-  // step would have to fall below min_step_s or the state stops being finite.
+  // step would have to fall below min_step_s, the steps exceed max_steps_per_s, or the state
+  // stops being finite; the message names the stiffest term there and every parameter
+  // outside its bounds (stiffness_diagnosis).
   void advance(DoorState& state, double end_time_s, const UserForce& hand);
   const StepperStats& stats() const { return stats_; }
 
@@ -103,6 +111,8 @@ class DoorStepper {
   Derivative k1_{};
   DoorState k1_state_{};
   const UserForce* k1_hand_ = nullptr;
+  double first_time_s_ = 0.0;  // of the first advance
+  bool started_ = false;
   StepperStats stats_;
 };
 
@@ -118,6 +128,12 @@ struct Trajectory {
 
   std::size_t size() const { return time_s.size(); }
 };
+
+// Why the equation of `model` is stiff at (θ, ω): the term whose torque changes fastest
+// with ω or θ, as a time constant with the model's inertia, and every parameter outside its
+// bounds, e.g. "the stiffest term is friction (time constant 4e-08 s); parameters outside
+// their bounds: d1 = 1e+06 (bounds 0 to 20)".
+std::string stiffness_diagnosis(const DoorModel& model, double theta_rad, double omega_rad_s);
 
 // Runs from `initial` (its time is the first output time) and records every output
 // time, which must be strictly increasing.

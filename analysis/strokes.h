@@ -24,6 +24,7 @@ struct ExcludedSegment {
   double start_s = 0.0;
   double end_s = 0.0;
   std::string reason;
+  bool lost_samples = false;  // it holds samples lost in recording (a gap): said on stderr
 };
 
 struct PreparedData {
@@ -44,6 +45,9 @@ struct PreparedData {
   std::string angle_source;
   double gyro_bias_rad_s = 0.0;
   std::vector<std::string> notes;
+  // Physically impossible samples left out (channel, how many, when, the largest value):
+  // fit and loop print each on stderr as "warning: ...".
+  std::vector<std::string> warnings;
 };
 
 }  // namespace doorbench

@@ -7,6 +7,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "acquisition/output_file.h"
+
 namespace doorbench {
 namespace {
 
@@ -189,12 +191,7 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
 
 void write_svg_plot(const std::string& path, const PlotOptions& options,
                     std::span<const PlotSeries> series) {
-  const std::string svg = render_svg_plot(options, series);
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error(path + ": cannot open for writing");
-  out << svg;
-  out.close();
-  if (!out) throw std::runtime_error(path + ": write failed");
+  write_text_file_atomically(path, render_svg_plot(options, series));
 }
 
 }  // namespace doorbench

@@ -27,7 +27,8 @@ struct PlotOptions {
 // a finite point.
 std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeries> series);
 
-// Writes the plot; throws std::runtime_error naming the path when it cannot.
+// Writes the plot whole or not at all (acquisition/output_file.h); throws OutputError
+// "PATH: cannot write: SYSTEM ERROR" when it cannot.
 void write_svg_plot(const std::string& path, const PlotOptions& options,
                     std::span<const PlotSeries> series);
 

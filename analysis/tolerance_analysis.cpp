@@ -89,7 +89,7 @@ ToleranceSpec parse_tolerance_file(std::string_view json_text, std::string_view 
   json root;
   try {
     root = json::parse(json_text);
-  } catch (const json::parse_error& error) {
+  } catch (const json::exception& error) {  // also numbers beyond a double
     throw std::runtime_error(where + ": " + error.what());
   }
   if (!root.is_object()) throw std::runtime_error(where + ": a JSON object of parameters expected");

@@ -6,7 +6,9 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <numbers>
+#include <sstream>
 
+#include "acquisition/output_file.h"
 #include "analysis/fit_metrics.h"
 #include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
@@ -28,8 +30,7 @@ struct FitCommandOptions {
 };
 
 void run_fit(const FitCommandOptions& options) {
-  std::filesystem::create_directories(options.out_dir);
-  const FitInputs inputs = load_fit_inputs(options.input);
+  const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   const PreparedData& data = inputs.data;
   const DoorModel& start = inputs.start;
 
@@ -48,18 +49,19 @@ void run_fit(const FitCommandOptions& options) {
   const FitResult result = fit_model(start, data, fit_options);
 
   const std::filesystem::path dir = options.out_dir;
-  std::ofstream(dir / "result.json") << fit_result_json(result, data).dump(2) << "\n";
-  std::ofstream(dir / "fitted-params.json") << to_parameter_json(result.model);
+  write_text_file_atomically(dir / "result.json", fit_result_json(result, data).dump(2) + "\n");
+  write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model));
   if (!result.model.effects().empty()) {
-    std::ofstream(dir / "fitted-effects.json") << to_effects_json(result.model);
+    write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model));
   }
   const std::vector<std::string> plots = write_fit_plots(dir, result.model, data, fit_options);
-  std::ofstream report(dir / "report.md");
+  std::ostringstream report;
   report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n"
          << handle_radius_line(data, result.model) << ".\n\n"
          << "```\n"
          << result.summary.full_report() << "```\n\n";
   for (const std::string& plot : plots) report << "![" << plot << "](" << plot << ")\n\n";
+  write_text_file_atomically(dir / "report.md", report.str());
   std::cout << result.summary.brief_report() << "\nresult.json, report.md, fitted-params.json and "
             << "plots are in " << dir.string() << "/\n";
 }

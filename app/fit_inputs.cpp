@@ -1,10 +1,12 @@
 #include "app/fit_inputs.h"
 
+#include <cstdio>
 #include <fstream>
 #include <iostream>
 #include <sstream>
 #include <stdexcept>
 
+#include "acquisition/output_file.h"
 #include "acquisition/recording_csv.h"
 #include "analysis/parameter_file.h"
 #include "analysis/preprocessing.h"
@@ -24,7 +26,11 @@ bool is_hdf5_file(const std::string& path) {
 
 PreparedData load_prepared_data(const std::string& path) {
   if (is_hdf5_file(path)) return prepare_session(path);
-  return prepare(read_recording_csv(path));
+  if (path.ends_with(".h5") || path.ends_with(".hdf5")) {
+    throw std::runtime_error(path + ": not an HDF5 file (a session starts with the HDF5 "
+                                    "signature; a CSV recording is read only under another name)");
+  }
+  return prepare(read_recording_csv(path, EmptyCells::kMissing));  // empty cells: lost samples
 }
 
 std::vector<std::string> split_names(const std::string& list) {
@@ -89,6 +95,23 @@ void add_fit_data_options(CLI::App& command, FitDataOptions& options,
   command.add_option("--params", options.model.params_path,
                      "Start values and bounds (parameter file); default: the reference door");
   command.add_option("--effects", options.model.effects_path, effects_help);
+  command.add_flag("--overwrite", options.overwrite,
+                   "Write into an --out folder that exists and is not empty (files of the same "
+                   "names are replaced)");
+}
+
+std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options) {
+  std::vector<std::filesystem::path> inputs{options.data_path};
+  if (!options.model.params_path.empty()) inputs.emplace_back(options.model.params_path);
+  if (options.model.effects_path.ends_with(".json")) inputs.emplace_back(options.model.effects_path);
+  return inputs;
+}
+
+FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::path& out_dir) {
+  check_output_folder(out_dir, fit_input_paths(options), options.overwrite);
+  FitInputs inputs = load_fit_inputs(options);
+  std::filesystem::create_directories(out_dir);
+  return inputs;
 }
 
 FitInputs load_fit_inputs(const FitDataOptions& options) {
@@ -96,6 +119,13 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
   PreparedData data = load_prepared_data(options.data_path);
   std::cerr << "  " << data.strokes.size() << " strokes, " << data.excluded.size()
             << " segments excluded\n";
+  for (const std::string& warning : data.warnings) std::cerr << "warning: " << warning << "\n";
+  for (const ExcludedSegment& e : data.excluded) {
+    if (!e.lost_samples) continue;  // gaps are never silent
+    char span[64];
+    std::snprintf(span, sizeof span, "%.3f s to %.3f s", e.start_s, e.end_s);
+    std::cerr << "  excluded " << span << ": " << e.reason << "\n";
+  }
   DoorModel start =
       start_model(options.model.model, options.model.params_path, options.model.effects_path);
   if (!data.geometry_calibration_id.empty() && data.handle_radius_m > 0) {

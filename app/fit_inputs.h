@@ -1,7 +1,9 @@
 #pragma once
 // What `doorbench fit` (and later `loop`) read: the data, prepared, and the start model.
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <string>
+#include <vector>
 
 #include "analysis/door_model.h"
 #include "analysis/strokes.h"
@@ -14,7 +16,8 @@ namespace doorbench::app {
 bool is_hdf5_file(const std::string& path);
 
 // A session (HDF5: by its signature) or a recording in the CSV exchange format, prepared
-// into strokes (analysis/preprocessing.h).
+// into strokes (analysis/preprocessing.h); empty cells of the CSV are missing samples. A
+// file named *.h5 or *.hdf5 that is not HDF5 is refused ("PATH: not an HDF5 file ...").
 PreparedData load_prepared_data(const std::string& path);
 
 // "a,b,,c" -> {"a", "b", "c"}: the parameter lists of --free and --fixed (empty items dropped).
@@ -28,11 +31,17 @@ std::vector<EffectSetting> effects_from_argument(const std::string& argument);
 DoorModel start_model(const std::string& model_kind, const std::string& params_path,
                       const std::string& effects_argument);
 
-// The options `fit` and `loop` share: DATA, --model, --params, --effects.
+// The options `fit` and `loop` share: DATA, --model, --params, --effects, --overwrite.
 struct FitDataOptions {
   std::string data_path;
   ModelOptions model;
+  bool overwrite = false;  // write into an --out folder that is not empty
 };
+// DATA, --params and an --effects file: what the --out folder must not hold.
+std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options);
+// The output rule for the --out folder (acquisition/output_file.h), then the inputs are
+// read (load_fit_inputs), and only then is the folder created: a failure leaves no folder.
+// Returns the inputs.
 void add_fit_data_options(CLI::App& command, FitDataOptions& options,
                           const std::string& effects_help);
 
@@ -44,6 +53,7 @@ struct FitInputs {
 // carries a geometry record (a session's load cell with geometry_calibration_id), the
 // record's handle radius replaces the door file's in the start model.
 FitInputs load_fit_inputs(const FitDataOptions& options);
+FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::path& out_dir);
 
 // Which handle radius `model` has and where it came from, one line for reports: "handle
 // radius 0.62 m, from geometry record geometry-B1-v2" or "…, from the door parameter file".

@@ -20,8 +20,7 @@ struct LoopCommandOptions {
 };
 
 void run_loop(const LoopCommandOptions& options) {
-  std::filesystem::create_directories(options.out_dir);
-  const FitInputs inputs = load_fit_inputs(options.input);
+  const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   LoopOptions loop_options;
   loop_options.fit.cross_validation_folds = options.folds;
   loop_options.max_steps = options.max_steps;

@@ -4,7 +4,9 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 
+#include "acquisition/output_file.h"
 #include "analysis/parameter_file.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
@@ -81,18 +83,19 @@ std::string steps_table(const LoopResult& result) {
 std::string write_loop_outputs(const std::filesystem::path& dir, const LoopResult& result,
                                const PreparedData& data, const std::string& model_name,
                                const FitOptions& fit_options) {
-  std::ofstream(dir / "result.json") << loop_json(result, data).dump(2) << "\n";
-  std::ofstream(dir / "fitted-params.json") << to_parameter_json(result.model());
-  std::ofstream(dir / "fitted-effects.json") << to_effects_json(result.model());
+  write_text_file_atomically(dir / "result.json", loop_json(result, data).dump(2) + "\n");
+  write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model()));
+  write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model()));
   const std::vector<std::string> plots = write_fit_plots(dir, result.model(), data, fit_options);
   const std::string table = steps_table(result);
-  std::ofstream report(dir / "report.md");
+  std::ostringstream report;
   report << "# Residual loop: the " << model_name << " model on " << data.source << "\n\n"
          << handle_radius_line(data, result.model()) << ".\n\n"
          << table << "\n```\n"
          << result.full_report() << "```\n\n"
          << "Plots of the final model:\n\n";
   for (const std::string& plot : plots) report << "![" << plot << "](" << plot << ")\n\n";
+  write_text_file_atomically(dir / "report.md", report.str());
   return table;
 }
 

@@ -5,6 +5,8 @@
 #include <iostream>
 #include <string>
 
+#include "acquisition/output_file.h"
+#include "acquisition/printable.h"
 #include "app/commands.h"
 
 namespace {
@@ -76,10 +78,14 @@ int main(int argc, char** argv) {
     if (action) action();
     return 0;
   } catch (const doorbench::app::UsageError& error) {
-    std::cerr << "doorbench: " << error.what() << " (see doorbench --help)\n";
+    std::cerr << "doorbench: " << doorbench::printable(error.what()) << " (see doorbench --help)\n";
+    return 2;
+  } catch (const doorbench::OutputRefused& error) {  // an existing output, or an input
+    std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
     return 2;
   } catch (const std::exception& error) {
-    std::cerr << "doorbench: " << error.what() << "\n";
+    // Messages quote files' text: control characters are shown escaped.
+    std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
     return 1;
   }
 }

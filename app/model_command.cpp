@@ -3,6 +3,7 @@
 #include <memory>
 
 #include "acquisition/csv_table.h"
+#include "acquisition/output_file.h"
 #include "analysis/parameter_file.h"
 #include "app/commands.h"
 
@@ -31,9 +32,15 @@ struct TorqueOptions {
   ModelOptions model;
   std::string grid_path;
   std::string out_path;
+  bool overwrite = false;
 };
 
 void run_torque(const TorqueOptions& options) {
+  std::vector<std::filesystem::path> inputs{options.grid_path};
+  for (const std::string* input : {&options.model.params_path, &options.model.effects_path}) {
+    if (!input->empty()) inputs.emplace_back(*input);
+  }
+  check_output_file(options.out_path, inputs, options.overwrite);
   const DoorModel model = load_model(options.model);
   const CsvTable grid = read_csv_file(options.grid_path);
   const auto theta_column = grid.find_column("theta_rad");
@@ -61,15 +68,12 @@ void run_torque(const TorqueOptions& options) {
     names.push_back("tau_" + model.term_name(term) + "_Nm");
     columns.push_back(&terms[term]);
   }
-  std::ofstream out(options.out_path, std::ios::binary);
-  if (!out) throw std::runtime_error(options.out_path + ": cannot open for writing");
   const CsvMetadata metadata = {
       {"source", "doorbench model torque --model " + options.model.model},
       {"params", options.model.params_path.empty() ? "reference door" : options.model.params_path},
       {"handle_radius_m", format_csv_number(model.geometry().handle_radius_m)}};
-  write_csv(out, metadata, names, columns);
-  out.close();
-  if (!out) throw std::runtime_error(options.out_path + ": write failed");
+  write_file_atomically(options.out_path,
+                        [&](std::ostream& out) { write_csv(out, metadata, names, columns); });
 }
 
 }  // namespace
@@ -86,6 +90,7 @@ void add_model_command(CLI::App& app, Action& action) {
   add_model_options(*torque, options->model);
   torque->add_option("--in", options->grid_path, "Grid of (theta, omega) points (CSV)")->required();
   torque->add_option("--out", options->out_path, "Where to write the torques (CSV)")->required();
+  torque->add_flag("--overwrite", options->overwrite, "Replace an existing --out file");
   torque->callback([options, &action] { action = [options] { run_torque(*options); }; });
 }
 

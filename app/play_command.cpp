@@ -4,6 +4,7 @@
 #include <iostream>
 #include <memory>
 
+#include "acquisition/output_file.h"
 #include "analysis/parameter_file.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
@@ -137,9 +138,11 @@ void run_play(const PlayOptions& options) {
   request.model_source =
       options.model.params_path.empty() ? "reference door" : options.model.params_path;
   request.effects = options.model.effects_path;
-  if (std::filesystem::exists(request.session_path)) {
-    throw UsageError("--out " + options.out + ": exists (sessions are never overwritten)");
+  std::vector<std::filesystem::path> inputs;
+  for (const std::string* input : {&options.model.params_path, &options.model.effects_path}) {
+    if (!input->empty()) inputs.emplace_back(*input);
   }
+  check_output_session(request.session_path, inputs);
   std::cerr << "playing the " << to_string(model.kind()) << " model (" << request.model_source
             << ") on " << options.device << " at " << options.rate_hz << " Hz for "
             << options.duration_s << " s" << (options.simulated_time ? " of simulated time" : "")

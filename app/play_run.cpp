@@ -7,7 +7,10 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <system_error>
 
+#include "acquisition/output_file.h"
+#include "acquisition/session_file.h"
 #include "app/session_recording.h"
 
 namespace doorbench::app {
@@ -48,7 +51,10 @@ class StopSignals {
 
 }  // namespace
 
-haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request) {
+namespace {
+
+haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& request,
+                                  const std::filesystem::path& session_path) {
   haptic::OpenedDevice opened =
       haptic::open_device(request.device, request.playback.arc, model.geometry().handle_radius_m);
   if (request.device.simulated_time && !opened.simulated) {
@@ -71,7 +77,7 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
                    "model: " + request.model_source +
                    (request.effects.empty() ? "" : ", effects: " + request.effects);
   haptic::Playback playback(
-      *opened.device, model, options, request.session_path, metadata,
+      *opened.device, model, options, session_path, metadata,
       haptic::PlaybackSetup{opened.device->name(), request.model_source, request.effects});
   if (request.device.simulated_time) {
     haptic::SimulatedDevice* device = opened.simulated;
@@ -113,6 +119,33 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
         return request.control ? request.control(playback) : true;
       });
   if (request.show_status && tty) std::fprintf(stderr, "\n");
+  return summary;
+}
+
+}  // namespace
+
+haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request) {
+  if (std::filesystem::exists(request.session_path)) {
+    throw OutputRefused(request.session_path.string() +
+                        ": exists (sessions are never overwritten)");
+  }
+  // Whole or not at all (acquisition/output_file.h): a failed or full-disk playback leaves
+  // no file under the session's name to block the next one.
+  const std::filesystem::path partial = partial_path_for(request.session_path);
+  haptic::PlaybackSummary summary;
+  try {
+    summary = play_into(model, request, partial);
+  } catch (const SessionError& error) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw SessionError(request.session_path.string() + ": cannot write: " + error.what());
+  } catch (...) {
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw;
+  }
+  commit_partial_file(partial, request.session_path);
+  summary.session_path = request.session_path;
   return summary;
 }
 

@@ -31,7 +31,10 @@ struct PlayRequest {
   std::function<bool(haptic::Playback&)> control;
 };
 
-// Throws std::runtime_error (device, session) or std::invalid_argument (options, model).
+// The session is written through a temporary file beside it and renamed into place when
+// complete (acquisition/output_file.h), so a failure leaves no file under its name. Throws
+// OutputRefused when it exists, std::runtime_error (device, session: naming the session's
+// path) or std::invalid_argument (options, model).
 haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request);
 
 }  // namespace doorbench::app

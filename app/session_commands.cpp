@@ -14,6 +14,8 @@
 #include <string>
 #include <thread>
 
+#include "acquisition/output_file.h"
+#include "acquisition/printable.h"
 #include "acquisition/recorder.h"
 #include "acquisition/recovery.h"
 #include "acquisition/rig_file.h"
@@ -414,7 +416,7 @@ void print_geometry(const SessionReader& session) {
   for (const ChannelInfo& c : session.channels()) {
     if (c.geometry_calibration_id.empty()) continue;
     any = true;
-    std::cout << "geometry: " << c.name << " uses " << c.geometry_calibration_id;
+    std::cout << "geometry: " << c.name << " uses " << printable(c.geometry_calibration_id);
     for (const calibration::CalibrationRecord& r : session.calibrations()) {
       if (r.id != c.geometry_calibration_id) continue;
       for (const char* name : {"handle_radius_m", "mounting_angle_deg"}) {
@@ -436,71 +438,128 @@ void print_geometry(const SessionReader& session) {
 void print_range_warnings(const SessionReader& session) {
   try {
     const std::vector<std::string> warnings = calibration::range_warnings(session);
-    for (const std::string& warning : warnings) std::cout << "warning: " << warning << "\n";
+    for (const std::string& warning : warnings) std::cout << "warning: " << printable(warning) << "\n";
   } catch (const std::exception& error) {
     std::cout << "warning: ranges not checked: " << error.what() << "\n";
   }
+}
+
+// Samples lost in recording (a recovered ring overflow, an imported empty cell): every run
+// of each channel, runs at the same place in several channels on one line.
+void print_gaps(const SessionReader& session) {
+  struct Gap {
+    LostRun run;
+    std::string channels;
+  };
+  std::vector<Gap> gaps;
+  for (const ChannelInfo& c : session.channels()) {
+    ChannelSlice slice;
+    try {
+      slice = session.read(c.name);
+    } catch (const SessionError& error) {
+      std::cout << "gaps: not checked: " << printable(error.what()) << "\n";
+      return;
+    }
+    for (const LostRun& run : lost_runs(c, slice)) {
+      auto same = std::find_if(gaps.begin(), gaps.end(), [&](const Gap& g) {
+        // The same scans: channels on one clock differ only by the converter's skew.
+        return g.run.first_index == run.first_index && g.run.count == run.count &&
+               std::abs(g.run.first_time_s - run.first_time_s) < 1e-3;
+      });
+      if (same == gaps.end()) {
+        gaps.push_back({run, c.name});
+      } else {
+        same->channels += ", " + c.name;
+      }
+    }
+  }
+  std::sort(gaps.begin(), gaps.end(),
+            [](const Gap& a, const Gap& b) { return a.run.first_time_s < b.run.first_time_s; });
+  std::uint64_t samples = 0;
+  for (const Gap& g : gaps) samples += g.run.count;
+  std::cout << "gaps: " << gaps.size();
+  if (!gaps.empty()) std::cout << " (" << samples << " samples lost; they read as missing)";
+  std::cout << "\n";
+  for (std::size_t i = 0; i < gaps.size() && i < 20; ++i) {
+    const LostRun& r = gaps[i].run;
+    std::printf("  %10.3f s to %10.3f s  %8zu samples  %s\n", r.first_time_s, r.last_time_s,
+                r.count, gaps[i].channels.c_str());
+  }
+  if (gaps.size() > 20) std::printf("  ... %zu more\n", gaps.size() - 20);
+  std::fflush(stdout);
 }
 
 void run_info(const std::string& session_path) {
   const SessionReader session(session_path);
   const SessionMetadata& m = session.metadata();
   std::cout << "session " << session_path << "\n"
-            << "  rig        " << m.rig_name << "\n"
-            << "  operator   " << m.operator_name << "\n"
-            << "  product    " << m.product_id << "\n"
-            << "  started    " << m.start_time_utc << "\n"
-            << "  software   " << m.software_version << "\n"
+            << "  rig        " << printable(m.rig_name) << "\n"
+            << "  operator   " << printable(m.operator_name) << "\n"
+            << "  product    " << printable(m.product_id) << "\n"
+            << "  started    " << printable(m.start_time_utc) << "\n"
+            << "  software   " << printable(m.software_version) << "\n"
             << "  duration   " << format_seconds(session.end_time_s() - session.start_time_s())
             << " (" << format_seconds(session.start_time_s()) << " to "
             << format_seconds(session.end_time_s()) << ")\n";
-  if (!m.notes.empty()) std::cout << "  notes      " << m.notes << "\n";
+  if (!m.notes.empty()) std::cout << "  notes      " << printable(m.notes) << "\n";
   std::cout << "channels:\n";
   std::printf("  %-14s %-13s %10s %10s %-7s %-6s %s\n", "name", "sensor", "samples", "rate Hz",
               "raw", "unit", "calibration");
   std::fflush(stdout);
   for (const ChannelInfo& c : session.channels()) {
     std::printf(
-        "  %-14s %-13s %10zu %10g %-7s %-6s %s%s%s\n", c.name.c_str(), c.sensor_kind.c_str(),
-        session.sample_count(c.name), c.sample_rate_hz, c.raw_unit.c_str(), c.unit.c_str(),
-        c.calibration_id.empty() ? "(values are physical)" : c.calibration_id.c_str(),
-        c.geometry_calibration_id.empty() ? "" : ", geometry ", c.geometry_calibration_id.c_str());
+        "  %-14s %-13s %10zu %10g %-7s %-6s %s%s%s\n", c.name.c_str(),
+        printable(c.sensor_kind).c_str(), session.sample_count(c.name), c.sample_rate_hz,
+        printable(c.raw_unit).c_str(), printable(c.unit).c_str(),
+        c.calibration_id.empty() ? "(values are physical)" : printable(c.calibration_id).c_str(),
+        c.geometry_calibration_id.empty() ? "" : ", geometry ",
+        printable(c.geometry_calibration_id).c_str());
   }
   std::fflush(stdout);
   print_geometry(session);
   print_range_warnings(session);
+  print_gaps(session);
   const std::vector<SessionEvent> events = session.events();
   std::map<std::string, int> by_kind;
   for (const SessionEvent& e : events) ++by_kind[e.kind];
   std::cout << "events: " << events.size();
   std::string separator = " (";
   for (const auto& [kind, count] : by_kind) {
-    std::cout << separator << kind << " " << count;
+    std::cout << separator << printable(kind) << " " << count;
     separator = ", ";
   }
   std::cout << (events.empty() ? "" : ")") << "\n";
   for (std::size_t i = 0; i < events.size() && i < 12; ++i) {
-    std::printf("  %10.3f s  %-13s %s%s%s\n", events[i].time_s, events[i].kind.c_str(),
-                events[i].channel.c_str(), events[i].channel.empty() ? "" : " ",
-                events[i].detail.c_str());
+    std::printf("  %10.3f s  %-13s %s%s%s\n", events[i].time_s, printable(events[i].kind).c_str(),
+                printable(events[i].channel).c_str(), events[i].channel.empty() ? "" : " ",
+                printable(events[i].detail).c_str());
   }
   if (events.size() > 12) std::printf("  ... %zu more\n", events.size() - 12);
   std::fflush(stdout);
   std::cout << "calibrations:\n";
   for (const calibration::CalibrationRecord& r : session.calibrations()) {
-    std::cout << "  " << r.id << "  " << r.sensor_kind << " " << r.sensor_serial << "  " << r.unit
-              << " = ";
+    std::cout << "  " << printable(r.id) << "  " << printable(r.sensor_kind) << " "
+              << printable(r.sensor_serial) << "  " << printable(r.unit) << " = ";
     for (std::size_t k = 0; k < r.coefficients.size(); ++k) {
       std::cout << (k ? " + " : "") << r.coefficients[k]
                 << (k == 0   ? ""
                     : k == 1 ? "·x"
                              : "·x^" + std::to_string(k));
     }
-    std::cout << "  (" << r.method << ")\n";
+    std::cout << "  (" << printable(r.method) << ")\n";
   }
 }
 
-void run_export(const std::string& session_path, const std::string& csv_path) {
+struct ExportOptions {
+  std::string session_path;
+  std::string csv_path;
+  bool overwrite = false;
+};
+
+void run_export(const ExportOptions& options) {
+  const std::string& session_path = options.session_path;
+  const std::string& csv_path = options.csv_path;
+  check_output_file(csv_path, {session_path}, options.overwrite);
   const SessionReader session(session_path);
   const Recording recording = session_to_recording(session);
   write_recording_csv_file(csv_path, recording);
@@ -514,7 +573,8 @@ struct ImportOptions {
 };
 
 void run_import(const ImportOptions& options) {
-  const Recording recording = read_recording_csv(options.csv_path);
+  check_output_session(options.out_path, {options.csv_path});
+  const Recording recording = read_recording_csv(options.csv_path, EmptyCells::kMissing);
   SessionMetadata metadata;
   metadata.rig_name = "imported";
   metadata.operator_name = options.operator_name;
@@ -577,15 +637,18 @@ void add_session_commands(CLI::App& app, Action& action) {
   info->add_option("SESSION", *info_path, "Session file (HDF5)")->required();
   info->callback([info_path, &action] { action = [info_path] { run_info(*info_path); }; });
 
-  auto export_paths = std::make_shared<std::pair<std::string, std::string>>();
+  auto export_options = std::make_shared<ExportOptions>();
   CLI::App* export_command = app.add_subcommand(
       "export",
       "Write a session as CSV (the exchange format: physical units, strokes marked, the force "
       "signed by the load cell's mounting)");
-  export_command->add_option("SESSION", export_paths->first, "Session file (HDF5)")->required();
-  export_command->add_option("--csv", export_paths->second, "The CSV file to write")->required();
-  export_command->callback([export_paths, &action] {
-    action = [export_paths] { run_export(export_paths->first, export_paths->second); };
+  export_command->add_option("SESSION", export_options->session_path, "Session file (HDF5)")
+      ->required();
+  export_command->add_option("--csv", export_options->csv_path, "The CSV file to write")
+      ->required();
+  export_command->add_flag("--overwrite", export_options->overwrite, "Replace an existing CSV file");
+  export_command->callback([export_options, &action] {
+    action = [export_options] { run_export(*export_options); };
   });
 
   auto import = std::make_shared<ImportOptions>();

@@ -4,6 +4,7 @@
 #include <memory>
 #include <numbers>
 
+#include "acquisition/output_file.h"
 #include "acquisition/recording_csv.h"
 #include "analysis/parameter_file.h"
 #include "analysis/trajectory_io.h"
@@ -35,6 +36,7 @@ struct SimulateOptions {
   double duration_s = 10.0;
   double rate_hz = 1000.0;
   std::string out_path;
+  bool overwrite = false;
 };
 
 std::string describe(const SimulateOptions& options) {
@@ -51,6 +53,12 @@ void run_simulate(const SimulateOptions& options) {
   if (options.force_path.empty() == options.hand.empty()) {
     throw UsageError("simulate needs exactly one of --force FILE.csv and --hand open-close");
   }
+  std::vector<std::filesystem::path> inputs;
+  for (const std::string* input :
+       {&options.force_path, &options.model.params_path, &options.model.effects_path}) {
+    if (!input->empty()) inputs.emplace_back(*input);
+  }
+  check_output_file(options.out_path, inputs, options.overwrite);
   const DoorModel model = load_model(options.model);
   Trajectory run;
   if (!options.force_path.empty()) {
@@ -65,6 +73,14 @@ void run_simulate(const SimulateOptions& options) {
     run = simulate(model, recorded_force(recording), initial_state(recording), recording.time_s);
     if (recording.stroke) run.stroke = *recording.stroke;
   } else {
+    // A bound on the output: 10 million samples (about 1 GB of CSV with every term).
+    constexpr double kMaxSamples = 1e7;
+    if (options.duration_s * options.rate_hz > kMaxSamples) {
+      throw UsageError("--duration-s " + format_csv_number(options.duration_s) + " at --rate-hz " +
+                       format_csv_number(options.rate_hz) + " gives " +
+                       format_csv_number(options.duration_s * options.rate_hz) +
+                       " samples; at most 10000000");
+    }
     VirtualHandOptions hand;
     hand.target_angle_rad = options.target_deg * std::numbers::pi / 180.0;
     hand.duration_s = options.duration_s;
@@ -105,6 +121,7 @@ void add_simulate_command(CLI::App& app, Action& action) {
       ->check(CLI::Range(1.0, 100000.0))
       ->capture_default_str();
   simulate->add_option("--out", options->out_path, "Where to write the run (CSV)")->required();
+  simulate->add_flag("--overwrite", options->overwrite, "Replace an existing --out file");
   simulate->callback([options, &action] { action = [options] { run_simulate(*options); }; });
 }
 

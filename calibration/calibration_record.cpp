@@ -105,7 +105,7 @@ CalibrationRecord calibration_record_from_json(std::string_view json_text,
   nlohmann::json json;
   try {
     json = nlohmann::json::parse(json_text.begin(), json_text.end());
-  } catch (const nlohmann::json::parse_error& error) {
+  } catch (const nlohmann::json::exception& error) {  // also numbers beyond a double
     throw std::runtime_error(where + ": calibration record is not valid JSON: " + error.what());
   }
   if (!json.is_object()) throw std::runtime_error(where + ": calibration record must be an object");

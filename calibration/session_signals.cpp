@@ -1,6 +1,7 @@
 #include "calibration/session_signals.h"
 
 #include <algorithm>
+#include <limits>
 
 #include "calibration/procedure.h"
 
@@ -19,6 +20,10 @@ ChannelSignal read_channel_signal(const SessionReader& session, const std::strin
   s.signal.resize(slice.raw.size());
   s.physical.resize(slice.raw.size());
   for (std::size_t i = 0; i < slice.raw.size(); ++i) {
+    if (is_lost_sample(s.info, slice.raw[i])) {  // a lost scan: missing, never a number
+      s.signal[i] = s.physical[i] = std::numeric_limits<double>::quiet_NaN();
+      continue;
+    }
     s.signal[i] = s.info.raw_offset + s.info.raw_scale * slice.raw[i];
     s.physical[i] = s.record ? s.record->apply(s.signal[i]) : s.signal[i];
   }

@@ -390,7 +390,7 @@ TEST_CASE("files on disk", "[csv][file]") {
                         missing.string() + ": cannot open for reading");
     REQUIRE_THROWS_WITH(read_csv_file(missing), missing.string() + ": cannot open for reading");
     REQUIRE_THROWS_WITH(write_recording_csv_file(missing, small_recording()),
-                        missing.string() + ": cannot open for writing");
+                        missing.string() + ": cannot write: No such file or directory");
   }
   SECTION("a directory") {
     const auto directory = std::filesystem::temp_directory_path();

@@ -302,16 +302,25 @@ TEST_CASE("Rig file: numbers must be finite numbers", "[rig_file]") {
 }
 
 // --- [clock] and [daq] --------------------------------------------------------------------
-TEST_CASE("Rig file: clock.sample_rate_hz must be > 0", "[rig_file]") {
+TEST_CASE("Rig file: clock.sample_rate_hz must be from 1 Hz to 200 kHz", "[rig_file]") {
   CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nsample_rate_hz = 0\n[daq]")) ==
-        "rig.toml:4: clock.sample_rate_hz: must be > 0 (got 0)");
+        "rig.toml:4: clock.sample_rate_hz: must be from 1 to 200000 Hz (got 0)");
   CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nsample_rate_hz = -2.5\n[daq]")) ==
-        "rig.toml:4: clock.sample_rate_hz: must be > 0 (got -2.5)");
+        "rig.toml:4: clock.sample_rate_hz: must be from 1 to 200000 Hz (got -2.5)");
+  // Issue 18: 1e9 Hz ended in std::bad_alloc, 1e-9 Hz recorded "successfully" nothing.
+  CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nsample_rate_hz = 1e9\n[daq]")) ==
+        "rig.toml:4: clock.sample_rate_hz: must be from 1 to 200000 Hz (got 1e+09)");
+  CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nsample_rate_hz = 1e-9\n[daq]")) ==
+        "rig.toml:4: clock.sample_rate_hz: must be from 1 to 200000 Hz (got 1e-09)");
+  CHECK(parse(edit(minimal(), "[daq]", "[clock]\nsample_rate_hz = 200000\n[daq]")).sample_rate_hz ==
+        200000.0);
 }
 
 TEST_CASE("Rig file: clock.convert_interval_s must be >= 0", "[rig_file]") {
   CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nconvert_interval_s = -1e-6\n[daq]")) ==
-        "rig.toml:4: clock.convert_interval_s: must be >= 0 (got -1e-06)");
+        "rig.toml:4: clock.convert_interval_s: must be from 0 to 1 s (got -1e-06)");
+  CHECK(error_of(edit(minimal(), "[daq]", "[clock]\nconvert_interval_s = 2\n[daq]")) ==
+        "rig.toml:4: clock.convert_interval_s: must be from 0 to 1 s (got 2)");
   CHECK(parse(edit(minimal(), "[daq]", "[clock]\nconvert_interval_s = 0\n[daq]"))
             .convert_interval_s == 0.0);
 }
@@ -641,6 +650,13 @@ TEST_CASE("Rig file: the virtual hand's settings", "[rig_file]") {
         "rig.toml:15: simulation.hand.target_deg: must be > 0 and < 180 (got 180)");
   CHECK(error_of(hand + "cycle_duration_s = 0\n") ==
         "rig.toml:15: simulation.hand.cycle_duration_s: must be > 0 (got 0)");
+  // Issue 18: 1e300 s recorded "successfully" nothing.
+  CHECK(error_of(hand + "cycle_duration_s = 1e300\n") ==
+        "rig.toml:15: simulation.hand.cycle_duration_s: cycles * cycle_duration_s = 3 * 1e+300 s "
+        "= 3e+300 s must be <= 86400 s (a day)");
+  CHECK(error_of(hand + "cycles = 100000\n") ==
+        "rig.toml:15: simulation.hand.cycles: cycles * cycle_duration_s = 100000 * 6 s = 6e+05 s "
+        "must be <= 86400 s (a day)");
   const RigDefinition rig = parse(hand + "cycles = 1\ntarget_deg = 45.5\ncycle_duration_s = 2\n");
   CHECK(rig.simulation->hand_cycles == 1);
   CHECK(rig.simulation->hand_target_deg == 45.5);
@@ -762,7 +778,7 @@ TEST_CASE("Rig file: level and manual triggers, the recording table, and their e
   CHECK(error_of(edit(kTriggerRig, "hysteresis = 0.5", "hysteresis = -0.5")) ==
         "rig.toml:32: triggers[1].hysteresis: must be >= 0 (got -0.5)");
   CHECK(error_of(edit(kTriggerRig, "hold_s = 1.5", "hold_s = -1")) ==
-        "rig.toml:40: triggers[2].hold_s: must be >= 0 (got -1)");
+        "rig.toml:40: triggers[2].hold_s: must be from 0 to 3600 s (got -1)");
   CHECK(error_of(edit(kTriggerRig, "unit = \"N\"\n[[triggers]]", "unit = \"kN\"\n[[triggers]]")) ==
         "rig.toml:33: triggers[1].unit: \"kN\" is not the unit of channel force, which is \"N\"");
   CHECK(error_of(edit(kTriggerRig, "direction = \"falling\"", "direction = \"down\"")) ==
@@ -788,14 +804,16 @@ TEST_CASE("Rig file: level and manual triggers, the recording table, and their e
         "rig.toml:53: recording.stop: \"door_switch\" is an external trigger; a stop must be a "
         "level or manual trigger");
   CHECK(error_of(edit(kTriggerRig, "duration_s = 30", "duration_s = 0")) ==
-        "rig.toml:54: recording.duration_s: must be > 0 (got 0)");
+        "rig.toml:54: recording.duration_s: must be > 0 and <= 86400 s (got 0)");
+  CHECK(error_of(edit(kTriggerRig, "duration_s = 30", "duration_s = 1e300")) ==
+        "rig.toml:54: recording.duration_s: must be > 0 and <= 86400 s (got 1e+300)");
   CHECK(error_of(edit(kTriggerRig, "pre_trigger_s = 2", "pre_trigger_s = 61")) ==
         "rig.toml:55: recording.pre_trigger_s: must be from 0 to 60 s (got 61)");
   CHECK(error_of(edit(kTriggerRig, "strokes = \"moving\"", "strokes = \"enter\"")) ==
         "rig.toml:56: recording.strokes: \"enter\" is a manual trigger; stroke markers need a "
         "level trigger");
   CHECK(error_of(kTriggerRig + "min_stroke_s = -0.1\n") ==
-        "rig.toml:57: recording.min_stroke_s: must be >= 0 (got -0.1)");
+        "rig.toml:57: recording.min_stroke_s: must be from 0 to 86400 s (got -0.1)");
   CHECK(error_of(kTriggerRig + "begin = \"push\"\n") ==
         "rig.toml:57: recording.begin: unknown key; valid keys: start, stop, duration_s, "
         "pre_trigger_s, strokes, min_stroke_s");

@@ -463,6 +463,10 @@ TEST_CASE("session physical values go through the calibration record", "[session
   const std::vector<double> newtons = reader.physical("force", force);
   REQUIRE(newtons.size() == force.raw.size());
   for (std::size_t i = 0; i < newtons.size(); ++i) {
+    if (force.raw[i] == doorbench::kGapFillCount) {  // the mark of a lost scan: missing, never a number
+      CHECK(std::isnan(newtons[i]));
+      continue;
+    }
     const double volts = -10.0 + 20.0 / 65536.0 * force.raw[i];
     CHECK_THAT(newtons[i],
                Catch::Matchers::WithinRel(1.5 + 100.0 * volts + 0.25 * volts * volts, 1e-12));
