@@ -5,6 +5,7 @@
 
 #include <atomic>
 #include <cmath>
+#include <optional>
 #include <cstdio>
 #include <iostream>
 #include <system_error>
@@ -76,6 +77,10 @@ haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& req
   metadata.notes = (request.notes.empty() ? "" : request.notes + "; ") +
                    "model: " + request.model_source +
                    (request.effects.empty() ? "" : ", effects: " + request.effects);
+  // In real time, Ctrl-C and SIGTERM are caught from before the device starts: one during
+  // the start-up (homing may take a while) ends the run as soon as it begins.
+  std::optional<StopSignals> signals;
+  if (!request.device.simulated_time) signals.emplace();
   haptic::Playback playback(
       *opened.device, model, options, session_path, metadata,
       haptic::PlaybackSetup{opened.device->name(), request.model_source, request.effects});
@@ -91,11 +96,10 @@ haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& req
   }
   const bool tty = isatty(STDERR_FILENO) != 0;
   int calls = 0;
-  const StopSignals signals;
   bool signal_reported = false;
   haptic::PlaybackSummary summary =
       playback.run_real_time([&](const haptic::RenderLoop::Status& status) {
-        if (const int signal_number = signals.received(); signal_number != 0) {
+        if (const int signal_number = signals->received(); signal_number != 0) {
           if (!signal_reported) {
             std::fprintf(stderr, "%s%s: ramping the force down and stopping the device\n",
                          tty ? "\n" : "", signal_number == SIGINT ? "Ctrl-C" : "SIGTERM");
