@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "haptic/door_mapping.h"
+#include "haptic/hapticmaster_connection.h"
 #include "haptic/hapticmaster_protocol.h"
 
 namespace doorbench::haptic {
@@ -31,16 +32,6 @@ double monotonic_s() {
   timespec ts{};
   ::clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-int millis_left(Clock::time_point deadline) {
-  const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-  return static_cast<int>(std::max<long long>(0, left.count()));
-}
-
-Clock::time_point after(double seconds) {
-  return Clock::now() +
-         std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
 }
 
 // The HapticMaster's figures: where each comes from is in docs/hapticmaster.md (limits).
@@ -128,109 +119,6 @@ void workspace_box(const Vec3& r_phi_z_min, const Vec3& r_phi_z_max, double axis
 
 }  // namespace
 
-// The socket, owned by whichever thread currently talks to the device (start/stop or the
-// I/O thread, never both). Errors are std::runtime_error with the reason only.
-class HapticMasterDevice::Connection {
- public:
-  Connection(const std::string& host, int port, double timeout_s) {
-    addrinfo hints{};
-    hints.ai_family = AF_UNSPEC;
-    hints.ai_socktype = SOCK_STREAM;
-    addrinfo* found = nullptr;
-    const int gai = ::getaddrinfo(host.c_str(), std::to_string(port).c_str(), &hints, &found);
-    if (gai != 0) {
-      throw std::runtime_error(std::string("cannot resolve host: ").append(::gai_strerror(gai)));
-    }
-    std::string why = "no address";
-    for (addrinfo* a = found; a != nullptr && fd_ < 0; a = a->ai_next) {
-      const int fd =
-          ::socket(a->ai_family, a->ai_socktype | SOCK_NONBLOCK | SOCK_CLOEXEC, a->ai_protocol);
-      if (fd < 0) {
-        why = std::strerror(errno);
-        continue;
-      }
-      if (::connect(fd, a->ai_addr, a->ai_addrlen) != 0 && errno != EINPROGRESS) {
-        why = std::strerror(errno);
-        ::close(fd);
-        continue;
-      }
-      pollfd p{fd, POLLOUT, 0};
-      const int ready = ::poll(&p, 1, static_cast<int>(timeout_s * 1000));
-      int error = 0;
-      socklen_t length = sizeof error;
-      if (ready <= 0) {
-        why = "connect timed out after " + hm::format_number(timeout_s) + " s";
-      } else if (::getsockopt(fd, SOL_SOCKET, SO_ERROR, &error, &length) != 0 || error != 0) {
-        why = std::strerror(error != 0 ? error : errno);
-      } else {
-        fd_ = fd;
-        break;
-      }
-      ::close(fd);
-    }
-    ::freeaddrinfo(found);
-    if (fd_ < 0) throw std::runtime_error("cannot connect: " + why);
-    const int one = 1;  // small messages, one round trip each: no Nagle delay
-    ::setsockopt(fd_, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
-  }
-  ~Connection() { ::close(fd_); }
-  Connection(const Connection&) = delete;
-  Connection& operator=(const Connection&) = delete;
-
-  // Sends `commands` (as one joined message or one message each) and returns the replies
-  // in order. Normally one per command; fewer if the device skipped some (the caller looks
-  // for an error reply first, then at the count).
-  std::vector<std::string> round_trip(const std::vector<std::string>& commands, double timeout_s,
-                                      bool joined) {
-    const auto deadline = after(timeout_s);
-    const std::string bytes = hm::request(commands, joined);
-    std::size_t sent = 0;
-    while (sent < bytes.size()) {
-      const ssize_t n = ::send(fd_, bytes.data() + sent, bytes.size() - sent, MSG_NOSIGNAL);
-      if (n > 0) {
-        sent += static_cast<std::size_t>(n);
-        continue;
-      }
-      if (n < 0 && errno != EAGAIN && errno != EWOULDBLOCK && errno != EINTR) {
-        throw std::runtime_error(std::string("send failed: ").append(std::strerror(errno)));
-      }
-      pollfd p{fd_, POLLOUT, 0};
-      if (::poll(&p, 1, millis_left(deadline)) == 0) throw std::runtime_error("send timed out");
-    }
-    const std::size_t messages_expected = joined ? 1 : commands.size();
-    std::size_t messages = 0;
-    std::vector<std::string> replies;
-    replies.reserve(commands.size());
-    char buffer[4096];
-    for (;;) {
-      while (messages < messages_expected) {
-        auto message = splitter_.next();
-        if (!message) break;
-        ++messages;
-        for (std::string& reply : hm::split_replies(*message)) replies.push_back(std::move(reply));
-      }
-      if (splitter_.corrupt()) throw std::runtime_error(splitter_.error());
-      if (messages == messages_expected) break;
-      // The deadline is checked here too: a device trickling bytes must not extend it.
-      pollfd p{fd_, POLLIN, 0};
-      if (Clock::now() >= deadline || ::poll(&p, 1, millis_left(deadline)) == 0) {
-        throw std::runtime_error("no reply within " + hm::format_number(timeout_s) + " s");
-      }
-      const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
-      if (n == 0) throw std::runtime_error("connection closed by the device");
-      if (n < 0) {
-        if (errno == EAGAIN || errno == EWOULDBLOCK || errno == EINTR) continue;
-        throw std::runtime_error(std::string("receive failed: ").append(std::strerror(errno)));
-      }
-      splitter_.feed(std::string_view(buffer, static_cast<std::size_t>(n)));
-    }
-    return replies;
-  }
-
- private:
-  int fd_ = -1;
-  hm::ReplySplitter splitter_;
-};
 
 std::string HapticMasterOptions::validate() const {
   if (!(connect_timeout_s > 0) || !std::isfinite(connect_timeout_s)) {
@@ -614,7 +502,7 @@ void HapticMasterDevice::start(double inertia) {
                       hm::format_number(assumed.max_inertia) + " kg");
   }
   try {
-    connection_ = std::make_unique<Connection>(host_, port_, options_.connect_timeout_s);
+    connection_ = std::make_unique<hm::Connection>(host_, port_, options_.connect_timeout_s);
   } catch (const std::exception& e) {
     throw DeviceError(name() + ": " + e.what());
   }
@@ -696,7 +584,7 @@ std::string HapticMasterDevice::emergency_stop(bool connection_intact) noexcept 
   connection_.reset();
   connection_intact_ = false;
   try {
-    Connection fresh(host_, port_, options_.emergency_timeout_s);
+    hm::Connection fresh(host_, port_, options_.emergency_timeout_s);
     if (stopped_by(fresh.round_trip(commands, options_.emergency_timeout_s,
                                     options_.join_commands))) {
       device_stopped_.store(true);
@@ -826,7 +714,7 @@ void HapticMasterDevice::stop() noexcept {
 void HapticMasterDevice::connect_only() {
   if (io_thread_.joinable() || connection_) throw DeviceError(name() + ": already connected");
   try {
-    connection_ = std::make_unique<Connection>(host_, port_, options_.connect_timeout_s);
+    connection_ = std::make_unique<hm::Connection>(host_, port_, options_.connect_timeout_s);
   } catch (const std::exception& e) {
     throw DeviceError(name() + ": " + e.what());
   }

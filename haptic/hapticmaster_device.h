@@ -28,6 +28,9 @@
 #include "haptic/device.h"
 
 namespace doorbench::haptic {
+namespace hm {
+class Connection;
+}
 
 struct HapticMasterOptions {
   double connect_timeout_s = 2.0;  // TCP connect
@@ -162,7 +165,6 @@ class HapticMasterDevice : public HapticDevice {
     Vec3 force = Vec3::Zero();
     double inertia = 0.0;
   };
-  class Connection;
 
   // Runs on the I/O thread; its arguments are what start() sent and published.
   void io_loop(double sent_inertia, DeviceSample sample);
@@ -197,7 +199,7 @@ class HapticMasterDevice : public HapticDevice {
   std::string host_;
   int port_ = 0;
   HapticMasterOptions options_;
-  std::unique_ptr<Connection> connection_;
+  std::unique_ptr<hm::Connection> connection_;
   std::thread io_thread_;
   std::atomic<bool> stop_requested_{false};
   std::atomic<bool> brake_requested_{false};
