@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <limits>
 #include <optional>
 
 #include "acquisition/interpolation.h"
@@ -1022,6 +1023,39 @@ void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor
   }
 }
 
+// The step of a quantised angle: the smallest non-zero change between successive samples,
+// when every value is a whole multiple of it (within 1e-6 of a step); nullopt otherwise.
+std::optional<double> angle_quantum(const std::vector<double>& angle) {
+  double step = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 1; i < angle.size(); ++i) {
+    const double change = std::abs(angle[i] - angle[i - 1]);
+    if (change > 0) step = std::min(step, change);
+  }
+  if (!std::isfinite(step)) return std::nullopt;
+  for (double value : angle) {
+    const double multiple = value / step;
+    if (std::abs(multiple - std::round(multiple)) > 1e-6) return std::nullopt;
+  }
+  return step;
+}
+
+// The standard deviation of smoothing_derivative's output for white noise of unit standard
+// deviation on a uniform grid: the root of the sum of the squares of its impulse response.
+double derivative_noise_gain(double cutoff_hz, double sample_rate_hz) {
+  const auto half =
+      static_cast<std::size_t>(std::ceil(20.0 * sample_rate_hz / cutoff_hz)) + 2;
+  std::vector<double> time_s(2 * half + 1), impulse(2 * half + 1, 0.0);
+  for (std::size_t i = 0; i < time_s.size(); ++i) {
+    time_s[i] = static_cast<double>(i) / sample_rate_hz;
+  }
+  impulse[half] = 1.0;
+  double squares = 0.0;
+  for (double value : uniform_derivative(time_s, impulse, cutoff_hz, sample_rate_hz)) {
+    squares += value * value;
+  }
+  return std::sqrt(squares);
+}
+
 std::string milliseconds(double value_s) { return text(1000.0 * value_s) + " ms"; }
 
 // PreparedData::rate_summary: the rate, its jitter, the derivative's cut-off, and what the
@@ -1161,6 +1195,27 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
   data.angle_noise_rad =
       angle_noise ? std::max(*angle_noise, kNoiseFloorFraction * options.fallback_angle_noise_rad)
                   : options.fallback_angle_noise_rad;
+  // A quantised angle (an encoder's steps) that stands still reads no noise at all: its
+  // noise is at least the quantisation's, q / sqrt(12), and so is the derivative's.
+  if (!in.angle.empty()) {
+    if (const std::optional<double> q = angle_quantum(in.angle)) {
+      const double quantisation_rad = *q / std::sqrt(12.0);
+      if (quantisation_rad > data.angle_noise_rad) {
+        data.angle_noise_rad = quantisation_rad;
+        if (in.mode == Mode::kAngleOnly) {
+          const double rate_floor = quantisation_rad * derivative_noise_gain(derivative_cutoff_hz,
+                                                                             in.rate_hz);
+          data.rate_noise_rad_s = std::max(data.rate_noise_rad_s, rate_floor);
+        }
+        data.notes.push_back("angle_rad is quantised in steps of " + text(*q) +
+                             " rad: its noise is taken as at least the quantisation's (step / "
+                             "sqrt(12))" +
+                             (in.mode == Mode::kAngleOnly ? ", and the rate's as that through the "
+                                                            "smoothing derivative"
+                                                          : ""));
+      }
+    }
+  }
 
   if (options.force_cutoff_hz > 0) {
     in.check_cutoff(options.force_cutoff_hz, "force_cutoff_hz");
