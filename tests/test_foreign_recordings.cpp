@@ -329,6 +329,7 @@ TEST_CASE("Foreign recordings: fit --init-only writes the start from the data",
   CHECK(start.geometry().handle_radius_m == 0.8);
   CHECK(start.parameter_values()[sensory::kJ] == Approx(6.0).epsilon(0.2));
   const std::string page = read_text(dir / "init" / "start.md");
+  INFO(page);
   CHECK_THAT(page, Contains("start values from the data: J, d1, d2 from ") &&
                        Contains(" samples of free motion (balance torque ") &&
                        Contains("| J | ") && Contains(" | the data (free motion) |") &&
