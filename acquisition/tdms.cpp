@@ -62,40 +62,76 @@ std::string hex(std::uint32_t value) {
 
 std::string type_name(std::uint32_t type) {
   switch (type) {
-    case kVoid: return "void";
-    case kI8: return "I8";
-    case kI16: return "I16";
-    case kI32: return "I32";
-    case kI64: return "I64";
-    case kU8: return "U8";
-    case kU16: return "U16";
-    case kU32: return "U32";
-    case kU64: return "U64";
-    case kSingle: return "SGL";
-    case kDouble: return "DBL";
-    case kExtended: return "EXT (extended float)";
-    case kSingleWithUnit: return "SGL with unit";
-    case kDoubleWithUnit: return "DBL with unit";
-    case kExtendedWithUnit: return "EXT with unit (extended float)";
-    case kString: return "string";
-    case kBoolean: return "boolean";
-    case kTimeStamp: return "time stamp";
-    case kFixedPoint: return "fixed point";
-    case kComplexSingle: return "complex SGL";
-    case kComplexDouble: return "complex DBL";
-    case kDaqmxRaw: return "DAQmx raw data";
-    default: return "unknown type " + hex(type);
+    case kVoid:
+      return "void";
+    case kI8:
+      return "I8";
+    case kI16:
+      return "I16";
+    case kI32:
+      return "I32";
+    case kI64:
+      return "I64";
+    case kU8:
+      return "U8";
+    case kU16:
+      return "U16";
+    case kU32:
+      return "U32";
+    case kU64:
+      return "U64";
+    case kSingle:
+      return "SGL";
+    case kDouble:
+      return "DBL";
+    case kExtended:
+      return "EXT (extended float)";
+    case kSingleWithUnit:
+      return "SGL with unit";
+    case kDoubleWithUnit:
+      return "DBL with unit";
+    case kExtendedWithUnit:
+      return "EXT with unit (extended float)";
+    case kString:
+      return "string";
+    case kBoolean:
+      return "boolean";
+    case kTimeStamp:
+      return "time stamp";
+    case kFixedPoint:
+      return "fixed point";
+    case kComplexSingle:
+      return "complex SGL";
+    case kComplexDouble:
+      return "complex DBL";
+    case kDaqmxRaw:
+      return "DAQmx raw data";
+    default:
+      return "unknown type " + hex(type);
   }
 }
 
 // Bytes per value of the numeric channel types; 0 for the types a channel may not have here.
 std::size_t numeric_size(std::uint32_t type) {
   switch (type) {
-    case kI8: case kU8: return 1;
-    case kI16: case kU16: return 2;
-    case kI32: case kU32: case kSingle: case kSingleWithUnit: return 4;
-    case kI64: case kU64: case kDouble: case kDoubleWithUnit: return 8;
-    default: return 0;
+    case kI8:
+    case kU8:
+      return 1;
+    case kI16:
+    case kU16:
+      return 2;
+    case kI32:
+    case kU32:
+    case kSingle:
+    case kSingleWithUnit:
+      return 4;
+    case kI64:
+    case kU64:
+    case kDouble:
+    case kDoubleWithUnit:
+      return 8;
+    default:
+      return 0;
   }
 }
 
@@ -133,17 +169,30 @@ class Reader {
   }
   double read_number(std::uint32_t type) {
     switch (type) {
-      case kI8: return read<std::int8_t>();
-      case kI16: return read<std::int16_t>();
-      case kI32: return read<std::int32_t>();
-      case kI64: return static_cast<double>(read<std::int64_t>());
-      case kU8: return read<std::uint8_t>();
-      case kU16: return read<std::uint16_t>();
-      case kU32: return read<std::uint32_t>();
-      case kU64: return static_cast<double>(read<std::uint64_t>());
-      case kSingle: case kSingleWithUnit: return read<float>();
-      case kDouble: case kDoubleWithUnit: return read<double>();
-      default: fail("no number of type " + type_name(type));
+      case kI8:
+        return read<std::int8_t>();
+      case kI16:
+        return read<std::int16_t>();
+      case kI32:
+        return read<std::int32_t>();
+      case kI64:
+        return static_cast<double>(read<std::int64_t>());
+      case kU8:
+        return read<std::uint8_t>();
+      case kU16:
+        return read<std::uint16_t>();
+      case kU32:
+        return read<std::uint32_t>();
+      case kU64:
+        return static_cast<double>(read<std::uint64_t>());
+      case kSingle:
+      case kSingleWithUnit:
+        return read<float>();
+      case kDouble:
+      case kDoubleWithUnit:
+        return read<double>();
+      default:
+        fail("no number of type " + type_name(type));
     }
   }
 
@@ -233,9 +282,9 @@ struct ObjectState {
   std::vector<std::string> parts;
   bool has_raw = false;
   std::uint32_t type = kVoid;
-  std::uint64_t count = 0;        // values per chunk
-  std::uint64_t string_bytes = 0; // string channels: bytes per chunk
-  std::size_t channel = 0;        // index into TdmsFile::channels (channels only)
+  std::uint64_t count = 0;         // values per chunk
+  std::uint64_t string_bytes = 0;  // string channels: bytes per chunk
+  std::size_t channel = 0;         // index into TdmsFile::channels (channels only)
   bool is_channel = false;
 };
 
@@ -246,8 +295,8 @@ std::size_t chunk_bytes(const ObjectState& object) {
 
 // The channel's scaling (NI_Scaling_Status "unscaled"): scale NI_Number_Of_Scales − 1,
 // whose input source is another scale's index or the raw data (−1, absent).
-double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, double raw,
-                   int depth, const std::string& where) {
+double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, double raw, int depth,
+                   const std::string& where) {
   if (scale < 0) return raw;
   if (depth > 16) throw TdmsError(where + ": the scales' input sources form a loop");
   const std::string prefix = "NI_Scale[" + std::to_string(scale) + "]_";
@@ -297,9 +346,9 @@ void apply_scaling(TdmsChannel& channel, const std::string& source) {
   for (double& value : channel.values) {
     value = scale_value(channel.properties, last, value, 0, where);
   }
-  channel.scaling = "NI_Scale[" + std::to_string(last) + "] (" +
-                    channel.properties.at("NI_Scale[" + std::to_string(last) + "]_Scale_Type").text +
-                    ")";
+  channel.scaling =
+      "NI_Scale[" + std::to_string(last) + "] (" +
+      channel.properties.at("NI_Scale[" + std::to_string(last) + "]_Scale_Type").text + ")";
 }
 
 }  // namespace
@@ -340,8 +389,9 @@ TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& s
       in.fail("big-endian segments (ToC flag kTocBigEndian) are not supported");
     }
     if (toc & kTocDAQmxRawData) {
-      in.fail("DAQmx raw data (ToC flag kTocDAQmxRawData) is not supported: log the channels "
-              "scaled (LabVIEW: TDMS, not TDMS raw / 'Log and Read' with scaled data)");
+      in.fail(
+          "DAQmx raw data (ToC flag kTocDAQmxRawData) is not supported: log the channels "
+          "scaled (LabVIEW: TDMS, not TDMS raw / 'Log and Read' with scaled data)");
     }
     const std::size_t meta_start = start + kLeadInBytes;
     const std::size_t end = next_offset == kIncompleteSegment
@@ -380,8 +430,8 @@ TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& s
           }
           object.has_raw = true;
         } else if (index == kDaqmxFormatScaler || index == kDaqmxDigitalScaler) {
-          in.fail_at(index_at, "object " + path + ": DAQmx raw data (raw data index " +
-                                   hex(index) + ") is not supported");
+          in.fail_at(index_at, "object " + path + ": DAQmx raw data (raw data index " + hex(index) +
+                                   ") is not supported");
         } else {
           const auto type = in.read<std::uint32_t>();
           const auto dimension = in.read<std::uint32_t>();
@@ -492,7 +542,8 @@ std::vector<TdmsMapItem> parse_tdms_map(const std::string& text) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
     const std::string item = text.substr(start, comma - start);
     const std::size_t equals = item.find('=');
-    const std::size_t slash = equals == std::string::npos ? std::string::npos : item.find('/', equals);
+    const std::size_t slash =
+        equals == std::string::npos ? std::string::npos : item.find('/', equals);
     if (equals == std::string::npos || equals == 0 || slash == std::string::npos ||
         slash == equals + 1 || slash + 1 == item.size()) {
       throw std::invalid_argument("--map item '" + item +
@@ -528,8 +579,9 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
   }
   if (!force_item) throw TdmsError(source + ": --map gives no force channel (force=GROUP/CHANNEL)");
   if (!has_motion) {
-    throw TdmsError(source + ": --map gives neither angle nor rate (angle=GROUP/CHANNEL or "
-                             "rate=GROUP/CHANNEL)");
+    throw TdmsError(source +
+                    ": --map gives neither angle nor rate (angle=GROUP/CHANNEL or "
+                    "rate=GROUP/CHANNEL)");
   }
   auto channel_of = [&](const TdmsMapItem& item) -> const TdmsChannel& {
     const TdmsChannel* channel = file.find(item.group, item.channel);
@@ -542,8 +594,8 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
                       item.channel + " (the file has " + (known.empty() ? "none" : known) + ")");
     }
     if (channel->data_type.empty()) {
-      throw TdmsError(source + ": " + item.target + ": channel " + item.group + "/" +
-                      item.channel + " has no numeric values");
+      throw TdmsError(source + ": " + item.target + ": channel " + item.group + "/" + item.channel +
+                      " has no numeric values");
     }
     return *channel;
   };
@@ -600,8 +652,8 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
                                                           : "";
     const TdmsProperty* unit = property(channel, "unit_string");
     if (!expected.empty() && unit && !unit->text.empty() && unit->text != expected) {
-      throw TdmsError(source + ": " + item.target + ": channel " + name + " is in '" +
-                      unit->text + "', not " + expected +
+      throw TdmsError(source + ": " + item.target + ": channel " + name + " is in '" + unit->text +
+                      "', not " + expected +
                       " (scale it in the file, or map it as an extra column whose name ends in "
                       "its unit)");
     }
@@ -618,7 +670,8 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
     const std::string key = "tdms_" + item.target;
     recording.metadata.emplace_back(key + "_channel", name);
     if (unit) recording.metadata.emplace_back(key + "_unit", unit->text);
-    if (!channel.scaling.empty()) recording.metadata.emplace_back(key + "_scaling", channel.scaling);
+    if (!channel.scaling.empty())
+      recording.metadata.emplace_back(key + "_scaling", channel.scaling);
   }
   for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
     if (!(recording.time_s[i] > recording.time_s[i - 1])) {

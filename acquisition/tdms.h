@@ -41,8 +41,8 @@ struct TdmsProperty {
 };
 
 struct TdmsChannel {
-  std::string group, name;  // unescaped
-  std::string data_type;    // "I32", "DBL", ...; "" when the channel has no raw data
+  std::string group, name;     // unescaped
+  std::string data_type;       // "I32", "DBL", ...; "" when the channel has no raw data
   std::vector<double> values;  // scaled when the file asks for scaling
   std::map<std::string, TdmsProperty> properties;
   std::string scaling;  // how the values were scaled ("" = as stored)

@@ -43,8 +43,8 @@ DataStart start_from_data(const PreparedData& data, const DoorModel& base) {
   const double r_h = base.geometry().handle_radius_m;
   const double s = values[sensory::kS];
   const double theta4 = values[sensory::kTheta4];
-  const double zone_rad = std::min(std::max(0.12, 2.0 * values[sensory::kTheta3]),
-                                   0.5 * base.geometry().theta_max_rad);
+  const double zone_rad =
+      std::min(std::max(0.12, 2.0 * values[sensory::kTheta3]), 0.5 * base.geometry().theta_max_rad);
   const double moving_rad_s = std::max(kMovingFloor_rad_s, 3.0 * data.rate_noise_rad_s);
   const double half_width_s = std::max(0.005, 1.5 * data.interval_median_s);
 
@@ -84,8 +84,7 @@ DataStart start_from_data(const PreparedData& data, const DoorModel& base) {
       const double friction_upper = std::max(5.0 * d_open, 1.0);
       widen(bounds[sensory::kD1], 0.0, friction_upper);
       widen(bounds[sensory::kD2], 0.0, friction_upper);
-      out.origin[sensory::kJ] = out.origin[sensory::kD1] = out.origin[sensory::kD2] =
-          "free motion";
+      out.origin[sensory::kJ] = out.origin[sensory::kD1] = out.origin[sensory::kD2] = "free motion";
       out.balance_torque_Nm = c(3);
       out.force_offset_N = c(4) / r_h;
       if (open_samples == 0 || near_samples == 0) {
@@ -94,7 +93,8 @@ DataStart start_from_data(const PreparedData& data, const DoorModel& base) {
                             " rad: d2 is not read (0), the friction one level");
       }
     } else {
-      out.notes.push_back("free motion gave no positive inertia: J, d1, d2 are the reference door's");
+      out.notes.push_back(
+          "free motion gave no positive inertia: J, d1, d2 are the reference door's");
     }
   } else {
     out.notes.push_back("only " + std::to_string(samples) +
@@ -132,8 +132,7 @@ DataStart start_from_data(const PreparedData& data, const DoorModel& base) {
       bounds = trial_bounds;
       for (int index : read) out.origin[index] = "latch read-off";
     } catch (const std::invalid_argument& error) {
-      out.notes.push_back(std::string("the latch read off the data was not used: ") +
-                          error.what());
+      out.notes.push_back(std::string("the latch read off the data was not used: ") + error.what());
     }
   }
   out.model = DoorModel(ModelKind::kSensory, base.geometry(), values, bounds,

@@ -33,7 +33,7 @@ struct DataStart {
   // Per base parameter, where its start came from: "free motion", "latch read-off" or
   // "reference door".
   std::vector<std::string> origin;
-  int free_motion_samples = 0;  // samples in the regression (0: not used)
+  int free_motion_samples = 0;     // samples in the regression (0: not used)
   double balance_torque_Nm = 0.0;  // g1
   double force_offset_N = 0.0;     // b / r_h
   std::vector<std::string> notes;  // what was not taken from the data, and why

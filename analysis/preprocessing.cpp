@@ -203,9 +203,8 @@ std::vector<Range> find_still_periods(const std::vector<double>& time_s,
                                       double rate_std_limit, double sample_rate_hz,
                                       const PreprocessingOptions& options) {
   const std::size_t n = time_s.size();
-  const auto half = static_cast<std::size_t>(
-      std::max(1.0, std::round(0.5 * still_window_used_s(options, sample_rate_hz) *
-                               sample_rate_hz)));
+  const auto half = static_cast<std::size_t>(std::max(
+      1.0, std::round(0.5 * still_window_used_s(options, sample_rate_hz) * sample_rate_hz)));
   // Prefix sums, the rate centred on its mean to keep the variance's cancellation small.
   double centre = 0;
   for (double r : rate) centre += r;
@@ -681,8 +680,8 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
     in.max_interval_s = std::max(in.max_interval_s, interval);
   }
   in.jittered =
-      std::max(in.max_interval_s - in.median_interval_s,
-               in.median_interval_s - in.min_interval_s) > kJitterFraction * in.median_interval_s;
+      std::max(in.max_interval_s - in.median_interval_s, in.median_interval_s - in.min_interval_s) >
+      kJitterFraction * in.median_interval_s;
   if (in.rate_hz < options.min_sample_rate_hz) {
     throw PreprocessingError(source + ": sampled at " + text(in.rate_hz) +
                              " Hz (1 / the median interval), below the " +
@@ -739,11 +738,10 @@ Stillness find_stillness(const Input& in, const std::vector<double>& rate,
   still.periods =
       find_still_periods(in.t, rate, in.force, in.fault, still.rate_std_limit, in.rate_hz, options);
   still.rule = "still: over " + text(still_window_used_s(options, in.rate_hz)) +
-               " s windows the rate's std < " +
-               text(still.rate_std_limit / kDeg) + " deg/s, |mean rate| < " +
-               text(options.still_rate_limit_rad_s / kDeg) + " deg/s and mean |force| < " +
-               text(options.still_force_N) + " N, for >= " + text(options.still_min_duration_s) +
-               " s";
+               " s windows the rate's std < " + text(still.rate_std_limit / kDeg) +
+               " deg/s, |mean rate| < " + text(options.still_rate_limit_rad_s / kDeg) +
+               " deg/s and mean |force| < " + text(options.still_force_N) +
+               " N, for >= " + text(options.still_min_duration_s) + " s";
   return still;
 }
 
@@ -1042,8 +1040,7 @@ std::optional<double> angle_quantum(const std::vector<double>& angle) {
 // The standard deviation of smoothing_derivative's output for white noise of unit standard
 // deviation on a uniform grid: the root of the sum of the squares of its impulse response.
 double derivative_noise_gain(double cutoff_hz, double sample_rate_hz) {
-  const auto half =
-      static_cast<std::size_t>(std::ceil(20.0 * sample_rate_hz / cutoff_hz)) + 2;
+  const auto half = static_cast<std::size_t>(std::ceil(20.0 * sample_rate_hz / cutoff_hz)) + 2;
   std::vector<double> time_s(2 * half + 1), impulse(2 * half + 1, 0.0);
   for (std::size_t i = 0; i < time_s.size(); ++i) {
     time_s[i] = static_cast<double>(i) / sample_rate_hz;
@@ -1056,7 +1053,9 @@ double derivative_noise_gain(double cutoff_hz, double sample_rate_hz) {
   return std::sqrt(squares);
 }
 
-std::string milliseconds(double value_s) { return text(1000.0 * value_s) + " ms"; }
+std::string milliseconds(double value_s) {
+  return text(1000.0 * value_s) + " ms";
+}
 
 // PreparedData::rate_summary: the rate, its jitter, the derivative's cut-off, and what the
 // rate does not resolve (docs/preprocessing.md, "Any sample rate").
@@ -1203,8 +1202,8 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
       if (quantisation_rad > data.angle_noise_rad) {
         data.angle_noise_rad = quantisation_rad;
         if (in.mode == Mode::kAngleOnly) {
-          const double rate_floor = quantisation_rad * derivative_noise_gain(derivative_cutoff_hz,
-                                                                             in.rate_hz);
+          const double rate_floor =
+              quantisation_rad * derivative_noise_gain(derivative_cutoff_hz, in.rate_hz);
           data.rate_noise_rad_s = std::max(data.rate_noise_rad_s, rate_floor);
         }
         data.notes.push_back("angle_rad is quantised in steps of " + text(*q) +

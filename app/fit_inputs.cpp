@@ -8,10 +8,10 @@
 #include <stdexcept>
 
 #include "acquisition/recording_csv.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
 #include "analysis/constraint_check.h"
 #include "analysis/fit_init.h"
+#include "analysis/parameter_file.h"
+#include "analysis/preprocessing.h"
 #include "app/commands.h"
 
 namespace doorbench::app {
@@ -38,7 +38,9 @@ PreparedData load_prepared_data(const std::string& path,
   return data;
 }
 
-std::string handle_radius_origin(const PreparedData& data) { return data.handle_radius_origin; }
+std::string handle_radius_origin(const PreparedData& data) {
+  return data.handle_radius_origin;
+}
 
 std::vector<std::string> split_names(const std::string& list) {
   std::vector<std::string> names;
@@ -151,8 +153,7 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
       if (options.strict_geometry) {
         throw std::runtime_error(difference + " (--strict-geometry)");
       }
-      const std::string warning = "warning: " + difference +
-                                  "; the door file's handle radius " +
+      const std::string warning = "warning: " + difference + "; the door file's handle radius " +
                                   format_number(file_radius_m) +
                                   " m is replaced (--strict-geometry makes this an error)";
       std::cerr << "  " << warning << "\n";
@@ -211,8 +212,8 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
     start_line += "; the others " + base_name + "'s";
     for (const std::string& note : derived.notes) start_line += "; " + note;
   } else if (from_data) {
-    start_line = "start values: " + base_name +
-                 "'s (start values from the data: the sensory model only)";
+    start_line =
+        "start values: " + base_name + "'s (start values from the data: the sensory model only)";
   } else {
     start_line = "start values: " + base_name + "'s";
   }

@@ -618,8 +618,8 @@ void add_session_commands(CLI::App& app, Action& action) {
       "import",
       "Make a session of a recording from elsewhere: the CSV exchange format, or a TDMS file "
       "(LabVIEW, SignalExpress, DAQmx logging) with --map (docs/tdms.md)");
-  import_command->add_option("CSV", import->csv_path,
-                             "Recording (CSV exchange format, or *.tdms with --map)")
+  import_command
+      ->add_option("CSV", import->csv_path, "Recording (CSV exchange format, or *.tdms with --map)")
       ->required();
   import_command->add_option("--out", import->out_path, "The new session file (HDF5)")->required();
   import_command->add_option("--operator", import->operator_name, "Who recorded it");

@@ -86,9 +86,15 @@ inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, cons
     for (const Object& object : objects) {
       meta.text(object.path);
       switch (object.raw) {
-        case Object::kNone: meta.put<std::uint32_t>(0xFFFFFFFFu); break;
-        case Object::kSame: meta.put<std::uint32_t>(0u); break;
-        case Object::kRawIndex: meta.put<std::uint32_t>(object.raw_index); break;
+        case Object::kNone:
+          meta.put<std::uint32_t>(0xFFFFFFFFu);
+          break;
+        case Object::kSame:
+          meta.put<std::uint32_t>(0u);
+          break;
+        case Object::kRawIndex:
+          meta.put<std::uint32_t>(object.raw_index);
+          break;
         case Object::kNew:
           meta.put<std::uint32_t>(object.type == kString ? 28u : 20u);
           meta.put<std::uint32_t>(object.type);

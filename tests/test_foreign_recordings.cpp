@@ -1,12 +1,12 @@
 // Recordings from elsewhere (issue 19): any reasonable sample rate with jittered time stamps
 // (preprocessing's rate rules), and the recording's own geometry winning over a parameter
 // file's (fit and loop). docs/preprocessing.md ("Any sample rate"), docs/csv-format.md.
-#include <catch2/catch.hpp>
 #include <algorithm>
-#include <iterator>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -15,8 +15,8 @@
 #include "analysis/fit_init.h"
 #include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
-#include "analysis/sensory_model.h"
 #include "analysis/preprocessing.h"
+#include "analysis/sensory_model.h"
 #include "tests/foreign_recording.h"
 #include "tests/run_doorbench.h"
 #include "tests/temp_dir.h"
@@ -125,8 +125,7 @@ TEST_CASE("Foreign recordings: the smoothing derivative on jittered times",
 TEST_CASE("Foreign recordings: a 50 Hz jittered encoder recording is prepared",
           "[foreign][preprocessing]") {
   std::vector<double> true_omega;
-  const Recording recording =
-      testing::foreign_recording(door_with_radius(0.8), {}, &true_omega);
+  const Recording recording = testing::foreign_recording(door_with_radius(0.8), {}, &true_omega);
   const PreparedData data = prepare(recording);
   CHECK(data.jittered);
   CHECK(data.derivative_cutoff_hz == auto_derivative_cutoff_hz(1.0 / data.interval_median_s));
@@ -146,8 +145,7 @@ TEST_CASE("Foreign recordings: a 50 Hz jittered encoder recording is prepared",
   std::size_t count = 0;
   for (std::size_t s = 0; s < data.strokes.size(); ++s) {
     const Stroke& stroke = data.strokes[s];
-    CHECK(stroke.direction ==
-          (s % 2 == 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing));
+    CHECK(stroke.direction == (s % 2 == 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing));
     for (std::size_t k = 0; k < stroke.size(); ++k) {
       const auto i = static_cast<std::size_t>(
           std::lower_bound(recording.time_s.begin(), recording.time_s.end(), stroke.time_s[k]) -
@@ -195,8 +193,7 @@ TEST_CASE("Foreign recordings: rates below the supported one are refused by name
 TEST_CASE("Foreign recordings: fit takes a 50 Hz jittered CSV and its handle radius",
           "[foreign][cli][fit]") {
   const testing::TempDir dir("foreign_fit");
-  write_recording_csv_file(dir / "door.csv",
-                           testing::foreign_recording(door_with_radius(0.8), {}));
+  write_recording_csv_file(dir / "door.csv", testing::foreign_recording(door_with_radius(0.8), {}));
   const std::string csv = (dir / "door.csv").string();
 
   SECTION("default options, no parameter file") {
@@ -282,7 +279,7 @@ TEST_CASE("Foreign recordings: a full-size door at 50 Hz fits from start values 
   // t-distribution's scale with n_eff - 1 degrees of freedom). Each must lie within the
   // two-sided 99.73 % interval (three standard uncertainties for a normal distribution) of
   // Student's t with floor(n_eff) - 1 degrees of freedom (quantiles from mpmath).
-  const double t_quantile[] = {0.0,  235.78, 19.206, 9.2187, 6.6201, 5.5070, 4.9040, 4.5299,
+  const double t_quantile[] = {0.0,    235.78, 19.206, 9.2187, 6.6201, 5.5070, 4.9040, 4.5299,
                                4.2766, 4.0942, 3.9569, 3.8499, 3.7642, 3.6941, 3.6358, 3.5864};
   std::vector<std::string> checked;
   for (const FittedParameter& parameter : result.summary.parameters) {
@@ -292,9 +289,8 @@ TEST_CASE("Foreign recordings: a full-size door at 50 Hz fits from start values 
     const int index = *truth.find_parameter(parameter.name);
     const auto dof = static_cast<std::size_t>(std::floor(parameter.effective_windows)) - 1;
     const double factor = dof < std::size(t_quantile) ? t_quantile[dof] : 3.0;
-    INFO(parameter.name << " = " << parameter.value << " +- " << parameter.uncertainty
-                        << " (n_eff " << parameter.effective_windows << "), truth "
-                        << true_values[index]);
+    INFO(parameter.name << " = " << parameter.value << " +- " << parameter.uncertainty << " (n_eff "
+                        << parameter.effective_windows << "), truth " << true_values[index]);
     CHECK(std::abs(parameter.value - true_values[index]) <= factor * parameter.uncertainty);
     checked.push_back(parameter.name);
   }
@@ -325,14 +321,15 @@ TEST_CASE("Foreign recordings: fit --init-only writes the start from the data",
   INFO(run.err);
   REQUIRE(run.status == 0);
   CHECK_THAT(run.out, Contains("start-params.json and start.md are in "));
-  const DoorModel start = load_model(ModelKind::kSensory, (dir / "init" / "start-params.json").string(), "");
+  const DoorModel start =
+      load_model(ModelKind::kSensory, (dir / "init" / "start-params.json").string(), "");
   CHECK(start.geometry().handle_radius_m == 0.8);
   CHECK(start.parameter_values()[sensory::kJ] == Approx(6.0).epsilon(0.2));
   const std::string page = read_text(dir / "init" / "start.md");
   INFO(page);
   CHECK_THAT(page, Contains("start values from the data: J, d1, d2 from ") &&
-                       Contains(" samples of free motion (balance torque ") &&
-                       Contains("| J | ") && Contains(" | the data (free motion) |") &&
+                       Contains(" samples of free motion (balance torque ") && Contains("| J | ") &&
+                       Contains(" | the data (free motion) |") &&
                        Contains("handle radius 0.8 m, from the CSV's metadata"));
   CHECK(!std::filesystem::exists(dir / "init" / "result.json"));
 }

@@ -24,11 +24,15 @@ using Catch::Matchers::Contains;
 
 constexpr int kSamples = 115;  // 2 chunks of 25, 25, 20 interleaved, 20 interleaved
 
-double force_at(int k) { return 10.0 * std::sin(0.1 * k) + 0.123456789 * k; }
+double force_at(int k) {
+  return 10.0 * std::sin(0.1 * k) + 0.123456789 * k;
+}
 std::int32_t counts_at(int k) {
   return static_cast<std::int32_t>(std::lround(500.0 * (1.0 - std::cos(0.05 * k))));
 }
-float incl_at(int k) { return static_cast<float>(3.7 * std::sin(0.05 * k)); }
+float incl_at(int k) {
+  return static_cast<float>(3.7 * std::sin(0.05 * k));
+}
 
 struct Expected {
   std::vector<double> force, angle, incl;
@@ -100,14 +104,14 @@ std::vector<std::uint8_t> door_file() {
               {text_property("unit_string", "N"), double_property("wf_increment", 0.02),
                double_property("wf_start_offset", 0.0),
                time_property("wf_start_time", 3786912000, 1ull << 63)}),
-      channel("Angle", kI32, 25,
-              {text_property("unit_string", "rad"), double_property("wf_increment", 0.02),
-               text_property("NI_Scaling_Status", "unscaled"),
-               i32_property("NI_Number_Of_Scales", 1),
-               text_property("NI_Scale[0]_Scale_Type", "Linear"),
-               double_property("NI_Scale[0]_Linear_Slope", 0.001),
-               double_property("NI_Scale[0]_Linear_Y_Intercept", 0.0),
-               i32_property("NI_Scale[0]_Linear_Input_Source", -1)}),
+      channel(
+          "Angle", kI32, 25,
+          {text_property("unit_string", "rad"), double_property("wf_increment", 0.02),
+           text_property("NI_Scaling_Status", "unscaled"), i32_property("NI_Number_Of_Scales", 1),
+           text_property("NI_Scale[0]_Scale_Type", "Linear"),
+           double_property("NI_Scale[0]_Linear_Slope", 0.001),
+           double_property("NI_Scale[0]_Linear_Y_Intercept", 0.0),
+           i32_property("NI_Scale[0]_Linear_Input_Source", -1)}),
       channel("Incl", kSingle, 25, {text_property("unit_string", "deg")}),
       note};
   Bytes raw1 = raw_block(0, 25, false, true);
@@ -174,12 +178,12 @@ TEST_CASE("TDMS: segments, chunks, interleaving and scaling read back bit for bi
   CHECK(recording.handle_radius_m == 0.8);
 }
 
-TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
-          "[tdms][cli]") {
+TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit", "[tdms][cli]") {
   const testing::TempDir dir("tdms_import");
   const std::vector<std::uint8_t> bytes = door_file();
   std::ofstream(dir / "door.tdms", std::ios::binary)
-      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
   const std::string tdms = (dir / "door.tdms").string();
   testing::DoorbenchRun run = testing::run_doorbench_shell(
       "import '" + tdms +
@@ -200,10 +204,10 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
   for (int i = 0; i < kSamples; ++i) CHECK(recording.time_s[i] == 0.0 + i * 0.02);
   CHECK(recording.handle_radius_m == 0.8);
 
-  run = testing::run_doorbench_shell(
-      "import '" + tdms + "' --map force=Door/Force,angle=Door/Nope --out '" +
-          (dir / "t.h5").string() + "'",
-      dir);
+  run = testing::run_doorbench_shell("import '" + tdms +
+                                         "' --map force=Door/Force,angle=Door/Nope --out '" +
+                                         (dir / "t.h5").string() + "'",
+                                     dir);
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + tdms +
                        ": angle: no channel Door/Nope (the file has Door/Force, Door/Angle, "
@@ -214,10 +218,10 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
   CHECK(run.err ==
         "doorbench: --map item 'force' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force) (see "
         "doorbench --help)\n");
-  run = testing::run_doorbench_shell(
-      "import '" + tdms + "' --map force=Door/Force,angle=Door/Incl --out '" +
-          (dir / "t.h5").string() + "'",
-      dir);
+  run = testing::run_doorbench_shell("import '" + tdms +
+                                         "' --map force=Door/Force,angle=Door/Incl --out '" +
+                                         (dir / "t.h5").string() + "'",
+                                     dir);
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + tdms +
                        ": angle: channel Door/Incl is in 'deg', not rad (scale it in the file, or "
@@ -275,6 +279,43 @@ TEST_CASE("TDMS: layouts that are not supported are refused by name", "[tdms]") 
                              std::to_string(cut.size() + 10 - 28) +
                              ") points past the end of the file (" + std::to_string(cut.size()) +
                              " bytes)");
+}
+
+}  // namespace doorbench
+
+namespace doorbench {
+
+TEST_CASE("TDMS: a Polynomial scale fed by a Linear one", "[tdms]") {
+  using namespace testing::tdms;
+  const std::vector<std::int32_t> raw_counts = {-7, 0, 3, 1000, 65535};
+  Object pot;
+  pot.raw = Object::kNew;
+  pot.path = "/'Bench'/'Pot'";
+  pot.type = kI32;
+  pot.count = raw_counts.size();
+  pot.properties = {text_property("NI_Scaling_Status", "unscaled"),
+                    i32_property("NI_Number_Of_Scales", 2),
+                    text_property("NI_Scale[0]_Scale_Type", "Linear"),
+                    double_property("NI_Scale[0]_Linear_Slope", 0.5),
+                    double_property("NI_Scale[0]_Linear_Y_Intercept", 1.0),
+                    text_property("NI_Scale[1]_Scale_Type", "Polynomial"),
+                    i32_property("NI_Scale[1]_Polynomial_Coefficients_Size", 3),
+                    double_property("NI_Scale[1]_Polynomial_Coefficients[0]", 0.5),
+                    double_property("NI_Scale[1]_Polynomial_Coefficients[1]", 2.0),
+                    double_property("NI_Scale[1]_Polynomial_Coefficients[2]", 0.25),
+                    i32_property("NI_Scale[1]_Polynomial_Input_Source", 0)};
+  Bytes raw;
+  for (std::int32_t count : raw_counts) raw.put(count);
+  const TdmsFile file =
+      parse_tdms(segment(kTocMetaData | kTocNewObjList | kTocRawData, {pot}, raw).data, "p.tdms");
+  const TdmsChannel* channel = file.find("Bench", "Pot");
+  REQUIRE(channel);
+  CHECK(channel->scaling == "NI_Scale[1] (Polynomial)");
+  REQUIRE(channel->values.size() == raw_counts.size());
+  for (std::size_t i = 0; i < raw_counts.size(); ++i) {
+    const double x = 0.5 * raw_counts[i] + 1.0;
+    CHECK(channel->values[i] == (0.25 * x + 2.0) * x + 0.5);
+  }
 }
 
 }  // namespace doorbench
