@@ -553,35 +553,44 @@ std::vector<double> uniform_derivative(std::span<const double> time_s,
 
 }  // namespace
 
-std::vector<double> zero_phase_lowpass_at(std::span<const double> time_s,
-                                          std::span<const double> values, double cutoff_hz,
-                                          double sample_rate_hz) {
+namespace {
+
+// `operation(times, values)` (samples in, samples out) on samples at `time_s`: directly when
+// they are uniform, else on the uniform grid (values interpolated there, the result
+// interpolated back). `name` is the caller's, for the message on mismatched lengths.
+template <typename Operation>
+std::vector<double> on_uniform_times(std::span<const double> time_s,
+                                     std::span<const double> values, double sample_rate_hz,
+                                     const char* name, Operation operation) {
   if (time_s.size() != values.size()) {
-    throw std::invalid_argument("zero_phase_lowpass_at: as many times as values needed");
+    throw std::invalid_argument(std::string(name) + ": as many times as values needed");
   }
   if (values.size() < 2 || uniform_times(time_s, sample_rate_hz)) {
-    return zero_phase_lowpass(values, cutoff_hz, sample_rate_hz);
+    return operation(time_s, values);
   }
   const std::vector<double> grid = uniform_grid(time_s, sample_rate_hz);
   const std::vector<double> on_grid = interpolate_sorted(time_s, values, grid);
-  const std::vector<double> smooth = zero_phase_lowpass(on_grid, cutoff_hz, sample_rate_hz);
-  return interpolate_sorted(grid, smooth, time_s);
+  return interpolate_sorted(grid, operation(grid, on_grid), time_s);
+}
+
+}  // namespace
+
+std::vector<double> zero_phase_lowpass_at(std::span<const double> time_s,
+                                          std::span<const double> values, double cutoff_hz,
+                                          double sample_rate_hz) {
+  return on_uniform_times(time_s, values, sample_rate_hz, "zero_phase_lowpass_at",
+                          [&](std::span<const double>, std::span<const double> samples) {
+                            return zero_phase_lowpass(samples, cutoff_hz, sample_rate_hz);
+                          });
 }
 
 std::vector<double> smoothing_derivative(std::span<const double> time_s,
                                          std::span<const double> values, double cutoff_hz,
                                          double sample_rate_hz) {
-  if (time_s.size() != values.size()) {
-    throw std::invalid_argument("smoothing_derivative: as many times as values needed");
-  }
-  if (values.size() < 2 || uniform_times(time_s, sample_rate_hz)) {
-    return uniform_derivative(time_s, values, cutoff_hz, sample_rate_hz);
-  }
-  const std::vector<double> grid = uniform_grid(time_s, sample_rate_hz);
-  const std::vector<double> on_grid = interpolate_sorted(time_s, values, grid);
-  const std::vector<double> derivative =
-      uniform_derivative(grid, on_grid, cutoff_hz, sample_rate_hz);
-  return interpolate_sorted(grid, derivative, time_s);
+  return on_uniform_times(time_s, values, sample_rate_hz, "smoothing_derivative",
+                          [&](std::span<const double> times, std::span<const double> samples) {
+                            return uniform_derivative(times, samples, cutoff_hz, sample_rate_hz);
+                          });
 }
 
 namespace {

@@ -62,13 +62,6 @@ DoorModel full_size_door() {
   return DoorModel(ModelKind::kSensory, geometry, values, bounds, {});
 }
 
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 }  // namespace
 
 TEST_CASE("Foreign recordings: the derivative's cut-off follows the sample rate",
@@ -201,7 +194,7 @@ TEST_CASE("Foreign recordings: fit takes a 50 Hz jittered CSV and its handle rad
         "fit '" + csv + "' --model sensory --out '" + (dir / "fit").string() + "'", dir);
     INFO(run.err);
     REQUIRE(run.status == 0);
-    const std::string report = read_text(dir / "fit" / "report.md");
+    const std::string report = read_text_file(dir / "fit" / "report.md");
     CHECK_THAT(report, Contains("start values from the data: J, d1, d2 from ") &&
                            Contains("Data: sample rate 50") && Contains(": jittered, filtered") &&
                            Contains("handle radius 0.8 m, from the CSV's metadata "
@@ -213,11 +206,10 @@ TEST_CASE("Foreign recordings: fit takes a 50 Hz jittered CSV and its handle rad
         "loop '" + csv + "' --model sensory --out '" + (dir / "loop").string() + "'", dir);
     INFO(run.err);
     REQUIRE(run.status == 0);
-    const std::string report = read_text(dir / "loop" / "report.md");
+    const std::string report = read_text_file(dir / "loop" / "report.md");
     CHECK_THAT(report, Contains("start values from the data: J, d1, d2 from ") &&
                            Contains("Data: sample rate 50") &&
                            Contains("handle radius 0.8 m, from the CSV's metadata"));
-    UNSCOPED_INFO(run.out);
   }
   SECTION("a parameter file with another radius: a warning, or an error when strict") {
     const std::filesystem::path door =
@@ -235,7 +227,7 @@ TEST_CASE("Foreign recordings: fit takes a 50 Hz jittered CSV and its handle rad
                                 "; the door file's handle radius 0.58 m is replaced "
                                 "(--strict-geometry makes this an error)";
     CHECK_THAT(run.err, Contains("  " + warning + "\n"));
-    CHECK_THAT(read_text(dir / "fit" / "report.md"),
+    CHECK_THAT(read_text_file(dir / "fit" / "report.md"),
                Contains(warning + ".\n") && Contains("handle radius 0.8 m, from the CSV's"));
     run = testing::run_doorbench_shell("fit '" + csv + "' --model sensory --params '" +
                                            door.string() + "' --strict-geometry --out '" +
@@ -325,7 +317,7 @@ TEST_CASE("Foreign recordings: fit --init-only writes the start from the data",
       load_model(ModelKind::kSensory, (dir / "init" / "start-params.json").string(), "");
   CHECK(start.geometry().handle_radius_m == 0.8);
   CHECK(start.parameter_values()[sensory::kJ] == Approx(6.0).epsilon(0.2));
-  const std::string page = read_text(dir / "init" / "start.md");
+  const std::string page = read_text_file(dir / "init" / "start.md");
   INFO(page);
   CHECK_THAT(page, Contains("start values from the data: J, d1, d2 from ") &&
                        Contains(" samples of free motion (balance torque ") && Contains("| J | ") &&
