@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iterator>
+#include <nlohmann/json.hpp>
 #include <numbers>
 #include <random>
 #include <sstream>
@@ -200,6 +201,11 @@ TEST_CASE("Foreign recordings: fit takes a 50 Hz jittered CSV and its handle rad
                            Contains("handle radius 0.8 m, from the CSV's metadata "
                                     "(# handle_radius_m)."));
     CHECK_THAT(run.err, !Contains("warning"));
+    const nlohmann::json result =
+        nlohmann::json::parse(read_text_file(dir / "fit" / "result.json"))["data"];
+    CHECK(result["jittered"] == true);
+    CHECK(result["derivative_cutoff_hz"].get<double>() == Approx(12.5).epsilon(0.01));
+    CHECK(result["handle_radius_origin"] == "the CSV's metadata (# handle_radius_m)");
   }
   SECTION("loop, default options, no parameter file") {
     const testing::DoorbenchRun run = testing::run_doorbench_shell(
