@@ -193,6 +193,11 @@ std::size_t last_at_or_before(const std::vector<double>& time_s, double t) {
   return after == time_s.begin() ? 0 : static_cast<std::size_t>(after - time_s.begin()) - 1;
 }
 
+// The still window used: still_window_s, never fewer than kStillWindowSamples samples.
+double still_window_used_s(const PreprocessingOptions& options, double sample_rate_hz) {
+  return std::max(options.still_window_s, kStillWindowSamples / sample_rate_hz);
+}
+
 // The stillness test (PreprocessingOptions): runs of quiet samples lasting
 // still_min_duration_s or more.
 std::vector<Range> find_still_periods(const std::vector<double>& time_s,
@@ -202,8 +207,8 @@ std::vector<Range> find_still_periods(const std::vector<double>& time_s,
                                       double rate_std_limit, double sample_rate_hz,
                                       const PreprocessingOptions& options) {
   const std::size_t n = time_s.size();
-  const auto half = static_cast<std::size_t>(
-      std::max(1.0, std::round(0.5 * options.still_window_s * sample_rate_hz)));
+  const auto half = static_cast<std::size_t>(std::max(
+      1.0, std::round(0.5 * still_window_used_s(options, sample_rate_hz) * sample_rate_hz)));
   // Prefix sums, the rate centred on its mean to keep the variance's cancellation small.
   double centre = 0;
   for (double r : rate) centre += r;
@@ -404,7 +409,8 @@ std::string PreprocessingOptions::validate() const {
       {"inclinometer_range_rad", inclinometer_range_rad, true},
       {"inclinometer_margin_rad", inclinometer_margin_rad, false},
       {"inclinometer_settle_s", inclinometer_settle_s, false},
-      {"derivative_cutoff_hz", derivative_cutoff_hz, true},
+      {"derivative_cutoff_hz", derivative_cutoff_hz, false},
+      {"min_sample_rate_hz", min_sample_rate_hz, true},
       {"force_cutoff_hz", force_cutoff_hz, false},
       {"motion_rate_rad_s", motion_rate_rad_s, true},
       {"edge_rate_rad_s", edge_rate_rad_s, false},
@@ -491,12 +497,56 @@ std::vector<double> zero_phase_lowpass(std::span<const double> values, double cu
                              x.begin() + static_cast<std::ptrdiff_t>(pad + n));
 }
 
-std::vector<double> smoothing_derivative(std::span<const double> time_s,
-                                         std::span<const double> values, double cutoff_hz,
-                                         double sample_rate_hz) {
-  if (time_s.size() != values.size()) {
-    throw std::invalid_argument("smoothing_derivative: as many times as values needed");
+double auto_derivative_cutoff_hz(double sample_rate_hz) {
+  return std::min(30.0, 0.25 * sample_rate_hz);
+}
+
+namespace {
+
+// Whether every interval is within kJitterFraction of 1 / sample_rate_hz.
+bool uniform_times(std::span<const double> time_s, double sample_rate_hz) {
+  const double interval = 1.0 / sample_rate_hz;
+  for (std::size_t i = 1; i < time_s.size(); ++i) {
+    if (std::abs(time_s[i] - time_s[i - 1] - interval) > kJitterFraction * interval) return false;
   }
+  return true;
+}
+
+// Linear interpolation of (x, y) at the increasing times `at` (held beyond the ends).
+std::vector<double> interpolate_sorted(std::span<const double> x, std::span<const double> y,
+                                       std::span<const double> at) {
+  std::vector<double> out(at.size());
+  std::size_t k = 1;
+  for (std::size_t i = 0; i < at.size(); ++i) {
+    if (at[i] <= x.front()) {
+      out[i] = y.front();
+      continue;
+    }
+    if (at[i] >= x.back()) {
+      out[i] = y.back();
+      continue;
+    }
+    while (x[k] < at[i]) ++k;
+    const double s = (at[i] - x[k - 1]) / (x[k] - x[k - 1]);
+    out[i] = y[k - 1] + s * (y[k] - y[k - 1]);
+  }
+  return out;
+}
+
+// The uniform grid time_s[0] + k / sample_rate_hz up to the last time.
+std::vector<double> uniform_grid(std::span<const double> time_s, double sample_rate_hz) {
+  const double span_s = time_s.back() - time_s.front();
+  const auto count = static_cast<std::size_t>(std::floor(span_s * sample_rate_hz + 1e-9)) + 1;
+  std::vector<double> grid(std::max<std::size_t>(count, 2));
+  for (std::size_t k = 0; k < grid.size(); ++k) {
+    grid[k] = time_s.front() + static_cast<double>(k) / sample_rate_hz;
+  }
+  return grid;
+}
+
+std::vector<double> uniform_derivative(std::span<const double> time_s,
+                                       std::span<const double> values, double cutoff_hz,
+                                       double sample_rate_hz) {
   const std::size_t n = values.size();
   std::vector<double> derivative(n, 0.0);
   if (n < 2) return derivative;
@@ -507,6 +557,48 @@ std::vector<double> smoothing_derivative(std::span<const double> time_s,
     derivative[i] = (smooth[i + 1] - smooth[i - 1]) / (time_s[i + 1] - time_s[i - 1]);
   }
   return derivative;
+}
+
+}  // namespace
+
+namespace {
+
+// `operation(times, values)` (samples in, samples out) on samples at `time_s`: directly when
+// they are uniform, else on the uniform grid (values interpolated there, the result
+// interpolated back). `name` is the caller's, for the message on mismatched lengths.
+template <typename Operation>
+std::vector<double> on_uniform_times(std::span<const double> time_s,
+                                     std::span<const double> values, double sample_rate_hz,
+                                     const char* name, Operation operation) {
+  if (time_s.size() != values.size()) {
+    throw std::invalid_argument(std::string(name) + ": as many times as values needed");
+  }
+  if (values.size() < 2 || uniform_times(time_s, sample_rate_hz)) {
+    return operation(time_s, values);
+  }
+  const std::vector<double> grid = uniform_grid(time_s, sample_rate_hz);
+  const std::vector<double> on_grid = interpolate_sorted(time_s, values, grid);
+  return interpolate_sorted(grid, operation(grid, on_grid), time_s);
+}
+
+}  // namespace
+
+std::vector<double> zero_phase_lowpass_at(std::span<const double> time_s,
+                                          std::span<const double> values, double cutoff_hz,
+                                          double sample_rate_hz) {
+  return on_uniform_times(time_s, values, sample_rate_hz, "zero_phase_lowpass_at",
+                          [&](std::span<const double>, std::span<const double> samples) {
+                            return zero_phase_lowpass(samples, cutoff_hz, sample_rate_hz);
+                          });
+}
+
+std::vector<double> smoothing_derivative(std::span<const double> time_s,
+                                         std::span<const double> values, double cutoff_hz,
+                                         double sample_rate_hz) {
+  return on_uniform_times(time_s, values, sample_rate_hz, "smoothing_derivative",
+                          [&](std::span<const double> times, std::span<const double> samples) {
+                            return uniform_derivative(times, samples, cutoff_hz, sample_rate_hz);
+                          });
 }
 
 namespace {
@@ -526,7 +618,9 @@ struct Input {
   // non-finite at either end, or a gap.
   std::vector<std::size_t> unknown;
   double median_interval_s = 0;
-  double rate_hz = 0;  // 1 / median interval: what the filters use
+  double min_interval_s = 0, max_interval_s = 0;
+  bool jittered = false;  // an interval differs from the median by more than kJitterFraction
+  double rate_hz = 0;     // 1 / median interval: what the filters use
   double saturation_limit = 0;
 
   std::size_t size() const { return t.size(); }
@@ -596,6 +690,23 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
   for (std::size_t i = 1; i < n; ++i) intervals[i - 1] = t[i] - t[i - 1];
   in.median_interval_s = median(intervals);
   in.rate_hz = 1.0 / in.median_interval_s;
+  // The spread of the intervals, gaps (which are listed as faults) left out.
+  in.min_interval_s = in.median_interval_s;
+  in.max_interval_s = in.median_interval_s;
+  for (double interval : intervals) {
+    if (interval > options.max_gap_factor * in.median_interval_s) continue;
+    in.min_interval_s = std::min(in.min_interval_s, interval);
+    in.max_interval_s = std::max(in.max_interval_s, interval);
+  }
+  in.jittered =
+      std::max(in.max_interval_s - in.median_interval_s, in.median_interval_s - in.min_interval_s) >
+      kJitterFraction * in.median_interval_s;
+  if (in.rate_hz < options.min_sample_rate_hz) {
+    throw PreprocessingError(source + ": sampled at " + text(in.rate_hz) +
+                             " Hz (1 / the median interval), below the " +
+                             text(options.min_sample_rate_hz) +
+                             " Hz preprocessing supports (the min_sample_rate_hz option)");
+  }
 
   in.force = recording.force_N;
   if (in.has_rate) in.rate = *recording.rate_rad_s;
@@ -732,11 +843,11 @@ Stillness find_stillness(const Input& in, const std::vector<double>& rate,
   still.periods =
       find_still_periods(in.t, rate, in.force, in.motion_fault, still.rate_std_limit, in.rate_hz,
                          options);
-  still.rule = "still: over " + text(options.still_window_s) + " s windows the rate's std < " +
-               text(still.rate_std_limit / kDeg) + " deg/s, |mean rate| < " +
-               text(options.still_rate_limit_rad_s / kDeg) + " deg/s and mean |force| < " +
-               text(options.still_force_N) + " N, for >= " + text(options.still_min_duration_s) +
-               " s";
+  still.rule = "still: over " + text(still_window_used_s(options, in.rate_hz)) +
+               " s windows the rate's std < " + text(still.rate_std_limit / kDeg) +
+               " deg/s, |mean rate| < " + text(options.still_rate_limit_rad_s / kDeg) +
+               " deg/s and mean |force| < " + text(options.still_force_N) +
+               " N, for >= " + text(options.still_min_duration_s) + " s";
   return still;
 }
 
@@ -1036,6 +1147,70 @@ void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor
   }
 }
 
+// The step of a quantised angle: the smallest non-zero change between successive samples,
+// when every value is a whole multiple of it (within 1e-6 of a step); nullopt otherwise.
+std::optional<double> angle_quantum(const std::vector<double>& angle) {
+  double step = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 1; i < angle.size(); ++i) {
+    const double change = std::abs(angle[i] - angle[i - 1]);
+    if (change > 0) step = std::min(step, change);
+  }
+  if (!std::isfinite(step)) return std::nullopt;
+  for (double value : angle) {
+    const double multiple = value / step;
+    if (std::abs(multiple - std::round(multiple)) > 1e-6) return std::nullopt;
+  }
+  return step;
+}
+
+// The standard deviation of smoothing_derivative's output for white noise of unit standard
+// deviation on a uniform grid: the root of the sum of the squares of its impulse response.
+double derivative_noise_gain(double cutoff_hz, double sample_rate_hz) {
+  const auto half = static_cast<std::size_t>(std::ceil(20.0 * sample_rate_hz / cutoff_hz)) + 2;
+  std::vector<double> time_s(2 * half + 1), impulse(2 * half + 1, 0.0);
+  for (std::size_t i = 0; i < time_s.size(); ++i) {
+    time_s[i] = static_cast<double>(i) / sample_rate_hz;
+  }
+  impulse[half] = 1.0;
+  double squares = 0.0;
+  for (double value : uniform_derivative(time_s, impulse, cutoff_hz, sample_rate_hz)) {
+    squares += value * value;
+  }
+  return std::sqrt(squares);
+}
+
+std::string milliseconds(double value_s) {
+  return text(1000.0 * value_s) + " ms";
+}
+
+// PreparedData::rate_summary: the rate, its jitter, the derivative's cut-off, and what the
+// rate does not resolve (docs/preprocessing.md, "Any sample rate").
+std::string describe_rate(const Input& in, double derivative_cutoff_hz, bool cutoff_auto) {
+  std::string line = "sample rate " + text(in.rate_hz) + " Hz (median interval " +
+                     milliseconds(in.median_interval_s);
+  if (in.jittered) {
+    line += ", intervals " + milliseconds(in.min_interval_s) + " to " +
+            milliseconds(in.max_interval_s) + ": jittered, filtered on a uniform " +
+            milliseconds(in.median_interval_s) + " grid";
+  }
+  line += ")";
+  double resolved_hz = 0.5 * in.rate_hz;
+  if (derivative_cutoff_hz > 0) {
+    line += "; the rate is angle_rad's derivative, low-passed at " + text(derivative_cutoff_hz) +
+            " Hz" + (cutoff_auto ? " (min(30 Hz, rate / 4))" : " (as asked)");
+    resolved_hz = derivative_cutoff_hz;
+  }
+  line += "; motion faster than " + text(resolved_hz) + " Hz is not resolved";
+  if (in.rate_hz < kLatchDetailRate_hz) {
+    line += "; below " + text(kLatchDetailRate_hz) +
+            " Hz the latch's details (release, snap and force edges lasting a few ms) are not "
+            "resolved: they are averaged over two samples (" +
+            milliseconds(2.0 * in.median_interval_s) +
+            ") of travel, so latch angles and stiffnesses are approximate";
+  }
+  return line;
+}
+
 }  // namespace
 
 PreparedData prepare(const Recording& recording, const PreprocessingOptions& options) {
@@ -1049,6 +1224,13 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
   data.handle_radius_m = recording.handle_radius_m.value_or(0.0);
   for (const auto& [key, value] : recording.metadata) {
     if (key == kGeometryCalibrationKey) data.geometry_calibration_id = value;
+  }
+  if (data.handle_radius_m > 0) {
+    data.handle_radius_origin =
+        data.geometry_calibration_id.empty()
+            ? "the recording's handle_radius_m"
+            : "geometry record " + data.geometry_calibration_id +
+                  " (the force corrected for the load cell's mounting angle)";
   }
   data.sample_rate_hz = recording.sample_rate_hz.value_or(in.rate_hz);
   switch (in.mode) {
@@ -1072,10 +1254,19 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
   // The rate the stillness test looks at: the gyroscope's (bias included), or the
   // derivative of angle_rad.
   std::vector<double> derived_rate;
+  const bool cutoff_auto = !(options.derivative_cutoff_hz > 0);
+  const double derivative_cutoff_hz =
+      cutoff_auto ? auto_derivative_cutoff_hz(in.rate_hz) : options.derivative_cutoff_hz;
   if (in.mode == Mode::kAngleOnly) {
-    in.check_cutoff(options.derivative_cutoff_hz, "derivative_cutoff_hz");
-    derived_rate = smoothing_derivative(in.t, in.angle, options.derivative_cutoff_hz, in.rate_hz);
+    in.check_cutoff(derivative_cutoff_hz, "derivative_cutoff_hz");
+    derived_rate = smoothing_derivative(in.t, in.angle, derivative_cutoff_hz, in.rate_hz);
+    data.derivative_cutoff_hz = derivative_cutoff_hz;
   }
+  data.interval_median_s = in.median_interval_s;
+  data.interval_min_s = in.min_interval_s;
+  data.interval_max_s = in.max_interval_s;
+  data.jittered = in.jittered;
+  data.rate_summary = describe_rate(in, data.derivative_cutoff_hz, cutoff_auto);
   const std::vector<double>& tested_rate = in.has_rate ? in.rate : derived_rate;
   const Stillness still = find_stillness(in, tested_rate, options);
   std::vector<Anchor> anchors = find_anchors(in, still, options);
@@ -1105,7 +1296,8 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
                          "from there");
   } else if (in.mode == Mode::kAngleOnly) {
     data.notes.push_back("rate: derivative of angle_rad after a zero-phase low-pass at " +
-                         text(options.derivative_cutoff_hz) + " Hz");
+                         text(derivative_cutoff_hz) + " Hz" +
+                         (cutoff_auto ? " (the rate's rule: min(30 Hz, sample rate / 4))" : ""));
   }
 
   // Noise levels from the trusted still periods, else the bench's figures.
@@ -1129,10 +1321,31 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
   data.angle_noise_rad =
       angle_noise ? std::max(*angle_noise, kNoiseFloorFraction * options.fallback_angle_noise_rad)
                   : options.fallback_angle_noise_rad;
+  // A quantised angle (an encoder's steps) that stands still reads no noise at all: its
+  // noise is at least the quantisation's, q / sqrt(12), and so is the derivative's.
+  if (!in.angle.empty()) {
+    if (const std::optional<double> q = angle_quantum(in.angle)) {
+      const double quantisation_rad = *q / std::sqrt(12.0);
+      if (quantisation_rad > data.angle_noise_rad) {
+        data.angle_noise_rad = quantisation_rad;
+        if (in.mode == Mode::kAngleOnly) {
+          const double rate_floor =
+              quantisation_rad * derivative_noise_gain(derivative_cutoff_hz, in.rate_hz);
+          data.rate_noise_rad_s = std::max(data.rate_noise_rad_s, rate_floor);
+        }
+        data.notes.push_back("angle_rad is quantised in steps of " + text(*q) +
+                             " rad: its noise is taken as at least the quantisation's (step / "
+                             "sqrt(12))" +
+                             (in.mode == Mode::kAngleOnly ? ", and the rate's as that through the "
+                                                            "smoothing derivative"
+                                                          : ""));
+      }
+    }
+  }
 
   if (options.force_cutoff_hz > 0) {
     in.check_cutoff(options.force_cutoff_hz, "force_cutoff_hz");
-    in.force = zero_phase_lowpass(in.force, options.force_cutoff_hz, in.rate_hz);
+    in.force = zero_phase_lowpass_at(in.t, in.force, options.force_cutoff_hz, in.rate_hz);
   }
 
   std::vector<ExcludedSegment> excluded;

@@ -52,7 +52,8 @@ struct PreprocessingOptions {
   // this bounds it), the mean |force| is below still_force_N, and no sample is faulty.
   // A still period is a run of quiet samples, less still_guard_s at both ends (a motion
   // that starts gently stays below the noise test for tens of ms), lasting at least
-  // still_min_duration_s.
+  // still_min_duration_s. The window is never shorter than kStillWindowSamples samples
+  // (at 50 Hz: 0.2 s), so that its standard deviation means something at low rates.
   double still_window_s = 0.1;
   double still_min_duration_s = 0.3;
   double still_guard_s = 0.1;
@@ -82,9 +83,15 @@ struct PreprocessingOptions {
   // Zero-phase (forward-backward 2nd-order Butterworth) low-pass filters, −6 dB at the
   // cut-off: before differentiating angle_rad (when there is no rate), and optionally on
   // the force (0 = off, the default: the door's inertia already averages the load cell's
-  // noise, and a filter would round the latch's force edges).
-  double derivative_cutoff_hz = 30.0;
+  // noise, and a filter would round the latch's force edges). derivative_cutoff_hz 0 (the
+  // default) follows the sample rate f_s: auto_derivative_cutoff_hz(f_s) = min(30 Hz,
+  // f_s / 4). A cut-off given must be below f_s / 2 (else PreprocessingError).
+  double derivative_cutoff_hz = 0.0;
   double force_cutoff_hz = 0.0;
+
+  // Recordings sampled more slowly than this (1 / the median interval) are refused: the
+  // rate rules (docs/preprocessing.md, "Any sample rate") are made and tested down to 20 Hz.
+  double min_sample_rate_hz = 20.0;
 
   // Segmentation (used when there is no stroke column, or use_stroke_column is false):
   // motion where |ω| > motion_rate_rad_s, widened while |ω| stays above
@@ -131,6 +138,20 @@ struct PreprocessingOptions {
   std::string validate() const;
 };
 
+// The still window's least number of samples (PreprocessingOptions::still_window_s).
+inline constexpr int kStillWindowSamples = 10;
+// Intervals that differ from 1 / the sample rate by more than this fraction make the
+// times jittered: the filters then work on a uniform grid (zero_phase_lowpass_at).
+inline constexpr double kJitterFraction = 0.01;
+// Below this rate the latch's details (its release, snap and force edges last a few
+// milliseconds on the reference door) are not resolved; PreparedData::rate_summary says so.
+inline constexpr double kLatchDetailRate_hz = 200.0;
+
+// The derivative's cut-off for a sample rate: min(30 Hz, f_s / 4). 30 Hz is the bench's
+// measured best at 1 kHz (docs/preprocessing.md); f_s / 4 keeps the filter well inside
+// the band the samples hold (half of Nyquist) at low rates: 12.5 Hz at 50 Hz, 5 Hz at 20 Hz.
+double auto_derivative_cutoff_hz(double sample_rate_hz);
+
 // Prepares a recording. Throws std::invalid_argument for bad options and
 // PreprocessingError (message "SOURCE: ...") for data it cannot prepare: no samples or
 // too few, columns of different lengths, times not finite and increasing, neither rate
@@ -151,8 +172,17 @@ PreparedData prepare_session(const std::filesystem::path& session_path,
 std::vector<double> zero_phase_lowpass(std::span<const double> values, double cutoff_hz,
                                        double sample_rate_hz);
 
+// zero_phase_lowpass of samples taken at `time_s` (strictly increasing), which need not be
+// uniform: when an interval differs from 1 / sample_rate_hz by more than kJitterFraction,
+// the values are interpolated linearly onto the uniform grid time_s[0] + k / sample_rate_hz,
+// filtered there and interpolated back to time_s; otherwise this is zero_phase_lowpass.
+std::vector<double> zero_phase_lowpass_at(std::span<const double> time_s,
+                                          std::span<const double> values, double cutoff_hz,
+                                          double sample_rate_hz);
+
 // The derivative of zero_phase_lowpass(values): central differences on the times
-// (one-sided at the ends).
+// (one-sided at the ends). Jittered times (as for zero_phase_lowpass_at): the derivative is
+// taken on the uniform grid and interpolated back to time_s.
 std::vector<double> smoothing_derivative(std::span<const double> time_s,
                                          std::span<const double> values, double cutoff_hz,
                                          double sample_rate_hz);

@@ -33,6 +33,10 @@ struct PreparedData {
   // The geometry record whose handle radius this is (and which corrected the force for the
   // load cell's mounting angle); empty when there is none.
   std::string geometry_calibration_id;
+  // Where handle_radius_m came from, for reports ("geometry record ID (...)", "the
+  // recording's handle_radius_m"; readers of files may name the file's field); empty when
+  // the data states no radius.
+  std::string handle_radius_origin;
   double sample_rate_hz = 0.0;
   std::vector<Stroke> strokes;
   std::vector<ExcludedSegment> excluded;
@@ -48,6 +52,16 @@ struct PreparedData {
   // Physically impossible samples left out (channel, how many, when, the largest value):
   // fit and loop print each on stderr as "warning: ...".
   std::vector<std::string> warnings;
+  // The sampling as found (docs/preprocessing.md, "Any sample rate"): the intervals'
+  // median, smallest and largest (s); jittered when an interval differs from the median by
+  // more than 1% (the filters then work on a uniform grid); the derivative's cut-off used
+  // (0: no derivative taken); one line saying what this rate resolves, for reports.
+  double interval_median_s = 0.0;
+  double interval_min_s = 0.0;
+  double interval_max_s = 0.0;
+  bool jittered = false;
+  double derivative_cutoff_hz = 0.0;
+  std::string rate_summary;
 };
 
 }  // namespace doorbench

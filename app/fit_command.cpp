@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "acquisition/output_file.h"
+#include "analysis/constraint_check.h"
 #include "analysis/fit_metrics.h"
 #include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
@@ -26,15 +27,41 @@ struct FitCommandOptions {
   std::string fixed;
   std::string objective = "windows";
   int folds = 4;
+  bool init_only = false;
   std::string out_dir;
 };
+
+// --init-only: the start parameter file and a page saying where each value came from.
+void write_start(const std::filesystem::path& dir, const FitInputs& inputs) {
+  write_text_file_atomically(dir / "start-params.json", to_parameter_json(inputs.start));
+  std::ostringstream page;
+  page << "# Start values for " << inputs.data.source << "\n\n";
+  for (const std::string& line : inputs.report_lines) page << line << ".\n\n";
+  page << "Data: " << inputs.data.rate_summary << ".\n\n"
+       << handle_radius_line(inputs.data, inputs.start) << ".\n\n"
+       << "| parameter | start | lower | upper | from |\n|---|---|---|---|---|\n";
+  const auto values = inputs.start.parameter_values();
+  const auto bounds = inputs.start.parameter_bounds();
+  for (std::size_t i = 0; i < inputs.start_origin.size(); ++i) {
+    page << "| " << inputs.start.parameter_name(static_cast<int>(i)) << " | "
+         << format_number(values[i]) << " | " << format_number(bounds[i].lower) << " | "
+         << format_number(bounds[i].upper) << " | " << inputs.start_origin[i] << " |\n";
+  }
+  write_text_file_atomically(dir / "start.md", page.str());
+}
 
 void run_fit(const FitCommandOptions& options) {
   const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   const PreparedData& data = inputs.data;
   const DoorModel& start = inputs.start;
+  if (options.init_only) {
+    write_start(options.out_dir, inputs);
+    std::cout << "start-params.json and start.md are in " << options.out_dir << "/\n";
+    return;
+  }
 
   FitOptions fit_options;
+  fit_options.substeps_per_sample = substeps_for(data);
   fit_options.free_parameters = split_names(options.free);
   fit_options.fixed_parameters = split_names(options.fixed);
   if (options.objective == "study-max") {
@@ -56,7 +83,9 @@ void run_fit(const FitCommandOptions& options) {
   }
   const std::vector<std::string> plots = write_fit_plots(dir, result.model, data, fit_options);
   std::ostringstream report;
-  report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n"
+  report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n";
+  for (const std::string& line : inputs.report_lines) report << line << ".\n\n";
+  report << "Data: " << data.rate_summary << ".\n\n"
          << handle_radius_line(data, result.model) << ".\n\n"
          << "```\n"
          << result.summary.full_report() << "```\n\n";
@@ -89,6 +118,9 @@ void add_fit_command(CLI::App& app, Action& action) {
   fit->add_option("--folds", options->folds, "Cross-validation folds over strokes (0: none)")
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
+  fit->add_flag("--init-only", options->init_only,
+                "Only write the start: start-params.json (a parameter file) and start.md "
+                "(where each value came from)");
   fit->add_option("--out", options->out_dir, "Folder for result.json, report.md and plots")
       ->required();
   fit->callback([options, &action] { action = [options] { run_fit(*options); }; });

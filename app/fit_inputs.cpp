@@ -1,5 +1,7 @@
 #include "app/fit_inputs.h"
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <iostream>
@@ -8,6 +10,8 @@
 
 #include "acquisition/output_file.h"
 #include "acquisition/recording_csv.h"
+#include "analysis/constraint_check.h"
+#include "analysis/fit_init.h"
 #include "analysis/parameter_file.h"
 #include "analysis/preprocessing.h"
 #include "app/commands.h"
@@ -24,13 +28,26 @@ bool is_hdf5_file(const std::string& path) {
   return in.gcount() == 8 && std::equal(head, head + 8, kSignature);
 }
 
-PreparedData load_prepared_data(const std::string& path) {
-  if (is_hdf5_file(path)) return prepare_session(path);
-  if (path.ends_with(".h5") || path.ends_with(".hdf5")) {
+PreparedData load_prepared_data(const std::string& path,
+                                const PreprocessingOptions& preprocessing) {
+  const bool session = is_hdf5_file(path);
+  if (!session && (path.ends_with(".h5") || path.ends_with(".hdf5"))) {
     throw std::runtime_error(path + ": not an HDF5 file (a session starts with the HDF5 "
                                     "signature; a CSV recording is read only under another name)");
   }
-  return prepare(read_recording_csv(path, EmptyCells::kMissing));  // empty cells: lost samples
+  // Empty cells of a CSV are lost samples.
+  PreparedData data =
+      session ? prepare_session(path, preprocessing)
+              : prepare(read_recording_csv(path, EmptyCells::kMissing), preprocessing);
+  if (data.handle_radius_m > 0 && data.geometry_calibration_id.empty()) {
+    data.handle_radius_origin = session ? "the session's handle_radius_m attribute"
+                                        : "the CSV's metadata (# handle_radius_m)";
+  }
+  return data;
+}
+
+std::string handle_radius_origin(const PreparedData& data) {
+  return data.handle_radius_origin;
 }
 
 std::vector<std::string> split_names(const std::string& list) {
@@ -95,6 +112,31 @@ void add_fit_data_options(CLI::App& command, FitDataOptions& options,
   command.add_option("--params", options.model.params_path,
                      "Start values and bounds (parameter file); default: the reference door");
   command.add_option("--effects", options.model.effects_path, effects_help);
+  command
+      .add_option("--derivative-cutoff-hz", options.preprocessing.derivative_cutoff_hz,
+                  "Low-pass before differentiating angle_rad (no gyroscope), Hz; 0: the rate's "
+                  "rule min(30 Hz, sample rate / 4) (docs/preprocessing.md)")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      .add_option("--force-cutoff-hz", options.preprocessing.force_cutoff_hz,
+                  "Zero-phase low-pass on the force, Hz; 0: none")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  command
+      .add_option("--min-sample-rate-hz", options.preprocessing.min_sample_rate_hz,
+                  "Refuse recordings sampled more slowly than this")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  command
+      .add_option("--start", options.start,
+                  "Start values: auto (from the data without --params, else the file), data "
+                  "(from the data; the file or the reference door fills in), file")
+      ->check(CLI::IsMember({"auto", "data", "file"}))
+      ->capture_default_str();
+  command.add_flag("--strict-geometry", options.strict_geometry,
+                   "A handle radius stated by the recording that differs from the --params "
+                   "file's is an error (default: a warning; the recording's is used)");
   command.add_flag("--overwrite", options.overwrite,
                    "Write into an --out folder that exists and is not empty (files of the same "
                    "names are replaced)");
@@ -116,9 +158,10 @@ FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::
 
 FitInputs load_fit_inputs(const FitDataOptions& options) {
   std::cerr << "preparing " << options.data_path << "\n";
-  PreparedData data = load_prepared_data(options.data_path);
+  PreparedData data = load_prepared_data(options.data_path, options.preprocessing);
   std::cerr << "  " << data.strokes.size() << " strokes, " << data.excluded.size()
-            << " segments excluded\n";
+            << " segments excluded\n"
+            << "  " << data.rate_summary << "\n";
   for (const std::string& warning : data.warnings) std::cerr << "warning: " << warning << "\n";
   for (const ExcludedSegment& e : data.excluded) {
     if (!e.lost_samples) continue;  // gaps are never silent
@@ -128,11 +171,27 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
   }
   DoorModel start =
       start_model(options.model.model, options.model.params_path, options.model.effects_path);
-  if (!data.geometry_calibration_id.empty() && data.handle_radius_m > 0) {
-    // The bench's calibrated geometry, not the door file's nominal radius.
+  std::vector<std::string> report_lines;
+  const double file_radius_m = start.geometry().handle_radius_m;
+  if (data.handle_radius_m > 0 &&
+      std::abs(data.handle_radius_m - file_radius_m) > 1e-6 * file_radius_m) {
+    // The recording's geometry (a calibrated bench's, or what the recording states), not
+    // the door file's nominal radius.
+    if (!options.model.params_path.empty()) {
+      const std::string difference =
+          "the door file's handle radius " + format_number(file_radius_m) + " m (" +
+          options.model.params_path + ") differs from the recording's " +
+          format_number(data.handle_radius_m) + " m, from " + handle_radius_origin(data);
+      if (options.strict_geometry) {
+        throw std::runtime_error(difference + " (--strict-geometry)");
+      }
+      const std::string warning = "warning: " + difference + "; the door file's handle radius " +
+                                  format_number(file_radius_m) +
+                                  " m is replaced (--strict-geometry makes this an error)";
+      std::cerr << "  " << warning << "\n";
+      report_lines.push_back(warning);
+    }
     DoorGeometry geometry = start.geometry();
-    std::cerr << "  the door file's handle radius " << geometry.handle_radius_m
-              << " m is replaced\n";
     geometry.handle_radius_m = data.handle_radius_m;
     const std::span<const double> values = start.parameter_values();
     const std::span<const Bounds> bounds = start.parameter_bounds();
@@ -142,18 +201,71 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
                       {start.effects().begin(), start.effects().end()});
   }
   std::cerr << "  " << handle_radius_line(data, start) << "\n";
-  return {std::move(data), std::move(start)};
+
+  const std::string base_name =
+      options.model.params_path.empty() ? "the reference door" : options.model.params_path;
+  std::vector<std::string> origin(static_cast<std::size_t>(start.base_parameter_count()),
+                                  base_name);
+  const bool from_data =
+      options.start == "data" || (options.start == "auto" && options.model.params_path.empty());
+  std::string start_line;
+  if (from_data && start.kind() == ModelKind::kSensory) {
+    const DataStart derived = start_from_data(data, start);
+    start = derived.model;
+    std::vector<std::string> data_names, latch_names;
+    for (std::size_t i = 0; i < derived.origin.size(); ++i) {
+      const std::string& name = start.parameter_name(static_cast<int>(i));
+      if (derived.origin[i] == "free motion") {
+        data_names.push_back(name);
+        origin[i] = "the data (free motion)";
+      } else if (derived.origin[i] == "latch read-off") {
+        latch_names.push_back(name);
+        origin[i] = "the data (latch read-off)";
+      }
+    }
+    auto join = [](const std::vector<std::string>& names) {
+      std::string text;
+      for (const std::string& name : names) text += (text.empty() ? "" : ", ") + name;
+      return text;
+    };
+    start_line = "start values from the data";
+    if (!data_names.empty()) {
+      start_line += ": " + join(data_names) + " from " +
+                    std::to_string(derived.free_motion_samples) +
+                    " samples of free motion (balance torque " +
+                    format_number(std::round(derived.balance_torque_Nm * 1000.0) / 1000.0) +
+                    " N*m, force offset " +
+                    format_number(std::round(derived.force_offset_N * 1000.0) / 1000.0) + " N)";
+    }
+    if (!latch_names.empty()) {
+      start_line += std::string(data_names.empty() ? ": " : "; ") + join(latch_names) +
+                    " read off the force-angle curves near closed";
+    }
+    start_line += "; the others " + base_name + "'s";
+    for (const std::string& note : derived.notes) start_line += "; " + note;
+  } else if (from_data) {
+    start_line =
+        "start values: " + base_name + "'s (start values from the data: the sensory model only)";
+  } else {
+    start_line = "start values: " + base_name + "'s";
+  }
+  std::cerr << "  " << start_line << "\n";
+  report_lines.push_back(start_line);
+  return {std::move(data), std::move(start), std::move(report_lines), std::move(origin)};
+}
+
+int substeps_for(const PreparedData& data) {
+  const double interval_s = data.interval_median_s > 0 ? data.interval_median_s
+                            : data.sample_rate_hz > 0  ? 1.0 / data.sample_rate_hz
+                                                       : 0.001;
+  return std::clamp(static_cast<int>(std::ceil(interval_s / 0.001 - 1e-9)), 2, 100);
 }
 
 std::string handle_radius_line(const PreparedData& data, const DoorModel& model) {
   std::ostringstream line;
   line << "handle radius " << model.geometry().handle_radius_m << " m, from ";
-  if (!data.geometry_calibration_id.empty() && data.handle_radius_m > 0) {
-    line << "geometry record " << data.geometry_calibration_id
-         << " (the force corrected for the load cell's mounting angle)";
-  } else {
-    line << "the door parameter file";
-  }
+  const std::string origin = handle_radius_origin(data);
+  line << (origin.empty() ? "the door parameter file" : origin);
   return line.str();
 }
 

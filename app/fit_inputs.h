@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "analysis/door_model.h"
+#include "analysis/preprocessing.h"
 #include "analysis/strokes.h"
 #include "app/commands.h"
 
@@ -18,7 +19,13 @@ bool is_hdf5_file(const std::string& path);
 // A session (HDF5: by its signature) or a recording in the CSV exchange format, prepared
 // into strokes (analysis/preprocessing.h); empty cells of the CSV are missing samples. A
 // file named *.h5 or *.hdf5 that is not HDF5 is refused ("PATH: not an HDF5 file ...").
-PreparedData load_prepared_data(const std::string& path);
+// A handle radius the recording states gets its origin named for the file's kind
+// (PreparedData::handle_radius_origin).
+PreparedData load_prepared_data(const std::string& path,
+                                const PreprocessingOptions& preprocessing = {});
+
+// PreparedData::handle_radius_origin: "" when the data states no radius.
+std::string handle_radius_origin(const PreparedData& data);
 
 // "a,b,,c" -> {"a", "b", "c"}: the parameter lists of --free and --fixed (empty items dropped).
 std::vector<std::string> split_names(const std::string& list);
@@ -31,32 +38,55 @@ std::vector<EffectSetting> effects_from_argument(const std::string& argument);
 DoorModel start_model(const std::string& model_kind, const std::string& params_path,
                       const std::string& effects_argument);
 
-// The options `fit` and `loop` share: DATA, --model, --params, --effects, --overwrite.
+// The options `fit` and `loop` share: DATA, --model, --params, --effects, the filters
+// (--derivative-cutoff-hz, --force-cutoff-hz, --min-sample-rate-hz), --strict-geometry,
+// --start and --overwrite.
 struct FitDataOptions {
   std::string data_path;
   ModelOptions model;
+  PreprocessingOptions preprocessing;
+  // A handle radius stated by the recording that differs from the parameter file's is an
+  // error (default: a warning, and the recording's is used).
+  bool strict_geometry = false;
+  // Where the start values come from (--start): "auto" (from the data without --params,
+  // else the file's), "data" (from the data, the file or the reference door filling in what
+  // the data do not give: analysis/fit_init.h), "file" (the file's, or the reference door's).
+  // From the data for the sensory model only.
+  std::string start = "auto";
   bool overwrite = false;  // write into an --out folder that is not empty
 };
 // DATA, --params and an --effects file: what the --out folder must not hold.
 std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options);
-// The output rule for the --out folder (acquisition/output_file.h), then the inputs are
-// read (load_fit_inputs), and only then is the folder created: a failure leaves no folder.
-// Returns the inputs.
+
+// RK4 sub-steps per sample for a fit of `data`: steps of at most 1 ms, and at least 2 per
+// sample (the fit's default, kept at 500 Hz and above). At 50 Hz: 20.
+int substeps_for(const PreparedData& data);
 void add_fit_data_options(CLI::App& command, FitDataOptions& options,
                           const std::string& effects_help);
 
 struct FitInputs {
   PreparedData data;
   DoorModel start;
+  // Lines for the report (warnings first, then where the start values came from).
+  std::vector<std::string> report_lines;
+  // Per base parameter of `start`: where its start value came from.
+  std::vector<std::string> start_origin;
 };
-// Prepares DATA and builds the start model, reporting progress on stderr. When the data
-// carries a geometry record (a session's load cell with geometry_calibration_id), the
-// record's handle radius replaces the door file's in the start model.
+// Prepares DATA and builds the start model, reporting progress on stderr. The recording's
+// geometry wins: when the data states a handle radius (a session's geometry record, its
+// handle_radius_m, or a CSV's `# handle_radius_m:`), it replaces the parameter file's (or
+// the reference door's) in the start model. A difference from a parameter file given with
+// --params is a warning on stderr and in report_lines; with strict_geometry it throws
+// std::runtime_error naming both radii and where they came from.
 FitInputs load_fit_inputs(const FitDataOptions& options);
+// The output rule for the --out folder (acquisition/output_file.h), then the inputs are
+// read (load_fit_inputs), and only then is the folder created: a failure leaves no folder.
+// Returns the inputs.
 FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::path& out_dir);
 
 // Which handle radius `model` has and where it came from, one line for reports: "handle
-// radius 0.62 m, from geometry record geometry-B1-v2" or "…, from the door parameter file".
+// radius 0.62 m, from geometry record geometry-B1-v2 (...)", "…, from the CSV's metadata
+// (# handle_radius_m)" or "…, from the door parameter file" (the data states none).
 std::string handle_radius_line(const PreparedData& data, const DoorModel& model);
 
 }  // namespace doorbench::app

@@ -69,7 +69,17 @@ nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedDa
   for (const ExcludedSegment& e : data.excluded) {
     excluded.push_back({{"start_s", e.start_s}, {"end_s", e.end_s}, {"reason", e.reason}});
   }
+  const nlohmann::ordered_json sampling = {{"sample_rate_hz", data.sample_rate_hz},
+                                           {"interval_median_s", data.interval_median_s},
+                                           {"interval_min_s", data.interval_min_s},
+                                           {"interval_max_s", data.interval_max_s},
+                                           {"jittered", data.jittered},
+                                           {"derivative_cutoff_hz", data.derivative_cutoff_hz},
+                                           {"rate_summary", data.rate_summary},
+                                           {"handle_radius_m", data.handle_radius_m},
+                                           {"handle_radius_origin", data.handle_radius_origin}};
   return {{"source", data.source},
+          {"data", sampling},
           {"model", std::string(to_string(s.model_kind))},
           {"strokes", s.strokes},
           {"windows", s.windows},

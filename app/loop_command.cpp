@@ -23,11 +23,13 @@ void run_loop(const LoopCommandOptions& options) {
   const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   LoopOptions loop_options;
   loop_options.fit.cross_validation_folds = options.folds;
+  loop_options.fit.substeps_per_sample = substeps_for(inputs.data);
   loop_options.max_steps = options.max_steps;
   loop_options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
   const LoopResult result = run_residual_loop(inputs.start, inputs.data, loop_options);
-  const std::string table = write_loop_outputs(options.out_dir, result, inputs.data,
-                                               options.input.model.model, loop_options.fit);
+  const std::string table =
+      write_loop_outputs(options.out_dir, result, inputs.data, options.input.model.model,
+                         loop_options.fit, inputs.report_lines);
   std::cout << result.brief_report() << "\n"
             << table << "\nresult.json, report.md, the fitted "
             << "parameter and effects files and plots are in " << options.out_dir << "/\n";

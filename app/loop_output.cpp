@@ -82,14 +82,17 @@ std::string steps_table(const LoopResult& result) {
 
 std::string write_loop_outputs(const std::filesystem::path& dir, const LoopResult& result,
                                const PreparedData& data, const std::string& model_name,
-                               const FitOptions& fit_options) {
+                               const FitOptions& fit_options,
+                               const std::vector<std::string>& report_lines) {
   write_text_file_atomically(dir / "result.json", loop_json(result, data).dump(2) + "\n");
   write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model()));
   write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model()));
   const std::vector<std::string> plots = write_fit_plots(dir, result.model(), data, fit_options);
   const std::string table = steps_table(result);
   std::ostringstream report;
-  report << "# Residual loop: the " << model_name << " model on " << data.source << "\n\n"
+  report << "# Residual loop: the " << model_name << " model on " << data.source << "\n\n";
+  for (const std::string& line : report_lines) report << line << ".\n\n";
+  report << "Data: " << data.rate_summary << ".\n\n"
          << handle_radius_line(data, result.model()) << ".\n\n"
          << table << "\n```\n"
          << result.full_report() << "```\n\n"

@@ -13,9 +13,12 @@ namespace doorbench::app {
 // window RMSE of ω before → after on fitted and held-out strokes.
 std::string steps_table(const LoopResult& result);
 
-// Writes the folder's files (dir must exist) and returns steps_table(result).
+// Writes the folder's files (dir must exist) and returns steps_table(result). report.md
+// starts with `report_lines` (warnings, the start values' origin), the data's rate summary
+// and the handle radius's origin.
 std::string write_loop_outputs(const std::filesystem::path& dir, const LoopResult& result,
                                const PreparedData& data, const std::string& model_name,
-                               const FitOptions& fit_options);
+                               const FitOptions& fit_options,
+                               const std::vector<std::string>& report_lines = {});
 
 }  // namespace doorbench::app

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <ctime>
+#include <filesystem>
 #include <iostream>
 #include <map>
 #include <memory>
@@ -20,6 +21,7 @@
 #include "acquisition/recovery.h"
 #include "acquisition/rig_file.h"
 #include "acquisition/session_csv.h"
+#include "acquisition/tdms.h"
 #include "app/commands.h"
 #include "app/session_recording.h"
 #include "calibration/range_warnings.h"
@@ -570,11 +572,34 @@ struct ImportOptions {
   std::string csv_path;
   std::string out_path;
   std::string operator_name, product_id, notes;
+  std::string tdms_map;  // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/tdms.h)
 };
+
+// A TDMS file (by its .tdms extension, any case) through --map, else the CSV exchange format.
+Recording read_import(const ImportOptions& options) {
+  std::string extension = std::filesystem::path(options.csv_path).extension().string();
+  std::transform(extension.begin(), extension.end(), extension.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension != ".tdms") {
+    if (!options.tdms_map.empty()) throw UsageError("--map is for TDMS files (*.tdms)");
+    return read_recording_csv(options.csv_path, EmptyCells::kMissing);  // empty: lost samples
+  }
+  if (options.tdms_map.empty()) {
+    throw UsageError("a TDMS file needs --map force=GROUP/CHANNEL,angle=GROUP/CHANNEL (or rate=)");
+  }
+  std::vector<TdmsMapItem> map;
+  try {
+    map = parse_tdms_map(options.tdms_map);
+  } catch (const std::invalid_argument& error) {
+    throw UsageError(error.what());
+  }
+  const TdmsFile file = read_tdms(options.csv_path);
+  return tdms_to_recording(file, map, options.csv_path);
+}
 
 void run_import(const ImportOptions& options) {
   check_output_session(options.out_path, {options.csv_path});
-  const Recording recording = read_recording_csv(options.csv_path, EmptyCells::kMissing);
+  const Recording recording = read_import(options);
   SessionMetadata metadata;
   metadata.rig_name = "imported";
   metadata.operator_name = options.operator_name;
@@ -653,13 +678,19 @@ void add_session_commands(CLI::App& app, Action& action) {
 
   auto import = std::make_shared<ImportOptions>();
   CLI::App* import_command = app.add_subcommand(
-      "import", "Make a session of a recording in the CSV exchange format from elsewhere");
-  import_command->add_option("CSV", import->csv_path, "Recording (CSV exchange format)")
+      "import",
+      "Make a session of a recording from elsewhere: the CSV exchange format, or a TDMS file "
+      "(LabVIEW, SignalExpress, DAQmx logging) with --map (docs/tdms.md)");
+  import_command
+      ->add_option("CSV", import->csv_path, "Recording (CSV exchange format, or *.tdms with --map)")
       ->required();
   import_command->add_option("--out", import->out_path, "The new session file (HDF5)")->required();
   import_command->add_option("--operator", import->operator_name, "Who recorded it");
   import_command->add_option("--product", import->product_id, "The door or product");
   import_command->add_option("--notes", import->notes, "Free text kept in the session");
+  import_command->add_option("--map", import->tdms_map,
+                             "TDMS channels: force=GROUP/CHANNEL,angle=GROUP/CHANNEL[,rate=...]"
+                             "[,time=...][,NAME_UNIT=...]");
   import_command->callback([import, &action] { action = [import] { run_import(*import); }; });
 }
 

@@ -1,0 +1,125 @@
+#pragma once
+// A TDMS writer for tests, from NI's published description of the format ("TDMS File Format
+// Internal Structure"): segments of a 28-byte lead-in ("TDSm", the ToC flags, the version,
+// the next segment's and the raw data's offsets), metadata (objects with their raw data
+// indexes and properties) and raw data, all little-endian. It writes exactly what a test
+// asks for, including layouts the reader refuses.
+#include <cstdint>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace doorbench::testing::tdms {
+
+inline constexpr std::uint32_t kTocMetaData = 1u << 1;
+inline constexpr std::uint32_t kTocNewObjList = 1u << 2;
+inline constexpr std::uint32_t kTocRawData = 1u << 3;
+inline constexpr std::uint32_t kTocInterleavedData = 1u << 5;
+inline constexpr std::uint32_t kTocBigEndian = 1u << 6;
+inline constexpr std::uint32_t kTocDAQmxRawData = 1u << 7;
+
+inline constexpr std::uint32_t kI32 = 3, kU32 = 7, kSingle = 9, kDouble = 10, kExtended = 11,
+                               kString = 0x20, kTimeStamp = 0x44;
+
+struct Bytes {
+  std::vector<std::uint8_t> data;
+  template <typename T>
+  void put(T value) {
+    std::uint8_t raw[sizeof(T)];
+    std::memcpy(raw, &value, sizeof(T));
+    data.insert(data.end(), raw, raw + sizeof(T));
+  }
+  void text(const std::string& value) {
+    put<std::uint32_t>(static_cast<std::uint32_t>(value.size()));
+    data.insert(data.end(), value.begin(), value.end());
+  }
+  void append(const Bytes& other) { data.insert(data.end(), other.data.begin(), other.data.end()); }
+};
+
+struct Property {
+  std::string name;
+  std::uint32_t type;
+  Bytes value;
+};
+inline Property text_property(const std::string& name, const std::string& value) {
+  Property p{name, kString, {}};
+  p.value.text(value);
+  return p;
+}
+inline Property double_property(const std::string& name, double value) {
+  Property p{name, kDouble, {}};
+  p.value.put(value);
+  return p;
+}
+inline Property i32_property(const std::string& name, std::int32_t value) {
+  Property p{name, kI32, {}};
+  p.value.put(value);
+  return p;
+}
+inline Property time_property(const std::string& name, std::int64_t seconds_since_1904,
+                              std::uint64_t fractions) {
+  Property p{name, kTimeStamp, {}};
+  p.value.put(fractions);
+  p.value.put(seconds_since_1904);
+  return p;
+}
+
+// One object of a segment's metadata. raw: kNone (0xFFFFFFFF), kSame (0x00000000), kNew (an
+// index with type and count), or kRawIndex (the 4 bytes `raw_index` as they are, e.g. a
+// DAQmx index).
+struct Object {
+  enum Raw { kNone, kSame, kNew, kRawIndex } raw = kNone;
+  std::string path;
+  std::uint32_t type = kDouble;
+  std::uint64_t count = 0;
+  std::uint64_t string_bytes = 0;  // strings: the raw data's total size in bytes
+  std::uint32_t raw_index = 0;
+  std::vector<Property> properties;
+};
+
+// A whole segment: the lead-in, the metadata (when the ToC says so) and `raw`.
+inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, const Bytes& raw,
+                     std::uint32_t version = 4713) {
+  Bytes meta;
+  if (toc & kTocMetaData) {
+    meta.put<std::uint32_t>(static_cast<std::uint32_t>(objects.size()));
+    for (const Object& object : objects) {
+      meta.text(object.path);
+      switch (object.raw) {
+        case Object::kNone:
+          meta.put<std::uint32_t>(0xFFFFFFFFu);
+          break;
+        case Object::kSame:
+          meta.put<std::uint32_t>(0u);
+          break;
+        case Object::kRawIndex:
+          meta.put<std::uint32_t>(object.raw_index);
+          break;
+        case Object::kNew:
+          meta.put<std::uint32_t>(object.type == kString ? 28u : 20u);
+          meta.put<std::uint32_t>(object.type);
+          meta.put<std::uint32_t>(1u);
+          meta.put<std::uint64_t>(object.count);
+          if (object.type == kString) meta.put<std::uint64_t>(object.string_bytes);
+          break;
+      }
+      meta.put<std::uint32_t>(static_cast<std::uint32_t>(object.properties.size()));
+      for (const Property& property : object.properties) {
+        meta.text(property.name);
+        meta.put<std::uint32_t>(property.type);
+        meta.append(property.value);
+      }
+    }
+  }
+  Bytes out;
+  out.data = {'T', 'D', 'S', 'm'};
+  out.put<std::uint32_t>(toc);
+  out.put<std::uint32_t>(version);
+  out.put<std::uint64_t>(meta.data.size() + raw.data.size());
+  out.put<std::uint64_t>(meta.data.size());
+  out.append(meta);
+  out.append(raw);
+  return out;
+}
+
+}  // namespace doorbench::testing::tdms
