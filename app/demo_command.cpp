@@ -10,6 +10,7 @@
 #include <iostream>
 #include <memory>
 
+#include "acquisition/output_file.h"
 #include "acquisition/recording_csv.h"
 #include "acquisition/session_csv.h"
 #include "analysis/fitting.h"
@@ -324,7 +325,7 @@ void run_demo(const DemoOptions& options) {
         run_path, to_recording(run, "doorbench demo, reference door, " +
                                         std::string(to_string(kind)) + " model, virtual hand"));
     const std::filesystem::path params_path = dir / (std::string(to_string(kind)) + "-params.json");
-    std::ofstream(params_path) << to_parameter_json(model);
+    write_text_file_atomically(params_path, to_parameter_json(model));
     std::cout << "\n"
               << to_string(kind) << " model (" << run_path.string() << "):\n"
               << format_summary(summarize_run(model, run));

@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "acquisition/output_file.h"
 #include "analysis/commanded_torque.h"
 #include "analysis/inverse_design.h"
 #include "analysis/parameter_file.h"
@@ -129,7 +130,7 @@ void run_spec(const SpecCommandOptions& options) {
   const SpecReportFiles files =
       write_spec_report(options.out_dir, design, evaluation, options.no_pdf ? "none" : "");
   const std::filesystem::path params = std::filesystem::path(options.out_dir) / "tobe-params.json";
-  std::ofstream(params) << to_parameter_json(design.solutions.front().model);
+  write_text_file_atomically(params, to_parameter_json(design.solutions.front().model));
 
   std::cout << design.brief_report() << "\nfelt, AS-IS door:\n"
             << evaluation.felt_before.brief_report() << "felt, TO-BE design:\n"
