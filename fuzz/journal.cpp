@@ -1,11 +1,16 @@
 // Fuzzes the recording journal's reader and recovery (acquisition/journal.h, recovery.h):
 // any bytes on disk give frames up to the first bad one and a session, or a JournalError /
 // SessionError naming the file; nothing else may escape, crash or be undefined. Each input
-// is written to a file of its own process's, read frame by frame, then recovered.
+// is tried twice: as it is, and with its CRC-32s made right (the header's and each frame's,
+// layout in docs/session-format.md), so that mutations reach the header's JSON and the
+// frames' contents instead of stopping at a checksum. Each is written to a file of the
+// process's own, read frame by frame, then recovered.
 #include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
+#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -32,9 +37,37 @@ const std::filesystem::path& folder() {
   return scratch.path;
 }
 
-}  // namespace
+std::uint32_t get32(const std::vector<std::uint8_t>& bytes, std::size_t at) {
+  std::uint32_t value;
+  std::memcpy(&value, bytes.data() + at, 4);
+  return value;
+}
 
-extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+void put32(std::vector<std::uint8_t>& bytes, std::size_t at, std::uint32_t value) {
+  std::memcpy(bytes.data() + at, &value, 4);
+}
+
+// The same bytes with the header's and every whole frame's checksum recomputed.
+std::vector<std::uint8_t> with_checksums(const std::uint8_t* data, std::size_t size) {
+  std::vector<std::uint8_t> bytes(data, data + size);
+  constexpr std::size_t kHead = 8 + 12;  // magic, version, JSON length, JSON CRC
+  if (bytes.size() < kHead) return bytes;
+  const std::uint32_t json_bytes = get32(bytes, 12);
+  if (json_bytes > bytes.size() - kHead) return bytes;
+  put32(bytes, 16, doorbench::crc32({bytes.data() + kHead, json_bytes}));
+  std::size_t at = kHead + json_bytes;
+  while (bytes.size() - at >= 16) {  // magic, type, payload length, CRC, payload
+    const std::uint32_t payload = get32(bytes, at + 8);
+    if (payload > bytes.size() - at - 16) break;
+    std::uint32_t crc = doorbench::crc32({bytes.data() + at + 4, 8});
+    crc = doorbench::crc32({bytes.data() + at + 16, payload}, crc);
+    put32(bytes, at + 12, crc);
+    at += 16 + payload;
+  }
+  return bytes;
+}
+
+void read_and_recover(const std::uint8_t* data, std::size_t size) {
   const std::filesystem::path journal = folder() / "s.h5.journal";
   const std::filesystem::path session = folder() / "s.h5";
   std::error_code ignored;
@@ -57,5 +90,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   std::filesystem::remove(journal, ignored);
   std::filesystem::remove(session, ignored);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  read_and_recover(data, size);
+  const std::vector<std::uint8_t> repaired = with_checksums(data, size);
+  read_and_recover(repaired.data(), repaired.size());
   return 0;
 }
