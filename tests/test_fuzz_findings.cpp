@@ -12,10 +12,9 @@
 #include <catch2/catch.hpp>
 #include <cstdint>
 #include <filesystem>
+#include <sstream>
 #include <string>
 #include <vector>
-
-#include <sstream>
 
 #include "acquisition/journal.h"
 #include "acquisition/recording_csv.h"
