@@ -120,8 +120,10 @@ def main():
     for model, parameters, torque in (("sensory", sensory, sensory_torque),
                                       ("physical", physical, physical_torque)):
         out_path = os.path.join(args.work_dir, f"torque_{model}.csv")
+        # --overwrite: the work folder is the build's, kept from the run before.
         subprocess.run([args.doorbench, "model", "torque", "--model", model, "--params",
-                        args.door_json, "--in", grid_path, "--out", out_path], check=True)
+                        args.door_json, "--in", grid_path, "--out", out_path, "--overwrite"],
+                       check=True)
         with open(out_path) as f:
             rows = list(csv.reader(line for line in f if not line.startswith("#")))
         column = rows[0].index("tau_Nm")
