@@ -289,6 +289,7 @@ void specify_tuned_variant(const std::filesystem::path& dir) {
   spec.fixed = "m_d,l_c,k_stop,c_stop,e,w_f";
   spec.fixed_given = true;
   spec.show_progress = false;
+  spec.overwrite = true;  // the demo owns its folder
   run_spec(spec);
   const DoorModel specified =
       load_model(ModelKind::kPhysical, dir / "spec" / "tobe-params.json", "");

@@ -181,6 +181,24 @@ TEST_CASE("Outputs: fit and loop check their input before creating --out", "[out
                          bad.string() + ") (doorbench never writes onto its input)\n");
 }
 
+TEST_CASE("Outputs: spec refuses a folder that is not empty before any work", "[outputs][cli]") {
+  const TempDir dir("output_spec");
+  const fs::path out = dir / "spec";
+  fs::create_directories(out);
+  std::ofstream(out / "spec.json") << "{}\n";
+  // Inputs that would fail if read: the refusal comes first.
+  const fs::path tobe = dir.write("tobe.csv", "not a recording\n");
+  const fs::path asis = dir.write("asis.json", "not a door\n");
+  const DoorbenchRun run = run_doorbench_shell(
+      "spec " + tobe.string() + " --asis " + asis.string() +
+          " --out " + out.string(),
+      dir);
+  CHECK(run.status == 2);
+  CHECK(run.err ==
+        "doorbench: " + out.string() + ": exists and is not empty (give --overwrite to write into it)\n");
+  CHECK(read_file(out / "spec.json") == "{}\n");
+}
+
 TEST_CASE("Outputs: a full disk leaves the old file or nothing, and the message names the path",
           "[outputs][cli]") {
   const TempDir dir("output_full");
