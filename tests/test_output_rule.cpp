@@ -199,6 +199,31 @@ TEST_CASE("Outputs: spec refuses a folder that is not empty before any work", "[
   CHECK(read_file(out / "spec.json") == "{}\n");
 }
 
+TEST_CASE("Outputs: calibration certificates follow the rule", "[outputs][cli]") {
+  const TempDir dir("output_certificate");
+  const fs::path session = small_session(dir);
+  const fs::path certificate = dir / "cert.html";
+  std::ofstream(certificate) << "old\n";
+  const DoorbenchRun existing = run_doorbench_shell(
+      "calibrate gyro --from " + session.string() + " --certificate " + certificate.string(), dir);
+  CHECK(existing.status == 2);
+  CHECK(existing.err ==
+        "doorbench: " + certificate.string() + ": exists (give --overwrite to replace it)\n");
+  CHECK(read_file(certificate) == "old\n");
+  const DoorbenchRun onto = run_doorbench_shell("calibrate gyro --from " + session.string() +
+                                                    " --certificate " + session.string() +
+                                                    " --overwrite",
+                                                dir);
+  CHECK(onto.status == 2);
+  CHECK(onto.err == "doorbench: " + session.string() +
+                        ": is an input of this command (doorbench never writes onto its input)\n");
+  const DoorbenchRun store = run_doorbench_shell(
+      "calibration certificate some-id --out " + certificate.string(), dir);
+  CHECK(store.status == 2);
+  CHECK(store.err ==
+        "doorbench: " + certificate.string() + ": exists (give --overwrite to replace it)\n");
+}
+
 TEST_CASE("Outputs: a full disk leaves the old file or nothing, and the message names the path",
           "[outputs][cli]") {
   const TempDir dir("output_full");
