@@ -77,7 +77,7 @@ std::string format_csv_number(double value);
 // Writes `# key: value` lines (`# text` for a note, i.e. an empty key), the header and
 // one row per sample. Throws std::invalid_argument when the input could not be read back
 // as given: column count or lengths that differ, a null column, no columns, names that
-// are empty, duplicated, padded with spaces, numbers, start with `#` or contain `,` `"`
+// are empty, duplicated, padded with spaces, numbers, the first starting with `#`, contain `,` `"`
 // `;`, tabs or line breaks, invalid or duplicated metadata keys, values with line breaks
 // or edge spaces, notes that would read back as metadata, infinities. A NaN is a missing
 // sample and is written as an empty cell (read back as NaN with EmptyCells::kMissing).

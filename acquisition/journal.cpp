@@ -154,6 +154,15 @@ JournalHeader parse_header(const std::string& text, const std::string& source) {
     header.calibrations.push_back(
         calibration::calibration_record_from_json(r.get<std::string>(), source));
   }
+  // Within the rig file's limits (docs/rig-format.md): a damaged header must not make
+  // recovery's clock arithmetic or gap filling unbounded.
+  // (0: no DAQ, only polled channels with explicit times.)
+  if (!(header.scan_rate_hz == 0.0 ||
+        (header.scan_rate_hz >= 1.0 && header.scan_rate_hz <= 200000.0))) {
+    char rate[32];
+    std::snprintf(rate, sizeof rate, "%g", header.scan_rate_hz);
+    throw std::invalid_argument(std::string("scan_rate_hz ") + rate + " is not 0 (no DAQ) or from 1 to 200000 Hz");
+  }
   return header;
 }
 

@@ -223,6 +223,16 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
             if (frame.first_scan > result.scans) {
               // Scans the writer never got (ring overflow): keep the clock, mark the gap.
               const std::uint64_t missing = frame.first_scan - result.scans;
+              // No writer falls an hour behind: such a jump is damage, and filling it would
+              // write without bound (found by fuzz/journal.cpp).
+              const double hour_of_scans = 3600.0 * header.scan_rate_hz;
+              if (static_cast<double>(missing) > hour_of_scans) {
+                throw JournalError(journal.string() + ": block at byte " +
+                                   std::to_string(frame.offset) + " starts at scan " +
+                                   std::to_string(frame.first_scan) + ", " +
+                                   std::to_string(missing) + " scans after the last one the " +
+                                   "journal has (more than an hour): the journal is damaged");
+              }
               char detail[200];
               std::snprintf(detail, sizeof detail,
                             "%llu scans from scan %llu lost (ring buffer overflow); their raw "
@@ -293,6 +303,13 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
                          " to it: " + error.message());
     }
     sync_path(folder_of(session), true);
+  } catch (const std::logic_error& error) {
+    // The session writer refused what the header describes (a channel's calibration record
+    // missing, a bad name): damage, not a misuse (found by fuzz/journal.cpp).
+    std::error_code ignored;
+    std::filesystem::remove(partial, ignored);
+    throw JournalError(journal.string() + ": the journal's header does not describe a valid " +
+                       "session: " + error.what());
   } catch (...) {
     std::error_code ignored;
     std::filesystem::remove(partial, ignored);

@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "acquisition/output_file.h"
 #include "analysis/svg_plot.h"
 #include "analysis/text_format.h"
 
@@ -479,11 +480,9 @@ SpecReportFiles write_spec_report(const std::filesystem::path& dir,
   SpecReportFiles files;
   files.json = dir / "spec.json";
   files.html = dir / "spec.html";
+  // Whole or not at all, the error naming the path (acquisition/output_file.h).
   auto write = [](const std::filesystem::path& path, const std::string& text) {
-    std::ofstream out(path, std::ios::binary);
-    out << text;
-    out.close();
-    if (!out) throw std::runtime_error(path.string() + ": cannot write");
+    write_text_file_atomically(path, text);
   };
   write(files.json, spec_json(design, evaluation));
   write(files.html, spec_html(design, evaluation));

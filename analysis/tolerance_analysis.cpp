@@ -149,7 +149,10 @@ ToleranceSpec parse_tolerance_file(std::string_view json_text, std::string_view 
       }
     }
     if (!has_plus_minus) throw std::runtime_error(key + ": plus_minus missing");
-    std::erase_if(spec.parameters, [&](const ParameterTolerance& t) { return t.name == name; });
+    // (A named copy: clang 14, which builds the fuzz targets, cannot capture a binding.)
+    const std::string parameter = name;
+    std::erase_if(spec.parameters,
+                  [&parameter](const ParameterTolerance& t) { return t.name == parameter; });
     if (tolerance.plus_minus > 0) spec.parameters.push_back(tolerance);
   }
   return spec;

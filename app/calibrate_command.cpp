@@ -9,6 +9,7 @@
 #include <memory>
 #include <numbers>
 
+#include "acquisition/output_file.h"
 #include "app/commands.h"
 #include "app/session_recording.h"
 #include "calibration/calibration_store.h"
@@ -37,6 +38,7 @@ struct CalibrateOptions {
   std::string operator_name;
   std::string valid_until;
   std::string certificate;
+  bool overwrite = false;   // --certificate may replace an existing file
   std::string out_session;  // gyro/timing live: where the recording goes
   bool apply = false;       // --from: apply the new record to the session
   bool dry_run = false;     // do not store
@@ -56,6 +58,17 @@ struct CalibrateOptions {
   std::vector<double> check_reference_N, check_reading_N;
   std::string bench_name;
 };
+
+// The output rule for --certificate (docs/output-files.md), before the procedure, then it.
+void checked(const CalibrateOptions& o, void (*procedure)(const CalibrateOptions&)) {
+  if (!o.certificate.empty()) {
+    std::vector<std::filesystem::path> inputs;
+    if (!o.from_session.empty()) inputs.emplace_back(o.from_session);
+    if (!o.rig_path.empty()) inputs.emplace_back(o.rig_path);
+    check_output_file(o.certificate, inputs, o.overwrite);
+  }
+  procedure(o);
+}
 
 cal::CalibrationStore store_of(const CalibrateOptions& o, const std::filesystem::path& base) {
   return cal::CalibrationStore(cal::calibration_store_directory(o.store_dir, base));
@@ -356,6 +369,7 @@ void add_common(CLI::App* command, CalibrateOptions& o, bool live, bool from) {
   command->add_option("--operator", o.operator_name, "Who calibrates");
   command->add_option("--valid-until", o.valid_until, "Expiry, ISO 8601 (default: none)");
   command->add_option("--certificate", o.certificate, "Write the certificate (HTML) here");
+  command->add_flag("--overwrite", o.overwrite, "Replace an existing --certificate file");
   command->add_flag("--dry-run", o.dry_run, "Show the record, do not store it");
 }
 
@@ -381,7 +395,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
                      "from the unloaded start of --from SESSION)");
   loadcell->add_option("--window-s", o->window_s, "Stable window averaged per point")
       ->check(CLI::Range(0.01, 600.0));
-  loadcell->callback([o, &action] { action = [o] { run_load_cell(*o); }; });
+  loadcell->callback([o, &action] { action = [o] { checked(*o, run_load_cell); }; });
 
   CLI::App* inclinometer = calibrate->add_subcommand(
       "inclinometer",
@@ -394,7 +408,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
       ->check(CLI::Range(0.01, 600.0));
   inclinometer->add_option("--inclinometer-range-deg", o->inclinometer_range_deg,
                            "With --from: the inclinometer's range when the session has no rig");
-  inclinometer->callback([o, &action] { action = [o] { run_inclinometer(*o); }; });
+  inclinometer->callback([o, &action] { action = [o] { checked(*o, run_inclinometer); }; });
 
   CLI::App* gyro = calibrate->add_subcommand(
       "gyro", "Gyroscope: bias from still periods, drift, scale factor against the inclinometer");
@@ -403,7 +417,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   gyro->add_option("--inclinometer", o->inclinometer_channel, "The inclinometer channel");
   gyro->add_option("--inclinometer-range-deg", o->inclinometer_range_deg,
                    "The inclinometer's range when the session has no rig");
-  gyro->callback([o, &action] { action = [o] { run_gyro(*o); }; });
+  gyro->callback([o, &action] { action = [o] { checked(*o, run_gyro); }; });
 
   CLI::App* timing = calibrate->add_subcommand(
       "timing",
@@ -413,7 +427,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   timing->add_option("--out", o->out_session, "Without --from: record the live bench here first");
   timing->add_option("--inclinometer-range-deg", o->inclinometer_range_deg,
                      "The inclinometer's range when the session has no rig");
-  timing->callback([o, &action] { action = [o] { run_timing(*o); }; });
+  timing->callback([o, &action] { action = [o] { checked(*o, run_timing); }; });
 
   CLI::App* geometry = calibrate->add_subcommand(
       "geometry", "Geometry: handle radius and the load cell's mounting angle, with uncertainty");
@@ -430,7 +444,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   geometry->add_option("--check-reading-N", o->check_reading_N, "The load cell's readings")
       ->delimiter(',');
   geometry->add_option("--bench", o->bench_name, "The bench's name (default: the rig's)");
-  geometry->callback([o, &action] { action = [o] { run_geometry(*o); }; });
+  geometry->callback([o, &action] { action = [o] { checked(*o, run_geometry); }; });
 }
 
 }  // namespace doorbench::app

@@ -5,6 +5,7 @@
 #include <iostream>
 #include <memory>
 
+#include "acquisition/output_file.h"
 #include "acquisition/session_file.h"
 #include "app/commands.h"
 #include "calibration/calibration_store.h"
@@ -23,6 +24,7 @@ struct CalibrationCommandOptions {
   std::string record_id;
   std::string channel;
   std::string out;
+  bool overwrite = false;  // certificate: replace an existing --out file
 };
 
 cal::CalibrationStore store_of(const CalibrationCommandOptions& o) {
@@ -149,6 +151,7 @@ void run_apply(const CalibrationCommandOptions& o) {
 }
 
 void run_certificate(const CalibrationCommandOptions& o) {
+  check_output_file(o.out, {}, o.overwrite);  // docs/output-files.md
   cal::write_certificate(o.out, store_of(o).get(o.what));
   std::cerr << "wrote " << o.out << "\n";
 }
@@ -187,6 +190,7 @@ void add_calibration_command(CLI::App& app, Action& action) {
       "certificate", "Write a record's calibration certificate (HTML; print it to PDF)");
   certificate->add_option("ID", o->what, "The record's id in the store")->required();
   certificate->add_option("--out", o->out, "The HTML file to write")->required();
+  certificate->add_flag("--overwrite", o->overwrite, "Replace an existing --out file");
   store_option(certificate);
   certificate->callback([o, &action] { action = [o] { run_certificate(*o); }; });
 }

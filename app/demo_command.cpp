@@ -10,6 +10,7 @@
 #include <iostream>
 #include <memory>
 
+#include "acquisition/output_file.h"
 #include "acquisition/recording_csv.h"
 #include "acquisition/session_csv.h"
 #include "analysis/fitting.h"
@@ -288,6 +289,7 @@ void specify_tuned_variant(const std::filesystem::path& dir) {
   spec.fixed = "m_d,l_c,k_stop,c_stop,e,w_f";
   spec.fixed_given = true;
   spec.show_progress = false;
+  spec.overwrite = true;  // the demo owns its folder
   run_spec(spec);
   const DoorModel specified =
       load_model(ModelKind::kPhysical, dir / "spec" / "tobe-params.json", "");
@@ -324,7 +326,7 @@ void run_demo(const DemoOptions& options) {
         run_path, to_recording(run, "doorbench demo, reference door, " +
                                         std::string(to_string(kind)) + " model, virtual hand"));
     const std::filesystem::path params_path = dir / (std::string(to_string(kind)) + "-params.json");
-    std::ofstream(params_path) << to_parameter_json(model);
+    write_text_file_atomically(params_path, to_parameter_json(model));
     std::cout << "\n"
               << to_string(kind) << " model (" << run_path.string() << "):\n"
               << format_summary(summarize_run(model, run));

@@ -363,6 +363,10 @@ void run_record(const RecordCommandOptions& options) {
   const std::filesystem::path out(options.out_path);
   recover_unfinished_sessions(out.parent_path().empty() ? std::filesystem::path(".")
                                                         : out.parent_path());
+  // After recovery, which may have made it (docs/output-files.md).
+  std::vector<std::filesystem::path> inputs;
+  if (!options.rig_path.empty()) inputs.emplace_back(options.rig_path);
+  check_output_session(out, inputs);
   SessionRecordingOptions recording = options.recording;
   recording.stop_requested = &g_stop_recording;
   struct sigaction action {};

@@ -10,6 +10,7 @@
 #include <optional>
 #include <thread>
 
+#include "acquisition/output_file.h"
 #include "analysis/commanded_torque.h"
 #include "analysis/inverse_design.h"
 #include "analysis/parameter_file.h"
@@ -43,9 +44,12 @@ std::string describe(const SpecCommandOptions& o) {
 void run_spec(const SpecCommandOptions& options) {
   if (options.samples < 2) throw UsageError("--samples must be >= 2");
   if (options.threads < 0) throw UsageError("--threads must be >= 0");
-  if (std::filesystem::exists(options.out_dir) && !std::filesystem::is_directory(options.out_dir)) {
-    throw UsageError("--out " + options.out_dir + " is a file, not a folder");
-  }
+  // The output rule (docs/output-files.md): checked before any work; the folder is made
+  // once the inputs are read and the design is done.
+  std::vector<std::filesystem::path> inputs(options.tobe_paths.begin(), options.tobe_paths.end());
+  inputs.emplace_back(options.asis_path);
+  if (!options.tolerances_path.empty()) inputs.emplace_back(options.tolerances_path);
+  check_output_folder(options.out_dir, inputs, options.overwrite);
   // ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
   std::filesystem::path asis_file = options.asis_path;
   if (std::filesystem::is_directory(asis_file)) asis_file /= "fitted-params.json";
@@ -129,7 +133,7 @@ void run_spec(const SpecCommandOptions& options) {
   const SpecReportFiles files =
       write_spec_report(options.out_dir, design, evaluation, options.no_pdf ? "none" : "");
   const std::filesystem::path params = std::filesystem::path(options.out_dir) / "tobe-params.json";
-  std::ofstream(params) << to_parameter_json(design.solutions.front().model);
+  write_text_file_atomically(params, to_parameter_json(design.solutions.front().model));
 
   std::cout << design.brief_report() << "\nfelt, AS-IS door:\n"
             << evaluation.felt_before.brief_report() << "felt, TO-BE design:\n"
@@ -161,6 +165,8 @@ void add_spec_command(CLI::App& app, Action& action) {
                    "AS-IS door: a physical parameter file or a `doorbench fit` folder")
       ->required();
   command->add_option("--out", options->out_dir, "folder for the report")->required();
+  command->add_flag("--overwrite", options->overwrite,
+                    "write into an --out folder that exists and is not empty");
   command
       ->add_option("--fixed", options->fixed,
                    "comma-separated parameters kept at their AS-IS values (default: m_d, l_c, "

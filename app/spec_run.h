@@ -25,6 +25,9 @@ struct SpecCommandOptions {
   bool no_pdf = false;
   bool no_tolerances = false;
   bool show_progress = true;  // progress lines on stderr
+  // Write into an --out folder that exists and is not empty (docs/output-files.md); the
+  // demo, which owns its folder, sets it.
+  bool overwrite = false;
 };
 
 // Throws UsageError for bad options, std::runtime_error for files and failures.

@@ -5,6 +5,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "acquisition/output_file.h"
 #include "calibration/procedure.h"
 
 namespace doorbench::calibration {
@@ -179,9 +180,7 @@ std::string certificate_html(const CalibrationRecord& r) {
 }
 
 void write_certificate(const std::filesystem::path& path, const CalibrationRecord& record) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out << certificate_html(record);
-  if (!out) throw std::runtime_error(path.string() + ": cannot write the certificate");
+  write_text_file_atomically(path, certificate_html(record));  // whole or not at all
 }
 
 }  // namespace doorbench::calibration

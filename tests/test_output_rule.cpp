@@ -181,6 +181,49 @@ TEST_CASE("Outputs: fit and loop check their input before creating --out", "[out
                          bad.string() + ") (doorbench never writes onto its input)\n");
 }
 
+TEST_CASE("Outputs: spec refuses a folder that is not empty before any work", "[outputs][cli]") {
+  const TempDir dir("output_spec");
+  const fs::path out = dir / "spec";
+  fs::create_directories(out);
+  std::ofstream(out / "spec.json") << "{}\n";
+  // Inputs that would fail if read: the refusal comes first.
+  const fs::path tobe = dir.write("tobe.csv", "not a recording\n");
+  const fs::path asis = dir.write("asis.json", "not a door\n");
+  const DoorbenchRun run = run_doorbench_shell(
+      "spec " + tobe.string() + " --asis " + asis.string() +
+          " --out " + out.string(),
+      dir);
+  CHECK(run.status == 2);
+  CHECK(run.err ==
+        "doorbench: " + out.string() + ": exists and is not empty (give --overwrite to write into it)\n");
+  CHECK(read_file(out / "spec.json") == "{}\n");
+}
+
+TEST_CASE("Outputs: calibration certificates follow the rule", "[outputs][cli]") {
+  const TempDir dir("output_certificate");
+  const fs::path session = small_session(dir);
+  const fs::path certificate = dir / "cert.html";
+  std::ofstream(certificate) << "old\n";
+  const DoorbenchRun existing = run_doorbench_shell(
+      "calibrate gyro --from " + session.string() + " --certificate " + certificate.string(), dir);
+  CHECK(existing.status == 2);
+  CHECK(existing.err ==
+        "doorbench: " + certificate.string() + ": exists (give --overwrite to replace it)\n");
+  CHECK(read_file(certificate) == "old\n");
+  const DoorbenchRun onto = run_doorbench_shell("calibrate gyro --from " + session.string() +
+                                                    " --certificate " + session.string() +
+                                                    " --overwrite",
+                                                dir);
+  CHECK(onto.status == 2);
+  CHECK(onto.err == "doorbench: " + session.string() +
+                        ": is an input of this command (doorbench never writes onto its input)\n");
+  const DoorbenchRun store = run_doorbench_shell(
+      "calibration certificate some-id --out " + certificate.string(), dir);
+  CHECK(store.status == 2);
+  CHECK(store.err ==
+        "doorbench: " + certificate.string() + ": exists (give --overwrite to replace it)\n");
+}
+
 TEST_CASE("Outputs: a full disk leaves the old file or nothing, and the message names the path",
           "[outputs][cli]") {
   const TempDir dir("output_full");

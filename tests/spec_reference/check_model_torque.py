@@ -120,7 +120,7 @@ def main():
     for model, parameters, torque in (("sensory", sensory, sensory_torque),
                                       ("physical", physical, physical_torque)):
         out_path = os.path.join(args.work_dir, f"torque_{model}.csv")
-        # The previous run's output is replaced (doorbench refuses an existing --out otherwise).
+        # --overwrite: the work folder is the build's, kept from the run before.
         subprocess.run([args.doorbench, "model", "torque", "--model", model, "--params",
                         args.door_json, "--in", grid_path, "--out", out_path, "--overwrite"],
                        check=True)
