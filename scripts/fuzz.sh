@@ -11,7 +11,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-20}
 shift || true
 targets=("$@")
-if ((${#targets[@]} == 0)); then targets=(csv rig params journal); fi
+if ((${#targets[@]} == 0)); then targets=(csv rig params journal hapticmaster); fi
 build_dir=${DOORBENCH_FUZZ_BUILD_DIR:-build-fuzz}
 root=$(pwd)
 
