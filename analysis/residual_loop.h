@@ -56,6 +56,13 @@ struct LoopOptions {
   double min_held_out_improvement = 0.02;
   // ... and BIC = n ln(SSR/n) + p ln(n) falls by more than this (0: falls at all).
   double min_bic_decrease = 0.0;
+  // The second look at weak candidates (docs/residual-loop.md, "The second look"): a
+  // candidate that explains at least min_explained_fraction but scores z below min_score_z
+  // is added at its examination start and refined with the free parameters by at most this
+  // many Gauss–Newton steps on the examination's windows (no fit_model call); it is
+  // refitted when the refined share and z pass both thresholds. At most refit_candidates
+  // are screened per step, in rank order. 0: off.
+  int screen_steps = 5;
 
   // --- The residual examination's scans of nonlinear parameters (start values) ---
   std::vector<double> stribeck_speeds_rad_s = {0.01, 0.02, 0.05, 0.1, 0.2, 0.5};  // w_s
@@ -128,6 +135,16 @@ struct CandidateEvidence {
   // from the regression (clamped into bounds), nonlinear ones from the scan's best point.
   std::vector<double> start_values;
   std::string scan;  // the scanned values chosen, e.g. "w_s = 0.05"; empty when none
+
+  // The second look (LoopOptions::screen_steps), when it was taken: the share of the
+  // examination's Σe² that the effect removes once it and the free parameters are refined
+  // (against the model without it, refined the same way), the refined amplitude's z
+  // (window-clustered), and the refined effect parameters, the refit's start when the
+  // second look promotes the candidate.
+  bool screened = false;
+  double screen_explained_fraction = 0.0;
+  double screen_score_z = 0.0;
+  std::vector<double> screen_values;
 
   bool refitted = false;
   std::string refit_start;            // "the current fit" or "the start model"
