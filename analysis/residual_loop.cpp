@@ -10,6 +10,7 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 
 #include "analysis/fit_metrics.h"
 #include "analysis/fit_windows.h"
@@ -32,6 +33,21 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Calls task(0) … task(count − 1): at once on threads of their own when `parallel` (and
+// count > 1), else one after another on the caller's thread. Returns when all have ended.
+// The tasks must not throw.
+template <typename Task>
+void run_all(std::size_t count, bool parallel, Task&& task) {
+  if (!parallel || count < 2) {
+    for (std::size_t j = 0; j < count; ++j) task(j);
+    return;
+  }
+  std::vector<std::thread> threads;
+  for (std::size_t j = 1; j < count; ++j) threads.emplace_back([&task, j] { task(j); });
+  task(0);
+  for (std::thread& thread : threads) thread.join();
 }
 
 std::string number(double value) {
@@ -409,6 +425,34 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
   return result;
 }
 
+// Σ(ω − ω̂)² over the windows as linearize() counts it, and the windows that failed, from
+// the simulation alone (a trial step's test, without the sensitivities).
+std::pair<double, int> window_sum_of_squares(const DoorModel& model, const PreparedData& data,
+                                             const WindowOptions& windows) {
+  const WindowSimulation simulation = simulate_windows(model, data, windows);
+  double sum = 0.0;
+  int failed = 0;
+  for (const FitWindow& window : split_windows(data, windows)) {
+    const Stroke& stroke = data.strokes[window.stroke];
+    const std::vector<double>& theta_sim = simulation.theta_rad[window.stroke];
+    const std::vector<double>& omega_sim = simulation.omega_rad_s[window.stroke];
+    double window_sum = 0.0;
+    bool usable = true;
+    for (int j = 1; j < window.count && usable; ++j) {
+      const int i = window.first + j;
+      usable = std::isfinite(theta_sim[i]) && std::isfinite(omega_sim[i]);
+      const double error = stroke.omega_rad_s[i] - omega_sim[i];
+      window_sum += error * error;
+    }
+    if (usable) {
+      sum += window_sum;
+    } else {
+      ++failed;
+    }
+  }
+  return {sum, failed};
+}
+
 // A few damped Gauss–Newton (Levenberg–Marquardt) steps on the measured-state windows of
 // the examination, the linearization above as the Jacobian: moves `parameters` (model
 // indices) of `model` to lower Σ(ω − ω̂)². A step is taken only when it lowers the sum and
@@ -461,12 +505,11 @@ Refined refine_parameters(const DoorModel& start, const PreparedData& data,
       damping *= 10.0;
       continue;
     }
-    Linearization linear = linearize(*trial, data, windows, parameters, {});
+    const auto [trial_sum, trial_failed] = window_sum_of_squares(*trial, data, windows);
     const double before = refined.linear.rate_sum_of_squares;
-    if (linear.failed_windows <= refined.linear.failed_windows &&
-        linear.rate_sum_of_squares < before) {
+    if (trial_failed <= refined.linear.failed_windows && trial_sum < before) {
       refined.model = std::move(*trial);
-      refined.linear = std::move(linear);
+      refined.linear = linearize(refined.model, data, windows, parameters, {});
       ++refined.steps;
       damping = std::max(1e-6, 0.1 * damping);
       if (before - refined.linear.rate_sum_of_squares < 1e-3 * before) break;
@@ -531,8 +574,9 @@ ColumnScore last_column_score(const Linearization& linear) {
   return score;
 }
 
-// The second look (LoopOptions::screen_steps): a candidate that explains enough of the
-// residual but whose linear score z is below min_score_z is added at its examination start
+// The second look (LoopOptions::screen_steps): the best-ranked candidates that explain at
+// least min_explained_fraction but score z below min_score_z, as many as refit slots are
+// left by the candidates that pass both, are each added at their examination start
 // and refined, with the free parameters, by a few Gauss–Newton steps on the examination's
 // windows (refine_parameters); the model without it is refined the same way. Its screened
 // share is the fall of Σe² between the two over the examination's Σe², its screened z the
@@ -544,9 +588,17 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
                             const std::vector<int>& free, ResidualExamination& examination) {
   if (options.screen_steps <= 0) return;
   std::optional<Refined> without;
+  // Only refit slots that the linear score leaves free are worth a second look.
+  int slots = options.refit_candidates;
+  for (const CandidateEvidence& candidate : examination.candidates) {
+    if (candidate.explained_fraction >= options.min_explained_fraction &&
+        candidate.score_z >= options.min_score_z) {
+      --slots;
+    }
+  }
   int screened = 0;
   for (CandidateEvidence& candidate : examination.candidates) {
-    if (screened >= options.refit_candidates) break;
+    if (screened >= slots) break;
     if (candidate.explained_fraction < options.min_explained_fraction ||
         candidate.score_z >= options.min_score_z || candidate.start_values.empty()) {
       continue;
@@ -606,6 +658,7 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
 
 ResidualExamination examine(const DoorModel& model, const PreparedData& data,
                             const LoopOptions& options, const FitOptions& fit) {
+  const Clock::time_point began = Clock::now();
   const std::vector<effects::Kind> kinds = candidate_kinds(model, options);
   std::vector<Regressor> regressors = make_regressors(model, data, kinds, options);
   const WindowOptions windows = metric_window_options(fit, model);
@@ -726,7 +779,10 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
     examination.candidates[k].rank = static_cast<int>(k) + 1;
   }
+  const Clock::time_point screen_began = Clock::now();
   screen_weak_candidates(model, data, options, windows, free, examination);
+  examination.screen_time_s = seconds_since(screen_began);
+  examination.time_s = seconds_since(began);
   return examination;
 }
 
@@ -802,26 +858,41 @@ FitResult refit(const DoorModel& start, const FitResult& current, const FitOptio
     case LoopOptions::RefitStart::kBest:
       break;
   }
-  // Both starts without cross-validation; the better one again, with it, from its result.
-  std::optional<FitResult> best;
-  std::string failures;
-  auto attempt = [&](auto make_model, FitOptions fit, const char* name) {
+  // Both starts without cross-validation (at once when options.parallel_refits: each fit
+  // is the same on any thread); the better one again, with it, from its result.
+  struct Attempt {
+    std::optional<FitResult> result;
+    std::string error;
+  };
+  Attempt attempts[2];
+  const char* names[2] = {"the current fit", "the start model"};
+  auto attempt = [&](std::size_t which) {
+    FitOptions fit = which == 0 ? from_fit : from_start;
     fit.cross_validation_folds = 0;
     try {
-      const DoorModel model = make_model();
-      ++fits;
-      FitResult result = fit_model(model, data, fit);
-      if (!best || model_figures(result.summary).sum_of_squares <
-                       model_figures(best->summary).sum_of_squares) {
-        best = std::move(result);
-        origin = name;
-      }
+      const DoorModel model = which == 0 ? current.model.with_effect(setting) : fresh_start();
+      attempts[which].result = fit_model(model, data, fit);
     } catch (const std::exception& error) {
-      failures += std::string(failures.empty() ? "" : "; ") + "from " + name + ": " + error.what();
+      attempts[which].error = error.what();
     }
   };
-  attempt([&] { return current.model.with_effect(setting); }, from_fit, "the current fit");
-  attempt(fresh_start, from_start, "the start model");
+  run_all(2, options.parallel_refits, attempt);
+  std::optional<FitResult> best;
+  std::string failures;
+  for (std::size_t which = 0; which < 2; ++which) {
+    ++fits;
+    Attempt& tried = attempts[which];
+    if (!tried.result) {
+      failures += std::string(failures.empty() ? "" : "; ") + "from " + names[which] + ": " +
+                  tried.error;
+      continue;
+    }
+    if (!best || model_figures(tried.result->summary).sum_of_squares <
+                     model_figures(best->summary).sum_of_squares) {
+      best = std::move(tried.result);
+      origin = names[which];
+    }
+  }
   if (!best) throw std::runtime_error(failures);
   FitOptions final_fit = from_fit;
   final_fit.equation_error_start = false;  // it starts at the optimum
@@ -935,24 +1006,44 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
                                     candidate.screen_score_z);
     }
     order.insert(order.end(), promoted.begin(), promoted.end());
-    int refitted = 0;
+    std::vector<std::size_t> to_refit;
     for (std::size_t k : order) {
       CandidateEvidence& candidate = examination.candidates[k];
-      if (refitted >= options.refit_candidates) {
+      if (static_cast<int>(to_refit.size()) >= options.refit_candidates) {
         candidate.verdict = "not refitted: ranked below the " +
                             std::to_string(options.refit_candidates) + " refitted";
         continue;
       }
-      ++refitted;
+      to_refit.push_back(k);
       candidate.refitted = true;
       say("step " + std::to_string(step_number) + ": refitting with " + candidate.name +
           (candidate.scan.empty() ? "" : " (" + candidate.scan + ")"));
+    }
+    const int refitted = static_cast<int>(to_refit.size());
+    // The refits (LoopOptions::parallel_refits): fit_model gives the same result bit for
+    // bit on any thread and with any num_threads (docs/fitting.md), so running them at once
+    // changes no verdict, only the time.
+    std::vector<std::string> refit_errors(to_refit.size());
+    std::vector<int> refit_fits(to_refit.size(), 0);
+    std::vector<double> refit_seconds(to_refit.size(), 0.0);
+    auto run_refit = [&](std::size_t j) {
+      CandidateEvidence& candidate = examination.candidates[to_refit[j]];
       const Clock::time_point refit_began = Clock::now();
       try {
-        refits[k] = refit(start, current, current_options, data, options, candidate, fits,
-                          candidate.refit_start);
+        refits[to_refit[j]] = refit(start, current, current_options, data, options, candidate,
+                                    refit_fits[j], candidate.refit_start);
       } catch (const std::exception& error) {
-        candidate.verdict = std::string("refit failed: ") + error.what();
+        refit_errors[j] = error.what();
+      }
+      refit_seconds[j] = seconds_since(refit_began);
+    };
+    run_all(to_refit.size(), options.parallel_refits, run_refit);
+    for (std::size_t j = 0; j < to_refit.size(); ++j) {
+      const std::size_t k = to_refit[j];
+      CandidateEvidence& candidate = examination.candidates[k];
+      fits += refit_fits[j];
+      if (!refits[k]) {
+        candidate.verdict = "refit failed: " + refit_errors[j];
         say("  " + candidate.name + ": " + candidate.verdict);
         continue;
       }
@@ -979,7 +1070,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
       }
       say("  " + candidate.name + ": " + candidate.verdict +
           printf_text(" [refit from %s, %.1f s]", candidate.refit_start.c_str(),
-                      seconds_since(refit_began)));
+                      refit_seconds[j]));
     }
 
     int chosen = -1;

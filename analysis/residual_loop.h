@@ -13,7 +13,8 @@
 //   loop.final_fit.model;                            // the last accepted model, fitted
 //
 // Thread safety: free functions without shared state; the progress callback is called on
-// the caller's thread.
+// the caller's thread. With LoopOptions::parallel_refits the loop runs fit_model on threads
+// of its own, joined before the step's verdicts.
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -56,12 +57,12 @@ struct LoopOptions {
   double min_held_out_improvement = 0.02;
   // ... and BIC = n ln(SSR/n) + p ln(n) falls by more than this (0: falls at all).
   double min_bic_decrease = 0.0;
-  // The second look at weak candidates (docs/residual-loop.md, "The second look"): a
-  // candidate that explains at least min_explained_fraction but scores z below min_score_z
-  // is added at its examination start and refined with the free parameters by at most this
-  // many Gauss–Newton steps on the examination's windows (no fit_model call); it is
-  // refitted when the refined share and z pass both thresholds. At most refit_candidates
-  // are screened per step, in rank order. 0: off.
+  // The second look at weak candidates (docs/residual-loop.md, "The second look"): the
+  // best-ranked candidates that explain at least min_explained_fraction but score z below
+  // min_score_z, as many as the refit slots the passing candidates leave free, are each
+  // added at their examination start and refined with the free parameters by at most this
+  // many Gauss–Newton steps on the examination's windows (no fit_model call); a candidate
+  // is refitted when its refined share and z pass both thresholds. 0: off.
   int screen_steps = 5;
 
   // --- The residual examination's scans of nonlinear parameters (start values) ---
@@ -88,6 +89,11 @@ struct LoopOptions {
     kStartModel,
   };
   RefitStart refit_start = RefitStart::kBest;
+  // Run a step's refits (and kBest's two starts) at once, each on a thread of its own.
+  // fit_model's result does not depend on the thread or on num_threads (docs/fitting.md,
+  // "Threads and determinism"), so the decisions are the same either way; only the wall
+  // time changes.
+  bool parallel_refits = true;
 
   // Called with one line at each stage (fits, the ranking, each verdict); may be empty.
   std::function<void(const std::string&)> progress;
@@ -160,6 +166,8 @@ struct ResidualExamination {
   std::size_t samples = 0;           // rate residuals used (window samples after the first)
   double rate_sum_of_squares = 0.0;  // Σ(ω − ω̂)², rad²/s²
   std::vector<CandidateEvidence> candidates;  // best first
+  double time_s = 0.0;         // wall clock, the second look included
+  double screen_time_s = 0.0;  // the second look's share of it
 };
 
 struct LoopStep {

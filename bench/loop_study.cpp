@@ -6,6 +6,7 @@
 //   doorbench_loop_study CASE [SEED] [--exam]
 //   CASE: clean | stribeck | stribeck-small | stribeck-large | physical | demo
 //   --exam: the examination of the true-model-less fit only (no refits)
+//   --serial: refits one after another; --no-second-look: screen_steps = 0
 //   --tremor-mm A, --drift-N F: the tremor hand's amplitudes (defaults 0.5 mm, 1 N)
 #include <chrono>
 #include <cstdio>
@@ -89,6 +90,10 @@ int main(int argc, char** argv) {
   std::printf("%s: %zu strokes\n", which.c_str(), data.strokes.size());
 
   LoopOptions options;
+  for (int i = 2; i < argc; ++i) {
+    if (std::strcmp(argv[i], "--serial") == 0) options.parallel_refits = false;
+    if (std::strcmp(argv[i], "--no-second-look") == 0) options.screen_steps = 0;
+  }
   const auto began = std::chrono::steady_clock::now();
   options.progress = [&](const std::string& line) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
@@ -108,6 +113,7 @@ int main(int argc, char** argv) {
     const FitResult fit = fit_model(sensory, data, options.fit);
     std::printf("%s", fit.summary.full_report().c_str());
     const ResidualExamination exam = examine_residual(fit.model, data, options);
+    std::printf("examination %.2f s (second look %.2f s)\n", exam.time_s, exam.screen_time_s);
     for (const CandidateEvidence& c : exam.candidates) {
       std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s\n", c.name.c_str(),
                   100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str());
