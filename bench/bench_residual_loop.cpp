@@ -59,13 +59,16 @@ PreparedData tremor_recording(int effect) {
 
 void run_loop(benchmark::State& state, const PreparedData& data) {
   const DoorModel start = reference_model(ModelKind::kSensory);
-  LoopResult last;
+  int fits = 0;
+  std::size_t added = 0;
   for (auto _ : state) {
-    last = run_residual_loop(start, data, LoopOptions{});
-    benchmark::DoNotOptimize(last.steps.data());
+    const LoopResult loop = run_residual_loop(start, data, LoopOptions{});
+    fits = loop.fits;
+    added = loop.steps.size();
+    benchmark::DoNotOptimize(loop.steps.data());
   }
-  state.counters["fits"] = last.fits;
-  state.counters["effects_added"] = static_cast<double>(last.steps.size());
+  state.counters["fits"] = fits;
+  state.counters["effects_added"] = static_cast<double>(added);
   state.counters["strokes"] = static_cast<double>(data.strokes.size());
 }
 
