@@ -4,6 +4,7 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
@@ -308,6 +309,8 @@ struct Linearization {
   double rate_sum_of_squares = 0.0;           // Σ(ω − ω̂)², rad²/s²
   std::size_t samples = 0;
   int failed_windows = 0;  // windows whose simulation failed (left out)
+  // Σe² and samples per band of measured |ω| (kSpeedBandEdges_rad_s).
+  std::array<double, std::size(kSpeedBandEdges_rad_s)> band_sum{}, band_samples{};
 };
 
 // Along each window the simulated state (θ̂, ω̂) starts from the measured one. A change a
@@ -403,6 +406,12 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       const double error = stroke.omega_rad_s[i] - omega;
       result.rate_sum_of_squares += error * error;
       ++result.samples;
+      {
+        std::size_t band = std::size(kSpeedBandEdges_rad_s) - 1;
+        while (band > 0 && std::abs(stroke.omega_rad_s[i]) < kSpeedBandEdges_rad_s[band]) --band;
+        result.band_sum[band] += error * error;
+        result.band_samples[band] += 1.0;
+      }
       for (int c = 0; c < free_count + regressor_count; ++c) {
         Sensitivity& s = state[c];
         const double forcing = forcing_of(c, theta, omega, acceleration);
@@ -672,6 +681,17 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   ResidualExamination examination;
   examination.samples = linear.samples;
   examination.rate_sum_of_squares = linear.rate_sum_of_squares;
+  for (std::size_t b = 0; b < std::size(kSpeedBandEdges_rad_s); ++b) {
+    SpeedBand band;
+    band.low_rad_s = kSpeedBandEdges_rad_s[b];
+    band.high_rad_s = b + 1 < std::size(kSpeedBandEdges_rad_s)
+                          ? kSpeedBandEdges_rad_s[b + 1]
+                          : std::numeric_limits<double>::infinity();
+    band.samples = static_cast<std::size_t>(linear.band_samples[b]);
+    band.rms_rad_s =
+        band.samples > 0 ? std::sqrt(linear.band_sum[b] / linear.band_samples[b]) : 0.0;
+    examination.speed_bands.push_back(band);
+  }
 
 
   // Project the free parameters' columns out (the fit re-estimates them with the effect):
@@ -950,6 +970,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   FitOptions current_options = options.fit;  // the options current was fitted with
   std::vector<LoopStep> steps;
   std::vector<CandidateEvidence> last_candidates;
+  std::vector<SpeedBand> last_speed_bands;
   std::string stop_reason;
   for (int step_number = 1;; ++step_number) {
     if (step_number > options.max_steps) {
@@ -1088,6 +1109,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
               ? "no candidate was worth a refit (explained share or z below the thresholds)"
               : "no refitted candidate qualified";
       last_candidates = std::move(examination.candidates);
+      last_speed_bands = std::move(examination.speed_bands);
       break;
     }
 
@@ -1116,6 +1138,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     current = std::move(*refits[chosen]);
     current_options = refit_options(current_options, options, accepted.kind);
     step.candidates = std::move(examination.candidates);
+    step.speed_bands = std::move(examination.speed_bands);
     steps.push_back(std::move(step));
   }
   say("stopped: " + stop_reason);
@@ -1124,6 +1147,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
                     std::move(current),
                     std::move(steps),
                     std::move(last_candidates),
+                    std::move(last_speed_bands),
                     std::move(stop_reason),
                     fits,
                     0.0,
@@ -1166,6 +1190,19 @@ void candidate_table(std::string& out, const std::vector<CandidateEvidence>& can
       out += printf_text("         refit from %s\n", candidate.refit_start.c_str());
     }
   }
+}
+
+void speed_band_line(std::string& out, const std::vector<SpeedBand>& bands) {
+  if (bands.empty()) return;
+  out += "    residual by measured speed |omega| (RMS of omega - omega_hat, rad/s, samples):";
+  for (const SpeedBand& band : bands) {
+    out += std::isfinite(band.high_rad_s)
+               ? printf_text(" [%g, %g) %s (%zu);", band.low_rad_s, band.high_rad_s,
+                             number(band.rms_rad_s).c_str(), band.samples)
+               : printf_text(" >= %g %s (%zu)", band.low_rad_s, number(band.rms_rad_s).c_str(),
+                             band.samples);
+  }
+  out += "\n";
 }
 
 std::string effect_list(const std::vector<LoopStep>& steps) {
@@ -1234,10 +1271,12 @@ std::string LoopResult::full_report() const {
     out += "  figures:\n";
     figures_table(out, step.before, step.after);
     out += "  candidates:\n";
+    speed_band_line(out, step.speed_bands);
     candidate_table(out, step.candidates);
   }
   if (!last_candidates.empty()) {
     out += "\nLast examination (no step taken):\n";
+    speed_band_line(out, last_speed_bands);
     candidate_table(out, last_candidates);
   }
   out += "\nStopped: " + stop_reason + ".\n";

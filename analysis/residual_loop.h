@@ -161,13 +161,25 @@ struct CandidateEvidence {
   std::string verdict;  // "not refitted: ...", "held-out RMSE fell 0.8% (needs > 2%)", ...
 };
 
+// The rate residual in one band of measured speed |ω| (low ≤ |ω| < high): where the model
+// misses. Breakaway friction shows below about 0.1 rad/s, a missing weight at all speeds.
+struct SpeedBand {
+  double low_rad_s = 0.0, high_rad_s = 0.0;
+  std::size_t samples = 0;
+  double rms_rad_s = 0.0;  // √(mean (ω − ω̂)²) over the band's samples; 0 when none
+};
+
+// The bands of the examination: [0, 0.01), [0.01, 0.05), [0.05, 0.2), [0.2, 0.5), [0.5, ∞) rad/s.
+inline constexpr double kSpeedBandEdges_rad_s[] = {0.0, 0.01, 0.05, 0.2, 0.5};
+
 // The residual examination of one model (step 2 of the loop), without refits.
 struct ResidualExamination {
   std::size_t samples = 0;           // rate residuals used (window samples after the first)
   double rate_sum_of_squares = 0.0;  // Σ(ω − ω̂)², rad²/s²
   std::vector<CandidateEvidence> candidates;  // best first
-  double time_s = 0.0;         // wall clock, the second look included
-  double screen_time_s = 0.0;  // the second look's share of it
+  std::vector<SpeedBand> speed_bands;  // the residual by measured speed
+  double time_s = 0.0;                 // wall clock, the second look included
+  double screen_time_s = 0.0;          // the second look's share of it
 };
 
 struct LoopStep {
@@ -184,6 +196,7 @@ struct LoopStep {
   double held_out_improvement = 0.0;
   double bic_change = 0.0;
   std::vector<CandidateEvidence> candidates;  // the whole ranking, with every refit's verdict
+  std::vector<SpeedBand> speed_bands;         // the examination's residual by speed
 };
 
 struct LoopResult {
@@ -193,6 +206,7 @@ struct LoopResult {
   // The examination that ended the loop, with why each candidate failed (empty when the
   // loop stopped at max_steps or ran out of candidates).
   std::vector<CandidateEvidence> last_candidates;
+  std::vector<SpeedBand> last_speed_bands;  // that examination's residual by speed
   std::string stop_reason;
   int fits = 0;  // calls of fit_model
   double total_time_s = 0.0;

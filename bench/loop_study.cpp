@@ -114,6 +114,10 @@ int main(int argc, char** argv) {
     std::printf("%s", fit.summary.full_report().c_str());
     const ResidualExamination exam = examine_residual(fit.model, data, options);
     std::printf("examination %.2f s (second look %.2f s)\n", exam.time_s, exam.screen_time_s);
+    for (const SpeedBand& band : exam.speed_bands) {
+      std::printf("  |omega| from %g: %zu samples, residual RMS %.4g rad/s\n", band.low_rad_s,
+                  band.samples, band.rms_rad_s);
+    }
     for (const CandidateEvidence& c : exam.candidates) {
       std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s\n", c.name.c_str(),
                   100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str());
