@@ -1021,6 +1021,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     }
     for (std::size_t k : promoted) {
       CandidateEvidence& candidate = examination.candidates[k];
+      candidate.promoted = true;
       candidate.start_values = candidate.screen_values;
       candidate.scan += std::string(candidate.scan.empty() ? "" : "; ") +
                         printf_text("second look: %.1f%%, z %.3g", 100.0 * candidate.screen_explained_fraction,
@@ -1118,8 +1119,10 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     step.number = step_number;
     step.effect = accepted.kind;
     step.effect_name = accepted.name;
-    step.explained_fraction = accepted.explained_fraction;
-    step.score_z = accepted.score_z;
+    step.second_look = accepted.promoted;
+    step.explained_fraction =
+        accepted.promoted ? accepted.screen_explained_fraction : accepted.explained_fraction;
+    step.score_z = accepted.promoted ? accepted.screen_score_z : accepted.score_z;
     step.rank = accepted.rank;
     const std::string prefix = accepted.name + ".";
     for (const FittedParameter& parameter : refits[chosen]->summary.parameters) {
@@ -1226,9 +1229,9 @@ std::string LoopResult::brief_report() const {
          " -> " + number(last.fitted_rmse_rad_s) + " rad/s.\n";
   for (const LoopStep& step : steps) {
     out += printf_text(
-        "Step %d: %s (explains %s of the residual, z %.3g, rank %d of %zu):", step.number,
-        step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z, step.rank,
-        step.candidates.size());
+        "Step %d: %s (explains %s of the residual, z %.3g%s, rank %d of %zu):", step.number,
+        step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z,
+        step.second_look ? " on the second look" : "", step.rank, step.candidates.size());
     for (const FittedParameter& parameter : step.parameters) {
       if (!parameter.free) continue;
       out += ' ';

@@ -148,6 +148,7 @@ struct CandidateEvidence {
   // (window-clustered), and the refined effect parameters, the refit's start when the
   // second look promotes the candidate.
   bool screened = false;
+  bool promoted = false;  // refitted on the second look's evidence alone
   double screen_explained_fraction = 0.0;
   double screen_score_z = 0.0;
   std::vector<double> screen_values;
@@ -186,8 +187,11 @@ struct LoopStep {
   int number = 0;  // 1, 2, ...
   effects::Kind effect = effects::Kind::kViscousDamping;
   std::string effect_name;
-  double explained_fraction = 0.0;  // the evidence
+  // The evidence that had it refitted: the examination's linear share and z, or the second
+  // look's when that promoted it (second_look).
+  double explained_fraction = 0.0;
   double score_z = 0.0;
+  bool second_look = false;
   int rank = 0;  // among `candidates`
   // The added effect's parameters as the step's fit left them ("<effect>.<param>", with
   // standard uncertainty).

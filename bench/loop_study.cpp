@@ -4,7 +4,7 @@
 // docs/residual-loop.md and docs/PERFORMANCE.md.
 //
 //   doorbench_loop_study CASE [SEED] [--exam]
-//   CASE: clean | stribeck | stribeck-small | stribeck-large | physical | demo
+//   CASE: clean | stribeck | stribeck-small | stribeck-large | physical | demo | plain-end-stop
 //   --exam: the examination of the true-model-less fit only (no refits)
 //   --serial: refits one after another; --no-second-look: screen_steps = 0
 //   --tremor-mm A, --drift-N F: the tremor hand's amplitudes (defaults 0.5 mm, 1 N)
@@ -16,6 +16,7 @@
 #include <iostream>
 #include <string>
 
+#include "analysis/fit_synthetic.h"
 #include "analysis/parameter_file.h"
 #include "analysis/preprocessing.h"
 #include "analysis/residual_loop.h"
@@ -71,6 +72,13 @@ int main(int argc, char** argv) {
     const double size = which == "stribeck" ? 1.5 : which == "stribeck-small" ? 0.75 : 3.0;
     data = testing::tremor_recording(
         with_effect(sensory, effects::Kind::kStribeck, {d1 + size, 0.05}), recording);
+  } else if (which == "plain-end-stop") {
+    // tests/test_residual_loop.cpp's end-stop recording: the plain virtual hand, 6 strokes.
+    SyntheticStrokeOptions plain;
+    plain.runs = {{0.6, 3.0}, {1.0, 4.0}, {1.3, 4.0}};
+    plain.seed = 3;
+    data = synthetic_strokes(with_effect(sensory, effects::Kind::kEndStop, {200.0, 1.2, 3000.0}),
+                             plain);
   } else if (which == "physical") {
     data = testing::tremor_recording(reference_model(ModelKind::kPhysical), recording);
   } else if (which == "demo") {
