@@ -4,12 +4,14 @@
 
 #include <Eigen/Dense>
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 
 #include "analysis/fit_metrics.h"
 #include "analysis/fit_windows.h"
@@ -32,6 +34,21 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point start) {
   return std::chrono::duration<double>(Clock::now() - start).count();
+}
+
+// Calls task(0) … task(count − 1): at once on threads of their own when `parallel` (and
+// count > 1), else one after another on the caller's thread. Returns when all have ended.
+// The tasks must not throw.
+template <typename Task>
+void run_all(std::size_t count, bool parallel, Task&& task) {
+  if (!parallel || count < 2) {
+    for (std::size_t j = 0; j < count; ++j) task(j);
+    return;
+  }
+  std::vector<std::thread> threads;
+  for (std::size_t j = 1; j < count; ++j) threads.emplace_back([&task, j] { task(j); });
+  task(0);
+  for (std::thread& thread : threads) thread.join();
 }
 
 std::string number(double value) {
@@ -217,6 +234,7 @@ std::string LoopOptions::validate() const {
     return message;
   }
   if (end_stop_angles < 1) return "loop end_stop_angles must be >= 1";
+  if (screen_steps < 0) return "loop screen_steps must be >= 0 (0: no second look)";
   for (const std::string& name : fixed_effect_parameters) {
     bool known = false;
     for (const effects::EffectInfo& effect : effects::catalogue()) {
@@ -283,19 +301,36 @@ struct Sensitivity {
   double d_theta = 0.0, d_omega = 0.0, forcing = 0.0;
 };
 
-ResidualExamination examine(const DoorModel& model, const PreparedData& data,
-                            const LoopOptions& options, const FitOptions& fit) {
-  const std::vector<effects::Kind> kinds = candidate_kinds(model, options);
-  std::vector<Regressor> regressors = make_regressors(model, data, kinds, options);
-  const WindowOptions windows = metric_window_options(fit, model);
+// The linearized window simulation of one model: the normal equations (Gram matrix) of the
+// columns [parameters..., regressors..., e], in total and per window, and Σe².
+struct Linearization {
+  Eigen::MatrixXd gram;
+  std::vector<Eigen::MatrixXd> window_grams;  // each window's share of `gram`
+  double rate_sum_of_squares = 0.0;           // Σ(ω − ω̂)², rad²/s²
+  std::size_t samples = 0;
+  int failed_windows = 0;  // windows whose simulation failed (left out)
+  // Σe² and samples per band of measured |ω| (kSpeedBandEdges_rad_s).
+  std::array<double, std::size(kSpeedBandEdges_rad_s)> band_sum{}, band_samples{};
+};
+
+// Along each window the simulated state (θ̂, ω̂) starts from the measured one. A change a
+// of one quantity (an effect's amplitude, a parameter) changes it, to first order, by
+// a·(δθ, δω) with
+//   d(δθ)/dt = δω,  J d(δω)/dt = ∂τ/∂θ δθ + ∂τ/∂ω δω + φ(θ̂, ω̂),  δ = 0 at the start,
+// φ the quantity's torque per unit (∂τ/∂a; for J and ΔJ, −dω̂/dt), with ∂τ from the current
+// model along the simulation. δω is the column of the rate residual e = ω − ω̂; the
+// trapezoidal rule integrates it (A-stable through the stiff latch). `parameters` are model
+// indices: their forcing is the torque's derivative by forward-mode differentiation; J (and
+// an inertia error) act through 1/J, like the inertia error.
+Linearization linearize(const DoorModel& model, const PreparedData& data,
+                        const WindowOptions& windows, const std::vector<int>& parameters,
+                        const std::vector<Regressor>& regressors) {
   const WindowSimulation simulation = simulate_windows(model, data, windows);
   const effects::BaseFriction<double> friction = base_friction(model);
   const double inertia = model.inertia_kg_m2();
   const double handle_radius_m = model.geometry().handle_radius_m;
 
-  // The free parameters' columns (nuisance): their torque derivative by forward-mode
-  // differentiation; J (and an inertia error) act through 1/J, like the inertia error.
-  const std::vector<int> free = free_indices(model, fit);
+  const std::vector<int>& free = parameters;
   const int free_count = static_cast<int>(free.size());
   std::vector<char> is_inertia(free_count, 0);
   for (int k = 0; k < free_count; ++k) {
@@ -318,23 +353,12 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
     return torque.v[0];
   };
 
-  // Normal equations of every column at once: columns 0 .. free_count − 1 the free
-  // parameters, then the regressors, then the residual e.
   const int regressor_count = static_cast<int>(regressors.size());
   const int columns = free_count + regressor_count + 1;
-  Eigen::MatrixXd gram = Eigen::MatrixXd::Zero(columns, columns);
-  std::vector<Eigen::MatrixXd> window_grams;  // each window's share of `gram`
+  Linearization result;
+  result.gram = Eigen::MatrixXd::Zero(columns, columns);
   Eigen::VectorXd row(columns);
   std::vector<Sensitivity> state(free_count + regressor_count);
-
-  ResidualExamination examination;
-  // Along each window the simulated state (θ̂, ω̂) starts from the measured one. A change a
-  // of one quantity (an effect's amplitude, a parameter) changes it, to first order, by
-  // a·(δθ, δω) with
-  //   d(δθ)/dt = δω,  J d(δω)/dt = ∂τ/∂θ δθ + ∂τ/∂ω δω + φ(θ̂, ω̂),  δ = 0 at the start,
-  // φ the quantity's torque per unit (∂τ/∂a; for J and ΔJ, −dω̂/dt), with ∂τ from the current
-  // model along the simulation. δω is the column of the rate residual e = ω − ω̂; the
-  // trapezoidal rule integrates it (A-stable through the stiff latch).
   for (const FitWindow& window : split_windows(data, windows)) {
     const Stroke& stroke = data.strokes[window.stroke];
     const std::vector<double>& theta_sim = simulation.theta_rad[window.stroke];
@@ -344,7 +368,10 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
       const int i = window.first + j;
       usable = std::isfinite(theta_sim[i]) && std::isfinite(omega_sim[i]);
     }
-    if (!usable) continue;
+    if (!usable) {
+      ++result.failed_windows;
+      continue;
+    }
     auto state_at = [&](int j, double& theta, double& omega) {
       const int i = window.first + j;
       theta = j == 0 ? stroke.theta_rad[i] : theta_sim[i];
@@ -377,8 +404,14 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
       const double b_omega = derivatives.dtorque_domega_Nm_s_per_rad / inertia;
       const double determinant = (1.0 - half_h * b_omega) - half_h * half_h * b_theta;
       const double error = stroke.omega_rad_s[i] - omega;
-      examination.rate_sum_of_squares += error * error;
-      ++examination.samples;
+      result.rate_sum_of_squares += error * error;
+      ++result.samples;
+      {
+        std::size_t band = std::size(kSpeedBandEdges_rad_s) - 1;
+        while (band > 0 && std::abs(stroke.omega_rad_s[i]) < kSpeedBandEdges_rad_s[band]) --band;
+        result.band_sum[band] += error * error;
+        result.band_samples[band] += 1.0;
+      }
       for (int c = 0; c < free_count + regressor_count; ++c) {
         Sensitivity& s = state[c];
         const double forcing = forcing_of(c, theta, omega, acceleration);
@@ -395,9 +428,271 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
       window_gram.selfadjointView<Eigen::Upper>().rankUpdate(row);
     }
     window_gram = window_gram.selfadjointView<Eigen::Upper>();
-    gram += window_gram;
-    window_grams.push_back(std::move(window_gram));
+    result.gram += window_gram;
+    result.window_grams.push_back(std::move(window_gram));
   }
+  return result;
+}
+
+// Σ(ω − ω̂)² over the windows as linearize() counts it, and the windows that failed, from
+// the simulation alone (a trial step's test, without the sensitivities).
+std::pair<double, int> window_sum_of_squares(const DoorModel& model, const PreparedData& data,
+                                             const WindowOptions& windows) {
+  const WindowSimulation simulation = simulate_windows(model, data, windows);
+  double sum = 0.0;
+  int failed = 0;
+  for (const FitWindow& window : split_windows(data, windows)) {
+    const Stroke& stroke = data.strokes[window.stroke];
+    const std::vector<double>& theta_sim = simulation.theta_rad[window.stroke];
+    const std::vector<double>& omega_sim = simulation.omega_rad_s[window.stroke];
+    double window_sum = 0.0;
+    bool usable = true;
+    for (int j = 1; j < window.count && usable; ++j) {
+      const int i = window.first + j;
+      usable = std::isfinite(theta_sim[i]) && std::isfinite(omega_sim[i]);
+      const double error = stroke.omega_rad_s[i] - omega_sim[i];
+      window_sum += error * error;
+    }
+    if (usable) {
+      sum += window_sum;
+    } else {
+      ++failed;
+    }
+  }
+  return {sum, failed};
+}
+
+// A few damped Gauss–Newton (Levenberg–Marquardt) steps on the measured-state windows of
+// the examination, the linearization above as the Jacobian: moves `parameters` (model
+// indices) of `model` to lower Σ(ω − ω̂)². A step is taken only when it lowers the sum and
+// no more windows fail to simulate. `linear` holds the columns [parameters..., e] at the
+// result.
+struct Refined {
+  DoorModel model;
+  Linearization linear;
+  int steps = 0;
+};
+
+Refined refine_parameters(const DoorModel& start, const PreparedData& data,
+                          const WindowOptions& windows, const std::vector<int>& parameters,
+                          int max_steps) {
+  Refined refined{start, linearize(start, data, windows, parameters, {}), 0};
+  const int p = static_cast<int>(parameters.size());
+  const auto bounds = start.parameter_bounds();
+  double damping = 1e-3;
+  for (int attempt = 0; attempt < 4 * max_steps && refined.steps < max_steps; ++attempt) {
+    const Eigen::MatrixXd& g = refined.linear.gram;
+    Eigen::VectorXd scale(p);
+    for (int k = 0; k < p; ++k) {
+      const double d = g(k, k);
+      scale[k] = d > 0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 0.0;
+    }
+    const Eigen::MatrixXd a = scale.asDiagonal() * g.topLeftCorner(p, p) * scale.asDiagonal();
+    const Eigen::VectorXd b = scale.cwiseProduct(g.block(0, p, p, 1));
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(a);
+    const Eigen::VectorXd& values = eigen.eigenvalues();
+    const double largest = values.size() > 0 ? values.maxCoeff() : 0.0;
+    Eigen::VectorXd inverse = Eigen::VectorXd::Zero(p);
+    for (int k = 0; k < p; ++k) {
+      if (values[k] > kProjectionRankTolerance * largest) {
+        inverse[k] = 1.0 / (values[k] + damping * largest);
+      }
+    }
+    const Eigen::VectorXd step = scale.cwiseProduct(
+        eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose() * b);
+    if (!step.allFinite() || largest <= 0) break;
+    std::vector<double> trial_values(refined.model.parameter_values().begin(),
+                                     refined.model.parameter_values().end());
+    for (int k = 0; k < p; ++k) {
+      const int i = parameters[k];
+      trial_values[i] = std::clamp(trial_values[i] + step[k], bounds[i].lower, bounds[i].upper);
+    }
+    std::optional<DoorModel> trial;
+    try {
+      trial = refined.model.with_parameter_values(std::move(trial_values));
+    } catch (const std::invalid_argument&) {
+      damping *= 10.0;
+      continue;
+    }
+    const auto [trial_sum, trial_failed] = window_sum_of_squares(*trial, data, windows);
+    const double before = refined.linear.rate_sum_of_squares;
+    if (trial_failed <= refined.linear.failed_windows && trial_sum < before) {
+      refined.model = std::move(*trial);
+      refined.linear = linearize(refined.model, data, windows, parameters, {});
+      ++refined.steps;
+      damping = std::max(1e-6, 0.1 * damping);
+      if (before - refined.linear.rate_sum_of_squares < 1e-3 * before) break;
+    } else {
+      damping *= 10.0;
+    }
+  }
+  return refined;
+}
+
+// The score of the last parameter column of `linear` (columns [nuisance..., x, e]) with
+// the nuisance projected out: returns (x·Pe, |Px|², Σ_w (Px·Pe)_w²), the pieces of the
+// window-clustered Wald statistic at a least-squares point.
+struct ColumnScore {
+  double pxe = 0.0, pxx = 0.0, spread = 0.0;
+};
+
+ColumnScore last_column_score(const Linearization& linear) {
+  const int columns = static_cast<int>(linear.gram.rows());
+  const int x = columns - 2, e = columns - 1, nuisance = x;
+  Eigen::VectorXd scale = Eigen::VectorXd::Ones(nuisance);
+  Eigen::MatrixXd inverse;
+  if (nuisance > 0) {
+    for (int k = 0; k < nuisance; ++k) {
+      const double d = linear.gram(k, k);
+      scale[k] = d > 0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 0.0;
+    }
+    const Eigen::MatrixXd scaled = scale.asDiagonal() *
+                                   linear.gram.topLeftCorner(nuisance, nuisance) *
+                                   scale.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
+    const Eigen::VectorXd& values = eigen.eigenvalues();
+    const double largest = values.size() > 0 ? values.maxCoeff() : 0.0;
+    Eigen::VectorXd inverse_values = Eigen::VectorXd::Zero(values.size());
+    for (int k = 0; k < values.size(); ++k) {
+      if (values[k] > kProjectionRankTolerance * largest) inverse_values[k] = 1.0 / values[k];
+    }
+    inverse = eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+  }
+  auto beta = [&](int a) -> Eigen::VectorXd {
+    if (nuisance == 0) return Eigen::VectorXd();
+    return inverse * scale.cwiseProduct(linear.gram.block(0, a, nuisance, 1));
+  };
+  const Eigen::VectorXd beta_x = beta(x), beta_e = beta(e);
+  auto project = [&](const Eigen::MatrixXd& g, int a, const Eigen::VectorXd& beta_a, int b,
+                     const Eigen::VectorXd& beta_b) {
+    double value = g(a, b);
+    if (nuisance == 0) return value;
+    const Eigen::VectorXd ga = scale.cwiseProduct(g.block(0, a, nuisance, 1));
+    const Eigen::VectorXd gb = scale.cwiseProduct(g.block(0, b, nuisance, 1));
+    const Eigen::MatrixXd h =
+        scale.asDiagonal() * g.topLeftCorner(nuisance, nuisance) * scale.asDiagonal();
+    return value - beta_a.dot(gb) - beta_b.dot(ga) + beta_a.dot(h * beta_b);
+  };
+  ColumnScore score;
+  score.pxe = project(linear.gram, x, beta_x, e, beta_e);
+  score.pxx = project(linear.gram, x, beta_x, x, beta_x);
+  for (const Eigen::MatrixXd& window_gram : linear.window_grams) {
+    const double w = project(window_gram, x, beta_x, e, beta_e);
+    score.spread += w * w;
+  }
+  return score;
+}
+
+// The second look (LoopOptions::screen_steps): the best-ranked candidates that explain at
+// least min_explained_fraction but score z below min_score_z, as many as refit slots are
+// left by the candidates that pass both, are each added at their examination start
+// and refined, with the free parameters, by a few Gauss–Newton steps on the examination's
+// windows (refine_parameters); the model without it is refined the same way. Its screened
+// share is the fall of Σe² between the two over the examination's Σe², its screened z the
+// refined amplitude over its window-clustered standard error there. A linear score is
+// poor where the effect's response is not linear in its amplitude: breakaway friction
+// that holds the door a few milliseconds longer before the latch snaps.
+void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
+                            const LoopOptions& options, const WindowOptions& windows,
+                            const std::vector<int>& free, ResidualExamination& examination) {
+  if (options.screen_steps <= 0) return;
+  std::optional<Refined> without;
+  // Only refit slots that the linear score leaves free are worth a second look.
+  int slots = options.refit_candidates;
+  for (const CandidateEvidence& candidate : examination.candidates) {
+    if (candidate.explained_fraction >= options.min_explained_fraction &&
+        candidate.score_z >= options.min_score_z) {
+      --slots;
+    }
+  }
+  int screened = 0;
+  for (CandidateEvidence& candidate : examination.candidates) {
+    if (screened >= slots) break;
+    if (candidate.explained_fraction < options.min_explained_fraction ||
+        candidate.score_z >= options.min_score_z || candidate.start_values.empty()) {
+      continue;
+    }
+    ++screened;
+    const effects::EffectInfo& info = effects::info(candidate.kind);
+    EffectSetting setting{candidate.kind, candidate.start_values, {}};
+    for (const effects::EffectParameter& parameter : info.parameters) {
+      setting.bounds.push_back(parameter.default_bounds);
+    }
+    std::optional<DoorModel> with;
+    try {
+      with = model.with_effect(setting);
+    } catch (const std::invalid_argument&) {
+      continue;  // the start breaks a constraint: no second look
+    }
+    // The effect's free parameters, the amplitude last (the column scored).
+    std::vector<int> parameters = free;
+    int amplitude = -1;
+    for (std::size_t k = 0; k < info.parameters.size(); ++k) {
+      const std::string name =
+          std::string(info.name) + "." + std::string(info.parameters[k].info.name);
+      const bool fixed = std::find(options.fixed_effect_parameters.begin(),
+                                   options.fixed_effect_parameters.end(),
+                                   name) != options.fixed_effect_parameters.end();
+      const std::optional<int> index = with->find_parameter(name);
+      if (!index) continue;
+      if (k == 0) {
+        amplitude = *index;
+      } else if (!fixed) {
+        parameters.push_back(*index);
+      }
+    }
+    if (amplitude < 0) continue;
+    parameters.push_back(amplitude);
+    if (!without) without = refine_parameters(model, data, windows, free, options.screen_steps);
+    const Refined refined = refine_parameters(*with, data, windows, parameters, options.screen_steps);
+    const ColumnScore score = last_column_score(refined.linear);
+    const double offset =
+        candidate.kind == effects::Kind::kStribeck ? base_friction(refined.model).level_Nm : 0.0;
+    const double value = refined.model.parameter_values()[amplitude] - offset;
+    const double fall = without->linear.rate_sum_of_squares - refined.linear.rate_sum_of_squares;
+    candidate.screened = true;
+    candidate.screen_explained_fraction =
+        examination.rate_sum_of_squares > 0 ? std::max(0.0, fall) / examination.rate_sum_of_squares
+                                            : 0.0;
+    candidate.screen_score_z =
+        score.spread > 0 && fall > 0 ? std::abs(value) * score.pxx / std::sqrt(score.spread) : 0.0;
+    candidate.screen_values.clear();
+    for (const effects::EffectParameter& parameter : info.parameters) {
+      const std::optional<int> index = refined.model.find_parameter(
+          std::string(info.name) + "." + std::string(parameter.info.name));
+      candidate.screen_values.push_back(refined.model.parameter_values()[*index]);
+    }
+  }
+}
+
+ResidualExamination examine(const DoorModel& model, const PreparedData& data,
+                            const LoopOptions& options, const FitOptions& fit) {
+  const Clock::time_point began = Clock::now();
+  const std::vector<effects::Kind> kinds = candidate_kinds(model, options);
+  std::vector<Regressor> regressors = make_regressors(model, data, kinds, options);
+  const WindowOptions windows = metric_window_options(fit, model);
+  const std::vector<int> free = free_indices(model, fit);
+  const int free_count = static_cast<int>(free.size());
+  const int regressor_count = static_cast<int>(regressors.size());
+  const int columns = free_count + regressor_count + 1;
+  Linearization linear = linearize(model, data, windows, free, regressors);
+  const Eigen::MatrixXd& gram = linear.gram;
+  const std::vector<Eigen::MatrixXd>& window_grams = linear.window_grams;
+  ResidualExamination examination;
+  examination.samples = linear.samples;
+  examination.rate_sum_of_squares = linear.rate_sum_of_squares;
+  for (std::size_t b = 0; b < std::size(kSpeedBandEdges_rad_s); ++b) {
+    SpeedBand band;
+    band.low_rad_s = kSpeedBandEdges_rad_s[b];
+    band.high_rad_s = b + 1 < std::size(kSpeedBandEdges_rad_s)
+                          ? kSpeedBandEdges_rad_s[b + 1]
+                          : std::numeric_limits<double>::infinity();
+    band.samples = static_cast<std::size_t>(linear.band_samples[b]);
+    band.rms_rad_s =
+        band.samples > 0 ? std::sqrt(linear.band_sum[b] / linear.band_samples[b]) : 0.0;
+    examination.speed_bands.push_back(band);
+  }
+
 
   // Project the free parameters' columns out (the fit re-estimates them with the effect):
   // with X those columns, x a regressor and P = I − X (XᵀX)⁺ Xᵀ,
@@ -504,6 +799,10 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
     examination.candidates[k].rank = static_cast<int>(k) + 1;
   }
+  const Clock::time_point screen_began = Clock::now();
+  screen_weak_candidates(model, data, options, windows, free, examination);
+  examination.screen_time_s = seconds_since(screen_began);
+  examination.time_s = seconds_since(began);
   return examination;
 }
 
@@ -579,26 +878,41 @@ FitResult refit(const DoorModel& start, const FitResult& current, const FitOptio
     case LoopOptions::RefitStart::kBest:
       break;
   }
-  // Both starts without cross-validation; the better one again, with it, from its result.
-  std::optional<FitResult> best;
-  std::string failures;
-  auto attempt = [&](auto make_model, FitOptions fit, const char* name) {
+  // Both starts without cross-validation (at once when options.parallel_refits: each fit
+  // is the same on any thread); the better one again, with it, from its result.
+  struct Attempt {
+    std::optional<FitResult> result;
+    std::string error;
+  };
+  Attempt attempts[2];
+  const char* names[2] = {"the current fit", "the start model"};
+  auto attempt = [&](std::size_t which) {
+    FitOptions fit = which == 0 ? from_fit : from_start;
     fit.cross_validation_folds = 0;
     try {
-      const DoorModel model = make_model();
-      ++fits;
-      FitResult result = fit_model(model, data, fit);
-      if (!best || model_figures(result.summary).sum_of_squares <
-                       model_figures(best->summary).sum_of_squares) {
-        best = std::move(result);
-        origin = name;
-      }
+      const DoorModel model = which == 0 ? current.model.with_effect(setting) : fresh_start();
+      attempts[which].result = fit_model(model, data, fit);
     } catch (const std::exception& error) {
-      failures += std::string(failures.empty() ? "" : "; ") + "from " + name + ": " + error.what();
+      attempts[which].error = error.what();
     }
   };
-  attempt([&] { return current.model.with_effect(setting); }, from_fit, "the current fit");
-  attempt(fresh_start, from_start, "the start model");
+  run_all(2, options.parallel_refits, attempt);
+  std::optional<FitResult> best;
+  std::string failures;
+  for (std::size_t which = 0; which < 2; ++which) {
+    ++fits;
+    Attempt& tried = attempts[which];
+    if (!tried.result) {
+      failures += std::string(failures.empty() ? "" : "; ") + "from " + names[which] + ": " +
+                  tried.error;
+      continue;
+    }
+    if (!best || model_figures(tried.result->summary).sum_of_squares <
+                     model_figures(best->summary).sum_of_squares) {
+      best = std::move(tried.result);
+      origin = names[which];
+    }
+  }
   if (!best) throw std::runtime_error(failures);
   FitOptions final_fit = from_fit;
   final_fit.equation_error_start = false;  // it starts at the optimum
@@ -656,6 +970,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   FitOptions current_options = options.fit;  // the options current was fitted with
   std::vector<LoopStep> steps;
   std::vector<CandidateEvidence> last_candidates;
+  std::vector<SpeedBand> last_speed_bands;
   std::string stop_reason;
   for (int step_number = 1;; ++step_number) {
     if (step_number > options.max_steps) {
@@ -678,35 +993,79 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
 
     const ModelFigures before = model_figures(current.summary);
     std::vector<std::optional<FitResult>> refits(examination.candidates.size());
-    int refitted = 0;
+    // Who is refitted: the candidates whose linear share and z pass, in rank order, then
+    // those the second look promotes, while refit slots are left.
+    std::vector<std::size_t> order, promoted;
     for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
       CandidateEvidence& candidate = examination.candidates[k];
-      if (refitted >= options.refit_candidates) {
+      const bool share_ok = candidate.explained_fraction >= options.min_explained_fraction;
+      if (share_ok && candidate.score_z >= options.min_score_z) {
+        order.push_back(k);
+      } else if (candidate.screened &&
+                 candidate.screen_explained_fraction >= options.min_explained_fraction &&
+                 candidate.screen_score_z >= options.min_score_z) {
+        promoted.push_back(k);
+      } else if (!share_ok) {
+        candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
+                            " of the residual (needs " + percent(options.min_explained_fraction) +
+                            ")";
+      } else {
+        candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
+                            " (needs " + printf_text("%.2g", options.min_score_z) + ")";
+        if (candidate.screened) {
+          candidate.verdict += printf_text(", second look %.1f%%, z %.2g",
+                                           100.0 * candidate.screen_explained_fraction,
+                                           candidate.screen_score_z);
+        }
+      }
+    }
+    for (std::size_t k : promoted) {
+      CandidateEvidence& candidate = examination.candidates[k];
+      candidate.promoted = true;
+      candidate.start_values = candidate.screen_values;
+      candidate.scan += std::string(candidate.scan.empty() ? "" : "; ") +
+                        printf_text("second look: %.1f%%, z %.3g", 100.0 * candidate.screen_explained_fraction,
+                                    candidate.screen_score_z);
+    }
+    order.insert(order.end(), promoted.begin(), promoted.end());
+    std::vector<std::size_t> to_refit;
+    for (std::size_t k : order) {
+      CandidateEvidence& candidate = examination.candidates[k];
+      if (static_cast<int>(to_refit.size()) >= options.refit_candidates) {
         candidate.verdict = "not refitted: ranked below the " +
                             std::to_string(options.refit_candidates) + " refitted";
         continue;
       }
-      if (candidate.explained_fraction < options.min_explained_fraction) {
-        candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
-                            " of the residual (needs " + percent(options.min_explained_fraction) +
-                            ")";
-        continue;
-      }
-      if (candidate.score_z < options.min_score_z) {
-        candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
-                            " (needs " + printf_text("%.2g", options.min_score_z) + ")";
-        continue;
-      }
-      ++refitted;
+      to_refit.push_back(k);
       candidate.refitted = true;
       say("step " + std::to_string(step_number) + ": refitting with " + candidate.name +
           (candidate.scan.empty() ? "" : " (" + candidate.scan + ")"));
+    }
+    const int refitted = static_cast<int>(to_refit.size());
+    // The refits (LoopOptions::parallel_refits): fit_model gives the same result bit for
+    // bit on any thread and with any num_threads (docs/fitting.md), so running them at once
+    // changes no verdict, only the time.
+    std::vector<std::string> refit_errors(to_refit.size());
+    std::vector<int> refit_fits(to_refit.size(), 0);
+    std::vector<double> refit_seconds(to_refit.size(), 0.0);
+    auto run_refit = [&](std::size_t j) {
+      CandidateEvidence& candidate = examination.candidates[to_refit[j]];
       const Clock::time_point refit_began = Clock::now();
       try {
-        refits[k] = refit(start, current, current_options, data, options, candidate, fits,
-                          candidate.refit_start);
+        refits[to_refit[j]] = refit(start, current, current_options, data, options, candidate,
+                                    refit_fits[j], candidate.refit_start);
       } catch (const std::exception& error) {
-        candidate.verdict = std::string("refit failed: ") + error.what();
+        refit_errors[j] = error.what();
+      }
+      refit_seconds[j] = seconds_since(refit_began);
+    };
+    run_all(to_refit.size(), options.parallel_refits, run_refit);
+    for (std::size_t j = 0; j < to_refit.size(); ++j) {
+      const std::size_t k = to_refit[j];
+      CandidateEvidence& candidate = examination.candidates[k];
+      fits += refit_fits[j];
+      if (!refits[k]) {
+        candidate.verdict = "refit failed: " + refit_errors[j];
         say("  " + candidate.name + ": " + candidate.verdict);
         continue;
       }
@@ -733,7 +1092,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
       }
       say("  " + candidate.name + ": " + candidate.verdict +
           printf_text(" [refit from %s, %.1f s]", candidate.refit_start.c_str(),
-                      seconds_since(refit_began)));
+                      refit_seconds[j]));
     }
 
     int chosen = -1;
@@ -751,6 +1110,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
               ? "no candidate was worth a refit (explained share or z below the thresholds)"
               : "no refitted candidate qualified";
       last_candidates = std::move(examination.candidates);
+      last_speed_bands = std::move(examination.speed_bands);
       break;
     }
 
@@ -759,8 +1119,10 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     step.number = step_number;
     step.effect = accepted.kind;
     step.effect_name = accepted.name;
-    step.explained_fraction = accepted.explained_fraction;
-    step.score_z = accepted.score_z;
+    step.second_look = accepted.promoted;
+    step.explained_fraction =
+        accepted.promoted ? accepted.screen_explained_fraction : accepted.explained_fraction;
+    step.score_z = accepted.promoted ? accepted.screen_score_z : accepted.score_z;
     step.rank = accepted.rank;
     const std::string prefix = accepted.name + ".";
     for (const FittedParameter& parameter : refits[chosen]->summary.parameters) {
@@ -779,6 +1141,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     current = std::move(*refits[chosen]);
     current_options = refit_options(current_options, options, accepted.kind);
     step.candidates = std::move(examination.candidates);
+    step.speed_bands = std::move(examination.speed_bands);
     steps.push_back(std::move(step));
   }
   say("stopped: " + stop_reason);
@@ -787,6 +1150,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
                     std::move(current),
                     std::move(steps),
                     std::move(last_candidates),
+                    std::move(last_speed_bands),
                     std::move(stop_reason),
                     fits,
                     0.0,
@@ -831,6 +1195,19 @@ void candidate_table(std::string& out, const std::vector<CandidateEvidence>& can
   }
 }
 
+void speed_band_line(std::string& out, const std::vector<SpeedBand>& bands) {
+  if (bands.empty()) return;
+  out += "    residual by measured speed |omega| (RMS of omega - omega_hat, rad/s, samples):";
+  for (const SpeedBand& band : bands) {
+    out += std::isfinite(band.high_rad_s)
+               ? printf_text(" [%g, %g) %s (%zu);", band.low_rad_s, band.high_rad_s,
+                             number(band.rms_rad_s).c_str(), band.samples)
+               : printf_text(" >= %g %s (%zu)", band.low_rad_s, number(band.rms_rad_s).c_str(),
+                             band.samples);
+  }
+  out += "\n";
+}
+
 std::string effect_list(const std::vector<LoopStep>& steps) {
   std::string list;
   for (const LoopStep& step : steps) list += (list.empty() ? "" : ", ") + step.effect_name;
@@ -852,9 +1229,9 @@ std::string LoopResult::brief_report() const {
          " -> " + number(last.fitted_rmse_rad_s) + " rad/s.\n";
   for (const LoopStep& step : steps) {
     out += printf_text(
-        "Step %d: %s (explains %s of the residual, z %.3g, rank %d of %zu):", step.number,
-        step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z, step.rank,
-        step.candidates.size());
+        "Step %d: %s (explains %s of the residual, z %.3g%s, rank %d of %zu):", step.number,
+        step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z,
+        step.second_look ? " on the second look" : "", step.rank, step.candidates.size());
     for (const FittedParameter& parameter : step.parameters) {
       if (!parameter.free) continue;
       out += ' ';
@@ -897,10 +1274,12 @@ std::string LoopResult::full_report() const {
     out += "  figures:\n";
     figures_table(out, step.before, step.after);
     out += "  candidates:\n";
+    speed_band_line(out, step.speed_bands);
     candidate_table(out, step.candidates);
   }
   if (!last_candidates.empty()) {
     out += "\nLast examination (no step taken):\n";
+    speed_band_line(out, last_speed_bands);
     candidate_table(out, last_candidates);
   }
   out += "\nStopped: " + stop_reason + ".\n";

@@ -13,7 +13,8 @@
 //   loop.final_fit.model;                            // the last accepted model, fitted
 //
 // Thread safety: free functions without shared state; the progress callback is called on
-// the caller's thread.
+// the caller's thread. With LoopOptions::parallel_refits the loop runs fit_model on threads
+// of its own, joined before the step's verdicts.
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -56,6 +57,13 @@ struct LoopOptions {
   double min_held_out_improvement = 0.02;
   // ... and BIC = n ln(SSR/n) + p ln(n) falls by more than this (0: falls at all).
   double min_bic_decrease = 0.0;
+  // The second look at weak candidates (docs/residual-loop.md, "The second look"): the
+  // best-ranked candidates that explain at least min_explained_fraction but score z below
+  // min_score_z, as many as the refit slots the passing candidates leave free, are each
+  // added at their examination start and refined with the free parameters by at most this
+  // many Gauss–Newton steps on the examination's windows (no fit_model call); a candidate
+  // is refitted when its refined share and z pass both thresholds. 0: off.
+  int screen_steps = 5;
 
   // --- The residual examination's scans of nonlinear parameters (start values) ---
   std::vector<double> stribeck_speeds_rad_s = {0.01, 0.02, 0.05, 0.1, 0.2, 0.5};  // w_s
@@ -81,6 +89,11 @@ struct LoopOptions {
     kStartModel,
   };
   RefitStart refit_start = RefitStart::kBest;
+  // Run a step's refits (and kBest's two starts) at once, each on a thread of its own.
+  // fit_model's result does not depend on the thread or on num_threads (docs/fitting.md,
+  // "Threads and determinism"), so the decisions are the same either way; only the wall
+  // time changes.
+  bool parallel_refits = true;
 
   // Called with one line at each stage (fits, the ranking, each verdict); may be empty.
   std::function<void(const std::string&)> progress;
@@ -129,6 +142,17 @@ struct CandidateEvidence {
   std::vector<double> start_values;
   std::string scan;  // the scanned values chosen, e.g. "w_s = 0.05"; empty when none
 
+  // The second look (LoopOptions::screen_steps), when it was taken: the share of the
+  // examination's Σe² that the effect removes once it and the free parameters are refined
+  // (against the model without it, refined the same way), the refined amplitude's z
+  // (window-clustered), and the refined effect parameters, the refit's start when the
+  // second look promotes the candidate.
+  bool screened = false;
+  bool promoted = false;  // refitted on the second look's evidence alone
+  double screen_explained_fraction = 0.0;
+  double screen_score_z = 0.0;
+  std::vector<double> screen_values;
+
   bool refitted = false;
   std::string refit_start;            // "the current fit" or "the start model"
   std::optional<ModelFigures> after;  // the refit's figures
@@ -138,19 +162,36 @@ struct CandidateEvidence {
   std::string verdict;  // "not refitted: ...", "held-out RMSE fell 0.8% (needs > 2%)", ...
 };
 
+// The rate residual in one band of measured speed |ω| (low ≤ |ω| < high): where the model
+// misses. Breakaway friction shows below about 0.1 rad/s, a missing weight at all speeds.
+struct SpeedBand {
+  double low_rad_s = 0.0, high_rad_s = 0.0;
+  std::size_t samples = 0;
+  double rms_rad_s = 0.0;  // √(mean (ω − ω̂)²) over the band's samples; 0 when none
+};
+
+// The bands of the examination: [0, 0.01), [0.01, 0.05), [0.05, 0.2), [0.2, 0.5), [0.5, ∞) rad/s.
+inline constexpr double kSpeedBandEdges_rad_s[] = {0.0, 0.01, 0.05, 0.2, 0.5};
+
 // The residual examination of one model (step 2 of the loop), without refits.
 struct ResidualExamination {
   std::size_t samples = 0;           // rate residuals used (window samples after the first)
   double rate_sum_of_squares = 0.0;  // Σ(ω − ω̂)², rad²/s²
   std::vector<CandidateEvidence> candidates;  // best first
+  std::vector<SpeedBand> speed_bands;  // the residual by measured speed
+  double time_s = 0.0;                 // wall clock, the second look included
+  double screen_time_s = 0.0;          // the second look's share of it
 };
 
 struct LoopStep {
   int number = 0;  // 1, 2, ...
   effects::Kind effect = effects::Kind::kViscousDamping;
   std::string effect_name;
-  double explained_fraction = 0.0;  // the evidence
+  // The evidence that had it refitted: the examination's linear share and z, or the second
+  // look's when that promoted it (second_look).
+  double explained_fraction = 0.0;
   double score_z = 0.0;
+  bool second_look = false;
   int rank = 0;  // among `candidates`
   // The added effect's parameters as the step's fit left them ("<effect>.<param>", with
   // standard uncertainty).
@@ -159,6 +200,7 @@ struct LoopStep {
   double held_out_improvement = 0.0;
   double bic_change = 0.0;
   std::vector<CandidateEvidence> candidates;  // the whole ranking, with every refit's verdict
+  std::vector<SpeedBand> speed_bands;         // the examination's residual by speed
 };
 
 struct LoopResult {
@@ -168,6 +210,7 @@ struct LoopResult {
   // The examination that ended the loop, with why each candidate failed (empty when the
   // loop stopped at max_steps or ran out of candidates).
   std::vector<CandidateEvidence> last_candidates;
+  std::vector<SpeedBand> last_speed_bands;  // that examination's residual by speed
   std::string stop_reason;
   int fits = 0;  // calls of fit_model
   double total_time_s = 0.0;

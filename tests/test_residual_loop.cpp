@@ -158,6 +158,8 @@ TEST_CASE("residual loop: the examination finds nothing significant at the truth
     CHECK(candidate.rank == static_cast<int>(k) + 1);
     CHECK(candidate.score_z < defaults.min_score_z);
     CHECK(candidate.explained_fraction < 0.1);
+    // The second look, where taken, finds nothing significant either.
+    if (candidate.screened) CHECK(candidate.screen_score_z < defaults.min_score_z);
     if (k > 0) CHECK(candidate.explained_fraction <= examination.candidates[k - 1].explained_fraction);
     CHECK(candidate.start_values.size() == effects::info(candidate.kind).parameters.size());
   }
@@ -285,6 +287,7 @@ TEST_CASE("residual loop: options are validated with a message naming the option
   CHECK_THAT(message([](LoopOptions& o) { o.soft_close_sharpness_per_rad = {1e6}; }),
              Contains("soft_close_sharpness_per_rad"));
   CHECK_THAT(message([](LoopOptions& o) { o.end_stop_angles = 0; }), Contains("end_stop_angles"));
+  CHECK_THAT(message([](LoopOptions& o) { o.screen_steps = -1; }), Contains("screen_steps"));
   CHECK_THAT(message([](LoopOptions& o) { o.fixed_effect_parameters = {"end_stop.beta"}; }),
              Contains("fixed_effect_parameters") && Contains("end_stop.beta"));
 
