@@ -5,11 +5,10 @@
 // when a check failed.
 #include <unistd.h>
 
-#include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
+#include "acquisition/output_file.h"
 #include "app/commands.h"
 #include "haptic/hapticmaster_check.h"
 
@@ -22,6 +21,7 @@ struct CheckOptions {
   double inertia_kg = 10.0;
   bool yes = false;
   std::string json_path;
+  bool overwrite = false;
 };
 
 void run_check(const CheckOptions& options) {
@@ -30,9 +30,8 @@ void run_check(const CheckOptions& options) {
     throw UsageError("hapticmaster check: '" + options.uri +
                      "' is not hapticmaster://HOST[:PORT]");
   }
-  if (!options.json_path.empty() && std::filesystem::exists(options.json_path)) {
-    throw UsageError("--json " + options.json_path + ": exists (never overwritten)");
-  }
+  // The output rule (acquisition/output_file.h): refused before the device is touched.
+  if (!options.json_path.empty()) check_output_file(options.json_path, {}, options.overwrite);
   haptic::HapticMasterCheckOptions check;
   check.exchanges = options.exchanges;
   check.inertia_kg = options.inertia_kg;
@@ -56,11 +55,7 @@ void run_check(const CheckOptions& options) {
   const haptic::HapticMasterCheckReport report =
       haptic::run_hapticmaster_check(options.uri.substr(kScheme.size()), check);
   std::cout << report.text();
-  if (!options.json_path.empty()) {
-    std::ofstream out(options.json_path);
-    out << report.json() << "\n";
-    if (!out) throw std::runtime_error("--json " + options.json_path + ": write failed");
-  }
+  if (!options.json_path.empty()) write_text_file_atomically(options.json_path, report.json() + "\n");
   if (!report.passed()) throw std::runtime_error("hapticmaster check: a check failed");
 }
 
@@ -85,7 +80,8 @@ void add_hapticmaster_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   check->add_flag("--yes", options->yes,
                   "Run the disconnect test without asking (it pushes the arm with 2 N)");
-  check->add_option("--json", options->json_path, "Also write the report as JSON (a new file)");
+  check->add_option("--json", options->json_path, "Also write the report as JSON");
+  check->add_flag("--overwrite", options->overwrite, "Replace an existing --json file");
   check->callback([options, &action] { action = [options] { run_check(*options); }; });
 }
 

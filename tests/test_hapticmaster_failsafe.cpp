@@ -455,6 +455,20 @@ TEST_CASE("doorbench hapticmaster check: start-up, latency, stiffness limit and 
   CHECK_THAT(text, Catch::Contains("\"p99_ms\""));
   CHECK_THAT(text, Catch::Contains("\"stiffness_limit_N_per_m\""));
   CHECK_THAT(text, Catch::Contains("\"force_after_N\": 2.0"));
+  // The report is an output like any other: an existing one is refused before the device is
+  // touched (exit 2), --overwrite replaces it.
+  const auto again = doorbench::testing::run_doorbench_shell(
+      "hapticmaster check hapticmaster://" + emulator.address() + " --exchanges 200 --json '" +
+          json.string() + "'",
+      dir);
+  CHECK(again.status == 2);
+  CHECK_THAT(again.err,
+             Catch::Contains(json.string() + ": exists (give --overwrite to replace it)"));
+  const auto replaced = doorbench::testing::run_doorbench_shell(
+      "hapticmaster check hapticmaster://" + emulator.address() + " --exchanges 200 --json '" +
+          json.string() + "' --overwrite",
+      dir);
+  CHECK(replaced.status == 0);
 
   // Refusals name the step; without a terminal or --yes the disconnect test is skipped.
   Emulator pushed({"--emergency-button"});
