@@ -44,7 +44,10 @@ std::vector<double> time_round_trips(HapticMasterDevice& device, int count,
     }
   }
   device.stop();
-  return device.round_trip_times_s();
+  // The I/O thread may finish one more exchange before it stops: report exactly `count`.
+  std::vector<double> times = device.round_trip_times_s();
+  if (times.size() > static_cast<std::size_t>(count)) times.resize(static_cast<std::size_t>(count));
+  return times;
 }
 
 }  // namespace
