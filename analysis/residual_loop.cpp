@@ -529,6 +529,52 @@ Refined refine_parameters(const DoorModel& start, const PreparedData& data,
   return refined;
 }
 
+// The projection off a Gram matrix's first `count` columns (X): (XᵀX)⁺ taken on
+// unit-diagonal scaling with a relative eigenvalue cut-off, the coefficients β_a = (XᵀX)⁺
+// Xᵀ(column a) in scaled coordinates, and (P column a)·(P column b) over the rows of any
+// Gram matrix `g` of the same columns (the whole data or one window), P = I − X (XᵀX)⁺ Xᵀ.
+class GramProjector {
+ public:
+  GramProjector(const Eigen::MatrixXd& gram, int count)
+      : count_(count), scale_(Eigen::VectorXd::Ones(count)) {
+    if (count_ == 0) return;
+    for (int k = 0; k < count_; ++k) {
+      const double d = gram(k, k);
+      scale_[k] = d > 0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 0.0;
+    }
+    const Eigen::MatrixXd scaled =
+        scale_.asDiagonal() * gram.topLeftCorner(count_, count_) * scale_.asDiagonal();
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
+    const Eigen::VectorXd& values = eigen.eigenvalues();
+    const double largest = values.size() > 0 ? values.maxCoeff() : 0.0;
+    Eigen::VectorXd inverse_values = Eigen::VectorXd::Zero(values.size());
+    for (int k = 0; k < values.size(); ++k) {
+      if (values[k] > kProjectionRankTolerance * largest) inverse_values[k] = 1.0 / values[k];
+    }
+    inverse_ =
+        eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
+  }
+  Eigen::VectorXd coefficients(const Eigen::MatrixXd& gram, int a) const {
+    if (count_ == 0) return Eigen::VectorXd();
+    return inverse_ * scale_.cwiseProduct(gram.block(0, a, count_, 1));
+  }
+  double project(const Eigen::MatrixXd& g, int a, const Eigen::VectorXd& beta_a, int b,
+                 const Eigen::VectorXd& beta_b) const {
+    double value = g(a, b);
+    if (count_ == 0) return value;
+    const Eigen::VectorXd ga = scale_.cwiseProduct(g.block(0, a, count_, 1));
+    const Eigen::VectorXd gb = scale_.cwiseProduct(g.block(0, b, count_, 1));
+    const Eigen::MatrixXd h =
+        scale_.asDiagonal() * g.topLeftCorner(count_, count_) * scale_.asDiagonal();
+    return value - beta_a.dot(gb) - beta_b.dot(ga) + beta_a.dot(h * beta_b);
+  }
+
+ private:
+  int count_;
+  Eigen::VectorXd scale_;
+  Eigen::MatrixXd inverse_;
+};
+
 // The score of the last parameter column of `linear` (columns [nuisance..., x, e]) with
 // the nuisance projected out: returns (x·Pe, |Px|², Σ_w (Px·Pe)_w²), the pieces of the
 // window-clustered Wald statistic at a least-squares point.
@@ -538,46 +584,15 @@ struct ColumnScore {
 
 ColumnScore last_column_score(const Linearization& linear) {
   const int columns = static_cast<int>(linear.gram.rows());
-  const int x = columns - 2, e = columns - 1, nuisance = x;
-  Eigen::VectorXd scale = Eigen::VectorXd::Ones(nuisance);
-  Eigen::MatrixXd inverse;
-  if (nuisance > 0) {
-    for (int k = 0; k < nuisance; ++k) {
-      const double d = linear.gram(k, k);
-      scale[k] = d > 0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 0.0;
-    }
-    const Eigen::MatrixXd scaled = scale.asDiagonal() *
-                                   linear.gram.topLeftCorner(nuisance, nuisance) *
-                                   scale.asDiagonal();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
-    const Eigen::VectorXd& values = eigen.eigenvalues();
-    const double largest = values.size() > 0 ? values.maxCoeff() : 0.0;
-    Eigen::VectorXd inverse_values = Eigen::VectorXd::Zero(values.size());
-    for (int k = 0; k < values.size(); ++k) {
-      if (values[k] > kProjectionRankTolerance * largest) inverse_values[k] = 1.0 / values[k];
-    }
-    inverse = eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
-  }
-  auto beta = [&](int a) -> Eigen::VectorXd {
-    if (nuisance == 0) return Eigen::VectorXd();
-    return inverse * scale.cwiseProduct(linear.gram.block(0, a, nuisance, 1));
-  };
-  const Eigen::VectorXd beta_x = beta(x), beta_e = beta(e);
-  auto project = [&](const Eigen::MatrixXd& g, int a, const Eigen::VectorXd& beta_a, int b,
-                     const Eigen::VectorXd& beta_b) {
-    double value = g(a, b);
-    if (nuisance == 0) return value;
-    const Eigen::VectorXd ga = scale.cwiseProduct(g.block(0, a, nuisance, 1));
-    const Eigen::VectorXd gb = scale.cwiseProduct(g.block(0, b, nuisance, 1));
-    const Eigen::MatrixXd h =
-        scale.asDiagonal() * g.topLeftCorner(nuisance, nuisance) * scale.asDiagonal();
-    return value - beta_a.dot(gb) - beta_b.dot(ga) + beta_a.dot(h * beta_b);
-  };
+  const int x = columns - 2, e = columns - 1;
+  const GramProjector projector(linear.gram, x);
+  const Eigen::VectorXd beta_x = projector.coefficients(linear.gram, x);
+  const Eigen::VectorXd beta_e = projector.coefficients(linear.gram, e);
   ColumnScore score;
-  score.pxe = project(linear.gram, x, beta_x, e, beta_e);
-  score.pxx = project(linear.gram, x, beta_x, x, beta_x);
+  score.pxe = projector.project(linear.gram, x, beta_x, e, beta_e);
+  score.pxx = projector.project(linear.gram, x, beta_x, x, beta_x);
   for (const Eigen::MatrixXd& window_gram : linear.window_grams) {
-    const double w = project(window_gram, x, beta_x, e, beta_e);
+    const double w = projector.project(window_gram, x, beta_x, e, beta_e);
     score.spread += w * w;
   }
   return score;
@@ -698,40 +713,13 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   // with X those columns, x a regressor and P = I − X (XᵀX)⁺ Xᵀ,
   //   x·Pe = x·e − xᵀX (XᵀX)⁺ Xᵀe,  |Px|² = x·x − xᵀX (XᵀX)⁺ Xᵀx,
   // (XᵀX)⁺ taken on unit-diagonal scaling with a relative eigenvalue cut-off.
-  Eigen::MatrixXd projector_gram;  // (XᵀX)⁺ in scaled coordinates
-  Eigen::VectorXd scale = Eigen::VectorXd::Ones(free_count);
-  if (free_count > 0) {
-    for (int k = 0; k < free_count; ++k) {
-      const double d = gram(k, k);
-      scale[k] = d > 0 && std::isfinite(d) ? 1.0 / std::sqrt(d) : 0.0;
-    }
-    const Eigen::MatrixXd scaled =
-        scale.asDiagonal() * gram.topLeftCorner(free_count, free_count) * scale.asDiagonal();
-    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eigen(scaled);
-    const Eigen::VectorXd& values = eigen.eigenvalues();
-    const double largest = values.size() > 0 ? values.maxCoeff() : 0.0;
-    Eigen::VectorXd inverse_values = Eigen::VectorXd::Zero(values.size());
-    for (int k = 0; k < values.size(); ++k) {
-      if (values[k] > kProjectionRankTolerance * largest) inverse_values[k] = 1.0 / values[k];
-    }
-    projector_gram =
-        eigen.eigenvectors() * inverse_values.asDiagonal() * eigen.eigenvectors().transpose();
-  }
+  const GramProjector projector(gram, free_count);
   // β_a = (XᵀX)⁺ Xᵀ(column a), scaled: Xβ is the part of a column the parameters mimic.
-  auto coefficients = [&](int a) -> Eigen::VectorXd {
-    if (free_count == 0) return Eigen::VectorXd();
-    return projector_gram * scale.cwiseProduct(gram.block(0, a, free_count, 1));
-  };
+  auto coefficients = [&](int a) { return projector.coefficients(gram, a); };
   // (P column a)·(P column b) over the rows of `g` (the whole data or one window).
   auto project = [&](const Eigen::MatrixXd& g, int a, const Eigen::VectorXd& beta_a, int b,
                      const Eigen::VectorXd& beta_b) {
-    double value = g(a, b);
-    if (free_count == 0) return value;
-    const Eigen::VectorXd ga = scale.cwiseProduct(g.block(0, a, free_count, 1));
-    const Eigen::VectorXd gb = scale.cwiseProduct(g.block(0, b, free_count, 1));
-    const Eigen::MatrixXd h =
-        scale.asDiagonal() * g.topLeftCorner(free_count, free_count) * scale.asDiagonal();
-    return value - beta_a.dot(gb) - beta_b.dot(ga) + beta_a.dot(h * beta_b);
+    return projector.project(g, a, beta_a, b, beta_b);
   };
   const int e_column = columns - 1;
   const Eigen::VectorXd beta_e = coefficients(e_column);
