@@ -1,22 +1,14 @@
 #include "haptic/hapticmaster_device.h"
 
-#include <fcntl.h>
-#include <netdb.h>
-#include <netinet/in.h>
-#include <netinet/tcp.h>
-#include <poll.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
-#include <optional>
 #include <cctype>
-#include <cerrno>
 #include <chrono>
 #include <cmath>
-#include <cstring>
+#include <ctime>
+#include <optional>
 #include <stdexcept>
+#include <thread>
 #include <vector>
 
 #include "haptic/door_mapping.h"
