@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "acquisition/session_file.h"
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 
 namespace doorbench {
 

@@ -130,7 +130,7 @@ RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata&
 
 // ---------------------------------------------------------------------------------------
 // The parts shared by the two threads, public so that tests can drive the reading side
-// on its own (tests/test_recorder_realtime.cpp proves it allocates nothing).
+// on its own (tests/acquisition/test_recorder.cpp proves it allocates nothing).
 
 // One block of scans in the ring: counts[c * capacity + s].
 struct ScanSlot {

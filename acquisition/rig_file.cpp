@@ -17,7 +17,7 @@
 #include <span>
 #include <system_error>
 
-#include "sensors/sensor_models.h"
+#include "acquisition/sensor_parameters.h"
 
 namespace doorbench {
 namespace {

@@ -22,7 +22,7 @@
 #include <string>
 #include <vector>
 
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 
 namespace doorbench {
 

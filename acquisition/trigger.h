@@ -10,7 +10,7 @@
 //
 // Threads: the stage is used by one thread (the recorder's writer thread). It is not the
 // real-time thread, but it still allocates nothing after construction: every buffer and
-// every event text is made in the constructor (tests/test_trigger.cpp counts).
+// every event text is made in the constructor (tests/acquisition/test_trigger.cpp counts).
 #include <atomic>
 #include <cstdint>
 #include <limits>
@@ -21,7 +21,7 @@
 #include <vector>
 
 #include "acquisition/session_file.h"
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 
 namespace doorbench {
 

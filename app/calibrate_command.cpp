@@ -12,7 +12,7 @@
 #include "acquisition/output_file.h"
 #include "app/commands.h"
 #include "app/session_recording.h"
-#include "calibration/calibration_store.h"
+#include "acquisition/calibration_store.h"
 #include "calibration/certificate.h"
 #include "calibration/geometry_calibration.h"
 #include "calibration/gyro_calibration.h"
@@ -23,7 +23,7 @@
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
 #include "sensors/rig_channel.h"
-#include "sensors/simulated_bench.h"
+#include "simulated_bench/simulated_bench.h"
 
 namespace doorbench::app {
 namespace {

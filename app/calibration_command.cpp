@@ -8,7 +8,7 @@
 #include "acquisition/output_file.h"
 #include "acquisition/session_file.h"
 #include "app/commands.h"
-#include "calibration/calibration_store.h"
+#include "acquisition/calibration_store.h"
 #include "calibration/certificate.h"
 #include "calibration/procedure.h"
 #include "calibration/range_warnings.h"

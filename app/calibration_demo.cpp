@@ -11,7 +11,7 @@
 
 #include "acquisition/recorder.h"
 #include "acquisition/session_csv.h"
-#include "calibration/calibration_store.h"
+#include "acquisition/calibration_store.h"
 #include "calibration/demo_rig.h"
 #include "calibration/gyro_calibration.h"
 #include "calibration/inclinometer_calibration.h"
@@ -19,7 +19,7 @@
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
 #include "sensors/rig_channel.h"
-#include "sensors/simulated_bench.h"
+#include "simulated_bench/simulated_bench.h"
 
 namespace doorbench::app {
 namespace {

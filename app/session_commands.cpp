@@ -27,7 +27,7 @@
 #include "calibration/range_warnings.h"
 #include "sensors/comedi_backend.h"
 #include "sensors/modbus_source.h"
-#include "sensors/simulated_bench.h"
+#include "simulated_bench/simulated_bench.h"
 
 namespace doorbench::app {
 

@@ -1,10 +1,12 @@
 // The render loop's tick: its cost alone (a device that costs nothing, records drained outside
-// the timing every 50000 ticks), for the sensory and the physical reference door.
+// the timing every 50000 ticks), for the sensory and the physical reference door; and the
+// simulated HapticMaster's closed loop per 1 kHz tick (docs/haptic-devices.md, "Cost").
 #include <benchmark/benchmark.h>
 
 #include "analysis/parameter_file.h"
 #include "bench/haptic_fixed_device.h"
 #include "haptic/render_loop.h"
+#include "haptic/simulated_hapticmaster.h"
 
 namespace {
 
@@ -43,5 +45,29 @@ void BM_RenderLoopTickPhysical(benchmark::State& state) {
 }
 BENCHMARK(BM_RenderLoopTickSensory);
 BENCHMARK(BM_RenderLoopTickPhysical);
+
+// One 1 kHz tick of the simulated HapticMaster in closed loop with the reference sensory
+// door: 2.5 servo steps (hand with ±20 N pushes at 2 Hz), a read, the door's torque mapped
+// to a force command. Per iteration = per tick.
+void BM_SimulatedHapticMasterTick(benchmark::State& state) {
+  const DoorModel model = reference_model(ModelKind::kSensory);
+  const haptic::DoorMapping mapping(haptic::Kinematics::kCartesian3, haptic::ArcGeometry{},
+                                    model.geometry().handle_radius_m);
+  haptic::SimulatedHapticMaster device;
+  haptic::SimulatedHandOptions hand;
+  hand.pushes.rate_hz = 2.0;
+  device.set_hand(hand, mapping);
+  device.start(mapping.inertia_on_device(model.inertia_kg_m2()));
+  long tick = 0;
+  for (auto _ : state) {
+    device.advance_to(static_cast<double>(++tick) * 0.001);
+    const haptic::DeviceSample sample = device.read();
+    const haptic::DoorPoint door = mapping.to_door(sample);
+    device.command_force(
+        mapping.to_device(model.torque_Nm(door.theta_rad, door.omega_rad_s), sample));
+  }
+  state.counters["servo_steps"] = static_cast<double>(device.truth().steps);
+}
+BENCHMARK(BM_SimulatedHapticMasterTick);
 
 }  // namespace

@@ -4,7 +4,7 @@
 //     the simulated bench for 19 s (seed 1, 6 strokes), through the session file and
 //     preprocessing; the loop adds the imbalance and stops. Target (issue 23): < 5 s.
 //   residual_loop_tremor_12_strokes/<effect>: 12 strokes of the tremor hand
-//     (tests/tremor_recording.h, seed 1); 0 clean, 1 breakaway friction (d_s − d1 = 1.5 N·m,
+//     (tests/support/tremor_recording.h, seed 1); 0 clean, 1 breakaway friction (d_s − d1 = 1.5 N·m,
 //     w_s = 0.05 rad/s), 2 gravity imbalance g1 = 3 N·m. Target (issue 23): < 10 s on 2 cores.
 // Counters: fit_model calls, effects added, the loop's own time split (examinations).
 // Each iteration is a whole loop (seconds to a minute): run with --benchmark_min_time=0.
@@ -16,8 +16,8 @@
 #include "analysis/parameter_file.h"
 #include "analysis/preprocessing.h"
 #include "analysis/residual_loop.h"
-#include "tests/simulated_session.h"
-#include "tests/tremor_recording.h"
+#include "tests/support/simulated_session.h"
+#include "tests/support/tremor_recording.h"
 
 namespace {
 

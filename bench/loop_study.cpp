@@ -1,5 +1,5 @@
 // Not a timing: runs the residual loop on one recording made by the tremor hand
-// (tests/tremor_recording.h) or on the demo's bench recording, and prints the progress
+// (tests/support/tremor_recording.h) or on the demo's bench recording, and prints the progress
 // lines (each fit with its time), the examination's ranking and the full report, for
 // docs/residual-loop.md and docs/PERFORMANCE.md.
 //
@@ -20,8 +20,8 @@
 #include "analysis/parameter_file.h"
 #include "analysis/preprocessing.h"
 #include "analysis/residual_loop.h"
-#include "tests/simulated_session.h"
-#include "tests/tremor_recording.h"
+#include "tests/support/simulated_session.h"
+#include "tests/support/tremor_recording.h"
 
 using namespace doorbench;
 
@@ -73,7 +73,7 @@ int main(int argc, char** argv) {
     data = testing::tremor_recording(
         with_effect(sensory, effects::Kind::kStribeck, {d1 + size, 0.05}), recording);
   } else if (which == "plain-end-stop") {
-    // tests/test_residual_loop.cpp's end-stop recording: the plain virtual hand, 6 strokes.
+    // tests/analysis/test_residual_loop.cpp's end-stop recording: the plain virtual hand, 6 strokes.
     SyntheticStrokeOptions plain;
     plain.runs = {{0.6, 3.0}, {1.0, 4.0}, {1.3, 4.0}};
     plain.seed = 3;

@@ -15,7 +15,7 @@
 
 #include "acquisition/rig_file.h"
 #include "sensors/modbus_source.h"
-#include "tests/modbus/modbus_test_server.h"
+#include "tests/support/modbus_test_server.h"
 
 namespace {
 

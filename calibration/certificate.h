@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 
 namespace doorbench::calibration {
 

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 #include "calibration/procedure.h"
 
 namespace doorbench::calibration {

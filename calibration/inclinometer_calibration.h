@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "acquisition/session_file.h"
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 #include "calibration/guided_procedure.h"
 #include "calibration/gyro_calibration.h"
 #include "calibration/procedure.h"

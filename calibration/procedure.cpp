@@ -3,7 +3,7 @@
 #include <charconv>
 #include <cstdio>
 
-#include "calibration/calibration_store.h"
+#include "acquisition/calibration_store.h"
 
 namespace doorbench::calibration {
 

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 
 namespace doorbench::calibration {
 

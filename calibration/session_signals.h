@@ -8,7 +8,7 @@
 
 #include "acquisition/rig_file.h"
 #include "acquisition/session_file.h"
-#include "calibration/calibration_record.h"
+#include "acquisition/calibration_record.h"
 
 namespace doorbench::calibration {
 

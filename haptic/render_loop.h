@@ -7,7 +7,7 @@
 // The MuJoCo split: the constant part (options, mapping, device limits) is fixed at
 // construction; the mutable part (the parameter set in use, the safety and passivity state,
 // counters) changes tick by tick; tick() is the step function over both. tick() never
-// allocates, locks, logs or does I/O (tests/test_render_loop.cpp counts allocations): its
+// allocates, locks, logs or does I/O (tests/haptic/test_render_loop.cpp counts allocations): its
 // output goes through a preallocated single-producer ring (SpscRing) to whoever records it,
 // and new parameter sets come in through the ParameterMailbox at tick boundaries.
 //

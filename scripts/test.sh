@@ -1,9 +1,11 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds doorbench with warnings as errors, fuzzes the parsers for
-# a bounded time (scripts/fuzz.sh, docs/fuzzing.md), and runs every test.
+# Installs what is missing, checks the layers (scripts/check_includes.py, docs/architecture.md),
+# builds doorbench with warnings as errors, fuzzes the parsers for a bounded time
+# (scripts/fuzz.sh, docs/fuzzing.md), and runs every test, the slow ones included.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
+python3 scripts/check_includes.py
 build_dir=${DOORBENCH_BUILD_DIR:-build}
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DDOORBENCH_WERROR=ON
 cmake --build "$build_dir" -j "$(nproc)"

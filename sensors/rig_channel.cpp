@@ -3,7 +3,7 @@
 #include <cmath>
 #include <numbers>
 
-#include "calibration/calibration_store.h"
+#include "acquisition/calibration_store.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::sensors {

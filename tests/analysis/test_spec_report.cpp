@@ -1,0 +1,159 @@
+// The specification report: spec.json's fields, spec.html's tables and plots, spec.pdf when
+// weasyprint is installed. The inverse design result is made by hand here (a known TO-BE
+// door), so that the report is tested without the inverse fit.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdlib>
+#include <nlohmann/json.hpp>
+
+#include "analysis/fit_synthetic.h"
+#include "analysis/parameter_file.h"
+#include "analysis/spec_report.h"
+#include "tests/support/temp_dir.h"
+
+using Catch::Matchers::Contains;
+using doorbench::DesignParameter;
+using doorbench::DesignSolution;
+using doorbench::DoorModel;
+using doorbench::InverseDesignResult;
+using doorbench::ModelKind;
+using doorbench::PreparedData;
+
+namespace {
+
+DoorModel scaled(const DoorModel& model, const char* name, double factor) {
+  std::vector<double> values(model.parameter_values().begin(), model.parameter_values().end());
+  values.at(static_cast<std::size_t>(*model.find_parameter(name))) *= factor;
+  return model.with_parameter_values(values);
+}
+
+DesignSolution solution_of(const DoorModel& asis, const DoorModel& tobe) {
+  DesignSolution solution{.model = tobe,
+                          .parameters = {},
+                          .fit = {},
+                          .held_at_as_is = {},
+                          .at_bound = {},
+                          .summary = {}};
+  for (int i = 0; i < tobe.parameter_count(); ++i) {
+    DesignParameter p;
+    p.name = tobe.parameter_name(i);
+    p.unit = std::string(tobe.parameter_unit(i));
+    p.free = p.name != "m_d";
+    p.as_is = asis.parameter_values()[i];
+    p.to_be = tobe.parameter_values()[i];
+    p.change = p.to_be - p.as_is;
+    p.relative_change = p.change / std::abs(p.as_is);
+    p.uncertainty = p.free ? 0.01 * std::abs(p.to_be) : NAN;
+    p.weight = 1.0;
+    p.bounds = tobe.parameter_bounds()[i];
+    solution.parameters.push_back(p);
+  }
+  return solution;
+}
+
+}  // namespace
+
+TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[spec]") {
+  const DoorModel asis = doorbench::reference_model(ModelKind::kPhysical);
+  const DoorModel tobe = scaled(scaled(asis, "F_l0", 0.7), "F0", 1.04);
+  const DoorModel alternative = scaled(asis, "k_l", 0.8);
+  doorbench::SyntheticStrokeOptions synthetic;
+  synthetic.runs = {{1.0, 4.0}, {1.3, 5.0}};
+  std::vector<PreparedData> recordings = {doorbench::synthetic_strokes(tobe, synthetic)};
+  recordings[0].source = "tobe <1>.h5";  // escaped in the HTML
+
+  InverseDesignResult design;
+  design.solutions.push_back(solution_of(asis, tobe));
+  design.solutions.front().held_at_as_is = {"k_s", "L0"};  // a fewest-changes design
+  design.solutions.front().parts_changed_cost = 2.0;
+  design.solutions.push_back(solution_of(asis, alternative));
+  design.commanded_torque = true;
+  design.rate_noise_rad_s = 0.001;
+  design.notes = {"made by hand for the test"};
+
+  doorbench::SpecEvaluationOptions options;
+  options.felt.hand.duration_s = 6.0;
+  options.monte_carlo.samples = 8;
+  options.monte_carlo.threads = 2;
+  doorbench::SpecEvaluation evaluation =
+      doorbench::evaluate_spec(asis, design, recordings, options);
+  evaluation.command = "doorbench spec test";
+  evaluation.asis_source = "reference door";
+  REQUIRE(evaluation.tolerances);
+  CHECK(evaluation.tolerances->failed == 0);
+  REQUIRE(evaluation.felt_alternatives.size() == 1);
+  // The design is the door that made the recordings: its check is far better than AS-IS's.
+  CHECK(evaluation.check_after.curve_rms_error_N < 0.5);
+  CHECK(evaluation.check_before.curve_rms_error_N > 5 * evaluation.check_after.curve_rms_error_N);
+  CHECK(evaluation.felt_after.peak_unlatch_force_N < evaluation.felt_before.peak_unlatch_force_N);
+
+  doorbench::testing::TempDir dir("spec_report");
+  const doorbench::SpecReportFiles files =
+      doorbench::write_spec_report(dir / "out", design, evaluation);
+  REQUIRE(std::filesystem::exists(files.json));
+  REQUIRE(std::filesystem::exists(files.html));
+
+  const auto json = nlohmann::json::parse(doorbench::read_text_file(files.json));
+  CHECK(json["feasible"] == true);
+  CHECK(json["requested"].empty());
+  CHECK(json["tobe_sources"][0] == "tobe <1>.h5");
+  REQUIRE(json["parameters"].size() == static_cast<std::size_t>(asis.parameter_count()));
+  const auto& f_l0 = json["parameters"][doorbench::physical::kFl0];
+  CHECK(f_l0["name"] == "F_l0");
+  CHECK(f_l0["unit"] == "N");
+  CHECK(f_l0["as_is"].get<double>() == 15.0);
+  CHECK_THAT(f_l0["to_be"].get<double>(), Catch::Matchers::WithinRel(10.5, 1e-12));
+  CHECK_THAT(f_l0["change"].get<double>(), Catch::Matchers::WithinRel(-4.5, 1e-12));
+  CHECK(f_l0["uncertainty"].is_number());
+  CHECK(json["parameters"][0]["uncertainty"].is_null());  // m_d fixed: NaN -> null
+  for (const char* key : {"before", "after", "tobe_recorded"}) {
+    INFO(key);
+    CHECK(json["felt"][key]["peak_unlatch_force_N"].is_number());
+    CHECK(json["felt"][key]["balance_force_N"].is_number());
+  }
+  CHECK(json["check"]["after"]["errors"].size() == doorbench::kFeltQuantities.size());
+  CHECK(json["check"]["after"]["curve_rms_error_N"].get<double>() < 0.5);
+  CHECK(json["tolerances"]["samples"] == 8);
+  REQUIRE(json["tolerances"]["spreads"].size() == doorbench::kFeltQuantities.size());
+  CHECK(json["tolerances"]["spreads"][0]["sd"].get<double>() > 0);
+  CHECK(json["tolerances"]["spreads"][0]["explained_variance"].contains("F_l0"));
+  CHECK(json["fit"]["commanded_torque"] == true);
+  CHECK(json["fit"]["parts_changed_cost"].get<double>() == 2.0);
+  CHECK(json["fit"]["held_at_as_is"] == nlohmann::json::array({"k_s", "L0"}));
+  REQUIRE(json["alternatives"].size() == 1);
+  CHECK(json["alternatives"][0]["held_at_as_is"].empty());
+  CHECK(json["alternatives"][0]["changes"].size() == 1);
+  CHECK(json["alternatives"][0]["changes"][0]["name"] == "k_l");
+
+  const std::string html = doorbench::read_text_file(files.html);
+  CHECK_THAT(html, Contains("<h2>Parameters</h2>"));
+  CHECK_THAT(html, Contains("<tr class=\"changed\"><td>F_l0</td>"));
+  CHECK_THAT(html, Contains("<svg"));
+  CHECK_THAT(html, Contains("fitted to the torque they commanded"));
+  CHECK_THAT(html, Contains("The design with the fewest changes: AS-IS kept for k_s L0"));
+  CHECK_THAT(html, Contains("TO-BE design, opening"));
+  CHECK_THAT(html, Contains("spread of peak force to unlatch"));
+  CHECK_THAT(html, Contains("tobe &lt;1&gt;.h5"));
+  CHECK(html.find("<?xml") == std::string::npos);  // inline SVG, no XML declaration
+
+  if (std::system("command -v weasyprint > /dev/null 2>&1") == 0) {
+    INFO(files.pdf_note);
+    REQUIRE(!files.pdf.empty());
+    CHECK(doorbench::read_text_file(files.pdf).rfind("%PDF", 0) == 0);
+  } else {
+    WARN("weasyprint not installed: " << files.pdf_note);
+    CHECK(files.pdf.empty());
+  }
+  // Asked for no PDF: none.
+  const auto no_pdf = doorbench::write_spec_report(dir / "nopdf", design, evaluation, "none");
+  CHECK(no_pdf.pdf.empty());
+  CHECK(!std::filesystem::exists(dir / "nopdf" / "spec.pdf"));
+}
+
+TEST_CASE("Spec report: a design without solutions is refused", "[spec]") {
+  const DoorModel asis = doorbench::reference_model(ModelKind::kPhysical);
+  const InverseDesignResult empty;
+  const std::vector<PreparedData> none;
+  CHECK_THROWS_WITH(doorbench::evaluate_spec(asis, empty, none),
+                    "spec: the inverse design has no solution");
+}

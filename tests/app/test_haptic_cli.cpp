@@ -1,0 +1,113 @@
+// doorbench play through the real executable.
+#include <catch2/catch.hpp>
+#include <fstream>
+
+#include "acquisition/session_file.h"
+#include "analysis/parameter_file.h"
+#include "analysis/perceptual_controls.h"
+#include "tests/support/run_doorbench.h"
+#include "tests/support/run_on_terminal.h"
+
+using namespace doorbench;
+using doorbench::testing::run_doorbench_shell;
+using doorbench::testing::TempDir;
+
+TEST_CASE("play: the simulated HapticMaster in simulated time writes a session and a summary",
+          "[haptic][cli]") {
+  TempDir dir("play_cli");
+  const auto session = dir / "played.h5";
+  const auto run = run_doorbench_shell(
+      "play --device sim --simulated-time --duration-s 12 --out '" + session.string() + "'", dir);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  // 12 s of ticks, then the safety layer's stop ramp (20 ms).
+  CHECK_THAT(run.out, Catch::Contains("12022 ticks over 12.02 s into"));
+  CHECK_THAT(run.out, Catch::Contains("0 records dropped"));
+  CHECK_THAT(run.out, Catch::Contains("safety stopped (events: start_ramp_done"));
+  const SessionReader reader(session);
+  CHECK(reader.sample_count("force") == 12022);
+  CHECK(reader.read_group_attribute("haptic", "device") == "sim:hapticmaster");
+
+  // Sessions are never overwritten.
+  const auto again = run_doorbench_shell(
+      "play --device sim --simulated-time --duration-s 1 --out '" + session.string() + "'", dir);
+  CHECK(again.status == 2);
+  CHECK_THAT(again.err, Catch::Contains("exists (sessions are never overwritten)"));
+}
+
+TEST_CASE("play: bad devices and options are refused by name", "[haptic][cli]") {
+  TempDir dir("play_cli_errors");
+  const auto bogus = run_doorbench_shell(
+      "play --device telepathy --duration-s 1 --out '" + (dir / "x.h5").string() + "'", dir);
+  CHECK(bogus.status == 1);
+  CHECK_THAT(bogus.err, Catch::Contains("--device 'telepathy': not a device (use sim, "
+                                        "sim:hapticmaster, sim:rotary or "
+                                        "hapticmaster://HOST[:PORT])"));
+  const auto rate =
+      run_doorbench_shell("play --rate-hz 8000 --out '" + (dir / "y.h5").string() + "'", dir);
+  CHECK(rate.status != 0);
+  CHECK_THAT(rate.err, Catch::Contains("--rate-hz"));
+}
+
+TEST_CASE("play --watch-params: a parameter file saved during a real-time run is played live",
+          "[haptic][cli]") {
+  TempDir dir("play_watch");
+  const DoorModel reference = reference_model(ModelKind::kSensory);
+  const DoorModel heavier = perceptual::set(reference, perceptual::Control::kHeaviness, 1.2);
+  std::ofstream(dir / "heavier.json") << to_parameter_json(heavier);
+  const auto watched = dir / "tuned.json";
+  const auto session = dir / "live.h5";
+  // The file appears one second into a three-second run (as the viewer's "save" would). A
+  // loaded machine may delay a tick by tens of ms: that must not stop this run early.
+  const std::string writer =
+      "sleep 1; cp '" + (dir / "heavier.json").string() + "' '" + watched.string() + "'; sleep 4";
+  const auto run = run_doorbench_shell(
+      "play --device sim --duration-s 3 --max-tick-interval-ms 200 --watch-params '" +
+          watched.string() + "' --out '" + session.string() + "'",
+      dir, "", writer);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.err, Catch::Contains("applied as parameter set 2"));
+  const SessionReader reader(session);
+  bool applied = false;
+  for (const SessionEvent& event : reader.events()) {
+    if (event.kind == "parameters" && event.detail.find("set 2: file ") == 0) {
+      applied = true;
+      CHECK(event.time_s > 0.8);
+      CHECK(event.time_s < 2.5);
+    }
+  }
+  CHECK(applied);
+  CHECK_THAT(reader.read_group_attribute("haptic/parameter_sets/set_2", "parameters"),
+             Catch::Contains("\"J\""));
+}
+
+TEST_CASE("play --keys: keypad presses on a terminal tune the door live, each one recorded",
+          "[haptic][cli]") {
+  // stdin is a real pseudo-terminal (openpty), as the operator's keypad would be.
+  TempDir dir("play_keys");
+  const auto session = dir / "keys.h5";
+  // Heavier, then an unknown key, one second into the run.
+  const testing::DoorbenchRun run = testing::run_doorbench_on_terminal(
+      {"play", "--device", "sim", "--duration-s", "3", "--max-tick-interval-ms", "200", "--keys",
+       "--out", session.string()},
+      dir, "+x", 1000);
+  const std::string& err = run.err;
+  INFO(err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(err, Catch::Contains("key +: heavier: heaviness 0.95 -> 1.045 kg*m^2"));
+  const SessionReader reader(session);
+  int tuning_events = 0;
+  bool heavier_played = false;
+  for (const SessionEvent& event : reader.events()) {
+    if (event.kind == "tuning") ++tuning_events;
+    if (event.kind == "parameters" &&
+        event.detail.rfind("set 2: key +: heavier: heaviness 0.95 -> 1.045", 0) == 0) {
+      heavier_played = true;
+    }
+  }
+  CHECK(tuning_events == 2);  // the refused key too
+  CHECK(heavier_played);
+  CHECK_THAT(reader.read_group_attribute("haptic/parameter_sets/set_2", "parameters"),
+             Catch::Contains("1.045"));
+}

@@ -1,0 +1,75 @@
+#pragma once
+// Runs the doorbench executable with its stdin on a real pseudo-terminal (openpty), as an
+// operator's keyboard or keypad would be, for tests of interactive input. `typed` is written to
+// the terminal after `delay_ms`; the terminal's echo is drained until doorbench exits (so that it
+// never blocks on it). stdout and stderr go to files in `dir`.
+#include <fcntl.h>
+#include <poll.h>
+#include <pty.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "tests/support/run_doorbench.h"
+#include "tests/support/temp_dir.h"
+
+namespace doorbench::testing {
+
+inline DoorbenchRun run_doorbench_on_terminal(const std::vector<std::string>& args,
+                                              const TempDir& dir, const std::string& typed,
+                                              int delay_ms = 0) {
+  const std::string out_path = (dir / "stdout.txt").string();
+  const std::string err_path = (dir / "stderr.txt").string();
+  DoorbenchRun run;
+  int master = -1, slave = -1;
+  if (::openpty(&master, &slave, nullptr, nullptr, nullptr) != 0) return run;
+  const pid_t child = ::fork();
+  if (child < 0) return run;
+  if (child == 0) {
+    ::dup2(slave, STDIN_FILENO);
+    ::close(master);
+    ::close(slave);
+    const int out_fd = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    const int err_fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    ::dup2(out_fd, STDOUT_FILENO);
+    ::dup2(err_fd, STDERR_FILENO);
+    std::vector<char*> argv;
+    argv.push_back(const_cast<char*>(DOORBENCH_EXECUTABLE));
+    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+    argv.push_back(nullptr);
+    ::execv(DOORBENCH_EXECUTABLE, argv.data());
+    ::_exit(127);
+  }
+  ::close(slave);
+  std::this_thread::sleep_for(std::chrono::milliseconds(delay_ms));
+  if (::write(master, typed.data(), typed.size()) != static_cast<ssize_t>(typed.size())) {
+    run.err = "could not type on the terminal";
+  }
+  int status = 0;
+  for (int waited_ms = 0; waited_ms < 60000; waited_ms += 10) {
+    char echo[256];
+    pollfd request{master, POLLIN, 0};
+    if (::poll(&request, 1, 10) > 0 && (request.revents & POLLIN)) {
+      if (::read(master, echo, sizeof echo) <= 0) break;
+    }
+    if (::waitpid(child, &status, WNOHANG) == child) break;
+  }
+  if (::waitpid(child, &status, WNOHANG) == 0) ::waitpid(child, &status, 0);
+  ::close(master);
+  run.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream o(out_path), e(err_path);
+  std::stringstream os, es;
+  os << o.rdbuf();
+  es << e.rdbuf();
+  run.out = os.str();
+  run.err.append(es.str());
+  return run;
+}
+
+}  // namespace doorbench::testing

@@ -1,0 +1,40 @@
+#pragma once
+// Records the built-in simulated bench (the reference door opened and closed by the
+// virtual hand, through the sensor models) into a session at `path`, through the real
+// recorder and session writer. Returns the number of scans recorded.
+//
+// model "physical" (the built-in rig's) or "sensory". The physical reference door falls
+// open by its weight once unlatched, faster than the gyroscope's ±100 °/s: its openings
+// saturate the gyroscope from about 1.2 s in. The sensory door has no weight and stays
+// inside every sensor's range: tests about accuracy use it. effects_file: an effects file
+// (door-models.md §4) the simulated door has, by absolute path.
+#include <cstdint>
+#include <filesystem>
+#include <string>
+
+#include "acquisition/recorder.h"
+#include "acquisition/rig_file.h"
+#include "simulated_bench/simulated_bench.h"
+
+namespace doorbench::testing {
+
+inline std::size_t record_built_in_session(const std::filesystem::path& path, double duration_s,
+                                           std::uint64_t seed,
+                                           const std::string& model_kind = "physical",
+                                           const std::filesystem::path& effects_file = {}) {
+  RigDefinition rig =
+      parse_rig(simulated_dishwasher_rig_text(), "built-in", std::filesystem::current_path());
+  rig.simulation->seed = seed;
+  rig.simulation->model = model_kind;
+  rig.simulation->effects = effects_file.string();  // absolute, or empty: none
+  const DoorModel model = sensors::simulated_door_model(rig);
+  sensors::SimulatedBench bench(rig, model, duration_s);
+  SessionMetadata metadata;
+  metadata.rig_name = rig.name;
+  metadata.rig_definition = rig.text;
+  RecordOptions options;
+  options.duration_s = duration_s;
+  return record_session(bench, metadata, path, options).scans;
+}
+
+}  // namespace doorbench::testing
