@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs what is missing, builds doorbench with warnings as errors, fuzzes the parsers for
+# Installs what is missing, builds doorbench with warnings as errors, checks that no
+# function is too long (docs/architecture.md), fuzzes the parsers for
 # a bounded time (scripts/fuzz.sh, docs/fuzzing.md), and runs every test.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -7,5 +8,6 @@ bash scripts/install-deps.sh
 build_dir=${DOORBENCH_BUILD_DIR:-build}
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DDOORBENCH_WERROR=ON
 cmake --build "$build_dir" -j "$(nproc)"
+python3 scripts/check_function_length.py
 bash scripts/fuzz.sh "${DOORBENCH_FUZZ_SECONDS:-20}"
 ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)"
