@@ -275,14 +275,6 @@ std::vector<std::vector<double>> resample_onto_common_clock(
   return columns;
 }
 
-// Per sample: the stroke it belongs to (0: none) and the load cell's mounting (+1 opening,
-// −1 closing), from the session's stroke events.
-struct StrokeColumns {
-  std::vector<int> stroke;
-  std::vector<int> sign;
-  bool any_stroke = false;
-};
-
 // "stroke 7" → 7 (imported strokes keep their ids); 0 otherwise.
 int stroke_id(const std::string& detail) {
   if (detail.rfind("stroke ", 0) != 0) return 0;
@@ -293,8 +285,10 @@ int stroke_id(const std::string& detail) {
   }
 }
 
-StrokeColumns strokes_from_events(std::vector<SessionEvent> events,
-                                  const std::vector<double>& time_s) {
+}  // namespace
+
+StrokeColumns stroke_columns_from_events(std::vector<SessionEvent> events,
+                                         const std::vector<double>& time_s) {
   std::stable_sort(events.begin(), events.end(), [](const SessionEvent& a, const SessionEvent& b) {
     return a.time_s < b.time_s;
   });
@@ -324,6 +318,8 @@ StrokeColumns strokes_from_events(std::vector<SessionEvent> events,
   }
   return strokes;
 }
+
+namespace {
 
 // The handle's radius: the geometry record's (the bench's as calibrated) before the
 // truth's, the import's or the haptic group's attribute.
@@ -374,7 +370,7 @@ Recording session_to_recording(const SessionReader& session) {
   };
 
   // Strokes from events; the load cell's mounting from each stroke's detail.
-  const StrokeColumns strokes = strokes_from_events(session.events(), recording.time_s);
+  const StrokeColumns strokes = stroke_columns_from_events(session.events(), recording.time_s);
   recording.force_N = column(*exported.force);
   const std::optional<calibration::CalibrationRecord> geometry =
       geometry_record(session, *exported.force);
