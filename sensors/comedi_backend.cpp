@@ -171,8 +171,8 @@ ComediBackend::ComediBackend(const RigDefinition& rig, const ComediApi& api,
   open_device();
   try {
     const int flags = check_subdevice();
-    load_soft_calibration(flags);
     const int n_channels = api_.get_n_channels(device_, setup_.subdevice);
+    load_soft_calibration(flags);
     for (std::size_t i = 0; i < rig.channels.size(); ++i) {
       setup_.channels.push_back(configure_channel(rig.channels[i], numbers[i], flags,
                                                   rig.daq_resolution_bits, n_channels));
