@@ -158,13 +158,17 @@ class CheckFunctionLength(unittest.TestCase):
         status, out, err = run_check("--root", FIXTURES, "--all", ".")
         self.assertEqual((status, err), (0, ""))
         self.assertEqual(out.splitlines(), [
-            "tricky.cpp:20: Widget::Widget 6 lines",  # the initialiser list's braces
-            "tricky.cpp:26: Widget::area 1 lines",
-            "tricky.cpp:32: raw_strings 5 lines",
-            "tricky.cpp:38: with_lambda 9 lines",  # its lambda and local class count
-            "tricky.cpp:48: trailing 3 lines",
-            "tricky.cpp:53: identity 3 lines",
-            "tricky.cpp:59: operator== 3 lines",
+            "tricky.cpp:21: Widget::Widget 6 lines",  # the initialiser list's braces
+            "tricky.cpp:27: Widget::area 1 lines",
+            "tricky.cpp:33: raw_strings 5 lines",
+            "tricky.cpp:39: with_lambda 9 lines",  # its lambda and local class count
+            "tricky.cpp:49: trailing 3 lines",
+            "tricky.cpp:54: identity 3 lines",
+            "tricky.cpp:60: operator== 3 lines",
+            "tricky.cpp:67: Callable::Callable 1 lines",  # a lambda in its initialiser list
+            "tricky.cpp:68: Callable::operator() 1 lines",
+            "tricky.cpp:74: c_function 3 lines",  # inside extern "C"
+            "tricky.cpp:79: guarded 5 lines",  # a function-try-block, its handler included
         ])
 
 
