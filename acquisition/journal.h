@@ -40,7 +40,9 @@ std::filesystem::path journal_path_for(const std::filesystem::path& session_path
 // CLOCK_REALTIME ns as ISO 8601 UTC with nanoseconds: "2026-11-21T10:30:00.123456789Z".
 std::string utc_iso8601_ns(std::int64_t realtime_ns);
 
-// CRC-32 (IEEE 802.3, the one of zlib and Python's zlib.crc32), continuing from `crc`.
+// CRC-32 (IEEE 802.3: reflected polynomial 0xEDB88320, initial and final XOR 0xFFFFFFFF),
+// zlib's crc32(), continuing from `crc`: crc32(b, crc32(a)) == crc32(a + b). Journals of
+// every version use it. Thread-safe.
 std::uint32_t crc32(std::span<const std::uint8_t> bytes, std::uint32_t crc = 0);
 
 // What the journal's header holds: everything the HDF5 session needs besides samples

@@ -209,9 +209,6 @@ bool RealtimeReader::step() {
 // ---------------------------------------------------------------------------------------
 // The writer side
 
-// ---------------------------------------------------------------------------------------
-// The writer side
-
 namespace {
 
 // signal = raw_offset + raw_scale · raw, then the channel's calibration record (if the
@@ -387,97 +384,102 @@ RecordSummary record_session(AcquisitionBackend& backend, const SessionMetadata&
   return record_session(sources, metadata, path, options);
 }
 
-RecordSummary record_session(const RecordSources& sources, const SessionMetadata& metadata,
-                             const std::filesystem::path& path, const RecordOptions& options) {
-  if (std::string problem = options.validate(); !problem.empty()) {
-    throw std::invalid_argument(problem);
-  }
-  AcquisitionBackend* const backend = sources.scans;
-  if (backend == nullptr && sources.polled.empty()) {
-    throw std::invalid_argument(path.string() +
-                                ": nothing to record (no scan backend and no polled source)");
-  }
+namespace {
+
+// What the sources bring to a recording, checked: every channel (scan channels, then each
+// polled channel followed by its latency channel), the calibration records, and the sizes
+// that follow from the scan rate.
+struct RecordingPlan {
+  AcquisitionBackend* backend = nullptr;
   std::vector<ChannelInfo> channels;
   std::vector<calibration::CalibrationRecord> calibrations;
   std::string description;
   double rate_hz = 0.0;
   std::size_t scan_channels = 0;
-  if (backend != nullptr) {
-    channels = backend->channels();
-    if (channels.empty()) throw std::invalid_argument(backend->description() + ": no channels");
-    rate_hz = backend->scan_rate_hz();
-    if (!(rate_hz > 0) || !std::isfinite(rate_hz)) {
-      throw std::invalid_argument(backend->description() + ": scan rate must be > 0");
-    }
-    for (const ChannelInfo& channel : channels) {
-      if (channel.raw_type != RawType::kCounts) {
-        throw std::invalid_argument(backend->description() + ": channel " + channel.name +
-                                    " holds values; the recorder records counts");
-      }
-    }
-    scan_channels = channels.size();
-    calibrations = backend->calibrations();
-    description = backend->description();
-  }
-  // Polled channels, each followed by its latency channel.
   std::vector<PolledState> polled;
-  for (PolledSource* source : sources.polled) {
-    if (source == nullptr) throw std::invalid_argument(path.string() + ": a polled source is null");
-    PolledState state;
-    state.source = source;
-    const std::vector<ChannelInfo> source_channels = source->channels();
-    if (source_channels.empty()) {
-      throw std::invalid_argument(source->description() + ": no channels");
-    }
-    for (const ChannelInfo& channel : source_channels) {
-      if (channel.sample_rate_hz != 0 || channel.raw_type != RawType::kValues) {
-        throw std::invalid_argument(source->description() + ": channel " + channel.name +
-                                    " must hold values at explicit times (sample_rate_hz 0)");
-      }
-      TimedBatch batch;
-      batch.journal_channel = static_cast<std::uint32_t>(channels.size());
-      channels.push_back(channel);
-      ChannelInfo latency;
-      latency.name = channel.name + "_latency";
-      latency.sensor_kind = "poll_latency";
-      latency.sensor_serial = channel.sensor_serial;
-      latency.raw_type = RawType::kValues;
-      latency.raw_unit = "s";
-      latency.unit = "s";
-      latency.range_min = 0.0;
-      latency.range_max = 3600.0;
-      latency.sample_rate_hz = 0.0;
-      channels.push_back(latency);
-      batch.time_ns.resize(options.polled_batch);
-      batch.latency_ns.resize(options.polled_batch);
-      batch.raw.resize(options.polled_batch);
-      state.batches.push_back(std::move(batch));
-    }
-    for (calibration::CalibrationRecord& record : source->calibrations()) {
-      calibrations.push_back(std::move(record));
-    }
-    if (!description.empty()) description += "; ";
-    description += source->description();
-    polled.push_back(std::move(state));
+  std::size_t block_scans = 1;
+  std::uint64_t total_scans = 0;
+  std::int64_t duration_ns = 0;
+  std::filesystem::path journal_path;
+};
+
+// The scan backend's channels (counts only), rate, calibrations and description.
+void plan_scan_backend(AcquisitionBackend& backend, RecordingPlan& plan) {
+  plan.channels = backend.channels();
+  if (plan.channels.empty()) throw std::invalid_argument(backend.description() + ": no channels");
+  plan.rate_hz = backend.scan_rate_hz();
+  if (!(plan.rate_hz > 0) || !std::isfinite(plan.rate_hz)) {
+    throw std::invalid_argument(backend.description() + ": scan rate must be > 0");
   }
-  {
-    std::set<std::string> names;
-    for (const ChannelInfo& channel : channels) {
-      if (!names.insert(channel.name).second) {
-        throw std::invalid_argument(path.string() + ": channel name " + channel.name +
-                                    " is used twice among the sources");
-      }
+  for (const ChannelInfo& channel : plan.channels) {
+    if (channel.raw_type != RawType::kCounts) {
+      throw std::invalid_argument(backend.description() + ": channel " + channel.name +
+                                  " holds values; the recorder records counts");
     }
   }
-  const std::size_t block_scans =
-      backend == nullptr ? 1
-      : options.block_scans > 0
-          ? options.block_scans
-          : std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(rate_hz * 0.01)));
-  const auto total_scans = static_cast<std::uint64_t>(std::llround(options.duration_s * rate_hz));
-  const auto duration_ns = static_cast<std::int64_t>(std::llround(options.duration_s * 1e9));
-  const std::filesystem::path journal_path = journal_path_for(path);
-  // Refused before recording, not after it.
+  plan.scan_channels = plan.channels.size();
+  plan.calibrations = backend.calibrations();
+  plan.description = backend.description();
+}
+
+// The latency channel recorded next to polled channel `channel`.
+ChannelInfo latency_channel(const ChannelInfo& channel) {
+  ChannelInfo latency;
+  latency.name = channel.name + "_latency";
+  latency.sensor_kind = "poll_latency";
+  latency.sensor_serial = channel.sensor_serial;
+  latency.raw_type = RawType::kValues;
+  latency.raw_unit = "s";
+  latency.unit = "s";
+  latency.range_min = 0.0;
+  latency.range_max = 3600.0;
+  latency.sample_rate_hz = 0.0;
+  return latency;
+}
+
+// One polled source's channels (explicit-time values only), each followed by its latency
+// channel, with a batch of `polled_batch` samples per channel.
+void plan_polled_source(PolledSource& source, std::size_t polled_batch, RecordingPlan& plan) {
+  PolledState state;
+  state.source = &source;
+  const std::vector<ChannelInfo> source_channels = source.channels();
+  if (source_channels.empty()) throw std::invalid_argument(source.description() + ": no channels");
+  for (const ChannelInfo& channel : source_channels) {
+    if (channel.sample_rate_hz != 0 || channel.raw_type != RawType::kValues) {
+      throw std::invalid_argument(source.description() + ": channel " + channel.name +
+                                  " must hold values at explicit times (sample_rate_hz 0)");
+    }
+    TimedBatch batch;
+    batch.journal_channel = static_cast<std::uint32_t>(plan.channels.size());
+    plan.channels.push_back(channel);
+    plan.channels.push_back(latency_channel(channel));
+    batch.time_ns.resize(polled_batch);
+    batch.latency_ns.resize(polled_batch);
+    batch.raw.resize(polled_batch);
+    state.batches.push_back(std::move(batch));
+  }
+  for (calibration::CalibrationRecord& record : source.calibrations()) {
+    plan.calibrations.push_back(std::move(record));
+  }
+  if (!plan.description.empty()) plan.description += "; ";
+  plan.description += source.description();
+  plan.polled.push_back(std::move(state));
+}
+
+void check_unique_channel_names(const std::vector<ChannelInfo>& channels,
+                                const std::filesystem::path& path) {
+  std::set<std::string> names;
+  for (const ChannelInfo& channel : channels) {
+    if (!names.insert(channel.name).second) {
+      throw std::invalid_argument(path.string() + ": channel name " + channel.name +
+                                  " is used twice among the sources");
+    }
+  }
+}
+
+// Refused before recording, not after it.
+void refuse_files_in_the_way(const std::filesystem::path& path,
+                             const std::filesystem::path& journal_path) {
   if (std::filesystem::exists(path)) {
     throw SessionError(path.string() + ": already exists (sessions are never overwritten)");
   }
@@ -487,91 +489,218 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
                        "(doorbench recover " +
                        journal_path.string() + ")");
   }
+}
 
+RecordingPlan plan_recording(const RecordSources& sources, const std::filesystem::path& path,
+                             const RecordOptions& options) {
+  RecordingPlan plan;
+  plan.backend = sources.scans;
+  if (plan.backend == nullptr && sources.polled.empty()) {
+    throw std::invalid_argument(path.string() +
+                                ": nothing to record (no scan backend and no polled source)");
+  }
+  if (plan.backend != nullptr) plan_scan_backend(*plan.backend, plan);
+  for (PolledSource* source : sources.polled) {
+    if (source == nullptr) throw std::invalid_argument(path.string() + ": a polled source is null");
+    plan_polled_source(*source, options.polled_batch, plan);
+  }
+  check_unique_channel_names(plan.channels, path);
+  plan.block_scans =
+      plan.backend == nullptr ? 1
+      : options.block_scans > 0
+          ? options.block_scans
+          : std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(plan.rate_hz * 0.01)));
+  plan.total_scans = static_cast<std::uint64_t>(std::llround(options.duration_s * plan.rate_hz));
+  plan.duration_ns = static_cast<std::int64_t>(std::llround(options.duration_s * 1e9));
+  plan.journal_path = journal_path_for(path);
+  return plan;
+}
+
+JournalHeader journal_header(const RecordingPlan& plan, const SessionMetadata& metadata,
+                             const std::filesystem::path& path, const RecordOptions& options) {
   JournalHeader header;
   header.metadata = metadata;
-  header.channels = channels;
-  header.calibrations = calibrations;
-  header.scan_rate_hz = rate_hz;
+  header.channels = plan.channels;
+  header.calibrations = plan.calibrations;
+  header.scan_rate_hz = plan.rate_hz;
   header.session_name = path.filename().string();
   header.flush_interval_s = options.flush_interval_s;
-  header.backend = description;
-  JournalWriter journal(journal_path, header, block_scans, options.polled_batch);
+  header.backend = plan.description;
+  return header;
+}
 
-  // The live status: scan channels, then polled value channels.
-  RecordStatus status;
-  std::vector<LiveConversion> scan_conversion;
-  for (std::size_t c = 0; c < scan_channels; ++c) {
-    ChannelStatus channel;
-    channel.name = channels[c].name;
-    scan_conversion.push_back(live_conversion(channels[c], calibrations, channel.unit));
-    status.channels.push_back(channel);
+// One recording from the polled sources' start to the journal's end frame, on the
+// caller's thread (the writer), with the reading thread and the sync thread it starts.
+// Not copyable or movable: the threads and the trigger stage's sink refer to it.
+class SessionRecording {
+ public:
+  SessionRecording(RecordingPlan& plan, JournalWriter& journal, const RecordOptions& options)
+      : plan_(plan),
+        options_(options),
+        journal_(journal),
+        flush_interval_(options.flush_interval_s),
+        poll_(std::min(0.005, options.flush_interval_s / 4)),
+        samples_(options.polled_batch),
+        polled_events_(64) {
+    set_up_live_status();
+    set_up_trigger();
   }
-  for (PolledState& state : polled) {
-    for (TimedBatch& batch : state.batches) {
-      ChannelStatus channel;
-      channel.name = channels[batch.journal_channel].name;
-      channel.polled = true;
-      batch.conversion =
-          live_conversion(channels[batch.journal_channel], calibrations, channel.unit);
-      batch.status_index = status.channels.size();
-      status.channels.push_back(channel);
+  SessionRecording(const SessionRecording&) = delete;
+  SessionRecording& operator=(const SessionRecording&) = delete;
+  // Whatever happened, the polling threads end with the recording.
+  ~SessionRecording() {
+    try {
+      stop_polled();
+    } catch (...) {
+      // Already ending with another error, or stopped before.
     }
   }
 
+  // Polled sources start first (a source that cannot start stops the recording before
+  // it began: the journal is removed); without a scan backend their start is the
+  // session's time 0.
+  void start_polled_sources();
+  // The reading thread (with a scan backend) and the sync thread.
+  void start_threads();
+  // Drains the sources into the journal until the recording is over, then writes its
+  // ending. A failed write throws JournalError saying what is kept and how to recover it.
+  void write_until_done();
+  // After write_until_done: joins the reading thread, completes the summary.
+  RecordSummary finish();
+  // The start of session time 0 relative to the acquisition's start (the trigger's).
+  double session_origin_s() const { return sink_ ? sink_->offset_s() : 0.0; }
+  const std::exception_ptr& read_error() const { return read_error_; }
+
+ private:
+  void set_up_live_status();
+  void set_up_trigger();
+  void stop_polled();
+  void read_scans();
+  void sync_journal_periodically();
+  void stop_syncing();
+  void join_reading();
+  void write_event(double time_s, std::string_view kind, std::string_view channel,
+                   std::string_view detail);
+  void forward_event(double time_s, const char* kind, const char* channel, const char* detail);
+  void write_start(std::int64_t monotonic_ns, std::int64_t realtime_ns);
+  bool acquisition_over();
+  void write_start_once_scanning();
+  bool drain_ring_events();
+  bool drain_ring_scans();
+  void show_latest_scan(const ScanSlot& slot);
+  bool drain_polled();
+  bool drain_polled_events(PolledState& state);
+  bool drain_polled_samples(PolledState& state);
+  void flush_batch(TimedBatch& batch);
+  void report_dropped_events();
+  void take_stop_request();
+  void report_progress();
+  void write_ending();
+  [[noreturn]] void abandon(const std::exception& error);
+  double elapsed_s() const;
+  double recorded_s() const;
+
+  RecordingPlan& plan_;
+  const RecordOptions& options_;
+  JournalWriter& journal_;
+  const std::chrono::duration<double> flush_interval_;
+  const std::chrono::duration<double> poll_;
+  RecordSummary summary_;
+  RecordStatus status_;
+  std::vector<LiveConversion> scan_conversion_;
   // Triggering: the stage between the sources and the journal, and its sink.
-  std::vector<ChannelInfo> polled_value_channels;
-  std::vector<std::uint32_t> stage_to_journal;
-  for (PolledState& state : polled) {
+  std::vector<ChannelInfo> polled_value_channels_;
+  std::optional<JournalSink> sink_;
+  std::optional<TriggerStage> stage_;
+  std::vector<double> stage_time_s_;
+  std::vector<double> stage_latency_s_;
+  // The session clock's origin (CLOCK_MONOTONIC; -1 until known) and UTC at that moment.
+  std::int64_t origin_ns_ = -1;
+  std::int64_t origin_realtime_ns_ = 0;
+  std::size_t started_ = 0;  // polled sources started (and not stopped)
+  std::optional<RecorderRings> rings_;
+  std::optional<RealtimeReader> reader_;
+  std::exception_ptr read_error_;
+  std::string read_error_text_;
+  std::thread reading_;
+  // The sync thread's.
+  std::atomic<bool> sync_stop_{false};
+  std::atomic<bool> sync_failed_{false};
+  std::string sync_error_;
+  std::thread syncing_;
+  // The writer's.
+  bool start_written_ = false;
+  std::uint64_t written_scans_ = 0;
+  std::uint64_t acquired_scans_ = 0;
+  std::uint64_t reported_dropped_events_ = 0;
+  std::vector<PolledSample> samples_;
+  std::vector<PolledEvent> polled_events_;
+};
+
+// The live status: scan channels, then polled value channels.
+void SessionRecording::set_up_live_status() {
+  for (std::size_t c = 0; c < plan_.scan_channels; ++c) {
+    ChannelStatus channel;
+    channel.name = plan_.channels[c].name;
+    scan_conversion_.push_back(
+        live_conversion(plan_.channels[c], plan_.calibrations, channel.unit));
+    status_.channels.push_back(channel);
+  }
+  for (PolledState& state : plan_.polled) {
     for (TimedBatch& batch : state.batches) {
-      batch.stage_index = static_cast<std::uint32_t>(polled_value_channels.size());
-      polled_value_channels.push_back(channels[batch.journal_channel]);
+      ChannelStatus channel;
+      channel.name = plan_.channels[batch.journal_channel].name;
+      channel.polled = true;
+      batch.conversion =
+          live_conversion(plan_.channels[batch.journal_channel], plan_.calibrations, channel.unit);
+      batch.status_index = status_.channels.size();
+      status_.channels.push_back(channel);
+    }
+  }
+}
+
+void SessionRecording::set_up_trigger() {
+  std::vector<std::uint32_t> stage_to_journal;
+  for (PolledState& state : plan_.polled) {
+    for (TimedBatch& batch : state.batches) {
+      batch.stage_index = static_cast<std::uint32_t>(polled_value_channels_.size());
+      polled_value_channels_.push_back(plan_.channels[batch.journal_channel]);
       stage_to_journal.push_back(batch.journal_channel);
     }
   }
-  RecordSummary summary;
-  const auto write_event = [&](double time_s, std::string_view kind, std::string_view channel,
-                               std::string_view detail) {
-    journal.append_event(time_s, kind, channel, detail);
-    ++summary.events;
-    if (kind == "fault") ++summary.faults;
-  };
-  std::optional<JournalSink> sink;
-  std::optional<TriggerStage> stage;
-  if (options.trigger) {
-    sink.emplace(journal, stage_to_journal, options.polled_batch, options.trigger->pre_trigger_s,
-                 write_event);
-    stage.emplace(*options.trigger, std::span<const ChannelInfo>(channels.data(), scan_channels),
-                  rate_hz, block_scans, polled_value_channels, calibrations, *sink);
-  }
-  std::vector<double> stage_time_s(stage ? options.polled_batch : 0);
-  std::vector<double> stage_latency_s(stage ? options.polled_batch : 0);
+  if (!options_.trigger) return;
+  sink_.emplace(journal_, stage_to_journal, options_.polled_batch, options_.trigger->pre_trigger_s,
+                [this](double time_s, std::string_view kind, std::string_view channel,
+                       std::string_view detail) { write_event(time_s, kind, channel, detail); });
+  stage_.emplace(
+      *options_.trigger, std::span<const ChannelInfo>(plan_.channels.data(), plan_.scan_channels),
+      plan_.rate_hz, plan_.block_scans, polled_value_channels_, plan_.calibrations, *sink_);
+  stage_time_s_.resize(options_.polled_batch);
+  stage_latency_s_.resize(options_.polled_batch);
+}
 
-  // Polled sources start first (a source that cannot start stops the recording before it
-  // began); without a scan backend their start is the session's time 0.
-  std::int64_t origin_ns = -1;
-  std::int64_t origin_realtime_ns = 0;
-  std::size_t started = 0;
-  const auto stop_polled = [&] {
-    std::exception_ptr first;
-    for (; started > 0; --started) {
-      try {
-        polled[started - 1].source->stop();
-      } catch (...) {
-        if (!first) first = std::current_exception();
-      }
+void SessionRecording::stop_polled() {
+  std::exception_ptr first;
+  for (; started_ > 0; --started_) {
+    try {
+      plan_.polled[started_ - 1].source->stop();
+    } catch (...) {
+      if (!first) first = std::current_exception();
     }
-    if (first) std::rethrow_exception(first);
-  };
+  }
+  if (first) std::rethrow_exception(first);
+}
+
+void SessionRecording::start_polled_sources() {
   try {
-    if (backend == nullptr) {
+    if (plan_.backend == nullptr) {
       const ClockOrigin origin = sample_clock_origin();
-      origin_ns = origin.monotonic_ns;
-      origin_realtime_ns = origin.realtime_ns;
+      origin_ns_ = origin.monotonic_ns;
+      origin_realtime_ns_ = origin.realtime_ns;
     }
-    for (PolledState& state : polled) {
+    for (PolledState& state : plan_.polled) {
       state.source->start();
-      ++started;
+      ++started_;
     }
   } catch (...) {
     try {
@@ -579,368 +708,433 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
     } catch (...) {
       // The start's error is the one to report.
     }
-    journal.close();
-    std::filesystem::remove(journal_path);
+    journal_.close();
+    std::filesystem::remove(plan_.journal_path);
     throw;
   }
-  // Whatever happens below, the polling threads end with this function.
-  struct PolledGuard {
-    const std::function<void()> stop;
-    ~PolledGuard() {
-      try {
-        stop();
-      } catch (...) {
-        // Already ending with another error, or stopped before.
-      }
+}
+
+// The reading thread's body: reads until the end, then stops the backend; its error is
+// kept for the writer.
+void SessionRecording::read_scans() {
+  try {
+    reader_->start();
+    while (reader_->step()) {
     }
-  } polled_guard{stop_polled};
+  } catch (const std::exception& error) {
+    read_error_ = std::current_exception();
+    read_error_text_ = error.what();
+  } catch (...) {
+    read_error_ = std::current_exception();
+    read_error_text_ = "unknown error";
+  }
+  try {
+    plan_.backend->stop();
+  } catch (const std::exception& error) {
+    if (!read_error_) {
+      read_error_ = std::current_exception();
+      read_error_text_ = error.what();
+    }
+  }
+  rings_->done.store(true, std::memory_order_release);
+}
 
+// The sync thread's body: fdatasync every flush interval, apart from the writer so that a
+// slow sync never holds up write() (what is written survives a killed process; a sync is
+// needed only against a power loss).
+void SessionRecording::sync_journal_periodically() {
+  std::uint64_t synced_bytes = journal_.bytes_written();
+  auto next = std::chrono::steady_clock::now() + flush_interval_;
+  while (!sync_stop_.load(std::memory_order_relaxed)) {
+    const auto now = std::chrono::steady_clock::now();
+    if (now < next) {
+      std::this_thread::sleep_for(std::min<std::chrono::duration<double>>(next - now, poll_));
+      continue;
+    }
+    next = now + flush_interval_;
+    const std::uint64_t bytes = journal_.bytes_written();
+    if (bytes == synced_bytes) continue;
+    try {
+      journal_.sync();
+      synced_bytes = bytes;
+    } catch (const std::exception& error) {
+      sync_error_ = error.what();
+      sync_failed_.store(true, std::memory_order_release);
+      return;
+    }
+  }
+}
+
+void SessionRecording::start_threads() {
+  const RecordingPlan& plan = plan_;
   const auto scan_slots =
-      backend == nullptr
+      plan.backend == nullptr
           ? std::size_t{4}
-          : std::max<std::size_t>(
-                4, static_cast<std::size_t>(std::ceil(options.ring_s * rate_hz / block_scans)));
-  RecorderRings rings(std::max<std::size_t>(scan_channels, 1), block_scans, scan_slots,
-                      options.ring_events);
-  std::optional<RealtimeReader> reader;
-  if (backend != nullptr) {
-    reader.emplace(*backend, rings, scan_channels, block_scans, total_scans,
-                   options.when_ring_full);
+          : std::max<std::size_t>(4, static_cast<std::size_t>(std::ceil(
+                                         options_.ring_s * plan.rate_hz / plan.block_scans)));
+  rings_.emplace(std::max<std::size_t>(plan.scan_channels, 1), plan.block_scans, scan_slots,
+                 options_.ring_events);
+  if (plan.backend != nullptr) {
+    reader_.emplace(*plan.backend, *rings_, plan.scan_channels, plan.block_scans, plan.total_scans,
+                    options_.when_ring_full);
+    reading_ = std::thread([this] { read_scans(); });
   }
+  syncing_ = std::thread([this] { sync_journal_periodically(); });
+}
 
-  std::exception_ptr read_error;
-  std::string read_error_text;
-  std::thread reading;
-  if (backend != nullptr) {
-    reading = std::thread([&] {
-      try {
-        reader->start();
-        while (reader->step()) {
-        }
-      } catch (const std::exception& error) {
-        read_error = std::current_exception();
-        read_error_text = error.what();
-      } catch (...) {
-        read_error = std::current_exception();
-        read_error_text = "unknown error";
-      }
-      try {
-        backend->stop();
-      } catch (const std::exception& error) {
-        if (!read_error) {
-          read_error = std::current_exception();
-          read_error_text = error.what();
-        }
-      }
-      rings.done.store(true, std::memory_order_release);
-    });
+void SessionRecording::stop_syncing() {
+  sync_stop_.store(true, std::memory_order_relaxed);
+  if (syncing_.joinable()) syncing_.join();
+}
+
+void SessionRecording::join_reading() {
+  if (reading_.joinable()) reading_.join();
+}
+
+void SessionRecording::write_event(double time_s, std::string_view kind, std::string_view channel,
+                                   std::string_view detail) {
+  journal_.append_event(time_s, kind, channel, detail);
+  ++summary_.events;
+  if (kind == "fault") ++summary_.faults;
+}
+
+// An event from a source: through the trigger stage when there is one.
+void SessionRecording::forward_event(double time_s, const char* kind, const char* channel,
+                                     const char* detail) {
+  if (stage_) {
+    stage_->event(time_s, kind, channel, detail);
+  } else {
+    write_event(time_s, kind, channel, detail);
   }
-  const auto join_reading = [&] {
-    if (reading.joinable()) reading.join();
-  };
+}
 
-  std::uint64_t written_scans = 0;
-  std::uint64_t acquired_scans = 0;
-  std::uint64_t reported_dropped_events = 0;
-  const auto flush_interval = std::chrono::duration<double>(options.flush_interval_s);
-  const auto poll = std::chrono::duration<double>(std::min(0.005, options.flush_interval_s / 4));
-  // The sync thread: fdatasync every flush interval, apart from the writer so that a slow
-  // sync never holds up write() (what is written survives a killed process; a sync is
-  // needed only against a power loss).
-  std::atomic<bool> sync_stop{false};
-  std::atomic<bool> sync_failed{false};
-  std::string sync_error;
-  std::thread syncing([&] {
-    std::uint64_t synced_bytes = journal.bytes_written();
-    auto next = std::chrono::steady_clock::now() + flush_interval;
-    while (!sync_stop.load(std::memory_order_relaxed)) {
-      const auto now = std::chrono::steady_clock::now();
-      if (now < next) {
-        std::this_thread::sleep_for(std::min<std::chrono::duration<double>>(next - now, poll));
+// With a trigger stage the journal's start waits for the first kept sample.
+void SessionRecording::write_start(std::int64_t monotonic_ns, std::int64_t realtime_ns) {
+  if (sink_) {
+    sink_->attach(*stage_, monotonic_ns, realtime_ns);
+  } else {
+    journal_.append_start(monotonic_ns, realtime_ns);
+  }
+  start_written_ = true;
+}
+
+// Session time now: the monotonic clock since the origin (0 before it is known).
+double SessionRecording::elapsed_s() const {
+  return origin_ns_ < 0 ? 0.0 : static_cast<double>(monotonic_now_ns() - origin_ns_) * 1e-9;
+}
+
+// Session time recorded: the scans' clock, or the monotonic clock without scans.
+double SessionRecording::recorded_s() const {
+  if (plan_.backend != nullptr) return static_cast<double>(written_scans_) / plan_.rate_hz;
+  return elapsed_s() - (sink_ ? sink_->offset_s() : 0.0);
+}
+
+bool SessionRecording::acquisition_over() {
+  if (plan_.backend != nullptr) return rings_->done.load(std::memory_order_acquire);
+  return monotonic_now_ns() - origin_ns_ >= plan_.duration_ns || summary_.stopped_by_request ||
+         (stage_ && stage_->finished());
+}
+
+// The scan backend's start is session time 0.
+void SessionRecording::write_start_once_scanning() {
+  if (start_written_) return;
+  const std::int64_t start_ns = rings_->start_monotonic_ns.load(std::memory_order_acquire);
+  if (start_ns < 0) return;
+  origin_ns_ = start_ns;
+  write_start(start_ns, rings_->start_realtime_ns.load(std::memory_order_relaxed));
+}
+
+bool SessionRecording::drain_ring_events() {
+  bool wrote = false;
+  while (const EventSlot* event = rings_->events.consumer_slot()) {
+    forward_event(event->time_s, event->kind, event->channel, event->detail);
+    rings_->events.release();
+    wrote = true;
+  }
+  return wrote;
+}
+
+void SessionRecording::show_latest_scan(const ScanSlot& slot) {
+  if (slot.scan_count == 0) return;
+  for (std::size_t c = 0; c < plan_.scan_channels; ++c) {
+    status_.channels[c].latest =
+        scan_conversion_[c](slot.counts[c * slot.capacity + slot.scan_count - 1]);
+  }
+}
+
+bool SessionRecording::drain_ring_scans() {
+  bool wrote = false;
+  while (const ScanSlot* slot = rings_->scans.consumer_slot()) {
+    acquired_scans_ = slot->first_scan + slot->scan_count;
+    if (stage_) {
+      stage_->scans(slot->first_scan, slot->scan_count, slot->counts.data(), slot->capacity);
+      written_scans_ = sink_->written_scans();
+    } else {
+      journal_.append_scans(slot->first_scan, slot->scan_count, slot->counts.data(),
+                            slot->capacity);
+      written_scans_ = acquired_scans_;
+    }
+    show_latest_scan(*slot);
+    rings_->scans.release();
+    wrote = true;
+  }
+  return wrote;
+}
+
+void SessionRecording::flush_batch(TimedBatch& batch) {
+  if (batch.count == 0) return;
+  if (stage_) {
+    for (std::size_t i = 0; i < batch.count; ++i) {
+      stage_time_s_[i] = static_cast<double>(batch.time_ns[i]) * 1e-9;
+      stage_latency_s_[i] = static_cast<double>(batch.latency_ns[i]) * 1e-9;
+    }
+    stage_->timed_samples(batch.stage_index,
+                          std::span<const double>(stage_time_s_.data(), batch.count),
+                          std::span<const double>(stage_latency_s_.data(), batch.count),
+                          std::span<const double>(batch.raw.data(), batch.count));
+  } else {
+    journal_.append_timed(batch.journal_channel, batch.count, batch.time_ns.data(),
+                          batch.latency_ns.data(), batch.raw.data());
+  }
+  ChannelStatus& live = status_.channels[batch.status_index];
+  if (live.samples == 0) batch.first_time_s = static_cast<double>(batch.time_ns[0]) * 1e-9;
+  live.samples += batch.count;
+  live.latest = batch.conversion(batch.raw[batch.count - 1]);
+  const double span_s =
+      static_cast<double>(batch.time_ns[batch.count - 1]) * 1e-9 - batch.first_time_s;
+  if (live.samples > 1 && span_s > 0) {
+    live.achieved_rate_hz = static_cast<double>(live.samples - 1) / span_s;
+  }
+  summary_.polled_samples += batch.count;
+  batch.count = 0;
+}
+
+bool SessionRecording::drain_polled_events(PolledState& state) {
+  bool any = false;
+  for (;;) {
+    const std::size_t got = state.source->take_events(polled_events_);
+    for (std::size_t e = 0; e < got; ++e) {
+      const PolledEvent& event = polled_events_[e];
+      const double time_s = static_cast<double>(event.monotonic_ns - origin_ns_) * 1e-9;
+      forward_event(time_s, event.kind[0] != '\0' ? event.kind : "mark", event.channel,
+                    event.detail);
+    }
+    any |= got > 0;
+    if (got < polled_events_.size()) return any;
+  }
+}
+
+bool SessionRecording::drain_polled_samples(PolledState& state) {
+  bool any = false;
+  for (;;) {
+    const std::size_t got = state.source->take_samples(samples_);
+    for (std::size_t i = 0; i < got; ++i) {
+      const PolledSample& sample = samples_[i];
+      if (sample.channel >= state.batches.size()) continue;  // not the source's
+      const std::int64_t time_ns = sample.midpoint_ns() - origin_ns_;
+      if (time_ns < 0) {
+        ++summary_.polled_before_origin;
         continue;
       }
-      next = now + flush_interval;
-      const std::uint64_t bytes = journal.bytes_written();
-      if (bytes == synced_bytes) continue;
-      try {
-        journal.sync();
-        synced_bytes = bytes;
-      } catch (const std::exception& error) {
-        sync_error = error.what();
-        sync_failed.store(true, std::memory_order_release);
-        return;
-      }
+      TimedBatch& batch = state.batches[sample.channel];
+      batch.time_ns[batch.count] = time_ns;
+      batch.latency_ns[batch.count] = sample.latency_ns();
+      batch.raw[batch.count] = sample.raw;
+      if (++batch.count == batch.raw.size()) flush_batch(batch);
     }
-  });
-  const auto stop_syncing = [&] {
-    sync_stop.store(true, std::memory_order_relaxed);
-    if (syncing.joinable()) syncing.join();
-  };
-  // Session time now / at the end: the scans' clock, or the monotonic clock without scans.
-  const auto elapsed_s = [&] {
-    return origin_ns < 0 ? 0.0 : static_cast<double>(monotonic_now_ns() - origin_ns) * 1e-9;
-  };
-  const auto recorded_s = [&] {
-    if (backend != nullptr) return static_cast<double>(written_scans) / rate_hz;
-    return elapsed_s() - (sink ? sink->offset_s() : 0.0);
-  };
-  std::vector<PolledSample> samples(options.polled_batch);
-  std::vector<PolledEvent> polled_events(64);
-  const auto flush_batch = [&](TimedBatch& batch) {
-    if (batch.count == 0) return;
-    if (stage) {
-      for (std::size_t i = 0; i < batch.count; ++i) {
-        stage_time_s[i] = static_cast<double>(batch.time_ns[i]) * 1e-9;
-        stage_latency_s[i] = static_cast<double>(batch.latency_ns[i]) * 1e-9;
-      }
-      stage->timed_samples(batch.stage_index,
-                           std::span<const double>(stage_time_s.data(), batch.count),
-                           std::span<const double>(stage_latency_s.data(), batch.count),
-                           std::span<const double>(batch.raw.data(), batch.count));
-    } else {
-      journal.append_timed(batch.journal_channel, batch.count, batch.time_ns.data(),
-                           batch.latency_ns.data(), batch.raw.data());
+    any |= got > 0;
+    if (got < samples_.size()) return any;
+  }
+}
+
+// Takes every polled source's samples and events into the journal; true if any.
+bool SessionRecording::drain_polled() {
+  bool any = false;
+  for (PolledState& state : plan_.polled) {
+    any |= drain_polled_events(state);
+    any |= drain_polled_samples(state);
+    for (TimedBatch& batch : state.batches) flush_batch(batch);
+  }
+  return any;
+}
+
+void SessionRecording::report_dropped_events() {
+  const std::uint64_t dropped_events = rings_->dropped_events.load(std::memory_order_relaxed);
+  if (dropped_events <= reported_dropped_events_) return;
+  write_event(recorded_s(), "fault", "",
+              std::to_string(dropped_events - reported_dropped_events_) +
+                  " events lost: the event ring was full");
+  reported_dropped_events_ = dropped_events;
+}
+
+// A stop request or a finished trigger stage tells the reading thread to stop.
+void SessionRecording::take_stop_request() {
+  if (options_.stop_requested != nullptr &&
+      options_.stop_requested->load(std::memory_order_relaxed) && !summary_.stopped_by_request) {
+    summary_.stopped_by_request = true;
+    rings_->stop.store(true, std::memory_order_relaxed);
+  }
+  if (stage_ && stage_->finished()) rings_->stop.store(true, std::memory_order_relaxed);
+}
+
+void SessionRecording::report_progress() {
+  status_.recorded_s = stage_ && !sink_->begun() ? 0.0 : recorded_s();
+  status_.scans = written_scans_;
+  const double elapsed = elapsed_s();
+  if (plan_.backend != nullptr && elapsed > 0) {
+    status_.achieved_scan_rate_hz = static_cast<double>(acquired_scans_) / elapsed;
+  }
+  if (stage_) {
+    status_.trigger_state = stage_->state() == TriggerStage::State::kArmed ? "armed"
+                            : stage_->finished()                           ? "stopped"
+                                                                           : "triggered";
+  }
+  for (std::size_t c = 0; c < plan_.scan_channels; ++c) {
+    status_.channels[c].samples = acquired_scans_;
+    status_.channels[c].achieved_rate_hz = status_.achieved_scan_rate_hz;
+  }
+  status_.faults = summary_.faults;
+  options_.progress(status_);
+}
+
+// The trigger's outcome, the closing events and the end frame, synced.
+void SessionRecording::write_ending() {
+  if (stage_) {
+    summary_.triggered = stage_->state() != TriggerStage::State::kArmed;
+    summary_.trigger_report = stage_->summary().brief_report();
+    if (!sink_->begun()) {
+      sink_->begin();
+      write_event(
+          0.0, "mark", "",
+          "the start condition never fired: no samples kept (" + summary_.trigger_report + ")");
     }
-    ChannelStatus& live = status.channels[batch.status_index];
-    if (live.samples == 0) batch.first_time_s = static_cast<double>(batch.time_ns[0]) * 1e-9;
-    live.samples += batch.count;
-    live.latest = batch.conversion(batch.raw[batch.count - 1]);
-    const double span_s =
-        static_cast<double>(batch.time_ns[batch.count - 1]) * 1e-9 - batch.first_time_s;
-    if (live.samples > 1 && span_s > 0) {
-      live.achieved_rate_hz = static_cast<double>(live.samples - 1) / span_s;
+    summary_.polled_samples = sink_->samples();
+  }
+  const double end_s = recorded_s();
+  for (const PolledState& state : plan_.polled) {
+    const PolledStatistics statistics = state.source->statistics();
+    if (statistics.dropped_samples > 0) {
+      write_event(end_s, "fault", "",
+                  state.source->description() + ": " + std::to_string(statistics.dropped_samples) +
+                      " polled samples lost (not taken in time)");
     }
-    summary.polled_samples += batch.count;
-    batch.count = 0;
-  };
-  // Takes every polled source's samples and events into the journal; true if any.
-  const auto drain_polled = [&] {
-    bool any = false;
-    for (PolledState& state : polled) {
-      for (;;) {
-        const std::size_t got = state.source->take_events(polled_events);
-        for (std::size_t e = 0; e < got; ++e) {
-          const PolledEvent& event = polled_events[e];
-          const double time_s = static_cast<double>(event.monotonic_ns - origin_ns) * 1e-9;
-          const char* kind = event.kind[0] != '\0' ? event.kind : "mark";
-          if (stage) {
-            stage->event(time_s, kind, event.channel, event.detail);
-          } else {
-            write_event(time_s, kind, event.channel, event.detail);
-          }
-        }
-        any |= got > 0;
-        if (got < polled_events.size()) break;
-      }
-      for (;;) {
-        const std::size_t got = state.source->take_samples(samples);
-        for (std::size_t i = 0; i < got; ++i) {
-          const PolledSample& sample = samples[i];
-          if (sample.channel >= state.batches.size()) continue;  // not the source's
-          const std::int64_t time_ns = sample.midpoint_ns() - origin_ns;
-          if (time_ns < 0) {
-            ++summary.polled_before_origin;
-            continue;
-          }
-          TimedBatch& batch = state.batches[sample.channel];
-          batch.time_ns[batch.count] = time_ns;
-          batch.latency_ns[batch.count] = sample.latency_ns();
-          batch.raw[batch.count] = sample.raw;
-          if (++batch.count == batch.raw.size()) flush_batch(batch);
-        }
-        any |= got > 0;
-        if (got < samples.size()) break;
-      }
-      for (TimedBatch& batch : state.batches) flush_batch(batch);
-    }
-    return any;
-  };
+  }
+  if (summary_.polled_before_origin > 0) {
+    write_event(0.0, "mark", "",
+                std::to_string(summary_.polled_before_origin) +
+                    " polled samples from before time 0 (the first scan) not kept");
+  }
+  if (summary_.stopped_by_request) {
+    char detail[96];
+    std::snprintf(detail, sizeof detail, "recording stopped by hand after %.3f s", end_s);
+    write_event(end_s, "stop", "", detail);
+  }
+  if (read_error_) write_event(end_s, "fault", "", "the recording stopped: " + read_error_text_);
+  summary_.duration_s = end_s;
+  journal_.append_end(written_scans_);
+  stop_syncing();
+  journal_.sync();
+}
+
+// A failed write: stops every thread, keeps what was written and says how to recover it.
+void SessionRecording::abandon(const std::exception& error) {
+  rings_->stop.store(true, std::memory_order_relaxed);
+  join_reading();
+  stop_syncing();
   try {
-    bool start_written = false;
-    if (backend == nullptr) {
-      // With a trigger stage the journal's start waits for the first kept sample.
-      if (sink) {
-        sink->attach(*stage, origin_ns, origin_realtime_ns);
-      } else {
-        journal.append_start(origin_ns, origin_realtime_ns);
-      }
-      start_written = true;
-    }
+    stop_polled();
+  } catch (const std::exception&) {
+    // The write error is the one to report.
+  }
+  try {
+    journal_.sync();
+  } catch (const std::exception&) {
+    // The write error is the one to report.
+  }
+  char kept[200];
+  std::snprintf(kept, sizeof kept,
+                "; the recording stopped after %.3f s: the %llu scans and %llu polled samples ",
+                recorded_s(), static_cast<unsigned long long>(written_scans_),
+                static_cast<unsigned long long>(summary_.polled_samples));
+  const std::string journal = plan_.journal_path.string();
+  throw JournalError(std::string(error.what()) + kept + "written so far are kept in " + journal +
+                     " (free space, then: doorbench recover " + journal + ")");
+}
+
+void SessionRecording::write_until_done() {
+  try {
+    if (plan_.backend == nullptr) write_start(origin_ns_, origin_realtime_ns_);
     for (;;) {
       // Read before draining: everything published before `done` is drained below; the
       // polled sources are stopped (joined) before their last drain.
-      const bool done = backend != nullptr
-                            ? rings.done.load(std::memory_order_acquire)
-                            : monotonic_now_ns() - origin_ns >= duration_ns ||
-                                  summary.stopped_by_request || (stage && stage->finished());
+      const bool done = acquisition_over();
       if (done) stop_polled();
-      bool wrote = false;
-      if (!start_written) {
-        const std::int64_t start_ns = rings.start_monotonic_ns.load(std::memory_order_acquire);
-        if (start_ns >= 0) {
-          origin_ns = start_ns;
-          const std::int64_t realtime_ns = rings.start_realtime_ns.load(std::memory_order_relaxed);
-          if (sink) {
-            sink->attach(*stage, start_ns, realtime_ns);
-          } else {
-            journal.append_start(start_ns, realtime_ns);
-          }
-          start_written = true;
-        }
-      }
-      while (const EventSlot* event = rings.events.consumer_slot()) {
-        if (stage) {
-          stage->event(event->time_s, event->kind, event->channel, event->detail);
-        } else {
-          write_event(event->time_s, event->kind, event->channel, event->detail);
-        }
-        rings.events.release();
-        wrote = true;
-      }
-      while (const ScanSlot* slot = rings.scans.consumer_slot()) {
-        acquired_scans = slot->first_scan + slot->scan_count;
-        if (stage) {
-          stage->scans(slot->first_scan, slot->scan_count, slot->counts.data(), slot->capacity);
-          written_scans = sink->written_scans();
-        } else {
-          journal.append_scans(slot->first_scan, slot->scan_count, slot->counts.data(),
-                               slot->capacity);
-          written_scans = acquired_scans;
-        }
-        if (slot->scan_count > 0) {
-          for (std::size_t c = 0; c < scan_channels; ++c) {
-            status.channels[c].latest =
-                scan_conversion[c](slot->counts[c * slot->capacity + slot->scan_count - 1]);
-          }
-        }
-        rings.scans.release();
-        wrote = true;
-      }
-      if (start_written) wrote |= drain_polled();
-      const std::uint64_t dropped_events = rings.dropped_events.load(std::memory_order_relaxed);
-      if (dropped_events > reported_dropped_events) {
-        write_event(recorded_s(), "fault", "",
-                    std::to_string(dropped_events - reported_dropped_events) +
-                        " events lost: the event ring was full");
-        reported_dropped_events = dropped_events;
-      }
-      if (sync_failed.load(std::memory_order_acquire)) throw JournalError(sync_error);
-      if (options.stop_requested != nullptr &&
-          options.stop_requested->load(std::memory_order_relaxed) && !summary.stopped_by_request) {
-        summary.stopped_by_request = true;
-        rings.stop.store(true, std::memory_order_relaxed);
-      }
-      if (stage && stage->finished()) rings.stop.store(true, std::memory_order_relaxed);
-      if (wrote && options.progress) {
-        status.recorded_s = stage && !sink->begun() ? 0.0 : recorded_s();
-        status.scans = written_scans;
-        const double elapsed = elapsed_s();
-        if (backend != nullptr && elapsed > 0) {
-          status.achieved_scan_rate_hz = static_cast<double>(acquired_scans) / elapsed;
-        }
-        if (stage) {
-          status.trigger_state = stage->state() == TriggerStage::State::kArmed ? "armed"
-                                 : stage->finished()                           ? "stopped"
-                                                                               : "triggered";
-        }
-        for (std::size_t c = 0; c < scan_channels; ++c) {
-          status.channels[c].samples = acquired_scans;
-          status.channels[c].achieved_rate_hz = status.achieved_scan_rate_hz;
-        }
-        status.faults = summary.faults;
-        options.progress(status);
-      }
+      write_start_once_scanning();
+      bool wrote = drain_ring_events();
+      wrote |= drain_ring_scans();
+      if (start_written_) wrote |= drain_polled();
+      report_dropped_events();
+      if (sync_failed_.load(std::memory_order_acquire)) throw JournalError(sync_error_);
+      take_stop_request();
+      if (wrote && options_.progress) report_progress();
       if (done) break;
-      if (!wrote) std::this_thread::sleep_for(poll);
+      if (!wrote) std::this_thread::sleep_for(poll_);
     }
-    if (stage) {
-      summary.triggered = stage->state() != TriggerStage::State::kArmed;
-      summary.trigger_report = stage->summary().brief_report();
-      if (!sink->begun()) {
-        sink->begin();
-        write_event(
-            0.0, "mark", "",
-            "the start condition never fired: no samples kept (" + summary.trigger_report + ")");
-      }
-      summary.polled_samples = sink->samples();
-    }
-    const double end_s = recorded_s();
-    for (const PolledState& state : polled) {
-      const PolledStatistics statistics = state.source->statistics();
-      if (statistics.dropped_samples > 0) {
-        write_event(end_s, "fault", "",
-                    state.source->description() + ": " +
-                        std::to_string(statistics.dropped_samples) +
-                        " polled samples lost (not taken in time)");
-      }
-    }
-    if (summary.polled_before_origin > 0) {
-      write_event(0.0, "mark", "",
-                  std::to_string(summary.polled_before_origin) +
-                      " polled samples from before time 0 (the first scan) not kept");
-    }
-    if (summary.stopped_by_request) {
-      char detail[96];
-      std::snprintf(detail, sizeof detail, "recording stopped by hand after %.3f s", end_s);
-      write_event(end_s, "stop", "", detail);
-    }
-    if (read_error) {
-      write_event(end_s, "fault", "", "the recording stopped: " + read_error_text);
-    }
-    summary.duration_s = end_s;
-    journal.append_end(written_scans);
-    stop_syncing();
-    journal.sync();
+    write_ending();
   } catch (const std::exception& error) {
-    rings.stop.store(true, std::memory_order_relaxed);
-    join_reading();
-    stop_syncing();
-    try {
-      stop_polled();
-    } catch (const std::exception&) {
-      // The write error is the one to report.
-    }
-    try {
-      journal.sync();
-    } catch (const std::exception&) {
-      // The write error is the one to report.
-    }
-    char kept[200];
-    std::snprintf(kept, sizeof kept,
-                  "; the recording stopped after %.3f s: the %llu scans and %llu polled samples ",
-                  recorded_s(), static_cast<unsigned long long>(written_scans),
-                  static_cast<unsigned long long>(summary.polled_samples));
-    throw JournalError(std::string(error.what()) + kept + "written so far are kept in " +
-                       journal_path.string() + " (free space, then: doorbench recover " +
-                       journal_path.string() + ")");
+    abandon(error);
   }
+}
+
+RecordSummary SessionRecording::finish() {
   join_reading();
+  summary_.scans = static_cast<std::size_t>(written_scans_);
+  summary_.dropped_scans = rings_->dropped_scans.load();
+  summary_.dropped_events = rings_->dropped_events.load();
+  summary_.journal_bytes = journal_.bytes_written();
+  summary_.journal_syncs = journal_.syncs();
+  return summary_;
+}
 
-  summary.scans = static_cast<std::size_t>(written_scans);
-  summary.dropped_scans = rings.dropped_scans.load();
-  summary.dropped_events = rings.dropped_events.load();
-  summary.journal_bytes = journal.bytes_written();
-  summary.journal_syncs = journal.syncs();
-
-  // The journal stays open (and locked) until the session is complete, so that another
-  // doorbench does not take it for an unfinished recording meanwhile.
+// The journal (kept open, and locked, until the session is complete, so that another
+// doorbench does not take it for an unfinished recording meanwhile) into the session.
+void convert_to_session(const RecordingPlan& plan, const std::filesystem::path& path,
+                        const RecordOptions& options, double session_origin_s) {
   ConvertOptions convert;
   convert.writer = options.writer;
-  if (backend != nullptr) {
-    const double session_origin_s = sink ? sink->offset_s() : 0.0;
+  if (AcquisitionBackend* const backend = plan.backend) {
     convert.extras = [backend, session_origin_s](SessionWriter& writer) {
       backend->write_extras(writer, session_origin_s);
     };
   }
   try {
-    convert_journal(journal_path, path, convert);
+    convert_journal(plan.journal_path, path, convert);
   } catch (const std::exception& error) {
     // E.g. the disk filled up during the conversion: the journal is whole and synced.
-    throw SessionError(std::string(error.what()) + "; the recording is kept in " +
-                       journal_path.string() + " (free space, then: doorbench recover " +
-                       journal_path.string() + ")");
+    const std::string journal = plan.journal_path.string();
+    throw SessionError(std::string(error.what()) + "; the recording is kept in " + journal +
+                       " (free space, then: doorbench recover " + journal + ")");
   }
-  if (read_error) std::rethrow_exception(read_error);
+}
+
+}  // namespace
+
+RecordSummary record_session(const RecordSources& sources, const SessionMetadata& metadata,
+                             const std::filesystem::path& path, const RecordOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
+  RecordingPlan plan = plan_recording(sources, path, options);
+  refuse_files_in_the_way(path, plan.journal_path);
+  JournalWriter journal(plan.journal_path, journal_header(plan, metadata, path, options),
+                        plan.block_scans, options.polled_batch);
+  SessionRecording recording(plan, journal, options);
+  recording.start_polled_sources();
+  recording.start_threads();
+  recording.write_until_done();
+  const RecordSummary summary = recording.finish();
+  convert_to_session(plan, path, options, recording.session_origin_s());
+  if (recording.read_error()) std::rethrow_exception(recording.read_error());
   return summary;
 }
 

@@ -111,6 +111,231 @@ std::string ConvertResult::brief_report() const {
   return report;
 }
 
+namespace {
+
+// The header's metadata, with the origin's UTC time (from the start frame, normally the
+// first) as the session's start time.
+SessionMetadata metadata_with_start_time(const std::filesystem::path& journal,
+                                         const JournalHeader& header) {
+  SessionMetadata metadata = header.metadata;
+  JournalReader first(journal);
+  JournalFrame frame;
+  for (int n = 0; n < 8 && first.next(frame); ++n) {
+    if (frame.type == FrameType::kStart) {
+      if (frame.realtime_ns != 0) metadata.start_time_utc = utc_iso8601_ns(frame.realtime_ns);
+      break;
+    }
+  }
+  return metadata;
+}
+
+// Writes a journal's frames into a session writer, one frame at a time, counting them in
+// the result.
+class FrameWriter {
+ public:
+  FrameWriter(const std::filesystem::path& journal, const JournalHeader& header,
+              SessionWriter& writer, ConvertResult& result)
+      : journal_(journal),
+        header_(header),
+        writer_(writer),
+        result_(result),
+        channel_count_(static_cast<int>(scan_channel_count(header))),
+        latency_channel_(header.channels.size(), -1),
+        last_time_ns_(header.channels.size(), std::numeric_limits<std::int64_t>::min()) {
+    for (const ChannelInfo& channel : header.channels) {
+      writer.add_channel(channel);
+      names_.insert(channel.name);
+    }
+    for (const calibration::CalibrationRecord& record : header.calibrations) {
+      writer.add_calibration(record);
+    }
+    for (std::size_t c = 0; c < header.channels.size(); ++c) {
+      for (std::size_t l = 0; l < header.channels.size(); ++l) {
+        if (header.channels[l].sensor_kind == "poll_latency" &&
+            header.channels[l].name == header.channels[c].name + "_latency") {
+          latency_channel_[c] = static_cast<int>(l);
+        }
+      }
+    }
+  }
+
+  void write(const JournalFrame& frame) {
+    switch (frame.type) {
+      case FrameType::kStart:
+        result_.start_monotonic_ns = frame.monotonic_ns;
+        result_.start_realtime_ns = frame.realtime_ns;
+        break;
+      case FrameType::kTimed:
+        timed(frame);
+        break;
+      case FrameType::kEnd:
+        result_.ended_cleanly = true;
+        break;
+      case FrameType::kEvent:
+        event(frame.event);
+        break;
+      case FrameType::kScans:
+        scans(frame);
+        break;
+    }
+  }
+
+  // After the last frame: the fault for unordered samples, the session clock's origin.
+  void finish() {
+    if (result_.unordered_samples > 0) {
+      writer_.add_event({0.0, "fault", "",
+                         std::to_string(result_.unordered_samples) +
+                             " polled samples dropped: their time was not after the one "
+                             "before on their channel"});
+      ++result_.events;
+    }
+    if (result_.start_monotonic_ns >= 0) {
+      // Session time t is CLOCK_MONOTONIC origin_monotonic_ns + t·1e9 and UTC
+      // origin_utc + t (docs/session-format.md).
+      writer_.write_group_attribute("clock", "origin_monotonic_ns",
+                                    std::to_string(result_.start_monotonic_ns));
+      if (result_.start_realtime_ns != 0) {
+        writer_.write_group_attribute("clock", "origin_realtime_ns",
+                                      std::to_string(result_.start_realtime_ns));
+        writer_.write_group_attribute("clock", "origin_utc",
+                                      utc_iso8601_ns(result_.start_realtime_ns));
+      }
+    }
+  }
+
+ private:
+  // A polled channel's samples, and their latencies on its latency channel; explicit times
+  // stay strictly increasing (a sample not after the one before is dropped and counted).
+  void timed(const JournalFrame& frame) {
+    times_s_.clear();
+    latencies_s_.clear();
+    raws_.clear();
+    std::int64_t& last = last_time_ns_[frame.channel];
+    for (std::size_t i = 0; i < frame.scan_count; ++i) {
+      if (frame.time_ns[i] <= last) {
+        ++result_.unordered_samples;
+        continue;
+      }
+      last = frame.time_ns[i];
+      times_s_.push_back(static_cast<double>(frame.time_ns[i]) * 1e-9);
+      latencies_s_.push_back(static_cast<double>(frame.latency_ns[i]) * 1e-9);
+      raws_.push_back(frame.raw[i]);
+    }
+    writer_.append_timed_values(static_cast<int>(frame.channel), times_s_, raws_);
+    if (latency_channel_[frame.channel] >= 0) {
+      writer_.append_timed_values(latency_channel_[frame.channel], times_s_, latencies_s_);
+    }
+    result_.timed_samples += times_s_.size();
+  }
+
+  // An event naming a channel the session does not have names it in its detail instead.
+  void event(SessionEvent event) {
+    if (!event.channel.empty() && names_.count(event.channel) == 0) {
+      event.detail = "(channel " + event.channel + ") " + event.detail;
+      event.channel.clear();
+    }
+    if (event.kind.empty()) event.kind = "mark";
+    writer_.add_event(event);
+    ++result_.events;
+  }
+
+  void scans(const JournalFrame& frame) {
+    if (frame.first_scan < result_.scans) {
+      throw JournalError(journal_.string() + ": block at byte " + std::to_string(frame.offset) +
+                         " starts at scan " + std::to_string(frame.first_scan) + ", before scan " +
+                         std::to_string(result_.scans) + " that the journal already has");
+    }
+    if (frame.first_scan > result_.scans) fill_gap(frame);
+    for (int c = 0; c < channel_count_; ++c) {
+      writer_.append_counts(c, std::span<const std::int32_t>(
+                                   frame.counts.data() + c * frame.scan_count, frame.scan_count));
+    }
+    result_.scans += frame.scan_count;
+  }
+
+  // Scans the writer never got (ring overflow) before `frame`: the clock is kept, the gap
+  // marked by an event and filled with kGapFillCount.
+  void fill_gap(const JournalFrame& frame) {
+    const std::uint64_t missing = frame.first_scan - result_.scans;
+    // No writer falls an hour behind: such a jump is damage, and filling it would write
+    // without bound (found by fuzz/journal.cpp).
+    const double hour_of_scans = 3600.0 * header_.scan_rate_hz;
+    if (static_cast<double>(missing) > hour_of_scans) {
+      throw JournalError(journal_.string() + ": block at byte " + std::to_string(frame.offset) +
+                         " starts at scan " + std::to_string(frame.first_scan) + ", " +
+                         std::to_string(missing) + " scans after the last one the " +
+                         "journal has (more than an hour): the journal is damaged");
+    }
+    char detail[200];
+    std::snprintf(detail, sizeof detail,
+                  "%llu scans from scan %llu lost (ring buffer overflow); their raw "
+                  "values are %d",
+                  static_cast<unsigned long long>(missing),
+                  static_cast<unsigned long long>(result_.scans), kGapFillCount);
+    writer_.add_event(
+        {static_cast<double>(result_.scans) / header_.scan_rate_hz, "gap", "", detail});
+    ++result_.events;
+    fill_.assign(static_cast<std::size_t>(std::min<std::uint64_t>(missing, 65536)), kGapFillCount);
+    for (std::uint64_t left = missing; left > 0;) {
+      const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(left, fill_.size()));
+      for (int c = 0; c < channel_count_; ++c) {
+        writer_.append_counts(c, std::span<const std::int32_t>(fill_.data(), n));
+      }
+      left -= n;
+    }
+    result_.gap_scans += missing;
+    result_.scans = frame.first_scan;
+  }
+
+  const std::filesystem::path& journal_;
+  const JournalHeader& header_;
+  SessionWriter& writer_;
+  ConvertResult& result_;
+  const int channel_count_;
+  std::set<std::string> names_;
+  std::vector<int> latency_channel_;        // each polled channel's "<name>_latency", -1: none
+  std::vector<std::int64_t> last_time_ns_;  // per channel: the last time written
+  std::vector<double> times_s_, latencies_s_, raws_;
+  std::vector<std::int32_t> fill_;
+};
+
+// The whole session into `partial`, closed.
+void write_partial_session(const std::filesystem::path& journal, JournalReader& reader,
+                           const std::filesystem::path& partial, const ConvertOptions& options,
+                           ConvertResult& result) {
+  const JournalHeader& header = reader.header();
+  SessionWriter writer(partial, metadata_with_start_time(journal, header), options.writer);
+  FrameWriter frames(journal, header, writer, result);
+  JournalFrame frame;
+  while (reader.next(frame)) frames.write(frame);
+  frames.finish();
+  result.journal_bytes = reader.file_bytes();
+  result.bytes_dropped = reader.bytes_dropped();
+  result.drop_reason = reader.stop_reason();
+  if (options.closing_events) {
+    for (const SessionEvent& event : options.closing_events(result)) {
+      writer.add_event(event);
+      ++result.events;
+    }
+  }
+  if (options.extras) options.extras(writer);
+  writer.close();
+}
+
+// The partial session synced and renamed to the session, the folder synced.
+void publish_session(const std::filesystem::path& partial, const std::filesystem::path& session) {
+  sync_path(partial, false);
+  std::error_code error;
+  std::filesystem::rename(partial, session, error);
+  if (error) {
+    throw SessionError(session.string() + ": cannot rename " + partial.string() +
+                       " to it: " + error.message());
+  }
+  sync_path(folder_of(session), true);
+}
+
+}  // namespace
+
 ConvertResult convert_journal(const std::filesystem::path& journal,
                               const std::filesystem::path& session, const ConvertOptions& options) {
   if (std::string problem = options.validate(); !problem.empty()) {
@@ -120,189 +345,19 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
     throw SessionError(session.string() + ": already exists (sessions are never overwritten)");
   }
   JournalReader reader(journal);
-  const JournalHeader& header = reader.header();
   ConvertResult result;
   result.journal = journal;
   result.session = session;
-  result.channels = header.channels.size();
-  result.scan_rate_hz = header.scan_rate_hz;
+  result.channels = reader.header().channels.size();
+  result.scan_rate_hz = reader.header().scan_rate_hz;
 
   std::filesystem::path partial = session;
   partial += ".partial";
   // A partial file is a conversion that died; whoever converts holds the journal.
   std::filesystem::remove(partial);
-  // The origin's UTC time (start frame, normally the first) is the session's start time.
-  SessionMetadata metadata = header.metadata;
-  {
-    JournalReader first(journal);
-    JournalFrame frame;
-    for (int n = 0; n < 8 && first.next(frame); ++n) {
-      if (frame.type == FrameType::kStart) {
-        if (frame.realtime_ns != 0) metadata.start_time_utc = utc_iso8601_ns(frame.realtime_ns);
-        break;
-      }
-    }
-  }
   try {
-    {
-      SessionWriter writer(partial, metadata, options.writer);
-      std::set<std::string> names;
-      for (const ChannelInfo& channel : header.channels) {
-        writer.add_channel(channel);
-        names.insert(channel.name);
-      }
-      for (const calibration::CalibrationRecord& record : header.calibrations) {
-        writer.add_calibration(record);
-      }
-      const auto channel_count = static_cast<int>(scan_channel_count(header));
-      // Each polled channel's latency channel ("<name>_latency"), -1 when none; and the
-      // last time written, to keep explicit times strictly increasing.
-      std::vector<int> latency_channel(header.channels.size(), -1);
-      std::vector<std::int64_t> last_time_ns(header.channels.size(),
-                                             std::numeric_limits<std::int64_t>::min());
-      for (std::size_t c = 0; c < header.channels.size(); ++c) {
-        for (std::size_t l = 0; l < header.channels.size(); ++l) {
-          if (header.channels[l].sensor_kind == "poll_latency" &&
-              header.channels[l].name == header.channels[c].name + "_latency") {
-            latency_channel[c] = static_cast<int>(l);
-          }
-        }
-      }
-      std::vector<double> times_s, latencies_s, raws;
-      std::vector<std::int32_t> fill;
-      JournalFrame frame;
-      while (reader.next(frame)) {
-        switch (frame.type) {
-          case FrameType::kStart:
-            result.start_monotonic_ns = frame.monotonic_ns;
-            result.start_realtime_ns = frame.realtime_ns;
-            break;
-          case FrameType::kTimed: {
-            times_s.clear();
-            latencies_s.clear();
-            raws.clear();
-            std::int64_t& last = last_time_ns[frame.channel];
-            for (std::size_t i = 0; i < frame.scan_count; ++i) {
-              if (frame.time_ns[i] <= last) {
-                ++result.unordered_samples;
-                continue;
-              }
-              last = frame.time_ns[i];
-              times_s.push_back(static_cast<double>(frame.time_ns[i]) * 1e-9);
-              latencies_s.push_back(static_cast<double>(frame.latency_ns[i]) * 1e-9);
-              raws.push_back(frame.raw[i]);
-            }
-            writer.append_timed_values(static_cast<int>(frame.channel), times_s, raws);
-            if (latency_channel[frame.channel] >= 0) {
-              writer.append_timed_values(latency_channel[frame.channel], times_s, latencies_s);
-            }
-            result.timed_samples += times_s.size();
-            break;
-          }
-          case FrameType::kEnd:
-            result.ended_cleanly = true;
-            break;
-          case FrameType::kEvent: {
-            SessionEvent event = frame.event;
-            if (!event.channel.empty() && names.count(event.channel) == 0) {
-              event.detail = "(channel " + event.channel + ") " + event.detail;
-              event.channel.clear();
-            }
-            if (event.kind.empty()) event.kind = "mark";
-            writer.add_event(event);
-            ++result.events;
-            break;
-          }
-          case FrameType::kScans: {
-            if (frame.first_scan < result.scans) {
-              throw JournalError(journal.string() + ": block at byte " +
-                                 std::to_string(frame.offset) + " starts at scan " +
-                                 std::to_string(frame.first_scan) + ", before scan " +
-                                 std::to_string(result.scans) + " that the journal already has");
-            }
-            if (frame.first_scan > result.scans) {
-              // Scans the writer never got (ring overflow): keep the clock, mark the gap.
-              const std::uint64_t missing = frame.first_scan - result.scans;
-              // No writer falls an hour behind: such a jump is damage, and filling it would
-              // write without bound (found by fuzz/journal.cpp).
-              const double hour_of_scans = 3600.0 * header.scan_rate_hz;
-              if (static_cast<double>(missing) > hour_of_scans) {
-                throw JournalError(journal.string() + ": block at byte " +
-                                   std::to_string(frame.offset) + " starts at scan " +
-                                   std::to_string(frame.first_scan) + ", " +
-                                   std::to_string(missing) + " scans after the last one the " +
-                                   "journal has (more than an hour): the journal is damaged");
-              }
-              char detail[200];
-              std::snprintf(detail, sizeof detail,
-                            "%llu scans from scan %llu lost (ring buffer overflow); their raw "
-                            "values are %d",
-                            static_cast<unsigned long long>(missing),
-                            static_cast<unsigned long long>(result.scans), kGapFillCount);
-              writer.add_event(
-                  {static_cast<double>(result.scans) / header.scan_rate_hz, "gap", "", detail});
-              ++result.events;
-              fill.assign(static_cast<std::size_t>(std::min<std::uint64_t>(missing, 65536)),
-                          kGapFillCount);
-              for (std::uint64_t left = missing; left > 0;) {
-                const auto n = static_cast<std::size_t>(std::min<std::uint64_t>(left, fill.size()));
-                for (int c = 0; c < channel_count; ++c) {
-                  writer.append_counts(c, std::span<const std::int32_t>(fill.data(), n));
-                }
-                left -= n;
-              }
-              result.gap_scans += missing;
-              result.scans = frame.first_scan;
-            }
-            for (int c = 0; c < channel_count; ++c) {
-              writer.append_counts(
-                  c, std::span<const std::int32_t>(frame.counts.data() + c * frame.scan_count,
-                                                   frame.scan_count));
-            }
-            result.scans += frame.scan_count;
-            break;
-          }
-        }
-      }
-      if (result.unordered_samples > 0) {
-        writer.add_event({0.0, "fault", "",
-                          std::to_string(result.unordered_samples) +
-                              " polled samples dropped: their time was not after the one "
-                              "before on their channel"});
-        ++result.events;
-      }
-      if (result.start_monotonic_ns >= 0) {
-        // Session time t is CLOCK_MONOTONIC origin_monotonic_ns + t·1e9 and UTC
-        // origin_utc + t (docs/session-format.md).
-        writer.write_group_attribute("clock", "origin_monotonic_ns",
-                                     std::to_string(result.start_monotonic_ns));
-        if (result.start_realtime_ns != 0) {
-          writer.write_group_attribute("clock", "origin_realtime_ns",
-                                       std::to_string(result.start_realtime_ns));
-          writer.write_group_attribute("clock", "origin_utc",
-                                       utc_iso8601_ns(result.start_realtime_ns));
-        }
-      }
-      result.journal_bytes = reader.file_bytes();
-      result.bytes_dropped = reader.bytes_dropped();
-      result.drop_reason = reader.stop_reason();
-      if (options.closing_events) {
-        for (const SessionEvent& event : options.closing_events(result)) {
-          writer.add_event(event);
-          ++result.events;
-        }
-      }
-      if (options.extras) options.extras(writer);
-      writer.close();
-    }
-    sync_path(partial, false);
-    std::error_code error;
-    std::filesystem::rename(partial, session, error);
-    if (error) {
-      throw SessionError(session.string() + ": cannot rename " + partial.string() +
-                         " to it: " + error.message());
-    }
-    sync_path(folder_of(session), true);
+    write_partial_session(journal, reader, partial, options, result);
+    publish_session(partial, session);
   } catch (const std::logic_error& error) {
     // The session writer refused what the header describes (a channel's calibration record
     // missing, a bad name): damage, not a misuse (found by fuzz/journal.cpp).

@@ -97,210 +97,235 @@ bool is_signed_by_mounting(const ChannelInfo& channel) {
   return channel.sensor_kind == "load_cell";
 }
 
-}  // namespace
-
-Recording session_to_recording(const SessionReader& session) {
-  const std::vector<ChannelInfo>& channels = session.channels();
-  if (channels.empty()) throw SessionError(session.path().string() + ": no channels to export");
+// The channels a recording exports: the first force (N), rate (rad/s) and full-range
+// angle (rad, not an inclinometer) channel, then every other one.
+struct ExportedChannels {
   const ChannelInfo* force = nullptr;
   const ChannelInfo* rate = nullptr;
   const ChannelInfo* angle = nullptr;
   std::vector<const ChannelInfo*> extras;
+  std::vector<const ChannelInfo*> all;  // force, rate, angle (those there), extras
+};
+
+ExportedChannels exported_channels(const SessionReader& session) {
+  const std::vector<ChannelInfo>& channels = session.channels();
+  if (channels.empty()) throw SessionError(session.path().string() + ": no channels to export");
+  ExportedChannels exported;
   for (const ChannelInfo& channel : channels) {
-    if (!force && channel.unit == "N")
-      force = &channel;
-    else if (!rate && channel.unit == "rad/s")
-      rate = &channel;
-    else if (!angle && channel.unit == "rad" && channel.sensor_kind != "inclinometer")
-      angle = &channel;
+    if (!exported.force && channel.unit == "N")
+      exported.force = &channel;
+    else if (!exported.rate && channel.unit == "rad/s")
+      exported.rate = &channel;
+    else if (!exported.angle && channel.unit == "rad" && channel.sensor_kind != "inclinometer")
+      exported.angle = &channel;
     else
-      extras.push_back(&channel);
+      exported.extras.push_back(&channel);
   }
   const std::string where = session.path().string();
-  if (!force) throw SessionError(where + ": no force channel (unit N) to export as force_N");
-  if (!rate && !angle) {
+  if (!exported.force) {
+    throw SessionError(where + ": no force channel (unit N) to export as force_N");
+  }
+  if (!exported.rate && !exported.angle) {
     throw SessionError(where +
                        ": neither a rate channel (rad/s) nor a full-range angle channel "
                        "(rad, not an inclinometer) to export");
   }
+  exported.all.push_back(exported.force);
+  if (exported.rate) exported.all.push_back(exported.rate);
+  if (exported.angle) exported.all.push_back(exported.angle);
+  exported.all.insert(exported.all.end(), exported.extras.begin(), exported.extras.end());
+  return exported;
+}
 
-  Recording recording;
-  recording.source = where;
-  recording.metadata.emplace_back("source", "doorbench export " + where);
+// A channel's physical values on its own clock.
+struct OwnClock {
+  std::vector<double> time_s, values;
+};
 
-  // Every exported channel on its own clock, delay-corrected (docs/synchronization.md).
-  std::vector<const ChannelInfo*> exported{force};
-  if (rate) exported.push_back(rate);
-  if (angle) exported.push_back(angle);
-  exported.insert(exported.end(), extras.begin(), extras.end());
-  struct Own {
-    std::vector<double> time_s, values;
-  };
-  std::vector<Own> own;
+// Every exported channel on its own clock, delay-corrected (docs/synchronization.md).
+std::vector<OwnClock> read_on_own_clocks(const SessionReader& session,
+                                         const std::vector<const ChannelInfo*>& exported) {
+  std::vector<OwnClock> own;
   for (const ChannelInfo* channel : exported) {
     const ChannelSlice slice = session.read(channel->name);
     std::vector<double> values = session.physical(channel->name, slice);
     own.push_back(
         {slice.time_s, correct_delay(session, *channel, slice.time_s, std::move(values))});
   }
-  // One clock: the same uniform rate and sample count, or the very same explicit times.
-  const auto same_clock = [&](std::size_t i, std::size_t j) {
-    const ChannelInfo& a = *exported[i];
-    const ChannelInfo& b = *exported[j];
-    if (own[i].time_s.size() != own[j].time_s.size()) return false;
-    if (a.sample_rate_hz > 0 && b.sample_rate_hz > 0) {
-      return std::abs(a.sample_rate_hz - b.sample_rate_hz) <= 1e-9 * a.sample_rate_hz;
-    }
-    return a.sample_rate_hz == 0 && b.sample_rate_hz == 0 && own[i].time_s == own[j].time_s;
-  };
-  bool one_clock = true;
-  for (std::size_t i = 1; i < exported.size(); ++i) one_clock = one_clock && same_clock(0, i);
-  std::vector<std::vector<double>> columns(exported.size());
-  if (one_clock) {
-    // All on the force channel's clock: its times (converter skews of a few µs are not
-    // resampled; explicit times shared by every channel, as imports have them, are kept).
-    recording.time_s = own[0].time_s;
-    for (std::size_t i = 0; i < exported.size(); ++i) columns[i] = std::move(own[i].values);
-  } else {
-    // The axis: the force channel's clock if uniform, else the first uniform exported
-    // channel's, else a common rate of 1 / the force channel's median interval; only
-    // where every channel has samples.
-    double first_s = -std::numeric_limits<double>::infinity();
-    double last_s = std::numeric_limits<double>::infinity();
-    for (std::size_t i = 0; i < exported.size(); ++i) {
-      if (own[i].time_s.size() < 2) {
-        throw SessionError(where + ": channel " + exported[i]->name + " has " +
-                           std::to_string(own[i].time_s.size()) +
-                           " samples, too few to place on a common clock");
-      }
-      first_s = std::max(first_s, own[i].time_s.front());
-      last_s = std::min(last_s, own[i].time_s.back());
-    }
-    if (!(last_s > first_s)) {
-      throw SessionError(where + ": the exported channels have no time span in common");
-    }
-    std::optional<std::size_t> reference;
-    for (std::size_t i = 0; i < exported.size() && !reference; ++i) {
-      if (exported[i]->sample_rate_hz > 0) reference = i;
-    }
-    std::string placed;
-    if (reference) {
-      for (double t : own[*reference].time_s) {
-        if (t >= first_s && t <= last_s) recording.time_s.push_back(t);
-      }
-      recording.sample_rate_hz = exported[*reference]->sample_rate_hz;
-      placed = "on the clock of " + exported[*reference]->name;
-    } else {
-      const double rate_hz = 1.0 / median_interval_s(own[0].time_s);
-      recording.time_s = uniform_axis(first_s, last_s, rate_hz);
-      recording.sample_rate_hz = rate_hz;
-      placed = "on a common clock of " + format_csv_number(rate_hz) +
-               " Hz (1 / the median interval of " + force->name + ")";
-    }
-    placed += " from " + format_csv_number(first_s) + " s to " + format_csv_number(last_s) + " s";
-    std::vector<bool> keep(recording.time_s.size(), true);
-    std::string gaps;
-    for (std::size_t i = 0; i < exported.size(); ++i) {
-      const ChannelInfo& channel = *exported[i];
-      const double interval_s = channel.sample_rate_hz > 0 ? 1.0 / channel.sample_rate_hz
-                                                           : median_interval_s(own[i].time_s);
-      columns[i] = resample_linear(own[i].time_s, own[i].values, recording.time_s,
-                                   kGapIntervals * interval_s, where + ": channel " + channel.name);
-      // Runs of times that fall in this channel's gaps.
-      for (std::size_t j = 0; j < columns[i].size(); ++j) {
-        if (!std::isnan(columns[i][j])) continue;
-        std::size_t end = j;
-        while (end + 1 < columns[i].size() && std::isnan(columns[i][end + 1])) ++end;
-        for (std::size_t k = j; k <= end; ++k) keep[k] = false;
-        if (!gaps.empty()) gaps += "; ";
-        gaps += channel.name + " " + format_csv_number(recording.time_s[j]) + "-" +
-                format_csv_number(recording.time_s[end]) + " s";
-        j = end;
-      }
-    }
-    if (!gaps.empty()) {
-      // Times inside a gap of any channel are left out: a jump in the time column.
-      const auto compact = [&](std::vector<double>& values) {
-        std::size_t n = 0;
-        for (std::size_t j = 0; j < values.size(); ++j) {
-          if (keep[j]) values[n++] = values[j];
-        }
-        values.resize(n);
-      };
-      compact(recording.time_s);
-      for (std::vector<double>& column : columns) compact(column);
-      recording.metadata.emplace_back("resample_gaps", gaps);
-    }
-    recording.metadata.emplace_back("resampled", "linear interpolation " + placed);
-  }
-  const std::size_t count = recording.time_s.size();
-  auto column = [&](const ChannelInfo& channel) {
-    for (std::size_t i = 0; i < exported.size(); ++i) {
-      if (exported[i] == &channel) return columns[i];
-    }
-    throw std::logic_error("not exported: " + channel.name);
-  };
+  return own;
+}
 
-  // Strokes from events; the load cell's mounting from each stroke's detail.
-  std::vector<SessionEvent> events = session.events();
+// One clock: the same uniform rate and sample count, or the very same explicit times.
+bool on_one_clock(const std::vector<const ChannelInfo*>& exported,
+                  const std::vector<OwnClock>& own) {
+  for (std::size_t i = 1; i < exported.size(); ++i) {
+    const ChannelInfo& a = *exported[0];
+    const ChannelInfo& b = *exported[i];
+    if (own[0].time_s.size() != own[i].time_s.size()) return false;
+    if (a.sample_rate_hz > 0 && b.sample_rate_hz > 0) {
+      if (!(std::abs(a.sample_rate_hz - b.sample_rate_hz) <= 1e-9 * a.sample_rate_hz)) {
+        return false;
+      }
+    } else if (!(a.sample_rate_hz == 0 && b.sample_rate_hz == 0 &&
+                 own[0].time_s == own[i].time_s)) {
+      return false;
+    }
+  }
+  return true;
+}
+
+// The time span every channel has samples in. Throws SessionError for a channel of fewer
+// than two samples or no span in common.
+std::pair<double, double> common_span_s(const std::string& where,
+                                        const std::vector<const ChannelInfo*>& exported,
+                                        const std::vector<OwnClock>& own) {
+  double first_s = -std::numeric_limits<double>::infinity();
+  double last_s = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < exported.size(); ++i) {
+    if (own[i].time_s.size() < 2) {
+      throw SessionError(where + ": channel " + exported[i]->name + " has " +
+                         std::to_string(own[i].time_s.size()) +
+                         " samples, too few to place on a common clock");
+    }
+    first_s = std::max(first_s, own[i].time_s.front());
+    last_s = std::min(last_s, own[i].time_s.back());
+  }
+  if (!(last_s > first_s)) {
+    throw SessionError(where + ": the exported channels have no time span in common");
+  }
+  return {first_s, last_s};
+}
+
+// The common axis, in recording.time_s and sample_rate_hz: the first uniform exported
+// channel's clock (the force channel's if uniform), else a common rate of 1 / the force
+// channel's median interval; within [first_s, last_s]. Returns how, for the metadata.
+std::string place_common_axis(const std::vector<const ChannelInfo*>& exported,
+                              const std::vector<OwnClock>& own, double first_s, double last_s,
+                              Recording& recording) {
+  std::optional<std::size_t> reference;
+  for (std::size_t i = 0; i < exported.size() && !reference; ++i) {
+    if (exported[i]->sample_rate_hz > 0) reference = i;
+  }
+  std::string placed;
+  if (reference) {
+    for (double t : own[*reference].time_s) {
+      if (t >= first_s && t <= last_s) recording.time_s.push_back(t);
+    }
+    recording.sample_rate_hz = exported[*reference]->sample_rate_hz;
+    placed = "on the clock of " + exported[*reference]->name;
+  } else {
+    const double rate_hz = 1.0 / median_interval_s(own[0].time_s);
+    recording.time_s = uniform_axis(first_s, last_s, rate_hz);
+    recording.sample_rate_hz = rate_hz;
+    placed = "on a common clock of " + format_csv_number(rate_hz) +
+             " Hz (1 / the median interval of " + exported[0]->name + ")";
+  }
+  return placed + " from " + format_csv_number(first_s) + " s to " + format_csv_number(last_s) +
+         " s";
+}
+
+// Marks the times of runs of NaN (the channel's gaps) false in `keep` and appends each
+// run to `gaps` as "NAME FIRST-LAST s" (joined by "; ").
+void mark_gaps(const std::string& name, const std::vector<double>& column,
+               const std::vector<double>& time_s, std::vector<bool>& keep, std::string& gaps) {
+  for (std::size_t j = 0; j < column.size(); ++j) {
+    if (!std::isnan(column[j])) continue;
+    std::size_t end = j;
+    while (end + 1 < column.size() && std::isnan(column[end + 1])) ++end;
+    for (std::size_t k = j; k <= end; ++k) keep[k] = false;
+    if (!gaps.empty()) gaps += "; ";
+    gaps += name + " " + format_csv_number(time_s[j]) + "-" + format_csv_number(time_s[end]) + " s";
+    j = end;
+  }
+}
+
+// Leaves out the values whose `keep` is false.
+void compact(std::vector<double>& values, const std::vector<bool>& keep) {
+  std::size_t n = 0;
+  for (std::size_t j = 0; j < values.size(); ++j) {
+    if (keep[j]) values[n++] = values[j];
+  }
+  values.resize(n);
+}
+
+// Channels on different clocks, resampled linearly onto a common axis (recording.time_s);
+// times inside a gap of any channel are left out: a jump in the time column.
+std::vector<std::vector<double>> resample_onto_common_clock(
+    const std::string& where, const std::vector<const ChannelInfo*>& exported,
+    std::vector<OwnClock>& own, Recording& recording) {
+  const auto [first_s, last_s] = common_span_s(where, exported, own);
+  const std::string placed = place_common_axis(exported, own, first_s, last_s, recording);
+  std::vector<std::vector<double>> columns(exported.size());
+  std::vector<bool> keep(recording.time_s.size(), true);
+  std::string gaps;
+  for (std::size_t i = 0; i < exported.size(); ++i) {
+    const ChannelInfo& channel = *exported[i];
+    const double interval_s = channel.sample_rate_hz > 0 ? 1.0 / channel.sample_rate_hz
+                                                         : median_interval_s(own[i].time_s);
+    columns[i] = resample_linear(own[i].time_s, own[i].values, recording.time_s,
+                                 kGapIntervals * interval_s, where + ": channel " + channel.name);
+    mark_gaps(channel.name, columns[i], recording.time_s, keep, gaps);
+  }
+  if (!gaps.empty()) {
+    compact(recording.time_s, keep);
+    for (std::vector<double>& column : columns) compact(column, keep);
+    recording.metadata.emplace_back("resample_gaps", gaps);
+  }
+  recording.metadata.emplace_back("resampled", "linear interpolation " + placed);
+  return columns;
+}
+
+// "stroke 7" → 7 (imported strokes keep their ids); 0 otherwise.
+int stroke_id(const std::string& detail) {
+  if (detail.rfind("stroke ", 0) != 0) return 0;
+  try {
+    return std::stoi(detail.substr(7));
+  } catch (const std::exception&) {
+    return 0;
+  }
+}
+
+}  // namespace
+
+StrokeColumns stroke_columns_from_events(std::vector<SessionEvent> events,
+                                         const std::vector<double>& time_s) {
   std::stable_sort(events.begin(), events.end(), [](const SessionEvent& a, const SessionEvent& b) {
     return a.time_s < b.time_s;
   });
-  std::vector<int> stroke(count, 0);
-  std::vector<int> sign(count, 1);
-  bool any_stroke = false;
-  {
-    std::size_t next_event = 0;
-    int current = 0, number = 0, mounting = 1;
-    for (std::size_t i = 0; i < count; ++i) {
-      // An event at a sample's time applies to that sample (a part in 1e9 of slack for
-      // times that went through arithmetic).
-      const double slack = 1e-9 * std::max(1.0, std::abs(recording.time_s[i]));
-      while (next_event < events.size() &&
-             events[next_event].time_s <= recording.time_s[i] + slack) {
-        const SessionEvent& event = events[next_event++];
-        if (event.kind == "stroke_start") {
-          // Imported strokes keep their ids ("stroke 7"); others are numbered in order.
-          int id = 0;
-          if (event.detail.rfind("stroke ", 0) == 0) {
-            try {
-              id = std::stoi(event.detail.substr(7));
-            } catch (const std::exception&) {
-              id = 0;
-            }
-          }
-          number = id > 0 ? id : number + 1;
-          current = number;
-          any_stroke = true;
-          if (event.detail == "opening") mounting = 1;
-          if (event.detail == "closing") mounting = -1;
-        } else if (event.kind == "stroke_end") {
-          current = 0;
-        }
+  StrokeColumns strokes{std::vector<int>(time_s.size(), 0), std::vector<int>(time_s.size(), 1)};
+  std::size_t next_event = 0;
+  int current = 0, number = 0, mounting = 1;
+  for (std::size_t i = 0; i < time_s.size(); ++i) {
+    // An event at a sample's time applies to that sample (a part in 1e9 of slack for
+    // times that went through arithmetic).
+    const double slack = 1e-9 * std::max(1.0, std::abs(time_s[i]));
+    while (next_event < events.size() && events[next_event].time_s <= time_s[i] + slack) {
+      const SessionEvent& event = events[next_event++];
+      if (event.kind == "stroke_start") {
+        // Imported strokes keep their ids; others are numbered in order.
+        const int id = stroke_id(event.detail);
+        number = id > 0 ? id : number + 1;
+        current = number;
+        strokes.any_stroke = true;
+        if (event.detail == "opening") mounting = 1;
+        if (event.detail == "closing") mounting = -1;
+      } else if (event.kind == "stroke_end") {
+        current = 0;
       }
-      stroke[i] = current;
-      sign[i] = mounting;
     }
+    strokes.stroke[i] = current;
+    strokes.sign[i] = mounting;
   }
+  return strokes;
+}
 
-  recording.force_N = column(*force);
-  const std::optional<calibration::CalibrationRecord> geometry = geometry_record(session, *force);
-  if (geometry) {
-    for (double& value : recording.force_N) value = geometry->apply(value);
-  }
-  if (is_signed_by_mounting(*force)) {
-    for (std::size_t i = 0; i < count; ++i) recording.force_N[i] *= sign[i];
-  }
-  if (rate) recording.rate_rad_s = column(*rate);
-  if (angle) recording.angle_rad = column(*angle);
-  if (any_stroke) recording.stroke = stroke;
-  for (const ChannelInfo* extra : extras) {
-    recording.extra_names.push_back(column_name(*extra));
-    recording.extra_columns.push_back(column(*extra));
-  }
-  if (!recording.sample_rate_hz && force->sample_rate_hz > 0) {
-    recording.sample_rate_hz = force->sample_rate_hz;
-  }
+namespace {
+
+// The handle's radius: the geometry record's (the bench's as calibrated) before the
+// truth's, the import's or the haptic group's attribute.
+void take_handle_radius(const SessionReader& session,
+                        const std::optional<calibration::CalibrationRecord>& geometry,
+                        Recording& recording) {
   for (const std::string group : {"truth", "import", "haptic"}) {
     try {
       const std::string radius = session.read_group_attribute(group, "handle_radius_m");
@@ -310,14 +335,64 @@ Recording session_to_recording(const SessionReader& session) {
       // not in this group
     }
   }
-  // The geometry record's radius is the bench's as calibrated: it comes before the truth's
-  // or the import's.
   if (geometry) {
     recording.metadata.emplace_back(std::string(kGeometryCalibrationKey), geometry->id);
     if (const calibration::CalibrationQuantity* radius = geometry->quantity("handle_radius_m")) {
       recording.handle_radius_m = radius->value;
     }
   }
+}
+
+}  // namespace
+
+Recording session_to_recording(const SessionReader& session) {
+  const ExportedChannels exported = exported_channels(session);
+  const std::string where = session.path().string();
+  Recording recording;
+  recording.source = where;
+  recording.metadata.emplace_back("source", "doorbench export " + where);
+
+  std::vector<OwnClock> own = read_on_own_clocks(session, exported.all);
+  std::vector<std::vector<double>> columns(exported.all.size());
+  if (on_one_clock(exported.all, own)) {
+    // All on the force channel's clock: its times (converter skews of a few µs are not
+    // resampled; explicit times shared by every channel, as imports have them, are kept).
+    recording.time_s = own[0].time_s;
+    for (std::size_t i = 0; i < exported.all.size(); ++i) columns[i] = std::move(own[i].values);
+  } else {
+    columns = resample_onto_common_clock(where, exported.all, own, recording);
+  }
+  const auto column = [&](const ChannelInfo& channel) {
+    for (std::size_t i = 0; i < exported.all.size(); ++i) {
+      if (exported.all[i] == &channel) return columns[i];
+    }
+    throw std::logic_error("not exported: " + channel.name);
+  };
+
+  // Strokes from events; the load cell's mounting from each stroke's detail.
+  const StrokeColumns strokes = stroke_columns_from_events(session.events(), recording.time_s);
+  recording.force_N = column(*exported.force);
+  const std::optional<calibration::CalibrationRecord> geometry =
+      geometry_record(session, *exported.force);
+  if (geometry) {
+    for (double& value : recording.force_N) value = geometry->apply(value);
+  }
+  if (is_signed_by_mounting(*exported.force)) {
+    for (std::size_t i = 0; i < recording.force_N.size(); ++i) {
+      recording.force_N[i] *= strokes.sign[i];
+    }
+  }
+  if (exported.rate) recording.rate_rad_s = column(*exported.rate);
+  if (exported.angle) recording.angle_rad = column(*exported.angle);
+  if (strokes.any_stroke) recording.stroke = strokes.stroke;
+  for (const ChannelInfo* extra : exported.extras) {
+    recording.extra_names.push_back(column_name(*extra));
+    recording.extra_columns.push_back(column(*extra));
+  }
+  if (!recording.sample_rate_hz && exported.force->sample_rate_hz > 0) {
+    recording.sample_rate_hz = exported.force->sample_rate_hz;
+  }
+  take_handle_radius(session, geometry, recording);
   return recording;
 }
 

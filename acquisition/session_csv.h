@@ -33,6 +33,7 @@
 #include <filesystem>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "acquisition/recording_csv.h"
 #include "acquisition/session_file.h"
@@ -43,6 +44,19 @@ namespace doorbench {
 inline constexpr std::string_view kGeometryCalibrationKey = "geometry_calibration";
 
 Recording session_to_recording(const SessionReader& session);
+
+// Per sample of `time_s`: the stroke it belongs to (0: none) and the load cell's mounting
+// (+1 opening, −1 closing), from stroke_start/stroke_end events (any order). An event
+// applies from the sample at its time (within a part in 1e9). A stroke_start whose detail
+// is "stroke N" (N > 0) keeps id N, others are numbered on from the last; its detail
+// "opening" or "closing" sets the mounting until the next such detail.
+struct StrokeColumns {
+  std::vector<int> stroke;
+  std::vector<int> sign;
+  bool any_stroke = false;  // a stroke_start applied to some sample
+};
+StrokeColumns stroke_columns_from_events(std::vector<SessionEvent> events,
+                                         const std::vector<double>& time_s);
 
 // Writes `recording` as a new session at `path` (which must not exist).
 void recording_to_session(const Recording& recording, const std::filesystem::path& path,

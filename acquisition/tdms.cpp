@@ -360,169 +360,236 @@ const TdmsChannel* TdmsFile::find(const std::string& group, const std::string& n
   return nullptr;
 }
 
-TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& source) {
-  TdmsFile file;
-  Reader in(bytes, source);
-  std::map<std::string, ObjectState> objects;
-  std::vector<std::string> active;  // the object list of the current segment, in order
-  std::size_t start = 0;
-  while (start < bytes.size()) {
-    ++file.segments;
-    in.set_segment(file.segments);
-    in.seek(start);
-    in.need(kLeadInBytes);
-    if (std::memcmp(in.at(start), "TDSm", 4) != 0) {
-      if (std::memcmp(in.at(start), "TDSh", 4) == 0) {
-        in.fail("this is a TDMS index file (.tdms_index); import the .tdms file itself");
-      }
-      in.fail("no TDMS segment here (the lead-in starts with 'TDSm')");
-    }
-    in.seek(start + 4);
-    const auto toc = in.read<std::uint32_t>();
-    const auto version = in.read<std::uint32_t>();
-    const auto next_offset = in.read<std::uint64_t>();
-    const auto raw_offset = in.read<std::uint64_t>();
-    if (version != 4712 && version != 4713) {
-      in.fail("TDMS version " + std::to_string(version) + " is not supported (4712 and 4713 are)");
-    }
-    if (toc & kTocBigEndian) {
-      in.fail("big-endian segments (ToC flag kTocBigEndian) are not supported");
-    }
-    if (toc & kTocDAQmxRawData) {
-      in.fail(
-          "DAQmx raw data (ToC flag kTocDAQmxRawData) is not supported: log the channels "
-          "scaled (LabVIEW: TDMS, not TDMS raw / 'Log and Read' with scaled data)");
-    }
-    const std::size_t meta_start = start + kLeadInBytes;
-    const std::size_t end = next_offset == kIncompleteSegment
-                                ? bytes.size()
-                                : meta_start + static_cast<std::size_t>(next_offset);
-    if (end > bytes.size() || end < meta_start) {
-      in.fail("the next segment offset (" + std::to_string(next_offset) +
-              ") points past the end of the file (" + std::to_string(bytes.size()) + " bytes)");
-    }
-    const std::size_t raw_start = meta_start + static_cast<std::size_t>(raw_offset);
-    if (raw_start > end) in.fail("the raw data offset points past the segment's end");
+namespace {
 
-    if (toc & kTocMetaData) {
-      if (toc & kTocNewObjList) active.clear();
-      in.seek(meta_start);
-      const auto count = in.read<std::uint32_t>();
-      for (std::uint32_t o = 0; o < count; ++o) {
-        const std::string path = in.read_string();
-        const bool known = objects.count(path) > 0;
-        ObjectState& object = objects[path];
-        if (!known) {
-          object.parts = split_path(path, in);
-          if (object.parts.size() == 2) {
-            object.is_channel = true;
-            object.channel = file.channels.size();
-            file.channels.push_back({object.parts[0], object.parts[1], "", {}, {}, ""});
-          }
-        }
-        const std::size_t index_at = in.position();
-        const auto index = in.read<std::uint32_t>();
-        if (index == kNoRawData) {
-          object.has_raw = false;
-        } else if (index == kSameRawIndex) {
-          if (!object.has_raw && object.type == kVoid) {
-            in.fail("object " + path + " repeats a raw data index it never had");
-          }
-          object.has_raw = true;
-        } else if (index == kDaqmxFormatScaler || index == kDaqmxDigitalScaler) {
-          in.fail_at(index_at, "object " + path + ": DAQmx raw data (raw data index " + hex(index) +
-                                   ") is not supported");
-        } else {
-          const auto type = in.read<std::uint32_t>();
-          const auto dimension = in.read<std::uint32_t>();
-          const auto values = in.read<std::uint64_t>();
-          std::uint64_t string_bytes = 0;
-          if (type == kString) string_bytes = in.read<std::uint64_t>();
-          if (dimension != 1) {
-            in.fail_at(index_at, "object " + path + ": arrays of dimension " +
-                                     std::to_string(dimension) + " are not supported (1 is)");
-          }
-          if (type != kString && numeric_size(type) == 0) {
-            in.fail_at(index_at, "object " + path + ": channels of type " + type_name(type) +
-                                     " are not supported (I8-I64, U8-U64, SGL, DBL are; strings "
-                                     "are skipped)");
-          }
-          object.has_raw = true;
-          object.type = type;
-          object.count = values;
-          object.string_bytes = string_bytes;
-          if (object.is_channel && type != kString) {
-            file.channels[object.channel].data_type = type_name(type);
-          }
-        }
-        const auto properties = in.read<std::uint32_t>();
-        for (std::uint32_t p = 0; p < properties; ++p) {
-          const std::string name = in.read_string();
-          const auto type = in.read<std::uint32_t>();
-          TdmsProperty value = read_property_value(in, type);
-          if (object.parts.empty()) {
-            file.file_properties[name] = std::move(value);
-          } else if (object.parts.size() == 1) {
-            file.group_properties[object.parts[0]][name] = std::move(value);
-          } else {
-            file.channels[object.channel].properties[name] = std::move(value);
-          }
-        }
-        if (std::find(active.begin(), active.end(), path) == active.end()) active.push_back(path);
-      }
-    }
+// One segment's lead-in: its table of contents and where its parts are.
+struct SegmentLayout {
+  std::uint32_t toc = 0;
+  std::size_t meta_start = 0;
+  std::size_t raw_start = 0;
+  std::size_t end = 0;  // the next segment's start
+};
 
-    if ((toc & kTocRawData) && raw_start < end) {
-      std::vector<ObjectState*> with_data;
-      std::size_t chunk = 0;
-      for (const std::string& path : active) {
-        ObjectState& object = objects[path];
-        if (!object.has_raw || object.count == 0) continue;
-        with_data.push_back(&object);
-        chunk += chunk_bytes(object);
-      }
-      const std::size_t raw_bytes = end - raw_start;
-      if (chunk == 0) in.fail("raw data but no object with raw data in the segment");
-      if (raw_bytes % chunk != 0) {
-        in.fail("raw data of " + std::to_string(raw_bytes) + " bytes is not a whole number of " +
-                std::to_string(chunk) + "-byte chunks (partial chunks are not supported)");
-      }
-      const std::size_t chunks = raw_bytes / chunk;
-      in.seek(raw_start);
-      const bool interleaved = (toc & kTocInterleavedData) != 0;
-      if (interleaved) {
-        for (const ObjectState* object : with_data) {
-          if (object->type == kString) in.fail("interleaved string channels are not supported");
-          if (object->count != with_data.front()->count) {
-            in.fail("interleaved channels with different numbers of values are not supported");
-          }
-        }
-      }
-      for (std::size_t c = 0; c < chunks; ++c) {
-        if (interleaved) {
-          for (std::uint64_t i = 0; i < with_data.front()->count; ++i) {
-            for (ObjectState* object : with_data) {
-              const double value = in.read_number(object->type);
-              if (object->is_channel) file.channels[object->channel].values.push_back(value);
-            }
-          }
-          continue;
-        }
-        for (ObjectState* object : with_data) {
-          if (object->type == kString) {
-            in.need(chunk_bytes(*object));
-            in.seek(in.position() + chunk_bytes(*object));
-            continue;
-          }
-          std::vector<double>& values = file.channels[object->channel].values;
-          for (std::uint64_t i = 0; i < object->count; ++i) {
-            values.push_back(in.read_number(object->type));
-          }
-        }
-      }
+SegmentLayout read_lead_in(Reader& in, std::size_t start, std::size_t file_bytes) {
+  in.seek(start);
+  in.need(kLeadInBytes);
+  if (std::memcmp(in.at(start), "TDSm", 4) != 0) {
+    if (std::memcmp(in.at(start), "TDSh", 4) == 0) {
+      in.fail("this is a TDMS index file (.tdms_index); import the .tdms file itself");
     }
-    start = end;
+    in.fail("no TDMS segment here (the lead-in starts with 'TDSm')");
   }
+  in.seek(start + 4);
+  SegmentLayout layout;
+  layout.toc = in.read<std::uint32_t>();
+  const auto version = in.read<std::uint32_t>();
+  const auto next_offset = in.read<std::uint64_t>();
+  const auto raw_offset = in.read<std::uint64_t>();
+  if (version != 4712 && version != 4713) {
+    in.fail("TDMS version " + std::to_string(version) + " is not supported (4712 and 4713 are)");
+  }
+  if (layout.toc & kTocBigEndian) {
+    in.fail("big-endian segments (ToC flag kTocBigEndian) are not supported");
+  }
+  if (layout.toc & kTocDAQmxRawData) {
+    in.fail(
+        "DAQmx raw data (ToC flag kTocDAQmxRawData) is not supported: log the channels "
+        "scaled (LabVIEW: TDMS, not TDMS raw / 'Log and Read' with scaled data)");
+  }
+  layout.meta_start = start + kLeadInBytes;
+  layout.end = next_offset == kIncompleteSegment
+                   ? file_bytes
+                   : layout.meta_start + static_cast<std::size_t>(next_offset);
+  if (layout.end > file_bytes || layout.end < layout.meta_start) {
+    in.fail("the next segment offset (" + std::to_string(next_offset) +
+            ") points past the end of the file (" + std::to_string(file_bytes) + " bytes)");
+  }
+  layout.raw_start = layout.meta_start + static_cast<std::size_t>(raw_offset);
+  if (layout.raw_start > layout.end) in.fail("the raw data offset points past the segment's end");
+  return layout;
+}
+
+// Reads TDMS files: the objects met so far and the current segment's object list.
+class TdmsParser {
+ public:
+  TdmsParser(const std::vector<std::uint8_t>& bytes, const std::string& source)
+      : bytes_(bytes), in_(bytes, source) {}
+
+  TdmsFile parse() {
+    std::size_t start = 0;
+    while (start < bytes_.size()) {
+      ++file_.segments;
+      in_.set_segment(file_.segments);
+      const SegmentLayout layout = read_lead_in(in_, start, bytes_.size());
+      if (layout.toc & kTocMetaData) read_meta_data(layout);
+      if ((layout.toc & kTocRawData) && layout.raw_start < layout.end) read_raw_data(layout);
+      start = layout.end;
+    }
+    return std::move(file_);
+  }
+
+ private:
+  void read_meta_data(const SegmentLayout& layout) {
+    if (layout.toc & kTocNewObjList) active_.clear();
+    in_.seek(layout.meta_start);
+    const auto count = in_.read<std::uint32_t>();
+    for (std::uint32_t o = 0; o < count; ++o) {
+      const std::string path = in_.read_string();
+      ObjectState& object = object_at(path);
+      read_raw_index(path, object);
+      read_properties(object);
+      if (std::find(active_.begin(), active_.end(), path) == active_.end()) {
+        active_.push_back(path);
+      }
+    }
+  }
+
+  // The object at `path`, a channel (group/channel) added to the file when first met.
+  ObjectState& object_at(const std::string& path) {
+    const bool known = objects_.count(path) > 0;
+    ObjectState& object = objects_[path];
+    if (!known) {
+      object.parts = split_path(path, in_);
+      if (object.parts.size() == 2) {
+        object.is_channel = true;
+        object.channel = file_.channels.size();
+        file_.channels.push_back({object.parts[0], object.parts[1], "", {}, {}, ""});
+      }
+    }
+    return object;
+  }
+
+  void read_raw_index(const std::string& path, ObjectState& object) {
+    const std::size_t index_at = in_.position();
+    const auto index = in_.read<std::uint32_t>();
+    if (index == kNoRawData) {
+      object.has_raw = false;
+      return;
+    }
+    if (index == kSameRawIndex) {
+      if (!object.has_raw && object.type == kVoid) {
+        in_.fail("object " + path + " repeats a raw data index it never had");
+      }
+      object.has_raw = true;
+      return;
+    }
+    if (index == kDaqmxFormatScaler || index == kDaqmxDigitalScaler) {
+      in_.fail_at(index_at, "object " + path + ": DAQmx raw data (raw data index " + hex(index) +
+                                ") is not supported");
+    }
+    const auto type = in_.read<std::uint32_t>();
+    const auto dimension = in_.read<std::uint32_t>();
+    const auto values = in_.read<std::uint64_t>();
+    std::uint64_t string_bytes = 0;
+    if (type == kString) string_bytes = in_.read<std::uint64_t>();
+    if (dimension != 1) {
+      in_.fail_at(index_at, "object " + path + ": arrays of dimension " +
+                                std::to_string(dimension) + " are not supported (1 is)");
+    }
+    if (type != kString && numeric_size(type) == 0) {
+      in_.fail_at(index_at, "object " + path + ": channels of type " + type_name(type) +
+                                " are not supported (I8-I64, U8-U64, SGL, DBL are; strings "
+                                "are skipped)");
+    }
+    object.has_raw = true;
+    object.type = type;
+    object.count = values;
+    object.string_bytes = string_bytes;
+    if (object.is_channel && type != kString) {
+      file_.channels[object.channel].data_type = type_name(type);
+    }
+  }
+
+  // The object's properties: the file's, a group's or a channel's.
+  void read_properties(const ObjectState& object) {
+    const auto properties = in_.read<std::uint32_t>();
+    for (std::uint32_t p = 0; p < properties; ++p) {
+      const std::string name = in_.read_string();
+      const auto type = in_.read<std::uint32_t>();
+      TdmsProperty value = read_property_value(in_, type);
+      if (object.parts.empty()) {
+        file_.file_properties[name] = std::move(value);
+      } else if (object.parts.size() == 1) {
+        file_.group_properties[object.parts[0]][name] = std::move(value);
+      } else {
+        file_.channels[object.channel].properties[name] = std::move(value);
+      }
+    }
+  }
+
+  // The segment's chunks of raw data, each holding every active object's values.
+  void read_raw_data(const SegmentLayout& layout) {
+    std::vector<ObjectState*> with_data;
+    std::size_t chunk = 0;
+    for (const std::string& path : active_) {
+      ObjectState& object = objects_[path];
+      if (!object.has_raw || object.count == 0) continue;
+      with_data.push_back(&object);
+      chunk += chunk_bytes(object);
+    }
+    const std::size_t raw_bytes = layout.end - layout.raw_start;
+    if (chunk == 0) in_.fail("raw data but no object with raw data in the segment");
+    if (raw_bytes % chunk != 0) {
+      in_.fail("raw data of " + std::to_string(raw_bytes) + " bytes is not a whole number of " +
+               std::to_string(chunk) + "-byte chunks (partial chunks are not supported)");
+    }
+    const std::size_t chunks = raw_bytes / chunk;
+    in_.seek(layout.raw_start);
+    const bool interleaved = (layout.toc & kTocInterleavedData) != 0;
+    if (interleaved) check_interleaved(with_data);
+    for (std::size_t c = 0; c < chunks; ++c) {
+      if (interleaved) {
+        read_interleaved_chunk(with_data);
+      } else {
+        read_contiguous_chunk(with_data);
+      }
+    }
+  }
+
+  void check_interleaved(const std::vector<ObjectState*>& with_data) {
+    for (const ObjectState* object : with_data) {
+      if (object->type == kString) in_.fail("interleaved string channels are not supported");
+      if (object->count != with_data.front()->count) {
+        in_.fail("interleaved channels with different numbers of values are not supported");
+      }
+    }
+  }
+
+  void read_interleaved_chunk(const std::vector<ObjectState*>& with_data) {
+    for (std::uint64_t i = 0; i < with_data.front()->count; ++i) {
+      for (ObjectState* object : with_data) {
+        const double value = in_.read_number(object->type);
+        if (object->is_channel) file_.channels[object->channel].values.push_back(value);
+      }
+    }
+  }
+
+  // Each object's values in turn; string channels are skipped.
+  void read_contiguous_chunk(const std::vector<ObjectState*>& with_data) {
+    for (ObjectState* object : with_data) {
+      if (object->type == kString) {
+        in_.need(chunk_bytes(*object));
+        in_.seek(in_.position() + chunk_bytes(*object));
+        continue;
+      }
+      std::vector<double>& values = file_.channels[object->channel].values;
+      for (std::uint64_t i = 0; i < object->count; ++i) {
+        values.push_back(in_.read_number(object->type));
+      }
+    }
+  }
+
+  const std::vector<std::uint8_t>& bytes_;
+  Reader in_;
+  TdmsFile file_;
+  std::map<std::string, ObjectState> objects_;
+  std::vector<std::string> active_;  // the object list of the current segment, in order
+};
+
+}  // namespace
+
+TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& source) {
+  TdmsFile file = TdmsParser(bytes, source).parse();
   for (TdmsChannel& channel : file.channels) apply_scaling(channel, source);
   return file;
 }
@@ -567,118 +634,126 @@ std::vector<TdmsMapItem> parse_tdms_map(const std::string& text) {
   return items;
 }
 
-Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
-                            const std::string& source) {
-  Recording recording;
-  recording.source = source;
-  const TdmsMapItem* force_item = nullptr;
-  bool has_motion = false;
+namespace {
+
+const TdmsProperty* property(const TdmsChannel& channel, const std::string& name) {
+  const auto it = channel.properties.find(name);
+  return it == channel.properties.end() ? nullptr : &it->second;
+}
+
+// The item a map gives for `target`, or null.
+const TdmsMapItem* map_item(const std::vector<TdmsMapItem>& map, const std::string& target) {
+  const TdmsMapItem* found = nullptr;
   for (const TdmsMapItem& item : map) {
-    if (item.target == "force") force_item = &item;
-    if (item.target == "angle" || item.target == "rate") has_motion = true;
+    if (item.target == target) found = &item;
   }
+  return found;
+}
+
+// The map's force item; throws when the map gives no force or no motion channel.
+const TdmsMapItem& check_map(const std::vector<TdmsMapItem>& map, const std::string& source) {
+  const TdmsMapItem* force_item = map_item(map, "force");
+  const bool has_motion = map_item(map, "angle") != nullptr || map_item(map, "rate") != nullptr;
   if (!force_item) throw TdmsError(source + ": --map gives no force channel (force=GROUP/CHANNEL)");
   if (!has_motion) {
     throw TdmsError(source +
                     ": --map gives neither angle nor rate (angle=GROUP/CHANNEL or "
                     "rate=GROUP/CHANNEL)");
   }
-  auto channel_of = [&](const TdmsMapItem& item) -> const TdmsChannel& {
-    const TdmsChannel* channel = file.find(item.group, item.channel);
-    if (!channel) {
-      std::string known;
-      for (const TdmsChannel& c : file.channels) {
-        known += (known.empty() ? "" : ", ") + c.group + "/" + c.name;
-      }
-      throw TdmsError(source + ": " + item.target + ": no channel " + item.group + "/" +
-                      item.channel + " (the file has " + (known.empty() ? "none" : known) + ")");
+  return *force_item;
+}
+
+// The channel an item maps, which must exist and hold numbers.
+const TdmsChannel& mapped_channel(const TdmsFile& file, const TdmsMapItem& item,
+                                  const std::string& source) {
+  const TdmsChannel* channel = file.find(item.group, item.channel);
+  if (!channel) {
+    std::string known;
+    for (const TdmsChannel& c : file.channels) {
+      known += (known.empty() ? "" : ", ") + c.group + "/" + c.name;
     }
-    if (channel->data_type.empty()) {
-      throw TdmsError(source + ": " + item.target + ": channel " + item.group + "/" + item.channel +
-                      " has no numeric values");
-    }
-    return *channel;
-  };
-  const TdmsChannel& force = channel_of(*force_item);
-  const std::size_t count = force.values.size();
-  auto property = [](const TdmsChannel& channel, const std::string& name) -> const TdmsProperty* {
-    const auto it = channel.properties.find(name);
-    return it == channel.properties.end() ? nullptr : &it->second;
-  };
-  const TdmsMapItem* time_item = nullptr;
-  for (const TdmsMapItem& item : map) {
-    if (item.target == "time") time_item = &item;
+    throw TdmsError(source + ": " + item.target + ": no channel " + item.group + "/" +
+                    item.channel + " (the file has " + (known.empty() ? "none" : known) + ")");
   }
-  if (time_item) {
-    recording.time_s = channel_of(*time_item).values;
-  } else {
-    const TdmsProperty* increment = property(force, "wf_increment");
-    if (!increment || !increment->number || !(*increment->number > 0)) {
-      throw TdmsError(source + ": force: channel " + force.group + "/" + force.name +
-                      " has no wf_increment > 0 to give the time (map a time channel: "
-                      "time=GROUP/CHANNEL)");
-    }
-    const TdmsProperty* offset = property(force, "wf_start_offset");
-    const double first_s = offset && offset->number ? *offset->number : 0.0;
-    recording.time_s.resize(count);
-    for (std::size_t i = 0; i < count; ++i) {
-      recording.time_s[i] = first_s + static_cast<double>(i) * *increment->number;
-    }
-    if (const TdmsProperty* start = property(force, "wf_start_time")) {
-      recording.metadata.emplace_back("tdms_wf_start_time", start->text);
-    }
+  if (channel->data_type.empty()) {
+    throw TdmsError(source + ": " + item.target + ": channel " + item.group + "/" + item.channel +
+                    " has no numeric values");
   }
-  for (const TdmsMapItem& item : map) {
-    const TdmsChannel& channel = channel_of(item);
-    const std::string name = item.group + "/" + item.channel;
-    if (channel.values.size() != count) {
-      throw TdmsError(source + ": " + item.target + ": channel " + name + " has " +
-                      std::to_string(channel.values.size()) + " values, the force channel " +
-                      std::to_string(count));
-    }
-    if (!time_item && item.target != "time") {
-      const TdmsProperty* increment = property(channel, "wf_increment");
-      const TdmsProperty* force_increment = property(force, "wf_increment");
-      if (increment && increment->number && *increment->number != *force_increment->number) {
-        throw TdmsError(source + ": " + item.target + ": channel " + name + " has wf_increment " +
-                        format_csv_number(*increment->number) + ", the force channel " +
-                        format_csv_number(*force_increment->number));
-      }
-    }
-    const std::string expected = item.target == "force"   ? "N"
-                                 : item.target == "angle" ? "rad"
-                                 : item.target == "rate"  ? "rad/s"
-                                 : item.target == "time"  ? "s"
-                                                          : "";
-    const TdmsProperty* unit = property(channel, "unit_string");
-    if (!expected.empty() && unit && !unit->text.empty() && unit->text != expected) {
-      throw TdmsError(source + ": " + item.target + ": channel " + name + " is in '" + unit->text +
-                      "', not " + expected +
-                      " (scale it in the file, or map it as an extra column whose name ends in "
-                      "its unit)");
-    }
-    if (item.target == "force") {
-      recording.force_N = channel.values;
-    } else if (item.target == "angle") {
-      recording.angle_rad = channel.values;
-    } else if (item.target == "rate") {
-      recording.rate_rad_s = channel.values;
-    } else if (item.target != "time") {
-      recording.extra_names.push_back(item.target);
-      recording.extra_columns.push_back(channel.values);
-    }
-    const std::string key = "tdms_" + item.target;
-    recording.metadata.emplace_back(key + "_channel", name);
-    if (unit) recording.metadata.emplace_back(key + "_unit", unit->text);
-    if (!channel.scaling.empty())
-      recording.metadata.emplace_back(key + "_scaling", channel.scaling);
+  return *channel;
+}
+
+// Without a time channel, the time from the force channel's waveform properties
+// (wf_start_offset + i · wf_increment), and its start time as metadata.
+void waveform_time(const TdmsChannel& force, const std::string& source, Recording& recording) {
+  const TdmsProperty* increment = property(force, "wf_increment");
+  if (!increment || !increment->number || !(*increment->number > 0)) {
+    throw TdmsError(source + ": force: channel " + force.group + "/" + force.name +
+                    " has no wf_increment > 0 to give the time (map a time channel: "
+                    "time=GROUP/CHANNEL)");
   }
-  for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
-    if (!(recording.time_s[i] > recording.time_s[i - 1])) {
-      throw TdmsError(source + ": time is not strictly increasing at sample " + std::to_string(i));
+  const TdmsProperty* offset = property(force, "wf_start_offset");
+  const double first_s = offset && offset->number ? *offset->number : 0.0;
+  recording.time_s.resize(force.values.size());
+  for (std::size_t i = 0; i < force.values.size(); ++i) {
+    recording.time_s[i] = first_s + static_cast<double>(i) * *increment->number;
+  }
+  if (const TdmsProperty* start = property(force, "wf_start_time")) {
+    recording.metadata.emplace_back("tdms_wf_start_time", start->text);
+  }
+}
+
+// One mapped channel into its column (force, angle, rate, an extra; time is taken
+// before): as many values as the force channel, the same waveform increment (when the
+// time is the waveform's), the target's unit; its origin as metadata.
+void take_mapped_column(const TdmsMapItem& item, const TdmsChannel& channel,
+                        const TdmsChannel& force, bool waveform_clock, const std::string& source,
+                        Recording& recording) {
+  const std::string name = item.group + "/" + item.channel;
+  if (channel.values.size() != force.values.size()) {
+    throw TdmsError(source + ": " + item.target + ": channel " + name + " has " +
+                    std::to_string(channel.values.size()) + " values, the force channel " +
+                    std::to_string(force.values.size()));
+  }
+  if (waveform_clock && item.target != "time") {
+    const TdmsProperty* increment = property(channel, "wf_increment");
+    const TdmsProperty* force_increment = property(force, "wf_increment");
+    if (increment && increment->number && *increment->number != *force_increment->number) {
+      throw TdmsError(source + ": " + item.target + ": channel " + name + " has wf_increment " +
+                      format_csv_number(*increment->number) + ", the force channel " +
+                      format_csv_number(*force_increment->number));
     }
   }
-  // The handle radius: a file property, else the force channel's group's.
+  const std::string expected = item.target == "force"   ? "N"
+                               : item.target == "angle" ? "rad"
+                               : item.target == "rate"  ? "rad/s"
+                               : item.target == "time"  ? "s"
+                                                        : "";
+  const TdmsProperty* unit = property(channel, "unit_string");
+  if (!expected.empty() && unit && !unit->text.empty() && unit->text != expected) {
+    throw TdmsError(source + ": " + item.target + ": channel " + name + " is in '" + unit->text +
+                    "', not " + expected +
+                    " (scale it in the file, or map it as an extra column whose name ends in "
+                    "its unit)");
+  }
+  if (item.target == "force") {
+    recording.force_N = channel.values;
+  } else if (item.target == "angle") {
+    recording.angle_rad = channel.values;
+  } else if (item.target == "rate") {
+    recording.rate_rad_s = channel.values;
+  } else if (item.target != "time") {
+    recording.extra_names.push_back(item.target);
+    recording.extra_columns.push_back(channel.values);
+  }
+  const std::string key = "tdms_" + item.target;
+  recording.metadata.emplace_back(key + "_channel", name);
+  if (unit) recording.metadata.emplace_back(key + "_unit", unit->text);
+  if (!channel.scaling.empty()) recording.metadata.emplace_back(key + "_scaling", channel.scaling);
+}
+
+// The handle radius: a file property, else the force channel's group's; must be > 0.
+std::optional<double> handle_radius_m(const TdmsFile& file, const TdmsChannel& force,
+                                      const std::string& source) {
   std::optional<double> radius;
   if (const auto it = file.file_properties.find("handle_radius_m");
       it != file.file_properties.end() && it->second.number) {
@@ -690,10 +765,13 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
       radius = r->second.number;
     }
   }
-  if (radius) {
-    if (!(*radius > 0)) throw TdmsError(source + ": handle_radius_m must be > 0");
-    recording.handle_radius_m = radius;
-  }
+  if (radius && !(*radius > 0)) throw TdmsError(source + ": handle_radius_m must be > 0");
+  return radius;
+}
+
+// The file's other properties as metadata "tdms_file_NAME" (non-alphanumerics as '_', line
+// breaks as spaces).
+void file_properties_as_metadata(const TdmsFile& file, Recording& recording) {
   for (const auto& [name, value] : file.file_properties) {
     if (name == "handle_radius_m") continue;
     std::string key = "tdms_file_";
@@ -703,6 +781,34 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
     std::replace(text.begin(), text.end(), '\r', ' ');
     recording.metadata.emplace_back(key, text);
   }
+}
+
+}  // namespace
+
+Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
+                            const std::string& source) {
+  Recording recording;
+  recording.source = source;
+  const TdmsChannel& force = mapped_channel(file, check_map(map, source), source);
+  const TdmsMapItem* time_item = map_item(map, "time");
+  if (time_item) {
+    recording.time_s = mapped_channel(file, *time_item, source).values;
+  } else {
+    waveform_time(force, source, recording);
+  }
+  for (const TdmsMapItem& item : map) {
+    take_mapped_column(item, mapped_channel(file, item, source), force, time_item == nullptr,
+                       source, recording);
+  }
+  for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
+    if (!(recording.time_s[i] > recording.time_s[i - 1])) {
+      throw TdmsError(source + ": time is not strictly increasing at sample " + std::to_string(i));
+    }
+  }
+  if (const std::optional<double> radius = handle_radius_m(file, force, source)) {
+    recording.handle_radius_m = radius;
+  }
+  file_properties_as_metadata(file, recording);
   return recording;
 }
 

@@ -45,8 +45,8 @@ enum Fault : std::uint8_t {
   kRateNonFinite = 2,
   kAngleNonFinite = 4,
   kForceNonFinite = 8,
-  kGapBefore = 16,  // the interval ending at this sample is a gap
-  kLost = 32,       // every measured column missing: a scan lost in recording (a gap)
+  kGapBefore = 16,   // the interval ending at this sample is a gap
+  kLost = 32,        // every measured column missing: a scan lost in recording (a gap)
   kImpossible = 64,  // a value beyond the physical limits (PreprocessingOptions::max_abs_*)
 };
 
@@ -567,9 +567,8 @@ namespace {
 // they are uniform, else on the uniform grid (values interpolated there, the result
 // interpolated back). `name` is the caller's, for the message on mismatched lengths.
 template <typename Operation>
-std::vector<double> on_uniform_times(std::span<const double> time_s,
-                                     std::span<const double> values, double sample_rate_hz,
-                                     const char* name, Operation operation) {
+std::vector<double> on_uniform_times(std::span<const double> time_s, std::span<const double> values,
+                                     double sample_rate_hz, const char* name, Operation operation) {
   if (time_s.size() != values.size()) {
     throw std::invalid_argument(std::string(name) + ": as many times as values needed");
   }
@@ -612,7 +611,7 @@ struct Input {
   std::vector<double> t, force, rate, angle, incl;  // rate, angle, incl: empty when absent
   std::string inclinometer_name;
   std::vector<std::uint8_t> fault;
-  std::vector<std::string> warnings;  // physically impossible samples, per channel
+  std::vector<std::string> warnings;       // physically impossible samples, per channel
   std::vector<std::uint8_t> motion_fault;  // fault without a bad force alone (stillness test)
   // unknown[i] counts the intervals in (0, i] over which the rate is unknown: saturated or
   // non-finite at either end, or a gap.
@@ -633,10 +632,9 @@ struct Input {
   }
 };
 
-Input read_input(const Recording& recording, const PreprocessingOptions& options) {
-  Input in;
-  in.source = recording.source;
-  const std::string& source = in.source;
+// The columns' lengths, at least one motion column, finite and strictly increasing times.
+void check_columns(const Recording& recording) {
+  const std::string& source = recording.source;
   const std::size_t n = recording.size();
   if (n < kMinimumSamples) {
     throw PreprocessingError(source + ": too few samples to prepare (" + std::to_string(n) +
@@ -650,18 +648,21 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
   if (recording.rate_rad_s) check_length(recording, "rate_rad_s", recording.rate_rad_s->size());
   if (recording.angle_rad) check_length(recording, "angle_rad", recording.angle_rad->size());
   if (recording.stroke) check_length(recording, "stroke", recording.stroke->size());
-  in.t = recording.time_s;
-  const std::vector<double>& t = in.t;
+  const std::vector<double>& t = recording.time_s;
   for (std::size_t i = 0; i < n; ++i) {
     if (!std::isfinite(t[i]) || (i > 0 && !(t[i] > t[i - 1]))) {
       throw PreprocessingError(source + ": time_s must be finite and strictly increasing (row " +
                                std::to_string(i + 1) + " of the data)");
     }
   }
+}
 
+// The method from the columns there: angle and rate, angle only, rate fused with an
+// inclinometer, or rate only; the inclinometer's column in radians when fused.
+void choose_mode(const Recording& recording, const PreprocessingOptions& options, Input& in) {
   const std::optional<std::size_t> inclinometer = find_inclinometer(recording, options);
   if (!options.inclinometer_column.empty() && !inclinometer) {
-    throw PreprocessingError(source + ": no column " + options.inclinometer_column +
+    throw PreprocessingError(in.source + ": no column " + options.inclinometer_column +
                              " (the inclinometer_column option)");
   }
   if (inclinometer) {
@@ -685,12 +686,16 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
       for (double& v : in.incl) v *= kDeg;
     }
   }
+}
 
-  std::vector<double> intervals(n - 1);
-  for (std::size_t i = 1; i < n; ++i) intervals[i - 1] = t[i] - t[i - 1];
+// The median interval (the filters' rate) and the spread of the intervals, gaps (which
+// are listed as faults) left out. Throws for a rate below min_sample_rate_hz.
+void measure_intervals(const PreprocessingOptions& options, Input& in) {
+  const std::vector<double>& t = in.t;
+  std::vector<double> intervals(t.size() - 1);
+  for (std::size_t i = 1; i < t.size(); ++i) intervals[i - 1] = t[i] - t[i - 1];
   in.median_interval_s = median(intervals);
   in.rate_hz = 1.0 / in.median_interval_s;
-  // The spread of the intervals, gaps (which are listed as faults) left out.
   in.min_interval_s = in.median_interval_s;
   in.max_interval_s = in.median_interval_s;
   for (double interval : intervals) {
@@ -702,58 +707,67 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
       std::max(in.max_interval_s - in.median_interval_s, in.median_interval_s - in.min_interval_s) >
       kJitterFraction * in.median_interval_s;
   if (in.rate_hz < options.min_sample_rate_hz) {
-    throw PreprocessingError(source + ": sampled at " + text(in.rate_hz) +
+    throw PreprocessingError(in.source + ": sampled at " + text(in.rate_hz) +
                              " Hz (1 / the median interval), below the " +
                              text(options.min_sample_rate_hz) +
                              " Hz preprocessing supports (the min_sample_rate_hz option)");
   }
+}
 
-  in.force = recording.force_N;
-  if (in.has_rate) in.rate = *recording.rate_rad_s;
-  if (recording.angle_rad) in.angle = *recording.angle_rad;
-  in.saturation_limit = (1.0 - options.gyro_saturation_fraction) * options.gyro_range_rad_s;
-  in.fault.assign(n, 0);
-  // Physically impossible values: never used, always said (channel, time, value).
-  std::vector<bool> motion_impossible(n, false);  // in the rate or the angle
-  auto exclude_impossible = [&](std::vector<double>& values, const std::string& name,
-                                double limit, const char* unit, bool motion) {
-    std::size_t count = 0, first = 0;
-    double largest = 0.0;
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      if (!std::isfinite(values[i]) || std::abs(values[i]) <= limit) continue;
-      if (count++ == 0) first = i;
-      if (std::abs(values[i]) > std::abs(largest)) largest = values[i];
-      values[i] = std::numeric_limits<double>::quiet_NaN();
-      in.fault[i] |= kImpossible;
-      if (motion) motion_impossible[i] = true;
-    }
-    if (count == 0) return;
-    char line[300];
-    std::snprintf(line, sizeof line,
-                  "%s: %zu physically impossible sample%s (|value| > %.6g %s) from %.3f s, "
-                  "the largest %.6g %s: not used",
-                  name.c_str(), count, count == 1 ? "" : "s", limit, unit, t[first], largest,
-                  unit);
-    in.warnings.emplace_back(line);
-  };
-  exclude_impossible(in.force, "force_N", options.max_abs_force_N, "N", false);
+// Physically impossible values (|value| > limit) of one column: replaced by NaN, marked
+// kImpossible in in.fault (and in `motion_impossible` when given), said in a warning
+// (channel, time, value).
+void exclude_impossible(std::vector<double>& values, const std::string& name, double limit,
+                        const char* unit, Input& in, std::vector<bool>* motion_impossible) {
+  std::size_t count = 0, first = 0;
+  double largest = 0.0;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    if (!std::isfinite(values[i]) || std::abs(values[i]) <= limit) continue;
+    if (count++ == 0) first = i;
+    if (std::abs(values[i]) > std::abs(largest)) largest = values[i];
+    values[i] = std::numeric_limits<double>::quiet_NaN();
+    in.fault[i] |= kImpossible;
+    if (motion_impossible != nullptr) (*motion_impossible)[i] = true;
+  }
+  if (count == 0) return;
+  char line[300];
+  std::snprintf(line, sizeof line,
+                "%s: %zu physically impossible sample%s (|value| > %.6g %s) from %.3f s, "
+                "the largest %.6g %s: not used",
+                name.c_str(), count, count == 1 ? "" : "s", limit, unit, in.t[first], largest,
+                unit);
+  in.warnings.emplace_back(line);
+}
+
+// Impossible values in every column: never used, always said. Returns, per sample,
+// whether the rate or the angle was impossible.
+std::vector<bool> exclude_impossible_values(const PreprocessingOptions& options, Input& in) {
+  std::vector<bool> motion_impossible(in.size(), false);
+  exclude_impossible(in.force, "force_N", options.max_abs_force_N, "N", in, nullptr);
   if (in.has_rate) {
     exclude_impossible(in.rate, "rate_rad_s", options.impossible_factor * options.gyro_range_rad_s,
-                       "rad/s", true);
+                       "rad/s", in, &motion_impossible);
   }
   if (!in.angle.empty()) {
-    exclude_impossible(in.angle, "angle_rad", options.max_abs_angle_rad, "rad", true);
+    exclude_impossible(in.angle, "angle_rad", options.max_abs_angle_rad, "rad", in,
+                       &motion_impossible);
   }
   if (!in.incl.empty()) {
     const std::vector<std::uint8_t> before = in.fault;
     exclude_impossible(in.incl, in.inclinometer_name,
-                       options.impossible_factor * options.inclinometer_range_rad, "rad", false);
+                       options.impossible_factor * options.inclinometer_range_rad, "rad", in,
+                       nullptr);
     in.fault = before;  // an inclinometer sample is no stroke's fault: it only anchors
   }
-  for (std::size_t i = 0; i < n; ++i) {
+  return motion_impossible;
+}
+
+// Each sample's faults: non-finite (an impossible value, now NaN, counts as unknown like
+// a non-finite one and is described as impossible), saturated, a gap before it, lost.
+void mark_faults(const Recording& recording, const PreprocessingOptions& options, Input& in) {
+  const std::vector<double>& t = in.t;
+  for (std::size_t i = 0; i < in.size(); ++i) {
     std::uint8_t& f = in.fault[i];
-    // An impossible value (now NaN) counts as unknown like a non-finite one, and is
-    // described as impossible.
     const bool impossible = (f & kImpossible) != 0;
     if (!std::isfinite(in.force[i]) && !(impossible && std::isfinite(recording.force_N[i]))) {
       f |= kForceNonFinite;
@@ -773,17 +787,29 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
                       (in.incl.empty() || !std::isfinite(in.incl[i]));
     if (lost) f |= kLost;
   }
-  if (!fill_non_finite(in.force, t)) throw PreprocessingError(source + ": no finite force_N value");
-  if (in.has_rate && !fill_non_finite(in.rate, t)) {
-    throw PreprocessingError(source + ": no finite rate_rad_s value");
+}
+
+// Non-finite values bridged in every column; a column without any finite value throws.
+void fill_non_finite_values(Input& in) {
+  if (!fill_non_finite(in.force, in.t)) {
+    throw PreprocessingError(in.source + ": no finite force_N value");
   }
-  if (!in.angle.empty() && !fill_non_finite(in.angle, t)) {
-    throw PreprocessingError(source + ": no finite angle_rad value");
+  if (in.has_rate && !fill_non_finite(in.rate, in.t)) {
+    throw PreprocessingError(in.source + ": no finite rate_rad_s value");
   }
-  // A short run of lost scans (a ring overflow of a few blocks) is bridged: the rate
-  // interpolated across it stands for the rate, so the drift between the anchors around it
-  // is still removed and the strokes beside it keep their accuracy. (The strokes holding it
-  // are left out all the same.) A longer loss, like any other fault, makes the rate unknown.
+  if (!in.angle.empty() && !fill_non_finite(in.angle, in.t)) {
+    throw PreprocessingError(in.source + ": no finite angle_rad value");
+  }
+}
+
+// A short run of lost scans (a ring overflow of a few blocks) is bridged: the rate
+// interpolated across it stands for the rate, so the drift between the anchors around it
+// is still removed and the strokes beside it keep their accuracy. (The strokes holding it
+// are left out all the same.) A longer loss, like any other fault, makes the rate unknown.
+// Returns, per sample, whether it is bridged.
+std::vector<bool> bridged_losses(const PreprocessingOptions& options, const Input& in) {
+  const std::vector<double>& t = in.t;
+  const std::size_t n = in.size();
   std::vector<bool> bridged(n, false);
   for (std::size_t i = 0; i < n;) {
     if (!(in.fault[i] & kLost)) {
@@ -798,30 +824,65 @@ Input read_input(const Recording& recording, const PreprocessingOptions& options
     }
     i = end;
   }
-  // What the stillness test may not look through: every fault but a missing or impossible
-  // force alone (the rate still says whether the door moves; the force there is bridged).
-  in.motion_fault = in.fault;
-  for (std::size_t i = 0; i < n; ++i) {
+  return bridged;
+}
+
+// What the stillness test may not look through: every fault but a missing or impossible
+// force alone (the rate still says whether the door moves; the force there is bridged).
+std::vector<std::uint8_t> motion_faults(const Input& in,
+                                        const std::vector<bool>& motion_impossible) {
+  std::vector<std::uint8_t> motion_fault = in.fault;
+  for (std::size_t i = 0; i < in.size(); ++i) {
     const std::uint8_t others = in.fault[i] & ~(kForceNonFinite | kImpossible);
-    if (others == 0 && !motion_impossible[i]) in.motion_fault[i] = 0;
+    if (others == 0 && !motion_impossible[i]) motion_fault[i] = 0;
   }
-  in.unknown.assign(n, 0);
-  if (in.has_rate) {
-    std::vector<bool> rate_impossible(n, false);
-    for (std::size_t i = 0; i < n; ++i) {
-      rate_impossible[i] = std::isfinite((*recording.rate_rad_s)[i]) &&
-                           std::abs((*recording.rate_rad_s)[i]) >
-                               options.impossible_factor * options.gyro_range_rad_s;
-    }
-    const std::uint8_t rate_faults = kSaturated | kRateNonFinite;
-    auto rate_fault = [&](std::size_t i) {
-      return ((in.fault[i] & rate_faults) || rate_impossible[i]) && !bridged[i];
-    };
-    for (std::size_t i = 1; i < n; ++i) {
-      const bool u = rate_fault(i) || (in.fault[i] & kGapBefore) || rate_fault(i - 1);
-      in.unknown[i] = in.unknown[i - 1] + (u ? 1 : 0);
-    }
+  return motion_fault;
+}
+
+// unknown[i]: the intervals in (0, i] over which the rate is unknown (a rate fault not
+// bridged at either end, or a gap).
+std::vector<std::size_t> count_unknown_intervals(const Recording& recording,
+                                                 const PreprocessingOptions& options,
+                                                 const Input& in,
+                                                 const std::vector<bool>& bridged) {
+  const std::size_t n = in.size();
+  std::vector<std::size_t> unknown(n, 0);
+  if (!in.has_rate) return unknown;
+  std::vector<bool> rate_impossible(n, false);
+  for (std::size_t i = 0; i < n; ++i) {
+    rate_impossible[i] =
+        std::isfinite((*recording.rate_rad_s)[i]) &&
+        std::abs((*recording.rate_rad_s)[i]) > options.impossible_factor * options.gyro_range_rad_s;
   }
+  const std::uint8_t rate_faults = kSaturated | kRateNonFinite;
+  auto rate_fault = [&](std::size_t i) {
+    return ((in.fault[i] & rate_faults) || rate_impossible[i]) && !bridged[i];
+  };
+  for (std::size_t i = 1; i < n; ++i) {
+    const bool u = rate_fault(i) || (in.fault[i] & kGapBefore) || rate_fault(i - 1);
+    unknown[i] = unknown[i - 1] + (u ? 1 : 0);
+  }
+  return unknown;
+}
+
+Input read_input(const Recording& recording, const PreprocessingOptions& options) {
+  check_columns(recording);
+  Input in;
+  in.source = recording.source;
+  in.t = recording.time_s;
+  choose_mode(recording, options, in);
+  measure_intervals(options, in);
+  in.force = recording.force_N;
+  if (in.has_rate) in.rate = *recording.rate_rad_s;
+  if (recording.angle_rad) in.angle = *recording.angle_rad;
+  in.saturation_limit = (1.0 - options.gyro_saturation_fraction) * options.gyro_range_rad_s;
+  in.fault.assign(in.size(), 0);
+  const std::vector<bool> motion_impossible = exclude_impossible_values(options, in);
+  mark_faults(recording, options, in);
+  fill_non_finite_values(in);
+  const std::vector<bool> bridged = bridged_losses(options, in);
+  in.motion_fault = motion_faults(in, motion_impossible);
+  in.unknown = count_unknown_intervals(recording, options, in, bridged);
   return in;
 }
 
@@ -840,9 +901,8 @@ Stillness find_stillness(const Input& in, const std::vector<double>& rate,
       std::max(options.still_noise_factor *
                    (std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0),
                options.still_rate_std_floor_rad_s);
-  still.periods =
-      find_still_periods(in.t, rate, in.force, in.motion_fault, still.rate_std_limit, in.rate_hz,
-                         options);
+  still.periods = find_still_periods(in.t, rate, in.force, in.motion_fault, still.rate_std_limit,
+                                     in.rate_hz, options);
   still.rule = "still: over " + text(still_window_used_s(options, in.rate_hz)) +
                " s windows the rate's std < " + text(still.rate_std_limit / kDeg) +
                " deg/s, |mean rate| < " + text(options.still_rate_limit_rad_s / kDeg) +
@@ -997,154 +1057,229 @@ Motion integrate_and_anchor(const Input& in, std::vector<Anchor>& anchors) {
   return motion;
 }
 
-// Cuts the strokes out of the motion, leaving out (and listing) those with faults, with an
-// unknown angle, or too short; then lists the faulty samples outside every stroke.
-void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor>& anchors,
-                 const std::vector<Candidate>& candidates, const PreprocessingOptions& options,
-                 PreparedData& data, std::vector<ExcludedSegment>& excluded) {
-  const std::vector<double>& t = in.t;
-  const std::size_t n = in.size();
-  std::vector<bool> covered(n, false);
-  // Before the first anchor and after the last the angle is only as good as the rate between
-  // the stroke and that anchor (with the rate only, that is everywhere).
-  const bool anchored = in.mode == Mode::kFused || in.mode == Mode::kRateOnly;
-  // Whether the angle on [first, last] is known: joined to an anchor by a known rate.
-  auto angle_known = [&](std::size_t first, std::size_t last) {
-    if (!anchored) return true;
-    const Anchor* left = nullptr;
-    const Anchor* right = nullptr;
-    for (const Anchor& anchor : anchors) {
-      if (anchor.index <= first) left = &anchor;
-      if (anchor.index >= last && right == nullptr) right = &anchor;
-    }
-    return (left != nullptr && in.unknown[last] == in.unknown[left->index]) ||
-           (right != nullptr && in.unknown[right->index] == in.unknown[first]);
-  };
-  for (const Candidate& candidate : candidates) {
-    Range r = candidate.range;
-    for (std::size_t i = r.first; i <= r.last; ++i) covered[i] = true;
-    const double net = motion.theta[r.last] - motion.theta[r.first];
-    const StrokeDirection direction =
-        net > 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing;
-    const std::string name = "stroke " + std::to_string(candidate.id) + " (" +
-                             (direction == StrokeDirection::kOpening ? "opening" : "closing") + ")";
-    std::uint8_t kinds = 0;
-    std::size_t fault_count = 0, first_fault = n;
-    // A gap before the first sample is outside the stroke.
-    auto fault_at = [&](std::size_t i) {
-      return i == r.first ? static_cast<std::uint8_t>(in.fault[i] & ~kGapBefore) : in.fault[i];
-    };
-    for (std::size_t i = r.first; i <= r.last; ++i) {
-      const std::uint8_t f = fault_at(i);
-      if (f == 0) continue;
-      kinds |= f;
-      ++fault_count;
-      first_fault = std::min(first_fault, i);
-    }
-    auto long_enough = [&](const Range& piece) {
-      return t[piece.last] - t[piece.first] >= options.min_stroke_duration_s &&
-             std::abs(motion.theta[piece.last] - motion.theta[piece.first]) >=
-                 options.min_stroke_angle_rad;
-    };
-    std::string reason;
-    if (kinds & kLost) {
-      // Scans lost in recording: the stroke is cut there, and neither part is fitted, so
-      // that a fit sees the recording as if the stroke had not been made.
-      std::size_t first_lost = r.first, lost_count = 0;
-      while (!(fault_at(first_lost) & kLost)) ++first_lost;
-      std::size_t last_lost = first_lost;
-      for (std::size_t i = r.first; i <= r.last; ++i) {
-        if (!(fault_at(i) & kLost)) continue;
-        ++lost_count;
-        last_lost = i;
-      }
-      excluded.push_back({t[r.first], t[r.last],
-                          name + ": recording gap: " + std::to_string(lost_count) +
-                              " samples lost from " + seconds(t[first_lost]) + " to " +
-                              seconds(t[last_lost]) +
-                              "; the stroke is cut there and neither part is fitted",
-                          true});
-      continue;
-    }
-    if (kinds != 0) {
-      // A brisk stroke saturates the gyroscope for part of its course: keep its longest
-      // fault-free part whose angle is known (before the faults, from the anchor before
-      // it; after them, from the anchor after it), and list the rest.
-      const std::string faults = describe_faults(kinds, in.saturation_limit) + " in " +
-                                 std::to_string(fault_count) + " samples from " +
-                                 seconds(t[first_fault]);
-      std::optional<Range> best;
-      std::size_t i = r.first;
-      while (i <= r.last) {
-        if (fault_at(i) != 0 && !(i > r.first && in.fault[i] == kGapBefore)) {
-          ++i;
-          continue;
-        }
-        // A gap before i ends the previous piece but i itself is a good sample.
-        Range piece{i, i};
-        while (piece.last + 1 <= r.last && in.fault[piece.last + 1] == 0) ++piece.last;
-        if (angle_known(piece.first, piece.last) && long_enough(piece) &&
-            (!best || piece.last - piece.first > best->last - best->first)) {
-          best = piece;
-        }
-        i = piece.last + 1;
-      }
-      if (!best) {
-        excluded.push_back({t[r.first], t[r.last], name + ": " + faults});
-        continue;
-      }
-      if (best->first > r.first) {
-        excluded.push_back(
-            {t[r.first], t[best->first - 1], name + ", before the part kept: " + faults});
-      }
-      if (best->last < r.last) {
-        excluded.push_back(
-            {t[best->last + 1], t[r.last], name + ", after the part kept: " + faults});
-      }
-      r = *best;
-    } else if (!angle_known(r.first, r.last)) {
-      reason = name +
-               ": angle unknown: the gyroscope's rate is unknown (saturated, non-finite "
-               "or a gap) between this stroke and the " +
-               std::string(in.mode == Mode::kFused ? "nearest inclinometer anchor"
-                                                   : "still period where theta = 0");
-    } else if (!long_enough(r)) {
-      reason = name + ": too short (" + text(t[r.last] - t[r.first]) + " s, " + text(net / kDeg) +
-               " deg; a stroke needs >= " + text(options.min_stroke_duration_s) +
-               " s and >= " + text(options.min_stroke_angle_rad / kDeg) + " deg)";
-    }
-    if (!reason.empty()) {
-      excluded.push_back({t[r.first], t[r.last], reason});
-      continue;
-    }
-    Stroke stroke;
-    stroke.id = candidate.id;
-    stroke.direction = direction;
-    const auto begin = static_cast<std::ptrdiff_t>(r.first);
-    const auto end = static_cast<std::ptrdiff_t>(r.last + 1);
-    stroke.time_s.assign(t.begin() + begin, t.begin() + end);
-    stroke.force_N.assign(in.force.begin() + begin, in.force.begin() + end);
-    stroke.theta_rad.assign(motion.theta.begin() + begin, motion.theta.begin() + end);
-    stroke.omega_rad_s.assign(motion.omega.begin() + begin, motion.omega.begin() + end);
-    data.strokes.push_back(std::move(stroke));
-  }
+// Cuts the strokes out of the motion: one candidate at a time (cut()), leaving out (and
+// listing) those with faults, with an unknown angle, or too short; then lists the faulty
+// samples outside every stroke (list_faults_outside()).
+class StrokeCutter {
+ public:
+  StrokeCutter(const Input& in, const Motion& motion, const std::vector<Anchor>& anchors,
+               const PreprocessingOptions& options, PreparedData& data,
+               std::vector<ExcludedSegment>& excluded)
+      : in_(in),
+        t_(in.t),
+        motion_(motion),
+        anchors_(anchors),
+        options_(options),
+        data_(data),
+        excluded_(excluded),
+        covered_(in.size(), false) {}
 
+  void cut(const Candidate& candidate);
+  void list_faults_outside();
+
+ private:
+  // The candidate's name, direction and faults (a gap before its first sample is outside).
+  struct Faults {
+    std::uint8_t kinds = 0;
+    std::size_t count = 0;
+    std::size_t first = 0;
+  };
+  std::uint8_t fault_at(const Range& r, std::size_t i) const {
+    return i == r.first ? static_cast<std::uint8_t>(in_.fault[i] & ~kGapBefore) : in_.fault[i];
+  }
+  Faults faults_in(const Range& r) const;
+  bool angle_known(std::size_t first, std::size_t last) const;
+  bool long_enough(const Range& piece) const {
+    return t_[piece.last] - t_[piece.first] >= options_.min_stroke_duration_s &&
+           std::abs(motion_.theta[piece.last] - motion_.theta[piece.first]) >=
+               options_.min_stroke_angle_rad;
+  }
+  void exclude_lost(const Range& r, const std::string& name);
+  std::optional<Range> keep_good_part(const Range& r, const std::string& name,
+                                      const Faults& faults);
+  std::string reason_to_leave_out(const Range& r, const std::string& name, double net) const;
+  void keep(const Candidate& candidate, const Range& r, StrokeDirection direction);
+
+  const Input& in_;
+  const std::vector<double>& t_;
+  const Motion& motion_;
+  const std::vector<Anchor>& anchors_;
+  const PreprocessingOptions& options_;
+  PreparedData& data_;
+  std::vector<ExcludedSegment>& excluded_;
+  std::vector<bool> covered_;
+};
+
+StrokeCutter::Faults StrokeCutter::faults_in(const Range& r) const {
+  Faults faults;
+  faults.first = in_.size();
+  for (std::size_t i = r.first; i <= r.last; ++i) {
+    const std::uint8_t f = fault_at(r, i);
+    if (f == 0) continue;
+    faults.kinds |= f;
+    ++faults.count;
+    faults.first = std::min(faults.first, i);
+  }
+  return faults;
+}
+
+// Whether the angle on [first, last] is known: joined to an anchor by a known rate. Before
+// the first anchor and after the last the angle is only as good as the rate between the
+// stroke and that anchor (with the rate only, that is everywhere).
+bool StrokeCutter::angle_known(std::size_t first, std::size_t last) const {
+  const bool anchored = in_.mode == Mode::kFused || in_.mode == Mode::kRateOnly;
+  if (!anchored) return true;
+  const Anchor* left = nullptr;
+  const Anchor* right = nullptr;
+  for (const Anchor& anchor : anchors_) {
+    if (anchor.index <= first) left = &anchor;
+    if (anchor.index >= last && right == nullptr) right = &anchor;
+  }
+  return (left != nullptr && in_.unknown[last] == in_.unknown[left->index]) ||
+         (right != nullptr && in_.unknown[right->index] == in_.unknown[first]);
+}
+
+// Scans lost in recording: the stroke is cut there, and neither part is fitted, so that a
+// fit sees the recording as if the stroke had not been made.
+void StrokeCutter::exclude_lost(const Range& r, const std::string& name) {
+  std::size_t first_lost = r.first, lost_count = 0;
+  while (!(fault_at(r, first_lost) & kLost)) ++first_lost;
+  std::size_t last_lost = first_lost;
+  for (std::size_t i = r.first; i <= r.last; ++i) {
+    if (!(fault_at(r, i) & kLost)) continue;
+    ++lost_count;
+    last_lost = i;
+  }
+  excluded_.push_back({t_[r.first], t_[r.last],
+                       name + ": recording gap: " + std::to_string(lost_count) +
+                           " samples lost from " + seconds(t_[first_lost]) + " to " +
+                           seconds(t_[last_lost]) +
+                           "; the stroke is cut there and neither part is fitted",
+                       true});
+}
+
+// A brisk stroke saturates the gyroscope for part of its course: its longest fault-free
+// part whose angle is known (before the faults, from the anchor before it; after them,
+// from the anchor after it) is kept, the rest listed. nullopt: no part is.
+std::optional<Range> StrokeCutter::keep_good_part(const Range& r, const std::string& name,
+                                                  const Faults& faults) {
+  const std::string described = describe_faults(faults.kinds, in_.saturation_limit) + " in " +
+                                std::to_string(faults.count) + " samples from " +
+                                seconds(t_[faults.first]);
+  std::optional<Range> best;
+  std::size_t i = r.first;
+  while (i <= r.last) {
+    if (fault_at(r, i) != 0 && !(i > r.first && in_.fault[i] == kGapBefore)) {
+      ++i;
+      continue;
+    }
+    // A gap before i ends the previous piece but i itself is a good sample.
+    Range piece{i, i};
+    while (piece.last + 1 <= r.last && in_.fault[piece.last + 1] == 0) ++piece.last;
+    if (angle_known(piece.first, piece.last) && long_enough(piece) &&
+        (!best || piece.last - piece.first > best->last - best->first)) {
+      best = piece;
+    }
+    i = piece.last + 1;
+  }
+  if (!best) {
+    excluded_.push_back({t_[r.first], t_[r.last], name + ": " + described});
+    return std::nullopt;
+  }
+  if (best->first > r.first) {
+    excluded_.push_back(
+        {t_[r.first], t_[best->first - 1], name + ", before the part kept: " + described});
+  }
+  if (best->last < r.last) {
+    excluded_.push_back(
+        {t_[best->last + 1], t_[r.last], name + ", after the part kept: " + described});
+  }
+  return best;
+}
+
+// Why a fault-free stroke is left out: its angle is unknown, or it is too short ("" when
+// it is kept).
+std::string StrokeCutter::reason_to_leave_out(const Range& r, const std::string& name,
+                                              double net) const {
+  if (!angle_known(r.first, r.last)) {
+    return name +
+           ": angle unknown: the gyroscope's rate is unknown (saturated, non-finite "
+           "or a gap) between this stroke and the " +
+           std::string(in_.mode == Mode::kFused ? "nearest inclinometer anchor"
+                                                : "still period where theta = 0");
+  }
+  if (!long_enough(r)) {
+    return name + ": too short (" + text(t_[r.last] - t_[r.first]) + " s, " + text(net / kDeg) +
+           " deg; a stroke needs >= " + text(options_.min_stroke_duration_s) +
+           " s and >= " + text(options_.min_stroke_angle_rad / kDeg) + " deg)";
+  }
+  return "";
+}
+
+void StrokeCutter::keep(const Candidate& candidate, const Range& r, StrokeDirection direction) {
+  Stroke stroke;
+  stroke.id = candidate.id;
+  stroke.direction = direction;
+  const auto begin = static_cast<std::ptrdiff_t>(r.first);
+  const auto end = static_cast<std::ptrdiff_t>(r.last + 1);
+  stroke.time_s.assign(t_.begin() + begin, t_.begin() + end);
+  stroke.force_N.assign(in_.force.begin() + begin, in_.force.begin() + end);
+  stroke.theta_rad.assign(motion_.theta.begin() + begin, motion_.theta.begin() + end);
+  stroke.omega_rad_s.assign(motion_.omega.begin() + begin, motion_.omega.begin() + end);
+  data_.strokes.push_back(std::move(stroke));
+}
+
+void StrokeCutter::cut(const Candidate& candidate) {
+  Range r = candidate.range;
+  for (std::size_t i = r.first; i <= r.last; ++i) covered_[i] = true;
+  const double net = motion_.theta[r.last] - motion_.theta[r.first];
+  const StrokeDirection direction = net > 0 ? StrokeDirection::kOpening : StrokeDirection::kClosing;
+  const std::string name = "stroke " + std::to_string(candidate.id) + " (" +
+                           (direction == StrokeDirection::kOpening ? "opening" : "closing") + ")";
+  const Faults faults = faults_in(r);
+  if (faults.kinds & kLost) {
+    exclude_lost(r, name);
+    return;
+  }
+  if (faults.kinds != 0) {
+    const std::optional<Range> part = keep_good_part(r, name, faults);
+    if (!part) return;
+    r = *part;
+  } else if (const std::string reason = reason_to_leave_out(r, name, net); !reason.empty()) {
+    excluded_.push_back({t_[r.first], t_[r.last], reason});
+    return;
+  }
+  keep(candidate, r, direction);
+}
+
+void StrokeCutter::list_faults_outside() {
+  const std::size_t n = in_.size();
   std::size_t i = 0;
   while (i < n) {
-    const std::uint8_t f = covered[i] ? 0 : in.fault[i];
+    const std::uint8_t f = covered_[i] ? 0 : in_.fault[i];
     if (f == 0) {
       ++i;
       continue;
     }
     std::size_t last = i;
     std::uint8_t kinds = f;
-    while (last + 1 < n && !covered[last + 1] && in.fault[last + 1] != 0) kinds |= in.fault[++last];
+    while (last + 1 < n && !covered_[last + 1] && in_.fault[last + 1] != 0) {
+      kinds |= in_.fault[++last];
+    }
     const std::size_t first = (f & kGapBefore) && i > 0 ? i - 1 : i;  // a gap starts before
-    excluded.push_back({t[first], t[last],
-                        "outside the strokes: " + describe_faults(kinds, in.saturation_limit),
-                        (kinds & kLost) != 0});
+    excluded_.push_back({t_[first], t_[last],
+                         "outside the strokes: " + describe_faults(kinds, in_.saturation_limit),
+                         (kinds & kLost) != 0});
     i = last + 1;
   }
+}
+
+void cut_strokes(const Input& in, const Motion& motion, const std::vector<Anchor>& anchors,
+                 const std::vector<Candidate>& candidates, const PreprocessingOptions& options,
+                 PreparedData& data, std::vector<ExcludedSegment>& excluded) {
+  StrokeCutter cutter(in, motion, anchors, options, data, excluded);
+  for (const Candidate& candidate : candidates) cutter.cut(candidate);
+  cutter.list_faults_outside();
 }
 
 // The step of a quantised angle: the smallest non-zero change between successive samples,
@@ -1211,14 +1346,9 @@ std::string describe_rate(const Input& in, double derivative_cutoff_hz, bool cut
   return line;
 }
 
-}  // namespace
-
-PreparedData prepare(const Recording& recording, const PreprocessingOptions& options) {
-  if (std::string problem = options.validate(); !problem.empty()) {
-    throw std::invalid_argument(problem);
-  }
-  Input in = read_input(recording, options);
-  PreparedData data;
+// Where the data come from: the source, the handle's radius and its origin, the sample
+// rate, how the angle is obtained.
+void describe_source(const Recording& recording, const Input& in, PreparedData& data) {
   data.source = recording.source;
   data.warnings = in.warnings;
   data.handle_radius_m = recording.handle_radius_m.value_or(0.0);
@@ -1250,34 +1380,25 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
       data.angle_source = "angle_rad (full range); rate: its zero-phase smoothed derivative";
       break;
   }
+}
 
-  // The rate the stillness test looks at: the gyroscope's (bias included), or the
-  // derivative of angle_rad.
-  std::vector<double> derived_rate;
-  const bool cutoff_auto = !(options.derivative_cutoff_hz > 0);
-  const double derivative_cutoff_hz =
-      cutoff_auto ? auto_derivative_cutoff_hz(in.rate_hz) : options.derivative_cutoff_hz;
-  if (in.mode == Mode::kAngleOnly) {
-    in.check_cutoff(derivative_cutoff_hz, "derivative_cutoff_hz");
-    derived_rate = smoothing_derivative(in.t, in.angle, derivative_cutoff_hz, in.rate_hz);
-    data.derivative_cutoff_hz = derivative_cutoff_hz;
-  }
-  data.interval_median_s = in.median_interval_s;
-  data.interval_min_s = in.min_interval_s;
-  data.interval_max_s = in.max_interval_s;
-  data.jittered = in.jittered;
-  data.rate_summary = describe_rate(in, data.derivative_cutoff_hz, cutoff_auto);
-  const std::vector<double>& tested_rate = in.has_rate ? in.rate : derived_rate;
-  const Stillness still = find_stillness(in, tested_rate, options);
-  std::vector<Anchor> anchors = find_anchors(in, still, options);
-  // The still periods trusted for the bias and the noise: the anchors' (in the inclinometer's
-  // range, or with a consistent bias), not a door creeping to rest at the open position.
+// The still periods trusted for the bias and the noise: the anchors' (in the
+// inclinometer's range, or with a consistent bias), not a door creeping to rest at the
+// open position; all still periods when no anchor has a bias.
+std::vector<Range> trusted_periods(const std::vector<Anchor>& anchors, const Stillness& still) {
   std::vector<Range> trusted;
   for (const Anchor& anchor : anchors) {
     if (anchor.has_bias) trusted.push_back(anchor.period);
   }
   if (trusted.empty()) trusted = still.periods;
+  return trusted;
+}
 
+// θ and ω: the rate integrated and anchored (which sets the anchors' offsets), or
+// angle_rad and its derivative; and the note saying how.
+Motion motion_of(const Input& in, std::vector<Anchor>& anchors,
+                 const std::vector<double>& derived_rate, double derivative_cutoff_hz,
+                 bool cutoff_auto, PreparedData& data) {
   Motion motion;
   if (in.has_rate) {
     motion = integrate_and_anchor(in, anchors);
@@ -1299,8 +1420,13 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
                          text(derivative_cutoff_hz) + " Hz" +
                          (cutoff_auto ? " (the rate's rule: min(30 Hz, sample rate / 4))" : ""));
   }
+  return motion;
+}
 
-  // Noise levels from the trusted still periods, else the bench's figures.
+// Noise levels from the trusted still periods, else the bench's figures.
+void estimate_noise(const Input& in, const Stillness& still, const std::vector<Range>& trusted,
+                    const std::vector<Anchor>& anchors, const std::vector<double>& tested_rate,
+                    const PreprocessingOptions& options, PreparedData& data) {
   if (still.periods.empty()) {
     data.notes.push_back("no still period: noise levels are the bench's figures");
   }
@@ -1321,43 +1447,87 @@ PreparedData prepare(const Recording& recording, const PreprocessingOptions& opt
   data.angle_noise_rad =
       angle_noise ? std::max(*angle_noise, kNoiseFloorFraction * options.fallback_angle_noise_rad)
                   : options.fallback_angle_noise_rad;
-  // A quantised angle (an encoder's steps) that stands still reads no noise at all: its
-  // noise is at least the quantisation's, q / sqrt(12), and so is the derivative's.
-  if (!in.angle.empty()) {
-    if (const std::optional<double> q = angle_quantum(in.angle)) {
-      const double quantisation_rad = *q / std::sqrt(12.0);
-      if (quantisation_rad > data.angle_noise_rad) {
-        data.angle_noise_rad = quantisation_rad;
-        if (in.mode == Mode::kAngleOnly) {
-          const double rate_floor =
-              quantisation_rad * derivative_noise_gain(derivative_cutoff_hz, in.rate_hz);
-          data.rate_noise_rad_s = std::max(data.rate_noise_rad_s, rate_floor);
-        }
-        data.notes.push_back("angle_rad is quantised in steps of " + text(*q) +
-                             " rad: its noise is taken as at least the quantisation's (step / "
-                             "sqrt(12))" +
-                             (in.mode == Mode::kAngleOnly ? ", and the rate's as that through the "
-                                                            "smoothing derivative"
-                                                          : ""));
-      }
-    }
+}
+
+// A quantised angle (an encoder's steps) that stands still reads no noise at all: its
+// noise is at least the quantisation's, q / sqrt(12), and so is the derivative's.
+void apply_quantisation_floor(const Input& in, double derivative_cutoff_hz, PreparedData& data) {
+  if (in.angle.empty()) return;
+  const std::optional<double> q = angle_quantum(in.angle);
+  if (!q) return;
+  const double quantisation_rad = *q / std::sqrt(12.0);
+  if (!(quantisation_rad > data.angle_noise_rad)) return;
+  data.angle_noise_rad = quantisation_rad;
+  if (in.mode == Mode::kAngleOnly) {
+    const double rate_floor =
+        quantisation_rad * derivative_noise_gain(derivative_cutoff_hz, in.rate_hz);
+    data.rate_noise_rad_s = std::max(data.rate_noise_rad_s, rate_floor);
   }
+  data.notes.push_back("angle_rad is quantised in steps of " + text(*q) +
+                       " rad: its noise is taken as at least the quantisation's (step / "
+                       "sqrt(12))" +
+                       (in.mode == Mode::kAngleOnly ? ", and the rate's as that through the "
+                                                      "smoothing derivative"
+                                                    : ""));
+}
+
+// The strokes to cut: the recording's stroke column (when used), else the motion's
+// segments (those too short to be strokes go to `excluded`).
+std::vector<Candidate> stroke_candidates(const Recording& recording, const Input& in,
+                                         const Motion& motion, const Stillness& still,
+                                         const PreprocessingOptions& options,
+                                         std::vector<ExcludedSegment>& excluded) {
+  if (recording.stroke && options.use_stroke_column) {
+    return strokes_from_column(*recording.stroke);
+  }
+  const double noise = std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0;
+  const double edge =
+      std::min(options.motion_rate_rad_s, std::max(options.edge_rate_rad_s, 4.0 * noise));
+  return segment_strokes(in.t, motion.theta, motion.omega, edge, options, excluded);
+}
+
+}  // namespace
+
+PreparedData prepare(const Recording& recording, const PreprocessingOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
+  Input in = read_input(recording, options);
+  PreparedData data;
+  describe_source(recording, in, data);
+
+  // The rate the stillness test looks at: the gyroscope's (bias included), or the
+  // derivative of angle_rad.
+  std::vector<double> derived_rate;
+  const bool cutoff_auto = !(options.derivative_cutoff_hz > 0);
+  const double derivative_cutoff_hz =
+      cutoff_auto ? auto_derivative_cutoff_hz(in.rate_hz) : options.derivative_cutoff_hz;
+  if (in.mode == Mode::kAngleOnly) {
+    in.check_cutoff(derivative_cutoff_hz, "derivative_cutoff_hz");
+    derived_rate = smoothing_derivative(in.t, in.angle, derivative_cutoff_hz, in.rate_hz);
+    data.derivative_cutoff_hz = derivative_cutoff_hz;
+  }
+  data.interval_median_s = in.median_interval_s;
+  data.interval_min_s = in.min_interval_s;
+  data.interval_max_s = in.max_interval_s;
+  data.jittered = in.jittered;
+  data.rate_summary = describe_rate(in, data.derivative_cutoff_hz, cutoff_auto);
+  const std::vector<double>& tested_rate = in.has_rate ? in.rate : derived_rate;
+  const Stillness still = find_stillness(in, tested_rate, options);
+  std::vector<Anchor> anchors = find_anchors(in, still, options);
+  const std::vector<Range> trusted = trusted_periods(anchors, still);
+  const Motion motion =
+      motion_of(in, anchors, derived_rate, derivative_cutoff_hz, cutoff_auto, data);
+  estimate_noise(in, still, trusted, anchors, tested_rate, options, data);
+  apply_quantisation_floor(in, derivative_cutoff_hz, data);
 
   if (options.force_cutoff_hz > 0) {
     in.check_cutoff(options.force_cutoff_hz, "force_cutoff_hz");
     in.force = zero_phase_lowpass_at(in.t, in.force, options.force_cutoff_hz, in.rate_hz);
   }
-
   std::vector<ExcludedSegment> excluded;
-  std::vector<Candidate> candidates;
-  if (recording.stroke && options.use_stroke_column) {
-    candidates = strokes_from_column(*recording.stroke);
-  } else {
-    const double noise = std::isfinite(still.noise_estimate) ? still.noise_estimate : 0.0;
-    const double edge =
-        std::min(options.motion_rate_rad_s, std::max(options.edge_rate_rad_s, 4.0 * noise));
-    candidates = segment_strokes(in.t, motion.theta, motion.omega, edge, options, excluded);
-  }
+  const std::vector<Candidate> candidates =
+      stroke_candidates(recording, in, motion, still, options, excluded);
   cut_strokes(in, motion, anchors, candidates, options, data, excluded);
   std::stable_sort(
       excluded.begin(), excluded.end(),

@@ -1,6 +1,8 @@
 #include "calibration/least_squares.h"
 
 #include <Eigen/Dense>
+#include <boost/math/distributions/normal.hpp>
+#include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <stdexcept>
 
@@ -71,18 +73,14 @@ PolynomialFit fit_polynomial(std::span<const double> x, std::span<const double> 
 double student_t_95(int degrees_of_freedom) {
   if (degrees_of_freedom < 1)
     throw std::invalid_argument("student_t_95: needs >= 1 degree of freedom");
-  // Exact for the smallest ν, then the Cornish–Fisher expansion (error < 1e-3 for ν ≥ 5).
-  static const double exact[] = {12.706, 4.303, 3.182, 2.776, 2.571};
-  if (degrees_of_freedom <= 5) return exact[degrees_of_freedom - 1];
-  const double z = 1.959964;
-  const double v = degrees_of_freedom;
-  const double z3 = z * z * z, z5 = z3 * z * z, z7 = z5 * z * z;
-  return z + (z3 + z) / (4 * v) + (5 * z5 + 16 * z3 + 3 * z) / (96 * v * v) +
-         (3 * z7 + 19 * z5 + 17 * z3 - 15 * z) / (384 * v * v * v);
+  const boost::math::students_t_distribution<double> t(degrees_of_freedom);
+  return boost::math::quantile(boost::math::complement(t, 0.025));
 }
 
 double small_sample_factor(int degrees_of_freedom) {
-  return student_t_95(degrees_of_freedom) / 1.959964;
+  static const double z_95 = boost::math::quantile(
+      boost::math::complement(boost::math::normal_distribution<double>(), 0.025));
+  return student_t_95(degrees_of_freedom) / z_95;
 }
 
 double mean_of(std::span<const double> values) {

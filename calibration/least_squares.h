@@ -25,11 +25,14 @@ struct PolynomialFit {
 // std::invalid_argument otherwise or when the x are degenerate.
 PolynomialFit fit_polynomial(std::span<const double> x, std::span<const double> y, int degree);
 
-// Two-sided 95 % Student-t quantile for `degrees_of_freedom` ≥ 1 (1.96 for ∞).
+// Two-sided 95 % Student-t quantile for `degrees_of_freedom` ≥ 1 (1.96 for ∞), i.e.
+// the 0.975 quantile, from Boost.Math (to double precision). Throws
+// std::invalid_argument for degrees_of_freedom < 1. Thread-safe.
 double student_t_95(int degrees_of_freedom);
 
 // The factor that scales a standard deviation estimated with ν degrees of freedom so that
-// ±2 × (scaled value) covers like ±2σ for a known σ: t₉₅(ν) / 1.96 (≥ 1).
+// ±2 × (scaled value) covers like ±2σ for a known σ: t₉₅(ν) / z₉₅, z₉₅ = 1.959964…
+// the normal distribution's 0.975 quantile (≥ 1).
 double small_sample_factor(int degrees_of_freedom);
 
 // Mean and (n − 1) standard deviation.

@@ -1,6 +1,7 @@
 #include "haptic/ab_trials.h"
 
 #include <algorithm>
+#include <boost/math/distributions/binomial.hpp>
 #include <chrono>
 #include <cmath>
 #include <ctime>
@@ -209,21 +210,9 @@ double binomial_two_sided_p(long k, long n) {
   const long m = std::min(k, n - k);
   // At the centre every outcome is at least as far from n/2: p = 1.
   if (2 * m == n || n == 0) return 1.0;
-  // P(X <= m) = t_m (1 + t_{m−1}/t_m + …), t_i = C(n, i) / 2^n; the ratio of neighbours is
-  // t_{i−1}/t_i = i / (n − i + 1) < 1 below the centre, so the sum is summed from its
-  // largest term and stops once the terms no longer change it.
-  const double dn = static_cast<double>(n);
-  const double dm = static_cast<double>(m);
-  const double log_t_m =
-      std::lgamma(dn + 1) - std::lgamma(dm + 1) - std::lgamma(dn - dm + 1) - dn * std::log(2.0);
-  double sum = 1.0, term = 1.0;
-  for (long i = m; i >= 1; --i) {
-    term *= static_cast<double>(i) / static_cast<double>(n - i + 1);
-    sum += term;
-    if (term < sum * 1e-17) break;
-  }
-  const double p = 2.0 * std::exp(log_t_m + std::log(sum));
-  return std::min(p, 1.0);
+  // The distribution is symmetric: p = 2 P(X <= m), m the nearer tail's end.
+  const boost::math::binomial_distribution<double> chance(static_cast<double>(n), 0.5);
+  return std::min(2.0 * boost::math::cdf(chance, static_cast<double>(m)), 1.0);
 }
 
 AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>& trials) {

@@ -71,9 +71,10 @@ AbAnswer parse_answer(AbQuestion question, int rating_scale, std::string_view te
                       const std::array<std::string, 2>& labels = {"1", "2"});
 
 // The exact two-sided binomial test against chance 0.5: the probability, under chance, of
-// an outcome at least as far from n/2 as k. Computed from the tail's largest term down by
-// the ratio of neighbouring terms, scaled so that it neither under- nor overflows for any
-// n (tested to n = 10^7). k > n or negative throws std::invalid_argument.
+// an outcome at least as far from n/2 as k: twice the nearer tail, from Boost.Math's
+// binomial distribution (the regularised incomplete beta function, to double precision;
+// a far tail underflows to 0, tested to n = 10^7). k > n or negative throws
+// std::invalid_argument. Thread-safe.
 double binomial_two_sided_p(long k, long n);
 
 struct AbTrialOutcome {

@@ -123,6 +123,150 @@ std::string HapticMasterCheckReport::json() const {
   return j.dump(2);
 }
 
+namespace {
+
+void add(HapticMasterCheckReport& report, std::string name, std::string status,
+         std::string detail) {
+  report.items.push_back({std::move(name), std::move(status), std::move(detail)});
+}
+
+// 1. Start-up, as playback does it (a refusal is the check's answer: thrown by name).
+void check_startup(HapticMasterDevice& device, const HapticMasterCheckOptions& options,
+                   HapticMasterCheckReport& report) {
+  device.start(options.inertia_kg);
+  report.startup = device.startup_report();
+  report.limits = device.limits();
+  const HapticMasterStartup& s = report.startup;
+  add(report, "device answers", "pass", "state '" + s.initial_state + "' before start");
+  if (s.emergency_signals_reported) {
+    add(report, "emergency button", "pass", "not pushed");
+    add(report, "emergency relay", "pass", "closed (the device was started)");
+  } else {
+    add(report, "emergency button", "warn", "the device does not report it (error reply)");
+    add(report, "emergency relay", "warn", "the device does not report it (error reply)");
+  }
+  add(report, "position calibration", "pass",
+      s.was_calibrated ? "calibrated"
+                       : "was not calibrated: homed in " +
+                             hm::format_number(std::round(s.homing_s * 10) / 10) + " s");
+  add(report, "effects of other programs", "pass", "removed (remove all)");
+  add(report, "workspace", s.workspace_source == "device" ? "pass" : "warn",
+      "r " + hm::format_number(s.workspace_r_phi_z_min.x()) + ".." +
+          hm::format_number(s.workspace_r_phi_z_max.x()) + " m, phi " +
+          hm::format_number(s.workspace_r_phi_z_min.y()) + ".." +
+          hm::format_number(s.workspace_r_phi_z_max.y()) + " rad, z " +
+          hm::format_number(s.workspace_r_phi_z_min.z()) + ".." +
+          hm::format_number(s.workspace_r_phi_z_max.z()) + " m about an axis " +
+          hm::format_number(s.base_axis_offset_m) + " m behind the origin (" +
+          s.workspace_source + ")");
+  add(report, "inertia", "pass",
+      "set " + hm::format_number(options.inertia_kg) + " kg, read back " +
+          hm::format_number(s.inertia_read_back_kg) + " kg");
+}
+
+// The round trips' statistics, the delay they give and the stiffness limit for it.
+void summarise_round_trips(const std::vector<double>& rtt_s, bool complete,
+                           const HapticMasterCheckOptions& options,
+                           HapticMasterCheckReport& report) {
+  double sum = 0.0;
+  for (const double t : rtt_s) sum += t;
+  report.rtt_mean_ms = 1e3 * sum / static_cast<double>(rtt_s.size());
+  report.rtt_p50_ms = 1e3 * percentile(rtt_s, 0.50);
+  report.rtt_p99_ms = 1e3 * percentile(rtt_s, 0.99);
+  report.rtt_max_ms = 1e3 * *std::max_element(rtt_s.begin(), rtt_s.end());
+  report.loop_period_ms = 1e3 / options.driver.io_rate_hz;
+  report.effective_delay_ms = 0.5 * report.loop_period_ms + report.rtt_p99_ms;
+  report.stiffness_limit_N_per_m = stiffness_limit_for_delay(
+      options.inertia_kg, 1e-3 * report.effective_delay_ms, options.damping_ratio);
+  if (complete) {
+    add(report, "round-trip time", report.rtt_p99_ms <= 2.0 ? "pass" : "warn",
+        "p50 " + ms(report.rtt_p50_ms) + ", p99 " + ms(report.rtt_p99_ms) + ", max " +
+            ms(report.rtt_max_ms) + " over " + std::to_string(report.round_trips) +
+            (report.rtt_p99_ms <= 2.0 ? "" : " (p99 above 2 ms: stiff parts belong on the device)"));
+  }
+  std::ostringstream limit;
+  limit.precision(3);
+  limit << report.stiffness_limit_N_per_m << " N/m at " << options.inertia_kg << " kg with "
+        << report.effective_delay_ms
+        << " ms delay (half a period + p99 round trip, damping ratio " << options.damping_ratio
+        << "); a door's stiffest slope played from the host must stay below it";
+  add(report, "host-loop stiffness limit", "pass", limit.str());
+}
+
+// 2. Round trips.
+void check_round_trips(HapticMasterDevice& device, const HapticMasterCheckOptions& options,
+                       HapticMasterCheckReport& report) {
+  const std::vector<double> rtt_s =
+      time_round_trips(device, options.exchanges, options.driver.progress);
+  report.round_trips = static_cast<int>(rtt_s.size());
+  const std::string lost = device.last_error();
+  const bool complete = lost.empty() && report.round_trips >= options.exchanges;
+  if (!complete) {
+    add(report, "round-trip time", "fail",
+        std::to_string(report.round_trips) + " of " + std::to_string(options.exchanges) +
+            " round trips" + (lost.empty() ? "" : ": " + lost));
+  }
+  if (!rtt_s.empty()) summarise_round_trips(rtt_s, complete, options, report);
+}
+
+// Pushes the arm on a connection of its own, then drops that connection without a stop.
+void push_and_abandon(const std::string& address, const HapticMasterOptions& quiet,
+                      const HapticMasterCheckOptions& options) {
+  HapticMasterDevice pusher(address, quiet);
+  pusher.start(options.inertia_kg);
+  pusher.command_force(Vec3(options.test_force_N, 0.0, 0.0));
+  const std::uint64_t from = pusher.round_trips();
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(2);
+  while (pusher.round_trips() < from + 20 && std::chrono::steady_clock::now() < end) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  pusher.abandon_connection_for_test();
+}
+
+// 3. What a disconnect leaves on the device (only with the user's word).
+void check_disconnect(const std::string& address, const HapticMasterCheckOptions& options,
+                      HapticMasterCheckReport& report) {
+  const std::string what = "The arm will be pushed with " +
+                           hm::format_number(options.test_force_N) +
+                           " N along +x for about a second, then the connection is closed "
+                           "without a stop, as a crashed program would. Keep hands off the arm.";
+  if (!options.confirm || !options.confirm(what)) {
+    add(report, "disconnect leaves zero force", "skipped", "not confirmed (--yes, or answer y)");
+    return;
+  }
+  HapticMasterOptions quiet = options.driver;
+  quiet.command_watchdog_s = 0.0;  // the test itself stops commanding
+  push_and_abandon(address, quiet, options);
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  HapticMasterDevice reader(address, quiet);
+  reader.connect_only();
+  report.disconnect_tested = true;
+  const hm::Reply state = hm::parse_reply(reader.exchange("get state"));
+  report.state_after_disconnect =
+      state.kind == hm::Reply::Kind::kString ? state.string : state.text;
+  std::string force_text;
+  try {
+    force_text = reader.exchange("get " + quiet.bias_object + " force");
+  } catch (const DeviceError&) {
+    force_text = "";  // the object is gone: the device removed it on the disconnect
+  }
+  const hm::Reply force = hm::parse_reply(force_text);
+  report.force_after_disconnect_N =
+      force.kind == hm::Reply::Kind::kVector ? force.vector.norm() : 0.0;
+  reader.stop();  // zero force, state stop, remove the object: whatever was left
+  const bool kept =
+      report.force_after_disconnect_N > 0.0 && report.state_after_disconnect == "force";
+  add(report, "disconnect leaves zero force", kept ? "warn" : "pass",
+      kept ? "the device kept " + hm::format_number(report.force_after_disconnect_N) +
+                 " N in state force after the connection closed: doorbench's fail-safe "
+                 "stops it on a fresh connection, but a killed doorbench or a host power "
+                 "loss would leave the force on (use the device's emergency button)"
+           : "state '" + report.state_after_disconnect + "', " +
+                 hm::format_number(report.force_after_disconnect_N) + " N after the close");
+}
+
+}  // namespace
+
 HapticMasterCheckReport run_hapticmaster_check(const std::string& address,
                                                const HapticMasterCheckOptions& options) {
   // The check's own thread plays the tick at zero force; on a loaded machine it may sleep
@@ -136,123 +280,11 @@ HapticMasterCheckReport run_hapticmaster_check(const std::string& address,
   const auto say = options.driver.progress;
   HapticMasterCheckReport report;
   report.device = device.name();
-  const auto add = [&](std::string name, std::string status, std::string detail) {
-    report.items.push_back({std::move(name), std::move(status), std::move(detail)});
-  };
-
-  // 1. Start-up, as playback does it (a refusal is the check's answer: thrown by name).
   if (say) say(device.name() + ": start-up checks");
-  device.start(options.inertia_kg);
-  report.startup = device.startup_report();
-  report.limits = device.limits();
-  const HapticMasterStartup& s = report.startup;
-  add("device answers", "pass", "state '" + s.initial_state + "' before start");
-  if (s.emergency_signals_reported) {
-    add("emergency button", "pass", "not pushed");
-    add("emergency relay", "pass", "closed (the device was started)");
-  } else {
-    add("emergency button", "warn", "the device does not report it (error reply)");
-    add("emergency relay", "warn", "the device does not report it (error reply)");
-  }
-  add("position calibration", "pass",
-      s.was_calibrated ? "calibrated"
-                       : "was not calibrated: homed in " +
-                             hm::format_number(std::round(s.homing_s * 10) / 10) + " s");
-  add("effects of other programs", "pass", "removed (remove all)");
-  add("workspace", s.workspace_source == "device" ? "pass" : "warn",
-      "r " + hm::format_number(s.workspace_r_phi_z_min.x()) + ".." +
-          hm::format_number(s.workspace_r_phi_z_max.x()) + " m, phi " +
-          hm::format_number(s.workspace_r_phi_z_min.y()) + ".." +
-          hm::format_number(s.workspace_r_phi_z_max.y()) + " rad, z " +
-          hm::format_number(s.workspace_r_phi_z_min.z()) + ".." +
-          hm::format_number(s.workspace_r_phi_z_max.z()) + " m about an axis " +
-          hm::format_number(s.base_axis_offset_m) + " m behind the origin (" +
-          s.workspace_source + ")");
-  add("inertia", "pass",
-      "set " + hm::format_number(options.inertia_kg) + " kg, read back " +
-          hm::format_number(s.inertia_read_back_kg) + " kg");
-
-  // 2. Round trips.
+  check_startup(device, options, report);
   if (say) say(device.name() + ": timing " + std::to_string(options.exchanges) + " round trips");
-  const std::vector<double> rtt_s = time_round_trips(device, options.exchanges, say);
-  report.round_trips = static_cast<int>(rtt_s.size());
-  const std::string lost = device.last_error();
-  if (!lost.empty() || report.round_trips < options.exchanges) {
-    add("round-trip time", "fail",
-        std::to_string(report.round_trips) + " of " + std::to_string(options.exchanges) +
-            " round trips" + (lost.empty() ? "" : ": " + lost));
-  }
-  if (!rtt_s.empty()) {
-    double sum = 0.0;
-    for (const double t : rtt_s) sum += t;
-    report.rtt_mean_ms = 1e3 * sum / static_cast<double>(rtt_s.size());
-    report.rtt_p50_ms = 1e3 * percentile(rtt_s, 0.50);
-    report.rtt_p99_ms = 1e3 * percentile(rtt_s, 0.99);
-    report.rtt_max_ms = 1e3 * *std::max_element(rtt_s.begin(), rtt_s.end());
-    report.loop_period_ms = 1e3 / options.driver.io_rate_hz;
-    report.effective_delay_ms = 0.5 * report.loop_period_ms + report.rtt_p99_ms;
-    report.stiffness_limit_N_per_m = stiffness_limit_for_delay(
-        options.inertia_kg, 1e-3 * report.effective_delay_ms, options.damping_ratio);
-    if (lost.empty() && report.round_trips >= options.exchanges) {
-      add("round-trip time", report.rtt_p99_ms <= 2.0 ? "pass" : "warn",
-          "p50 " + ms(report.rtt_p50_ms) + ", p99 " + ms(report.rtt_p99_ms) + ", max " +
-              ms(report.rtt_max_ms) + " over " + std::to_string(report.round_trips) +
-              (report.rtt_p99_ms <= 2.0 ? "" : " (p99 above 2 ms: stiff parts belong on the device)"));
-    }
-    std::ostringstream limit;
-    limit.precision(3);
-    limit << report.stiffness_limit_N_per_m << " N/m at " << options.inertia_kg
-          << " kg with " << report.effective_delay_ms
-          << " ms delay (half a period + p99 round trip, damping ratio " << options.damping_ratio
-          << "); a door's stiffest slope played from the host must stay below it";
-    add("host-loop stiffness limit", "pass", limit.str());
-  }
-
-  // 3. What a disconnect leaves on the device (only with the user's word).
-  const std::string what = "The arm will be pushed with " + hm::format_number(options.test_force_N) +
-                           " N along +x for about a second, then the connection is closed "
-                           "without a stop, as a crashed program would. Keep hands off the arm.";
-  if (!options.confirm || !options.confirm(what)) {
-    add("disconnect leaves zero force", "skipped", "not confirmed (--yes, or answer y)");
-  } else {
-    HapticMasterOptions quiet = options.driver;
-    quiet.command_watchdog_s = 0.0;  // the test itself stops commanding
-    HapticMasterDevice pusher(address, quiet);
-    pusher.start(options.inertia_kg);
-    pusher.command_force(Vec3(options.test_force_N, 0.0, 0.0));
-    const std::uint64_t from = pusher.round_trips();
-    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(2);
-    while (pusher.round_trips() < from + 20 && std::chrono::steady_clock::now() < end) {
-      std::this_thread::sleep_for(std::chrono::milliseconds(5));
-    }
-    pusher.abandon_connection_for_test();
-    std::this_thread::sleep_for(std::chrono::milliseconds(200));
-    HapticMasterDevice reader(address, quiet);
-    reader.connect_only();
-    report.disconnect_tested = true;
-    const hm::Reply state = hm::parse_reply(reader.exchange("get state"));
-    report.state_after_disconnect = state.kind == hm::Reply::Kind::kString ? state.string
-                                                                            : state.text;
-    std::string force_text;
-    try {
-      force_text = reader.exchange("get " + quiet.bias_object + " force");
-    } catch (const DeviceError&) {
-      force_text = "";  // the object is gone: the device removed it on the disconnect
-    }
-    const hm::Reply force = hm::parse_reply(force_text);
-    report.force_after_disconnect_N = force.kind == hm::Reply::Kind::kVector ? force.vector.norm()
-                                                                              : 0.0;
-    reader.stop();  // zero force, state stop, remove the object: whatever was left
-    const bool kept = report.force_after_disconnect_N > 0.0 &&
-                      report.state_after_disconnect == "force";
-    add("disconnect leaves zero force", kept ? "warn" : "pass",
-        kept ? "the device kept " + hm::format_number(report.force_after_disconnect_N) +
-                   " N in state force after the connection closed: doorbench's fail-safe "
-                   "stops it on a fresh connection, but a killed doorbench or a host power "
-                   "loss would leave the force on (use the device's emergency button)"
-             : "state '" + report.state_after_disconnect + "', " +
-                   hm::format_number(report.force_after_disconnect_N) + " N after the close");
-  }
+  check_round_trips(device, options, report);
+  check_disconnect(address, options, report);
   return report;
 }
 

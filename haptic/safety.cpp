@@ -233,92 +233,120 @@ SafetyOutput SafetyLayer::step(const SafetyInput& input) noexcept {
 
   SafetyOutput output;
   const bool first_tick = !have_previous_;
+  const double dt_s = advance_clock(time_s, input.sample.sequence);
+  if (state_ != SafetyState::kRampingDown) check_trips(input, first_tick, dt_s, output);
+  if (state_ == SafetyState::kRampingDown) return ramp_down(time_s, output);
+  // Starting or running.
+  if (state_ == SafetyState::kStarting) advance_start_ramp(time_s, output);
+  bool force_clipped = false;
+  bool rate_clipped = false;
+  const Vec3 target = limit_force(input.desired_force, dt_s, force_clipped, rate_clipped);
+  report_clipping(force_clipped, rate_clipped, output);
+  previous_force_ = target;
+  output.force = target;
+  output.scale = scale_;
+  output.state = state_;
+  output.clipped = force_clipped || rate_clipped;
+  return output;
+}
+
+double SafetyLayer::advance_clock(double time_s, std::uint64_t sequence) noexcept {
   double dt_s = 0.0;
-  if (first_tick) {
+  if (!have_previous_) {
     have_previous_ = true;
     start_time_s_ = time_s;
-    previous_sequence_ = input.sample.sequence;
+    previous_sequence_ = sequence;
   } else {
     dt_s = time_s - previous_time_s_;
   }
   previous_time_s_ = time_s;
+  return dt_s;
+}
 
-  if (state_ != SafetyState::kRampingDown) {
-    const bool is_rotary = limits_.kinematics == Kinematics::kRotary1;
-    const DeviceSample& sample = input.sample;
-    if (!first_tick && (dt_s > options_.max_tick_stall_s || dt_s < 0.0)) {
-      begin_ramp_down(time_s, kEventDeadlineMiss, output);
-    } else if (!first_tick && dt_s > options_.max_tick_interval_s) {
-      output.events |= kEventLateTick;
-    }
-    if (!sample.link_ok) begin_ramp_down(time_s, kEventLinkLost, output);
-    if (!first_tick) {
-      if (sample.sequence == previous_sequence_) {
-        ++stale_ticks_;
-      } else {
-        stale_ticks_ = 0;
-        previous_sequence_ = sample.sequence;
-      }
-      if (stale_ticks_ >= options_.max_stale_ticks) {
-        begin_ramp_down(time_s, kEventDeviceStalled, output);
-      }
-    }
-    const bool finite_sample = sample.position.allFinite() && sample.velocity.allFinite() &&
-                               sample.measured_force.allFinite();
-    if (!finite_sample || !input.desired_force.allFinite()) {
-      begin_ramp_down(time_s, kEventNonFiniteInput, output);
-    }
-    if (finite_sample) {
-      const double speed = is_rotary ? std::abs(sample.velocity.x()) : safe_norm(sample.velocity);
-      if (speed > velocity_trip_) begin_ramp_down(time_s, kEventVelocityTrip, output);
-      const double margin = options_.workspace_margin_m;
-      bool outside = false;
-      for (int axis = 0; axis < (is_rotary ? 1 : 3); ++axis) {
-        outside = outside || sample.position[axis] < limits_.workspace_min[axis] + margin ||
-                  sample.position[axis] > limits_.workspace_max[axis] - margin;
-      }
-      if (outside) begin_ramp_down(time_s, kEventWorkspaceTrip, output);
-    }
-    if (stop_requested_ && !stop_reported_) {
-      stop_reported_ = true;
-      begin_ramp_down(time_s, kEventStopRequested, output);
-    }
+void SafetyLayer::check_trips(const SafetyInput& input, bool first_tick, double dt_s,
+                              SafetyOutput& output) noexcept {
+  const double time_s = input.time_s;
+  const DeviceSample& sample = input.sample;
+  if (!first_tick && (dt_s > options_.max_tick_stall_s || dt_s < 0.0)) {
+    begin_ramp_down(time_s, kEventDeadlineMiss, output);
+  } else if (!first_tick && dt_s > options_.max_tick_interval_s) {
+    output.events |= kEventLateTick;
   }
+  if (!sample.link_ok) begin_ramp_down(time_s, kEventLinkLost, output);
+  if (!first_tick) check_stale(time_s, sample.sequence, output);
+  const bool finite_sample = sample.position.allFinite() && sample.velocity.allFinite() &&
+                             sample.measured_force.allFinite();
+  if (!finite_sample || !input.desired_force.allFinite()) {
+    begin_ramp_down(time_s, kEventNonFiniteInput, output);
+  }
+  if (finite_sample) check_motion(time_s, sample, output);
+  if (stop_requested_ && !stop_reported_) {
+    stop_reported_ = true;
+    begin_ramp_down(time_s, kEventStopRequested, output);
+  }
+}
 
-  if (state_ == SafetyState::kRampingDown) {
-    // The force at the trip, scaled linearly to zero over shutdown_ramp_s: the per-tick
-    // change is at most force_limit · dt / shutdown_ramp_s, within the rate limit (checked
-    // in the constructor).
-    const double elapsed_s = std::max(0.0, time_s - ramp_down_start_s_);
-    ramp_down_remaining_ =
-        std::min(ramp_down_remaining_, 1.0 - elapsed_s / options_.shutdown_ramp_s);
-    const double remaining = ramp_down_remaining_;
-    if (remaining <= 0.0 || ramp_down_from_force_.isZero(0.0)) {
-      return stopped_output(output.events | kEventStopped);
-    }
-    previous_force_ = remaining * ramp_down_from_force_;
-    scale_ = remaining * ramp_down_from_scale_;
-    output.force = previous_force_;
-    output.scale = scale_;
-    output.state = state_;
-    return output;
+void SafetyLayer::check_stale(double time_s, std::uint64_t sequence,
+                              SafetyOutput& output) noexcept {
+  if (sequence == previous_sequence_) {
+    ++stale_ticks_;
+  } else {
+    stale_ticks_ = 0;
+    previous_sequence_ = sequence;
   }
+  if (stale_ticks_ >= options_.max_stale_ticks) {
+    begin_ramp_down(time_s, kEventDeviceStalled, output);
+  }
+}
 
-  // Starting or running.
-  if (state_ == SafetyState::kStarting) {
-    const double ramp =
-        options_.startup_ramp_s > 0.0 ? (time_s - start_time_s_) / options_.startup_ramp_s : 1.0;
-    scale_ = std::clamp(ramp, 0.0, 1.0);
-    if (scale_ >= 1.0) {
-      state_ = SafetyState::kRunning;
-      output.events |= kEventStartRampDone;
-    }
+void SafetyLayer::check_motion(double time_s, const DeviceSample& sample,
+                               SafetyOutput& output) noexcept {
+  const bool is_rotary = limits_.kinematics == Kinematics::kRotary1;
+  const double speed = is_rotary ? std::abs(sample.velocity.x()) : safe_norm(sample.velocity);
+  if (speed > velocity_trip_) begin_ramp_down(time_s, kEventVelocityTrip, output);
+  const double margin = options_.workspace_margin_m;
+  bool outside = false;
+  for (int axis = 0; axis < (is_rotary ? 1 : 3); ++axis) {
+    outside = outside || sample.position[axis] < limits_.workspace_min[axis] + margin ||
+              sample.position[axis] > limits_.workspace_max[axis] - margin;
   }
-  Vec3 target = input.desired_force;
+  if (outside) begin_ramp_down(time_s, kEventWorkspaceTrip, output);
+}
+
+// The force at the trip, scaled linearly to zero over shutdown_ramp_s: the per-tick change
+// is at most force_limit · dt / shutdown_ramp_s, within the rate limit (checked in the
+// constructor).
+SafetyOutput SafetyLayer::ramp_down(double time_s, SafetyOutput output) noexcept {
+  const double elapsed_s = std::max(0.0, time_s - ramp_down_start_s_);
+  ramp_down_remaining_ = std::min(ramp_down_remaining_, 1.0 - elapsed_s / options_.shutdown_ramp_s);
+  const double remaining = ramp_down_remaining_;
+  if (remaining <= 0.0 || ramp_down_from_force_.isZero(0.0)) {
+    return stopped_output(output.events | kEventStopped);
+  }
+  previous_force_ = remaining * ramp_down_from_force_;
+  scale_ = remaining * ramp_down_from_scale_;
+  output.force = previous_force_;
+  output.scale = scale_;
+  output.state = state_;
+  return output;
+}
+
+void SafetyLayer::advance_start_ramp(double time_s, SafetyOutput& output) noexcept {
+  const double ramp =
+      options_.startup_ramp_s > 0.0 ? (time_s - start_time_s_) / options_.startup_ramp_s : 1.0;
+  scale_ = std::clamp(ramp, 0.0, 1.0);
+  if (scale_ >= 1.0) {
+    state_ = SafetyState::kRunning;
+    output.events |= kEventStartRampDone;
+  }
+}
+
+Vec3 SafetyLayer::limit_force(const Vec3& desired_force, double dt_s, bool& force_clipped,
+                              bool& rate_clipped) const noexcept {
+  Vec3 target = desired_force;
   if (limits_.kinematics == Kinematics::kRotary1) target.y() = target.z() = 0.0;
   // Limit the magnitude before scaling, so that a huge finite request cannot overflow.
   const double requested = safe_norm(target);
-  bool force_clipped = false;
   if (requested > force_limit_) {
     target *= force_limit_ / requested;
     force_clipped = true;
@@ -329,12 +357,17 @@ SafetyOutput SafetyLayer::step(const SafetyInput& input) noexcept {
   const double max_change = force_rate_limit_ * std::min(dt_s, options_.max_tick_interval_s);
   const Vec3 change = target - previous_force_;
   const double change_size = safe_norm(change);
-  bool rate_clipped = false;
   if (change_size > max_change) {
     target = previous_force_ + change * (max_change / change_size);
     rate_clipped = true;
   }
+  return target;
+}
 
+// Each clipping episode is reported once, again only after kQuietTicksBeforeReraise ticks
+// without clipping.
+void SafetyLayer::report_clipping(bool force_clipped, bool rate_clipped,
+                                  SafetyOutput& output) noexcept {
   if (force_clipped) {
     clipping_quiet_ticks_ = 0;
     if (!clipping_) output.events |= kEventForceLimited;
@@ -349,13 +382,6 @@ SafetyOutput SafetyLayer::step(const SafetyInput& input) noexcept {
   } else if (rate_clipping_ && ++rate_quiet_ticks_ >= kQuietTicksBeforeReraise) {
     rate_clipping_ = false;
   }
-
-  previous_force_ = target;
-  output.force = target;
-  output.scale = scale_;
-  output.state = state_;
-  output.clipped = force_clipped || rate_clipped;
-  return output;
 }
 
 std::string PassivityOptions::validate() const {

@@ -49,8 +49,8 @@ struct SafetyOptions {
   // A longer gap is a stalled tick: trip. What the device holds meanwhile is bounded by this
   // (the derivation in docs/haptic-safety.md); the HapticMaster's I/O watchdog uses it too.
   double max_tick_stall_s = 0.1;
-  int max_stale_ticks = 50;            // ticks without a new device sample: stalled
-  std::string validate() const;        // empty when usable, else one line naming the option
+  int max_stale_ticks = 50;      // ticks without a new device sample: stalled
+  std::string validate() const;  // empty when usable, else one line naming the option
 };
 
 enum class SafetyState { kStarting, kRunning, kRampingDown, kStopped };
@@ -133,6 +133,17 @@ class SafetyLayer {
 
   void begin_ramp_down(double time_s, std::uint32_t event, SafetyOutput& output) noexcept;
   SafetyOutput stopped_output(std::uint32_t events) noexcept;
+  // step()'s stages; like it, none allocates, locks or throws.
+  double advance_clock(double time_s, std::uint64_t sequence) noexcept;  // dt (0 at first)
+  void check_trips(const SafetyInput& input, bool first_tick, double dt_s,
+                   SafetyOutput& output) noexcept;
+  void check_stale(double time_s, std::uint64_t sequence, SafetyOutput& output) noexcept;
+  void check_motion(double time_s, const DeviceSample& sample, SafetyOutput& output) noexcept;
+  SafetyOutput ramp_down(double time_s, SafetyOutput output) noexcept;
+  void advance_start_ramp(double time_s, SafetyOutput& output) noexcept;
+  Vec3 limit_force(const Vec3& desired_force, double dt_s, bool& force_clipped,
+                   bool& rate_clipped) const noexcept;
+  void report_clipping(bool force_clipped, bool rate_clipped, SafetyOutput& output) noexcept;
 };
 
 // Passivity observer and controller on the active terms (after Hannaford and Ryu). The

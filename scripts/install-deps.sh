@@ -23,6 +23,8 @@ packages=(
   socat                       # RTU tests over a pseudo-terminal pair
   weasyprint                  # doorbench spec renders spec.html to spec.pdf
   clang libclang-rt-14-dev    # libFuzzer and the sanitizers for the parsers' fuzz targets (fuzz/)
+  libboost-math-dev           # Boost.Math: Student-t quantile (calibration), exact binomial test (A/B)
+  zlib1g-dev                  # zlib's crc32() for the recording journal's checksums
 )
 
 missing=()

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Installs what is missing, checks the layers (scripts/check_includes.py, docs/architecture.md),
-# builds doorbench with warnings as errors, fuzzes the parsers for a bounded time
+# builds doorbench with warnings as errors, checks that no function is too long
+# (scripts/check_function_length.py), fuzzes the parsers for a bounded time
 # (scripts/fuzz.sh, docs/fuzzing.md), and runs every test, the slow ones included.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -9,5 +10,6 @@ python3 scripts/check_includes.py
 build_dir=${DOORBENCH_BUILD_DIR:-build}
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DDOORBENCH_WERROR=ON
 cmake --build "$build_dir" -j "$(nproc)"
+python3 scripts/check_function_length.py
 bash scripts/fuzz.sh "${DOORBENCH_FUZZ_SECONDS:-20}"
 ctest --test-dir "$build_dir" --output-on-failure -j "$(nproc)"

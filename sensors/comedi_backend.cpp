@@ -123,6 +123,42 @@ std::string ComediSetup::brief_report() const {
   return out.str();
 }
 
+namespace {
+
+// The channels' numbers on their subdevice: all on one, so that one command samples them.
+std::vector<unsigned> channel_numbers(const RigDefinition& rig, unsigned& subdevice) {
+  std::vector<unsigned> numbers;
+  for (std::size_t i = 0; i < rig.channels.size(); ++i) {
+    const RigChannel& rc = rig.channels[i];
+    if (rc.backend != "comedi") {
+      throw std::invalid_argument(rig.source + ": channel " + rc.name + " uses backend " +
+                                  rc.backend + "; the comedi backend records comedi channels only");
+    }
+    unsigned on = 0, channel = 0;
+    if (!parse_address(rc.address, on, channel)) {
+      throw std::invalid_argument(rig.source + ": channel " + rc.name + ": address \"" +
+                                  rc.address +
+                                  "\" is not a comedi address SUBDEVICE/CHANNEL, e.g. \"0/3\"");
+    }
+    if (i == 0) subdevice = on;
+    if (on != subdevice) {
+      throw std::invalid_argument(rig.source + ": channel " + rc.name + " is on subdevice " +
+                                  std::to_string(on) + " but channel " + rig.channels[0].name +
+                                  " on subdevice " + std::to_string(subdevice) +
+                                  "; one command samples one subdevice");
+    }
+    numbers.push_back(channel);
+  }
+  return numbers;
+}
+
+// A count range's ends clamped into a command argument (1 .. 2^32 − 1).
+unsigned command_argument(long long value) {
+  return static_cast<unsigned>(std::clamp(value, 1LL, 0xffffffffLL));
+}
+
+}  // namespace
+
 ComediBackend::ComediBackend(const RigDefinition& rig, const ComediApi& api,
                              const ComediOptions& options)
     : api_(api), options_(options) {
@@ -131,277 +167,289 @@ ComediBackend::ComediBackend(const RigDefinition& rig, const ComediApi& api,
   }
   if (rig.channels.empty()) throw std::invalid_argument(rig.source + ": no channels");
   setup_.device = rig.daq_device;
-  const std::string& dev = setup_.device;
-
-  // The channels' addresses: all on one subdevice, so one command samples them.
-  std::vector<unsigned> channel_numbers;
-  for (std::size_t i = 0; i < rig.channels.size(); ++i) {
-    const RigChannel& rc = rig.channels[i];
-    if (rc.backend != "comedi") {
-      throw std::invalid_argument(rig.source + ": channel " + rc.name + " uses backend " +
-                                  rc.backend + "; the comedi backend records comedi channels only");
-    }
-    unsigned subdevice = 0, channel = 0;
-    if (!parse_address(rc.address, subdevice, channel)) {
-      throw std::invalid_argument(rig.source + ": channel " + rc.name + ": address \"" +
-                                  rc.address +
-                                  "\" is not a comedi address SUBDEVICE/CHANNEL, e.g. \"0/3\"");
-    }
-    if (i == 0) setup_.subdevice = subdevice;
-    if (subdevice != setup_.subdevice) {
-      throw std::invalid_argument(
-          rig.source + ": channel " + rc.name + " is on subdevice " + std::to_string(subdevice) +
-          " but channel " + rig.channels[0].name + " on subdevice " +
-          std::to_string(setup_.subdevice) + "; one command samples one subdevice");
-    }
-    channel_numbers.push_back(channel);
-  }
-
-  device_ = api_.open(dev.c_str());
-  if (device_ == nullptr) {
-    const int error = api_.errno_value();
-    std::string message = dev + ": cannot open the comedi device: " + api_.last_error();
-    if (error == ENOENT) {
-      message +=
-          " (no such device file: is a card installed, its comedi driver loaded and the "
-          "device configured? A USB cDAQ-9172 has no comedi driver)";
-    }
-    throw ComediError(message);
-  }
+  const std::vector<unsigned> numbers = channel_numbers(rig, setup_.subdevice);
+  open_device();
   try {
-    const char* driver = api_.get_driver_name(device_);
-    const char* board = api_.get_board_name(device_);
-    setup_.driver = driver ? driver : "?";
-    setup_.board = board ? board : "?";
-    const unsigned subdevice = setup_.subdevice;
-    const std::string where = dev + " subdevice " + std::to_string(subdevice);
-    const int subdevices = api_.get_n_subdevices(device_);
-    if (subdevices < 0 || subdevice >= static_cast<unsigned>(subdevices)) {
-      throw ComediError(dev + ": no subdevice " + std::to_string(subdevice) + " (the board has " +
-                        std::to_string(std::max(subdevices, 0)) + ")");
-    }
-    if (api_.get_subdevice_type(device_, subdevice) != COMEDI_SUBD_AI) {
-      throw ComediError(where + " is " +
-                        comedi_subdevice_type_name(api_.get_subdevice_type(device_, subdevice)) +
-                        ", not analog input");
-    }
-    const int flags = api_.get_subdevice_flags(device_, subdevice);
-    if (flags < 0 || !(flags & SDF_CMD_READ)) {
-      throw ComediError(where + " cannot run input commands (no SDF_CMD_READ)");
-    }
-    setup_.sample_bytes = (flags & SDF_LSAMPL) ? 4 : 2;
-    const int n_channels = api_.get_n_channels(device_, subdevice);
-
-    // Soft calibration, where the board has one.
-    if (flags & SDF_SOFT_CALIBRATED) {
-      char* path = api_.get_default_calibration_path(device_);
-      if (path != nullptr) {
-        calibration_ = api_.parse_calibration_file(path);
-        if (calibration_ == nullptr) {
-          setup_.warnings.push_back(
-              "the board is soft-calibrated but its calibration file " + std::string(path) +
-              " cannot be read (run comedi_soft_calibrate); converting with comedi_to_phys");
-        }
-        std::free(path);
-      } else {
-        setup_.warnings.push_back(
-            "the board is soft-calibrated but comedilib names no calibration file; "
-            "converting with comedi_to_phys");
-      }
-    }
-
-    const std::uint32_t expected_maxdata = (std::uint32_t{1} << rig.daq_resolution_bits) - 1;
+    const int flags = check_subdevice();
+    const int n_channels = api_.get_n_channels(device_, setup_.subdevice);
+    load_soft_calibration(flags);
     for (std::size_t i = 0; i < rig.channels.size(); ++i) {
-      const RigChannel& rc = rig.channels[i];
-      ComediSetup::Channel c;
-      c.name = rc.name;
-      c.channel = channel_numbers[i];
-      const std::string label = "channel " + rc.name + " (" + rc.address + ")";
-      if (n_channels < 0 || c.channel >= static_cast<unsigned>(n_channels)) {
-        throw ComediError(where + ": " + label + ": no channel " + std::to_string(c.channel) +
-                          " (the subdevice has " + std::to_string(std::max(n_channels, 0)) + ")");
-      }
-      c.maxdata = api_.get_maxdata(device_, subdevice, c.channel);
-      if (c.maxdata != expected_maxdata) {
-        throw ComediError(
-            where + ": " + label + ": maxdata is " + std::to_string(c.maxdata) +
-            " but the rig says resolution_bits = " + std::to_string(rig.daq_resolution_bits) +
-            " (maxdata " + std::to_string(expected_maxdata) + ")");
-      }
-      // The range: the board's range equal to the rig's range_V.
-      const int n_ranges = api_.get_n_ranges(device_, subdevice, c.channel);
-      std::string available;
-      bool found = false;
-      for (int r = 0; r < n_ranges && !found; ++r) {
-        const comedi_range* range = api_.get_range(device_, subdevice, c.channel, r);
-        if (range == nullptr || range->unit != UNIT_volt) continue;
-        const double tolerance = 1e-9 * std::max(1.0, std::abs(range->max - range->min));
-        if (std::abs(range->min - rc.range_min_V) <= tolerance &&
-            std::abs(range->max - rc.range_max_V) <= tolerance) {
-          c.range = static_cast<unsigned>(r);
-          c.range_min_V = range->min;
-          c.range_max_V = range->max;
-          found = true;
-        }
-        available.append(available.empty() ? "" : ", ").append(range_text(range->min, range->max));
-      }
-      if (!found) {
-        throw ComediError(where + ": " + label + ": the board has no range " +
-                          range_text(rc.range_min_V, rc.range_max_V) + "; its voltage ranges are " +
-                          (available.empty() ? "none" : available));
-      }
-      c.aref = aref_of(rc.aref);
-      if (!(flags & aref_flag(c.aref))) {
-        throw ComediError(where + ": " + label + ": aref " + comedi_aref_name(c.aref) +
-                          " is not supported by the subdevice");
-      }
-      chanlist_.push_back(CR_PACK(c.channel, c.range, c.aref));
-
-      // Counts → volts, as the session will store it: a line.
-      comedi_polynomial_t polynomial{};
-      if (calibration_ != nullptr &&
-          api_.get_softcal_converter(subdevice, c.channel, c.range, COMEDI_TO_PHYSICAL,
-                                     calibration_, &polynomial) == 0) {
-        c.conversion = "softcal";
-        c.polynomial.assign(polynomial.coefficients,
-                            polynomial.coefficients + polynomial.order + 1);
-        c.polynomial_origin = polynomial.expansion_origin;
-        // Least-squares line through the polynomial over the whole count range.
-        const int points = 1025;
-        double sx = 0, sy = 0, sxx = 0, sxy = 0;
-        std::vector<double> xs(points), ys(points);
-        for (int k = 0; k < points; ++k) {
-          xs[k] = std::round(static_cast<double>(c.maxdata) * k / (points - 1));
-          ys[k] = api_.to_physical(static_cast<lsampl_t>(xs[k]), &polynomial);
-          sx += xs[k];
-          sy += ys[k];
-          sxx += xs[k] * xs[k];
-          sxy += xs[k] * ys[k];
-        }
-        c.raw_scale_V = (points * sxy - sx * sy) / (points * sxx - sx * sx);
-        c.raw_offset_V = (sy - c.raw_scale_V * sx) / points;
-        for (int k = 0; k < points; ++k) {
-          c.line_deviation_V = std::max(c.line_deviation_V,
-                                        std::abs(c.raw_offset_V + c.raw_scale_V * xs[k] - ys[k]));
-        }
-        if (!std::isfinite(c.raw_scale_V) || !std::isfinite(c.raw_offset_V)) {
-          throw ComediError(where + ": " + label + ": the soft calibration gives no finite values");
-        }
-      } else {
-        if (calibration_ != nullptr) {
-          setup_.warnings.push_back(label +
-                                    ": the calibration file has no soft calibration for "
-                                    "range " +
-                                    std::to_string(c.range) + "; using comedi_to_phys");
-        }
-        c.conversion = "comedi_to_phys";
-        // comedi_to_phys is linear (min + (max − min) · data / maxdata); it gives NaN at 0
-        // and maxdata by default, so the line is taken through two inner points.
-        comedi_range* range = api_.get_range(device_, subdevice, c.channel, c.range);
-        const lsampl_t low = 1, high = c.maxdata - 1;
-        const double v_low = api_.to_phys(low, range, c.maxdata);
-        const double v_high = api_.to_phys(high, range, c.maxdata);
-        c.raw_scale_V = (v_high - v_low) / static_cast<double>(high - low);
-        c.raw_offset_V = v_low - c.raw_scale_V * low;
-        if (!std::isfinite(c.raw_scale_V) || !std::isfinite(c.raw_offset_V)) {
-          throw ComediError(where + ": " + label + ": comedi_to_phys gives no finite values");
-        }
-      }
-      setup_.channels.push_back(c);
+      setup_.channels.push_back(configure_channel(rig.channels[i], numbers[i], flags,
+                                                  rig.daq_resolution_bits, n_channels));
     }
-
-    // The command.
-    setup_.requested_scan_rate_hz = rig.sample_rate_hz;
-    setup_.requested_convert_interval_s = rig.convert_interval_s;
-    command_.subdev = subdevice;
-    command_.flags = 0;
-    command_.start_src = TRIG_INT;
-    command_.start_arg = 0;
-    setup_.start = "software (TRIG_INT 0)";
-    if (!rig.daq_start_trigger.empty()) {
-      const auto trigger =
-          std::find_if(rig.triggers.begin(), rig.triggers.end(),
-                       [&](const RigTrigger& t) { return t.name == rig.daq_start_trigger; });
-      if (trigger == rig.triggers.end()) {
-        throw std::invalid_argument(rig.source + ": daq.start_trigger \"" + rig.daq_start_trigger +
-                                    "\" names no trigger");
-      }
-      if (trigger->kind == "external") {
-        unsigned line = 0;
-        command_.start_src = TRIG_EXT;
-        if (trigger->source.rfind("PFI", 0) == 0 &&
-            parse_unsigned(std::string_view(trigger->source).substr(3), line)) {
-          // NI boards: channel n of the start argument is PFI n; CR_EDGE: on the rising edge.
-          command_.start_arg = line | CR_EDGE;
-        } else if (parse_unsigned(trigger->source, line)) {
-          command_.start_arg = line;  // a driver-specific TRIG_EXT argument, as it is
-        } else {
-          throw std::invalid_argument(rig.source + ": trigger " + trigger->name + ": source \"" +
-                                      trigger->source +
-                                      "\" is neither PFIn nor a number (the TRIG_EXT argument)");
-        }
-        setup_.start = "external " + trigger->source + " (TRIG_EXT " +
-                       std::to_string(command_.start_arg) + ")";
-      } else {
-        setup_.start = "software, trigger " + trigger->name + " (TRIG_INT 0)";
-      }
-    }
-    command_.scan_begin_src = TRIG_TIMER;
-    command_.scan_begin_arg = static_cast<unsigned>(
-        std::clamp(std::llround(1e9 / rig.sample_rate_hz), 1LL, 0xffffffffLL));
-    if (rig.convert_interval_s > 0) {
-      command_.convert_src = TRIG_TIMER;
-      command_.convert_arg = static_cast<unsigned>(
-          std::clamp(std::llround(rig.convert_interval_s * 1e9), 1LL, 0xffffffffLL));
-    } else {
-      command_.convert_src = TRIG_NOW;
-      command_.convert_arg = 0;
-    }
-    command_.scan_end_src = TRIG_COUNT;
-    command_.scan_end_arg = static_cast<unsigned>(chanlist_.size());
-    if (options_.duration_s > 0) {
-      command_.stop_src = TRIG_COUNT;
-      command_.stop_arg = static_cast<unsigned>(
-          std::clamp(std::llround(options_.duration_s * rig.sample_rate_hz), 1LL, 0xffffffffLL));
-    } else {
-      command_.stop_src = TRIG_NONE;
-      command_.stop_arg = 0;
-    }
-    command_.chanlist = chanlist_.data();
-    command_.chanlist_len = static_cast<unsigned>(chanlist_.size());
-    settle_command(1);
-    setup_.achieved_scan_rate_hz = 1e9 / command_.scan_begin_arg;
-    // The stop count from the rate the board will really run at.
-    if (options_.duration_s > 0) {
-      const long long wanted =
-          std::max(1LL, std::llround(options_.duration_s * setup_.achieved_scan_rate_hz));
-      if (wanted <= 0xffffffffLL && command_.stop_arg != wanted) {
-        command_.stop_arg = static_cast<unsigned>(wanted);
-        settle_command(2);
-      }
-      if (wanted > 0xffffffffLL || command_.stop_arg < wanted) {
-        // The board counts fewer scans than asked (NI boards: 2^24 − 1): acquire
-        // continuously; the recorder stops after its duration and stop() cancels.
-        setup_.warnings.push_back("the board's stop count holds at most " +
-                                  std::to_string(command_.stop_arg) + " scans, fewer than the " +
-                                  std::to_string(wanted) +
-                                  " asked for: acquiring with stop TRIG_NONE instead");
-        command_.stop_src = TRIG_NONE;
-        command_.stop_arg = 0;
-        settle_command(3);
-      }
-      setup_.achieved_scan_rate_hz = 1e9 / command_.scan_begin_arg;
-      setup_.stop_scans = command_.stop_src == TRIG_COUNT ? command_.stop_arg : 0;
-    }
-    setup_.achieved_convert_interval_s =
-        command_.convert_src == TRIG_TIMER ? command_.convert_arg * 1e-9 : 0.0;
+    build_command(rig);
   } catch (...) {
     if (calibration_) api_.cleanup_calibration(calibration_);
     api_.close(device_);
     throw;
   }
+  describe_session_channels(rig);
+}
 
-  // What the session gets.
+std::string ComediBackend::where() const {
+  return setup_.device + " subdevice " + std::to_string(setup_.subdevice);
+}
+
+void ComediBackend::open_device() {
+  device_ = api_.open(setup_.device.c_str());
+  if (device_ != nullptr) return;
+  const int error = api_.errno_value();
+  std::string message = setup_.device + ": cannot open the comedi device: " + api_.last_error();
+  if (error == ENOENT) {
+    message +=
+        " (no such device file: is a card installed, its comedi driver loaded and the "
+        "device configured? A USB cDAQ-9172 has no comedi driver)";
+  }
+  throw ComediError(message);
+}
+
+int ComediBackend::check_subdevice() {
+  const char* driver = api_.get_driver_name(device_);
+  const char* board = api_.get_board_name(device_);
+  setup_.driver = driver ? driver : "?";
+  setup_.board = board ? board : "?";
+  const unsigned subdevice = setup_.subdevice;
+  const int subdevices = api_.get_n_subdevices(device_);
+  if (subdevices < 0 || subdevice >= static_cast<unsigned>(subdevices)) {
+    throw ComediError(setup_.device + ": no subdevice " + std::to_string(subdevice) +
+                      " (the board has " + std::to_string(std::max(subdevices, 0)) + ")");
+  }
+  if (api_.get_subdevice_type(device_, subdevice) != COMEDI_SUBD_AI) {
+    throw ComediError(where() + " is " +
+                      comedi_subdevice_type_name(api_.get_subdevice_type(device_, subdevice)) +
+                      ", not analog input");
+  }
+  const int flags = api_.get_subdevice_flags(device_, subdevice);
+  if (flags < 0 || !(flags & SDF_CMD_READ)) {
+    throw ComediError(where() + " cannot run input commands (no SDF_CMD_READ)");
+  }
+  setup_.sample_bytes = (flags & SDF_LSAMPL) ? 4 : 2;
+  return flags;
+}
+
+void ComediBackend::load_soft_calibration(int flags) {
+  if (!(flags & SDF_SOFT_CALIBRATED)) return;
+  char* path = api_.get_default_calibration_path(device_);
+  if (path == nullptr) {
+    setup_.warnings.push_back(
+        "the board is soft-calibrated but comedilib names no calibration file; "
+        "converting with comedi_to_phys");
+    return;
+  }
+  calibration_ = api_.parse_calibration_file(path);
+  if (calibration_ == nullptr) {
+    setup_.warnings.push_back(
+        "the board is soft-calibrated but its calibration file " + std::string(path) +
+        " cannot be read (run comedi_soft_calibrate); converting with comedi_to_phys");
+  }
+  std::free(path);
+}
+
+ComediSetup::Channel ComediBackend::configure_channel(const RigChannel& rc, unsigned number,
+                                                      int flags, int resolution_bits,
+                                                      int n_channels) {
+  ComediSetup::Channel c;
+  c.name = rc.name;
+  c.channel = number;
+  const std::string label = "channel " + rc.name + " (" + rc.address + ")";
+  if (n_channels < 0 || c.channel >= static_cast<unsigned>(n_channels)) {
+    throw ComediError(where() + ": " + label + ": no channel " + std::to_string(c.channel) +
+                      " (the subdevice has " + std::to_string(std::max(n_channels, 0)) + ")");
+  }
+  const std::uint32_t expected_maxdata = (std::uint32_t{1} << resolution_bits) - 1;
+  c.maxdata = api_.get_maxdata(device_, setup_.subdevice, c.channel);
+  if (c.maxdata != expected_maxdata) {
+    throw ComediError(where() + ": " + label + ": maxdata is " + std::to_string(c.maxdata) +
+                      " but the rig says resolution_bits = " + std::to_string(resolution_bits) +
+                      " (maxdata " + std::to_string(expected_maxdata) + ")");
+  }
+  choose_range(rc, label, c);
+  c.aref = aref_of(rc.aref);
+  if (!(flags & aref_flag(c.aref))) {
+    throw ComediError(where() + ": " + label + ": aref " + comedi_aref_name(c.aref) +
+                      " is not supported by the subdevice");
+  }
+  chanlist_.push_back(CR_PACK(c.channel, c.range, c.aref));
+  convert_counts_to_volts(label, c);
+  return c;
+}
+
+// The board's range equal to the rig's range_V.
+void ComediBackend::choose_range(const RigChannel& rc, const std::string& label,
+                                 ComediSetup::Channel& c) {
+  const int n_ranges = api_.get_n_ranges(device_, setup_.subdevice, c.channel);
+  std::string available;
+  for (int r = 0; r < n_ranges; ++r) {
+    const comedi_range* range = api_.get_range(device_, setup_.subdevice, c.channel, r);
+    if (range == nullptr || range->unit != UNIT_volt) continue;
+    const double tolerance = 1e-9 * std::max(1.0, std::abs(range->max - range->min));
+    if (std::abs(range->min - rc.range_min_V) <= tolerance &&
+        std::abs(range->max - rc.range_max_V) <= tolerance) {
+      c.range = static_cast<unsigned>(r);
+      c.range_min_V = range->min;
+      c.range_max_V = range->max;
+      return;
+    }
+    available.append(available.empty() ? "" : ", ").append(range_text(range->min, range->max));
+  }
+  throw ComediError(where() + ": " + label + ": the board has no range " +
+                    range_text(rc.range_min_V, rc.range_max_V) + "; its voltage ranges are " +
+                    (available.empty() ? "none" : available));
+}
+
+// Counts → volts, as the session will store it: a line, from the soft calibration where
+// the calibration file has one for the channel's range, else from comedi_to_phys.
+void ComediBackend::convert_counts_to_volts(const std::string& label, ComediSetup::Channel& c) {
+  comedi_polynomial_t polynomial{};
+  if (calibration_ != nullptr &&
+      api_.get_softcal_converter(setup_.subdevice, c.channel, c.range, COMEDI_TO_PHYSICAL,
+                                 calibration_, &polynomial) == 0) {
+    line_through_soft_calibration(label, polynomial, c);
+    return;
+  }
+  if (calibration_ != nullptr) {
+    setup_.warnings.push_back(label +
+                              ": the calibration file has no soft calibration for "
+                              "range " +
+                              std::to_string(c.range) + "; using comedi_to_phys");
+  }
+  c.conversion = "comedi_to_phys";
+  // comedi_to_phys is linear (min + (max − min) · data / maxdata); it gives NaN at 0
+  // and maxdata by default, so the line is taken through two inner points.
+  comedi_range* range = api_.get_range(device_, setup_.subdevice, c.channel, c.range);
+  const lsampl_t low = 1, high = c.maxdata - 1;
+  const double v_low = api_.to_phys(low, range, c.maxdata);
+  const double v_high = api_.to_phys(high, range, c.maxdata);
+  c.raw_scale_V = (v_high - v_low) / static_cast<double>(high - low);
+  c.raw_offset_V = v_low - c.raw_scale_V * low;
+  if (!std::isfinite(c.raw_scale_V) || !std::isfinite(c.raw_offset_V)) {
+    throw ComediError(where() + ": " + label + ": comedi_to_phys gives no finite values");
+  }
+}
+
+// The least-squares line through the soft calibration's polynomial over the whole count
+// range, and how far the polynomial strays from it.
+void ComediBackend::line_through_soft_calibration(const std::string& label,
+                                                  const comedi_polynomial_t& polynomial,
+                                                  ComediSetup::Channel& c) const {
+  c.conversion = "softcal";
+  c.polynomial.assign(polynomial.coefficients, polynomial.coefficients + polynomial.order + 1);
+  c.polynomial_origin = polynomial.expansion_origin;
+  const int points = 1025;
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  std::vector<double> xs(points), ys(points);
+  for (int k = 0; k < points; ++k) {
+    xs[k] = std::round(static_cast<double>(c.maxdata) * k / (points - 1));
+    ys[k] = api_.to_physical(static_cast<lsampl_t>(xs[k]), &polynomial);
+    sx += xs[k];
+    sy += ys[k];
+    sxx += xs[k] * xs[k];
+    sxy += xs[k] * ys[k];
+  }
+  c.raw_scale_V = (points * sxy - sx * sy) / (points * sxx - sx * sx);
+  c.raw_offset_V = (sy - c.raw_scale_V * sx) / points;
+  for (int k = 0; k < points; ++k) {
+    c.line_deviation_V =
+        std::max(c.line_deviation_V, std::abs(c.raw_offset_V + c.raw_scale_V * xs[k] - ys[k]));
+  }
+  if (!std::isfinite(c.raw_scale_V) || !std::isfinite(c.raw_offset_V)) {
+    throw ComediError(where() + ": " + label + ": the soft calibration gives no finite values");
+  }
+}
+
+// The command: start, scan and convert timers, stop count; settled with the driver.
+void ComediBackend::build_command(const RigDefinition& rig) {
+  setup_.requested_scan_rate_hz = rig.sample_rate_hz;
+  setup_.requested_convert_interval_s = rig.convert_interval_s;
+  command_.subdev = setup_.subdevice;
+  command_.flags = 0;
+  choose_start(rig);
+  command_.scan_begin_src = TRIG_TIMER;
+  command_.scan_begin_arg = command_argument(std::llround(1e9 / rig.sample_rate_hz));
+  if (rig.convert_interval_s > 0) {
+    command_.convert_src = TRIG_TIMER;
+    command_.convert_arg = command_argument(std::llround(rig.convert_interval_s * 1e9));
+  } else {
+    command_.convert_src = TRIG_NOW;
+    command_.convert_arg = 0;
+  }
+  command_.scan_end_src = TRIG_COUNT;
+  command_.scan_end_arg = static_cast<unsigned>(chanlist_.size());
+  if (options_.duration_s > 0) {
+    command_.stop_src = TRIG_COUNT;
+    command_.stop_arg = command_argument(std::llround(options_.duration_s * rig.sample_rate_hz));
+  } else {
+    command_.stop_src = TRIG_NONE;
+    command_.stop_arg = 0;
+  }
+  command_.chanlist = chanlist_.data();
+  command_.chanlist_len = static_cast<unsigned>(chanlist_.size());
+  settle_command(1);
+  setup_.achieved_scan_rate_hz = 1e9 / command_.scan_begin_arg;
+  if (options_.duration_s > 0) settle_stop_count();
+  setup_.achieved_convert_interval_s =
+      command_.convert_src == TRIG_TIMER ? command_.convert_arg * 1e-9 : 0.0;
+}
+
+// Software start (TRIG_INT 0), or the rig's daq.start_trigger: an external line.
+void ComediBackend::choose_start(const RigDefinition& rig) {
+  command_.start_src = TRIG_INT;
+  command_.start_arg = 0;
+  setup_.start = "software (TRIG_INT 0)";
+  if (rig.daq_start_trigger.empty()) return;
+  const auto trigger =
+      std::find_if(rig.triggers.begin(), rig.triggers.end(),
+                   [&](const RigTrigger& t) { return t.name == rig.daq_start_trigger; });
+  if (trigger == rig.triggers.end()) {
+    throw std::invalid_argument(rig.source + ": daq.start_trigger \"" + rig.daq_start_trigger +
+                                "\" names no trigger");
+  }
+  if (trigger->kind != "external") {
+    setup_.start = "software, trigger " + trigger->name + " (TRIG_INT 0)";
+    return;
+  }
+  unsigned line = 0;
+  command_.start_src = TRIG_EXT;
+  if (trigger->source.rfind("PFI", 0) == 0 &&
+      parse_unsigned(std::string_view(trigger->source).substr(3), line)) {
+    // NI boards: channel n of the start argument is PFI n; CR_EDGE: on the rising edge.
+    command_.start_arg = line | CR_EDGE;
+  } else if (parse_unsigned(trigger->source, line)) {
+    command_.start_arg = line;  // a driver-specific TRIG_EXT argument, as it is
+  } else {
+    throw std::invalid_argument(rig.source + ": trigger " + trigger->name + ": source \"" +
+                                trigger->source +
+                                "\" is neither PFIn nor a number (the TRIG_EXT argument)");
+  }
+  setup_.start =
+      "external " + trigger->source + " (TRIG_EXT " + std::to_string(command_.start_arg) + ")";
+}
+
+// The stop count from the rate the board will really run at.
+void ComediBackend::settle_stop_count() {
+  const long long wanted =
+      std::max(1LL, std::llround(options_.duration_s * setup_.achieved_scan_rate_hz));
+  if (wanted <= 0xffffffffLL && command_.stop_arg != wanted) {
+    command_.stop_arg = static_cast<unsigned>(wanted);
+    settle_command(2);
+  }
+  if (wanted > 0xffffffffLL || command_.stop_arg < wanted) {
+    // The board counts fewer scans than asked (NI boards: 2^24 − 1): acquire
+    // continuously; the recorder stops after its duration and stop() cancels.
+    setup_.warnings.push_back("the board's stop count holds at most " +
+                              std::to_string(command_.stop_arg) + " scans, fewer than the " +
+                              std::to_string(wanted) +
+                              " asked for: acquiring with stop TRIG_NONE instead");
+    command_.stop_src = TRIG_NONE;
+    command_.stop_arg = 0;
+    settle_command(3);
+  }
+  setup_.achieved_scan_rate_hz = 1e9 / command_.scan_begin_arg;
+  setup_.stop_scans = command_.stop_src == TRIG_COUNT ? command_.stop_arg : 0;
+}
+
+// What the session gets: the channels, their calibration records, the read buffers.
+void ComediBackend::describe_session_channels(const RigDefinition& rig) {
   for (std::size_t i = 0; i < rig.channels.size(); ++i) {
     const RigChannel& rc = rig.channels[i];
     const ComediSetup::Channel& c = setup_.channels[i];

@@ -113,6 +113,22 @@ class ComediBackend final : public AcquisitionBackend {
   void request_stop() { stop_requested_.store(true); }
 
  private:
+  // The set-up's stages, in the constructor's order.
+  void open_device();
+  int check_subdevice();  // the subdevice's flags
+  void load_soft_calibration(int flags);
+  ComediSetup::Channel configure_channel(const RigChannel& rc, unsigned number, int flags,
+                                         int resolution_bits, int n_channels);
+  void choose_range(const RigChannel& rc, const std::string& label, ComediSetup::Channel& c);
+  void convert_counts_to_volts(const std::string& label, ComediSetup::Channel& c);
+  void line_through_soft_calibration(const std::string& label,
+                                     const comedi_polynomial_t& polynomial,
+                                     ComediSetup::Channel& c) const;
+  void build_command(const RigDefinition& rig);
+  void choose_start(const RigDefinition& rig);
+  void settle_stop_count();
+  void describe_session_channels(const RigDefinition& rig);
+  std::string where() const;  // "DEVICE subdevice N", for messages
   void settle_command(int round);
   void push_event(ScanBlock& block, double time_s, const std::string& channel,
                   const std::string& detail);

@@ -103,3 +103,26 @@ TEST_CASE("Session CSV: stroke ids and regular times survive the round trip", "[
   CHECK(back.time_s == original.time_s);
   CHECK(*back.stroke == *original.stroke);
 }
+
+TEST_CASE("Session CSV: stroke columns from stroke events, in any order", "[session_csv]") {
+  const std::vector<double> time_s = {0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7};
+  // Out of order; 0.1 + 0.2 is 0.30000000000000004 and still applies at sample 0.3.
+  const std::vector<SessionEvent> events = {
+      {0.5, "stroke_start", "", "closing"},
+      {0.1 + 0.2, "stroke_end", "", ""},
+      {0.1, "stroke_start", "", "stroke 7"},
+      {0.6, "stroke_end", "", ""},
+      {0.65, "mark", "", "stroke 2"},  // not a stroke event
+      {0.7, "stroke_start", "", "opening"},
+  };
+  const StrokeColumns columns = stroke_columns_from_events(events, time_s);
+  CHECK(columns.any_stroke);
+  // Stroke 7 keeps its id; the next ones are numbered on from it.
+  CHECK(columns.stroke == std::vector<int>{0, 7, 7, 0, 0, 8, 0, 9});
+  CHECK(columns.sign == std::vector<int>{1, 1, 1, 1, 1, -1, -1, 1});
+
+  const StrokeColumns none = stroke_columns_from_events({{0.2, "stroke_end", "", ""}}, time_s);
+  CHECK_FALSE(none.any_stroke);
+  CHECK(none.stroke == std::vector<int>(time_s.size(), 0));
+  CHECK(none.sign == std::vector<int>(time_s.size(), 1));
+}
