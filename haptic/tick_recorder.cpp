@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "analysis/parameter_file.h"
@@ -98,8 +99,8 @@ ChannelInfo value_channel(const std::string& name, const std::string& kind,
   info.raw_unit = unit;
   info.unit = unit;
   info.sample_rate_hz = 0.0;  // explicit times: the ticks' own
-  info.range_min = -1e300;
-  info.range_max = 1e300;
+  info.range_min = -std::numeric_limits<double>::infinity();  // unknown (session-format.md)
+  info.range_max = std::numeric_limits<double>::infinity();
   return info;
 }
 

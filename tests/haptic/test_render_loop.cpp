@@ -1,6 +1,7 @@
 // The render loop's tick, its parameter hand-off and its recording, on a small rotary test
 // device in simulated time (tests/support/haptic_test_device.h).
 #include <catch2/catch.hpp>
+#include <limits>
 #include <cmath>
 
 #include "acquisition/session_csv.h"
@@ -235,6 +236,12 @@ TEST_CASE("playback: ticks, parameter changes and events stream into a session a
   const SessionReader session(path);
   CHECK(session.sample_count("force") == summary.ticks);
   CHECK(session.sample_count("term_snap") == summary.ticks);
+  // A value whose range nobody knows is stored as ±inf (session-format.md), not ±1e300.
+  for (const ChannelInfo& channel : session.channels()) {
+    INFO(channel.name);
+    CHECK(channel.range_min == -std::numeric_limits<double>::infinity());
+    CHECK(channel.range_max == std::numeric_limits<double>::infinity());
+  }
   CHECK(session.read_group_attribute("haptic", "handle_radius_m") == "0.57999999999999996");
   CHECK_THAT(session.read_group_attribute("haptic/parameter_sets/set_2", "description"),
              Catch::Equals("smoother"));
