@@ -38,22 +38,34 @@ PreparedData synthetic_strokes(const DoorModel& model, const SyntheticStrokeOpti
     const RecordedForce recorded(times, by_hand.force_N);
     const Trajectory run = simulate(model, recorded, DoorState{}, times);
 
+    const SampleNoise noise{options.force_noise_N, options.angle_noise_rad,
+                            options.rate_noise_rad_s};
     for (int marker : {1, 2}) {
-      Stroke stroke;
-      stroke.id = static_cast<int>(2 * r) + marker;
-      stroke.direction = marker == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing;
-      for (std::size_t i = 0; i < run.size(); ++i) {
-        if (hand.stroke_at(times[i]) != marker) continue;
-        stroke.time_s.push_back(times[i]);
-        stroke.force_N.push_back(run.force_N[i] + options.force_noise_N * normal(random));
-        stroke.theta_rad.push_back(run.theta_rad[i] + options.angle_noise_rad * normal(random));
-        stroke.omega_rad_s.push_back(run.omega_rad_s[i] +
-                                     options.rate_noise_rad_s * normal(random));
-      }
-      data.strokes.push_back(std::move(stroke));
+      data.strokes.push_back(noisy_stroke(
+          run, times, static_cast<int>(2 * r) + marker,
+          marker == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing,
+          [&](std::size_t i) { return hand.stroke_at(times[i]) == marker; }, noise, random,
+          normal));
     }
   }
   return data;
+}
+
+Stroke noisy_stroke(const Trajectory& run, const std::vector<double>& times, int id,
+                    StrokeDirection direction, const std::function<bool(std::size_t)>& in_stroke,
+                    const SampleNoise& noise, std::mt19937& random,
+                    std::normal_distribution<double>& normal) {
+  Stroke stroke;
+  stroke.id = id;
+  stroke.direction = direction;
+  for (std::size_t i = 0; i < run.size(); ++i) {
+    if (!in_stroke(i)) continue;
+    stroke.time_s.push_back(times[i]);
+    stroke.force_N.push_back(run.force_N[i] + noise.force_N * normal(random));
+    stroke.theta_rad.push_back(run.theta_rad[i] + noise.angle_rad * normal(random));
+    stroke.omega_rad_s.push_back(run.omega_rad_s[i] + noise.rate_rad_s * normal(random));
+  }
+  return stroke;
 }
 
 }  // namespace doorbench

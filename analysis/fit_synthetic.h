@@ -9,10 +9,14 @@
 // model driven by the recorded force does, so a noise-free fit at the true parameters
 // leaves only the integrators' error. Gaussian noise is added afterwards to the force,
 // angle and rate, as a bench's sensors would.
+#include <cstddef>
 #include <cstdint>
+#include <functional>
+#include <random>
 #include <vector>
 
 #include "analysis/door_model.h"
+#include "analysis/simulator.h"
 #include "analysis/strokes.h"
 
 namespace doorbench {
@@ -36,5 +40,20 @@ struct SyntheticStrokeOptions {
 // as the virtual hand marks them. The data's noise levels are the options' (the bench's
 // where an option is 0, so that a noise-free fit keeps sensible weights).
 PreparedData synthetic_strokes(const DoorModel& model, const SyntheticStrokeOptions& options);
+
+// Standard deviations of the white noise a bench's sensors add.
+struct SampleNoise {
+  double force_N = 0.0;
+  double angle_rad = 0.0;
+  double rate_rad_s = 0.0;
+};
+
+// One stroke of a simulated run as a bench would record it: the samples i of `run` (at
+// `times`) for which in_stroke(i) holds, each with Gaussian noise drawn from `normal` and
+// `random` in the order force, angle, rate (the same draws for the same generator state).
+Stroke noisy_stroke(const Trajectory& run, const std::vector<double>& times, int id,
+                    StrokeDirection direction, const std::function<bool(std::size_t)>& in_stroke,
+                    const SampleNoise& noise, std::mt19937& random,
+                    std::normal_distribution<double>& normal);
 
 }  // namespace doorbench

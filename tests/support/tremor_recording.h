@@ -28,6 +28,7 @@
 #include <vector>
 
 #include "analysis/door_model.h"
+#include "analysis/fit_synthetic.h"
 #include "analysis/simulator.h"
 #include "analysis/strokes.h"
 #include "analysis/virtual_hand.h"
@@ -120,23 +121,19 @@ inline PreparedData tremor_recording(const DoorModel& model, const TremorRecordi
     const Trajectory by_hand = simulate(model, hand, DoorState{}, times);
     const RecordedForce recorded(times, by_hand.force_N);
     const Trajectory run = simulate(model, recorded, DoorState{}, times);
+    const SampleNoise noise{options.force_noise_N, options.angle_noise_rad,
+                            options.rate_noise_rad_s};
     for (int marker : {1, 2}) {
-      Stroke stroke;
-      stroke.id = 2 * r + marker;
-      stroke.direction = marker == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing;
-      for (std::size_t i = 0; i < run.size(); ++i) {
+      // The stroke with the rest before it (up to rest_before_s), where the door starts.
+      const auto in_stroke = [&](std::size_t i) {
         const double lead_s = std::min(options.rest_before_s, times[i]);
-        if (hand.hand().stroke_at(times[i]) != marker &&
-            hand.hand().stroke_at(times[i] + lead_s) != marker) {
-          continue;
-        }
-        stroke.time_s.push_back(times[i]);
-        stroke.force_N.push_back(run.force_N[i] + options.force_noise_N * normal(random));
-        stroke.theta_rad.push_back(run.theta_rad[i] + options.angle_noise_rad * normal(random));
-        stroke.omega_rad_s.push_back(run.omega_rad_s[i] +
-                                     options.rate_noise_rad_s * normal(random));
-      }
-      data.strokes.push_back(std::move(stroke));
+        return hand.hand().stroke_at(times[i]) == marker ||
+               hand.hand().stroke_at(times[i] + lead_s) == marker;
+      };
+      data.strokes.push_back(noisy_stroke(
+          run, times, 2 * r + marker,
+          marker == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing, in_stroke, noise,
+          random, normal));
     }
   }
   return data;
