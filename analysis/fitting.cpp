@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 
 #include "analysis/constraint_check.h"
 #include "analysis/fit_problem.h"
@@ -66,6 +67,23 @@ std::string FitOptions::validate() const {
     }
   }
   return "";
+}
+
+int fit_thread_count(const FitOptions& options) {
+  if (options.num_threads > 0) return options.num_threads;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+SolverSettings solver_settings(const FitOptions& options) {
+  SolverSettings settings;
+  settings.max_iterations = options.max_iterations;
+  settings.function_tolerance = options.function_tolerance;
+  settings.parameter_tolerance = options.parameter_tolerance;
+  settings.gradient_tolerance = options.gradient_tolerance;
+  settings.equation_error_step_tolerance = options.equation_error_step_tolerance;
+  settings.robust_uncertainty = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
+  settings.threads = fit_thread_count(options);
+  return settings;
 }
 
 std::vector<std::string> default_free_parameters(const DoorModel& model) {
@@ -265,7 +283,7 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
     WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
     coarse.z() = problem.z();
     const WindowProblem::Outcome outcome =
-        coarse.solve(options, max_iterations, 10 * options.uncertainty_tolerance);
+        coarse.solve(solver_settings(options), max_iterations, 10 * options.uncertainty_tolerance);
     used = outcome.iterations;
     initial_cost = outcome.initial_cost;
     if (outcome.usable) {
@@ -274,75 +292,111 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
     }
   }
   WindowProblem::Outcome outcome =
-      problem.solve(options, std::max(1, max_iterations - used), options.uncertainty_tolerance);
+      problem.solve(solver_settings(options), std::max(1, max_iterations - used), options.uncertainty_tolerance);
   outcome.iterations += used;
   if (used > 0) outcome.initial_cost = initial_cost;
   return outcome;
 }
 
+// One cross-validation fold's refit: its strokes left out, refitted from the full fit.
+struct FoldOutcome {
+  bool refitted = false;        // false: no window, or the solver failed (note says which)
+  std::string note;
+  std::optional<DoorModel> model;
+  FoldFit fit;
+  std::vector<int> held;        // indices into data.strokes
+  FitMetrics held_out;          // on the held strokes
+};
+
+PreparedData training_data(const PreparedData& data, int folds, int fold, std::vector<int>& held) {
+  PreparedData training;
+  training.source = data.source;
+  training.handle_radius_m = data.handle_radius_m;
+  training.sample_rate_hz = data.sample_rate_hz;
+  training.rate_noise_rad_s = data.rate_noise_rad_s;
+  training.angle_noise_rad = data.angle_noise_rad;
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  for (int s = 0; s < stroke_count; ++s) {
+    if (s % folds == fold) {
+      if (data.strokes[s].size() >= 2) held.push_back(s);
+    } else {
+      training.strokes.push_back(data.strokes[s]);
+    }
+  }
+  return training;
+}
+
+std::vector<std::string> at_bound_names(const DoorModel& model, const std::vector<int>& free_index) {
+  std::vector<std::string> names;
+  const auto bounds = model.parameter_bounds();
+  for (int index : free_index) {
+    const double value = model.parameter_values()[index];
+    const double width = bounds[index].upper - bounds[index].lower;
+    if (std::abs(value - bounds[index].lower) <= 1e-6 * width ||
+        std::abs(bounds[index].upper - value) <= 1e-6 * width) {
+      names.push_back(model.parameter_name(index));
+    }
+  }
+  return names;
+}
+
+FoldOutcome refit_fold(const DoorModel& fitted, const PreparedData& data, const ParameterMap& map,
+                       const std::vector<double>& x, const FitOptions& options,
+                       const FitWeights& weights, int folds, int fold) {
+  FoldOutcome out;
+  const PreparedData training = training_data(data, folds, fold, out.held);
+  WindowProblem problem(fitted, training, map, window_fit_kind(options, fitted), weights, x);
+  if (problem.windows().empty()) return out;
+  // Coarse pass first, window states from the measured states: see docs/fitting.md
+  // ("Held out") for why the folds do not start from the full fit's window states.
+  const WindowProblem::Outcome outcome = solve_coarse_to_fine(
+      problem, fitted, training, map, options, weights, options.held_out_max_iterations);
+  if (!outcome.usable) {
+    out.note = "cross-validation fold " + std::to_string(fold + 1) +
+               " failed: " + outcome.termination;
+    return out;
+  }
+  out.refitted = true;
+  out.model = fitted.with_parameter_values(map.values(problem.x().data()));
+  const WindowOptions windows = metric_windows(options, fitted);
+  out.held_out = compute_fit_metrics(*out.model, data, windows, out.held);
+  for (int s : out.held) out.fit.held_out_strokes.push_back(data.strokes[s].id);
+  out.fit.converged = outcome.converged;
+  out.fit.termination = outcome.termination;
+  out.fit.iterations = outcome.iterations;
+  out.fit.fitted_rmse_rad_s = compute_fit_metrics(*out.model, training, windows).window.rmse();
+  out.fit.held_out_rmse_rad_s = out.held_out.window.rmse();
+  out.fit.at_bound = at_bound_names(*out.model, map.free_index);
+  return out;
+}
+
 // Held-out metrics: stroke s is in fold s mod k; each fold is refitted from the full fit
-// without its strokes, and its strokes are measured with that refit.
+// without its strokes, and its strokes are measured with that refit. The folds are
+// independent and each deterministic, so they run at once (up to fit_thread_count) and are
+// gathered in fold order: the result is the same as one after another.
 FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
                           const ParameterMap& map, const std::vector<double>& x,
                           const FitOptions& options, const FitWeights& weights, int folds,
                           std::vector<std::string>& notes, std::vector<DoorModel>& fold_models,
                           std::vector<FoldFit>& fold_fits) {
   const int stroke_count = static_cast<int>(data.strokes.size());
-  std::vector<StrokeFitMetrics> per_stroke(stroke_count);
-  std::vector<char> have(stroke_count, 0);
   ParameterMap fold_map = map;
   fold_map.base_values.assign(fitted.parameter_values().begin(), fitted.parameter_values().end());
-  for (int fold = 0; fold < folds; ++fold) {
-    PreparedData training;
-    training.source = data.source;
-    training.handle_radius_m = data.handle_radius_m;
-    training.sample_rate_hz = data.sample_rate_hz;
-    training.rate_noise_rad_s = data.rate_noise_rad_s;
-    training.angle_noise_rad = data.angle_noise_rad;
-    std::vector<int> held;
-    for (int s = 0; s < stroke_count; ++s) {
-      if (s % folds == fold) {
-        if (data.strokes[s].size() >= 2) held.push_back(s);
-      } else {
-        training.strokes.push_back(data.strokes[s]);
-      }
-    }
-    WindowProblem problem(fitted, training, fold_map, window_fit_kind(options, fitted), weights, x);
-    if (problem.windows().empty()) continue;
-    // Coarse pass first, window states from the measured states: see docs/fitting.md
-    // ("Held out") for why the folds do not start from the full fit's window states.
-    const WindowProblem::Outcome outcome = solve_coarse_to_fine(
-        problem, fitted, training, fold_map, options, weights, options.held_out_max_iterations);
-    if (!outcome.usable) {
-      notes.push_back("cross-validation fold " + std::to_string(fold + 1) +
-                      " failed: " + outcome.termination);
-      continue;
-    }
-    const DoorModel fold_model = fitted.with_parameter_values(fold_map.values(problem.x().data()));
-    fold_models.push_back(fold_model);
-    const FitMetrics metrics =
-        compute_fit_metrics(fold_model, data, metric_windows(options, fitted), held);
-    FoldFit fold_fit;
-    for (int s : held) fold_fit.held_out_strokes.push_back(data.strokes[s].id);
-    fold_fit.converged = outcome.converged;
-    fold_fit.termination = outcome.termination;
-    fold_fit.iterations = outcome.iterations;
-    fold_fit.fitted_rmse_rad_s =
-        compute_fit_metrics(fold_model, training, metric_windows(options, fitted)).window.rmse();
-    fold_fit.held_out_rmse_rad_s = metrics.window.rmse();
-    const auto bounds = fitted.parameter_bounds();
-    for (int index : fold_map.free_index) {
-      const double value = fold_model.parameter_values()[index];
-      const double width = bounds[index].upper - bounds[index].lower;
-      if (std::abs(value - bounds[index].lower) <= 1e-6 * width ||
-          std::abs(bounds[index].upper - value) <= 1e-6 * width) {
-        fold_fit.at_bound.push_back(fitted.parameter_name(index));
-      }
-    }
-    fold_fits.push_back(std::move(fold_fit));
-    for (std::size_t i = 0; i < held.size() && i < metrics.strokes.size(); ++i) {
-      per_stroke[held[i]] = metrics.strokes[i];
-      have[held[i]] = 1;
+  std::vector<FoldOutcome> outcomes(static_cast<std::size_t>(folds));
+  parallel_for(folds, fit_thread_count(options), [&](int fold) {
+    outcomes[static_cast<std::size_t>(fold)] =
+        refit_fold(fitted, data, fold_map, x, options, weights, folds, fold);
+  });
+  std::vector<StrokeFitMetrics> per_stroke(stroke_count);
+  std::vector<char> have(stroke_count, 0);
+  for (FoldOutcome& outcome : outcomes) {
+    if (!outcome.note.empty()) notes.push_back(outcome.note);
+    if (!outcome.refitted) continue;
+    fold_models.push_back(std::move(*outcome.model));
+    fold_fits.push_back(std::move(outcome.fit));
+    for (std::size_t i = 0; i < outcome.held.size() && i < outcome.held_out.strokes.size(); ++i) {
+      per_stroke[outcome.held[i]] = outcome.held_out.strokes[i];
+      have[outcome.held[i]] = 1;
     }
   }
   int unconverged = 0;
@@ -476,7 +530,7 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   // The equation-error stage, then the windows.
   if (options.equation_error_start) {
     const EquationErrorOutcome equation_error =
-        solve_equation_error(start_model, data, map, options, x_start);
+        solve_equation_error(start_model, data, map, solver_settings(options), x_start);
     summary.equation_error_iterations = equation_error.iterations;
     summary.equation_error_termination = equation_error.termination;
     if (equation_error.usable) {
@@ -512,7 +566,7 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
     rate_only.angle_residuals = false;
     WindowProblem refine(start_model, data, map, whole, rate_only, problem.x());
     // The predicted-step rule assumes least squares: Ceres' own tests only.
-    const WindowProblem::Outcome refined = refine.solve(options, options.max_iterations, 0.0);
+    const WindowProblem::Outcome refined = refine.solve(solver_settings(options), options.max_iterations, 0.0);
     const std::string norm = "L" + std::to_string(2 * options.max_objective_power);
     if (refined.usable) {
       problem.x() = refine.x();

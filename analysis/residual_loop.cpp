@@ -902,8 +902,11 @@ FitResult refit(const DoorModel& start, const FitResult& current, const FitOptio
     }
   }
   if (!best) throw std::runtime_error(failures);
+  // It starts at the better start's optimum of the fine problem: no equation-error stage and
+  // no coarse pass (which would leave that optimum for the coarse one's and come back).
   FitOptions final_fit = from_fit;
-  final_fit.equation_error_start = false;  // it starts at the optimum
+  final_fit.equation_error_start = false;
+  final_fit.coarse_first = false;
   ++fits;
   return fit_model(best->model, data, final_fit);
 }
