@@ -124,8 +124,8 @@ class WindowProblem {
 
   // Levenberg–Marquardt from the current x and z. Besides Ceres' own tests it stops when
   // the Gauss–Newton step predicts that no free parameter would move by more than
-  // `uncertainty_tolerance` of its standard uncertainty (the kind settings name), or when three accepted steps in a row moved none by more than that; 0 turns
-  // these tests off.
+  // `uncertainty_tolerance` of its standard uncertainty (the kind settings name), or when three
+  // accepted steps in a row moved none by more than that; 0 turns these tests off.
   struct Outcome {
     bool usable = false;
     bool converged = false;
@@ -149,6 +149,7 @@ class WindowProblem {
   std::vector<double>& x() { return x_; }
   const std::vector<double>& x() const { return x_; }
   std::vector<double>& z() { return z_; }
+  const std::vector<double>& z() const { return z_; }
   bool estimates_states() const { return !z_.empty(); }
   const std::vector<FitWindow>& windows() const { return windows_; }
   int residual_count() const;

@@ -25,6 +25,8 @@ namespace doorbench {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// The median of a χ² variable of one degree of freedom over its mean.
+constexpr double kChiSquare1Median = 0.454936;
 // An eigenvalue of the free parameters' scaled normal matrix below this share of the largest
 // is a direction the data does not determine (left out of the projection); a regressor
 // with less than this share of its norm left after the projection is indistinguishable
@@ -318,16 +320,45 @@ struct Linearization {
   int failed_windows = 0;  // windows whose simulation failed (left out)
   // Σe² and samples per band of measured |ω| (kSpeedBandEdges_rad_s).
   std::array<double, std::size(kSpeedBandEdges_rad_s)> band_sum{}, band_samples{};
-  // The residual's differences along each window, for the noise floor: Σ(e_j − e_{j−1})²,
-  // Σ(e_j − e_{j−2})², their counts, and Σ j over the residuals counted.
-  double lag1_sum = 0.0, lag2_sum = 0.0, lag1_count = 0.0, lag2_count = 0.0, index_sum = 0.0;
+  // The residual's differences along each window, for the noise floor: (e_j − e_{j−1} − d̄)²
+  // and (e_j − e_{j−2} − d̄)² (d̄ each window's mean difference), and Σ j over the residuals.
+  std::vector<double> lag1_squares, lag2_squares;
+  double index_sum = 0.0;
 };
 
-// The noise floor from the lag sums (ResidualExamination::noise_floor_rad_s).
-void estimate_noise_floor(const Linearization& linear, ResidualExamination& examination) {
-  if (linear.lag1_count <= 0 || linear.lag2_count <= 0 || linear.samples == 0) return;
-  const double lag1 = linear.lag1_sum / linear.lag1_count;  // q + 2σ²
-  const double lag2 = linear.lag2_sum / linear.lag2_count;  // 2q + 2σ²
+// One window's differences e_j − e_{j−k}, each taken about the window's own mean difference
+// (a model error that grows steadily along the window differs by about the same amount at
+// every sample, noise does not); close() adds their squares to the examination's list.
+struct LagDifferences {
+  std::vector<double> differences;
+  void add(double difference) { differences.push_back(difference); }
+  void close(std::vector<double>& squares) {
+    if (differences.size() < 2) return;
+    double mean = 0.0;
+    for (double d : differences) mean += d;
+    mean /= static_cast<double>(differences.size());
+    const double correction = static_cast<double>(differences.size()) /
+                              static_cast<double>(differences.size() - 1);
+    for (double d : differences) squares.push_back((d - mean) * (d - mean) * correction);
+    differences.clear();
+  }
+};
+
+// The variance of Gaussian differences from the median of their squares (the median of a
+// χ²₁ variable is 0.4549 times its mean): the samples where a wrong model's error changes
+// abruptly (a latch it lacks) are few and leave the median alone.
+double robust_variance(std::vector<double>& squares) {
+  if (squares.empty()) return 0.0;
+  const auto middle = squares.begin() + static_cast<std::ptrdiff_t>(squares.size() / 2);
+  std::nth_element(squares.begin(), middle, squares.end());
+  return *middle / kChiSquare1Median;
+}
+
+// The noise floor from the lag differences (ResidualExamination::noise_floor_rad_s).
+void estimate_noise_floor(Linearization& linear, ResidualExamination& examination) {
+  if (linear.lag1_squares.empty() || linear.lag2_squares.empty() || linear.samples == 0) return;
+  const double lag1 = robust_variance(linear.lag1_squares);  // q + 2σ²
+  const double lag2 = robust_variance(linear.lag2_squares);  // 2q + 2σ²
   const double walk = std::max(0.0, lag2 - lag1);
   const double white = std::max(0.0, 0.5 * (lag1 - walk));
   const double mean_index = linear.index_sum / static_cast<double>(linear.samples);
@@ -415,6 +446,7 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
     }
     Eigen::MatrixXd window_gram = Eigen::MatrixXd::Zero(columns, columns);
     double error_1 = 0.0, error_2 = 0.0;  // e_{j−1}, e_{j−2}
+    LagDifferences lag1, lag2;
     for (int j = 1; j < window.count; ++j) {
       const int i = window.first + j;
       const double h = stroke.time_s[i] - stroke.time_s[i - 1];
@@ -431,14 +463,8 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       result.rate_sum_of_squares += error * error;
       ++result.samples;
       result.index_sum += j;
-      if (j >= 2) {
-        result.lag1_sum += (error - error_1) * (error - error_1);
-        result.lag1_count += 1.0;
-      }
-      if (j >= 3) {
-        result.lag2_sum += (error - error_2) * (error - error_2);
-        result.lag2_count += 1.0;
-      }
+      if (j >= 2) lag1.add(error - error_1);
+      if (j >= 3) lag2.add(error - error_2);
       error_2 = error_1;
       error_1 = error;
       {
@@ -462,6 +488,8 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       if (!row.allFinite()) continue;
       window_gram.selfadjointView<Eigen::Upper>().rankUpdate(row);
     }
+    lag1.close(result.lag1_squares);
+    lag2.close(result.lag2_squares);
     window_gram = window_gram.selfadjointView<Eigen::Upper>();
     result.gram += window_gram;
     result.window_grams.push_back(std::move(window_gram));
@@ -984,9 +1012,8 @@ std::string ranking_line(int step_number, const ResidualExamination& examination
 
 // Who is refitted: the candidates whose linear share and z pass, in rank order, then those
 // the second look promotes, while refit slots are left. Gives the others their verdicts.
-std::vector<std::size_t> select_refits(ResidualExamination& examination,
-                                       const LoopOptions& options, int step_number,
-                                       const Say& say) {
+std::vector<std::size_t> select_refits(ResidualExamination& examination, const LoopOptions& options,
+                                       int step_number, const Say& say) {
   std::vector<std::size_t> order, promoted;
   for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
     CandidateEvidence& candidate = examination.candidates[k];
@@ -1005,9 +1032,9 @@ std::vector<std::size_t> select_refits(ResidualExamination& examination,
       candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
                           " (needs " + printf_text("%.2g", options.min_score_z) + ")";
       if (candidate.screened) {
-        candidate.verdict += printf_text(", second look %.1f%%, z %.2g",
-                                         100.0 * candidate.screen_explained_fraction,
-                                         candidate.screen_score_z);
+        candidate.verdict +=
+            printf_text(", second look %.1f%%, z %.2g", 100.0 * candidate.screen_explained_fraction,
+                        candidate.screen_score_z);
       }
     }
   }
@@ -1015,10 +1042,10 @@ std::vector<std::size_t> select_refits(ResidualExamination& examination,
     CandidateEvidence& candidate = examination.candidates[k];
     candidate.promoted = true;
     candidate.start_values = candidate.screen_values;
-    candidate.scan += std::string(candidate.scan.empty() ? "" : "; ") +
-                      printf_text("second look: %.1f%%, z %.3g",
-                                  100.0 * candidate.screen_explained_fraction,
-                                  candidate.screen_score_z);
+    candidate.scan +=
+        std::string(candidate.scan.empty() ? "" : "; ") +
+        printf_text("second look: %.1f%%, z %.3g", 100.0 * candidate.screen_explained_fraction,
+                    candidate.screen_score_z);
   }
   order.insert(order.end(), promoted.begin(), promoted.end());
   std::vector<std::size_t> to_refit;
@@ -1047,8 +1074,8 @@ void judge(CandidateEvidence& candidate, const ModelFigures& before, const Model
   const bool held_out_ok = candidate.held_out_improvement > options.min_held_out_improvement;
   const bool bic_ok = candidate.bic_change < -options.min_bic_decrease;
   candidate.qualifies = held_out_ok && bic_ok;
-  const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) +
-                                    " -> " + number(after.held_out_rmse_rad_s) + " rad/s (" +
+  const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) + " -> " +
+                                    number(after.held_out_rmse_rad_s) + " rad/s (" +
                                     signed_percent(-candidate.held_out_improvement) + ")";
   const std::string bic_text = "BIC " + printf_text("%+.4g", candidate.bic_change);
   if (candidate.qualifies) {
@@ -1065,13 +1092,10 @@ void judge(CandidateEvidence& candidate, const ModelFigures& before, const Model
 // The refits of one step (LoopOptions::parallel_refits): fit_model gives the same result bit
 // for bit on any thread and with any num_threads (docs/fitting.md), so running them at once
 // changes no verdict, only the time. Returns the refits by candidate index; counts fits.
-std::vector<std::optional<FitResult>> run_refits(const DoorModel& start, const FitResult& current,
-                                                 const FitOptions& current_options,
-                                                 const PreparedData& data,
-                                                 const LoopOptions& options,
-                                                 const std::vector<std::size_t>& to_refit,
-                                                 ResidualExamination& examination, int& fits,
-                                                 const Say& say) {
+std::vector<std::optional<FitResult>> run_refits(
+    const DoorModel& start, const FitResult& current, const FitOptions& current_options,
+    const PreparedData& data, const LoopOptions& options, const std::vector<std::size_t>& to_refit,
+    ResidualExamination& examination, int& fits, const Say& say) {
   std::vector<std::optional<FitResult>> refits(examination.candidates.size());
   const ModelFigures before = model_figures(current.summary);
   std::vector<std::string> refit_errors(to_refit.size());
@@ -1182,10 +1206,11 @@ bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
                    printf_text("%.3g", options.structure_noise_ratio) + ")";
   } else {
     check.reason = "no effect closes the gap: the best candidate explains " +
-                   percent(check.best_explained_fraction) + " of the residual and the held-out "
-                   "RMSE " + number(figures.held_out_rmse_rad_s) + " rad/s is " +
-                   printf_text("%.3g", ratio) + " times the noise floor " +
-                   number(last.noise_floor_rad_s) + " rad/s";
+                   percent(check.best_explained_fraction) +
+                   " of the residual and the held-out "
+                   "RMSE " +
+                   number(figures.held_out_rmse_rad_s) + " rad/s is " + printf_text("%.3g", ratio) +
+                   " times the noise floor " + number(last.noise_floor_rad_s) + " rad/s";
     return true;
   }
   return false;
@@ -1222,8 +1247,9 @@ StructureCheck check_structure(const FitResult& current, const PreparedData& dat
     if (parameter.free) check.other_free.push_back(parameter.name);
   }
   check.other_undetermined = other.undetermined;
-  check.held_out_improvement = (check.current.held_out_rmse_rad_s - check.other.held_out_rmse_rad_s) /
-                               check.current.held_out_rmse_rad_s;
+  check.held_out_improvement =
+      (check.current.held_out_rmse_rad_s - check.other.held_out_rmse_rad_s) /
+      check.current.held_out_rmse_rad_s;
   check.bic_change = check.other.bic - check.current.bic;
   check.other_better = check.held_out_improvement > options.min_held_out_improvement &&
                        check.bic_change < -options.min_bic_decrease;
@@ -1237,9 +1263,9 @@ StructureCheck check_structure(const FitResult& current, const PreparedData& dat
   const std::string current_name(to_string(check.current_kind));
   check.verdict = std::string(check.other_better ? "the " + other_name : "the " + current_name) +
                   " model is the better structure: held-out RMSE " +
-                  number(check.current.held_out_rmse_rad_s) + " rad/s (" + current_name + ") against " +
-                  number(check.other.held_out_rmse_rad_s) + " (" + other_name + ", " +
-                  signed_percent(-check.held_out_improvement) + "), BIC " +
+                  number(check.current.held_out_rmse_rad_s) + " rad/s (" + current_name +
+                  ") against " + number(check.other.held_out_rmse_rad_s) + " (" + other_name +
+                  ", " + signed_percent(-check.held_out_improvement) + "), BIC " +
                   printf_text("%+.4g", check.bic_change);
   say("structure check: " + check.verdict);
   return check;
@@ -1290,11 +1316,9 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     }
     say(ranking_line(step_number, examination));
     const ModelFigures before = model_figures(current.summary);
-    const std::vector<std::size_t> to_refit =
-        select_refits(examination, options, step_number, say);
-    std::vector<std::optional<FitResult>> refits =
-        run_refits(start, current, current_options, data, options, to_refit, examination,
-                   result.fits, say);
+    const std::vector<std::size_t> to_refit = select_refits(examination, options, step_number, say);
+    std::vector<std::optional<FitResult>> refits = run_refits(
+        start, current, current_options, data, options, to_refit, examination, result.fits, say);
     const int chosen = choose(examination.candidates);
     if (chosen < 0) {
       result.stop_reason =
@@ -1319,8 +1343,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     result.steps.push_back(std::move(step));
   }
   say("stopped: " + result.stop_reason);
-  result.structure =
-      check_structure(current, data, options, at_max_steps, last, result.fits, say);
+  result.structure = check_structure(current, data, options, at_max_steps, last, result.fits, say);
   result.final_fit = std::move(current);
   result.total_time_s = seconds_since(began);
   return result;

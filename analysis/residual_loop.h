@@ -196,11 +196,12 @@ struct ResidualExamination {
   // The noise floor of the window RMSE, from the residual's own differences along each
   // window (docs/residual-loop.md, "The structure check"): with e_j the residual at the
   // j-th sample of a window, white measurement noise σ² and a random walk of q per sample
-  // (the measured force's noise integrated by the simulation) give mean (e_j − e_{j−1})² =
-  // q + 2σ² and mean (e_j − e_{j−2})² = 2q + 2σ²; a model error, smooth along a window,
-  // adds little to either. The floor is √(σ² + q·mean j), what a right model would leave.
-  double white_noise_rad_s = 0.0;        // σ
-  double walk_per_sample_rad_s = 0.0;    // √q
+  // (the measured force's noise integrated by the simulation) give a variance of
+  // e_j − e_{j−1} of q + 2σ² and of e_j − e_{j−2} of 2q + 2σ², each taken about its window's
+  // mean; a model error, smooth along a window, shifts the differences' mean and adds little
+  // to their variance. The floor is √(σ² + q·mean j), what a right model would leave.
+  double white_noise_rad_s = 0.0;      // σ
+  double walk_per_sample_rad_s = 0.0;  // √q
   double noise_floor_rad_s = 0.0;
   std::vector<CandidateEvidence> candidates;  // best first
   std::vector<SpeedBand> speed_bands;  // the residual by measured speed
@@ -231,15 +232,15 @@ struct LoopStep {
 // The structure check's comparison (LoopOptions::structure_check): the loop's final model
 // against the other model family fitted to the same data with the same options.
 struct StructureCheck {
-  bool ran = false;    // false: `reason` says why not
-  std::string reason;  // the conditions met, or the one that was not
-  double noise_floor_rad_s = 0.0;       // the last examination's
-  double best_explained_fraction = 0.0; // the best remaining candidate's share
+  bool ran = false;                      // false: `reason` says why not
+  std::string reason;                    // the conditions met, or the one that was not
+  double noise_floor_rad_s = 0.0;        // the last examination's
+  double best_explained_fraction = 0.0;  // the best remaining candidate's share
   ModelKind current_kind = ModelKind::kSensory;
   ModelKind other_kind = ModelKind::kPhysical;
-  ModelFigures current, other;          // held-out RMSE, BIC, parameters of both
-  std::vector<std::string> other_free;        // the other family's free parameters
-  std::vector<std::string> other_undetermined; // those the data did not determine
+  ModelFigures current, other;                  // held-out RMSE, BIC, parameters of both
+  std::vector<std::string> other_free;          // the other family's free parameters
+  std::vector<std::string> other_undetermined;  // those the data did not determine
   bool other_better = false;
   double held_out_improvement = 0.0;  // (current − other) / current, held-out window RMSE
   double bic_change = 0.0;            // other − current

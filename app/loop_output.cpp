@@ -47,8 +47,8 @@ nlohmann::ordered_json loop_json(const LoopResult& result, const PreparedData& d
                      {"bic_change", step.bic_change}});
   }
   const StructureCheck& check = result.structure;
-  nlohmann::ordered_json structure = {{"ran", check.ran}, {"reason", check.reason},
-                                      {"noise_floor_rad_s", check.noise_floor_rad_s}};
+  nlohmann::ordered_json structure = {
+      {"ran", check.ran}, {"reason", check.reason}, {"noise_floor_rad_s", check.noise_floor_rad_s}};
   if (check.ran && check.other_fit) {
     structure["current_model"] = std::string(to_string(check.current_kind));
     structure["other_model"] = std::string(to_string(check.other_kind));
@@ -97,10 +97,9 @@ std::string steps_table(const LoopResult& result) {
     std::snprintf(row, sizeof row,
                   "| %zu | structure: %s model is better | held out: %s %.4g, %s %.4g rad/s; BIC "
                   "%+.4g | %.4g → %.4g | %.4g → %.4g |\n",
-                  result.steps.size() + 1,
-                  check.other_better ? other.c_str() : current.c_str(), current.c_str(),
-                  check.current.held_out_rmse_rad_s,
-                  other.c_str(), check.other.held_out_rmse_rad_s, check.bic_change,
+                  result.steps.size() + 1, check.other_better ? other.c_str() : current.c_str(),
+                  current.c_str(), check.current.held_out_rmse_rad_s, other.c_str(),
+                  check.other.held_out_rmse_rad_s, check.bic_change,
                   check.current.fitted_rmse_rad_s, check.other.fitted_rmse_rad_s,
                   check.current.held_out_rmse_rad_s, check.other.held_out_rmse_rad_s);
     table += row;

@@ -114,9 +114,10 @@ TEST_CASE("residual loop: names breakaway friction first on tremor-hand recordin
 // and spring leave, so the loop must end with the structure check naming the physical
 // model the better structure, with both held-out errors; on the clean sensory recording the
 // held-out error is at the noise floor and the check does not run.
-TEST_CASE("residual loop: the structure check names the physical model on a physical door "
-          "fitted with the sensory model",
-          "[residual_loop][tremor][slow]") {
+TEST_CASE(
+    "residual loop: the structure check names the physical model on a physical door "
+    "fitted with the sensory model",
+    "[residual_loop][tremor][slow]") {
   const doorbench::PreparedData data =
       tremor_data(doorbench::reference_model(ModelKind::kPhysical), 1);
   const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), data);
@@ -129,7 +130,8 @@ TEST_CASE("residual loop: the structure check names the physical model on a phys
   CHECK(check.other_better);
   CHECK(check.other.held_out_rmse_rad_s < check.current.held_out_rmse_rad_s);
   CHECK(check.bic_change < 0);
-  CHECK(check.current.held_out_rmse_rad_s > loop.options.structure_noise_ratio * check.noise_floor_rad_s);
+  CHECK(check.current.held_out_rmse_rad_s >
+        loop.options.structure_noise_ratio * check.noise_floor_rad_s);
   CHECK(check.best_explained_fraction < loop.options.structure_max_explained_fraction);
   CHECK(check.verdict.find("the physical model is the better structure") == 0);
   CHECK(loop.brief_report().find("Structure check: the physical model is the better structure") !=
