@@ -1174,7 +1174,7 @@ FitOptions structure_fit_options(const LoopOptions& options, ModelKind other) {
   fit.fixed_parameters.clear();
   fit.free_parameters = options.structure_free_parameters;
   if (fit.free_parameters.empty() && other == ModelKind::kPhysical) {
-    fit.free_parameters = {"m_d", "J_d", "k_s", "F0", "T_h", "mu_g"};
+    fit.free_parameters = {"J_d", "k_s", "F0", "T_h", "mu_g"};
   }
   return fit;
 }

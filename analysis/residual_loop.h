@@ -108,7 +108,7 @@ struct LoopOptions {
   double structure_max_explained_fraction = 0.5;
   double structure_noise_ratio = 4.0;
   // The other family's free parameters; empty: for the physical model a small set the
-  // strokes determine (m_d, J_d, k_s, F0, T_h, mu_g), for the sensory model its default set.
+  // strokes determine (J_d, k_s, F0, T_h, mu_g), for the sensory model its default set.
   std::vector<std::string> structure_free_parameters;
 
   // Called with one line at each stage (fits, the ranking, each verdict); may be empty.
