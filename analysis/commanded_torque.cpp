@@ -119,7 +119,8 @@ CommandedTorqueFit fit_commanded_torque(const DoorModel& start,
   }
 
   const TorqueMapOutcome outcome = solve_torque_map(
-      start, strokes, map, options, map.scaled(map.base_values), prior_residuals, torque_scale_Nm);
+      start, strokes, map, solver_settings(options), map.scaled(map.base_values), prior_residuals,
+      torque_scale_Nm);
   if (!outcome.usable) {
     throw std::runtime_error("commanded-torque fit: the solver failed (" + outcome.termination +
                              ")");

@@ -67,7 +67,7 @@ T torque(Kind kind, const T* p, const BaseFriction<T>& base, double handle_radiu
       return p[0] * sin(theta);
     case Kind::kStribeck: {  // − (d_s − d1) exp(−(ω/w_s)²) tanh(s ω)
       const T ratio = omega / p[1];
-      return -(p[0] - base.level_Nm) * exp(-ratio * ratio) *
+      return -(p[0] - base.level_Nm) * exp_minus(ratio * ratio) *
              tanh(base.speed_sensitivity_s_per_rad * omega);
     }
     case Kind::kDirectionFriction: {  // − d_dir max(0, tanh(s ω))

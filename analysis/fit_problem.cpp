@@ -17,7 +17,6 @@
 #include <thread>
 
 #include "analysis/fit_equation_error.h"
-#include "analysis/fitting.h"
 
 namespace doorbench {
 
@@ -31,11 +30,6 @@ bool tracing() {
 }
 
 }  // namespace
-
-int fit_thread_count(const FitOptions& options) {
-  if (options.num_threads > 0) return options.num_threads;
-  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
-}
 
 void parallel_for(int count, int threads, const std::function<void(int)>& task) {
   threads = std::clamp(threads, 1, std::max(1, count));
@@ -268,7 +262,7 @@ class PriorCost final : public ceres::CostFunction {
   std::vector<PriorResidual> priors_;
 };
 
-ceres::Solver::Options solver_options(const FitOptions& options, int max_iterations) {
+ceres::Solver::Options solver_options(const SolverSettings& options, int max_iterations) {
   ceres::Solver::Options solver;
   solver.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
   solver.linear_solver_type = ceres::DENSE_QR;
@@ -534,10 +528,10 @@ int WindowProblem::residual_count() const {
   return count;
 }
 
-WindowProblem::Outcome WindowProblem::solve(const FitOptions& options, int max_iterations,
+WindowProblem::Outcome WindowProblem::solve(const SolverSettings& settings, int max_iterations,
                                             double uncertainty_tolerance) {
-  ceres::Solver::Options solver = solver_options(options, max_iterations);
-  preparer_->set_threads(fit_thread_count(options));
+  ceres::Solver::Options solver = solver_options(settings, max_iterations);
+  preparer_->set_threads(settings.threads);
   if (!z_.empty()) {
     // The window states are eliminated first (Schur complement): each appears in one
     // window only, so the reduced system is the size of x.
@@ -551,8 +545,7 @@ WindowProblem::Outcome WindowProblem::solve(const FitOptions& options, int max_i
   // Without the statistical stopping rule (the study's objective), the result must be the
   // best point seen: monotonic steps only.
   solver.use_nonmonotonic_steps = uncertainty_tolerance > 0;
-  PredictedStepCheck check(*this, uncertainty_tolerance,
-                           options.uncertainty == FitOptions::Uncertainty::kWindowRobust);
+  PredictedStepCheck check(*this, uncertainty_tolerance, settings.robust_uncertainty);
   solver.callbacks.push_back(&check);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, problem_.get(), &summary);
@@ -640,10 +633,10 @@ namespace {
 class EquationErrorProblem {
  public:
   EquationErrorProblem(const DoorModel& model, const PreparedData& data, const ParameterMap& map,
-                       const FitOptions& options, std::vector<double>& x,
+                       const SolverSettings& options, std::vector<double>& x,
                        std::vector<std::vector<double>> rate_derivatives, double torque_scale_Nm)
       : preparer_(model, map, x.data()) {
-    preparer_.set_threads(fit_thread_count(options));
+    preparer_.set_threads(options.threads);
     setup_.model = &model;
     setup_.data = &data;
     setup_.map = &map;
@@ -685,7 +678,7 @@ class EquationErrorProblem {
 }  // namespace
 
 EquationErrorOutcome solve_equation_error(const DoorModel& model, const PreparedData& data,
-                                          const ParameterMap& map, const FitOptions& options,
+                                          const ParameterMap& map, const SolverSettings& options,
                                           std::vector<double> x0) {
   EquationErrorOutcome outcome;
   outcome.x = std::move(x0);
@@ -708,7 +701,7 @@ EquationErrorOutcome solve_equation_error(const DoorModel& model, const Prepared
 }
 
 TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& data,
-                                  const ParameterMap& map, const FitOptions& options,
+                                  const ParameterMap& map, const SolverSettings& options,
                                   std::vector<double> x0, const std::vector<PriorResidual>& priors,
                                   double torque_scale_Nm) {
   TorqueMapOutcome outcome;

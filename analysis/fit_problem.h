@@ -21,7 +21,20 @@ class Problem;
 
 namespace doorbench {
 
-struct FitOptions;
+// What the solvers here need of the caller's options (fit_model's FitOptions, the
+// commanded-torque fit's): Ceres' tolerances and iteration limit, the stopping rules' kind of
+// uncertainty and the number of evaluation threads.
+struct SolverSettings {
+  int max_iterations = 100;
+  double function_tolerance = 1e-6;
+  double parameter_tolerance = 1e-8;
+  double gradient_tolerance = 1e-10;
+  // The equation-error stage's step rule (FitOptions::equation_error_step_tolerance).
+  double equation_error_step_tolerance = 1e-2;
+  // The predicted-step rule measures steps in the window-robust uncertainty (else classical).
+  bool robust_uncertainty = true;
+  int threads = 1;  // evaluation threads, the caller's among them (>= 1)
+};
 
 // A prior on one free parameter in solver units: the residual (x_k − center_x) / sigma_x.
 struct PriorResidual {
@@ -111,9 +124,8 @@ class WindowProblem {
 
   // Levenberg–Marquardt from the current x and z. Besides Ceres' own tests it stops when
   // the Gauss–Newton step predicts that no free parameter would move by more than
-  // `uncertainty_tolerance` of its standard uncertainty (the kind options.uncertainty
-  // names), or when three accepted steps in a row moved none by more than that; 0 turns
-  // these tests off.
+  // `uncertainty_tolerance` of its standard uncertainty (the kind settings name), or when three
+  // accepted steps in a row moved none by more than that; 0 turns these tests off.
   struct Outcome {
     bool usable = false;
     bool converged = false;
@@ -122,7 +134,7 @@ class WindowProblem {
     double final_cost = 0.0;
     std::string termination;
   };
-  Outcome solve(const FitOptions& options, int max_iterations, double uncertainty_tolerance);
+  Outcome solve(const SolverSettings& settings, int max_iterations, double uncertainty_tolerance);
 
   // The reduced system at the current x and z (the priors' residuals included in H, g and
   // Σ r², as observations outside every window); from the Jacobians the solver last computed
@@ -137,6 +149,7 @@ class WindowProblem {
   std::vector<double>& x() { return x_; }
   const std::vector<double>& x() const { return x_; }
   std::vector<double>& z() { return z_; }
+  const std::vector<double>& z() const { return z_; }
   bool estimates_states() const { return !z_.empty(); }
   const std::vector<FitWindow>& windows() const { return windows_; }
   int residual_count() const;
@@ -163,7 +176,7 @@ struct EquationErrorOutcome {
   std::vector<double> x;
 };
 EquationErrorOutcome solve_equation_error(const DoorModel& model, const PreparedData& data,
-                                          const ParameterMap& map, const FitOptions& options,
+                                          const ParameterMap& map, const SolverSettings& settings,
                                           std::vector<double> x0);
 
 // The commanded-torque problem (analysis/commanded_torque.h): the equation-error residuals
@@ -182,7 +195,7 @@ struct TorqueMapOutcome {
   Eigen::MatrixXd information;
 };
 TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& data,
-                                  const ParameterMap& map, const FitOptions& options,
+                                  const ParameterMap& map, const SolverSettings& settings,
                                   std::vector<double> x0, const std::vector<PriorResidual>& priors,
                                   double torque_scale_Nm);
 
@@ -190,8 +203,6 @@ TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& da
 // whole problem and `inverse`, relative to √(C_ii C_jj); NaN when Ceres cannot compute it.
 double compare_with_ceres_covariance(WindowProblem& problem, const Eigen::MatrixXd& inverse,
                                      int num_threads);
-
-int fit_thread_count(const FitOptions& options);
 
 // The solver's unit for a free parameter: its start's magnitude, or a tenth of its bounds'
 // width when the start is (nearly) zero (analysis/fitting.cpp).

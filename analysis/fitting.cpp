@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <thread>
 
 #include "analysis/constraint_check.h"
 #include "analysis/fit_problem.h"
@@ -66,6 +67,23 @@ std::string FitOptions::validate() const {
     }
   }
   return "";
+}
+
+int fit_thread_count(const FitOptions& options) {
+  if (options.num_threads > 0) return options.num_threads;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+SolverSettings solver_settings(const FitOptions& options) {
+  SolverSettings settings;
+  settings.max_iterations = options.max_iterations;
+  settings.function_tolerance = options.function_tolerance;
+  settings.parameter_tolerance = options.parameter_tolerance;
+  settings.gradient_tolerance = options.gradient_tolerance;
+  settings.equation_error_step_tolerance = options.equation_error_step_tolerance;
+  settings.robust_uncertainty = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
+  settings.threads = fit_thread_count(options);
+  return settings;
 }
 
 std::vector<std::string> default_free_parameters(const DoorModel& model) {
@@ -265,7 +283,7 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
     WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
     coarse.z() = problem.z();
     const WindowProblem::Outcome outcome =
-        coarse.solve(options, max_iterations, 10 * options.uncertainty_tolerance);
+        coarse.solve(solver_settings(options), max_iterations, 10 * options.uncertainty_tolerance);
     used = outcome.iterations;
     initial_cost = outcome.initial_cost;
     if (outcome.usable) {
@@ -273,76 +291,113 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
       problem.z() = coarse.z();
     }
   }
-  WindowProblem::Outcome outcome =
-      problem.solve(options, std::max(1, max_iterations - used), options.uncertainty_tolerance);
+  WindowProblem::Outcome outcome = problem.solve(
+      solver_settings(options), std::max(1, max_iterations - used), options.uncertainty_tolerance);
   outcome.iterations += used;
   if (used > 0) outcome.initial_cost = initial_cost;
   return outcome;
 }
 
+// One cross-validation fold's refit: its strokes left out, refitted from the full fit.
+struct FoldOutcome {
+  bool refitted = false;  // false: no window, or the solver failed (note says which)
+  std::string note;
+  std::optional<DoorModel> model;
+  FoldFit fit;
+  std::vector<int> held;  // indices into data.strokes
+  FitMetrics held_out;    // on the held strokes
+};
+
+PreparedData training_data(const PreparedData& data, int folds, int fold, std::vector<int>& held) {
+  PreparedData training;
+  training.source = data.source;
+  training.handle_radius_m = data.handle_radius_m;
+  training.sample_rate_hz = data.sample_rate_hz;
+  training.rate_noise_rad_s = data.rate_noise_rad_s;
+  training.angle_noise_rad = data.angle_noise_rad;
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  for (int s = 0; s < stroke_count; ++s) {
+    if (s % folds == fold) {
+      if (data.strokes[s].size() >= 2) held.push_back(s);
+    } else {
+      training.strokes.push_back(data.strokes[s]);
+    }
+  }
+  return training;
+}
+
+std::vector<std::string> at_bound_names(const DoorModel& model,
+                                        const std::vector<int>& free_index) {
+  std::vector<std::string> names;
+  const auto bounds = model.parameter_bounds();
+  for (int index : free_index) {
+    const double value = model.parameter_values()[index];
+    const double width = bounds[index].upper - bounds[index].lower;
+    if (std::abs(value - bounds[index].lower) <= 1e-6 * width ||
+        std::abs(bounds[index].upper - value) <= 1e-6 * width) {
+      names.push_back(model.parameter_name(index));
+    }
+  }
+  return names;
+}
+
+FoldOutcome refit_fold(const DoorModel& fitted, const PreparedData& data, const ParameterMap& map,
+                       const std::vector<double>& x, const FitOptions& options,
+                       const FitWeights& weights, int folds, int fold) {
+  FoldOutcome out;
+  const PreparedData training = training_data(data, folds, fold, out.held);
+  WindowProblem problem(fitted, training, map, window_fit_kind(options, fitted), weights, x);
+  if (problem.windows().empty()) return out;
+  // Coarse pass first, window states from the measured states: see docs/fitting.md
+  // ("Held out") for why the folds do not start from the full fit's window states.
+  const WindowProblem::Outcome outcome = solve_coarse_to_fine(
+      problem, fitted, training, map, options, weights, options.held_out_max_iterations);
+  if (!outcome.usable) {
+    out.note =
+        "cross-validation fold " + std::to_string(fold + 1) + " failed: " + outcome.termination;
+    return out;
+  }
+  out.refitted = true;
+  out.model = fitted.with_parameter_values(map.values(problem.x().data()));
+  const WindowOptions windows = metric_windows(options, fitted);
+  out.held_out = compute_fit_metrics(*out.model, data, windows, out.held);
+  for (int s : out.held) out.fit.held_out_strokes.push_back(data.strokes[s].id);
+  out.fit.converged = outcome.converged;
+  out.fit.termination = outcome.termination;
+  out.fit.iterations = outcome.iterations;
+  out.fit.fitted_rmse_rad_s = compute_fit_metrics(*out.model, training, windows).window.rmse();
+  out.fit.held_out_rmse_rad_s = out.held_out.window.rmse();
+  out.fit.at_bound = at_bound_names(*out.model, map.free_index);
+  return out;
+}
+
 // Held-out metrics: stroke s is in fold s mod k; each fold is refitted from the full fit
-// without its strokes, and its strokes are measured with that refit.
+// without its strokes, and its strokes are measured with that refit. The folds are
+// independent and each deterministic, so they run at once (up to fit_thread_count) and are
+// gathered in fold order: the result is the same as one after another.
 FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
                           const ParameterMap& map, const std::vector<double>& x,
                           const FitOptions& options, const FitWeights& weights, int folds,
                           std::vector<std::string>& notes, std::vector<DoorModel>& fold_models,
                           std::vector<FoldFit>& fold_fits) {
   const int stroke_count = static_cast<int>(data.strokes.size());
-  std::vector<StrokeFitMetrics> per_stroke(stroke_count);
-  std::vector<char> have(stroke_count, 0);
   ParameterMap fold_map = map;
   fold_map.base_values.assign(fitted.parameter_values().begin(), fitted.parameter_values().end());
-  for (int fold = 0; fold < folds; ++fold) {
-    PreparedData training;
-    training.source = data.source;
-    training.handle_radius_m = data.handle_radius_m;
-    training.sample_rate_hz = data.sample_rate_hz;
-    training.rate_noise_rad_s = data.rate_noise_rad_s;
-    training.angle_noise_rad = data.angle_noise_rad;
-    std::vector<int> held;
-    for (int s = 0; s < stroke_count; ++s) {
-      if (s % folds == fold) {
-        if (data.strokes[s].size() >= 2) held.push_back(s);
-      } else {
-        training.strokes.push_back(data.strokes[s]);
-      }
-    }
-    WindowProblem problem(fitted, training, fold_map, window_fit_kind(options, fitted), weights, x);
-    if (problem.windows().empty()) continue;
-    // Coarse pass first, window states from the measured states: see docs/fitting.md
-    // ("Held out") for why the folds do not start from the full fit's window states.
-    const WindowProblem::Outcome outcome = solve_coarse_to_fine(
-        problem, fitted, training, fold_map, options, weights, options.held_out_max_iterations);
-    if (!outcome.usable) {
-      notes.push_back("cross-validation fold " + std::to_string(fold + 1) +
-                      " failed: " + outcome.termination);
-      continue;
-    }
-    const DoorModel fold_model = fitted.with_parameter_values(fold_map.values(problem.x().data()));
-    fold_models.push_back(fold_model);
-    const FitMetrics metrics =
-        compute_fit_metrics(fold_model, data, metric_windows(options, fitted), held);
-    FoldFit fold_fit;
-    for (int s : held) fold_fit.held_out_strokes.push_back(data.strokes[s].id);
-    fold_fit.converged = outcome.converged;
-    fold_fit.termination = outcome.termination;
-    fold_fit.iterations = outcome.iterations;
-    fold_fit.fitted_rmse_rad_s =
-        compute_fit_metrics(fold_model, training, metric_windows(options, fitted)).window.rmse();
-    fold_fit.held_out_rmse_rad_s = metrics.window.rmse();
-    const auto bounds = fitted.parameter_bounds();
-    for (int index : fold_map.free_index) {
-      const double value = fold_model.parameter_values()[index];
-      const double width = bounds[index].upper - bounds[index].lower;
-      if (std::abs(value - bounds[index].lower) <= 1e-6 * width ||
-          std::abs(bounds[index].upper - value) <= 1e-6 * width) {
-        fold_fit.at_bound.push_back(fitted.parameter_name(index));
-      }
-    }
-    fold_fits.push_back(std::move(fold_fit));
-    for (std::size_t i = 0; i < held.size() && i < metrics.strokes.size(); ++i) {
-      per_stroke[held[i]] = metrics.strokes[i];
-      have[held[i]] = 1;
+  std::vector<FoldOutcome> outcomes(static_cast<std::size_t>(folds));
+  parallel_for(folds, fit_thread_count(options), [&](int fold) {
+    outcomes[static_cast<std::size_t>(fold)] =
+        refit_fold(fitted, data, fold_map, x, options, weights, folds, fold);
+  });
+  std::vector<StrokeFitMetrics> per_stroke(stroke_count);
+  std::vector<char> have(stroke_count, 0);
+  for (FoldOutcome& outcome : outcomes) {
+    if (!outcome.note.empty()) notes.push_back(outcome.note);
+    if (!outcome.refitted) continue;
+    fold_models.push_back(std::move(*outcome.model));
+    fold_fits.push_back(std::move(outcome.fit));
+    for (std::size_t i = 0; i < outcome.held.size() && i < outcome.held_out.strokes.size(); ++i) {
+      per_stroke[outcome.held[i]] = outcome.held_out.strokes[i];
+      have[outcome.held[i]] = 1;
     }
   }
   int unconverged = 0;
@@ -372,27 +427,24 @@ namespace {
 // A fold must fit every stroke at least this much better (RMSE ratio) to restart from it.
 constexpr double kFoldRestartGain = 0.9;
 
-FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOptions& options,
-                   std::vector<DoorModel>& fold_models) {
-  const Clock::time_point began = Clock::now();
-  if (const std::string message = options.validate(); !message.empty()) {
-    throw std::invalid_argument(message);
-  }
-  check_data(data, start);
-  FitSummary summary;
-  summary.model_kind = start.kind();
-  summary.source = data.source;
-  summary.options = options;
-  summary.strokes = data.strokes.size();
-  FitWeights weights = resolve_weights(options, data, summary.notes);
-  summary.rate_noise_rad_s = weights.rate_noise_rad_s;
-  summary.angle_noise_rad = weights.angle_noise_rad;
+// The start: free parameters, the start values (the latch read off the data when asked,
+// clamped into bounds) and where each value came from.
+struct StartValues {
+  std::vector<int> free_index;
+  std::vector<double> values;
+  std::vector<std::string> origin;
+};
 
-  // Free parameters and the start.
-  const std::vector<int> free_index = resolve_free(start, options);
-  const int parameter_count = start.parameter_count();
-  std::vector<double> values(start.parameter_values().begin(), start.parameter_values().end());
-  std::vector<std::string> origin(parameter_count, "start model");
+StartValues start_values(const DoorModel& start, const PreparedData& data,
+                         const FitOptions& options, const FitWeights& weights,
+                         FitSummary& summary) {
+  StartValues chosen;
+  chosen.free_index = resolve_free(start, options);
+  const std::vector<int>& free_index = chosen.free_index;
+  std::vector<double>& values = chosen.values;
+  std::vector<std::string>& origin = chosen.origin;
+  values.assign(start.parameter_values().begin(), start.parameter_values().end());
+  origin.assign(static_cast<std::size_t>(start.parameter_count()), "start model");
   if (options.latch_start_from_data && start.kind() == ModelKind::kSensory) {
     summary.latch_start = read_latch_start(data, start, weights.rate_noise_rad_s);
     for (const std::string& note : summary.latch_start.notes) summary.notes.push_back(note);
@@ -408,19 +460,28 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
                               " lay outside its bounds and was moved onto the nearer one");
     }
   }
-  const DoorModel start_model = [&] {
-    try {
-      return start.with_parameter_values(values);
-    } catch (const std::invalid_argument& error) {
-      throw std::invalid_argument(std::string("fit: the start breaks a constraint: ") +
-                                  error.what());
-    }
-  }();
+  return chosen;
+}
 
+DoorModel checked_start_model(const DoorModel& start, const std::vector<double>& values) {
+  try {
+    return start.with_parameter_values(values);
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument(std::string("fit: the start breaks a constraint: ") + error.what());
+  }
+}
+
+// The solver's map of the free parameters, and the priors on them in its units.
+ParameterMap make_map(const DoorModel& start, const StartValues& chosen, const FitOptions& options,
+                      FitWeights& weights, FitSummary& summary) {
+  const std::vector<int>& free_index = chosen.free_index;
+  const auto bounds = start.parameter_bounds();
   ParameterMap map;
-  map.base_values = values;
+  map.base_values = chosen.values;
   map.free_index = free_index;
-  for (int index : free_index) map.scale.push_back(parameter_scale(values[index], bounds[index]));
+  for (int index : free_index) {
+    map.scale.push_back(parameter_scale(chosen.values[index], bounds[index]));
+  }
   summary.free_parameters = map.free_count();
   for (int index : free_index) summary.free_names.push_back(start.parameter_name(index));
   for (const ParameterPrior& prior : options.priors) {
@@ -432,10 +493,31 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
         {static_cast<int>(k), prior.center / map.scale[k], prior.sigma / map.scale[k]});
   }
 
-  // The window problem (built first: it tells whether there is enough data).
-  const Clock::time_point solve_began = Clock::now();
-  const std::vector<double> x_start = scaled_values(map, start_model.parameter_values());
-  WindowProblem problem(start_model, data, map, window_fit_kind(options, start), weights, x_start);
+  return map;
+}
+
+// "stroke 3 (closing), the window from ... (largest |force| there ...)": where a simulation
+// was not finite.
+std::string describe_window(const WindowProblem& problem, const PreparedData& data, int w) {
+  const FitWindow& window = problem.windows()[static_cast<std::size_t>(w)];
+  const Stroke& stroke = data.strokes[static_cast<std::size_t>(window.stroke)];
+  const auto first = static_cast<std::size_t>(window.first);
+  const auto last = first + static_cast<std::size_t>(window.count) - 1;
+  double largest_force_N = 0.0;
+  for (std::size_t i = first; i <= last; ++i) {
+    largest_force_N = std::max(largest_force_N, std::abs(stroke.force_N[i]));
+  }
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "stroke %d (%s), the window from %.3f s to %.3f s (largest |force| there %.4g N)",
+                stroke.id, stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
+                stroke.time_s[first], stroke.time_s[last], largest_force_N);
+  return std::string(text);
+}
+
+// Refuses a window problem without enough data or whose start does not simulate.
+void check_problem(const WindowProblem& problem, const PreparedData& data, const ParameterMap& map,
+                   FitSummary& summary) {
   summary.windows = problem.windows().size();
   summary.window_state_parameters = static_cast<int>(problem.z().size());
   summary.residuals = static_cast<std::size_t>(problem.residual_count());
@@ -446,53 +528,42 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
                                 std::to_string(map.free_count() + summary.window_state_parameters) +
                                 ")");
   }
-
   // A fit never runs on non-finite residuals: a start whose simulation blows up is refused
   // with the window that did (the data there, or the start values, are to be checked).
-  auto describe_window = [&](int w) {
-    const FitWindow& window = problem.windows()[static_cast<std::size_t>(w)];
-    const Stroke& stroke = data.strokes[static_cast<std::size_t>(window.stroke)];
-    const auto first = static_cast<std::size_t>(window.first);
-    const auto last = first + static_cast<std::size_t>(window.count) - 1;
-    double largest_force_N = 0.0;
-    for (std::size_t i = first; i <= last; ++i) {
-      largest_force_N = std::max(largest_force_N, std::abs(stroke.force_N[i]));
-    }
-    char text[200];
-    std::snprintf(text, sizeof text,
-                  "stroke %d (%s), the window from %.3f s to %.3f s (largest |force| there %.4g N)",
-                  stroke.id, stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
-                  stroke.time_s[first], stroke.time_s[last], largest_force_N);
-    return std::string(text);
-  };
   if (const int w = problem.first_non_finite_window(); w >= 0) {
     throw std::runtime_error("fit: the start model's simulation is not finite in " +
-                             describe_window(w) +
+                             describe_window(problem, data, w) +
                              "; check that window's data and the start parameters");
   }
+}
 
-  summary.times.start_s = seconds_since(began);
-
-  // The equation-error stage, then the windows.
-  if (options.equation_error_start) {
-    const EquationErrorOutcome equation_error =
-        solve_equation_error(start_model, data, map, options, x_start);
-    summary.equation_error_iterations = equation_error.iterations;
-    summary.equation_error_termination = equation_error.termination;
-    if (equation_error.usable) {
-      problem.x() = equation_error.x;
-      if (const int w = problem.first_non_finite_window(); w >= 0) {
-        problem.x() = x_start;  // its result blows up where the start did not
-        summary.notes.push_back("the equation-error result's simulation is not finite in " +
-                                describe_window(w) + "; the windows started from the start values");
-      }
-    } else {
-      summary.notes.push_back("the equation-error stage failed (" + equation_error.termination +
-                              "); the windows started from the start values");
+// The equation-error stage: moves the problem's x to its result when that simulates.
+void equation_error_stage(WindowProblem& problem, const DoorModel& start_model,
+                          const PreparedData& data, const ParameterMap& map,
+                          const FitOptions& options, const std::vector<double>& x_start,
+                          FitSummary& summary) {
+  const EquationErrorOutcome equation_error =
+      solve_equation_error(start_model, data, map, solver_settings(options), x_start);
+  summary.equation_error_iterations = equation_error.iterations;
+  summary.equation_error_termination = equation_error.termination;
+  if (equation_error.usable) {
+    problem.x() = equation_error.x;
+    if (const int w = problem.first_non_finite_window(); w >= 0) {
+      problem.x() = x_start;  // its result blows up where the start did not
+      summary.notes.push_back("the equation-error result's simulation is not finite in " +
+                              describe_window(problem, data, w) +
+                              "; the windows started from the start values");
     }
+  } else {
+    summary.notes.push_back("the equation-error stage failed (" + equation_error.termination +
+                            "); the windows started from the start values");
   }
-  const std::vector<double> window_start_values = map.values(problem.x().data());
-  summary.times.equation_error_s = seconds_since(solve_began);
+}
+
+// The window fit, and the study's objective from there when asked.
+void window_stage(WindowProblem& problem, const DoorModel& start, const DoorModel& start_model,
+                  const PreparedData& data, const ParameterMap& map, const FitOptions& options,
+                  const FitWeights& weights, FitSummary& summary) {
   const WindowProblem::Outcome outcome = solve_coarse_to_fine(
       problem, start_model, data, map, options, weights, options.max_iterations);
   if (!outcome.usable) throw std::runtime_error("fit: the solver failed: " + outcome.termination);
@@ -501,7 +572,6 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   summary.iterations = outcome.iterations;
   summary.initial_cost = outcome.initial_cost;
   summary.final_cost = outcome.final_cost;
-
   if (options.objective == FitOptions::Objective::kWholeStrokeMax) {
     ProblemKind whole;
     whole.windows = metric_windows(options, start);
@@ -512,7 +582,8 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
     rate_only.angle_residuals = false;
     WindowProblem refine(start_model, data, map, whole, rate_only, problem.x());
     // The predicted-step rule assumes least squares: Ceres' own tests only.
-    const WindowProblem::Outcome refined = refine.solve(options, options.max_iterations, 0.0);
+    const WindowProblem::Outcome refined =
+        refine.solve(solver_settings(options), options.max_iterations, 0.0);
     const std::string norm = "L" + std::to_string(2 * options.max_objective_power);
     if (refined.usable) {
       problem.x() = refine.x();
@@ -527,13 +598,18 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
                             " norm of the rate error approximating its maximum); uncertainties "
                             "are the window least-squares problem's at that result");
   }
-  summary.solve_time_s = seconds_since(solve_began);
-  summary.times.windows_s = summary.solve_time_s - summary.times.equation_error_s;
-  const Clock::time_point statistics_began = Clock::now();
+}
 
-  const std::vector<double> fitted_values = map.values(problem.x().data());
-  FitResult result{start.with_parameter_values(fitted_values), FitSummary{}};
-
+// The statistics of the window problem at the result: covariances, uncertainties, which
+// parameters are determined, strong correlations.
+void statistics_stage(WindowProblem& problem, const DoorModel& start, const ParameterMap& map,
+                      const StartValues& starts, const std::vector<double>& window_start_values,
+                      const std::vector<double>& fitted_values, const FitOptions& options,
+                      FitSummary& summary) {
+  const int parameter_count = start.parameter_count();
+  const std::vector<double>& values = starts.values;
+  const std::vector<std::string>& origin = starts.origin;
+  const auto bounds = start.parameter_bounds();
   // Statistics of the window problem at the result: (JᵀJ)⁻¹ from the reduced system, the
   // classical σ² (JᵀJ)⁻¹ and the window-robust (JᵀJ)⁻¹ (Σ g_w g_wᵀ) (JᵀJ)⁻¹ · W/(W − p).
   ReducedSystem system;
@@ -629,7 +705,49 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
             [](const ParameterCorrelation& a, const ParameterCorrelation& b) {
               return std::abs(a.value) > std::abs(b.value);
             });
+}
 
+FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOptions& options,
+                   std::vector<DoorModel>& fold_models) {
+  const Clock::time_point began = Clock::now();
+  if (const std::string message = options.validate(); !message.empty()) {
+    throw std::invalid_argument(message);
+  }
+  check_data(data, start);
+  FitSummary summary;
+  summary.model_kind = start.kind();
+  summary.source = data.source;
+  summary.options = options;
+  summary.strokes = data.strokes.size();
+  FitWeights weights = resolve_weights(options, data, summary.notes);
+  summary.rate_noise_rad_s = weights.rate_noise_rad_s;
+  summary.angle_noise_rad = weights.angle_noise_rad;
+
+  const StartValues chosen = start_values(start, data, options, weights, summary);
+  const DoorModel start_model = checked_start_model(start, chosen.values);
+  const ParameterMap map = make_map(start, chosen, options, weights, summary);
+
+  // The window problem (built first: it tells whether there is enough data).
+  const Clock::time_point solve_began = Clock::now();
+  const std::vector<double> x_start = scaled_values(map, start_model.parameter_values());
+  WindowProblem problem(start_model, data, map, window_fit_kind(options, start), weights, x_start);
+  check_problem(problem, data, map, summary);
+  summary.times.start_s = seconds_since(began);
+
+  if (options.equation_error_start) {
+    equation_error_stage(problem, start_model, data, map, options, x_start, summary);
+  }
+  const std::vector<double> window_start_values = map.values(problem.x().data());
+  summary.times.equation_error_s = seconds_since(solve_began);
+  window_stage(problem, start, start_model, data, map, options, weights, summary);
+  summary.solve_time_s = seconds_since(solve_began);
+  summary.times.windows_s = summary.solve_time_s - summary.times.equation_error_s;
+
+  const Clock::time_point statistics_began = Clock::now();
+  const std::vector<double> fitted_values = map.values(problem.x().data());
+  FitResult result{start.with_parameter_values(fitted_values), FitSummary{}};
+  statistics_stage(problem, start, map, chosen, window_start_values, fitted_values, options,
+                   summary);
   summary.times.statistics_s = seconds_since(statistics_began);
 
   // Metrics: on the fitted strokes, then held out.

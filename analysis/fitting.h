@@ -26,6 +26,8 @@
 
 namespace doorbench {
 
+struct SolverSettings;  // analysis/fit_problem.h
+
 // The bench's noise levels (reference-door.json): the weights when neither the options
 // nor the data give them.
 inline constexpr double kBenchRateNoise_rad_s = 0.05 * 3.14159265358979323846 / 180.0;
@@ -244,6 +246,12 @@ struct FitResult {
 // start at all.
 FitResult fit_model(const DoorModel& start, const PreparedData& data,
                     const FitOptions& options = {});
+
+// What the least-squares solvers (analysis/fit_problem.h) take of `options`: tolerances,
+// iteration limit, the kind of uncertainty of the stopping rule, and the threads
+// (num_threads, 0: every hardware thread).
+SolverSettings solver_settings(const FitOptions& options);
+int fit_thread_count(const FitOptions& options);
 
 // The metrics of any model on `data` with the options' windows (the residual loop's
 // "error before and after").

@@ -15,6 +15,7 @@
 
 #include "analysis/fit_metrics.h"
 #include "analysis/fit_windows.h"
+#include "analysis/parameter_file.h"
 #include "analysis/physical_model.h"
 #include "analysis/sensory_model.h"
 #include "analysis/text_format.h"
@@ -24,6 +25,8 @@ namespace doorbench {
 namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// The median of a χ² variable of one degree of freedom over its mean.
+constexpr double kChiSquare1Median = 0.454936;
 // An eigenvalue of the free parameters' scaled normal matrix below this share of the largest
 // is a direction the data does not determine (left out of the projection); a regressor
 // with less than this share of its norm left after the projection is indistinguishable
@@ -247,6 +250,12 @@ std::string LoopOptions::validate() const {
              "', which no effect has (write <effect>.<parameter>, e.g. end_stop.beta_e)";
     }
   }
+  if (!finite_in(structure_max_explained_fraction, 0.0, 1.0)) {
+    return "loop structure_max_explained_fraction must lie in [0, 1]";
+  }
+  if (!std::isfinite(structure_noise_ratio) || structure_noise_ratio < 1) {
+    return "loop structure_noise_ratio must be >= 1";
+  }
   if (refit_start != RefitStart::kBest && refit_start != RefitStart::kCurrentFit &&
       refit_start != RefitStart::kStartModel) {
     return "loop refit_start is not a RefitStart";
@@ -311,7 +320,52 @@ struct Linearization {
   int failed_windows = 0;  // windows whose simulation failed (left out)
   // Σe² and samples per band of measured |ω| (kSpeedBandEdges_rad_s).
   std::array<double, std::size(kSpeedBandEdges_rad_s)> band_sum{}, band_samples{};
+  // The residual's differences along each window, for the noise floor: (e_j − e_{j−1} − d̄)²
+  // and (e_j − e_{j−2} − d̄)² (d̄ each window's mean difference), and Σ j over the residuals.
+  std::vector<double> lag1_squares, lag2_squares;
+  double index_sum = 0.0;
 };
+
+// One window's differences e_j − e_{j−k}, each taken about the window's own mean difference
+// (a model error that grows steadily along the window differs by about the same amount at
+// every sample, noise does not); close() adds their squares to the examination's list.
+struct LagDifferences {
+  std::vector<double> differences;
+  void add(double difference) { differences.push_back(difference); }
+  void close(std::vector<double>& squares) {
+    if (differences.size() < 2) return;
+    double mean = 0.0;
+    for (double d : differences) mean += d;
+    mean /= static_cast<double>(differences.size());
+    const double correction = static_cast<double>(differences.size()) /
+                              static_cast<double>(differences.size() - 1);
+    for (double d : differences) squares.push_back((d - mean) * (d - mean) * correction);
+    differences.clear();
+  }
+};
+
+// The variance of Gaussian differences from the median of their squares (the median of a
+// χ²₁ variable is 0.4549 times its mean): the samples where a wrong model's error changes
+// abruptly (a latch it lacks) are few and leave the median alone.
+double robust_variance(std::vector<double>& squares) {
+  if (squares.empty()) return 0.0;
+  const auto middle = squares.begin() + static_cast<std::ptrdiff_t>(squares.size() / 2);
+  std::nth_element(squares.begin(), middle, squares.end());
+  return *middle / kChiSquare1Median;
+}
+
+// The noise floor from the lag differences (ResidualExamination::noise_floor_rad_s).
+void estimate_noise_floor(Linearization& linear, ResidualExamination& examination) {
+  if (linear.lag1_squares.empty() || linear.lag2_squares.empty() || linear.samples == 0) return;
+  const double lag1 = robust_variance(linear.lag1_squares);  // q + 2σ²
+  const double lag2 = robust_variance(linear.lag2_squares);  // 2q + 2σ²
+  const double walk = std::max(0.0, lag2 - lag1);
+  const double white = std::max(0.0, 0.5 * (lag1 - walk));
+  const double mean_index = linear.index_sum / static_cast<double>(linear.samples);
+  examination.white_noise_rad_s = std::sqrt(white);
+  examination.walk_per_sample_rad_s = std::sqrt(walk);
+  examination.noise_floor_rad_s = std::sqrt(white + walk * mean_index);
+}
 
 // Along each window the simulated state (θ̂, ω̂) starts from the measured one. A change a
 // of one quantity (an effect's amplitude, a parameter) changes it, to first order, by
@@ -391,6 +445,8 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       state[c] = {0.0, 0.0, forcing_of(c, theta, omega, acceleration)};
     }
     Eigen::MatrixXd window_gram = Eigen::MatrixXd::Zero(columns, columns);
+    double error_1 = 0.0, error_2 = 0.0;  // e_{j−1}, e_{j−2}
+    LagDifferences lag1, lag2;
     for (int j = 1; j < window.count; ++j) {
       const int i = window.first + j;
       const double h = stroke.time_s[i] - stroke.time_s[i - 1];
@@ -406,6 +462,11 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       const double error = stroke.omega_rad_s[i] - omega;
       result.rate_sum_of_squares += error * error;
       ++result.samples;
+      result.index_sum += j;
+      if (j >= 2) lag1.add(error - error_1);
+      if (j >= 3) lag2.add(error - error_2);
+      error_2 = error_1;
+      error_1 = error;
       {
         std::size_t band = std::size(kSpeedBandEdges_rad_s) - 1;
         while (band > 0 && std::abs(stroke.omega_rad_s[i]) < kSpeedBandEdges_rad_s[band]) --band;
@@ -427,6 +488,8 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       if (!row.allFinite()) continue;
       window_gram.selfadjointView<Eigen::Upper>().rankUpdate(row);
     }
+    lag1.close(result.lag1_squares);
+    lag2.close(result.lag2_squares);
     window_gram = window_gram.selfadjointView<Eigen::Upper>();
     result.gram += window_gram;
     result.window_grams.push_back(std::move(window_gram));
@@ -696,6 +759,7 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   ResidualExamination examination;
   examination.samples = linear.samples;
   examination.rate_sum_of_squares = linear.rate_sum_of_squares;
+  estimate_noise_floor(linear, examination);
   for (std::size_t b = 0; b < std::size(kSpeedBandEdges_rad_s); ++b) {
     SpeedBand band;
     band.low_rad_s = kSpeedBandEdges_rad_s[b];
@@ -902,8 +966,11 @@ FitResult refit(const DoorModel& start, const FitResult& current, const FitOptio
     }
   }
   if (!best) throw std::runtime_error(failures);
+  // It starts at the better start's optimum of the fine problem: no equation-error stage and
+  // no coarse pass (which would leave that optimum for the coarse one's and come back).
   FitOptions final_fit = from_fit;
-  final_fit.equation_error_start = false;  // it starts at the optimum
+  final_fit.equation_error_start = false;
+  final_fit.coarse_first = false;
   ++fits;
   return fit_model(best->model, data, final_fit);
 }
@@ -928,6 +995,284 @@ std::string parameter_text(const FittedParameter& parameter) {
 
 }  // namespace
 
+namespace {
+
+using Say = std::function<void(const std::string&)>;
+
+std::string ranking_line(int step_number, const ResidualExamination& examination) {
+  std::string ranking = "step " + std::to_string(step_number) + ": the residual ranks ";
+  for (std::size_t k = 0; k < examination.candidates.size() && k < 4; ++k) {
+    if (k > 0) ranking += ", ";
+    ranking += examination.candidates[k].name + " (" +
+               percent(examination.candidates[k].explained_fraction) +
+               printf_text(", z %.3g)", examination.candidates[k].score_z);
+  }
+  return ranking;
+}
+
+// Who is refitted: the candidates whose linear share and z pass, in rank order, then those
+// the second look promotes, while refit slots are left. Gives the others their verdicts.
+std::vector<std::size_t> select_refits(ResidualExamination& examination, const LoopOptions& options,
+                                       int step_number, const Say& say) {
+  std::vector<std::size_t> order, promoted;
+  for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
+    CandidateEvidence& candidate = examination.candidates[k];
+    const bool share_ok = candidate.explained_fraction >= options.min_explained_fraction;
+    if (share_ok && candidate.score_z >= options.min_score_z) {
+      order.push_back(k);
+    } else if (candidate.screened &&
+               candidate.screen_explained_fraction >= options.min_explained_fraction &&
+               candidate.screen_score_z >= options.min_score_z) {
+      promoted.push_back(k);
+    } else if (!share_ok) {
+      candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
+                          " of the residual (needs " + percent(options.min_explained_fraction) +
+                          ")";
+    } else {
+      candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
+                          " (needs " + printf_text("%.2g", options.min_score_z) + ")";
+      if (candidate.screened) {
+        candidate.verdict +=
+            printf_text(", second look %.1f%%, z %.2g", 100.0 * candidate.screen_explained_fraction,
+                        candidate.screen_score_z);
+      }
+    }
+  }
+  for (std::size_t k : promoted) {
+    CandidateEvidence& candidate = examination.candidates[k];
+    candidate.promoted = true;
+    candidate.start_values = candidate.screen_values;
+    candidate.scan +=
+        std::string(candidate.scan.empty() ? "" : "; ") +
+        printf_text("second look: %.1f%%, z %.3g", 100.0 * candidate.screen_explained_fraction,
+                    candidate.screen_score_z);
+  }
+  order.insert(order.end(), promoted.begin(), promoted.end());
+  std::vector<std::size_t> to_refit;
+  for (std::size_t k : order) {
+    CandidateEvidence& candidate = examination.candidates[k];
+    if (static_cast<int>(to_refit.size()) >= options.refit_candidates) {
+      candidate.verdict = "not refitted: ranked below the " +
+                          std::to_string(options.refit_candidates) + " refitted";
+      continue;
+    }
+    to_refit.push_back(k);
+    candidate.refitted = true;
+    say("step " + std::to_string(step_number) + ": refitting with " + candidate.name +
+        (candidate.scan.empty() ? "" : " (" + candidate.scan + ")"));
+  }
+  return to_refit;
+}
+
+// A refitted candidate's figures and verdict against `before`.
+void judge(CandidateEvidence& candidate, const ModelFigures& before, const ModelFigures& after,
+           const LoopOptions& options) {
+  candidate.after = after;
+  candidate.held_out_improvement =
+      (before.held_out_rmse_rad_s - after.held_out_rmse_rad_s) / before.held_out_rmse_rad_s;
+  candidate.bic_change = after.bic - before.bic;
+  const bool held_out_ok = candidate.held_out_improvement > options.min_held_out_improvement;
+  const bool bic_ok = candidate.bic_change < -options.min_bic_decrease;
+  candidate.qualifies = held_out_ok && bic_ok;
+  const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) + " -> " +
+                                    number(after.held_out_rmse_rad_s) + " rad/s (" +
+                                    signed_percent(-candidate.held_out_improvement) + ")";
+  const std::string bic_text = "BIC " + printf_text("%+.4g", candidate.bic_change);
+  if (candidate.qualifies) {
+    candidate.verdict = "qualifies: " + held_out_text + ", " + bic_text;
+  } else if (!held_out_ok) {
+    candidate.verdict = "rejected: " + held_out_text + ", needs a fall of more than " +
+                        percent(options.min_held_out_improvement);
+  } else {
+    candidate.verdict = "rejected: " + bic_text + " (must fall by more than " +
+                        number(options.min_bic_decrease) + "), " + held_out_text;
+  }
+}
+
+// The refits of one step (LoopOptions::parallel_refits): fit_model gives the same result bit
+// for bit on any thread and with any num_threads (docs/fitting.md), so running them at once
+// changes no verdict, only the time. Returns the refits by candidate index; counts fits.
+std::vector<std::optional<FitResult>> run_refits(
+    const DoorModel& start, const FitResult& current, const FitOptions& current_options,
+    const PreparedData& data, const LoopOptions& options, const std::vector<std::size_t>& to_refit,
+    ResidualExamination& examination, int& fits, const Say& say) {
+  std::vector<std::optional<FitResult>> refits(examination.candidates.size());
+  const ModelFigures before = model_figures(current.summary);
+  std::vector<std::string> refit_errors(to_refit.size());
+  std::vector<int> refit_fits(to_refit.size(), 0);
+  std::vector<double> refit_seconds(to_refit.size(), 0.0);
+  auto run_refit = [&](std::size_t j) {
+    CandidateEvidence& candidate = examination.candidates[to_refit[j]];
+    const Clock::time_point refit_began = Clock::now();
+    try {
+      refits[to_refit[j]] = refit(start, current, current_options, data, options, candidate,
+                                  refit_fits[j], candidate.refit_start);
+    } catch (const std::exception& error) {
+      refit_errors[j] = error.what();
+    }
+    refit_seconds[j] = seconds_since(refit_began);
+  };
+  run_all(to_refit.size(), options.parallel_refits, run_refit);
+  for (std::size_t j = 0; j < to_refit.size(); ++j) {
+    const std::size_t k = to_refit[j];
+    CandidateEvidence& candidate = examination.candidates[k];
+    fits += refit_fits[j];
+    if (!refits[k]) {
+      candidate.verdict = "refit failed: " + refit_errors[j];
+      say("  " + candidate.name + ": " + candidate.verdict);
+      continue;
+    }
+    judge(candidate, before, model_figures(refits[k]->summary), options);
+    say("  " + candidate.name + ": " + candidate.verdict +
+        printf_text(" [refit from %s, %.1f s]", candidate.refit_start.c_str(), refit_seconds[j]));
+  }
+  return refits;
+}
+
+// The qualifying candidate with the lowest held-out RMSE; -1 when none qualifies.
+int choose(const std::vector<CandidateEvidence>& candidates) {
+  int chosen = -1;
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const CandidateEvidence& candidate = candidates[k];
+    if (!candidate.qualifies) continue;
+    if (chosen < 0 ||
+        candidate.after->held_out_rmse_rad_s < candidates[chosen].after->held_out_rmse_rad_s) {
+      chosen = static_cast<int>(k);
+    }
+  }
+  return chosen;
+}
+
+LoopStep make_step(int step_number, ResidualExamination& examination, int chosen,
+                   const FitResult& refit_result, const ModelFigures& before) {
+  const CandidateEvidence& accepted = examination.candidates[chosen];
+  LoopStep step;
+  step.number = step_number;
+  step.effect = accepted.kind;
+  step.effect_name = accepted.name;
+  step.second_look = accepted.promoted;
+  step.explained_fraction =
+      accepted.promoted ? accepted.screen_explained_fraction : accepted.explained_fraction;
+  step.score_z = accepted.promoted ? accepted.screen_score_z : accepted.score_z;
+  step.rank = accepted.rank;
+  const std::string prefix = accepted.name + ".";
+  for (const FittedParameter& parameter : refit_result.summary.parameters) {
+    if (parameter.name.rfind(prefix, 0) == 0) step.parameters.push_back(parameter);
+  }
+  step.before = before;
+  step.after = *accepted.after;
+  step.held_out_improvement = accepted.held_out_improvement;
+  step.bic_change = accepted.bic_change;
+  step.candidates = std::move(examination.candidates);
+  step.speed_bands = std::move(examination.speed_bands);
+  return step;
+}
+
+// The reference door of the other family with the structure check's free set.
+FitOptions structure_fit_options(const LoopOptions& options, ModelKind other) {
+  FitOptions fit = options.fit;
+  fit.fixed_parameters.clear();
+  fit.free_parameters = options.structure_free_parameters;
+  if (fit.free_parameters.empty() && other == ModelKind::kPhysical) {
+    fit.free_parameters = {"J_d", "k_s", "F0", "T_h", "mu_g"};
+  }
+  return fit;
+}
+
+// Whether the structure check runs, and why (or why not).
+bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
+                         const ModelFigures& figures, const ResidualExamination& last,
+                         StructureCheck& check) {
+  for (const CandidateEvidence& candidate : last.candidates) {
+    check.best_explained_fraction =
+        std::max(check.best_explained_fraction, candidate.explained_fraction);
+  }
+  check.noise_floor_rad_s = last.noise_floor_rad_s;
+  const double ratio = last.noise_floor_rad_s > 0
+                           ? figures.held_out_rmse_rad_s / last.noise_floor_rad_s
+                           : std::numeric_limits<double>::infinity();
+  if (!options.structure_check) {
+    check.reason = "off (structure_check)";
+  } else if (stopped_at_max_steps) {
+    check.reason = "not run: the loop stopped at max_steps";
+  } else if (check.best_explained_fraction >= options.structure_max_explained_fraction) {
+    check.reason = "not run: the best candidate explains " +
+                   percent(check.best_explained_fraction) + " of the residual (at least " +
+                   percent(options.structure_max_explained_fraction) + ")";
+  } else if (ratio <= options.structure_noise_ratio) {
+    check.reason = "not run: the held-out RMSE " + number(figures.held_out_rmse_rad_s) +
+                   " rad/s is " + printf_text("%.2g", ratio) + " times the noise floor " +
+                   number(last.noise_floor_rad_s) + " rad/s (needs more than " +
+                   printf_text("%.3g", options.structure_noise_ratio) + ")";
+  } else {
+    check.reason = "no effect closes the gap: the best candidate explains " +
+                   percent(check.best_explained_fraction) +
+                   " of the residual and the held-out "
+                   "RMSE " +
+                   number(figures.held_out_rmse_rad_s) + " rad/s is " + printf_text("%.3g", ratio) +
+                   " times the noise floor " + number(last.noise_floor_rad_s) + " rad/s";
+    return true;
+  }
+  return false;
+}
+
+// The structure check: the other family fitted and compared, then examined for what it
+// leaves. Counts its fit in `fits`.
+StructureCheck check_structure(const FitResult& current, const PreparedData& data,
+                               const LoopOptions& options, bool stopped_at_max_steps,
+                               const ResidualExamination& last, int& fits, const Say& say) {
+  StructureCheck check;
+  check.current_kind = current.model.kind();
+  check.other_kind =
+      check.current_kind == ModelKind::kSensory ? ModelKind::kPhysical : ModelKind::kSensory;
+  check.current = model_figures(current.summary);
+  if (!structure_check_due(options, stopped_at_max_steps, check.current, last, check)) {
+    return check;
+  }
+  check.ran = true;
+  const std::string other_name(to_string(check.other_kind));
+  say("structure check: " + check.reason + "; fitting the " + other_name + " model");
+  const FitOptions fit = structure_fit_options(options, check.other_kind);
+  try {
+    ++fits;
+    check.other_fit = fit_model(reference_model(check.other_kind), data, fit);
+  } catch (const std::exception& error) {
+    check.verdict = "the " + other_name + " model's fit failed: " + error.what();
+    say("structure check: " + check.verdict);
+    return check;
+  }
+  const FitSummary& other = check.other_fit->summary;
+  check.other = model_figures(other);
+  for (const FittedParameter& parameter : other.parameters) {
+    if (parameter.free) check.other_free.push_back(parameter.name);
+  }
+  check.other_undetermined = other.undetermined;
+  check.held_out_improvement =
+      (check.current.held_out_rmse_rad_s - check.other.held_out_rmse_rad_s) /
+      check.current.held_out_rmse_rad_s;
+  check.bic_change = check.other.bic - check.current.bic;
+  check.other_better = check.held_out_improvement > options.min_held_out_improvement &&
+                       check.bic_change < -options.min_bic_decrease;
+  ResidualExamination examination = examine(check.other_fit->model, data, options, fit);
+  for (const CandidateEvidence& candidate : examination.candidates) {
+    if (candidate.explained_fraction >= options.min_explained_fraction &&
+        candidate.score_z >= options.min_score_z) {
+      check.remaining.push_back(candidate);
+    }
+  }
+  const std::string current_name(to_string(check.current_kind));
+  check.verdict = std::string(check.other_better ? "the " + other_name : "the " + current_name) +
+                  " model is the better structure: held-out RMSE " +
+                  number(check.current.held_out_rmse_rad_s) + " rad/s (" + current_name +
+                  ") against " + number(check.other.held_out_rmse_rad_s) + " (" + other_name +
+                  ", " + signed_percent(-check.held_out_improvement) + "), BIC " +
+                  printf_text("%+.4g", check.bic_change);
+  say("structure check: " + check.verdict);
+  return check;
+}
+
+}  // namespace
+
 LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
                              const LoopOptions& options) {
   const Clock::time_point began = Clock::now();
@@ -941,208 +1286,65 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
         "residual loop: the data needs at least 2 strokes (held-out errors need strokes left "
         "out of a fit)");
   }
-  auto say = [&](const std::string& line) {
+  const Say say = [&](const std::string& line) {
     if (options.progress) options.progress(line);
   };
 
-  int fits = 0;
   say("fitting the start model (" + std::string(to_string(start.kind())) + ", " +
       std::to_string(start.effects().size()) + " effects) with " +
       std::to_string(options.fit.cross_validation_folds) + "-fold cross-validation");
   FitResult start_fit = fit_model(start, data, options.fit);
-  ++fits;
-  say("start model: " + describe_figures(model_figures(start_fit.summary)) +
-      printf_text(" [%.1f s]", start_fit.summary.total_time_s));
+  LoopResult result{start_fit, std::move(start_fit), {}, {}, {}, "", 1, 0.0, options, {}};
+  say("start model: " + describe_figures(model_figures(result.start_fit.summary)) +
+      printf_text(" [%.1f s]", result.start_fit.summary.total_time_s));
 
-  FitResult current = start_fit;
+  FitResult current = result.start_fit;
   FitOptions current_options = options.fit;  // the options current was fitted with
-  std::vector<LoopStep> steps;
-  std::vector<CandidateEvidence> last_candidates;
-  std::vector<SpeedBand> last_speed_bands;
-  std::string stop_reason;
+  ResidualExamination last;                  // the examination that ended the loop
+  bool at_max_steps = false;
   for (int step_number = 1;; ++step_number) {
     if (step_number > options.max_steps) {
-      stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
+      result.stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
+      at_max_steps = true;
       break;
     }
     ResidualExamination examination = examine(current.model, data, options, current_options);
     if (examination.candidates.empty()) {
-      stop_reason = "no candidate effect is left (every candidate is in the model)";
+      result.stop_reason = "no candidate effect is left (every candidate is in the model)";
+      last = std::move(examination);
       break;
     }
-    std::string ranking = "step " + std::to_string(step_number) + ": the residual ranks ";
-    for (std::size_t k = 0; k < examination.candidates.size() && k < 4; ++k) {
-      if (k > 0) ranking += ", ";
-      ranking += examination.candidates[k].name + " (" +
-                 percent(examination.candidates[k].explained_fraction) +
-                 printf_text(", z %.3g)", examination.candidates[k].score_z);
-    }
-    say(ranking);
-
+    say(ranking_line(step_number, examination));
     const ModelFigures before = model_figures(current.summary);
-    std::vector<std::optional<FitResult>> refits(examination.candidates.size());
-    // Who is refitted: the candidates whose linear share and z pass, in rank order, then
-    // those the second look promotes, while refit slots are left.
-    std::vector<std::size_t> order, promoted;
-    for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
-      CandidateEvidence& candidate = examination.candidates[k];
-      const bool share_ok = candidate.explained_fraction >= options.min_explained_fraction;
-      if (share_ok && candidate.score_z >= options.min_score_z) {
-        order.push_back(k);
-      } else if (candidate.screened &&
-                 candidate.screen_explained_fraction >= options.min_explained_fraction &&
-                 candidate.screen_score_z >= options.min_score_z) {
-        promoted.push_back(k);
-      } else if (!share_ok) {
-        candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
-                            " of the residual (needs " + percent(options.min_explained_fraction) +
-                            ")";
-      } else {
-        candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
-                            " (needs " + printf_text("%.2g", options.min_score_z) + ")";
-        if (candidate.screened) {
-          candidate.verdict += printf_text(", second look %.1f%%, z %.2g",
-                                           100.0 * candidate.screen_explained_fraction,
-                                           candidate.screen_score_z);
-        }
-      }
-    }
-    for (std::size_t k : promoted) {
-      CandidateEvidence& candidate = examination.candidates[k];
-      candidate.promoted = true;
-      candidate.start_values = candidate.screen_values;
-      candidate.scan += std::string(candidate.scan.empty() ? "" : "; ") +
-                        printf_text("second look: %.1f%%, z %.3g", 100.0 * candidate.screen_explained_fraction,
-                                    candidate.screen_score_z);
-    }
-    order.insert(order.end(), promoted.begin(), promoted.end());
-    std::vector<std::size_t> to_refit;
-    for (std::size_t k : order) {
-      CandidateEvidence& candidate = examination.candidates[k];
-      if (static_cast<int>(to_refit.size()) >= options.refit_candidates) {
-        candidate.verdict = "not refitted: ranked below the " +
-                            std::to_string(options.refit_candidates) + " refitted";
-        continue;
-      }
-      to_refit.push_back(k);
-      candidate.refitted = true;
-      say("step " + std::to_string(step_number) + ": refitting with " + candidate.name +
-          (candidate.scan.empty() ? "" : " (" + candidate.scan + ")"));
-    }
-    const int refitted = static_cast<int>(to_refit.size());
-    // The refits (LoopOptions::parallel_refits): fit_model gives the same result bit for
-    // bit on any thread and with any num_threads (docs/fitting.md), so running them at once
-    // changes no verdict, only the time.
-    std::vector<std::string> refit_errors(to_refit.size());
-    std::vector<int> refit_fits(to_refit.size(), 0);
-    std::vector<double> refit_seconds(to_refit.size(), 0.0);
-    auto run_refit = [&](std::size_t j) {
-      CandidateEvidence& candidate = examination.candidates[to_refit[j]];
-      const Clock::time_point refit_began = Clock::now();
-      try {
-        refits[to_refit[j]] = refit(start, current, current_options, data, options, candidate,
-                                    refit_fits[j], candidate.refit_start);
-      } catch (const std::exception& error) {
-        refit_errors[j] = error.what();
-      }
-      refit_seconds[j] = seconds_since(refit_began);
-    };
-    run_all(to_refit.size(), options.parallel_refits, run_refit);
-    for (std::size_t j = 0; j < to_refit.size(); ++j) {
-      const std::size_t k = to_refit[j];
-      CandidateEvidence& candidate = examination.candidates[k];
-      fits += refit_fits[j];
-      if (!refits[k]) {
-        candidate.verdict = "refit failed: " + refit_errors[j];
-        say("  " + candidate.name + ": " + candidate.verdict);
-        continue;
-      }
-      const ModelFigures after = model_figures(refits[k]->summary);
-      candidate.after = after;
-      candidate.held_out_improvement =
-          (before.held_out_rmse_rad_s - after.held_out_rmse_rad_s) / before.held_out_rmse_rad_s;
-      candidate.bic_change = after.bic - before.bic;
-      const bool held_out_ok = candidate.held_out_improvement > options.min_held_out_improvement;
-      const bool bic_ok = candidate.bic_change < -options.min_bic_decrease;
-      candidate.qualifies = held_out_ok && bic_ok;
-      const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) +
-                                        " -> " + number(after.held_out_rmse_rad_s) + " rad/s (" +
-                                        signed_percent(-candidate.held_out_improvement) + ")";
-      const std::string bic_text = "BIC " + printf_text("%+.4g", candidate.bic_change);
-      if (candidate.qualifies) {
-        candidate.verdict = "qualifies: " + held_out_text + ", " + bic_text;
-      } else if (!held_out_ok) {
-        candidate.verdict = "rejected: " + held_out_text + ", needs a fall of more than " +
-                            percent(options.min_held_out_improvement);
-      } else {
-        candidate.verdict = "rejected: " + bic_text + " (must fall by more than " +
-                            number(options.min_bic_decrease) + "), " + held_out_text;
-      }
-      say("  " + candidate.name + ": " + candidate.verdict +
-          printf_text(" [refit from %s, %.1f s]", candidate.refit_start.c_str(),
-                      refit_seconds[j]));
-    }
-
-    int chosen = -1;
-    for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
-      const CandidateEvidence& candidate = examination.candidates[k];
-      if (!candidate.qualifies) continue;
-      if (chosen < 0 || candidate.after->held_out_rmse_rad_s <
-                            examination.candidates[chosen].after->held_out_rmse_rad_s) {
-        chosen = static_cast<int>(k);
-      }
-    }
+    const std::vector<std::size_t> to_refit = select_refits(examination, options, step_number, say);
+    std::vector<std::optional<FitResult>> refits = run_refits(
+        start, current, current_options, data, options, to_refit, examination, result.fits, say);
+    const int chosen = choose(examination.candidates);
     if (chosen < 0) {
-      stop_reason =
-          refitted == 0
+      result.stop_reason =
+          to_refit.empty()
               ? "no candidate was worth a refit (explained share or z below the thresholds)"
               : "no refitted candidate qualified";
-      last_candidates = std::move(examination.candidates);
-      last_speed_bands = std::move(examination.speed_bands);
+      result.last_candidates = examination.candidates;
+      result.last_speed_bands = examination.speed_bands;
+      last = std::move(examination);
       break;
     }
-
-    const CandidateEvidence& accepted = examination.candidates[chosen];
-    LoopStep step;
-    step.number = step_number;
-    step.effect = accepted.kind;
-    step.effect_name = accepted.name;
-    step.second_look = accepted.promoted;
-    step.explained_fraction =
-        accepted.promoted ? accepted.screen_explained_fraction : accepted.explained_fraction;
-    step.score_z = accepted.promoted ? accepted.screen_score_z : accepted.score_z;
-    step.rank = accepted.rank;
-    const std::string prefix = accepted.name + ".";
-    for (const FittedParameter& parameter : refits[chosen]->summary.parameters) {
-      if (parameter.name.rfind(prefix, 0) == 0) step.parameters.push_back(parameter);
-    }
-    step.before = before;
-    step.after = *accepted.after;
-    step.held_out_improvement = accepted.held_out_improvement;
-    step.bic_change = accepted.bic_change;
-    std::string added = "step " + std::to_string(step_number) + ": added " + accepted.name + ":";
+    const effects::Kind accepted = examination.candidates[chosen].kind;
+    LoopStep step = make_step(step_number, examination, chosen, *refits[chosen], before);
+    std::string added = "step " + std::to_string(step_number) + ": added " + step.effect_name + ":";
     for (const FittedParameter& parameter : step.parameters) {
       added += ' ';
       added += parameter_text(parameter);
     }
     say(added);
     current = std::move(*refits[chosen]);
-    current_options = refit_options(current_options, options, accepted.kind);
-    step.candidates = std::move(examination.candidates);
-    step.speed_bands = std::move(examination.speed_bands);
-    steps.push_back(std::move(step));
+    current_options = refit_options(current_options, options, accepted);
+    result.steps.push_back(std::move(step));
   }
-  say("stopped: " + stop_reason);
-
-  LoopResult result{std::move(start_fit),
-                    std::move(current),
-                    std::move(steps),
-                    std::move(last_candidates),
-                    std::move(last_speed_bands),
-                    std::move(stop_reason),
-                    fits,
-                    0.0,
-                    options};
+  say("stopped: " + result.stop_reason);
+  result.structure = check_structure(current, data, options, at_max_steps, last, result.fits, say);
+  result.final_fit = std::move(current);
   result.total_time_s = seconds_since(began);
   return result;
 }
@@ -1196,6 +1398,29 @@ void speed_band_line(std::string& out, const std::vector<SpeedBand>& bands) {
   out += "\n";
 }
 
+void structure_section(std::string& out, const StructureCheck& check) {
+  out += "\nStructure check: " + check.reason + "\n";
+  if (!check.ran) return;
+  out += "  " + check.verdict + "\n";
+  if (!check.other_fit) return;
+  out += "  " + std::string(to_string(check.other_kind)) + " model, free:";
+  for (const std::string& name : check.other_free) out += " " + name;
+  out += check.other_undetermined.empty() ? "; every one determined\n" : "; undetermined:";
+  for (const std::string& name : check.other_undetermined) out += " " + name;
+  if (!check.other_undetermined.empty()) out += "\n";
+  figures_table(out, check.current, check.other);
+  out += "  (before: the loop's " + std::string(to_string(check.current_kind)) +
+         " model; after: the " + std::string(to_string(check.other_kind)) + " model)\n";
+  if (check.remaining.empty()) {
+    out += "  the examination of the " + std::string(to_string(check.other_kind)) +
+           " fit ranks no catalogue effect above the refit thresholds\n";
+    return;
+  }
+  out += "  effects the " + std::string(to_string(check.other_kind)) +
+         " fit still lacks, by the examination (not refitted):\n";
+  candidate_table(out, check.remaining);
+}
+
 std::string effect_list(const std::vector<LoopStep>& steps) {
   std::string list;
   for (const LoopStep& step : steps) list += (list.empty() ? "" : ", ") + step.effect_name;
@@ -1230,6 +1455,7 @@ std::string LoopResult::brief_report() const {
            printf_text("%+.4g", step.bic_change) + ".\n";
   }
   out += "Stopped: " + stop_reason + ".\n";
+  if (structure.ran) out += "Structure check: " + structure.verdict + ".\n";
   return out;
 }
 
@@ -1271,6 +1497,7 @@ std::string LoopResult::full_report() const {
     candidate_table(out, last_candidates);
   }
   out += "\nStopped: " + stop_reason + ".\n";
+  structure_section(out, structure);
   out += "\nFinal fit:\n" + final_fit.summary.brief_report();
   return out;
 }

@@ -95,6 +95,22 @@ struct LoopOptions {
   // time changes.
   bool parallel_refits = true;
 
+  // --- The structure check (docs/residual-loop.md, "The structure check") ---
+  // When the loop stops because no catalogue effect qualifies (not at max_steps), the best
+  // remaining candidate explains less than structure_max_explained_fraction of the
+  // residual, and the held-out window RMSE is more than structure_noise_ratio times the
+  // noise floor the examination estimates from the residual itself
+  // (ResidualExamination::noise_floor_rad_s), the loop fits the other model family (sensory
+  // <-> physical, the reference door of that family as the start) and reports the
+  // comparison as its last step. It names the other family the better structure when its
+  // held-out RMSE is lower by more than min_held_out_improvement and its BIC lower too.
+  bool structure_check = true;
+  double structure_max_explained_fraction = 0.5;
+  double structure_noise_ratio = 4.0;
+  // The other family's free parameters; empty: for the physical model a small set the
+  // strokes determine (J_d, k_s, F0, T_h, mu_g), for the sensory model its default set.
+  std::vector<std::string> structure_free_parameters;
+
   // Called with one line at each stage (fits, the ranking, each verdict); may be empty.
   std::function<void(const std::string&)> progress;
 
@@ -177,6 +193,16 @@ inline constexpr double kSpeedBandEdges_rad_s[] = {0.0, 0.01, 0.05, 0.2, 0.5};
 struct ResidualExamination {
   std::size_t samples = 0;           // rate residuals used (window samples after the first)
   double rate_sum_of_squares = 0.0;  // Σ(ω − ω̂)², rad²/s²
+  // The noise floor of the window RMSE, from the residual's own differences along each
+  // window (docs/residual-loop.md, "The structure check"): with e_j the residual at the
+  // j-th sample of a window, white measurement noise σ² and a random walk of q per sample
+  // (the measured force's noise integrated by the simulation) give a variance of
+  // e_j − e_{j−1} of q + 2σ² and of e_j − e_{j−2} of 2q + 2σ², each taken about its window's
+  // mean; a model error, smooth along a window, shifts the differences' mean and adds little
+  // to their variance. The floor is √(σ² + q·mean j), what a right model would leave.
+  double white_noise_rad_s = 0.0;      // σ
+  double walk_per_sample_rad_s = 0.0;  // √q
+  double noise_floor_rad_s = 0.0;
   std::vector<CandidateEvidence> candidates;  // best first
   std::vector<SpeedBand> speed_bands;  // the residual by measured speed
   double time_s = 0.0;                 // wall clock, the second look included
@@ -203,6 +229,28 @@ struct LoopStep {
   std::vector<SpeedBand> speed_bands;         // the examination's residual by speed
 };
 
+// The structure check's comparison (LoopOptions::structure_check): the loop's final model
+// against the other model family fitted to the same data with the same options.
+struct StructureCheck {
+  bool ran = false;                      // false: `reason` says why not
+  std::string reason;                    // the conditions met, or the one that was not
+  double noise_floor_rad_s = 0.0;        // the last examination's
+  double best_explained_fraction = 0.0;  // the best remaining candidate's share
+  ModelKind current_kind = ModelKind::kSensory;
+  ModelKind other_kind = ModelKind::kPhysical;
+  ModelFigures current, other;                  // held-out RMSE, BIC, parameters of both
+  std::vector<std::string> other_free;          // the other family's free parameters
+  std::vector<std::string> other_undetermined;  // those the data did not determine
+  bool other_better = false;
+  double held_out_improvement = 0.0;  // (current − other) / current, held-out window RMSE
+  double bic_change = 0.0;            // other − current
+  // Catalogue effects the examination of the other family's fit still ranks above the
+  // refit thresholds (share and z), best first: what that family leaves unexplained.
+  std::vector<CandidateEvidence> remaining;
+  std::optional<FitResult> other_fit;
+  std::string verdict;
+};
+
 struct LoopResult {
   FitResult start_fit;  // the start model's fit (step 0)
   FitResult final_fit;  // the fit of the final model (= start_fit when nothing was added)
@@ -215,6 +263,7 @@ struct LoopResult {
   int fits = 0;  // calls of fit_model
   double total_time_s = 0.0;
   LoopOptions options;  // as given
+  StructureCheck structure;  // the loop's last step when it ran
 
   const DoorModel& model() const { return final_fit.model; }
   std::string brief_report() const;  // a few lines: the effects added and the error

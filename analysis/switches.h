@@ -5,6 +5,16 @@
 
 namespace doorbench {
 
+// exp(−x) for x ≥ 0: exactly std::exp's value (and a Jet's exp's), but 0 without calling it
+// where it is 0 anyway (x beyond 746). Sharp switches far from their step ask for exp(−2000)
+// all the time, and glibc's exp takes a slow path (errno) for every result that underflows.
+template <typename T>
+T exp_minus(const T& x) {
+  using std::exp;
+  if (x > T(746.0)) return T(0.0);
+  return exp(-x);
+}
+
 // The logistic function 1 / (1 + exp(−u)), in the form that neither overflows nor
 // loses relative accuracy in either tail.
 template <typename T>
@@ -30,7 +40,7 @@ SwitchValues<T> switch_values(const T& x, const T& x0, const T& beta) {
   using std::exp;
   // S = logistic(u) with u = 2β (x − x0), identical to ½ (1 + tanh(β (x − x0))).
   const T u = T(2.0) * beta * (x - x0);
-  const T tail = exp(-abs(u));
+  const T tail = exp_minus(abs(u));
   const T large = T(1.0) / (T(1.0) + tail);
   const T small = tail * large;
   if (u >= T(0.0)) return {large, small};
@@ -72,7 +82,7 @@ T softplus(const T& z, const T& e) {
   using std::log1p;
   // ">=" so that a Jet at exactly z = 0 gets the slope ½ (|z| differentiates as +z there).
   const T positive_part = z >= T(0.0) ? z : T(0.0);
-  return positive_part + e * log1p(exp(-abs(z) / e));
+  return positive_part + e * log1p(exp_minus(abs(z) / e));
 }
 
 // softmin_e(a, b) = −e ln(exp(−a/e) + exp(−b/e)) = min(a, b) − e ln(1 + exp(−|a − b|/e)).
@@ -82,7 +92,7 @@ T softmin(const T& a, const T& b, const T& e) {
   using std::exp;
   using std::log1p;
   const T smaller = a < b ? a : b;
-  return smaller - e * log1p(exp(-abs(a - b) / e));
+  return smaller - e * log1p(exp_minus(abs(a - b) / e));
 }
 
 }  // namespace doorbench

@@ -46,8 +46,21 @@ nlohmann::ordered_json loop_json(const LoopResult& result, const PreparedData& d
                      {"held_out_improvement", step.held_out_improvement},
                      {"bic_change", step.bic_change}});
   }
+  const StructureCheck& check = result.structure;
+  nlohmann::ordered_json structure = {
+      {"ran", check.ran}, {"reason", check.reason}, {"noise_floor_rad_s", check.noise_floor_rad_s}};
+  if (check.ran && check.other_fit) {
+    structure["current_model"] = std::string(to_string(check.current_kind));
+    structure["other_model"] = std::string(to_string(check.other_kind));
+    structure["current"] = figures_json(check.current);
+    structure["other"] = figures_json(check.other);
+    structure["other_free_parameters"] = check.other_free;
+    structure["other_is_better"] = check.other_better;
+    structure["verdict"] = check.verdict;
+  }
   return {{"source", data.source},
           {"steps", steps},
+          {"structure_check", structure},
           {"start_fit", fit_result_json(result.start_fit, data)},
           {"final_fit", fit_result_json(result.final_fit, data)}};
 }
@@ -75,6 +88,20 @@ std::string steps_table(const LoopResult& result) {
                   step.effect_name.c_str(), parameters.c_str(), step.before.fitted_rmse_rad_s,
                   step.after.fitted_rmse_rad_s, step.before.held_out_rmse_rad_s,
                   step.after.held_out_rmse_rad_s);
+    table += row;
+  }
+  const StructureCheck& check = result.structure;
+  if (check.ran && check.other_fit) {
+    const std::string other(to_string(check.other_kind));
+    const std::string current(to_string(check.current_kind));
+    std::snprintf(row, sizeof row,
+                  "| %zu | structure: %s model is better | held out: %s %.4g, %s %.4g rad/s; BIC "
+                  "%+.4g | %.4g → %.4g | %.4g → %.4g |\n",
+                  result.steps.size() + 1, check.other_better ? other.c_str() : current.c_str(),
+                  current.c_str(), check.current.held_out_rmse_rad_s, other.c_str(),
+                  check.other.held_out_rmse_rad_s, check.bic_change,
+                  check.current.fitted_rmse_rad_s, check.other.fitted_rmse_rad_s,
+                  check.current.held_out_rmse_rad_s, check.other.held_out_rmse_rad_s);
     table += row;
   }
   return table;

@@ -121,7 +121,10 @@ int main(int argc, char** argv) {
     const FitResult fit = fit_model(sensory, data, options.fit);
     std::printf("%s", fit.summary.full_report().c_str());
     const ResidualExamination exam = examine_residual(fit.model, data, options);
-    std::printf("examination %.2f s (second look %.2f s)\n", exam.time_s, exam.screen_time_s);
+    std::printf("examination %.2f s (second look %.2f s); noise floor %.4g rad/s (white %.3g, "
+                "walk %.3g per sample)\n",
+                exam.time_s, exam.screen_time_s, exam.noise_floor_rad_s, exam.white_noise_rad_s,
+                exam.walk_per_sample_rad_s);
     for (const SpeedBand& band : exam.speed_bands) {
       std::printf("  |omega| from %g: %zu samples, residual RMS %.4g rad/s\n", band.low_rad_s,
                   band.samples, band.rms_rad_s);

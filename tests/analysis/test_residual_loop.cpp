@@ -210,7 +210,7 @@ TEST_CASE("residual loop: finds a force-sensor offset first", "[residual_loop]")
   check_recovered(parameter(loop.steps.front(), "force_offset.F_off"), offset);
 }
 
-TEST_CASE("residual loop: finds Stribeck friction first", "[residual_loop][.slow]") {
+TEST_CASE("residual loop: finds Stribeck friction first", "[residual_loop][slow]") {
   const LoopResult loop = expect_first_step(
       with_effect(sensory_reference(), effects::Kind::kStribeck, {5.0, 0.1}),
       effects::Kind::kStribeck);
@@ -218,14 +218,14 @@ TEST_CASE("residual loop: finds Stribeck friction first", "[residual_loop][.slow
   check_recovered(parameter(loop.steps.front(), "stribeck.w_s"), 0.1);
 }
 
-TEST_CASE("residual loop: finds direction-dependent friction first", "[residual_loop][.slow]") {
+TEST_CASE("residual loop: finds direction-dependent friction first", "[residual_loop][slow]") {
   const LoopResult loop = expect_first_step(
       with_effect(sensory_reference(), effects::Kind::kDirectionFriction, {1.5}),
       effects::Kind::kDirectionFriction);
   check_recovered(parameter(loop.steps.front(), "direction_friction.d_dir"), 1.5);
 }
 
-TEST_CASE("residual loop: finds a soft-close damper first", "[residual_loop][.slow]") {
+TEST_CASE("residual loop: finds a soft-close damper first", "[residual_loop][slow]") {
   const LoopResult loop = expect_first_step(
       with_effect(sensory_reference(), effects::Kind::kSoftClose, {5.0, 0.15, 50.0}),
       effects::Kind::kSoftClose);
@@ -234,7 +234,7 @@ TEST_CASE("residual loop: finds a soft-close damper first", "[residual_loop][.sl
   check_recovered(parameter(loop.steps.front(), "soft_close.beta_sc"), 50.0);
 }
 
-TEST_CASE("residual loop: finds an end stop first", "[residual_loop][.slow]") {
+TEST_CASE("residual loop: finds an end stop first", "[residual_loop][slow]") {
   const LoopResult loop = expect_first_step(
       with_effect(sensory_reference(), effects::Kind::kEndStop, {200.0, 1.2, 3000.0}),
       effects::Kind::kEndStop);
@@ -243,7 +243,7 @@ TEST_CASE("residual loop: finds an end stop first", "[residual_loop][.slow]") {
   CHECK_FALSE(parameter(loop.steps.front(), "end_stop.beta_e").free);  // fixed_effect_parameters
 }
 
-TEST_CASE("residual loop: finds an inertia error first when J is held", "[residual_loop][.slow]") {
+TEST_CASE("residual loop: finds an inertia error first when J is held", "[residual_loop][slow]") {
   LoopOptions options;
   options.fit.fixed_parameters = {"J"};  // otherwise the inertia error is J itself
   const LoopResult loop = expect_first_step(
