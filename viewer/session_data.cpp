@@ -31,7 +31,7 @@ std::shared_ptr<Series> channel_series(const SessionReader& reader, const Channe
 }
 
 std::shared_ptr<Series> loop_series(const PreparedData& data, StrokeDirection direction,
-                                    const std::string& name, Rgba colour) {
+                                    const std::string& name, plot_style::Meaning meaning) {
   std::vector<double> angle, force;
   for (const Stroke& stroke : data.strokes) {
     if (stroke.direction != direction) continue;
@@ -44,11 +44,42 @@ std::shared_ptr<Series> loop_series(const PreparedData& data, StrokeDirection di
   }
   auto series =
       std::make_shared<Series>(Series::xy(name, "rad", "N", std::move(angle), std::move(force)));
-  series->colour = colour;
+  style_series(*series, meaning);
   return series;
 }
 
+// Stroke events for a session whose file has none (see SessionData::events).
+void add_found_stroke_events(SessionData& session) {
+  for (const SessionEvent& e : session.events) {
+    if (e.kind == "stroke_start") return;
+  }
+  if (!session.prepared || session.data.strokes.empty()) return;
+  for (const Stroke& stroke : session.data.strokes) {
+    const std::string direction =
+        stroke.direction == StrokeDirection::kOpening ? "opening" : "closing";
+    session.events.push_back({motion_onset_s(stroke), "stroke_start", "", direction});
+    session.events.push_back({motion_end_s(stroke), "stroke_end", "", direction});
+  }
+  std::stable_sort(
+      session.events.begin(), session.events.end(),
+      [](const SessionEvent& x, const SessionEvent& y) { return x.time_s < y.time_s; });
+  session.strokes_found_on_read = true;
+}
+
 }  // namespace
+
+Rgba meaning_colour(plot_style::Meaning meaning, bool opaque) {
+  const plot_style::LineStyle style = plot_style::line_style(meaning);
+  const double alpha = opaque ? 1.0 : style.viewer_opacity;
+  return {style.r, style.g, style.b, std::uint8_t(std::lround(255.0 * alpha))};
+}
+
+void style_series(Series& series, plot_style::Meaning meaning) {
+  const plot_style::LineStyle style = plot_style::line_style(meaning);
+  series.colour = meaning_colour(meaning);
+  series.width_px = float(style.viewer_width_px);
+  series.layer = style.layer;
+}
 
 Rgba palette(std::size_t index) {
   static constexpr Rgba colours[] = {{230, 90, 40, 255},   {40, 140, 230, 255}, {60, 180, 75, 255},
@@ -81,10 +112,11 @@ SessionData load_session(const std::filesystem::path& path, const LoadOptions& o
   } else {
     session.prepare_message = "strokes not prepared";
   }
+  add_found_stroke_events(session);
   session.opening_loop =
-      loop_series(session.data, StrokeDirection::kOpening, "opening", kOpeningColour);
+      loop_series(session.data, StrokeDirection::kOpening, "opening", plot_style::Meaning::kOpening);
   session.closing_loop =
-      loop_series(session.data, StrokeDirection::kClosing, "closing", kClosingColour);
+      loop_series(session.data, StrokeDirection::kClosing, "closing", plot_style::Meaning::kClosing);
   return session;
 }
 
@@ -130,9 +162,9 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
       std::make_shared<Series>(Series::timed("simulated", "rad/s", t, simulated));
   comparison.residual =
       std::make_shared<Series>(Series::timed("residual", "rad/s", std::move(t), residual));
-  comparison.measured->colour = palette(1);
-  comparison.simulated->colour = palette(0);
-  comparison.residual->colour = palette(2);
+  style_series(*comparison.measured, plot_style::Meaning::kMeasured);
+  style_series(*comparison.simulated, plot_style::Meaning::kSimulated);
+  style_series(*comparison.residual, plot_style::Meaning::kResidual);
   comparison.rmse_rad_s = count > 0 ? std::sqrt(sum_sq / double(count)) : kNaN;
   return comparison;
 }
@@ -191,7 +223,9 @@ namespace doorbench::viewer {
 bool event_marker(const SessionEvent& e, Marker& marker) {
   Rgba colour;
   if (e.kind == "stroke_start" || e.kind == "stroke_end") {
-    colour = e.detail == "closing" ? Rgba{40, 140, 230, 110} : Rgba{230, 90, 40, 110};
+    colour = meaning_colour(
+        e.detail == "closing" ? plot_style::Meaning::kClosing : plot_style::Meaning::kOpening);
+    colour.a = 110;
     if (e.kind == "stroke_end") colour = {170, 170, 170, 90};
   } else if (e.kind == "fault" || e.kind == "gap") {
     colour = {255, 0, 255, 200};
@@ -230,23 +264,66 @@ double first_stroke_start_s(const SessionData& session, const std::string& direc
   return first;
 }
 
+double motion_onset_s(const Stroke& stroke) {
+  const double threshold = PreprocessingOptions{}.motion_rate_rad_s;
+  for (std::size_t i = 0; i < stroke.size(); ++i) {
+    if (std::abs(stroke.omega_rad_s[i]) > threshold) return stroke.time_s[i];
+  }
+  return stroke.time_s.empty() ? kNaN : stroke.time_s.front();
+}
+
+double motion_end_s(const Stroke& stroke) {
+  const double threshold = PreprocessingOptions{}.motion_rate_rad_s;
+  for (std::size_t i = stroke.size(); i-- > 0;) {
+    if (std::abs(stroke.omega_rad_s[i]) > threshold) return stroke.time_s[i];
+  }
+  return stroke.time_s.empty() ? kNaN : stroke.time_s.back();
+}
+
+double first_motion_onset_s(const SessionData& session, const std::string& direction) {
+  double first = std::numeric_limits<double>::infinity();
+  for (const Stroke& stroke : session.data.strokes) {
+    const bool opening = stroke.direction == StrokeDirection::kOpening;
+    if (!direction.empty() && direction != (opening ? "opening" : "closing")) continue;
+    if (!stroke.time_s.empty()) first = std::min(first, motion_onset_s(stroke));
+  }
+  if (!std::isfinite(first)) {
+    throw std::invalid_argument(
+        std::string(session.path.string())
+            .append(": no stroke")
+            .append(direction.empty() ? "" : " of direction " + direction)
+            .append(" found from its motion to align on")
+            .append(session.prepared ? "" : " (" + session.prepare_message + ")"));
+  }
+  return first;
+}
+
 Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::string& direction) {
   Overlay overlay;
-  overlay.a_start_s = first_stroke_start_s(a, direction);
-  overlay.b_start_s = first_stroke_start_s(b, direction);
+  const bool by_events = !a.strokes_found_on_read && !b.strokes_found_on_read;
+  overlay.alignment = by_events ? "stroke_start events" : "motion onset";
+  overlay.a_start_s =
+      by_events ? first_stroke_start_s(a, direction) : first_motion_onset_s(a, direction);
+  overlay.b_start_s =
+      by_events ? first_stroke_start_s(b, direction) : first_motion_onset_s(b, direction);
   for (std::size_t i = 0; i < a.channels.size(); ++i) {
     for (std::size_t j = 0; j < b.channels.size(); ++j) {
       if (a.channels[i].name != b.channels[j].name) continue;
       PlotView plot;
-      plot.title = a.channels[i].name + ": A and B, aligned on stroke start";
+      plot.title = a.channels[i].name + ": A and B, aligned on stroke start (" +
+                   overlay.alignment + ")";
       plot.x_label = "time since stroke start";
       plot.y_label = a.channels[i].name;
       auto sa = std::make_shared<Series>(
           a.channel_series[i]->shifted(-overlay.a_start_s, "A " + a.path.filename().string()));
       auto sb = std::make_shared<Series>(
           b.channel_series[j]->shifted(-overlay.b_start_s, "B " + b.path.filename().string()));
-      sa->colour = palette(1);
-      sb->colour = palette(0);
+      // A as measured, on top; B opaque and wider beneath, so that both show where they
+      // coincide.
+      style_series(*sa, plot_style::Meaning::kMeasured);
+      sb->colour = meaning_colour(plot_style::Meaning::kSimulated, true);
+      sb->width_px = 4.0f;
+      sb->layer = 1;
       plot.add(sa);
       plot.add(sb);
       if (!overlay.plots.empty()) plot.link_x_to(overlay.plots.front());

@@ -10,6 +10,7 @@
 
 #include "acquisition/session_file.h"
 #include "analysis/door_model.h"
+#include "analysis/plot_style.h"
 #include "analysis/strokes.h"
 #include "viewer/plot_view.h"
 
@@ -17,15 +18,24 @@ namespace doorbench::viewer {
 
 // Distinct colours for series, in order; index wraps.
 Rgba palette(std::size_t index);
-inline constexpr Rgba kOpeningColour{230, 90, 40, 255};   // orange-red
-inline constexpr Rgba kClosingColour{40, 140, 230, 255};  // blue
+// The colour of a meaning (analysis/plot_style.h, shared with the SVG reports), with the
+// viewer's opacity as alpha unless `opaque`.
+Rgba meaning_colour(plot_style::Meaning meaning, bool opaque = false);
+// Colour, width and layer of a curve from its meaning: measured on top, a model's curve
+// wide and translucent under it.
+void style_series(Series& series, plot_style::Meaning meaning);
 
 struct SessionData {
   std::filesystem::path path;
   SessionMetadata metadata;
   std::vector<ChannelInfo> channels;
   std::vector<std::size_t> sample_counts;
+  // The file's events in time order. A session without stroke_start events (a haptic
+  // playback's) gets them here on read when its strokes were prepared: one stroke_start and
+  // one stroke_end per prepared stroke (found from the motion as preprocessing segments,
+  // detail "opening" or "closing", no channel) at motion_onset_s / motion_end_s.
   std::vector<SessionEvent> events;
+  bool strokes_found_on_read = false;
   std::vector<calibration::CalibrationRecord> calibrations;
   // Per channel (same order): physical values over session time, in the channel's unit.
   std::vector<std::shared_ptr<Series>> channel_series;
@@ -84,10 +94,23 @@ std::vector<Marker> event_markers_of(const Events& events, const std::string& ch
 // Throws std::invalid_argument naming the session when there is none.
 double first_stroke_start_s(const SessionData& session, const std::string& direction = "");
 
+// Where a prepared stroke's motion starts and ends: its first and last sample with |ω|
+// above preprocessing's motion threshold (PreprocessingOptions::motion_rate_rad_s); the
+// stroke's first and last sample when none is.
+double motion_onset_s(const Stroke& stroke);
+double motion_end_s(const Stroke& stroke);
+// The motion onset of the session's first prepared stroke of `direction` ("" any).
+// Throws std::invalid_argument naming the session when it has none (with why).
+double first_motion_onset_s(const SessionData& session, const std::string& direction = "");
+
 // The A/B overlay: for each channel both sessions have (by name), A's and B's series on
-// time since their first stroke start (of `direction`), so that the strokes line up.
+// time since their first stroke start (of `direction`), so that the strokes line up. Both
+// sessions are aligned the same way: on their first stroke_start event when both files
+// carry stroke events, else (one of them is e.g. a haptic playback, whose strokes are found
+// on read) on both first strokes' motion onset. A is drawn as measured on top, B under it.
 struct Overlay {
   double a_start_s = 0.0, b_start_s = 0.0;  // the stroke starts aligned to 0
+  std::string alignment;                    // "stroke_start events" or "motion onset"
   std::vector<PlotView> plots;              // time axes linked
 };
 Overlay overlay_plots(const SessionData& a, const SessionData& b,

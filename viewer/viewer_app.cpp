@@ -33,6 +33,15 @@ float stacked_height(float avail, std::size_t n) {
   return std::max(140.0f, std::floor((avail - spacing * float(n)) / float(n)));
 }
 
+constexpr const char* kNoFitModel =
+    "No model to compare with: start the viewer with --params FILE (a fitted parameter file, "
+    "e.g. the one `doorbench fit` wrote) and --model, --fit DIR or --loop DIR.";
+constexpr const char* kNoLoop =
+    "No residual loop: start the viewer with --loop DIR (the folder `doorbench loop` wrote).";
+constexpr const char* kNoTuningModel =
+    "No model to tune: start the viewer with --params FILE (or --compare, --fit DIR or "
+    "--loop DIR).";
+
 constexpr ImGuiTableFlags kTableFlags =
     ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp;
 
@@ -72,6 +81,28 @@ Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitC
       overlay_message_ = error.what();
     }
   }
+}
+
+std::string Viewer::missing_data(const std::string& layout) const {
+  if (const std::string problem = check_layout(layout); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
+  if (layout == "steps") return steps_ ? "" : kNoLoop;
+  if (layout == "live") return live_ ? "" : "not following a recording (--live)";
+  if (sessions_.empty()) return "no session";
+  const SessionView& s = sessions_[std::size_t(std::clamp(current_, 0, int(sessions_.size()) - 1))];
+  const std::string no_strokes = "no strokes in " + s.data.path.string() + ": " +
+                                 (s.data.prepared ? "none found" : s.data.prepare_message);
+  if (layout == "loop" && (!s.data.prepared || s.data.data.strokes.empty())) return no_strokes;
+  if (layout == "fit" && !s.fit) {
+    return tuning_model_ ? "no comparison with the model: " + no_strokes : kNoFitModel;
+  }
+  if (layout == "overlay" && (!overlay_ || overlay_->plots.empty())) return overlay_message_;
+  if (layout == "tuning") {
+    if (!tuning_model_) return kNoTuningModel;
+    if (!s.data.prepared || s.data.data.strokes.empty()) return no_strokes;
+  }
+  return "";
 }
 
 void Viewer::frame(float width, float height, const std::string& layout) {
@@ -128,13 +159,16 @@ void Viewer::frame(float width, float height, const std::string& layout) {
     }
     if (ImGui::BeginTabBar("layouts")) {
       for (const std::string& name : layout_names()) {
-        if (ImGui::BeginTabItem(name.c_str())) {
+        const bool select = !initial_layout_shown_ && name == initial_layout_;
+        if (ImGui::BeginTabItem(name.c_str(), nullptr,
+                                select ? ImGuiTabItemFlags_SetSelected : ImGuiTabItemFlags_None)) {
           layout_body(s, name);
           ImGui::EndTabItem();
         }
       }
       ImGui::EndTabBar();
     }
+    initial_layout_shown_ = true;
   } else {
     layout_body(s, layout);
   }
@@ -358,9 +392,7 @@ void Viewer::loop(SessionView& s) {
 
 void Viewer::fit(SessionView& s) {
   if (!s.fit) {
-    ImGui::TextWrapped(
-        "No model to compare with: start the viewer with --params FILE (a fitted parameter "
-        "file, e.g. the one `doorbench fit` wrote) and --model.");
+    ImGui::TextWrapped("%s", kNoFitModel);
     return;
   }
   ImGui::Text("%s: rate RMSE %.4g rad/s over windows (as the fit sees them)",
@@ -376,9 +408,10 @@ void Viewer::overlay() {
     ImGui::TextWrapped("%s", overlay_message_.c_str());
     return;
   }
-  ImGui::Text("A: %s (stroke at %.4f s)   B: %s (stroke at %.4f s)",
+  ImGui::Text("A: %s (stroke at %.4f s)   B: %s (stroke at %.4f s)   aligned on %s",
               sessions_[0].data.path.string().c_str(), overlay_->a_start_s,
-              sessions_[1].data.path.string().c_str(), overlay_->b_start_s);
+              sessions_[1].data.path.string().c_str(), overlay_->b_start_s,
+              overlay_->alignment.c_str());
   const float avail = ImGui::GetContentRegionAvail().y;
   const float each = stacked_height(avail, overlay_->plots.size());
   ImGui::BeginChild("overlay");
@@ -397,8 +430,7 @@ void Viewer::set_loop_steps(LoopSteps steps) {
 
 void Viewer::steps() {
   if (!steps_) {
-    ImGui::TextWrapped(
-        "No residual loop: start the viewer with --loop DIR (the folder `doorbench loop` wrote).");
+    ImGui::TextWrapped("%s", kNoLoop);
     return;
   }
   ImGui::Text("%s (loop on %s)", steps_->path.string().c_str(), steps_->source.c_str());
@@ -432,9 +464,7 @@ void Viewer::steps() {
 
 void Viewer::tuning(SessionView& s) {
   if (!tuning_model_) {
-    ImGui::TextWrapped(
-        "No model to tune: start the viewer with --params FILE (or --compare, or "
-        "--loop DIR).");
+    ImGui::TextWrapped("%s", kNoTuningModel);
     return;
   }
   if (!s.tuning && s.tuning_message.empty()) {
