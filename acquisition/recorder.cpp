@@ -705,6 +705,7 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
     if (live.samples == 0) batch.first_time_s = static_cast<double>(batch.time_ns[0]) * 1e-9;
     live.samples += batch.count;
     live.latest = batch.conversion(batch.raw[batch.count - 1]);
+    live.largest_abs = std::max(live.largest_abs, std::abs(live.latest));
     const double span_s =
         static_cast<double>(batch.time_ns[batch.count - 1]) * 1e-9 - batch.first_time_s;
     if (live.samples > 1 && span_s > 0) {
@@ -809,8 +810,12 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
         }
         if (slot->scan_count > 0) {
           for (std::size_t c = 0; c < scan_channels; ++c) {
-            status.channels[c].latest =
-                scan_conversion[c](slot->counts[c * slot->capacity + slot->scan_count - 1]);
+            const std::int32_t* counts = slot->counts.data() + c * slot->capacity;
+            status.channels[c].latest = scan_conversion[c](counts[slot->scan_count - 1]);
+            const auto [low, high] = std::minmax_element(counts, counts + slot->scan_count);
+            status.channels[c].largest_abs =
+                std::max({status.channels[c].largest_abs, std::abs(scan_conversion[c](*low)),
+                          std::abs(scan_conversion[c](*high))});
           }
         }
         rings.scans.release();
@@ -849,6 +854,7 @@ RecordSummary record_session(const RecordSources& sources, const SessionMetadata
         }
         status.faults = summary.faults;
         options.progress(status);
+        for (ChannelStatus& channel : status.channels) channel.largest_abs = 0.0;
       }
       if (done) break;
       if (!wrote) std::this_thread::sleep_for(poll);
