@@ -2,10 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
 #include <utility>
 
+#include "analysis/text_format.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::app {
@@ -15,17 +15,9 @@ namespace {
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kLimitFraction = 0.99;  // of the range: at the limit
 
-std::string range_text(double range, const char* unit) {
-  char text[64];
-  std::snprintf(text, sizeof text, "±%g %s", range, unit);
-  return text;
-}
+std::string range_text(double range, const char* unit) { return printf_text("±%g %s", range, unit); }
 
-std::string seconds(double s) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f s", s);
-  return text;
-}
+std::string seconds(double s) { return printf_text("%.1f s", s); }
 
 }  // namespace
 

@@ -24,24 +24,6 @@ constexpr double kRateAmplitude = 1.5;  // rad/s
 
 double known_rate(double t) { return kRateAmplitude * std::sin(2.0 * std::numbers::pi * 0.4 * t); }
 
-// A session with one short channel: the viewer needs a session to show a comparison on.
-void write_small_session(const fs::path& path) {
-  SessionMetadata metadata;
-  metadata.rig_name = "viewer-test";
-  SessionWriter writer(path, metadata);
-  ChannelInfo channel;
-  channel.name = "force";
-  channel.sensor_kind = "imported";
-  channel.raw_type = RawType::kValues;
-  channel.raw_unit = "N";
-  channel.unit = "N";
-  channel.range_min = -100;
-  channel.range_max = 100;
-  channel.sample_rate_hz = 100.0;
-  const int index = writer.add_channel(channel);
-  writer.append_values(index, std::vector<double>(100, 0.0));
-  writer.close();
-}
 
 }  // namespace
 
@@ -52,7 +34,7 @@ TEST_CASE("fit layout screenshot with simulated = measured (child of the test be
   const char* png = std::getenv("DOORBENCH_TEST_PNG");
   REQUIRE(png != nullptr);
   const fs::path session_path = fs::path(png).parent_path() / "small.h5";
-  write_small_session(session_path);
+  testing::write_force_session(session_path, std::vector<double>(100, 0.0), 100.0);
   std::vector<double> t, omega;
   for (int i = 0; i <= 5000; ++i) {
     t.push_back(i * 0.002);

@@ -12,6 +12,7 @@
 #include "tests/run_doorbench.h"
 #include "tests/simulated_session.h"
 #include "tests/temp_dir.h"
+#include "tests/viewer_pixels.h"
 #include "viewer/session_data.h"
 #include "viewer/viewer_app.h"
 
@@ -19,25 +20,6 @@ namespace fs = std::filesystem;
 using namespace doorbench;
 
 namespace {
-
-// A session of one flat channel: no strokes can be found in it.
-void write_flat_session(const fs::path& path) {
-  SessionMetadata metadata;
-  metadata.rig_name = "viewer-test";
-  SessionWriter writer(path, metadata);
-  ChannelInfo channel;
-  channel.name = "force";
-  channel.sensor_kind = "imported";
-  channel.raw_type = RawType::kValues;
-  channel.raw_unit = "N";
-  channel.unit = "N";
-  channel.range_min = -100;
-  channel.range_max = 100;
-  channel.sample_rate_hz = 100.0;
-  const int index = writer.add_channel(channel);
-  writer.append_values(index, std::vector<double>(300, 1.0));
-  writer.close();
-}
 
 // One headless ImGui frame of the viewer's window (every layout as tabs): the plots drawn.
 std::vector<std::string> window_frame_plots(viewer::Viewer& view) {
@@ -74,7 +56,8 @@ TEST_CASE("view --layout NAME without its data fails with exit status 1 and says
           "[viewer][cli]") {
   testing::TempDir dir("viewer_layouts");
   const fs::path session = dir.path / "flat.h5";
-  write_flat_session(session);
+  // One flat channel: no strokes can be found in it.
+  testing::write_force_session(session, std::vector<double>(300, 1.0), 100.0);
   const std::string prepare_message = viewer::load_session(session).prepare_message;
   REQUIRE_FALSE(prepare_message.empty());
   const fs::path png = dir.path / "x.png";

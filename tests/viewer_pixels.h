@@ -1,7 +1,8 @@
 #pragma once
-// Helpers for tests that read the viewer's screenshots: run `doorbench view --screenshot`
-// under Xvfb (xvfb-run, Mesa's software OpenGL), load the PNG (stb_image, libstb) and its
-// companion PNG.json (where each plot's data area is, its ranges and series colours).
+// Helpers for tests of the viewer: a one-channel session to show; run `doorbench view
+// --screenshot` under Xvfb (xvfb-run, Mesa's software OpenGL), load the PNG (stb_image,
+// libstb) and its companion PNG.json (where each plot's data area is, its ranges and series
+// colours).
 #include <stb_image.h>
 #include <sys/wait.h>
 
@@ -16,7 +17,28 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/session_file.h"
+
 namespace doorbench::testing {
+
+// A session with one channel "force" (N, values as given, no calibration) at rate_hz.
+inline void write_force_session(const std::filesystem::path& path,
+                                const std::vector<double>& values, double rate_hz) {
+  SessionMetadata metadata;
+  metadata.rig_name = "viewer-test";
+  SessionWriter writer(path, metadata);
+  ChannelInfo channel;
+  channel.name = "force";
+  channel.sensor_kind = "imported";
+  channel.raw_type = RawType::kValues;
+  channel.raw_unit = "N";
+  channel.unit = "N";
+  channel.range_min = -100;
+  channel.range_max = 100;
+  channel.sample_rate_hz = rate_hz;
+  writer.append_values(writer.add_channel(channel), values);
+  writer.close();
+}
 
 struct Screenshot {
   int width = 0, height = 0;
