@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "analysis/fit_metrics.h"
+#include "analysis/residual_whiteness.h"
 #include "analysis/svg_plot.h"
 
 namespace doorbench::app {
@@ -102,7 +103,8 @@ nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedDa
 }
 
 // Measured against simulated (window by window) rate and angle, the force–angle loops, and
-// the rate residual against angle and speed.
+// the rate residual against angle and speed, and the residual's whiteness (when the data
+// have enough samples).
 std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
                                          const PreparedData& data, const FitOptions& options) {
   WindowOptions window_options;
@@ -159,6 +161,29 @@ std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const
   write_svg_plot((dir / files[3]).string(),
                  {"Rate residual against speed", "rate [deg/s]", "measured - simulated [deg/s]"},
                  residual_speed);
+  // Is the residual noise? Its autocorrelation and cross-correlation with the force.
+  try {
+    const ResidualWhiteness w = residual_whiteness(residual_deg_s, force_N,
+                                                   data.interval_median_s,
+                                                   whiteness_max_lag(data.interval_median_s));
+    const int max_lag = int(w.autocorrelation.size()) - 1;
+    std::vector<double> auto_lag_s, cross_lag_s;
+    for (int k = 0; k <= max_lag; ++k) auto_lag_s.push_back(k * w.lag_step_s);
+    for (int k = -max_lag; k <= max_lag; ++k) cross_lag_s.push_back(k * w.lag_step_s);
+    const std::vector<double> band_x = {cross_lag_s.front(), cross_lag_s.back()};
+    const std::vector<double> upper = {w.band, w.band}, lower = {-w.band, -w.band};
+    const std::vector<PlotSeries> whiteness = {
+        {"autocorrelation of the residual", auto_lag_s, w.autocorrelation, "",
+         plot_style::Meaning::kResidual},
+        {"cross-correlation with the force", cross_lag_s, w.cross_correlation, "#b8860b"},
+        {"99 % band of white noise", band_x, upper, "", plot_style::Meaning::kOther},
+        {"", band_x, lower, "", plot_style::Meaning::kOther}};
+    files.push_back("residual-whiteness.svg");
+    write_svg_plot((dir / files.back()).string(),
+                   {"Residual whiteness: " + w.summary(), "lag [s]", "correlation"}, whiteness);
+  } catch (const std::invalid_argument&) {
+    // Too few samples for the lags: no whiteness plot.
+  }
   return files;
 }
 

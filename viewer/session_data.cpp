@@ -132,6 +132,7 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
   const WindowOptions windows = metric_window_options(FitOptions{}, model);
   const WindowSimulation sim = simulate_windows(model, session.data, windows);
   std::vector<double> t, measured, simulated, residual;
+  std::vector<std::vector<double>> stroke_residuals, stroke_forces;
   double sum_sq = 0.0;
   std::size_t count = 0;
   for (std::size_t k = 0; k < session.data.strokes.size(); ++k) {
@@ -143,8 +144,11 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
       simulated.push_back(kNaN);
       residual.push_back(kNaN);
     }
+    stroke_residuals.emplace_back();
+    stroke_forces.push_back(stroke.force_N);
     for (std::size_t i = 0; i < stroke.size(); ++i) {
       const double hat = sim.omega_rad_s[k][i];
+      stroke_residuals.back().push_back(stroke.omega_rad_s[i] - hat);
       t.push_back(stroke.time_s[i]);
       measured.push_back(stroke.omega_rad_s[i]);
       simulated.push_back(hat);
@@ -166,6 +170,13 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
   style_series(*comparison.simulated, plot_style::Meaning::kSimulated);
   style_series(*comparison.residual, plot_style::Meaning::kResidual);
   comparison.rmse_rad_s = count > 0 ? std::sqrt(sum_sq / double(count)) : kNaN;
+  const double step_s = session.data.interval_median_s;
+  try {
+    comparison.whiteness = residual_whiteness(stroke_residuals, stroke_forces, step_s,
+                                              whiteness_max_lag(step_s));
+  } catch (const std::invalid_argument& error) {
+    comparison.whiteness_message = error.what();
+  }
   return comparison;
 }
 
@@ -199,6 +210,32 @@ PlotView loop_plot(const SessionData& session) {
   return plot;
 }
 
+PlotView whiteness_plot(const ResidualWhiteness& w) {
+  PlotView plot;
+  plot.title = "residual whiteness (99 % band): " + w.summary();
+  plot.x_label = "lag";
+  const int max_lag = int(w.autocorrelation.size()) - 1;
+  const double dx = w.lag_step_s > 0 ? w.lag_step_s : 1.0;
+  auto autocorrelation = std::make_shared<Series>(
+      Series::uniform("autocorrelation", "", 0.0, dx, w.autocorrelation));
+  style_series(*autocorrelation, plot_style::Meaning::kResidual);
+  auto cross = std::make_shared<Series>(Series::uniform(
+      "cross-correlation with force", "", -max_lag * dx, dx, w.cross_correlation));
+  cross->colour = palette(3);
+  plot.add(autocorrelation);
+  plot.add(cross);
+  for (double sign : {1.0, -1.0}) {
+    auto band = std::make_shared<Series>(Series::uniform(
+        sign > 0 ? "+99 %" : "-99 %", "", -max_lag * dx, 2.0 * max_lag * dx,
+        std::vector<double>{sign * w.band, sign * w.band}));
+    style_series(*band, plot_style::Meaning::kOther);
+    band->width_px = 1.0f;
+    plot.add(band);
+  }
+  plot.fit();
+  return plot;
+}
+
 std::vector<PlotView> fit_plots(const FitComparison& comparison) {
   std::vector<PlotView> plots(2);
   plots[0].title = "rate: measured and " + comparison.model_description;
@@ -213,6 +250,7 @@ std::vector<PlotView> fit_plots(const FitComparison& comparison) {
   plots[1].link_x_to(plots[0]);
   plots[0].fit();
   plots[1].fit_y();
+  if (comparison.whiteness) plots.push_back(whiteness_plot(*comparison.whiteness));
   return plots;
 }
 

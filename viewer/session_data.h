@@ -5,12 +5,14 @@
 // the model's simulation with the residual.
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "acquisition/session_file.h"
 #include "analysis/door_model.h"
 #include "analysis/plot_style.h"
+#include "analysis/residual_whiteness.h"
 #include "analysis/strokes.h"
 #include "viewer/plot_view.h"
 
@@ -66,6 +68,11 @@ struct FitComparison {
   std::shared_ptr<Series> simulated;
   std::shared_ptr<Series> residual;
   double rmse_rad_s = 0.0;
+  // The residual's autocorrelation and its cross-correlation with the force, strokes kept
+  // apart, lags up to 0.5 s (analysis/residual_whiteness.h); empty when it cannot be
+  // computed (whiteness_message says why).
+  std::optional<ResidualWhiteness> whiteness;
+  std::string whiteness_message;
 };
 // Throws std::invalid_argument when the session has no prepared strokes.
 FitComparison compare_with_model(const SessionData& session, const DoorModel& model,
@@ -120,7 +127,12 @@ Overlay overlay_plots(const SessionData& a, const SessionData& b,
 std::vector<PlotView> channel_plots(const SessionData& session);
 // Force against angle, opening and closing in their colours (empty series: not prepared).
 PlotView loop_plot(const SessionData& session);
-// Measured and simulated ω, and the residual below with its time axis linked.
+// Measured and simulated ω, the residual below with its time axis linked, and (when
+// computed) the residual's whiteness: autocorrelation and cross-correlation with the force
+// against the lag, with the 99 % band.
 std::vector<PlotView> fit_plots(const FitComparison& comparison);
+// The whiteness plot: autocorrelation (lags ≥ 0) and cross-correlation with the force
+// (lags of either sign) against the lag in s, and the ±99 % band.
+PlotView whiteness_plot(const ResidualWhiteness& whiteness);
 
 }  // namespace doorbench::viewer

@@ -398,9 +398,17 @@ void Viewer::fit(SessionView& s) {
   ImGui::Text("%s: rate RMSE %.4g rad/s over windows (as the fit sees them)",
               s.fit->model_description.c_str(), s.fit->rmse_rad_s);
   const float avail = ImGui::GetContentRegionAvail().y;
+  const bool whiteness = s.fit_plots.size() > 2;
   plots_.push_back(plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f,
-                               std::floor(avail * 0.65f), controls_));
-  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f, 0.0f, controls_));
+                               std::floor(avail * (whiteness ? 0.5f : 0.65f)), controls_));
+  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f,
+                               whiteness ? std::floor(avail * 0.24f) : 0.0f, controls_));
+  if (whiteness) {
+    plots_.push_back(
+        plot_widget("whiteness", s.fit_plots[2], s.fit_states[2], 0.0f, 0.0f, controls_));
+  } else if (!s.fit->whiteness_message.empty()) {
+    ImGui::TextWrapped("No whiteness: %s", s.fit->whiteness_message.c_str());
+  }
 }
 
 void Viewer::overlay() {
