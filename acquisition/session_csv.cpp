@@ -5,8 +5,8 @@
 #include <limits>
 #include <map>
 #include <optional>
-#include <system_error>
 #include <stdexcept>
+#include <system_error>
 
 #include "acquisition/interpolation.h"
 #include "acquisition/output_file.h"
@@ -333,10 +333,9 @@ namespace {
 // The channel_names metadata (column=channel,...): which channel each column was; without
 // it (a CSV from elsewhere) the main columns give force, angle and rate.
 std::map<std::string, std::string> channel_names(const Recording& recording) {
-  std::map<std::string, std::string> names = {
-      {std::string(kForceColumn), "force"},
-      {std::string(kAngleColumn), "angle"},
-      {std::string(kRateColumn), "rate"}};
+  std::map<std::string, std::string> names = {{std::string(kForceColumn), "force"},
+                                              {std::string(kAngleColumn), "angle"},
+                                              {std::string(kRateColumn), "rate"}};
   for (const auto& [key, value] : recording.metadata) {
     if (key != kChannelNamesKey) continue;
     std::size_t begin = 0;

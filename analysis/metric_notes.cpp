@@ -9,7 +9,9 @@ namespace doorbench {
 
 namespace {
 
-std::string three_digits(double value) { return printf_text("%.3g", value); }
+std::string three_digits(double value) {
+  return printf_text("%.3g", value);
+}
 
 }  // namespace
 
@@ -24,8 +26,8 @@ std::string fit_and_max_error_note(const FitMetrics& metrics) {
          three_digits(spread) + " rad/s) is an average over " + std::to_string(w.count) +
          " samples; max |omega error| " + three_digits(r.max_abs_error) +
          " rad/s is the one worst sample of a stroke replayed open-loop (stroke " +
-         std::to_string(metrics.worst_replay_stroke_id) + ", at " +
-         three_digits(r.time_of_max_s) + " s).\n";
+         std::to_string(metrics.worst_replay_stroke_id) + ", at " + three_digits(r.time_of_max_s) +
+         " s).\n";
 }
 
 }  // namespace doorbench

@@ -24,12 +24,12 @@ enum class Meaning { kOther, kMeasured, kSimulated, kTuned, kOpening, kClosing, 
 
 struct LineStyle {
   std::uint8_t r = 0, g = 0, b = 0;
-  double opacity = 1.0;     // 0..1
-  double width_px = 1.5;    // SVG stroke width; the viewer uses viewer_width_px
+  double opacity = 1.0;   // 0..1
+  double width_px = 1.5;  // SVG stroke width; the viewer uses viewer_width_px
   double viewer_width_px = 2.0;
-  bool dashed = false;      // SVG only (ImGui has no dashes: the viewer uses opacity)
+  bool dashed = false;  // SVG only (ImGui has no dashes: the viewer uses opacity)
   double viewer_opacity = 1.0;
-  int layer = 0;            // drawn in increasing layer order: higher is on top
+  int layer = 0;  // drawn in increasing layer order: higher is on top
 };
 
 LineStyle line_style(Meaning meaning);

@@ -219,8 +219,7 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
     std::snprintf(buffer, sizeof buffer, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"",
                   legend_x, row_y, legend_x + 24, row_y);
     svg += buffer + stroke_attributes(index, 2.0) + "/>";
-    std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\">", legend_x + 30,
-                  row_y + 4);
+    std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\">", legend_x + 30, row_y + 4);
     svg += buffer + escaped(series[index].label) + "</text>\n";
   }
   svg += "</svg>\n";

@@ -141,9 +141,10 @@ std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const
     bool& named = opening ? opening_named : closing_named;
     const std::string label = named ? "" : (opening ? "opening" : "closing");
     named = true;
-    rate.push_back({s == 0 ? "measured" : "", time_s[s], measured_deg_s[s], "", Meaning::kMeasured});
     rate.push_back(
-        {s == 0 ? "simulated (windows)" : "", time_s[s], simulated_deg_s[s], "", Meaning::kSimulated});
+        {s == 0 ? "measured" : "", time_s[s], measured_deg_s[s], "", Meaning::kMeasured});
+    rate.push_back({s == 0 ? "simulated (windows)" : "", time_s[s], simulated_deg_s[s], "",
+                    Meaning::kSimulated});
     loops.push_back({label, angle_deg[s], force_N[s], "", direction});
     residual_angle.push_back({label, angle_deg[s], residual_deg_s[s], "", direction});
     residual_speed.push_back({label, speed_deg_s[s], residual_deg_s[s], "", direction});
@@ -163,8 +164,7 @@ std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const
                  residual_speed);
   // Is the residual noise? Its autocorrelation and cross-correlation with the force.
   try {
-    const ResidualWhiteness w = residual_whiteness(residual_deg_s, force_N,
-                                                   data.interval_median_s,
+    const ResidualWhiteness w = residual_whiteness(residual_deg_s, force_N, data.interval_median_s,
                                                    whiteness_max_lag(data.interval_median_s));
     const int max_lag = int(w.autocorrelation.size()) - 1;
     std::vector<double> auto_lag_s, cross_lag_s;

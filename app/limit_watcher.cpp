@@ -15,9 +15,13 @@ namespace {
 constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kLimitFraction = 0.99;  // of the range: at the limit
 
-std::string range_text(double range, const char* unit) { return printf_text("±%g %s", range, unit); }
+std::string range_text(double range, const char* unit) {
+  return printf_text("±%g %s", range, unit);
+}
 
-std::string seconds(double s) { return printf_text("%.1f s", s); }
+std::string seconds(double s) {
+  return printf_text("%.1f s", s);
+}
 
 }  // namespace
 
@@ -80,9 +84,9 @@ std::vector<std::string> LimitWatcher::summary() const {
   for (const Watched& w : watched_) {
     if (w.stretches == 0) continue;
     lines.push_back(w.limit.sensor + " " + w.limit.channel + " at its " + w.limit.range +
-                    " limit for " + seconds(w.total_s) + " in all, " +
-                    std::to_string(w.stretches) + (w.stretches == 1 ? " time" : " times") +
-                    " (first at " + seconds(w.first_s) + ")");
+                    " limit for " + seconds(w.total_s) + " in all, " + std::to_string(w.stretches) +
+                    (w.stretches == 1 ? " time" : " times") + " (first at " + seconds(w.first_s) +
+                    ")");
   }
   return lines;
 }

@@ -66,8 +66,7 @@ std::string help_hint(const CLI::App& app, int argc, char** argv) {
 // `doorbench help [VERB...]` is `doorbench [VERB...] --help`: the words are checked here
 // (an unknown one is a usage error, exit 2, with the expected verbs) and `args` becomes the
 // command line with --help. Returns false after printing the error.
-bool help_command_line(const CLI::App& app, int argc, char** argv,
-                       std::vector<std::string>& args) {
+bool help_command_line(const CLI::App& app, int argc, char** argv, std::vector<std::string>& args) {
   const CLI::App* level = &app;
   std::string path;
   args = {argv[0]};
@@ -172,8 +171,8 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const doorbench::app::UsageError& error) {
     quiet_stderr.restore();
-    std::cerr << "doorbench: " << doorbench::printable(error.what())
-              << help_hint(app, argc, argv) << "\n";
+    std::cerr << "doorbench: " << doorbench::printable(error.what()) << help_hint(app, argc, argv)
+              << "\n";
     return 2;
   } catch (const doorbench::OutputRefused& error) {  // an existing output, or an input
     quiet_stderr.restore();

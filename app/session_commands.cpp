@@ -530,8 +530,8 @@ void run_info(const std::string& session_path) {
     raw_w = std::max(raw_w, int(printable(c.raw_unit).size()));
     unit_w = std::max(unit_w, int(printable(c.unit).size()));
   }
-  std::printf("  %-*s %-*s %10s %10s %-*s %-*s %s\n", name_w, "name", sensor_w, "sensor",
-              "samples", "rate Hz", raw_w, "raw", unit_w, "unit", "calibration");
+  std::printf("  %-*s %-*s %10s %10s %-*s %-*s %s\n", name_w, "name", sensor_w, "sensor", "samples",
+              "rate Hz", raw_w, "raw", unit_w, "unit", "calibration");
   std::fflush(stdout);
   for (const ChannelInfo& c : session.channels()) {
     std::printf(

@@ -37,8 +37,9 @@ TEST_CASE("CLI habits: -V, help VERB, --quiet, errors naming the verb's help", "
   SECTION("usage errors point at the verb's own help") {
     auto r = run_doorbench_shell("info --no-such-option x.h5", dir);
     CHECK(r.status == 2);
-    CHECK(r.err == "doorbench: The following argument was not expected: --no-such-option "
-                   "(see doorbench info --help)\n");
+    CHECK(r.err ==
+          "doorbench: The following argument was not expected: --no-such-option "
+          "(see doorbench info --help)\n");
     r = run_doorbench_shell("model torque --out x.csv", dir);
     CHECK(r.status == 2);
     CHECK(r.err == "doorbench: --in is required (see doorbench model torque --help)\n");
@@ -64,7 +65,8 @@ TEST_CASE("CLI habits: -V, help VERB, --quiet, errors naming the verb's help", "
     CHECK(quiet_before.status == 0);
     CHECK(quiet_before.err.empty());
     // An error still shows, on one line.
-    const auto failing = run_doorbench_shell("--quiet info '" + (dir / "none.h5").string() + "'", dir);
+    const auto failing =
+        run_doorbench_shell("--quiet info '" + (dir / "none.h5").string() + "'", dir);
     CHECK(failing.status != 0);
     CHECK(failing.err.rfind("doorbench: ", 0) == 0);
   }

@@ -1,8 +1,8 @@
 // Export then import (issue 21, item 7): the imported session keeps the channels' names and
 // the session's rig, operator, product and start time, so that `info` says the same of both;
 // and `info`'s channel table lines up whatever the names' lengths.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -58,9 +58,8 @@ TEST_CASE("export then import keeps channel names, rig, operator, product and st
   testing::TempDir dir("csv_round_trip");
   const std::string session = (dir / "bench.h5").string(), csv = (dir / "bench.csv").string(),
                     imported = (dir / "imported.h5").string();
-  auto r = testing::run_doorbench_shell("record --out '" + session +
-                                            "' --duration-s 3 --operator 'Ann Lee' --product DW-7",
-                                        dir);
+  auto r = testing::run_doorbench_shell(
+      "record --out '" + session + "' --duration-s 3 --operator 'Ann Lee' --product DW-7", dir);
   INFO(r.err);
   REQUIRE(r.status == 0);
   r = testing::run_doorbench_shell("export '" + session + "' --csv '" + csv + "'", dir);
@@ -87,8 +86,9 @@ TEST_CASE("export then import keeps channel names, rig, operator, product and st
   CHECK(lines_starting(info_a, "  operator ")[0] == "  operator   Ann Lee");
   // A second round trip gives the same CSV but for its source line.
   const std::string csv2 = (dir / "again.csv").string();
-  REQUIRE(testing::run_doorbench_shell("export '" + imported + "' --csv '" + csv2 + "'", dir)
-              .status == 0);
+  REQUIRE(
+      testing::run_doorbench_shell("export '" + imported + "' --csv '" + csv2 + "'", dir).status ==
+      0);
   auto without_source = [](const std::string& path) {
     std::ifstream in(path);
     std::string text, line;

@@ -22,20 +22,23 @@ TEST_CASE("SVG plots draw measured on top of a dashed model curve, legend beside
     std::vector<PlotSeries> series;
     const PlotSeries measured{"measured", x, y, "", Meaning::kMeasured};
     const PlotSeries simulated{"simulated", x, y, "", Meaning::kSimulated};
-    if (measured_first) series = {measured, simulated};
-    else series = {simulated, measured};
+    if (measured_first)
+      series = {measured, simulated};
+    else
+      series = {simulated, measured};
     const std::string svg = render_svg_plot({"rate", "time [s]", "rate [deg/s]"}, series);
     const std::string measured_stroke = "stroke=\"" + plot_style::hex_colour(Meaning::kMeasured);
-    const std::string simulated_stroke =
-        "stroke=\"" + plot_style::hex_colour(Meaning::kSimulated);
+    const std::string simulated_stroke = "stroke=\"" + plot_style::hex_colour(Meaning::kSimulated);
     const std::size_t measured_line = svg.find("<polyline fill=\"none\" " + measured_stroke);
     const std::size_t simulated_line = svg.find("<polyline fill=\"none\" " + simulated_stroke);
     REQUIRE(measured_line != std::string::npos);
     REQUIRE(simulated_line != std::string::npos);
     CHECK(simulated_line < measured_line);
     // The model dashed, measured solid.
-    const std::string simulated_tag = svg.substr(simulated_line, svg.find('>', simulated_line) - simulated_line);
-    const std::string measured_tag = svg.substr(measured_line, svg.find('>', measured_line) - measured_line);
+    const std::string simulated_tag =
+        svg.substr(simulated_line, svg.find('>', simulated_line) - simulated_line);
+    const std::string measured_tag =
+        svg.substr(measured_line, svg.find('>', measured_line) - measured_line);
     CHECK(simulated_tag.find("stroke-dasharray") != std::string::npos);
     CHECK(measured_tag.find("stroke-dasharray") == std::string::npos);
     // Legend texts right of the data frame's right edge.

@@ -63,7 +63,7 @@ TEST_CASE("the limit watcher counts time at a channel's limit from the status ca
   app::LimitWatcher watcher({{"rate", "gyroscope", 1.0, "±100 deg/s"}});
   watcher.update(status_at(0.5, 0.2));
   CHECK(watcher.status_text().empty());
-  watcher.update(status_at(1.0, 1.0));  // at the limit: a stretch, 1.0 s first, 0.5 s counted
+  watcher.update(status_at(1.0, 1.0));   // at the limit: a stretch, 1.0 s first, 0.5 s counted
   watcher.update(status_at(1.5, -1.2));  // still (either sign): 0.5 s more
   CHECK(watcher.status_text() == "; AT LIMIT rate (gyroscope ±100 deg/s) now, 1.0 s so far");
   watcher.update(status_at(2.0, 0.1));  // below: not counted

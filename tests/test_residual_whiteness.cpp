@@ -63,7 +63,8 @@ TEST_CASE("residual whiteness: lags stay inside each stroke; bad input is refuse
   // Two strokes, each an alternating +1/-1 run: within a stroke r(1) = -1 exactly; a lag
   // bridging the strokes would add a product across their boundary.
   std::vector<std::vector<double>> r = {{1, -1, 1, -1, 1, -1}, {1, -1, 1, -1, 1, -1}};
-  const ResidualWhiteness w = residual_whiteness(r, {{1, 2, 3, 1, 2, 3}, {3, 1, 2, 3, 1, 2}}, 0.01, 2);
+  const ResidualWhiteness w =
+      residual_whiteness(r, {{1, 2, 3, 1, 2, 3}, {3, 1, 2, 3, 1, 2}}, 0.01, 2);
   CHECK(w.autocorrelation[1] == Approx(-10.0 / 12.0));  // 5 products per stroke of 6 samples
   CHECK_THROWS_WITH(residual_whiteness(r, {{1}}, 0.01, 2),
                     "residual whiteness: 2 residual strokes but 1 force strokes");

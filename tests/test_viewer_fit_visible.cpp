@@ -22,8 +22,9 @@ namespace {
 
 constexpr double kRateAmplitude = 1.5;  // rad/s
 
-double known_rate(double t) { return kRateAmplitude * std::sin(2.0 * std::numbers::pi * 0.4 * t); }
-
+double known_rate(double t) {
+  return kRateAmplitude * std::sin(2.0 * std::numbers::pi * 0.4 * t);
+}
 
 }  // namespace
 
@@ -42,7 +43,8 @@ TEST_CASE("fit layout screenshot with simulated = measured (child of the test be
   }
   viewer::FitComparison fit;
   fit.model_description = "perfect model";
-  fit.measured = std::make_shared<viewer::Series>(viewer::Series::timed("measured", "rad/s", t, omega));
+  fit.measured =
+      std::make_shared<viewer::Series>(viewer::Series::timed("measured", "rad/s", t, omega));
   fit.simulated =
       std::make_shared<viewer::Series>(viewer::Series::timed("simulated", "rad/s", t, omega));
   fit.residual = std::make_shared<viewer::Series>(

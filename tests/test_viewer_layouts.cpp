@@ -82,7 +82,7 @@ TEST_CASE("view --layout NAME without its data fails with exit status 1 and says
   r = testing::run_doorbench_shell("view --layout loop" + shot, dir);
   CHECK(r.status == 1);
   CHECK(last_line(r.err) == "doorbench: --layout loop: no strokes in " + session.string() + ": " +
-                     printable(prepare_message) + "\n");
+                                printable(prepare_message) + "\n");
   // The window too: the check comes before any window is opened (no display needed).
   r = testing::run_doorbench_shell("view --layout fit '" + session.string() + "'", dir);
   CHECK(r.status == 1);
@@ -91,8 +91,9 @@ TEST_CASE("view --layout NAME without its data fails with exit status 1 and says
   // With --params, the fit layout has its model but this session has no strokes.
   r = testing::run_doorbench_shell("view --layout fit --compare" + shot, dir);
   CHECK(r.status == 1);
-  CHECK(last_line(r.err) == "doorbench: --layout fit: no comparison with the model: no strokes in " +
-                     session.string() + ": " + printable(prepare_message) + "\n");
+  CHECK(last_line(r.err) ==
+        "doorbench: --layout fit: no comparison with the model: no strokes in " + session.string() +
+            ": " + printable(prepare_message) + "\n");
   CHECK_FALSE(fs::exists(png));
 }
 

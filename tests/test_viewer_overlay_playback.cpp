@@ -87,11 +87,10 @@ TEST_CASE("a playback session gets stroke events on read and overlays a bench se
   // The picture: both rate curves, leaving rest at the aligned stroke start.
   const fs::path png = dir.path / "overlay.png";
   std::string err;
-  const int status = testing::run_under_xvfb(std::string(DOORBENCH_EXECUTABLE) + " view '" +
-                                                 bench.string() + "' '" + played.string() +
-                                                 "' --layout overlay --screenshot '" +
-                                                 png.string() + "' --width 1200 --height 900",
-                                             dir.path, err);
+  const int status = testing::run_under_xvfb(
+      std::string(DOORBENCH_EXECUTABLE) + " view '" + bench.string() + "' '" + played.string() +
+          "' --layout overlay --screenshot '" + png.string() + "' --width 1200 --height 900",
+      dir.path, err);
   INFO("stderr: " << err);
   REQUIRE(status == 0);
   const testing::Screenshot shot = testing::load_screenshot(png);

@@ -113,10 +113,10 @@ SessionData load_session(const std::filesystem::path& path, const LoadOptions& o
     session.prepare_message = "strokes not prepared";
   }
   add_found_stroke_events(session);
-  session.opening_loop =
-      loop_series(session.data, StrokeDirection::kOpening, "opening", plot_style::Meaning::kOpening);
-  session.closing_loop =
-      loop_series(session.data, StrokeDirection::kClosing, "closing", plot_style::Meaning::kClosing);
+  session.opening_loop = loop_series(session.data, StrokeDirection::kOpening, "opening",
+                                     plot_style::Meaning::kOpening);
+  session.closing_loop = loop_series(session.data, StrokeDirection::kClosing, "closing",
+                                     plot_style::Meaning::kClosing);
   return session;
 }
 
@@ -172,8 +172,8 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
   comparison.rmse_rad_s = count > 0 ? std::sqrt(sum_sq / double(count)) : kNaN;
   const double step_s = session.data.interval_median_s;
   try {
-    comparison.whiteness = residual_whiteness(stroke_residuals, stroke_forces, step_s,
-                                              whiteness_max_lag(step_s));
+    comparison.whiteness =
+        residual_whiteness(stroke_residuals, stroke_forces, step_s, whiteness_max_lag(step_s));
   } catch (const std::invalid_argument& error) {
     comparison.whiteness_message = error.what();
   }
@@ -216,18 +216,18 @@ PlotView whiteness_plot(const ResidualWhiteness& w) {
   plot.x_label = "lag";
   const int max_lag = int(w.autocorrelation.size()) - 1;
   const double dx = w.lag_step_s > 0 ? w.lag_step_s : 1.0;
-  auto autocorrelation = std::make_shared<Series>(
-      Series::uniform("autocorrelation", "", 0.0, dx, w.autocorrelation));
+  auto autocorrelation =
+      std::make_shared<Series>(Series::uniform("autocorrelation", "", 0.0, dx, w.autocorrelation));
   style_series(*autocorrelation, plot_style::Meaning::kResidual);
-  auto cross = std::make_shared<Series>(Series::uniform(
-      "cross-correlation with force", "", -max_lag * dx, dx, w.cross_correlation));
+  auto cross = std::make_shared<Series>(
+      Series::uniform("cross-correlation with force", "", -max_lag * dx, dx, w.cross_correlation));
   cross->colour = palette(3);
   plot.add(autocorrelation);
   plot.add(cross);
   for (double sign : {1.0, -1.0}) {
-    auto band = std::make_shared<Series>(Series::uniform(
-        sign > 0 ? "+99 %" : "-99 %", "", -max_lag * dx, 2.0 * max_lag * dx,
-        std::vector<double>{sign * w.band, sign * w.band}));
+    auto band = std::make_shared<Series>(
+        Series::uniform(sign > 0 ? "+99 %" : "-99 %", "", -max_lag * dx, 2.0 * max_lag * dx,
+                        std::vector<double>{sign * w.band, sign * w.band}));
     style_series(*band, plot_style::Meaning::kOther);
     band->width_px = 1.0f;
     plot.add(band);
@@ -261,8 +261,8 @@ namespace doorbench::viewer {
 bool event_marker(const SessionEvent& e, Marker& marker) {
   Rgba colour;
   if (e.kind == "stroke_start" || e.kind == "stroke_end") {
-    colour = meaning_colour(
-        e.detail == "closing" ? plot_style::Meaning::kClosing : plot_style::Meaning::kOpening);
+    colour = meaning_colour(e.detail == "closing" ? plot_style::Meaning::kClosing
+                                                  : plot_style::Meaning::kOpening);
     colour.a = 110;
     if (e.kind == "stroke_end") colour = {170, 170, 170, 90};
   } else if (e.kind == "fault" || e.kind == "gap") {
@@ -348,8 +348,8 @@ Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::str
     for (std::size_t j = 0; j < b.channels.size(); ++j) {
       if (a.channels[i].name != b.channels[j].name) continue;
       PlotView plot;
-      plot.title = a.channels[i].name + ": A and B, aligned on stroke start (" +
-                   overlay.alignment + ")";
+      plot.title =
+          a.channels[i].name + ": A and B, aligned on stroke start (" + overlay.alignment + ")";
       plot.x_label = "time since stroke start";
       plot.y_label = a.channels[i].name;
       auto sa = std::make_shared<Series>(

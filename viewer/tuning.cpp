@@ -10,9 +10,9 @@
 
 #include "analysis/fit_metrics.h"
 #include "analysis/fit_problem.h"
-#include "viewer/session_data.h"
 #include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
+#include "viewer/session_data.h"
 
 namespace doorbench::viewer {
 
@@ -119,8 +119,7 @@ void Tuning::apply_selection(std::vector<int> strokes) {
 }
 
 std::shared_ptr<Series> Tuning::replay(const DoorModel& model, const std::string& name,
-                                       plot_style::Meaning meaning,
-                                       double* max_error) {
+                                       plot_style::Meaning meaning, double* max_error) {
   WindowOptions options = metric_window_options(FitOptions{}, model);
   options.whole_strokes = true;
   // Each stroke is one window of its own (whole_strokes): replaying them separately, in

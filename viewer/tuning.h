@@ -65,8 +65,7 @@ class Tuning {
 
  private:
   std::shared_ptr<Series> replay(const DoorModel& model, const std::string& name,
-                                 plot_style::Meaning meaning,
-                                 double* max_error);
+                                 plot_style::Meaning meaning, double* max_error);
   // "" or why `strokes` (sorted) is not a selection of all_'s strokes.
   std::string check_selection(const std::vector<int>& strokes) const;
   // Takes a checked, sorted selection: data_, singles_ and the plot's three curves.
