@@ -2,8 +2,6 @@
 // and says what is missing, with or without --screenshot (no PNG written); with its data,
 // --layout without --screenshot opens the window on that layout's tab (checked on a headless
 // ImGui frame: the tab's plots are the ones drawn).
-#include <imgui.h>
-
 #include <catch2/catch.hpp>
 #include <filesystem>
 
@@ -21,26 +19,6 @@ using namespace doorbench;
 
 namespace {
 
-// One headless ImGui frame of the viewer's window (every layout as tabs): the plots drawn.
-std::vector<std::string> window_frame_plots(viewer::Viewer& view) {
-  ImGui::CreateContext();
-  ImGuiIO& io = ImGui::GetIO();
-  io.IniFilename = nullptr;
-  io.DisplaySize = ImVec2(1200, 800);
-  io.DeltaTime = 1.0f / 60.0f;
-  unsigned char* texels = nullptr;
-  int w = 0, h = 0;
-  io.Fonts->GetTexDataAsRGBA32(&texels, &w, &h);
-  std::vector<std::string> titles;
-  for (int frame = 0; frame < 2; ++frame) {
-    ImGui::NewFrame();
-    view.frame(1200, 800);
-    ImGui::Render();
-  }
-  for (const auto& p : view.plots()) titles.push_back(p.title);
-  ImGui::DestroyContext();
-  return titles;
-}
 
 // The last line of a command's stderr (before it, the viewer says which sessions have no
 // strokes).
@@ -106,11 +84,11 @@ TEST_CASE("the window opens on the tab --layout names", "[viewer][cli]") {
   REQUIRE(sessions.back().prepared);
   viewer::Viewer first(sessions, {});
   // Without a layout the window opens on the first tab (the browser: no plots).
-  CHECK(window_frame_plots(first).empty());
+  CHECK(testing::window_frame_plots(first).empty());
   REQUIRE(first.missing_data("loop").empty());
   viewer::Viewer on_loop(sessions, {});
   on_loop.set_initial_layout("loop");
-  const auto titles = window_frame_plots(on_loop);
+  const auto titles = testing::window_frame_plots(on_loop);
   REQUIRE(titles.size() == 1);
   CHECK(titles[0] == "force against angle");
 }

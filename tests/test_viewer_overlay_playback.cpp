@@ -5,7 +5,9 @@
 // leave rest at the same place, the aligned stroke start.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <algorithm>
 #include <filesystem>
+#include <map>
 
 #include "analysis/parameter_file.h"
 #include "haptic/device_factory.h"
@@ -113,4 +115,28 @@ TEST_CASE("a playback session gets stroke events on read and overlays a bench se
   CHECK(g.x_of(column_b) < 0.3);
   CHECK(std::abs(g.x_of(column_a) - g.x_of(column_b)) < 0.2);
   REQUIRE(std::abs(overlay.a_start_s - overlay.b_start_s) > 0.3);  // a real shift was needed
+}
+
+TEST_CASE("a playback session's channels are grouped: door open, device, model and safety closed",
+          "[viewer]") {
+  testing::TempDir dir("viewer_playback_groups");
+  const fs::path played = dir.path / "played.h5";
+  record_playback(played, 3.0);
+  std::vector<viewer::SessionData> sessions;
+  sessions.push_back(viewer::load_session(played, {false}));
+  const viewer::SessionData& s = sessions.front();
+  std::map<std::string, std::vector<std::string>> groups;
+  for (const ChannelInfo& c : s.channels) groups[viewer::channel_group(c)].push_back(c.name);
+  CHECK(groups["door"] == std::vector<std::string>{"force", "angle", "rate"});
+  CHECK(groups["device"].size() == 12);  // position, velocity, measured and commanded force
+  CHECK(std::find(groups["model"].begin(), groups["model"].end(), "model_torque") !=
+        groups["model"].end());
+  CHECK(groups["model"].size() > 1);  // and its terms
+  CHECK(groups["safety"].size() == 5);
+  CHECK(groups[""].empty());
+  // The window's channels tab draws the door's three plots; the other groups start closed.
+  viewer::Viewer view(std::move(sessions), {});
+  view.set_initial_layout("channels");
+  const auto titles = testing::window_frame_plots(view);
+  CHECK(titles == std::vector<std::string>{"force", "angle", "rate"});
 }

@@ -3,6 +3,7 @@
 // --screenshot` under Xvfb (xvfb-run, Mesa's software OpenGL), load the PNG (stb_image,
 // libstb) and its companion PNG.json (where each plot's data area is, its ranges and series
 // colours).
+#include <imgui.h>
 #include <stb_image.h>
 #include <sys/wait.h>
 
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "acquisition/session_file.h"
+#include "viewer/viewer_app.h"
 
 namespace doorbench::testing {
 
@@ -55,6 +57,27 @@ struct Screenshot {
     throw std::runtime_error("no plot titled " + prefix + "... in the screenshot");
   }
 };
+
+// One headless ImGui frame of the viewer's window (every layout as tabs): the plots drawn.
+inline std::vector<std::string> window_frame_plots(viewer::Viewer& view) {
+  ImGui::CreateContext();
+  ImGuiIO& io = ImGui::GetIO();
+  io.IniFilename = nullptr;
+  io.DisplaySize = ImVec2(1200, 800);
+  io.DeltaTime = 1.0f / 60.0f;
+  unsigned char* texels = nullptr;
+  int w = 0, h = 0;
+  io.Fonts->GetTexDataAsRGBA32(&texels, &w, &h);
+  std::vector<std::string> titles;
+  for (int frame = 0; frame < 2; ++frame) {
+    ImGui::NewFrame();
+    view.frame(1200, 800);
+    ImGui::Render();
+  }
+  for (const auto& p : view.plots()) titles.push_back(p.title);
+  ImGui::DestroyContext();
+  return titles;
+}
 
 inline Screenshot load_screenshot(const std::filesystem::path& png) {
   Screenshot shot;

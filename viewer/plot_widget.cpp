@@ -71,8 +71,10 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     const bool swatch = i > 0 && i <= view.series.size();
     ImVec2 p = at[i];
     if (swatch) {
+      Rgba swatch_colour = view.series[i - 1]->colour;
+      swatch_colour.a = 255;  // the colour itself, even for a translucent curve
       draw->AddRectFilled(ImVec2(p.x, p.y + 4.0f), ImVec2(p.x + 10.0f, p.y + 14.0f),
-                          to_imgui_colour(view.series[i - 1]->colour));
+                          to_imgui_colour(swatch_colour));
       p.x += 14.0f;
     }
     const bool x_item = i > view.series.size() && i > 0;

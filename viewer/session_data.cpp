@@ -180,6 +180,20 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
   return comparison;
 }
 
+std::string channel_group(const ChannelInfo& channel) {
+  const std::string& kind = channel.sensor_kind;
+  if (kind == "haptic_force" || kind == "haptic_angle" || kind == "haptic_rate") return "door";
+  if (kind == "haptic_position" || kind == "haptic_velocity" || kind == "haptic_force_sensor" ||
+      kind == "haptic_command") {
+    return "device";
+  }
+  if (kind == "haptic_model") return "model";
+  if (kind == "haptic_safety" || kind == "haptic_constraint" || kind == "haptic_parameters") {
+    return "safety";
+  }
+  return "";
+}
+
 std::vector<PlotView> channel_plots(const SessionData& session) {
   std::vector<PlotView> plots;
   for (std::size_t i = 0; i < session.channels.size(); ++i) {

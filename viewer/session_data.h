@@ -123,6 +123,18 @@ struct Overlay {
 Overlay overlay_plots(const SessionData& a, const SessionData& b,
                       const std::string& direction = "");
 
+// The group a channel is shown in, by its sensor kind: a haptic playback's channels
+// (haptic/tick_recorder.cpp) as "door" (force, angle, rate: what a fit reads), "device"
+// (position, velocity, measured and commanded force), "model" (model torque and its
+// terms) and "safety" (passivity, constraint errors, safety scale, parameter set); ""
+// for any other (a bench's sensors: one group, no headers).
+std::string channel_group(const ChannelInfo& channel);
+// The groups in the order they are shown.
+inline const std::vector<std::string>& channel_group_order() {
+  static const std::vector<std::string> order = {"door", "device", "model", "safety", ""};
+  return order;
+}
+
 // A plot of each channel over time, their time axes linked to the first.
 std::vector<PlotView> channel_plots(const SessionData& session);
 // Force against angle, opening and closing in their colours (empty series: not prepared).

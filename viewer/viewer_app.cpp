@@ -340,12 +340,43 @@ void Viewer::channels(SessionView& s) {
     return;
   }
   const float avail = ImGui::GetContentRegionAvail().y;
-  const float each = stacked_height(avail, s.channels.size());
+  std::vector<std::string> groups;
+  for (const ChannelInfo& c : s.data.channels) groups.push_back(channel_group(c));
+  const bool grouped =
+      std::any_of(groups.begin(), groups.end(), [](const std::string& g) { return !g.empty(); });
   ImGui::BeginChild("channels");
-  for (std::size_t i = 0; i < s.channels.size(); ++i) {
-    const std::string id = "channel" + std::to_string(i);
-    plots_.push_back(
-        plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each, controls_));
+  if (!grouped) {
+    const float each = stacked_height(avail, s.channels.size());
+    for (std::size_t i = 0; i < s.channels.size(); ++i) {
+      const std::string id = "channel" + std::to_string(i);
+      plots_.push_back(
+          plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each, controls_));
+    }
+  } else {
+    // A haptic session's many channels: a header per group (the door's open), two plots
+    // side by side, scrolling.
+    const float half = std::floor((ImGui::GetContentRegionAvail().x -
+                                   ImGui::GetStyle().ItemSpacing.x) * 0.5f);
+    for (const std::string& group : channel_group_order()) {
+      const auto count = std::count(groups.begin(), groups.end(), group);
+      if (count == 0) continue;
+      const std::string header = (group.empty() ? std::string("other") : group) + " (" +
+                                 std::to_string(count) + " channels)###" + group;
+      if (!ImGui::CollapsingHeader(header.c_str(),
+                                   group == "door" ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+        continue;
+      }
+      int column = 0;
+      for (std::size_t i = 0; i < s.channels.size(); ++i) {
+        if (groups[i] != group) continue;
+        if (column++ % 2 == 1) ImGui::SameLine();
+        const std::string id = "channel" + std::to_string(i);
+        ImGui::BeginGroup();  // so that SameLine puts the next plot beside this one
+        plots_.push_back(
+            plot_widget(id.c_str(), s.channels[i], s.channel_states[i], half, 170.0f, controls_));
+        ImGui::EndGroup();
+      }
+    }
   }
   ImGui::EndChild();
 }
