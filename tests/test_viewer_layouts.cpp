@@ -19,7 +19,6 @@ using namespace doorbench;
 
 namespace {
 
-
 // The last line of a command's stderr (before it, the viewer says which sessions have no
 // strokes).
 std::string last_line(const std::string& err) {

@@ -3,9 +3,9 @@
 // simulated HapticMaster's render loop, no stroke events) are overlaid by the real
 // `doorbench view --screenshot` under Xvfb; both rate curves must be in the picture and
 // leave rest at the same place, the aligned stroke start.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
-#include <algorithm>
 #include <filesystem>
 #include <map>
 

@@ -355,8 +355,8 @@ void Viewer::channels(SessionView& s) {
   } else {
     // A haptic session's many channels: a header per group (the door's open), two plots
     // side by side, scrolling.
-    const float half = std::floor((ImGui::GetContentRegionAvail().x -
-                                   ImGui::GetStyle().ItemSpacing.x) * 0.5f);
+    const float half =
+        std::floor((ImGui::GetContentRegionAvail().x - ImGui::GetStyle().ItemSpacing.x) * 0.5f);
     for (const std::string& group : channel_group_order()) {
       const auto count = std::count(groups.begin(), groups.end(), group);
       if (count == 0) continue;
