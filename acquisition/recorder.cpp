@@ -857,8 +857,12 @@ bool SessionRecording::drain_ring_events() {
 void SessionRecording::show_latest_scan(const ScanSlot& slot) {
   if (slot.scan_count == 0) return;
   for (std::size_t c = 0; c < plan_.scan_channels; ++c) {
-    status_.channels[c].latest =
-        scan_conversion_[c](slot.counts[c * slot.capacity + slot.scan_count - 1]);
+    const std::int32_t* counts = slot.counts.data() + c * slot.capacity;
+    status_.channels[c].latest = scan_conversion_[c](counts[slot.scan_count - 1]);
+    const auto [low, high] = std::minmax_element(counts, counts + slot.scan_count);
+    status_.channels[c].largest_abs =
+        std::max({status_.channels[c].largest_abs, std::abs(scan_conversion_[c](*low)),
+                  std::abs(scan_conversion_[c](*high))});
   }
 }
 
@@ -900,6 +904,7 @@ void SessionRecording::flush_batch(TimedBatch& batch) {
   if (live.samples == 0) batch.first_time_s = static_cast<double>(batch.time_ns[0]) * 1e-9;
   live.samples += batch.count;
   live.latest = batch.conversion(batch.raw[batch.count - 1]);
+  live.largest_abs = std::max(live.largest_abs, std::abs(live.latest));
   const double span_s =
       static_cast<double>(batch.time_ns[batch.count - 1]) * 1e-9 - batch.first_time_s;
   if (live.samples > 1 && span_s > 0) {
@@ -995,6 +1000,7 @@ void SessionRecording::report_progress() {
   }
   status_.faults = summary_.faults;
   options_.progress(status_);
+  for (ChannelStatus& channel : status_.channels) channel.largest_abs = 0.0;
 }
 
 // The trigger's outcome, the closing events and the end frame, synced.

@@ -49,6 +49,9 @@ struct ChannelStatus {
   std::string name;
   std::string unit;     // of `latest`: the physical unit, else the signal's unit
   double latest = 0.0;  // the latest sample, physical where a record or scale gives it
+  // The largest |value| (as `latest`) since the previous status: scan channels over every
+  // scan (the extremes of the counts, converted), polled channels over their latest values.
+  double largest_abs = 0.0;
   std::uint64_t samples = 0;
   double achieved_rate_hz = 0.0;  // scan channels: the scans'; polled: its own samples'
   bool polled = false;

@@ -3,9 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <optional>
-#include <system_error>
 #include <stdexcept>
+#include <system_error>
 
 #include "acquisition/interpolation.h"
 #include "acquisition/output_file.h"
@@ -135,6 +136,21 @@ ExportedChannels exported_channels(const SessionReader& session) {
   if (exported.angle) exported.all.push_back(exported.angle);
   exported.all.insert(exported.all.end(), exported.extras.begin(), exported.extras.end());
   return exported;
+}
+
+// Each column's channel, "force_N=force,...", so that import names the channels as they
+// were (csv-format.md).
+std::string channel_names_line(const ExportedChannels& exported) {
+  std::string names;
+  const auto name = [&](std::string_view column, const ChannelInfo& channel) {
+    if (!names.empty()) names.push_back(',');
+    names.append(column).append("=").append(channel.name);
+  };
+  name(kForceColumn, *exported.force);
+  if (exported.rate) name(kRateColumn, *exported.rate);
+  if (exported.angle) name(kAngleColumn, *exported.angle);
+  for (const ChannelInfo* extra : exported.extras) name(column_name(*extra), *extra);
+  return names;
 }
 
 // A channel's physical values on its own clock.
@@ -351,6 +367,7 @@ Recording session_to_recording(const SessionReader& session) {
   Recording recording;
   recording.source = where;
   recording.metadata.emplace_back("source", "doorbench export " + where);
+  recording.metadata.emplace_back(std::string(kChannelNamesKey), channel_names_line(exported));
 
   std::vector<OwnClock> own = read_on_own_clocks(session, exported.all);
   std::vector<std::vector<double>> columns(exported.all.size());
@@ -398,6 +415,28 @@ Recording session_to_recording(const SessionReader& session) {
 
 namespace {
 
+// The channel_names metadata (column=channel,...): which channel each column was; without
+// it (a CSV from elsewhere) the main columns give force, angle and rate.
+std::map<std::string, std::string> channel_names(const Recording& recording) {
+  std::map<std::string, std::string> names = {{std::string(kForceColumn), "force"},
+                                              {std::string(kAngleColumn), "angle"},
+                                              {std::string(kRateColumn), "rate"}};
+  for (const auto& [key, value] : recording.metadata) {
+    if (key != kChannelNamesKey) continue;
+    std::size_t begin = 0;
+    while (begin <= value.size()) {
+      const std::size_t end = std::min(value.find(',', begin), value.size());
+      const std::string item = value.substr(begin, end - begin);
+      const std::size_t equals = item.find('=');
+      if (equals != std::string::npos && equals > 0 && equals + 1 < item.size()) {
+        names[item.substr(0, equals)] = item.substr(equals + 1);
+      }
+      begin = end + 1;
+    }
+  }
+  return names;
+}
+
 void write_recording_session(const Recording& recording, const std::filesystem::path& path,
                              const SessionMetadata& metadata) {
   const std::size_t count = recording.size();
@@ -423,13 +462,15 @@ void write_recording_session(const Recording& recording, const std::filesystem::
   }
 
   SessionWriter writer(path, metadata);
-  auto add = [&](const std::string& name, const std::string& unit,
+  const std::map<std::string, std::string> names = channel_names(recording);
+  auto add = [&](const std::string& column, const std::string& unit,
                  const std::vector<double>& values) {
     ChannelInfo channel;
-    channel.name = name;
+    const auto named = names.find(column);
+    channel.name = named != names.end() ? named->second : column;
     // A narrow-range inclinometer column (as export writes it) stays an inclinometer, so
     // that it is not taken for the full-range angle on the way back.
-    channel.sensor_kind = name.rfind("inclinometer", 0) == 0 ? "inclinometer" : "imported";
+    channel.sensor_kind = column.rfind("inclinometer", 0) == 0 ? "inclinometer" : "imported";
     channel.raw_type = RawType::kValues;
     channel.raw_unit = unit;
     channel.unit = unit;
@@ -443,9 +484,9 @@ void write_recording_session(const Recording& recording, const std::filesystem::
     else
       writer.append_timed_values(index, recording.time_s, values);
   };
-  add("force", "N", recording.force_N);
-  if (recording.angle_rad) add("angle", "rad", *recording.angle_rad);
-  if (recording.rate_rad_s) add("rate", "rad/s", *recording.rate_rad_s);
+  add(std::string(kForceColumn), "N", recording.force_N);
+  if (recording.angle_rad) add(std::string(kAngleColumn), "rad", *recording.angle_rad);
+  if (recording.rate_rad_s) add(std::string(kRateColumn), "rad/s", *recording.rate_rad_s);
   for (std::size_t e = 0; e < recording.extra_names.size(); ++e) {
     const std::string& column = recording.extra_names[e];
     add(column, unit_of_column(column), recording.extra_columns[e]);

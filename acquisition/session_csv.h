@@ -28,7 +28,9 @@
 // unit, with no calibration (the values already are physical); times become a sample
 // clock only when that clock gives every time back exactly, else they are stored as
 // explicit times; strokes become events that keep their ids; the CSV's metadata lines
-// are kept as attributes of the session's "import" group. A column whose name starts with
+// are kept as attributes of the session's "import" group; channel_names (kChannelNamesKey)
+// gives each column's channel name back (without it: force, angle, rate, and extra columns
+// by their column name). A column whose name starts with
 // "inclinometer" becomes an inclinometer channel (narrow range, not the door angle).
 #include <filesystem>
 #include <string>
@@ -42,6 +44,9 @@ namespace doorbench {
 
 // The metadata key that names the geometry record applied to the force (export adds it).
 inline constexpr std::string_view kGeometryCalibrationKey = "geometry_calibration";
+// The metadata key naming each column's channel, "force_N=force,inclinometer_angle_rad=angle"
+// (export adds it; import names the channels so, so that a round trip keeps their names).
+inline constexpr std::string_view kChannelNamesKey = "channel_names";
 
 Recording session_to_recording(const SessionReader& session);
 

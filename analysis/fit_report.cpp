@@ -5,6 +5,7 @@
 #include <string>
 
 #include "analysis/fitting.h"
+#include "analysis/metric_notes.h"
 #include "analysis/text_format.h"
 
 namespace doorbench {
@@ -80,6 +81,7 @@ std::string FitSummary::brief_report() const {
   out += "Study objective (whole strokes replayed): max |omega error| " +
          short_number(fitted.study_objective_rad_s()) + " rad/s (stroke " +
          std::to_string(fitted.worst_replay_stroke_id) + ").\n";
+  out += fit_and_max_error_note(fitted);
   if (!undetermined.empty()) {
     out += "Undetermined:";
     for (const std::string& name : undetermined) out += " " + name;

@@ -67,6 +67,43 @@ std::string escaped(const std::string& text) {
   return out;
 }
 
+// A series' points as SVG "x,y " pairs, reduced per pixel column to its first, smallest,
+// largest and last point in order (which draws the same as all of them).
+template <typename ToPxX, typename ToPxY>
+std::string reduced_points(const PlotSeries& s, const ToPxX& px, const ToPxY& py) {
+  int column = std::numeric_limits<int>::min();
+  std::vector<std::size_t> kept;
+  std::size_t lowest = 0, highest = 0, first = 0, last = 0;
+  auto flush = [&] {
+    if (column == std::numeric_limits<int>::min()) return;
+    const std::size_t picks[4] = {first, std::min(lowest, highest), std::max(lowest, highest),
+                                  last};
+    for (std::size_t pick : picks) {
+      if (kept.empty() || kept.back() != pick) kept.push_back(pick);
+    }
+  };
+  for (std::size_t i = 0; i < s.x.size(); ++i) {
+    if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
+    const int this_column = static_cast<int>(std::floor(px(s.x[i])));
+    if (this_column != column) {
+      flush();
+      column = this_column;
+      first = lowest = highest = i;
+    }
+    if (s.y[i] < s.y[lowest]) lowest = i;
+    if (s.y[i] > s.y[highest]) highest = i;
+    last = i;
+  }
+  flush();
+  std::string points;
+  char buffer[64];
+  for (std::size_t i : kept) {
+    std::snprintf(buffer, sizeof buffer, "%.1f,%.1f ", px(s.x[i]), py(s.y[i]));
+    points += buffer;
+  }
+  return points;
+}
+
 }  // namespace
 
 std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeries> series) {
@@ -90,7 +127,11 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
   x_range = padded(x_range);
   y_range = padded(y_range);
 
-  const double left = 70, right = 20, top = 40, bottom = 55;
+  // The legend sits right of the data area: as wide as its longest label.
+  std::size_t longest_label = 0;
+  for (const PlotSeries& s : series) longest_label = std::max(longest_label, s.label.size());
+  const double legend_w = longest_label == 0 ? 0.0 : 44.0 + 7.0 * double(longest_label);
+  const double left = 70, right = 20 + legend_w, top = 40, bottom = 55;
   const double plot_w = options.width_px - left - right;
   const double plot_h = options.height_px - top - bottom;
   auto px = [&](double x) {
@@ -142,48 +183,44 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
                 top + plot_h / 2);
   svg += buffer + escaped(options.y_label) + "</text>\n";
 
-  // Series, reduced per pixel column: first, smallest, largest and last point in order.
-  int legend_entries = 0;
-  for (std::size_t index = 0; index < series.size(); ++index) {
+  // Series in stacking order (plot_style: measured on top), each reduced per pixel column:
+  // first, smallest, largest and last point in order.
+  std::vector<std::size_t> order(series.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t i, std::size_t j) {
+    return plot_style::line_style(series[i].meaning).layer <
+           plot_style::line_style(series[j].meaning).layer;
+  });
+  auto colour_of = [&](std::size_t index) {
     const PlotSeries& s = series[index];
-    const std::string color = s.color.empty() ? kPalette[index % 6] : s.color;
-    svg += "<polyline fill=\"none\" stroke-width=\"1.4\" stroke=\"" + color + "\" points=\"";
-    int column = std::numeric_limits<int>::min();
-    std::vector<std::size_t> kept;
-    std::size_t lowest = 0, highest = 0, first = 0, last = 0;
-    auto flush = [&] {
-      if (column == std::numeric_limits<int>::min()) return;
-      std::size_t picks[4] = {first, std::min(lowest, highest), std::max(lowest, highest), last};
-      for (std::size_t pick : picks) {
-        if (kept.empty() || kept.back() != pick) kept.push_back(pick);
-      }
-    };
-    for (std::size_t i = 0; i < s.x.size(); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-      const int this_column = static_cast<int>(std::floor(px(s.x[i])));
-      if (this_column != column) {
-        flush();
-        column = this_column;
-        first = lowest = highest = i;
-      }
-      if (s.y[i] < s.y[lowest]) lowest = i;
-      if (s.y[i] > s.y[highest]) highest = i;
-      last = i;
-    }
-    flush();
-    for (std::size_t i : kept) {
-      std::snprintf(buffer, sizeof buffer, "%.1f,%.1f ", px(s.x[i]), py(s.y[i]));
-      svg += buffer;
-    }
+    if (!s.color.empty()) return s.color;
+    if (s.meaning != plot_style::Meaning::kOther) return plot_style::hex_colour(s.meaning);
+    return std::string(kPalette[index % 6]);
+  };
+  auto stroke_attributes = [&](std::size_t index, double width_factor) {
+    const plot_style::LineStyle style = plot_style::line_style(series[index].meaning);
+    std::snprintf(buffer, sizeof buffer, "stroke-width=\"%.1f\" stroke-opacity=\"%.2f\"%s",
+                  style.width_px * width_factor, style.opacity,
+                  style.dashed ? " stroke-dasharray=\"6 3\"" : "");
+    return std::string(" stroke=\"") + colour_of(index) + "\" " + buffer;
+  };
+  for (std::size_t index : order) {
+    const PlotSeries& s = series[index];
+    svg += "<polyline fill=\"none\"" + stroke_attributes(index, 1.0) + " points=\"";
+    svg += reduced_points(s, px, py);
     svg += "\"/>\n";
-    if (s.label.empty()) continue;  // unlabelled series share a labelled one's entry
-    const double legend_row = static_cast<double>(legend_entries++);
-    std::snprintf(buffer, sizeof buffer,
-                  "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
-                  "stroke-width=\"3\"/><text x=\"%.1f\" y=\"%.1f\">",
-                  left + 10, top + 14 + 16.0 * legend_row, left + 30, top + 14 + 16.0 * legend_row,
-                  color.c_str(), left + 36, top + 18 + 16.0 * legend_row);
-    svg += buffer + escaped(s.label) + "</text>\n";
+  }
+  // The legend, right of the data area, in the order the series were given.
+  int legend_entries = 0;
+  const double legend_x = left + plot_w + 16;
+  for (std::size_t index = 0; index < series.size(); ++index) {
+    if (series[index].label.empty()) continue;  // unlabelled series share a labelled entry
+    const double row_y = top + 8 + 18.0 * double(legend_entries++);
+    std::snprintf(buffer, sizeof buffer, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"",
+                  legend_x, row_y, legend_x + 24, row_y);
+    svg += buffer + stroke_attributes(index, 2.0) + "/>";
+    std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\">", legend_x + 30, row_y + 4);
+    svg += buffer + escaped(series[index].label) + "</text>\n";
   }
   svg += "</svg>\n";
   return svg;

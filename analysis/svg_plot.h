@@ -1,10 +1,15 @@
 #pragma once
 // Line plots as standalone SVG files (any browser shows them): several series with a
-// legend, axes with round-number ticks, labels with units. Long series are reduced to
-// each pixel column's first, smallest, largest and last point, which draws the same.
+// legend to the right of the data (never over a curve), axes with round-number ticks,
+// labels with units. Each series is drawn as its meaning says (analysis/plot_style.h, the
+// vocabulary the viewer uses too): measured on top, simulated dashed under it, so both stay
+// visible when they coincide. Long series are reduced to each pixel column's first,
+// smallest, largest and last point, which draws the same.
 #include <span>
 #include <string>
 #include <vector>
+
+#include "analysis/plot_style.h"
 
 namespace doorbench {
 
@@ -12,12 +17,13 @@ struct PlotSeries {
   std::string label;
   std::span<const double> x;
   std::span<const double> y;
-  std::string color;  // any SVG colour; empty picks from a palette
+  std::string color;  // any SVG colour; empty: the meaning's (a palette's for kOther)
+  plot_style::Meaning meaning = plot_style::Meaning::kOther;  // style and stacking
 };
 
 struct PlotOptions {
   std::string title;
-  std::string x_label;  // with its unit, e.g. "angle (deg)"
+  std::string x_label;  // with its unit, e.g. "angle [deg]" (plot_style::axis_label)
   std::string y_label;
   int width_px = 760;
   int height_px = 440;

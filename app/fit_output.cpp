@@ -5,6 +5,7 @@
 #include <numbers>
 
 #include "analysis/fit_metrics.h"
+#include "analysis/residual_whiteness.h"
 #include "analysis/svg_plot.h"
 
 namespace doorbench::app {
@@ -102,7 +103,8 @@ nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedDa
 }
 
 // Measured against simulated (window by window) rate and angle, the force–angle loops, and
-// the rate residual against angle and speed.
+// the rate residual against angle and speed, and the residual's whiteness (when the data
+// have enough samples).
 std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
                                          const PreparedData& data, const FitOptions& options) {
   WindowOptions window_options;
@@ -130,35 +132,58 @@ std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const
     force_N.push_back(stroke.force_N);
   }
   std::vector<PlotSeries> rate, loops, residual_angle, residual_speed;
+  using plot_style::Meaning;
+  bool opening_named = false, closing_named = false;
   for (std::size_t s = 0; s < data.strokes.size(); ++s) {
     const bool opening = data.strokes[s].direction == StrokeDirection::kOpening;
-    rate.push_back({s == 0 ? "measured" : "", time_s[s], measured_deg_s[s], "#1f77b4"});
-    rate.push_back({s == 0 ? "simulated (windows)" : "", time_s[s], simulated_deg_s[s], "#d62728"});
-    loops.push_back(
-        {s == 0 ? "strokes" : "", angle_deg[s], force_N[s], opening ? "#1f77b4" : "#d62728"});
-    residual_angle.push_back(
-        {"", angle_deg[s], residual_deg_s[s], opening ? "#1f77b4" : "#d62728"});
-    residual_speed.push_back(
-        {"", speed_deg_s[s], residual_deg_s[s], opening ? "#1f77b4" : "#d62728"});
-  }
-  if (!residual_angle.empty()) {
-    residual_angle[0].label = "openings blue, closings red";
-    residual_speed[0].label = "openings blue, closings red";
-    loops[0].label = "openings blue, closings red";
+    const Meaning direction = opening ? Meaning::kOpening : Meaning::kClosing;
+    // One legend entry per direction: the first stroke of each names it.
+    bool& named = opening ? opening_named : closing_named;
+    const std::string label = named ? "" : (opening ? "opening" : "closing");
+    named = true;
+    rate.push_back(
+        {s == 0 ? "measured" : "", time_s[s], measured_deg_s[s], "", Meaning::kMeasured});
+    rate.push_back({s == 0 ? "simulated (windows)" : "", time_s[s], simulated_deg_s[s], "",
+                    Meaning::kSimulated});
+    loops.push_back({label, angle_deg[s], force_N[s], "", direction});
+    residual_angle.push_back({label, angle_deg[s], residual_deg_s[s], "", direction});
+    residual_speed.push_back({label, speed_deg_s[s], residual_deg_s[s], "", direction});
   }
   std::vector<std::string> files = {"rate.svg", "force-angle.svg", "residual-angle.svg",
                                     "residual-speed.svg"};
   write_svg_plot((dir / files[0]).string(),
-                 {"Door rate: measured and simulated window by window", "time (s)", "rate (deg/s)"},
+                 {"Door rate: measured and simulated window by window", "time [s]", "rate [deg/s]"},
                  rate);
   write_svg_plot((dir / files[1]).string(),
-                 {"Force-angle loops (measured)", "angle (deg)", "hand force (N)"}, loops);
+                 {"Force-angle loops (measured)", "angle [deg]", "hand force [N]"}, loops);
   write_svg_plot((dir / files[2]).string(),
-                 {"Rate residual against angle", "angle (deg)", "measured - simulated (deg/s)"},
+                 {"Rate residual against angle", "angle [deg]", "measured - simulated [deg/s]"},
                  residual_angle);
   write_svg_plot((dir / files[3]).string(),
-                 {"Rate residual against speed", "rate (deg/s)", "measured - simulated (deg/s)"},
+                 {"Rate residual against speed", "rate [deg/s]", "measured - simulated [deg/s]"},
                  residual_speed);
+  // Is the residual noise? Its autocorrelation and cross-correlation with the force.
+  try {
+    const ResidualWhiteness w = residual_whiteness(residual_deg_s, force_N, data.interval_median_s,
+                                                   whiteness_max_lag(data.interval_median_s));
+    const int max_lag = int(w.autocorrelation.size()) - 1;
+    std::vector<double> auto_lag_s, cross_lag_s;
+    for (int k = 0; k <= max_lag; ++k) auto_lag_s.push_back(k * w.lag_step_s);
+    for (int k = -max_lag; k <= max_lag; ++k) cross_lag_s.push_back(k * w.lag_step_s);
+    const std::vector<double> band_x = {cross_lag_s.front(), cross_lag_s.back()};
+    const std::vector<double> upper = {w.band, w.band}, lower = {-w.band, -w.band};
+    const std::vector<PlotSeries> whiteness = {
+        {"autocorrelation of the residual", auto_lag_s, w.autocorrelation, "",
+         plot_style::Meaning::kResidual},
+        {"cross-correlation with the force", cross_lag_s, w.cross_correlation, "#b8860b"},
+        {"99 % band of white noise", band_x, upper, "", plot_style::Meaning::kOther},
+        {"", band_x, lower, "", plot_style::Meaning::kOther}};
+    files.push_back("residual-whiteness.svg");
+    write_svg_plot((dir / files.back()).string(),
+                   {"Residual whiteness: " + w.summary(), "lag [s]", "correlation"}, whiteness);
+  } catch (const std::invalid_argument&) {
+    // Too few samples for the lags: no whiteness plot.
+  }
   return files;
 }
 

@@ -1,9 +1,12 @@
 // doorbench: record, model, fit and play back the feel of a product mechanism.
-// Exit status: 0 success, 1 failure, 2 bad usage. Errors go to stderr on one line.
+// Exit status: 0 success, 1 failure, 2 bad usage. Errors go to stderr on one line; a usage
+// error points at the verb's own help (`doorbench VERB --help`, also `doorbench help VERB`).
 #include <CLI/CLI.hpp>
 #include <exception>
 #include <iostream>
+#include <streambuf>
 #include <string>
+#include <vector>
 
 #include "acquisition/output_file.h"
 #include "acquisition/printable.h"
@@ -35,14 +38,93 @@ std::string unknown_verb_message(const CLI::App& app, int argc, char** argv) {
   return "";
 }
 
+// The verb the command line names, as "fit" or "hapticmaster check" (words that name a
+// subcommand at each level, options and their values skipped); "" when none.
+std::string named_verb(const CLI::App& app, int argc, char** argv) {
+  const CLI::App* level = &app;
+  std::string path;
+  for (int i = 1; i < argc; ++i) {
+    const std::string word = argv[i];
+    if (word.empty() || word[0] == '-') continue;
+    const CLI::App* next = nullptr;
+    for (const CLI::App* sub : level->get_subcommands([](const CLI::App*) { return true; })) {
+      if (sub->get_name() == word) next = sub;
+    }
+    if (next == nullptr) continue;
+    path += (path.empty() ? "" : " ") + word;
+    level = next;
+  }
+  return path;
+}
+
+// Where to read about a usage error: the verb's own help when a verb was named.
+std::string help_hint(const CLI::App& app, int argc, char** argv) {
+  const std::string verb = named_verb(app, argc, argv);
+  return " (see doorbench " + (verb.empty() ? std::string() : verb + " ") + "--help)";
+}
+
+// `doorbench help [VERB...]` is `doorbench [VERB...] --help`: the words are checked here
+// (an unknown one is a usage error, exit 2, with the expected verbs) and `args` becomes the
+// command line with --help. Returns false after printing the error.
+bool help_command_line(const CLI::App& app, int argc, char** argv, std::vector<std::string>& args) {
+  const CLI::App* level = &app;
+  std::string path;
+  args = {argv[0]};
+  for (int i = 2; i < argc; ++i) {
+    const std::string word = argv[i];
+    const CLI::App* next = nullptr;
+    std::string expected;
+    for (const CLI::App* sub : level->get_subcommands([](const CLI::App*) { return true; })) {
+      if (sub->get_name() == word) next = sub;
+      expected += (expected.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (next == nullptr) {
+      std::cerr << "doorbench: help: unknown verb '" << doorbench::printable(path + word) << "'"
+                << (expected.empty() ? "" : " (expected " + expected + ")")
+                << " (see doorbench --help)\n";
+      return false;
+    }
+    path += word + " ";
+    args.push_back(word);
+    level = next;
+  }
+  args.push_back("--help");
+  return true;
+}
+
+// --quiet: stderr's progress, stage and warning lines are dropped while the verb runs;
+// its error (printed by main after the verb returns) and stdout are kept.
+class QuietStderr {
+ public:
+  explicit QuietStderr(bool quiet) : saved_(quiet ? std::cerr.rdbuf(&null_) : nullptr) {}
+  ~QuietStderr() { restore(); }
+  QuietStderr(const QuietStderr&) = delete;
+  QuietStderr& operator=(const QuietStderr&) = delete;
+  void restore() {
+    if (saved_ != nullptr) std::cerr.rdbuf(saved_);
+    saved_ = nullptr;
+  }
+
+ private:
+  struct NullBuffer : std::streambuf {
+    int overflow(int c) override { return traits_type::not_eof(c); }
+  } null_;
+  std::streambuf* saved_;
+};
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{
       "doorbench: measure a door's feel on the bench, fit models to it and play it back.\n"
-      "Run `doorbench VERB --help` for each verb."};
-  app.set_version_flag("--version", std::string("doorbench ") + DOORBENCH_VERSION);
+      "Run `doorbench help VERB` (or `doorbench VERB --help`) for each verb."};
+  app.set_version_flag("-V,--version", std::string("doorbench ") + DOORBENCH_VERSION);
   app.require_subcommand(1);
+  bool quiet = false;
+  app.add_flag("-q,--quiet", quiet,
+               "No progress, stage or warning lines on stderr (errors still); before or after "
+               "the verb");
+  app.fallthrough(true);  // every verb takes --quiet too
   doorbench::app::Action action;
   doorbench::app::add_model_command(app, action);
   doorbench::app::add_simulate_command(app, action);
@@ -59,6 +141,15 @@ int main(int argc, char** argv) {
   doorbench::app::add_spec_command(app, action);
   doorbench::app::add_hapticmaster_command(app, action);
 
+  // `doorbench help VERB`: parsed as `doorbench VERB --help`.
+  std::vector<std::string> help_args;
+  std::vector<char*> help_argv;
+  if (argc >= 2 && std::string(argv[1]) == "help") {
+    if (!help_command_line(app, argc, argv, help_args)) return 2;
+    for (std::string& arg : help_args) help_argv.push_back(arg.data());
+    argc = int(help_argv.size());
+    argv = help_argv.data();
+  }
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& help) {
@@ -70,20 +161,25 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& error) {
     std::string message = unknown_verb_message(app, argc, argv);
     if (message.empty()) message = error.what();
-    std::cerr << "doorbench: " << message << " (see doorbench --help)\n";
+    std::cerr << "doorbench: " << message << help_hint(app, argc, argv) << "\n";
     return 2;
   }
 
+  QuietStderr quiet_stderr(quiet);
   try {
     if (action) action();
     return 0;
   } catch (const doorbench::app::UsageError& error) {
-    std::cerr << "doorbench: " << doorbench::printable(error.what()) << " (see doorbench --help)\n";
+    quiet_stderr.restore();
+    std::cerr << "doorbench: " << doorbench::printable(error.what()) << help_hint(app, argc, argv)
+              << "\n";
     return 2;
   } catch (const doorbench::OutputRefused& error) {  // an existing output, or an input
+    quiet_stderr.restore();
     std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
     return 2;
   } catch (const std::exception& error) {
+    quiet_stderr.restore();
     // Messages quote files' text: control characters are shown escaped.
     std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
     return 1;

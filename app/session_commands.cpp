@@ -23,6 +23,7 @@
 #include "acquisition/session_csv.h"
 #include "acquisition/tdms.h"
 #include "app/commands.h"
+#include "app/limit_watcher.h"
 #include "app/session_recording.h"
 #include "calibration/range_warnings.h"
 #include "sensors/comedi_backend.h"
@@ -73,7 +74,9 @@ class StatusDisplay {
   StatusDisplay(std::string path, double duration_s)
       : path_(std::move(path)), duration_s_(duration_s), terminal_(isatty(STDERR_FILENO) != 0) {}
 
-  void show(const RecordStatus& status) {
+  // `limits`: the limit watcher's text for the status line ("" when none).
+  void show(const RecordStatus& status, const std::string& limits = "") {
+    limits_ = limits;
     const auto now = std::chrono::steady_clock::now();
     if (terminal_) {
       if (now < next_draw_) {
@@ -130,10 +133,11 @@ class StatusDisplay {
         static_cast<unsigned long long>(status.scans), status.achieved_scan_rate_hz,
         static_cast<unsigned long long>(status.faults), status.trigger_state.empty() ? "" : " [",
         status.trigger_state.c_str(), status.trigger_state.empty() ? "" : "]");
-    return line;
+    return line + limits_;
   }
 
   std::string path_;
+  std::string limits_;
   double duration_s_;
   bool terminal_;
   int lines_ = 0;
@@ -216,12 +220,21 @@ RecordSummary record_with_status(const RecordSources& sources, const RigDefiniti
   record.flush_interval_s = options.flush_interval_s;
   record.stop_requested = options.stop_requested;
   StatusDisplay display(out_path.string(), display_s);
-  if (options.show_progress) {
-    record.progress = [&display](const RecordStatus& status) { display.show(status); };
+  // Sensors at their range's end, live on the status line and in the summary.
+  LimitWatcher limits(rig_channel_limits(rig));
+  const bool show = options.show_progress;
+  if (show) {
+    record.progress = [&display, &limits](const RecordStatus& status) {
+      limits.update(status);
+      display.show(status, limits.status_text());
+    };
   }
   const RecordSummary summary =
       record_session(sources, new_session_metadata(rig, options), out_path, record);
-  if (options.show_progress) display.finish();
+  if (show) display.finish();
+  if (show) {
+    for (const std::string& line : limits.summary()) std::cerr << "warning: " << line << "\n";
+  }
   return summary;
 }
 
@@ -509,14 +522,22 @@ void run_info(const std::string& session_path) {
             << format_seconds(session.end_time_s()) << ")\n";
   if (!m.notes.empty()) std::cout << "  notes      " << printable(m.notes) << "\n";
   std::cout << "channels:\n";
-  std::printf("  %-14s %-13s %10s %10s %-7s %-6s %s\n", "name", "sensor", "samples", "rate Hz",
-              "raw", "unit", "calibration");
+  // Columns as wide as their longest entry, so that every row lines up with the header.
+  int name_w = 14, sensor_w = 13, raw_w = 7, unit_w = 6;
+  for (const ChannelInfo& c : session.channels()) {
+    name_w = std::max(name_w, int(printable(c.name).size()));
+    sensor_w = std::max(sensor_w, int(printable(c.sensor_kind).size()));
+    raw_w = std::max(raw_w, int(printable(c.raw_unit).size()));
+    unit_w = std::max(unit_w, int(printable(c.unit).size()));
+  }
+  std::printf("  %-*s %-*s %10s %10s %-*s %-*s %s\n", name_w, "name", sensor_w, "sensor", "samples",
+              "rate Hz", raw_w, "raw", unit_w, "unit", "calibration");
   std::fflush(stdout);
   for (const ChannelInfo& c : session.channels()) {
     std::printf(
-        "  %-14s %-13s %10zu %10g %-7s %-6s %s%s%s\n", c.name.c_str(),
-        printable(c.sensor_kind).c_str(), session.sample_count(c.name), c.sample_rate_hz,
-        printable(c.raw_unit).c_str(), printable(c.unit).c_str(),
+        "  %-*s %-*s %10zu %10g %-*s %-*s %s%s%s\n", name_w, printable(c.name).c_str(), sensor_w,
+        printable(c.sensor_kind).c_str(), session.sample_count(c.name), c.sample_rate_hz, raw_w,
+        printable(c.raw_unit).c_str(), unit_w, printable(c.unit).c_str(),
         c.calibration_id.empty() ? "(values are physical)" : printable(c.calibration_id).c_str(),
         c.geometry_calibration_id.empty() ? "" : ", geometry ",
         printable(c.geometry_calibration_id).c_str());
@@ -556,6 +577,20 @@ void run_info(const std::string& session_path) {
   }
 }
 
+// Metadata keys export writes and import reads (docs/csv-format.md).
+constexpr const char* kCsvRigKey = "rig";
+constexpr const char* kCsvOperatorKey = "operator";
+constexpr const char* kCsvProductKey = "product";
+constexpr const char* kCsvStartKey = "start_time_utc";
+
+// A metadata value on one line: line breaks become spaces.
+std::string one_line(std::string text) {
+  for (char& c : text) {
+    if (c == '\n' || c == '\r') c = ' ';
+  }
+  return text;
+}
+
 struct ExportOptions {
   std::string session_path;
   std::string csv_path;
@@ -567,7 +602,15 @@ void run_export(const ExportOptions& options) {
   const std::string& csv_path = options.csv_path;
   check_output_file(csv_path, {session_path}, options.overwrite);
   const SessionReader session(session_path);
-  const Recording recording = session_to_recording(session);
+  Recording recording = session_to_recording(session);
+  // Who, what and when, so that import gives them back (docs/csv-format.md).
+  const SessionMetadata& m = session.metadata();
+  for (const auto& [key, value] : {std::pair<std::string, std::string>{kCsvRigKey, m.rig_name},
+                                   {kCsvOperatorKey, m.operator_name},
+                                   {kCsvProductKey, m.product_id},
+                                   {kCsvStartKey, m.start_time_utc}}) {
+    if (!value.empty()) recording.metadata.emplace_back(key, one_line(value));
+  }
   write_recording_csv_file(csv_path, recording);
   std::cerr << "wrote " << csv_path << ": " << recording.size() << " rows\n";
 }
@@ -604,11 +647,21 @@ Recording read_import(const ImportOptions& options) {
 void run_import(const ImportOptions& options) {
   check_output_session(options.out_path, {options.csv_path});
   const Recording recording = read_import(options);
+  // The recording's own rig, operator, product and start (an exported session's) unless
+  // given; else "imported" and now.
+  auto from_csv = [&recording](const char* key, const std::string& otherwise) {
+    for (const auto& [k, value] : recording.metadata) {
+      if (k == key && !value.empty()) return value;
+    }
+    return otherwise;
+  };
   SessionMetadata metadata;
-  metadata.rig_name = "imported";
-  metadata.operator_name = options.operator_name;
-  metadata.product_id = options.product_id;
-  metadata.start_time_utc = utc_now_iso8601();
+  metadata.rig_name = from_csv(kCsvRigKey, "imported");
+  metadata.operator_name =
+      options.operator_name.empty() ? from_csv(kCsvOperatorKey, "") : options.operator_name;
+  metadata.product_id =
+      options.product_id.empty() ? from_csv(kCsvProductKey, "") : options.product_id;
+  metadata.start_time_utc = from_csv(kCsvStartKey, utc_now_iso8601());
   metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
   metadata.notes = options.notes.empty() ? "imported from " + options.csv_path : options.notes;
   recording_to_session(recording, options.out_path, metadata);

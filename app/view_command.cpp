@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <stdexcept>
 
 #include "app/commands.h"
 #include "viewer/fit_result.h"
@@ -59,8 +60,9 @@ void run_view(const ViewOptions& options) {
     run_live(options, window);
     return;
   }
-  if (!options.layout.empty() && options.screenshot.empty()) {
-    throw UsageError("--layout chooses what --screenshot shows; the window shows every layout");
+  if (!options.layout.empty()) {
+    const std::string problem = viewer::check_layout(options.layout);
+    if (!problem.empty()) throw UsageError("--layout: " + problem);
   }
   if (!options.screenshot.empty()) {
     const std::size_t wanted = options.layout == "overlay" ? 2 : 1;
@@ -69,8 +71,6 @@ void run_view(const ViewOptions& options) {
           "--screenshot takes one SESSION (two, A and B, for --layout overlay; any for steps)");
     }
     if (options.layout.empty()) throw UsageError("--screenshot needs --layout");
-    const std::string problem = viewer::check_layout(options.layout);
-    if (!problem.empty()) throw UsageError("--layout: " + problem);
   }
   viewer::WindowOptions window;
   window.width_px = options.width_px;
@@ -128,6 +128,15 @@ void run_view(const ViewOptions& options) {
   viewer::Viewer view(std::move(sessions), std::move(fits));
   if (steps) view.set_loop_steps(std::move(*steps));
   if (model) view.set_tuning_model(*model);
+  if (!options.layout.empty()) {
+    // A layout without its data is a failure a script can see (exit 1), not a picture of
+    // the instructions.
+    const std::string missing = view.missing_data(options.layout);
+    if (!missing.empty()) {
+      throw std::runtime_error("--layout " + options.layout + ": " + missing);
+    }
+    view.set_initial_layout(options.layout);
+  }
   if (!options.screenshot.empty()) {
     viewer::screenshot(view, options.layout, options.screenshot, window);
     std::cout << options.screenshot << "\n";
@@ -149,7 +158,9 @@ void add_view_command(CLI::App& app, Action& action) {
                    "Render --layout of the one SESSION offscreen to this PNG and exit (also "
                    "writes PNG.json: where each plot is and its ranges)");
   view->add_option("--layout", options->layout,
-                   "browser, channels, loop, fit, overlay, steps or tuning");
+                   "browser, channels, loop, fit, overlay, steps or tuning: what --screenshot "
+                   "renders, or the tab the window opens on; exit 1 when it lacks its data "
+                   "(no model for fit, no --loop for steps, ...)");
   view->add_option("--width", options->width_px, "Window width in pixels")->capture_default_str();
   view->add_option("--height", options->height_px, "Window height in pixels")
       ->capture_default_str();

@@ -105,6 +105,7 @@ PlotView loop_steps_plot(const LoopSteps& steps) {
   PlotView plot;
   plot.title = "window RMSE of the rate after each step (0: start model)";
   plot.x_label = "step";
+  plot.integer_x = true;
   plot.y_label = "RMSE";
   plot.add(fitted_series);
   plot.add(held_series);

@@ -66,6 +66,10 @@ class Series {
   Series shifted(double dx, std::string name) const;
 
   Rgba colour{};
+  // How the widget draws the line: its width and stacking (higher layers on top); set from
+  // the curve's meaning by style_series() (viewer/session_data.h, analysis/plot_style.h).
+  float width_px = 2.0f;
+  int layer = 0;
   // Samples with x in [x_min, x_max], as [begin, end) (time series only).
   void index_range(double x_min, double x_max, std::size_t& begin, std::size_t& end) const;
   // The first index with x >= value (time series only), size() when none.

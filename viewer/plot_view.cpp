@@ -18,6 +18,8 @@ float clamp_px(double v, double lo, double hi) {
 struct StripBuilder {
   DrawData& out;
   Rgba colour;
+  float width_px;
+  int layer;
   std::size_t begin = 0;
   bool open = false;
 
@@ -30,7 +32,7 @@ struct StripBuilder {
   }
   void close() {
     if (open && out.points.size() - begin >= 2) {
-      out.strips.push_back({begin, out.points.size(), colour});
+      out.strips.push_back({begin, out.points.size(), colour, width_px, layer});
     } else if (open) {
       out.points.resize(begin);  // a lone point draws nothing
     }
@@ -147,7 +149,7 @@ void PlotView::build_draw_data(const Rect& r, DrawData& out) const {
   const std::size_t width = std::max<std::size_t>(1, std::size_t(std::lround(r.width)));
   const double top = r.y, bottom = r.y + r.height, left = r.x, right = r.x + r.width;
   for (const auto& s : series) {
-    StripBuilder strip{out, s->colour};
+    StripBuilder strip{out, s->colour, s->width_px, s->layer};
     if (s->is_xy()) {
       float last_x = NAN, last_y = NAN;
       for (std::size_t i = 0; i < s->size(); ++i) {
@@ -243,14 +245,15 @@ std::string visible_csv(const PlotView& view) {
   return csv;
 }
 
-std::vector<double> nice_ticks(double min, double max, int target) {
+std::vector<double> nice_ticks(double min, double max, int target, double min_step) {
   std::vector<double> ticks;
   const double span = max - min;
   if (!std::isfinite(span) || !(span > 0.0) || target < 1) return ticks;
   const double raw = span / target;
   const double magnitude = std::pow(10.0, std::floor(std::log10(raw)));
   const double norm = raw / magnitude;
-  const double step = (norm < 1.5 ? 1.0 : norm < 3.5 ? 2.0 : norm < 7.5 ? 5.0 : 10.0) * magnitude;
+  double step = (norm < 1.5 ? 1.0 : norm < 3.5 ? 2.0 : norm < 7.5 ? 5.0 : 10.0) * magnitude;
+  if (min_step > 0.0) step = std::max(step, min_step);
   const double first = std::ceil(min / step - 1e-9);
   for (double k = first;; k += 1.0) {
     const double v = k * step;
@@ -258,15 +261,24 @@ std::vector<double> nice_ticks(double min, double max, int target) {
     ticks.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
     if (ticks.size() > 1000) break;
   }
+  // One tick says nothing about the scale: ask for more until two fit (not below min_step).
+  if (ticks.size() < 2 && target < 64 && !(min_step > 0.0 && step <= min_step)) {
+    return nice_ticks(min, max, target * 2, min_step);
+  }
   return ticks;
 }
 
 std::string tick_label(double value, double step) {
+  char text[64];
+  // Very small or large steps: a few significant digits with an exponent, not 0.000005.
+  if (step > 0.0 && std::isfinite(step) && (step < 1e-3 || step >= 1e6)) {
+    std::snprintf(text, sizeof text, "%.3g", std::abs(value) < step * 1e-9 ? 0.0 : value);
+    return text;
+  }
   int decimals = 0;
   if (step > 0.0 && std::isfinite(step)) {
     decimals = std::max(0, int(-std::floor(std::log10(step) + 1e-9)));
   }
-  char text[64];
   std::snprintf(text, sizeof text, "%.*f", std::min(decimals, 12), value);
   return text;
 }

@@ -34,6 +34,8 @@ struct DrawData {
   struct Strip {
     std::size_t begin = 0, end = 0;  // into points
     Rgba colour;
+    float width_px = 2.0f;
+    int layer = 0;  // the series' layer: strips are drawn in increasing layer order
   };
   std::vector<Point> points;
   std::vector<Strip> strips;
@@ -72,6 +74,7 @@ class PlotView {
   std::shared_ptr<Range> x = std::make_shared<Range>();
   Range y;
   std::vector<Marker> markers;
+  bool integer_x = false;  // x takes whole numbers (e.g. steps): ticks 1 apart or more
   // Bumped by whoever replaces a series' data, so that cached draw data are rebuilt.
   std::uint64_t revision = 0;
 
@@ -119,9 +122,11 @@ class PlotView {
 std::string visible_csv(const PlotView& view);
 
 // Tick values for an axis from min to max: steps of 1, 2 or 5 × 10^k, about `target` of
-// them, every tick inside [min, max].
-std::vector<double> nice_ticks(double min, double max, int target = 6);
-// A tick label: the value with as many decimals as the step needs.
+// them (at least two when a step of min_step or more allows), every tick inside [min, max],
+// the step at least min_step (1 for an integer axis; 0: any).
+std::vector<double> nice_ticks(double min, double max, int target = 6, double min_step = 0.0);
+// A tick label: the value with as many decimals as the step needs; steps under 1e-3 or from
+// 1e6 up: three significant digits with an exponent ("5e-06").
 std::string tick_label(double value, double step);
 
 }  // namespace doorbench::viewer

@@ -14,7 +14,6 @@ namespace {
 constexpr float kLeftMargin = 64.0f;    // y tick labels
 constexpr float kBottomMargin = 20.0f;  // x tick labels
 constexpr float kHeaderHeight = 20.0f;  // title and legend, above the data area
-constexpr float kLineThickness = 2.0f;
 
 const ImU32 kFrameColour = IM_COL32(120, 120, 120, 255);
 const ImU32 kGridColour = IM_COL32(60, 60, 60, 255);
@@ -45,23 +44,41 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
   const ImVec2 origin = ImGui::GetCursorScreenPos();
   ImDrawList* draw = ImGui::GetWindowDrawList();
 
-  // Header: title, then each series' colour, name and unit (outside the data area, so that
-  // only curves and grid are drawn inside it).
-  float hx = origin.x + 4.0f;
-  const float hy = origin.y + 2.0f;
-  draw->AddText(ImVec2(hx, hy), kTextColour, view.title.c_str());
-  hx += ImGui::CalcTextSize(view.title.c_str()).x + 16.0f;
-  for (const auto& s : view.series) {
-    const std::string label = with_unit(s->name(), s->unit());
-    draw->AddRectFilled(ImVec2(hx, hy + 4.0f), ImVec2(hx + 10.0f, hy + 14.0f),
-                        to_imgui_colour(s->colour));
-    draw->AddText(ImVec2(hx + 14.0f, hy), kTextColour, label.c_str());
-    hx += 14.0f + ImGui::CalcTextSize(label.c_str()).x + 16.0f;
-  }
-  // The x axis' quantity and unit, last on the header line.
+  // Header: title, then each series' colour, name and unit, the x quantity and unit last
+  // (outside the data area, so that only curves and grid are drawn inside it). Items that
+  // do not fit on a line go on the next one, so that the legend is never cut.
+  std::vector<std::string> items;
+  items.push_back(view.title);
+  for (const auto& s : view.series) items.push_back(with_unit(s->name(), s->unit()));
   if (!view.series.empty()) {
-    const std::string x_unit = "x: " + with_unit(view.x_label, view.series.front()->x_unit());
-    draw->AddText(ImVec2(hx + 8.0f, hy), IM_COL32(160, 160, 160, 255), x_unit.c_str());
+    items.push_back("x: " + with_unit(view.x_label, view.series.front()->x_unit()));
+  }
+  const float line_end = origin.x + width - (controls ? 90.0f : 8.0f);
+  std::vector<ImVec2> at(items.size());
+  float hx = origin.x + 4.0f, hy = origin.y + 2.0f;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const bool swatch = i > 0 && i <= view.series.size();
+    const float w = ImGui::CalcTextSize(items[i].c_str()).x + (swatch ? 14.0f : 0.0f);
+    if (i > 0 && hx + w > line_end) {
+      hx = origin.x + 4.0f;
+      hy += kHeaderHeight - 2.0f;
+    }
+    at[i] = ImVec2(hx, hy);
+    hx += w + 16.0f;
+  }
+  const float header_height = hy - origin.y + kHeaderHeight - 2.0f;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    const bool swatch = i > 0 && i <= view.series.size();
+    ImVec2 p = at[i];
+    if (swatch) {
+      Rgba swatch_colour = view.series[i - 1]->colour;
+      swatch_colour.a = 255;  // the colour itself, even for a translucent curve
+      draw->AddRectFilled(ImVec2(p.x, p.y + 4.0f), ImVec2(p.x + 10.0f, p.y + 14.0f),
+                          to_imgui_colour(swatch_colour));
+      p.x += 14.0f;
+    }
+    const bool x_item = i > view.series.size() && i > 0;
+    draw->AddText(p, x_item ? IM_COL32(160, 160, 160, 255) : kTextColour, items[i].c_str());
   }
 
   if (controls) {
@@ -71,8 +88,8 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     record.want_png = ImGui::SmallButton("PNG");
   }
 
-  const Rect area{origin.x + kLeftMargin, origin.y + kHeaderHeight, width - kLeftMargin - 8.0f,
-                  height - kHeaderHeight - kBottomMargin};
+  const Rect area{origin.x + kLeftMargin, origin.y + header_height, width - kLeftMargin - 8.0f,
+                  height - header_height - kBottomMargin};
   const ImVec2 a0(float(area.x), float(area.y));
   const ImVec2 a1(float(area.x + area.width), float(area.y + area.height));
 
@@ -103,7 +120,8 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
 
   draw->AddRectFilled(a0, a1, kBackground);
   // Grid and tick labels.
-  const auto x_ticks = nice_ticks(view.x->min, view.x->max, std::max(2, int(area.width / 110)));
+  const auto x_ticks = nice_ticks(view.x->min, view.x->max, std::max(2, int(area.width / 110)),
+                                  view.integer_x ? 1.0 : 0.0);
   const auto y_ticks = nice_ticks(view.y.min, view.y.max, std::max(2, int(area.height / 50)));
   const double x_step = x_ticks.size() > 1 ? x_ticks[1] - x_ticks[0] : view.x->span();
   const double y_step = y_ticks.size() > 1 ? y_ticks[1] - y_ticks[0] : view.y.span();
@@ -146,10 +164,19 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     state.drawn_revision = view.revision;
     state.drawn = true;
   }
+  // Curves in layer order (analysis/plot_style.h: measured on top of a model's curve).
+  int lowest = 0, highest = 0;
   for (const DrawData::Strip& strip : state.draw.strips) {
-    draw->AddPolyline(reinterpret_cast<const ImVec2*>(state.draw.points.data() + strip.begin),
-                      int(strip.end - strip.begin), to_imgui_colour(strip.colour), 0,
-                      kLineThickness);
+    lowest = std::min(lowest, strip.layer);
+    highest = std::max(highest, strip.layer);
+  }
+  for (int layer = lowest; layer <= highest; ++layer) {
+    for (const DrawData::Strip& strip : state.draw.strips) {
+      if (strip.layer != layer) continue;
+      draw->AddPolyline(reinterpret_cast<const ImVec2*>(state.draw.points.data() + strip.begin),
+                        int(strip.end - strip.begin), to_imgui_colour(strip.colour), 0,
+                        strip.width_px);
+    }
   }
   if (state.box_active) {
     draw->AddRect(ImVec2(float(state.box_x0), float(state.box_y0)), ImVec2(float(mx), float(my)),

@@ -31,7 +31,7 @@ std::shared_ptr<Series> channel_series(const SessionReader& reader, const Channe
 }
 
 std::shared_ptr<Series> loop_series(const PreparedData& data, StrokeDirection direction,
-                                    const std::string& name, Rgba colour) {
+                                    const std::string& name, plot_style::Meaning meaning) {
   std::vector<double> angle, force;
   for (const Stroke& stroke : data.strokes) {
     if (stroke.direction != direction) continue;
@@ -44,11 +44,42 @@ std::shared_ptr<Series> loop_series(const PreparedData& data, StrokeDirection di
   }
   auto series =
       std::make_shared<Series>(Series::xy(name, "rad", "N", std::move(angle), std::move(force)));
-  series->colour = colour;
+  style_series(*series, meaning);
   return series;
 }
 
+// Stroke events for a session whose file has none (see SessionData::events).
+void add_found_stroke_events(SessionData& session) {
+  for (const SessionEvent& e : session.events) {
+    if (e.kind == "stroke_start") return;
+  }
+  if (!session.prepared || session.data.strokes.empty()) return;
+  for (const Stroke& stroke : session.data.strokes) {
+    const std::string direction =
+        stroke.direction == StrokeDirection::kOpening ? "opening" : "closing";
+    session.events.push_back({motion_onset_s(stroke), "stroke_start", "", direction});
+    session.events.push_back({motion_end_s(stroke), "stroke_end", "", direction});
+  }
+  std::stable_sort(
+      session.events.begin(), session.events.end(),
+      [](const SessionEvent& x, const SessionEvent& y) { return x.time_s < y.time_s; });
+  session.strokes_found_on_read = true;
+}
+
 }  // namespace
+
+Rgba meaning_colour(plot_style::Meaning meaning, bool opaque) {
+  const plot_style::LineStyle style = plot_style::line_style(meaning);
+  const double alpha = opaque ? 1.0 : style.viewer_opacity;
+  return {style.r, style.g, style.b, std::uint8_t(std::lround(255.0 * alpha))};
+}
+
+void style_series(Series& series, plot_style::Meaning meaning) {
+  const plot_style::LineStyle style = plot_style::line_style(meaning);
+  series.colour = meaning_colour(meaning);
+  series.width_px = float(style.viewer_width_px);
+  series.layer = style.layer;
+}
 
 Rgba palette(std::size_t index) {
   static constexpr Rgba colours[] = {{230, 90, 40, 255},   {40, 140, 230, 255}, {60, 180, 75, 255},
@@ -81,10 +112,11 @@ SessionData load_session(const std::filesystem::path& path, const LoadOptions& o
   } else {
     session.prepare_message = "strokes not prepared";
   }
-  session.opening_loop =
-      loop_series(session.data, StrokeDirection::kOpening, "opening", kOpeningColour);
-  session.closing_loop =
-      loop_series(session.data, StrokeDirection::kClosing, "closing", kClosingColour);
+  add_found_stroke_events(session);
+  session.opening_loop = loop_series(session.data, StrokeDirection::kOpening, "opening",
+                                     plot_style::Meaning::kOpening);
+  session.closing_loop = loop_series(session.data, StrokeDirection::kClosing, "closing",
+                                     plot_style::Meaning::kClosing);
   return session;
 }
 
@@ -100,6 +132,7 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
   const WindowOptions windows = metric_window_options(FitOptions{}, model);
   const WindowSimulation sim = simulate_windows(model, session.data, windows);
   std::vector<double> t, measured, simulated, residual;
+  std::vector<std::vector<double>> stroke_residuals, stroke_forces;
   double sum_sq = 0.0;
   std::size_t count = 0;
   for (std::size_t k = 0; k < session.data.strokes.size(); ++k) {
@@ -111,8 +144,11 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
       simulated.push_back(kNaN);
       residual.push_back(kNaN);
     }
+    stroke_residuals.emplace_back();
+    stroke_forces.push_back(stroke.force_N);
     for (std::size_t i = 0; i < stroke.size(); ++i) {
       const double hat = sim.omega_rad_s[k][i];
+      stroke_residuals.back().push_back(stroke.omega_rad_s[i] - hat);
       t.push_back(stroke.time_s[i]);
       measured.push_back(stroke.omega_rad_s[i]);
       simulated.push_back(hat);
@@ -130,11 +166,32 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
       std::make_shared<Series>(Series::timed("simulated", "rad/s", t, simulated));
   comparison.residual =
       std::make_shared<Series>(Series::timed("residual", "rad/s", std::move(t), residual));
-  comparison.measured->colour = palette(1);
-  comparison.simulated->colour = palette(0);
-  comparison.residual->colour = palette(2);
+  style_series(*comparison.measured, plot_style::Meaning::kMeasured);
+  style_series(*comparison.simulated, plot_style::Meaning::kSimulated);
+  style_series(*comparison.residual, plot_style::Meaning::kResidual);
   comparison.rmse_rad_s = count > 0 ? std::sqrt(sum_sq / double(count)) : kNaN;
+  const double step_s = session.data.interval_median_s;
+  try {
+    comparison.whiteness =
+        residual_whiteness(stroke_residuals, stroke_forces, step_s, whiteness_max_lag(step_s));
+  } catch (const std::invalid_argument& error) {
+    comparison.whiteness_message = error.what();
+  }
   return comparison;
+}
+
+std::string channel_group(const ChannelInfo& channel) {
+  const std::string& kind = channel.sensor_kind;
+  if (kind == "haptic_force" || kind == "haptic_angle" || kind == "haptic_rate") return "door";
+  if (kind == "haptic_position" || kind == "haptic_velocity" || kind == "haptic_force_sensor" ||
+      kind == "haptic_command") {
+    return "device";
+  }
+  if (kind == "haptic_model") return "model";
+  if (kind == "haptic_safety" || kind == "haptic_constraint" || kind == "haptic_parameters") {
+    return "safety";
+  }
+  return "";
 }
 
 std::vector<PlotView> channel_plots(const SessionData& session) {
@@ -167,6 +224,32 @@ PlotView loop_plot(const SessionData& session) {
   return plot;
 }
 
+PlotView whiteness_plot(const ResidualWhiteness& w) {
+  PlotView plot;
+  plot.title = "residual whiteness (99 % band): " + w.summary();
+  plot.x_label = "lag";
+  const int max_lag = int(w.autocorrelation.size()) - 1;
+  const double dx = w.lag_step_s > 0 ? w.lag_step_s : 1.0;
+  auto autocorrelation =
+      std::make_shared<Series>(Series::uniform("autocorrelation", "", 0.0, dx, w.autocorrelation));
+  style_series(*autocorrelation, plot_style::Meaning::kResidual);
+  auto cross = std::make_shared<Series>(
+      Series::uniform("cross-correlation with force", "", -max_lag * dx, dx, w.cross_correlation));
+  cross->colour = palette(3);
+  plot.add(autocorrelation);
+  plot.add(cross);
+  for (double sign : {1.0, -1.0}) {
+    auto band = std::make_shared<Series>(
+        Series::uniform(sign > 0 ? "+99 %" : "-99 %", "", -max_lag * dx, 2.0 * max_lag * dx,
+                        std::vector<double>{sign * w.band, sign * w.band}));
+    style_series(*band, plot_style::Meaning::kOther);
+    band->width_px = 1.0f;
+    plot.add(band);
+  }
+  plot.fit();
+  return plot;
+}
+
 std::vector<PlotView> fit_plots(const FitComparison& comparison) {
   std::vector<PlotView> plots(2);
   plots[0].title = "rate: measured and " + comparison.model_description;
@@ -181,6 +264,7 @@ std::vector<PlotView> fit_plots(const FitComparison& comparison) {
   plots[1].link_x_to(plots[0]);
   plots[0].fit();
   plots[1].fit_y();
+  if (comparison.whiteness) plots.push_back(whiteness_plot(*comparison.whiteness));
   return plots;
 }
 
@@ -191,7 +275,9 @@ namespace doorbench::viewer {
 bool event_marker(const SessionEvent& e, Marker& marker) {
   Rgba colour;
   if (e.kind == "stroke_start" || e.kind == "stroke_end") {
-    colour = e.detail == "closing" ? Rgba{40, 140, 230, 110} : Rgba{230, 90, 40, 110};
+    colour = meaning_colour(e.detail == "closing" ? plot_style::Meaning::kClosing
+                                                  : plot_style::Meaning::kOpening);
+    colour.a = 110;
     if (e.kind == "stroke_end") colour = {170, 170, 170, 90};
   } else if (e.kind == "fault" || e.kind == "gap") {
     colour = {255, 0, 255, 200};
@@ -230,23 +316,66 @@ double first_stroke_start_s(const SessionData& session, const std::string& direc
   return first;
 }
 
+double motion_onset_s(const Stroke& stroke) {
+  const double threshold = PreprocessingOptions{}.motion_rate_rad_s;
+  for (std::size_t i = 0; i < stroke.size(); ++i) {
+    if (std::abs(stroke.omega_rad_s[i]) > threshold) return stroke.time_s[i];
+  }
+  return stroke.time_s.empty() ? kNaN : stroke.time_s.front();
+}
+
+double motion_end_s(const Stroke& stroke) {
+  const double threshold = PreprocessingOptions{}.motion_rate_rad_s;
+  for (std::size_t i = stroke.size(); i-- > 0;) {
+    if (std::abs(stroke.omega_rad_s[i]) > threshold) return stroke.time_s[i];
+  }
+  return stroke.time_s.empty() ? kNaN : stroke.time_s.back();
+}
+
+double first_motion_onset_s(const SessionData& session, const std::string& direction) {
+  double first = std::numeric_limits<double>::infinity();
+  for (const Stroke& stroke : session.data.strokes) {
+    const bool opening = stroke.direction == StrokeDirection::kOpening;
+    if (!direction.empty() && direction != (opening ? "opening" : "closing")) continue;
+    if (!stroke.time_s.empty()) first = std::min(first, motion_onset_s(stroke));
+  }
+  if (!std::isfinite(first)) {
+    throw std::invalid_argument(
+        std::string(session.path.string())
+            .append(": no stroke")
+            .append(direction.empty() ? "" : " of direction " + direction)
+            .append(" found from its motion to align on")
+            .append(session.prepared ? "" : " (" + session.prepare_message + ")"));
+  }
+  return first;
+}
+
 Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::string& direction) {
   Overlay overlay;
-  overlay.a_start_s = first_stroke_start_s(a, direction);
-  overlay.b_start_s = first_stroke_start_s(b, direction);
+  const bool by_events = !a.strokes_found_on_read && !b.strokes_found_on_read;
+  overlay.alignment = by_events ? "stroke_start events" : "motion onset";
+  overlay.a_start_s =
+      by_events ? first_stroke_start_s(a, direction) : first_motion_onset_s(a, direction);
+  overlay.b_start_s =
+      by_events ? first_stroke_start_s(b, direction) : first_motion_onset_s(b, direction);
   for (std::size_t i = 0; i < a.channels.size(); ++i) {
     for (std::size_t j = 0; j < b.channels.size(); ++j) {
       if (a.channels[i].name != b.channels[j].name) continue;
       PlotView plot;
-      plot.title = a.channels[i].name + ": A and B, aligned on stroke start";
+      plot.title =
+          a.channels[i].name + ": A and B, aligned on stroke start (" + overlay.alignment + ")";
       plot.x_label = "time since stroke start";
       plot.y_label = a.channels[i].name;
       auto sa = std::make_shared<Series>(
           a.channel_series[i]->shifted(-overlay.a_start_s, "A " + a.path.filename().string()));
       auto sb = std::make_shared<Series>(
           b.channel_series[j]->shifted(-overlay.b_start_s, "B " + b.path.filename().string()));
-      sa->colour = palette(1);
-      sb->colour = palette(0);
+      // A as measured, on top; B opaque and wider beneath, so that both show where they
+      // coincide.
+      style_series(*sa, plot_style::Meaning::kMeasured);
+      sb->colour = meaning_colour(plot_style::Meaning::kSimulated, true);
+      sb->width_px = 4.0f;
+      sb->layer = 1;
       plot.add(sa);
       plot.add(sb);
       if (!overlay.plots.empty()) plot.link_x_to(overlay.plots.front());

@@ -5,11 +5,14 @@
 // the model's simulation with the residual.
 #include <filesystem>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "acquisition/session_file.h"
 #include "analysis/door_model.h"
+#include "analysis/plot_style.h"
+#include "analysis/residual_whiteness.h"
 #include "analysis/strokes.h"
 #include "viewer/plot_view.h"
 
@@ -17,15 +20,24 @@ namespace doorbench::viewer {
 
 // Distinct colours for series, in order; index wraps.
 Rgba palette(std::size_t index);
-inline constexpr Rgba kOpeningColour{230, 90, 40, 255};   // orange-red
-inline constexpr Rgba kClosingColour{40, 140, 230, 255};  // blue
+// The colour of a meaning (analysis/plot_style.h, shared with the SVG reports), with the
+// viewer's opacity as alpha unless `opaque`.
+Rgba meaning_colour(plot_style::Meaning meaning, bool opaque = false);
+// Colour, width and layer of a curve from its meaning: measured on top, a model's curve
+// wide and translucent under it.
+void style_series(Series& series, plot_style::Meaning meaning);
 
 struct SessionData {
   std::filesystem::path path;
   SessionMetadata metadata;
   std::vector<ChannelInfo> channels;
   std::vector<std::size_t> sample_counts;
+  // The file's events in time order. A session without stroke_start events (a haptic
+  // playback's) gets them here on read when its strokes were prepared: one stroke_start and
+  // one stroke_end per prepared stroke (found from the motion as preprocessing segments,
+  // detail "opening" or "closing", no channel) at motion_onset_s / motion_end_s.
   std::vector<SessionEvent> events;
+  bool strokes_found_on_read = false;
   std::vector<calibration::CalibrationRecord> calibrations;
   // Per channel (same order): physical values over session time, in the channel's unit.
   std::vector<std::shared_ptr<Series>> channel_series;
@@ -56,6 +68,11 @@ struct FitComparison {
   std::shared_ptr<Series> simulated;
   std::shared_ptr<Series> residual;
   double rmse_rad_s = 0.0;
+  // The residual's autocorrelation and its cross-correlation with the force, strokes kept
+  // apart, lags up to 0.5 s (analysis/residual_whiteness.h); empty when it cannot be
+  // computed (whiteness_message says why).
+  std::optional<ResidualWhiteness> whiteness;
+  std::string whiteness_message;
 };
 // Throws std::invalid_argument when the session has no prepared strokes.
 FitComparison compare_with_model(const SessionData& session, const DoorModel& model,
@@ -84,20 +101,50 @@ std::vector<Marker> event_markers_of(const Events& events, const std::string& ch
 // Throws std::invalid_argument naming the session when there is none.
 double first_stroke_start_s(const SessionData& session, const std::string& direction = "");
 
+// Where a prepared stroke's motion starts and ends: its first and last sample with |ω|
+// above preprocessing's motion threshold (PreprocessingOptions::motion_rate_rad_s); the
+// stroke's first and last sample when none is.
+double motion_onset_s(const Stroke& stroke);
+double motion_end_s(const Stroke& stroke);
+// The motion onset of the session's first prepared stroke of `direction` ("" any).
+// Throws std::invalid_argument naming the session when it has none (with why).
+double first_motion_onset_s(const SessionData& session, const std::string& direction = "");
+
 // The A/B overlay: for each channel both sessions have (by name), A's and B's series on
-// time since their first stroke start (of `direction`), so that the strokes line up.
+// time since their first stroke start (of `direction`), so that the strokes line up. Both
+// sessions are aligned the same way: on their first stroke_start event when both files
+// carry stroke events, else (one of them is e.g. a haptic playback, whose strokes are found
+// on read) on both first strokes' motion onset. A is drawn as measured on top, B under it.
 struct Overlay {
   double a_start_s = 0.0, b_start_s = 0.0;  // the stroke starts aligned to 0
+  std::string alignment;                    // "stroke_start events" or "motion onset"
   std::vector<PlotView> plots;              // time axes linked
 };
 Overlay overlay_plots(const SessionData& a, const SessionData& b,
                       const std::string& direction = "");
 
+// The group a channel is shown in, by its sensor kind: a haptic playback's channels
+// (haptic/tick_recorder.cpp) as "door" (force, angle, rate: what a fit reads), "device"
+// (position, velocity, measured and commanded force), "model" (model torque and its
+// terms) and "safety" (passivity, constraint errors, safety scale, parameter set); ""
+// for any other (a bench's sensors: one group, no headers).
+std::string channel_group(const ChannelInfo& channel);
+// The groups in the order they are shown.
+inline const std::vector<std::string>& channel_group_order() {
+  static const std::vector<std::string> order = {"door", "device", "model", "safety", ""};
+  return order;
+}
+
 // A plot of each channel over time, their time axes linked to the first.
 std::vector<PlotView> channel_plots(const SessionData& session);
 // Force against angle, opening and closing in their colours (empty series: not prepared).
 PlotView loop_plot(const SessionData& session);
-// Measured and simulated ω, and the residual below with its time axis linked.
+// Measured and simulated ω, the residual below with its time axis linked, and (when
+// computed) the residual's whiteness: autocorrelation and cross-correlation with the force
+// against the lag, with the 99 % band.
 std::vector<PlotView> fit_plots(const FitComparison& comparison);
+// The whiteness plot: autocorrelation (lags ≥ 0) and cross-correlation with the force
+// (lags of either sign) against the lag in s, and the ±99 % band.
+PlotView whiteness_plot(const ResidualWhiteness& whiteness);
 
 }  // namespace doorbench::viewer

@@ -12,6 +12,7 @@
 #include "analysis/fit_problem.h"
 #include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
+#include "viewer/session_data.h"
 
 namespace doorbench::viewer {
 
@@ -101,24 +102,24 @@ void Tuning::apply_selection(std::vector<int> strokes) {
     omega.insert(omega.end(), stroke.omega_rad_s.begin(), stroke.omega_rad_s.end());
   }
   auto measured = std::make_shared<Series>(Series::timed("measured", "rad/s", t, omega));
-  measured->colour = {200, 200, 200, 255};
+  style_series(*measured, plot_style::Meaning::kMeasured);
   plot.series.clear();
   plot.title = "rate: measured, fitted and tuned (strokes replayed open-loop)";
   plot.x_label = "time";
   plot.y_label = "rate";
   plot.add(measured);
   double ignored = 0.0;
-  plot.add(replay(fitted_, "fitted", {40, 140, 230, 255}, &ignored));
+  plot.add(replay(fitted_, "fitted", plot_style::Meaning::kSimulated, &ignored));
   const auto start = std::chrono::steady_clock::now();
-  plot.add(replay(model_, "tuned", {230, 90, 40, 255}, &max_error_));
+  plot.add(replay(model_, "tuned", plot_style::Meaning::kTuned, &max_error_));
   last_ms_ =
       std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   ++plot.revision;
   plot.fit();
 }
 
-std::shared_ptr<Series> Tuning::replay(const DoorModel& model, const std::string& name, Rgba colour,
-                                       double* max_error) {
+std::shared_ptr<Series> Tuning::replay(const DoorModel& model, const std::string& name,
+                                       plot_style::Meaning meaning, double* max_error) {
   WindowOptions options = metric_window_options(FitOptions{}, model);
   options.whole_strokes = true;
   // Each stroke is one window of its own (whole_strokes): replaying them separately, in
@@ -145,7 +146,7 @@ std::shared_ptr<Series> Tuning::replay(const DoorModel& model, const std::string
     }
   }
   auto series = std::make_shared<Series>(Series::timed(name, "rad/s", std::move(t), omega));
-  series->colour = colour;
+  style_series(*series, meaning);
   return series;
 }
 
@@ -174,7 +175,7 @@ std::string Tuning::set_control(perceptual::Control control, double value) {
 
 double Tuning::resimulate() {
   const auto start = std::chrono::steady_clock::now();
-  auto tuned = replay(model_, "tuned", {230, 90, 40, 255}, &max_error_);
+  auto tuned = replay(model_, "tuned", plot_style::Meaning::kTuned, &max_error_);
   plot.series.back() = std::move(tuned);
   ++plot.revision;
   last_ms_ =

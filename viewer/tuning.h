@@ -11,6 +11,7 @@
 
 #include "analysis/door_model.h"
 #include "analysis/perceptual_controls.h"
+#include "analysis/plot_style.h"
 #include "analysis/strokes.h"
 #include "viewer/plot_view.h"
 
@@ -63,8 +64,8 @@ class Tuning {
   std::vector<std::filesystem::path> save(const std::filesystem::path& params_path) const;
 
  private:
-  std::shared_ptr<Series> replay(const DoorModel& model, const std::string& name, Rgba colour,
-                                 double* max_error);
+  std::shared_ptr<Series> replay(const DoorModel& model, const std::string& name,
+                                 plot_style::Meaning meaning, double* max_error);
   // "" or why `strokes` (sorted) is not a selection of all_'s strokes.
   std::string check_selection(const std::vector<int>& strokes) const;
   // Takes a checked, sorted selection: data_, singles_ and the plot's three curves.

@@ -33,6 +33,15 @@ float stacked_height(float avail, std::size_t n) {
   return std::max(140.0f, std::floor((avail - spacing * float(n)) / float(n)));
 }
 
+constexpr const char* kNoFitModel =
+    "No model to compare with: start the viewer with --params FILE (a fitted parameter file, "
+    "e.g. the one `doorbench fit` wrote) and --model, --fit DIR or --loop DIR.";
+constexpr const char* kNoLoop =
+    "No residual loop: start the viewer with --loop DIR (the folder `doorbench loop` wrote).";
+constexpr const char* kNoTuningModel =
+    "No model to tune: start the viewer with --params FILE (or --compare, --fit DIR or "
+    "--loop DIR).";
+
 constexpr ImGuiTableFlags kTableFlags =
     ImGuiTableFlags_Borders | ImGuiTableFlags_RowBg | ImGuiTableFlags_SizingStretchProp;
 
@@ -72,6 +81,28 @@ Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitC
       overlay_message_ = error.what();
     }
   }
+}
+
+std::string Viewer::missing_data(const std::string& layout) const {
+  if (const std::string problem = check_layout(layout); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
+  if (layout == "steps") return steps_ ? "" : kNoLoop;
+  if (layout == "live") return live_ ? "" : "not following a recording (--live)";
+  if (sessions_.empty()) return "no session";
+  const SessionView& s = sessions_[std::size_t(std::clamp(current_, 0, int(sessions_.size()) - 1))];
+  const std::string no_strokes = "no strokes in " + s.data.path.string() + ": " +
+                                 (s.data.prepared ? "none found" : s.data.prepare_message);
+  if (layout == "loop" && (!s.data.prepared || s.data.data.strokes.empty())) return no_strokes;
+  if (layout == "fit" && !s.fit) {
+    return tuning_model_ ? "no comparison with the model: " + no_strokes : kNoFitModel;
+  }
+  if (layout == "overlay" && (!overlay_ || overlay_->plots.empty())) return overlay_message_;
+  if (layout == "tuning") {
+    if (!tuning_model_) return kNoTuningModel;
+    if (!s.data.prepared || s.data.data.strokes.empty()) return no_strokes;
+  }
+  return "";
 }
 
 void Viewer::frame(float width, float height, const std::string& layout) {
@@ -128,13 +159,16 @@ void Viewer::frame(float width, float height, const std::string& layout) {
     }
     if (ImGui::BeginTabBar("layouts")) {
       for (const std::string& name : layout_names()) {
-        if (ImGui::BeginTabItem(name.c_str())) {
+        const bool select = !initial_layout_shown_ && name == initial_layout_;
+        if (ImGui::BeginTabItem(name.c_str(), nullptr,
+                                select ? ImGuiTabItemFlags_SetSelected : ImGuiTabItemFlags_None)) {
           layout_body(s, name);
           ImGui::EndTabItem();
         }
       }
       ImGui::EndTabBar();
     }
+    initial_layout_shown_ = true;
   } else {
     layout_body(s, layout);
   }
@@ -306,12 +340,43 @@ void Viewer::channels(SessionView& s) {
     return;
   }
   const float avail = ImGui::GetContentRegionAvail().y;
-  const float each = stacked_height(avail, s.channels.size());
+  std::vector<std::string> groups;
+  for (const ChannelInfo& c : s.data.channels) groups.push_back(channel_group(c));
+  const bool grouped =
+      std::any_of(groups.begin(), groups.end(), [](const std::string& g) { return !g.empty(); });
   ImGui::BeginChild("channels");
-  for (std::size_t i = 0; i < s.channels.size(); ++i) {
-    const std::string id = "channel" + std::to_string(i);
-    plots_.push_back(
-        plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each, controls_));
+  if (!grouped) {
+    const float each = stacked_height(avail, s.channels.size());
+    for (std::size_t i = 0; i < s.channels.size(); ++i) {
+      const std::string id = "channel" + std::to_string(i);
+      plots_.push_back(
+          plot_widget(id.c_str(), s.channels[i], s.channel_states[i], 0.0f, each, controls_));
+    }
+  } else {
+    // A haptic session's many channels: a header per group (the door's open), two plots
+    // side by side, scrolling.
+    const float half =
+        std::floor((ImGui::GetContentRegionAvail().x - ImGui::GetStyle().ItemSpacing.x) * 0.5f);
+    for (const std::string& group : channel_group_order()) {
+      const auto count = std::count(groups.begin(), groups.end(), group);
+      if (count == 0) continue;
+      const std::string header = (group.empty() ? std::string("other") : group) + " (" +
+                                 std::to_string(count) + " channels)###" + group;
+      if (!ImGui::CollapsingHeader(header.c_str(),
+                                   group == "door" ? ImGuiTreeNodeFlags_DefaultOpen : 0)) {
+        continue;
+      }
+      int column = 0;
+      for (std::size_t i = 0; i < s.channels.size(); ++i) {
+        if (groups[i] != group) continue;
+        if (column++ % 2 == 1) ImGui::SameLine();
+        const std::string id = "channel" + std::to_string(i);
+        ImGui::BeginGroup();  // so that SameLine puts the next plot beside this one
+        plots_.push_back(
+            plot_widget(id.c_str(), s.channels[i], s.channel_states[i], half, 170.0f, controls_));
+        ImGui::EndGroup();
+      }
+    }
   }
   ImGui::EndChild();
 }
@@ -358,17 +423,23 @@ void Viewer::loop(SessionView& s) {
 
 void Viewer::fit(SessionView& s) {
   if (!s.fit) {
-    ImGui::TextWrapped(
-        "No model to compare with: start the viewer with --params FILE (a fitted parameter "
-        "file, e.g. the one `doorbench fit` wrote) and --model.");
+    ImGui::TextWrapped("%s", kNoFitModel);
     return;
   }
   ImGui::Text("%s: rate RMSE %.4g rad/s over windows (as the fit sees them)",
               s.fit->model_description.c_str(), s.fit->rmse_rad_s);
   const float avail = ImGui::GetContentRegionAvail().y;
+  const bool whiteness = s.fit_plots.size() > 2;
   plots_.push_back(plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f,
-                               std::floor(avail * 0.65f), controls_));
-  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f, 0.0f, controls_));
+                               std::floor(avail * (whiteness ? 0.5f : 0.65f)), controls_));
+  plots_.push_back(plot_widget("residual", s.fit_plots[1], s.fit_states[1], 0.0f,
+                               whiteness ? std::floor(avail * 0.24f) : 0.0f, controls_));
+  if (whiteness) {
+    plots_.push_back(
+        plot_widget("whiteness", s.fit_plots[2], s.fit_states[2], 0.0f, 0.0f, controls_));
+  } else if (!s.fit->whiteness_message.empty()) {
+    ImGui::TextWrapped("No whiteness: %s", s.fit->whiteness_message.c_str());
+  }
 }
 
 void Viewer::overlay() {
@@ -376,9 +447,10 @@ void Viewer::overlay() {
     ImGui::TextWrapped("%s", overlay_message_.c_str());
     return;
   }
-  ImGui::Text("A: %s (stroke at %.4f s)   B: %s (stroke at %.4f s)",
+  ImGui::Text("A: %s (stroke at %.4f s)   B: %s (stroke at %.4f s)   aligned on %s",
               sessions_[0].data.path.string().c_str(), overlay_->a_start_s,
-              sessions_[1].data.path.string().c_str(), overlay_->b_start_s);
+              sessions_[1].data.path.string().c_str(), overlay_->b_start_s,
+              overlay_->alignment.c_str());
   const float avail = ImGui::GetContentRegionAvail().y;
   const float each = stacked_height(avail, overlay_->plots.size());
   ImGui::BeginChild("overlay");
@@ -397,8 +469,7 @@ void Viewer::set_loop_steps(LoopSteps steps) {
 
 void Viewer::steps() {
   if (!steps_) {
-    ImGui::TextWrapped(
-        "No residual loop: start the viewer with --loop DIR (the folder `doorbench loop` wrote).");
+    ImGui::TextWrapped("%s", kNoLoop);
     return;
   }
   ImGui::Text("%s (loop on %s)", steps_->path.string().c_str(), steps_->source.c_str());
@@ -432,9 +503,7 @@ void Viewer::steps() {
 
 void Viewer::tuning(SessionView& s) {
   if (!tuning_model_) {
-    ImGui::TextWrapped(
-        "No model to tune: start the viewer with --params FILE (or --compare, or "
-        "--loop DIR).");
+    ImGui::TextWrapped("%s", kNoTuningModel);
     return;
   }
   if (!s.tuning && s.tuning_message.empty()) {

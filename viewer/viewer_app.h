@@ -38,6 +38,13 @@ class Viewer {
   // named (one of layout_names()), or every layout as tabs when it is empty. Between
   // ImGui::NewFrame() and ImGui::Render(). Throws std::invalid_argument for an unknown name.
   void frame(float width, float height, const std::string& layout = "");
+  // "" when `layout` has what it shows for the current session, else why not (the text the
+  // layout shows instead): loop needs prepared strokes, fit a model compared with the
+  // session, overlay two sessions aligned, steps a loop folder, tuning a model and strokes.
+  // Browser and channels always have it. Throws std::invalid_argument for an unknown name.
+  std::string missing_data(const std::string& layout) const;
+  // The tab the interactive window shows first ("" : the first tab).
+  void set_initial_layout(std::string layout) { initial_layout_ = std::move(layout); }
   // The plots drawn in the last frame.
   const std::vector<PlotRecord>& plots() const { return plots_; }
   std::size_t session_count() const { return sessions_.size(); }
@@ -84,6 +91,8 @@ class Viewer {
 
   std::vector<SessionView> sessions_;
   int current_ = 0;
+  std::string initial_layout_;
+  bool initial_layout_shown_ = false;
   std::optional<Overlay> overlay_;
   std::string overlay_message_;
   std::vector<PlotWidgetState> overlay_states_;

@@ -217,7 +217,7 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
   CHECK(run.status == 2);
   CHECK(run.err ==
         "doorbench: --map item 'force' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force) (see "
-        "doorbench --help)\n");
+        "doorbench import --help)\n");
   run = testing::run_doorbench_shell("import '" + tdms +
                                          "' --map force=Door/Force,angle=Door/Incl --out '" +
                                          (dir / "t.h5").string() + "'",

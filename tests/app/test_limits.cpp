@@ -75,7 +75,7 @@ TEST_CASE("Limits: simulate refuses more than 10 million output samples", "[limi
   CHECK(run.status == 2);
   CHECK(run.err ==
         "doorbench: --duration-s 3600 at --rate-hz 1e+05 gives 3.6e+08 samples; at most "
-        "10000000 (see doorbench --help)\n");
+        "10000000 (see doorbench simulate --help)\n");
   CHECK(!std::filesystem::exists(dir / "r.csv"));
 }
 

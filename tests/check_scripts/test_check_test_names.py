@@ -18,7 +18,7 @@ def fake_suite(directory, visible, hidden, registered):
     executable = os.path.join(directory, "fake_tests")
     with open(executable, "w", encoding="utf-8") as out:
         out.write("#!%s\nimport sys\n" % sys.executable)
-        out.write("names = %r if '[.]' in sys.argv else %r\n" % (hidden, visible))
+        out.write("names = %r if any(a.startswith('[.]') for a in sys.argv) else %r\n" % (hidden, visible))
         out.write("print('\\n'.join(names))\nsys.exit(len(names) % 256)\n")
     os.chmod(executable, 0o755)
     with open(os.path.join(directory, "CTestTestfile.cmake"), "w", encoding="utf-8") as out:

@@ -86,7 +86,10 @@ TEST_CASE("view --fit takes a doorbench fit folder as the fit result", "[viewer]
   REQUIRE(view_code == 0);
   std::ifstream info_file(png.string() + ".json");
   const nlohmann::json info = nlohmann::json::parse(info_file);
-  REQUIRE(info["plots"].size() == 2);
+  // Rate, residual and the residual's whiteness.
+  REQUIRE(info["plots"].size() == 3);
+  REQUIRE_THAT(info["plots"][2]["title"].get<std::string>(),
+               Contains("residual whiteness (99 % band): residual autocorrelation: "));
   REQUIRE_THAT(info["plots"][0]["title"].get<std::string>(), Contains(description));
 
   // --fit gives the model: not with --params.

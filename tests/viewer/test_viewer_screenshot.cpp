@@ -187,9 +187,6 @@ TEST_CASE("view refuses a screenshot without a layout or with an unknown one", "
   REQUIRE(r.exit_code == 2);
   REQUIRE_THAT(r.err, Contains("unknown layout 'nope' (expected browser, channels, loop, fit, "
                                "overlay, steps, tuning or live)"));
-  r = run("view --layout loop " + session.string(), dir.path);
-  REQUIRE(r.exit_code == 2);
-  REQUIRE_THAT(r.err, Contains("--layout chooses what --screenshot shows"));
   REQUIRE_FALSE(fs::exists(png));
 }
 

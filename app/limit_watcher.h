@@ -1,0 +1,62 @@
+#pragma once
+// Live sensor-limit warnings for `doorbench record` (issue 21): which channel sits at the
+// end of its sensor's range, since when and for how long, from the recorder's status
+// callback (RecordOptions::progress: each channel's largest |value| since the previous
+// call, ChannelStatus::largest_abs, and its latest value), for
+// the status line and for the summary after the recording. The limits come from the rig:
+// an inclinometer's range_deg (default 10 deg) and a gyroscope's range_dps (default
+// 100 deg/s), less 1 % (a saturated reading, bias and noise included, lands within it).
+// `doorbench info` checks every sample afterwards (calibration/range_warnings.h); this
+// counts time per status call (several a second on a running DAQ; an unpaced simulated
+// bench makes few), so its times are approximate: the time since the previous status counts
+// as at the limit when the channel reached it in between.
+//
+// Thread safety: one thread calls update() (the recorder's writer thread); the text
+// functions may be called from it or after the recording ended, not concurrently.
+#include <string>
+#include <vector>
+
+#include "acquisition/recorder.h"
+#include "acquisition/rig_file.h"
+
+namespace doorbench::app {
+
+struct ChannelLimit {
+  std::string channel;  // as in RecordStatus::channels
+  std::string sensor;   // inclinometer | gyroscope
+  double limit = 0.0;   // |physical value| at or beyond this is at the limit
+  std::string range;    // the sensor's range for messages, e.g. "±100 deg/s"
+};
+
+// The rig's channels with a known sensor range (inclinometers and gyroscopes in rad and
+// rad/s); others are not watched.
+std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig);
+
+class LimitWatcher {
+ public:
+  explicit LimitWatcher(std::vector<ChannelLimit> limits);
+  bool empty() const { return watched_.empty(); }
+  // One status of the recording: a channel whose latest value is at its limit counts the
+  // time since the previous status as time at the limit; a new stretch starts when the
+  // previous status found it below.
+  void update(const RecordStatus& status);
+  // For the status line: "" when no channel has been at its limit, else e.g. "; AT LIMIT
+  // rate (gyroscope ±100 deg/s) now, 1.2 s so far".
+  std::string status_text() const;
+  // One line per channel that reached its limit, e.g. "gyroscope rate at its ±100 deg/s
+  // limit for 2.3 s in all, 3 times (first at 1.1 s)".
+  std::vector<std::string> summary() const;
+
+ private:
+  struct Watched {
+    ChannelLimit limit;
+    bool at_limit = false;
+    int stretches = 0;
+    double first_s = 0.0;
+    double total_s = 0.0;
+  };
+  std::vector<Watched> watched_;
+  double last_recorded_s_ = 0.0;
+};
+
+}  // namespace doorbench::app
