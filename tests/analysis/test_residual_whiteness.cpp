@@ -58,7 +58,7 @@ TEST_CASE("residual whiteness: white noise inside the band, coloured residuals o
   CHECK(x.cross_outside >= 1);
 }
 
-TEST_CASE("residual whiteness: lags stay inside each stroke; bad input is refused",
+TEST_CASE("residual whiteness: lags stay inside each stroke, and bad input is refused",
           "[fit][whiteness]") {
   // Two strokes, each an alternating +1/-1 run: within a stroke r(1) = -1 exactly; a lag
   // bridging the strokes would add a product across their boundary.
