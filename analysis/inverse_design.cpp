@@ -31,6 +31,9 @@ constexpr const char* kInertiaParameter = "J_d";
 // The unit of the commanded-torque residuals before φ rescales the priors: the torque is
 // exact, so any unit well below what is felt serves (0.01 N*m is 0.017 N at the handle).
 constexpr double kCommandedTorqueScale_Nm = 0.01;
+// Two refits of the sparse search whose data costs differ by less than this fraction fit
+// the same (a degenerate pair of parameters).
+constexpr double kSameCost = 1e-4;
 
 bool finite_positive(double value) {
   return std::isfinite(value) && value > 0;
@@ -633,6 +636,9 @@ class DesignRun {
   DesignSolution as_is_design();
   DesignSolution sparse_search();
   bool sparse_step(std::vector<int>& chosen, DesignSolution& current);
+  void refine_sparse(std::vector<int>& chosen, DesignSolution& current);
+  std::optional<DesignSolution> refit_set(const DesignSolution& current, int reset_position,
+                                          const std::vector<int>& set, const std::string& what);
   void keep_equivalent(const std::vector<DesignSolution>& found, const DesignSolution* reference);
   std::vector<std::string> names_except(const std::vector<int>& free_positions) const;
 
@@ -930,20 +936,33 @@ std::vector<std::string> DesignRun::names_except(const std::vector<int>& free_po
   return names;
 }
 
-// The AS-IS door as a design: nothing changed; its data cost from the reduced system at
-// the measured window states.
+// The AS-IS door as a design: nothing changed. Its data cost is that of a fit of the window
+// start states alone (one free parameter held at AS-IS by a prior of 1e-9 of its scale), so
+// that it compares with the candidates' fits, whose states are fitted too.
 DesignSolution DesignRun::as_is_design() {
-  const std::vector<double> none(asis_.parameter_count(), kNaN);
-  const FitMetrics metrics = evaluate_model(asis_, data_, fit_);
-  DesignSolution solution = describe_design(asis_, none, metrics, true, FitSummary{}, asis_,
-                                            setup_, lambda_, DesignSolution::kSparseSearch);
-  const std::optional<ReducedSystem> system = reduced_system(
-      asis_, data_, fit_, result_.rate_noise_rad_s, angle_noise_rad_, setup_, false);
-  if (!system) throw std::runtime_error("inverse design: the AS-IS door cannot simulate the data");
-  solution.data_cost = 0.5 * system->sum_of_squares;
-  solution.data_residuals = system->residuals;
-  const double dof = static_cast<double>(system->residuals) - system->window_parameters;
-  solution.reduced_data_cost = dof > 0 ? system->sum_of_squares / dof : 1.0;
+  const int pinned = setup_.free_index.front();
+  const std::string name = asis_.parameter_name(pinned);
+  FitOptions states = fit_;
+  states.free_parameters = {name};
+  states.fixed_parameters.clear();
+  states.priors = {{name, setup_.as_is[pinned], 1e-9 * setup_.scale[pinned]}};
+  states.equation_error_start = false;
+  ++result_.fits_run;
+  const FitResult fit = fit_model(asis_, data_, states);
+  DesignSolution solution = make_solution(fit, asis_, setup_, 0.0, DesignSolution::kSparseSearch);
+  solution.model = asis_;  // exactly AS-IS, not the pinned parameter's 1e-9 move
+  for (DesignParameter& parameter : solution.parameters) {
+    parameter.to_be = parameter.as_is;
+    parameter.change = 0.0;
+    parameter.relative_change = parameter.as_is != 0 ? 0.0 : kNaN;
+    parameter.uncertainty = kNaN;
+    parameter.changed = false;
+  }
+  solution.parts_changed = 0;
+  solution.parts_changed_cost = 0.0;
+  solution.size_of_change = 0.0;
+  solution.prior_cost = 0.0;
+  solution.data_cost = std::max(0.0, fit.summary.final_cost);
   return solution;
 }
 
@@ -974,10 +993,87 @@ DesignSolution DesignRun::sparse_search() {
                                           ? "every free parameter is in"
                                           : "sparse_max_parts reached");
   }
+  refine_sparse(chosen, current);
   sparse_held_ = names_except(chosen);
   current.held_at_as_is.clear();
   current.start_index = DesignSolution::kSparseSearch;
   return current;
+}
+
+// A refit of the design with the parameters at `set` (free positions) free, from `current`
+// with the parameter at `reset_position` back at AS-IS; empty when that start or the fit
+// fails.
+std::optional<DesignSolution> DesignRun::refit_set(const DesignSolution& current,
+                                                   int reset_position, const std::vector<int>& set,
+                                                   const std::string& what) {
+  std::vector<double> values(current.model.parameter_values().begin(),
+                             current.model.parameter_values().end());
+  const int index = setup_.free_index[reset_position];
+  values[index] = setup_.as_is[index];
+  try {
+    const DoorModel start = asis_.with_parameter_values(values);
+    if (options_.progress) options_.progress("sparse search, refining: " + what);
+    return fit_design(start, DesignSolution::kSparseSearch, names_except(set));
+  } catch (const std::exception&) {
+    return std::nullopt;  // the start breaks a constraint, or the fit failed
+  }
+}
+
+// After the forward pass. A part chosen early, while others were still missing, may have
+// stood in for them: each chosen part is swapped for a candidate its step found equivalent
+// when that refit fits better, then dropped when the design without it still fits within
+// sparse_min_improvement. Each change is a row of the sequence.
+void DesignRun::refine_sparse(std::vector<int>& chosen, DesignSolution& current) {
+  const std::vector<SparseStep> steps = result_.sparse_steps;
+  const auto name_of = [&](int k) { return asis_.parameter_name(setup_.free_index[k]); };
+  const auto names_of = [&](const std::vector<int>& set) {
+    std::vector<std::string> names;
+    for (int k : set) names.push_back(name_of(k));
+    return names;
+  };
+  const auto position_of = [&](const std::string& name) {
+    const int index = *asis_.find_parameter(name);
+    return static_cast<int>(std::find(setup_.free_index.begin(), setup_.free_index.end(), index) -
+                            setup_.free_index.begin());
+  };
+  for (std::size_t c = 0; c < chosen.size() && c + 1 < steps.size(); ++c) {
+    for (const std::string& alternative : steps[c + 1].equivalent) {
+      const int k = position_of(alternative);
+      if (std::find(chosen.begin(), chosen.end(), k) != chosen.end()) continue;
+      std::vector<int> trial = chosen;
+      trial[c] = k;
+      const std::string what = name_of(chosen[c]) + " -> " + alternative;
+      std::optional<DesignSolution> refit = refit_set(current, chosen[c], trial, what);
+      if (!refit) continue;
+      // Better by more than a hair, or as good (a degenerate pair such as F0 and L0, whose
+      // difference sets the spring's tension) with a smaller weighted change.
+      const auto weighted = [&](const DesignSolution& design, int position) {
+        const int index = setup_.free_index[position];
+        return setup_.weight[index] * std::abs(design.parameters[index].change) /
+               setup_.scale[index];
+      };
+      const bool better = refit->data_cost < (1 - kSameCost) * current.data_cost;
+      const bool same = refit->data_cost <= (1 + kSameCost) * current.data_cost;
+      if (!better && !(same && weighted(*refit, k) < weighted(current, chosen[c]))) continue;
+      chosen = trial;
+      current = std::move(*refit);
+      result_.sparse_steps.push_back(sparse_row(current, what, names_of(chosen)));
+    }
+  }
+  for (std::size_t c = 0; c < chosen.size() && chosen.size() > 1;) {
+    std::vector<int> trial = chosen;
+    trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(c));
+    const std::string what = "- " + name_of(chosen[c]);
+    std::optional<DesignSolution> refit = refit_set(current, chosen[c], trial, what);
+    if (!refit ||
+        refit->data_cost - current.data_cost >= options_.sparse_min_improvement * refit->data_cost) {
+      ++c;
+      continue;
+    }
+    chosen = trial;
+    current = std::move(*refit);
+    result_.sparse_steps.push_back(sparse_row(current, what, names_of(chosen)));
+  }
 }
 
 // One step: rank the candidates by their predicted decrease, refit the best few, take the
@@ -1120,10 +1216,7 @@ std::string parameter_table(const DesignSolution& solution, bool changed_only) {
   std::string text =
       "    parameter        AS-IS          TO-BE          change     rel      +-          w\n";
   for (const DesignParameter& p : solution.parameters) {
-    if (!p.free && changed_only) continue;
-    if (changed_only && std::abs(p.change) <= 1e-3 * std::abs(p.bounds.upper - p.bounds.lower)) {
-      continue;
-    }
+    if (changed_only && !p.changed) continue;
     text += printf_text(
         "    %-12s %12.5g %14.5g %14.4g %6s %11.3g %6.3g%s%s\n", p.name.c_str(), p.as_is, p.to_be,
         p.change,
@@ -1136,15 +1229,16 @@ std::string parameter_table(const DesignSolution& solution, bool changed_only) {
 
 std::string solution_header(const DesignSolution& solution, int rank) {
   std::string origin = printf_text("start %d", solution.start_index);
+  if (solution.start_index == DesignSolution::kSparseSearch) origin = "sparse design search";
   if (!solution.held_at_as_is.empty()) {
     origin = "fewest changes, AS-IS kept for";
     for (const std::string& name : solution.held_at_as_is) origin += " " + name;
   }
   return printf_text(
-      "Solution %d (%s): parts changed (cost) %.4g, size of change %.4g; window RMSE of omega %.4g "
-      "rad/s, FIT %.1f%%; "
-      "data cost %.4g, prior cost %.4g%s\n",
-      rank, origin.c_str(), solution.parts_changed_cost, solution.size_of_change,
+      "Solution %d (%s): parts changed %d (cost %.4g), size of change %.4g; window RMSE of omega "
+      "%.4g rad/s, FIT %.1f%%; data cost %.4g, prior cost %.4g%s\n",
+      rank, origin.c_str(), solution.parts_changed, solution.parts_changed_cost,
+      solution.size_of_change,
       solution.fit.window.rmse(), solution.fit.window.fit_percent(), solution.data_cost,
       solution.prior_cost, solution.converged ? "" : " (not converged)");
 }
@@ -1180,6 +1274,7 @@ std::string InverseDesignResult::brief_report() const {
     text += solution_header(solutions.front(), 1);
     text += parameter_table(solutions.front(), /*changed_only=*/true);
   }
+  text += sparse_table(*this);
   return text;
 }
 
@@ -1188,7 +1283,6 @@ std::string InverseDesignResult::full_report() const {
   text += printf_text(
       "TO-BE rate noise: %.4g rad/s; misfit factor phi %.4g; effective regularization %.4g\n",
       rate_noise_rad_s, misfit_factor, effective_regularization);
-  text += sparse_table(*this);
   for (std::size_t s = 0; s < solutions.size(); ++s) {
     text += std::string("\n").append(solution_header(solutions[s], static_cast<int>(s + 1)));
     text += parameter_table(solutions[s], /*changed_only=*/false);

@@ -135,11 +135,7 @@ void run_spec(const SpecCommandOptions& options) {
   const std::filesystem::path params = std::filesystem::path(options.out_dir) / "tobe-params.json";
   write_text_file_atomically(params, to_parameter_json(design.solutions.front().model));
 
-  std::cout << design.brief_report() << "\nfelt, AS-IS door:\n"
-            << evaluation.felt_before.brief_report() << "felt, TO-BE design:\n"
-            << evaluation.felt_after.brief_report()
-            << "check of the TO-BE design against the TO-BE recordings:\n"
-            << evaluation.check_after.brief_report();
+  std::cout << design.brief_report() << "\n" << spec_summary(design, evaluation);
   if (evaluation.tolerances) {
     std::cout << "tolerances:\n" << evaluation.tolerances->brief_report();
   }

@@ -43,7 +43,9 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   INFO("stdout: " << run.out << "\nstderr: " << run.err);
   REQUIRE(run.status == 0);
   CHECK_THAT(run.err, Contains("tolerance Monte Carlo: 8 / 8 samples"));
-  CHECK_THAT(run.out, Contains("felt, TO-BE design:"));
+  CHECK_THAT(run.out, Contains("What to change: F_l0 15 -> "));
+  CHECK_THAT(run.out, Contains("felt along the TO-BE recordings' motion ("));
+  CHECK_THAT(run.out, Contains("peak force to unlatch (N)"));
   CHECK_THAT(run.out, Contains("no PDF (not asked for)"));
   const auto json = nlohmann::json::parse(doorbench::read_text_file(dir / "spec" / "spec.json"));
   CHECK(json["tobe_sources"].size() == 2);
