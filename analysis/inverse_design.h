@@ -118,7 +118,7 @@ struct InverseDesignOptions {
   int smallest_change_starts = 1;  // 1 to 32
   int sparse_max_parts = 6;          // ≥ 1
   int sparse_refits_per_step = 4;    // ≥ 1
-  double sparse_min_improvement = 0.03;  // > 0
+  double sparse_min_improvement = 0.10;  // > 0
   // A change counts (listed, highlighted, counted in parts_changed_cost) only when it is
   // larger than `significant_uncertainties` times its uncertainty (when finite) and than
   // `significant_fraction_of_bounds` of its bound width. ≥ 0.

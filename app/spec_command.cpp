@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <thread>
 
@@ -29,11 +30,32 @@ std::ostream& null_stream() {
   return sink;
 }
 
+// "F0=1,k_s=5" into `weights` (each entry replacing the default). Throws UsageError naming
+// the entry that is not NAME=COST with a number.
+void parse_costs(const std::string& list, std::map<std::string, double>& weights) {
+  for (const std::string& entry : split_names(list)) {
+    const std::size_t equals = entry.find('=');
+    std::size_t used = 0;
+    double cost = 0.0;
+    try {
+      if (equals != std::string::npos) cost = std::stod(entry.substr(equals + 1), &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (equals == std::string::npos || equals == 0 || used == 0 ||
+        used != entry.size() - equals - 1) {
+      throw UsageError("--costs: '" + entry + "' is not NAME=COST (e.g. F0=1)");
+    }
+    weights[entry.substr(0, equals)] = cost;
+  }
+}
+
 std::string describe(const SpecCommandOptions& o) {
   std::string text = "doorbench spec";
   for (const std::string& path : o.tobe_paths) text += " " + path;
   text += " --asis " + o.asis_path + " --out " + o.out_dir;
   if (o.fixed_given) text += " --fixed " + (o.fixed.empty() ? std::string("''") : o.fixed);
+  if (!o.costs.empty()) text += " --costs " + o.costs;
   if (!o.tolerances_path.empty()) text += " --tolerances " + o.tolerances_path;
   text += " --samples " + std::to_string(o.samples) + " --seed " + std::to_string(o.seed);
   return text;
@@ -90,6 +112,7 @@ void run_spec(const SpecCommandOptions& options) {
 
   InverseDesignOptions design_options;
   if (options.fixed_given) design_options.fixed = split_names(options.fixed);
+  parse_costs(options.costs, design_options.weights);
   design_options.regularization = options.regularization;
   design_options.starts = options.starts;
   if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
@@ -168,6 +191,9 @@ void add_spec_command(CLI::App& app, Action& action) {
                    "comma-separated parameters kept at their AS-IS values (default: m_d, l_c, "
                    "J_d and the modelling devices k_stop, c_stop, e, w_f)")
       ->each([options](const std::string&) { options->fixed_given = true; });
+  command->add_option("--costs", options->costs,
+                      "costs of change overriding the defaults, e.g. F0=1,k_s=5 (a parameter "
+                      "the data cannot tell from another: the cheaper one is changed)");
   command
       ->add_option("--tolerances", options->tolerances_path,
                    "tolerance file overriding the defaults (docs/design-spec.md)")

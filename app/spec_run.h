@@ -15,6 +15,8 @@ struct SpecCommandOptions {
   std::string out_dir;
   std::string fixed;  // empty: the inverse design's default fixed set
   bool fixed_given = false;
+  // Costs of change overriding the defaults, "F0=1,k_s=5" (docs/inverse-design.md).
+  std::string costs;
   std::string tolerances_path;
   int samples = 1000;
   int threads = 0;

@@ -22,13 +22,7 @@ inline PreparedData record_bench_door(const DoorModel& door, const std::filesyst
       parse_rig(simulated_dishwasher_rig_text(), "built-in", std::filesystem::current_path());
   rig.simulation->seed = seed;
   rig.simulation->model = "physical";
-  sensors::SimulatedBench bench(rig, door, duration_s);
-  SessionMetadata metadata;
-  metadata.rig_name = rig.name;
-  metadata.rig_definition = rig.text;
-  RecordOptions options;
-  options.duration_s = duration_s;
-  record_session(bench, metadata, path, options);
+  record_door_on_rig(rig, door, path, duration_s);
   return prepare_session(path);
 }
 

@@ -60,6 +60,16 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
         json["check"]["before"]["curve_rms_error_N"].get<double>());
 
   // Wrong inputs are named.
+  const auto bad_cost = run_doorbench_shell(std::string("spec '")
+                                                .append((dir / "tobe60.csv").string())
+                                                .append("' --asis '")
+                                                .append(asis_file.string())
+                                                .append("' --costs F0 --out '")
+                                                .append((dir / "spec3").string())
+                                                .append("'"),
+                                            dir);
+  CHECK(bad_cost.status != 0);
+  CHECK_THAT(bad_cost.err, Contains("--costs: 'F0' is not NAME=COST (e.g. F0=1)"));
   const auto missing = run_doorbench_shell(std::string("spec '")
                                                .append((dir / "tobe60.csv").string())
                                                .append("' --asis '")
