@@ -728,6 +728,14 @@ DesignSolution DesignRun::fit_design(const DoorModel& start, int start_index,
     return make_solution(fit_model(start, data_, held_fit), asis_, setup_, lambda_, start_index);
   }();
   solution.held_at_as_is = held;
+  FitSummary::Times& sum = result_.fit_times;
+  const FitSummary::Times& times = solution.summary.times;
+  sum.start_s += times.start_s;
+  sum.equation_error_s += times.equation_error_s;
+  sum.windows_s += times.windows_s;
+  sum.statistics_s += times.statistics_s;
+  sum.metrics_s += times.metrics_s;
+  sum.held_out_s += times.held_out_s;
   return solution;
 }
 
@@ -866,7 +874,9 @@ void DesignRun::smallest_change_then_fewest() {
 }
 
 void DesignRun::sparse_then_smallest_change() {
+  const auto began = std::chrono::steady_clock::now();
   DesignSolution sparse = sparse_search();
+  result_.sparse_search_s = seconds_since(began);
   result_.misfit_factor = misfit_factor(sparse);
   if (options_.scale_priors_by_misfit && lambda_ > 0 && result_.misfit_factor > 1.0) {
     lambda_ *= result_.misfit_factor;

@@ -6,7 +6,11 @@
 //   doorbench::InverseDesignResult result =
 //       doorbench::inverse_design(asis_physical_model, {tobe_prepared}, options);
 //   std::cout << result.brief_report();
-//   result.solutions.front().model;               // the smallest change that fits
+//   result.solutions.front().model;               // the first design
+//
+// For recordings of a door the first design is the sparse design search's (parts freed one
+// at a time from AS-IS, InverseDesignOptions::sparse_search); for playbacks (commanded
+// torque) the smallest change below and the fewest-changes search.
 //
 // The method: the physical model is fitted to the TO-BE strokes with fit_model's
 // machinery (multiple shooting on windows), plus one prior residual per free parameter
@@ -42,6 +46,9 @@ std::map<std::string, double> default_costs_of_change();
 // k_stop, c_stop, e, w_f (end stops and smoothing lengths: modelling devices, not design
 // parameters).
 std::vector<std::string> default_fixed_design_parameters();
+
+// Thread safety: inverse_design() uses only its arguments (the fits run on options.fit's
+// threads); calls on different data may run at once.
 
 struct InverseDesignOptions {
   // Parameters kept exactly at their AS-IS values. Empty is allowed (every parameter of
@@ -221,6 +228,9 @@ struct InverseDesignResult {
   std::vector<SparseStep> sparse_steps;
   std::string sparse_stop;
   int fits_run = 0;  // fits of every kind (starts, refits, candidates)
+  double sparse_search_s = 0.0;  // wall time of the sparse search (the rest: the smallest
+                                 // change beside it, the feasibility refit)
+  FitSummary::Times fit_times;   // where the fits' time went, summed over every fit
   double total_time_s = 0.0;
   std::vector<std::string> notes;
 

@@ -233,10 +233,23 @@ TEST_CASE("Spec report: spec.pdf fits A4 portrait, nothing at the right margin",
   // What ran off the page before: a long command line and long notes.
   for (int i = 0; i < 8; ++i) known.evaluation.command += " /some/long/folder/tobe-recording.h5";
   known.design.notes.push_back(std::string(300, 'x'));
+  // The sparse search's table, with candidates the data cannot tell apart.
+  doorbench::SparseStep as_is_row, step;
+  as_is_row.data_cost = 8.12849e7;
+  step.added = "F_l0";
+  step.data_cost = 14391.8;
+  step.reduced_data_cost = 1.392;
+  step.tried = {{"F_l0", 14391.8}, {"k_l", 14400.1}, {"theta_seal", 14410.9}, {"alpha_o", 14420.5}};
+  step.equivalent = {"F_l0", "k_l", "theta_seal", "alpha_o"};
+  known.design.sparse_steps = {as_is_row, step};
+  known.design.sparse_stop = "stopped at 1 part(s): " + std::string(200, 'y');
   doorbench::testing::TempDir dir("spec_pdf");
   const doorbench::SpecReportFiles files =
       doorbench::write_spec_report(dir / "out", known.design, known.evaluation);
   INFO(files.pdf_note);
+  CHECK_THAT(doorbench::read_text_file(files.html),
+             Contains("<h2>How the parts were chosen</h2>") &&
+                 Contains("<td>k_l (14400.1), theta_seal (14410.9), alpha_o (14420.5)</td>"));
   REQUIRE(!files.pdf.empty());
   constexpr int kDpi = 40;
   const std::string command = "pdftoppm -r " + std::to_string(kDpi) + " -gray '" +
