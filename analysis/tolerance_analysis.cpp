@@ -350,14 +350,17 @@ std::string ToleranceResult::brief_report() const {
       printf_text("  %d samples (%d failed) of %zu toleranced parameters, %d threads, %.1f s\n",
                   samples, failed, tolerances.size(), threads, elapsed_s);
   text +=
-      "  quantity                   nominal     mean       sd       p5      p95  most important\n";
+      "  quantity (standard run)              nominal     mean       sd       p5      p95  most "
+      "important\n";
   for (std::size_t q = 0; q < spreads.size(); ++q) {
     const QuantitySpread& s = spreads[q];
     double share = 0.0;
     for (std::size_t p = 0; p < tolerances.size(); ++p) {
       if (tolerances[p].name == most_important[q]) share = explained[q][p];
     }
-    text += printf_text("  %-24s %8.2f %8.2f %8.2f %8.2f %8.2f  %s (%.0f %%)\n", s.name.c_str(),
+    const std::string label =
+        q < kFeltQuantities.size() ? felt_label(kFeltQuantities[q]) : s.name;
+    text += printf_text("  %-34s %8.2f %8.2f %8.2f %8.2f %8.2f  %s (%.0f %%)\n", label.c_str(),
                         s.nominal, s.mean, s.sd, s.p5, s.p95,
                         most_important[q].empty() ? "-" : most_important[q].c_str(), 100.0 * share);
   }
