@@ -13,6 +13,7 @@
 
 #include "acquisition/output_file.h"
 #include "analysis/commanded_torque.h"
+#include "analysis/constraint_check.h"
 #include "analysis/inverse_design.h"
 #include "analysis/parameter_file.h"
 #include "analysis/spec_report.h"
@@ -50,10 +51,31 @@ void parse_costs(const std::string& list, std::map<std::string, double>& weights
   }
 }
 
+// The AS-IS door as the bench sees it: `asis` corrected to its own recording by the sparse
+// search (docs/inverse-design.md, "The AS-IS door as the bench sees it").
+DoorModel asis_on_bench(const DoorModel& asis, const std::string& recording,
+                        const InverseDesignOptions& design_options, std::ostream& progress) {
+  progress << "AS-IS recording: " << recording << "\n";
+  InverseDesignOptions options = design_options;
+  options.smallest_change_alongside = false;
+  const InverseDesignResult bench = inverse_design(asis, {load_prepared_data(recording)}, options);
+  const DesignSolution& door = bench.solutions.front();
+  std::string changes;
+  for (const DesignParameter& p : door.parameters) {
+    if (p.changed) {
+      changes += " " + p.name + " " + format_number(p.as_is) + " -> " + format_number(p.to_be);
+    }
+  }
+  progress << "the AS-IS door as this bench sees it:" << (changes.empty() ? " as its file" : changes)
+           << "\n";
+  return door.model;
+}
+
 std::string describe(const SpecCommandOptions& o) {
   std::string text = "doorbench spec";
   for (const std::string& path : o.tobe_paths) text += " " + path;
   text += " --asis " + o.asis_path + " --out " + o.out_dir;
+  if (!o.asis_recording.empty()) text += " --asis-recording " + o.asis_recording;
   if (o.fixed_given) text += " --fixed " + (o.fixed.empty() ? std::string("''") : o.fixed);
   if (!o.costs.empty()) text += " --costs " + o.costs;
   if (!o.tolerances_path.empty()) text += " --tolerances " + o.tolerances_path;
@@ -70,6 +92,7 @@ void run_spec(const SpecCommandOptions& options) {
   // once the inputs are read and the design is done.
   std::vector<std::filesystem::path> inputs(options.tobe_paths.begin(), options.tobe_paths.end());
   inputs.emplace_back(options.asis_path);
+  if (!options.asis_recording.empty()) inputs.emplace_back(options.asis_recording);
   if (!options.tolerances_path.empty()) inputs.emplace_back(options.tolerances_path);
   check_output_folder(options.out_dir, inputs, options.overwrite);
   // ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
@@ -80,7 +103,7 @@ void run_spec(const SpecCommandOptions& options) {
                              ": no such file (--asis takes a physical "
                              "parameter file or a doorbench fit folder)");
   }
-  const DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
+  DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
   std::ostream& progress = options.show_progress ? std::cerr : null_stream();
   progress << "AS-IS door: " << asis_file.string() << "\n";
 
@@ -122,6 +145,9 @@ void run_spec(const SpecCommandOptions& options) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - design_began).count();
     progress << "  [" << static_cast<int>(seconds) << " s] " << step << "\n" << std::flush;
   };
+  if (!options.asis_recording.empty()) {
+    asis = asis_on_bench(asis, options.asis_recording, design_options, progress);
+  }
   progress << "inverse design: fitting the physical model to " << tobe.size()
            << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
   const InverseDesignResult design = inverse_design(asis, tobe, design_options, commanded);
@@ -183,6 +209,11 @@ void add_spec_command(CLI::App& app, Action& action) {
       ->add_option("--asis", options->asis_path,
                    "AS-IS door: a physical parameter file or a `doorbench fit` folder")
       ->required();
+  command
+      ->add_option("--asis-recording", options->asis_recording,
+                   "a recording of the AS-IS door on the same bench: the AS-IS door is first "
+                   "corrected to it (the bench's own effects stay out of the design)")
+      ->check(CLI::ExistingFile);
   command->add_option("--out", options->out_dir, "folder for the report")->required();
   command->add_flag("--overwrite", options->overwrite,
                     "write into an --out folder that exists and is not empty");

@@ -12,6 +12,10 @@ namespace doorbench::app {
 struct SpecCommandOptions {
   std::vector<std::string> tobe_paths;
   std::string asis_path;
+  // A recording of the AS-IS door on the same bench as the TO-BE recordings: the AS-IS
+  // door is first corrected to it by the sparse search (the bench's own effects then stay
+  // out of the design). Empty: the AS-IS file as it is.
+  std::string asis_recording;
   std::string out_dir;
   std::string fixed;  // empty: the inverse design's default fixed set
   bool fixed_given = false;
