@@ -195,10 +195,10 @@ PreparedData merge_prepared(const std::vector<PreparedData>& data) {
 namespace {
 
 struct Setup {
-  std::vector<int> free_index;  // model order
-  std::vector<double> as_is;    // every parameter
-  std::vector<double> scale;    // s_i, every parameter
-  std::vector<double> weight;   // w_i, every parameter
+  std::vector<int> free_index;                  // model order
+  std::vector<double> as_is;                    // every parameter
+  std::vector<double> scale;                    // s_i, every parameter
+  std::vector<double> weight;                   // w_i, every parameter
   double significant_uncertainties = 1.0;       // a change counts when larger than these
   double significant_fraction_of_bounds = 0.0;  // (InverseDesignOptions)
 };
@@ -744,8 +744,7 @@ DesignSolution DesignRun::fit_design(const DoorModel& start, int start_index,
 // determined direction inflates the robust uncertainties so much that the window fit's
 // stopping rule would end it at once, and the stage cannot move the start along a direction
 // the data do not determine.
-std::vector<DesignSolution> DesignRun::run_starts(const DoorModel& origin, int pass,
-                                                  int starts) {
+std::vector<DesignSolution> DesignRun::run_starts(const DoorModel& origin, int pass, int starts) {
   std::vector<DesignSolution> found;
   start_notes_.clear();
   const auto report = [&](int start) {
@@ -760,8 +759,8 @@ std::vector<DesignSolution> DesignRun::run_starts(const DoorModel& origin, int p
   const auto bounds = asis_.parameter_bounds();
   const int extra = starts - 1;
   const std::vector<Eigen::VectorXd> directions =
-      weak_directions(first_model, data_, fit_, result_.rate_noise_rad_s, angle_noise_rad_,
-                      setup_, (extra + 1) / 2);
+      weak_directions(first_model, data_, fit_, result_.rate_noise_rad_s, angle_noise_rad_, setup_,
+                      (extra + 1) / 2);
   for (int j = 0; j < extra && j / 2 < static_cast<int>(directions.size()); ++j) {
     const Eigen::VectorXd& direction = directions[j / 2];
     const double sign = j % 2 == 0 ? 1.0 : -1.0;
@@ -824,7 +823,8 @@ void DesignRun::keep_equivalent(const std::vector<DesignSolution>& found,
   for (const DesignSolution* candidate : order) {
     bool distinct = true;
     for (const DesignSolution& kept : result_.solutions) {
-      distinct = distinct && scaled_distance(*candidate, kept, setup_) > options_.distinct_threshold;
+      distinct =
+          distinct && scaled_distance(*candidate, kept, setup_) > options_.distinct_threshold;
     }
     if (!distinct) continue;
     result_.solutions.push_back(*candidate);
@@ -836,7 +836,7 @@ void DesignRun::keep_equivalent(const std::vector<DesignSolution>& found,
     result_.notes.push_back(
         printf_text("start %d: data cost %.6g, size of change %.4g: %s", solution.start_index,
                     solution.data_cost, solution.size_of_change,
-                    kept                 ? "kept"
+                    kept                   ? "kept"
                     : equivalent(solution) ? "dropped (the same design as one kept)"
                                            : "dropped (fits clearly worse than the best)"));
   }
@@ -889,13 +889,14 @@ void DesignRun::sparse_then_smallest_change() {
     // The smallest change, every parameter free, from the sparse design, with the priors
     // strengthened by the sparse design's φ.
     set_priors(lambda_);
-    std::vector<DesignSolution> smallest = run_starts(found_.front().model, 1, options_.smallest_change_starts);
+    std::vector<DesignSolution> smallest =
+        run_starts(found_.front().model, 1, options_.smallest_change_starts);
     result_.notes.insert(result_.notes.end(), start_notes_.begin(), start_notes_.end());
     keep_equivalent(smallest, &found_.front());
     const DesignSolution* low = lowest_cost(smallest);
-    if (low != nullptr && !equivalent_cost(found_.front().data_cost, low->data_cost,
-                                           low->data_residuals,
-                                           options_.equivalent_cost_tolerance)) {
+    if (low != nullptr &&
+        !equivalent_cost(found_.front().data_cost, low->data_cost, low->data_residuals,
+                         options_.equivalent_cost_tolerance)) {
       result_.notes.push_back(printf_text(
           "every parameter free, the data cost falls to %.6g from the sparse design's %.6g: "
           "more than the data cannot tell apart; the parts the sparse search stopped short of "
@@ -998,10 +999,10 @@ DesignSolution DesignRun::sparse_search() {
     if (!sparse_step(chosen, current)) break;
   }
   if (result_.sparse_stop.empty()) {
-    result_.sparse_stop = printf_text("stopped at %zu parts: %s", chosen.size(),
-                                      chosen.size() == setup_.free_index.size()
-                                          ? "every free parameter is in"
-                                          : "sparse_max_parts reached");
+    result_.sparse_stop =
+        printf_text("stopped at %zu parts: %s", chosen.size(),
+                    chosen.size() == setup_.free_index.size() ? "every free parameter is in"
+                                                              : "sparse_max_parts reached");
   }
   refine_sparse(chosen, current);
   sparse_held_ = names_except(chosen);
@@ -1075,8 +1076,8 @@ void DesignRun::refine_sparse(std::vector<int>& chosen, DesignSolution& current)
     trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(c));
     const std::string what = "- " + name_of(chosen[c]);
     std::optional<DesignSolution> refit = refit_set(current, chosen[c], trial, what);
-    if (!refit ||
-        refit->data_cost - current.data_cost >= options_.sparse_min_improvement * refit->data_cost) {
+    if (!refit || refit->data_cost - current.data_cost >=
+                      options_.sparse_min_improvement * refit->data_cost) {
       ++c;
       continue;
     }
@@ -1112,12 +1113,12 @@ bool DesignRun::sparse_step(std::vector<int>& chosen, DesignSolution& current) {
     trial.push_back(k);
     const std::string name = asis_.parameter_name(setup_.free_index[k]);
     if (options_.progress) {
-      options_.progress(printf_text("sparse search, part %zu: trying %s", chosen.size() + 1,
-                                    name.c_str()));
+      options_.progress(
+          printf_text("sparse search, part %zu: trying %s", chosen.size() + 1, name.c_str()));
     }
     try {
-      trials.emplace_back(k, fit_design(current.model, DesignSolution::kSparseSearch,
-                                        names_except(trial)));
+      trials.emplace_back(
+          k, fit_design(current.model, DesignSolution::kSparseSearch, names_except(trial)));
     } catch (const std::runtime_error& error) {
       result_.notes.push_back("sparse search: the fit with " + name + " failed: " + error.what());
     }
@@ -1159,8 +1160,8 @@ bool DesignRun::sparse_step(std::vector<int>& chosen, DesignSolution& current) {
         "stopped at %zu part(s): the best further part, %s, lowers the data cost by %.2f %% "
         "(%.6g to %.6g), less than the %.2f %% asked for (sparse_min_improvement): the rest of "
         "the misfit is noise or beyond the model",
-        chosen.size(), picked_name.c_str(), 100 * improvement, current.data_cost,
-        picked.data_cost, 100 * options_.sparse_min_improvement);
+        chosen.size(), picked_name.c_str(), 100 * improvement, current.data_cost, picked.data_cost,
+        100 * options_.sparse_min_improvement);
     return false;
   }
   chosen.push_back(trials[pick].first);
@@ -1248,9 +1249,8 @@ std::string solution_header(const DesignSolution& solution, int rank) {
       "Solution %d (%s): parts changed %d (cost %.4g), size of change %.4g; window RMSE of omega "
       "%.4g rad/s, FIT %.1f%%; data cost %.4g, prior cost %.4g%s\n",
       rank, origin.c_str(), solution.parts_changed, solution.parts_changed_cost,
-      solution.size_of_change,
-      solution.fit.window.rmse(), solution.fit.window.fit_percent(), solution.data_cost,
-      solution.prior_cost, solution.converged ? "" : " (not converged)");
+      solution.size_of_change, solution.fit.window.rmse(), solution.fit.window.fit_percent(),
+      solution.data_cost, solution.prior_cost, solution.converged ? "" : " (not converged)");
 }
 
 std::string sparse_table(const InverseDesignResult& result) {
@@ -1262,8 +1262,8 @@ std::string sparse_table(const InverseDesignResult& result) {
     std::string tried;
     for (const auto& [name, cost] : step.tried) {
       if (name == step.added) continue;
-      const bool same = std::find(step.equivalent.begin(), step.equivalent.end(), name) !=
-                        step.equivalent.end();
+      const bool same =
+          std::find(step.equivalent.begin(), step.equivalent.end(), name) != step.equivalent.end();
       tried += printf_text(" %s %.6g%s", name.c_str(), cost, same ? " (equivalent)" : "");
     }
     text += printf_text("    %5zu  %-12s %-12.6g %-8.4g %-12.4g%s\n", s,

@@ -122,9 +122,9 @@ struct InverseDesignOptions {
   // sparse design and report it beside it, from `smallest_change_starts` starts (the
   // perturbed ones as above; `starts` is the playback path's).
   bool smallest_change_alongside = true;
-  int smallest_change_starts = 1;  // 1 to 32
-  int sparse_max_parts = 6;          // ≥ 1
-  int sparse_refits_per_step = 4;    // ≥ 1
+  int smallest_change_starts = 1;        // 1 to 32
+  int sparse_max_parts = 6;              // ≥ 1
+  int sparse_refits_per_step = 4;        // ≥ 1
   double sparse_min_improvement = 0.10;  // > 0
   // A change counts (listed, highlighted, counted in parts_changed_cost) only when it is
   // larger than `significant_uncertainties` times its uncertainty (when finite) and than
@@ -191,7 +191,7 @@ struct DesignSolution {
 
 // One step of the sparse design search: the parameter freed and the fit with it.
 struct SparseStep {
-  std::string added;  // empty for step 0, AS-IS
+  std::string added;              // empty for step 0, AS-IS
   std::vector<std::string> free;  // every parameter free after this step
   double data_cost = 0.0;
   double reduced_data_cost = 0.0;  // φ
@@ -227,7 +227,7 @@ struct InverseDesignResult {
   // why it stopped.
   std::vector<SparseStep> sparse_steps;
   std::string sparse_stop;
-  int fits_run = 0;  // fits of every kind (starts, refits, candidates)
+  int fits_run = 0;              // fits of every kind (starts, refits, candidates)
   double sparse_search_s = 0.0;  // wall time of the sparse search (the rest: the smallest
                                  // change beside it, the feasibility refit)
   FitSummary::Times fit_times;   // where the fits' time went, summed over every fit

@@ -119,8 +119,8 @@ std::string inline_svg(const PlotOptions& options, std::span<const PlotSeries> s
     std::string svg = render_svg_plot(options, series);
     if (svg.rfind("<?xml", 0) == 0) svg.erase(0, svg.find('\n') + 1);
     // Scaled to the page's width: a viewBox of the drawn size, the width the column's.
-    const std::string size = printf_text("width=\"%d\" height=\"%d\"", options.width_px,
-                                         options.height_px);
+    const std::string size =
+        printf_text("width=\"%d\" height=\"%d\"", options.width_px, options.height_px);
     if (const std::size_t at = svg.find(size); at != std::string::npos) {
       svg.replace(at, size.size(),
                   printf_text("viewBox=\"0 0 %d %d\" width=\"100%%\" style=\"max-width:%dpx\"",
@@ -258,6 +258,40 @@ std::string tolerance_section(const ToleranceResult& t, const FeltOptions& felt)
   return html + "</table>\n";
 }
 
+// spec.json's tolerances: those used (with their absolute band) and the spread per quantity.
+json tolerances_json(const ToleranceResult& t) {
+  json tolerances = json::array();
+  for (std::size_t p = 0; p < t.tolerances.size(); ++p) {
+    const ParameterTolerance& tol = t.tolerances[p];
+    tolerances.push_back({{"name", tol.name},
+                          {"plus_minus", tol.plus_minus},
+                          {"percent", tol.percent},
+                          {"distribution", std::string(to_string(tol.distribution))},
+                          {"absolute", number(tol.absolute(t.nominal_values[p]))}});
+  }
+  json spreads = json::array();
+  for (std::size_t q = 0; q < t.spreads.size(); ++q) {
+    const QuantitySpread& s = t.spreads[q];
+    json explained = json::object();
+    for (std::size_t p = 0; p < t.tolerances.size(); ++p) {
+      explained[t.tolerances[p].name] = number(t.explained[q][p]);
+    }
+    spreads.push_back({{"name", s.name},
+                       {"nominal", number(s.nominal)},
+                       {"mean", number(s.mean)},
+                       {"sd", number(s.sd)},
+                       {"p5", number(s.p5)},
+                       {"p95", number(s.p95)},
+                       {"min", number(s.min)},
+                       {"max", number(s.max)},
+                       {"count", s.count},
+                       {"most_important", t.most_important[q]},
+                       {"explained_variance", explained}});
+  }
+  return {{"samples", t.samples},     {"failed", t.failed},       {"threads", t.threads},
+          {"elapsed_s", t.elapsed_s}, {"parameters", tolerances}, {"spreads", spreads}};
+}
+
 }  // namespace
 
 std::string SpecEvaluationOptions::validate() const {
@@ -339,7 +373,8 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
   json steps = json::array();
   for (const SparseStep& step : design.sparse_steps) {
     json tried = json::array();
-    for (const auto& [name, cost] : step.tried) tried.push_back({{"name", name}, {"data_cost", cost}});
+    for (const auto& [name, cost] : step.tried)
+      tried.push_back({{"name", name}, {"data_cost", cost}});
     steps.push_back({{"added", step.added},
                      {"free", step.free},
                      {"data_cost", number(step.data_cost)},
@@ -350,42 +385,7 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
   }
   root["design_search"] = {{"steps", steps}, {"stopped", design.sparse_stop}};
   root["check"] = {{"before", check_json(e.check_before)}, {"after", check_json(e.check_after)}};
-  if (e.tolerances) {
-    const ToleranceResult& t = *e.tolerances;
-    json tolerances = json::array();
-    for (std::size_t p = 0; p < t.tolerances.size(); ++p) {
-      const ParameterTolerance& tol = t.tolerances[p];
-      tolerances.push_back({{"name", tol.name},
-                            {"plus_minus", tol.plus_minus},
-                            {"percent", tol.percent},
-                            {"distribution", std::string(to_string(tol.distribution))},
-                            {"absolute", number(tol.absolute(t.nominal_values[p]))}});
-    }
-    json spreads = json::array();
-    for (std::size_t q = 0; q < t.spreads.size(); ++q) {
-      const QuantitySpread& s = t.spreads[q];
-      json explained = json::object();
-      for (std::size_t p = 0; p < t.tolerances.size(); ++p) {
-        explained[t.tolerances[p].name] = number(t.explained[q][p]);
-      }
-      spreads.push_back({{"name", s.name},
-                         {"nominal", number(s.nominal)},
-                         {"mean", number(s.mean)},
-                         {"sd", number(s.sd)},
-                         {"p5", number(s.p5)},
-                         {"p95", number(s.p95)},
-                         {"min", number(s.min)},
-                         {"max", number(s.max)},
-                         {"count", s.count},
-                         {"most_important", t.most_important[q]},
-                         {"explained_variance", explained}});
-    }
-    root["tolerances"] = {{"samples", t.samples},     {"failed", t.failed},
-                          {"threads", t.threads},     {"elapsed_s", t.elapsed_s},
-                          {"parameters", tolerances}, {"spreads", spreads}};
-  } else {
-    root["tolerances"] = nullptr;
-  }
+  root["tolerances"] = e.tolerances ? tolerances_json(*e.tolerances) : json(nullptr);
   json alternatives = json::array();
   for (std::size_t s = 1; s < design.solutions.size(); ++s) {
     const DesignSolution& alt = design.solutions[s];
@@ -432,9 +432,9 @@ std::string what_to_change(const InverseDesignResult& design, const SpecEvaluati
   for (const DesignParameter* p : parts) change += (change.empty() ? "" : "; ") + change_text(*p);
   int kept = 0;
   for (const DesignParameter& p : best.parameters) kept += p.changed ? 0 : 1;
-  std::string html = "<div class=\"todo\">\n<p><b>Change:</b> " +
-                     (parts.empty() ? std::string("nothing (the AS-IS door already fits)") : change) +
-                     ".</p>\n";
+  std::string html =
+      "<div class=\"todo\">\n<p><b>Change:</b> " +
+      (parts.empty() ? std::string("nothing (the AS-IS door already fits)") : change) + ".</p>\n";
   html += printf_text(
       "<p><b>Keep</b> the other %d parameters as they are (parts changed: %d, cost %.4g).</p>\n",
       kept, best.parts_changed, best.parts_changed_cost);
@@ -449,7 +449,8 @@ std::string what_to_change(const InverseDesignResult& design, const SpecEvaluati
 
 std::string sources_section(const InverseDesignResult& design, const SpecEvaluation& e) {
   const DesignSolution& best = design.solutions.front();
-  std::string html = "<p class=\"small\">AS-IS: " + escape(e.asis_source) + "<br>TO-BE recordings: ";
+  std::string html =
+      "<p class=\"small\">AS-IS: " + escape(e.asis_source) + "<br>TO-BE recordings: ";
   for (std::size_t i = 0; i < e.tobe_sources.size(); ++i) {
     html += (i ? ", " : "") + escape(e.tobe_sources[i]);
   }
@@ -479,16 +480,16 @@ std::string parameter_section(const DesignSolution& best) {
       "<h2>Parameters</h2><table><tr><th>parameter</th><th>AS-IS</th><th>design</th>"
       "<th>change</th><th>&plusmn;</th><th>unit</th><th></th></tr>\n";
   for (const DesignParameter& p : best.parameters) {
-    html += std::string(changed(p) ? "<tr class=\"changed\">" : "<tr>") + "<td>" + escape(p.name) +
-            "</td><td>" + cell(p.as_is, "%.5g") + "</td><td>" + cell(p.to_be, "%.5g") +
-            "</td><td>" +
-            (changed(p) ? cell(p.change, "%+.4g") +
-                              (std::isfinite(p.relative_change)
-                                   ? printf_text(" (%+.1f %%)", 100 * p.relative_change)
-                                   : std::string())
-                        : std::string()) +
-            "</td><td>" + cell(p.uncertainty, "%.2g") + "</td><td>" + escape(p.unit) +
-            "</td><td>" + (p.free ? (p.at_bound ? "at bound" : "") : "fixed") + "</td></tr>\n";
+    html +=
+        std::string(changed(p) ? "<tr class=\"changed\">" : "<tr>") + "<td>" + escape(p.name) +
+        "</td><td>" + cell(p.as_is, "%.5g") + "</td><td>" + cell(p.to_be, "%.5g") + "</td><td>" +
+        (changed(p)
+             ? cell(p.change, "%+.4g") + (std::isfinite(p.relative_change)
+                                              ? printf_text(" (%+.1f %%)", 100 * p.relative_change)
+                                              : std::string())
+             : std::string()) +
+        "</td><td>" + cell(p.uncertainty, "%.2g") + "</td><td>" + escape(p.unit) + "</td><td>" +
+        (p.free ? (p.at_bound ? "at bound" : "") : "fixed") + "</td></tr>\n";
   }
   return html + "</table>\n";
 }
@@ -504,8 +505,8 @@ std::string sparse_section(const InverseDesignResult& design) {
     const SparseStep& step = design.sparse_steps[s];
     std::string same;
     for (const auto& [name, cost] : step.tried) {
-      const bool equivalent = std::find(step.equivalent.begin(), step.equivalent.end(), name) !=
-                              step.equivalent.end();
+      const bool equivalent =
+          std::find(step.equivalent.begin(), step.equivalent.end(), name) != step.equivalent.end();
       if (name != step.added && equivalent) {
         same += (same.empty() ? "" : ", ") + escape(name) + printf_text(" (%.6g)", cost);
       }
@@ -557,8 +558,8 @@ std::string alternatives_section(const InverseDesignResult& design, const SpecEv
       changes = "<em>smallest change</em>: ";
     }
     for (const DesignParameter* p : changed_parts(alt)) changes += change_text(*p) + "; ";
-    html += printf_text("<tr><td>%zu</td><td>%d</td><td>%.4g</td><td>%.6g</td><td class=\"l\">", s + 1,
-                        alt.parts_changed, alt.parts_changed_cost, alt.data_cost) +
+    html += printf_text("<tr><td>%zu</td><td>%d</td><td>%.4g</td><td>%.6g</td><td class=\"l\">",
+                        s + 1, alt.parts_changed, alt.parts_changed_cost, alt.data_cost) +
             changes + "</td></tr>\n";
   }
   (void)e;
@@ -573,13 +574,15 @@ std::string spec_summary(const InverseDesignResult& design, const SpecEvaluation
   const DesignSolution& best = design.solutions.front();
   std::string text = "What to change:";
   for (const DesignParameter* p : changed_parts(best)) {
-    text += printf_text(" %s %.5g -> %.5g %s", p->name.c_str(), p->as_is, p->to_be, p->unit.c_str());
-    if (std::isfinite(p->relative_change)) text += printf_text(" (%+.1f %%)", 100 * p->relative_change);
+    text +=
+        printf_text(" %s %.5g -> %.5g %s", p->name.c_str(), p->as_is, p->to_be, p->unit.c_str());
+    if (std::isfinite(p->relative_change))
+      text += printf_text(" (%+.1f %%)", 100 * p->relative_change);
     text += ";";
   }
   if (best.parts_changed == 0) text += " nothing;";
-  text += printf_text("\nKeep everything else (parts changed: %d, cost %.4g).\n", best.parts_changed,
-                      best.parts_changed_cost);
+  text += printf_text("\nKeep everything else (parts changed: %d, cost %.4g).\n",
+                      best.parts_changed, best.parts_changed_cost);
   text += printf_text(
       "Force-angle curve along the TO-BE recordings: RMS error %.2f N (AS-IS door %.2f N).\n",
       e.check_after.curve_rms_error_N, e.check_before.curve_rms_error_N);
@@ -594,8 +597,8 @@ std::string spec_summary(const InverseDesignResult& design, const SpecEvaluation
   }
   text += "felt in the standard run (" + standard_run_conditions(e.felt) + "):\n";
   for (const FeltQuantityInfo& info : kFeltQuantities) {
-    text += printf_text("  %-34s %9.2f %9.2f\n", felt_label(info).c_str(), e.felt_before.*info.member,
-                        e.felt_after.*info.member);
+    text += printf_text("  %-34s %9.2f %9.2f\n", felt_label(info).c_str(),
+                        e.felt_before.*info.member, e.felt_after.*info.member);
   }
   return text;
 }

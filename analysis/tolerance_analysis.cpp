@@ -325,9 +325,8 @@ ToleranceResult tolerance_analysis(const DoorModel& design, const ToleranceSpec&
   const FeltQuantities failed{kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
   result.felt.assign(samples, failed);
   std::vector<std::string> failure(samples);
-  result.threads = run_pool(options, [&](std::size_t s) {
-    run_sample(design, index, options, s, result, failure[s]);
-  });
+  result.threads = run_pool(
+      options, [&](std::size_t s) { run_sample(design, index, options, s, result, failure[s]); });
   for (std::size_t s = 0; s < samples; ++s) {
     if (failure[s].empty()) continue;
     if (result.failed++ == 0) {
@@ -358,8 +357,7 @@ std::string ToleranceResult::brief_report() const {
     for (std::size_t p = 0; p < tolerances.size(); ++p) {
       if (tolerances[p].name == most_important[q]) share = explained[q][p];
     }
-    const std::string label =
-        q < kFeltQuantities.size() ? felt_label(kFeltQuantities[q]) : s.name;
+    const std::string label = q < kFeltQuantities.size() ? felt_label(kFeltQuantities[q]) : s.name;
     text += printf_text("  %-34s %8.2f %8.2f %8.2f %8.2f %8.2f  %s (%.0f %%)\n", label.c_str(),
                         s.nominal, s.mean, s.sd, s.p5, s.p95,
                         most_important[q].empty() ? "-" : most_important[q].c_str(), 100.0 * share);

@@ -66,8 +66,8 @@ DoorModel asis_on_bench(const DoorModel& asis, const std::string& recording,
       changes += " " + p.name + " " + format_number(p.as_is) + " -> " + format_number(p.to_be);
     }
   }
-  progress << "the AS-IS door as this bench sees it:" << (changes.empty() ? " as its file" : changes)
-           << "\n";
+  progress << "the AS-IS door as this bench sees it:"
+           << (changes.empty() ? " as its file" : changes) << "\n";
   return door.model;
 }
 

@@ -69,8 +69,8 @@ void check_case(const Case& c) {
   for (const DesignParameter& p : first.parameters) {
     const int index = *tobe.find_parameter(p.name);
     const double truth = tobe.parameter_values()[index];
-    INFO(p.name << ": AS-IS " << p.as_is << ", true " << truth << ", designed " << p.to_be
-                << " +- " << p.uncertainty);
+    INFO(p.name << ": AS-IS " << p.as_is << ", true " << truth << ", designed " << p.to_be << " +- "
+                << p.uncertainty);
     if (truth != reference.parameter_values()[index]) {
       CHECK(p.changed);
       CHECK(std::abs(p.to_be - truth) <= 0.05 * std::abs(truth - p.as_is) + 1e-12);
@@ -80,6 +80,23 @@ void check_case(const Case& c) {
     }
   }
   CHECK(first.parts_changed == static_cast<int>(c.factors.size()));
+  // A change counts only when it matters, in every solution: beyond its uncertainty and
+  // 0.5 % of its bound width; the cost line counts exactly the parts that count.
+  for (const DesignSolution& solution : result.solutions) {
+    double cost = 0.0;
+    int parts = 0;
+    for (const DesignParameter& p : solution.parameters) {
+      const double change = std::abs(p.change);
+      const bool matters = p.free && !(std::isfinite(p.uncertainty) && change <= p.uncertainty) &&
+                           change > 0.005 * (p.bounds.upper - p.bounds.lower);
+      INFO(p.name << " change " << p.change << " +- " << p.uncertainty);
+      CHECK(p.changed == matters);
+      cost += p.changed ? p.weight : 0.0;
+      parts += p.changed ? 1 : 0;
+    }
+    CHECK(solution.parts_changed == parts);
+    CHECK(solution.parts_changed_cost == cost);
+  }
 }
 
 }  // namespace

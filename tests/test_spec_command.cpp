@@ -111,18 +111,18 @@ TEST_CASE("CLI: spec of a bench-recorded prototype against the AS-IS door on the
   dir.write("asis-rig.toml", asis_rig);
   for (const char* name : {"tobe", "asis"}) {
     const std::string n(name);
-    const auto run = run_doorbench_shell("record --rig '" + (dir / (n + "-rig.toml")).string() +
-                                             "' --duration-s 19 --out '" +
-                                             (dir / (n + ".h5")).string() + "'",
-                                         dir);
+    const auto run =
+        run_doorbench_shell("record --rig '" + (dir / (n + "-rig.toml")).string() +
+                                "' --duration-s 19 --out '" + (dir / (n + ".h5")).string() + "'",
+                            dir);
     INFO(run.err);
     REQUIRE(run.status == 0);
   }
-  const auto run = run_doorbench_shell(
-      "spec '" + (dir / "tobe.h5").string() + "' --asis '" + asis_file.string() +
-          "' --asis-recording '" + (dir / "asis.h5").string() + "' --out '" +
-          (dir / "spec").string() + "' --samples 8 --no-pdf",
-      dir);
+  const auto run = run_doorbench_shell("spec '" + (dir / "tobe.h5").string() + "' --asis '" +
+                                           asis_file.string() + "' --asis-recording '" +
+                                           (dir / "asis.h5").string() + "' --out '" +
+                                           (dir / "spec").string() + "' --samples 8 --no-pdf",
+                                       dir);
   INFO("stdout: " << run.out << "\nstderr: " << run.err);
   REQUIRE(run.status == 0);
   CHECK_THAT(run.err, Contains("the AS-IS door as this bench sees it: b_h 0.05 -> "));

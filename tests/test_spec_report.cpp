@@ -74,7 +74,7 @@ KnownReport known_report() {
   InverseDesignResult design;
   design.solutions.push_back(solution_of(asis, tobe));
   design.solutions.front().held_at_as_is = {"k_s", "L0"};  // a fewest-changes design
-  design.solutions.front().parts_changed_cost = 2.0;  // F0 and F_l0
+  design.solutions.front().parts_changed_cost = 2.0;       // F0 and F_l0
   design.solutions.push_back(solution_of(asis, alternative));
   design.commanded_torque = true;
   design.rate_noise_rad_s = 0.001;
