@@ -205,6 +205,8 @@ struct SparseStep {
 struct InverseDesignResult {
   // Distinct solutions that fit the TO-BE data equally well, ranked by the size of the
   // change: the fewest parts first (parts_changed_cost), then the smallest size_of_change.
+  // With the sparse search its design is first whatever the ranking (the smallest change
+  // beside it is kept when it fits equivalently; a note says when it fits clearly better).
   std::vector<DesignSolution> solutions;
   bool feasible = true;
   // When infeasible: which parameters bind at which bound and what the data asked for
