@@ -43,6 +43,28 @@ const std::array<FeltQuantityInfo, 6> kFeltQuantities = {{
     {"balance_force_N", "holding force at mid-angle", "N", &FeltQuantities::balance_force_N},
 }};
 
+std::string felt_label(const FeltQuantityInfo& info) {
+  return std::string(info.label) + " (" + std::string(info.unit) + ")";
+}
+
+std::string felt_definition(const FeltOptions& o) {
+  return printf_text(
+      "hand force at the handle; peaks within %.1f deg of closed (latching: while moving "
+      "faster than %.2f rad/s), median over strokes; friction = half the opening-closing gap "
+      "from %.1f to %.1f deg (near closed) and beyond (further open, to %.1f deg short of the "
+      "largest angle); holding force = mean of opening and closing at %.0f +- %.0f deg "
+      "(> 0: falls shut)",
+      o.latch_zone_rad * kDeg, o.moving_rate_rad_s, o.latch_zone_rad * kDeg,
+      o.near_closed_end_rad * kDeg, o.open_end_margin_rad * kDeg, o.balance_angle_rad * kDeg,
+      o.balance_half_width_rad * kDeg);
+}
+
+std::string standard_run_conditions(const FeltOptions& o) {
+  return printf_text("virtual hand, 0 to %.0f deg and back in %.0f s (opening %.1f s)",
+                     o.hand.target_angle_rad * kDeg, o.hand.duration_s,
+                     o.hand.opening_fraction * o.hand.duration_s);
+}
+
 std::string FeltOptions::validate() const {
   if (std::string error = hand.validate(); !error.empty()) return error;
   if (std::string error = simulation.validate(); !error.empty()) return error;
@@ -329,7 +351,11 @@ std::string FeltQuantities::brief_report() const {
 std::string FeelCheck::brief_report() const {
   std::string text = "  quantity                     model   recorded    error\n";
   for (const FeltQuantityError& e : errors) {
-    text += printf_text("  %-26s %8.2f   %8.2f %8.2f N (%+.1f %%)\n", e.name.c_str(), e.model,
+    std::string label = e.name;
+    for (const FeltQuantityInfo& info : kFeltQuantities) {
+      if (info.name == e.name) label = std::string(info.label);
+    }
+    text += printf_text("  %-26s %8.2f   %8.2f %8.2f N (%+.1f %%)\n", label.c_str(), e.model,
                         e.recorded, e.error, e.error_percent);
   }
   text += printf_text(

@@ -81,6 +81,16 @@ struct FeltQuantityInfo {
 };
 extern const std::array<FeltQuantityInfo, 6> kFeltQuantities;
 
+// "peak force to unlatch (N)": the label people read, with its unit.
+std::string felt_label(const FeltQuantityInfo& info);
+
+// One line stating where each quantity is read (angles, directions, speeds), from `options`:
+// the definition every table of felt quantities shares.
+std::string felt_definition(const FeltOptions& options);
+
+// The standard run's conditions: "virtual hand, 0 to 80 deg and back in 10 s".
+std::string standard_run_conditions(const FeltOptions& options);
+
 // Mean hand force per angle bin and direction; NaN in a bin without samples.
 struct ForceAngleCurve {
   double bin_width_rad = 0.0;

@@ -6,7 +6,11 @@
 //   doorbench::InverseDesignResult result =
 //       doorbench::inverse_design(asis_physical_model, {tobe_prepared}, options);
 //   std::cout << result.brief_report();
-//   result.solutions.front().model;               // the smallest change that fits
+//   result.solutions.front().model;               // the first design
+//
+// For recordings of a door the first design is the sparse design search's (parts freed one
+// at a time from AS-IS, InverseDesignOptions::sparse_search); for playbacks (commanded
+// torque) the smallest change below and the fewest-changes search.
 //
 // The method: the physical model is fitted to the TO-BE strokes with fit_model's
 // machinery (multiple shooting on windows), plus one prior residual per free parameter
@@ -42,6 +46,9 @@ std::map<std::string, double> default_costs_of_change();
 // k_stop, c_stop, e, w_f (end stops and smoothing lengths: modelling devices, not design
 // parameters).
 std::vector<std::string> default_fixed_design_parameters();
+
+// Thread safety: inverse_design() uses only its arguments (the fits run on options.fit's
+// threads); calls on different data may run at once.
 
 struct InverseDesignOptions {
   // Parameters kept exactly at their AS-IS values. Empty is allowed (every parameter of
@@ -97,6 +104,33 @@ struct InverseDesignOptions {
   // off. The inertia is never held when fitted from commanded torques (its evidence is the
   // motion).
   int fewest_changes_refits = 10;
+  // Sparse design search (recordings of a door; a playback's commanded torque keeps the
+  // smallest change and the fewest-changes search above): from AS-IS, free one more
+  // parameter at a time, the one whose refit lowers the data cost most, and stop when the
+  // best addition lowers it by less than `sparse_min_improvement` of the current data cost
+  // (the misfit no longer falls measurably: what is left is noise and what the model
+  // cannot show). Candidates are ranked by the Gauss–Newton predicted decrease (one
+  // Jacobian at the current design) and the best `sparse_refits_per_step` are refitted.
+  // Candidates whose refit fits as well as the best (equivalent_cost_tolerance) are the
+  // alternatives the data cannot separate; of them the smallest weighted change
+  // (w_i |Δp_i| / s_i) is chosen, so costs of change decide. The sparse design is the first
+  // solution; the smallest change (every free parameter, priors strengthened by the sparse
+  // design's φ) is fitted from it and reported beside it. Off: the smallest change and the
+  // fewest-changes search as for playbacks.
+  bool sparse_search = true;
+  // With the sparse search: also fit the smallest change (every free parameter) from the
+  // sparse design and report it beside it, from `smallest_change_starts` starts (the
+  // perturbed ones as above; `starts` is the playback path's).
+  bool smallest_change_alongside = true;
+  int smallest_change_starts = 1;        // 1 to 32
+  int sparse_max_parts = 6;              // ≥ 1
+  int sparse_refits_per_step = 4;        // ≥ 1
+  double sparse_min_improvement = 0.10;  // > 0
+  // A change counts (listed, highlighted, counted in parts_changed_cost) only when it is
+  // larger than `significant_uncertainties` times its uncertainty (when finite) and than
+  // `significant_fraction_of_bounds` of its bound width. ≥ 0.
+  double significant_uncertainties = 1.0;
+  double significant_fraction_of_bounds = 0.005;
   // Called before each fit with a line saying which (pass, start, refit); may be empty. Called
   // on the calling thread.
   std::function<void(const std::string&)> progress;
@@ -122,6 +156,9 @@ struct DesignParameter {
   double weight = 0.0;           // its cost of change
   Bounds bounds;
   bool at_bound = false;
+  // Free, and changed by more than significant_uncertainties × uncertainty and
+  // significant_fraction_of_bounds × the bound width: a part to change.
+  bool changed = false;
 };
 
 struct DesignSolution {
@@ -136,10 +173,14 @@ struct DesignSolution {
   double prior_cost = 0.0;  // ½ Σ r² of the prior residuals
   // √(Σ w_i ((p_i − p_asis_i)/s_i)²): the weighted size of the change.
   double size_of_change = 0.0;
-  // Σ w_i over the parameters changed by more than 0.1 % of their bound width: what the
+  // Σ w_i over the parameters whose change counts (DesignParameter::changed): what the
   // change costs in parts (a spring changed by 5 % or by 10 % is one new spring).
   double parts_changed_cost = 0.0;
-  int start_index = 0;     // which start found it (0: from AS-IS; −2: the fewest-changes search)
+  int parts_changed = 0;  // how many parameters' changes count
+  // Which start found it (0: from AS-IS; −1: the feasibility refit; −2: the fewest-changes
+  // search; kSparseSearch: the sparse design search).
+  int start_index = 0;
+  static constexpr int kSparseSearch = -3;
   int data_residuals = 0;  // n of the data cost
   // Free parameters held at their AS-IS values (the fewest-changes alternative).
   std::vector<std::string> held_at_as_is;
@@ -148,9 +189,24 @@ struct DesignSolution {
   FitSummary summary;                 // the underlying fit's summary
 };
 
+// One step of the sparse design search: the parameter freed and the fit with it.
+struct SparseStep {
+  std::string added;              // empty for step 0, AS-IS
+  std::vector<std::string> free;  // every parameter free after this step
+  double data_cost = 0.0;
+  double reduced_data_cost = 0.0;  // φ
+  double window_rmse_rad_s = 0.0;
+  // Candidates refitted at this step: (name, data cost), best first. Those whose cost the
+  // data cannot tell from the chosen one's are in `equivalent`.
+  std::vector<std::pair<std::string, double>> tried;
+  std::vector<std::string> equivalent;
+};
+
 struct InverseDesignResult {
   // Distinct solutions that fit the TO-BE data equally well, ranked by the size of the
   // change: the fewest parts first (parts_changed_cost), then the smallest size_of_change.
+  // With the sparse search its design is first whatever the ranking (the smallest change
+  // beside it is kept when it fits equivalently; a note says when it fits clearly better).
   std::vector<DesignSolution> solutions;
   bool feasible = true;
   // When infeasible: which parameters bind at which bound and what the data asked for
@@ -169,6 +225,14 @@ struct InverseDesignResult {
   bool commanded_torque = false;  // the design was fitted to commanded torques
   double effective_regularization = 0.0;
   int starts_run = 0;
+  // The sparse design search (empty when not run): AS-IS, then one row per part freed; and
+  // why it stopped.
+  std::vector<SparseStep> sparse_steps;
+  std::string sparse_stop;
+  int fits_run = 0;              // fits of every kind (starts, refits, candidates)
+  double sparse_search_s = 0.0;  // wall time of the sparse search (the rest: the smallest
+                                 // change beside it, the feasibility refit)
+  FitSummary::Times fit_times;   // where the fits' time went, summed over every fit
   double total_time_s = 0.0;
   std::vector<std::string> notes;
 

@@ -29,6 +29,7 @@ struct SpecEvaluation {
   FeelCheck check_before;                         // AS-IS model against the TO-BE recordings
   FeelCheck check_after;                          // TO-BE model against them
   std::optional<ToleranceResult> tolerances;      // of the TO-BE door
+  FeltOptions felt;  // the felt quantities' definition and the standard run used
 };
 
 struct SpecEvaluationOptions {
@@ -53,6 +54,10 @@ struct SpecReportFiles {
 
 // spec.json's text (what write_spec_report writes).
 std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& evaluation);
+// The summary `doorbench spec` prints: what to change (three lines), the felt quantities along
+// the TO-BE recordings (AS-IS model, design, recorded) and in the standard run, each with its
+// conditions.
+std::string spec_summary(const InverseDesignResult& design, const SpecEvaluation& evaluation);
 // spec.html's text.
 std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& evaluation);
 

@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
@@ -164,13 +165,12 @@ std::string MonteCarloOptions::validate() const {
   return felt.validate();
 }
 
-ToleranceResult tolerance_analysis(const DoorModel& design, const ToleranceSpec& spec,
-                                   const MonteCarloOptions& options) {
-  if (std::string error = options.validate(); !error.empty()) throw std::invalid_argument(error);
-  const auto start = std::chrono::steady_clock::now();
-  ToleranceResult result;
-  result.samples = options.samples;
-  std::vector<int> index;  // of each toleranced parameter in the model
+namespace {
+
+// The toleranced parameters' model indices; result.tolerances and nominal_values filled.
+std::vector<int> toleranced_parameters(const DoorModel& design, const ToleranceSpec& spec,
+                                       ToleranceResult& result) {
+  std::vector<int> index;
   for (const ParameterTolerance& t : spec.parameters) {
     const std::optional<int> i = design.find_parameter(t.name);
     if (!i) throw std::invalid_argument("tolerance for " + t.name + ": no such parameter");
@@ -181,57 +181,57 @@ ToleranceResult tolerance_analysis(const DoorModel& design, const ToleranceSpec&
     result.tolerances.push_back(t);
     result.nominal_values.push_back(design.parameter_values()[*i]);
   }
-  const std::size_t parameters = index.size();
-  result.nominal = felt_quantities(design, options.felt);
+  return index;
+}
 
+// Sample s: its own generator seeded from (seed, s), every toleranced parameter drawn within
+// its band (clamped to its bounds), the felt quantities of that door; `failure` set when the
+// model refuses the draw or the run fails.
+void run_sample(const DoorModel& design, const std::vector<int>& index,
+                const MonteCarloOptions& options, std::size_t s, ToleranceResult& result,
+                std::string& failure) {
+  std::mt19937_64 random(splitmix64(options.seed * 0x100000001b3ULL + s));
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  std::vector<double> values(design.parameter_values().begin(), design.parameter_values().end());
+  for (std::size_t p = 0; p < index.size(); ++p) {
+    const ParameterTolerance& t = result.tolerances[p];
+    const double nominal = result.nominal_values[p];
+    const double band = t.absolute(nominal);
+    double unit;
+    if (t.distribution == ToleranceDistribution::kUniform) {
+      unit = uniform(random);
+    } else {
+      do {
+        unit = normal(random) / 3.0;
+      } while (std::abs(unit) > 1.0);
+    }
+    const Bounds bounds = design.parameter_bounds()[index[p]];
+    const double value = std::clamp(nominal + band * unit, bounds.lower, bounds.upper);
+    values[index[p]] = value;
+    result.draws[s][p] = value;
+  }
+  try {
+    result.felt[s] = felt_quantities(design.with_parameter_values(values), options.felt);
+  } catch (const std::exception& error) {
+    failure = error.what();
+  }
+}
+
+// Runs `sample(s)` for every s on a pool of threads (options.threads; 0: every core),
+// reporting progress serialized. Returns the number of threads used.
+int run_pool(const MonteCarloOptions& options, const std::function<void(std::size_t)>& sample) {
   const auto samples = static_cast<std::size_t>(options.samples);
-  result.draws.assign(samples, std::vector<double>(parameters, kNaN));
-  const FeltQuantities failed{kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
-  result.felt.assign(samples, failed);
-  std::vector<std::string> failure(samples);
-
-  const std::vector<double> nominal_all(design.parameter_values().begin(),
-                                        design.parameter_values().end());
-  auto run_sample = [&](std::size_t s) {
-    std::mt19937_64 random(splitmix64(options.seed * 0x100000001b3ULL + s));
-    std::normal_distribution<double> normal(0.0, 1.0);
-    std::uniform_real_distribution<double> uniform(-1.0, 1.0);
-    std::vector<double> values = nominal_all;
-    for (std::size_t p = 0; p < parameters; ++p) {
-      const ParameterTolerance& t = result.tolerances[p];
-      const double nominal = result.nominal_values[p];
-      const double band = t.absolute(nominal);
-      double unit;
-      if (t.distribution == ToleranceDistribution::kUniform) {
-        unit = uniform(random);
-      } else {
-        do {
-          unit = normal(random) / 3.0;
-        } while (std::abs(unit) > 1.0);
-      }
-      const Bounds bounds = design.parameter_bounds()[index[p]];
-      const double value = std::clamp(nominal + band * unit, bounds.lower, bounds.upper);
-      values[index[p]] = value;
-      result.draws[s][p] = value;
-    }
-    try {
-      result.felt[s] = felt_quantities(design.with_parameter_values(values), options.felt);
-    } catch (const std::exception& error) {
-      failure[s] = error.what();
-    }
-  };
-
   unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
                                          : std::max(1u, std::thread::hardware_concurrency());
   threads = std::min<unsigned>(threads, static_cast<unsigned>(samples));
-  result.threads = static_cast<int>(threads);
   std::atomic<std::size_t> next{0};
   std::atomic<int> done{0};
   std::mutex progress_mutex;
   const int report_every = std::max(1, options.samples / 20);
   auto worker = [&] {
     for (std::size_t s = next++; s < samples; s = next++) {
-      run_sample(s);
+      sample(s);
       const int finished = ++done;
       if (options.progress && (finished % report_every == 0 || finished == options.samples)) {
         const std::lock_guard lock(progress_mutex);
@@ -243,7 +243,90 @@ ToleranceResult tolerance_analysis(const DoorModel& design, const ToleranceSpec&
   for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& thread : pool) thread.join();
+  return static_cast<int>(threads);
+}
 
+// Quantity q's spread over the samples where it is defined, and each parameter's share of
+// its variance (the squared correlation of its draws with the quantity) into explained[q].
+QuantitySpread quantity_spread(std::size_t q, ToleranceResult& result) {
+  const auto member = kFeltQuantities[q].member;
+  QuantitySpread spread;
+  spread.name = std::string(kFeltQuantities[q].name);
+  spread.nominal = result.nominal.*member;
+  std::vector<double> values;
+  std::vector<std::size_t> used;
+  for (std::size_t s = 0; s < result.felt.size(); ++s) {
+    const double v = result.felt[s].*member;
+    if (!std::isfinite(v)) continue;
+    values.push_back(v);
+    used.push_back(s);
+  }
+  spread.count = static_cast<int>(values.size());
+  const double n = static_cast<double>(values.size());
+  if (values.size() < 2) {
+    spread.mean = spread.sd = spread.p5 = spread.p95 = spread.min = spread.max = kNaN;
+    return spread;
+  }
+  double sum = 0;
+  for (double v : values) sum += v;
+  spread.mean = sum / n;
+  double square = 0;
+  for (double v : values) square += (v - spread.mean) * (v - spread.mean);
+  spread.sd = std::sqrt(square / (n - 1));
+  std::vector<double> sorted = values;
+  std::sort(sorted.begin(), sorted.end());
+  spread.p5 = percentile(sorted, 0.05);
+  spread.p95 = percentile(sorted, 0.95);
+  spread.min = sorted.front();
+  spread.max = sorted.back();
+  for (std::size_t p = 0; p < result.tolerances.size(); ++p) {
+    double mean_x = 0;
+    for (std::size_t s : used) mean_x += result.draws[s][p];
+    mean_x /= n;
+    double sxy = 0, sxx = 0, syy = 0;
+    for (std::size_t k = 0; k < used.size(); ++k) {
+      const double dx = result.draws[used[k]][p] - mean_x;
+      const double dy = values[k] - spread.mean;
+      sxy += dx * dy;
+      sxx += dx * dx;
+      syy += dy * dy;
+    }
+    result.explained[q][p] = sxx > 0 && syy > 0 ? sxy * sxy / (sxx * syy) : 0.0;
+  }
+  return spread;
+}
+
+// The parameter explaining most of quantity q's variance ("" when none explains any).
+std::string most_important(std::size_t q, const ToleranceResult& result) {
+  std::string most;
+  double best = 0.0;
+  for (std::size_t p = 0; p < result.tolerances.size(); ++p) {
+    if (result.explained[q][p] > best) {
+      best = result.explained[q][p];
+      most = result.tolerances[p].name;
+    }
+  }
+  return most;
+}
+
+}  // namespace
+
+ToleranceResult tolerance_analysis(const DoorModel& design, const ToleranceSpec& spec,
+                                   const MonteCarloOptions& options) {
+  if (std::string error = options.validate(); !error.empty()) throw std::invalid_argument(error);
+  const auto start = std::chrono::steady_clock::now();
+  ToleranceResult result;
+  result.samples = options.samples;
+  const std::vector<int> index = toleranced_parameters(design, spec, result);
+  result.nominal = felt_quantities(design, options.felt);
+
+  const auto samples = static_cast<std::size_t>(options.samples);
+  result.draws.assign(samples, std::vector<double>(index.size(), kNaN));
+  const FeltQuantities failed{kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN, kNaN};
+  result.felt.assign(samples, failed);
+  std::vector<std::string> failure(samples);
+  result.threads = run_pool(
+      options, [&](std::size_t s) { run_sample(design, index, options, s, result, failure[s]); });
   for (std::size_t s = 0; s < samples; ++s) {
     if (failure[s].empty()) continue;
     if (result.failed++ == 0) {
@@ -251,63 +334,10 @@ ToleranceResult tolerance_analysis(const DoorModel& design, const ToleranceSpec&
     }
   }
 
-  result.explained.assign(kFeltQuantities.size(), std::vector<double>(parameters, 0.0));
+  result.explained.assign(kFeltQuantities.size(), std::vector<double>(index.size(), 0.0));
   for (std::size_t q = 0; q < kFeltQuantities.size(); ++q) {
-    const auto member = kFeltQuantities[q].member;
-    QuantitySpread spread;
-    spread.name = std::string(kFeltQuantities[q].name);
-    spread.nominal = result.nominal.*member;
-    std::vector<double> values;
-    std::vector<std::size_t> used;
-    for (std::size_t s = 0; s < samples; ++s) {
-      const double v = result.felt[s].*member;
-      if (!std::isfinite(v)) continue;
-      values.push_back(v);
-      used.push_back(s);
-    }
-    spread.count = static_cast<int>(values.size());
-    const double n = static_cast<double>(values.size());
-    if (values.size() >= 2) {
-      double sum = 0;
-      for (double v : values) sum += v;
-      spread.mean = sum / n;
-      double square = 0;
-      for (double v : values) square += (v - spread.mean) * (v - spread.mean);
-      spread.sd = std::sqrt(square / (n - 1));
-      std::vector<double> sorted = values;
-      std::sort(sorted.begin(), sorted.end());
-      spread.p5 = percentile(sorted, 0.05);
-      spread.p95 = percentile(sorted, 0.95);
-      spread.min = sorted.front();
-      spread.max = sorted.back();
-      // Squared correlation of each parameter's draws with the quantity.
-      for (std::size_t p = 0; p < parameters; ++p) {
-        double mean_x = 0;
-        for (std::size_t s : used) mean_x += result.draws[s][p];
-        mean_x /= n;
-        double sxy = 0, sxx = 0, syy = 0;
-        for (std::size_t k = 0; k < used.size(); ++k) {
-          const double dx = result.draws[used[k]][p] - mean_x;
-          const double dy = values[k] - spread.mean;
-          sxy += dx * dy;
-          sxx += dx * dx;
-          syy += dy * dy;
-        }
-        result.explained[q][p] = sxx > 0 && syy > 0 ? sxy * sxy / (sxx * syy) : 0.0;
-      }
-    } else {
-      spread.mean = spread.sd = spread.p5 = spread.p95 = spread.min = spread.max = kNaN;
-    }
-    result.spreads.push_back(spread);
-    std::string most;
-    double best = 0.0;
-    for (std::size_t p = 0; p < parameters; ++p) {
-      if (result.explained[q][p] > best) {
-        best = result.explained[q][p];
-        most = result.tolerances[p].name;
-      }
-    }
-    result.most_important.push_back(most);
+    result.spreads.push_back(quantity_spread(q, result));
+    result.most_important.push_back(most_important(q, result));
   }
   result.elapsed_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -319,14 +349,16 @@ std::string ToleranceResult::brief_report() const {
       printf_text("  %d samples (%d failed) of %zu toleranced parameters, %d threads, %.1f s\n",
                   samples, failed, tolerances.size(), threads, elapsed_s);
   text +=
-      "  quantity                   nominal     mean       sd       p5      p95  most important\n";
+      "  quantity (standard run)              nominal     mean       sd       p5      p95  most "
+      "important\n";
   for (std::size_t q = 0; q < spreads.size(); ++q) {
     const QuantitySpread& s = spreads[q];
     double share = 0.0;
     for (std::size_t p = 0; p < tolerances.size(); ++p) {
       if (tolerances[p].name == most_important[q]) share = explained[q][p];
     }
-    text += printf_text("  %-24s %8.2f %8.2f %8.2f %8.2f %8.2f  %s (%.0f %%)\n", s.name.c_str(),
+    const std::string label = q < kFeltQuantities.size() ? felt_label(kFeltQuantities[q]) : s.name;
+    text += printf_text("  %-34s %8.2f %8.2f %8.2f %8.2f %8.2f  %s (%.0f %%)\n", label.c_str(),
                         s.nominal, s.mean, s.sd, s.p5, s.p95,
                         most_important[q].empty() ? "-" : most_important[q].c_str(), 100.0 * share);
   }

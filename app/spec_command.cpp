@@ -7,11 +7,13 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <thread>
 
 #include "acquisition/output_file.h"
 #include "analysis/commanded_torque.h"
+#include "analysis/constraint_check.h"
 #include "analysis/inverse_design.h"
 #include "analysis/parameter_file.h"
 #include "analysis/spec_report.h"
@@ -29,11 +31,53 @@ std::ostream& null_stream() {
   return sink;
 }
 
+// "F0=1,k_s=5" into `weights` (each entry replacing the default). Throws UsageError naming
+// the entry that is not NAME=COST with a number.
+void parse_costs(const std::string& list, std::map<std::string, double>& weights) {
+  for (const std::string& entry : split_names(list)) {
+    const std::size_t equals = entry.find('=');
+    std::size_t used = 0;
+    double cost = 0.0;
+    try {
+      if (equals != std::string::npos) cost = std::stod(entry.substr(equals + 1), &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (equals == std::string::npos || equals == 0 || used == 0 ||
+        used != entry.size() - equals - 1) {
+      throw UsageError("--costs: '" + entry + "' is not NAME=COST (e.g. F0=1)");
+    }
+    weights[entry.substr(0, equals)] = cost;
+  }
+}
+
+// The AS-IS door as the bench sees it: `asis` corrected to its own recording by the sparse
+// search (docs/inverse-design.md, "The AS-IS door as the bench sees it").
+DoorModel asis_on_bench(const DoorModel& asis, const std::string& recording,
+                        const InverseDesignOptions& design_options, std::ostream& progress) {
+  progress << "AS-IS recording: " << recording << "\n";
+  InverseDesignOptions options = design_options;
+  options.smallest_change_alongside = false;
+  const InverseDesignResult bench = inverse_design(asis, {load_prepared_data(recording)}, options);
+  const DesignSolution& door = bench.solutions.front();
+  std::string changes;
+  for (const DesignParameter& p : door.parameters) {
+    if (p.changed) {
+      changes += " " + p.name + " " + format_number(p.as_is) + " -> " + format_number(p.to_be);
+    }
+  }
+  progress << "the AS-IS door as this bench sees it:"
+           << (changes.empty() ? " as its file" : changes) << "\n";
+  return door.model;
+}
+
 std::string describe(const SpecCommandOptions& o) {
   std::string text = "doorbench spec";
   for (const std::string& path : o.tobe_paths) text += " " + path;
   text += " --asis " + o.asis_path + " --out " + o.out_dir;
+  if (!o.asis_recording.empty()) text += " --asis-recording " + o.asis_recording;
   if (o.fixed_given) text += " --fixed " + (o.fixed.empty() ? std::string("''") : o.fixed);
+  if (!o.costs.empty()) text += " --costs " + o.costs;
   if (!o.tolerances_path.empty()) text += " --tolerances " + o.tolerances_path;
   text += " --samples " + std::to_string(o.samples) + " --seed " + std::to_string(o.seed);
   return text;
@@ -48,6 +92,7 @@ void run_spec(const SpecCommandOptions& options) {
   // once the inputs are read and the design is done.
   std::vector<std::filesystem::path> inputs(options.tobe_paths.begin(), options.tobe_paths.end());
   inputs.emplace_back(options.asis_path);
+  if (!options.asis_recording.empty()) inputs.emplace_back(options.asis_recording);
   if (!options.tolerances_path.empty()) inputs.emplace_back(options.tolerances_path);
   check_output_folder(options.out_dir, inputs, options.overwrite);
   // ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
@@ -58,7 +103,7 @@ void run_spec(const SpecCommandOptions& options) {
                              ": no such file (--asis takes a physical "
                              "parameter file or a doorbench fit folder)");
   }
-  const DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
+  DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
   std::ostream& progress = options.show_progress ? std::cerr : null_stream();
   progress << "AS-IS door: " << asis_file.string() << "\n";
 
@@ -90,6 +135,7 @@ void run_spec(const SpecCommandOptions& options) {
 
   InverseDesignOptions design_options;
   if (options.fixed_given) design_options.fixed = split_names(options.fixed);
+  parse_costs(options.costs, design_options.weights);
   design_options.regularization = options.regularization;
   design_options.starts = options.starts;
   if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
@@ -99,6 +145,9 @@ void run_spec(const SpecCommandOptions& options) {
         std::chrono::duration<double>(std::chrono::steady_clock::now() - design_began).count();
     progress << "  [" << static_cast<int>(seconds) << " s] " << step << "\n" << std::flush;
   };
+  if (!options.asis_recording.empty()) {
+    asis = asis_on_bench(asis, options.asis_recording, design_options, progress);
+  }
   progress << "inverse design: fitting the physical model to " << tobe.size()
            << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
   const InverseDesignResult design = inverse_design(asis, tobe, design_options, commanded);
@@ -135,11 +184,7 @@ void run_spec(const SpecCommandOptions& options) {
   const std::filesystem::path params = std::filesystem::path(options.out_dir) / "tobe-params.json";
   write_text_file_atomically(params, to_parameter_json(design.solutions.front().model));
 
-  std::cout << design.brief_report() << "\nfelt, AS-IS door:\n"
-            << evaluation.felt_before.brief_report() << "felt, TO-BE design:\n"
-            << evaluation.felt_after.brief_report()
-            << "check of the TO-BE design against the TO-BE recordings:\n"
-            << evaluation.check_after.brief_report();
+  std::cout << design.brief_report() << "\n" << spec_summary(design, evaluation);
   if (evaluation.tolerances) {
     std::cout << "tolerances:\n" << evaluation.tolerances->brief_report();
   }
@@ -164,6 +209,11 @@ void add_spec_command(CLI::App& app, Action& action) {
       ->add_option("--asis", options->asis_path,
                    "AS-IS door: a physical parameter file or a `doorbench fit` folder")
       ->required();
+  command
+      ->add_option("--asis-recording", options->asis_recording,
+                   "a recording of the AS-IS door on the same bench: the AS-IS door is first "
+                   "corrected to it (the bench's own effects stay out of the design)")
+      ->check(CLI::ExistingFile);
   command->add_option("--out", options->out_dir, "folder for the report")->required();
   command->add_flag("--overwrite", options->overwrite,
                     "write into an --out folder that exists and is not empty");
@@ -172,6 +222,9 @@ void add_spec_command(CLI::App& app, Action& action) {
                    "comma-separated parameters kept at their AS-IS values (default: m_d, l_c, "
                    "J_d and the modelling devices k_stop, c_stop, e, w_f)")
       ->each([options](const std::string&) { options->fixed_given = true; });
+  command->add_option("--costs", options->costs,
+                      "costs of change overriding the defaults, e.g. F0=1,k_s=5 (a parameter "
+                      "the data cannot tell from another: the cheaper one is changed)");
   command
       ->add_option("--tolerances", options->tolerances_path,
                    "tolerance file overriding the defaults (docs/design-spec.md)")

@@ -12,9 +12,15 @@ namespace doorbench::app {
 struct SpecCommandOptions {
   std::vector<std::string> tobe_paths;
   std::string asis_path;
+  // A recording of the AS-IS door on the same bench as the TO-BE recordings: the AS-IS
+  // door is first corrected to it by the sparse search (the bench's own effects then stay
+  // out of the design). Empty: the AS-IS file as it is.
+  std::string asis_recording;
   std::string out_dir;
   std::string fixed;  // empty: the inverse design's default fixed set
   bool fixed_given = false;
+  // Costs of change overriding the defaults, "F0=1,k_s=5" (docs/inverse-design.md).
+  std::string costs;
   std::string tolerances_path;
   int samples = 1000;
   int threads = 0;

@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
+#include <fstream>
 #include <nlohmann/json.hpp>
 
 #include "analysis/fit_synthetic.h"
@@ -46,14 +47,22 @@ DesignSolution solution_of(const DoorModel& asis, const DoorModel& tobe) {
     p.uncertainty = p.free ? 0.01 * std::abs(p.to_be) : NAN;
     p.weight = 1.0;
     p.bounds = tobe.parameter_bounds()[i];
+    p.changed = p.free && p.change != 0.0;
+    solution.parts_changed += p.changed ? 1 : 0;
     solution.parameters.push_back(p);
   }
   return solution;
 }
 
-}  // namespace
+// A known design (the reference door with a softer catch and more preload), its evaluation
+// against synthetic recordings of that door, and an alternative.
+struct KnownReport {
+  DoorModel asis;
+  InverseDesignResult design;
+  doorbench::SpecEvaluation evaluation;
+};
 
-TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[spec]") {
+KnownReport known_report() {
   const DoorModel asis = doorbench::reference_model(ModelKind::kPhysical);
   const DoorModel tobe = scaled(scaled(asis, "F_l0", 0.7), "F0", 1.04);
   const DoorModel alternative = scaled(asis, "k_l", 0.8);
@@ -65,7 +74,7 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
   InverseDesignResult design;
   design.solutions.push_back(solution_of(asis, tobe));
   design.solutions.front().held_at_as_is = {"k_s", "L0"};  // a fewest-changes design
-  design.solutions.front().parts_changed_cost = 2.0;
+  design.solutions.front().parts_changed_cost = 2.0;       // F0 and F_l0
   design.solutions.push_back(solution_of(asis, alternative));
   design.commanded_torque = true;
   design.rate_noise_rad_s = 0.001;
@@ -79,6 +88,40 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
       doorbench::evaluate_spec(asis, design, recordings, options);
   evaluation.command = "doorbench spec test";
   evaluation.asis_source = "reference door";
+  return {asis, design, evaluation};
+}
+
+// A binary PGM (P5, 8 bit) as pdftoppm -gray writes it.
+struct GrayImage {
+  int width = 0, height = 0;
+  std::vector<unsigned char> pixels;  // row by row
+};
+
+GrayImage read_pgm(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::string magic;
+  int max_value = 0;
+  GrayImage image;
+  in >> magic >> image.width >> image.height >> max_value;
+  in.get();  // the one whitespace before the pixels
+  REQUIRE(magic == "P5");
+  REQUIRE(max_value == 255);
+  image.pixels.resize(static_cast<std::size_t>(image.width) * image.height);
+  in.read(reinterpret_cast<char*>(image.pixels.data()),
+          static_cast<std::streamsize>(image.pixels.size()));
+  REQUIRE(in.good());
+  return image;
+}
+
+}  // namespace
+
+TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[spec]") {
+  KnownReport known = known_report();
+  const DoorModel& asis = known.asis;
+  const DoorModel tobe = known.design.solutions.front().model;
+  InverseDesignResult& design = known.design;
+  doorbench::SpecEvaluation& evaluation = known.evaluation;
+
   REQUIRE(evaluation.tolerances);
   CHECK(evaluation.tolerances->failed == 0);
   REQUIRE(evaluation.felt_alternatives.size() == 1);
@@ -130,9 +173,29 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
   CHECK_THAT(html, Contains("<tr class=\"changed\"><td>F_l0</td>"));
   CHECK_THAT(html, Contains("<svg"));
   CHECK_THAT(html, Contains("fitted to the torque they commanded"));
-  CHECK_THAT(html, Contains("The design with the fewest changes: AS-IS kept for k_s L0"));
-  CHECK_THAT(html, Contains("TO-BE design, opening"));
-  CHECK_THAT(html, Contains("spread of peak force to unlatch"));
+  // The first page says what to change, what stays, what it gives.
+  CHECK_THAT(html, Contains("<p><b>Change:</b> F0 250 &rarr; 260 N (+4.0 %); F_l0 15 &rarr; "
+                            "10.5 N (-30.0 %).</p>"));
+  CHECK_THAT(html, Contains("<p><b>Keep</b> the other 24 parameters as they are (parts changed: "
+                            "2, cost 2)."));
+  CHECK_THAT(html, Contains("design, opening"));
+  CHECK_THAT(html, Contains("spread of the peak force to unlatch"));
+  // Felt quantities by their human labels with units, under stated conditions.
+  CHECK_THAT(html, Contains("<td>peak force to unlatch (N)</td>"));
+  CHECK(html.find("peak_unlatch_force_N") == std::string::npos);
+  CHECK_THAT(html, Contains("The same quantities in the standard run (virtual hand, 0 to 80 deg "
+                            "and back in 6 s"));
+  // One definition: spec.json's felt quantities of a model are those of its check, read along
+  // the same recordings (like with like), and the tables cannot disagree.
+  for (std::size_t q = 0; q < doorbench::kFeltQuantities.size(); ++q) {
+    const std::string name(doorbench::kFeltQuantities[q].name);
+    INFO(name);
+    CHECK(json["felt"]["after"][name] == json["check"]["after"]["errors"][q]["model"]);
+    CHECK(json["felt"]["before"][name] == json["check"]["before"]["errors"][q]["model"]);
+    CHECK(json["felt"]["tobe_recorded"][name] == json["check"]["after"]["errors"][q]["recorded"]);
+  }
+  CHECK(json["felt"]["conditions"] == "along the TO-BE recordings' motion");
+  CHECK(json["felt"]["standard_run"]["after"]["peak_unlatch_force_N"].is_number());
   CHECK_THAT(html, Contains("tobe &lt;1&gt;.h5"));
   CHECK(html.find("<?xml") == std::string::npos);  // inline SVG, no XML declaration
 
@@ -156,4 +219,60 @@ TEST_CASE("Spec report: a design without solutions is refused", "[spec]") {
   const std::vector<PreparedData> none;
   CHECK_THROWS_WITH(doorbench::evaluate_spec(asis, empty, none),
                     "spec: the inverse design has no solution");
+}
+
+// spec.pdf must print on A4 portrait: every page rendered to pixels (pdftoppm, poppler-utils)
+// has nothing in its right margin, where a table or plot too wide for the page would run.
+TEST_CASE("Spec report: spec.pdf fits A4 portrait, nothing at the right margin", "[spec][pdf]") {
+  if (std::system("command -v weasyprint > /dev/null 2>&1") != 0 ||
+      std::system("command -v pdftoppm > /dev/null 2>&1") != 0) {
+    WARN("weasyprint or pdftoppm (poppler-utils) not installed: scripts/install-deps.sh");
+    return;
+  }
+  KnownReport known = known_report();
+  // What ran off the page before: a long command line and long notes.
+  for (int i = 0; i < 8; ++i) known.evaluation.command += " /some/long/folder/tobe-recording.h5";
+  known.design.notes.push_back(std::string(300, 'x'));
+  // The sparse search's table, with candidates the data cannot tell apart.
+  doorbench::SparseStep as_is_row, step;
+  as_is_row.data_cost = 8.12849e7;
+  step.added = "F_l0";
+  step.data_cost = 14391.8;
+  step.reduced_data_cost = 1.392;
+  step.tried = {{"F_l0", 14391.8}, {"k_l", 14400.1}, {"theta_seal", 14410.9}, {"alpha_o", 14420.5}};
+  step.equivalent = {"F_l0", "k_l", "theta_seal", "alpha_o"};
+  known.design.sparse_steps = {as_is_row, step};
+  known.design.sparse_stop = "stopped at 1 part(s): " + std::string(200, 'y');
+  doorbench::testing::TempDir dir("spec_pdf");
+  const doorbench::SpecReportFiles files =
+      doorbench::write_spec_report(dir / "out", known.design, known.evaluation);
+  INFO(files.pdf_note);
+  CHECK_THAT(doorbench::read_text_file(files.html),
+             Contains("<h2>How the parts were chosen</h2>") &&
+                 Contains("<td>k_l (14400.1), theta_seal (14410.9), alpha_o (14420.5)</td>"));
+  REQUIRE(!files.pdf.empty());
+  constexpr int kDpi = 40;
+  const std::string command = "pdftoppm -r " + std::to_string(kDpi) + " -gray '" +
+                              files.pdf.string() + "' '" + (dir / "page").string() + "'";
+  REQUIRE(std::system(command.c_str()) == 0);
+  int pages = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path)) {
+    if (entry.path().extension() != ".pgm") continue;
+    ++pages;
+    const GrayImage page = read_pgm(entry.path());
+    INFO(entry.path().filename().string() << ": " << page.width << " x " << page.height);
+    // A4 portrait: 210 x 297 mm.
+    CHECK(std::abs(page.width - 210.0 / 25.4 * kDpi) <= 2);
+    CHECK(std::abs(page.height - 297.0 / 25.4 * kDpi) <= 2);
+    // The right margin is 12 mm: its outer 10 mm must stay white on every row.
+    const int margin_px = static_cast<int>(10.0 / 25.4 * kDpi);
+    int ink = 0;
+    for (int y = 0; y < page.height; ++y) {
+      for (int x = page.width - margin_px; x < page.width; ++x) {
+        ink += page.pixels[static_cast<std::size_t>(y) * page.width + x] < 200 ? 1 : 0;
+      }
+    }
+    CHECK(ink == 0);
+  }
+  CHECK(pages >= 2);
 }

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
+#include "acquisition/rig_file.h"
 #include "analysis/parameter_file.h"
 #include "tests/support/run_doorbench.h"
 
@@ -43,7 +44,9 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   INFO("stdout: " << run.out << "\nstderr: " << run.err);
   REQUIRE(run.status == 0);
   CHECK_THAT(run.err, Contains("tolerance Monte Carlo: 8 / 8 samples"));
-  CHECK_THAT(run.out, Contains("felt, TO-BE design:"));
+  CHECK_THAT(run.out, Contains("What to change: F_l0 15 -> "));
+  CHECK_THAT(run.out, Contains("felt along the TO-BE recordings' motion ("));
+  CHECK_THAT(run.out, Contains("peak force to unlatch (N)"));
   CHECK_THAT(run.out, Contains("no PDF (not asked for)"));
   const auto json = nlohmann::json::parse(doorbench::read_text_file(dir / "spec" / "spec.json"));
   CHECK(json["tobe_sources"].size() == 2);
@@ -58,6 +61,16 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
         json["check"]["before"]["curve_rms_error_N"].get<double>());
 
   // Wrong inputs are named.
+  const auto bad_cost = run_doorbench_shell(std::string("spec '")
+                                                .append((dir / "tobe60.csv").string())
+                                                .append("' --asis '")
+                                                .append(asis_file.string())
+                                                .append("' --costs F0 --out '")
+                                                .append((dir / "spec3").string())
+                                                .append("'"),
+                                            dir);
+  CHECK(bad_cost.status != 0);
+  CHECK_THAT(bad_cost.err, Contains("--costs: 'F0' is not NAME=COST (e.g. F0=1)"));
   const auto missing = run_doorbench_shell(std::string("spec '")
                                                .append((dir / "tobe60.csv").string())
                                                .append("' --asis '")
@@ -69,4 +82,63 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   CHECK(missing.status == 1);
   CHECK_THAT(missing.err,
              Contains("nope/fitted-params.json: no such file") || Contains("nope: no such file"));
+}
+
+// Issue 20's recipe: a prototype (the reference door with the spring preload F0 -12 % and
+// the hinge friction T_h +25 %) recorded with `doorbench record` on a simulated rig whose
+// door is its file, the AS-IS door recorded on the same bench; `doorbench spec` names
+// exactly F0 and T_h (the bench's own damping stays in the AS-IS door).
+TEST_CASE("CLI: spec of a bench-recorded prototype against the AS-IS door on the same bench",
+          "[cli][spec][slow]") {
+  TempDir dir("spec_bench");
+  const doorbench::DoorModel asis = doorbench::reference_model(doorbench::ModelKind::kPhysical);
+  std::vector<double> values(asis.parameter_values().begin(), asis.parameter_values().end());
+  values[*asis.find_parameter("F0")] *= 0.88;
+  values[*asis.find_parameter("T_h")] *= 1.25;
+  const auto asis_file = dir.write("asis.json", doorbench::to_parameter_json(asis));
+  dir.write("tobe.json", doorbench::to_parameter_json(asis.with_parameter_values(values)));
+  // The built-in rig with the prototype as its door, and with another noise seed.
+  std::string rig(doorbench::simulated_dishwasher_rig_text());
+  const std::string door_line = "door = \"reference\"";
+  const std::string seed_line = "seed = 1 ";
+  REQUIRE(rig.find(door_line) != std::string::npos);
+  REQUIRE(rig.find(seed_line) != std::string::npos);
+  std::string tobe_rig = rig;
+  tobe_rig.replace(tobe_rig.find(door_line), door_line.size(), "door = \"tobe.json\"");
+  std::string asis_rig = rig;
+  asis_rig.replace(asis_rig.find(seed_line), seed_line.size(), "seed = 2 ");
+  dir.write("tobe-rig.toml", tobe_rig);
+  dir.write("asis-rig.toml", asis_rig);
+  for (const char* name : {"tobe", "asis"}) {
+    const std::string n(name);
+    const auto run =
+        run_doorbench_shell("record --rig '" + (dir / (n + "-rig.toml")).string() +
+                                "' --duration-s 19 --out '" + (dir / (n + ".h5")).string() + "'",
+                            dir);
+    INFO(run.err);
+    REQUIRE(run.status == 0);
+  }
+  const auto run = run_doorbench_shell("spec '" + (dir / "tobe.h5").string() + "' --asis '" +
+                                           asis_file.string() + "' --asis-recording '" +
+                                           (dir / "asis.h5").string() + "' --out '" +
+                                           (dir / "spec").string() + "' --samples 8 --no-pdf",
+                                       dir);
+  INFO("stdout: " << run.out << "\nstderr: " << run.err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.err, Contains("the AS-IS door as this bench sees it: b_h 0.05 -> "));
+  const auto json = nlohmann::json::parse(doorbench::read_text_file(dir / "spec" / "spec.json"));
+  CHECK(json["fit"]["parts_changed"] == 2);
+  for (const auto& p : json["parameters"]) {
+    const std::string name = p["name"];
+    INFO(name << ": " << p.dump());
+    if (name == "F0" || name == "T_h") {
+      CHECK(p["changed"] == true);
+      const double truth = name == "F0" ? 220.0 : 0.75;
+      CHECK(std::abs(p["to_be"].get<double>() - truth) <=
+            0.05 * std::abs(truth - p["as_is"].get<double>()));
+    } else {
+      CHECK(p["changed"] == false);
+    }
+  }
+  CHECK_THAT(run.out, Contains("What to change: F0 250 -> "));
 }
