@@ -320,6 +320,27 @@ struct Linearization {
   int failed_windows = 0;  // windows whose simulation failed (left out)
   // Σe² and samples per band of measured |ω| (kSpeedBandEdges_rad_s).
   std::array<double, std::size(kSpeedBandEdges_rad_s)> band_sum{}, band_samples{};
+  void add_to_band(double measured_rad_s, double error) {
+    std::size_t band = std::size(kSpeedBandEdges_rad_s) - 1;
+    while (band > 0 && std::abs(measured_rad_s) < kSpeedBandEdges_rad_s[band]) --band;
+    band_sum[band] += error * error;
+    band_samples[band] += 1.0;
+  }
+  // The examination's residual by speed (ResidualExamination::speed_bands).
+  std::vector<SpeedBand> speed_bands() const {
+    std::vector<SpeedBand> bands;
+    for (std::size_t b = 0; b < std::size(kSpeedBandEdges_rad_s); ++b) {
+      SpeedBand band;
+      band.low_rad_s = kSpeedBandEdges_rad_s[b];
+      band.high_rad_s = b + 1 < std::size(kSpeedBandEdges_rad_s)
+                            ? kSpeedBandEdges_rad_s[b + 1]
+                            : std::numeric_limits<double>::infinity();
+      band.samples = static_cast<std::size_t>(band_samples[b]);
+      band.rms_rad_s = band.samples > 0 ? std::sqrt(band_sum[b] / band_samples[b]) : 0.0;
+      bands.push_back(band);
+    }
+    return bands;
+  }
   // The residual's differences along each window, for the noise floor: (e_j − e_{j−1} − d̄)²
   // and (e_j − e_{j−2} − d̄)² (d̄ each window's mean difference), and Σ j over the residuals.
   std::vector<double> lag1_squares, lag2_squares;
@@ -467,12 +488,7 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       if (j >= 3) lag2.add(error - error_2);
       error_2 = error_1;
       error_1 = error;
-      {
-        std::size_t band = std::size(kSpeedBandEdges_rad_s) - 1;
-        while (band > 0 && std::abs(stroke.omega_rad_s[i]) < kSpeedBandEdges_rad_s[band]) --band;
-        result.band_sum[band] += error * error;
-        result.band_samples[band] += 1.0;
-      }
+      result.add_to_band(stroke.omega_rad_s[i], error);
       for (int c = 0; c < free_count + regressor_count; ++c) {
         Sensitivity& s = state[c];
         const double forcing = forcing_of(c, theta, omega, acceleration);
@@ -760,17 +776,7 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   examination.samples = linear.samples;
   examination.rate_sum_of_squares = linear.rate_sum_of_squares;
   estimate_noise_floor(linear, examination);
-  for (std::size_t b = 0; b < std::size(kSpeedBandEdges_rad_s); ++b) {
-    SpeedBand band;
-    band.low_rad_s = kSpeedBandEdges_rad_s[b];
-    band.high_rad_s = b + 1 < std::size(kSpeedBandEdges_rad_s)
-                          ? kSpeedBandEdges_rad_s[b + 1]
-                          : std::numeric_limits<double>::infinity();
-    band.samples = static_cast<std::size_t>(linear.band_samples[b]);
-    band.rms_rad_s =
-        band.samples > 0 ? std::sqrt(linear.band_sum[b] / linear.band_samples[b]) : 0.0;
-    examination.speed_bands.push_back(band);
-  }
+  examination.speed_bands = linear.speed_bands();
 
 
   // Project the free parameters' columns out (the fit re-estimates them with the effect):
