@@ -250,6 +250,7 @@ std::string LoopOptions::validate() const {
              "', which no effect has (write <effect>.<parameter>, e.g. end_stop.beta_e)";
     }
   }
+  if (refit_start_max_iterations < 1) return "loop refit_start_max_iterations must be >= 1";
   if (!finite_in(structure_max_explained_fraction, 0.0, 1.0)) {
     return "loop structure_max_explained_fraction must lie in [0, 1]";
   }
@@ -947,6 +948,7 @@ FitResult refit(const DoorModel& start, const FitResult& current, const FitOptio
   auto attempt = [&](std::size_t which) {
     FitOptions fit = which == 0 ? from_fit : from_start;
     fit.cross_validation_folds = 0;
+    fit.max_iterations = std::min(fit.max_iterations, options.refit_start_max_iterations);
     try {
       const DoorModel model = which == 0 ? current.model.with_effect(setting) : fresh_start();
       attempts[which].result = fit_model(model, data, fit);
@@ -1186,9 +1188,8 @@ FitOptions structure_fit_options(const LoopOptions& options, ModelKind other) {
 }
 
 // Whether the structure check runs, and why (or why not).
-bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
-                         const ModelFigures& figures, const ResidualExamination& last,
-                         StructureCheck& check) {
+bool structure_check_due(const LoopOptions& options, const ModelFigures& figures,
+                         const ResidualExamination& last, StructureCheck& check) {
   for (const CandidateEvidence& candidate : last.candidates) {
     check.best_explained_fraction =
         std::max(check.best_explained_fraction, candidate.explained_fraction);
@@ -1199,8 +1200,6 @@ bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
                            : std::numeric_limits<double>::infinity();
   if (!options.structure_check) {
     check.reason = "off (structure_check)";
-  } else if (stopped_at_max_steps) {
-    check.reason = "not run: the loop stopped at max_steps";
   } else if (check.best_explained_fraction >= options.structure_max_explained_fraction) {
     check.reason = "not run: the best candidate explains " +
                    percent(check.best_explained_fraction) + " of the residual (at least " +
@@ -1211,7 +1210,7 @@ bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
                    number(last.noise_floor_rad_s) + " rad/s (needs more than " +
                    printf_text("%.3g", options.structure_noise_ratio) + ")";
   } else {
-    check.reason = "no effect closes the gap: the best candidate explains " +
+    check.reason = "no effect closes the gap: the best remaining candidate explains " +
                    percent(check.best_explained_fraction) +
                    " of the residual and the held-out "
                    "RMSE " +
@@ -1225,14 +1224,14 @@ bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
 // The structure check: the other family fitted and compared, then examined for what it
 // leaves. Counts its fit in `fits`.
 StructureCheck check_structure(const FitResult& current, const PreparedData& data,
-                               const LoopOptions& options, bool stopped_at_max_steps,
-                               const ResidualExamination& last, int& fits, const Say& say) {
+                               const LoopOptions& options, const ResidualExamination& last,
+                               int& fits, const Say& say) {
   StructureCheck check;
   check.current_kind = current.model.kind();
   check.other_kind =
       check.current_kind == ModelKind::kSensory ? ModelKind::kPhysical : ModelKind::kSensory;
   check.current = model_figures(current.summary);
-  if (!structure_check_due(options, stopped_at_max_steps, check.current, last, check)) {
+  if (!structure_check_due(options, check.current, last, check)) {
     return check;
   }
   check.ran = true;
@@ -1307,11 +1306,11 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   FitResult current = result.start_fit;
   FitOptions current_options = options.fit;  // the options current was fitted with
   ResidualExamination last;                  // the examination that ended the loop
-  bool at_max_steps = false;
   for (int step_number = 1;; ++step_number) {
     if (step_number > options.max_steps) {
       result.stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
-      at_max_steps = true;
+      // The structure check's evidence: the final model's residual (no refits).
+      if (options.structure_check) last = examine(current.model, data, options, current_options);
       break;
     }
     ResidualExamination examination = examine(current.model, data, options, current_options);
@@ -1349,7 +1348,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     result.steps.push_back(std::move(step));
   }
   say("stopped: " + result.stop_reason);
-  result.structure = check_structure(current, data, options, at_max_steps, last, result.fits, say);
+  result.structure = check_structure(current, data, options, last, result.fits, say);
   result.final_fit = std::move(current);
   result.total_time_s = seconds_since(began);
   return result;
