@@ -250,7 +250,6 @@ std::string LoopOptions::validate() const {
              "', which no effect has (write <effect>.<parameter>, e.g. end_stop.beta_e)";
     }
   }
-  if (refit_start_max_iterations < 1) return "loop refit_start_max_iterations must be >= 1";
   if (!finite_in(structure_max_explained_fraction, 0.0, 1.0)) {
     return "loop structure_max_explained_fraction must lie in [0, 1]";
   }
@@ -948,7 +947,6 @@ FitResult refit(const DoorModel& start, const FitResult& current, const FitOptio
   auto attempt = [&](std::size_t which) {
     FitOptions fit = which == 0 ? from_fit : from_start;
     fit.cross_validation_folds = 0;
-    fit.max_iterations = std::min(fit.max_iterations, options.refit_start_max_iterations);
     try {
       const DoorModel model = which == 0 ? current.model.with_effect(setting) : fresh_start();
       attempts[which].result = fit_model(model, data, fit);

@@ -89,9 +89,6 @@ struct LoopOptions {
     kStartModel,
   };
   RefitStart refit_start = RefitStart::kBest;
-  // kBest's two starts stop after at most this many iterations (fit.max_iterations when
-  // smaller); the cross-validated fit of the better one continues from where it stopped.
-  int refit_start_max_iterations = 40;
   // Run a step's refits (and kBest's two starts) at once, each on a thread of its own.
   // fit_model's result does not depend on the thread or on num_threads (docs/fitting.md,
   // "Threads and determinism"), so the decisions are the same either way; only the wall
