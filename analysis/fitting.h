@@ -110,7 +110,10 @@ struct FitOptions {
   // The equation-error stage stops after two accepted steps that change no free parameter
   // by more than this fraction of its scale.
   double equation_error_step_tolerance = 1e-2;
-  int num_threads = 0;  // 0: every hardware thread
+  // Evaluation threads per solve (0: every hardware thread); the cross-validation folds also
+  // run at once, up to this many, each with its own evaluation threads. The result does not
+  // depend on it (docs/fitting.md, "Threads and determinism").
+  int num_threads = 0;
 
   // --- Report ---
   // Held-out metrics by k-fold cross-validation over strokes; 0: none; at least the

@@ -320,6 +320,27 @@ struct Linearization {
   int failed_windows = 0;  // windows whose simulation failed (left out)
   // Σe² and samples per band of measured |ω| (kSpeedBandEdges_rad_s).
   std::array<double, std::size(kSpeedBandEdges_rad_s)> band_sum{}, band_samples{};
+  void add_to_band(double measured_rad_s, double error) {
+    std::size_t band = std::size(kSpeedBandEdges_rad_s) - 1;
+    while (band > 0 && std::abs(measured_rad_s) < kSpeedBandEdges_rad_s[band]) --band;
+    band_sum[band] += error * error;
+    band_samples[band] += 1.0;
+  }
+  // The examination's residual by speed (ResidualExamination::speed_bands).
+  std::vector<SpeedBand> speed_bands() const {
+    std::vector<SpeedBand> bands;
+    for (std::size_t b = 0; b < std::size(kSpeedBandEdges_rad_s); ++b) {
+      SpeedBand band;
+      band.low_rad_s = kSpeedBandEdges_rad_s[b];
+      band.high_rad_s = b + 1 < std::size(kSpeedBandEdges_rad_s)
+                            ? kSpeedBandEdges_rad_s[b + 1]
+                            : std::numeric_limits<double>::infinity();
+      band.samples = static_cast<std::size_t>(band_samples[b]);
+      band.rms_rad_s = band.samples > 0 ? std::sqrt(band_sum[b] / band_samples[b]) : 0.0;
+      bands.push_back(band);
+    }
+    return bands;
+  }
   // The residual's differences along each window, for the noise floor: (e_j − e_{j−1} − d̄)²
   // and (e_j − e_{j−2} − d̄)² (d̄ each window's mean difference), and Σ j over the residuals.
   std::vector<double> lag1_squares, lag2_squares;
@@ -467,12 +488,7 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       if (j >= 3) lag2.add(error - error_2);
       error_2 = error_1;
       error_1 = error;
-      {
-        std::size_t band = std::size(kSpeedBandEdges_rad_s) - 1;
-        while (band > 0 && std::abs(stroke.omega_rad_s[i]) < kSpeedBandEdges_rad_s[band]) --band;
-        result.band_sum[band] += error * error;
-        result.band_samples[band] += 1.0;
-      }
+      result.add_to_band(stroke.omega_rad_s[i], error);
       for (int c = 0; c < free_count + regressor_count; ++c) {
         Sensitivity& s = state[c];
         const double forcing = forcing_of(c, theta, omega, acceleration);
@@ -760,17 +776,7 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   examination.samples = linear.samples;
   examination.rate_sum_of_squares = linear.rate_sum_of_squares;
   estimate_noise_floor(linear, examination);
-  for (std::size_t b = 0; b < std::size(kSpeedBandEdges_rad_s); ++b) {
-    SpeedBand band;
-    band.low_rad_s = kSpeedBandEdges_rad_s[b];
-    band.high_rad_s = b + 1 < std::size(kSpeedBandEdges_rad_s)
-                          ? kSpeedBandEdges_rad_s[b + 1]
-                          : std::numeric_limits<double>::infinity();
-    band.samples = static_cast<std::size_t>(linear.band_samples[b]);
-    band.rms_rad_s =
-        band.samples > 0 ? std::sqrt(linear.band_sum[b] / linear.band_samples[b]) : 0.0;
-    examination.speed_bands.push_back(band);
-  }
+  examination.speed_bands = linear.speed_bands();
 
 
   // Project the free parameters' columns out (the fit re-estimates them with the effect):
@@ -1180,9 +1186,8 @@ FitOptions structure_fit_options(const LoopOptions& options, ModelKind other) {
 }
 
 // Whether the structure check runs, and why (or why not).
-bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
-                         const ModelFigures& figures, const ResidualExamination& last,
-                         StructureCheck& check) {
+bool structure_check_due(const LoopOptions& options, const ModelFigures& figures,
+                         const ResidualExamination& last, StructureCheck& check) {
   for (const CandidateEvidence& candidate : last.candidates) {
     check.best_explained_fraction =
         std::max(check.best_explained_fraction, candidate.explained_fraction);
@@ -1193,8 +1198,6 @@ bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
                            : std::numeric_limits<double>::infinity();
   if (!options.structure_check) {
     check.reason = "off (structure_check)";
-  } else if (stopped_at_max_steps) {
-    check.reason = "not run: the loop stopped at max_steps";
   } else if (check.best_explained_fraction >= options.structure_max_explained_fraction) {
     check.reason = "not run: the best candidate explains " +
                    percent(check.best_explained_fraction) + " of the residual (at least " +
@@ -1205,7 +1208,7 @@ bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
                    number(last.noise_floor_rad_s) + " rad/s (needs more than " +
                    printf_text("%.3g", options.structure_noise_ratio) + ")";
   } else {
-    check.reason = "no effect closes the gap: the best candidate explains " +
+    check.reason = "no effect closes the gap: the best remaining candidate explains " +
                    percent(check.best_explained_fraction) +
                    " of the residual and the held-out "
                    "RMSE " +
@@ -1219,14 +1222,14 @@ bool structure_check_due(const LoopOptions& options, bool stopped_at_max_steps,
 // The structure check: the other family fitted and compared, then examined for what it
 // leaves. Counts its fit in `fits`.
 StructureCheck check_structure(const FitResult& current, const PreparedData& data,
-                               const LoopOptions& options, bool stopped_at_max_steps,
-                               const ResidualExamination& last, int& fits, const Say& say) {
+                               const LoopOptions& options, const ResidualExamination& last,
+                               int& fits, const Say& say) {
   StructureCheck check;
   check.current_kind = current.model.kind();
   check.other_kind =
       check.current_kind == ModelKind::kSensory ? ModelKind::kPhysical : ModelKind::kSensory;
   check.current = model_figures(current.summary);
-  if (!structure_check_due(options, stopped_at_max_steps, check.current, last, check)) {
+  if (!structure_check_due(options, check.current, last, check)) {
     return check;
   }
   check.ran = true;
@@ -1301,11 +1304,11 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   FitResult current = result.start_fit;
   FitOptions current_options = options.fit;  // the options current was fitted with
   ResidualExamination last;                  // the examination that ended the loop
-  bool at_max_steps = false;
   for (int step_number = 1;; ++step_number) {
     if (step_number > options.max_steps) {
       result.stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
-      at_max_steps = true;
+      // The structure check's evidence: the final model's residual (no refits).
+      if (options.structure_check) last = examine(current.model, data, options, current_options);
       break;
     }
     ResidualExamination examination = examine(current.model, data, options, current_options);
@@ -1343,7 +1346,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     result.steps.push_back(std::move(step));
   }
   say("stopped: " + result.stop_reason);
-  result.structure = check_structure(current, data, options, at_max_steps, last, result.fits, say);
+  result.structure = check_structure(current, data, options, last, result.fits, say);
   result.final_fit = std::move(current);
   result.total_time_s = seconds_since(began);
   return result;

@@ -96,9 +96,9 @@ struct LoopOptions {
   bool parallel_refits = true;
 
   // --- The structure check (docs/residual-loop.md, "The structure check") ---
-  // When the loop stops because no catalogue effect qualifies (not at max_steps), the best
-  // remaining candidate explains less than structure_max_explained_fraction of the
-  // residual, and the held-out window RMSE is more than structure_noise_ratio times the
+  // When the loop has stopped (no candidate qualified, none is left, or max_steps: then the
+  // final model is examined once more), the best remaining candidate explains less than
+  // structure_max_explained_fraction of the residual, and the held-out window RMSE is more than structure_noise_ratio times the
   // noise floor the examination estimates from the residual itself
   // (ResidualExamination::noise_floor_rad_s), the loop fits the other model family (sensory
   // <-> physical, the reference door of that family as the start) and reports the

@@ -288,6 +288,10 @@ TEST_CASE("residual loop: options are validated with a message naming the option
              Contains("soft_close_sharpness_per_rad"));
   CHECK_THAT(message([](LoopOptions& o) { o.end_stop_angles = 0; }), Contains("end_stop_angles"));
   CHECK_THAT(message([](LoopOptions& o) { o.screen_steps = -1; }), Contains("screen_steps"));
+  CHECK(message([](LoopOptions& o) { o.structure_max_explained_fraction = 1.5; }) ==
+        "loop structure_max_explained_fraction must lie in [0, 1]");
+  CHECK(message([](LoopOptions& o) { o.structure_noise_ratio = 0.5; }) ==
+        "loop structure_noise_ratio must be >= 1");
   CHECK_THAT(message([](LoopOptions& o) { o.fixed_effect_parameters = {"end_stop.beta"}; }),
              Contains("fixed_effect_parameters") && Contains("end_stop.beta"));
 

@@ -153,3 +153,39 @@ TEST_CASE("residual loop: the structure check does not run at the noise floor",
   CHECK(held_out > 0.5 * clean.structure.noise_floor_rad_s);
   CHECK(clean.structure.reason.find("times the noise floor") != std::string::npos);
 }
+
+// The other catalogue effects on a tremor-hand recording (seed 1), each at the size of
+// tests/test_residual_loop.cpp's plain-hand case: named first, its amplitude within 3
+// standard uncertainties, nothing else added. Not here: the soft-close damper of the
+// plain-hand case (b_sc = 5 N·m·s/rad from 0.15 rad) is not found on this recording (the
+// start fit's held-out RMSE is 0.143 rad/s and no candidate is worth a refit; issue 23's
+// follow-up), nor the end stop at 1.2 rad and the inertia error, which need the plain
+// hand's strokes (tests/test_residual_loop.cpp).
+TEST_CASE("residual loop: names each catalogue effect first on a tremor-hand recording",
+          "[residual_loop][tremor][slow]") {
+  struct Case {
+    effects::Kind kind;
+    std::vector<double> values;
+    std::string amplitude;
+  };
+  const Case c = GENERATE(Case{effects::Kind::kViscousDamping, {0.5}, "viscous_damping.b"},
+                          Case{effects::Kind::kGravityImbalance, {3.0}, "gravity_imbalance.g1"},
+                          Case{effects::Kind::kForceOffset, {3.0}, "force_offset.F_off"},
+                          Case{effects::Kind::kDirectionFriction, {1.5}, "direction_friction.d_dir"});
+  INFO(c.amplitude);
+  doorbench::EffectSetting setting{c.kind, c.values, {}};
+  for (const effects::EffectParameter& parameter : effects::info(c.kind).parameters) {
+    setting.bounds.push_back(parameter.default_bounds);
+  }
+  const LoopResult loop = doorbench::run_residual_loop(
+      sensory_reference(), tremor_data(sensory_reference().with_effect(setting), 1));
+  INFO(loop.full_report());
+  REQUIRE_FALSE(loop.steps.empty());
+  const doorbench::LoopStep& step = loop.steps.front();
+  CHECK(step.effect == c.kind);
+  CHECK(step.after.held_out_rmse_rad_s < step.before.held_out_rmse_rad_s);
+  CHECK(step.after.bic < step.before.bic);
+  check_within_3u(find(step, c.amplitude), c.values.front());
+  CHECK(loop.steps.size() == 1);
+  CHECK_FALSE(loop.structure.ran);
+}
