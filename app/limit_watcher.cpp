@@ -69,6 +69,30 @@ void LimitWatcher::update(const RecordStatus& status) {
   }
 }
 
+void LimitWatcher::measure(const SessionReader& session) {
+  for (Watched& w : watched_) {
+    bool recorded = false;
+    for (const ChannelInfo& channel : session.channels()) recorded |= channel.name == w.limit.channel;
+    if (!recorded) continue;
+    const ChannelSlice slice = session.read(w.limit.channel);
+    const std::vector<double> values = session.physical(w.limit.channel, slice);
+    w = Watched{w.limit};
+    for (std::size_t i = 0; i < values.size(); ++i) {
+      const bool at_limit = std::abs(values[i]) >= w.limit.limit;  // NaN (lost): not
+      if (at_limit && !w.at_limit) {
+        if (w.stretches == 0) w.first_s = slice.time_s[i];
+        ++w.stretches;
+      }
+      if (at_limit && values.size() > 1) {
+        const std::size_t next = i + 1 < values.size() ? i + 1 : i;
+        const std::size_t previous = i + 1 < values.size() ? i : i - 1;
+        w.total_s += slice.time_s[next] - slice.time_s[previous];
+      }
+      w.at_limit = at_limit;
+    }
+  }
+}
+
 std::string LimitWatcher::status_text() const {
   std::string text;
   for (const Watched& w : watched_) {

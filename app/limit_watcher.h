@@ -6,10 +6,11 @@
 // the status line and for the summary after the recording. The limits come from the rig:
 // an inclinometer's range_deg (default 10 deg) and a gyroscope's range_dps (default
 // 100 deg/s), less 1 % (a saturated reading, bias and noise included, lands within it).
-// `doorbench info` checks every sample afterwards (calibration/range_warnings.h); this
-// counts time per status call (several a second on a running DAQ; an unpaced simulated
-// bench makes few), so its times are approximate: the time since the previous status counts
-// as at the limit when the channel reached it in between.
+// `doorbench info` checks every sample afterwards (calibration/range_warnings.h). Live,
+// this counts time per status call (several a second on a running DAQ; an unpaced simulated
+// bench makes few), so the status line's times are approximate: the time since the previous
+// status counts as at the limit when the channel reached it in between. The summary's are
+// exact: measure() counts the recorded samples at the limit once the session is written.
 //
 // Thread safety: one thread calls update() (the recorder's writer thread); the text
 // functions may be called from it or after the recording ended, not concurrently.
@@ -43,6 +44,11 @@ class LimitWatcher {
   // For the status line: "" when no channel has been at its limit, else e.g. "; AT LIMIT
   // rate (gyroscope ±100 deg/s) now, 1.2 s so far".
   std::string status_text() const;
+  // After the recording: each watched channel's time at its limit, its stretches and the
+  // first time, from every recorded sample (|physical value| >= limit; a sample stands for
+  // the time to the next one, the last for the one before it). Replaces the live figures.
+  // Throws SessionError for a session that cannot be read.
+  void measure(const SessionReader& session);
   // One line per channel that reached its limit, e.g. "gyroscope rate at its ±100 deg/s
   // limit for 2.3 s in all, 3 times (first at 1.1 s)".
   std::vector<std::string> summary() const;

@@ -232,7 +232,8 @@ RecordSummary record_with_status(const RecordSources& sources, const RigDefiniti
   const RecordSummary summary =
       record_session(sources, new_session_metadata(rig, options), out_path, record);
   if (show) display.finish();
-  if (show) {
+  if (show && !limits.empty()) {
+    limits.measure(SessionReader(out_path));  // the summary's times from every sample
     for (const std::string& line : limits.summary()) std::cerr << "warning: " << line << "\n";
   }
   return summary;
