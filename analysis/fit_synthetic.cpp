@@ -29,14 +29,10 @@ PreparedData synthetic_strokes(const DoorModel& model, const SyntheticStrokeOpti
     hand_options.target_angle_rad = options.runs[r].target_angle_rad;
     hand_options.duration_s = options.runs[r].duration_s;
     const VirtualHand hand(hand_options, r_h);
-    const auto samples =
-        static_cast<std::size_t>(std::floor(hand_options.duration_s * options.sample_rate_hz));
-    std::vector<double> times(samples + 1);
-    for (std::size_t i = 0; i <= samples; ++i)
-      times[i] = static_cast<double>(i) / options.sample_rate_hz;
-    const Trajectory by_hand = simulate(model, hand, DoorState{}, times);
-    const RecordedForce recorded(times, by_hand.force_N);
-    const Trajectory run = simulate(model, recorded, DoorState{}, times);
+    const SampledRun sampled =
+        simulate_sampled_run(model, hand, hand_options.duration_s, options.sample_rate_hz);
+    const std::vector<double>& times = sampled.times_s;
+    const Trajectory& run = sampled.run;
 
     const SampleNoise noise{options.force_noise_N, options.angle_noise_rad,
                             options.rate_noise_rad_s};
@@ -49,6 +45,20 @@ PreparedData synthetic_strokes(const DoorModel& model, const SyntheticStrokeOpti
     }
   }
   return data;
+}
+
+SampledRun simulate_sampled_run(const DoorModel& model, const UserForce& hand, double duration_s,
+                                double sample_rate_hz) {
+  const auto samples = static_cast<std::size_t>(std::floor(duration_s * sample_rate_hz));
+  SampledRun sampled;
+  sampled.times_s.resize(samples + 1);
+  for (std::size_t i = 0; i <= samples; ++i) {
+    sampled.times_s[i] = static_cast<double>(i) / sample_rate_hz;
+  }
+  const Trajectory by_hand = simulate(model, hand, DoorState{}, sampled.times_s);
+  const RecordedForce recorded(sampled.times_s, by_hand.force_N);
+  sampled.run = simulate(model, recorded, DoorState{}, sampled.times_s);
+  return sampled;
 }
 
 Stroke noisy_stroke(const Trajectory& run, const std::vector<double>& times, int id,

@@ -41,6 +41,16 @@ struct SyntheticStrokeOptions {
 // where an option is 0, so that a noise-free fit keeps sensible weights).
 PreparedData synthetic_strokes(const DoorModel& model, const SyntheticStrokeOptions& options);
 
+// The sample times 0, 1/rate, ... up to duration_s (floor), and the run the data are made
+// of: the door simulated under `hand`, then again from rest under that force as sampled
+// at those times (RecordedForce), as the comment at the top of this file explains.
+struct SampledRun {
+  std::vector<double> times_s;
+  Trajectory run;
+};
+SampledRun simulate_sampled_run(const DoorModel& model, const UserForce& hand, double duration_s,
+                                double sample_rate_hz);
+
 // Standard deviations of the white noise a bench's sensors add.
 struct SampleNoise {
   double force_N = 0.0;

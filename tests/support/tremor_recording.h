@@ -112,15 +112,10 @@ inline PreparedData tremor_recording(const DoorModel& model, const TremorRecordi
     hand_options.damping_N_s_per_m = options.grip_damping_N_s_per_m;
     const TremorHand hand(hand_options, r_h, options.tremor_amplitude_m, options.drift_force_N,
                           random);
-    const auto samples =
-        static_cast<std::size_t>(std::floor(hand_options.duration_s * options.sample_rate_hz));
-    std::vector<double> times(samples + 1);
-    for (std::size_t i = 0; i <= samples; ++i) {
-      times[i] = static_cast<double>(i) / options.sample_rate_hz;
-    }
-    const Trajectory by_hand = simulate(model, hand, DoorState{}, times);
-    const RecordedForce recorded(times, by_hand.force_N);
-    const Trajectory run = simulate(model, recorded, DoorState{}, times);
+    const SampledRun sampled =
+        simulate_sampled_run(model, hand, hand_options.duration_s, options.sample_rate_hz);
+    const std::vector<double>& times = sampled.times_s;
+    const Trajectory& run = sampled.run;
     const SampleNoise noise{options.force_noise_N, options.angle_noise_rad,
                             options.rate_noise_rad_s};
     for (int marker : {1, 2}) {
