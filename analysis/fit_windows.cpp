@@ -159,11 +159,14 @@ ceres::CostFunction* make_cost(const WindowResidualSetup& setup, const FitWindow
 
 ceres::CostFunction* make_window_cost(const WindowResidualSetup& setup, const FitWindow& window) {
   // The Jacobian takes ceil(active / Stride) passes of Jets with Stride derivative parts:
-  // pick the stride that needs one pass for the usual sizes without wasting many parts.
+  // pick the stride that needs one pass for the usual sizes without wasting many parts. A
+  // loop's refit adds one to three effect parameters to the default 13-14 (17-19 with the
+  // window states): one pass of 24 instead of two of 16.
   const int free = setup.map->free_count() + (setup.estimate_start_state ? 2 : 0);
   if (free <= 4) return make_cost<4>(setup, window);
   if (free <= 8) return make_cost<8>(setup, window);
-  return make_cost<16>(setup, window);
+  if (free <= 16) return make_cost<16>(setup, window);
+  return make_cost<24>(setup, window);
 }
 
 }  // namespace doorbench

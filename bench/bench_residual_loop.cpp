@@ -6,9 +6,12 @@
 //   residual_loop_tremor_12_strokes/<effect>: 12 strokes of the tremor hand
 //     (tests/support/tremor_recording.h, seed 1); 0 clean, 1 breakaway friction (d_s − d1 = 1.5 N·m,
 //     w_s = 0.05 rad/s), 2 gravity imbalance g1 = 3 N·m. Target (issue 23): < 10 s on 2 cores.
-// Counters: fit_model calls, effects added, the loop's own time split (examinations).
+// Counters: fit_model calls, effects added, strokes, and process_cpu_s: the CPU time of the
+// whole process (every thread: the refits', the folds' and Ceres' own), user + system.
 // Each iteration is a whole loop (seconds to a minute): run with --benchmark_min_time=0.
 #include <benchmark/benchmark.h>
+
+#include <sys/resource.h>
 
 #include <filesystem>
 #include <fstream>
@@ -57,10 +60,18 @@ PreparedData tremor_recording(int effect) {
   return testing::tremor_recording(truth, options);
 }
 
+double process_cpu_s() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  auto seconds = [](const timeval& t) { return t.tv_sec + 1e-6 * t.tv_usec; };
+  return seconds(usage.ru_utime) + seconds(usage.ru_stime);
+}
+
 void run_loop(benchmark::State& state, const PreparedData& data) {
   const DoorModel start = reference_model(ModelKind::kSensory);
   int fits = 0;
   std::size_t added = 0;
+  const double cpu_before_s = process_cpu_s();
   for (auto _ : state) {
     const LoopResult loop = run_residual_loop(start, data, LoopOptions{});
     fits = loop.fits;
@@ -70,6 +81,8 @@ void run_loop(benchmark::State& state, const PreparedData& data) {
   state.counters["fits"] = fits;
   state.counters["effects_added"] = static_cast<double>(added);
   state.counters["strokes"] = static_cast<double>(data.strokes.size());
+  state.counters["process_cpu_s"] =
+      (process_cpu_s() - cpu_before_s) / static_cast<double>(state.iterations());
 }
 
 void residual_loop_demo(benchmark::State& state) {
