@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
+#include <exception>
 #include <limits>
 #include <stdexcept>
 #include <thread>
@@ -397,6 +398,54 @@ void estimate_noise_floor(Linearization& linear, ResidualExamination& examinatio
 // trapezoidal rule integrates it (A-stable through the stiff latch). `parameters` are model
 // indices: their forcing is the torque's derivative by forward-mode differentiation; J (and
 // an inertia error) act through 1/J, like the inertia error.
+// ∂τ/∂p of the free parameters `free` (model indices) at one state, the linearization's
+// parameter forcings: J ∂(dω/dt)/∂p, and −dω/dt for an inertia. Eight parameters per
+// evaluation: a Jet's parts are computed one by one, so each is bit for bit what a
+// one-part Jet seeded on that parameter alone gives.
+class ParameterForcings {
+ public:
+  ParameterForcings(const DoorModel& model, const std::vector<int>& free)
+      : model_(model),
+        free_(free),
+        is_inertia_(free.size(), 0),
+        parameters_(model.parameter_values().begin(), model.parameter_values().end()),
+        values_(free.size(), 0.0) {
+    for (std::size_t k = 0; k < free.size(); ++k) {
+      const std::string& name = model.parameter_name(free[k]);
+      is_inertia_[k] = (model.kind() == ModelKind::kSensory && free[k] == sensory::kJ) ||
+                       (model.kind() == ModelKind::kPhysical && free[k] == physical::kJd) ||
+                       name == "inertia_error.delta_J";
+    }
+  }
+  // The forcings at (θ, ω), where the door's acceleration is `acceleration`; values() has
+  // them by position in `free`.
+  void compute(double theta, double omega, double acceleration) {
+    const int count = static_cast<int>(free_.size());
+    for (int first = 0; first < count; first += kParts) {
+      const int last = std::min(count, first + kParts);
+      for (int k = first; k < last; ++k) {
+        if (!is_inertia_[k]) parameters_[free_[k]].v[k - first] = 1.0;
+      }
+      const Chunk torque = model_.evaluate(parameters_.data(), Chunk(theta), Chunk(omega), terms_);
+      for (int k = first; k < last; ++k) {
+        values_[k] = is_inertia_[k] ? -acceleration : torque.v[k - first];
+        parameters_[free_[k]].v[k - first] = 0.0;
+      }
+    }
+  }
+  const std::vector<double>& values() const { return values_; }
+
+ private:
+  static constexpr int kParts = 8;
+  using Chunk = ceres::Jet<double, kParts>;
+  const DoorModel& model_;
+  const std::vector<int>& free_;
+  std::vector<char> is_inertia_;
+  std::vector<Chunk> parameters_;
+  Chunk terms_[DoorModel::kMaxTerms];
+  std::vector<double> values_;
+};
+
 Linearization linearize(const DoorModel& model, const PreparedData& data,
                         const WindowOptions& windows, const std::vector<int>& parameters,
                         const std::vector<Regressor>& regressors) {
@@ -405,29 +454,8 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
   const double inertia = model.inertia_kg_m2();
   const double handle_radius_m = model.geometry().handle_radius_m;
 
-  const std::vector<int>& free = parameters;
-  const int free_count = static_cast<int>(free.size());
-  std::vector<char> is_inertia(free_count, 0);
-  for (int k = 0; k < free_count; ++k) {
-    const std::string& name = model.parameter_name(free[k]);
-    is_inertia[k] = (model.kind() == ModelKind::kSensory && free[k] == sensory::kJ) ||
-                    (model.kind() == ModelKind::kPhysical && free[k] == physical::kJd) ||
-                    name == "inertia_error.delta_J";
-  }
-  using Dual = ceres::Jet<double, 1>;
-  std::vector<Dual> dual_parameters(model.parameter_values().begin(),
-                                    model.parameter_values().end());
-  Dual dual_terms[DoorModel::kMaxTerms];
-  auto parameter_forcing = [&](int k, double theta, double omega, double acceleration) {
-    if (is_inertia[k]) return -acceleration;
-    Dual& parameter = dual_parameters[free[k]];
-    parameter.v[0] = 1.0;
-    const Dual torque =
-        model.evaluate(dual_parameters.data(), Dual(theta), Dual(omega), dual_terms);
-    parameter.v[0] = 0.0;
-    return torque.v[0];
-  };
-
+  const int free_count = static_cast<int>(parameters.size());
+  ParameterForcings parameter_forcings(model, parameters);
   const int regressor_count = static_cast<int>(regressors.size());
   const int columns = free_count + regressor_count + 1;
   Linearization result;
@@ -452,8 +480,9 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       theta = j == 0 ? stroke.theta_rad[i] : theta_sim[i];
       omega = j == 0 ? stroke.omega_rad_s[i] : omega_sim[i];
     };
+    // Column c's forcing at the state last given to parameter_forcings.compute.
     auto forcing_of = [&](int c, double theta, double omega, double acceleration) {
-      return c < free_count ? parameter_forcing(c, theta, omega, acceleration)
+      return c < free_count ? parameter_forcings.values()[c]
                             : unit_forcing(regressors[c - free_count], model, friction, theta,
                                            omega, acceleration);
     };
@@ -462,6 +491,7 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
     TorqueDerivatives derivatives = model.torque_derivatives(theta, omega);
     double acceleration =
         (handle_radius_m * stroke.force_N[window.first] + derivatives.torque_Nm) / inertia;
+    parameter_forcings.compute(theta, omega, acceleration);
     for (int c = 0; c < free_count + regressor_count; ++c) {
       state[c] = {0.0, 0.0, forcing_of(c, theta, omega, acceleration)};
     }
@@ -480,6 +510,7 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       const double b_theta = derivatives.dtorque_dtheta_Nm_per_rad / inertia;
       const double b_omega = derivatives.dtorque_domega_Nm_s_per_rad / inertia;
       const double determinant = (1.0 - half_h * b_omega) - half_h * half_h * b_theta;
+      parameter_forcings.compute(theta, omega, acceleration);
       const double error = stroke.omega_rad_s[i] - omega;
       result.rate_sum_of_squares += error * error;
       ++result.samples;
@@ -686,11 +717,21 @@ ColumnScore last_column_score(const Linearization& linear) {
 // refined amplitude over its window-clustered standard error there. A linear score is
 // poor where the effect's response is not linear in its amplitude: breakaway friction
 // that holds the door a few milliseconds longer before the latch snaps.
-void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
-                            const LoopOptions& options, const WindowOptions& windows,
-                            const std::vector<int>& free, ResidualExamination& examination) {
-  if (options.screen_steps <= 0) return;
-  std::optional<Refined> without;
+// A candidate chosen for the second look: the model with it added at its start values, and
+// the parameters to refine (the free ones, the effect's other free parameters, its
+// amplitude last: the column scored).
+struct SecondLook {
+  CandidateEvidence* candidate = nullptr;
+  DoorModel with;
+  std::vector<int> parameters;
+  int amplitude = -1;
+};
+
+// The candidates the second look takes (those the linear score leaves refit slots for).
+std::vector<SecondLook> second_look_candidates(const DoorModel& model, const LoopOptions& options,
+                                               const std::vector<int>& free,
+                                               ResidualExamination& examination) {
+  std::vector<SecondLook> chosen;
   // Only refit slots that the linear score leaves free are worth a second look.
   int slots = options.refit_candidates;
   for (const CandidateEvidence& candidate : examination.candidates) {
@@ -699,14 +740,12 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
       --slots;
     }
   }
-  int screened = 0;
   for (CandidateEvidence& candidate : examination.candidates) {
-    if (screened >= slots) break;
+    if (static_cast<int>(chosen.size()) >= slots) break;
     if (candidate.explained_fraction < options.min_explained_fraction ||
         candidate.score_z >= options.min_score_z || candidate.start_values.empty()) {
       continue;
     }
-    ++screened;
     const effects::EffectInfo& info = effects::info(candidate.kind);
     EffectSetting setting{candidate.kind, candidate.start_values, {}};
     for (const effects::EffectParameter& parameter : info.parameters) {
@@ -716,9 +755,10 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
     try {
       with = model.with_effect(setting);
     } catch (const std::invalid_argument&) {
-      continue;  // the start breaks a constraint: no second look
+      // The start breaks a constraint: no second look (its slot still counts as taken).
+      chosen.push_back({&candidate, model, {}, -1});
+      continue;
     }
-    // The effect's free parameters, the amplitude last (the column scored).
     std::vector<int> parameters = free;
     int amplitude = -1;
     for (std::size_t k = 0; k < info.parameters.size(); ++k) {
@@ -735,15 +775,46 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
         parameters.push_back(*index);
       }
     }
-    if (amplitude < 0) continue;
-    parameters.push_back(amplitude);
-    if (!without) without = refine_parameters(model, data, windows, free, options.screen_steps);
-    const Refined refined = refine_parameters(*with, data, windows, parameters, options.screen_steps);
-    const ColumnScore score = last_column_score(refined.linear);
+    if (amplitude >= 0) parameters.push_back(amplitude);
+    chosen.push_back({&candidate, std::move(*with), std::move(parameters), amplitude});
+  }
+  std::erase_if(chosen, [](const SecondLook& look) { return look.amplitude < 0; });
+  return chosen;
+}
+
+void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
+                            const LoopOptions& options, const WindowOptions& windows,
+                            const std::vector<int>& free, ResidualExamination& examination) {
+  if (options.screen_steps <= 0) return;
+  const std::vector<SecondLook> chosen =
+      second_look_candidates(model, options, free, examination);
+  if (chosen.empty()) return;
+  // The model without any candidate and each candidate's, refined at once (each is
+  // deterministic and independent: the same results as one after another).
+  std::vector<std::optional<Refined>> refined(chosen.size() + 1);
+  std::vector<std::exception_ptr> errors(chosen.size() + 1);
+  run_all(refined.size(), options.parallel_refits, [&](std::size_t j) {
+    try {
+      refined[j] = j == 0 ? refine_parameters(model, data, windows, free, options.screen_steps)
+                          : refine_parameters(chosen[j - 1].with, data, windows,
+                                              chosen[j - 1].parameters, options.screen_steps);
+    } catch (...) {
+      errors[j] = std::current_exception();
+    }
+  });
+  for (const std::exception_ptr& error : errors) {
+    if (error) std::rethrow_exception(error);
+  }
+  const Refined& without = *refined[0];
+  for (std::size_t j = 0; j < chosen.size(); ++j) {
+    CandidateEvidence& candidate = *chosen[j].candidate;
+    const Refined& with = *refined[j + 1];
+    const effects::EffectInfo& info = effects::info(candidate.kind);
+    const ColumnScore score = last_column_score(with.linear);
     const double offset =
-        candidate.kind == effects::Kind::kStribeck ? base_friction(refined.model).level_Nm : 0.0;
-    const double value = refined.model.parameter_values()[amplitude] - offset;
-    const double fall = without->linear.rate_sum_of_squares - refined.linear.rate_sum_of_squares;
+        candidate.kind == effects::Kind::kStribeck ? base_friction(with.model).level_Nm : 0.0;
+    const double value = with.model.parameter_values()[chosen[j].amplitude] - offset;
+    const double fall = without.linear.rate_sum_of_squares - with.linear.rate_sum_of_squares;
     candidate.screened = true;
     candidate.screen_explained_fraction =
         examination.rate_sum_of_squares > 0 ? std::max(0.0, fall) / examination.rate_sum_of_squares
@@ -752,9 +823,9 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
         score.spread > 0 && fall > 0 ? std::abs(value) * score.pxx / std::sqrt(score.spread) : 0.0;
     candidate.screen_values.clear();
     for (const effects::EffectParameter& parameter : info.parameters) {
-      const std::optional<int> index = refined.model.find_parameter(
+      const std::optional<int> index = with.model.find_parameter(
           std::string(info.name) + "." + std::string(parameter.info.name));
-      candidate.screen_values.push_back(refined.model.parameter_values()[*index]);
+      candidate.screen_values.push_back(with.model.parameter_values()[*index]);
     }
   }
 }
