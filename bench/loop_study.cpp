@@ -19,7 +19,9 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include "analysis/fit_synthetic.h"
 #include "analysis/parameter_file.h"
@@ -99,8 +101,29 @@ int main(int argc, char** argv) {
 
   const DoorModel sensory = reference_model(ModelKind::kSensory);
   const double d1 = sensory.parameter_values()[sensory.find_parameter("d1").value()];
+  // The catalogue's other effects at the plain-hand tests' sizes, on the tremor hand.
+  struct TremorCase {
+    const char* name;
+    effects::Kind kind;
+    std::vector<double> values;
+  };
+  const TremorCase tremor_cases[] = {
+      {"soft-close", effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
+      {"end-stop", effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
+      {"inertia", effects::Kind::kInertiaError, {0.2}},
+      {"viscous", effects::Kind::kViscousDamping, {0.5}},
+      {"gravity", effects::Kind::kGravityImbalance, {3.0}},
+      {"offset", effects::Kind::kForceOffset, {3.0}},
+      {"direction", effects::Kind::kDirectionFriction, {1.5}},
+  };
+  const auto tremor_case =
+      std::find_if(std::begin(tremor_cases), std::end(tremor_cases),
+                   [&](const TremorCase& c) { return which == c.name; });
   PreparedData data;
-  if (which == "clean") {
+  if (tremor_case != std::end(tremor_cases)) {
+    data = testing::tremor_recording(with_effect(sensory, tremor_case->kind, tremor_case->values),
+                                     recording);
+  } else if (which == "clean") {
     data = testing::tremor_recording(sensory, recording);
   } else if (which == "stribeck" || which == "stribeck-small" || which == "stribeck-large") {
     const double size = which == "stribeck" ? 1.5 : which == "stribeck-small" ? 0.75 : 3.0;
@@ -113,27 +136,6 @@ int main(int argc, char** argv) {
     plain.seed = 3;
     data = synthetic_strokes(with_effect(sensory, effects::Kind::kEndStop, {200.0, 1.2, 3000.0}),
                              plain);
-  } else if (which == "soft-close") {
-    data = testing::tremor_recording(
-        with_effect(sensory, effects::Kind::kSoftClose, {5.0, 0.15, 50.0}), recording);
-  } else if (which == "end-stop") {
-    data = testing::tremor_recording(
-        with_effect(sensory, effects::Kind::kEndStop, {200.0, 1.2, 3000.0}), recording);
-  } else if (which == "inertia") {
-    data = testing::tremor_recording(with_effect(sensory, effects::Kind::kInertiaError, {0.2}),
-                                     recording);
-  } else if (which == "viscous") {
-    data = testing::tremor_recording(
-        with_effect(sensory, effects::Kind::kViscousDamping, {0.5}), recording);
-  } else if (which == "gravity") {
-    data = testing::tremor_recording(
-        with_effect(sensory, effects::Kind::kGravityImbalance, {3.0}), recording);
-  } else if (which == "offset") {
-    data = testing::tremor_recording(with_effect(sensory, effects::Kind::kForceOffset, {3.0}),
-                                     recording);
-  } else if (which == "direction") {
-    data = testing::tremor_recording(
-        with_effect(sensory, effects::Kind::kDirectionFriction, {1.5}), recording);
   } else if (which == "physical") {
     data = testing::tremor_recording(reference_model(ModelKind::kPhysical), recording);
   } else if (which == "demo") {
