@@ -9,7 +9,8 @@
 //   --exam: the examination of the true-model-less fit only (no refits)
 //   --serial: refits one after another; --no-second-look: screen_steps = 0
 //   --tremor-mm A, --drift-N F: the tremor hand's amplitudes (defaults 0.5 mm, 1 N)
-//   --min-z Z: LoopOptions::min_score_z; --only EFFECT: the one candidate (catalogue name)
+//   --min-z Z: LoopOptions::min_score_z; --only EFFECT: the one candidate (catalogue name);
+//   --screen-steps N: LoopOptions::screen_steps
 //   --strokes: each stroke's angle range and its speed through a few angles, then stop
 #include <algorithm>
 #include <chrono>
@@ -43,7 +44,7 @@ DoorModel with_effect(const DoorModel& model, effects::Kind kind, std::vector<do
 }
 
 // Each stroke's angle range and duration, and its measured speed where it passes a few
-// angles (the first crossing, by linear interpolation), for seeing which effects a recording
+// angles (the rate at the first sample past each angle), for seeing which effects a recording
 // can excite (a soft close near closed, an end stop near open).
 void print_strokes(const PreparedData& data) {
   const double marks_rad[] = {0.3, 0.15, 0.1, 0.05, 1.1, 1.2};
