@@ -4,17 +4,25 @@
 // docs/residual-loop.md and docs/PERFORMANCE.md.
 //
 //   doorbench_loop_study CASE [SEED] [--exam]
-//   CASE: clean | stribeck | stribeck-small | stribeck-large | physical | demo | plain-end-stop
+//   CASE: clean | stribeck | stribeck-small | stribeck-large | physical | demo | plain-end-stop |
+//         soft-close | end-stop | inertia (J held fixed) | viscous | gravity | offset | direction
 //   --exam: the examination of the true-model-less fit only (no refits)
 //   --serial: refits one after another; --no-second-look: screen_steps = 0
 //   --tremor-mm A, --drift-N F: the tremor hand's amplitudes (defaults 0.5 mm, 1 N)
+//   --min-z Z: LoopOptions::min_score_z; --only EFFECT: the one candidate (catalogue name);
+//   --screen-steps N: LoopOptions::screen_steps
+//   --strokes: each stroke's angle range and its speed through a few angles, then stop
+#include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <string>
+#include <vector>
 
 #include "analysis/fit_synthetic.h"
 #include "analysis/parameter_file.h"
@@ -33,6 +41,35 @@ DoorModel with_effect(const DoorModel& model, effects::Kind kind, std::vector<do
     setting.bounds.push_back(p.default_bounds);
   }
   return model.with_effect(std::move(setting));
+}
+
+// Each stroke's angle range and duration, and its measured speed where it passes a few
+// angles (the rate at the first sample past each angle), for seeing which effects a recording
+// can excite (a soft close near closed, an end stop near open).
+void print_strokes(const PreparedData& data) {
+  const double marks_rad[] = {0.3, 0.15, 0.1, 0.05, 1.1, 1.2};
+  for (const Stroke& s : data.strokes) {
+    if (s.size() == 0) continue;
+    double lo = s.theta_rad[0], hi = s.theta_rad[0], fastest = 0.0;
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      lo = std::min(lo, s.theta_rad[i]);
+      hi = std::max(hi, s.theta_rad[i]);
+      fastest = std::max(fastest, std::abs(s.omega_rad_s[i]));
+    }
+    std::printf("stroke %2d %-7s %.2f s  theta %.3f..%.3f rad  |omega| max %.2f rad/s  at:", s.id,
+                s.direction == StrokeDirection::kOpening ? "opening" : "closing",
+                s.time_s.back() - s.time_s.front(), lo, hi, fastest);
+    for (double mark : marks_rad) {
+      for (std::size_t i = 1; i < s.size(); ++i) {
+        if ((s.theta_rad[i - 1] - mark) * (s.theta_rad[i] - mark) <= 0 &&
+            s.theta_rad[i - 1] != s.theta_rad[i]) {
+          std::printf("  %.2f: %.3f", mark, s.omega_rad_s[i]);
+          break;
+        }
+      }
+    }
+    std::printf("\n");
+  }
 }
 
 }  // namespace
@@ -65,8 +102,29 @@ int main(int argc, char** argv) {
 
   const DoorModel sensory = reference_model(ModelKind::kSensory);
   const double d1 = sensory.parameter_values()[sensory.find_parameter("d1").value()];
+  // The catalogue's other effects at the plain-hand tests' sizes, on the tremor hand.
+  struct TremorCase {
+    const char* name;
+    effects::Kind kind;
+    std::vector<double> values;
+  };
+  const TremorCase tremor_cases[] = {
+      {"soft-close", effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
+      {"end-stop", effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
+      {"inertia", effects::Kind::kInertiaError, {0.2}},
+      {"viscous", effects::Kind::kViscousDamping, {0.5}},
+      {"gravity", effects::Kind::kGravityImbalance, {3.0}},
+      {"offset", effects::Kind::kForceOffset, {3.0}},
+      {"direction", effects::Kind::kDirectionFriction, {1.5}},
+  };
+  const auto tremor_case =
+      std::find_if(std::begin(tremor_cases), std::end(tremor_cases),
+                   [&](const TremorCase& c) { return which == c.name; });
   PreparedData data;
-  if (which == "clean") {
+  if (tremor_case != std::end(tremor_cases)) {
+    data = testing::tremor_recording(with_effect(sensory, tremor_case->kind, tremor_case->values),
+                                     recording);
+  } else if (which == "clean") {
     data = testing::tremor_recording(sensory, recording);
   } else if (which == "stribeck" || which == "stribeck-small" || which == "stribeck-large") {
     const double size = which == "stribeck" ? 1.5 : which == "stribeck-small" ? 0.75 : 3.0;
@@ -97,10 +155,27 @@ int main(int argc, char** argv) {
   }
   std::printf("%s: %zu strokes\n", which.c_str(), data.strokes.size());
 
+  bool strokes_only = false;
+  for (int i = 2; i < argc; ++i) strokes_only = strokes_only || std::strcmp(argv[i], "--strokes") == 0;
+  if (strokes_only) {
+    print_strokes(data);
+    return 0;
+  }
+
   LoopOptions options;
+  if (which == "inertia") options.fit.fixed_parameters = {"J"};  // else the error is J itself
   for (int i = 2; i < argc; ++i) {
     if (std::strcmp(argv[i], "--serial") == 0) options.parallel_refits = false;
     if (std::strcmp(argv[i], "--no-second-look") == 0) options.screen_steps = 0;
+    if (std::strcmp(argv[i], "--screen-steps") == 0 && i + 1 < argc) {
+      options.screen_steps = std::stoi(argv[i + 1]);
+    }
+    if (std::strcmp(argv[i], "--min-z") == 0 && i + 1 < argc) {
+      options.min_score_z = std::stod(argv[i + 1]);
+    }
+    if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
+      options.candidates = {effects::find(argv[i + 1]).value()};
+    }
   }
   const auto began = std::chrono::steady_clock::now();
   options.progress = [&](const std::string& line) {

@@ -4,13 +4,17 @@
 // before each stroke, the bench's noise). Breakaway friction, d_s − d1 = 1.5 N·m above the
 // Coulomb level with w_s = 0.05 rad/s (issue 23), must be named first with its parameters
 // within 3 standard uncertainties on three seeds, and nothing added on the clean recordings
-// of the same seeds.
+// of the same seeds. Every other catalogue effect is named first on seed 1 (the soft close,
+// the end stop and the inertia error on seeds 2 and 3 too), and a physical door fitted with
+// the sensory model ends with the structure check naming the physical model.
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <cstdint>
 #include <string>
 #include <vector>
 
+#include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
 #include "analysis/residual_loop.h"
 #include "tests/support/tremor_recording.h"
@@ -154,38 +158,112 @@ TEST_CASE("residual loop: the structure check does not run at the noise floor",
   CHECK(clean.structure.reason.find("times the noise floor") != std::string::npos);
 }
 
-// The other catalogue effects on a tremor-hand recording (seed 1), each at the size of
-// tests/test_residual_loop.cpp's plain-hand case: named first, its amplitude within 3
-// standard uncertainties, nothing else added. Not here: the soft-close damper of the
-// plain-hand case (b_sc = 5 N·m·s/rad from 0.15 rad) is not found on this recording (the
-// start fit's held-out RMSE is 0.143 rad/s and no candidate is worth a refit; issue 23's
-// follow-up), nor the end stop at 1.2 rad and the inertia error, which need the plain
-// hand's strokes (tests/test_residual_loop.cpp).
-TEST_CASE("residual loop: names each catalogue effect first on a tremor-hand recording",
-          "[residual_loop][tremor][slow]") {
-  struct Case {
-    effects::Kind kind;
-    std::vector<double> values;
-    std::string amplitude;
-  };
-  const Case c = GENERATE(Case{effects::Kind::kViscousDamping, {0.5}, "viscous_damping.b"},
-                          Case{effects::Kind::kGravityImbalance, {3.0}, "gravity_imbalance.g1"},
-                          Case{effects::Kind::kForceOffset, {3.0}, "force_offset.F_off"},
-                          Case{effects::Kind::kDirectionFriction, {1.5}, "direction_friction.d_dir"});
-  INFO(c.amplitude);
+namespace {
+
+// A catalogue effect of the size of tests/analysis/test_residual_loop.cpp's plain-hand case,
+// added to the reference door, recorded by the tremor hand with the default options (every
+// closing goes through the soft-close zone to closed, the last run opens past 1.2 rad into
+// the end stop), and the loop run from the plain reference door: the effect must be named
+// first, every free parameter of it within 3 standard uncertainties of the truth, nothing
+// else added. An inertia error is J itself while J is free, so that case holds J (as the
+// plain-hand test does).
+struct CatalogueCase {
+  effects::Kind kind;
+  std::vector<double> values;  // the effect's parameters, in the catalogue's order
+  bool hold_J = false;
+};
+
+LoopResult check_catalogue_case(const CatalogueCase& c, std::uint32_t seed) {
+  const effects::EffectInfo& info = effects::info(c.kind);
+  INFO(info.name << ", seed " << seed);
   doorbench::EffectSetting setting{c.kind, c.values, {}};
-  for (const effects::EffectParameter& parameter : effects::info(c.kind).parameters) {
+  for (const effects::EffectParameter& parameter : info.parameters) {
     setting.bounds.push_back(parameter.default_bounds);
   }
-  const LoopResult loop = doorbench::run_residual_loop(
-      sensory_reference(), tremor_data(sensory_reference().with_effect(setting), 1));
+  doorbench::LoopOptions options;
+  if (c.hold_J) options.fit.fixed_parameters = {"J"};
+  LoopResult loop = doorbench::run_residual_loop(
+      sensory_reference(), tremor_data(sensory_reference().with_effect(setting), seed), options);
   INFO(loop.full_report());
   REQUIRE_FALSE(loop.steps.empty());
   const doorbench::LoopStep& step = loop.steps.front();
   CHECK(step.effect == c.kind);
   CHECK(step.after.held_out_rmse_rad_s < step.before.held_out_rmse_rad_s);
   CHECK(step.after.bic < step.before.bic);
-  check_within_3u(find(step, c.amplitude), c.values.front());
+  for (std::size_t k = 0; k < info.parameters.size(); ++k) {
+    const std::string name = std::string(info.name) + "." + std::string(info.parameters[k].info.name);
+    const doorbench::FittedParameter* p = find(step, name);
+    REQUIRE(p != nullptr);
+    if (k == 0 || p->free) check_within_3u(p, c.values[k]);  // the amplitude is always free
+  }
   CHECK(loop.steps.size() == 1);
+  // Where the structure check runs (its noise floor is an estimate), it keeps the sensory
+  // model: the door is a sensory one.
+  CHECK_FALSE(loop.structure.other_better);
+  return loop;
+}
+
+}  // namespace
+
+// Every catalogue effect on the tremor hand's seed-1 recording, at the plain-hand case's
+// size. The soft close needs the second look (docs/residual-loop.md, "Recordings with the
+// tremor hand": linear z 3.6; its second look's standard error from the residual the
+// linearised step leaves, z 6.4). Here the check does not run at all: the held-out error
+// after the effect is near the noise floor.
+TEST_CASE("residual loop: names each catalogue effect first on a tremor-hand recording",
+          "[residual_loop][tremor][slow]") {
+  const CatalogueCase c =
+      GENERATE(CatalogueCase{effects::Kind::kViscousDamping, {0.5}},
+               CatalogueCase{effects::Kind::kGravityImbalance, {3.0}},
+               CatalogueCase{effects::Kind::kForceOffset, {3.0}},
+               CatalogueCase{effects::Kind::kDirectionFriction, {1.5}},
+               CatalogueCase{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
+               CatalogueCase{effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
+               CatalogueCase{effects::Kind::kInertiaError, {0.2}, true});
+  const LoopResult loop = check_catalogue_case(c, 1);
+  INFO(loop.brief_report());
   CHECK_FALSE(loop.structure.ran);
+}
+
+// Why the soft close needed the second look on seed 1, without the refits: the linear score
+// stays below the refit threshold (5.4%, z 3.6, measured), and the second look's refinement,
+// five steps from a start fit that bent the latch to mimic the damper, ends short of a
+// least-squares point. Its z takes the standard error from the residual the linearised step
+// leaves; from the refined point's own residual it was 1.6 and the damper was not refitted.
+TEST_CASE("residual loop: the second look sees the tremor hand's soft close that the linear "
+          "score undersells",
+          "[residual_loop][tremor]") {
+  doorbench::EffectSetting setting{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}, {}};
+  for (const effects::EffectParameter& parameter : effects::info(setting.kind).parameters) {
+    setting.bounds.push_back(parameter.default_bounds);
+  }
+  const doorbench::PreparedData data = tremor_data(sensory_reference().with_effect(setting), 1);
+  const doorbench::LoopOptions options;
+  const doorbench::FitResult fit = doorbench::fit_model(sensory_reference(), data, options.fit);
+  const doorbench::ResidualExamination examination =
+      doorbench::examine_residual(fit.model, data, options);
+  REQUIRE_FALSE(examination.candidates.empty());
+  const doorbench::CandidateEvidence& best = examination.candidates.front();
+  INFO(best.name << ": " << best.explained_fraction << ", z " << best.score_z << "; second look "
+                 << best.screen_explained_fraction << ", z " << best.screen_score_z);
+  CHECK(best.kind == effects::Kind::kSoftClose);
+  CHECK(best.score_z < options.min_score_z);  // the linear score alone would not refit it
+  REQUIRE(best.screened);
+  CHECK(best.screen_explained_fraction > 0.5);
+  CHECK(best.screen_score_z >= options.min_score_z);
+}
+
+// The effects the tremor hand's strokes reach only in part (the soft-close zone at the end of
+// each closing, the end stop in the last run's two strokes) and the inertia error, on two more
+// seeds. On seed 2 the end stop's loop ends at 5.5 times the estimated noise floor and the
+// structure check runs; it keeps the sensory model.
+TEST_CASE("residual loop: names a soft close, an end stop and an inertia error first on two "
+          "more tremor-hand seeds",
+          "[residual_loop][tremor][slow]") {
+  const std::uint32_t seed = GENERATE(2u, 3u);
+  const CatalogueCase c =
+      GENERATE(CatalogueCase{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
+               CatalogueCase{effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
+               CatalogueCase{effects::Kind::kInertiaError, {0.2}, true});
+  check_catalogue_case(c, seed);
 }
