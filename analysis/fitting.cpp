@@ -783,13 +783,17 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitO
   // in a local minimum (an output-error cost is not convex: a window can settle on the
   // wrong side of a latch barrier). Restart once from the best such fold.
   const double fitted_rmse = result.summary.fitted.window.rmse();
+  // Each fold's model on all strokes, at once (independent and deterministic), then in order.
+  std::vector<double> fold_rmse(fold_models.size());
+  parallel_for(static_cast<int>(fold_models.size()), fit_thread_count(options), [&](int k) {
+    fold_rmse[k] = evaluate_model(fold_models[k], data, options).window.rmse();
+  });
   const DoorModel* best = nullptr;
   double best_rmse = kFoldRestartGain * fitted_rmse;
-  for (const DoorModel& fold_model : fold_models) {
-    const double rmse = evaluate_model(fold_model, data, options).window.rmse();
-    if (rmse < best_rmse) {
-      best_rmse = rmse;
-      best = &fold_model;
+  for (std::size_t k = 0; k < fold_models.size(); ++k) {
+    if (fold_rmse[k] < best_rmse) {
+      best_rmse = fold_rmse[k];
+      best = &fold_models[k];
     }
   }
   if (best == nullptr) return result;
