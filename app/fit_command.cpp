@@ -17,6 +17,7 @@
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
+#include "app/progress.h"
 
 namespace doorbench::app {
 namespace {
@@ -68,12 +69,14 @@ void run_fit(const FitCommandOptions& options) {
     fit_options.objective = FitOptions::Objective::kWholeStrokeMax;
   }
   fit_options.cross_validation_folds = options.folds;
-  std::cerr << "fitting the " << options.input.model.model << " model"
-            << (options.folds > 0
-                    ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
-                    : "")
-            << "\n";
+  StatusLine status(std::cerr, stderr_is_terminal());
+  status.line("fitting the " + options.input.model.model + " model" +
+              (options.folds > 0
+                   ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
+                   : ""));
+  fit_options.progress = fit_progress_display(status);
   const FitResult result = fit_model(start, data, fit_options);
+  status.finish();
 
   const std::filesystem::path dir = options.out_dir;
   write_text_file_atomically(dir / "result.json", fit_result_json(result, data).dump(2) + "\n");

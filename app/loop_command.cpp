@@ -1,13 +1,16 @@
 // doorbench loop: fit, look at the residual, add the effect the model lacks, refit, and
 // report the error before and after each step (analysis/residual_loop.h).
+#include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include "analysis/residual_loop.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/loop_output.h"
+#include "app/progress.h"
 
 namespace doorbench::app {
 namespace {
@@ -25,8 +28,21 @@ void run_loop(const LoopCommandOptions& options) {
   loop_options.fit.cross_validation_folds = options.folds;
   loop_options.fit.substeps_per_sample = substeps_for(inputs.data);
   loop_options.max_steps = options.max_steps;
-  loop_options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
+  // Stage lines stay; the start fit's, the steps' and the structure check's progress is a
+  // status line with the time left (app/progress.h).
+  StatusLine status(std::cerr, stderr_is_terminal());
+  loop_options.progress = [&status](const std::string& line) { status.line(line); };
+  loop_options.fit.progress = fit_progress_display(status);
+  std::optional<std::chrono::steady_clock::time_point> steps_began;
+  loop_options.step_progress = [&status, &steps_began](const LoopProgress& progress) {
+    const auto now = std::chrono::steady_clock::now();
+    if (!steps_began) steps_began = now;
+    status.update(
+        loop_progress_text(progress, std::chrono::duration<double>(now - *steps_began).count()),
+        now, progress.refits_done == 0);
+  };
   const LoopResult result = run_residual_loop(inputs.start, inputs.data, loop_options);
+  status.finish();
   const std::string table =
       write_loop_outputs(options.out_dir, result, inputs.data, options.input.model.model,
                          loop_options.fit, inputs.report_lines);
