@@ -300,8 +300,8 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
       problem.z() = coarse.z();
     }
   }
-  WindowProblem::Outcome outcome = problem.solve(
-      settings, std::max(1, max_iterations - used), options.uncertainty_tolerance);
+  WindowProblem::Outcome outcome =
+      problem.solve(settings, std::max(1, max_iterations - used), options.uncertainty_tolerance);
   outcome.iterations += used;
   if (used > 0) outcome.initial_cost = initial_cost;
   return outcome;

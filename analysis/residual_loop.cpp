@@ -1330,9 +1330,9 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     say(ranking_line(step_number, examination));
     const ModelFigures before = model_figures(current.summary);
     const std::vector<std::size_t> to_refit = select_refits(examination, options, step_number, say);
-    std::vector<std::optional<FitResult>> refits = run_refits(
-        start, current, current_options, data, options, to_refit, examination, result.fits, say,
-        step_number);
+    std::vector<std::optional<FitResult>> refits =
+        run_refits(start, current, current_options, data, options, to_refit, examination,
+                   result.fits, say, step_number);
     const int chosen = choose(examination.candidates);
     if (chosen < 0) {
       result.stop_reason =

@@ -104,7 +104,8 @@ std::string ResidualWhiteness::report_line() const {
   const Lags autos{autocorrelation, 1, 0, auto_outside};
   const Lags cross{cross_correlation, 0, cross_correlation.size() / 2, cross_outside};
   const char* verdict =
-      !cross.white(band) ? "not white: the residual follows the force (dynamics the model does not reproduce, whatever the residual's size)"
+      !cross.white(band) ? "not white: the residual follows the force (dynamics the model does not "
+                           "reproduce, whatever the residual's size)"
       : !autos.white(band)
           ? "not white: correlated in time but not with the force (coloured noise such as the "
             "rate's filtering, or dynamics the force does not drive)"

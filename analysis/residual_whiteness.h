@@ -33,10 +33,11 @@ struct ResidualWhiteness {
   std::string summary() const;
   // One line for the fit's and the loop's text reports: each correlation's lags outside the
   // band, its largest |r| (lag 0 of the autocorrelation left out) and where, and the verdict
-  // (kWhitenessOutsideShare, kWhitenessPeakBands), e.g. "residual whiteness: autocorrelation outside the 99 % band
-  // (±0.012) at 12 of 50 lags (largest |r| 0.63 at lag 0.005 s); cross-correlation with the
-  // force outside it at 0 of 101 lags (largest |r| 0.0081 at lag -0.12 s); verdict: not
-  // white: ...". Whiteness says whether the residual is systematic, not how large it is.
+  // (kWhitenessOutsideShare, kWhitenessPeakBands), e.g. "residual whiteness: autocorrelation
+  // outside the 99 % band (±0.012) at 12 of 50 lags (largest |r| 0.63 at lag 0.005 s);
+  // cross-correlation with the force outside it at 0 of 101 lags (largest |r| 0.0081 at
+  // lag -0.12 s); verdict: not white: ...". It says whether the residual is systematic, not
+  // how large it is.
   std::string report_line() const;
 };
 

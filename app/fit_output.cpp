@@ -151,8 +151,7 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
   }
   FitPlots plots;
   std::vector<std::string>& files = plots.files;
-  files = {"rate.svg", "force-angle.svg", "residual-angle.svg",
-                                    "residual-speed.svg"};
+  files = {"rate.svg", "force-angle.svg", "residual-angle.svg", "residual-speed.svg"};
   write_svg_plot((dir / files[0]).string(),
                  {"Door rate: measured and simulated window by window", "time [s]", "rate [deg/s]"},
                  rate);

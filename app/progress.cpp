@@ -29,8 +29,7 @@ double time_left_s(double done, double total, double elapsed_s) {
   return elapsed_s * (total - done) / done;
 }
 
-std::string progress_time_text(double done, double total, double elapsed_s,
-                               bool total_is_bound) {
+std::string progress_time_text(double done, double total, double elapsed_s, bool total_is_bound) {
   if (total > 0 && done >= total) return "done in " + format_duration(elapsed_s);
   const std::string so_far = format_duration(elapsed_s) + " so far, ";
   const double left_s = time_left_s(done, total, elapsed_s);
@@ -39,12 +38,16 @@ std::string progress_time_text(double done, double total, double elapsed_s,
          " left";
 }
 
-bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) != 0; }
+bool stderr_is_terminal() {
+  return ::isatty(STDERR_FILENO) != 0;
+}
 
 StatusLine::StatusLine(std::ostream& out, bool terminal, double plain_interval_s)
     : out_(out), terminal_(terminal), plain_interval_s_(plain_interval_s) {}
 
-StatusLine::~StatusLine() { finish(); }
+StatusLine::~StatusLine() {
+  finish();
+}
 
 void StatusLine::draw() {
   out_ << '\r' << text_ << "\x1b[K" << std::flush;
@@ -111,12 +114,10 @@ void StatusLine::finish() {
 
 std::string fit_progress_text(const FitProgress& progress, double elapsed_s) {
   if (progress.stage == FitProgress::Stage::kWindows) {
-    return printf_text("window fit: iteration %d of at most %d, ", progress.done,
-                       progress.total) +
+    return printf_text("window fit: iteration %d of at most %d, ", progress.done, progress.total) +
            progress_time_text(progress.done, progress.total, elapsed_s, true);
   }
-  return printf_text("cross-validation: %d of %d folds refitted, ", progress.done,
-                     progress.total) +
+  return printf_text("cross-validation: %d of %d folds refitted, ", progress.done, progress.total) +
          progress_time_text(progress.done, progress.total, elapsed_s);
 }
 
@@ -135,8 +136,8 @@ std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status)
     const auto now = StatusLine::Clock::now();
     if (progress.done == 0) *stage_began = now;
     status.update(
-        fit_progress_text(progress, std::chrono::duration<double>(now - *stage_began).count()),
-        now, progress.done == 0);
+        fit_progress_text(progress, std::chrono::duration<double>(now - *stage_began).count()), now,
+        progress.done == 0);
   };
 }
 

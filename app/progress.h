@@ -73,10 +73,10 @@ class StatusLine {
   const bool terminal_;
   const double plain_interval_s_;
   std::mutex mutex_;
-  std::string text_;           // the latest update
-  bool drawn_ = false;         // terminal: text_ is on screen; plain: text_ was written
-  bool on_screen_ = false;     // terminal: a status line is on the last line
-  bool printed_plain_ = false; // plain: a status line since the last permanent line
+  std::string text_;            // the latest update
+  bool drawn_ = false;          // terminal: text_ is on screen; plain: text_ was written
+  bool on_screen_ = false;      // terminal: a status line is on the last line
+  bool printed_plain_ = false;  // plain: a status line since the last permanent line
   Clock::time_point last_draw_{};
 };
 

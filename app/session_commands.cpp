@@ -530,9 +530,10 @@ void print_playback_clock(const SessionReader& session) {
   for (std::size_t i = 1; i < times.size(); ++i) {
     intervals_ms.push_back(1e3 * (times[i] - times[i - 1]));
   }
-  std::printf("playback clock: nominal %s Hz (haptic/rate_hz); the channels keep each tick's own "
-              "time (rate \"times\")",
-              printable(nominal_hz).c_str());
+  std::printf(
+      "playback clock: nominal %s Hz (haptic/rate_hz); the channels keep each tick's own "
+      "time (rate \"times\")",
+      printable(nominal_hz).c_str());
   if (!intervals_ms.empty()) {
     const double largest = *std::max_element(intervals_ms.begin(), intervals_ms.end());
     std::nth_element(intervals_ms.begin(), intervals_ms.begin() + intervals_ms.size() / 2,

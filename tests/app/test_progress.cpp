@@ -1,10 +1,6 @@
 // Progress with the time left on the long verbs (issue 21, item 8; app/progress.h): the
 // estimate's arithmetic and words, the status line on a terminal and off it, and fit on a
 // pseudo-terminal, into a file and with --quiet.
-#include <pty.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <cmath>
@@ -14,6 +10,7 @@
 
 #include "app/progress.h"
 #include "tests/support/run_doorbench.h"
+#include "tests/support/run_on_terminal.h"
 #include "tests/support/temp_dir.h"
 
 namespace {
@@ -22,30 +19,6 @@ using doorbench::FitProgress;
 using doorbench::LoopProgress;
 using doorbench::app::StatusLine;
 using namespace std::chrono_literals;
-
-// doorbench with stdout and stderr on a pseudo-terminal; everything it wrote.
-std::string run_on_terminal(const std::string& args, int& status) {
-  int master = -1;
-  const pid_t child = ::forkpty(&master, nullptr, nullptr, nullptr);
-  if (child < 0) return "";
-  if (child == 0) {
-    ::execl("/bin/sh", "sh", "-c", (std::string("'" DOORBENCH_EXECUTABLE "' ") + args).c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  std::string output;
-  char buffer[4096];
-  for (;;) {
-    const ssize_t n = ::read(master, buffer, sizeof buffer);
-    if (n <= 0) break;  // EIO once the child closed the terminal
-    output.append(buffer, std::size_t(n));
-  }
-  int wait_status = 0;
-  ::waitpid(child, &wait_status, 0);
-  ::close(master);
-  status = WIFEXITED(wait_status) ? WEXITSTATUS(wait_status) : -1;
-  return output;
-}
 
 }  // namespace
 
@@ -149,17 +122,13 @@ TEST_CASE("fit shows its progress with the time left: on a terminal, in a file, 
           "[progress][cli]") {
   const doorbench::testing::TempDir dir("progress_cli");
   // 40 s at 1 kHz: a fit of a few seconds, so that the status line is redrawn.
-  const std::string csv = (dir / "run.csv").string();
-  REQUIRE(doorbench::testing::run_doorbench_shell(
-              "simulate --model sensory --hand open-close --duration-s 40 --rate-hz 1000 --out '" +
-                  csv + "'",
-              dir)
-              .status == 0);
+  const std::string csv = doorbench::testing::simulate_open_close_csv(dir, "run.csv", 40, 1000);
+  REQUIRE_FALSE(csv.empty());
 
   SECTION("on a terminal: one status line, redrawn, with the time left") {
     int status = -1;
-    const std::string output =
-        run_on_terminal("fit '" + csv + "' --out '" + (dir / "t").string() + "'", status);
+    const std::string output = doorbench::testing::run_doorbench_terminal_output(
+        "fit '" + csv + "' --out '" + (dir / "t").string() + "'", status);
     INFO(output);
     REQUIRE(status == 0);
     CHECK(output.find("fitting the sensory model (with 4-fold cross-validation)") !=
@@ -185,8 +154,7 @@ TEST_CASE("fit shows its progress with the time left: on a terminal, in a file, 
         "\nwindow fit: iteration [1-9][0-9]* of at most 100, [0-9]+ s so far, at most about "
         "[^\n]* left\ncross-validation: 0 of 2 folds refitted, ");
     CHECK(std::regex_search(run.err, windows_end));
-    CHECK(run.err.find("\ncross-validation: 2 of 2 folds refitted, done in ") !=
-          std::string::npos);
+    CHECK(run.err.find("\ncross-validation: 2 of 2 folds refitted, done in ") != std::string::npos);
   }
   SECTION("--quiet: nothing on stderr") {
     const auto run = doorbench::testing::run_doorbench_shell(

@@ -22,33 +22,30 @@ std::string read_file(const std::string& path) {
 
 TEST_CASE("fit and loop reports state the residual's whiteness in a line", "[cli][whiteness]") {
   const doorbench::testing::TempDir dir("whiteness_report");
-  const std::string csv = (dir / "run.csv").string();
-  REQUIRE(doorbench::testing::run_doorbench_shell(
-              "simulate --model sensory --hand open-close --duration-s 8 --rate-hz 200 --out '" +
-                  csv + "'",
-              dir)
-              .status == 0);
+  const std::string csv = doorbench::testing::simulate_open_close_csv(dir, "run.csv", 8, 200);
+  REQUIRE_FALSE(csv.empty());
   // 200 Hz: lags of 5 ms up to 0.5 s, 100 of them (201 for the cross-correlation).
   const std::string line =
       "residual whiteness: autocorrelation outside the 99 % band \\(±[0-9.e-]+\\) at [0-9]+ "
       "of 100 lags \\(largest \\|r\\| [0-9.e-]+ at lag [0-9.e-]+ s\\); cross-correlation with "
       "the force outside it at [0-9]+ of 201 lags \\(largest \\|r\\| [0-9.e-]+ at lag "
       "-?[0-9.e-]+ s\\); verdict: (white|not white)[^\n]*\\.\n";
-  SECTION("fit") {
+  // report.md of `doorbench VERB` on the CSV.
+  auto report_of = [&](const std::string& verb) {
     const auto run = doorbench::testing::run_doorbench_shell(
-        "fit -q '" + csv + "' --out '" + (dir / "fit").string() + "'", dir);
+        verb + " -q '" + csv + "' --out '" + (dir / verb).string() + "'", dir);
     REQUIRE(run.status == 0);
-    const std::string report = read_file((dir / "fit" / "report.md").string());
+    return read_file((dir / verb / "report.md").string());
+  };
+  SECTION("fit") {
+    const std::string report = report_of("fit");
     INFO(report);
     CHECK(std::regex_search(report, std::regex("```\n\nThe fitted model's " + line)));
   }
   SECTION("loop") {
-    const auto run = doorbench::testing::run_doorbench_shell(
-        "loop -q '" + csv + "' --out '" + (dir / "loop").string() + "'", dir);
-    REQUIRE(run.status == 0);
-    const std::string report = read_file((dir / "loop" / "report.md").string());
+    const std::string report = report_of("loop");
     INFO(report);
-    CHECK(std::regex_search(report, std::regex("```\n\nThe final model's " + line +
-                                               "\nPlots of the final model:")));
+    CHECK(std::regex_search(
+        report, std::regex("```\n\nThe final model's " + line + "\nPlots of the final model:")));
   }
 }

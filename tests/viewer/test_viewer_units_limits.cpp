@@ -4,8 +4,8 @@
 // sensor's limit (sensors/channel_limits.h, the definition `doorbench record` warns with). A
 // session of the simulated bench's rig with one inclinometer channel, "angle", that is held at
 // the sensor's 10 deg end from 0.995 s to 1.505 s.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
@@ -39,20 +39,10 @@ void write_angle_session(const fs::path& path, bool with_rig) {
   SessionMetadata metadata;
   metadata.rig_name = "simulated-dishwasher";
   if (with_rig) metadata.rig_definition = std::string(simulated_dishwasher_rig_text());
-  SessionWriter writer(path, metadata);
-  ChannelInfo channel;
-  channel.name = "angle";
-  channel.sensor_kind = "inclinometer";
-  channel.raw_type = RawType::kValues;
-  channel.raw_unit = "rad";
-  channel.unit = "rad";
-  channel.range_min = -1;
-  channel.range_max = 1;
-  channel.sample_rate_hz = kRateHz;
   std::vector<double> values;
   for (int i = 0; i < 3000; ++i) values.push_back(known_angle_rad(i / kRateHz));
-  writer.append_values(writer.add_channel(channel), values);
-  writer.close();
+  testing::write_channel_session(path, "angle", "inclinometer", "rad", 1.0, values, kRateHz,
+                                 metadata);
 }
 
 }  // namespace
@@ -110,11 +100,10 @@ TEST_CASE("view --screenshot: the channels layout in deg, the stretch at the lim
   const fs::path png = dir.path / "channels.png";
   write_angle_session(session, true);
   std::string err;
-  const int status = testing::run_under_xvfb(std::string("'" DOORBENCH_EXECUTABLE "' view ") +
-                                                 "--screenshot '" + png.string() +
-                                                 "' --layout channels --width 900 --height 600 '" +
-                                                 session.string() + "'",
-                                             dir.path, err);
+  const int status = testing::run_under_xvfb(
+      std::string("'" DOORBENCH_EXECUTABLE "' view ") + "--screenshot '" + png.string() +
+          "' --layout channels --width 900 --height 600 '" + session.string() + "'",
+      dir.path, err);
   INFO("stderr: " << err);
   REQUIRE(status == 0);
   const testing::Screenshot shot = testing::load_screenshot(png);
