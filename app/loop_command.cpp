@@ -1,10 +1,8 @@
 // doorbench loop: fit, look at the residual, add the effect the model lacks, refit, and
 // report the error before and after each step (analysis/residual_loop.h).
-#include <chrono>
 #include <filesystem>
 #include <iostream>
 #include <memory>
-#include <optional>
 
 #include "analysis/residual_loop.h"
 #include "app/commands.h"
@@ -33,14 +31,7 @@ void run_loop(const LoopCommandOptions& options) {
   StatusLine status(std::cerr, stderr_is_terminal());
   loop_options.progress = [&status](const std::string& line) { status.line(line); };
   loop_options.fit.progress = fit_progress_display(status);
-  std::optional<std::chrono::steady_clock::time_point> steps_began;
-  loop_options.step_progress = [&status, &steps_began](const LoopProgress& progress) {
-    const auto now = std::chrono::steady_clock::now();
-    if (!steps_began) steps_began = now;
-    status.update(
-        loop_progress_text(progress, std::chrono::duration<double>(now - *steps_began).count()),
-        now, progress.refits_done == 0);
-  };
+  loop_options.step_progress = loop_progress_display(status);
   const LoopResult result = run_residual_loop(inputs.start, inputs.data, loop_options);
   status.finish();
   const std::string table =

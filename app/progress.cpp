@@ -2,10 +2,12 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <optional>
 #include <ostream>
 
 #include "analysis/text_format.h"
@@ -121,13 +123,38 @@ std::string fit_progress_text(const FitProgress& progress, double elapsed_s) {
          progress_time_text(progress.done, progress.total, elapsed_s);
 }
 
-std::string loop_progress_text(const LoopProgress& progress, double elapsed_s) {
-  const double step_done =
-      progress.refits > 0 ? double(progress.refits_done) / progress.refits : 1.0;
-  const double steps_done = progress.step - 1 + step_done;
-  return printf_text("loop step %d of at most %d: %d of %d refits done, ", progress.step,
-                     progress.max_steps, progress.refits_done, progress.refits) +
-         progress_time_text(steps_done, progress.max_steps, elapsed_s, true);
+std::string loop_progress_text(const LoopProgress& progress, double completed_s, double current_s) {
+  const int completed = progress.step - 1 + (progress.refits_done >= progress.refits ? 1 : 0);
+  const std::string head =
+      printf_text("loop step %d of at most %d: %d of %d refits done, ", progress.step,
+                  progress.max_steps, progress.refits_done, progress.refits);
+  const double so_far_s = completed_s + current_s;
+  if (completed >= progress.max_steps) return head + "done in " + format_duration(so_far_s);
+  if (completed <= 0) {
+    return head + format_duration(so_far_s) + " so far, time left known after step 1";
+  }
+  const double per_step_s = completed_s / completed;
+  const double left_s = std::max(per_step_s - current_s, 0.0) +
+                        per_step_s * double(progress.max_steps - completed - 1);
+  return head + format_duration(so_far_s) + " so far, at most about " + format_duration(left_s) +
+         " left";
+}
+
+std::function<void(const LoopProgress&)> loop_progress_display(StatusLine& status) {
+  struct Clocks {
+    std::optional<StatusLine::Clock::time_point> began;
+    StatusLine::Clock::time_point last_step_end;
+  };
+  auto clocks = std::make_shared<Clocks>();
+  return [&status, clocks](const LoopProgress& progress) {
+    const auto now = StatusLine::Clock::now();
+    if (!clocks->began) clocks->began = clocks->last_step_end = now;
+    if (progress.refits_done >= progress.refits) clocks->last_step_end = now;
+    const auto seconds = [](auto d) { return std::chrono::duration<double>(d).count(); };
+    status.update(loop_progress_text(progress, seconds(clocks->last_step_end - *clocks->began),
+                                     seconds(now - clocks->last_step_end)),
+                  now, progress.refits_done == 0);
+  };
 }
 
 std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status) {

@@ -85,13 +85,23 @@ class StatusLine {
 //   "cross-validation: 2 of 4 folds refitted, 8 s so far, about 8 s left"
 std::string fit_progress_text(const FitProgress& progress, double elapsed_s);
 
-// A loop's steps for the status line, `elapsed_s` since the first step's refits were known
-// (the loop stops at max_steps or earlier, so the time left is a bound):
-//   "loop step 2 of at most 4: 1 of 3 refits done, 50 s so far, at most about 1 min 40 s left"
-std::string loop_progress_text(const LoopProgress& progress, double elapsed_s);
+// A loop's steps for the status line. `completed_s`: from the first step's start (its refits
+// known) to the end of the last step whose refits are all done (0 while step 1 runs);
+// `current_s`: since then. The refits of a step run at once and the step ends with the
+// slowest, so refits done say little about the time: the estimate is per step, the mean of the
+// completed steps for what the current step has left and for each further one up to
+// max_steps. The loop may stop earlier (a bound: "at most about"); a later step can take
+// longer than the mean of those before (more effects, costlier refits).
+//   "loop step 2 of at most 4: 1 of 2 refits done, 25 s so far, at most about 55 s left"
+//   "loop step 1 of at most 4: 1 of 3 refits done, 9 s so far, time left known after step 1"
+std::string loop_progress_text(const LoopProgress& progress, double completed_s, double current_s);
 
 // FitOptions::progress drawing fit_progress_text on `status`, each stage timed from its
 // report of 0 done. `status` must outlive the fit.
 std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status);
+
+// LoopOptions::step_progress drawing loop_progress_text on `status`, the steps timed from the
+// first report. `status` must outlive the loop.
+std::function<void(const LoopProgress&)> loop_progress_display(StatusLine& status);
 
 }  // namespace doorbench::app
