@@ -66,23 +66,43 @@ TEST_CASE("progress: the fit's and the loop's lines", "[progress]") {
         "cross-validation: 2 of 4 folds refitted, 8 s so far, about 8 s left");
   CHECK(fit_progress_text({FitProgress::Stage::kFolds, 0, 4}, 1.0) ==
         "cross-validation: 0 of 4 folds refitted, 1 s so far, time left not known yet");
-  // The loop: per completed step. Step 1 done in 20 s, step 2 under way for 5 s: 15 s more
-  // for it, 20 s for each of steps 3 and 4.
-  CHECK(loop_progress_text(LoopProgress{2, 4, 1, 2}, 20.0, 5.0) ==
-        "loop step 2 of at most 4: 1 of 2 refits done, 25 s so far, at most about 55 s left");
-  // Refits done within a step do not count (they run at once; the slowest ends the step).
-  CHECK(loop_progress_text(LoopProgress{1, 4, 2, 3}, 0.0, 12.0) ==
-        "loop step 1 of at most 4: 2 of 3 refits done, 12 s so far, time left known after step 1");
-  CHECK(loop_progress_text(LoopProgress{1, 4, 0, 3}, 0.0, 0.0) ==
-        "loop step 1 of at most 4: 0 of 3 refits done, 0 s so far, time left known after step 1");
-  // Step 2's refits all done at 40 s: 20 s a step, two more at most.
-  CHECK(loop_progress_text(LoopProgress{2, 4, 2, 2}, 40.0, 0.0) ==
-        "loop step 2 of at most 4: 2 of 2 refits done, 40 s so far, at most about 40 s left");
-  // A step longer than the mean so far: only the steps after it are left in the estimate.
-  CHECK(loop_progress_text(LoopProgress{2, 4, 0, 2}, 10.0, 30.0) ==
-        "loop step 2 of at most 4: 0 of 2 refits done, 40 s so far, at most about 20 s left");
-  CHECK(loop_progress_text(LoopProgress{4, 4, 1, 1}, 80.0, 0.0) ==
-        "loop step 4 of at most 4: 1 of 1 refits done, done in 1 min 20 s");
+  // The loop: per completed step.
+  struct LoopCase {
+    LoopProgress progress;
+    double completed_s, current_s;
+    const char* expected;
+  };
+  const LoopCase cases[] = {
+      // Step 1 done in 20 s, step 2 under way for 5 s: 15 s more for it, 20 s for each of
+      // steps 3 and 4.
+      {{2, 4, 1, 2},
+       20.0,
+       5.0,
+       "loop step 2 of at most 4: 1 of 2 refits done, 25 s so far, at most about 55 s left"},
+      // Refits done within a step do not count (they run at once; the slowest ends it).
+      {{1, 4, 2, 3},
+       0.0,
+       12.0,
+       "loop step 1 of at most 4: 2 of 3 refits done, 12 s so far, time left known after step 1"},
+      {{1, 4, 0, 3},
+       0.0,
+       0.0,
+       "loop step 1 of at most 4: 0 of 3 refits done, 0 s so far, time left known after step 1"},
+      // Step 2's refits all done at 40 s: 20 s a step, two more at most.
+      {{2, 4, 2, 2},
+       40.0,
+       0.0,
+       "loop step 2 of at most 4: 2 of 2 refits done, 40 s so far, at most about 40 s left"},
+      // A step longer than the mean so far: only the steps after it are left.
+      {{2, 4, 0, 2},
+       10.0,
+       30.0,
+       "loop step 2 of at most 4: 0 of 2 refits done, 40 s so far, at most about 20 s left"},
+      {{4, 4, 1, 1}, 80.0, 0.0, "loop step 4 of at most 4: 1 of 1 refits done, done in 1 min 20 s"},
+  };
+  for (const LoopCase& c : cases) {
+    CHECK(loop_progress_text(c.progress, c.completed_s, c.current_s) == c.expected);
+  }
 }
 
 TEST_CASE("progress: on a terminal the status line is redrawn in place", "[progress]") {
