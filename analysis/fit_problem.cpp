@@ -528,6 +528,23 @@ int WindowProblem::residual_count() const {
   return count;
 }
 
+namespace {
+
+// SolverSettings::on_iteration as a Ceres callback.
+class IterationReport final : public ceres::IterationCallback {
+ public:
+  explicit IterationReport(const std::function<void(int)>& report) : report_(report) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
+    if (summary.iteration > 0) report_(summary.iteration);
+    return ceres::SOLVER_CONTINUE;
+  }
+
+ private:
+  const std::function<void(int)>& report_;
+};
+
+}  // namespace
+
 WindowProblem::Outcome WindowProblem::solve(const SolverSettings& settings, int max_iterations,
                                             double uncertainty_tolerance) {
   ceres::Solver::Options solver = solver_options(settings, max_iterations);
@@ -546,6 +563,9 @@ WindowProblem::Outcome WindowProblem::solve(const SolverSettings& settings, int 
   // best point seen: monotonic steps only.
   solver.use_nonmonotonic_steps = uncertainty_tolerance > 0;
   PredictedStepCheck check(*this, uncertainty_tolerance, settings.robust_uncertainty);
+  // The report first: Ceres calls no further callback after one that ends the solve.
+  IterationReport report(settings.on_iteration);
+  if (settings.on_iteration) solver.callbacks.push_back(&report);
   solver.callbacks.push_back(&check);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, problem_.get(), &summary);

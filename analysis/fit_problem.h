@@ -34,6 +34,9 @@ struct SolverSettings {
   // The predicted-step rule measures steps in the window-robust uncertainty (else classical).
   bool robust_uncertainty = true;
   int threads = 1;  // evaluation threads, the caller's among them (>= 1)
+  // Called after each solver iteration with the iterations of this solve so far, on the
+  // solve's calling thread; may be empty.
+  std::function<void(int iterations)> on_iteration;
 };
 
 // A prior on one free parameter in solver units: the residual (x_k − center_x) / sigma_x.

@@ -5,7 +5,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
@@ -274,8 +276,15 @@ ProblemKind window_fit_kind(const FitOptions& options, const DoorModel& model) {
 WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorModel& model,
                                             const PreparedData& data, const ParameterMap& map,
                                             const FitOptions& options, const FitWeights& weights,
-                                            int max_iterations) {
+                                            int max_iterations,
+                                            const std::function<void(int)>& on_iteration = {}) {
   int used = 0;
+  SolverSettings settings = solver_settings(options);
+  if (on_iteration) {
+    settings.on_iteration = [&on_iteration, &used](int iterations) {
+      on_iteration(used + iterations);
+    };
+  }
   double initial_cost = kNaN;
   if (options.coarse_first && options.substeps_per_sample > 1) {
     ProblemKind coarse_kind = window_fit_kind(options, model);
@@ -283,7 +292,7 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
     WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
     coarse.z() = problem.z();
     const WindowProblem::Outcome outcome =
-        coarse.solve(solver_settings(options), max_iterations, 10 * options.uncertainty_tolerance);
+        coarse.solve(settings, max_iterations, 10 * options.uncertainty_tolerance);
     used = outcome.iterations;
     initial_cost = outcome.initial_cost;
     if (outcome.usable) {
@@ -291,8 +300,8 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
       problem.z() = coarse.z();
     }
   }
-  WindowProblem::Outcome outcome = problem.solve(
-      solver_settings(options), std::max(1, max_iterations - used), options.uncertainty_tolerance);
+  WindowProblem::Outcome outcome =
+      problem.solve(settings, std::max(1, max_iterations - used), options.uncertainty_tolerance);
   outcome.iterations += used;
   if (used > 0) outcome.initial_cost = initial_cost;
   return outcome;
@@ -384,9 +393,16 @@ FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
   ParameterMap fold_map = map;
   fold_map.base_values.assign(fitted.parameter_values().begin(), fitted.parameter_values().end());
   std::vector<FoldOutcome> outcomes(static_cast<std::size_t>(folds));
+  std::mutex progress_mutex;
+  int folds_done = 0;
+  if (options.progress) options.progress({FitProgress::Stage::kFolds, 0, folds});
   parallel_for(folds, fit_thread_count(options), [&](int fold) {
     outcomes[static_cast<std::size_t>(fold)] =
         refit_fold(fitted, data, fold_map, x, options, weights, folds, fold);
+    if (options.progress) {
+      const std::lock_guard lock(progress_mutex);
+      options.progress({FitProgress::Stage::kFolds, ++folds_done, folds});
+    }
   });
   std::vector<StrokeFitMetrics> per_stroke(stroke_count);
   std::vector<char> have(stroke_count, 0);
@@ -564,8 +580,15 @@ void equation_error_stage(WindowProblem& problem, const DoorModel& start_model,
 void window_stage(WindowProblem& problem, const DoorModel& start, const DoorModel& start_model,
                   const PreparedData& data, const ParameterMap& map, const FitOptions& options,
                   const FitWeights& weights, FitSummary& summary) {
+  std::function<void(int)> on_iteration;
+  if (options.progress) {
+    options.progress({FitProgress::Stage::kWindows, 0, options.max_iterations});
+    on_iteration = [&options](int iterations) {
+      options.progress({FitProgress::Stage::kWindows, iterations, options.max_iterations});
+    };
+  }
   const WindowProblem::Outcome outcome = solve_coarse_to_fine(
-      problem, start_model, data, map, options, weights, options.max_iterations);
+      problem, start_model, data, map, options, weights, options.max_iterations, on_iteration);
   if (!outcome.usable) throw std::runtime_error("fit: the solver failed: " + outcome.termination);
   summary.converged = outcome.converged;
   summary.termination = outcome.termination;

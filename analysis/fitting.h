@@ -14,6 +14,7 @@
 // by RK4 under the measured force, Jacobians by Ceres' Jets through the integration.
 // Uncertainties from the Gauss–Newton system with the window states eliminated; every
 // figure in the report is defined in docs/fitting.md.
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -27,6 +28,21 @@
 namespace doorbench {
 
 struct SolverSettings;  // analysis/fit_problem.h
+
+// Where a fit is, for a progress display (FitOptions::progress). Counts, no times: the
+// caller measures time.
+struct FitProgress {
+  enum class Stage {
+    // The window fit's solver iterations (the coarse pass's and the fine one's together):
+    // `done` of at most `total` (max_iterations; a fit that converges stops earlier).
+    kWindows,
+    // The cross-validation folds refitted: `done` of `total`.
+    kFolds,
+  };
+  Stage stage = Stage::kWindows;
+  int done = 0;
+  int total = 0;
+};
 
 // The bench's noise levels (reference-door.json): the weights when neither the options
 // nor the data give them.
@@ -122,6 +138,13 @@ struct FitOptions {
   int held_out_max_iterations = 30;                // each fold's refit starts from the full fit
   double correlation_threshold = 0.9;              // |correlations| above are named
   double undetermined_relative_uncertainty = 1.0;  // u/|value| above: "undetermined"
+
+  // Called as each stage begins (done 0), after each solver iteration of the window fit and
+  // after each cross-validation fold (for a fold from the thread that refitted it, never two
+  // at once); may be empty.
+  // The equation-error stage, the statistics and the whole-stroke objective do not report.
+  // A restart from a fold (docs/fitting.md) reports its window fit again from 0.
+  std::function<void(const FitProgress&)> progress;
 
   // Empty when usable, else a one-line message naming the option.
   std::string validate() const;

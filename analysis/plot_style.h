@@ -9,6 +9,7 @@
 //   opening    amber; closing: purple (loops, residuals by direction, stroke markers)
 //   residual   teal
 //   other      grey (anything else; callers may pick their own colour)
+//   at limit   a translucent red band behind a channel where its sensor is at its limit
 // Angles are shown in degrees where people read them (kDegPerRad); every axis label carries
 // its unit, written "quantity [unit]" (axis_label).
 //
@@ -37,6 +38,14 @@ LineStyle line_style(Meaning meaning);
 std::string hex_colour(Meaning meaning);
 // Lower-case name: "measured", "simulated", "tuned", "opening", "closing", "residual", "other".
 std::string_view meaning_name(Meaning meaning);
+
+// The shade behind a channel's stretches at its sensor's limit (the viewer's channels
+// layout; sensors/channel_limits.h): red, translucent, so the curve stays readable.
+struct ShadeStyle {
+  std::uint8_t r = 0, g = 0, b = 0;
+  double opacity = 1.0;
+};
+inline constexpr ShadeStyle kAtLimitShade{230, 40, 40, 0.3};
 
 inline constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 

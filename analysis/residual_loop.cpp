@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <exception>
 #include <limits>
+#include <mutex>
 #include <stdexcept>
 #include <thread>
 
@@ -1179,12 +1180,15 @@ void judge(CandidateEvidence& candidate, const ModelFigures& before, const Model
 std::vector<std::optional<FitResult>> run_refits(
     const DoorModel& start, const FitResult& current, const FitOptions& current_options,
     const PreparedData& data, const LoopOptions& options, const std::vector<std::size_t>& to_refit,
-    ResidualExamination& examination, int& fits, const Say& say) {
+    ResidualExamination& examination, int& fits, const Say& say, int step_number) {
   std::vector<std::optional<FitResult>> refits(examination.candidates.size());
   const ModelFigures before = model_figures(current.summary);
   std::vector<std::string> refit_errors(to_refit.size());
   std::vector<int> refit_fits(to_refit.size(), 0);
   std::vector<double> refit_seconds(to_refit.size(), 0.0);
+  LoopProgress progress{step_number, options.max_steps, 0, static_cast<int>(to_refit.size())};
+  std::mutex progress_mutex;
+  if (options.step_progress && !to_refit.empty()) options.step_progress(progress);
   auto run_refit = [&](std::size_t j) {
     CandidateEvidence& candidate = examination.candidates[to_refit[j]];
     const Clock::time_point refit_began = Clock::now();
@@ -1195,6 +1199,11 @@ std::vector<std::optional<FitResult>> run_refits(
       refit_errors[j] = error.what();
     }
     refit_seconds[j] = seconds_since(refit_began);
+    if (options.step_progress) {
+      const std::lock_guard lock(progress_mutex);
+      ++progress.refits_done;
+      options.step_progress(progress);
+    }
   };
   run_all(to_refit.size(), options.parallel_refits, run_refit);
   for (std::size_t j = 0; j < to_refit.size(); ++j) {
@@ -1381,6 +1390,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
 
   FitResult current = result.start_fit;
   FitOptions current_options = options.fit;  // the options current was fitted with
+  current_options.progress = nullptr;        // the refits run several at once
   ResidualExamination last;                  // the examination that ended the loop
   for (int step_number = 1;; ++step_number) {
     if (step_number > options.max_steps) {
@@ -1398,8 +1408,9 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     say(ranking_line(step_number, examination));
     const ModelFigures before = model_figures(current.summary);
     const std::vector<std::size_t> to_refit = select_refits(examination, options, step_number, say);
-    std::vector<std::optional<FitResult>> refits = run_refits(
-        start, current, current_options, data, options, to_refit, examination, result.fits, say);
+    std::vector<std::optional<FitResult>> refits =
+        run_refits(start, current, current_options, data, options, to_refit, examination,
+                   result.fits, say, step_number);
     const int chosen = choose(examination.candidates);
     if (chosen < 0) {
       result.stop_reason =

@@ -28,6 +28,14 @@
 
 namespace doorbench {
 
+// Where the loop is, for a progress display (LoopOptions::step_progress). Counts, no times.
+struct LoopProgress {
+  int step = 1;         // the step under way, from 1
+  int max_steps = 1;    // LoopOptions::max_steps: the loop may stop before
+  int refits_done = 0;  // this step's refits finished ...
+  int refits = 0;       // ... of this many (known once the step's residual is examined)
+};
+
 struct LoopOptions {
   // Every fit of the loop: the start model's and each candidate's (where a refit starts:
   // refit_start). cross_validation_folds must be >= 2, since the loop compares held-out
@@ -113,6 +121,11 @@ struct LoopOptions {
 
   // Called with one line at each stage (fits, the ranking, each verdict); may be empty.
   std::function<void(const std::string&)> progress;
+  // Called when a step's refits are known (refits_done 0; not for a step without refits,
+  // which ends the loop) and after each of them (from the thread that ran it, never two at
+  // once); may be empty. fit.progress reports the start
+  // model's fit and the structure check's; the refits (several at once) do not report.
+  std::function<void(const LoopProgress&)> step_progress;
 
   // Empty when usable, else a one-line message naming the option.
   std::string validate() const;

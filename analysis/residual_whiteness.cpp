@@ -66,6 +66,56 @@ std::string ResidualWhiteness::summary() const {
       cross_outside, cross_correlation.size());
 }
 
+namespace {
+
+// One correlation's lags values[first …], lag (i − zero_index) · step_s.
+struct Lags {
+  const std::vector<double>& values;
+  std::size_t first;
+  std::size_t zero_index;
+  int outside;
+
+  std::size_t count() const { return values.size() > first ? values.size() - first : 0; }
+  std::size_t largest() const {
+    std::size_t at = first;
+    for (std::size_t i = first; i < values.size(); ++i) {
+      if (std::abs(values[i]) > std::abs(values[at])) at = i;
+    }
+    return at;
+  }
+  double largest_abs() const {
+    return largest() < values.size() ? std::abs(values[largest()]) : 0.0;
+  }
+  // The verdict's rule (kWhitenessOutsideShare, kWhitenessPeakBands).
+  bool white(double band) const {
+    return outside <= kWhitenessOutsideShare * double(count()) &&
+           largest_abs() <= kWhitenessPeakBands * band;
+  }
+  // "12 of 50 lags (largest |r| 0.63 at lag 0.005 s)"
+  std::string text(double step_s) const {
+    return printf_text("%d of %zu lags (largest |r| %.2g at lag %.3g s)", outside, count(),
+                       largest_abs(), (double(largest()) - double(zero_index)) * step_s);
+  }
+};
+
+}  // namespace
+
+std::string ResidualWhiteness::report_line() const {
+  const Lags autos{autocorrelation, 1, 0, auto_outside};
+  const Lags cross{cross_correlation, 0, cross_correlation.size() / 2, cross_outside};
+  const char* verdict =
+      !cross.white(band) ? "not white: the residual follows the force (dynamics the model does not "
+                           "reproduce, whatever the residual's size)"
+      : !autos.white(band)
+          ? "not white: correlated in time but not with the force (coloured noise such as the "
+            "rate's filtering, or dynamics the force does not drive)"
+          : "white: consistent with noise";
+  return printf_text("residual whiteness: autocorrelation outside the 99 %% band (±%.3g) at ",
+                     band) +
+         autos.text(lag_step_s) + "; cross-correlation with the force outside it at " +
+         cross.text(lag_step_s) + "; verdict: " + verdict;
+}
+
 ResidualWhiteness residual_whiteness(const std::vector<std::vector<double>>& residual,
                                      const std::vector<std::vector<double>>& force,
                                      double lag_step_s, int max_lag) {

@@ -31,7 +31,24 @@ struct ResidualWhiteness {
   // "residual autocorrelation: 3 of 50 lags outside the 99 % band (±0.012); cross-correlation
   // with the force: 0 of 101" — for reports.
   std::string summary() const;
+  // One line for the fit's and the loop's text reports: each correlation's lags outside the
+  // band, its largest |r| (lag 0 of the autocorrelation left out) and where, and the verdict
+  // (kWhitenessOutsideShare, kWhitenessPeakBands), e.g. "residual whiteness: autocorrelation
+  // outside the 99 % band (±0.012) at 12 of 50 lags (largest |r| 0.63 at lag 0.005 s);
+  // cross-correlation with the force outside it at 0 of 101 lags (largest |r| 0.0081 at
+  // lag -0.12 s); verdict: not white: ...". It says whether the residual is systematic, not
+  // how large it is.
+  std::string report_line() const;
 };
+
+// The verdict's rule: a correlation is not white when more than kWhitenessOutsideShare of
+// its lags are outside the band (a white sequence leaves about 1 % outside a 99 % band by
+// chance, and neighbouring lags of a finite record are themselves correlated) or its largest
+// |r| is more than kWhitenessPeakBands times the band (one clear peak, e.g. a delay: 5.2
+// standard deviations of a white sequence's correlation, which its largest of 1000 lags
+// reaches with a probability below 1e-3).
+inline constexpr double kWhitenessOutsideShare = 0.05;
+inline constexpr double kWhitenessPeakBands = 2.0;
 
 // The lags reports and the viewer show: 0.5 s of samples `step_s` apart, 10 … 500 lags.
 int whiteness_max_lag(double step_s);

@@ -229,6 +229,7 @@ int run_pool(const MonteCarloOptions& options, const std::function<void(std::siz
   std::atomic<int> done{0};
   std::mutex progress_mutex;
   const int report_every = std::max(1, options.samples / 20);
+  if (options.progress) options.progress(0, options.samples);
   auto worker = [&] {
     for (std::size_t s = next++; s < samples; s = next++) {
       sample(s);

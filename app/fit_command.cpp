@@ -17,6 +17,7 @@
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
+#include "app/progress.h"
 
 namespace doorbench::app {
 namespace {
@@ -68,12 +69,14 @@ void run_fit(const FitCommandOptions& options) {
     fit_options.objective = FitOptions::Objective::kWholeStrokeMax;
   }
   fit_options.cross_validation_folds = options.folds;
-  std::cerr << "fitting the " << options.input.model.model << " model"
-            << (options.folds > 0
-                    ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
-                    : "")
-            << "\n";
+  StatusLine status(std::cerr, stderr_is_terminal());
+  status.line("fitting the " + options.input.model.model + " model" +
+              (options.folds > 0
+                   ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
+                   : ""));
+  fit_options.progress = fit_progress_display(status);
   const FitResult result = fit_model(start, data, fit_options);
+  status.finish();
 
   const std::filesystem::path dir = options.out_dir;
   write_text_file_atomically(dir / "result.json", fit_result_json(result, data).dump(2) + "\n");
@@ -81,15 +84,16 @@ void run_fit(const FitCommandOptions& options) {
   if (!result.model.effects().empty()) {
     write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model));
   }
-  const std::vector<std::string> plots = write_fit_plots(dir, result.model, data, fit_options);
+  const FitPlots plots = write_fit_plots(dir, result.model, data, fit_options);
   std::ostringstream report;
   report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n";
   for (const std::string& line : inputs.report_lines) report << line << ".\n\n";
   report << "Data: " << data.rate_summary << ".\n\n"
          << handle_radius_line(data, result.model) << ".\n\n"
          << "```\n"
-         << result.summary.full_report() << "```\n\n";
-  for (const std::string& plot : plots) report << "![" << plot << "](" << plot << ")\n\n";
+         << result.summary.full_report() << "```\n\n"
+         << "The fitted model's " << plots.whiteness << ".\n\n";
+  for (const std::string& plot : plots.files) report << "![" << plot << "](" << plot << ")\n\n";
   write_text_file_atomically(dir / "report.md", report.str());
   std::cout << result.summary.brief_report() << "\nresult.json, report.md, fitted-params.json and "
             << "plots are in " << dir.string() << "/\n";

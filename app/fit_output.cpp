@@ -105,8 +105,8 @@ nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedDa
 // Measured against simulated (window by window) rate and angle, the force–angle loops, and
 // the rate residual against angle and speed, and the residual's whiteness (when the data
 // have enough samples).
-std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
-                                         const PreparedData& data, const FitOptions& options) {
+FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
+                         const PreparedData& data, const FitOptions& options) {
   WindowOptions window_options;
   window_options.window_s = options.window_s;
   window_options.substeps_per_sample = options.substeps_per_sample;
@@ -149,8 +149,9 @@ std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const
     residual_angle.push_back({label, angle_deg[s], residual_deg_s[s], "", direction});
     residual_speed.push_back({label, speed_deg_s[s], residual_deg_s[s], "", direction});
   }
-  std::vector<std::string> files = {"rate.svg", "force-angle.svg", "residual-angle.svg",
-                                    "residual-speed.svg"};
+  FitPlots plots;
+  std::vector<std::string>& files = plots.files;
+  files = {"rate.svg", "force-angle.svg", "residual-angle.svg", "residual-speed.svg"};
   write_svg_plot((dir / files[0]).string(),
                  {"Door rate: measured and simulated window by window", "time [s]", "rate [deg/s]"},
                  rate);
@@ -181,10 +182,12 @@ std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const
     files.push_back("residual-whiteness.svg");
     write_svg_plot((dir / files.back()).string(),
                    {"Residual whiteness: " + w.summary(), "lag [s]", "correlation"}, whiteness);
-  } catch (const std::invalid_argument&) {
+    plots.whiteness = w.report_line();
+  } catch (const std::invalid_argument& error) {
     // Too few samples for the lags: no whiteness plot.
+    plots.whiteness = "residual whiteness: not computed (" + std::string(error.what()) + ")";
   }
-  return files;
+  return plots;
 }
 
 }  // namespace doorbench::app

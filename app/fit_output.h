@@ -15,10 +15,15 @@ nlohmann::ordered_json metrics_json(const FitMetrics& metrics);
 // Parameters with standard uncertainty, correlations, undetermined parameters, metrics on
 // fitted and held-out strokes, the solver's figures and the excluded segments.
 nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedData& data);
+struct FitPlots {
+  std::vector<std::string> files;  // the plots' file names, in `dir`
+  // For the text report: ResidualWhiteness::report_line(), or "residual whiteness: not
+  // computed (REASON)" when the data have too few samples for its lags.
+  std::string whiteness;
+};
 // rate.svg, force-angle.svg, residual-angle.svg, residual-speed.svg and, when there are enough
-// samples for its lags, residual-whiteness.svg (analysis/residual_whiteness.h); returns their
-// names.
-std::vector<std::string> write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
-                                         const PreparedData& data, const FitOptions& options);
+// samples for its lags, residual-whiteness.svg (analysis/residual_whiteness.h).
+FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
+                         const PreparedData& data, const FitOptions& options);
 
 }  // namespace doorbench::app

@@ -2,46 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <utility>
 
 #include "analysis/text_format.h"
-#include "sensors/sensor_models.h"
 
 namespace doorbench::app {
 
 namespace {
-
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
-constexpr double kLimitFraction = 0.99;  // of the range: at the limit
-
-std::string range_text(double range, const char* unit) {
-  return printf_text("±%g %s", range, unit);
-}
 
 std::string seconds(double s) {
   return printf_text("%.1f s", s);
 }
 
 }  // namespace
-
-std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig) {
-  std::vector<ChannelLimit> limits;
-  for (const RigChannel& channel : rig.channels) {
-    if (channel.sensor == "inclinometer") {
-      sensors::InclinometerParameters p;
-      for (const auto& [name, value] : channel.parameters) p.set(name, value);
-      limits.push_back({channel.name, channel.sensor, kLimitFraction * p.range_deg * kRadPerDeg,
-                        range_text(p.range_deg, "deg")});
-    } else if (channel.sensor == "gyroscope") {
-      sensors::GyroscopeParameters p;
-      for (const auto& [name, value] : channel.parameters) p.set(name, value);
-      limits.push_back({channel.name, channel.sensor, kLimitFraction * p.range_dps * kRadPerDeg,
-                        range_text(p.range_dps, "deg/s")});
-    }
-  }
-  return limits;
-}
 
 LimitWatcher::LimitWatcher(std::vector<ChannelLimit> limits) {
   for (ChannelLimit& limit : limits) watched_.push_back({std::move(limit)});
@@ -77,18 +50,15 @@ void LimitWatcher::measure(const SessionReader& session) {
     const ChannelSlice slice = session.read(w.limit.channel);
     const std::vector<double> values = session.physical(w.limit.channel, slice);
     w = Watched{w.limit};
-    for (std::size_t i = 0; i < values.size(); ++i) {
-      const bool at_limit = std::abs(values[i]) >= w.limit.limit;  // NaN (lost): not
-      if (at_limit && !w.at_limit) {
-        if (w.stretches == 0) w.first_s = slice.time_s[i];
-        ++w.stretches;
-      }
-      if (at_limit && values.size() > 1) {
+    for (const sensors::SampleStretch& stretch : sensors::limit_stretches(values, w.limit.limit)) {
+      if (w.stretches == 0) w.first_s = slice.time_s[stretch.begin];
+      ++w.stretches;
+      for (std::size_t i = stretch.begin; i < stretch.end && values.size() > 1; ++i) {
         const std::size_t next = i + 1 < values.size() ? i + 1 : i;
         const std::size_t previous = i + 1 < values.size() ? i : i - 1;
         w.total_s += slice.time_s[next] - slice.time_s[previous];
       }
-      w.at_limit = at_limit;
+      w.at_limit = stretch.end == values.size();
     }
   }
 }

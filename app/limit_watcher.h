@@ -3,9 +3,8 @@
 // end of its sensor's range, since when and for how long, from the recorder's status
 // callback (RecordOptions::progress: each channel's largest |value| since the previous
 // call, ChannelStatus::largest_abs, and its latest value), for
-// the status line and for the summary after the recording. The limits come from the rig:
-// an inclinometer's range_deg (default 10 deg) and a gyroscope's range_dps (default
-// 100 deg/s), less 1 % (a saturated reading, bias and noise included, lands within it).
+// the status line and for the summary after the recording. The limits come from the rig
+// (sensors/channel_limits.h: the sensor's range less 1 %).
 // `doorbench info` checks every sample afterwards (calibration/range_warnings.h). Live,
 // this counts time per status call (several a second on a running DAQ; an unpaced simulated
 // bench makes few), so the status line's times are approximate: the time since the previous
@@ -19,19 +18,13 @@
 
 #include "acquisition/recorder.h"
 #include "acquisition/rig_file.h"
+#include "sensors/channel_limits.h"
 
 namespace doorbench::app {
 
-struct ChannelLimit {
-  std::string channel;  // as in RecordStatus::channels
-  std::string sensor;   // inclinometer | gyroscope
-  double limit = 0.0;   // |physical value| at or beyond this is at the limit
-  std::string range;    // the sensor's range for messages, e.g. "±100 deg/s"
-};
-
-// The rig's channels with a known sensor range (inclinometers and gyroscopes in rad and
-// rad/s); others are not watched.
-std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig);
+// The limits' definition, shared with the viewer's shaded stretches: sensors/channel_limits.h.
+using sensors::ChannelLimit;
+using sensors::rig_channel_limits;
 
 class LimitWatcher {
  public:

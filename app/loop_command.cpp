@@ -8,6 +8,7 @@
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/loop_output.h"
+#include "app/progress.h"
 
 namespace doorbench::app {
 namespace {
@@ -25,8 +26,14 @@ void run_loop(const LoopCommandOptions& options) {
   loop_options.fit.cross_validation_folds = options.folds;
   loop_options.fit.substeps_per_sample = substeps_for(inputs.data);
   loop_options.max_steps = options.max_steps;
-  loop_options.progress = [](const std::string& line) { std::cerr << line << "\n"; };
+  // Stage lines stay; the start fit's, the steps' and the structure check's progress is a
+  // status line with the time left (app/progress.h).
+  StatusLine status(std::cerr, stderr_is_terminal());
+  loop_options.progress = [&status](const std::string& line) { status.line(line); };
+  loop_options.fit.progress = fit_progress_display(status);
+  loop_options.step_progress = loop_progress_display(status);
   const LoopResult result = run_residual_loop(inputs.start, inputs.data, loop_options);
+  status.finish();
   const std::string table =
       write_loop_outputs(options.out_dir, result, inputs.data, options.input.model.model,
                          loop_options.fit, inputs.report_lines);

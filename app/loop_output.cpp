@@ -114,7 +114,7 @@ std::string write_loop_outputs(const std::filesystem::path& dir, const LoopResul
   write_text_file_atomically(dir / "result.json", loop_json(result, data).dump(2) + "\n");
   write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model()));
   write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model()));
-  const std::vector<std::string> plots = write_fit_plots(dir, result.model(), data, fit_options);
+  const FitPlots plots = write_fit_plots(dir, result.model(), data, fit_options);
   const std::string table = steps_table(result);
   std::ostringstream report;
   report << "# Residual loop: the " << model_name << " model on " << data.source << "\n\n";
@@ -123,8 +123,9 @@ std::string write_loop_outputs(const std::filesystem::path& dir, const LoopResul
          << handle_radius_line(data, result.model()) << ".\n\n"
          << table << "\n```\n"
          << result.full_report() << "```\n\n"
+         << "The final model's " << plots.whiteness << ".\n\n"
          << "Plots of the final model:\n\n";
-  for (const std::string& plot : plots) report << "![" << plot << "](" << plot << ")\n\n";
+  for (const std::string& plot : plots.files) report << "![" << plot << "](" << plot << ")\n\n";
   write_text_file_atomically(dir / "report.md", report.str());
   return table;
 }

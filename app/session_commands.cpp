@@ -509,6 +509,42 @@ void print_gaps(const SessionReader& session) {
   std::fflush(stdout);
 }
 
+// A haptic playback (tick_recorder.h): its channels keep each tick's own time (explicit
+// times, so a late tick or a dropped record is where it was), and the group `haptic` states
+// the nominal tick rate; one line with both and the intervals the ticks kept. Nothing for
+// other sessions.
+void print_playback_clock(const SessionReader& session) {
+  std::string nominal_hz;
+  try {
+    nominal_hz = session.read_group_attribute("haptic", "rate_hz");
+  } catch (const std::exception&) {
+    return;  // not a playback
+  }
+  const ChannelInfo* timed = nullptr;
+  for (const ChannelInfo& c : session.channels()) {
+    if (c.sample_rate_hz == 0.0 && timed == nullptr) timed = &c;
+  }
+  if (timed == nullptr) return;
+  const std::vector<double> times = session.read(timed->name).time_s;
+  std::vector<double> intervals_ms;
+  for (std::size_t i = 1; i < times.size(); ++i) {
+    intervals_ms.push_back(1e3 * (times[i] - times[i - 1]));
+  }
+  std::printf(
+      "playback clock: nominal %s Hz (haptic/rate_hz); the channels keep each tick's own "
+      "time (rate \"times\")",
+      printable(nominal_hz).c_str());
+  if (!intervals_ms.empty()) {
+    const double largest = *std::max_element(intervals_ms.begin(), intervals_ms.end());
+    std::nth_element(intervals_ms.begin(), intervals_ms.begin() + intervals_ms.size() / 2,
+                     intervals_ms.end());
+    std::printf(": intervals median %.4g ms, largest %.4g ms over %zu ticks",
+                intervals_ms[intervals_ms.size() / 2], largest, times.size());
+  }
+  std::printf("\n");
+  std::fflush(stdout);
+}
+
 void run_info(const std::string& session_path) {
   const SessionReader session(session_path);
   const SessionMetadata& m = session.metadata();
@@ -535,15 +571,19 @@ void run_info(const std::string& session_path) {
               "rate Hz", raw_w, "raw", unit_w, "unit", "calibration");
   std::fflush(stdout);
   for (const ChannelInfo& c : session.channels()) {
+    // Explicit times (sample_rate_hz 0): "times", not a rate of 0.
+    char rate[32] = "times";
+    if (c.sample_rate_hz > 0) std::snprintf(rate, sizeof rate, "%g", c.sample_rate_hz);
     std::printf(
-        "  %-*s %-*s %10zu %10g %-*s %-*s %s%s%s\n", name_w, printable(c.name).c_str(), sensor_w,
-        printable(c.sensor_kind).c_str(), session.sample_count(c.name), c.sample_rate_hz, raw_w,
+        "  %-*s %-*s %10zu %10s %-*s %-*s %s%s%s\n", name_w, printable(c.name).c_str(), sensor_w,
+        printable(c.sensor_kind).c_str(), session.sample_count(c.name), rate, raw_w,
         printable(c.raw_unit).c_str(), unit_w, printable(c.unit).c_str(),
         c.calibration_id.empty() ? "(values are physical)" : printable(c.calibration_id).c_str(),
         c.geometry_calibration_id.empty() ? "" : ", geometry ",
         printable(c.geometry_calibration_id).c_str());
   }
   std::fflush(stdout);
+  print_playback_clock(session);
   print_geometry(session);
   print_range_warnings(session);
   print_gaps(session);

@@ -1,7 +1,5 @@
 // doorbench spec: the design specification from TO-BE recordings and the AS-IS door —
 // inverse design, felt quantities before/after, the check, tolerances, spec.json/html/pdf.
-#include <unistd.h>
-
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
@@ -17,9 +15,11 @@
 #include "analysis/inverse_design.h"
 #include "analysis/parameter_file.h"
 #include "analysis/spec_report.h"
+#include "analysis/text_format.h"
 #include "analysis/tolerance_analysis.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
+#include "app/progress.h"
 #include "app/spec_run.h"
 
 namespace doorbench::app {
@@ -159,14 +159,16 @@ void run_spec(const SpecCommandOptions& options) {
   evaluation_options.monte_carlo.samples = options.samples;
   evaluation_options.monte_carlo.threads = options.threads;
   evaluation_options.monte_carlo.seed = options.seed;
-  const bool terminal = isatty(fileno(stderr)) != 0;
-  evaluation_options.monte_carlo.progress = [&progress, terminal](int done, int total) {
-    if (terminal) {
-      progress << "\rtolerance Monte Carlo: " << done << " / " << total << " samples"
-               << (done == total ? "\n" : "") << std::flush;
-    } else if (done == total || (done * 10 / total) != ((done - 1) * 10 / total)) {
-      progress << "tolerance Monte Carlo: " << done << " / " << total << " samples\n";
-    }
+  // The samples' status line, with the time left (app/progress.h).
+  StatusLine status(progress, stderr_is_terminal());
+  auto samples_began = std::chrono::steady_clock::now();
+  evaluation_options.monte_carlo.progress = [&status, &samples_began](int done, int total) {
+    const auto now = std::chrono::steady_clock::now();
+    if (done == 0) samples_began = now;
+    status.update(printf_text("tolerance Monte Carlo: %d of %d samples, ", done, total) +
+                      progress_time_text(
+                          done, total, std::chrono::duration<double>(now - samples_began).count()),
+                  now, done == 0);
   };
   if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
   progress << "felt quantities and the check; tolerance analysis of " << options.samples
@@ -175,6 +177,7 @@ void run_spec(const SpecCommandOptions& options) {
                                    : static_cast<int>(std::thread::hardware_concurrency()))
            << " thread(s)\n";
   SpecEvaluation evaluation = evaluate_spec(asis, design, tobe, evaluation_options);
+  status.finish();
   evaluation.command = describe(options);
   evaluation.asis_source = asis_file.string();
 

@@ -375,9 +375,10 @@ bool LiveJournal::update_plots(std::vector<PlotView>& plots) const {
         }
       }
     }
-    auto series = std::make_shared<Series>(Series::timed(
-        info.name, calib_[c] || info.calibration_id.empty() ? info.unit : info.raw_unit,
-        std::move(x), std::move(y)));
+    const std::string unit =
+        to_display_units(calib_[c] || info.calibration_id.empty() ? info.unit : info.raw_unit, y);
+    auto series =
+        std::make_shared<Series>(Series::timed(info.name, unit, std::move(x), std::move(y)));
     series->colour = palette(c);
     plots[c].series.clear();
     plots[c].add(std::move(series));

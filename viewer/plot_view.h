@@ -64,6 +64,14 @@ struct Marker {
   std::string label;  // the tooltip: e.g. "stroke_start opening"
 };
 
+// A stretch of x shaded behind the curves over the data area's height (a channel at its
+// sensor's limit), with a tooltip.
+struct Shade {
+  double x0 = 0.0, x1 = 0.0;  // x0 <= x1; drawn at least 1 px wide
+  Rgba colour;
+  std::string label;  // e.g. "inclinometer angle at its ±10 deg limit"
+};
+
 class PlotView {
  public:
   std::string title;
@@ -74,6 +82,7 @@ class PlotView {
   std::shared_ptr<Range> x = std::make_shared<Range>();
   Range y;
   std::vector<Marker> markers;
+  std::vector<Shade> shades;
   bool integer_x = false;  // x takes whole numbers (e.g. steps): ticks 1 apart or more
   // Bumped by whoever replaces a series' data, so that cached draw data are rebuilt.
   std::uint64_t revision = 0;

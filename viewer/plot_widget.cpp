@@ -53,6 +53,7 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
   if (!view.series.empty()) {
     items.push_back("x: " + with_unit(view.x_label, view.series.front()->x_unit()));
   }
+  if (!view.shades.empty()) items.push_back("shaded: " + view.shades.front().label);
   const float line_end = origin.x + width - (controls ? 90.0f : 8.0f);
   std::vector<ImVec2> at(items.size());
   float hx = origin.x + 4.0f, hy = origin.y + 2.0f;
@@ -140,8 +141,16 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     draw->AddText(ImVec2(a0.x - w - 4.0f, py - 7.0f), kTextColour, label.c_str());
   }
 
-  // Event markers behind the curves, clipped to the data area like them.
+  // Event markers and shaded stretches behind the curves, clipped to the data area like them.
   draw->PushClipRect(a0, a1, true);
+  std::vector<const Shade*> shade_under_mouse;
+  for (const Shade& shade : view.shades) {
+    if (shade.x1 < view.x->min || shade.x0 > view.x->max) continue;
+    const float left = std::round(float(view.to_px_x(shade.x0, area)));
+    const float right = std::max(left + 1.0f, std::round(float(view.to_px_x(shade.x1, area))));
+    draw->AddRectFilled(ImVec2(left, a0.y), ImVec2(right, a1.y), to_imgui_colour(shade.colour));
+    if (hovered && mx >= left - 2.0f && mx <= right + 2.0f) shade_under_mouse.push_back(&shade);
+  }
   std::vector<const Marker*> near_mouse;
   for (const Marker& m : view.markers) {
     if (m.x < view.x->min || m.x > view.x->max) continue;
@@ -189,6 +198,9 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     const auto readouts = view.readout(mx, my, area);
     ImGui::BeginTooltip();
     for (const Marker* m : near_mouse) ImGui::Text("event at %.4f: %s", m->x, m->label.c_str());
+    for (const Shade* shade : shade_under_mouse) {
+      ImGui::Text("%.4f to %.4f: %s", shade->x0, shade->x1, shade->label.c_str());
+    }
     for (const Readout& r : readouts) {
       ImGui::Text("%s: x = %.6g %s, y = %.6g %s (sample %zu)", r.series.c_str(), r.x,
                   r.x_unit.c_str(), r.y, r.unit.c_str(), r.index);
@@ -208,6 +220,7 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
   ImGui::PopID();
 
   record.title = view.title;
+  record.labels = items;
   record.view = &view;
   record.widget = {origin.x, origin.y, width, height};
   record.area = area;

@@ -18,6 +18,8 @@ struct PlotRecord {
   Range x, y;
   std::vector<std::string> series;
   std::vector<Rgba> colours;
+  // The header's texts as drawn: the title, each series' "name [unit]", "x: label [unit]".
+  std::vector<std::string> labels;
   const PlotView* view = nullptr;
   Rect widget;            // the whole widget: header, axes and data area
   bool want_csv = false;  // its CSV or PNG button was pressed this frame

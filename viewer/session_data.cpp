@@ -8,6 +8,7 @@
 #include "analysis/fit_metrics.h"
 #include "analysis/fitting.h"
 #include "analysis/preprocessing.h"
+#include "sensors/channel_limits.h"
 
 namespace doorbench::viewer {
 
@@ -15,17 +16,31 @@ namespace {
 
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-std::shared_ptr<Series> channel_series(const SessionReader& reader, const ChannelInfo& info) {
+// A channel's series; `limit` (or null): its stretches at the limit as shades in `at_limit`.
+std::shared_ptr<Series> channel_series(const SessionReader& reader, const ChannelInfo& info,
+                                       const sensors::ChannelLimit* limit,
+                                       std::vector<Shade>& at_limit) {
   const ChannelSlice slice = reader.read(info.name);
   std::vector<double> values = reader.physical(info.name, slice);
+  const std::vector<sensors::SampleStretch> stretches =
+      limit != nullptr ? sensors::limit_stretches(values, limit->limit)
+                       : std::vector<sensors::SampleStretch>{};
+  const std::string unit = to_display_units(info.unit, values);
   std::shared_ptr<Series> series;
   if (info.sample_rate_hz > 0.0) {
     const double t0 = info.first_sample_time_s + double(slice.first_index) / info.sample_rate_hz;
     series = std::make_shared<Series>(
-        Series::uniform(info.name, info.unit, t0, 1.0 / info.sample_rate_hz, std::move(values)));
+        Series::uniform(info.name, unit, t0, 1.0 / info.sample_rate_hz, std::move(values)));
   } else {
-    series = std::make_shared<Series>(
-        Series::timed(info.name, info.unit, slice.time_s, std::move(values)));
+    series =
+        std::make_shared<Series>(Series::timed(info.name, unit, slice.time_s, std::move(values)));
+  }
+  const plot_style::ShadeStyle& style = plot_style::kAtLimitShade;
+  const Rgba colour{style.r, style.g, style.b, std::uint8_t(std::lround(255.0 * style.opacity))};
+  for (const sensors::SampleStretch& stretch : stretches) {
+    const std::size_t after = stretch.end < series->size() ? stretch.end : stretch.end - 1;
+    at_limit.push_back({series->x(stretch.begin), series->x(after), colour,
+                        limit->sensor + " " + info.name + " at its " + limit->range + " limit"});
   }
   return series;
 }
@@ -42,8 +57,9 @@ std::shared_ptr<Series> loop_series(const PreparedData& data, StrokeDirection di
     angle.insert(angle.end(), stroke.theta_rad.begin(), stroke.theta_rad.end());
     force.insert(force.end(), stroke.force_N.begin(), stroke.force_N.end());
   }
-  auto series =
-      std::make_shared<Series>(Series::xy(name, "rad", "N", std::move(angle), std::move(force)));
+  const std::string angle_unit = to_display_units("rad", angle);
+  auto series = std::make_shared<Series>(
+      Series::xy(name, angle_unit, "N", std::move(angle), std::move(force)));
   style_series(*series, meaning);
   return series;
 }
@@ -81,6 +97,14 @@ void style_series(Series& series, plot_style::Meaning meaning) {
   series.layer = style.layer;
 }
 
+std::string to_display_units(const std::string& stored_unit, std::vector<double>& values) {
+  const plot_style::DisplayUnit shown = plot_style::display_unit(stored_unit);
+  if (shown.scale != 1.0) {
+    for (double& v : values) v *= shown.scale;
+  }
+  return shown.unit;
+}
+
 Rgba palette(std::size_t index) {
   static constexpr Rgba colours[] = {{230, 90, 40, 255},   {40, 140, 230, 255}, {60, 180, 75, 255},
                                      {220, 190, 30, 255},  {170, 80, 200, 255}, {30, 200, 200, 255},
@@ -96,10 +120,17 @@ SessionData load_session(const std::filesystem::path& path, const LoadOptions& o
   session.channels = reader.channels();
   session.events = reader.events();
   session.calibrations = reader.calibrations();
+  const std::vector<sensors::ChannelLimit> limits =
+      sensors::session_channel_limits(session.metadata);
   for (std::size_t i = 0; i < session.channels.size(); ++i) {
     const ChannelInfo& info = session.channels[i];
     session.sample_counts.push_back(reader.sample_count(info.name));
-    session.channel_series.push_back(channel_series(reader, info));
+    const sensors::ChannelLimit* limit = nullptr;
+    for (const sensors::ChannelLimit& l : limits) {
+      if (l.channel == info.name) limit = &l;
+    }
+    session.at_limit.emplace_back();
+    session.channel_series.push_back(channel_series(reader, info, limit, session.at_limit.back()));
     session.channel_series.back()->colour = palette(i);
   }
   if (options.prepare) {
@@ -161,11 +192,14 @@ FitComparison compare_with_model(const SessionData& session, const DoorModel& mo
   }
   FitComparison comparison;
   comparison.model_description = description;
-  comparison.measured = std::make_shared<Series>(Series::timed("measured", "rad/s", t, measured));
+  const std::string rate_unit = to_display_units("rad/s", measured);
+  to_display_units("rad/s", simulated);
+  to_display_units("rad/s", residual);
+  comparison.measured = std::make_shared<Series>(Series::timed("measured", rate_unit, t, measured));
   comparison.simulated =
-      std::make_shared<Series>(Series::timed("simulated", "rad/s", t, simulated));
+      std::make_shared<Series>(Series::timed("simulated", rate_unit, t, simulated));
   comparison.residual =
-      std::make_shared<Series>(Series::timed("residual", "rad/s", std::move(t), residual));
+      std::make_shared<Series>(Series::timed("residual", rate_unit, std::move(t), residual));
   style_series(*comparison.measured, plot_style::Meaning::kMeasured);
   style_series(*comparison.simulated, plot_style::Meaning::kSimulated);
   style_series(*comparison.residual, plot_style::Meaning::kResidual);
@@ -203,6 +237,7 @@ std::vector<PlotView> channel_plots(const SessionData& session) {
     plot.y_label = session.channels[i].name;
     plot.add(session.channel_series[i]);
     plot.markers = event_markers(session, session.channels[i].name);
+    if (i < session.at_limit.size()) plot.shades = session.at_limit[i];
     if (!plots.empty()) plot.link_x_to(plots.front());
     plots.push_back(std::move(plot));
   }

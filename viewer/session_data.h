@@ -26,6 +26,11 @@ Rgba meaning_colour(plot_style::Meaning meaning, bool opaque = false);
 // Colour, width and layer of a curve from its meaning: measured on top, a model's curve
 // wide and translucent under it.
 void style_series(Series& series, plot_style::Meaning meaning);
+// The viewer keeps every quantity in its stored unit until it makes a curve of it; here the
+// values are put in the unit people read (plot_style::display_unit, the one place that says
+// which: rad -> deg, rad/s -> deg/s, as the SVG reports show them): `values` scaled in place
+// (NaN stays NaN), the unit shown returned. The curve's header then names that unit.
+std::string to_display_units(const std::string& stored_unit, std::vector<double>& values);
 
 struct SessionData {
   std::filesystem::path path;
@@ -39,8 +44,13 @@ struct SessionData {
   std::vector<SessionEvent> events;
   bool strokes_found_on_read = false;
   std::vector<calibration::CalibrationRecord> calibrations;
-  // Per channel (same order): physical values over session time, in the channel's unit.
+  // Per channel (same order): physical values over session time, in the unit shown
+  // (to_display_units: an angle in deg, a rate in deg/s).
   std::vector<std::shared_ptr<Series>> channel_series;
+  // Per channel (same order): its stretches at its sensor's limit (sensors/channel_limits.h,
+  // the rig the session states: record's definition), as shades over [the first sample at the
+  // limit, the sample after the last); empty for a channel without a known limit.
+  std::vector<std::vector<Shade>> at_limit;
 
   // The session prepared into strokes (analysis/preprocessing.h); when that fails,
   // prepared is false and prepare_message says why (the views that need strokes say so).

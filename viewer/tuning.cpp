@@ -101,7 +101,8 @@ void Tuning::apply_selection(std::vector<int> strokes) {
     t.insert(t.end(), stroke.time_s.begin(), stroke.time_s.end());
     omega.insert(omega.end(), stroke.omega_rad_s.begin(), stroke.omega_rad_s.end());
   }
-  auto measured = std::make_shared<Series>(Series::timed("measured", "rad/s", t, omega));
+  const std::string rate_unit = to_display_units("rad/s", omega);
+  auto measured = std::make_shared<Series>(Series::timed("measured", rate_unit, t, omega));
   style_series(*measured, plot_style::Meaning::kMeasured);
   plot.series.clear();
   plot.title = "rate: measured, fitted and tuned (strokes replayed open-loop)";
@@ -145,7 +146,8 @@ std::shared_ptr<Series> Tuning::replay(const DoorModel& model, const std::string
       if (std::isfinite(error)) *max_error = std::max(*max_error, error);
     }
   }
-  auto series = std::make_shared<Series>(Series::timed(name, "rad/s", std::move(t), omega));
+  const std::string rate_unit = to_display_units("rad/s", omega);
+  auto series = std::make_shared<Series>(Series::timed(name, rate_unit, std::move(t), omega));
   style_series(*series, meaning);
   return series;
 }

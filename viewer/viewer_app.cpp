@@ -426,8 +426,9 @@ void Viewer::fit(SessionView& s) {
     ImGui::TextWrapped("%s", kNoFitModel);
     return;
   }
-  ImGui::Text("%s: rate RMSE %.4g rad/s over windows (as the fit sees them)",
-              s.fit->model_description.c_str(), s.fit->rmse_rad_s);
+  const plot_style::DisplayUnit rate = plot_style::display_unit("rad/s");  // as the plots
+  ImGui::Text("%s: rate RMSE %.4g %s over windows (as the fit sees them)",
+              s.fit->model_description.c_str(), s.fit->rmse_rad_s * rate.scale, rate.unit.c_str());
   const float avail = ImGui::GetContentRegionAvail().y;
   const bool whiteness = s.fit_plots.size() > 2;
   plots_.push_back(plot_widget("fit", s.fit_plots[0], s.fit_states[0], 0.0f,
@@ -640,8 +641,9 @@ void Viewer::tuning(SessionView& s) {
   if (changed) t.resimulate();
   ImGui::SameLine();
   ImGui::BeginChild("tuned");
-  ImGui::Text("%zu strokes replayed in %.1f ms; largest |w_meas - w_sim| %.4g rad/s",
-              t.stroke_count(), t.last_resimulate_ms(), t.max_error_rad_s());
+  const plot_style::DisplayUnit rate = plot_style::display_unit("rad/s");  // as the plot
+  ImGui::Text("%zu strokes replayed in %.1f ms; largest |w_meas - w_sim| %.4g %s", t.stroke_count(),
+              t.last_resimulate_ms(), t.max_error_rad_s() * rate.scale, rate.unit.c_str());
   plots_.push_back(plot_widget("tuning", t.plot, s.tuning_state, 0.0f, 0.0f, controls_));
   ImGui::EndChild();
 }

@@ -180,6 +180,7 @@ void screenshot(Viewer& viewer, const std::string& layout, const std::filesystem
     plot["area_px"] = {p.area.x * sx, p.area.y * sy, p.area.width * sx, p.area.height * sy};
     plot["x_range"] = {p.x.min, p.x.max};
     plot["y_range"] = {p.y.min, p.y.max};
+    plot["labels"] = p.labels;
     plot["series"] = nlohmann::ordered_json::array();
     for (std::size_t i = 0; i < p.series.size(); ++i) {
       const Rgba c = p.colours[i];

@@ -72,8 +72,43 @@ LoopResult expect_first_step(const DoorModel& truth, effects::Kind expected,
   const PreparedData data = recording(truth);
   std::vector<std::string> progress;
   options.progress = [&](const std::string& line) { progress.push_back(line); };
+  std::vector<doorbench::LoopProgress> steps;
+  options.step_progress = [&](const doorbench::LoopProgress& p) { steps.push_back(p); };
+  std::vector<doorbench::FitProgress> fits;
+  options.fit.progress = [&](const doorbench::FitProgress& p) { fits.push_back(p); };
   const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), data, options);
   INFO(loop.full_report());
+  // The counts for a progress display (app/progress.h): each step's refits from 0 to all of
+  // them, and the start fit's iterations and folds (the refits do not report).
+  REQUIRE(steps.size() >= 2);
+  CHECK(steps.front().step == 1);
+  CHECK(steps.front().refits_done == 0);
+  CHECK(steps.front().refits >= 1);
+  for (std::size_t i = 1; i < steps.size(); ++i) {
+    CHECK(steps[i].max_steps == options.max_steps);
+    CHECK(steps[i].refits_done <= steps[i].refits);
+    if (steps[i].step == steps[i - 1].step) {
+      CHECK(steps[i].refits_done == steps[i - 1].refits_done + 1);
+    } else {
+      CHECK(steps[i].refits_done == 0);
+    }
+  }
+  CHECK(steps.back().refits_done == steps.back().refits);
+  REQUIRE_FALSE(fits.empty());
+  CHECK(fits.front().stage == doorbench::FitProgress::Stage::kWindows);
+  CHECK(fits.front().done == 0);
+  CHECK(fits.front().total == options.fit.max_iterations);
+  const doorbench::FitProgress& last_fold = fits.back();
+  CHECK(last_fold.stage == doorbench::FitProgress::Stage::kFolds);
+  CHECK(last_fold.done == last_fold.total);
+  CHECK(last_fold.total == options.fit.cross_validation_folds);
+  std::size_t windows = 0;
+  for (const doorbench::FitProgress& p : fits) {
+    if (p.stage == doorbench::FitProgress::Stage::kWindows) ++windows;
+  }
+  // The start fit and, when the loop ran it, the structure check's fit: 0, then each
+  // iteration of each.
+  CHECK(windows >= 1 + static_cast<std::size_t>(loop.start_fit.summary.iterations));
   REQUIRE_FALSE(loop.steps.empty());
   const doorbench::LoopStep& step = loop.steps.front();
   CHECK(step.effect == expected);

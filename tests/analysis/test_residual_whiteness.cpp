@@ -36,6 +36,7 @@ TEST_CASE("residual whiteness: white noise inside the band, coloured residuals o
   CHECK(w.auto_outside <= 3);   // 1 % of 50 lags expected
   CHECK(w.cross_outside <= 4);  // of 101
   CHECK(w.summary().rfind("residual autocorrelation: ", 0) == 0);
+  CHECK_THAT(w.report_line(), Catch::EndsWith("; verdict: white: consistent with noise"));
 
   // AR(1) with 0.8: r(1) near 0.8 and many lags outside.
   auto coloured = noise;
@@ -45,6 +46,10 @@ TEST_CASE("residual whiteness: white noise inside the band, coloured residuals o
   const ResidualWhiteness ar = residual_whiteness(coloured, force, 0.001, 50);
   CHECK(ar.autocorrelation[1] == Approx(0.8).margin(0.03));
   CHECK(ar.auto_outside >= 10);
+  CHECK_THAT(ar.report_line(),
+             Catch::EndsWith("; verdict: not white: correlated in time but not with the force "
+                             "(coloured noise such as the rate's filtering, or dynamics the force "
+                             "does not drive)"));
 
   // The residual follows the force 3 samples later: the cross-correlation peaks at +3.
   auto following = noise;
@@ -56,6 +61,12 @@ TEST_CASE("residual whiteness: white noise inside the band, coloured residuals o
   CHECK(at_3 > 0.6);
   CHECK(std::abs(x.cross_correlation[50 - 3]) < x.band * 1.5);
   CHECK(x.cross_outside >= 1);
+  // One clear peak is enough for the verdict, however few lags are outside.
+  CHECK_THAT(x.report_line(),
+             Catch::Contains("(largest |r| 0.7") &&
+                 Catch::Contains(" at lag 0.003 s); verdict: not white: the residual follows "
+                                 "the force (dynamics the model does not reproduce, whatever the "
+                                 "residual's size)"));
 }
 
 TEST_CASE("residual whiteness: lags stay inside each stroke, and bad input is refused",
@@ -73,4 +84,36 @@ TEST_CASE("residual whiteness: lags stay inside each stroke, and bad input is re
   CHECK_THROWS_WITH(residual_whiteness(r, r, 0.01, 0), "residual whiteness: max_lag must be >= 1");
   CHECK_THROWS_WITH(residual_whiteness(r, r, 0.01, 7),
                     "residual whiteness: 12 finite samples (not constant) needed at least 14");
+}
+
+TEST_CASE("residual whiteness: the report line, word for word", "[fit][whiteness]") {
+  ResidualWhiteness w;
+  w.lag_step_s = 0.01;
+  w.samples = 700;
+  w.band = 0.1;
+  w.autocorrelation = {1.0, 0.05, -0.02, 0.03};
+  w.cross_correlation = {0.01, -0.04, 0.05, 0.02, 0.0};  // lags -2 … 2
+  CHECK(w.report_line() ==
+        "residual whiteness: autocorrelation outside the 99 % band (±0.1) at 0 of 3 lags "
+        "(largest |r| 0.05 at lag 0.01 s); cross-correlation with the force outside it at 0 of "
+        "5 lags (largest |r| 0.05 at lag 0 s); verdict: white: consistent with noise");
+  // A peak above twice the band at lag +2 (the force leading): the force is named.
+  w.cross_correlation[4] = -0.25;
+  w.cross_outside = 1;
+  CHECK(w.report_line() ==
+        "residual whiteness: autocorrelation outside the 99 % band (±0.1) at 0 of 3 lags "
+        "(largest |r| 0.05 at lag 0.01 s); cross-correlation with the force outside it at 1 of "
+        "5 lags (largest |r| 0.25 at lag 0.02 s); verdict: not white: the residual follows the "
+        "force (dynamics the model does not reproduce, whatever the residual's size)");
+  // The autocorrelation alone: 1 of 3 lags outside is more than 5 % of them.
+  w.cross_correlation[4] = 0.0;
+  w.cross_outside = 0;
+  w.autocorrelation[2] = 0.15;
+  w.auto_outside = 1;
+  CHECK(w.report_line() ==
+        "residual whiteness: autocorrelation outside the 99 % band (±0.1) at 1 of 3 lags "
+        "(largest |r| 0.15 at lag 0.02 s); cross-correlation with the force outside it at 0 of "
+        "5 lags (largest |r| 0.05 at lag 0 s); verdict: not white: correlated in time but not "
+        "with the force (coloured noise such as the rate's filtering, or dynamics the force does "
+        "not drive)");
 }

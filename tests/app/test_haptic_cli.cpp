@@ -1,6 +1,7 @@
 // doorbench play through the real executable.
 #include <catch2/catch.hpp>
 #include <fstream>
+#include <regex>
 
 #include "acquisition/session_file.h"
 #include "analysis/parameter_file.h"
@@ -27,6 +28,20 @@ TEST_CASE("play: the simulated HapticMaster in simulated time writes a session a
   const SessionReader reader(session);
   CHECK(reader.sample_count("force") == 12022);
   CHECK(reader.read_group_attribute("haptic", "device") == "sim:hapticmaster");
+
+  // Explicit tick times (a late tick stays where it fell), the nominal rate in the group
+  // haptic, and info shows both: the rate column says "times", a line the rate and the
+  // intervals the ticks kept (exactly 1 ms in simulated time).
+  CHECK(reader.channel("force").sample_rate_hz == 0.0);
+  CHECK(reader.read_group_attribute("haptic", "rate_hz") == "1000");
+  const auto info = run_doorbench_shell("info '" + session.string() + "'", dir);
+  REQUIRE(info.status == 0);
+  INFO(info.out);
+  CHECK_THAT(info.out, Catch::Contains("\nplayback clock: nominal 1000 Hz (haptic/rate_hz); the "
+                                       "channels keep each tick's own time (rate \"times\"): "
+                                       "intervals median 1 ms, largest 1 ms over 12022 ticks\n"));
+  CHECK(std::regex_search(info.out, std::regex("\n  force +haptic_force +12022 +times +N +N +"
+                                               "\\(values are physical\\)\n")));
 
   // Sessions are never overwritten.
   const auto again = run_doorbench_shell(

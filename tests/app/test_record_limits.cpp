@@ -3,10 +3,6 @@
 // channel sits at its limit during the openings. Recorded with stderr on a pseudo-terminal
 // (the live status display), the status line and the summary must name the channel and the
 // time at the limit; the limit watcher's model is checked on its own too.
-#include <pty.h>
-#include <sys/wait.h>
-#include <unistd.h>
-
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <regex>
@@ -14,36 +10,12 @@
 
 #include "acquisition/session_file.h"
 #include "app/limit_watcher.h"
+#include "tests/support/run_on_terminal.h"
 #include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 
 namespace {
-
-// Runs doorbench with stdout and stderr on a pseudo-terminal; returns what it wrote there
-// and its exit status.
-std::string run_with_terminal_output(const std::string& args, int& status) {
-  int master = -1;
-  const pid_t child = ::forkpty(&master, nullptr, nullptr, nullptr);
-  if (child < 0) return "";
-  if (child == 0) {
-    ::execl("/bin/sh", "sh", "-c", (std::string("'" DOORBENCH_EXECUTABLE "' ") + args).c_str(),
-            static_cast<char*>(nullptr));
-    ::_exit(127);
-  }
-  std::string output;
-  char buffer[4096];
-  for (;;) {
-    const ssize_t n = ::read(master, buffer, sizeof buffer);
-    if (n <= 0) break;  // EIO once the child closed the terminal
-    output.append(buffer, std::size_t(n));
-  }
-  int wait_status = 0;
-  ::waitpid(child, &wait_status, 0);
-  ::close(master);
-  status = WIFEXITED(wait_status) ? WEXITSTATUS(wait_status) : -1;
-  return output;
-}
 
 RecordStatus status_at(double recorded_s, double rate) {
   RecordStatus status;
@@ -130,8 +102,8 @@ TEST_CASE("record on a rig that clips: the live status line and the summary name
   testing::TempDir dir("record_limits");
   const std::string session = (dir / "clipping.h5").string();
   int status = -1;
-  const std::string output =
-      run_with_terminal_output("record --out '" + session + "' --duration-s 4", status);
+  const std::string output = testing::run_doorbench_terminal_output(
+      "record --out '" + session + "' --duration-s 4", status);
   INFO(output);
   REQUIRE(status == 0);
   // The status line, redrawn in place, says the gyroscope's channel is at its limit.

@@ -43,7 +43,7 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
                                        dir);
   INFO("stdout: " << run.out << "\nstderr: " << run.err);
   REQUIRE(run.status == 0);
-  CHECK_THAT(run.err, Contains("tolerance Monte Carlo: 8 / 8 samples"));
+  CHECK_THAT(run.err, Contains("tolerance Monte Carlo: 8 of 8 samples, done in "));
   CHECK_THAT(run.out, Contains("What to change: F_l0 15 -> "));
   CHECK_THAT(run.out, Contains("felt along the TO-BE recordings' motion ("));
   CHECK_THAT(run.out, Contains("peak force to unlatch (N)"));

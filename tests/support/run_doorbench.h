@@ -52,4 +52,16 @@ inline std::string comedi_emulator_environment() {
   return "DOORBENCH_COMEDI_LIBRARY='" DOORBENCH_COMEDI_EMULATOR "'";
 }
 
+// `doorbench simulate` of the sensory reference door opened and closed by the virtual hand,
+// duration_s at rate_hz, into the CSV `dir / name`; returns its path ("" when it failed).
+inline std::string simulate_open_close_csv(const TempDir& dir, const std::string& name,
+                                           double duration_s, double rate_hz) {
+  const std::string csv = (dir / name).string();
+  const DoorbenchRun run = run_doorbench_shell(
+      "simulate --model sensory --hand open-close --duration-s " + std::to_string(duration_s) +
+          " --rate-hz " + std::to_string(rate_hz) + " --out '" + csv + "'",
+      dir);
+  return run.status == 0 ? csv : "";
+}
+
 }  // namespace doorbench::testing

@@ -1,6 +1,8 @@
 #pragma once
 // Runs the doorbench executable with its stdin on a real pseudo-terminal (openpty), as an
-// operator's keyboard or keypad would be, for tests of interactive input. `typed` is written to
+// operator's keyboard or keypad would be, for tests of interactive input; or with its stdout
+// and stderr on one (forkpty), for tests of what a terminal shows (status lines redrawn in
+// place). `typed` is written to
 // the terminal after `delay_ms`; the terminal's echo is drained until doorbench exits (so that it
 // never blocks on it). stdout and stderr go to files in `dir`.
 #include <fcntl.h>
@@ -70,6 +72,31 @@ inline DoorbenchRun run_doorbench_on_terminal(const std::vector<std::string>& ar
   run.out = os.str();
   run.err.append(es.str());
   return run;
+}
+
+// doorbench ARGS (a shell command line's arguments) with stdout and stderr on a
+// pseudo-terminal; returns everything it wrote there, its exit status in `status`.
+inline std::string run_doorbench_terminal_output(const std::string& args, int& status) {
+  int master = -1;
+  const pid_t child = ::forkpty(&master, nullptr, nullptr, nullptr);
+  if (child < 0) return "";
+  if (child == 0) {
+    ::execl("/bin/sh", "sh", "-c", (std::string("'" DOORBENCH_EXECUTABLE "' ") + args).c_str(),
+            static_cast<char*>(nullptr));
+    ::_exit(127);
+  }
+  std::string output;
+  char buffer[4096];
+  for (;;) {
+    const ssize_t n = ::read(master, buffer, sizeof buffer);
+    if (n <= 0) break;  // EIO once the child closed the terminal
+    output.append(buffer, std::size_t(n));
+  }
+  int wait_status = 0;
+  ::waitpid(child, &wait_status, 0);
+  ::close(master);
+  status = WIFEXITED(wait_status) ? WEXITSTATUS(wait_status) : -1;
+  return output;
 }
 
 }  // namespace doorbench::testing

@@ -23,23 +23,31 @@
 
 namespace doorbench::testing {
 
-// A session with one channel "force" (N, values as given, no calibration) at rate_hz.
-inline void write_force_session(const std::filesystem::path& path,
-                                const std::vector<double>& values, double rate_hz) {
-  SessionMetadata metadata;
-  metadata.rig_name = "viewer-test";
+// A session with one value channel `name` (physical values as given in `unit`, no
+// calibration, range ±range) at rate_hz, with `metadata` (default: rig "viewer-test").
+inline void write_channel_session(const std::filesystem::path& path, const std::string& name,
+                                  const std::string& sensor_kind, const std::string& unit,
+                                  double range, const std::vector<double>& values, double rate_hz,
+                                  SessionMetadata metadata = {}) {
+  if (metadata.rig_name.empty()) metadata.rig_name = "viewer-test";
   SessionWriter writer(path, metadata);
   ChannelInfo channel;
-  channel.name = "force";
-  channel.sensor_kind = "imported";
+  channel.name = name;
+  channel.sensor_kind = sensor_kind;
   channel.raw_type = RawType::kValues;
-  channel.raw_unit = "N";
-  channel.unit = "N";
-  channel.range_min = -100;
-  channel.range_max = 100;
+  channel.raw_unit = unit;
+  channel.unit = unit;
+  channel.range_min = -range;
+  channel.range_max = range;
   channel.sample_rate_hz = rate_hz;
   writer.append_values(writer.add_channel(channel), values);
   writer.close();
+}
+
+// A session with one channel "force" (N, values as given, no calibration) at rate_hz.
+inline void write_force_session(const std::filesystem::path& path,
+                                const std::vector<double>& values, double rate_hz) {
+  write_channel_session(path, "force", "imported", "N", 100, values, rate_hz);
 }
 
 struct Screenshot {

@@ -7,6 +7,7 @@
 #include "analysis/fit_metrics.h"
 #include "analysis/fitting.h"
 #include "analysis/parameter_file.h"
+#include "analysis/plot_style.h"
 #include "analysis/preprocessing.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
@@ -125,7 +126,7 @@ TEST_CASE("tuning replays strokes in parallel with the same result as one thread
       if (std::isnan(expected)) {
         REQUIRE(std::isnan(b.y(i)));
       } else {
-        REQUIRE(b.y(i) == expected);
+        REQUIRE(b.y(i) == expected * doorbench::plot_style::kDegPerRad);  // shown in deg/s
       }
       ++i;
     }
@@ -170,6 +171,8 @@ TEST_CASE("tuning re-simulates exactly the selected strokes", "[viewer]") {
   const auto expected = doorbench::simulate_windows(tuning.model(), selected, options);
   const auto& measured = *tuning.plot.series[0];
   const auto& tuned = *tuning.plot.series[2];
+  CHECK(measured.unit() == "deg/s");
+  CHECK(tuned.unit() == "deg/s");
   REQUIRE(tuned.size() == selected.strokes[0].size() + 1 + selected.strokes[1].size());
   REQUIRE(measured.size() == tuned.size());
   std::size_t i = 0;
@@ -183,12 +186,13 @@ TEST_CASE("tuning re-simulates exactly the selected strokes", "[viewer]") {
     for (std::size_t n = 0; n < stroke.size(); ++n, ++i) {
       INFO("stroke " << k << " sample " << n);
       REQUIRE(tuned.x(i) == stroke.time_s[n]);
-      REQUIRE(measured.y(i) == stroke.omega_rad_s[n]);
+      // Shown in deg/s (viewer::to_display_units), the model run in rad/s.
+      REQUIRE(measured.y(i) == stroke.omega_rad_s[n] * doorbench::plot_style::kDegPerRad);
       const double hat = expected.omega_rad_s[k][n];
       if (std::isnan(hat)) {
         REQUIRE(std::isnan(tuned.y(i)));
       } else {
-        REQUIRE(tuned.y(i) == hat);
+        REQUIRE(tuned.y(i) == hat * doorbench::plot_style::kDegPerRad);
         max_error = std::max(max_error, std::abs(stroke.omega_rad_s[n] - hat));
       }
     }

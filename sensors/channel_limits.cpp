@@ -1,0 +1,67 @@
+#include "sensors/channel_limits.h"
+
+#include <cmath>
+#include <cstdio>
+#include <exception>
+#include <filesystem>
+#include <numbers>
+
+#include "sensors/sensor_models.h"
+
+namespace doorbench::sensors {
+
+namespace {
+
+constexpr double kRadPerDeg = std::numbers::pi / 180.0;
+constexpr double kLimitFraction = 0.99;  // of the range: at the limit
+
+std::string range_text(double range, const char* unit) {
+  char text[64];
+  std::snprintf(text, sizeof text, "±%g %s", range, unit);
+  return text;
+}
+
+}  // namespace
+
+std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig) {
+  std::vector<ChannelLimit> limits;
+  for (const RigChannel& channel : rig.channels) {
+    if (channel.sensor == "inclinometer") {
+      InclinometerParameters p;
+      for (const auto& [name, value] : channel.parameters) p.set(name, value);
+      limits.push_back({channel.name, channel.sensor, kLimitFraction * p.range_deg * kRadPerDeg,
+                        range_text(p.range_deg, "deg")});
+    } else if (channel.sensor == "gyroscope") {
+      GyroscopeParameters p;
+      for (const auto& [name, value] : channel.parameters) p.set(name, value);
+      limits.push_back({channel.name, channel.sensor, kLimitFraction * p.range_dps * kRadPerDeg,
+                        range_text(p.range_dps, "deg/s")});
+    }
+  }
+  return limits;
+}
+
+std::vector<ChannelLimit> session_channel_limits(const SessionMetadata& metadata) {
+  if (metadata.rig_definition.empty()) return {};
+  try {
+    return rig_channel_limits(parse_rig(metadata.rig_definition,
+                                        "the session's rig " + metadata.rig_name,
+                                        std::filesystem::current_path()));
+  } catch (const std::exception&) {
+    return {};  // a rig text this build cannot read: no limits known
+  }
+}
+
+std::vector<SampleStretch> limit_stretches(const std::vector<double>& values, double limit) {
+  std::vector<SampleStretch> stretches;
+  bool at = false;
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    const bool now = std::abs(values[i]) >= limit;  // NaN: false
+    if (now && !at) stretches.push_back({i, i});
+    if (now) stretches.back().end = i + 1;
+    at = now;
+  }
+  return stretches;
+}
+
+}  // namespace doorbench::sensors
