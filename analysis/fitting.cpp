@@ -47,9 +47,11 @@ std::string FitOptions::validate() const {
   if (max_iterations < 1) return "fit max_iterations must be >= 1";
   if (!finite_positive(function_tolerance) || !finite_positive(parameter_tolerance) ||
       !finite_positive(gradient_tolerance) || !finite_positive(uncertainty_tolerance) ||
+      !finite_positive(coarse_tolerance_factor) ||
       !finite_positive(equation_error_step_tolerance)) {
     return "fit function_tolerance, parameter_tolerance, gradient_tolerance, "
-           "uncertainty_tolerance and equation_error_step_tolerance must be > 0";
+           "uncertainty_tolerance, coarse_tolerance_factor and equation_error_step_tolerance "
+           "must be > 0";
   }
   if (num_threads < 0) return "fit num_threads must be >= 0 (0: every hardware thread)";
   if (cross_validation_folds < 0 || cross_validation_folds == 1) {
@@ -292,7 +294,8 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
     WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
     coarse.z() = problem.z();
     const WindowProblem::Outcome outcome =
-        coarse.solve(settings, max_iterations, 10 * options.uncertainty_tolerance);
+        coarse.solve(settings, max_iterations,
+                     options.coarse_tolerance_factor * options.uncertainty_tolerance);
     used = outcome.iterations;
     initial_cost = outcome.initial_cost;
     if (outcome.usable) {

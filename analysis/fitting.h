@@ -121,8 +121,13 @@ struct FitOptions {
   double parameter_tolerance = 1e-8;
   double gradient_tolerance = 1e-10;
   // Also stop once the Gauss–Newton step predicts that no free parameter would move by
-  // more than this many of its standard uncertainties (10 times this for the coarse pass).
+  // more than this many of its standard uncertainties (coarse_tolerance_factor times this
+  // for the coarse pass).
   double uncertainty_tolerance = 0.1;
+  // The coarse pass's stopping rule against the fine pass's (> 0). Far from the data σ is
+  // inflated and 10 stops the coarse pass at once, leaving the iterations to the fine pass
+  // at twice the cost; the residual loop's refit starts use 1 (docs/residual-loop.md).
+  double coarse_tolerance_factor = 10.0;
   // The equation-error stage stops after two accepted steps that change no free parameter
   // by more than this fraction of its scale.
   double equation_error_step_tolerance = 1e-2;

@@ -1026,6 +1026,10 @@ FitResult refit(const DoorModel& start, const FitResult& current, const FitOptio
   auto attempt = [&](std::size_t which) {
     FitOptions fit = which == 0 ? from_fit : from_start;
     fit.cross_validation_folds = 0;
+    // A start is the loop's search, not its measurement: its coarse pass goes on to the fine
+    // pass's own precision instead of stopping at once where σ is inflated (a model lacking
+    // an effect), so the iterations run at the coarse problem's half cost.
+    fit.coarse_tolerance_factor = 1.0;
     try {
       const DoorModel model = which == 0 ? current.model.with_effect(setting) : fresh_start();
       attempts[which].result = fit_model(model, data, fit);

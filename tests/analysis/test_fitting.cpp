@@ -504,6 +504,9 @@ TEST_CASE("options and inputs are checked, with messages naming the culprit", "[
   CHECK_THAT(message([](FitOptions& o) { o.max_iterations = 0; }), Contains("max_iterations"));
   CHECK_THAT(message([](FitOptions& o) { o.uncertainty_tolerance = 0; }),
              Contains("uncertainty_tolerance"));
+  CHECK(message([](FitOptions& o) { o.coarse_tolerance_factor = -1; }) ==
+        "fit function_tolerance, parameter_tolerance, gradient_tolerance, uncertainty_tolerance, "
+        "coarse_tolerance_factor and equation_error_step_tolerance must be > 0");
   CHECK_THAT(message([](FitOptions& o) { o.num_threads = -1; }), Contains("num_threads"));
   CHECK_THAT(message([](FitOptions& o) { o.cross_validation_folds = 1; }),
              Contains("cross_validation_folds"));
