@@ -55,7 +55,8 @@ with tempfile.TemporaryDirectory() as tree:
     open(target, "w", encoding="utf-8").write("\n".join(lines))
     sibling = run(tree)
     expect('viewer/plot_view.cpp:2: includes "haptic/..." but viewer may use only acquisition, '
-           'analysis (viewer/CMakeLists.txt)' in sibling.stdout, "a sibling include fails", sibling)
+           'analysis, sensors (viewer/CMakeLists.txt)' in sibling.stdout, "a sibling include fails",
+           sibling)
     expect("check_includes: 2 include(s) against the layers" in sibling.stdout,
            "the count of problems", sibling)
 
