@@ -748,12 +748,14 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
       --slots;
     }
   }
+  int taken = 0;  // slots used, by a candidate the second look then takes or not
   for (CandidateEvidence& candidate : examination.candidates) {
-    if (static_cast<int>(chosen.size()) >= slots) break;
+    if (taken >= slots) break;
     if (candidate.explained_fraction < options.min_explained_fraction ||
         candidate.score_z >= options.min_score_z || candidate.start_values.empty()) {
       continue;
     }
+    ++taken;
     const effects::EffectInfo& info = effects::info(candidate.kind);
     EffectSetting setting{candidate.kind, candidate.start_values, {}};
     for (const effects::EffectParameter& parameter : info.parameters) {
@@ -763,9 +765,7 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
     try {
       with = model.with_effect(setting);
     } catch (const std::invalid_argument&) {
-      // The start breaks a constraint: no second look (its slot still counts as taken).
-      chosen.push_back({&candidate, model, {}, -1});
-      continue;
+      continue;  // the start breaks a constraint: no second look
     }
     std::vector<int> parameters = free;
     int amplitude = -1;
@@ -783,10 +783,10 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
         parameters.push_back(*index);
       }
     }
-    if (amplitude >= 0) parameters.push_back(amplitude);
+    if (amplitude < 0) continue;
+    parameters.push_back(amplitude);
     chosen.push_back({&candidate, std::move(*with), std::move(parameters), amplitude});
   }
-  std::erase_if(chosen, [](const SecondLook& look) { return look.amplitude < 0; });
   return chosen;
 }
 
