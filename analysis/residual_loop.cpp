@@ -390,15 +390,6 @@ void estimate_noise_floor(Linearization& linear, ResidualExamination& examinatio
   examination.noise_floor_rad_s = std::sqrt(white + walk * mean_index);
 }
 
-// Along each window the simulated state (θ̂, ω̂) starts from the measured one. A change a
-// of one quantity (an effect's amplitude, a parameter) changes it, to first order, by
-// a·(δθ, δω) with
-//   d(δθ)/dt = δω,  J d(δω)/dt = ∂τ/∂θ δθ + ∂τ/∂ω δω + φ(θ̂, ω̂),  δ = 0 at the start,
-// φ the quantity's torque per unit (∂τ/∂a; for J and ΔJ, −dω̂/dt), with ∂τ from the current
-// model along the simulation. δω is the column of the rate residual e = ω − ω̂; the
-// trapezoidal rule integrates it (A-stable through the stiff latch). `parameters` are model
-// indices: their forcing is the torque's derivative by forward-mode differentiation; J (and
-// an inertia error) act through 1/J, like the inertia error.
 // ∂τ/∂p of the free parameters `free` (model indices) at one state, the linearization's
 // parameter forcings: J ∂(dω/dt)/∂p, and −dω/dt for an inertia. Eight parameters per
 // evaluation: a Jet's parts are computed one by one, so each is bit for bit what a
@@ -418,9 +409,9 @@ class ParameterForcings {
                        name == "inertia_error.delta_J";
     }
   }
-  // The forcings at (θ, ω), where the door's acceleration is `acceleration`; values() has
-  // them by position in `free`.
-  void compute(double theta, double omega, double acceleration) {
+  // The forcings at (θ, ω), where the door's acceleration is `acceleration`, by position in
+  // `free` (valid until the next call).
+  const std::vector<double>& compute(double theta, double omega, double acceleration) {
     const int count = static_cast<int>(free_.size());
     for (int first = 0; first < count; first += kParts) {
       const int last = std::min(count, first + kParts);
@@ -433,8 +424,8 @@ class ParameterForcings {
         parameters_[free_[k]].v[k - first] = 0.0;
       }
     }
+    return values_;
   }
-  const std::vector<double>& values() const { return values_; }
 
  private:
   static constexpr int kParts = 8;
@@ -447,6 +438,15 @@ class ParameterForcings {
   std::vector<double> values_;
 };
 
+// Along each window the simulated state (θ̂, ω̂) starts from the measured one. A change a
+// of one quantity (an effect's amplitude, a parameter) changes it, to first order, by
+// a·(δθ, δω) with
+//   d(δθ)/dt = δω,  J d(δω)/dt = ∂τ/∂θ δθ + ∂τ/∂ω δω + φ(θ̂, ω̂),  δ = 0 at the start,
+// φ the quantity's torque per unit (∂τ/∂a; for J and ΔJ, −dω̂/dt), with ∂τ from the current
+// model along the simulation. δω is the column of the rate residual e = ω − ω̂; the
+// trapezoidal rule integrates it (A-stable through the stiff latch). `parameters` are model
+// indices: their forcing is the torque's derivative by forward-mode differentiation; J (and
+// an inertia error) act through 1/J, like the inertia error.
 Linearization linearize(const DoorModel& model, const PreparedData& data,
                         const WindowOptions& windows, const std::vector<int>& parameters,
                         const std::vector<Regressor>& regressors) {
@@ -481,9 +481,11 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       theta = j == 0 ? stroke.theta_rad[i] : theta_sim[i];
       omega = j == 0 ? stroke.omega_rad_s[i] : omega_sim[i];
     };
-    // Column c's forcing at the state last given to parameter_forcings.compute.
-    auto forcing_of = [&](int c, double theta, double omega, double acceleration) {
-      return c < free_count ? parameter_forcings.values()[c]
+    // Column c's forcing at (θ, ω) with the door's acceleration there: a parameter's from
+    // `forcings`, parameter_forcings computed at that state.
+    auto forcing_of = [&](int c, const std::vector<double>& forcings, double theta, double omega,
+                          double acceleration) {
+      return c < free_count ? forcings[c]
                             : unit_forcing(regressors[c - free_count], model, friction, theta,
                                            omega, acceleration);
     };
@@ -492,9 +494,10 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
     TorqueDerivatives derivatives = model.torque_derivatives(theta, omega);
     double acceleration =
         (handle_radius_m * stroke.force_N[window.first] + derivatives.torque_Nm) / inertia;
-    parameter_forcings.compute(theta, omega, acceleration);
+    const std::vector<double>& start_forcings =
+        parameter_forcings.compute(theta, omega, acceleration);
     for (int c = 0; c < free_count + regressor_count; ++c) {
-      state[c] = {0.0, 0.0, forcing_of(c, theta, omega, acceleration)};
+      state[c] = {0.0, 0.0, forcing_of(c, start_forcings, theta, omega, acceleration)};
     }
     Eigen::MatrixXd window_gram = Eigen::MatrixXd::Zero(columns, columns);
     double error_1 = 0.0, error_2 = 0.0;  // e_{j−1}, e_{j−2}
@@ -511,7 +514,7 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       const double b_theta = derivatives.dtorque_dtheta_Nm_per_rad / inertia;
       const double b_omega = derivatives.dtorque_domega_Nm_s_per_rad / inertia;
       const double determinant = (1.0 - half_h * b_omega) - half_h * half_h * b_theta;
-      parameter_forcings.compute(theta, omega, acceleration);
+      const std::vector<double>& forcings = parameter_forcings.compute(theta, omega, acceleration);
       const double error = stroke.omega_rad_s[i] - omega;
       result.rate_sum_of_squares += error * error;
       ++result.samples;
@@ -523,7 +526,7 @@ Linearization linearize(const DoorModel& model, const PreparedData& data,
       result.add_to_band(stroke.omega_rad_s[i], error);
       for (int c = 0; c < free_count + regressor_count; ++c) {
         Sensitivity& s = state[c];
-        const double forcing = forcing_of(c, theta, omega, acceleration);
+        const double forcing = forcing_of(c, forcings, theta, omega, acceleration);
         const double rhs_theta = s.d_theta + half_h * s.d_omega;
         const double rhs_omega = s.d_omega + half_h * (a_theta * s.d_theta + a_omega * s.d_omega +
                                                        (s.forcing + forcing) / inertia);
@@ -716,15 +719,6 @@ ColumnScore last_column_score(const Linearization& linear) {
   return score;
 }
 
-// The second look (LoopOptions::screen_steps): the best-ranked candidates that explain at
-// least min_explained_fraction but score z below min_score_z, as many as refit slots are
-// left by the candidates that pass both, are each added at their examination start
-// and refined, with the free parameters, by a few Gauss–Newton steps on the examination's
-// windows (refine_parameters); the model without it is refined the same way. Its screened
-// share is the fall of Σe² between the two over the examination's Σe², its screened z the
-// refined amplitude over its window-clustered standard error there. A linear score is
-// poor where the effect's response is not linear in its amplitude: breakaway friction
-// that holds the door a few milliseconds longer before the latch snaps.
 // A candidate chosen for the second look: the model with it added at its start values, and
 // the parameters to refine (the free ones, the effect's other free parameters, its
 // amplitude last: the column scored).
@@ -732,7 +726,6 @@ struct SecondLook {
   CandidateEvidence* candidate = nullptr;
   DoorModel with;
   std::vector<int> parameters;
-  int amplitude = -1;
 };
 
 // The candidates the second look takes (those the linear score leaves refit slots for).
@@ -785,11 +778,20 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
     }
     if (amplitude < 0) continue;
     parameters.push_back(amplitude);
-    chosen.push_back({&candidate, std::move(*with), std::move(parameters), amplitude});
+    chosen.push_back({&candidate, std::move(*with), std::move(parameters)});
   }
   return chosen;
 }
 
+// The second look (LoopOptions::screen_steps): the best-ranked candidates that explain at
+// least min_explained_fraction but score z below min_score_z, as many as refit slots are
+// left by the candidates that pass both, are each added at their examination start
+// and refined, with the free parameters, by a few Gauss–Newton steps on the examination's
+// windows (refine_parameters); the model without it is refined the same way. Its screened
+// share is the fall of Σe² between the two over the examination's Σe², its screened z the
+// refined amplitude over its window-clustered standard error there. A linear score is
+// poor where the effect's response is not linear in its amplitude: breakaway friction
+// that holds the door a few milliseconds longer before the latch snaps.
 void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
                             const LoopOptions& options, const WindowOptions& windows,
                             const std::vector<int>& free, ResidualExamination& examination) {
@@ -821,7 +823,7 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
     const ColumnScore score = last_column_score(with.linear);
     const double offset =
         candidate.kind == effects::Kind::kStribeck ? base_friction(with.model).level_Nm : 0.0;
-    const double value = with.model.parameter_values()[chosen[j].amplitude] - offset;
+    const double value = with.model.parameter_values()[chosen[j].parameters.back()] - offset;
     const double fall = without.linear.rate_sum_of_squares - with.linear.rate_sum_of_squares;
     candidate.screened = true;
     candidate.screen_explained_fraction =
@@ -1192,6 +1194,7 @@ std::vector<std::optional<FitResult>> run_refits(
   std::vector<double> refit_seconds(to_refit.size(), 0.0);
   LoopProgress progress{step_number, options.max_steps, 0, static_cast<int>(to_refit.size())};
   std::mutex progress_mutex;
+  std::exception_ptr progress_error;
   if (options.step_progress && !to_refit.empty()) options.step_progress(progress);
   auto run_refit = [&](std::size_t j) {
     CandidateEvidence& candidate = examination.candidates[to_refit[j]];
@@ -1201,15 +1204,22 @@ std::vector<std::optional<FitResult>> run_refits(
                                   refit_fits[j], candidate.refit_start);
     } catch (const std::exception& error) {
       refit_errors[j] = error.what();
+    } catch (...) {
+      refit_errors[j] = "an exception that is not a std::exception";
     }
     refit_seconds[j] = seconds_since(refit_began);
     if (options.step_progress) {
       const std::lock_guard lock(progress_mutex);
       ++progress.refits_done;
-      options.step_progress(progress);
+      try {  // on a refit's thread: what it throws is rethrown on the caller's, after the join
+        options.step_progress(progress);
+      } catch (...) {
+        if (!progress_error) progress_error = std::current_exception();
+      }
     }
   };
   run_all(to_refit.size(), options.parallel_refits, run_refit);
+  if (progress_error) std::rethrow_exception(progress_error);
   for (std::size_t j = 0; j < to_refit.size(); ++j) {
     const std::size_t k = to_refit[j];
     CandidateEvidence& candidate = examination.candidates[k];

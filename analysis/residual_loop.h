@@ -12,9 +12,10 @@
 //   std::cout << loop.full_report();
 //   loop.final_fit.model;                            // the last accepted model, fitted
 //
-// Thread safety: free functions without shared state; the progress callback is called on
-// the caller's thread. With LoopOptions::parallel_refits the loop runs fit_model on threads
-// of its own, joined before the step's verdicts.
+// Thread safety: free functions without shared state; the `progress` callback is called on
+// the caller's thread, `step_progress` also from a refit's thread (never two at once). With
+// LoopOptions::parallel_refits the loop runs fit_model, and the second look's refinements,
+// on threads of its own, joined before the step's verdicts.
 #include <cstddef>
 #include <functional>
 #include <optional>
@@ -97,7 +98,8 @@ struct LoopOptions {
     kStartModel,
   };
   RefitStart refit_start = RefitStart::kBest;
-  // Run a step's refits (and kBest's two starts) at once, each on a thread of its own.
+  // Run a step's refits (and kBest's two starts, and the second look's refinements) at
+  // once, each on a thread of its own.
   // fit_model's result does not depend on the thread or on num_threads (docs/fitting.md,
   // "Threads and determinism"), so the decisions are the same either way; only the wall
   // time changes.
