@@ -228,6 +228,7 @@ int run_pool(const MonteCarloOptions& options, const std::function<void(std::siz
   std::atomic<std::size_t> next{0};
   std::atomic<int> done{0};
   std::mutex progress_mutex;
+  int reported = 0;  // the largest count reported (under the mutex): reports only grow
   const int report_every = std::max(1, options.samples / 20);
   if (options.progress) options.progress(0, options.samples);
   auto worker = [&] {
@@ -236,7 +237,11 @@ int run_pool(const MonteCarloOptions& options, const std::function<void(std::siz
       const int finished = ++done;
       if (options.progress && (finished % report_every == 0 || finished == options.samples)) {
         const std::lock_guard lock(progress_mutex);
-        options.progress(finished, options.samples);
+        // Another thread may have reported a larger count since this one's increment.
+        if (finished > reported) {
+          reported = finished;
+          options.progress(finished, options.samples);
+        }
       }
     }
   };

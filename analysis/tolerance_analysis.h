@@ -59,7 +59,8 @@ struct MonteCarloOptions {
   int threads = 0;  // 0: every core (std::thread::hardware_concurrency)
   FeltOptions felt;
   // Called with 0 done as the samples begin, then now and then from worker threads
-  // (serialized) with samples done and the total, last with done == total.
+  // (serialized) with samples done and the total: counts that only grow, the last with
+  // done == total.
   std::function<void(int done, int total)> progress;
 
   // Empty when usable, else a one-line message naming the option.

@@ -71,6 +71,22 @@ TEST_CASE("Tolerance Monte Carlo is the same for any thread count", "[tolerance]
   CHECK(doorbench::tolerance_analysis(door, spec, other).draws[0] != one.draws[0]);
 }
 
+TEST_CASE("Tolerance Monte Carlo: progress counts only grow and end at the total",
+          "[tolerance]") {
+  const DoorModel door = doorbench::reference_model(ModelKind::kPhysical);
+  MonteCarloOptions options = quick(40, 3);
+  std::vector<int> counts;  // the callback is serialized: no lock needed here
+  options.progress = [&counts](int done, int total) {
+    CHECK(total == 40);
+    counts.push_back(done);
+  };
+  doorbench::tolerance_analysis(door, doorbench::default_tolerances(door), options);
+  REQUIRE(counts.size() >= 2);
+  CHECK(counts.front() == 0);
+  CHECK(counts.back() == 40);
+  for (std::size_t i = 1; i < counts.size(); ++i) CHECK(counts[i] > counts[i - 1]);
+}
+
 TEST_CASE("Tolerance Monte Carlo: wider tolerance, wider spread, and the large one matters most",
           "[tolerance]") {
   const DoorModel door = doorbench::reference_model(ModelKind::kPhysical);
