@@ -69,7 +69,7 @@ void run_fit(const FitCommandOptions& options) {
     fit_options.objective = FitOptions::Objective::kWholeStrokeMax;
   }
   fit_options.cross_validation_folds = options.folds;
-  StatusLine status(std::cerr, stderr_is_terminal());
+  StatusLine status(std::cerr, stderr_is_terminal(), 5.0, stderr_terminal_columns());
   status.line("fitting the " + options.input.model.model + " model" +
               (options.folds > 0
                    ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"

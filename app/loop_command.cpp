@@ -28,7 +28,7 @@ void run_loop(const LoopCommandOptions& options) {
   loop_options.max_steps = options.max_steps;
   // Stage lines stay; the start fit's, the steps' and the structure check's progress is a
   // status line with the time left (app/progress.h).
-  StatusLine status(std::cerr, stderr_is_terminal());
+  StatusLine status(std::cerr, stderr_is_terminal(), 5.0, stderr_terminal_columns());
   loop_options.progress = [&status](const std::string& line) { status.line(line); };
   loop_options.fit.progress = fit_progress_display(status);
   loop_options.step_progress = loop_progress_display(status);

@@ -1,5 +1,6 @@
 #include "app/progress.h"
 
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -44,15 +45,36 @@ bool stderr_is_terminal() {
   return ::isatty(STDERR_FILENO) != 0;
 }
 
-StatusLine::StatusLine(std::ostream& out, bool terminal, double plain_interval_s)
-    : out_(out), terminal_(terminal), plain_interval_s_(plain_interval_s) {}
+int stderr_terminal_columns() {
+  winsize size{};
+  if (::ioctl(STDERR_FILENO, TIOCGWINSZ, &size) != 0) return 0;
+  return size.ws_col;
+}
+
+StatusLine::StatusLine(std::ostream& out, bool terminal, double plain_interval_s, int columns)
+    : out_(out), terminal_(terminal), plain_interval_s_(plain_interval_s), columns_(columns) {}
 
 StatusLine::~StatusLine() {
   finish();
 }
 
 void StatusLine::draw() {
-  out_ << '\r' << text_ << "\x1b[K" << std::flush;
+  // At most columns − 1 characters: the cursor stays on the line, and '\r' returns to its
+  // start. Cut between UTF-8 characters (a continuation byte is 10xxxxxx).
+  std::size_t length = text_.size();
+  if (columns_ > 1) {
+    std::size_t characters = 0;
+    for (std::size_t i = 0; i < text_.size(); ++i) {
+      if ((static_cast<unsigned char>(text_[i]) & 0xC0) == 0x80) continue;
+      if (++characters == static_cast<std::size_t>(columns_)) {
+        length = i;
+        break;
+      }
+    }
+  }
+  out_ << '\r';
+  out_.write(text_.data(), static_cast<std::streamsize>(length));
+  out_ << "\x1b[K" << std::flush;
   on_screen_ = true;
   drawn_ = true;
 }

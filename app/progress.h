@@ -38,6 +38,9 @@ std::string progress_time_text(double done, double total, double elapsed_s,
 // Whether stderr is a terminal (isatty).
 bool stderr_is_terminal();
 
+// The width of the terminal on stderr in columns (TIOCGWINSZ); 0 when not known.
+int stderr_terminal_columns();
+
 // A status line that updates. On a terminal each update redraws it in place ("\r", the text,
 // ANSI erase to the end of the line), at most every 0.1 s; off a terminal an update is a
 // plain line when it is the first since the last permanent line or plain_interval_s has
@@ -46,7 +49,9 @@ bool stderr_is_terminal();
 class StatusLine {
  public:
   using Clock = std::chrono::steady_clock;
-  StatusLine(std::ostream& out, bool terminal, double plain_interval_s = 5.0);
+  // `columns`: the terminal's width; a longer text is cut to columns − 1 characters on
+  // screen, since a line that wraps cannot be redrawn in place (0: never cut).
+  StatusLine(std::ostream& out, bool terminal, double plain_interval_s = 5.0, int columns = 0);
   ~StatusLine();
   StatusLine(const StatusLine&) = delete;
   StatusLine& operator=(const StatusLine&) = delete;
@@ -72,6 +77,7 @@ class StatusLine {
   std::ostream& out_;
   const bool terminal_;
   const double plain_interval_s_;
+  const int columns_;
   std::mutex mutex_;
   std::string text_;            // the latest update
   bool drawn_ = false;          // terminal: text_ is on screen; plain: text_ was written

@@ -160,7 +160,7 @@ void run_spec(const SpecCommandOptions& options) {
   evaluation_options.monte_carlo.threads = options.threads;
   evaluation_options.monte_carlo.seed = options.seed;
   // The samples' status line, with the time left (app/progress.h).
-  StatusLine status(progress, stderr_is_terminal());
+  StatusLine status(progress, stderr_is_terminal(), 5.0, stderr_terminal_columns());
   auto samples_began = std::chrono::steady_clock::now();
   evaluation_options.monte_carlo.progress = [&status, &samples_began](int done, int total) {
     const auto now = std::chrono::steady_clock::now();

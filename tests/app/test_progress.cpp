@@ -127,6 +127,25 @@ TEST_CASE("progress: on a terminal the status line is redrawn in place", "[progr
   CHECK(out.str() == "\rd\x1b[K\re\x1b[K\n");
 }
 
+TEST_CASE("progress: on a terminal a status wider than it is cut so that it redraws in place",
+          "[progress]") {
+  std::ostringstream out;
+  const auto t0 = StatusLine::Clock::now();
+  {
+    StatusLine status(out, /*terminal=*/true, 5.0, /*columns=*/8);
+    status.update("0123456789", t0);
+    CHECK(out.str() == "\r0123456\x1b[K");  // 7 characters: the cursor stays on the line
+    out.str("");
+    status.update("ab\u00b0cdefgh", t0 + 150ms);  // a 2-byte character counts as one
+    CHECK(out.str() == "\rab\u00b0cdef\x1b[K");
+    out.str("");
+    status.update("short", t0 + 300ms);
+    CHECK(out.str() == "\rshort\x1b[K");
+    out.str("");
+  }
+  CHECK(out.str() == "\n");
+}
+
 TEST_CASE("progress: off a terminal the status is plain lines, a few", "[progress]") {
   std::ostringstream out;
   const auto t0 = StatusLine::Clock::now();
