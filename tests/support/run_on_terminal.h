@@ -5,6 +5,7 @@
 // place). `typed` is written to
 // the terminal after `delay_ms`; the terminal's echo is drained until doorbench exits (so that it
 // never blocks on it). stdout and stderr go to files in `dir`.
+#include <cerrno>
 #include <fcntl.h>
 #include <poll.h>
 #include <pty.h>
@@ -29,6 +30,11 @@ inline DoorbenchRun run_doorbench_on_terminal(const std::vector<std::string>& ar
   const std::string out_path = (dir / "stdout.txt").string();
   const std::string err_path = (dir / "stderr.txt").string();
   DoorbenchRun run;
+  // Built before the fork: the child only calls what is safe after one (no allocation).
+  std::vector<char*> argv;
+  argv.push_back(const_cast<char*>(DOORBENCH_EXECUTABLE));
+  for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
+  argv.push_back(nullptr);
   int master = -1, slave = -1;
   if (::openpty(&master, &slave, nullptr, nullptr, nullptr) != 0) return run;
   const pid_t child = ::fork();
@@ -41,10 +47,6 @@ inline DoorbenchRun run_doorbench_on_terminal(const std::vector<std::string>& ar
     const int err_fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
     ::dup2(out_fd, STDOUT_FILENO);
     ::dup2(err_fd, STDERR_FILENO);
-    std::vector<char*> argv;
-    argv.push_back(const_cast<char*>(DOORBENCH_EXECUTABLE));
-    for (const std::string& arg : args) argv.push_back(const_cast<char*>(arg.c_str()));
-    argv.push_back(nullptr);
     ::execv(DOORBENCH_EXECUTABLE, argv.data());
     ::_exit(127);
   }
@@ -77,18 +79,20 @@ inline DoorbenchRun run_doorbench_on_terminal(const std::vector<std::string>& ar
 // doorbench ARGS (a shell command line's arguments) with stdout and stderr on a
 // pseudo-terminal; returns everything it wrote there, its exit status in `status`.
 inline std::string run_doorbench_terminal_output(const std::string& args, int& status) {
+  // Built before the fork: the child only calls what is safe after one.
+  const std::string command = std::string("'" DOORBENCH_EXECUTABLE "' ") + args;
   int master = -1;
   const pid_t child = ::forkpty(&master, nullptr, nullptr, nullptr);
   if (child < 0) return "";
   if (child == 0) {
-    ::execl("/bin/sh", "sh", "-c", (std::string("'" DOORBENCH_EXECUTABLE "' ") + args).c_str(),
-            static_cast<char*>(nullptr));
+    ::execl("/bin/sh", "sh", "-c", command.c_str(), static_cast<char*>(nullptr));
     ::_exit(127);
   }
   std::string output;
   char buffer[4096];
   for (;;) {
     const ssize_t n = ::read(master, buffer, sizeof buffer);
+    if (n < 0 && errno == EINTR) continue;
     if (n <= 0) break;  // EIO once the child closed the terminal
     output.append(buffer, std::size_t(n));
   }
