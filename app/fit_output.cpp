@@ -184,8 +184,11 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
                    {"Residual whiteness: " + w.summary(), "lag [s]", "correlation"}, whiteness);
     plots.whiteness = w.report_line();
   } catch (const std::invalid_argument& error) {
-    // Too few samples for the lags: no whiteness plot.
-    plots.whiteness = "residual whiteness: not computed (" + std::string(error.what()) + ")";
+    // Too few samples for the lags: no whiteness plot. The reason without its own prefix.
+    std::string reason = error.what();
+    const std::string prefix = "residual whiteness: ";
+    if (reason.starts_with(prefix)) reason.erase(0, prefix.size());
+    plots.whiteness = prefix + "not computed (" + reason + ")";
   }
   return plots;
 }

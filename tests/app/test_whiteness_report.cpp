@@ -1,13 +1,18 @@
 // The residual-whiteness line of the fit's and the loop's text reports (issue 21, item 9;
 // ResidualWhiteness::report_line): report.md states it under the full report.
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <filesystem>
 #include <fstream>
 #include <regex>
 #include <sstream>
 #include <string>
 
+#include "analysis/parameter_file.h"
+#include "app/fit_output.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/tremor_recording.h"
 
 namespace {
 
@@ -48,4 +53,30 @@ TEST_CASE("fit and loop reports state the residual's whiteness in a line", "[cli
     CHECK(std::regex_search(
         report, std::regex("```\n\nThe final model's " + line + "\nPlots of the final model:")));
   }
+}
+
+// Too few samples for the lags: no whiteness plot, and the report says why.
+TEST_CASE("the fit's plots say the residual's whiteness was not computed on too short data",
+          "[cli][whiteness]") {
+  const doorbench::testing::TempDir dir("whiteness_short");
+  const doorbench::DoorModel door = doorbench::reference_model(doorbench::ModelKind::kSensory);
+  doorbench::PreparedData data = doorbench::testing::tremor_recording(door, {});
+  data.strokes.resize(1);  // its first 200 samples: 0.2 s at 1 kHz
+  doorbench::Stroke& stroke = data.strokes.front();
+  for (std::vector<double>* channel :
+       {&stroke.time_s, &stroke.force_N, &stroke.theta_rad, &stroke.omega_rad_s}) {
+    channel->resize(200);
+  }
+  data.interval_median_s = stroke.time_s[1] - stroke.time_s[0];
+  REQUIRE(data.interval_median_s == Approx(0.001));
+  const doorbench::app::FitPlots plots =
+      doorbench::app::write_fit_plots(dir.path, door, data, doorbench::FitOptions{});
+  // 0.5 s of lags at 1 ms: 500, and at least twice as many samples.
+  CHECK(plots.whiteness ==
+        "residual whiteness: not computed (200 finite samples (not constant) needed at least "
+        "1000)");
+  CHECK(std::find(plots.files.begin(), plots.files.end(), "residual-whiteness.svg") ==
+        plots.files.end());
+  CHECK_FALSE(std::filesystem::exists(dir.path / "residual-whiteness.svg"));
+  CHECK(std::filesystem::exists(dir.path / "rate.svg"));
 }
