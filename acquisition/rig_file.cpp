@@ -1015,6 +1015,15 @@ RigDefinition parse_rig(std::string_view text, std::string_view source,
   return rig;
 }
 
+std::optional<RigDefinition> parse_stored_rig(std::string_view text, std::string_view source) {
+  if (text.empty()) return std::nullopt;
+  try {
+    return parse_rig(text, source, {});
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+}
+
 RigDefinition read_rig_file(const std::filesystem::path& path) {
   std::error_code error;
   if (fs::is_directory(path, error)) {

@@ -151,6 +151,13 @@ RigDefinition parse_rig(std::string_view text, std::string_view source,
                         const std::filesystem::path& base_dir);
 RigDefinition read_rig_file(const std::filesystem::path& path);
 
+// A rig definition a session stores (SessionMetadata::rig_definition), as the session's
+// readers need it: only its channels and their parameters. Relative paths inside resolve
+// against the working directory. nullopt when `text` is empty or this build cannot read it
+// (a rig key it does not know, a door file no longer where it was): the caller then knows
+// no rig, which readers of old sessions must cope with anyway. `source` names it in errors.
+std::optional<RigDefinition> parse_stored_rig(std::string_view text, std::string_view source);
+
 // The simulated reference bench (rigs/simulated-dishwasher.toml), built in like the
 // reference door, so that `doorbench record` and the demo run without the rigs folder.
 std::string_view simulated_dishwasher_rig_text();

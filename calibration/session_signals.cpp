@@ -57,14 +57,8 @@ std::string find_session_channel(const SessionReader& session, const std::string
 }
 
 std::optional<RigDefinition> session_rig(const SessionReader& session) {
-  const std::string& text = session.metadata().rig_definition;
-  if (text.empty()) return std::nullopt;
-  try {
-    // Paths inside are not needed (only the channels' parameters are read).
-    return parse_rig(text, session.path().string() + " (rig_definition)", {});
-  } catch (const std::exception&) {
-    return std::nullopt;  // e.g. a door file that no longer exists where it was
-  }
+  return parse_stored_rig(session.metadata().rig_definition,
+                          session.path().string() + " (rig_definition)");
 }
 
 }  // namespace doorbench::calibration

@@ -2,8 +2,6 @@
 
 #include <cmath>
 #include <cstdio>
-#include <exception>
-#include <filesystem>
 #include <numbers>
 
 #include "sensors/sensor_models.h"
@@ -42,14 +40,9 @@ std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig) {
 }
 
 std::vector<ChannelLimit> session_channel_limits(const SessionMetadata& metadata) {
-  if (metadata.rig_definition.empty()) return {};
-  try {
-    return rig_channel_limits(parse_rig(metadata.rig_definition,
-                                        "the session's rig " + metadata.rig_name,
-                                        std::filesystem::current_path()));
-  } catch (const std::exception&) {
-    return {};  // a rig text this build cannot read: no limits known
-  }
+  const std::optional<RigDefinition> rig =
+      parse_stored_rig(metadata.rig_definition, "the session's rig " + metadata.rig_name);
+  return rig ? rig_channel_limits(*rig) : std::vector<ChannelLimit>{};
 }
 
 std::vector<SampleStretch> limit_stretches(const std::vector<double>& values, double limit) {

@@ -1019,3 +1019,14 @@ TEST_CASE("Rig file: rigs/modbus-bench.toml parses", "[rig_file][modbus]") {
   CHECK(rig.channels[1].sensor == "inclinometer");
   CHECK(rig.channels[2].sensor == "gyroscope");
 }
+
+TEST_CASE("Rig file: a session's stored rig text parses, or is no rig when empty or unreadable",
+          "[rig_file]") {
+  const std::optional<doorbench::RigDefinition> built_in = doorbench::parse_stored_rig(
+      doorbench::simulated_dishwasher_rig_text(), "session.h5 (rig_definition)");
+  REQUIRE(built_in.has_value());
+  CHECK(built_in->find_channel("angle") != nullptr);
+  CHECK_FALSE(doorbench::parse_stored_rig("", "session.h5 (rig_definition)").has_value());
+  CHECK_FALSE(
+      doorbench::parse_stored_rig("[rig\nname = ", "session.h5 (rig_definition)").has_value());
+}
