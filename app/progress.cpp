@@ -179,14 +179,43 @@ std::function<void(const LoopProgress&)> loop_progress_display(StatusLine& statu
   };
 }
 
-std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status) {
-  auto stage_began = std::make_shared<StatusLine::Clock::time_point>(StatusLine::Clock::now());
-  return [&status, stage_began](const FitProgress& progress) {
+namespace {
+
+// Draws text(elapsed_s) on `status`, the time taken from the report that began the stage.
+class StageClock {
+ public:
+  explicit StageClock(StatusLine& status) : status_(status) {}
+  template <typename Text>
+  void report(bool begins_stage, Text&& text) {
     const auto now = StatusLine::Clock::now();
-    if (progress.done == 0) *stage_began = now;
-    status.update(
-        fit_progress_text(progress, std::chrono::duration<double>(now - *stage_began).count()), now,
-        progress.done == 0);
+    if (begins_stage) began_ = now;
+    status_.update(text(std::chrono::duration<double>(now - began_).count()), now, begins_stage);
+  }
+
+ private:
+  StatusLine& status_;
+  StatusLine::Clock::time_point began_ = StatusLine::Clock::now();
+};
+
+}  // namespace
+
+std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status) {
+  auto clock = std::make_shared<StageClock>(status);
+  return [clock](const FitProgress& progress) {
+    clock->report(progress.done == 0,
+                  [&](double elapsed_s) { return fit_progress_text(progress, elapsed_s); });
+  };
+}
+
+std::function<void(int done, int total)> count_progress_display(StatusLine& status,
+                                                                 std::string what,
+                                                                 std::string unit) {
+  auto clock = std::make_shared<StageClock>(status);
+  return [clock, what = std::move(what), unit = std::move(unit)](int done, int total) {
+    clock->report(done == 0, [&](double elapsed_s) {
+      return what + ": " + std::to_string(done) + " of " + std::to_string(total) + " " + unit +
+             ", " + progress_time_text(done, total, elapsed_s);
+    });
   };
 }
 

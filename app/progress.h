@@ -106,6 +106,13 @@ std::string loop_progress_text(const LoopProgress& progress, double completed_s,
 // report of 0 done. `status` must outlive the fit.
 std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status);
 
+// A count's progress drawn on `status`: "WHAT: DONE of TOTAL UNIT, " and progress_time_text,
+// timed from the last report with done == 0 (which begins a stage). `status` must outlive it.
+// For MonteCarloOptions::progress (spec's "tolerance Monte Carlo", "samples").
+std::function<void(int done, int total)> count_progress_display(StatusLine& status,
+                                                                 std::string what,
+                                                                 std::string unit);
+
 // LoopOptions::step_progress drawing loop_progress_text on `status`, the steps timed from the
 // first report. `status` must outlive the loop.
 std::function<void(const LoopProgress&)> loop_progress_display(StatusLine& status);

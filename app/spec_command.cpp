@@ -161,15 +161,8 @@ void run_spec(const SpecCommandOptions& options) {
   evaluation_options.monte_carlo.seed = options.seed;
   // The samples' status line, with the time left (app/progress.h).
   StatusLine status(progress, stderr_is_terminal(), 5.0, stderr_terminal_columns());
-  auto samples_began = std::chrono::steady_clock::now();
-  evaluation_options.monte_carlo.progress = [&status, &samples_began](int done, int total) {
-    const auto now = std::chrono::steady_clock::now();
-    if (done == 0) samples_began = now;
-    status.update(printf_text("tolerance Monte Carlo: %d of %d samples, ", done, total) +
-                      progress_time_text(
-                          done, total, std::chrono::duration<double>(now - samples_began).count()),
-                  now, done == 0);
-  };
+  evaluation_options.monte_carlo.progress =
+      count_progress_display(status, "tolerance Monte Carlo", "samples");
   if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
   progress << "felt quantities and the check; tolerance analysis of " << options.samples
            << " samples on "
