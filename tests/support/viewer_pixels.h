@@ -3,10 +3,12 @@
 // --screenshot` under Xvfb (xvfb-run, Mesa's software OpenGL), load the PNG (stb_image,
 // libstb) and its companion PNG.json (where each plot's data area is, its ranges and series
 // colours).
+#include <catch2/catch.hpp>
 #include <imgui.h>
 #include <stb_image.h>
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -135,5 +137,34 @@ struct PlotGeometry {
   int left() const { return int(std::ceil(x0)) + 1; }
   int right() const { return int(std::floor(x0 + w)) - 2; }
 };
+
+// Requires, in 24 columns across the data area of `plot` in an RGB image `width` pixels
+// wide, that the colour `rgb` is drawn where y = curve(x) passes (within 3 px of the rows it
+// spans over ±1.5 px, the line's thickness) and nowhere else in the column.
+template <typename Curve>
+void require_curve_drawn_where_it_belongs(const unsigned char* pixels, int width,
+                                          const PlotGeometry& plot, const std::vector<int>& rgb,
+                                          Curve&& curve) {
+  for (int k = 1; k <= 24; ++k) {
+    const int px = int(plot.x0 + plot.w * k / 25.0);
+    double lo = 1e9, hi = -1e9;
+    for (double dx = -1.5; dx <= 1.5; dx += 0.25) {
+      const double row = plot.row_of(curve(plot.x_of(px + dx)));
+      lo = std::min(lo, row);
+      hi = std::max(hi, row);
+    }
+    bool on_curve = false;
+    for (int y = plot.top(); y <= plot.bottom(); ++y) {
+      const unsigned char* p = pixels + (std::size_t(y) * std::size_t(width) + px) * 3;
+      const bool coloured = near_rgb(p, rgb, 60);
+      const bool near = y >= lo - 3.0 && y <= hi + 3.0;
+      INFO("column " << px << ", row " << y << ", curve rows " << lo << ".." << hi);
+      if (coloured) REQUIRE(near);  // the series colour nowhere else in the data area
+      on_curve = on_curve || (coloured && near);
+    }
+    INFO("column " << px << ": curve expected at rows " << lo << ".." << hi);
+    REQUIRE(on_curve);
+  }
+}
 
 }  // namespace doorbench::testing

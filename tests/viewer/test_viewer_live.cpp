@@ -20,6 +20,7 @@
 
 #include "acquisition/journal.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/viewer_pixels.h"
 #include "viewer/live_journal.h"
 
 using namespace doorbench;
@@ -477,35 +478,9 @@ TEST_CASE("view --live draws a journal being written: the last seconds, where th
   REQUIRE(area[2] > 700);
 
   auto pixel = [&](int x, int y) { return pixels + (std::size_t(y) * std::size_t(w) + x) * 3; };
-  auto row_of = [&](double value) {
-    return area[1] + area[3] - (value - yr[0]) / (yr[1] - yr[0]) * area[3];
-  };
-  auto time_of = [&](double px) {
-    return xr[0] + (px + 0.5 - area[0]) / area[2] * (xr[1] - xr[0]);
-  };
-  auto near_colour = [&](const unsigned char* p) {
-    return std::abs(p[0] - rgb[0]) + std::abs(p[1] - rgb[1]) + std::abs(p[2] - rgb[2]) <= 60;
-  };
-  const int top = int(std::ceil(area[1])) + 1, bottom = int(std::floor(area[1] + area[3])) - 2;
-  for (int k = 1; k <= 24; ++k) {
-    const int px = int(area[0] + area[2] * k / 25.0);
-    double lo = 1e9, hi = -1e9;
-    for (double dx = -1.5; dx <= 1.5; dx += 0.25) {
-      const double row = row_of(known(time_of(px + dx)));
-      lo = std::min(lo, row);
-      hi = std::max(hi, row);
-    }
-    bool on_curve = false;
-    for (int y = top; y <= bottom; ++y) {
-      const bool coloured = near_colour(pixel(px, y));
-      const bool near = y >= lo - 3.0 && y <= hi + 3.0;
-      INFO("column " << px << ", row " << y << ", curve rows " << lo << ".." << hi);
-      if (coloured) REQUIRE(near);
-      on_curve = on_curve || (coloured && near);
-    }
-    INFO("column " << px);
-    REQUIRE(on_curve);
-  }
+  const doorbench::testing::PlotGeometry geometry(plot);
+  doorbench::testing::require_curve_drawn_where_it_belongs(pixels, w, geometry, rgb, known);
+  const int top = geometry.top();
   // The trigger's marker: a light vertical line at 2.5 s, in the rows where the curve is not.
   const int marker_px = int(std::lround(area[0] + (2.5 - xr[0]) / (xr[1] - xr[0]) * area[2]));
   int light = 0;

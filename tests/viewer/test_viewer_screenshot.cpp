@@ -19,6 +19,7 @@
 #include "acquisition/session_file.h"
 #include "analysis/parameter_file.h"
 #include "tests/support/temp_dir.h"
+#include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
 
 namespace fs = std::filesystem;
@@ -89,10 +90,6 @@ Run run(const std::string& arguments, const fs::path& dir) {
   return result;
 }
 
-bool near_colour(const unsigned char* p, const std::vector<int>& rgb, int tolerance) {
-  return std::abs(p[0] - rgb[0]) + std::abs(p[1] - rgb[1]) + std::abs(p[2] - rgb[2]) <= tolerance;
-}
-
 }  // namespace
 
 TEST_CASE("view --screenshot draws the known sine where it belongs, and only there",
@@ -142,37 +139,8 @@ TEST_CASE("view --screenshot draws the known sine where it belongs, and only the
   REQUIRE(yr[0] < -kAmplitudeN);
   REQUIRE(yr[1] > kAmplitudeN);
 
-  auto pixel = [&](int x, int y) { return pixels + (std::size_t(y) * std::size_t(w) + x) * 3; };
-  auto row_of = [&](double value) {
-    return area[1] + area[3] - (value - yr[0]) / (yr[1] - yr[0]) * area[3];
-  };
-  auto time_of = [&](double px) {
-    return xr[0] + (px + 0.5 - area[0]) / area[2] * (xr[1] - xr[0]);
-  };
-  const int top = int(std::ceil(area[1])) + 1, bottom = int(std::floor(area[1] + area[3])) - 2;
-  int checked = 0;
-  for (int k = 1; k <= 24; ++k) {
-    const int px = int(area[0] + area[2] * k / 25.0);
-    // Where the curve passes in this column (and its neighbours, for the line's thickness).
-    double lo = 1e9, hi = -1e9;
-    for (double dx = -1.5; dx <= 1.5; dx += 0.25) {
-      const double row = row_of(known_force(time_of(px + dx)));
-      lo = std::min(lo, row);
-      hi = std::max(hi, row);
-    }
-    bool on_curve = false;
-    for (int y = top; y <= bottom; ++y) {
-      const bool coloured = near_colour(pixel(px, y), rgb, 60);
-      const bool near = y >= lo - 3.0 && y <= hi + 3.0;
-      if (coloured && near) on_curve = true;
-      INFO("column " << px << ", row " << y << ", curve rows " << lo << ".." << hi);
-      if (coloured) REQUIRE(near);  // the series colour nowhere else in the data area
-    }
-    INFO("column " << px << ": curve expected at rows " << lo << ".." << hi);
-    REQUIRE(on_curve);
-    ++checked;
-  }
-  REQUIRE(checked == 24);
+  doorbench::testing::require_curve_drawn_where_it_belongs(
+      pixels, w, doorbench::testing::PlotGeometry(plot), rgb, known_force);
 }
 
 TEST_CASE("view refuses a screenshot without a layout or with an unknown one", "[viewer]") {
