@@ -18,6 +18,7 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "acquisition/session_file.h"
@@ -138,6 +139,20 @@ struct PlotGeometry {
   int right() const { return int(std::floor(x0 + w)) - 2; }
 };
 
+// The rows y = curve(x) spans over columns column ± half_width_px (a line's thickness):
+// {lowest, highest}.
+template <typename Curve>
+std::pair<double, double> curve_rows(const PlotGeometry& plot, Curve&& curve, int column,
+                                     double half_width_px) {
+  double lo = 1e9, hi = -1e9;
+  for (double dx = -half_width_px; dx <= half_width_px; dx += 0.25) {
+    const double row = plot.row_of(curve(plot.x_of(column + dx)));
+    lo = std::min(lo, row);
+    hi = std::max(hi, row);
+  }
+  return {lo, hi};
+}
+
 // Requires, in 24 columns across the data area of `plot` in an RGB image `width` pixels
 // wide, that the colour `rgb` is drawn where y = curve(x) passes (within 3 px of the rows it
 // spans over ±1.5 px, the line's thickness) and nowhere else in the column.
@@ -147,12 +162,7 @@ void require_curve_drawn_where_it_belongs(const unsigned char* pixels, int width
                                           Curve&& curve) {
   for (int k = 1; k <= 24; ++k) {
     const int px = int(plot.x0 + plot.w * k / 25.0);
-    double lo = 1e9, hi = -1e9;
-    for (double dx = -1.5; dx <= 1.5; dx += 0.25) {
-      const double row = plot.row_of(curve(plot.x_of(px + dx)));
-      lo = std::min(lo, row);
-      hi = std::max(hi, row);
-    }
+    const auto [lo, hi] = curve_rows(plot, curve, px, 1.5);
     bool on_curve = false;
     for (int y = plot.top(); y <= plot.bottom(); ++y) {
       const unsigned char* p = pixels + (std::size_t(y) * std::size_t(width) + px) * 3;

@@ -87,12 +87,7 @@ TEST_CASE("in the fit layout the measured curve stays visible when the model mat
   int seen = 0;
   for (int k = 1; k <= 40; ++k) {
     const int x = int(g.x0 + g.w * k / 41.0);
-    double lo = 1e9, hi = -1e9;
-    for (double dx = -1.0; dx <= 1.0; dx += 0.25) {
-      const double row = g.row_of(known_rate(g.x_of(x + dx)));
-      lo = std::min(lo, row);
-      hi = std::max(hi, row);
-    }
+    const auto [lo, hi] = testing::curve_rows(g, known_rate, x, 1.0);
     bool found = false;
     for (int y = std::max(g.top(), int(lo) - 3); y <= std::min(g.bottom(), int(hi) + 3); ++y) {
       found = found || testing::near_rgb(shot.pixel(x, y), measured, 30);
