@@ -455,14 +455,10 @@ TEST_CASE("view --live draws a journal being written: the last seconds, where th
   REQUIRE(WEXITSTATUS(status) == 0);
   CHECK_THAT(out.str(), Catch::Contains("recording: 3.999 s, 4000 scans, 42 frames, 1 events"));
 
-  int w = 0, h = 0, n = 0;
-  unsigned char* pixels = stbi_load(png.string().c_str(), &w, &h, &n, 3);
-  REQUIRE(pixels != nullptr);
-  std::unique_ptr<unsigned char, void (*)(void*)> owner(pixels, stbi_image_free);
-  REQUIRE(w == 900);
-  REQUIRE(h == 600);
-  std::ifstream info_file(png.string() + ".json");
-  const nlohmann::json info = nlohmann::json::parse(info_file);
+  const testing::Screenshot shot = testing::load_screenshot(png);
+  REQUIRE(shot.width == 900);
+  REQUIRE(shot.height == 600);
+  const nlohmann::json& info = shot.info;
   REQUIRE(info["layout"] == "live");
   REQUIRE(info["plots"].size() == 1);
   const auto& plot = info["plots"][0];
@@ -477,15 +473,14 @@ TEST_CASE("view --live draws a journal being written: the last seconds, where th
   REQUIRE(yr[1] > 1.99);
   REQUIRE(area[2] > 700);
 
-  auto pixel = [&](int x, int y) { return pixels + (std::size_t(y) * std::size_t(w) + x) * 3; };
-  const doorbench::testing::PlotGeometry geometry(plot);
-  doorbench::testing::require_curve_drawn_where_it_belongs(pixels, w, geometry, rgb, known);
+  const testing::PlotGeometry geometry(plot);
+  testing::require_curve_drawn_where_it_belongs(shot.rgb.data(), shot.width, geometry, rgb, known);
   const int top = geometry.top();
   // The trigger's marker: a light vertical line at 2.5 s, in the rows where the curve is not.
   const int marker_px = int(std::lround(area[0] + (2.5 - xr[0]) / (xr[1] - xr[0]) * area[2]));
   int light = 0;
   for (int x = marker_px - 1; x <= marker_px + 1; ++x) {
-    const unsigned char* p = pixel(x, top + 5);
+    const unsigned char* p = shot.pixel(x, top + 5);
     if (p[0] > 90 && p[1] > 90 && p[2] > 90) ++light;
   }
   CHECK(light > 0);

@@ -99,31 +99,18 @@ TEST_CASE("view --screenshot draws the known sine where it belongs, and only the
   const fs::path png = dir.path / "channels.png";
   write_sine_session(session);
   // xvfb-run (package xvfb) starts a private X server; Mesa draws in software.
-  const std::string command = std::string("xvfb-run -a -s '-screen 0 1024x768x24' ")
-                                  .append(DOORBENCH_EXECUTABLE)
-                                  .append(" view --screenshot ")
-                                  .append(png.string())
-                                  .append(" --layout channels --width 900 --height 600 ")
-                                  .append(session.string())
-                                  .append(" >/dev/null 2>")
-                                  .append((dir.path / "xvfb-stderr.txt").string());
-  const int status = std::system(command.c_str());
-  std::ifstream err_file(dir.path / "xvfb-stderr.txt");
-  std::ostringstream err;
-  err << err_file.rdbuf();
-  INFO("stderr: " << err.str());
-  REQUIRE(WIFEXITED(status));
-  REQUIRE(WEXITSTATUS(status) == 0);
+  std::string err;
+  const int status = doorbench::testing::run_under_xvfb(
+      "'" DOORBENCH_EXECUTABLE "' view --screenshot '" + png.string() +
+          "' --layout channels --width 900 --height 600 '" + session.string() + "'",
+      dir.path, err);
+  INFO("stderr: " << err);
+  REQUIRE(status == 0);
 
-  int w = 0, h = 0, n = 0;
-  unsigned char* pixels = stbi_load(png.string().c_str(), &w, &h, &n, 3);
-  REQUIRE(pixels != nullptr);
-  std::unique_ptr<unsigned char, void (*)(void*)> owner(pixels, stbi_image_free);
-  REQUIRE(w == 900);
-  REQUIRE(h == 600);
-
-  std::ifstream info_file(png.string() + ".json");
-  const nlohmann::json info = nlohmann::json::parse(info_file);
+  const doorbench::testing::Screenshot shot = doorbench::testing::load_screenshot(png);
+  REQUIRE(shot.width == 900);
+  REQUIRE(shot.height == 600);
+  const nlohmann::json& info = shot.info;
   REQUIRE(info["plots"].size() == 1);
   const auto& plot = info["plots"][0];
   REQUIRE(plot["title"] == "force");
@@ -140,7 +127,7 @@ TEST_CASE("view --screenshot draws the known sine where it belongs, and only the
   REQUIRE(yr[1] > kAmplitudeN);
 
   doorbench::testing::require_curve_drawn_where_it_belongs(
-      pixels, w, doorbench::testing::PlotGeometry(plot), rgb, known_force);
+      shot.rgb.data(), shot.width, doorbench::testing::PlotGeometry(plot), rgb, known_force);
 }
 
 TEST_CASE("view refuses a screenshot without a layout or with an unknown one", "[viewer]") {
