@@ -16,7 +16,7 @@ import sys
 
 # The folders whose code ships, in the layers' order (CMakeLists.txt at the top).
 LIBRARY_FOLDERS = ["acquisition", "sensors", "calibration", "analysis", "simulated_bench",
-                   "viewer", "haptic", "app"]
+                   "viewer", "haptic", "study", "app"]
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([A-Za-z0-9_]+)/[^"]+"')
 
 
