@@ -13,6 +13,7 @@
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
+#include "analysis/svg_plot.h"
 #include "study/statistics/numeric_minimize.h"
 
 namespace doorbench::study {
@@ -537,6 +538,48 @@ std::vector<StrongerObservation> stronger_observations(const TrialsTable& table)
                    comparison_first ? !row.second_stronger : row.second_stronger});
   }
   return out;
+}
+
+namespace {
+
+struct CurvePlot {
+  PlotOptions options;
+  std::vector<double> data_x, data_y, fit_x, fit_y;
+  std::vector<PlotSeries> series;
+};
+
+void fill_curve_plot(CurvePlot& plot, const ParameterThresholds& t) {
+  if (t.counts.empty()) throw std::invalid_argument("psychometric plot: no data");
+  plot.options.title = "Which felt stronger: " + t.parameter + " around " + t.reference;
+  plot.options.x_label = "comparison / reference [1]";
+  plot.options.y_label = "P(comparison felt stronger) [1]";
+  for (const LevelCount& c : t.counts) {
+    plot.data_x.push_back(std::exp(c.level));
+    plot.data_y.push_back(static_cast<double>(c.stronger) / c.trials);
+  }
+  const double low = t.counts.front().level, high = t.counts.back().level;
+  for (int i = 0; i <= 200; ++i) {
+    const double level = low + (high - low) * i / 200.0;
+    plot.fit_x.push_back(std::exp(level));
+    plot.fit_y.push_back(t.panel.probability(level));
+  }
+  plot.series.push_back({"panel's answers", plot.data_x, plot.data_y, "", plot_style::Meaning::kMeasured});
+  plot.series.push_back({"fit (JND " + percent(t.panel.weber_fraction) + ")", plot.fit_x, plot.fit_y, "",
+                         plot_style::Meaning::kSimulated});
+}
+
+}  // namespace
+
+std::string render_psychometric_plot(const ParameterThresholds& thresholds) {
+  CurvePlot plot;
+  fill_curve_plot(plot, thresholds);
+  return render_svg_plot(plot.options, plot.series);
+}
+
+void write_psychometric_plot(const std::string& path, const ParameterThresholds& thresholds) {
+  CurvePlot plot;
+  fill_curve_plot(plot, thresholds);
+  write_svg_plot(path, plot.options, plot.series);
 }
 
 }  // namespace doorbench::study

@@ -142,4 +142,10 @@ ThresholdsResult fit_thresholds(std::span<const StrongerObservation> trials,
 // number, an answer other than 1 or 2, a block where no label is in every trial.
 std::vector<StrongerObservation> stronger_observations(const TrialsTable& table);
 
+// The panel's psychometric curve with its data (analysis/svg_plot.h): the proportion
+// "comparison felt stronger" per comparison level (measured) and the pooled fit
+// (simulated), against the comparison / reference ratio; written whole or not at all.
+std::string render_psychometric_plot(const ParameterThresholds& thresholds);
+void write_psychometric_plot(const std::string& path, const ParameterThresholds& thresholds);
+
 }  // namespace doorbench::study
