@@ -151,7 +151,17 @@ double profile(const Problem& problem, double log_spread, Eigen::VectorXd& other
     return negative_log_likelihood(problem, full(o));
   };
   if (!std::isfinite(f(others))) others.setZero();
-  const auto result = statistics::minimize(f, others);
+  auto result = statistics::minimize(f, others);
+  if (problem.layout.fit_lapse) {
+    // A lapse rate driven to 0 saturates its logistic, where Newton steps stall: also start
+    // from a lapse of 2 % and keep the better.
+    Eigen::VectorXd reset = result.x;
+    reset[reset.size() - 1] = std::log(0.02 / (problem.layout.max_lapse - 0.02));
+    if (std::isfinite(f(reset))) {
+      auto second = statistics::minimize(f, reset);
+      if (second.value < result.value) result = std::move(second);
+    }
+  }
   others = result.x;
   return result.value;
 }
@@ -178,7 +188,7 @@ double profile_limit(const Problem& problem, const Eigen::VectorXd& optimum, dou
     inside = outside;
   }
   if (!crossed) return direction * std::numeric_limits<double>::infinity();
-  for (int iteration = 0; iteration < 40 && std::abs(outside - inside) > 1e-7; ++iteration) {
+  for (int iteration = 0; iteration < 40 && std::abs(outside - inside) > 1e-5; ++iteration) {
     const double middle = 0.5 * (inside + outside);
     Eigen::VectorXd start = others;
     (profile(problem, middle, start) - minimum > cut ? outside : inside) = middle;
