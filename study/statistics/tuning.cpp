@@ -19,6 +19,7 @@ namespace doorbench::study {
 std::string TuningOptions::validate() const {
   if (!(confidence > 0.0 && confidence < 1.0)) return "confidence must be in (0, 1)";
   if (min_cluster_size < 1) return "min_cluster_size must be at least 1";
+  if (!(min_separation_steps >= 0.0)) return "min_separation_steps must be at least 0";
   for (const auto& [name, w] : measured_weber) {
     if (!(w > 0.0) || !std::isfinite(w)) return "measured_weber of " + name + " must be positive";
   }
@@ -154,6 +155,24 @@ double bic(double within, const std::vector<int>& sizes, std::size_t dimensions)
   return -2.0 * log_likelihood + parameters * std::log(n);
 }
 
+// The distance between the two groups' centres.
+double centre_distance(const std::vector<std::vector<double>>& points, const std::vector<int>& group) {
+  const std::size_t p = points.front().size();
+  std::vector<double> sum[2] = {std::vector<double>(p, 0.0), std::vector<double>(p, 0.0)};
+  int count[2] = {0, 0};
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    ++count[group[i]];
+    for (std::size_t j = 0; j < p; ++j) sum[group[i]][j] += points[i][j];
+  }
+  if (count[0] == 0 || count[1] == 0) return 0.0;
+  double squares = 0.0;
+  for (std::size_t j = 0; j < p; ++j) {
+    const double d = sum[1][j] / count[1] - sum[0][j] / count[0];
+    squares += d * d;
+  }
+  return std::sqrt(squares);
+}
+
 TuningClusters cluster(const std::vector<TunedDoor>& doors,
                        const std::vector<ParameterDistribution>& distributions,
                        const TuningOptions& options) {
@@ -188,7 +207,9 @@ TuningClusters cluster(const std::vector<TunedDoor>& doors,
   for (const int g : partition.group) ++sizes[g];
   out.bic_one = bic(total, {static_cast<int>(points.size())}, columns.size());
   out.bic_two = bic(partition.within, sizes, columns.size());
-  out.split = out.bic_two < out.bic_one && std::min(sizes[0], sizes[1]) >= options.min_cluster_size;
+  out.separation = centre_distance(points, partition.group);
+  out.split = out.bic_two < out.bic_one && std::min(sizes[0], sizes[1]) >= options.min_cluster_size &&
+              out.separation >= options.min_separation_steps;
   if (!out.split) return out;
   out.group = partition.group;
   out.centres.resize(2);
@@ -287,8 +308,9 @@ nlohmann::json TuningResult::to_json() const {
     groups.push_back({{"participants", members}, {"centre", clusters.centres[g]}});
   }
   out["clusters"] = {{"split", clusters.split},
-                     {"rule", "2-means in perceptual steps; split when BIC(2 groups) < BIC(1) "
-                              "and each group has enough doors"},
+                     {"rule", "2-means in perceptual steps; split when BIC(2 groups) < BIC(1), "
+                              "each group has enough doors and the centres are far enough apart"},
+                     {"separation", clusters.separation},
                      {"bic_one", clusters.bic_one},
                      {"bic_two", clusters.bic_two},
                      {"dimensions", clusters.dimensions},

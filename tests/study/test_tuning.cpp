@@ -84,6 +84,7 @@ TEST_CASE("tuning: a panel of two groups splits, one group does not", "[study][t
   CHECK(result.clusters.dimensions == std::vector<std::string>{"J", "k_l"});
   for (int i = 0; i < 20; ++i) CHECK(result.clusters.group[i] == result.clusters.group[i < 10 ? 0 : 10]);
   const double expected = std::log(0.13 / 0.08) / std::log(1.1);
+  CHECK(result.clusters.separation == Approx(expected).epsilon(0.15));
   CHECK(std::abs(result.clusters.separation_steps.at("J")) == Approx(expected).epsilon(0.15));
   const std::string svg = render_tuning_plot(result);
   CHECK(svg.find("<svg") != std::string::npos);
