@@ -1391,8 +1391,14 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   FitResult start_fit = fit_model(start, data, options.fit);
   LoopResult result{.start_fit = start_fit,
                     .final_fit = std::move(start_fit),
+                    .steps = {},
+                    .last_candidates = {},
+                    .last_speed_bands = {},
+                    .stop_reason = "",
                     .fits = 1,
-                    .options = options};
+                    .total_time_s = 0.0,
+                    .options = options,
+                    .structure = {}};
   say("start model: " + describe_figures(model_figures(result.start_fit.summary)) +
       printf_text(" [%.1f s]", result.start_fit.summary.total_time_s));
 

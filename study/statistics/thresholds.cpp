@@ -13,7 +13,7 @@
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
-#include "analysis/svg_plot.h"
+#include "analysis/report/svg_plot.h"
 #include "study/statistics/numeric_minimize.h"
 
 namespace doorbench::study {

@@ -9,10 +9,10 @@
 
 #include <boost/math/distributions/students_t.hpp>
 
-#include "analysis/parameter_file.h"
-#include "analysis/physical_model.h"
-#include "analysis/sensory_model.h"
-#include "analysis/svg_plot.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/physical_model.h"
+#include "analysis/model/sensory_model.h"
+#include "analysis/report/svg_plot.h"
 
 namespace doorbench::study {
 

@@ -7,7 +7,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "study/statistics/ratings.h"
 #include "study/statistics/thresholds.h"
 #include "study/statistics/tuning.h"

@@ -8,7 +8,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "study/statistics/tuning.h"
 #include "tests/support/temp_dir.h"
 
