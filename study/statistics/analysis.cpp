@@ -276,8 +276,20 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
   return html + "</body></html>\n";
 }
 
+namespace {
+// A number for the terminal: "n/a" for null (not estimable), else 3 decimals, no "-0.000".
+std::string plain(const nlohmann::json& value) {
+  if (!value.is_number()) return value.is_string() ? value.get<std::string>() : "n/a";
+  char text[32];
+  const double x = value.get<double>();
+  std::snprintf(text, sizeof text, "%.3f", std::abs(x) < 5e-4 ? 0.0 : x);
+  return text;
+}
+}  // namespace
+
 std::string analysis_summary(const nlohmann::json& a) {
   std::string text;
+  auto cell = plain;
   if (a.contains("preference_scale")) {
     text += "preference scale (worth [95% interval]):";
     for (const auto& w : a["preference_scale"])
