@@ -296,6 +296,12 @@ std::string analysis_summary(const nlohmann::json& a) {
       text += " " + w["variant"].get<std::string>() + " " + cell(w["worth"]) + " [" +
               cell(w["ci_low"]) + ", " + cell(w["ci_high"]) + "]";
     text += "\n";
+    const nlohmann::json* favourite = nullptr;
+    for (const auto& w : a["preference_scale"])
+      if (favourite == nullptr || w["p_favourite"] > (*favourite)["p_favourite"]) favourite = &w;
+    if (favourite != nullptr)
+      text += "favourite: " + (*favourite)["variant"].get<std::string>() + " (probability " +
+              cell((*favourite)["p_favourite"]) + ")\n";
   }
   if (a.contains("ties"))
     text += "ties: nu " + cell(a["ties"]["nu"]) + " [" + cell(a["ties"]["ci_low"]) + ", " +

@@ -125,3 +125,22 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
   CHECK(run.err == "doorbench: " + (dir / "full").string() +
                        ": exists and is not empty (give --overwrite to write into it)\n");
 }
+
+TEST_CASE("campaign analyze shows the bootstrap's progress on stderr, and -q drops it", "[study]") {
+  TempDir dir("campaign_analyze_progress");
+  doorbench::testing::PairPanel panel;
+  panel.participants = 8;
+  panel.worths = {0.0, 0.3, -0.3, 1.5};  // D clearly the favourite
+  std::ofstream(dir / "trials.csv") << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 5);
+  const std::string args = "campaign analyze '" + (dir / "trials.csv").string() +
+                           "' --no-pdf --bootstrap 200 --out ";
+  auto run = run_doorbench_shell(args + "'" + (dir / "loud").string() + "'", dir);
+  INFO(run.out);
+  CHECK(run.status == 0);
+  CHECK(run.err.find("preference bootstrap: 200 of 200 resamples, done in ") != std::string::npos);
+  CHECK(run.out.find("favourite: D (probability ") != std::string::npos);
+  run = run_doorbench_shell(args + "'" + (dir / "quiet").string() + "' -q", dir);
+  CHECK(run.status == 0);
+  CHECK(run.err.empty());
+  CHECK(run.out.find("favourite: D (probability ") != std::string::npos);
+}
