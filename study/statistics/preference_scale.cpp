@@ -216,6 +216,10 @@ PairData pair_data(const TrialsTable& table) {
     }
     const std::string& first = table.value(r, "first");
     const std::string& second = table.value(r, "second");
+    if (first.empty() || second.empty())
+      throw TrialsTableError(table.source, table.line_numbers[r],
+                             "a " + question + " trial without a variant in '" +
+                                 (first.empty() ? "first" : "second") + "'");
     if (first == second)
       throw TrialsTableError(table.source, table.line_numbers[r],
                              "a " + question + " trial compares '" + first + "' with itself");

@@ -141,6 +141,9 @@ TEST_CASE("pair answers other than 1, 2 and same (2-AC only) are refused with th
   const std::string self = std::string(kTrialsHeader) + rows(1, "P1", "preference", "A", "A", "1");
   REQUIRE_THROWS_WITH(pair_data(parse_trials_table(self, "t.csv")),
                       "t.csv:2: a preference trial compares 'A' with itself");
+  const std::string empty = std::string(kTrialsHeader) + rows(1, "P1", "preference", "A", "", "1");
+  REQUIRE_THROWS_WITH(pair_data(parse_trials_table(empty, "t.csv")),
+                      "t.csv:2: a preference trial without a variant in 'second'");
 }
 
 TEST_CASE("the reference variant can be named and must exist", "[study]") {
