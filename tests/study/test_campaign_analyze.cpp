@@ -124,6 +124,17 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
   CHECK(run.status == 2);
   CHECK(run.err == "doorbench: " + (dir / "full").string() +
                        ": exists and is not empty (give --overwrite to write into it)\n");
+
+  std::filesystem::create_directories(dir / "campaign");
+  write(dir / "campaign" / "trials.csv", hand_table());
+  run = run_doorbench_shell("campaign analyze '" + (dir / "campaign").string() + "' --out '" +
+                                (dir / "campaign").string() + "' --overwrite",
+                            dir);
+  CHECK(run.status == 2);
+  CHECK(run.err == "doorbench: " + (dir / "campaign").string() + ": holds an input of this command (" +
+                       (dir / "campaign" / "trials.csv").string() +
+                       ") (doorbench never writes onto its input)\n");
+  CHECK_FALSE(std::filesystem::exists(dir / "campaign" / "analysis.json"));
 }
 
 TEST_CASE("campaign analyze shows the bootstrap's progress on stderr, and -q drops it", "[study]") {
