@@ -40,6 +40,9 @@ std::filesystem::path trials_path(const std::string& input) {
 }
 
 void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
+  if (options.bootstrap < 0 || (options.bootstrap > 0 && options.bootstrap < 100))
+    throw UsageError("--bootstrap: must be 0 (none) or at least 100 resamples, got " +
+                     std::to_string(options.bootstrap));
   const std::filesystem::path table_path = trials_path(options.input);
   const std::filesystem::path out(options.out_dir);
   check_output_folder(out, {table_path}, options.overwrite);

@@ -125,6 +125,13 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
   CHECK(run.err == "doorbench: " + (dir / "full").string() +
                        ": exists and is not empty (give --overwrite to write into it)\n");
 
+  run = run_doorbench_shell("campaign analyze '" + (dir / "good.csv").string() + "' --out '" +
+                                out + "' --bootstrap 50",
+                            dir);
+  CHECK(run.status == 2);
+  CHECK(run.err == "doorbench: --bootstrap: must be 0 (none) or at least 100 resamples, got 50 "
+                   "(see doorbench campaign analyze --help)\n");
+
   std::filesystem::create_directories(dir / "campaign");
   write(dir / "campaign" / "trials.csv", hand_table());
   run = run_doorbench_shell("campaign analyze '" + (dir / "campaign").string() + "' --out '" +
