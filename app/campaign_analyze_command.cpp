@@ -31,8 +31,9 @@ std::filesystem::path trials_path(const std::string& input) {
   if (std::filesystem::is_directory(path)) {
     const std::filesystem::path table = path / "trials.csv";
     if (!std::filesystem::exists(table))
-      throw UsageError(input + ": is a folder without trials.csv (give a campaign folder or a "
-                               "trials table)");
+      throw UsageError(input +
+                       ": is a folder without trials.csv (give a campaign folder or a "
+                       "trials table)");
     return table;
   }
   if (!std::filesystem::exists(path)) throw UsageError(input + ": no such file or folder");
@@ -71,7 +72,8 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
   std::filesystem::create_directories(out);
   const std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
   write_text_file_atomically(out / "analysis.json", analysis.dump(2) + "\n");
-  for (const study::AnalysisPlot& plot : plots) write_text_file_atomically(out / plot.file, plot.svg);
+  for (const study::AnalysisPlot& plot : plots)
+    write_text_file_atomically(out / plot.file, plot.svg);
   const std::filesystem::path html = out / "report.html";
   write_text_file_atomically(html, study::analysis_html(analysis, plots));
   std::string pdf_note = "no PDF (not asked for)";
@@ -98,18 +100,19 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
   command->add_option("--out", options->out_dir, "folder for the analysis")->required();
   command->add_flag("--overwrite", options->overwrite,
                     "write into an --out folder that exists and is not empty");
-  command->add_option("--bootstrap", options->bootstrap,
-                      "participant bootstrap resamples for the preference scale (0: none)")
+  command
+      ->add_option("--bootstrap", options->bootstrap,
+                   "participant bootstrap resamples for the preference scale (0: none)")
       ->capture_default_str();
   command->add_option("--seed", options->seed, "the bootstrap's seed")->capture_default_str();
   command->add_option("--reference", options->reference,
                       "the variant at worth 0 (default: the first in the table)");
-  command->add_option("--real-variant", options->real_variant,
-                      "the real door's name in identify-real trials")
+  command
+      ->add_option("--real-variant", options->real_variant,
+                   "the real door's name in identify-real trials")
       ->capture_default_str();
   command->add_flag("--no-pdf", options->no_pdf, "do not render report.pdf");
-  command->callback(
-      [options, &action] { action = [options] { run_campaign_analyze(*options); }; });
+  command->callback([options, &action] { action = [options] { run_campaign_analyze(*options); }; });
 }
 
 }  // namespace doorbench::app

@@ -83,11 +83,16 @@ namespace {
 std::string escape(const std::string& text) {
   std::string out;
   for (char c : text) {
-    if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else if (c == '&') out += "&amp;";
-    else if (c == '"') out += "&quot;";
-    else out += c;
+    if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else if (c == '&')
+      out += "&amp;";
+    else if (c == '"')
+      out += "&quot;";
+    else
+      out += c;
   }
   return out;
 }
@@ -194,8 +199,7 @@ std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis) {
       items.push_back({r["first"].get<std::string>() + " vs " + r["second"].get<std::string>(),
                        number_or_nan(r["dprime"]), number_or_nan(r["ci_low"]),
                        number_or_nan(r["ci_high"])});
-    add("two-ac.svg", "2-AC: d' per pair (> 0: second preferred), 95 % intervals", "d' [-]",
-        items);
+    add("two-ac.svg", "2-AC: d' per pair (> 0: second preferred), 95 % intervals", "d' [-]", items);
   }
   return plots;
 }
@@ -224,8 +228,8 @@ std::string preference_html(const nlohmann::json& a, const std::vector<AnalysisP
 }
 
 std::string identify_html(const nlohmann::json& ir, const std::vector<AnalysisPlot>& plots) {
-  std::string html = "<h2>Real vs virtual (identify-real)</h2>\n<p><b>" +
-                     cell(ir["verdict"]) + "</b></p>\n";
+  std::string html =
+      "<h2>Real vs virtual (identify-real)</h2>\n<p><b>" + cell(ir["verdict"]) + "</b></p>\n";
   nlohmann::json rows = nlohmann::json::array();
   nlohmann::json panel = ir["panel"];
   panel["participant"] = "panel";
@@ -248,8 +252,8 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
       "<h1>Campaign analysis</h1>\n";
   const auto& input = a["input"];
   html += "<p>" + cell(input["trials_table"]) + ": " + cell(input["rows"]) + " trials, " +
-          cell(input["participants"]) + " participants; intervals at " +
-          cell(input["confidence"]) + ".</p>\n";
+          cell(input["participants"]) + " participants; intervals at " + cell(input["confidence"]) +
+          ".</p>\n";
   std::set<std::string> shown{"input", "sections", "preference_fit", "ties", "order_effect"};
   if (a.contains("preference_scale")) {
     html += preference_html(a, plots);
@@ -260,12 +264,12 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
     shown.insert("identify_real");
   }
   if (a.contains("two_ac")) {
-    html += "<h2>2-AC preference (preference-2ac)</h2>\n<p>Thurstonian &tau; and d' per pair "
-            "(d' &gt; 0: the second variant preferred; interval: profile likelihood).</p>\n" +
-            table_of(a["two_ac"], {"first", "second", "prefer_first", "no_preference",
-                                   "prefer_second", "tau", "dprime", "ci_low", "ci_high", "p",
-                                   "note"}) +
-            figure(plots, "two-ac.svg");
+    html +=
+        "<h2>2-AC preference (preference-2ac)</h2>\n<p>Thurstonian &tau; and d' per pair "
+        "(d' &gt; 0: the second variant preferred; interval: profile likelihood).</p>\n" +
+        table_of(a["two_ac"], {"first", "second", "prefer_first", "no_preference", "prefer_second",
+                               "tau", "dprime", "ci_low", "ci_high", "p", "note"}) +
+        figure(plots, "two-ac.svg");
     shown.insert("two_ac");
   }
   for (const auto& [key, value] : a.items()) {  // sections added later (ratings, jnd, tuning)
@@ -306,12 +310,13 @@ std::string analysis_summary(const nlohmann::json& a) {
   if (a.contains("ties"))
     text += "ties: nu " + cell(a["ties"]["nu"]) + " [" + cell(a["ties"]["ci_low"]) + ", " +
             cell(a["ties"]["ci_high"]) + "]\n";
-  if (a.contains("identify_real")) text += "identify-real: " + cell(a["identify_real"]["verdict"]) + "\n";
+  if (a.contains("identify_real"))
+    text += "identify-real: " + cell(a["identify_real"]["verdict"]) + "\n";
   if (a.contains("two_ac"))
     for (const auto& r : a["two_ac"])
       text += "2-AC " + r["first"].get<std::string>() + " vs " + r["second"].get<std::string>() +
-              ": d' " + cell(r["dprime"]) + " [" + cell(r["ci_low"]) + ", " +
-              cell(r["ci_high"]) + "]\n";
+              ": d' " + cell(r["dprime"]) + " [" + cell(r["ci_low"]) + ", " + cell(r["ci_high"]) +
+              "]\n";
   return text;
 }
 
@@ -331,8 +336,8 @@ std::string render_pdf(const std::filesystem::path& html_path,
     for (char c : path.string()) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
     return out + "'";
   };
-  const std::string command = renderer + " " + quote(html_path) + " " + quote(partial) + " > " +
-                              quote(log) + " 2>&1";
+  const std::string command =
+      renderer + " " + quote(html_path) + " " + quote(partial) + " > " + quote(log) + " 2>&1";
   std::error_code ignored;
   if (std::system(command.c_str()) != 0 || !std::filesystem::exists(partial)) {
     std::filesystem::remove(partial, ignored);

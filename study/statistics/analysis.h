@@ -19,10 +19,9 @@
 // Thread safety: free functions without shared state; `progress` on the caller's thread.
 #include <filesystem>
 #include <functional>
+#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "study/statistics/preference_scale.h"
 #include "study/trials_table.h"

@@ -29,10 +29,16 @@ double normal_quantile(double p) {
 }
 
 // Φ(x) and 1 − Φ(x), each accurate in its own tail.
-double phi_lower(double x) { return 0.5 * std::erfc(-x / kSqrt2); }
-double phi_upper(double x) { return 0.5 * std::erfc(x / kSqrt2); }
+double phi_lower(double x) {
+  return 0.5 * std::erfc(-x / kSqrt2);
+}
+double phi_upper(double x) {
+  return 0.5 * std::erfc(x / kSqrt2);
+}
 
-double z_for(double confidence) { return normal_quantile((1 + confidence) / 2); }
+double z_for(double confidence) {
+  return normal_quantile((1 + confidence) / 2);
+}
 
 nlohmann::json number(double value) {
   return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
@@ -55,8 +61,7 @@ double two_ac_log_likelihood(double tau, double d, double n1, double n2, double 
   if (n2 > 0) {
     // The middle probability from the side where it is not a small difference of large
     // numbers.
-    const double middle =
-        hi <= 0 ? phi_lower(hi) - phi_lower(lo) : phi_upper(lo) - phi_upper(hi);
+    const double middle = hi <= 0 ? phi_lower(hi) - phi_lower(lo) : phi_upper(lo) - phi_upper(hi);
     ll += n2 * std::log(std::max(middle, 1e-300));
   }
   return ll;
@@ -95,11 +100,10 @@ Forced2Result forced_choice_2afc(int correct, int n, double confidence) {
 namespace {
 
 std::string identify_verdict(const Forced2Result& panel, double confidence) {
-  const std::string numbers = "d' " + format_number(panel.dprime) + " [" +
-                              format_number(panel.ci_low) + ", " + format_number(panel.ci_high) +
-                              "] (" + std::to_string(panel.correct) + " of " +
-                              std::to_string(panel.n) + " correct, p = " +
-                              format_number(panel.p) + ")";
+  const std::string numbers =
+      "d' " + format_number(panel.dprime) + " [" + format_number(panel.ci_low) + ", " +
+      format_number(panel.ci_high) + "] (" + std::to_string(panel.correct) + " of " +
+      std::to_string(panel.n) + " correct, p = " + format_number(panel.p) + ")";
   if (panel.p >= 1 - confidence)
     return "the panel could not tell the virtual door from the real one: " + numbers;
   if (panel.pc > 0.5) return "the panel could tell the virtual door from the real one: " + numbers;
@@ -116,15 +120,15 @@ std::optional<IdentifyReal> identify_real(const TrialsTable& table, const std::s
     if (table.value(r, "question") != "identify-real") continue;
     const std::string& answer = table.value(r, "answer");
     if (answer != "1" && answer != "2")
-      throw TrialsTableError(table.source, table.line_numbers[r],
-                             "answer '" + answer + "' to an identify-real question (expected 1 or 2)");
+      throw TrialsTableError(
+          table.source, table.line_numbers[r],
+          "answer '" + answer + "' to an identify-real question (expected 1 or 2)");
     const std::string& first = table.value(r, "first");
     const std::string& second = table.value(r, "second");
     if ((first == real_variant) == (second == real_variant))
       throw TrialsTableError(table.source, table.line_numbers[r],
-                             "an identify-real trial must present the real door ('" +
-                                 real_variant + "') once; it presents '" + first + "' and '" +
-                                 second + "'");
+                             "an identify-real trial must present the real door ('" + real_variant +
+                                 "') once; it presents '" + first + "' and '" + second + "'");
     const std::string& participant = table.value(r, "participant");
     if (counts.count(participant) == 0) order.push_back(participant);
     auto& [correct, n] = counts[participant];
@@ -225,9 +229,9 @@ std::vector<TwoAcResult> two_ac_pairs(const TrialsTable& table, double confidenc
     const std::string& second = table.value(r, "second");
     const std::string& answer = table.value(r, "answer");
     if (answer != "1" && answer != "2" && answer != "same")
-      throw TrialsTableError(table.source, table.line_numbers[r],
-                             "answer '" + answer +
-                                 "' to a preference-2ac question (expected 1, 2 or same)");
+      throw TrialsTableError(
+          table.source, table.line_numbers[r],
+          "answer '" + answer + "' to a preference-2ac question (expected 1, 2 or same)");
     auto at = std::find_if(pairs.begin(), pairs.end(), [&](const Counts& c) {
       return (c.a == first && c.b == second) || (c.a == second && c.b == first);
     });
@@ -251,19 +255,22 @@ std::vector<TwoAcResult> two_ac_pairs(const TrialsTable& table, double confidenc
 
 nlohmann::json identify_real_json(const IdentifyReal& result) {
   auto one = [](const Forced2Result& r) {
-    nlohmann::json j = {{"n", r.n},           {"correct", r.correct},
-                        {"pc", r.pc},         {"pc_low", r.pc_low},
-                        {"pc_high", r.pc_high}, {"dprime", number(r.dprime)},
-                        {"ci_low", number(r.ci_low)}, {"ci_high", number(r.ci_high)},
+    nlohmann::json j = {{"n", r.n},
+                        {"correct", r.correct},
+                        {"pc", r.pc},
+                        {"pc_low", r.pc_low},
+                        {"pc_high", r.pc_high},
+                        {"dprime", number(r.dprime)},
+                        {"ci_low", number(r.ci_low)},
+                        {"ci_high", number(r.ci_high)},
                         {"p", r.p}};
     if (!r.participant.empty()) j["participant"] = r.participant;
     return j;
   };
   nlohmann::json participants = nlohmann::json::array();
   for (const Forced2Result& r : result.participants) participants.push_back(one(r));
-  return {{"panel", one(result.panel)},
-          {"participants", participants},
-          {"verdict", result.verdict}};
+  return {
+      {"panel", one(result.panel)}, {"participants", participants}, {"verdict", result.verdict}};
 }
 
 nlohmann::json two_ac_json(const std::vector<TwoAcResult>& results) {

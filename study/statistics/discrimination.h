@@ -23,11 +23,10 @@
 // Errors: TrialsTableError naming the line of an answer that does not belong to the
 // question, or an identify-real trial without the real door.
 // Thread safety: free functions without shared state.
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "study/trials_table.h"
 
@@ -37,10 +36,10 @@ struct Forced2Result {
   std::string participant;  // empty for the panel
   int n = 0, correct = 0;
   double pc = 0;
-  double dprime = 0;           // ±infinity at Pc = 1 or 0
+  double dprime = 0;               // ±infinity at Pc = 1 or 0
   double ci_low = 0, ci_high = 0;  // of d'
   double pc_low = 0, pc_high = 0;  // Clopper–Pearson interval of Pc
-  double p = 1;                // exact two-sided binomial test of Pc = 1/2
+  double p = 1;                    // exact two-sided binomial test of Pc = 1/2
 };
 
 // Pc, d' and intervals from counts. `confidence` in (0.5, 1).
@@ -59,12 +58,12 @@ std::optional<IdentifyReal> identify_real(const TrialsTable& table,
                                           double confidence = 0.95);
 
 struct TwoAcResult {
-  std::string first, second;       // A and B
+  std::string first, second;  // A and B
   int prefer_first = 0, no_preference = 0, prefer_second = 0;
-  double tau = 0, dprime = 0;      // NaN / ±infinity where not estimable
+  double tau = 0, dprime = 0;        // NaN / ±infinity where not estimable
   double se_tau = 0, se_dprime = 0;  // NaN where the information is singular
-  double ci_low = 0, ci_high = 0;  // profile likelihood interval of d'
-  double p = 1;                    // likelihood-root test of d' = 0, two-sided
+  double ci_low = 0, ci_high = 0;    // profile likelihood interval of d'
+  double p = 1;                      // likelihood-root test of d' = 0, two-sided
   std::string note;
 };
 

@@ -31,8 +31,7 @@ std::vector<Cell> cells_of(const PairData& data, const std::vector<int>& partici
     Cell& cell = cells[{trial.first, trial.second}];
     cell.first = trial.first;
     cell.second = trial.second;
-    (trial.answer == 1 ? cell.n_first : trial.answer == 2 ? cell.n_second : cell.n_same) +=
-        weight;
+    (trial.answer == 1 ? cell.n_first : trial.answer == 2 ? cell.n_second : cell.n_same) += weight;
   }
   std::vector<Cell> out;
   for (const auto& [key, cell] : cells) out.push_back(cell);
@@ -136,8 +135,8 @@ double quantile(std::vector<double> values, double q) {
 // output the standard does not fix).
 int draw_index(std::mt19937_64& generator, int n) {
   const std::uint64_t range = std::uint64_t(n);
-  const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                              std::numeric_limits<std::uint64_t>::max() % range;
+  const std::uint64_t limit =
+      std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % range;
   std::uint64_t value = generator();
   while (value >= limit) value = generator();
   return int(value % range);
@@ -179,7 +178,8 @@ std::string separation_message(const PairData& data) {
 }  // namespace
 
 bool PairData::has_ties() const {
-  return std::any_of(trials.begin(), trials.end(), [](const PairTrial& t) { return t.answer == 0; });
+  return std::any_of(trials.begin(), trials.end(),
+                     [](const PairTrial& t) { return t.answer == 0; });
 }
 
 bool PairData::has_both_orders() const {
@@ -369,7 +369,8 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
   const auto point = newton(layout, cells_of(data, std::vector<int>(data.participants.size(), 1)));
   if (!point) throw PreferenceScaleError(separation_message(data));
   const Eigen::VectorXd& theta = point->first;
-  const Evaluation e = evaluate(layout, cells_of(data, std::vector<int>(data.participants.size(), 1)), theta);
+  const Evaluation e =
+      evaluate(layout, cells_of(data, std::vector<int>(data.participants.size(), 1)), theta);
   const Eigen::MatrixXd covariance = e.information.inverse();
 
   PreferenceScale scale;
@@ -377,8 +378,8 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
   scale.iterations = point->second;
   scale.trials = int(data.trials.size());
   scale.participants = int(data.participants.size());
-  const bool bootstrapped = options.bootstrap_replicates > 0 &&
-                            scale.participants >= options.min_bootstrap_participants;
+  const bool bootstrapped =
+      options.bootstrap_replicates > 0 && scale.participants >= options.min_bootstrap_participants;
   Replicates replicates;
   if (bootstrapped) replicates = bootstrap(data, layout, options, progress);
   scale.replicates_used = int(replicates.thetas.size());

@@ -32,12 +32,11 @@
 // thread.
 #include <cstdint>
 #include <functional>
+#include <nlohmann/json_fwd.hpp>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json_fwd.hpp>
 
 #include "study/trials_table.h"
 
@@ -69,11 +68,11 @@ struct PairData {
 PairData pair_data(const TrialsTable& table);
 
 struct PreferenceOptions {
-  std::string reference;  // the variant at worth 0; empty: the first in the table
+  std::string reference;     // the variant at worth 0; empty: the first in the table
   bool order_effect = true;  // fit δ when some pair was presented in both orders
   int bootstrap_replicates = 1000;
   int min_bootstrap_participants = 6;
-  std::uint64_t seed = 1;    // the bootstrap's and the favourite draws' generator
+  std::uint64_t seed = 1;  // the bootstrap's and the favourite draws' generator
   double confidence = 0.95;
   std::string validate() const;  // empty when usable, else one line naming the option
 };
@@ -89,8 +88,8 @@ struct Estimate {
 
 struct VariantWorth {
   std::string variant;
-  Estimate worth;             // log scale
-  double p_favourite = 0;     // share of replicates (or draws) in which it has the top worth
+  Estimate worth;          // log scale
+  double p_favourite = 0;  // share of replicates (or draws) in which it has the top worth
   int wins = 0, losses = 0, ties = 0;  // its answers, whatever position
 };
 
@@ -102,8 +101,8 @@ struct PreferenceScale {
   int iterations = 0;
   int trials = 0;
   int participants = 0;
-  int replicates_used = 0;   // bootstrap replicates that converged (0: not bootstrapped)
-  int replicates_failed = 0; // where a variant never won or never lost
+  int replicates_used = 0;       // bootstrap replicates that converged (0: not bootstrapped)
+  int replicates_failed = 0;     // where a variant never won or never lost
   std::string favourite_source;  // "bootstrap" or "normal draws from the Wald covariance"
   std::vector<std::string> notes;
 };

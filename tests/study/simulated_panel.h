@@ -44,8 +44,8 @@ inline void append_row(std::string& out, std::initializer_list<std::string> fiel
 struct PairPanel {
   std::vector<std::string> variants{"A", "B", "C", "D"};
   std::vector<double> worths{0.0, 0.5, -0.3, 1.0};  // log scale, first at 0
-  double delta = 0.0;           // first-position advantage
-  double nu = 0.0;              // Davidson's tie parameter (0: preference, else preference-2ac)
+  double delta = 0.0;                               // first-position advantage
+  double nu = 0.0;  // Davidson's tie parameter (0: preference, else preference-2ac)
   double heterogeneity_sd = 0.0;
   int participants = 10;
   int repetitions = 2;  // each ordered pair this often per participant
@@ -70,8 +70,8 @@ inline std::string simulate_pairs(const PairPanel& panel, std::uint64_t seed) {
           const double u = random.uniform() * (a + b + t);
           const std::string answer = u < a ? "1" : u < a + b ? "2" : "same";
           append_row(rows, {std::string("S").append(std::to_string(p + 1)), "pair",
-                            std::to_string(++trial), question, panel.variants[i],
-                            panel.variants[j], answer});
+                            std::to_string(++trial), question, panel.variants[i], panel.variants[j],
+                            answer});
         }
       }
     }
@@ -89,9 +89,9 @@ inline std::string simulate_identify_real(double pc, int participants, int trial
       const bool real_first = t % 2 == 0;
       const bool correct = random.uniform() < pc;
       const std::string answer = (real_first == correct) ? "1" : "2";
-      append_row(rows, {std::string("R").append(std::to_string(p + 1)), "ir",
-                        std::to_string(t + 1), "identify-real", real_first ? "real" : "V",
-                        real_first ? "V" : "real", answer});
+      append_row(rows,
+                 {std::string("R").append(std::to_string(p + 1)), "ir", std::to_string(t + 1),
+                  "identify-real", real_first ? "real" : "V", real_first ? "V" : "real", answer});
     }
   }
   return rows;

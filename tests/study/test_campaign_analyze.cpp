@@ -6,10 +6,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "tests/study/simulated_panel.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
-#include "tests/study/simulated_panel.h"
 
 using doorbench::testing::append_row;
 using doorbench::testing::kTrialsHeader;
@@ -37,21 +37,20 @@ std::string hand_table() {
   const char* ir[] = {"1", "2", "1", "2", "1", "1", "2", "2"};  // real first on odd trials
   for (int t = 0; t < 8; ++t) {
     const bool real_first = t % 2 == 0;
-    append_row(text, {"P1", "ir", std::to_string(t + 1), "identify-real",
-                      real_first ? "real" : "A", real_first ? "A" : "real", ir[t]});
+    append_row(text, {"P1", "ir", std::to_string(t + 1), "identify-real", real_first ? "real" : "A",
+                      real_first ? "A" : "real", ir[t]});
   }
   return text;
 }
 
 }  // namespace
 
-TEST_CASE("campaign analyze reads a hand-written trials table and writes every output",
-          "[study]") {
+TEST_CASE("campaign analyze reads a hand-written trials table and writes every output", "[study]") {
   TempDir dir("campaign_analyze");
   write(dir / "trials.csv", hand_table());
-  const auto run = run_doorbench_shell(
-      "campaign analyze '" + (dir / "trials.csv").string() + "' --out '" + (dir / "out").string() + "'",
-      dir);
+  const auto run = run_doorbench_shell("campaign analyze '" + (dir / "trials.csv").string() +
+                                           "' --out '" + (dir / "out").string() + "'",
+                                       dir);
   INFO(run.err);
   REQUIRE(run.status == 0);
   const auto analysis = nlohmann::json::parse(read_file(dir / "out" / "analysis.json"));
@@ -74,7 +73,8 @@ TEST_CASE("campaign analyze reads a hand-written trials table and writes every o
   CHECK(panel["dprime"].get<double>() == Approx(std::sqrt(2.0) * 0.6744897501960817));
   CHECK(analysis["identify_real"]["verdict"].get<std::string>().rfind(
             "the panel could not tell the virtual door from the real one: d' 0.95 [", 0) == 0);
-  for (const char* file : {"report.html", "preference-scale.svg", "identify-real.svg", "two-ac.svg"})
+  for (const char* file :
+       {"report.html", "preference-scale.svg", "identify-real.svg", "two-ac.svg"})
     CHECK(std::filesystem::exists(dir / "out" / file));
   CHECK(read_file(dir / "out" / "report.html").find("Preference scale") != std::string::npos);
   if (std::system("command -v weasyprint > /dev/null 2>&1") == 0)
@@ -99,17 +99,16 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
   TempDir dir("campaign_analyze_errors");
   write(dir / "bad.csv", std::string(kTrialsHeader) + "P1,pair,1,preference,A,B,maybe\n");
   const std::string out = (dir / "out").string();
-  auto run = run_doorbench_shell("campaign analyze '" + (dir / "bad.csv").string() + "' --out '" +
-                                     out + "' --no-pdf",
-                                 dir);
+  auto run = run_doorbench_shell(
+      "campaign analyze '" + (dir / "bad.csv").string() + "' --out '" + out + "' --no-pdf", dir);
   CHECK(run.status == 1);
   CHECK(run.err.find("doorbench: " + (dir / "bad.csv").string() +
                      ":2: answer 'maybe' to a preference question (expected 1 or 2)\n") !=
         std::string::npos);
 
   std::filesystem::create_directories(dir / "empty");
-  run = run_doorbench_shell("campaign analyze '" + (dir / "empty").string() + "' --out '" + out + "'",
-                            dir);
+  run = run_doorbench_shell(
+      "campaign analyze '" + (dir / "empty").string() + "' --out '" + out + "'", dir);
   CHECK(run.status == 2);
   CHECK(run.err == "doorbench: " + (dir / "empty").string() +
                        ": is a folder without trials.csv (give a campaign folder or a trials "
@@ -125,12 +124,13 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
   CHECK(run.err == "doorbench: " + (dir / "full").string() +
                        ": exists and is not empty (give --overwrite to write into it)\n");
 
-  run = run_doorbench_shell("campaign analyze '" + (dir / "good.csv").string() + "' --out '" +
-                                out + "' --bootstrap 50",
-                            dir);
+  run = run_doorbench_shell(
+      "campaign analyze '" + (dir / "good.csv").string() + "' --out '" + out + "' --bootstrap 50",
+      dir);
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: --bootstrap: must be 0 (none) or at least 100 resamples, got 50 "
-                   "(see doorbench campaign analyze --help)\n");
+  CHECK(run.err ==
+        "doorbench: --bootstrap: must be 0 (none) or at least 100 resamples, got 50 "
+        "(see doorbench campaign analyze --help)\n");
 
   std::filesystem::create_directories(dir / "campaign");
   write(dir / "campaign" / "trials.csv", hand_table());
@@ -138,7 +138,8 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
                                 (dir / "campaign").string() + "' --overwrite",
                             dir);
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: " + (dir / "campaign").string() + ": holds an input of this command (" +
+  CHECK(run.err == "doorbench: " + (dir / "campaign").string() +
+                       ": holds an input of this command (" +
                        (dir / "campaign" / "trials.csv").string() +
                        ") (doorbench never writes onto its input)\n");
   CHECK_FALSE(std::filesystem::exists(dir / "campaign" / "analysis.json"));
@@ -149,9 +150,10 @@ TEST_CASE("campaign analyze shows the bootstrap's progress on stderr, and -q dro
   doorbench::testing::PairPanel panel;
   panel.participants = 8;
   panel.worths = {0.0, 0.3, -0.3, 1.5};  // D clearly the favourite
-  std::ofstream(dir / "trials.csv") << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 5);
-  const std::string args = "campaign analyze '" + (dir / "trials.csv").string() +
-                           "' --no-pdf --bootstrap 200 --out ";
+  std::ofstream(dir / "trials.csv")
+      << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 5);
+  const std::string args =
+      "campaign analyze '" + (dir / "trials.csv").string() + "' --no-pdf --bootstrap 200 --out ";
   auto run = run_doorbench_shell(args + "'" + (dir / "loud").string() + "'", dir);
   INFO(run.out);
   CHECK(run.status == 0);

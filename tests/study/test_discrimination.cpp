@@ -7,9 +7,9 @@
 using doorbench::study::forced_choice_2afc;
 using doorbench::study::identify_real;
 using doorbench::study::parse_trials_table;
+using doorbench::study::TrialsTableError;
 using doorbench::study::two_ac;
 using doorbench::study::two_ac_pairs;
-using doorbench::study::TrialsTableError;
 
 namespace {
 const std::string kHeader = "participant,block,trial,question,first,second,answer\n";
@@ -90,11 +90,11 @@ TEST_CASE("2-AFC: Pc, d', the Clopper-Pearson interval and the exact test", "[st
 TEST_CASE("identify-real scores each participant and the panel, with a verdict", "[study]") {
   std::string text = kHeader;
   // P1: 4 of 6 correct; P2: 3 of 4. The real door is 'real', first or second.
-  const char* rows[] = {"P1,ir,1,identify-real,real,V,1",   "P1,ir,2,identify-real,V,real,2",
-                        "P1,ir,3,identify-real,real,V,2",   "P1,ir,4,identify-real,V,real,2",
-                        "P1,ir,5,identify-real,real,V,1",   "P1,ir,6,identify-real,V,real,1",
-                        "P2,ir,1,identify-real,V,real,2",   "P2,ir,2,identify-real,real,V,1",
-                        "P2,ir,3,identify-real,real,V,2",   "P2,ir,4,identify-real,V,real,2"};
+  const char* rows[] = {"P1,ir,1,identify-real,real,V,1", "P1,ir,2,identify-real,V,real,2",
+                        "P1,ir,3,identify-real,real,V,2", "P1,ir,4,identify-real,V,real,2",
+                        "P1,ir,5,identify-real,real,V,1", "P1,ir,6,identify-real,V,real,1",
+                        "P2,ir,1,identify-real,V,real,2", "P2,ir,2,identify-real,real,V,1",
+                        "P2,ir,3,identify-real,real,V,2", "P2,ir,4,identify-real,V,real,2"};
   for (const char* row : rows) text += std::string(row) + "\n";
   const auto result = identify_real(parse_trials_table(text, "t.csv"));
   REQUIRE(result);

@@ -34,9 +34,9 @@ std::map<std::string, double> r_estimates(const std::string& mode,
   REQUIRE(std::system("command -v Rscript > /dev/null 2>&1") == 0);  // install-deps.sh
   const auto out = dir / (mode + ".txt");
   const auto err = dir / (mode + ".err");
-  const std::string command = "Rscript '" DOORBENCH_SOURCE_DIR "/tests/study/preference_oracle.R' " +
-                              mode + " '" + table.string() + "' > '" + out.string() + "' 2> '" +
-                              err.string() + "'";
+  const std::string command =
+      "Rscript '" DOORBENCH_SOURCE_DIR "/tests/study/preference_oracle.R' " + mode + " '" +
+      table.string() + "' > '" + out.string() + "' 2> '" + err.string() + "'";
   const int status = std::system(command.c_str());
   INFO(read_file(err));
   REQUIRE(status == 0);

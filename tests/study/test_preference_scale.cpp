@@ -38,9 +38,11 @@ PreferenceOptions no_bootstrap(std::string reference = {}) {
 
 // Two variants in one order, no ties: the model is saturated and the MLE is the odds.
 TEST_CASE("two variants: the worth is the log of the observed odds", "[study]") {
-  const std::string text = std::string(kTrialsHeader) + rows(10, "P1", "preference", "A", "B", "1") +
+  const std::string text = std::string(kTrialsHeader) +
+                           rows(10, "P1", "preference", "A", "B", "1") +
                            rows(30, "P1", "preference", "A", "B", "2");
-  const auto scale = fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap());
+  const auto scale =
+      fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap());
   REQUIRE(scale.worths.size() == 2);
   CHECK(scale.worths[0].worth.value == 0);
   CHECK(scale.worths[0].worth.interval == "reference");
@@ -58,7 +60,8 @@ TEST_CASE("two variants with ties: Davidson's nu is the ties over the wins' geom
                            rows(8, "P1", "preference-2ac", "A", "B", "1") +
                            rows(18, "P1", "preference-2ac", "A", "B", "2") +
                            rows(6, "P1", "preference-2ac", "A", "B", "same");
-  const auto scale = fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap());
+  const auto scale =
+      fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap());
   CHECK(scale.worths[1].worth.value == Approx(std::log(18.0 / 8)).epsilon(1e-10));
   REQUIRE(scale.nu);
   CHECK(scale.nu->value == Approx(6 / std::sqrt(8.0 * 18)).epsilon(1e-10));
@@ -69,11 +72,12 @@ TEST_CASE("two variants with ties: Davidson's nu is the ties over the wins' geom
 // Both orders of one pair: logit P(first) is delta - lambda_B (A first) and delta + lambda_B
 // (B first), two binomials, saturated.
 TEST_CASE("both orders: the order effect and the worth from the two logits", "[study]") {
-  const std::string text = std::string(kTrialsHeader) + rows(12, "P1", "preference", "A", "B", "1") +
-                           rows(8, "P1", "preference", "A", "B", "2") +
-                           rows(15, "P1", "preference", "B", "A", "1") +
-                           rows(5, "P1", "preference", "B", "A", "2");
-  const auto scale = fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap());
+  const std::string text =
+      std::string(kTrialsHeader) + rows(12, "P1", "preference", "A", "B", "1") +
+      rows(8, "P1", "preference", "A", "B", "2") + rows(15, "P1", "preference", "B", "A", "1") +
+      rows(5, "P1", "preference", "B", "A", "2");
+  const auto scale =
+      fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap());
   const double l1 = std::log(12.0 / 8), l2 = std::log(15.0 / 5);
   REQUIRE(scale.order);
   CHECK(scale.order->value == Approx((l1 + l2) / 2).epsilon(1e-10));
@@ -126,16 +130,19 @@ TEST_CASE("a variant that was never preferred is refused by name", "[study]") {
                            rows(5, "P1", "preference", "C", "B", "1") +
                            rows(3, "P1", "preference", "A", "C", "2") +
                            rows(3, "P1", "preference", "A", "C", "1");
-  REQUIRE_THROWS_WITH(fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap()),
-                      "variant 'B' was never preferred: its worth is -infinity");
+  REQUIRE_THROWS_WITH(
+      fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap()),
+      "variant 'B' was never preferred: its worth is -infinity");
 }
 
 TEST_CASE("pair answers other than 1, 2 and same (2-AC only) are refused with the line",
           "[study]") {
-  const std::string same = std::string(kTrialsHeader) + rows(1, "P1", "preference", "A", "B", "same");
+  const std::string same =
+      std::string(kTrialsHeader) + rows(1, "P1", "preference", "A", "B", "same");
   REQUIRE_THROWS_WITH(pair_data(parse_trials_table(same, "t.csv")),
                       "t.csv:2: answer 'same' to a preference question (expected 1 or 2)");
-  const std::string other = std::string(kTrialsHeader) + rows(1, "P1", "preference-2ac", "A", "B", "x");
+  const std::string other =
+      std::string(kTrialsHeader) + rows(1, "P1", "preference-2ac", "A", "B", "x");
   REQUIRE_THROWS_WITH(pair_data(parse_trials_table(other, "t.csv")),
                       "t.csv:2: answer 'x' to a preference-2ac question (expected 1, 2 or same)");
   const std::string self = std::string(kTrialsHeader) + rows(1, "P1", "preference", "A", "A", "1");
@@ -147,7 +154,8 @@ TEST_CASE("pair answers other than 1, 2 and same (2-AC only) are refused with th
 }
 
 TEST_CASE("the reference variant can be named and must exist", "[study]") {
-  const std::string text = std::string(kTrialsHeader) + rows(10, "P1", "preference", "A", "B", "1") +
+  const std::string text = std::string(kTrialsHeader) +
+                           rows(10, "P1", "preference", "A", "B", "1") +
                            rows(30, "P1", "preference", "A", "B", "2");
   const auto scale =
       fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap("B"));
@@ -155,5 +163,5 @@ TEST_CASE("the reference variant can be named and must exist", "[study]") {
   CHECK(scale.worths[1].worth.interval == "reference");
   REQUIRE_THROWS_WITH(
       fit_preference_scale(pair_data(parse_trials_table(text, "t.csv")), no_bootstrap("Z")),
-                      "reference variant 'Z' is not in any preference trial");
+      "reference variant 'Z' is not in any preference trial");
 }

@@ -52,16 +52,16 @@ bool covers(double low, double high, double truth) {
 
 void tally_pairs(std::map<std::string, Tally>& tallies, const std::string& prefix,
                  const PairPanel& panel, std::uint64_t seed, bool first_50, int replicates = 400) {
-  const auto table = parse_trials_table(std::string(kTrialsHeader) + simulate_pairs(panel, seed),
-                                        "sim.csv");
+  const auto table =
+      parse_trials_table(std::string(kTrialsHeader) + simulate_pairs(panel, seed), "sim.csv");
   PreferenceOptions options;
   options.bootstrap_replicates = replicates;
   options.seed = seed;
   const auto scale = fit_preference_scale(pair_data(table), options);
   for (std::size_t v = 1; v < scale.worths.size(); ++v) {
     const auto& w = scale.worths[v].worth;
-    tallies[prefix + "worth " + panel.variants[v]].add(
-        covers(w.ci_low, w.ci_high, panel.worths[v]), first_50);
+    tallies[prefix + "worth " + panel.variants[v]].add(covers(w.ci_low, w.ci_high, panel.worths[v]),
+                                                       first_50);
   }
   tallies[prefix + "nu"].add(covers(scale.nu->ci_low, scale.nu->ci_high, panel.nu), first_50);
   tallies[prefix + "delta"].add(covers(scale.order->ci_low, scale.order->ci_high, panel.delta),
@@ -99,8 +99,8 @@ TEST_CASE("over 200 simulated campaigns every 95 % interval covers the truth 90-
         covers(ir->panel.ci_low, ir->panel.ci_high, dprime_real), first_50);
     const auto counts = simulate_two_ac(tau, dprime_2ac, 40, seed);
     const auto r = two_ac(counts[0], counts[1], counts[2]);
-    tallies["2-AC d' (profile likelihood, n = 40)"].add(
-        covers(r.ci_low, r.ci_high, dprime_2ac), first_50);
+    tallies["2-AC d' (profile likelihood, n = 40)"].add(covers(r.ci_low, r.ci_high, dprime_2ac),
+                                                        first_50);
   }
   std::cout << "| estimate | covered of 200 | coverage | first 50 campaigns |\n|---|---|---|---|\n";
   for (const auto& [name, tally] : tallies) {
