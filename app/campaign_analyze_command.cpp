@@ -6,7 +6,7 @@
 #include <map>
 #include <memory>
 
-#include "acquisition/output_file.h"
+#include "acquisition/session/output_file.h"
 #include "app/commands.h"
 #include "app/progress.h"
 #include "study/statistics/analysis.h"

@@ -5,8 +5,8 @@
 #include <cstdlib>
 #include <set>
 
-#include "acquisition/output_file.h"
-#include "analysis/svg_plot.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/report/svg_plot.h"
 #include "study/statistics/discrimination.h"
 
 namespace doorbench::study {
