@@ -66,11 +66,14 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
       at = displays.emplace(what, count_progress_display(status, what, "resamples")).first;
     at->second(done, total);
   };
-  const nlohmann::json analysis = study::analyze_trials(table, analysis_options, progress);
+  std::vector<study::AnalysisPlot> section_plots;
+  const nlohmann::json analysis =
+      study::analyze_trials(table, analysis_options, progress, &section_plots);
   status.finish();
 
   std::filesystem::create_directories(out);
-  const std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
+  std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
+  plots.insert(plots.end(), section_plots.begin(), section_plots.end());
   write_text_file_atomically(out / "analysis.json", analysis.dump(2) + "\n");
   for (const study::AnalysisPlot& plot : plots)
     write_text_file_atomically(out / plot.file, plot.svg);

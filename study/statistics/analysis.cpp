@@ -3,11 +3,16 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <memory>
+#include <optional>
 #include <set>
 
 #include "acquisition/session/output_file.h"
 #include "analysis/report/svg_plot.h"
 #include "study/statistics/discrimination.h"
+#include "study/statistics/ratings.h"
+#include "study/statistics/thresholds.h"
+#include "study/statistics/tuning.h"
 
 namespace doorbench::study {
 
@@ -18,10 +23,68 @@ std::string AnalysisOptions::validate() const {
   return "";
 }
 
+namespace {
+
+// The ratings, thresholds (jnd) and tuning sections (issue 29's other half,
+// study/statistics/ratings.h, thresholds.h, tuning.h). The thresholds are kept for tuning's
+// perceptual steps and for the psychometric plots.
+void add_ratings_thresholds_tuning(std::vector<AnalysisSection>& sections) {
+  sections.push_back({"ratings",
+                      [](const TrialsTable& table) {
+                        const auto observations = rating_observations(table);
+                        if (observations.empty()) return nlohmann::json(nullptr);
+                        const RatingsResult ratings = fit_ratings(observations);
+                        return nlohmann::json{{"ratings", ratings.to_json()},
+                                              {"ratings_models", ratings.models_json()}};
+                      },
+                      {}});
+  auto thresholds = std::make_shared<std::optional<ThresholdsResult>>();
+  sections.push_back({"jnd",
+                      [thresholds](const TrialsTable& table) {
+                        const auto observations = stronger_observations(table);
+                        if (observations.empty()) return nlohmann::json(nullptr);
+                        *thresholds = fit_thresholds(observations);
+                        return nlohmann::json{{"jnd", (*thresholds)->to_json()}};
+                      },
+                      [thresholds] {
+                        std::vector<AnalysisPlot> plots;
+                        if (!*thresholds) return plots;
+                        for (const ParameterThresholds& p : (*thresholds)->parameters)
+                          plots.push_back({"jnd-" + p.parameter + ".svg",
+                                           "Psychometric function: " + p.parameter,
+                                           render_psychometric_plot(p)});
+                        return plots;
+                      }});
+  auto tuning = std::make_shared<std::optional<TuningResult>>();
+  sections.push_back(
+      {"tuning",
+       [thresholds, tuning](const TrialsTable& table) {
+         const auto doors = tuned_doors(table, std::filesystem::path(table.source).parent_path());
+         if (doors.empty()) return nlohmann::json(nullptr);
+         TuningOptions options;
+         if (*thresholds) options.measured_weber = measured_weber_fractions(**thresholds);
+         *tuning = analyze_tuning(doors, options);
+         return nlohmann::json{{"tuning", (*tuning)->to_json()}};
+       },
+       [tuning] {
+         std::vector<AnalysisPlot> plots;
+         if (!*tuning) return plots;
+         try {
+           plots.push_back({"tuning.svg", "The panel's tuned doors", render_tuning_plot(**tuning)});
+         } catch (const std::invalid_argument&) {
+           // No parameter has perceptual steps: nothing to draw (the JSON says why).
+         }
+         return plots;
+       }});
+}
+
+}  // namespace
+
 std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
                                                const AnalysisProgress& progress) {
   std::vector<AnalysisSection> sections;
-  sections.push_back({"preference", [options, progress](const TrialsTable& table) {
+  sections.push_back({"preference",
+                      [options, progress](const TrialsTable& table) {
                         const PairData data = pair_data(table);
                         if (data.trials.empty()) return nlohmann::json(nullptr);
                         PreferenceOptions preference = options.preference;
@@ -31,32 +94,33 @@ std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
                         };
                         return preference_scale_json(
                             fit_preference_scale(data, preference, report));
-                      }});
-  sections.push_back({"identify_real", [options](const TrialsTable& table) {
+                      },
+                      {}});
+  sections.push_back({"identify_real",
+                      [options](const TrialsTable& table) {
                         const auto result =
                             identify_real(table, options.real_variant, options.confidence);
                         if (!result) return nlohmann::json(nullptr);
                         return nlohmann::json{{"identify_real", identify_real_json(*result)}};
-                      }});
-  sections.push_back({"two_ac", [options](const TrialsTable& table) {
+                      },
+                      {}});
+  sections.push_back({"two_ac",
+                      [options](const TrialsTable& table) {
                         const auto pairs = two_ac_pairs(table, options.confidence);
                         if (pairs.empty()) return nlohmann::json(nullptr);
                         return nlohmann::json{{"two_ac", two_ac_json(pairs)}};
-                      }});
-  // ---- HOOK (issue 29, helper 29b): ratings, thresholds (jnd) and tuning. -----------------
-  // Add one entry per section here, each a function of the table returning an object of
-  // analysis.json keys (or null when the table has none of its trials), e.g.
-  //   sections.push_back({"ratings", [](const TrialsTable& t) { return ratings_section(t); }});
-  //   sections.push_back({"jnd", [](const TrialsTable& t) { return jnd_section(t); }});
-  //   sections.push_back({"tuning", [](const TrialsTable& t) { return tuning_section(t); }});
-  // report.html shows any new key as a generic table (analysis_html), so nothing else is
-  // needed for the report; a plot for it goes in analysis_plots.
-  // ------------------------------------------------------------------------------------------
+                      },
+                      {}});
+  add_ratings_thresholds_tuning(sections);
+  // A further section: one entry here, a function of the table returning an object of
+  // analysis.json keys (or null when the table has none of its trials); report.html shows a
+  // key it does not know as a generic table.
   return sections;
 }
 
 nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& options,
-                              const AnalysisProgress& progress) {
+                              const AnalysisProgress& progress,
+                              std::vector<AnalysisPlot>* section_plots) {
   if (const std::string problem = options.validate(); !problem.empty())
     throw std::invalid_argument("analysis options: " + problem);
   nlohmann::json analysis = nlohmann::json::object();
@@ -73,6 +137,9 @@ nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& o
     sections.push_back({{"name", section.name}, {"found", !keys.is_null()}});
     if (keys.is_null()) continue;
     for (const auto& [key, value] : keys.items()) analysis[key] = value;
+    if (section_plots != nullptr && section.plots) {
+      for (AnalysisPlot& plot : section.plots()) section_plots->push_back(std::move(plot));
+    }
   }
   analysis["sections"] = sections;
   return analysis;

@@ -9,6 +9,10 @@
 //                        (when some pair came in both orders), preference_fit
 //   "identify_real"   -> identify_real
 //   "two_ac"          -> two_ac
+//   "ratings"         -> ratings, ratings_models   (study/statistics/ratings.h)
+//   "jnd"             -> jnd, plus a psychometric plot per parameter (thresholds.h)
+//   "tuning"          -> tuning, plus its plot; tune rows' files are read relative to the
+//                        trials table's folder; measured Weber fractions from "jnd" (tuning.h)
 // plus "input" (the table's path, row and participant counts) and "sections" (each
 // section's name and whether it found data, or its error). A section that fails on its data
 // (separation, an error in the table) stops the analysis with that error: the table is
@@ -38,26 +42,32 @@ struct AnalysisOptions {
 // Progress of a long section: what, done, total (a stage begins at done == 0).
 using AnalysisProgress = std::function<void(const std::string& what, int done, int total)>;
 
-// One section of analysis.json.
-struct AnalysisSection {
-  std::string name;
-  std::function<nlohmann::json(const TrialsTable&)> make;  // object of keys, or null
-};
-
-// The sections, in report order, made with `options` and reporting to `progress`.
-std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
-                                               const AnalysisProgress& progress = {});
-
-// analysis.json's object from the table (every section of analysis_sections()).
-nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& options = {},
-                              const AnalysisProgress& progress = {});
-
 // The plots of an analysis: file name (e.g. "preference-scale.svg") and SVG text.
 struct AnalysisPlot {
   std::string file;
   std::string title;
   std::string svg;
 };
+
+// One section of analysis.json.
+struct AnalysisSection {
+  std::string name;
+  std::function<nlohmann::json(const TrialsTable&)> make;  // object of keys, or null
+  // Plots that need more than the JSON (called after make; may be empty).
+  std::function<std::vector<AnalysisPlot>()> plots;
+};
+
+// The sections, in report order, made with `options` and reporting to `progress`.
+std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
+                                               const AnalysisProgress& progress = {});
+
+// analysis.json's object from the table (every section of analysis_sections()) and, in
+// `section_plots` when given, the plots the sections made beyond analysis_plots'.
+nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& options = {},
+                              const AnalysisProgress& progress = {},
+                              std::vector<AnalysisPlot>* section_plots = nullptr);
+
+// The plots drawn from analysis.json alone (preference scale, identify-real, 2-AC).
 std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis);
 
 // report.html: every key of the analysis as a section (the known ones as tables with the

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
+#include "analysis/model/parameter_file.h"
 #include "tests/study/simulated_panel.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
@@ -163,4 +164,61 @@ TEST_CASE("campaign analyze shows the bootstrap's progress on stderr, and -q dro
   CHECK(run.status == 0);
   CHECK(run.err.empty());
   CHECK(run.out.find("favourite: D (probability ") != std::string::npos);
+}
+
+// The other half of issue 29 (ratings, thresholds, tuning; study/statistics/ratings.h,
+// thresholds.h, tuning.h) through the verb: their sections, plots and the tune rows' files
+// read beside the table.
+TEST_CASE("campaign analyze writes the ratings, jnd and tuning sections and their plots",
+          "[study]") {
+  TempDir dir("campaign_analyze_others");
+  std::string text = kTrialsHeader;
+  doorbench::testing::PanelRandom random(8);
+  auto door = nlohmann::json::parse(doorbench::reference_door_json());
+  const double reference_j = door["sensory"]["J"]["value"].get<double>();
+  for (int p = 1; p <= 6; ++p) {
+    const std::string id = std::string("P0").append(std::to_string(p));
+    for (int r = 0; r < 3; ++r) {  // B rated about two points heavier than A
+      const int a = 2 + (p + r) % 3, b = std::min(7, a + 2 - (r == 2 ? 1 : 0));
+      append_row(text, {id, "rating", std::to_string(r + 1), "rating:heavy:7", "A", "B",
+                        std::to_string(a).append(" ").append(std::to_string(b))});
+    }
+    int trial = 0;
+    for (int rep = 0; rep < 8; ++rep) {
+      for (const char* level :
+           {"J_d*0.80", "J_d*0.90", "J_d*0.95", "J_d*1.05", "J_d*1.10", "J_d*1.20"}) {
+        const double factor = std::stod(std::string(level).substr(4));
+        const double p_stronger = 0.5 * std::erfc(-std::log(factor) / 0.12 / std::sqrt(2.0));
+        const bool stronger = random.uniform() < p_stronger;
+        const bool comparison_first = ++trial % 2 == 1;
+        append_row(text,
+                   {id, "jnd", std::to_string(trial), "stronger:J_d",
+                    comparison_first ? level : "J_d*1.00", comparison_first ? "J_d*1.00" : level,
+                    stronger == comparison_first ? "1" : "2"});
+      }
+    }
+    door["sensory"]["J"]["value"] = reference_j * (p > 3 ? 1.1 : 1.0) * (1.0 + 0.01 * p);
+    dir.write("campaign/tuned/" + id + ".json", door.dump());
+    append_row(text, {id, "tune", "1", "tune", "", "", "tuned/" + id + ".json"});
+  }
+  dir.write("campaign/trials.csv", text);
+  const auto run = run_doorbench_shell("campaign analyze '" + (dir / "campaign").string() +
+                                           "' --no-pdf --out '" + (dir / "out").string() + "'",
+                                       dir);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  const auto analysis = nlohmann::json::parse(read_file(dir / "out" / "analysis.json"));
+  REQUIRE(analysis["ratings"].size() == 2);
+  CHECK(analysis["ratings"][1]["variant"] == "B");
+  CHECK(analysis["ratings"][1]["ci_low"].get<double>() > 0.0);
+  REQUIRE(analysis["jnd"].size() >= 1);
+  CHECK(analysis["jnd"][0]["participant"] == "panel");
+  CHECK(analysis["jnd"][0]["trials"] == 288);
+  CHECK(analysis["tuning"]["doors"].size() == 6);
+  CHECK_FALSE(analysis.contains("preference_scale"));
+  CHECK(std::filesystem::exists(dir / "out" / "jnd-J_d.svg"));
+  CHECK(std::filesystem::exists(dir / "out" / "tuning.svg"));
+  const std::string html = read_file(dir / "out" / "report.html");
+  CHECK(html.find("<h2>ratings</h2>") != std::string::npos);
+  CHECK(html.find("<h2>jnd</h2>") != std::string::npos);
 }
