@@ -193,6 +193,22 @@ std::string table_of(const nlohmann::json& rows, std::vector<std::string> column
   return html + "</table>\n";
 }
 
+// A value without words of its own: an array of objects as a table; an object's members each
+// under a heading, the same way; anything else as JSON text.
+std::string generic_html(const nlohmann::json& value) {
+  if (value.is_array() && !value.empty() && value.front().is_object()) return table_of(value);
+  if (value.is_object()) {
+    std::string html;
+    for (const auto& [key, member] : value.items())
+      html += "<h3>" + escape(key) + "</h3>\n" +
+              (member.is_array() && !member.empty() && member.front().is_object()
+                   ? table_of(member)
+                   : "<pre>" + escape(member.dump(2)) + "</pre>\n");
+    return html;
+  }
+  return "<pre>" + escape(value.dump(2)) + "</pre>\n";
+}
+
 std::string figure(const std::vector<AnalysisPlot>& plots, const std::string& file) {
   for (const AnalysisPlot& plot : plots)
     if (plot.file == file) return "<figure>" + plot.svg + "</figure>\n";
@@ -313,8 +329,10 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
       "<!DOCTYPE html>\n<html><head><meta charset=\"utf-8\"><title>Campaign analysis</title>\n"
       "<style>@page{size:A4 portrait;margin:14mm 12mm}body{font-family:sans-serif;"
       "font-size:9.5pt;max-width:46em;margin:1em auto}h1{font-size:16pt}h2{font-size:12.5pt}"
-      "table{border-collapse:collapse;margin:0.6em 0}td,th{border:1px solid #bbb;"
-      "padding:1px 5px;text-align:right}td:first-child,th:first-child{text-align:left}"
+      "table{border-collapse:collapse;margin:0.6em 0;max-width:100%;font-size:8pt}td,th{border:1px "
+      "solid #bbb;"
+      "padding:1px "
+      "4px;text-align:right;overflow-wrap:anywhere}td:first-child,th:first-child{text-align:left}"
       ".small{font-size:8.5pt;color:#333}svg{max-width:100%;height:auto}</style></head><body>\n"
       "<h1>Campaign analysis</h1>\n";
   const auto& input = a["input"];
@@ -339,10 +357,13 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
         figure(plots, "two-ac.svg");
     shown.insert("two_ac");
   }
-  for (const auto& [key, value] : a.items()) {  // sections added later (ratings, jnd, tuning)
+  for (const auto& [key, value] : a.items()) {  // sections without words here (ratings, ...)
     if (shown.count(key)) continue;
-    html += "<h2>" + escape(key) + "</h2>\n" +
-            (value.is_array() ? table_of(value) : "<pre>" + escape(value.dump(2)) + "</pre>\n");
+    html += "<h2>" + escape(key) + "</h2>\n" + generic_html(value);
+    if (key == "jnd" || key == "tuning") {
+      for (const AnalysisPlot& plot : plots)
+        if (plot.file.rfind(key, 0) == 0) html += "<figure>" + plot.svg + "</figure>\n";
+    }
   }
   return html + "</body></html>\n";
 }
