@@ -11,6 +11,7 @@
 
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
+#include "core/parallel.h"
 #include "analysis/model/sensory_model.h"
 #include "analysis/simulation/fit_synthetic.h"
 #include "core/parallel.h"
