@@ -393,15 +393,29 @@ void write_gyro_record(const SessionReader& session, const GyroInput& in,
   record.valid_min = -range_dps / kDegPerRad;
   record.valid_max = range_dps / kDegPerRad;
   record.quantities = {
-      {"bias_dps", r.bias_dps, r.bias_std_dps, "deg/s"},
-      {"bias_drift_dps_per_s", r.drift_dps_per_s, r.drift_std_dps_per_s, "deg/s/s"},
-      {"noise_dps", r.noise_dps, 0.0, "deg/s"},
-      {"still_periods", static_cast<double>(r.bias_periods), 0.0, "1"},
-      {"saturated_samples", static_cast<double>(r.saturated_samples), 0.0, "1"},
+      {.name = "bias_dps",
+       .value = r.bias_dps,
+       .standard_uncertainty = r.bias_std_dps,
+       .unit = "deg/s"},
+      {.name = "bias_drift_dps_per_s",
+       .value = r.drift_dps_per_s,
+       .standard_uncertainty = r.drift_std_dps_per_s,
+       .unit = "deg/s/s"},
+      {.name = "noise_dps", .value = r.noise_dps, .standard_uncertainty = 0.0, .unit = "deg/s"},
+      {.name = "still_periods",
+       .value = static_cast<double>(r.bias_periods),
+       .standard_uncertainty = 0.0,
+       .unit = "1"},
+      {.name = "saturated_samples",
+       .value = static_cast<double>(r.saturated_samples),
+       .standard_uncertainty = 0.0,
+       .unit = "1"},
   };
   if (r.scale_estimated) {
-    record.quantities.push_back(
-        {"scale_factor_error", r.scale_factor_error, r.scale_factor_error_std, "1"});
+    record.quantities.push_back({.name = "scale_factor_error",
+                                 .value = r.scale_factor_error,
+                                 .standard_uncertainty = r.scale_factor_error_std,
+                                 .unit = "1"});
   }
   if (gyro.record) record.supersedes = gyro.record->id;
   for (const std::string& w : r.warnings)

@@ -117,10 +117,19 @@ InclinometerCalibration calibrate_inclinometer(std::span<const CalibrationPoint>
     record.points.push_back(p);
   }
   record.quantities = {
-      {"offset_deg", r.offset_deg, r.offset_std_deg, "deg"},
-      {"gain_rad_per_V", r.gain_rad_per_V, r.gain_std_rad_per_V, "rad/V"},
-      {"residual_std_deg", r.residual_std_deg, 0.0, "deg"},
-      {"range_deg", options.range_deg, 0.0, "deg"},
+      {.name = "offset_deg",
+       .value = r.offset_deg,
+       .standard_uncertainty = r.offset_std_deg,
+       .unit = "deg"},
+      {.name = "gain_rad_per_V",
+       .value = r.gain_rad_per_V,
+       .standard_uncertainty = r.gain_std_rad_per_V,
+       .unit = "rad/V"},
+      {.name = "residual_std_deg",
+       .value = r.residual_std_deg,
+       .standard_uncertainty = 0.0,
+       .unit = "deg"},
+      {.name = "range_deg", .value = options.range_deg, .standard_uncertainty = 0.0, .unit = "deg"},
   };
   apply_header(record, header);
   return r;

@@ -182,17 +182,35 @@ void write_load_cell_record(std::span<const CalibrationPoint> points, const Poly
     record.points.push_back(p);
   }
   record.quantities = {
-      {"offset_N", r.offset_N, r.offset_std_N, "N"},
-      {"gain_N_per_V", r.gain_N_per_V, r.gain_std_N_per_V, "N/V"},
+      {.name = "offset_N",
+       .value = r.offset_N,
+       .standard_uncertainty = r.offset_std_N,
+       .unit = "N"},
+      {.name = "gain_N_per_V",
+       .value = r.gain_N_per_V,
+       .standard_uncertainty = r.gain_std_N_per_V,
+       .unit = "N/V"},
   };
   if (r.quadratic) {
-    record.quantities.push_back(
-        {"quadratic_N_per_V2", r.quadratic_N_per_V2, r.quadratic_std_N_per_V2, "N/V^2"});
+    record.quantities.push_back({.name = "quadratic_N_per_V2",
+                                 .value = r.quadratic_N_per_V2,
+                                 .standard_uncertainty = r.quadratic_std_N_per_V2,
+                                 .unit = "N/V^2"});
   }
-  record.quantities.push_back({"residual_std_N", r.residual_std_N, 0.0, "N"});
-  record.quantities.push_back({"nonlinearity_percent_fs", r.nonlinearity_percent_fs, 0.0, "%"});
-  record.quantities.push_back({"hysteresis_percent_fs", r.hysteresis_percent_fs, 0.0, "%"});
-  record.quantities.push_back({"full_scale_N", fs, 0.0, "N"});
+  record.quantities.push_back({.name = "residual_std_N",
+                               .value = r.residual_std_N,
+                               .standard_uncertainty = 0.0,
+                               .unit = "N"});
+  record.quantities.push_back({.name = "nonlinearity_percent_fs",
+                               .value = r.nonlinearity_percent_fs,
+                               .standard_uncertainty = 0.0,
+                               .unit = "%"});
+  record.quantities.push_back({.name = "hysteresis_percent_fs",
+                               .value = r.hysteresis_percent_fs,
+                               .standard_uncertainty = 0.0,
+                               .unit = "%"});
+  record.quantities.push_back(
+      {.name = "full_scale_N", .value = fs, .standard_uncertainty = 0.0, .unit = "N"});
   apply_header(record, header);
 }
 
@@ -334,7 +352,10 @@ CalibrationRecord tare_load_cell(const CalibrationRecord& calibrated, double unl
       q.standard_uncertainty = offset_std_N;
     }
   }
-  tared.quantities.push_back({"tare_reading_before_N", reading_N, offset_std_N, "N"});
+  tared.quantities.push_back({.name = "tare_reading_before_N",
+                              .value = reading_N,
+                              .standard_uncertainty = offset_std_N,
+                              .unit = "N"});
   tared.notes =
       "Tare of " + calibrated.id + ": the unloaded cell read " + fixed(reading_N, 4) + " N before.";
   RecordHeader h = header;

@@ -391,9 +391,14 @@ TimingCalibration calibrate_timing(const SessionReader& session,
   record.method = inclinometer.record->method +
                   "; delay by cross-correlation with the integrated gyroscope " + gyro_name +
                   " on " + std::to_string(r.alignment.segments.size()) + " segments";
-  record.quantities.push_back({"delay_s", r.alignment.delay_s, r.alignment.delay_std_s, "s"});
-  record.quantities.push_back(
-      {"angle_per_integrated_gyro_angle", r.alignment.gain, r.alignment.gain_std, "1"});
+  record.quantities.push_back({.name = "delay_s",
+                               .value = r.alignment.delay_s,
+                               .standard_uncertainty = r.alignment.delay_std_s,
+                               .unit = "s"});
+  record.quantities.push_back({.name = "angle_per_integrated_gyro_angle",
+                               .value = r.alignment.gain,
+                               .standard_uncertainty = r.alignment.gain_std,
+                               .unit = "1"});
   record.references += std::string(record.references.empty() ? "" : "; ") + "timing: recording " +
                        session.path().filename().string() + ", gyroscope " + gyro_name;
   RecordHeader h = header;
