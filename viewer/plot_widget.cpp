@@ -253,8 +253,10 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     record.want_png = ImGui::SmallButton("PNG");
   }
 
-  const Rect area{origin.x + kLeftMargin, origin.y + header_height, width - kLeftMargin - 8.0f,
-                  height - header_height - kBottomMargin};
+  const Rect area{.x = origin.x + kLeftMargin,
+                  .y = origin.y + header_height,
+                  .width = width - kLeftMargin - 8.0f,
+                  .height = height - header_height - kBottomMargin};
   const ImVec2 a0(float(area.x), float(area.y));
   const ImVec2 a1(float(area.x + area.width), float(area.y + area.height));
   const Pointer pointer = handle_input(view, state, area);
@@ -282,7 +284,7 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
   record.title = view.title;
   record.labels = items;
   record.view = &view;
-  record.widget = {origin.x, origin.y, width, height};
+  record.widget = {.x = origin.x, .y = origin.y, .width = width, .height = height};
   record.area = area;
   record.x = *view.x;
   record.y = view.y;
