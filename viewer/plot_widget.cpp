@@ -179,7 +179,7 @@ void update_draw_data(PlotView& view, PlotWidgetState& state, const Rect& area) 
   }
 }
 
-// Curves in layer order (analysis/plot_style.h: measured on top of a model's curve).
+// Curves in layer order (analysis/report/plot_style.h: measured on top of a model's curve).
 void draw_curves(const DrawData& data, ImDrawList* draw) {
   int lowest = 0, highest = 0;
   for (const DrawData::Strip& strip : data.strips) {
