@@ -5,7 +5,7 @@ does not name.
     scripts/check_function_length.py [--limit N] [--root DIR] [--exceptions FILE] [--all]
                                      [FOLDER ...]
 
-Checks every .h/.hpp/.cpp/.cc file under each folder whose code ships (acquisition/,
+Checks every .h/.hpp/.cpp/.cc file under each folder whose code ships (core/, acquisition/,
 sensors/, calibration/, analysis/, simulated_bench/, viewer/, haptic/, study/, app/), under
 the tools' folders (bench/, fuzz/) -- those of them that exist under --root, by default the
 repository; tests/ is not checked -- and under each FOLDER given (which must exist). A
@@ -34,8 +34,8 @@ import re
 import sys
 
 # Every folder of code but tests/: what ships, then the tools (benchmarks, fuzzers).
-DEFAULT_FOLDERS = ["acquisition", "sensors", "calibration", "analysis", "simulated_bench",
-                   "viewer", "haptic", "study", "app", "bench", "fuzz"]
+DEFAULT_FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis",
+                   "simulated_bench", "viewer", "haptic", "study", "app", "bench", "fuzz"]
 SOURCE_SUFFIXES = (".h", ".hpp", ".cpp", ".cc", ".cxx")
 EXCEPTIONS_HEADING = "## Functions longer than 120 lines"
 

@@ -87,8 +87,8 @@ class CheckFunctionLength(unittest.TestCase):
                               "lines\"\n")
 
     def test_every_default_folder_is_checked(self):
-        folders = ["acquisition", "sensors", "calibration", "analysis", "simulated_bench",
-                   "viewer", "haptic", "study", "app", "bench", "fuzz"]
+        folders = ["core", "acquisition", "sensors", "calibration", "analysis",
+                   "simulated_bench", "viewer", "haptic", "study", "app", "bench", "fuzz"]
         for folder in folders:
             write(self.root, f"{folder}/long.h", function_of_lines("too_long", 121))
         status, out, _ = run_check("--root", self.root)
