@@ -114,40 +114,22 @@ Errors errors_of(const fs::path& session_path) {
   return e;
 }
 
-}  // namespace
-
-void run_calibration_demo(std::ostream& out) {
-  const Scratch scratch;
-  const cal::CalibrationStore store(scratch.path / "calibrations");
-  store.add(cal::calibration_record_from_json(cal::uncalibrated_rig_load_cell_record_json(),
-                                              "built-in load-cell record"));
-  RigDefinition rig =
-      parse_rig(cal::uncalibrated_rig_text(), "built-in rig simulated-uncalibrated", scratch.path);
-  rig.calibration_store = store.directory();
-  const RigChannel& lc = cal::find_rig_channel(rig, "load_cell", "");
-  const RigChannel& inc = cal::find_rig_channel(rig, "inclinometer", "");
-  const RigChannel& gyr = cal::find_rig_channel(rig, "gyroscope", "");
+// 1. Load cell: the guided procedure, a simulated operator pressing Enter; the record
+// added to the store and what it found printed against the truth.
+cal::LoadCellCalibration calibrate_demo_load_cell(const cal::CalibrationStore& store,
+                                                  const RigDefinition& rig, const RigChannel& lc,
+                                                  std::ostream& out) {
   const auto lcp = cal::load_cell_parameters(lc);
-  const auto incp = cal::inclinometer_parameters(inc);
-  const auto gyp = cal::gyroscope_parameters(gyr);
   const double true_gain_N_per_V = 1.0 / lcp.volts_per_newton();
   const double true_offset_N = -lcp.zero_offset_N;
-  const double pole = std::exp(-2 * std::numbers::pi * incp.bandwidth_hz / rig.sample_rate_hz);
-  const double true_delay_s = pole / (1 - pole) / rig.sample_rate_hz;
-
-  out << "Calibration on the simulated bench " << rig.name
-      << " (sensors off in known ways: rigs/simulated-uncalibrated.toml)\n";
-
-  // 1. Load cell: the guided procedure, a simulated operator pressing Enter.
   const cal::CalibrationRecord stale = store.get(lc.calibration);
   std::vector<double> masses{5, 10, 20, 30, 40};
   const auto plan = cal::load_cell_mass_points(masses);
   cal::SimulatedStaticSource lc_source(rig, lc, 11);
-  cal::GuidedOptions guided;
-  guided.display_per_V = true_gain_N_per_V;
-  guided.display_unit = "N";
-  guided.max_std_V = 1.0 / true_gain_N_per_V;
-  guided.max_drift_V = 0.3 / true_gain_N_per_V;
+  const cal::GuidedOptions guided{.max_std_V = 1.0 / true_gain_N_per_V,
+                                  .max_drift_V = 0.3 / true_gain_N_per_V,
+                                  .display_per_V = true_gain_N_per_V,
+                                  .display_unit = "N"};
   std::istringstream enter(std::string(plan.size(), '\n'));
   std::ostringstream dialogue;
   const auto lc_points = cal::run_guided_points(lc_source, plan, guided, enter, dialogue);
@@ -178,15 +160,23 @@ void run_calibration_demo(std::ostream& out) {
   out << "   non-linearity " << f(load_cell.nonlinearity_percent_fs, 4) << " % FS, hysteresis "
       << f(load_cell.hysteresis_percent_fs, 4) << " % FS, "
       << (load_cell.quadratic ? "quadratic term significant" : "straight line") << "\n";
+  return load_cell;
+}
 
-  // 2. Inclinometer: reference angles on a (simulated) tilt table.
+// 2. Inclinometer: reference angles on a (simulated) tilt table; the record added to the
+// store and printed against the truth.
+cal::InclinometerCalibration calibrate_demo_inclinometer(const cal::CalibrationStore& store,
+                                                         const RigDefinition& rig,
+                                                         const RigChannel& inc, std::ostream& out) {
+  const auto incp = cal::inclinometer_parameters(inc);
   std::vector<double> angles{-8, -4, 0, 4, 8};
   cal::SimulatedStaticSource inc_source(rig, inc, 12);
-  cal::GuidedOptions tilt;
-  tilt.display_per_V = 1.0 / incp.output_V_per_deg;
-  tilt.display_unit = "°";
-  tilt.max_std_V = 0.05 * incp.output_V_per_deg;
-  tilt.max_drift_V = 0.02 * incp.output_V_per_deg;
+  // Initialised, not assigned field by field: GCC 12 takes the assignment of "°" to the
+  // string for a read of uninitialised memory (-Wmaybe-uninitialized).
+  const cal::GuidedOptions tilt{.max_std_V = 0.05 * incp.output_V_per_deg,
+                                .max_drift_V = 0.02 * incp.output_V_per_deg,
+                                .display_per_V = 1.0 / incp.output_V_per_deg,
+                                .display_unit = "°"};
   std::istringstream enter2(std::string(angles.size(), '\n'));
   std::ostringstream dialogue2;
   const auto inc_points = cal::run_guided_points(inc_source, cal::inclinometer_angle_points(angles),
@@ -204,43 +194,63 @@ void run_calibration_demo(std::ostream& out) {
   out << "   gain:   datasheet " << f(1 / incp.output_V_per_deg, 4) << " °/V, now "
       << f(inclinometer.gain_rad_per_V * kDegPerRad, 4) << " ± "
       << f(inclinometer.gain_std_rad_per_V * kDegPerRad, 4) << " °/V\n";
+  return inclinometer;
+}
 
-  // 3. A recording (three openings and closings), then gyroscope and timing from it.
-  const fs::path session_path = scratch.path / "session.h5";
-  {
-    const DoorModel model = sensors::simulated_door_model(rig);
-    sensors::SimulatedBench bench(rig, model, 19.0);
-    SessionMetadata metadata;
-    metadata.rig_name = rig.name;
-    metadata.rig_definition = rig.text;
-    metadata.operator_name = "calibration demo";
-    RecordOptions record;
-    record.duration_s = 19.0;
-    record_session(bench, metadata, session_path, record);
-  }
-  const Errors before = errors_of(session_path);
-  apply_calibration(session_path, lc.name, load_cell.record);
-  apply_calibration(session_path, inc.name, inclinometer.record);
+// 3. A recording of 19 s on the simulated bench: three openings and closings.
+void record_demo_recording(const RigDefinition& rig, const fs::path& session_path) {
+  const DoorModel model = sensors::simulated_door_model(rig);
+  sensors::SimulatedBench bench(rig, model, 19.0);
+  SessionMetadata metadata;
+  metadata.rig_name = rig.name;
+  metadata.rig_definition = rig.text;
+  metadata.operator_name = "calibration demo";
+  RecordOptions record;
+  record.duration_s = 19.0;
+  record_session(bench, metadata, session_path, record);
+}
+
+struct FromRecording {
   cal::TimingCalibration timing;
-  {
-    const SessionReader session(session_path);
-    timing =
-        cal::calibrate_timing(session, inc.name, gyr.name, cal::TimingCalibrationOptions{},
-                              header(store, "inclinometer", inc.serial, inclinometer.record.id));
-  }
-  store.add(timing.record);
-  apply_calibration(session_path, inc.name, timing.record);
   cal::GyroCalibration gyro;
+};
+
+// The inclinometer's delay, then the gyroscope, each from the recording, added to the
+// store and applied to the session.
+FromRecording calibrate_from_recording(const cal::CalibrationStore& store,
+                                       const fs::path& session_path, const RigChannel& inc,
+                                       const RigChannel& gyr,
+                                       const std::string& inclinometer_record_id) {
+  FromRecording found;
   {
     const SessionReader session(session_path);
-    gyro = cal::calibrate_gyroscope(
+    found.timing =
+        cal::calibrate_timing(session, inc.name, gyr.name, cal::TimingCalibrationOptions{},
+                              header(store, "inclinometer", inc.serial, inclinometer_record_id));
+  }
+  store.add(found.timing.record);
+  apply_calibration(session_path, inc.name, found.timing.record);
+  {
+    const SessionReader session(session_path);
+    found.gyro = cal::calibrate_gyroscope(
         session, gyr.name, inc.name, cal::GyroCalibrationOptions{},
         header(store, "gyroscope", gyr.serial, session.channel(gyr.name).calibration_id));
   }
-  store.add(gyro.record);
-  apply_calibration(session_path, gyr.name, gyro.record);
-  const Errors after = errors_of(session_path);
+  store.add(found.gyro.record);
+  apply_calibration(session_path, gyr.name, found.gyro.record);
+  return found;
+}
 
+// What the recording gave against the truth, then the table of errors before and after.
+void print_recording_results(const FromRecording& found, const RigDefinition& rig,
+                             const RigChannel& inc, const RigChannel& gyr, const Errors& before,
+                             const Errors& after, std::ostream& out) {
+  const auto incp = cal::inclinometer_parameters(inc);
+  const auto gyp = cal::gyroscope_parameters(gyr);
+  const double pole = std::exp(-2 * std::numbers::pi * incp.bandwidth_hz / rig.sample_rate_hz);
+  const double true_delay_s = pole / (1 - pole) / rig.sample_rate_hz;
+  const cal::GyroCalibration& gyro = found.gyro;
+  const cal::TimingCalibration& timing = found.timing;
   out << "\n3. From a recording (19 s, three openings and closings):\n";
   out << "   gyroscope " << gyr.serial << ": bias " << f(gyro.bias_dps, 4) << " ± "
       << f(gyro.bias_std_dps, 4) << " °/s from " << gyro.bias_periods
@@ -267,6 +277,40 @@ void run_calibration_demo(std::ostream& out) {
   line("rate moving (rms)", before.rate_rms_dps, after.rate_rms_dps, "°/s", 3);
   out << "   (after: the session's channels now use the new records; its raw samples are "
          "unchanged)\n";
+}
+
+}  // namespace
+
+// The stages: the uncalibrated rig and its store, the load cell and the inclinometer
+// guided, a recording, the timing and the gyroscope from it, and the errors against the
+// truth before and after.
+void run_calibration_demo(std::ostream& out) {
+  const Scratch scratch;
+  const cal::CalibrationStore store(scratch.path / "calibrations");
+  store.add(cal::calibration_record_from_json(cal::uncalibrated_rig_load_cell_record_json(),
+                                              "built-in load-cell record"));
+  RigDefinition rig =
+      parse_rig(cal::uncalibrated_rig_text(), "built-in rig simulated-uncalibrated", scratch.path);
+  rig.calibration_store = store.directory();
+  const RigChannel& lc = cal::find_rig_channel(rig, "load_cell", "");
+  const RigChannel& inc = cal::find_rig_channel(rig, "inclinometer", "");
+  const RigChannel& gyr = cal::find_rig_channel(rig, "gyroscope", "");
+
+  out << "Calibration on the simulated bench " << rig.name
+      << " (sensors off in known ways: rigs/simulated-uncalibrated.toml)\n";
+  const cal::LoadCellCalibration load_cell = calibrate_demo_load_cell(store, rig, lc, out);
+  const cal::InclinometerCalibration inclinometer =
+      calibrate_demo_inclinometer(store, rig, inc, out);
+
+  const fs::path session_path = scratch.path / "session.h5";
+  record_demo_recording(rig, session_path);
+  const Errors before = errors_of(session_path);
+  apply_calibration(session_path, lc.name, load_cell.record);
+  apply_calibration(session_path, inc.name, inclinometer.record);
+  const FromRecording found =
+      calibrate_from_recording(store, session_path, inc, gyr, inclinometer.record.id);
+  const Errors after = errors_of(session_path);
+  print_recording_results(found, rig, inc, gyr, before, after, out);
 }
 
 }  // namespace doorbench::app

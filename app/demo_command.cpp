@@ -67,16 +67,24 @@ void write_plots(const std::filesystem::path& dir, const std::vector<ModelRun>& 
   curves.reserve(2 * runs.size());
   for (const ModelRun& model_run : runs) {
     const std::string name(to_string(model_run.kind));
-    angle.push_back({name + " model", model_run.run.time_s, model_run.angle_deg, ""});
-    force.push_back({name + " model", model_run.run.time_s, model_run.run.force_N, ""});
+    angle.push_back({.label = name + " model",
+                     .x = model_run.run.time_s,
+                     .y = model_run.angle_deg,
+                     .color = ""});
+    force.push_back({.label = name + " model",
+                     .x = model_run.run.time_s,
+                     .y = model_run.run.force_N,
+                     .color = ""});
     curves.push_back(latch_curve(model_run.run, 1, 8.0));
     curves.push_back(latch_curve(model_run.run, 2, 8.0));
   }
   const char* colors[] = {"#1f77b4", "#6baed6", "#d62728", "#fc9272"};
   for (std::size_t i = 0; i < curves.size(); ++i) {
     const std::string name(to_string(runs[i / 2].kind));
-    loops.push_back({name + (i % 2 == 0 ? ", opening" : ", closing"), curves[i].angle_deg,
-                     curves[i].force_N, colors[i % 4]});
+    loops.push_back({.label = name + (i % 2 == 0 ? ", opening" : ", closing"),
+                     .x = curves[i].angle_deg,
+                     .y = curves[i].force_N,
+                     .color = colors[i % 4]});
   }
   write_svg_plot((dir / "angle.svg").string(),
                  {"Door angle, virtual hand open-close", "time (s)", "angle (deg)"}, angle);

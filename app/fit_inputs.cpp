@@ -251,7 +251,10 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
   }
   std::cerr << "  " << start_line << "\n";
   report_lines.push_back(start_line);
-  return {std::move(data), std::move(start), std::move(report_lines), std::move(origin)};
+  return {.data = std::move(data),
+          .start = std::move(start),
+          .report_lines = std::move(report_lines),
+          .start_origin = std::move(origin)};
 }
 
 int substeps_for(const PreparedData& data) {

@@ -141,13 +141,28 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
     bool& named = opening ? opening_named : closing_named;
     const std::string label = named ? "" : (opening ? "opening" : "closing");
     named = true;
-    rate.push_back(
-        {s == 0 ? "measured" : "", time_s[s], measured_deg_s[s], "", Meaning::kMeasured});
-    rate.push_back({s == 0 ? "simulated (windows)" : "", time_s[s], simulated_deg_s[s], "",
-                    Meaning::kSimulated});
-    loops.push_back({label, angle_deg[s], force_N[s], "", direction});
-    residual_angle.push_back({label, angle_deg[s], residual_deg_s[s], "", direction});
-    residual_speed.push_back({label, speed_deg_s[s], residual_deg_s[s], "", direction});
+    rate.push_back({.label = s == 0 ? "measured" : "",
+                    .x = time_s[s],
+                    .y = measured_deg_s[s],
+                    .color = "",
+                    .meaning = Meaning::kMeasured});
+    rate.push_back({.label = s == 0 ? "simulated (windows)" : "",
+                    .x = time_s[s],
+                    .y = simulated_deg_s[s],
+                    .color = "",
+                    .meaning = Meaning::kSimulated});
+    loops.push_back(
+        {.label = label, .x = angle_deg[s], .y = force_N[s], .color = "", .meaning = direction});
+    residual_angle.push_back({.label = label,
+                              .x = angle_deg[s],
+                              .y = residual_deg_s[s],
+                              .color = "",
+                              .meaning = direction});
+    residual_speed.push_back({.label = label,
+                              .x = speed_deg_s[s],
+                              .y = residual_deg_s[s],
+                              .color = "",
+                              .meaning = direction});
   }
   FitPlots plots;
   std::vector<std::string>& files = plots.files;
@@ -174,11 +189,22 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
     const std::vector<double> band_x = {cross_lag_s.front(), cross_lag_s.back()};
     const std::vector<double> upper = {w.band, w.band}, lower = {-w.band, -w.band};
     const std::vector<PlotSeries> whiteness = {
-        {"autocorrelation of the residual", auto_lag_s, w.autocorrelation, "",
-         plot_style::Meaning::kResidual},
-        {"cross-correlation with the force", cross_lag_s, w.cross_correlation, "#b8860b"},
-        {"99 % band of white noise", band_x, upper, "", plot_style::Meaning::kOther},
-        {"", band_x, lower, "", plot_style::Meaning::kOther}};
+        {.label = "autocorrelation of the residual",
+         .x = auto_lag_s,
+         .y = w.autocorrelation,
+         .color = "",
+         .meaning = plot_style::Meaning::kResidual},
+        {.label = "cross-correlation with the force",
+         .x = cross_lag_s,
+         .y = w.cross_correlation,
+         .color = "#b8860b"},
+        {.label = "99 % band of white noise",
+         .x = band_x,
+         .y = upper,
+         .color = "",
+         .meaning = plot_style::Meaning::kOther},
+        {.label = "", .x = band_x, .y = lower, .color = "", .meaning = plot_style::Meaning::kOther},
+    };
     files.push_back("residual-whiteness.svg");
     write_svg_plot((dir / files.back()).string(),
                    {"Residual whiteness: " + w.summary(), "lag [s]", "correlation"}, whiteness);

@@ -56,7 +56,10 @@ class KeypadTuning {
         if (!problem.empty()) outcome = "not played: " + problem;
       }
       playback.recorder().add_event(
-          {time_s, "tuning", "", std::string("key ").append(1, *key).append(": ").append(outcome)});
+          {.time_s = time_s,
+           .kind = "tuning",
+           .channel = "",
+           .detail = std::string("key ").append(1, *key).append(": ").append(outcome)});
       std::cerr << "\nkey " << *key << ": " << outcome << "\n";
     }
   }

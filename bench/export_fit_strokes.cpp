@@ -128,7 +128,10 @@ void write_replay(const PreparedData& data, const DoorModel& truth,
     if (!ok)
       throw std::runtime_error("RK4 replay of stroke " + std::to_string(stroke.id) + " ran away");
     const RecordedForce force(stroke.time_s, stroke.force_N);
-    const DoorState initial{stroke.time_s[0], stroke.theta_rad[0], stroke.omega_rad_s[0], 0.0};
+    const DoorState initial{.time_s = stroke.time_s[0],
+                            .theta_rad = stroke.theta_rad[0],
+                            .omega_rad_s = stroke.omega_rad_s[0],
+                            .user_work_J = 0.0};
     const Trajectory dp5 = simulate(truth, force, initial, stroke.time_s);
     for (std::size_t i = 0; i < n; ++i) {
       out << stroke.id << ',' << stroke.time_s[i] << ',' << rk4_theta[i] << ',' << rk4_omega[i]

@@ -72,20 +72,19 @@ void print_strokes(const PreparedData& data) {
   }
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  if (argc < 2) {
-    std::fprintf(stderr, "usage: %s CASE [SEED] [--exam]\n", argv[0]);
-    return 2;
+// Whether `flag` is among the arguments after CASE.
+bool has_flag(int argc, char** argv, const char* flag) {
+  for (int i = 2; i < argc; ++i) {
+    if (std::strcmp(argv[i], flag) == 0) return true;
   }
-  const std::string which = argv[1];
-  const unsigned seed = argc > 2 && argv[2][0] != '-' ? static_cast<unsigned>(std::stoul(argv[2])) : 1;
-  bool exam_only = false;
+  return false;
+}
+
+// The tremor hand's options from the arguments: --tremor-mm, --grip, --rest-s, --drift-N.
+testing::TremorRecordingOptions recording_options(int argc, char** argv, unsigned seed) {
   testing::TremorRecordingOptions recording;
   recording.seed = seed;
   for (int i = 2; i < argc; ++i) {
-    exam_only = exam_only || std::strcmp(argv[i], "--exam") == 0;
     if (std::strcmp(argv[i], "--tremor-mm") == 0 && i + 1 < argc) {
       recording.tremor_amplitude_m = 1e-3 * std::stod(argv[i + 1]);
     }
@@ -99,8 +98,26 @@ int main(int argc, char** argv) {
       recording.drift_force_N = std::stod(argv[i + 1]);
     }
   }
+  return recording;
+}
 
-  const DoorModel sensory = reference_model(ModelKind::kSensory);
+// The demo's bench recording (19 s, an undeclared gravity imbalance), prepared.
+PreparedData demo_recording(unsigned seed) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("loop_study_" + std::to_string(seed));
+  std::filesystem::create_directories(dir);
+  const auto effects_path = dir / "undeclared.json";
+  std::ofstream(effects_path) << R"({"gravity_imbalance": {"g1": 3.0}})" << "\n";
+  const auto session_path = dir / "demo.h5";
+  std::filesystem::remove(session_path);
+  testing::record_built_in_session(session_path, 19.0, seed, "sensory", effects_path);
+  return prepare_session(session_path);
+}
+
+// The recording of the case `which` into `data`; false for an unknown case.
+bool make_recording(const std::string& which, const DoorModel& sensory,
+                    const testing::TremorRecordingOptions& recording, unsigned seed,
+                    PreparedData& data) {
   const double d1 = sensory.parameter_values()[sensory.find_parameter("d1").value()];
   // The catalogue's other effects at the plain-hand tests' sizes, on the tremor hand.
   struct TremorCase {
@@ -120,7 +137,6 @@ int main(int argc, char** argv) {
   const auto tremor_case =
       std::find_if(std::begin(tremor_cases), std::end(tremor_cases),
                    [&](const TremorCase& c) { return which == c.name; });
-  PreparedData data;
   if (tremor_case != std::end(tremor_cases)) {
     data = testing::tremor_recording(with_effect(sensory, tremor_case->kind, tremor_case->values),
                                      recording);
@@ -140,28 +156,16 @@ int main(int argc, char** argv) {
   } else if (which == "physical") {
     data = testing::tremor_recording(reference_model(ModelKind::kPhysical), recording);
   } else if (which == "demo") {
-    const std::filesystem::path dir =
-        std::filesystem::temp_directory_path() / ("loop_study_" + std::to_string(seed));
-    std::filesystem::create_directories(dir);
-    const auto effects_path = dir / "undeclared.json";
-    std::ofstream(effects_path) << R"({"gravity_imbalance": {"g1": 3.0}})" << "\n";
-    const auto session_path = dir / "demo.h5";
-    std::filesystem::remove(session_path);
-    testing::record_built_in_session(session_path, 19.0, seed, "sensory", effects_path);
-    data = prepare_session(session_path);
+    data = demo_recording(seed);
   } else {
-    std::fprintf(stderr, "unknown case %s\n", which.c_str());
-    return 2;
+    return false;
   }
-  std::printf("%s: %zu strokes\n", which.c_str(), data.strokes.size());
+  return true;
+}
 
-  bool strokes_only = false;
-  for (int i = 2; i < argc; ++i) strokes_only = strokes_only || std::strcmp(argv[i], "--strokes") == 0;
-  if (strokes_only) {
-    print_strokes(data);
-    return 0;
-  }
-
+// The loop's options from the case and the arguments (--serial, --no-second-look,
+// --screen-steps, --min-z, --only), with progress lines timed from now.
+LoopOptions loop_options(const std::string& which, int argc, char** argv) {
   LoopOptions options;
   if (which == "inertia") options.fit.fixed_parameters = {"J"};  // else the error is J itself
   for (int i = 2; i < argc; ++i) {
@@ -178,42 +182,79 @@ int main(int argc, char** argv) {
     }
   }
   const auto began = std::chrono::steady_clock::now();
-  options.progress = [&](const std::string& line) {
+  options.progress = [began](const std::string& line) {
     const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
     std::printf("[%7.2f s] %s\n", t, line.c_str());
     std::fflush(stdout);
   };
+  return options;
+}
+
+// --exam: the examination at the base truth, the fit's report, then the examination of
+// the fitted model with its speed bands and candidates.
+void print_examination(const DoorModel& sensory, const PreparedData& data,
+                       const LoopOptions& options) {
+  {
+    const ResidualExamination at_truth = examine_residual(sensory, data, options);
+    std::printf("examination at the base truth (not fitted):\n");
+    for (const CandidateEvidence& c : at_truth.candidates) {
+      std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s  start %g\n", c.name.c_str(),
+                  100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str(),
+                  c.start_values[0]);
+    }
+  }
+  const FitResult fit = fit_model(sensory, data, options.fit);
+  std::printf("%s", fit.summary.full_report().c_str());
+  const ResidualExamination exam = examine_residual(fit.model, data, options);
+  std::printf("examination %.2f s (second look %.2f s); noise floor %.4g rad/s (white %.3g, "
+              "walk %.3g per sample)\n",
+              exam.time_s, exam.screen_time_s, exam.noise_floor_rad_s, exam.white_noise_rad_s,
+              exam.walk_per_sample_rad_s);
+  for (const SpeedBand& band : exam.speed_bands) {
+    std::printf("  |omega| from %g: %zu samples, residual RMS %.4g rad/s\n", band.low_rad_s,
+                band.samples, band.rms_rad_s);
+  }
+  for (const CandidateEvidence& c : exam.candidates) {
+    std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s\n", c.name.c_str(),
+                100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str());
+    if (c.screened) {
+      std::printf("      second look: %6.2f%%  z %6.2f  values", 100 * c.screen_explained_fraction,
+                  c.screen_score_z);
+      for (double v : c.screen_values) std::printf(" %g", v);
+      std::printf("\n");
+    }
+  }
+}
+
+}  // namespace
+
+// The stages: the arguments, the case's recording, then its strokes (--strokes), the
+// examination (--exam) or the whole loop and its report.
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: %s CASE [SEED] [--exam]\n", argv[0]);
+    return 2;
+  }
+  const std::string which = argv[1];
+  const unsigned seed = argc > 2 && argv[2][0] != '-' ? static_cast<unsigned>(std::stoul(argv[2])) : 1;
+  const bool exam_only = has_flag(argc, argv, "--exam");
+  const testing::TremorRecordingOptions recording = recording_options(argc, argv, seed);
+
+  const DoorModel sensory = reference_model(ModelKind::kSensory);
+  PreparedData data;
+  if (!make_recording(which, sensory, recording, seed, data)) {
+    std::fprintf(stderr, "unknown case %s\n", which.c_str());
+    return 2;
+  }
+  std::printf("%s: %zu strokes\n", which.c_str(), data.strokes.size());
+  if (has_flag(argc, argv, "--strokes")) {
+    print_strokes(data);
+    return 0;
+  }
+
+  const LoopOptions options = loop_options(which, argc, argv);
   if (exam_only) {
-    {
-      const ResidualExamination at_truth = examine_residual(sensory, data, options);
-      std::printf("examination at the base truth (not fitted):\n");
-      for (const CandidateEvidence& c : at_truth.candidates) {
-        std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s  start %g\n", c.name.c_str(),
-                    100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str(),
-                    c.start_values[0]);
-      }
-    }
-    const FitResult fit = fit_model(sensory, data, options.fit);
-    std::printf("%s", fit.summary.full_report().c_str());
-    const ResidualExamination exam = examine_residual(fit.model, data, options);
-    std::printf("examination %.2f s (second look %.2f s); noise floor %.4g rad/s (white %.3g, "
-                "walk %.3g per sample)\n",
-                exam.time_s, exam.screen_time_s, exam.noise_floor_rad_s, exam.white_noise_rad_s,
-                exam.walk_per_sample_rad_s);
-    for (const SpeedBand& band : exam.speed_bands) {
-      std::printf("  |omega| from %g: %zu samples, residual RMS %.4g rad/s\n", band.low_rad_s,
-                  band.samples, band.rms_rad_s);
-    }
-    for (const CandidateEvidence& c : exam.candidates) {
-      std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s\n", c.name.c_str(),
-                  100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str());
-      if (c.screened) {
-        std::printf("      second look: %6.2f%%  z %6.2f  values", 100 * c.screen_explained_fraction,
-                    c.screen_score_z);
-        for (double v : c.screen_values) std::printf(" %g", v);
-        std::printf("\n");
-      }
-    }
+    print_examination(sensory, data, options);
     return 0;
   }
   const LoopResult loop = run_residual_loop(sensory, data, options);

@@ -64,7 +64,8 @@ void BM_OverlayDrawData(benchmark::State& state) {
   const double fraction = double(state.range(0)) / 1000.0;  // visible share of the record
   o.top.fit_x();
   *o.top.x = {o.top.x->min, o.top.x->min + o.top.x->span() * fraction};
-  const Rect top{64, 20, 1840, 600}, bottom{64, 660, 1840, 300};
+  const Rect top{.x = 64, .y = 20, .width = 1840, .height = 600};
+  const Rect bottom{.x = 64, .y = 660, .width = 1840, .height = 300};
   DrawData a, b;
   for (auto _ : state) {
     o.top.build_draw_data(top, a);
@@ -131,7 +132,7 @@ void BM_LoopDrawData(benchmark::State& state) {
   PlotView loop;
   loop.add(std::make_shared<Series>(Series::xy("loop", "rad", "N", angle, force)));
   loop.fit();
-  const Rect r{64, 20, 1840, 1000};
+  const Rect r{.x = 64, .y = 20, .width = 1840, .height = 1000};
   DrawData data;
   for (auto _ : state) {
     loop.build_draw_data(r, data);

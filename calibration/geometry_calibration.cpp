@@ -105,10 +105,19 @@ GeometryCalibration calibrate_geometry(const GeometryInputs& inputs,
   record.references = "tape/calliper resolution " + shortest(options.length_resolution_m) +
                       " m; protractor resolution " + shortest(options.angle_resolution_deg) + "°";
   record.quantities = {
-      {"handle_radius_m", g.handle_radius_m, g.handle_radius_std_m, "m"},
-      {"mounting_angle_deg", g.mounting_angle_deg, g.mounting_angle_std_deg, "deg"},
-      {"cos_mounting_angle", g.cos_factor,
-       std::sin(g.mounting_angle_deg / kDegPerRad) * g.mounting_angle_std_deg / kDegPerRad, "1"},
+      {.name = "handle_radius_m",
+       .value = g.handle_radius_m,
+       .standard_uncertainty = g.handle_radius_std_m,
+       .unit = "m"},
+      {.name = "mounting_angle_deg",
+       .value = g.mounting_angle_deg,
+       .standard_uncertainty = g.mounting_angle_std_deg,
+       .unit = "deg"},
+      {.name = "cos_mounting_angle",
+       .value = g.cos_factor,
+       .standard_uncertainty =
+           std::sin(g.mounting_angle_deg / kDegPerRad) * g.mounting_angle_std_deg / kDegPerRad,
+       .unit = "1"},
   };
   record.notes =
       "Tangential force = reading / cos(mounting angle); standard_uncertainty is relative.";

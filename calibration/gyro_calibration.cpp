@@ -157,16 +157,21 @@ std::vector<StillPeriod> find_still_periods(const std::vector<double>& time_s,
   return periods;
 }
 
-GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::string& gyro_channel,
-                                    const std::string& inclinometer_channel,
-                                    const GyroCalibrationOptions& options,
-                                    const RecordHeader& header) {
-  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
-  const std::string where = session.path().string() + ": ";
-  const std::string gyro_name = find_session_channel(session, "gyroscope", gyro_channel);
-  const std::string inclinometer_name =
-      find_session_channel(session, "inclinometer", inclinometer_channel, true);
-  const ChannelSignal gyro = read_channel_signal(session, gyro_name);
+namespace {
+
+// The gyroscope's channel read, checked (a uniform clock, 100 samples, a straight-line
+// record), with its record's coefficients and its rate in °/s.
+struct GyroInput {
+  ChannelSignal signal;
+  double c0 = 0.0, c1 = 1.0;  // the current record: physical = c0 + c1 · signal
+  std::vector<double> rate_dps;
+};
+
+GyroInput read_gyroscope(const SessionReader& session, const std::string& gyro_name,
+                         const std::string& where) {
+  GyroInput in;
+  in.signal = read_channel_signal(session, gyro_name);
+  const ChannelSignal& gyro = in.signal;
   if (gyro.info.sample_rate_hz <= 0 || gyro.signal.size() < 100) {
     throw CalibrationError(where + "channel " + gyro_name +
                            " needs a uniform clock and at least 100 samples");
@@ -175,13 +180,18 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
     throw CalibrationError(where + "channel " + gyro_name + "'s record " + gyro.record->id +
                            " is not a straight line; calibrate from the nominal record");
   }
-  const double c0 = gyro.record ? gyro.record->coefficients[0] : 0.0;
-  const double c1 = gyro.record ? gyro.record->coefficients[1] : 1.0;
-  std::vector<double> rate_dps(gyro.physical.size());
-  for (std::size_t i = 0; i < rate_dps.size(); ++i) rate_dps[i] = gyro.physical[i] * kDegPerRad;
+  in.c0 = gyro.record ? gyro.record->coefficients[0] : 0.0;
+  in.c1 = gyro.record ? gyro.record->coefficients[1] : 1.0;
+  in.rate_dps.resize(gyro.physical.size());
+  for (std::size_t i = 0; i < in.rate_dps.size(); ++i) {
+    in.rate_dps[i] = gyro.physical[i] * kDegPerRad;
+  }
+  return in;
+}
 
-  GyroCalibration r;
-  // Saturation: the sensor clamps its reading at ± its range.
+// The gyroscope's range (°/s): the option, else the rig's channel parameter, else 100.
+double gyroscope_range_dps(const SessionReader& session, const std::string& gyro_name,
+                           const GyroCalibrationOptions& options) {
   double range_dps = options.range_dps;
   const std::optional<RigDefinition> rig = session_rig(session);
   if (range_dps == 0) {
@@ -192,15 +202,24 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
       }
     }
   }
+  return range_dps;
+}
+
+// Saturation: the sensor clamps its reading at ± its range. Which samples are rates
+// (false: saturated); counts them and their intervals into `r`, with a warning.
+std::vector<bool> mark_saturated(const GyroInput& in, const std::string& gyro_name,
+                                 double range_dps, double margin_dps, GyroCalibration& r) {
+  const std::vector<double>& rate_dps = in.rate_dps;
+  const std::vector<double>& time_s = in.signal.time_s;
   std::vector<bool> valid(rate_dps.size(), true);
   for (std::size_t i = 0; i < rate_dps.size(); ++i) {
-    if (std::abs(rate_dps[i]) >= range_dps - options.saturation_margin_dps) {
+    if (std::abs(rate_dps[i]) >= range_dps - margin_dps) {
       valid[i] = false;
       ++r.saturated_samples;
       if (i > 0 && !valid[i - 1]) {
-        r.saturated_intervals.back().second = gyro.time_s[i];
+        r.saturated_intervals.back().second = time_s[i];
       } else {
-        r.saturated_intervals.emplace_back(gyro.time_s[i], gyro.time_s[i]);
+        r.saturated_intervals.emplace_back(time_s[i], time_s[i]);
       }
     }
   }
@@ -210,31 +229,46 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
                          std::to_string(r.saturated_intervals.size()) +
                          " intervals; those samples are not rates and were not used");
   }
+  return valid;
+}
 
-  // The inclinometer on the gyroscope's samples (NaN where out of range).
-  std::vector<double> inclinometer_deg;
-  ChannelSignal inclinometer;
+// The inclinometer's channel, which of its samples are in range, and its angle (°) on the
+// gyroscope's samples (NaN where out of range). All empty when there is no inclinometer.
+struct InclinometerOnGyro {
+  ChannelSignal signal;
   std::vector<bool> in_range;
-  if (!inclinometer_name.empty()) {
-    inclinometer = read_channel_signal(session, inclinometer_name);
-    in_range =
-        inclinometer_in_range(session, inclinometer_name, inclinometer.signal,
-                              options.inclinometer_range_deg, options.inclinometer_margin_deg);
-    std::vector<double> masked(inclinometer.physical.size());
-    for (std::size_t j = 0; j < masked.size(); ++j) {
-      masked[j] = in_range[j] ? inclinometer.physical[j] * kDegPerRad : NAN;
-    }
-    inclinometer_deg.resize(rate_dps.size());
-    const bool same_clock = inclinometer.time_s.size() == gyro.time_s.size();
-    for (std::size_t i = 0; i < rate_dps.size(); ++i) {
-      inclinometer_deg[i] =
-          same_clock ? masked[i] : interpolate_held(inclinometer.time_s, masked, gyro.time_s[i]);
-    }
-  }
+  std::vector<double> angle_deg;
+};
 
-  r.still_periods =
-      find_still_periods(gyro.time_s, rate_dps, inclinometer_deg, options.stillness, &r.noise_dps);
-  for (StillPeriod& p : r.still_periods) {
+InclinometerOnGyro read_inclinometer_on_gyro(const SessionReader& session,
+                                             const std::string& inclinometer_name,
+                                             const ChannelSignal& gyro,
+                                             const GyroCalibrationOptions& options) {
+  InclinometerOnGyro in;
+  if (inclinometer_name.empty()) return in;
+  in.signal = read_channel_signal(session, inclinometer_name);
+  in.in_range = inclinometer_in_range(session, inclinometer_name, in.signal.signal,
+                                      options.inclinometer_range_deg,
+                                      options.inclinometer_margin_deg);
+  std::vector<double> masked(in.signal.physical.size());
+  for (std::size_t j = 0; j < masked.size(); ++j) {
+    masked[j] = in.in_range[j] ? in.signal.physical[j] * kDegPerRad : NAN;
+  }
+  in.angle_deg.resize(gyro.physical.size());
+  const bool same_clock = in.signal.time_s.size() == gyro.time_s.size();
+  for (std::size_t i = 0; i < in.angle_deg.size(); ++i) {
+    in.angle_deg[i] =
+        same_clock ? masked[i] : interpolate_held(in.signal.time_s, masked, gyro.time_s[i]);
+  }
+  return in;
+}
+
+// Each still period's mean signal, and whether it goes into the bias: not saturated, and
+// confirmed by the inclinometer (with one) or consistent with the others (without).
+void choose_bias_periods(const ChannelSignal& gyro, const std::vector<bool>& valid,
+                         bool has_inclinometer, const StillnessOptions& stillness,
+                         std::vector<StillPeriod>& periods) {
+  for (StillPeriod& p : periods) {
     const auto a = static_cast<std::size_t>(
         std::lower_bound(gyro.time_s.begin(), gyro.time_s.end(), p.start_s) - gyro.time_s.begin());
     double sum = 0.0;
@@ -246,17 +280,23 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
     p.mean_signal_V = sum / p.samples;
     p.used = !saturated;
   }
-  if (!inclinometer_name.empty()) {
-    for (StillPeriod& p : r.still_periods) p.used = p.used && p.confirmed;
-  } else if (!r.still_periods.empty()) {
+  if (has_inclinometer) {
+    for (StillPeriod& p : periods) p.used = p.used && p.confirmed;
+  } else if (!periods.empty()) {
     std::vector<double> means;
-    for (const StillPeriod& p : r.still_periods) means.push_back(p.mean_rate_dps);
+    for (const StillPeriod& p : periods) means.push_back(p.mean_rate_dps);
     std::nth_element(means.begin(), means.begin() + means.size() / 2, means.end());
     const double median = means[means.size() / 2];
-    for (StillPeriod& p : r.still_periods) {
-      p.used = p.used && std::abs(p.mean_rate_dps - median) <= options.stillness.consistency_dps;
+    for (StillPeriod& p : periods) {
+      p.used = p.used && std::abs(p.mean_rate_dps - median) <= stillness.consistency_dps;
     }
   }
+}
+
+// The bias from the periods used, its uncertainty and (from three periods) its drift.
+// Throws CalibrationError when no period is used.
+void estimate_bias(const std::string& where, bool has_inclinometer,
+                   const StillnessOptions& stillness, GyroCalibration& r) {
   std::vector<double> bias_means, bias_times;
   std::size_t bias_samples = 0;
   for (const StillPeriod& p : r.still_periods) {
@@ -270,9 +310,8 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
     throw CalibrationError(
         where + "no still period for the gyroscope's bias (" +
         std::to_string(r.still_periods.size()) + " quiet periods found, none " +
-        (inclinometer_name.empty() ? "consistent" : "confirmed by the inclinometer in its range") +
-        "); record at least " +
-        shortest(options.stillness.min_duration_s + 2 * options.stillness.guard_s) +
+        (has_inclinometer ? "confirmed by the inclinometer in its range" : "consistent") +
+        "); record at least " + shortest(stillness.min_duration_s + 2 * stillness.guard_s) +
         " s with the door at rest near closed");
   }
   // The bias: the mean of the periods' means (each period counts once: the bias wanders
@@ -295,17 +334,22 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
     r.drift_std_dps_per_s =
         drift.coefficient_std(1) * small_sample_factor(drift.degrees_of_freedom);
   }
+}
 
-  // The rate through the current record with the bias removed (rad/s).
+// The scale's gain against the inclinometer (1 when not estimated, with a warning saying
+// why), the rate taken through the current record with the bias removed (rad/s).
+double estimate_scale(const ChannelSignal& gyro, const std::vector<bool>& valid,
+                      const InclinometerOnGyro& inclinometer, bool has_inclinometer,
+                      bool wanted, GyroCalibration& r) {
   const double bias_rad_s = r.bias_dps / kDegPerRad;
   double gain = 1.0;
-  if (options.estimate_scale && !inclinometer_name.empty()) {
+  if (wanted && has_inclinometer) {
     std::vector<double> rate(gyro.physical.size());
     for (std::size_t i = 0; i < rate.size(); ++i) rate[i] = gyro.physical[i] - bias_rad_s;
     try {
-      const Alignment alignment =
-          align_inclinometer_with_gyro(inclinometer.time_s, inclinometer.physical, in_range,
-                                       gyro.time_s, rate, valid, AlignmentOptions{});
+      const Alignment alignment = align_inclinometer_with_gyro(
+          inclinometer.signal.time_s, inclinometer.signal.physical, inclinometer.in_range,
+          gyro.time_s, rate, valid, AlignmentOptions{});
       gain = alignment.gain;
       r.scale_estimated = true;
       r.scale_segments = static_cast<int>(alignment.segments.size());
@@ -314,16 +358,26 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
     } catch (const CalibrationError& error) {
       r.warnings.push_back(std::string("scale factor not estimated: ") + error.what());
     }
-  } else if (options.estimate_scale) {
+  } else if (wanted) {
     r.warnings.push_back("scale factor not estimated: the session has no inclinometer");
   }
+  return gain;
+}
 
+// The new record: gain · (previous − bias), with its uncertainty, method, references,
+// validity, quantities, notes and header.
+void write_gyro_record(const SessionReader& session, const GyroInput& in,
+                       const std::string& inclinometer_name,
+                       const InclinometerOnGyro& inclinometer, double range_dps, double gain,
+                       const RecordHeader& header, GyroCalibration& r) {
+  const ChannelSignal& gyro = in.signal;
+  const double bias_rad_s = r.bias_dps / kDegPerRad;
   CalibrationRecord& record = r.record;
   record.sensor_kind = "gyroscope";
   record.unit = "rad/s";
   record.input_unit = gyro.info.raw_type == RawType::kCounts ? "V" : gyro.info.raw_unit;
   // New = gain · (previous − bias), previous = c0 + c1 · signal.
-  record.coefficients = {gain * (c0 - bias_rad_s), gain * c1};
+  record.coefficients = {gain * (in.c0 - bias_rad_s), gain * in.c1};
   const double bias_u = r.bias_std_dps / kDegPerRad;
   record.standard_uncertainty = std::hypot(bias_u, r.noise_dps / kDegPerRad);
   record.method = std::string("bias from ") + std::to_string(r.bias_periods) +
@@ -335,19 +389,33 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
       "recording " + session.path().filename().string() +
       (inclinometer_name.empty() ? ""
                                  : "; inclinometer " + inclinometer_name + " (its record " +
-                                       inclinometer.info.calibration_id + ")");
+                                       inclinometer.signal.info.calibration_id + ")");
   record.valid_min = -range_dps / kDegPerRad;
   record.valid_max = range_dps / kDegPerRad;
   record.quantities = {
-      {"bias_dps", r.bias_dps, r.bias_std_dps, "deg/s"},
-      {"bias_drift_dps_per_s", r.drift_dps_per_s, r.drift_std_dps_per_s, "deg/s/s"},
-      {"noise_dps", r.noise_dps, 0.0, "deg/s"},
-      {"still_periods", static_cast<double>(r.bias_periods), 0.0, "1"},
-      {"saturated_samples", static_cast<double>(r.saturated_samples), 0.0, "1"},
+      {.name = "bias_dps",
+       .value = r.bias_dps,
+       .standard_uncertainty = r.bias_std_dps,
+       .unit = "deg/s"},
+      {.name = "bias_drift_dps_per_s",
+       .value = r.drift_dps_per_s,
+       .standard_uncertainty = r.drift_std_dps_per_s,
+       .unit = "deg/s/s"},
+      {.name = "noise_dps", .value = r.noise_dps, .standard_uncertainty = 0.0, .unit = "deg/s"},
+      {.name = "still_periods",
+       .value = static_cast<double>(r.bias_periods),
+       .standard_uncertainty = 0.0,
+       .unit = "1"},
+      {.name = "saturated_samples",
+       .value = static_cast<double>(r.saturated_samples),
+       .standard_uncertainty = 0.0,
+       .unit = "1"},
   };
   if (r.scale_estimated) {
-    record.quantities.push_back(
-        {"scale_factor_error", r.scale_factor_error, r.scale_factor_error_std, "1"});
+    record.quantities.push_back({.name = "scale_factor_error",
+                                 .value = r.scale_factor_error,
+                                 .standard_uncertainty = r.scale_factor_error_std,
+                                 .unit = "1"});
   }
   if (gyro.record) record.supersedes = gyro.record->id;
   for (const std::string& w : r.warnings)
@@ -356,6 +424,39 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
   if (h.sensor_serial.empty()) h.sensor_serial = gyro.info.sensor_serial;
   if (h.supersedes.empty() && gyro.record) h.supersedes = gyro.record->id;
   apply_header(record, h);
+}
+
+}  // namespace
+
+// The stages: read and check the gyroscope, mark its saturated samples, read the
+// inclinometer on its clock, find the still periods, choose those for the bias, estimate
+// the bias and the scale, and write the record.
+GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::string& gyro_channel,
+                                    const std::string& inclinometer_channel,
+                                    const GyroCalibrationOptions& options,
+                                    const RecordHeader& header) {
+  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
+  const std::string where = session.path().string() + ": ";
+  const std::string gyro_name = find_session_channel(session, "gyroscope", gyro_channel);
+  const std::string inclinometer_name =
+      find_session_channel(session, "inclinometer", inclinometer_channel, true);
+  const bool has_inclinometer = !inclinometer_name.empty();
+  const GyroInput in = read_gyroscope(session, gyro_name, where);
+
+  GyroCalibration r;
+  const double range_dps = gyroscope_range_dps(session, gyro_name, options);
+  const std::vector<bool> valid =
+      mark_saturated(in, gyro_name, range_dps, options.saturation_margin_dps, r);
+  const InclinometerOnGyro inclinometer =
+      read_inclinometer_on_gyro(session, inclinometer_name, in.signal, options);
+
+  r.still_periods = find_still_periods(in.signal.time_s, in.rate_dps, inclinometer.angle_deg,
+                                       options.stillness, &r.noise_dps);
+  choose_bias_periods(in.signal, valid, has_inclinometer, options.stillness, r.still_periods);
+  estimate_bias(where, has_inclinometer, options.stillness, r);
+  const double gain = estimate_scale(in.signal, valid, inclinometer, has_inclinometer,
+                                     options.estimate_scale, r);
+  write_gyro_record(session, in, inclinometer_name, inclinometer, range_dps, gain, header, r);
   return r;
 }
 

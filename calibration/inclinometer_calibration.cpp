@@ -117,10 +117,19 @@ InclinometerCalibration calibrate_inclinometer(std::span<const CalibrationPoint>
     record.points.push_back(p);
   }
   record.quantities = {
-      {"offset_deg", r.offset_deg, r.offset_std_deg, "deg"},
-      {"gain_rad_per_V", r.gain_rad_per_V, r.gain_std_rad_per_V, "rad/V"},
-      {"residual_std_deg", r.residual_std_deg, 0.0, "deg"},
-      {"range_deg", options.range_deg, 0.0, "deg"},
+      {.name = "offset_deg",
+       .value = r.offset_deg,
+       .standard_uncertainty = r.offset_std_deg,
+       .unit = "deg"},
+      {.name = "gain_rad_per_V",
+       .value = r.gain_rad_per_V,
+       .standard_uncertainty = r.gain_std_rad_per_V,
+       .unit = "rad/V"},
+      {.name = "residual_std_deg",
+       .value = r.residual_std_deg,
+       .standard_uncertainty = 0.0,
+       .unit = "deg"},
+      {.name = "range_deg", .value = options.range_deg, .standard_uncertainty = 0.0, .unit = "deg"},
   };
   apply_header(record, header);
   return r;
@@ -220,13 +229,13 @@ std::string InclinometerRecordingPoints::brief_report() const {
   return text;
 }
 
-InclinometerRecordingPoints inclinometer_points_from_recording(
-    const SessionReader& session, const std::string& channel, std::span<const double> angles_deg,
-    const InclinometerRecordingOptions& options) {
-  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
-  const std::string where = session.path().string() + ": ";
-  const std::string name = find_session_channel(session, "inclinometer", channel);
-  const ChannelSignal s = read_channel_signal(session, name);
+namespace {
+
+// The inclinometer's channel read and checked: a uniform clock, 100 samples, a record to
+// read angles through.
+ChannelSignal read_inclinometer(const SessionReader& session, const std::string& name,
+                                const std::string& where) {
+  ChannelSignal s = read_channel_signal(session, name);
   if (s.info.sample_rate_hz <= 0 || s.signal.size() < 100) {
     throw CalibrationError(where + "inclinometer " + name +
                            " needs a uniform clock and at least 100 samples");
@@ -236,14 +245,15 @@ InclinometerRecordingPoints inclinometer_points_from_recording(
                            " has no calibration record to read angles for the stillness test; "
                            "apply its nominal record first");
   }
-  if (angles_deg.empty()) throw CalibrationError("no reference angles (--angles-deg)");
+  return s;
+}
 
-  std::vector<double> angle_deg(s.physical.size());
-  for (std::size_t i = 0; i < angle_deg.size(); ++i) angle_deg[i] = s.physical[i] * kDegPerRad;
-  InclinometerRecordingPoints result;
-  const std::vector<StillPeriod> periods =
-      find_still_periods(s.time_s, angle_deg, angle_deg, options.stillness, &result.noise_deg);
-
+// The holds: the still periods' samples, consecutive periods at the same angle (within
+// merge_deg) making one hold; each with its signal's mean and spread, its angle and drift.
+std::vector<InclinometerHold> holds_from_periods(const ChannelSignal& s,
+                                                 const std::vector<double>& angle_deg,
+                                                 const std::vector<StillPeriod>& periods,
+                                                 double merge_deg) {
   // Sample ranges of the periods; consecutive ones at the same angle are one hold.
   const double t0 = s.time_s.front(), rate_hz = s.info.sample_rate_hz;
   auto index_of = [&](double t) {
@@ -253,13 +263,14 @@ InclinometerRecordingPoints inclinometer_points_from_recording(
   std::vector<double> means;
   for (const StillPeriod& p : periods) {
     const std::pair<std::size_t, std::size_t> range{index_of(p.start_s), index_of(p.end_s) + 1};
-    if (!means.empty() && std::abs(p.mean_rate_dps - means.back()) < options.merge_deg) {
+    if (!means.empty() && std::abs(p.mean_rate_dps - means.back()) < merge_deg) {
       ranges.back().push_back(range);
       continue;
     }
     ranges.push_back({range});
     means.push_back(p.mean_rate_dps);
   }
+  std::vector<InclinometerHold> holds;
   for (const auto& hold_ranges : ranges) {
     InclinometerHold h;
     h.start_s = s.time_s[hold_ranges.front().first];
@@ -277,68 +288,115 @@ InclinometerRecordingPoints inclinometer_points_from_recording(
     h.point.signal = mean_of(volts);
     h.point.signal_std = std_of(volts);
     h.point.samples = static_cast<int>(volts.size());
-    result.holds.push_back(h);
+    holds.push_back(h);
   }
+  return holds;
+}
 
-  auto list_holds = [&] {
-    std::string text;
-    for (std::size_t k = 0; k < result.holds.size(); ++k) {
-      const InclinometerHold& h = result.holds[k];
-      text += (k ? "; " : "") + fixed(h.start_s, 2) + "–" + fixed(h.end_s, 2) + " s reads " +
-              fixed(h.mean_deg, 2) + "°";
-    }
-    return text.empty() ? std::string("none") : text;
-  };
-  std::string references;
-  for (double a : angles_deg) references += (references.empty() ? "" : ",") + shortest(a);
-  if (result.holds.size() != angles_deg.size()) {
+// "a–b s reads x°; …" for the errors ("none" without holds).
+std::string list_holds(const std::vector<InclinometerHold>& holds) {
+  std::string text;
+  for (std::size_t k = 0; k < holds.size(); ++k) {
+    const InclinometerHold& h = holds[k];
+    text += (k ? "; " : "") + fixed(h.start_s, 2) + "–" + fixed(h.end_s, 2) + " s reads " +
+            fixed(h.mean_deg, 2) + "°";
+  }
+  return text.empty() ? std::string("none") : text;
+}
+
+// Throws CalibrationError unless there is one hold per reference angle.
+void check_one_hold_per_reference(const std::vector<InclinometerHold>& holds,
+                                  std::span<const double> angles_deg, const std::string& references,
+                                  const std::string& where, const std::string& name,
+                                  const StillnessOptions& stillness) {
+  if (holds.size() != angles_deg.size()) {
     throw CalibrationError(
-        where + "found " + std::to_string(result.holds.size()) + " still " +
-        (result.holds.size() == 1 ? "window" : "windows") + " in inclinometer " + name + " where " +
+        where + "found " + std::to_string(holds.size()) + " still " +
+        (holds.size() == 1 ? "window" : "windows") + " in inclinometer " + name + " where " +
         std::to_string(angles_deg.size()) + " reference angles were given (" + references +
-        "°): " + list_holds() + ". Each still stretch of at least " +
-        shortest(options.stillness.min_duration_s + 2 * options.stillness.guard_s +
-                 options.stillness.window_s) +
+        "°): " + list_holds(holds) + ". Each still stretch of at least " +
+        shortest(stillness.min_duration_s + 2 * stillness.guard_s + stillness.window_s) +
         " s counts as one hold: hold each reference once, in the order given, without resting "
         "between them (or give --angles-deg for the holds recorded)");
   }
-  // The holds must follow the references: a step between references moves the reading the
-  // same way as the overall gain (its sign from the correlation of readings and references).
+}
+
+// The holds must follow the references: a step between references moves the reading the
+// same way as the overall gain (its sign from the correlation of readings and references).
+// Throws CalibrationError naming the first step that does not.
+void check_holds_follow_references(const std::vector<InclinometerHold>& holds,
+                                   std::span<const double> angles_deg,
+                                   const std::string& references, const std::string& where) {
   const std::size_t n = angles_deg.size();
   double mean_ref = 0.0, mean_read = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
     mean_ref += angles_deg[k] / n;
-    mean_read += result.holds[k].mean_deg / n;
+    mean_read += holds[k].mean_deg / n;
   }
   double covariance = 0.0;
   for (std::size_t k = 0; k < n; ++k) {
-    covariance += (angles_deg[k] - mean_ref) * (result.holds[k].mean_deg - mean_read);
+    covariance += (angles_deg[k] - mean_ref) * (holds[k].mean_deg - mean_read);
   }
   const double sign = covariance < 0 ? -1.0 : 1.0;
   for (std::size_t k = 1; k < n; ++k) {
     const double step_ref = angles_deg[k] - angles_deg[k - 1];
-    const double step_read = result.holds[k].mean_deg - result.holds[k - 1].mean_deg;
+    const double step_read = holds[k].mean_deg - holds[k - 1].mean_deg;
     if (step_ref != 0 && !(sign * step_read * step_ref > 0)) {
       throw CalibrationError(where + "the holds do not follow the reference angles (" + references +
                              "°) in order: from " + shortest(angles_deg[k - 1]) + "° to " +
                              shortest(angles_deg[k]) + "° the reading went from " +
-                             fixed(result.holds[k - 1].mean_deg, 2) + "° to " +
-                             fixed(result.holds[k].mean_deg, 2) + "° (holds at " + list_holds() +
+                             fixed(holds[k - 1].mean_deg, 2) + "° to " +
+                             fixed(holds[k].mean_deg, 2) + "° (holds at " + list_holds(holds) +
                              "); give --angles-deg in the order they were held");
     }
   }
+}
+
+// Each hold's reference (rad); throws CalibrationError at the first hold that drifted more
+// than max_drift_deg.
+void assign_references(std::vector<InclinometerHold>& holds, std::span<const double> angles_deg,
+                       double max_drift_deg, const std::string& where) {
+  const std::size_t n = angles_deg.size();
   for (std::size_t k = 0; k < n; ++k) {
-    InclinometerHold& h = result.holds[k];
-    if (h.drift_deg > options.max_drift_deg) {
+    InclinometerHold& h = holds[k];
+    if (h.drift_deg > max_drift_deg) {
       throw CalibrationError(where + "the reading did not settle at hold " + std::to_string(k + 1) +
                              " of " + std::to_string(n) + " (" + shortest(angles_deg[k]) + "°, " +
                              fixed(h.start_s, 2) + "–" + fixed(h.end_s, 2) +
                              " s): the means of its halves differ by " + fixed(h.drift_deg, 4) +
-                             "°, limit " + fixed(options.max_drift_deg, 4) +
+                             "°, limit " + fixed(max_drift_deg, 4) +
                              "°; steady the reference (no touching) and record again");
     }
     h.point.reference = angles_deg[k] / kDegPerRad;
   }
+}
+
+}  // namespace
+
+// The stages: read the channel, find its still periods, make them holds, check one hold
+// per reference in the references' order, each settled, and give each its reference.
+InclinometerRecordingPoints inclinometer_points_from_recording(
+    const SessionReader& session, const std::string& channel, std::span<const double> angles_deg,
+    const InclinometerRecordingOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
+  const std::string where = session.path().string() + ": ";
+  const std::string name = find_session_channel(session, "inclinometer", channel);
+  const ChannelSignal s = read_inclinometer(session, name, where);
+  if (angles_deg.empty()) throw CalibrationError("no reference angles (--angles-deg)");
+
+  std::vector<double> angle_deg(s.physical.size());
+  for (std::size_t i = 0; i < angle_deg.size(); ++i) angle_deg[i] = s.physical[i] * kDegPerRad;
+  InclinometerRecordingPoints result;
+  const std::vector<StillPeriod> periods =
+      find_still_periods(s.time_s, angle_deg, angle_deg, options.stillness, &result.noise_deg);
+  result.holds = holds_from_periods(s, angle_deg, periods, options.merge_deg);
+
+  std::string references;
+  for (double a : angles_deg) references += (references.empty() ? "" : ",") + shortest(a);
+  check_one_hold_per_reference(result.holds, angles_deg, references, where, name,
+                               options.stillness);
+  check_holds_follow_references(result.holds, angles_deg, references, where);
+  assign_references(result.holds, angles_deg, options.max_drift_deg, where);
   return result;
 }
 

@@ -51,12 +51,9 @@ std::string kg_text(double force_N) {
   return fixed(force_N / kStandardGravity_m_s2, 2) + " kg";
 }
 
-}  // namespace
-
-LoadCellCalibration calibrate_load_cell(std::span<const CalibrationPoint> points,
-                                        const LoadCellCalibrationOptions& options,
-                                        const RecordHeader& header) {
-  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
+// Throws CalibrationError on a point that is not finite or beyond the cell's range.
+void check_load_cell_points(std::span<const CalibrationPoint> points,
+                            const LoadCellCalibrationOptions& options) {
   const double fs = options.full_scale_N;
   for (const CalibrationPoint& p : points) {
     if (!std::isfinite(p.reference) || !std::isfinite(p.signal)) {
@@ -77,11 +74,17 @@ LoadCellCalibration calibrate_load_cell(std::span<const CalibrationPoint> points
                              " N is beyond the cell's full scale -" + shortest(fs) + " N");
     }
   }
-  const auto groups = by_reference(points, fs);
+}
+
+// Throws CalibrationError unless there are enough different references spanning enough
+// of the full scale.
+void check_reference_spread(const std::map<double, std::vector<std::size_t>>& groups,
+                            std::size_t points, const LoadCellCalibrationOptions& options) {
+  const double fs = options.full_scale_N;
   const int references = static_cast<int>(groups.size());
   if (references < options.min_references) {
     throw CalibrationError("load-cell calibration: " + std::to_string(references) +
-                           " different references (" + std::to_string(points.size()) +
+                           " different references (" + std::to_string(points) +
                            " points); at least " + std::to_string(options.min_references) +
                            " are needed, spread from 0 to full scale (" + shortest(fs) + " N)");
   }
@@ -92,63 +95,57 @@ LoadCellCalibration calibrate_load_cell(std::span<const CalibrationPoint> points
                            " % of full scale (" + shortest(fs) +
                            " N); a gain fitted on a small part of the range does not hold over it");
   }
+}
 
-  std::vector<double> signal, reference;
-  for (const CalibrationPoint& p : points) {
-    signal.push_back(p.signal);
-    reference.push_back(p.reference);
-  }
+// The straight line through the points and the curve chosen: the quadratic when its
+// term is significant (from four points at four references), else the line.
+struct LoadCellCurves {
+  PolynomialFit line, chosen;
+  bool quadratic = false;
+};
+
+LoadCellCurves fit_load_cell(const std::vector<double>& signal,
+                             const std::vector<double>& reference, int references,
+                             double quadratic_significance) {
   const PolynomialFit line = fit_polynomial(signal, reference, 1);
   if (!(line.coefficients[1] > 0)) {
     throw CalibrationError("load-cell calibration: the readings do not rise with the load (gain " +
                            shortest(line.coefficients[1]) +
                            " N/V); check the wiring and that the references were applied");
   }
-  PolynomialFit chosen = line;
-  bool quadratic = false;
-  if (static_cast<int>(points.size()) >= 4 && references >= 4) {
+  LoadCellCurves curves{.line = line, .chosen = line, .quadratic = false};
+  if (static_cast<int>(signal.size()) >= 4 && references >= 4) {
     const PolynomialFit curve = fit_polynomial(signal, reference, 2);
     const double c2 = curve.coefficients[2];
     const double u2 = curve.coefficient_std(2);
-    if (u2 > 0 && std::abs(c2) > options.quadratic_significance * u2) {
-      chosen = curve;
-      quadratic = true;
+    if (u2 > 0 && std::abs(c2) > quadratic_significance * u2) {
+      curves.chosen = curve;
+      curves.quadratic = true;
     } else if (u2 == 0 && c2 != 0 && curve.residual_std < line.residual_std) {
-      chosen = curve;  // an exact fit (no noise at all)
-      quadratic = true;
+      curves.chosen = curve;  // an exact fit (no noise at all)
+      curves.quadratic = true;
     }
   }
+  return curves;
+}
 
-  LoadCellCalibration r;
-  r.points = static_cast<int>(points.size());
-  r.references = references;
-  r.degrees_of_freedom = chosen.degrees_of_freedom;
-  r.quadratic = quadratic;
-  const double factor = small_sample_factor(chosen.degrees_of_freedom);
-  const double rel = options.reference_relative_uncertainty;
-  r.offset_N = chosen.coefficients[0];
-  r.offset_std_N = chosen.coefficient_std(0) * factor;
-  r.gain_N_per_V = chosen.coefficients[1];
-  r.gain_std_N_per_V = std::hypot(chosen.coefficient_std(1) * factor, rel * r.gain_N_per_V);
-  if (quadratic) {
-    r.quadratic_N_per_V2 = chosen.coefficients[2];
-    r.quadratic_std_N_per_V2 = chosen.coefficient_std(2) * factor;
-  }
-  r.residual_std_N = chosen.residual_std;
-
-  // Non-linearity: the branch-averaged points against the best straight line.
-  // Hysteresis: unloading − loading at each reference reached both ways.
+// Non-linearity: the branch-averaged points against the best straight line.
+// Hysteresis: unloading − loading at each reference reached both ways. Both in % of
+// full scale, into `r`.
+void nonlinearity_and_hysteresis(std::span<const CalibrationPoint> points,
+                                 const std::map<double, std::vector<std::size_t>>& groups,
+                                 const LoadCellCurves& curves, double fs, LoadCellCalibration& r) {
   double nonlinearity = 0.0, hysteresis = 0.0;
   for (const auto& [ref, members] : groups) {
     double sum = 0.0, loading = 0.0, unloading = 0.0;
     int n_loading = 0, n_unloading = 0;
     for (std::size_t i : members) {
-      sum += line.residuals[i];
+      sum += curves.line.residuals[i];
       if (points[i].branch == "loading") {
-        loading += chosen.residuals[i];
+        loading += curves.chosen.residuals[i];
         ++n_loading;
       } else if (points[i].branch == "unloading") {
-        unloading += chosen.residuals[i];
+        unloading += curves.chosen.residuals[i];
         ++n_unloading;
       }
     }
@@ -159,15 +156,14 @@ LoadCellCalibration calibrate_load_cell(std::span<const CalibrationPoint> points
   }
   r.nonlinearity_percent_fs = 100.0 * nonlinearity / fs;
   r.hysteresis_percent_fs = 100.0 * hysteresis / fs;
+}
 
-  // A calibrated reading's uncertainty: the scatter of the points about the curve
-  // (hysteresis, what is left of the non-linearity, the points' noise), the curve's own
-  // uncertainty at its worst point, and the references'.
-  double curve_std = 0.0;
-  for (double v : signal) curve_std = std::max(curve_std, chosen.value_std(v) * factor);
-  r.standard_uncertainty_N = std::sqrt(r.residual_std_N * r.residual_std_N * factor * factor +
-                                       curve_std * curve_std + (rel * fs) * (rel * fs));
-
+// The record: the chosen curve's coefficients, its points with their residuals and the
+// quantities found.
+void write_load_cell_record(std::span<const CalibrationPoint> points, const PolynomialFit& chosen,
+                            const LoadCellCalibrationOptions& options, const RecordHeader& header,
+                            LoadCellCalibration& r) {
+  const double fs = options.full_scale_N;
   CalibrationRecord& record = r.record;
   record.sensor_kind = "load_cell";
   record.unit = "N";
@@ -175,7 +171,7 @@ LoadCellCalibration calibrate_load_cell(std::span<const CalibrationPoint> points
   record.coefficients = chosen.coefficients;
   record.standard_uncertainty = r.standard_uncertainty_N;
   record.method = std::string("multi-point least squares, ") +
-                  (quadratic ? "quadratic (significant)" : "straight line") +
+                  (r.quadratic ? "quadratic (significant)" : "straight line") +
                   ", loading and unloading";
   record.references = options.references;
   record.valid_min = options.compression_only ? 0.0 : -fs;
@@ -186,18 +182,88 @@ LoadCellCalibration calibrate_load_cell(std::span<const CalibrationPoint> points
     record.points.push_back(p);
   }
   record.quantities = {
-      {"offset_N", r.offset_N, r.offset_std_N, "N"},
-      {"gain_N_per_V", r.gain_N_per_V, r.gain_std_N_per_V, "N/V"},
+      {.name = "offset_N",
+       .value = r.offset_N,
+       .standard_uncertainty = r.offset_std_N,
+       .unit = "N"},
+      {.name = "gain_N_per_V",
+       .value = r.gain_N_per_V,
+       .standard_uncertainty = r.gain_std_N_per_V,
+       .unit = "N/V"},
   };
-  if (quadratic) {
-    record.quantities.push_back(
-        {"quadratic_N_per_V2", r.quadratic_N_per_V2, r.quadratic_std_N_per_V2, "N/V^2"});
+  if (r.quadratic) {
+    record.quantities.push_back({.name = "quadratic_N_per_V2",
+                                 .value = r.quadratic_N_per_V2,
+                                 .standard_uncertainty = r.quadratic_std_N_per_V2,
+                                 .unit = "N/V^2"});
   }
-  record.quantities.push_back({"residual_std_N", r.residual_std_N, 0.0, "N"});
-  record.quantities.push_back({"nonlinearity_percent_fs", r.nonlinearity_percent_fs, 0.0, "%"});
-  record.quantities.push_back({"hysteresis_percent_fs", r.hysteresis_percent_fs, 0.0, "%"});
-  record.quantities.push_back({"full_scale_N", fs, 0.0, "N"});
+  record.quantities.push_back({.name = "residual_std_N",
+                               .value = r.residual_std_N,
+                               .standard_uncertainty = 0.0,
+                               .unit = "N"});
+  record.quantities.push_back({.name = "nonlinearity_percent_fs",
+                               .value = r.nonlinearity_percent_fs,
+                               .standard_uncertainty = 0.0,
+                               .unit = "%"});
+  record.quantities.push_back({.name = "hysteresis_percent_fs",
+                               .value = r.hysteresis_percent_fs,
+                               .standard_uncertainty = 0.0,
+                               .unit = "%"});
+  record.quantities.push_back(
+      {.name = "full_scale_N", .value = fs, .standard_uncertainty = 0.0, .unit = "N"});
   apply_header(record, header);
+}
+
+}  // namespace
+
+// The stages: check the points and their spread, fit the line and (if significant) the
+// quadratic, the coefficients with their uncertainties, non-linearity and hysteresis, a
+// reading's uncertainty, and the record.
+LoadCellCalibration calibrate_load_cell(std::span<const CalibrationPoint> points,
+                                        const LoadCellCalibrationOptions& options,
+                                        const RecordHeader& header) {
+  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
+  const double fs = options.full_scale_N;
+  check_load_cell_points(points, options);
+  const auto groups = by_reference(points, fs);
+  check_reference_spread(groups, points.size(), options);
+  const int references = static_cast<int>(groups.size());
+
+  std::vector<double> signal, reference;
+  for (const CalibrationPoint& p : points) {
+    signal.push_back(p.signal);
+    reference.push_back(p.reference);
+  }
+  const LoadCellCurves curves =
+      fit_load_cell(signal, reference, references, options.quadratic_significance);
+  const PolynomialFit& chosen = curves.chosen;
+
+  LoadCellCalibration r;
+  r.points = static_cast<int>(points.size());
+  r.references = references;
+  r.degrees_of_freedom = chosen.degrees_of_freedom;
+  r.quadratic = curves.quadratic;
+  const double factor = small_sample_factor(chosen.degrees_of_freedom);
+  const double rel = options.reference_relative_uncertainty;
+  r.offset_N = chosen.coefficients[0];
+  r.offset_std_N = chosen.coefficient_std(0) * factor;
+  r.gain_N_per_V = chosen.coefficients[1];
+  r.gain_std_N_per_V = std::hypot(chosen.coefficient_std(1) * factor, rel * r.gain_N_per_V);
+  if (curves.quadratic) {
+    r.quadratic_N_per_V2 = chosen.coefficients[2];
+    r.quadratic_std_N_per_V2 = chosen.coefficient_std(2) * factor;
+  }
+  r.residual_std_N = chosen.residual_std;
+  nonlinearity_and_hysteresis(points, groups, curves, fs, r);
+
+  // A calibrated reading's uncertainty: the scatter of the points about the curve
+  // (hysteresis, what is left of the non-linearity, the points' noise), the curve's own
+  // uncertainty at its worst point, and the references'.
+  double curve_std = 0.0;
+  for (double v : signal) curve_std = std::max(curve_std, chosen.value_std(v) * factor);
+  r.standard_uncertainty_N = std::sqrt(r.residual_std_N * r.residual_std_N * factor * factor +
+                                       curve_std * curve_std + (rel * fs) * (rel * fs));
+  write_load_cell_record(points, chosen, options, header, r);
   return r;
 }
 
@@ -286,7 +352,10 @@ CalibrationRecord tare_load_cell(const CalibrationRecord& calibrated, double unl
       q.standard_uncertainty = offset_std_N;
     }
   }
-  tared.quantities.push_back({"tare_reading_before_N", reading_N, offset_std_N, "N"});
+  tared.quantities.push_back({.name = "tare_reading_before_N",
+                              .value = reading_N,
+                              .standard_uncertainty = offset_std_N,
+                              .unit = "N"});
   tared.notes =
       "Tare of " + calibrated.id + ": the unloaded cell read " + fixed(reading_N, 4) + " N before.";
   RecordHeader h = header;

@@ -146,18 +146,10 @@ double best_delay(const Integral& integral, const std::vector<double>& t,
   return 0.5 * (a + b);
 }
 
-}  // namespace
-
-Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_time_s,
-                                       const std::vector<double>& inclinometer_rad,
-                                       const std::vector<bool>& inclinometer_in_range,
-                                       const std::vector<double>& gyro_time_s,
-                                       const std::vector<double>& gyro_rad_s,
-                                       const std::vector<bool>& gyro_valid,
-                                       const AlignmentOptions& options) {
-  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
-  const std::size_t ng = gyro_rad_s.size(), ni = inclinometer_rad.size();
-  if (ng < 16 || ni < 16) throw CalibrationError("alignment: too few samples");
+// The rate integrated (trapezoids) on the gyroscope's uniform clock.
+Integral integrate_rate(const std::vector<double>& gyro_time_s,
+                        const std::vector<double>& gyro_rad_s) {
+  const std::size_t ng = gyro_rad_s.size();
   Integral integral;
   integral.t0 = gyro_time_s.front();
   integral.rate_hz = static_cast<double>(ng - 1) / (gyro_time_s.back() - gyro_time_s.front());
@@ -166,6 +158,21 @@ Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_t
     integral.theta[i] =
         integral.theta[i - 1] + 0.5 * (gyro_rad_s[i - 1] + gyro_rad_s[i]) / integral.rate_hz;
   }
+  return integral;
+}
+
+// The stroke segments: runs of inclinometer samples in range near the door's motion (on
+// the gyroscope's clock, padded) that travel at least min_travel_deg, have 8 samples and
+// no saturated gyroscope sample within max_delay_s. Throws CalibrationError with fewer
+// than min_segments.
+std::vector<Segment> stroke_segments(const Integral& integral,
+                                     const std::vector<double>& inclinometer_time_s,
+                                     const std::vector<double>& inclinometer_rad,
+                                     const std::vector<bool>& inclinometer_in_range,
+                                     const std::vector<double>& gyro_rad_s,
+                                     const std::vector<bool>& gyro_valid,
+                                     const AlignmentOptions& options) {
+  const std::size_t ng = gyro_rad_s.size(), ni = inclinometer_rad.size();
   // Where the door moves (on the gyroscope's clock), padded; and saturated samples.
   const double motion = options.motion_rate_dps / kDegPerRad;
   const auto pad = static_cast<std::size_t>(std::round(options.motion_pad_s * integral.rate_hz));
@@ -212,6 +219,78 @@ Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_t
         std::to_string(options.min_segments) +
         " are needed: record openings and closings through the closed position");
   }
+  return segments;
+}
+
+// The sum of squares of the gyroscope's rate about its mean within each segment, read at
+// the inclinometer's samples less the delay (for the delay's least-squares deviation).
+double rate_sum_of_squares(const std::vector<Segment>& segments,
+                           const std::vector<double>& inclinometer_time_s,
+                           const std::vector<double>& gyro_time_s,
+                           const std::vector<double>& gyro_rad_s, double delay_s) {
+  double rate_ss = 0.0;
+  for (const Segment& s : segments) {
+    double mean = 0.0;
+    std::vector<double> w;
+    for (std::size_t j = s.begin; j < s.end; ++j) {
+      const double t = inclinometer_time_s[j] - delay_s;
+      w.push_back(interpolate_held(gyro_time_s, gyro_rad_s, t));
+      mean += w.back();
+    }
+    mean /= static_cast<double>(w.size());
+    for (double v : w) rate_ss += (v - mean) * (v - mean);
+  }
+  return rate_ss;
+}
+
+// The jackknife's standard deviation of leave-one-out estimates.
+double jackknife_std(const std::vector<double>& v) {
+  const double k = static_cast<double>(v.size());
+  const double mean = mean_of(v);
+  double sum = 0.0;
+  for (double x : v) sum += (x - mean) * (x - mean);
+  return std::sqrt((k - 1) / k * sum);
+}
+
+// Each segment described: its times, samples, travel and the delay found without it.
+std::vector<AlignmentSegment> describe_segments(const std::vector<Segment>& segments,
+                                                const std::vector<double>& inclinometer_time_s,
+                                                const std::vector<double>& inclinometer_rad,
+                                                const std::vector<double>& delays) {
+  std::vector<AlignmentSegment> described;
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    AlignmentSegment s;
+    s.start_s = inclinometer_time_s[segments[i].begin];
+    s.end_s = inclinometer_time_s[segments[i].end - 1];
+    s.samples = segments[i].end - segments[i].begin;
+    const auto [lo, hi] =
+        std::minmax_element(inclinometer_rad.begin() + static_cast<long>(segments[i].begin),
+                            inclinometer_rad.begin() + static_cast<long>(segments[i].end));
+    s.travel_deg = (*hi - *lo) * kDegPerRad;
+    s.delay_without_s = delays[i];
+    described.push_back(s);
+  }
+  return described;
+}
+
+}  // namespace
+
+// The stages: integrate the rate, find the stroke segments, the delay and gain over all of
+// them, their least-squares and jackknife deviations, and the segments described.
+Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_time_s,
+                                       const std::vector<double>& inclinometer_rad,
+                                       const std::vector<bool>& inclinometer_in_range,
+                                       const std::vector<double>& gyro_time_s,
+                                       const std::vector<double>& gyro_rad_s,
+                                       const std::vector<bool>& gyro_valid,
+                                       const AlignmentOptions& options) {
+  if (std::string problem = options.validate(); !problem.empty()) throw CalibrationError(problem);
+  const std::size_t ng = gyro_rad_s.size(), ni = inclinometer_rad.size();
+  if (ng < 16 || ni < 16) throw CalibrationError("alignment: too few samples");
+  const Integral integral = integrate_rate(gyro_time_s, gyro_rad_s);
+  const std::vector<Segment> segments =
+      stroke_segments(integral, inclinometer_time_s, inclinometer_rad, inclinometer_in_range,
+                      gyro_rad_s, gyro_valid, options);
 
   Alignment result;
   const std::size_t none = segments.size();
@@ -224,23 +303,12 @@ Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_t
   const double dof = static_cast<double>(fit.count) - static_cast<double>(parameters);
   result.residual_std_rad = std::sqrt(std::max(fit.sse, 0.0) / dof);
   // Least-squares standard deviations (white residuals)…
-  double rate_ss = 0.0;
-  for (const Segment& s : segments) {
-    double mean = 0.0;
-    std::vector<double> w;
-    for (std::size_t j = s.begin; j < s.end; ++j) {
-      const double t = inclinometer_time_s[j] - result.delay_s;
-      w.push_back(interpolate_held(gyro_time_s, gyro_rad_s, t));
-      mean += w.back();
-    }
-    mean /= static_cast<double>(w.size());
-    for (double v : w) rate_ss += (v - mean) * (v - mean);
-  }
+  const double rate_ss = rate_sum_of_squares(segments, inclinometer_time_s, gyro_time_s,
+                                             gyro_rad_s, result.delay_s);
   const double delay_ls = result.residual_std_rad / (std::abs(fit.gain) * std::sqrt(rate_ss));
   const double gain_ls = result.residual_std_rad / std::sqrt(fit.sxx);
   // …and the jackknife over segments, which also sees how the lag differs between
   // openings and closings (a low-pass is not exactly a delay).
-  const double k = static_cast<double>(segments.size());
   std::vector<double> delays, gains;
   for (std::size_t skip = 0; skip < segments.size(); ++skip) {
     const double d = best_delay(integral, inclinometer_time_s, inclinometer_rad, segments,
@@ -249,27 +317,10 @@ Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_t
     gains.push_back(
         regress(integral, inclinometer_time_s, inclinometer_rad, segments, d, skip).gain);
   }
-  auto jackknife = [&](const std::vector<double>& v) {
-    const double mean = mean_of(v);
-    double sum = 0.0;
-    for (double x : v) sum += (x - mean) * (x - mean);
-    return std::sqrt((k - 1) / k * sum);
-  };
   const double factor = small_sample_factor(static_cast<int>(segments.size()) - 1);
-  result.delay_std_s = std::max(delay_ls, jackknife(delays)) * factor;
-  result.gain_std = std::max(gain_ls, jackknife(gains)) * factor;
-  for (std::size_t i = 0; i < segments.size(); ++i) {
-    AlignmentSegment s;
-    s.start_s = inclinometer_time_s[segments[i].begin];
-    s.end_s = inclinometer_time_s[segments[i].end - 1];
-    s.samples = segments[i].end - segments[i].begin;
-    const auto [lo, hi] =
-        std::minmax_element(inclinometer_rad.begin() + static_cast<long>(segments[i].begin),
-                            inclinometer_rad.begin() + static_cast<long>(segments[i].end));
-    s.travel_deg = (*hi - *lo) * kDegPerRad;
-    s.delay_without_s = delays[i];
-    result.segments.push_back(s);
-  }
+  result.delay_std_s = std::max(delay_ls, jackknife_std(delays)) * factor;
+  result.gain_std = std::max(gain_ls, jackknife_std(gains)) * factor;
+  result.segments = describe_segments(segments, inclinometer_time_s, inclinometer_rad, delays);
   return result;
 }
 
@@ -340,9 +391,14 @@ TimingCalibration calibrate_timing(const SessionReader& session,
   record.method = inclinometer.record->method +
                   "; delay by cross-correlation with the integrated gyroscope " + gyro_name +
                   " on " + std::to_string(r.alignment.segments.size()) + " segments";
-  record.quantities.push_back({"delay_s", r.alignment.delay_s, r.alignment.delay_std_s, "s"});
-  record.quantities.push_back(
-      {"angle_per_integrated_gyro_angle", r.alignment.gain, r.alignment.gain_std, "1"});
+  record.quantities.push_back({.name = "delay_s",
+                               .value = r.alignment.delay_s,
+                               .standard_uncertainty = r.alignment.delay_std_s,
+                               .unit = "s"});
+  record.quantities.push_back({.name = "angle_per_integrated_gyro_angle",
+                               .value = r.alignment.gain,
+                               .standard_uncertainty = r.alignment.gain_std,
+                               .unit = "1"});
   record.references += std::string(record.references.empty() ? "" : "; ") + "timing: recording " +
                        session.path().filename().string() + ", gyroscope " + gyro_name;
   RecordHeader h = header;

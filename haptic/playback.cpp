@@ -94,8 +94,10 @@ std::string Playback::change_parameters(const DoorModel& model, const std::strin
   }
   auto parameters = std::make_unique<PlaybackParameters>(playable, *mapping_, description);
   if (std::string problem = loop_->check(*parameters); !problem.empty()) {
-    recorder_->add_event({loop_->status().time_s, "parameters_refused", "",
-                          std::string(description).append(": ").append(problem)});
+    recorder_->add_event({.time_s = loop_->status().time_s,
+                          .kind = "parameters_refused",
+                          .channel = "",
+                          .detail = std::string(description).append(": ").append(problem)});
     return problem;
   }
   // Noted under the id it will get before the tick can take it, so that the session names

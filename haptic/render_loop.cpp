@@ -181,12 +181,12 @@ RenderLoopCounters RenderLoop::counters() const noexcept {
 }
 
 RenderLoop::Status RenderLoop::status() const noexcept {
-  return Status{status_time_s_.load(std::memory_order_relaxed),
-                status_theta_.load(std::memory_order_relaxed),
-                status_omega_.load(std::memory_order_relaxed),
-                status_user_force_.load(std::memory_order_relaxed),
-                status_command_.load(std::memory_order_relaxed),
-                status_set_.load(std::memory_order_relaxed)};
+  return Status{.time_s = status_time_s_.load(std::memory_order_relaxed),
+                .theta_rad = status_theta_.load(std::memory_order_relaxed),
+                .omega_rad_s = status_omega_.load(std::memory_order_relaxed),
+                .user_force_N = status_user_force_.load(std::memory_order_relaxed),
+                .commanded_force_N = status_command_.load(std::memory_order_relaxed),
+                .parameter_set = status_set_.load(std::memory_order_relaxed)};
 }
 
 }  // namespace doorbench::haptic

@@ -24,7 +24,13 @@ namespace doorbench::haptic {
 DeviceLimits example_rotary_limits();
 
 struct SimulatedRotaryOptions {
-  SimulatedDeviceOptions device{SimClock::kManual, 2500.0, 0.001, 0.05, 1, 250, 0.0};
+  SimulatedDeviceOptions device{.clock = SimClock::kManual,
+                                .servo_rate_hz = 2500.0,
+                                .control_delay_s = 0.001,
+                                .force_noise_rms = 0.05,
+                                .seed = 1,
+                                .max_steps_per_read = 250,
+                                .start_time_s = 0.0};
   DeviceLimits limits = example_rotary_limits();
   bool render_inertia_by_admittance = true;
   double rotor_inertia_kg_m2 = 0.02;

@@ -194,8 +194,14 @@ struct SimulatedHapticMasterOptions {
   SimulatedDeviceOptions device;
   // About the HapticMaster's published figures (docs/haptic-devices.md): a box of ±0.2 m
   // stands in for its cylindrical workspace, 100 N continuous force, 1 m/s, 2 to 50 kg.
-  DeviceLimits limits{Kinematics::kCartesian3, 100.0, 20000.0, 1.0, Vec3::Constant(-0.2),
-                      Vec3::Constant(0.2),     2.0,   50.0};
+  DeviceLimits limits{.kinematics = Kinematics::kCartesian3,
+                      .max_force = 100.0,
+                      .max_force_rate = 20000.0,
+                      .max_velocity = 1.0,
+                      .workspace_min = Vec3::Constant(-0.2),
+                      .workspace_max = Vec3::Constant(0.2),
+                      .min_inertia = 2.0,
+                      .max_inertia = 50.0};
   Vec3 initial_position{-0.075, 0.0, 0.05};  // the default arc's θ = 0 (door_mapping.h)
   double wall_stiffness_N_per_m = 20000.0;   // the workspace's end stops
   double wall_damping_N_s_per_m = 200.0;     // while in a wall

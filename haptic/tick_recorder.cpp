@@ -131,7 +131,10 @@ TickRecorder::~TickRecorder() {
 void TickRecorder::note_parameter_set(int id, const std::string& description,
                                       const DoorModel& model) {
   const std::lock_guard lock(mutex_);
-  sets_.push_back({id, description, to_parameter_json(model), to_effects_json(model)});
+  sets_.push_back({.id = id,
+                   .description = description,
+                   .parameters_json = to_parameter_json(model),
+                   .effects_json = to_effects_json(model)});
 }
 
 void TickRecorder::add_event(const SessionEvent& event) {
@@ -169,13 +172,17 @@ std::size_t TickRecorder::drain() {
           if (set.id == record->parameter_set) detail.append(": ").append(set.description);
         }
       }
-      events.push_back({record->time_s, "parameters", "", detail});
+      events.push_back(
+          {.time_s = record->time_s, .kind = "parameters", .channel = "", .detail = detail});
       last_parameter_set_ = record->parameter_set;
     }
     for (std::uint32_t bit = 1; bit != 0 && bit <= record->events; bit <<= 1) {
       if (record->events & bit) {
-        events.push_back({record->time_s, "safety", "",
-                          std::string(event_name(bit)).append(": ").append(event_meaning(bit))});
+        events.push_back(
+            {.time_s = record->time_s,
+             .kind = "safety",
+             .channel = "",
+             .detail = std::string(event_name(bit)).append(": ").append(event_meaning(bit))});
       }
     }
     ring.release();

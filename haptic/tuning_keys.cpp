@@ -21,16 +21,22 @@ namespace {
 using perceptual::Control;
 
 constexpr TuningKey kKeys[] = {
-    {'+', Control::kHeaviness, true, "heavier"},
-    {'-', Control::kHeaviness, false, "lighter"},
-    {'U', Control::kLatchEffort, true, "harder to unlatch"},
-    {'u', Control::kLatchEffort, false, "easier to unlatch"},
-    {'C', Control::kClosingEffort, true, "harder to close"},
-    {'c', Control::kClosingEffort, false, "easier to close"},
-    {'S', Control::kSmoothness, true, "rougher"},
-    {'s', Control::kSmoothness, false, "smoother"},
-    {'N', Control::kSnap, true, "more snap"},
-    {'n', Control::kSnap, false, "less snap"},
+    {.key = '+', .control = Control::kHeaviness, .increase = true, .action = "heavier"},
+    {.key = '-', .control = Control::kHeaviness, .increase = false, .action = "lighter"},
+    {.key = 'U', .control = Control::kLatchEffort, .increase = true, .action = "harder to unlatch"},
+    {.key = 'u',
+     .control = Control::kLatchEffort,
+     .increase = false,
+     .action = "easier to unlatch"},
+    {.key = 'C', .control = Control::kClosingEffort, .increase = true, .action = "harder to close"},
+    {.key = 'c',
+     .control = Control::kClosingEffort,
+     .increase = false,
+     .action = "easier to close"},
+    {.key = 'S', .control = Control::kSmoothness, .increase = true, .action = "rougher"},
+    {.key = 's', .control = Control::kSmoothness, .increase = false, .action = "smoother"},
+    {.key = 'N', .control = Control::kSnap, .increase = true, .action = "more snap"},
+    {.key = 'n', .control = Control::kSnap, .increase = false, .action = "less snap"},
 };
 
 // Four significant digits: enough to tell steps of 10 % apart on an operator's screen.
@@ -203,9 +209,11 @@ std::string TuningLog::to_csv() const {
 
 void TuningLog::write_to_session(SessionWriter& writer) const {
   for (const TuningLogEntry& e : entries_) {
-    writer.add_event({e.time_s, "tuning", "",
-                      std::string("key ").append(1, e.key).append(": ") + e.message +
-                          (e.applied ? " (set " + e.parameter_set_id + ")" : "")});
+    writer.add_event({.time_s = e.time_s,
+                      .kind = "tuning",
+                      .channel = "",
+                      .detail = std::string("key ").append(1, e.key).append(": ") + e.message +
+                                (e.applied ? " (set " + e.parameter_set_id + ")" : "")});
   }
   writer.write_group_attribute("tuning", "log_csv", to_csv());
 }

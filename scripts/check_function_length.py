@@ -5,12 +5,14 @@ does not name.
     scripts/check_function_length.py [--limit N] [--root DIR] [--exceptions FILE] [--all]
                                      [FOLDER ...]
 
-Checks every .h/.hpp/.cpp/.cc file under acquisition/, sensors/, analysis/ and haptic/
-(those of them that exist under --root, by default the repository) and under each FOLDER
-given (which must exist). A function's length is the number of lines from the line of
-its name to the line of its closing brace, both included; lambdas and local classes
-inside a function count toward it. Comments, string and character literals (raw
-strings too) and preprocessor lines are ignored, so braces in them do not count.
+Checks every .h/.hpp/.cpp/.cc file under each folder whose code ships (core/, acquisition/,
+sensors/, calibration/, analysis/, simulated_bench/, viewer/, haptic/, study/, app/), under
+the tools' folders (bench/, fuzz/) -- those of them that exist under --root, by default the
+repository; tests/ is not checked -- and under each FOLDER given (which must exist). A
+function's length is the number of lines from the line of its name to the line of its
+closing brace, both included; lambdas and local classes inside a function count toward
+it. Comments, string and character literals (raw strings too) and preprocessor lines are
+ignored, so braces in them do not count.
 
 Exceptions are the rows of the Markdown table under the heading
 "## Functions longer than 120 lines" in --exceptions (default docs/architecture.md
@@ -31,7 +33,9 @@ import os
 import re
 import sys
 
-DEFAULT_FOLDERS = ["acquisition", "sensors", "analysis", "haptic"]
+# Every folder of code but tests/: what ships, then the tools (benchmarks, fuzzers).
+DEFAULT_FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis",
+                   "simulated_bench", "viewer", "haptic", "study", "app", "bench", "fuzz"]
 SOURCE_SUFFIXES = (".h", ".hpp", ".cpp", ".cc", ".cxx")
 EXCEPTIONS_HEADING = "## Functions longer than 120 lines"
 

@@ -27,13 +27,17 @@ std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig) {
     if (channel.sensor == "inclinometer") {
       InclinometerParameters p;
       for (const auto& [name, value] : channel.parameters) p.set(name, value);
-      limits.push_back({channel.name, channel.sensor, kLimitFraction * p.range_deg * kRadPerDeg,
-                        range_text(p.range_deg, "deg")});
+      limits.push_back({.channel = channel.name,
+                        .sensor = channel.sensor,
+                        .limit = kLimitFraction * p.range_deg * kRadPerDeg,
+                        .range = range_text(p.range_deg, "deg")});
     } else if (channel.sensor == "gyroscope") {
       GyroscopeParameters p;
       for (const auto& [name, value] : channel.parameters) p.set(name, value);
-      limits.push_back({channel.name, channel.sensor, kLimitFraction * p.range_dps * kRadPerDeg,
-                        range_text(p.range_dps, "deg/s")});
+      limits.push_back({.channel = channel.name,
+                        .sensor = channel.sensor,
+                        .limit = kLimitFraction * p.range_dps * kRadPerDeg,
+                        .range = range_text(p.range_dps, "deg/s")});
     }
   }
   return limits;

@@ -594,7 +594,7 @@ void ComediBackend::push_event(ScanBlock& block, double time_s, const std::strin
     ++dropped_events_;
     return;
   }
-  block.events.push_back({time_s, "fault", channel, detail});
+  block.events.push_back({.time_s = time_s, .kind = "fault", .channel = channel, .detail = detail});
 }
 
 void ComediBackend::check_rails(ScanBlock& block, std::size_t first_scan, std::size_t scans) {
@@ -634,7 +634,8 @@ std::size_t ComediBackend::read(ScanBlock& block) {
   block.scan_count = 0;
   if (!announced_start_) {
     announced_start_ = true;
-    block.events.push_back({0.0, "trigger", "", "start: " + setup_.start});
+    block.events.push_back(
+        {.time_s = 0.0, .kind = "trigger", .channel = "", .detail = "start: " + setup_.start});
   }
   if (dropped_events_ > 0 && block.events.size() < block.events.capacity()) {
     push_event(block, static_cast<double>(scans_read_) / setup_.achieved_scan_rate_hz, "",

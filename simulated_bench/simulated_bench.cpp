@@ -193,16 +193,24 @@ std::size_t SimulatedBench::read(ScanBlock& block) {
   const std::size_t scans = block.capacity();
   for (std::size_t s = 0; s < scans; ++s) {
     const double scan_time_s = static_cast<double>(next_scan_) / scan_rate_hz_;
-    if (next_scan_ == 0) block.events.push_back({0.0, "trigger", "", "start (software)"});
+    if (next_scan_ == 0) {
+      block.events.push_back(
+          {.time_s = 0.0, .kind = "trigger", .channel = "", .detail = "start (software)"});
+    }
     // Strokes begin and end with the hand's phases; the load cell's mounting follows.
     const int stroke = hand_->stroke_at(scan_time_s);
     if (stroke != previous_stroke_) {
-      if (previous_stroke_ != 0) block.events.push_back({scan_time_s, "stroke_end", "", ""});
+      if (previous_stroke_ != 0) {
+        block.events.push_back(
+            {.time_s = scan_time_s, .kind = "stroke_end", .channel = "", .detail = ""});
+      }
       if (stroke != 0) {
         mounting_sign_ = hand_->mounting_at(scan_time_s);
         hand_->stroke_started(scan_time_s, state_.theta_rad);
-        block.events.push_back(
-            {scan_time_s, "stroke_start", "", mounting_sign_ > 0 ? "opening" : "closing"});
+        block.events.push_back({.time_s = scan_time_s,
+                                .kind = "stroke_start",
+                                .channel = "",
+                                .detail = mounting_sign_ > 0 ? "opening" : "closing"});
       }
       previous_stroke_ = stroke;
     }

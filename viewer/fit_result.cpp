@@ -67,9 +67,17 @@ FitResultFolder read_fit_result(const std::filesystem::path& dir) {
   if (!std::filesystem::exists(params)) throw std::runtime_error(params.string() + ": missing");
   const std::filesystem::path effects = dir / "fitted-effects.json";
   const bool has_effects = std::filesystem::exists(effects);
-  FitResultFolder result{
-      dir,  params, has_effects ? effects : std::filesystem::path(),      *kind, "", false, "", 0,
-      kNaN, kNaN,   load_model(*kind, params, has_effects ? effects : "")};
+  FitResultFolder result{.dir = dir,
+                         .params_path = params,
+                         .effects_path = has_effects ? effects : std::filesystem::path(),
+                         .model_kind = *kind,
+                         .source = "",
+                         .converged = false,
+                         .termination = "",
+                         .strokes = 0,
+                         .fitted_window_rmse_rad_s = kNaN,
+                         .held_out_window_rmse_rad_s = kNaN,
+                         .model = load_model(*kind, params, has_effects ? effects : "")};
   const nlohmann::json& source = field(json, "source", file);
   if (!source.is_string()) throw std::runtime_error(file + ": 'source' is not a string");
   result.source = source.get<std::string>();

@@ -32,7 +32,11 @@ struct StripBuilder {
   }
   void close() {
     if (open && out.points.size() - begin >= 2) {
-      out.strips.push_back({begin, out.points.size(), colour, width_px, layer});
+      out.strips.push_back({.begin = begin,
+                            .end = out.points.size(),
+                            .colour = colour,
+                            .width_px = width_px,
+                            .layer = layer});
     } else if (open) {
       out.points.resize(begin);  // a lone point draws nothing
     }
@@ -139,7 +143,12 @@ std::vector<Readout> PlotView::readout(double px, double py, const Rect& r) cons
     if (s->size() == 0) continue;
     const std::size_t i = s->nearest(xq, yq, r.width / x->span(), r.height / y.span());
     if (i >= s->size()) continue;
-    result.push_back({s->name(), s->unit(), s->x_unit(), i, s->x(i), s->y(i)});
+    result.push_back({.series = s->name(),
+                      .unit = s->unit(),
+                      .x_unit = s->x_unit(),
+                      .index = i,
+                      .x = s->x(i),
+                      .y = s->y(i)});
   }
   return result;
 }
@@ -149,7 +158,7 @@ void PlotView::build_draw_data(const Rect& r, DrawData& out) const {
   const std::size_t width = std::max<std::size_t>(1, std::size_t(std::lround(r.width)));
   const double top = r.y, bottom = r.y + r.height, left = r.x, right = r.x + r.width;
   for (const auto& s : series) {
-    StripBuilder strip{out, s->colour, s->width_px, s->layer};
+    StripBuilder strip{.out = out, .colour = s->colour, .width_px = s->width_px, .layer = s->layer};
     if (s->is_xy()) {
       float last_x = NAN, last_y = NAN;
       for (std::size_t i = 0; i < s->size(); ++i) {

@@ -39,8 +39,11 @@ std::shared_ptr<Series> channel_series(const SessionReader& reader, const Channe
   const Rgba colour{style.r, style.g, style.b, std::uint8_t(std::lround(255.0 * style.opacity))};
   for (const sensors::SampleStretch& stretch : stretches) {
     const std::size_t after = stretch.end < series->size() ? stretch.end : stretch.end - 1;
-    at_limit.push_back({series->x(stretch.begin), series->x(after), colour,
-                        limit->sensor + " " + info.name + " at its " + limit->range + " limit"});
+    at_limit.push_back(
+        {.x0 = series->x(stretch.begin),
+         .x1 = series->x(after),
+         .colour = colour,
+         .label = limit->sensor + " " + info.name + " at its " + limit->range + " limit"});
   }
   return series;
 }
@@ -73,8 +76,12 @@ void add_found_stroke_events(SessionData& session) {
   for (const Stroke& stroke : session.data.strokes) {
     const std::string direction =
         stroke.direction == StrokeDirection::kOpening ? "opening" : "closing";
-    session.events.push_back({motion_onset_s(stroke), "stroke_start", "", direction});
-    session.events.push_back({motion_end_s(stroke), "stroke_end", "", direction});
+    session.events.push_back({.time_s = motion_onset_s(stroke),
+                              .kind = "stroke_start",
+                              .channel = "",
+                              .detail = direction});
+    session.events.push_back(
+        {.time_s = motion_end_s(stroke), .kind = "stroke_end", .channel = "", .detail = direction});
   }
   std::stable_sort(
       session.events.begin(), session.events.end(),

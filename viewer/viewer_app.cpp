@@ -502,116 +502,110 @@ void Viewer::steps() {
   plots_.push_back(plot_widget("steps", steps_plot_, steps_state_, 0.0f, 0.0f, controls_));
 }
 
-void Viewer::tuning(SessionView& s) {
-  if (!tuning_model_) {
-    ImGui::TextWrapped("%s", kNoTuningModel);
-    return;
-  }
-  if (!s.tuning && s.tuning_message.empty()) {
-    try {
-      if (!s.data.prepared) throw std::invalid_argument(s.data.prepare_message);
-      s.tuning.emplace(s.data.data, *tuning_model_);
-    } catch (const std::exception& error) {
-      s.tuning_message = std::string("Cannot tune on this session: ").append(error.what());
-    }
-  }
-  if (!s.tuning) {
-    ImGui::TextWrapped("%s", s.tuning_message.c_str());
-    return;
-  }
-  Tuning& t = *s.tuning;
+namespace {
+
+// "Reset to fitted" and "Save as" with its file name; whether the model was reset. A save
+// or its error goes to `status`.
+bool tuning_reset_and_save(Tuning& t, char* save_path, std::size_t save_path_size,
+                           std::string& status) {
   bool changed = false;
-  ImGui::BeginChild("sliders", ImVec2(500.0f, 0.0f), true);
   if (ImGui::Button("Reset to fitted")) {
     t.reset();
     changed = true;
   }
   ImGui::SetNextItemWidth(260.0f);
-  ImGui::InputText("##save", save_path_, sizeof save_path_);
+  ImGui::InputText("##save", save_path, save_path_size);
   ImGui::SameLine();
   if (ImGui::Button("Save as")) {
     try {
-      const auto written = t.save(save_path_);
-      status_ = "wrote " + written.front().string();
+      const auto written = t.save(save_path);
+      status = "wrote " + written.front().string();
     } catch (const std::exception& error) {
-      status_ = error.what();
+      status = error.what();
     }
   }
-  // Which strokes each change replays: a checkbox per stroke of the session. The
-  // selection re-simulates at once (measured, fitted and tuned curves for those strokes).
-  ImGui::Separator();
+  return changed;
+}
+
+// Which strokes each change replays: a checkbox per stroke of the session, and buttons for
+// the first 12, all, the openings and the closings. The selection re-simulates at once
+// (measured, fitted and tuned curves for those strokes); a refusal goes to `status`.
+void stroke_selection(Tuning& t, const std::vector<Stroke>& strokes, std::string& status) {
   const std::string strokes_header = std::string("Strokes (")
                                          .append(std::to_string(t.stroke_count()))
                                          .append(" of ")
                                          .append(std::to_string(t.session_stroke_count()))
                                          .append(" replayed)###strokes");
-  if (ImGui::CollapsingHeader(strokes_header.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) {
-    auto select = [this, &t](std::vector<int> strokes) {
-      if (std::string problem = t.select_strokes(std::move(strokes)); !problem.empty())
-        status_ = problem;
-    };
-    if (ImGui::Button("First 12")) {
-      std::vector<int> first;
-      for (int i = 0; i < int(t.session_stroke_count()) && i < 12; ++i) first.push_back(i);
-      select(std::move(first));
+  if (!ImGui::CollapsingHeader(strokes_header.c_str(), ImGuiTreeNodeFlags_DefaultOpen)) return;
+  auto select = [&status, &t](std::vector<int> chosen) {
+    if (std::string problem = t.select_strokes(std::move(chosen)); !problem.empty())
+      status = problem;
+  };
+  auto of_direction = [&strokes](StrokeDirection direction) {
+    std::vector<int> chosen;
+    for (std::size_t i = 0; i < strokes.size(); ++i) {
+      if (strokes[i].direction == direction) chosen.push_back(int(i));
     }
-    ImGui::SameLine();
-    if (ImGui::Button("All")) {
-      std::vector<int> all(t.session_stroke_count());
-      for (std::size_t i = 0; i < all.size(); ++i) all[i] = int(i);
-      select(std::move(all));
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Openings")) {
-      std::vector<int> openings;
-      for (std::size_t i = 0; i < s.data.data.strokes.size(); ++i) {
-        if (s.data.data.strokes[i].direction == StrokeDirection::kOpening)
-          openings.push_back(int(i));
-      }
-      select(std::move(openings));
-    }
-    ImGui::SameLine();
-    if (ImGui::Button("Closings")) {
-      std::vector<int> closings;
-      for (std::size_t i = 0; i < s.data.data.strokes.size(); ++i) {
-        if (s.data.data.strokes[i].direction == StrokeDirection::kClosing)
-          closings.push_back(int(i));
-      }
-      select(std::move(closings));
-    }
-    ImGui::BeginChild("stroke list", ImVec2(0.0f, 160.0f), true);
-    for (std::size_t i = 0; i < s.data.data.strokes.size(); ++i) {
-      const Stroke& stroke = s.data.data.strokes[i];
-      char label[96];
-      std::snprintf(label, sizeof label, "%zu: stroke %d, %s, %.2f-%.2f s", i, stroke.id,
-                    stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
-                    stroke.time_s.empty() ? 0.0 : stroke.time_s.front(),
-                    stroke.time_s.empty() ? 0.0 : stroke.time_s.back());
-      bool on = t.is_selected(int(i));
-      if (ImGui::Checkbox(label, &on)) {
-        if (std::string problem = t.toggle_stroke(int(i)); !problem.empty()) status_ = problem;
-      }
-    }
-    ImGui::EndChild();
+    return chosen;
+  };
+  if (ImGui::Button("First 12")) {
+    std::vector<int> first;
+    for (int i = 0; i < int(t.session_stroke_count()) && i < 12; ++i) first.push_back(i);
+    select(std::move(first));
   }
-  if (t.model().kind() == ModelKind::kSensory) {
-    ImGui::Separator();
-    ImGui::TextUnformatted("Perceptual controls (spec 2)");
-    for (const perceptual::ControlInfo& info : perceptual::controls()) {
-      double value = perceptual::read(t.model(), info.control);
-      const std::string label = std::string(info.name).append(" [").append(info.unit).append("]");
-      const float speed = float(std::max(std::abs(value) * 0.003, 1e-6));
-      if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &value, speed, nullptr, nullptr,
-                            "%.5g")) {
-        const std::string problem = t.set_control(info.control, value);
-        if (problem.empty())
-          changed = true;
-        else
-          status_ = problem;
-      }
-      if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", std::string(info.meaning).c_str());
+  ImGui::SameLine();
+  if (ImGui::Button("All")) {
+    std::vector<int> all(t.session_stroke_count());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = int(i);
+    select(std::move(all));
+  }
+  ImGui::SameLine();
+  if (ImGui::Button("Openings")) select(of_direction(StrokeDirection::kOpening));
+  ImGui::SameLine();
+  if (ImGui::Button("Closings")) select(of_direction(StrokeDirection::kClosing));
+  ImGui::BeginChild("stroke list", ImVec2(0.0f, 160.0f), true);
+  for (std::size_t i = 0; i < strokes.size(); ++i) {
+    const Stroke& stroke = strokes[i];
+    char label[96];
+    std::snprintf(label, sizeof label, "%zu: stroke %d, %s, %.2f-%.2f s", i, stroke.id,
+                  stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
+                  stroke.time_s.empty() ? 0.0 : stroke.time_s.front(),
+                  stroke.time_s.empty() ? 0.0 : stroke.time_s.back());
+    bool on = t.is_selected(int(i));
+    if (ImGui::Checkbox(label, &on)) {
+      if (std::string problem = t.toggle_stroke(int(i)); !problem.empty()) status = problem;
     }
   }
+  ImGui::EndChild();
+}
+
+// The sensory model's perceptual controls (spec 2) as drag fields; whether one changed
+// the model (a refused value goes to `status`).
+bool perceptual_control_fields(Tuning& t, std::string& status) {
+  bool changed = false;
+  ImGui::Separator();
+  ImGui::TextUnformatted("Perceptual controls (spec 2)");
+  for (const perceptual::ControlInfo& info : perceptual::controls()) {
+    double value = perceptual::read(t.model(), info.control);
+    const std::string label = std::string(info.name).append(" [").append(info.unit).append("]");
+    const float speed = float(std::max(std::abs(value) * 0.003, 1e-6));
+    if (ImGui::DragScalar(label.c_str(), ImGuiDataType_Double, &value, speed, nullptr, nullptr,
+                          "%.5g")) {
+      const std::string problem = t.set_control(info.control, value);
+      if (problem.empty())
+        changed = true;
+      else
+        status = problem;
+    }
+    if (ImGui::IsItemHovered()) ImGui::SetTooltip("%s", std::string(info.meaning).c_str());
+  }
+  return changed;
+}
+
+// The model's parameters: a slider within finite bounds, else a drag field; whether one
+// changed the model (a refused value goes to `status`).
+bool parameter_sliders(Tuning& t, std::string& status) {
+  bool changed = false;
   ImGui::Separator();
   ImGui::TextUnformatted("Parameters");
   for (int i = 0; i < t.model().parameter_count(); ++i) {
@@ -634,9 +628,43 @@ void Viewer::tuning(SessionView& s) {
       if (problem.empty())
         changed = true;
       else
-        status_ = problem;
+        status = problem;
     }
   }
+  return changed;
+}
+
+}  // namespace
+
+// The stages: the tuning made on first showing, then in the left child the reset and save
+// row, the strokes replayed, the perceptual controls (sensory model) and the parameters;
+// a change re-simulates; the tuned plot on the right.
+void Viewer::tuning(SessionView& s) {
+  if (!tuning_model_) {
+    ImGui::TextWrapped("%s", kNoTuningModel);
+    return;
+  }
+  if (!s.tuning && s.tuning_message.empty()) {
+    try {
+      if (!s.data.prepared) throw std::invalid_argument(s.data.prepare_message);
+      s.tuning.emplace(s.data.data, *tuning_model_);
+    } catch (const std::exception& error) {
+      s.tuning_message = std::string("Cannot tune on this session: ").append(error.what());
+    }
+  }
+  if (!s.tuning) {
+    ImGui::TextWrapped("%s", s.tuning_message.c_str());
+    return;
+  }
+  Tuning& t = *s.tuning;
+  ImGui::BeginChild("sliders", ImVec2(500.0f, 0.0f), true);
+  bool changed = tuning_reset_and_save(t, save_path_, sizeof save_path_, status_);
+  ImGui::Separator();
+  stroke_selection(t, s.data.data.strokes, status_);
+  if (t.model().kind() == ModelKind::kSensory) {
+    changed = perceptual_control_fields(t, status_) || changed;
+  }
+  changed = parameter_sliders(t, status_) || changed;
   ImGui::EndChild();
   if (changed) t.resimulate();
   ImGui::SameLine();

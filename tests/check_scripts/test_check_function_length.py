@@ -87,20 +87,26 @@ class CheckFunctionLength(unittest.TestCase):
                               "lines\"\n")
 
     def test_every_default_folder_is_checked(self):
-        for folder in ("acquisition", "sensors", "analysis", "haptic"):
+        folders = ["core", "acquisition", "sensors", "calibration", "analysis",
+                   "simulated_bench", "viewer", "haptic", "study", "app", "bench", "fuzz"]
+        for folder in folders:
             write(self.root, f"{folder}/long.h", function_of_lines("too_long", 121))
         status, out, _ = run_check("--root", self.root)
         self.assertEqual(status, 1)
         self.assertEqual([line.split(":")[0] for line in out.splitlines()],
-                         ["acquisition/long.h", "sensors/long.h", "analysis/long.h",
-                          "haptic/long.h"])
+                         [f"{folder}/long.h" for folder in folders])
+
+    def test_tests_and_other_folders_are_not_checked_by_default(self):
+        write(self.root, "tests/app/test_long.cpp", function_of_lines("too_long", 121))
+        write(self.root, "examples/long.cpp", function_of_lines("too_long", 121))
+        self.assertEqual(run_check("--root", self.root), (0, "", ""))
 
     def test_a_folder_given_is_checked_too(self):
-        write(self.root, "viewer/long.cpp", function_of_lines("too_long", 121))
+        write(self.root, "examples/long.cpp", function_of_lines("too_long", 121))
         self.assertEqual(run_check("--root", self.root)[0], 0)
-        status, out, _ = run_check("--root", self.root, "viewer")
+        status, out, _ = run_check("--root", self.root, "examples")
         self.assertEqual(status, 1)
-        self.assertTrue(out.startswith("viewer/long.cpp:1: too_long is 121 lines"), out)
+        self.assertTrue(out.startswith("examples/long.cpp:1: too_long is 121 lines"), out)
 
     def test_a_missing_folder_given_is_a_usage_error(self):
         status, out, err = run_check("--root", self.root, "nowhere")

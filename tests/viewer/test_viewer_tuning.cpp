@@ -126,7 +126,7 @@ TEST_CASE("tuning replays strokes in parallel with the same result as one thread
       if (std::isnan(expected)) {
         REQUIRE(std::isnan(b.y(i)));
       } else {
-        REQUIRE(b.y(i) == expected * doorbench::plot_style::kDegPerRad);  // shown in deg/s
+        REQUIRE(b.y(i) == expected * doorbench::kDegPerRad);  // shown in deg/s
       }
       ++i;
     }
@@ -187,12 +187,12 @@ TEST_CASE("tuning re-simulates exactly the selected strokes", "[viewer]") {
       INFO("stroke " << k << " sample " << n);
       REQUIRE(tuned.x(i) == stroke.time_s[n]);
       // Shown in deg/s (viewer::to_display_units), the model run in rad/s.
-      REQUIRE(measured.y(i) == stroke.omega_rad_s[n] * doorbench::plot_style::kDegPerRad);
+      REQUIRE(measured.y(i) == stroke.omega_rad_s[n] * doorbench::kDegPerRad);
       const double hat = expected.omega_rad_s[k][n];
       if (std::isnan(hat)) {
         REQUIRE(std::isnan(tuned.y(i)));
       } else {
-        REQUIRE(tuned.y(i) == hat * doorbench::plot_style::kDegPerRad);
+        REQUIRE(tuned.y(i) == hat * doorbench::kDegPerRad);
         max_error = std::max(max_error, std::abs(stroke.omega_rad_s[n] - hat));
       }
     }
