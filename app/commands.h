@@ -34,6 +34,9 @@ void add_play_command(CLI::App& app, Action& action);
 void add_ab_command(CLI::App& app, Action& action);
 void add_spec_command(CLI::App& app, Action& action);
 void add_hapticmaster_command(CLI::App& app, Action& action);
+// `campaign` and its plan, run and merge; returns the campaign subcommand, to which other
+// campaign subcommands (e.g. `campaign analyze`) attach in main.cpp.
+CLI::App* add_campaign_command(CLI::App& app, Action& action);
 
 // The options every verb that builds a model shares.
 struct ModelOptions {

@@ -140,6 +140,8 @@ int main(int argc, char** argv) {
   doorbench::app::add_ab_command(app, action);
   doorbench::app::add_spec_command(app, action);
   doorbench::app::add_hapticmaster_command(app, action);
+  CLI::App* campaign = doorbench::app::add_campaign_command(app, action);
+  (void)campaign;  // campaign subcommands of other files attach here
 
   // `doorbench help VERB`: parsed as `doorbench VERB --help`.
   std::vector<std::string> help_args;
