@@ -510,6 +510,16 @@ DoorModel apply_steps(const DoorModel& model, const std::vector<Step>& steps) {
       } catch (const std::invalid_argument& wrong) {
         throw std::invalid_argument(what + ": " + wrong.what());
       }
+      // The model does not hold its values to the bounds: a step must.
+      for (int i = 0; i < result.parameter_count(); ++i) {
+        const double value = result.parameter_values()[i];
+        const Bounds bounds = result.parameter_bounds()[i];
+        if (value < bounds.lower || value > bounds.upper) {
+          throw std::invalid_argument(what + ": " + result.parameter_name(i) + " would be " + number_text(value) +
+                                      ", outside its bounds " + number_text(bounds.lower) + ".." +
+                                      number_text(bounds.upper));
+        }
+      }
       continue;
     }
     const std::optional<int> index = result.find_parameter(step.target);
