@@ -61,7 +61,7 @@ struct ParticipantModelOptions {
   double preference_spread_jnd = 1.5;  // sd of a participant's preference around it, JNDs
   double lapse_rate = 0.03;            // mean; each participant's is uniform on [0, 2×]
   double position_bias_sd = 0.2;       // in the decision's σ
-  double same_band = 0.5;              // 2-AC: utilities closer than this are "same"
+  double same_band = 1.5;              // 2-AC: utilities closer than this are "same"
   double rating_steps_per_jnd = 0.5;
   double rating_noise = 0.5;  // scale steps
   int max_presses = 60;       // tune
