@@ -13,6 +13,7 @@
 #include <iostream>
 #include <memory>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -22,6 +23,7 @@
 #include "app/session_recording.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
+#include "study/campaign_summary.h"
 #include "study/power.h"
 #include "study/random_stream.h"
 
@@ -171,7 +173,74 @@ void run_run(const RunCommandOptions& options) {
             << " in this run); answers in " << (std::filesystem::path(options.dir) / "trials.csv").string() << "\n";
 }
 
+// The demo's campaign: campaigns/example.toml's variants and blocks, made short (2
+// participants, fewer levels and trials, presentations of 0.2 s in simulated time).
+constexpr const char* kDemoCampaign = R"(
+[campaign]
+name = "demo"
+seed = 2026
+simulated_presentation_s = 0.2
+[variants]
+reference = "base"
+heavier = "heaviness*1.2"
+easier_unlatch = "latch_effort*0.7"
+lighter_smoother = "J*0.85,smoothness*0.8"
+[participants]
+count = 2
+[[blocks]]
+name = "tune"
+type = "tune"
+[[blocks]]
+name = "pair"
+type = "pair"
+question = "preference-2ac"
+[[blocks]]
+name = "rating"
+type = "rating"
+attributes = ["heavy-light"]
+pairs = [["reference", "heavier"], ["reference", "lighter_smoother"]]
+[[blocks]]
+name = "jnd-heaviness"
+type = "jnd"
+parameter = "J"
+levels = [1.1, 1.3]
+[[blocks]]
+name = "jnd-latch"
+type = "jnd"
+parameter = "latch_effort"
+method = "staircase"
+trials = 8
+)";
+
 }  // namespace
+
+void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
+  const std::filesystem::path campaign_path = dir / "demo-campaign.toml";
+  std::filesystem::create_directories(dir);
+  write_file_atomically(campaign_path, [](std::ostream& file) { file << kDemoCampaign; });
+  const study::Campaign campaign = study::read_campaign(campaign_path);
+  const std::filesystem::path folder = dir / "folder";
+  study::write_campaign_folder(folder, campaign, study::make_plan(campaign, campaign.seed), false);
+  const study::CampaignFolder opened = study::open_campaign_folder(folder);
+  RunCommandOptions options;
+  options.dir = folder.string();
+  options.respondent = "sim";
+  const study::Presenter presenter = make_presenter(options, opened.campaign);
+  std::ostringstream prompts;  // the operator's lines, not shown in the demo
+  for (const std::string& participant : opened.campaign.participants) {
+    options.participant = participant;
+    const std::unique_ptr<study::Respondent> respondent = make_respondent(options, opened);
+    study::run_participant(opened, study::RunOptions{participant, false}, *respondent, presenter, prompts);
+  }
+  out << "\na simulated campaign (" << opened.campaign.participants.size()
+      << " simulated participants on the simulated HapticMaster, " << opened.plan.rows.size()
+      << " trials; docs/campaign.md):\n";
+  for (const std::string& line :
+       study::block_summaries(opened.campaign, study::read_trials_table(folder / "trials.csv"))) {
+    out << "  " << line << "\n";
+  }
+  out << "  answers in " << (folder / "trials.csv").string() << "\n";
+}
 
 CLI::App* add_campaign_command(CLI::App& app, Action& action) {
   CLI::App* campaign = app.add_subcommand(
