@@ -247,31 +247,51 @@ TEST_CASE("campaign run: the operator's output names no variant; a finished part
                                                    "address; use a pseudonymous id such as P07"));
 }
 
-TEST_CASE("campaign run: answers that end and a device fault stop the run; the answers given stay and it resumes",
+TEST_CASE("campaign run: answers that end, a wrong answer and a device fault stop the run; the answers given stay",
           "[study][campaign][cli]") {
   TempDir dir("campaign_fault");
-  const fs::path folder = plan(dir, "c", 1);
-  // A person's answers file for the first trials only (P01's first block is the tune, which a
-  // person cannot do here: so a simulated run first, then the person).
-  const fs::path plan_csv = folder / "plan.csv";
-  const auto plan_table = doorbench::study::read_trials_table(plan_csv, std::vector<std::string_view>{"question"});
-  CHECK(plan_table.value(0, "question") == "tune");
-  // Trials 1..4 by the simulated participant, killed there; then a device that is not there.
-  run_killed(folder, "P01", 5, dir.path);  // (this resumes to the end: use it as a baseline)
-  const std::size_t all = count_rows_of(folder / "trials.csv", "P01");
-  CHECK(all == 29);
-
-  const fs::path folder2 = plan(dir, "c2", 1);
-  const Result fault = run({"campaign", "run", folder2.string(), "--participant", "P01", "--respondent", "sim",
-                            "--device", "hapticmaster://127.0.0.1:1"},
-                           dir.path);
+  // A person's answers: no tune block (a person cannot tune inside a campaign yet).
+  std::string text = campaign_text(1);
+  text.erase(text.find("[[blocks]]\nname = \"tune\""), std::string("[[blocks]]\nname = \"tune\"\ntype = \"tune\"\n").size());
+  const fs::path campaign = dir.write("person.toml", text);
+  REQUIRE(run({"campaign", "plan", campaign.string(), "--out", (dir / "p").string()}, dir.path).status == 0);
+  const fs::path folder = dir / "p";
+  const auto plan_table = doorbench::study::read_trials_table(folder / "plan.csv", std::vector<std::string_view>{"question"});
+  REQUIRE(plan_table.value(0, "question") == "preference-2ac");
+  const fs::path answers = dir.write("answers.txt", "1\nsame\n2\n");
+  const std::vector<std::string> person = {"campaign", "run", folder.string(), "--participant", "P01",
+                                           "--answers", answers.string()};
+  const Result ended = run(person, dir.path);
+  CHECK(ended.status == 1);
+  CHECK_THAT(ended.err, Catch::Matchers::EndsWith(
+                            "doorbench: trial 4 of 28 stopped: " + answers.string() + ": the answers ended at trial 4 (the 3 "
+                            "answers before it are in " + (folder / "trials.csv").string() +
+                            "; run the same command again to resume)\n"));
+  CHECK(count_rows_of(folder / "trials.csv", "P01") == 3);
+  dir.write("answers.txt", "9\n");
+  const Result wrong = run(person, dir.path);
+  CHECK(wrong.status == 1);
+  CHECK_THAT(wrong.err, Catch::Matchers::Contains(answers.string() + ":1: trial 4: expected 1, 2 or same (which felt "
+                                                  "better; same: no preference), got \"9\""));
+  CHECK(count_rows_of(folder / "trials.csv", "P01") == 3);
+  // The device is not there: trial 4 stops, the 3 answers stay; then the rest on the
+  // simulated device, resumed at trial 4.
+  dir.write("answers.txt", "1\n");
+  std::vector<std::string> faulty = person;
+  faulty.insert(faulty.end(), {"--device", "hapticmaster://127.0.0.1:1"});
+  const Result fault = run(faulty, dir.path);
   CHECK(fault.status == 1);
-  CHECK_THAT(fault.err, Catch::Matchers::Contains("doorbench: trial 1 of 29 stopped: "));
-  CHECK_THAT(fault.err, Catch::Matchers::Contains("(the 0 answers before it are in "));
-  CHECK(count_rows_of(folder2 / "trials.csv", "P01") == 0);
-  // Resumed on the simulated device it finishes; answers equal the baseline's.
-  REQUIRE(run(run_args(folder2, "P01"), dir.path).status == 0);
-  CHECK(timeless_rows(folder2).size() == 29);
+  CHECK_THAT(fault.err, Catch::Matchers::Contains("doorbench: trial 4 of 28 stopped: "));
+  CHECK(count_rows_of(folder / "trials.csv", "P01") == 3);
+  const Result rest = run(run_args(folder, "P01"), dir.path);
+  INFO(rest.err);
+  REQUIRE(rest.status == 0);
+  CHECK_THAT(rest.err, Catch::Matchers::Contains("resuming at trial 4 of 28"));
+  const auto table = doorbench::study::read_trials_table(folder / "trials.csv");
+  REQUIRE(table.rows.size() == 28);
+  CHECK(table.value(0, "answer") == "1");
+  CHECK(table.value(1, "answer") == "same");
+  CHECK(table.value(2, "answer") == "2");
 }
 
 TEST_CASE("campaign merge joins folders of one plan and refuses another plan's", "[study][campaign][cli]") {
