@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/output_file.h"
+#include "acquisition/session/output_file.h"
 #include "app/commands.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"

@@ -9,8 +9,8 @@
 #include <optional>
 #include <set>
 
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
 
 namespace doorbench::study {
 namespace {

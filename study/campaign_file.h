@@ -21,7 +21,7 @@
 #include <utility>
 #include <vector>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench::study {
 

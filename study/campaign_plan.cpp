@@ -7,8 +7,8 @@
 #include <random>
 #include <sstream>
 
-#include "acquisition/output_file.h"
-#include "analysis/perceptual_controls.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/model/perceptual_controls.h"
 #include "haptic/tuning_keys.h"
 #include "study/latin_square.h"
 #include "study/random_stream.h"

@@ -16,8 +16,8 @@
 #include <set>
 #include <stdexcept>
 
-#include "acquisition/output_file.h"
-#include "analysis/parameter_file.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/model/parameter_file.h"
 #include "study/random_stream.h"
 #include "study/staircase.h"
 #include "study/trials_table.h"

@@ -26,7 +26,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 #include "study/campaign_plan.h"
 #include "study/participant_model.h"
 

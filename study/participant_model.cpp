@@ -4,7 +4,7 @@
 #include <cmath>
 #include <stdexcept>
 
-#include "analysis/perceptual_controls.h"
+#include "analysis/model/perceptual_controls.h"
 #include "haptic/tuning_keys.h"
 #include "study/random_stream.h"
 

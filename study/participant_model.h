@@ -42,7 +42,7 @@
 #include <string_view>
 #include <vector>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench::study {
 

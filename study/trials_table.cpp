@@ -9,13 +9,8 @@ namespace {
 
 std::string located(std::string_view source, int line, std::string_view detail) {
   std::string text(source);
-  // Appended piece by piece: GCC 12 warns (-Wrestrict, a false positive) on ":" + string.
-  if (line > 0) {
-    text += ':';
-    text += std::to_string(line);
-  }
-  text += ": ";
-  text += detail;
+  if (line > 0) text.append(":").append(std::to_string(line));
+  text.append(": ").append(detail);
   return text;
 }
 

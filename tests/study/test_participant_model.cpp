@@ -3,8 +3,8 @@
 #include <cmath>
 #include <random>
 
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
 #include "study/campaign_file.h"
 #include "study/campaign_run.h"
 #include "study/participant_model.h"
