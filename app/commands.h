@@ -5,7 +5,9 @@
 // or is an input (exit 2), and any other std::exception for failures (exit 1); main()
 // prints the message after "doorbench: ", control characters escaped.
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <functional>
+#include <iosfwd>
 #include <stdexcept>
 #include <string>
 
@@ -38,6 +40,11 @@ void add_play_command(CLI::App& app, Action& action);
 void add_ab_command(CLI::App& app, Action& action);
 void add_spec_command(CLI::App& app, Action& action);
 void add_hapticmaster_command(CLI::App& app, Action& action);
+// `campaign` and its plan, run and merge; returns the campaign subcommand, to which other
+// campaign subcommands (e.g. `campaign analyze`) attach in main.cpp.
+CLI::App* add_campaign_command(CLI::App& app, Action& action);
+// The demo's short simulated campaign into `dir`, a summary line per block on `out`.
+void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out);
 // `campaign analyze`, added to the `campaign` verb (app/campaign_analyze_command.cpp).
 void add_campaign_analyze(CLI::App& campaign, Action& action);
 

@@ -349,6 +349,7 @@ void run_demo(const DemoOptions& options) {
   const DoorModel fitted = close_the_loop(dir);
   play_and_fit_back(dir, fitted);
   specify_tuned_variant(dir);
+  run_demo_campaign(dir / "campaign", std::cout);
   std::cout << "\nruns, parameter files and plots (angle.svg, hand-force.svg, "
                "force-angle-latch.svg) are in "
             << dir.string() << "/\n";

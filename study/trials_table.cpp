@@ -125,6 +125,11 @@ const std::string& TrialsTable::value(std::size_t row, std::string_view name) co
 }
 
 TrialsTable parse_trials_table(std::string_view text, std::string_view source) {
+  return parse_trials_table(text, source, kTrialsColumns);
+}
+
+TrialsTable parse_trials_table(std::string_view text, std::string_view source,
+                               std::span<const std::string_view> required_columns) {
   RecordReader reader(text, source);
   TrialsTable table;
   table.source = std::string(source);
@@ -139,7 +144,7 @@ TrialsTable parse_trials_table(std::string_view text, std::string_view source) {
       }
     }
   }
-  for (std::string_view required : kTrialsColumns) {
+  for (std::string_view required : required_columns) {
     if (!table.find_column(required)) {
       throw TrialsTableError(source, header->line,
                              "no column '" + std::string(required) + "' (the header has: " +
@@ -159,11 +164,16 @@ TrialsTable parse_trials_table(std::string_view text, std::string_view source) {
 }
 
 TrialsTable read_trials_table(const std::filesystem::path& path) {
+  return read_trials_table(path, kTrialsColumns);
+}
+
+TrialsTable read_trials_table(const std::filesystem::path& path,
+                              std::span<const std::string_view> required) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw TrialsTableError(path.string(), 0, "cannot open for reading");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (text.empty()) throw TrialsTableError(path.string(), 0, "is empty");
-  return parse_trials_table(text, path.string());
+  return parse_trials_table(text, path.string(), required);
 }
 
 std::string csv_field(std::string_view value) {

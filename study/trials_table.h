@@ -18,6 +18,7 @@
 #include <filesystem>
 #include <optional>
 #include <ostream>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
@@ -57,9 +58,14 @@ struct TrialsTable {
 // with more or fewer fields than the header, an unterminated quote, a quote inside an
 // unquoted field. Blank lines are skipped. A byte-order mark and CRLF line ends are read.
 TrialsTable parse_trials_table(std::string_view text, std::string_view source);
+// The same with other required columns (plan.csv's, study/campaign_plan.h).
+TrialsTable parse_trials_table(std::string_view text, std::string_view source,
+                               std::span<const std::string_view> required);
 
 // Reads a file ("PATH: cannot open for reading", "PATH: is empty").
 TrialsTable read_trials_table(const std::filesystem::path& path);
+TrialsTable read_trials_table(const std::filesystem::path& path,
+                              std::span<const std::string_view> required);
 
 // One field as written: quoted when it holds ',', '"', '\r' or '\n' or starts or ends with a
 // space; otherwise as is.

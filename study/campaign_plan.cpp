@@ -1,0 +1,271 @@
+#include "study/campaign_plan.h"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <sstream>
+
+#include "acquisition/session/output_file.h"
+#include "analysis/model/perceptual_controls.h"
+#include "haptic/tuning_keys.h"
+#include "study/latin_square.h"
+#include "study/random_stream.h"
+#include "study/trials_table.h"
+
+namespace doorbench::study {
+namespace {
+
+struct Pending {
+  std::string question, first, second;
+};
+
+std::string level_text(double value, int decimals) {
+  char buffer[64];
+  std::snprintf(buffer, sizeof buffer, "%.*f", decimals, value);
+  std::string text = buffer;
+  if (text.find('.') != std::string::npos) {
+    while (text.back() == '0') text.pop_back();
+    if (text.back() == '.') text.pop_back();
+  }
+  return text;
+}
+
+// The controls the tuning keys move, each once, in the key map's order.
+std::vector<perceptual::Control> tuned_controls() {
+  std::vector<perceptual::Control> controls;
+  for (const haptic::TuningKey& key : haptic::tuning_keys()) {
+    bool seen = false;
+    for (perceptual::Control c : controls) seen = seen || c == key.control;
+    if (!seen) controls.push_back(key.control);
+  }
+  return controls;
+}
+
+std::string tune_start(const Campaign& campaign, const Block& block, std::mt19937_64& random) {
+  const DoorModel base = base_model(campaign);
+  const double span = std::log1p(block.start_spread);
+  for (int attempt = 0; attempt < 100; ++attempt) {
+    std::vector<Step> steps;
+    for (perceptual::Control control : tuned_controls()) {
+      const double factor = std::exp((2.0 * uniform_open01(random) - 1.0) * span);
+      for (const perceptual::ControlInfo& info : perceptual::controls()) {
+        if (info.control == control) steps.push_back({std::string(info.name), std::stod(level_text(factor, 3))});
+      }
+    }
+    try {
+      (void)apply_steps(base, steps);
+      return steps_text(steps);
+    } catch (const std::invalid_argument&) {
+      // A start outside the bounds or the constraints: draw again.
+    }
+  }
+  throw std::invalid_argument("block " + block.name + ": no tuning start within the bounds after 100 draws (start_spread " +
+                              level_text(block.start_spread, 3) + ")");
+}
+
+std::vector<Pending> block_trials(const Campaign& campaign, const Block& block, int participant,
+                                  std::mt19937_64& random) {
+  std::vector<Pending> trials;
+  switch (block.type) {
+    case BlockType::kTune:
+      trials.push_back({"tune", tune_start(campaign, block, random), ""});
+      return trials;
+    case BlockType::kPair:
+      for (int r = 0; r < block.repetitions; ++r) {
+        for (const auto& [a, b] : block.pairs) {
+          trials.push_back({std::string(to_string(block.question)), a, b});
+          trials.push_back({std::string(to_string(block.question)), b, a});
+        }
+      }
+      break;
+    case BlockType::kRating: {
+      int k = participant;
+      for (int r = 0; r < block.repetitions; ++r) {
+        for (const std::string& attribute : block.attributes) {
+          const std::string question = "rating:" + attribute + ":" + std::to_string(block.scale);
+          for (const auto& [a, b] : block.pairs) {
+            trials.push_back(++k % 2 == 0 ? Pending{question, a, b} : Pending{question, b, a});
+          }
+        }
+      }
+      break;
+    }
+    case BlockType::kJnd: {
+      const std::string question = "stronger:" + block.parameter;
+      const std::string standard = jnd_stimulus_name(block.parameter, 1.0);
+      std::vector<std::string> comparisons;
+      if (block.method == JndMethod::kConstantStimuli) {
+        for (int r = 0; r < block.repetitions; ++r) {
+          for (double level : block.levels) comparisons.push_back(jnd_stimulus_name(block.parameter, level));
+        }
+      } else {
+        comparisons.assign(block.trials, block.parameter + "*?");
+      }
+      // The comparison first in half of the trials (one more chosen by the draw when odd).
+      std::vector<bool> first(comparisons.size(), false);
+      for (std::size_t i = 0; i < first.size(); ++i) first[i] = i % 2 == 0;
+      if (first.size() % 2 == 1) first.back() = uniform_below(random, 2) == 0;
+      shuffle_in_place(first, random);
+      for (std::size_t i = 0; i < comparisons.size(); ++i) {
+        trials.push_back(first[i] ? Pending{question, comparisons[i], standard}
+                                  : Pending{question, standard, comparisons[i]});
+      }
+      if (block.method == JndMethod::kStaircase) return trials;  // slots stay in order
+      break;
+    }
+  }
+  shuffle_in_place(trials, random);
+  return trials;
+}
+
+}  // namespace
+
+std::vector<PlanRow> Plan::of(const std::string& participant) const {
+  std::vector<PlanRow> result;
+  for (const PlanRow& row : rows) {
+    if (row.participant == participant) result.push_back(row);
+  }
+  return result;
+}
+
+std::string jnd_stimulus_name(const std::string& parameter, double level) {
+  return parameter + "*" + level_text(level, 4);
+}
+
+Plan make_plan(const Campaign& campaign, std::uint64_t seed) {
+  Plan plan;
+  plan.seed = seed;
+  const std::vector<std::vector<int>> orders = williams_design(static_cast<int>(campaign.blocks.size()));
+  for (std::size_t p = 0; p < campaign.participants.size(); ++p) {
+    const std::vector<int>& order = orders[p % orders.size()];
+    int trial = 0;
+    for (int b : order) {
+      const Block& block = campaign.blocks[b];
+      std::mt19937_64 random(substream_seed(seed, p, b, Purpose::kTrialOrder));
+      int block_trial = 0;
+      for (Pending& pending : block_trials(campaign, block, static_cast<int>(p), random)) {
+        PlanRow row;
+        row.participant = campaign.participants[p];
+        row.block = block.name;
+        row.trial = ++trial;
+        row.block_trial = ++block_trial;
+        row.question = std::move(pending.question);
+        row.first = std::move(pending.first);
+        row.second = std::move(pending.second);
+        plan.rows.push_back(std::move(row));
+      }
+    }
+  }
+  return plan;
+}
+
+std::string plan_csv(const Plan& plan) {
+  std::string text = csv_row({"participant", "block", "trial", "question", "first", "second", "block_trial"});
+  for (const PlanRow& row : plan.rows) {
+    text += csv_row({row.participant, row.block, std::to_string(row.trial), row.question, row.first,
+                     row.second, std::to_string(row.block_trial)});
+  }
+  return text;
+}
+
+Plan read_plan_csv(const std::filesystem::path& path, std::uint64_t seed) {
+  static constexpr std::string_view kColumns[] = {"participant", "block",  "trial", "question",
+                                                  "first",       "second", "block_trial"};
+  const TrialsTable table = read_trials_table(path, kColumns);
+  Plan plan;
+  plan.seed = seed;
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    PlanRow row;
+    row.participant = table.value(r, "participant");
+    row.block = table.value(r, "block");
+    row.question = table.value(r, "question");
+    row.first = table.value(r, "first");
+    row.second = table.value(r, "second");
+    try {
+      row.trial = std::stoi(table.value(r, "trial"));
+      row.block_trial = std::stoi(table.value(r, "block_trial"));
+    } catch (const std::exception&) {
+      throw TrialsTableError(path.string(), table.line_numbers[r], "trial and block_trial must be whole numbers");
+    }
+    plan.rows.push_back(std::move(row));
+  }
+  return plan;
+}
+
+std::string fnv1a64_hex(std::string_view text) {
+  std::uint64_t hash = 0xcbf29ce484222325ULL;
+  for (unsigned char c : text) {
+    hash ^= c;
+    hash *= 0x100000001b3ULL;
+  }
+  char buffer[17];
+  std::snprintf(buffer, sizeof buffer, "%016llx", static_cast<unsigned long long>(hash));
+  return buffer;
+}
+
+std::string PlanIdentity::text() const {
+  return "campaign = " + campaign + "\nseed = " + std::to_string(seed) + "\nplan_fnv1a64 = " + plan_hash +
+         "\ncampaign_fnv1a64 = " + campaign_hash + "\ncampaign_folder = " + campaign_folder.string() + "\n";
+}
+
+void write_campaign_folder(const std::filesystem::path& dir, const Campaign& campaign,
+                           const Plan& plan, bool overwrite) {
+  check_output_folder(dir, {campaign.source}, overwrite);
+  std::filesystem::create_directories(dir);
+  const std::string csv = plan_csv(plan);
+  PlanIdentity identity;
+  identity.campaign = campaign.name;
+  identity.seed = plan.seed;
+  identity.plan_hash = fnv1a64_hex(csv);
+  identity.campaign_hash = fnv1a64_hex(campaign.text);
+  identity.campaign_folder = std::filesystem::absolute(std::filesystem::path(campaign.source)).parent_path();
+  const auto write = [&](const char* name, const std::string& text) {
+    write_file_atomically(dir / name, [&](std::ostream& out) { out << text; });
+  };
+  write("campaign.toml", campaign.text);
+  write("plan.csv", csv);
+  write("plan-id.txt", identity.text());
+}
+
+PlanIdentity read_plan_identity(const std::filesystem::path& dir) {
+  const std::filesystem::path path = dir / "plan-id.txt";
+  std::ifstream in(path);
+  if (!in) throw CampaignError(path.string() + ": cannot open for reading (is " + dir.string() + " a campaign folder made by `doorbench campaign plan`?)");
+  PlanIdentity identity;
+  std::string line;
+  int number = 0;
+  while (std::getline(in, line)) {
+    ++number;
+    const std::size_t eq = line.find(" = ");
+    if (eq == std::string::npos) throw CampaignError(path.string() + ":" + std::to_string(number) + ": expected KEY = VALUE");
+    const std::string key = line.substr(0, eq), value = line.substr(eq + 3);
+    if (key == "campaign") identity.campaign = value;
+    else if (key == "seed") identity.seed = std::stoull(value);
+    else if (key == "plan_fnv1a64") identity.plan_hash = value;
+    else if (key == "campaign_fnv1a64") identity.campaign_hash = value;
+    else if (key == "campaign_folder") identity.campaign_folder = value;
+    else throw CampaignError(path.string() + ":" + std::to_string(number) + ": " + key + ": unknown key");
+  }
+  std::ifstream plan_in(dir / "plan.csv", std::ios::binary);
+  const std::string csv((std::istreambuf_iterator<char>(plan_in)), std::istreambuf_iterator<char>());
+  if (fnv1a64_hex(csv) != identity.plan_hash) {
+    throw CampaignError((dir / "plan.csv").string() + ": does not match plan-id.txt (plan_fnv1a64 " + identity.plan_hash +
+                        ", the file's " + fnv1a64_hex(csv) + "): the plan was changed after it was made");
+  }
+  return identity;
+}
+
+CampaignFolder open_campaign_folder(const std::filesystem::path& dir) {
+  CampaignFolder folder;
+  folder.dir = dir;
+  folder.identity = read_plan_identity(dir);
+  std::ifstream in(dir / "campaign.toml", std::ios::binary);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  folder.campaign = parse_campaign(text, (dir / "campaign.toml").string(), folder.identity.campaign_folder);
+  folder.plan = read_plan_csv(dir / "plan.csv", folder.identity.seed);
+  return folder;
+}
+
+}  // namespace doorbench::study

@@ -1,0 +1,156 @@
+#pragma once
+// Running one participant's schedule (docs/campaign.md, "Running", "Resume"): each trial's
+// two presentations through a Presenter (the app plays them on the device and records each as
+// a session), the answer from a Respondent (a person through the operator's keyboard or an
+// answers file, or a simulated participant), and the row appended to DIR/trials.csv, written
+// with one write(), flushed and fsync()ed before the next trial starts.
+//
+// Resume: the rows already in trials.csv for this participant (and attempt) are checked
+// against the plan, in order, and the run continues at the next unanswered trial; a torn
+// last line (a write cut by a crash) is cut off first. Sessions and tuned files of the
+// unanswered trial left by the interrupted run are moved into sessions/P/interrupted/, never
+// overwritten. A participant who has answered every trial is refused unless `redo`: then a
+// new attempt (column `attempt`) starts from trial 1 and the earlier rows stay as they are.
+// Two runs of one participant at once are refused (a lock file under DIR/locks/).
+//
+// The prompts (the operator's screen) name trial numbers and the labels 1 and 2 only, never
+// a variant or a stimulus.
+// Thread safety: one run per participant at a time (enforced across processes).
+#include <filesystem>
+#include <functional>
+#include <iosfwd>
+#include <map>
+#include <memory>
+#include <optional>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "analysis/model/door_model.h"
+#include "study/campaign_plan.h"
+#include "study/participant_model.h"
+
+namespace doorbench::study {
+
+// What a presentation plays: a model, or the real door on the bench (model empty).
+struct Stimulus {
+  std::string name;  // a variant's name, "J*1.1", or a tune start's steps
+  std::optional<DoorModel> model;
+  std::string parameters;  // the rendered parameters, "J=1.045 k=0.12 ..." (empty: real door)
+};
+
+struct PresentationCall {
+  std::string participant;
+  int trial = 0;
+  int position = 1;  // 1 or 2
+  const Stimulus* stimulus = nullptr;
+  std::filesystem::path session_path;  // must not exist; the presenter records it there
+};
+// Plays one presentation and records it; throws (std::exception) on a device fault.
+using Presenter = std::function<void(const PresentationCall&)>;
+
+class Respondent {
+ public:
+  virtual ~Respondent() = default;
+  // The answer as trials.csv spells it ("1", "2", "same", "r1 r2"); throws std::runtime_error
+  // when none can be had (the answers ran out, a wrong scripted answer).
+  virtual std::string answer(const PlanRow& row, const Stimulus& first, const Stimulus& second,
+                             std::ostream& prompts) = 0;
+  // The tuned door from `start`.
+  virtual DoorModel tune(const PlanRow& row, const DoorModel& start, std::ostream& prompts) = 0;
+};
+
+// The simulated participant of study/participant_model.h, drawn from `seed`; each trial's
+// answer from its own substream (seed, attempt, trial), so a resumed run answers as an
+// uninterrupted one would.
+class SimulatedRespondent : public Respondent {
+ public:
+  SimulatedRespondent(std::uint64_t seed, const DoorModel& base, int attempt = 1,
+                      const ParticipantModelOptions& options = {});
+  std::string answer(const PlanRow& row, const Stimulus& first, const Stimulus& second,
+                     std::ostream& prompts) override;
+  DoorModel tune(const PlanRow& row, const DoorModel& start, std::ostream& prompts) override;
+  const SimulatedParticipant& participant() const { return participant_; }
+  void set_attempt(int attempt) { attempt_ = attempt; }
+
+ private:
+  std::mt19937_64 stream(const PlanRow& row) const;
+  SimulatedParticipant participant_;
+  std::uint64_t seed_;
+  int attempt_;
+};
+
+// A person: answer lines from `next_line` (stdin or a file). A wrong answer is asked again
+// when `interactive`, else ends the run naming `source` and the line.
+class LineRespondent : public Respondent {
+ public:
+  LineRespondent(std::function<std::optional<std::string>()> next_line, std::string source,
+                 bool interactive);
+  std::string answer(const PlanRow& row, const Stimulus& first, const Stimulus& second,
+                     std::ostream& prompts) override;
+  DoorModel tune(const PlanRow& row, const DoorModel& start, std::ostream& prompts) override;
+
+ private:
+  std::function<std::optional<std::string>()> next_line_;
+  std::string source_;
+  bool interactive_;
+  int line_ = 0;
+};
+
+// The answer `text` checked against `question` and spelled as trials.csv keeps it; throws
+// std::invalid_argument saying what was expected, e.g.
+// `expected 1, 2 or same (which felt better; same: no preference), got "3"`.
+std::string normalized_answer(std::string_view question, std::string_view text);
+
+// The stimuli of a trial: models built once per name and kept in the cache.
+class StimulusMaker {
+ public:
+  explicit StimulusMaker(const Campaign& campaign);
+  // `staircase_correct`: the answers so far in this row's block (a staircase slot's level).
+  std::pair<Stimulus, Stimulus> make(const PlanRow& row, const std::vector<bool>& staircase_correct);
+  Stimulus named(const std::string& name);
+  const Campaign& campaign() const { return *campaign_; }
+  const DoorModel& base() const { return base_; }
+
+ private:
+  const Campaign* campaign_;
+  DoorModel base_;
+  std::map<std::string, Stimulus> cache_;
+};
+
+// The block of `row` (std::invalid_argument when the campaign has none of that name).
+const Block& block_of(const Campaign& campaign, const PlanRow& row);
+// Whether a stronger:PARAM answer named the comparison (the stimulus that is not PARAM*1).
+bool names_comparison(const std::string& first, const std::string& second,
+                      const std::string& answer, const std::string& parameter);
+
+struct RunOptions {
+  std::string participant;
+  bool redo = false;
+};
+
+struct RunResult {
+  int attempt = 1;
+  int planned = 0;
+  int answered_before = 0;  // in this attempt, before this run
+  int answered_now = 0;
+  bool finished() const { return answered_before + answered_now == planned; }
+};
+
+// The trials.csv header this run writes.
+const std::vector<std::string>& trials_columns();
+
+// Runs (or resumes) `options.participant`. Throws std::runtime_error (device fault, answers
+// ended, a trials.csv that does not match the plan, a finished participant without redo, a
+// participant not in the plan) after every answer so far is safely in trials.csv.
+RunResult run_participant(const CampaignFolder& folder, const RunOptions& options,
+                          Respondent& respondent, const Presenter& presenter, std::ostream& prompts);
+
+// Joins campaign folders of one plan into `out` (which must not exist or be empty):
+// campaign.toml, plan.csv and plan-id.txt once, trials.csv with every folder's rows, the
+// sessions and tuned files (hard-linked where possible, else copied). Refused: folders of
+// different plans or seeds (naming both), one participant with rows in two folders.
+void merge_campaign_folders(const std::vector<std::filesystem::path>& dirs,
+                            const std::filesystem::path& out);
+
+}  // namespace doorbench::study

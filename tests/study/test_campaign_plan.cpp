@@ -1,0 +1,168 @@
+// The campaign file, the plan and its counterbalancing (docs/campaign.md).
+#include <catch2/catch.hpp>
+#include <map>
+#include <set>
+
+#include "study/campaign_file.h"
+#include "study/campaign_plan.h"
+#include "study/latin_square.h"
+#include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
+
+using namespace doorbench::study;
+using doorbench::testing::TempDir;
+
+namespace {
+
+// A small campaign: 4 variants, 5 blocks; `extra` goes at the end.
+std::string campaign_text(const std::string& participants = "count = 20",
+                          const std::string& extra = "") {
+  return "[campaign]\nname = \"t\"\nseed = 7\n"
+         "[variants]\nreference = \"base\"\nheavier = \"heaviness*1.2\"\n"
+         "easier_unlatch = \"latch_effort*0.7\"\nlighter = \"J*0.85,smoothness*0.8\"\n"
+         "[participants]\n" + participants + "\n"
+         "[[blocks]]\nname = \"tune\"\ntype = \"tune\"\n"
+         "[[blocks]]\nname = \"pair\"\ntype = \"pair\"\nquestion = \"preference-2ac\"\n"
+         "[[blocks]]\nname = \"rating\"\ntype = \"rating\"\nattributes = [\"heavy-light\"]\nscale = 5\n"
+         "[[blocks]]\nname = \"jnd-J\"\ntype = \"jnd\"\nparameter = \"J\"\nlevels = [1.1, 1.3]\nrepetitions = 2\n"
+         "[[blocks]]\nname = \"jnd-latch\"\ntype = \"jnd\"\nparameter = \"latch_effort\"\nmethod = \"staircase\"\ntrials = 6\n" +
+         extra;
+}
+
+Campaign parsed(const std::string& text) { return parse_campaign(text, "c.toml", "."); }
+
+}  // namespace
+
+TEST_CASE("Williams designs: each condition in each position equally often, carry-over balanced",
+          "[study][campaign]") {
+  for (int n = 1; n <= 9; ++n) {
+    const auto rows = williams_design(n);
+    const int expected_rows = (n % 2 == 0 || n == 1) ? n : 2 * n;
+    REQUIRE(static_cast<int>(rows.size()) == expected_rows);
+    const int per_cell = expected_rows / n;
+    std::map<std::pair<int, int>, int> position_count, carry_over;
+    for (const auto& row : rows) {
+      REQUIRE(static_cast<int>(row.size()) == n);
+      REQUIRE(std::set<int>(row.begin(), row.end()).size() == static_cast<std::size_t>(n));
+      for (int p = 0; p < n; ++p) ++position_count[{row[p], p}];
+      for (int p = 0; p + 1 < n; ++p) ++carry_over[{row[p], row[p + 1]}];
+    }
+    for (int c = 0; c < n; ++c) {
+      for (int p = 0; p < n; ++p) CHECK(position_count[{c, p}] == per_cell);
+    }
+    // Every ordered pair a -> b (a != b) directly after each other equally often.
+    for (int a = 0; a < n; ++a) {
+      for (int b = 0; b < n; ++b) {
+        if (a != b) CHECK(carry_over[{a, b}] == per_cell);
+      }
+    }
+  }
+}
+
+TEST_CASE("A plan's block order is balanced across participants and the same seed gives the same plan",
+          "[study][campaign]") {
+  const Campaign campaign = parsed(campaign_text());
+  const Plan plan = make_plan(campaign, 7);
+  // 5 blocks: the design has 10 rows, 20 participants take each twice.
+  std::map<std::pair<std::string, int>, int> position_count;
+  std::map<std::pair<std::string, std::string>, int> carry_over;
+  for (const std::string& id : campaign.participants) {
+    std::vector<std::string> order;
+    for (const PlanRow& row : plan.of(id)) {
+      if (order.empty() || order.back() != row.block) order.push_back(row.block);
+    }
+    REQUIRE(order.size() == 5);
+    for (int p = 0; p < 5; ++p) ++position_count[{order[p], p}];
+    for (int p = 0; p + 1 < 5; ++p) ++carry_over[{order[p], order[p + 1]}];
+  }
+  for (const Block& block : campaign.blocks) {
+    for (int p = 0; p < 5; ++p) CHECK(position_count[{block.name, p}] == 4);
+    for (const Block& next : campaign.blocks) {
+      if (next.name != block.name) CHECK(carry_over[{block.name, next.name}] == 4);
+    }
+  }
+  // Per participant: 1 tune + 12 pair + 6 rating + 4 constant + 6 staircase trials.
+  CHECK(plan.of("P01").size() == 29);
+  // Each pair in both orders; the jnd comparison first in half of its trials.
+  std::map<std::pair<std::string, std::string>, int> ordered;
+  int comparison_first = 0;
+  for (const PlanRow& row : plan.of("P03")) {
+    if (row.block == "pair") ++ordered[{row.first, row.second}];
+    if (row.block == "jnd-latch") comparison_first += row.first == "latch_effort*?";
+    if (row.block == "jnd-J") CHECK((row.first == "J*1" || row.second == "J*1"));
+  }
+  CHECK(ordered.size() == 12);
+  for (const auto& [pair, count] : ordered) CHECK(count == 1);
+  CHECK(comparison_first == 3);
+
+  CHECK(plan_csv(make_plan(campaign, 7)) == plan_csv(plan));
+  CHECK(plan_csv(make_plan(campaign, 8)) != plan_csv(plan));
+  // The same on any machine: pinned (mt19937_64 and our own draws; a change here changes
+  // every plan made before).
+  CHECK(fnv1a64_hex(plan_csv(plan)) == "e3f62e997f0cd128");
+}
+
+TEST_CASE("A plan folder keeps the campaign, the plan and its identity, read back and checked",
+          "[study][campaign]") {
+  TempDir dir("campaign_plan");
+  const auto path = dir.write("c.toml", campaign_text("ids = [\"P01\", \"sub-02\"]"));
+  const Campaign campaign = read_campaign(path);
+  write_campaign_folder(dir / "out", campaign, make_plan(campaign, 3), false);
+  const CampaignFolder folder = open_campaign_folder(dir / "out");
+  CHECK(folder.identity.seed == 3);
+  CHECK(plan_csv(folder.plan) == plan_csv(make_plan(campaign, 3)));
+  CHECK(doorbench::testing::read_file(dir / "out" / "campaign.toml") == campaign.text);
+  CHECK_THROWS_WITH(write_campaign_folder(dir / "out", campaign, make_plan(campaign, 3), false),
+                    (dir / "out").string() + ": exists and is not empty (give --overwrite to write into it)");
+  dir.write("out/plan.csv", "participant,block,trial,question,first,second,block_trial\n");
+  CHECK_THROWS_WITH(open_campaign_folder(dir / "out"),
+                    Catch::Matchers::StartsWith((dir / "out" / "plan.csv").string() + ": does not match plan-id.txt"));
+}
+
+TEST_CASE("A participant id that looks like a name or an e-mail is refused", "[study][campaign]") {
+  CHECK(participant_id_problem("P07") == "");
+  CHECK(participant_id_problem("sub-07") == "");
+  CHECK(participant_id_problem("s_12") == "");
+  CHECK(participant_id_problem("anna.berg@example.org") ==
+        "participant id 'anna.berg@example.org' looks like an e-mail address; use a pseudonymous id such as P07");
+  CHECK(participant_id_problem("Anna Berg") ==
+        "participant id 'Anna Berg' looks like a name (it holds a space); use a pseudonymous id such as P07");
+  CHECK(participant_id_problem("AnnaBerg1") ==
+        "participant id 'AnnaBerg1' looks like a name (a capitalised word); use a pseudonymous id such as P07");
+  CHECK(participant_id_problem("anna") ==
+        "participant id 'anna' has no digit (a word alone may be a name); use a pseudonymous id such as P07");
+  CHECK(participant_id_problem("p.07") == "participant id 'p.07' may hold only letters, digits, '-' and '_'");
+  CHECK_THROWS_WITH(parsed(campaign_text("ids = [\"P01\", \"Anna Berg\"]")),
+                    "c.toml:10: participants.ids: participant id 'Anna Berg' looks like a name (it holds a space); "
+                    "use a pseudonymous id such as P07");
+}
+
+TEST_CASE("A campaign file's errors name the file, the line and the field", "[study][campaign]") {
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"x\"\ntype = \"pair\"\nquestion = \"best\"\n")),
+                    "c.toml:38: blocks[6].question: must be preference, preference-2ac or identify-real, not 'best'");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"x\"\ntype = \"jnd\"\nparameter = \"J_d\"\nlevels = [1.1]\n")),
+                    Catch::Matchers::StartsWith("c.toml:38: blocks[6].parameter: step J_d*1.05: 'J_d' is neither a "
+                                                "perceptual control nor a parameter of the sensory model"));
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"pair\"\ntype = \"tune\"\n")),
+                    "c.toml:36: blocks[6].name: block 'pair' is named twice");
+  std::string text = campaign_text("count = 2");
+  text.replace(text.find("heaviness*1.2"), 13, "heaviness*x");
+  CHECK_THROWS_WITH(parsed(text),
+                    "c.toml:6: variants.heavier: expected steps such as \"J*1.2\" or \"heaviness*1.2,latch_effort*0.7\", "
+                    "got \"heaviness*x\"");
+  text = campaign_text("count = 2");
+  text.replace(text.find("heaviness*1.2"), 13, "heaviness*9");
+  CHECK_THROWS_WITH(parsed(text), "c.toml:6: variants.heavier: step heaviness*9: J would be 8.55, outside its bounds 0.1..5");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"y\"\ntype = \"rating\"\ncolour = 1\n")),
+                    Catch::Matchers::StartsWith("c.toml:38: blocks[6].colour: unknown key; valid keys: "));
+  CHECK_THROWS_WITH(parsed("[campaign]\nseed = \n"), Catch::Matchers::StartsWith("c.toml:2: "));
+}
+
+TEST_CASE("Steps from the base move exactly what they name", "[study][campaign]") {
+  const Campaign campaign = parsed(campaign_text("count = 2"));
+  const doorbench::DoorModel base = base_model(campaign);
+  const doorbench::DoorModel lighter = variant_model(campaign, *campaign.find_variant("lighter"));
+  const int j = *base.find_parameter("J");
+  CHECK(lighter.parameter_values()[j] == Approx(0.85 * base.parameter_values()[j]).epsilon(1e-12));
+  CHECK(steps_text(parse_steps("J*1.2, latch_effort*0.7")) == "J*1.2,latch_effort*0.7");
+}
