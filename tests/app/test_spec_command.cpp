@@ -6,6 +6,7 @@
 #include "acquisition/rig_file.h"
 #include "analysis/parameter_file.h"
 #include "tests/support/run_doorbench.h"
+#include "tests/support/svg_check.h"
 
 using Catch::Matchers::Contains;
 using doorbench::testing::run_doorbench_shell;
@@ -52,6 +53,10 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   CHECK(json["tobe_sources"].size() == 2);
   CHECK(json["tolerances"]["samples"] == 8);
   CHECK(std::filesystem::exists(dir / "spec" / "spec.html"));
+  const doorbench::testing::SvgCheck svgs = doorbench::testing::check_svgs({dir / "spec"});
+  INFO(svgs.output);
+  CHECK(svgs.status == 0);
+  CHECK(svgs.legend_entries >= 4);
   CHECK(std::filesystem::exists(dir / "spec" / "tobe-params.json"));
   // The design moves F_l0 toward the TO-BE door's (10.5 N from 15 N).
   const auto& f_l0 = json["parameters"][doorbench::physical::kFl0];
