@@ -128,7 +128,11 @@ int main(int argc, char** argv) {
   doorbench::app::Action action;
   doorbench::app::add_model_command(app, action);
   doorbench::app::add_simulate_command(app, action);
-  doorbench::app::add_session_commands(app, action);
+  doorbench::app::add_record_command(app, action);
+  doorbench::app::add_recover_command(app, action);
+  doorbench::app::add_info_command(app, action);
+  doorbench::app::add_export_command(app, action);
+  doorbench::app::add_import_command(app, action);
   doorbench::app::add_fit_command(app, action);
   doorbench::app::add_loop_command(app, action);
   doorbench::app::add_demo_command(app, action);
