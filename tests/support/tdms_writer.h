@@ -25,9 +25,10 @@ struct Bytes {
   std::vector<std::uint8_t> data;
   template <typename T>
   void put(T value) {
-    std::uint8_t raw[sizeof(T)];
-    std::memcpy(raw, &value, sizeof(T));
-    data.insert(data.end(), raw, raw + sizeof(T));
+    // resize and copy (an insert of a local array trips GCC 12's -Wstringop-overflow)
+    const std::size_t at = data.size();
+    data.resize(at + sizeof(T));
+    std::memcpy(data.data() + at, &value, sizeof(T));
   }
   void text(const std::string& value) {
     put<std::uint32_t>(static_cast<std::uint32_t>(value.size()));
