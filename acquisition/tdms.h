@@ -10,10 +10,18 @@
 // (I8…I64, U8…U64), SGL and DBL (with or without unit); string channels are skipped; every
 // property type but the extended float; scaling properties of the Linear and Polynomial
 // kinds (NI_Scaling_Status "unscaled"); time from wf_start_offset + i × wf_increment.
+// DAQmx raw data (DAQmx logging's "TDMS raw" files: ToC flag kTocDAQmxRawData, raw data
+// indexes 69 12 00 00 and 69 13 00 00): format-changing scalers (U8…I64, SGL, DBL at a byte
+// offset in a raw buffer's stride) and digital line scalers (a bit: 0/1), several raw
+// buffers (one per device) one after the other in each chunk; the channel's value is its
+// last NI_Scale, where a scale without a Scale_Type is the scaler of that scale id, and a
+// channel without scales is its one scaler's raw value. Each scaler's raw values are kept
+// (TdmsChannel::daqmx_raw).
 // Refused, each by name: big-endian segments (the ToC's flag is read before the version,
-// which a big-endian segment stores byte-swapped), DAQmx raw data (the kTocDAQmxRawData flag or
-// the 0x69120000/0x69130000 raw data indexes), channels of other data types, arrays of more
-// than one dimension, raw data that is not a whole number of chunks, other scale types.
+// which a big-endian segment stores byte-swapped), DAQmx scalers of other types or reading
+// past their buffer, a segment mixing DAQmx and other raw data, channels of other data
+// types, arrays of more than one dimension, raw data that is not a whole number of chunks,
+// other scale types (Table, Thermocouple, RTD, ...).
 // Values become doubles: exact for every type but I64/U64 beyond 2^53.
 //
 // Thread safety: free functions without shared state.
@@ -47,6 +55,9 @@ struct TdmsChannel {
   std::vector<double> values;  // scaled when the file asks for scaling
   std::map<std::string, TdmsProperty> properties;
   std::string scaling;  // how the values were scaled ("" = as stored)
+  // DAQmx raw data: each scaler's values as stored (digital lines as 0/1), by scale id; the
+  // channel's values are these through its NI_Scale properties. Empty for other channels.
+  std::map<std::uint32_t, std::vector<double>> daqmx_raw;
 };
 
 struct TdmsFile {
