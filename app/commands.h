@@ -1,7 +1,7 @@
 #pragma once
 // Each verb of the doorbench command registers its options and, when chosen, the action
 // that main() runs after parsing. Actions throw UsageError for wrong combinations of
-// options (exit 2), OutputRefused (acquisition/output_file.h) for an output that exists
+// options (exit 2), OutputRefused (acquisition/session/output_file.h) for an output that exists
 // or is an input (exit 2), and any other std::exception for failures (exit 1); main()
 // prints the message after "doorbench: ", control characters escaped.
 #include <CLI/CLI.hpp>
@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench::app {
 

@@ -15,13 +15,13 @@
 #include <string>
 #include <thread>
 
-#include "acquisition/output_file.h"
-#include "acquisition/printable.h"
-#include "acquisition/recorder.h"
-#include "acquisition/recovery.h"
-#include "acquisition/rig_file.h"
-#include "acquisition/session_csv.h"
-#include "acquisition/tdms.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/printable.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/record/recovery.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_csv.h"
+#include "acquisition/session/tdms.h"
 #include "app/commands.h"
 #include "app/csv_metadata_keys.h"
 #include "app/limit_watcher.h"

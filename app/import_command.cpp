@@ -15,13 +15,13 @@
 #include <string>
 #include <thread>
 
-#include "acquisition/output_file.h"
-#include "acquisition/printable.h"
-#include "acquisition/recorder.h"
-#include "acquisition/recovery.h"
-#include "acquisition/rig_file.h"
-#include "acquisition/session_csv.h"
-#include "acquisition/tdms.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/printable.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/record/recovery.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_csv.h"
+#include "acquisition/session/tdms.h"
 #include "app/commands.h"
 #include "app/csv_metadata_keys.h"
 #include "app/limit_watcher.h"
@@ -38,7 +38,7 @@ struct ImportOptions {
   std::string csv_path;
   std::string out_path;
   std::string operator_name, product_id, notes;
-  std::string tdms_map;  // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/tdms.h)
+  std::string tdms_map;  // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h)
 };
 
 // A TDMS file (by its .tdms extension, any case) through --map, else the CSV exchange format.

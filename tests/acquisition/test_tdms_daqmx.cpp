@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_csv.h"
-#include "acquisition/session_file.h"
-#include "acquisition/tdms.h"
+#include "acquisition/session/session_csv.h"
+#include "acquisition/session/session_file.h"
+#include "acquisition/session/tdms.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/tdms_writer.h"
 #include "tests/support/temp_dir.h"
