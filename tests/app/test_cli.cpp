@@ -32,10 +32,11 @@
 #include "acquisition/session/session_file.h"
 #include "analysis/model/door_model.h"
 #include "analysis/model/parameter_file.h"
+#include "core/units.h"
 #include "tests/support/files.h"
 #include "tests/support/svg_check.h"
-#include "core/units.h"
 
+using doorbench::kRadPerDeg;
 using doorbench::testing::read_file;
 
 using Catch::Matchers::Contains;
