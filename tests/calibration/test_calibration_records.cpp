@@ -14,8 +14,8 @@
 #include "sensors/rig_channel.h"
 #include "tests/support/files.h"
 #include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/svg_check.h"
+#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 
