@@ -212,7 +212,7 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
   if (from_data && start.kind() == ModelKind::kSensory) {
     const DataStart derived = start_from_data(data, start);
     start = derived.model;
-    std::vector<std::string> data_names, latch_names;
+    std::vector<std::string> data_names, latch_names, scaled_names;
     for (std::size_t i = 0; i < derived.origin.size(); ++i) {
       const std::string& name = start.parameter_name(static_cast<int>(i));
       if (derived.origin[i] == "free motion") {
@@ -221,6 +221,9 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
       } else if (derived.origin[i] == "latch read-off") {
         latch_names.push_back(name);
         origin[i] = "the data (latch read-off)";
+      } else if (derived.origin[i] == "latch scaled") {
+        scaled_names.push_back(name);
+        origin[i] = "scaled to the latch read off";
       }
     }
     auto join = [](const std::vector<std::string>& names) {
@@ -240,6 +243,9 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
     if (!latch_names.empty()) {
       start_line += std::string(data_names.empty() ? ": " : "; ") + join(latch_names) +
                     " read off the force-angle curves near closed";
+    }
+    if (!scaled_names.empty()) {
+      start_line += "; " + join(scaled_names) + " scaled to the latch read off";
     }
     start_line += "; the others " + base_name + "'s";
     for (const std::string& note : derived.notes) start_line += "; " + note;

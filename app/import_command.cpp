@@ -46,20 +46,32 @@ Recording read_import(const ImportOptions& options) {
   std::string extension = std::filesystem::path(options.csv_path).extension().string();
   std::transform(extension.begin(), extension.end(), extension.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (extension == ".tdms_index") {
+    std::string data = options.csv_path;
+    data.resize(data.size() - std::string("_index").size());
+    throw TdmsError(options.csv_path +
+                    ": this is a TDMS index file (.tdms_index); import the .tdms file itself (" +
+                    data + ")");
+  }
   if (extension != ".tdms") {
     if (!options.tdms_map.empty()) throw UsageError("--map is for TDMS files (*.tdms)");
     return read_recording_csv(options.csv_path, EmptyCells::kMissing);  // empty: lost samples
   }
+  // The file first: a missing or malformed --map is answered with the channels to map.
+  const TdmsFile file = read_tdms(options.csv_path);
   if (options.tdms_map.empty()) {
-    throw UsageError("a TDMS file needs --map force=GROUP/CHANNEL,angle=GROUP/CHANNEL (or rate=)");
+    throw UsageError(
+        "a TDMS file needs --map force=GROUP/CHANNEL,angle=GROUP/CHANNEL (or rate=); the file's "
+        "channels: " +
+        tdms_channel_list(file));
   }
   std::vector<TdmsMapItem> map;
   try {
     map = parse_tdms_map(options.tdms_map);
   } catch (const std::invalid_argument& error) {
-    throw UsageError(error.what());
+    throw UsageError(std::string(error.what()) + "; the file's channels: " +
+                     tdms_channel_list(file));
   }
-  const TdmsFile file = read_tdms(options.csv_path);
   return tdms_to_recording(file, map, options.csv_path);
 }
 
@@ -80,7 +92,9 @@ void run_import(const ImportOptions& options) {
       options.operator_name.empty() ? from_csv(kCsvOperatorKey, "") : options.operator_name;
   metadata.product_id =
       options.product_id.empty() ? from_csv(kCsvProductKey, "") : options.product_id;
-  metadata.start_time_utc = from_csv(kCsvStartKey, utc_now_iso8601());
+  // A TDMS file's wf_start_time (its first sample's time) is the start when it has one.
+  metadata.start_time_utc =
+      from_csv(kCsvStartKey, from_csv("tdms_wf_start_time", utc_now_iso8601()));
   metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
   metadata.notes = options.notes.empty() ? "imported from " + options.csv_path : options.notes;
   recording_to_session(recording, options.out_path, metadata);

@@ -70,6 +70,30 @@ DoorModel asis_on_bench(const DoorModel& asis, const std::string& recording,
   return door.model;
 }
 
+// The warning for TO-BE recordings of a real door measured through a bench's sensors (the
+// angle integrated from its gyroscope) without --asis-recording: the AS-IS parameter file
+// is then compared with what the bench measured, and the bench's own deviations can come
+// out as design changes (docs/inverse-design.md, "The AS-IS door as the bench sees it").
+// "" when the recordings are haptic playbacks, not from a bench, or --asis-recording is
+// given.
+std::string bench_without_asis_recording(const std::vector<PreparedData>& tobe,
+                                         bool playbacks, const SpecCommandOptions& options) {
+  if (playbacks || !options.asis_recording.empty()) return "";
+  std::string paths, how;
+  for (std::size_t i = 0; i < tobe.size(); ++i) {
+    if (tobe[i].angle_source.rfind("rate_rad_s integrated", 0) != 0) continue;
+    paths += (paths.empty() ? "" : ", ") + options.tobe_paths[i];
+    if (how.empty()) how = tobe[i].angle_source;
+  }
+  if (paths.empty()) return "";
+  return "the TO-BE recording " + paths + " was measured through a bench's sensors (angle: " +
+         how +
+         ") and --asis-recording is not given: the AS-IS parameter file is compared with what "
+         "the bench measured, so the bench's own deviations (sensor offsets and scales, the "
+         "load cell's mounting, its friction) can be specified as design changes; record the "
+         "AS-IS door on the same bench and give it as --asis-recording";
+}
+
 std::string describe(const SpecCommandOptions& o) {
   std::string text = "doorbench spec";
   for (const std::string& path : o.tobe_paths) text += " " + path;
@@ -121,6 +145,9 @@ void run_spec(const SpecCommandOptions& options) {
     }
   }
   if (!all_commanded) commanded.clear();
+  const std::string bench_warning =
+      bench_without_asis_recording(tobe, !commanded.empty(), options);
+  if (!bench_warning.empty()) progress << "warning: " << bench_warning << "\n";
   if (!commanded.empty()) {
     progress << "the TO-BE recordings are haptic playbacks: the design is fitted to the torque "
                 "they commanded, the inertia to their motion (--motion-only: the motion alone)\n";
@@ -172,6 +199,7 @@ void run_spec(const SpecCommandOptions& options) {
   status.finish();
   evaluation.command = describe(options);
   evaluation.asis_source = asis_file.string();
+  if (!bench_warning.empty()) evaluation.warnings.push_back(bench_warning);
 
   std::filesystem::create_directories(options.out_dir);
   const SpecReportFiles files =

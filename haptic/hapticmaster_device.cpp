@@ -377,8 +377,9 @@ void HapticMasterDevice::set_inertia_checked(double inertia) {
     throw DeviceError(name() + ": 'get inertia' answered '" + reply + "', not a number");
   }
   startup_.inertia_read_back_kg = value.number;
-  // The number was sent with 6 decimals at most.
-  if (std::abs(value.number - inertia) > 1e-6 + 1e-6 * std::abs(inertia)) {
+  // Compared at the precision the reply carries ("10.9195" for 10.91954 is the same number
+  // at six significant digits, C's %g); the number was sent with 6 decimals at most.
+  if (!hm::agrees_at_reply_precision(inertia, value.text)) {
     throw DeviceError(name() + ": 'set inertia " + hm::format_number(inertia) +
                       "' was accepted but the device reports " + value.text + " kg");
   }

@@ -1,7 +1,9 @@
 #include "haptic/hapticmaster_protocol.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace doorbench::haptic::hm {
@@ -144,6 +146,33 @@ std::optional<double> parse_number(std::string_view text) {
   if (result.ec != std::errc() || result.ptr != text.data() + text.size()) return std::nullopt;
   if (!std::isfinite(value)) return std::nullopt;
   return value;
+}
+
+std::optional<double> last_digit_step(std::string_view text) {
+  if (!parse_number(text)) return std::nullopt;
+  text = trim(text);
+  const std::size_t exponent_at = text.find_first_of("eE");
+  int exponent = 0;
+  if (exponent_at != std::string_view::npos) {
+    std::string_view digits = text.substr(exponent_at + 1);
+    if (!digits.empty() && digits.front() == '+') digits.remove_prefix(1);
+    const auto result = std::from_chars(digits.data(), digits.data() + digits.size(), exponent);
+    if (result.ec != std::errc()) return std::nullopt;
+    text = text.substr(0, exponent_at);
+  }
+  const std::size_t point = text.find('.');
+  const int decimals =
+      point == std::string_view::npos ? 0 : static_cast<int>(text.size() - point - 1);
+  return std::pow(10.0, exponent - decimals);
+}
+
+bool agrees_at_reply_precision(double sent, std::string_view reply) {
+  const std::optional<double> value = parse_number(reply);
+  const std::optional<double> step = last_digit_step(reply);
+  if (!value || !step || !std::isfinite(sent)) return false;
+  const double rounding = 8.0 * std::numeric_limits<double>::epsilon() *
+                          std::max(std::abs(sent), std::abs(*value));
+  return std::abs(*value - sent) <= 0.5 * *step + 0.5e-6 + rounding;
 }
 
 std::optional<Vec3> parse_vector(std::string_view text) {

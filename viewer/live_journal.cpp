@@ -96,16 +96,22 @@ bool LiveJournal::open() {
     waiting_reason_ = "no journal yet (" + journal_.string() + ")";
     return false;
   }
+  // The size before the reader looks: the writer only appends, so the reader saw at least
+  // this many bytes. A size taken after the reader failed would not do: the writer may
+  // have written the whole header in between, and an empty file read a moment earlier
+  // would then be taken for one that is not a journal (issue 31: `view --live` started
+  // with `record` failed so, 1 run in 25 on a loaded machine).
+  std::error_code size_error;
+  const std::uintmax_t size_before = fs::file_size(journal_, size_error);
   try {
     reader_ = std::make_unique<JournalReader>(journal_);
   } catch (const JournalError& error) {
     // A header still being written is "not yet" (the writer writes magic, version, length
-    // and CRC in the same write() as the JSON; a file shorter than that is brand new);
-    // anything else is not a journal.
+    // and CRC in the same write() as the JSON; a file shorter than that is brand new, and
+    // one gone again is not there yet); anything else is not a journal.
     const std::string text = error.what();
-    std::error_code ignored;
-    if (text.find("header is incomplete") != std::string::npos ||
-        fs::file_size(journal_, ignored) < sizeof(kJournalMagic) - 1 + 12) {
+    if (text.find("header is incomplete") != std::string::npos || size_error ||
+        size_before < sizeof(kJournalMagic) - 1 + 12) {
       waiting_reason_ = "the journal's header is being written";
       return false;
     }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <fstream>
@@ -24,8 +25,12 @@ constexpr std::uint32_t kTocDAQmxRawData = 1u << 7;
 constexpr std::size_t kLeadInBytes = 28;
 constexpr std::uint32_t kNoRawData = 0xFFFFFFFFu;
 constexpr std::uint32_t kSameRawIndex = 0x00000000u;
-constexpr std::uint32_t kDaqmxFormatScaler = 0x69120000u;
-constexpr std::uint32_t kDaqmxDigitalScaler = 0x69130000u;
+// The DAQmx raw data indexes: the bytes 69 12 00 00 (format-changing scalers) and 69 13 00 00
+// (digital line scalers), read little-endian; the byte-swapped reading is taken too.
+constexpr std::uint32_t kDaqmxFormatScaler = 0x00001269u;
+constexpr std::uint32_t kDaqmxDigitalScaler = 0x00001369u;
+constexpr std::uint32_t kDaqmxFormatScalerSwapped = 0x69120000u;
+constexpr std::uint32_t kDaqmxDigitalScalerSwapped = 0x69130000u;
 constexpr std::uint64_t kIncompleteSegment = 0xFFFFFFFFFFFFFFFFull;
 
 // Data types (tdsDataType).
@@ -132,6 +137,60 @@ std::size_t numeric_size(std::uint32_t type) {
       return 8;
     default:
       return 0;
+  }
+}
+
+// One scaler of a DAQmx raw data index: where its values are in the raw buffers.
+struct DaqmxScaler {
+  std::uint32_t type = 0;          // DAQmx's own codes: 0 U8, 1 I8, 2 U16, ... 9 DBL
+  std::uint32_t buffer = 0;        // the raw buffer (one per device) it reads from
+  std::uint32_t byte_offset = 0;   // within the buffer's stride (digital: bit_offset / 8)
+  std::uint32_t bit_offset = 0;    // digital line scalers: the line's bit in the stride
+  bool digital = false;
+  std::uint32_t scale_id = 0;      // the NI_Scale[scale_id] it stands for
+};
+
+// Bytes per value of DAQmx's scaler data types (its own codes); 0 for the others.
+std::size_t daqmx_value_size(std::uint32_t type) {
+  static constexpr std::size_t kSizes[] = {1, 1, 2, 2, 4, 4, 8, 8, 4, 8};
+  return type < 10 ? kSizes[type] : 0;
+}
+
+template <typename T>
+double read_as(const std::uint8_t* at) {
+  T value;
+  std::memcpy(&value, at, sizeof(T));  // the host is little-endian
+  return static_cast<double>(value);
+}
+
+// A scaler's value at `at`: the number of its type, or a digital line's bit (0 or 1).
+double daqmx_value(const DaqmxScaler& scaler, const std::uint8_t* at) {
+  if (scaler.digital) {
+    std::uint64_t word = 0;
+    std::memcpy(&word, at, daqmx_value_size(scaler.type));
+    return static_cast<double>((word >> (scaler.bit_offset % 8)) & 1u);
+  }
+  switch (scaler.type) {
+    case 0:
+      return read_as<std::uint8_t>(at);
+    case 1:
+      return read_as<std::int8_t>(at);
+    case 2:
+      return read_as<std::uint16_t>(at);
+    case 3:
+      return read_as<std::int16_t>(at);
+    case 4:
+      return read_as<std::uint32_t>(at);
+    case 5:
+      return read_as<std::int32_t>(at);
+    case 6:
+      return read_as<std::uint64_t>(at);
+    case 7:
+      return read_as<std::int64_t>(at);
+    case 8:
+      return read_as<float>(at);
+    default:
+      return read_as<double>(at);
   }
 }
 
@@ -281,6 +340,9 @@ std::vector<std::string> split_path(const std::string& path, const Reader& in) {
 struct ObjectState {
   std::vector<std::string> parts;
   bool has_raw = false;
+  bool daqmx = false;                  // DAQmx raw data: scalers and raw buffer widths
+  std::vector<DaqmxScaler> scalers;
+  std::vector<std::uint32_t> widths;   // bytes per sample of each raw buffer
   std::uint32_t type = kVoid;
   std::uint64_t count = 0;         // values per chunk
   std::uint64_t string_bytes = 0;  // string channels: bytes per chunk
@@ -290,18 +352,43 @@ struct ObjectState {
 
 std::size_t chunk_bytes(const ObjectState& object) {
   if (object.type == kString) return static_cast<std::size_t>(object.string_bytes);
+  if (object.daqmx) {
+    std::size_t stride = 0;
+    for (std::uint32_t width : object.widths) stride += width;
+    return static_cast<std::size_t>(object.count) * stride;
+  }
   return static_cast<std::size_t>(object.count) * numeric_size(object.type);
 }
 
+// What a channel's scales read: its raw value, or a DAQmx channel's scalers' raw values (by
+// scale id) at one sample.
+struct ScaleInputs {
+  double raw = 0.0;
+  const std::map<std::uint32_t, std::vector<double>>* daqmx = nullptr;
+  std::size_t sample = 0;
+};
+
 // The channel's scaling (NI_Scaling_Status "unscaled"): scale NI_Number_Of_Scales − 1,
-// whose input source is another scale's index or the raw data (−1, absent).
-double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, double raw, int depth,
-                   const std::string& where) {
-  if (scale < 0) return raw;
+// whose input source is another scale's index or the raw data (−1, absent). In a DAQmx
+// channel, a scale without a Scale_Type is the scaler of that scale id.
+double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, const ScaleInputs& in,
+                   int depth, const std::string& where) {
+  if (scale < 0) {
+    if (in.daqmx) {
+      throw TdmsError(where + ": a scale reads the raw data, which a DAQmx channel has only "
+                              "through its scalers");
+    }
+    return in.raw;
+  }
   if (depth > 16) throw TdmsError(where + ": the scales' input sources form a loop");
   const std::string prefix = "NI_Scale[" + std::to_string(scale) + "]_";
   const auto type = p.find(prefix + "Scale_Type");
   if (type == p.end()) {
+    if (in.daqmx) {
+      if (const auto it = in.daqmx->find(static_cast<std::uint32_t>(scale)); it != in.daqmx->end()) {
+        return it->second[in.sample];
+      }
+    }
     throw TdmsError(where + ": " + prefix + "Scale_Type is missing");
   }
   auto number = [&](const std::string& name) {
@@ -318,11 +405,11 @@ double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, doub
     return source >= 4294967295.0 || source < 0 ? -1 : static_cast<int>(source);
   };
   if (type->second.text == "Linear") {
-    const double x = scale_value(p, input("Linear"), raw, depth + 1, where);
+    const double x = scale_value(p, input("Linear"), in, depth + 1, where);
     return number("Linear_Slope") * x + number("Linear_Y_Intercept");
   }
   if (type->second.text == "Polynomial") {
-    const double x = scale_value(p, input("Polynomial"), raw, depth + 1, where);
+    const double x = scale_value(p, input("Polynomial"), in, depth + 1, where);
     const int size = static_cast<int>(number("Polynomial_Coefficients_Size"));
     double sum = 0.0;
     for (int k = size - 1; k >= 0; --k) {
@@ -334,21 +421,59 @@ double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, doub
                   "' is not supported (Linear and Polynomial are)");
 }
 
-void apply_scaling(TdmsChannel& channel, const std::string& source) {
-  const auto status = channel.properties.find("NI_Scaling_Status");
-  if (status == channel.properties.end() || status->second.text != "unscaled") return;
+// How many scales a channel has: NI_Number_Of_Scales, else (DAQmx files may leave it out)
+// one more than the highest k of an NI_Scale[k]_Scale_Type; 0 when neither.
+int number_of_scales(const TdmsChannel& channel) {
   const auto count = channel.properties.find("NI_Number_Of_Scales");
-  if (count == channel.properties.end() || !count->second.number || *count->second.number < 1) {
+  if (count != channel.properties.end() && count->second.number) {
+    return std::max(0, static_cast<int>(*count->second.number));
+  }
+  if (channel.daqmx_raw.empty()) return 0;
+  int scales = 0;
+  for (const auto& [name, value] : channel.properties) {
+    int k = -1;
+    char rest[16] = {};
+    if (std::sscanf(name.c_str(), "NI_Scale[%d]_Scale_Typ%15s", &k, rest) == 2 &&
+        std::string(rest) == "e") {
+      scales = std::max(scales, k + 1);
+    }
+  }
+  return scales;
+}
+
+void apply_scaling(TdmsChannel& channel, const std::string& source) {
+  const bool daqmx = !channel.daqmx_raw.empty();
+  const auto status = channel.properties.find("NI_Scaling_Status");
+  const bool unscaled = status != channel.properties.end() && status->second.text == "unscaled";
+  const int scales = number_of_scales(channel);
+  const std::string where = source + ": channel " + channel.group + "/" + channel.name;
+  if (daqmx && (scales < 1 || (!unscaled && status != channel.properties.end()))) {
+    // No scales: the one scaler's raw values, as stored.
+    if (channel.daqmx_raw.size() != 1) {
+      throw TdmsError(where + ": DAQmx raw data with " + std::to_string(channel.daqmx_raw.size()) +
+                      " scalers and no NI_Scale properties to combine them");
+    }
+    channel.values = channel.daqmx_raw.begin()->second;
+    channel.scaling = "DAQmx scaler " + std::to_string(channel.daqmx_raw.begin()->first) + " (raw)";
     return;
   }
-  const int last = static_cast<int>(*count->second.number) - 1;
-  const std::string where = source + ": channel " + channel.group + "/" + channel.name;
-  for (double& value : channel.values) {
-    value = scale_value(channel.properties, last, value, 0, where);
+  if (!unscaled && !daqmx) return;
+  if (scales < 1) return;
+  const int last = scales - 1;
+  ScaleInputs in;
+  if (daqmx) {
+    in.daqmx = &channel.daqmx_raw;
+    channel.values.assign(channel.daqmx_raw.begin()->second.size(), 0.0);
   }
-  channel.scaling =
-      "NI_Scale[" + std::to_string(last) + "] (" +
-      channel.properties.at("NI_Scale[" + std::to_string(last) + "]_Scale_Type").text + ")";
+  for (std::size_t i = 0; i < channel.values.size(); ++i) {
+    in.raw = channel.values[i];
+    in.sample = i;
+    channel.values[i] = scale_value(channel.properties, last, in, 0, where);
+  }
+  const auto type =
+      channel.properties.find("NI_Scale[" + std::to_string(last) + "]_Scale_Type");
+  channel.scaling = "NI_Scale[" + std::to_string(last) + "] (" +
+                    (type != channel.properties.end() ? type->second.text : "DAQmx scaler") + ")";
 }
 
 }  // namespace
@@ -382,19 +507,15 @@ SegmentLayout read_lead_in(Reader& in, std::size_t start, std::size_t file_bytes
   in.seek(start + 4);
   SegmentLayout layout;
   layout.toc = in.read<std::uint32_t>();
+  // The ToC first: a big-endian segment's version (and everything after) is byte-swapped.
+  if (layout.toc & kTocBigEndian) {
+    in.fail("big-endian segments (ToC flag kTocBigEndian) are not supported");
+  }
   const auto version = in.read<std::uint32_t>();
   const auto next_offset = in.read<std::uint64_t>();
   const auto raw_offset = in.read<std::uint64_t>();
   if (version != 4712 && version != 4713) {
     in.fail("TDMS version " + std::to_string(version) + " is not supported (4712 and 4713 are)");
-  }
-  if (layout.toc & kTocBigEndian) {
-    in.fail("big-endian segments (ToC flag kTocBigEndian) are not supported");
-  }
-  if (layout.toc & kTocDAQmxRawData) {
-    in.fail(
-        "DAQmx raw data (ToC flag kTocDAQmxRawData) is not supported: log the channels "
-        "scaled (LabVIEW: TDMS, not TDMS raw / 'Log and Read' with scaled data)");
   }
   layout.meta_start = start + kLeadInBytes;
   layout.end = next_offset == kIncompleteSegment
@@ -453,7 +574,7 @@ class TdmsParser {
       if (object.parts.size() == 2) {
         object.is_channel = true;
         object.channel = file_.channels.size();
-        file_.channels.push_back({object.parts[0], object.parts[1], "", {}, {}, ""});
+        file_.channels.push_back({object.parts[0], object.parts[1], "", {}, {}, "", {}});
       }
     }
     return object;
@@ -473,9 +594,11 @@ class TdmsParser {
       object.has_raw = true;
       return;
     }
-    if (index == kDaqmxFormatScaler || index == kDaqmxDigitalScaler) {
-      in_.fail_at(index_at, "object " + path + ": DAQmx raw data (raw data index " + hex(index) +
-                                ") is not supported");
+    if (index == kDaqmxFormatScaler || index == kDaqmxDigitalScaler ||
+        index == kDaqmxFormatScalerSwapped || index == kDaqmxDigitalScalerSwapped) {
+      read_daqmx_index(path, object, index_at,
+                       index == kDaqmxDigitalScaler || index == kDaqmxDigitalScalerSwapped);
+      return;
     }
     const auto type = in_.read<std::uint32_t>();
     const auto dimension = in_.read<std::uint32_t>();
@@ -492,12 +615,71 @@ class TdmsParser {
                                 "are skipped)");
     }
     object.has_raw = true;
+    object.daqmx = false;
     object.type = type;
     object.count = values;
     object.string_bytes = string_bytes;
     if (object.is_channel && type != kString) {
       file_.channels[object.channel].data_type = type_name(type);
     }
+  }
+
+  // A DAQmx raw data index (after its 4-byte header): data type 0xFFFFFFFF, dimension,
+  // values per chunk, the scalers (type, raw buffer, byte or bit offset, sample format, scale
+  // id), the raw buffers' widths.
+  void read_daqmx_index(const std::string& path, ObjectState& object, std::size_t index_at,
+                        bool digital) {
+    const auto type = in_.read<std::uint32_t>();
+    const auto dimension = in_.read<std::uint32_t>();
+    const auto values = in_.read<std::uint64_t>();
+    if (type != kDaqmxRaw) {
+      in_.fail_at(index_at, "object " + path + ": a DAQmx raw data index of data type " +
+                                hex(type) + " (0xFFFFFFFF expected)");
+    }
+    if (dimension != 1) {
+      in_.fail_at(index_at, "object " + path + ": arrays of dimension " +
+                                std::to_string(dimension) + " are not supported (1 is)");
+    }
+    object.scalers.clear();
+    const auto scalers = in_.read<std::uint32_t>();
+    for (std::uint32_t k = 0; k < scalers; ++k) {
+      DaqmxScaler scaler;
+      scaler.digital = digital;
+      scaler.type = in_.read<std::uint32_t>();
+      scaler.buffer = in_.read<std::uint32_t>();
+      if (digital) {
+        scaler.bit_offset = in_.read<std::uint32_t>();
+        scaler.byte_offset = scaler.bit_offset / 8;
+        in_.read<std::uint8_t>();  // sample format bitmap
+      } else {
+        scaler.byte_offset = in_.read<std::uint32_t>();
+        in_.read<std::uint32_t>();  // sample format bitmap
+      }
+      scaler.scale_id = in_.read<std::uint32_t>();
+      if (daqmx_value_size(scaler.type) == 0) {
+        in_.fail_at(index_at, "object " + path + ": DAQmx scalers of data type " +
+                                  std::to_string(scaler.type) +
+                                  " are not supported (0-9: U8, I8, U16, I16, U32, I32, U64, I64, "
+                                  "SGL, DBL are)");
+      }
+      object.scalers.push_back(scaler);
+    }
+    object.widths.clear();
+    const auto widths = in_.read<std::uint32_t>();
+    for (std::uint32_t k = 0; k < widths; ++k) object.widths.push_back(in_.read<std::uint32_t>());
+    for (const DaqmxScaler& scaler : object.scalers) {
+      if (scaler.buffer >= object.widths.size() ||
+          scaler.byte_offset + daqmx_value_size(scaler.type) > object.widths[scaler.buffer]) {
+        in_.fail_at(index_at, "object " + path + ": DAQmx scaler " +
+                                  std::to_string(scaler.scale_id) +
+                                  " reads past its raw buffer's width");
+      }
+    }
+    object.has_raw = true;
+    object.daqmx = true;
+    object.type = kDaqmxRaw;
+    object.count = values;
+    if (object.is_channel) file_.channels[object.channel].data_type = type_name(kDaqmxRaw);
   }
 
   // The object's properties: the file's, a group's or a channel's.
@@ -525,7 +707,8 @@ class TdmsParser {
       ObjectState& object = objects_[path];
       if (!object.has_raw || object.count == 0) continue;
       with_data.push_back(&object);
-      chunk += chunk_bytes(object);
+      // DAQmx channels share their raw buffers: the segment's chunk is one channel's.
+      if (!object.daqmx || with_data.size() == 1) chunk += chunk_bytes(object);
     }
     const std::size_t raw_bytes = layout.end - layout.raw_start;
     if (chunk == 0) in_.fail("raw data but no object with raw data in the segment");
@@ -535,6 +718,11 @@ class TdmsParser {
     }
     const std::size_t chunks = raw_bytes / chunk;
     in_.seek(layout.raw_start);
+    if (with_data.front()->daqmx) {
+      check_daqmx(with_data);
+      for (std::size_t c = 0; c < chunks; ++c) read_daqmx_chunk(with_data);
+      return;
+    }
     const bool interleaved = (layout.toc & kTocInterleavedData) != 0;
     if (interleaved) check_interleaved(with_data);
     for (std::size_t c = 0; c < chunks; ++c) {
@@ -543,6 +731,43 @@ class TdmsParser {
       } else {
         read_contiguous_chunk(with_data);
       }
+    }
+  }
+
+  // Every channel of a DAQmx segment reads the same raw buffers.
+  void check_daqmx(const std::vector<ObjectState*>& with_data) {
+    for (const ObjectState* object : with_data) {
+      if (!object->daqmx) {
+        in_.fail("a segment mixing DAQmx raw data with other raw data is not supported");
+      }
+      if (object->count != with_data.front()->count ||
+          object->widths != with_data.front()->widths) {
+        in_.fail("DAQmx channels with different raw buffers in one segment are not supported");
+      }
+    }
+  }
+
+  // One chunk of DAQmx raw data: each raw buffer in turn, sample by sample, each sample a
+  // stride of the buffer's width holding every scaler's value at its offset.
+  void read_daqmx_chunk(const std::vector<ObjectState*>& with_data) {
+    const ObjectState& first = *with_data.front();
+    const std::size_t count = static_cast<std::size_t>(first.count);
+    for (std::size_t b = 0; b < first.widths.size(); ++b) {
+      const std::size_t width = first.widths[b];
+      in_.need(count * width);
+      const std::size_t start = in_.position();
+      for (ObjectState* object : with_data) {
+        if (!object->is_channel) continue;
+        auto& raw = file_.channels[object->channel].daqmx_raw;
+        for (const DaqmxScaler& scaler : object->scalers) {
+          if (scaler.buffer != b) continue;
+          std::vector<double>& values = raw[scaler.scale_id];
+          for (std::size_t i = 0; i < count; ++i) {
+            values.push_back(daqmx_value(scaler, in_.at(start + i * width + scaler.byte_offset)));
+          }
+        }
+      }
+      in_.seek(start + count * width);
     }
   }
 
@@ -602,21 +827,64 @@ TdmsFile read_tdms(const std::filesystem::path& path) {
   return parse_tdms(bytes, path.string());
 }
 
+namespace {
+
+// The positions of `separator` in `text` not escaped by a backslash.
+std::vector<std::size_t> unescaped_positions(const std::string& text, char separator) {
+  std::vector<std::size_t> positions;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\\') {
+      ++i;
+    } else if (text[i] == separator) {
+      positions.push_back(i);
+    }
+  }
+  return positions;
+}
+
+// `text` with each "\x" as "x"; a backslash at the end is kept.
+std::string unescaped(const std::string& text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\\' && i + 1 < text.size()) ++i;
+    out += text[i];
+  }
+  return out;
+}
+
+// One TARGET=GROUP/CHANNEL item (escapes kept).
+TdmsMapItem parse_map_item(const std::string& item) {
+  const std::vector<std::size_t> equals_at = unescaped_positions(item, '=');
+  const std::size_t equals = equals_at.empty() ? std::string::npos : equals_at.front();
+  TdmsMapItem parsed;
+  if (equals != std::string::npos && equals > 0) {
+    parsed.target = item.substr(0, equals);
+    parsed.text = item.substr(equals + 1);
+    for (std::size_t slash : unescaped_positions(parsed.text, '/')) {
+      std::string group = unescaped(parsed.text.substr(0, slash));
+      std::string channel = unescaped(parsed.text.substr(slash + 1));
+      if (!group.empty() && !channel.empty()) parsed.splits.emplace_back(group, channel);
+    }
+  }
+  if (parsed.splits.empty()) {
+    throw std::invalid_argument("--map item '" + item +
+                                "' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force)");
+  }
+  parsed.group = parsed.splits.front().first;
+  parsed.channel = parsed.splits.front().second;
+  return parsed;
+}
+
+}  // namespace
+
 std::vector<TdmsMapItem> parse_tdms_map(const std::string& text) {
   std::vector<TdmsMapItem> items;
+  std::vector<std::size_t> commas = unescaped_positions(text, ',');
+  commas.push_back(text.size());
   std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    const std::string item = text.substr(start, comma - start);
-    const std::size_t equals = item.find('=');
-    const std::size_t slash =
-        equals == std::string::npos ? std::string::npos : item.find('/', equals);
-    if (equals == std::string::npos || equals == 0 || slash == std::string::npos ||
-        slash == equals + 1 || slash + 1 == item.size()) {
-      throw std::invalid_argument("--map item '" + item +
-                                  "' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force)");
-    }
-    const std::string target = item.substr(0, equals);
+  for (std::size_t comma : commas) {
+    TdmsMapItem item = parse_map_item(text.substr(start, comma - start));
+    const std::string& target = item.target;
     if (target != "force" && target != "angle" && target != "rate" && target != "time" &&
         !has_unit_suffix(target)) {
       throw std::invalid_argument("--map target '" + target +
@@ -628,10 +896,28 @@ std::vector<TdmsMapItem> parse_tdms_map(const std::string& text) {
         throw std::invalid_argument("--map names target '" + target + "' twice");
       }
     }
-    items.push_back({target, item.substr(equals + 1, slash - equals - 1), item.substr(slash + 1)});
+    items.push_back(std::move(item));
     start = comma + 1;
   }
   return items;
+}
+
+std::string escape_tdms_map_name(const std::string& name) {
+  std::string out;
+  for (char c : name) {
+    if (c == '/' || c == ',' || c == '=' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+std::string tdms_channel_list(const TdmsFile& file) {
+  std::string list;
+  for (const TdmsChannel& c : file.channels) {
+    list += (list.empty() ? "" : ", ") + escape_tdms_map_name(c.group) + "/" +
+            escape_tdms_map_name(c.name);
+  }
+  return list.empty() ? "none" : list;
 }
 
 namespace {
@@ -650,46 +936,69 @@ const TdmsMapItem* map_item(const std::vector<TdmsMapItem>& map, const std::stri
   return found;
 }
 
+// A mapping error: "SOURCE: WHAT; the file's channels: A/B, ..." (the names to map).
+[[noreturn]] void mapping_error(const TdmsFile& file, const std::string& source,
+                                const std::string& what) {
+  throw TdmsError(source + ": " + what + "; the file's channels: " + tdms_channel_list(file));
+}
+
+// A channel's name as --map takes it.
+std::string map_name(const TdmsChannel& channel) {
+  return escape_tdms_map_name(channel.group) + "/" + escape_tdms_map_name(channel.name);
+}
+
 // The map's force item; throws when the map gives no force or no motion channel.
-const TdmsMapItem& check_map(const std::vector<TdmsMapItem>& map, const std::string& source) {
+const TdmsMapItem& check_map(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
+                             const std::string& source) {
   const TdmsMapItem* force_item = map_item(map, "force");
   const bool has_motion = map_item(map, "angle") != nullptr || map_item(map, "rate") != nullptr;
-  if (!force_item) throw TdmsError(source + ": --map gives no force channel (force=GROUP/CHANNEL)");
+  if (!force_item) mapping_error(file, source, "--map gives no force channel (force=GROUP/CHANNEL)");
   if (!has_motion) {
-    throw TdmsError(source +
-                    ": --map gives neither angle nor rate (angle=GROUP/CHANNEL or "
-                    "rate=GROUP/CHANNEL)");
+    mapping_error(file, source,
+                  "--map gives neither angle nor rate (angle=GROUP/CHANNEL or "
+                  "rate=GROUP/CHANNEL)");
   }
   return *force_item;
 }
 
-// The channel an item maps, which must exist and hold numbers.
+// The channel an item maps, which must exist, be the only one its text can mean, and hold
+// numbers.
 const TdmsChannel& mapped_channel(const TdmsFile& file, const TdmsMapItem& item,
                                   const std::string& source) {
-  const TdmsChannel* channel = file.find(item.group, item.channel);
-  if (!channel) {
-    std::string known;
-    for (const TdmsChannel& c : file.channels) {
-      known += (known.empty() ? "" : ", ") + c.group + "/" + c.name;
+  std::vector<const TdmsChannel*> matches;
+  for (const auto& [group, name] : item.splits) {
+    if (const TdmsChannel* channel = file.find(group, name)) matches.push_back(channel);
+  }
+  if (matches.empty()) {
+    mapping_error(file, source, item.target + ": no channel " + item.text);
+  }
+  if (matches.size() > 1) {
+    std::string meant;
+    for (const TdmsChannel* channel : matches) {
+      meant += (meant.empty() ? "" : " and ") + map_name(*channel);
     }
-    throw TdmsError(source + ": " + item.target + ": no channel " + item.group + "/" +
-                    item.channel + " (the file has " + (known.empty() ? "none" : known) + ")");
+    mapping_error(file, source,
+                  item.target + ": " + item.text + " can mean " + meant +
+                      " (write '\\/' for a '/' inside a name)");
   }
-  if (channel->data_type.empty()) {
-    throw TdmsError(source + ": " + item.target + ": channel " + item.group + "/" + item.channel +
-                    " has no numeric values");
+  const TdmsChannel& channel = *matches.front();
+  if (channel.data_type.empty()) {
+    mapping_error(file, source,
+                  item.target + ": channel " + map_name(channel) + " has no numeric values");
   }
-  return *channel;
+  return channel;
 }
 
 // Without a time channel, the time from the force channel's waveform properties
-// (wf_start_offset + i · wf_increment), and its start time as metadata.
-void waveform_time(const TdmsChannel& force, const std::string& source, Recording& recording) {
+// (wf_start_offset + i · wf_increment).
+void waveform_time(const TdmsFile& file, const TdmsChannel& force, const std::string& source,
+                   Recording& recording) {
   const TdmsProperty* increment = property(force, "wf_increment");
   if (!increment || !increment->number || !(*increment->number > 0)) {
-    throw TdmsError(source + ": force: channel " + force.group + "/" + force.name +
-                    " has no wf_increment > 0 to give the time (map a time channel: "
-                    "time=GROUP/CHANNEL)");
+    mapping_error(file, source,
+                  "force: channel " + map_name(force) +
+                      " has no wf_increment > 0 to give the time (map a time channel: "
+                      "time=GROUP/CHANNEL)");
   }
   const TdmsProperty* offset = property(force, "wf_start_offset");
   const double first_s = offset && offset->number ? *offset->number : 0.0;
@@ -697,30 +1006,29 @@ void waveform_time(const TdmsChannel& force, const std::string& source, Recordin
   for (std::size_t i = 0; i < force.values.size(); ++i) {
     recording.time_s[i] = first_s + static_cast<double>(i) * *increment->number;
   }
-  if (const TdmsProperty* start = property(force, "wf_start_time")) {
-    recording.metadata.emplace_back("tdms_wf_start_time", start->text);
-  }
 }
 
 // One mapped channel into its column (force, angle, rate, an extra; time is taken
 // before): as many values as the force channel, the same waveform increment (when the
 // time is the waveform's), the target's unit; its origin as metadata.
-void take_mapped_column(const TdmsMapItem& item, const TdmsChannel& channel,
-                        const TdmsChannel& force, bool waveform_clock, const std::string& source,
-                        Recording& recording) {
-  const std::string name = item.group + "/" + item.channel;
+void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item,
+                        const TdmsChannel& channel, const TdmsChannel& force, bool waveform_clock,
+                        const std::string& source, Recording& recording) {
+  const std::string name = map_name(channel);
   if (channel.values.size() != force.values.size()) {
-    throw TdmsError(source + ": " + item.target + ": channel " + name + " has " +
-                    std::to_string(channel.values.size()) + " values, the force channel " +
-                    std::to_string(force.values.size()));
+    mapping_error(file, source,
+                  item.target + ": channel " + name + " has " +
+                      std::to_string(channel.values.size()) + " values, the force channel " +
+                      std::to_string(force.values.size()));
   }
   if (waveform_clock && item.target != "time") {
     const TdmsProperty* increment = property(channel, "wf_increment");
     const TdmsProperty* force_increment = property(force, "wf_increment");
     if (increment && increment->number && *increment->number != *force_increment->number) {
-      throw TdmsError(source + ": " + item.target + ": channel " + name + " has wf_increment " +
-                      format_csv_number(*increment->number) + ", the force channel " +
-                      format_csv_number(*force_increment->number));
+      mapping_error(file, source,
+                    item.target + ": channel " + name + " has wf_increment " +
+                        format_csv_number(*increment->number) + ", the force channel " +
+                        format_csv_number(*force_increment->number));
     }
   }
   const std::string expected = item.target == "force"   ? "N"
@@ -730,10 +1038,11 @@ void take_mapped_column(const TdmsMapItem& item, const TdmsChannel& channel,
                                                         : "";
   const TdmsProperty* unit = property(channel, "unit_string");
   if (!expected.empty() && unit && !unit->text.empty() && unit->text != expected) {
-    throw TdmsError(source + ": " + item.target + ": channel " + name + " is in '" + unit->text +
-                    "', not " + expected +
-                    " (scale it in the file, or map it as an extra column whose name ends in "
-                    "its unit)");
+    mapping_error(file, source,
+                  item.target + ": channel " + name + " is in '" + unit->text + "', not " +
+                      expected +
+                      " (scale it in the file, or map it as an extra column whose name ends "
+                      "in its unit)");
   }
   if (item.target == "force") {
     recording.force_N = channel.values;
@@ -789,16 +1098,32 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
                             const std::string& source) {
   Recording recording;
   recording.source = source;
-  const TdmsChannel& force = mapped_channel(file, check_map(map, source), source);
+  const TdmsChannel& force = mapped_channel(file, check_map(file, map, source), source);
+  // One channel, one target: a channel mapped as both force and angle is a typing error.
+  std::vector<std::pair<const TdmsChannel*, std::string>> taken;
+  for (const TdmsMapItem& item : map) {
+    const TdmsChannel* channel = &mapped_channel(file, item, source);
+    for (const auto& [earlier, target] : taken) {
+      if (earlier == channel) {
+        mapping_error(file, source,
+                      item.target + ": channel " + map_name(*channel) + " is mapped as " +
+                          target + " already (one channel per target)");
+      }
+    }
+    taken.emplace_back(channel, item.target);
+  }
   const TdmsMapItem* time_item = map_item(map, "time");
   if (time_item) {
     recording.time_s = mapped_channel(file, *time_item, source).values;
   } else {
-    waveform_time(force, source, recording);
+    waveform_time(file, force, source, recording);
+  }
+  if (const TdmsProperty* start = property(force, "wf_start_time")) {
+    recording.metadata.emplace_back("tdms_wf_start_time", start->text);
   }
   for (const TdmsMapItem& item : map) {
-    take_mapped_column(item, mapped_channel(file, item, source), force, time_item == nullptr,
-                       source, recording);
+    take_mapped_column(file, item, mapped_channel(file, item, source), force,
+                       time_item == nullptr, source, recording);
   }
   for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
     if (!(recording.time_s[i] > recording.time_s[i - 1])) {

@@ -10,9 +10,18 @@
 // (I8…I64, U8…U64), SGL and DBL (with or without unit); string channels are skipped; every
 // property type but the extended float; scaling properties of the Linear and Polynomial
 // kinds (NI_Scaling_Status "unscaled"); time from wf_start_offset + i × wf_increment.
-// Refused, each by name: big-endian segments, DAQmx raw data (the kTocDAQmxRawData flag or
-// the 0x69120000/0x69130000 raw data indexes), channels of other data types, arrays of more
-// than one dimension, raw data that is not a whole number of chunks, other scale types.
+// DAQmx raw data (DAQmx logging's "TDMS raw" files: ToC flag kTocDAQmxRawData, raw data
+// indexes 69 12 00 00 and 69 13 00 00): format-changing scalers (U8…I64, SGL, DBL at a byte
+// offset in a raw buffer's stride) and digital line scalers (a bit: 0/1), several raw
+// buffers (one per device) one after the other in each chunk; the channel's value is its
+// last NI_Scale, where a scale without a Scale_Type is the scaler of that scale id, and a
+// channel without scales is its one scaler's raw value. Each scaler's raw values are kept
+// (TdmsChannel::daqmx_raw).
+// Refused, each by name: big-endian segments (the ToC's flag is read before the version,
+// which a big-endian segment stores byte-swapped), DAQmx scalers of other types or reading
+// past their buffer, a segment mixing DAQmx and other raw data, channels of other data
+// types, arrays of more than one dimension, raw data that is not a whole number of chunks,
+// other scale types (Table, Thermocouple, RTD, ...).
 // Values become doubles: exact for every type but I64/U64 beyond 2^53.
 //
 // Thread safety: free functions without shared state.
@@ -46,6 +55,9 @@ struct TdmsChannel {
   std::vector<double> values;  // scaled when the file asks for scaling
   std::map<std::string, TdmsProperty> properties;
   std::string scaling;  // how the values were scaled ("" = as stored)
+  // DAQmx raw data: each scaler's values as stored (digital lines as 0/1), by scale id; the
+  // channel's values are these through its NI_Scale properties. Empty for other channels.
+  std::map<std::uint32_t, std::vector<double>> daqmx_raw;
 };
 
 struct TdmsFile {
@@ -63,20 +75,32 @@ TdmsFile read_tdms(const std::filesystem::path& path);
 TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& source);
 
 // One item of `doorbench import --map`: TARGET=GROUP/CHANNEL. TARGET is force, angle, rate,
-// time or an extra column name with a unit suffix (e.g. inclinometer_angle_rad).
+// time or an extra column name with a unit suffix (e.g. inclinometer_angle_rad). A name may
+// hold any character: '\/', '\,', '\=' and '\\' stand for '/', ',', '=' and '\'; an
+// unescaped '/' inside a name also works when only one of the ways to split GROUP/CHANNEL
+// at its '/'s names a channel of the file ("07/09/2012 06:58:23 PM - Digital Input/Line 0").
 struct TdmsMapItem {
-  std::string target, group, channel;
+  std::string target, group, channel;  // group and channel split at the first unescaped '/'
+  std::string text;                    // GROUP/CHANNEL as given (escapes kept)
+  // Every (group, channel) the text can mean, one per unescaped '/', the first first.
+  std::vector<std::pair<std::string, std::string>> splits;
 };
 // "force=Load/Force,angle=Encoder/Angle"; throws std::invalid_argument naming the item.
 std::vector<TdmsMapItem> parse_tdms_map(const std::string& text);
+// A group or channel name as --map takes it: '/', ',', '=' and '\' escaped with '\'.
+std::string escape_tdms_map_name(const std::string& name);
+// The file's channels as --map names them, "Door/Force, Door/Angle" ("none" when empty).
+std::string tdms_channel_list(const TdmsFile& file);
 
-// The mapped channels as a recording: force and angle or rate are required; time from the
+// The mapped channels as a recording: force and angle or rate are required, and no channel
+// may be mapped twice; time from the
 // `time` channel when mapped, else wf_start_offset + i × wf_increment of the force channel
 // (every mapped channel must have as many values and the same wf_increment). Units are
 // checked where the channel states one (unit_string: N for force, rad for angle, rad/s for
 // rate). The file's handle_radius_m property (file or group) becomes the recording's;
-// mapped channels' properties, the file's and wf_start_time go into the metadata. Throws
-// TdmsError "SOURCE: ..." naming the target and channel.
+// mapped channels' properties, the file's and the force channel's wf_start_time (metadata
+// tdms_wf_start_time, ISO 8601 UTC) go into the metadata. Throws TdmsError "SOURCE: ..."
+// naming the target and channel and ending with the file's channels (tdms_channel_list).
 Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
                             const std::string& source);
 

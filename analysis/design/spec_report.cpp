@@ -338,6 +338,7 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
   root["command"] = e.command;
   root["asis_source"] = e.asis_source;
   root["tobe_sources"] = e.tobe_sources;
+  root["warnings"] = e.warnings;
   root["feasible"] = design.feasible;
   root["infeasibility"] = design.infeasibility;
   // When infeasible: the binding parameters as the data ask for them (bounds widened).
@@ -455,6 +456,9 @@ std::string sources_section(const InverseDesignResult& design, const SpecEvaluat
     html += (i ? ", " : "") + escape(e.tobe_sources[i]);
   }
   html += "<br>made by: <code>" + escape(e.command) + "</code></p>\n";
+  for (const std::string& warning : e.warnings) {
+    html += "<p class=\"bad\">Warning: " + escape(warning) + "</p>\n";
+  }
   if (!design.feasible) {
     html +=
         "<p class=\"bad\">Not reachable within the bounds; the design below is the nearest "

@@ -23,6 +23,9 @@ struct SpecEvaluation {
   std::string command;      // how the report was made (shown in it)
   std::string asis_source;  // the AS-IS parameter file
   std::vector<std::string> tobe_sources;
+  // What the report warns of (each a sentence, without "warning: "): in spec.json's
+  // "warnings", at the top of spec.html; the spec verb prints them on stderr too.
+  std::vector<std::string> warnings;
   FeltQuantities felt_before{};                   // the AS-IS door, virtual hand
   FeltQuantities felt_after{};                    // the TO-BE door (first solution), virtual hand
   std::vector<FeltQuantities> felt_alternatives;  // the other solutions, virtual hand

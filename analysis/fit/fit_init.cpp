@@ -25,6 +25,61 @@ void widen(Bounds& bounds, double low, double high, double floor = 0.0) {
   bounds.upper = std::max(bounds.upper, high);
 }
 
+// The latch readings into `values` and `bounds` (bounds widened to hold them), origins
+// "latch read-off". When only one side of the latch was read and the start's other side
+// would cross it, that side's free angles are scaled by the ratio read / start of the side
+// read (origin "latch scaled"), as the fit itself does (fitting.cpp, apply_latch_read_off),
+// so the start and the fit's table say the same. A start that still breaks a constraint
+// keeps the base values, with a note.
+void apply_latch(const LatchReadOff& latch, const DoorGeometry& geometry,
+                 std::vector<double>& values, std::vector<Bounds>& bounds, DataStart& out) {
+  const std::pair<int, std::optional<double>> readings[] = {
+      {sensory::kTheta0, latch.theta0_rad},     {sensory::kTheta1, latch.theta1_rad},
+      {sensory::kTheta2, latch.theta2_rad},     {sensory::kTheta3, latch.theta3_rad},
+      {sensory::kKInf, latch.k_inf_Nm_per_rad}, {sensory::kKLock, latch.k_lock_Nm_per_rad}};
+  std::vector<double> trial = values;
+  std::vector<Bounds> trial_bounds = bounds;
+  std::vector<int> read, scaled;
+  const double theta_max = geometry.theta_max_rad;
+  const auto take = [&](int index, double value) {
+    const bool angle = index >= sensory::kTheta0 && index <= sensory::kTheta3;
+    if (angle) {
+      widen(trial_bounds[index], 0.5 * value, std::min(2.0 * value, theta_max), 1e-6);
+      trial_bounds[index].upper = std::min(trial_bounds[index].upper, theta_max);
+    } else {
+      widen(trial_bounds[index], 0.0, 4.0 * value);
+    }
+    trial[index] = std::clamp(value, trial_bounds[index].lower, trial_bounds[index].upper);
+  };
+  for (const auto& [index, reading] : readings) {
+    if (!reading || !(*reading > 0)) continue;
+    take(index, *reading);
+    read.push_back(index);
+  }
+  if (read.empty()) return;
+  const bool opening_read = latch.theta1_rad.has_value() && *latch.theta1_rad > 0;
+  const bool closing_read = latch.theta2_rad.has_value() && *latch.theta2_rad > 0;
+  if (!(trial[sensory::kTheta1] < trial[sensory::kTheta2]) && opening_read != closing_read) {
+    const int side_read = closing_read ? sensory::kTheta2 : sensory::kTheta1;
+    const double factor = trial[side_read] / values[side_read];
+    for (int index : closing_read ? std::vector<int>{sensory::kTheta0, sensory::kTheta1}
+                                  : std::vector<int>{sensory::kTheta2, sensory::kTheta3}) {
+      take(index, values[index] * factor);
+      scaled.push_back(index);
+    }
+  }
+  try {
+    (void)DoorModel(ModelKind::kSensory, geometry, trial, trial_bounds);
+  } catch (const std::invalid_argument& error) {
+    out.notes.push_back(std::string("the latch read off the data was not used: ") + error.what());
+    return;
+  }
+  values = trial;
+  bounds = trial_bounds;
+  for (int index : read) out.origin[index] = "latch read-off";
+  for (int index : scaled) out.origin[index] = "latch scaled";
+}
+
 }  // namespace
 
 DataStart start_from_data(const PreparedData& data, const DoorModel& base) {
@@ -105,36 +160,7 @@ DataStart start_from_data(const PreparedData& data, const DoorModel& base) {
   DoorModel with_inertia = DoorModel(ModelKind::kSensory, base.geometry(), values, bounds);
   const LatchReadOff latch = read_latch_start(data, with_inertia, data.rate_noise_rad_s);
   for (const std::string& note : latch.notes) out.notes.push_back(note);
-  const std::pair<int, std::optional<double>> readings[] = {
-      {sensory::kTheta0, latch.theta0_rad},     {sensory::kTheta1, latch.theta1_rad},
-      {sensory::kTheta2, latch.theta2_rad},     {sensory::kTheta3, latch.theta3_rad},
-      {sensory::kKInf, latch.k_inf_Nm_per_rad}, {sensory::kKLock, latch.k_lock_Nm_per_rad}};
-  std::vector<double> trial = values;
-  std::vector<Bounds> trial_bounds = bounds;
-  std::vector<int> read;
-  const double theta_max = base.geometry().theta_max_rad;
-  for (const auto& [index, reading] : readings) {
-    if (!reading || !(*reading > 0)) continue;
-    const bool angle = index >= sensory::kTheta0 && index <= sensory::kTheta3;
-    if (angle) {
-      widen(trial_bounds[index], 0.5 * *reading, std::min(2.0 * *reading, theta_max), 1e-6);
-      trial_bounds[index].upper = std::min(trial_bounds[index].upper, theta_max);
-    } else {
-      widen(trial_bounds[index], 0.0, 4.0 * *reading);
-    }
-    trial[index] = std::clamp(*reading, trial_bounds[index].lower, trial_bounds[index].upper);
-    read.push_back(index);
-  }
-  if (!read.empty()) {
-    try {
-      (void)DoorModel(ModelKind::kSensory, base.geometry(), trial, trial_bounds);
-      values = trial;
-      bounds = trial_bounds;
-      for (int index : read) out.origin[index] = "latch read-off";
-    } catch (const std::invalid_argument& error) {
-      out.notes.push_back(std::string("the latch read off the data was not used: ") + error.what());
-    }
-  }
+  apply_latch(latch, base.geometry(), values, bounds, out);
   out.model = DoorModel(ModelKind::kSensory, base.geometry(), values, bounds,
                         {base.effects().begin(), base.effects().end()});
   return out;

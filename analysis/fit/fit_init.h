@@ -30,7 +30,8 @@ namespace doorbench {
 
 struct DataStart {
   DoorModel model;  // the start: values and bounds; every constraint holds
-  // Per base parameter, where its start came from: "free motion", "latch read-off" or
+  // Per base parameter, where its start came from: "free motion", "latch read-off",
+  // "latch scaled" (one side of the latch read, the other side's angles scaled to it) or
   // "reference door".
   std::vector<std::string> origin;
   int free_motion_samples = 0;     // samples in the regression (0: not used)

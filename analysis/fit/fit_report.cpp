@@ -80,6 +80,7 @@ std::string FitSummary::brief_report() const {
          short_number(fitted.study_objective_rad_s()) + " rad/s (stroke " +
          std::to_string(fitted.worst_replay_stroke_id) + ").\n";
   out += fit_and_max_error_note(fitted);
+  out += fit_percent_warnings(fitted, held_out ? &*held_out : nullptr);
   if (!undetermined.empty()) {
     out += "Undetermined:";
     for (const std::string& name : undetermined) out += " " + name;
@@ -211,6 +212,7 @@ void metrics_section(std::string& out, const FitSummary& summary) {
       summary.held_out ? ("held out (" + std::to_string(summary.folds) + " folds)").c_str()
                        : "held out");
   metric_rows(out, summary.fitted, summary.held_out ? &*summary.held_out : nullptr);
+  out += fit_percent_warnings(summary.fitted, summary.held_out ? &*summary.held_out : nullptr);
 
   out += "\nPer stroke (omega errors in rad/s; held out: by the fold that left the stroke out)\n";
   out += printf_text("  %-7s %-6s %-8s %-8s %-10s %-10s %-8s %-11s %-10s %-11s\n", "stroke", "dir",

@@ -120,7 +120,8 @@ void apply_latch_read_off(const DoorModel& start, const LatchReadOff& read,
   }
   values = trial;
   for (int index : replaced) origin[index] = "read off the data";
-  for (int index : scaled) origin[index] = "start scaled to the latch read off";
+  // Shown as "start <origin>" in the report's status column.
+  for (int index : scaled) origin[index] = "scaled to the latch read off";
 }
 
 }  // namespace

@@ -31,4 +31,30 @@ std::string fit_and_max_error_note(const FitMetrics& metrics) {
          " s).\n";
 }
 
+std::string fit_percent_warnings(const FitMetrics& fitted, const FitMetrics* held_out) {
+  const double fit = fitted.window.fit_percent();
+  const double held = held_out ? held_out->window.fit_percent() : std::nan("");
+  std::string out;
+  if (fit < 0.0) {
+    out += printf_text(
+        "warning: FIT%% %.1f%% is below 0: on the fitted strokes the model predicts omega worse "
+        "than omega's mean (a constant) would; the fit is not usable as it is (check the "
+        "strokes, the start values and the model's effects).\n",
+        fit);
+  }
+  if (held < 0.0) {
+    out += printf_text(
+        "warning: held-out FIT%% %.1f%% is below 0: on strokes it was not fitted to, the model "
+        "predicts omega worse than omega's mean would; it does not generalize.\n",
+        held);
+  } else if (std::isfinite(fit) && fit - held > kHeldOutFitGap_points) {
+    out += printf_text(
+        "warning: held-out FIT%% %.1f%% is %.1f points below the fitted %.1f%%: the model "
+        "describes the strokes it was fitted to much better than new ones (overfitting, or "
+        "held-out strokes of another kind).\n",
+        held, fit - held, fit);
+  }
+  return out;
+}
+
 }  // namespace doorbench

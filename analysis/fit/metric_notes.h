@@ -16,4 +16,14 @@ namespace doorbench {
 // is not defined (no samples, no successful replay).
 std::string fit_and_max_error_note(const FitMetrics& metrics);
 
+// A held-out window FIT% this many points below the fitted one is called far below.
+constexpr double kHeldOutFitGap_points = 20.0;
+
+// Warning lines (each "warning: ...\n") for a window FIT% that says the model is not usable
+// as it is: a negative FIT% on the fitted strokes (the windows predict omega worse than its
+// mean, a constant, would), a negative held-out FIT%, or a held-out FIT% more than
+// kHeldOutFitGap_points below the fitted one (it describes the strokes it was fitted to,
+// not new ones). "" when none applies or FIT% is not defined. `held_out` may be null.
+std::string fit_percent_warnings(const FitMetrics& fitted, const FitMetrics* held_out);
+
 }  // namespace doorbench

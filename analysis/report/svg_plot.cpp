@@ -104,6 +104,18 @@ std::string reduced_points(const PlotSeries& s, const ToPxX& px, const ToPxY& py
   return points;
 }
 
+// ' stroke="COLOUR" stroke-width=...' of a series' line, its width times width_factor. Its
+// own buffer: render_svg_plot's `buffer` holds the element's start while this is called.
+std::string stroke_attributes(const PlotSeries& s, const std::string& colour,
+                              double width_factor) {
+  const plot_style::LineStyle style = plot_style::line_style(s.meaning);
+  char attributes[128];
+  std::snprintf(attributes, sizeof attributes, "stroke-width=\"%.1f\" stroke-opacity=\"%.2f\"%s",
+                style.width_px * width_factor, style.opacity,
+                style.dashed ? " stroke-dasharray=\"6 3\"" : "");
+  return " stroke=\"" + colour + "\" " + attributes;
+}
+
 }  // namespace
 
 std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeries> series) {
@@ -197,18 +209,12 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
     if (s.meaning != plot_style::Meaning::kOther) return plot_style::hex_colour(s.meaning);
     return std::string(kPalette[index % 6]);
   };
-  auto stroke_attributes = [&](std::size_t index, double width_factor) {
-    const plot_style::LineStyle style = plot_style::line_style(series[index].meaning);
-    std::snprintf(buffer, sizeof buffer, "stroke-width=\"%.1f\" stroke-opacity=\"%.2f\"%s",
-                  style.width_px * width_factor, style.opacity,
-                  style.dashed ? " stroke-dasharray=\"6 3\"" : "");
-    return std::string(" stroke=\"") + colour_of(index) + "\" " + buffer;
-  };
+  // A labelled series' line carries its label as <title> (a tooltip; the legend's key).
   for (std::size_t index : order) {
     const PlotSeries& s = series[index];
-    svg += "<polyline fill=\"none\"" + stroke_attributes(index, 1.0) + " points=\"";
+    svg += "<polyline fill=\"none\"" + stroke_attributes(s, colour_of(index), 1.0) + " points=\"";
     svg += reduced_points(s, px, py);
-    svg += "\"/>\n";
+    svg += s.label.empty() ? "\"/>\n" : "\"><title>" + escaped(s.label) + "</title></polyline>\n";
   }
   // The legend, right of the data area, in the order the series were given.
   int legend_entries = 0;
@@ -218,7 +224,8 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
     const double row_y = top + 8 + 18.0 * double(legend_entries++);
     std::snprintf(buffer, sizeof buffer, "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\"",
                   legend_x, row_y, legend_x + 24, row_y);
-    svg += buffer + stroke_attributes(index, 2.0) + "/>";
+    svg += buffer;
+    svg += stroke_attributes(series[index], colour_of(index), 2.0) + "/>";
     std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\">", legend_x + 30, row_y + 4);
     svg += buffer + escaped(series[index].label) + "</text>\n";
   }

@@ -209,15 +209,16 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
                                          (dir / "t.h5").string() + "'",
                                      dir);
   CHECK(run.status == 1);
-  CHECK(run.err == "doorbench: " + tdms +
-                       ": angle: no channel Door/Nope (the file has Door/Force, Door/Angle, "
-                       "Door/Incl, Door/Note)\n");
+  const std::string channels = "; the file's channels: Door/Force, Door/Angle, Door/Incl, "
+                               "Door/Note\n";
+  CHECK(run.err == "doorbench: " + tdms + ": angle: no channel Door/Nope" + channels);
   run = testing::run_doorbench_shell(
       "import '" + tdms + "' --map force --out '" + (dir / "t.h5").string() + "'", dir);
   CHECK(run.status == 2);
   CHECK(run.err ==
-        "doorbench: --map item 'force' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force) (see "
-        "doorbench import --help)\n");
+        "doorbench: --map item 'force' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force); the "
+        "file's channels: Door/Force, Door/Angle, Door/Incl, Door/Note (see doorbench import "
+        "--help)\n");
   run = testing::run_doorbench_shell("import '" + tdms +
                                          "' --map force=Door/Force,angle=Door/Incl --out '" +
                                          (dir / "t.h5").string() + "'",
@@ -225,7 +226,92 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + tdms +
                        ": angle: channel Door/Incl is in 'deg', not rad (scale it in the file, or "
-                       "map it as an extra column whose name ends in its unit)\n");
+                       "map it as an extra column whose name ends in its unit)" + channels);
+
+  // Without --map: the channels to map.
+  run = testing::run_doorbench_shell(
+      "import '" + tdms + "' --out '" + (dir / "t.h5").string() + "'", dir);
+  CHECK(run.status == 2);
+  CHECK(run.err ==
+        "doorbench: a TDMS file needs --map force=GROUP/CHANNEL,angle=GROUP/CHANNEL (or rate=); "
+        "the file's channels: Door/Force, Door/Angle, Door/Incl, Door/Note (see doorbench "
+        "import --help)\n");
+  // One channel as two targets.
+  run = testing::run_doorbench_shell("import '" + tdms +
+                                         "' --map force=Door/Force,angle=Door/Force --out '" +
+                                         (dir / "t.h5").string() + "'",
+                                     dir);
+  CHECK(run.status == 1);
+  CHECK(run.err == "doorbench: " + tdms +
+                       ": angle: channel Door/Force is mapped as force already (one channel per "
+                       "target)" + channels);
+  CHECK_FALSE(std::filesystem::exists(dir / "t.h5"));
+  // The index file beside a .tdms.
+  std::ofstream(dir / "door.tdms_index") << "TDSh";
+  const std::string index = (dir / "door.tdms_index").string();
+  run = testing::run_doorbench_shell(
+      "import '" + index + "' --map force=Door/Force,angle=Door/Angle --out '" +
+          (dir / "t.h5").string() + "'",
+      dir);
+  CHECK(run.status == 1);
+  CHECK(run.err == "doorbench: " + index +
+                       ": this is a TDMS index file (.tdms_index); import the .tdms file itself (" +
+                       tdms + ")\n");
+  // The file's wf_start_time (3786912000.5 s after 1904) is the session's start.
+  run = testing::run_doorbench_shell("info '" + (dir / "s.h5").string() + "'", dir);
+  INFO(run.out);
+  CHECK_THAT(run.out, Contains("2024-01-01T00:00:00.500000Z"));
+  CHECK(SessionReader(dir / "s.h5").metadata().start_time_utc == "2024-01-01T00:00:00.500000Z");
+}
+
+// A SignalExpress-style group named with a date ('/' in it) and a channel with a comma.
+TEST_CASE("TDMS: --map takes names with '/' and ',' (escaped, or '/' unescaped when only one "
+          "split names a channel)",
+          "[tdms][cli]") {
+  const testing::TempDir dir("tdms_names");
+  const std::string group = "07/09/2012 06:58:23 PM - Digital Input - All Data";
+  Object force = channel("Force", kDouble, 4, {double_property("wf_increment", 0.5)});
+  force.path = "/'" + group + "'/'Force'";
+  Object angle = channel("Angle, rad", kDouble, 4);
+  angle.path = "/'" + group + "'/'Angle, rad'";
+  Bytes raw;
+  for (double v : {1.0, 2.0, 3.0, 4.0}) raw.put(v);
+  for (double v : {0.1, 0.2, 0.3, 0.4}) raw.put(v);
+  const Bytes file = segment(kTocMetaData | kTocNewObjList | kTocRawData, {force, angle}, raw);
+  std::ofstream(dir / "se.tdms", std::ios::binary)
+      .write(reinterpret_cast<const char*>(file.data.data()),
+             static_cast<std::streamsize>(file.data.size()));
+  const std::string tdms = (dir / "se.tdms").string();
+  const std::string escaped_group = "07\\/09\\/2012 06:58:23 PM - Digital Input - All Data";
+  // Escaped: any name; unescaped '/': the one split that names a channel.
+  for (const std::string& map :
+       {"force=" + escaped_group + "/Force,angle=" + escaped_group + "/Angle\\, rad",
+        "force=" + group + "/Force,angle=" + group + "/Angle\\, rad"}) {
+    INFO(map);
+    std::filesystem::remove(dir / "s.h5");
+    const testing::DoorbenchRun run = testing::run_doorbench_shell(
+        "import '" + tdms + "' --map '" + map + "' --out '" + (dir / "s.h5").string() + "'", dir);
+    INFO(run.err);
+    REQUIRE(run.status == 0);
+    const Recording recording = session_to_recording(SessionReader(dir / "s.h5"));
+    CHECK(recording.force_N == std::vector<double>{1, 2, 3, 4});
+    REQUIRE(recording.angle_rad);
+    CHECK(*recording.angle_rad == std::vector<double>{0.1, 0.2, 0.3, 0.4});
+  }
+  const std::vector<TdmsMapItem> items = parse_tdms_map("force=a\\/b/c\\,d\\\\,x_V=e/f");
+  REQUIRE(items.size() == 2);
+  CHECK(items[0].group == "a/b");
+  CHECK(items[0].channel == "c,d\\");
+  CHECK(items[1].target == "x_V");
+  // A name the error lists is a name --map takes.
+  const testing::DoorbenchRun wrong = testing::run_doorbench_shell(
+      "import '" + tdms + "' --map force=Nope/Force,angle=Nope/Angle --out '" +
+          (dir / "t.h5").string() + "'",
+      dir);
+  CHECK(wrong.status == 1);
+  CHECK(wrong.err == "doorbench: " + tdms +
+                         ": force: no channel Nope/Force; the file's channels: " + escaped_group +
+                         "/Force, " + escaped_group + "/Angle\\, rad\n");
 }
 
 TEST_CASE("TDMS: layouts that are not supported are refused by name", "[tdms]") {
@@ -233,23 +319,26 @@ TEST_CASE("TDMS: layouts that are not supported are refused by name", "[tdms]") 
   const std::vector<Object> objects = {channel("Force", kDouble, 5), channel("Angle", kI32, 5),
                                        channel("Incl", kSingle, 5)};
   const std::uint32_t toc = kTocMetaData | kTocNewObjList | kTocRawData;
-  CHECK(error_of(segment(toc | kTocDAQmxRawData, objects, raw).data) ==
-        "mem.tdms: segment 1 (byte 28): DAQmx raw data (ToC flag kTocDAQmxRawData) is not "
-        "supported: log the channels scaled (LabVIEW: TDMS, not TDMS raw / 'Log and Read' with "
-        "scaled data)");
+  // The DAQmx flag alone changes nothing (tests/acquisition/test_tdms_daqmx.cpp reads DAQmx
+  // raw data).
+  CHECK(error_of(segment(toc | kTocDAQmxRawData, objects, raw).data) == "(no error)");
   CHECK(error_of(segment(toc | kTocBigEndian, objects, raw).data) ==
-        "mem.tdms: segment 1 (byte 28): big-endian segments (ToC flag kTocBigEndian) are not "
+        "mem.tdms: segment 1 (byte 8): big-endian segments (ToC flag kTocBigEndian) are not "
+        "supported");
+  // As a big-endian writer stores it: the version 4713 byte-swapped (0x69120000 read
+  // little-endian); the refusal names the byte order, not the version.
+  CHECK(error_of(segment(toc | kTocBigEndian, objects, raw, 0x69120000).data) ==
+        "mem.tdms: segment 1 (byte 8): big-endian segments (ToC flag kTocBigEndian) are not "
         "supported");
   CHECK(error_of(segment(toc, objects, raw, 4711).data) ==
         "mem.tdms: segment 1 (byte 28): TDMS version 4711 is not supported (4712 and 4713 are)");
 
   std::vector<Object> daqmx = objects;
-  daqmx[0].raw = Object::kRawIndex;
-  daqmx[0].raw_index = 0x69120000;
+  daqmx[0] = daqmx_channel("/'Door'/'Force'", 5, {{0xFFFFFFFFu, 0, 0, 0}}, {8}, false);
   // Byte 51: the object's raw data index (after the lead-in, the object count and the path).
   CHECK(error_of(segment(toc, daqmx, raw).data) ==
-        "mem.tdms: segment 1 (byte 51): object /'Door'/'Force': DAQmx raw data (raw data index "
-        "0x69120000) is not supported");
+        "mem.tdms: segment 1 (byte 51): object /'Door'/'Force': DAQmx scalers of data type "
+        "4294967295 are not supported (0-9: U8, I8, U16, I16, U32, I32, U64, I64, SGL, DBL are)");
   std::vector<Object> extended = objects;
   extended[0].type = kExtended;
   CHECK(error_of(segment(toc, extended, raw).data) ==

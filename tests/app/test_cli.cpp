@@ -34,6 +34,7 @@
 #include "analysis/model/parameter_file.h"
 #include "core/units.h"
 #include "tests/support/files.h"
+#include "tests/support/svg_check.h"
 
 using doorbench::kRadPerDeg;
 using doorbench::testing::read_file;
@@ -900,6 +901,13 @@ TEST_CASE("CLI: demo summarizes both models and writes their runs", "[cli]") {
   CHECK(fs::exists(dir / "tobe-tuned.h5"));
   CHECK(fs::exists(dir / "spec" / "spec.json"));
   CHECK(fs::exists(dir / "spec" / "spec.html"));
+  // Every SVG it wrote (its plots, the loop's, the spec's inline ones) is XML with its
+  // legend's keys drawn in their series' colours.
+  const doorbench::testing::SvgCheck svgs = doorbench::testing::check_svgs({dir});
+  INFO(svgs.output);
+  CHECK(svgs.status == 0);
+  CHECK(svgs.svgs >= 9);
+  CHECK(svgs.legend_entries >= 20);
 
   // The two models' summaries come first (the specification's felt quantities follow).
   std::vector<double> unlatch = numbers_after(result.out, "peak force to unlatch");
@@ -1545,6 +1553,11 @@ TEST_CASE("CLI: fit writes result.json, the report and plots for a simulated run
     INFO(file);
     CHECK(std::filesystem::exists(std::filesystem::path(out) / file));
   }
+  const doorbench::testing::SvgCheck svgs = doorbench::testing::check_svgs({out});
+  INFO(svgs.output);
+  CHECK(svgs.status == 0);
+  CHECK(svgs.svgs >= 4);
+  CHECK(svgs.legend_entries >= 8);
   // The fitted file is a parameter file doorbench reads back.
   const std::string grid = (scratch / "grid.csv").string();
   std::ofstream(grid) << "theta_rad,omega_rad_s\n0.02,0\n";

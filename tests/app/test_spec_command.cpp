@@ -6,6 +6,7 @@
 #include "acquisition/rig/rig_file.h"
 #include "analysis/model/parameter_file.h"
 #include "tests/support/run_doorbench.h"
+#include "tests/support/svg_check.h"
 
 using Catch::Matchers::Contains;
 using doorbench::testing::run_doorbench_shell;
@@ -48,10 +49,16 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
   CHECK_THAT(run.out, Contains("felt along the TO-BE recordings' motion ("));
   CHECK_THAT(run.out, Contains("peak force to unlatch (N)"));
   CHECK_THAT(run.out, Contains("no PDF (not asked for)"));
+  // Simulated runs, not a bench's sensors: no warning about --asis-recording.
+  CHECK(run.err.find("--asis-recording") == std::string::npos);
   const auto json = nlohmann::json::parse(doorbench::read_text_file(dir / "spec" / "spec.json"));
   CHECK(json["tobe_sources"].size() == 2);
   CHECK(json["tolerances"]["samples"] == 8);
   CHECK(std::filesystem::exists(dir / "spec" / "spec.html"));
+  const doorbench::testing::SvgCheck svgs = doorbench::testing::check_svgs({dir / "spec"});
+  INFO(svgs.output);
+  CHECK(svgs.status == 0);
+  CHECK(svgs.legend_entries >= 4);
   CHECK(std::filesystem::exists(dir / "spec" / "tobe-params.json"));
   // The design moves F_l0 toward the TO-BE door's (10.5 N from 15 N).
   const auto& f_l0 = json["parameters"][doorbench::physical::kFl0];
@@ -127,6 +134,9 @@ TEST_CASE("CLI: spec of a bench-recorded prototype against the AS-IS door on the
   REQUIRE(run.status == 0);
   CHECK_THAT(run.err, Contains("the AS-IS door as this bench sees it: b_h 0.05 -> "));
   const auto json = nlohmann::json::parse(doorbench::read_text_file(dir / "spec" / "spec.json"));
+  // The bench seen through its own AS-IS recording: nothing to warn of.
+  CHECK(run.err.find("warning: the TO-BE recording") == std::string::npos);
+  CHECK(json["warnings"].empty());
   CHECK(json["fit"]["parts_changed"] == 2);
   for (const auto& p : json["parameters"]) {
     const std::string name = p["name"];
@@ -141,4 +151,34 @@ TEST_CASE("CLI: spec of a bench-recorded prototype against the AS-IS door on the
     }
   }
   CHECK_THAT(run.out, Contains("What to change: F0 250 -> "));
+}
+
+// A TO-BE recording of a real door through a bench's sensors, without --asis-recording: the
+// spec warns, naming the risk and the option, on stderr and in spec.json (issue 31).
+TEST_CASE("CLI: spec warns when a bench recording is specified without --asis-recording",
+          "[cli][spec]") {
+  TempDir dir("spec_bench_warning");
+  const std::string tobe = (dir / "tobe.h5").string();
+  REQUIRE(run_doorbench_shell("record --duration-s 8 --out '" + tobe + "'", dir).status == 0);
+  const auto asis_file = dir.write(
+      "asis.json",
+      doorbench::to_parameter_json(doorbench::reference_model(doorbench::ModelKind::kPhysical)));
+  const std::string warning =
+      "the TO-BE recording " + tobe +
+      " was measured through a bench's sensors (angle: rate_rad_s integrated, anchored to "
+      "inclinometer_angle_rad) and --asis-recording is not given: the AS-IS parameter file is "
+      "compared with what the bench measured, so the bench's own deviations (sensor offsets "
+      "and scales, the load cell's mounting, its friction) can be specified as design changes; "
+      "record the AS-IS door on the same bench and give it as --asis-recording";
+  const auto run = run_doorbench_shell("spec '" + tobe + "' --asis '" + asis_file.string() +
+                                           "' --out '" + (dir / "spec").string() +
+                                           "' --samples 2 --starts 1 --no-pdf",
+                                       dir);
+  INFO("stderr: " << run.err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.err, Contains("\nwarning: " + warning + "\n"));
+  const auto json = nlohmann::json::parse(doorbench::read_text_file(dir / "spec" / "spec.json"));
+  CHECK(json["warnings"] == nlohmann::json::array({warning}));
+  CHECK_THAT(doorbench::read_text_file(dir / "spec" / "spec.html"),
+             Contains("<p class=\"bad\">Warning: the TO-BE recording "));
 }

@@ -1,5 +1,6 @@
 // The residual-whiteness line of the fit's and the loop's text reports (issue 21, item 9;
-// ResidualWhiteness::report_line): report.md states it under the full report.
+// ResidualWhiteness::report_line): report.md states it under the full report. Their SVG
+// plots are checked as XML with their legends on the way (issue 31).
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
@@ -11,6 +12,7 @@
 #include "analysis/model/parameter_file.h"
 #include "app/fit_output.h"
 #include "tests/support/run_doorbench.h"
+#include "tests/support/svg_check.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/tremor_recording.h"
 
@@ -40,6 +42,12 @@ TEST_CASE("fit and loop reports state the residual's whiteness in a line", "[cli
     const auto run = doorbench::testing::run_doorbench_shell(
         verb + " -q '" + csv + "' --out '" + (dir / verb).string() + "'", dir);
     REQUIRE(run.status == 0);
+    // Its plots, including the whiteness plot, are XML with their legends' keys drawn.
+    const doorbench::testing::SvgCheck svgs = doorbench::testing::check_svgs({dir / verb});
+    INFO(svgs.output);
+    CHECK(svgs.status == 0);
+    CHECK(svgs.svgs >= 5);
+    CHECK(svgs.legend_entries >= 10);
     return read_file((dir / verb / "report.md").string());
   };
   SECTION("fit") {

@@ -14,6 +14,7 @@
 #include "sensors/rig_channel.h"
 #include "tests/support/files.h"
 #include "tests/support/simulated_session.h"
+#include "tests/support/svg_check.h"
 #include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
@@ -230,6 +231,14 @@ TEST_CASE("CLI: calibrate loadcell through its prompts, then calibration show an
   CHECK_THAT(err, Catch::Contains("stored load_cell-SIM-LC445-0001-v1 in"));
   CHECK(std::filesystem::exists(dir / "store" / "load_cell-SIM-LC445-0001-v1.json"));
   CHECK_THAT(read_file(dir / "cert.html"), Catch::Contains("<svg"));
+  // The certificate's residual plot is XML, from calibrate and from calibration certificate.
+  std::tie(code, out, err) = run(
+      "calibration certificate load_cell-SIM-LC445-0001-v1 --calibrations store --out cert2.html");
+  CHECK(code == 0);
+  const testing::SvgCheck svgs = testing::check_svgs({dir / "cert.html", dir / "cert2.html"});
+  INFO(svgs.output);
+  CHECK(svgs.status == 0);
+  CHECK(svgs.svgs == 2);
   // Input ends early: a clear message and exit status 1.
   std::tie(code, out, err) =
       run("calibrate loadcell --calibrations store --window-s 0.2", "\\n\\n");

@@ -195,6 +195,33 @@ TEST_CASE("hapticmaster device: the exact command sequence at start, in the loop
   CHECK(std::vector<std::string>(lines.end() - 3, lines.end()) == stop);
 }
 
+TEST_CASE("hapticmaster device: start-up passes when the device replies with fewer digits",
+          "[hapticmaster]") {
+  // "set inertia 10.91954" read back as "10.9195" (%g), "10.919540" (%.6f) or in full is the
+  // inertia that was set; every other number replied (workspace, readings) in that format too.
+  for (const char* format : {"%g", "%.6f", ""}) {
+    INFO("replies formatted as '" << format << "'");
+    std::vector<std::string> options;
+    if (*format != '\0') options = {"--number-format", format};
+    Emulator emulator(options);
+    HapticMasterDevice device(emulator.address(), by_hand());
+    REQUIRE_NOTHROW(device.start(10.91954));
+    CHECK(device.startup_report().workspace_source == "device");
+    CHECK(device.startup_report().inertia_read_back_kg == Approx(10.91954).epsilon(1e-5));
+    const DeviceSample s =
+        poll_until(device, [](const DeviceSample& s) { return s.sequence >= 3; });
+    CHECK(s.link_ok);
+    device.stop();
+    CHECK(device.last_error() == "");
+  }
+  // An inertia that differs in the digits the reply carries is still refused.
+  Emulator wrong({"--answer", "get inertia=10.9194"});
+  HapticMasterDevice device(wrong.address(), by_hand());
+  CHECK_THROWS_WITH(device.start(10.91954),
+                    wrong.name() + ": 'set inertia 10.91954' was accepted but the device "
+                                   "reports 10.9194 kg");
+}
+
 TEST_CASE("hapticmaster device: an error reply at start is a DeviceError with its text",
           "[hapticmaster]") {
   Emulator emulator({"--fail", "set inertia 5=Inertia cannot be set in state 'home'"});

@@ -1,6 +1,9 @@
 // The HapticMaster protocol's pure functions: number and vector formatting, joining,
-// framing, splitting a reply stream (partial, several at once, corrupt) and parsing replies.
+// framing, splitting a reply stream (partial, several at once, corrupt) and parsing replies;
+// numbers read back compared at the precision their replies carry.
+#include <algorithm>
 #include <catch2/catch.hpp>
+#include <cstdio>
 #include <clocale>
 #include <locale>
 #include <stdexcept>
@@ -22,6 +25,42 @@ TEST_CASE("hapticmaster: numbers are fixed-point with '.', trimmed", "[hapticmas
   CHECK(format_number(1e9) == "1000000000");  // no exponent
   CHECK_THROWS_AS(format_number(std::nan("")), std::invalid_argument);
   CHECK(format_vector(Vec3(1, -0.5, 0)) == "[1,-0.5,0]");
+}
+
+TEST_CASE("hapticmaster: a number read back agrees at the precision its reply carries",
+          "[hapticmaster]") {
+  CHECK(last_digit_step("10.9195") == Approx(1e-4));
+  CHECK(last_digit_step("10.919540") == Approx(1e-6));
+  CHECK(last_digit_step(" 3 ") == Approx(1.0));
+  CHECK(last_digit_step("1.09195e+06") == Approx(10.0));
+  CHECK(last_digit_step("2.5E-3") == Approx(1e-4));
+  CHECK_FALSE(last_digit_step("ten").has_value());
+  auto printed = [](const char* format, double value) {
+    char text[64];
+    std::snprintf(text, sizeof text, format, value);
+    return std::string(text);
+  };
+  // Values as the driver sends them (6 decimals at most), replied as C's %g (six
+  // significant digits), %.6f and at full precision: each agrees with what was sent; the
+  // reply moved by one unit of its last digit, or by 2.5e-6 when that is less (the
+  // tolerance keeps half of format_number's last digit for a device keeping fewer bits than
+  // were sent; %.6f moved by two units), does not.
+  for (const double sent : {10.91954, 5.0, 2.000001, 99.999999, 12.345678, 0.000123, 3.5}) {
+    for (const char* format : {"%g", "%.6f", "%.17g"}) {
+      const std::string reply = printed(format, sent);
+      INFO(sent << " replied as " << format << ": " << reply);
+      CHECK(agrees_at_reply_precision(sent, reply));
+      const double step = *last_digit_step(reply);
+      const double off = std::string(format) == "%.6f" ? 2.0 * step : std::max(step, 2.5e-6);
+      const double moved = std::stod(reply) + off;
+      CHECK_FALSE(agrees_at_reply_precision(sent, printed(format, moved)));
+    }
+  }
+  CHECK(agrees_at_reply_precision(10.91954, "10.9195"));
+  CHECK_FALSE(agrees_at_reply_precision(10.91954, "10.9194"));
+  CHECK_FALSE(agrees_at_reply_precision(5.0, "3.0"));
+  CHECK_FALSE(agrees_at_reply_precision(5.0, "\"5\""));
+  CHECK_FALSE(agrees_at_reply_precision(5.0, "Inertia set"));
 }
 
 namespace {

@@ -43,6 +43,8 @@ command; --stall-after N stops answering it (the connection stays open); --garba
 answers it with a corrupt header; --fail COMMAND=TEXT answers the exact command COMMAND with
 "--- ERROR: TEXT" (every time). --latency-ms L [--jitter-ms J] delays each request by
 (L + U(0, J))/2 before it acts and its reply by as much again: a network's round trip.
+--number-format FORMAT replies every number (alone or in a vector) as printf's FORMAT
+would write it ("%g": six significant digits; default: full precision).
 --log FILE appends every command received, one a line. --events FILE appends time-stamped
 lines (CLOCK_MONOTONIC seconds): "<t> cmd <command>", "<t> fault <drop|stall|garbage|fail>",
 and "<t> device state=<s> bias=<|sum of enabled bias forces| N>" whenever either changes.
@@ -96,7 +98,12 @@ class Error(Exception):
     pass
 
 
+NUMBER_FORMAT = None  # --number-format: a printf format for every number replied
+
+
 def fmt(x):
+    if NUMBER_FORMAT is not None:
+        return NUMBER_FORMAT % float(x)
     return repr(float(x))
 
 
@@ -459,7 +466,14 @@ def main():
     parser.add_argument("--emergency-button", action="store_true")
     parser.add_argument("--relay-off", action="store_true")
     parser.add_argument("--leftover", action="append", default=[], metavar="NAME")
+    parser.add_argument("--number-format", metavar="FORMAT",
+                        help="printf format of every number replied (%%g, %%.6f; default: "
+                             "full precision, Python's repr)")
     args = parser.parse_args()
+    global NUMBER_FORMAT
+    if args.number_format is not None:
+        args.number_format % 1.0  # a bad format fails here, not at the first reply
+        NUMBER_FORMAT = args.number_format
     args.fail = dict(item.partition("=")[::2] for item in args.fail)
     args.answer = dict(item.partition("=")[::2] for item in args.answer)
 

@@ -25,9 +25,10 @@ struct Bytes {
   std::vector<std::uint8_t> data;
   template <typename T>
   void put(T value) {
-    std::uint8_t raw[sizeof(T)];
-    std::memcpy(raw, &value, sizeof(T));
-    data.insert(data.end(), raw, raw + sizeof(T));
+    // resize and copy (an insert of a local array trips GCC 12's -Wstringop-overflow)
+    const std::size_t at = data.size();
+    data.resize(at + sizeof(T));
+    std::memcpy(data.data() + at, &value, sizeof(T));
   }
   void text(const std::string& value) {
     put<std::uint32_t>(static_cast<std::uint32_t>(value.size()));
@@ -74,8 +75,50 @@ struct Object {
   std::uint64_t count = 0;
   std::uint64_t string_bytes = 0;  // strings: the raw data's total size in bytes
   std::uint32_t raw_index = 0;
+  Bytes index_tail;  // kRawIndex: what follows raw_index (a DAQmx index's body)
   std::vector<Property> properties;
 };
+
+// One scaler of a DAQmx raw data index: DAQmx's type code (0 U8, 1 I8, 2 U16, 3 I16, 4 U32,
+// 5 I32, 6 U64, 7 I64, 8 SGL, 9 DBL), its raw buffer, its byte offset in the buffer's stride
+// (a digital line scaler: its bit offset), its scale id.
+struct DaqmxScalerSpec {
+  std::uint32_t type, buffer, offset, scale_id;
+};
+
+// A channel of DAQmx raw data as DAQmx logging writes its raw data index: the bytes
+// 69 12 00 00 (format-changing scalers) or 69 13 00 00 (digital line scalers), data type
+// 0xFFFFFFFF, dimension 1, values per chunk, the scalers (20 bytes each; 17 for digital
+// lines, whose sample format bitmap is one byte), the raw buffers' widths.
+inline Object daqmx_channel(const std::string& path, std::uint64_t count,
+                            const std::vector<DaqmxScalerSpec>& scalers,
+                            const std::vector<std::uint32_t>& widths, bool digital,
+                            std::vector<Property> properties = {}) {
+  Object object;
+  object.raw = Object::kRawIndex;
+  object.path = path;
+  object.raw_index = digital ? 0x00001369u : 0x00001269u;
+  Bytes& tail = object.index_tail;
+  tail.put<std::uint32_t>(0xFFFFFFFFu);
+  tail.put<std::uint32_t>(1u);
+  tail.put<std::uint64_t>(count);
+  tail.put<std::uint32_t>(static_cast<std::uint32_t>(scalers.size()));
+  for (const DaqmxScalerSpec& scaler : scalers) {
+    tail.put<std::uint32_t>(scaler.type);
+    tail.put<std::uint32_t>(scaler.buffer);
+    tail.put<std::uint32_t>(scaler.offset);
+    if (digital) {
+      tail.put<std::uint8_t>(0);
+    } else {
+      tail.put<std::uint32_t>(0);
+    }
+    tail.put<std::uint32_t>(scaler.scale_id);
+  }
+  tail.put<std::uint32_t>(static_cast<std::uint32_t>(widths.size()));
+  for (std::uint32_t width : widths) tail.put<std::uint32_t>(width);
+  object.properties = std::move(properties);
+  return object;
+}
 
 // A whole segment: the lead-in, the metadata (when the ToC says so) and `raw`.
 inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, const Bytes& raw,
@@ -94,6 +137,7 @@ inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, cons
           break;
         case Object::kRawIndex:
           meta.put<std::uint32_t>(object.raw_index);
+          meta.append(object.index_tail);
           break;
         case Object::kNew:
           meta.put<std::uint32_t>(object.type == kString ? 28u : 20u);

@@ -10,7 +10,9 @@
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
+#include <exception>
 #include <fstream>
+#include <functional>
 #include <iterator>
 #include <memory>
 #include <nlohmann/json.hpp>
@@ -28,6 +30,18 @@ using namespace doorbench::viewer;
 namespace fs = std::filesystem;
 
 namespace {
+
+// Joins a thread when the scope ends, however it ends (a failed REQUIRE throws).
+struct JoinOnExit {
+  explicit JoinOnExit(std::thread& t) : thread(t) {}
+  std::thread& thread;
+  void join() {
+    if (thread.joinable()) thread.join();
+  }
+  ~JoinOnExit() { join(); }
+  JoinOnExit(const JoinOnExit&) = delete;
+  JoinOnExit& operator=(const JoinOnExit&) = delete;
+};
 
 // Two scan channels at 1 kHz (a load cell calibrated 1 + 2·V with 1 mV per count, and an
 // uncalibrated signal), then a polled channel with its latency channel.
@@ -82,7 +96,8 @@ std::int32_t count_of(std::size_t channel, std::uint64_t scan) {
 // Writes `blocks` blocks of kBlock scans, a polled sample every 4th block, a trigger at
 // block 1, stroke start and a fault every 25 blocks, a stop and the end frame.
 void write_recording(JournalWriter& journal, std::size_t blocks,
-                     std::chrono::microseconds pause = std::chrono::microseconds(0)) {
+                     std::chrono::microseconds pause = std::chrono::microseconds(0),
+                     const std::function<void(std::size_t)>& after_block = {}) {
   journal.append_start(1, 2);
   std::vector<std::int32_t> counts(2 * kBlock);
   for (std::size_t block = 0; block < blocks; ++block) {
@@ -101,6 +116,7 @@ void write_recording(JournalWriter& journal, std::size_t blocks,
     if (block % 25 == 0) journal.append_event(first * 1e-3, "stroke_start", "", "opening");
     if (block % 25 == 12) journal.append_event(first * 1e-3, "fault", "force", "overload");
     if (pause.count() > 0) std::this_thread::sleep_for(pause);
+    if (after_block) after_block(block);
   }
   journal.append_event(blocks * kBlock * 1e-3, "stop", "", "recording stopped by hand");
   journal.append_end(blocks * kBlock);
@@ -148,31 +164,54 @@ TEST_CASE("Live: a journal written by another thread is followed frame by frame"
 
   constexpr std::size_t kBlocks = 300;
   std::atomic<bool> done{false};
+  std::exception_ptr writer_error;
+  // The scans the follower has read, published after each poll. Every 10 blocks the writer
+  // waits until the follower has read them all, so the recording arrives in at least 30
+  // polls however the two threads are scheduled (no timing in the test; the 60 s bound
+  // only keeps a broken follower from hanging it).
+  std::atomic<std::uint64_t> scans_followed{0};
+  const auto wait_for_follower = [&](std::size_t block) {
+    if ((block + 1) % 10 != 0) return;
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (scans_followed.load() < (block + 1) * kBlock &&
+           std::chrono::steady_clock::now() < give_up) {
+      std::this_thread::sleep_for(std::chrono::microseconds(200));
+    }
+  };
   std::thread writer([&] {
-    JournalWriter journal(journal_path_for(session), live_header(), kBlock, 1);
-    write_recording(journal, kBlocks, std::chrono::microseconds(300));
-    journal.close();
-    done = true;
+    try {
+      JournalWriter journal(journal_path_for(session), live_header(), kBlock, 1);
+      write_recording(journal, kBlocks, std::chrono::microseconds(300), wait_for_follower);
+      journal.close();
+      done = true;
+    } catch (...) {
+      writer_error = std::current_exception();  // reported after the join, not terminate()
+    }
   });
+  // Joined on every path: a failed REQUIRE or a throwing poll is reported as a failure
+  // instead of ending the binary through a joinable std::thread's destructor.
+  JoinOnExit join_writer{writer};
   std::size_t polls_with_data = 0, events = 0, timed = 0;
   std::uint64_t scans = 0;
-  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(120);
   while (live.state() != LiveState::kEnded && std::chrono::steady_clock::now() < deadline) {
     const LivePoll poll = live.poll();
     if (poll.frames > 0) ++polls_with_data;
     scans += poll.scans;
+    scans_followed = scans;
     events += poll.events;
     timed += poll.timed_samples;
     // Whatever was read so far is a whole prefix: scans 0 .. scans-1, nothing twice.
     if (poll.scans > 0) REQUIRE(live.rings()[0].size() == scans);
     std::this_thread::sleep_for(std::chrono::microseconds(700));
   }
-  writer.join();
+  join_writer.join();
+  if (writer_error) std::rethrow_exception(writer_error);
   REQUIRE(done);
   REQUIRE(live.state() == LiveState::kEnded);
   CHECK_THAT(live.status(), Catch::Contains("the recording ended"));
   // It really followed: the recording arrived in many polls, not in one at the end.
-  CHECK(polls_with_data > 10);
+  CHECK(polls_with_data >= 30);
   CHECK(scans == kBlocks * kBlock);
   CHECK(live.scans_read() == kBlocks * kBlock);
   check_scans(live, 0, kBlocks * kBlock);
