@@ -148,20 +148,20 @@ void check_startup(HapticMasterDevice& device, const HapticMasterCheckOptions& o
   add(report, "position calibration", "pass",
       s.was_calibrated ? "calibrated"
                        : "was not calibrated: homed in " +
-                             hm::format_number(std::round(s.homing_s * 10) / 10) + " s");
+                             hm::format_device_number(std::round(s.homing_s * 10) / 10) + " s");
   add(report, "effects of other programs", "pass", "removed (remove all)");
   add(report, "workspace", s.workspace_source == "device" ? "pass" : "warn",
-      "r " + hm::format_number(s.workspace_r_phi_z_min.x()) + ".." +
-          hm::format_number(s.workspace_r_phi_z_max.x()) + " m, phi " +
-          hm::format_number(s.workspace_r_phi_z_min.y()) + ".." +
-          hm::format_number(s.workspace_r_phi_z_max.y()) + " rad, z " +
-          hm::format_number(s.workspace_r_phi_z_min.z()) + ".." +
-          hm::format_number(s.workspace_r_phi_z_max.z()) + " m about an axis " +
-          hm::format_number(s.base_axis_offset_m) + " m behind the origin (" +
+      "r " + hm::format_device_number(s.workspace_r_phi_z_min.x()) + ".." +
+          hm::format_device_number(s.workspace_r_phi_z_max.x()) + " m, phi " +
+          hm::format_device_number(s.workspace_r_phi_z_min.y()) + ".." +
+          hm::format_device_number(s.workspace_r_phi_z_max.y()) + " rad, z " +
+          hm::format_device_number(s.workspace_r_phi_z_min.z()) + ".." +
+          hm::format_device_number(s.workspace_r_phi_z_max.z()) + " m about an axis " +
+          hm::format_device_number(s.base_axis_offset_m) + " m behind the origin (" +
           s.workspace_source + ")");
   add(report, "inertia", "pass",
-      "set " + hm::format_number(options.inertia_kg) + " kg, read back " +
-          hm::format_number(s.inertia_read_back_kg) + " kg");
+      "set " + hm::format_device_number(options.inertia_kg) + " kg, read back " +
+          hm::format_device_number(s.inertia_read_back_kg) + " kg");
 }
 
 // The round trips' statistics, the delay they give and the stiffness limit for it.
@@ -182,7 +182,8 @@ void summarise_round_trips(const std::vector<double>& rtt_s, bool complete,
     add(report, "round-trip time", report.rtt_p99_ms <= 2.0 ? "pass" : "warn",
         "p50 " + ms(report.rtt_p50_ms) + ", p99 " + ms(report.rtt_p99_ms) + ", max " +
             ms(report.rtt_max_ms) + " over " + std::to_string(report.round_trips) +
-            (report.rtt_p99_ms <= 2.0 ? "" : " (p99 above 2 ms: stiff parts belong on the device)"));
+            (report.rtt_p99_ms <= 2.0 ? ""
+                                      : " (p99 above 2 ms: stiff parts belong on the device)"));
   }
   std::ostringstream limit;
   limit.precision(3);
@@ -227,7 +228,7 @@ void push_and_abandon(const std::string& address, const HapticMasterOptions& qui
 void check_disconnect(const std::string& address, const HapticMasterCheckOptions& options,
                       HapticMasterCheckReport& report) {
   const std::string what = "The arm will be pushed with " +
-                           hm::format_number(options.test_force_N) +
+                           hm::format_device_number(options.test_force_N) +
                            " N along +x for about a second, then the connection is closed "
                            "without a stop, as a crashed program would. Keep hands off the arm.";
   if (!options.confirm || !options.confirm(what)) {
@@ -257,12 +258,12 @@ void check_disconnect(const std::string& address, const HapticMasterCheckOptions
   const bool kept =
       report.force_after_disconnect_N > 0.0 && report.state_after_disconnect == "force";
   add(report, "disconnect leaves zero force", kept ? "warn" : "pass",
-      kept ? "the device kept " + hm::format_number(report.force_after_disconnect_N) +
+      kept ? "the device kept " + hm::format_device_number(report.force_after_disconnect_N) +
                  " N in state force after the connection closed: doorbench's fail-safe "
                  "stops it on a fresh connection, but a killed doorbench or a host power "
                  "loss would leave the force on (use the device's emergency button)"
            : "state '" + report.state_after_disconnect + "', " +
-                 hm::format_number(report.force_after_disconnect_N) + " N after the close");
+                 hm::format_device_number(report.force_after_disconnect_N) + " N after the close");
 }
 
 }  // namespace

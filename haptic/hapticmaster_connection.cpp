@@ -58,7 +58,7 @@ Connection::Connection(const std::string& host, int port, double timeout_s) {
     int error = 0;
     socklen_t length = sizeof error;
     if (ready <= 0) {
-      why = "connect timed out after " + format_number(timeout_s) + " s";
+      why = "connect timed out after " + format_device_number(timeout_s) + " s";
     } else if (::getsockopt(fd, SOL_SOCKET, SO_ERROR, &error, &length) != 0 || error != 0) {
       why = std::strerror(error != 0 ? error : errno);
     } else {
@@ -110,7 +110,7 @@ std::vector<std::string> Connection::round_trip(const std::vector<std::string>& 
     // The deadline is checked here too: a device trickling bytes must not extend it.
     pollfd p{fd_, POLLIN, 0};
     if (Clock::now() >= deadline || ::poll(&p, 1, millis_left(deadline)) == 0) {
-      throw std::runtime_error("no reply within " + format_number(timeout_s) + " s");
+      throw std::runtime_error("no reply within " + format_device_number(timeout_s) + " s");
     }
     const ssize_t n = ::recv(fd_, buffer, sizeof buffer, 0);
     if (n == 0) throw std::runtime_error("connection closed by the device");

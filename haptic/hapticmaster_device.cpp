@@ -13,6 +13,7 @@
 
 #include "haptic/door_mapping.h"
 #include "haptic/hapticmaster_connection.h"
+#include "haptic/hapticmaster_limits.h"
 #include "haptic/hapticmaster_protocol.h"
 
 namespace doorbench::haptic {
@@ -24,22 +25,6 @@ double monotonic_s() {
   timespec ts{};
   ::clock_gettime(CLOCK_MONOTONIC, &ts);
   return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
-// The HapticMaster's figures: where each comes from is in docs/hapticmaster.md (limits).
-DeviceLimits hapticmaster_limits() {
-  DeviceLimits limits;
-  limits.kinematics = Kinematics::kCartesian3;
-  limits.max_force = 250.0;         // N: assumed (recalled datasheet figure, not verified here)
-  limits.max_velocity = 1.0;        // m/s: assumed
-  limits.max_force_rate = 20000.0;  // N/s: assumed (the interface's default)
-  // A box inside the workspace a public example describes (radius 0.28..0.64 m about the
-  // base axis, 0.45 m behind the origin; +-0.5 rad; z +-0.2 m), x taken as radial: derived.
-  limits.workspace_min = Vec3(-0.14, -0.16, -0.2);
-  limits.workspace_max = Vec3(0.16, 0.16, 0.2);
-  limits.min_inertia = 2.0;    // kg: the smallest value public examples set; assumed
-  limits.max_inertia = 100.0;  // kg: assumed
-  return limits;
 }
 
 // "" if `replies` answer `commands` without error, else what went wrong: the first error
@@ -79,35 +64,6 @@ std::string take_readings(const std::vector<std::string>& commands,
 }
 
 const std::vector<std::string> kReadings = {"get measpos", "get modelvel", "get measforce"};
-
-// The largest box (symmetric in y) inside the cylindrical sector r ∈ [r0, r1], φ ∈ [φ0, φ1],
-// z ∈ [z0, z1] about the base axis `axis_behind_origin_m` behind the origin along x, in the
-// device frame (x radial at φ = 0, as the public client draws it). Scans
-// the box's half width: its corners must keep r0 <= r <= r1 and |φ| <= the smaller |φ| bound.
-void workspace_box(const Vec3& r_phi_z_min, const Vec3& r_phi_z_max, double axis_behind_origin_m,
-                   DeviceLimits& limits) {
-  const double r0 = r_phi_z_min.x(), r1 = r_phi_z_max.x();
-  const double phi = std::min(std::abs(r_phi_z_min.y()), std::abs(r_phi_z_max.y()));
-  double best_area = -1.0, best_half = 0.0, best_x0 = 0.0, best_x1 = 0.0;
-  for (int k = 1; k < 1000; ++k) {
-    const double half = r1 * static_cast<double>(k) / 1000.0;
-    if (half >= r1) break;
-    const double x1 = std::sqrt(r1 * r1 - half * half);
-    double x0 = std::sqrt(std::max(0.0, r0 * r0 - half * half));
-    if (phi < 1.5707) x0 = std::max(x0, half / std::tan(std::max(phi, 1e-6)));
-    if (!(x1 > x0)) continue;
-    const double area = (x1 - x0) * 2.0 * half;
-    if (area > best_area) {
-      best_area = area;
-      best_half = half;
-      best_x0 = x0;
-      best_x1 = x1;
-    }
-  }
-  if (best_area <= 0.0) return;  // no box fits: keep the assumed one (the caller checks)
-  limits.workspace_min = Vec3(best_x0 - axis_behind_origin_m, -best_half, r_phi_z_min.z());
-  limits.workspace_max = Vec3(best_x1 - axis_behind_origin_m, best_half, r_phi_z_max.z());
-}
 
 }  // namespace
 
@@ -297,17 +253,17 @@ void HapticMasterDevice::ensure_calibrated() {
     if (word_of(hm::parse_reply(expect_ok("get state"))) == "stop" && calibrated()) break;
     if (now - began_s > options_.homing_timeout_s) {
       throw DeviceError(name() + ": homing did not end within " +
-                        hm::format_number(options_.homing_timeout_s) +
+                        hm::format_device_number(options_.homing_timeout_s) +
                         " s (no state 'stop' with the position calibrated)");
     }
     if (now >= next_report_s) {
-      say(name() + ": homing ... " + hm::format_number(std::round(now - began_s)) + " s");
+      say(name() + ": homing ... " + hm::format_device_number(std::round(now - began_s)) + " s");
       next_report_s += 1.0;
     }
   }
   startup_.homing_s = monotonic_s() - began_s;
-  say(name() + ": homing done in " + hm::format_number(std::round(startup_.homing_s * 10) / 10) +
-      " s");
+  say(name() + ": homing done in " +
+      hm::format_device_number(std::round(startup_.homing_s * 10) / 10) + " s");
 }
 
 void HapticMasterDevice::clear_effects() {
@@ -357,12 +313,12 @@ void HapticMasterDevice::read_workspace() {
   }
   if (!usable || !(read.workspace_max.array() > read.workspace_min.array()).all()) {
     throw DeviceError(name() + ": the workspace the device reports (r " +
-                      hm::format_number(r_low) + ".." + hm::format_number(r_high) +
-                      " m about an axis " + hm::format_number(axis_m) + " m behind, phi " +
-                      hm::format_number(startup_.workspace_r_phi_z_min.y()) + ".." +
-                      hm::format_number(startup_.workspace_r_phi_z_max.y()) + " rad, z " +
-                      hm::format_number(startup_.workspace_r_phi_z_min.z()) + ".." +
-                      hm::format_number(startup_.workspace_r_phi_z_max.z()) +
+                      hm::format_device_number(r_low) + ".." + hm::format_device_number(r_high) +
+                      " m about an axis " + hm::format_device_number(axis_m) + " m behind, phi " +
+                      hm::format_device_number(startup_.workspace_r_phi_z_min.y()) + ".." +
+                      hm::format_device_number(startup_.workspace_r_phi_z_max.y()) + " rad, z " +
+                      hm::format_device_number(startup_.workspace_r_phi_z_min.z()) + ".." +
+                      hm::format_device_number(startup_.workspace_r_phi_z_max.z()) +
                       " m) holds no box");
   }
   limits_ = read;
@@ -370,7 +326,7 @@ void HapticMasterDevice::read_workspace() {
 }
 
 void HapticMasterDevice::set_inertia_checked(double inertia) {
-  expect_ok("set inertia " + hm::format_number(inertia));
+  expect_ok("set inertia " + hm::format_device_number(inertia));
   const std::string reply = expect_ok("get inertia");
   const hm::Reply value = hm::parse_reply(reply);
   if (value.kind != hm::Reply::Kind::kNumber) {
@@ -380,7 +336,7 @@ void HapticMasterDevice::set_inertia_checked(double inertia) {
   // Compared at the precision the reply carries ("10.9195" for 10.91954 is the same number
   // at six significant digits, C's %g); the number was sent with 6 decimals at most.
   if (!hm::agrees_at_reply_precision(inertia, value.text)) {
-    throw DeviceError(name() + ": 'set inertia " + hm::format_number(inertia) +
+    throw DeviceError(name() + ": 'set inertia " + hm::format_device_number(inertia) +
                       "' was accepted but the device reports " + value.text + " kg");
   }
 }
@@ -426,7 +382,7 @@ std::vector<std::string> HapticMasterDevice::radial_spring_at(double theta_rad) 
 void HapticMasterDevice::create_device_elements() {
   const ArcGeometry& g = arc_->geometry();
   const double m = startup_.inertia_read_back_kg;
-  const std::string max_force = hm::format_number(options_.element_max_force_N);
+  const std::string max_force = hm::format_device_number(options_.element_max_force_N);
   // Where the end-effector is now decides the radial spring's first angle.
   DeviceSample here;
   const hm::Reply position = hm::parse_reply(expect_ok("get measpos"));
@@ -439,9 +395,9 @@ void HapticMasterDevice::create_device_elements() {
     elements_created_ = true;
     expect_ok("set " + object + " pos " + hm::format_vector(pos));
     expect_ok("set " + object + " direction " + hm::format_vector(direction));
-    expect_ok("set " + object + " stiffness " + hm::format_number(k));
-    expect_ok("set " + object + " dampfactor " + hm::format_number(factor));
-    expect_ok("set " + object + " deadband " + hm::format_number(deadband));
+    expect_ok("set " + object + " stiffness " + hm::format_device_number(k));
+    expect_ok("set " + object + " dampfactor " + hm::format_device_number(factor));
+    expect_ok("set " + object + " deadband " + hm::format_device_number(deadband));
     expect_ok("set " + object + " maxforce " + max_force);
     expect_ok("set " + object + " enable");
   };
@@ -490,9 +446,9 @@ void HapticMasterDevice::start(double inertia) {
   const DeviceLimits assumed = hapticmaster_limits();
   if (!(inertia >= assumed.min_inertia && inertia <= assumed.max_inertia)) {
     throw DeviceError(name() + ": inertia " +
-                      hm::format_number(std::isfinite(inertia) ? inertia : 0) + " kg is outside " +
-                      hm::format_number(assumed.min_inertia) + ".." +
-                      hm::format_number(assumed.max_inertia) + " kg");
+                      hm::format_device_number(std::isfinite(inertia) ? inertia : 0) +
+                      " kg is outside " + hm::format_device_number(assumed.min_inertia) + ".." +
+                      hm::format_device_number(assumed.max_inertia) + " kg");
   }
   try {
     connection_ = std::make_unique<hm::Connection>(host_, port_, options_.connect_timeout_s);
@@ -583,7 +539,8 @@ std::string HapticMasterDevice::emergency_stop(bool connection_intact) noexcept 
       device_stopped_.store(true);
       return "";
     }
-    why += (why.empty() ? "" : "; ") + std::string("a fresh connection: 'set state stop' was refused");
+    why +=
+        (why.empty() ? "" : "; ") + std::string("a fresh connection: 'set state stop' was refused");
   } catch (const std::exception& e) {
     why += (why.empty() ? "" : "; ") + std::string("a fresh connection: ").append(e.what());
   }
@@ -628,8 +585,8 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     const double silent_s = monotonic_s() - last_command_s;
     if (options_.command_watchdog_s > 0 && silent_s > options_.command_watchdog_s) {
       lose_link("watchdog: the render loop sent no command for " +
-                    hm::format_number(std::round(silent_s * 1000) / 1000) + " s (limit " +
-                    hm::format_number(options_.command_watchdog_s) + " s)",
+                    hm::format_device_number(std::round(silent_s * 1000) / 1000) + " s (limit " +
+                    hm::format_device_number(options_.command_watchdog_s) + " s)",
                 connection_intact_, sample);
       return;
     }
@@ -641,7 +598,7 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     commands.clear();
     commands.push_back(set_force + hm::format_vector(force));
     const bool new_inertia = command.inertia != sent_inertia;
-    if (new_inertia) commands.push_back("set inertia " + hm::format_number(command.inertia));
+    if (new_inertia) commands.push_back("set inertia " + hm::format_device_number(command.inertia));
     if (arc_) {  // the radial spring follows the door (a milliradian moves it)
       const double theta = std::clamp(arc_->to_door(sample).theta_rad,
                                       stop_theta_min_rad_ - 0.05, stop_theta_max_rad_ + 0.05);

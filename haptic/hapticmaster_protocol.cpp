@@ -20,13 +20,14 @@ std::string_view trim(std::string_view s) {
 
 }  // namespace
 
-std::string format_number(double value) {
-  if (!std::isfinite(value)) throw std::invalid_argument("format_number: not a finite number");
+std::string format_device_number(double value) {
+  if (!std::isfinite(value))
+    throw std::invalid_argument("format_device_number: not a finite number");
   char buffer[64];
   // Fixed notation: the device's parser is not known to take exponents.
   const auto result =
       std::to_chars(buffer, buffer + sizeof buffer, value, std::chars_format::fixed, 6);
-  if (result.ec != std::errc()) throw std::invalid_argument("format_number: out of range");
+  if (result.ec != std::errc()) throw std::invalid_argument("format_device_number: out of range");
   std::string text(buffer, result.ptr);
   const std::size_t point = text.find('.');
   if (point != std::string::npos) {
@@ -41,9 +42,9 @@ std::string format_number(double value) {
 
 std::string format_vector(const Vec3& v) {
   std::string text("[");
-  text.append(format_number(v.x())).append(",");
-  text.append(format_number(v.y())).append(",");
-  text.append(format_number(v.z())).append("]");
+  text.append(format_device_number(v.x())).append(",");
+  text.append(format_device_number(v.y())).append(",");
+  text.append(format_device_number(v.z())).append("]");
   return text;
 }
 

@@ -28,19 +28,19 @@ constexpr std::uint32_t kMaxMessageSize = 65536;
 
 // Numbers as the device reads them: '.' decimal point whatever the locale, fixed notation
 // (no exponent), at most 6 decimals, trailing zeros dropped ("3.5", "-0.000001", "0").
-std::string format_number(double value);
+std::string format_device_number(double value);
 // The step of the last digit a number's text carries, from its digits and exponent:
 // "10.9195" -> 1e-4, "10.919540" -> 1e-6, "3" -> 1, "1.09195e+06" -> 10, "2.5E-3" -> 1e-4.
 // nullopt unless parse_number takes the text.
 std::optional<double> last_digit_step(std::string_view text);
 // Whether a number the device reports (`reply`, its text) agrees with `sent` (a value the
-// driver sent as format_number(sent)) to the digits both carry: they differ by at most half
-// the reply's last digit plus half of format_number's (5e-7, for a device that keeps fewer
+// driver sent as format_device_number(sent)) to the digits both carry: they differ by at most half
+// the reply's last digit plus half of format_device_number's (5e-7, for a device that keeps fewer
 // bits than were sent), plus a few units of the binary values' rounding. "10.9195" (%g's
 // six significant digits) agrees with 10.91954; "10.9194" and "3.0" do not. False when
 // the reply is not a number.
 bool agrees_at_reply_precision(double sent, std::string_view reply);
-// "[x,y,z]" with format_number's numbers and no spaces.
+// "[x,y,z]" with format_device_number's numbers and no spaces.
 std::string format_vector(const Vec3& v);
 // Joins commands with ';' (no trailing ';'). Throws std::invalid_argument if a command is
 // empty or contains ';' or a control character (it would change the framing).

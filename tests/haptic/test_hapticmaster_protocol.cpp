@@ -15,15 +15,15 @@ using namespace doorbench::haptic;
 using namespace doorbench::haptic::hm;
 
 TEST_CASE("hapticmaster: numbers are fixed-point with '.', trimmed", "[hapticmaster]") {
-  CHECK(format_number(3.5) == "3.5");
-  CHECK(format_number(0.0) == "0");
-  CHECK(format_number(-0.0) == "0");
-  CHECK(format_number(-2.0) == "-2");
-  CHECK(format_number(1e-7) == "0");
-  CHECK(format_number(-1e-6) == "-0.000001");
-  CHECK(format_number(123456.25) == "123456.25");
-  CHECK(format_number(1e9) == "1000000000");  // no exponent
-  CHECK_THROWS_AS(format_number(std::nan("")), std::invalid_argument);
+  CHECK(format_device_number(3.5) == "3.5");
+  CHECK(format_device_number(0.0) == "0");
+  CHECK(format_device_number(-0.0) == "0");
+  CHECK(format_device_number(-2.0) == "-2");
+  CHECK(format_device_number(1e-7) == "0");
+  CHECK(format_device_number(-1e-6) == "-0.000001");
+  CHECK(format_device_number(123456.25) == "123456.25");
+  CHECK(format_device_number(1e9) == "1000000000");  // no exponent
+  CHECK_THROWS_AS(format_device_number(std::nan("")), std::invalid_argument);
   CHECK(format_vector(Vec3(1, -0.5, 0)) == "[1,-0.5,0]");
 }
 
@@ -43,7 +43,7 @@ TEST_CASE("hapticmaster: a number read back agrees at the precision its reply ca
   // Values as the driver sends them (6 decimals at most), replied as C's %g (six
   // significant digits), %.6f and at full precision: each agrees with what was sent; the
   // reply moved by one unit of its last digit, or by 2.5e-6 when that is less (the
-  // tolerance keeps half of format_number's last digit for a device keeping fewer bits than
+  // tolerance keeps half of format_device_number's last digit for a device keeping fewer bits than
   // were sent; %.6f moved by two units), does not.
   for (const double sent : {10.91954, 5.0, 2.000001, 99.999999, 12.345678, 0.000123, 3.5}) {
     for (const char* format : {"%g", "%.6f", "%.17g"}) {
@@ -73,7 +73,7 @@ TEST_CASE("hapticmaster: formatting ignores the C and C++ locales", "[hapticmast
   // A C++ global locale with ',' as the decimal point (always available, unlike de_DE).
   const std::locale saved_cpp =
       std::locale::global(std::locale(std::locale::classic(), new CommaDecimal));
-  CHECK(format_number(3.5) == "3.5");
+  CHECK(format_device_number(3.5) == "3.5");
   CHECK(format_vector(Vec3(0.25, 0, -1)) == "[0.25,0,-1]");
   CHECK(parse_number("3.5") == Approx(3.5));
   std::locale::global(saved_cpp);
@@ -81,7 +81,7 @@ TEST_CASE("hapticmaster: formatting ignores the C and C++ locales", "[hapticmast
   const char* old = std::setlocale(LC_NUMERIC, nullptr);
   const std::string saved = old ? old : "C";
   std::setlocale(LC_NUMERIC, "de_DE.UTF-8");
-  CHECK(format_number(3.5) == "3.5");
+  CHECK(format_device_number(3.5) == "3.5");
   CHECK(parse_number("3.5") == Approx(3.5));
   std::setlocale(LC_NUMERIC, saved.c_str());
 }
@@ -224,8 +224,9 @@ TEST_CASE("hapticmaster: a request is one joined frame or one frame per command"
   CHECK_THROWS_WITH(request({"a;b"}, false), Catch::Contains("contains ';'"));
 }
 
-TEST_CASE("hapticmaster: a reply message holds one reply per command, split at semicolons outside quotes",
-          "[hapticmaster]") {
+TEST_CASE(
+    "hapticmaster: a reply message holds one reply per command, split at semicolons outside quotes",
+    "[hapticmaster]") {
   using V = std::vector<std::string>;
   CHECK(split_replies("[0.1,0,0.2];[0,0,0];") == V{"[0.1,0,0.2]", "[0,0,0]"});
   CHECK(split_replies("Inertia set") == V{"Inertia set"});

@@ -1,0 +1,329 @@
+// Mapping a TDMS file's channels to a recording (acquisition/session/tdms.h): the --map
+// syntax with its escapes, the channel list for messages, and tdms_to_recording.
+#include "acquisition/session/tdms.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <ctime>
+#include <fstream>
+#include <iterator>
+#include <map>
+#include <set>
+
+#include "acquisition/session/csv_table.h"
+
+namespace doorbench {
+
+namespace {
+
+// The positions of `separator` in `text` not escaped by a backslash.
+std::vector<std::size_t> unescaped_positions(const std::string& text, char separator) {
+  std::vector<std::size_t> positions;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\\') {
+      ++i;
+    } else if (text[i] == separator) {
+      positions.push_back(i);
+    }
+  }
+  return positions;
+}
+
+// `text` with each "\x" as "x"; a backslash at the end is kept.
+std::string unescaped(const std::string& text) {
+  std::string out;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    if (text[i] == '\\' && i + 1 < text.size()) ++i;
+    out += text[i];
+  }
+  return out;
+}
+
+// One TARGET=GROUP/CHANNEL item (escapes kept).
+TdmsMapItem parse_map_item(const std::string& item) {
+  const std::vector<std::size_t> equals_at = unescaped_positions(item, '=');
+  const std::size_t equals = equals_at.empty() ? std::string::npos : equals_at.front();
+  TdmsMapItem parsed;
+  if (equals != std::string::npos && equals > 0) {
+    parsed.target = item.substr(0, equals);
+    parsed.text = item.substr(equals + 1);
+    for (std::size_t slash : unescaped_positions(parsed.text, '/')) {
+      std::string group = unescaped(parsed.text.substr(0, slash));
+      std::string channel = unescaped(parsed.text.substr(slash + 1));
+      if (!group.empty() && !channel.empty()) parsed.splits.emplace_back(group, channel);
+    }
+  }
+  if (parsed.splits.empty()) {
+    throw std::invalid_argument("--map item '" + item +
+                                "' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force)");
+  }
+  parsed.group = parsed.splits.front().first;
+  parsed.channel = parsed.splits.front().second;
+  return parsed;
+}
+
+}  // namespace
+
+std::vector<TdmsMapItem> parse_tdms_map(const std::string& text) {
+  std::vector<TdmsMapItem> items;
+  std::vector<std::size_t> commas = unescaped_positions(text, ',');
+  commas.push_back(text.size());
+  std::size_t start = 0;
+  for (std::size_t comma : commas) {
+    TdmsMapItem item = parse_map_item(text.substr(start, comma - start));
+    const std::string& target = item.target;
+    if (target != "force" && target != "angle" && target != "rate" && target != "time" &&
+        !has_unit_suffix(target)) {
+      throw std::invalid_argument("--map target '" + target +
+                                  "' is not force, angle, rate, time or a column name with a "
+                                  "unit suffix (e.g. inclinometer_angle_rad)");
+    }
+    for (const TdmsMapItem& earlier : items) {
+      if (earlier.target == target) {
+        throw std::invalid_argument("--map names target '" + target + "' twice");
+      }
+    }
+    items.push_back(std::move(item));
+    start = comma + 1;
+  }
+  return items;
+}
+
+std::string escape_tdms_map_name(const std::string& name) {
+  std::string out;
+  for (char c : name) {
+    if (c == '/' || c == ',' || c == '=' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+std::string tdms_channel_list(const TdmsFile& file) {
+  std::string list;
+  for (const TdmsChannel& c : file.channels) {
+    list += (list.empty() ? "" : ", ") + escape_tdms_map_name(c.group) + "/" +
+            escape_tdms_map_name(c.name);
+  }
+  return list.empty() ? "none" : list;
+}
+
+namespace {
+
+const TdmsProperty* property(const TdmsChannel& channel, const std::string& name) {
+  const auto it = channel.properties.find(name);
+  return it == channel.properties.end() ? nullptr : &it->second;
+}
+
+// The item a map gives for `target`, or null.
+const TdmsMapItem* map_item(const std::vector<TdmsMapItem>& map, const std::string& target) {
+  const TdmsMapItem* found = nullptr;
+  for (const TdmsMapItem& item : map) {
+    if (item.target == target) found = &item;
+  }
+  return found;
+}
+
+// A mapping error: "SOURCE: WHAT; the file's channels: A/B, ..." (the names to map).
+[[noreturn]] void mapping_error(const TdmsFile& file, const std::string& source,
+                                const std::string& what) {
+  throw TdmsError(source + ": " + what + "; the file's channels: " + tdms_channel_list(file));
+}
+
+// A channel's name as --map takes it.
+std::string map_name(const TdmsChannel& channel) {
+  return escape_tdms_map_name(channel.group) + "/" + escape_tdms_map_name(channel.name);
+}
+
+// The map's force item; throws when the map gives no force or no motion channel.
+const TdmsMapItem& check_map(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
+                             const std::string& source) {
+  const TdmsMapItem* force_item = map_item(map, "force");
+  const bool has_motion = map_item(map, "angle") != nullptr || map_item(map, "rate") != nullptr;
+  if (!force_item) mapping_error(file, source, "--map gives no force channel (force=GROUP/CHANNEL)");
+  if (!has_motion) {
+    mapping_error(file, source,
+                  "--map gives neither angle nor rate (angle=GROUP/CHANNEL or "
+                  "rate=GROUP/CHANNEL)");
+  }
+  return *force_item;
+}
+
+// The channel an item maps, which must exist, be the only one its text can mean, and hold
+// numbers.
+const TdmsChannel& mapped_channel(const TdmsFile& file, const TdmsMapItem& item,
+                                  const std::string& source) {
+  std::vector<const TdmsChannel*> matches;
+  for (const auto& [group, name] : item.splits) {
+    if (const TdmsChannel* channel = file.find(group, name)) matches.push_back(channel);
+  }
+  if (matches.empty()) {
+    mapping_error(file, source, item.target + ": no channel " + item.text);
+  }
+  if (matches.size() > 1) {
+    std::string meant;
+    for (const TdmsChannel* channel : matches) {
+      meant += (meant.empty() ? "" : " and ") + map_name(*channel);
+    }
+    mapping_error(file, source,
+                  item.target + ": " + item.text + " can mean " + meant +
+                      " (write '\\/' for a '/' inside a name)");
+  }
+  const TdmsChannel& channel = *matches.front();
+  if (channel.data_type.empty()) {
+    mapping_error(file, source,
+                  item.target + ": channel " + map_name(channel) + " has no numeric values");
+  }
+  return channel;
+}
+
+// Without a time channel, the time from the force channel's waveform properties
+// (wf_start_offset + i · wf_increment).
+void waveform_time(const TdmsFile& file, const TdmsChannel& force, const std::string& source,
+                   Recording& recording) {
+  const TdmsProperty* increment = property(force, "wf_increment");
+  if (!increment || !increment->number || !(*increment->number > 0)) {
+    mapping_error(file, source,
+                  "force: channel " + map_name(force) +
+                      " has no wf_increment > 0 to give the time (map a time channel: "
+                      "time=GROUP/CHANNEL)");
+  }
+  const TdmsProperty* offset = property(force, "wf_start_offset");
+  const double first_s = offset && offset->number ? *offset->number : 0.0;
+  recording.time_s.resize(force.values.size());
+  for (std::size_t i = 0; i < force.values.size(); ++i) {
+    recording.time_s[i] = first_s + static_cast<double>(i) * *increment->number;
+  }
+}
+
+// One mapped channel into its column (force, angle, rate, an extra; time is taken
+// before): as many values as the force channel, the same waveform increment (when the
+// time is the waveform's), the target's unit; its origin as metadata.
+void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item,
+                        const TdmsChannel& channel, const TdmsChannel& force, bool waveform_clock,
+                        const std::string& source, Recording& recording) {
+  const std::string name = map_name(channel);
+  if (channel.values.size() != force.values.size()) {
+    mapping_error(file, source,
+                  item.target + ": channel " + name + " has " +
+                      std::to_string(channel.values.size()) + " values, the force channel " +
+                      std::to_string(force.values.size()));
+  }
+  if (waveform_clock && item.target != "time") {
+    const TdmsProperty* increment = property(channel, "wf_increment");
+    const TdmsProperty* force_increment = property(force, "wf_increment");
+    if (increment && increment->number && *increment->number != *force_increment->number) {
+      mapping_error(file, source,
+                    item.target + ": channel " + name + " has wf_increment " +
+                        format_csv_number(*increment->number) + ", the force channel " +
+                        format_csv_number(*force_increment->number));
+    }
+  }
+  const std::string expected = item.target == "force"   ? "N"
+                               : item.target == "angle" ? "rad"
+                               : item.target == "rate"  ? "rad/s"
+                               : item.target == "time"  ? "s"
+                                                        : "";
+  const TdmsProperty* unit = property(channel, "unit_string");
+  if (!expected.empty() && unit && !unit->text.empty() && unit->text != expected) {
+    mapping_error(file, source,
+                  item.target + ": channel " + name + " is in '" + unit->text + "', not " +
+                      expected +
+                      " (scale it in the file, or map it as an extra column whose name ends "
+                      "in its unit)");
+  }
+  if (item.target == "force") {
+    recording.force_N = channel.values;
+  } else if (item.target == "angle") {
+    recording.angle_rad = channel.values;
+  } else if (item.target == "rate") {
+    recording.rate_rad_s = channel.values;
+  } else if (item.target != "time") {
+    recording.extra_names.push_back(item.target);
+    recording.extra_columns.push_back(channel.values);
+  }
+  const std::string key = "tdms_" + item.target;
+  recording.metadata.emplace_back(key + "_channel", name);
+  if (unit) recording.metadata.emplace_back(key + "_unit", unit->text);
+  if (!channel.scaling.empty()) recording.metadata.emplace_back(key + "_scaling", channel.scaling);
+}
+
+// The handle radius: a file property, else the force channel's group's; must be > 0.
+std::optional<double> handle_radius_m(const TdmsFile& file, const TdmsChannel& force,
+                                      const std::string& source) {
+  std::optional<double> radius;
+  if (const auto it = file.file_properties.find("handle_radius_m");
+      it != file.file_properties.end() && it->second.number) {
+    radius = it->second.number;
+  } else if (const auto group = file.group_properties.find(force.group);
+             group != file.group_properties.end()) {
+    if (const auto r = group->second.find("handle_radius_m");
+        r != group->second.end() && r->second.number) {
+      radius = r->second.number;
+    }
+  }
+  if (radius && !(*radius > 0)) throw TdmsError(source + ": handle_radius_m must be > 0");
+  return radius;
+}
+
+// The file's other properties as metadata "tdms_file_NAME" (non-alphanumerics as '_', line
+// breaks as spaces).
+void file_properties_as_metadata(const TdmsFile& file, Recording& recording) {
+  for (const auto& [name, value] : file.file_properties) {
+    if (name == "handle_radius_m") continue;
+    std::string key = "tdms_file_";
+    for (char c : name) key += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+    std::string text = value.text;
+    std::replace(text.begin(), text.end(), '\n', ' ');
+    std::replace(text.begin(), text.end(), '\r', ' ');
+    recording.metadata.emplace_back(key, text);
+  }
+}
+
+}  // namespace
+
+Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
+                            const std::string& source) {
+  Recording recording;
+  recording.source = source;
+  const TdmsChannel& force = mapped_channel(file, check_map(file, map, source), source);
+  // One channel, one target: a channel mapped as both force and angle is a typing error.
+  std::vector<std::pair<const TdmsChannel*, std::string>> taken;
+  for (const TdmsMapItem& item : map) {
+    const TdmsChannel* channel = &mapped_channel(file, item, source);
+    for (const auto& [earlier, target] : taken) {
+      if (earlier == channel) {
+        mapping_error(file, source,
+                      item.target + ": channel " + map_name(*channel) + " is mapped as " +
+                          target + " already (one channel per target)");
+      }
+    }
+    taken.emplace_back(channel, item.target);
+  }
+  const TdmsMapItem* time_item = map_item(map, "time");
+  if (time_item) {
+    recording.time_s = mapped_channel(file, *time_item, source).values;
+  } else {
+    waveform_time(file, force, source, recording);
+  }
+  if (const TdmsProperty* start = property(force, "wf_start_time")) {
+    recording.metadata.emplace_back("tdms_wf_start_time", start->text);
+  }
+  for (const TdmsMapItem& item : map) {
+    take_mapped_column(file, item, mapped_channel(file, item, source), force,
+                       time_item == nullptr, source, recording);
+  }
+  for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
+    if (!(recording.time_s[i] > recording.time_s[i - 1])) {
+      throw TdmsError(source + ": time is not strictly increasing at sample " + std::to_string(i));
+    }
+  }
+  if (const std::optional<double> radius = handle_radius_m(file, force, source)) {
+    recording.handle_radius_m = radius;
+  }
+  file_properties_as_metadata(file, recording);
+  return recording;
+}
+
+}  // namespace doorbench
