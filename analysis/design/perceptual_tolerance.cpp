@@ -224,9 +224,8 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
 }
 
 std::string PerceptualSpec::brief_report() const {
-  std::string text =
-      "  quantity                                JND  from                           felt as "
-      "different: given -> proposed\n";
+  std::string text = printf_text("  %-34s %6s  %-48s %s\n", "quantity (standard run)", "JND",
+                                 "JND from", "felt as different: as given -> proposed");
   auto share = [](const PerceptualRow& row) {
     return std::isfinite(row.share) ? printf_text("%5.1f%% [%.1f, %.1f]", 100 * row.share,
                                                   100 * row.ci_low, 100 * row.ci_high)
@@ -235,7 +234,7 @@ std::string PerceptualSpec::brief_report() const {
   for (std::size_t q = 0; q < rows.size(); ++q) {
     const PerceptualRow& row = rows[q];
     const std::string label = felt_label(kFeltQuantities[q]);
-    text += printf_text("  %-34s %5.1f%%  %-30s %s -> %s\n", label.c_str(),
+    text += printf_text("  %-34s %5.1f%%  %-48s %s -> %s\n", label.c_str(),
                         100 * row.jnd.weber_fraction, row.jnd.source.c_str(), share(row).c_str(),
                         q < proposal.rows.size() ? share(proposal.rows[q]).c_str() : "-");
   }

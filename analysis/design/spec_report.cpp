@@ -432,10 +432,15 @@ std::string perceptual_section(const PerceptualSpec& p) {
   }
   html += "</table>\n<p>Proposed (level " + cell(100 * p.proposal.felt_share, "%.3g %%") +
           "): " + escape(p.proposal.summary) + ".</p>\n";
-  html += "<table><tr><th>parameter</th><th>&plusmn; proposed</th><th>distribution</th></tr>\n";
+  html +=
+      "<table><tr><th>parameter</th><th>&plusmn; as given</th><th>&plusmn; proposed</th>"
+      "<th>distribution</th></tr>\n";
   for (const ParameterTolerance& t : p.proposal.tolerances) {
-    html += "<tr><td>" + escape(t.name) + "</td><td>" + tolerance_text(t) + "</td><td>" +
-            std::string(to_string(t.distribution)) + "</td></tr>\n";
+    ParameterTolerance given = t;
+    given.plus_minus = t.plus_minus / p.proposal.factor;
+    html += "<tr><td>" + escape(t.name) + "</td><td>" + tolerance_text(given) + "</td><td>" +
+            tolerance_text(t) + "</td><td>" + std::string(to_string(t.distribution)) +
+            "</td></tr>\n";
   }
   return html + "</table>\n";
 }

@@ -13,6 +13,7 @@
 #include "analysis/simulation/fit_synthetic.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
+#include "core/parallel.h"
 #include "analysis/model/sensory_model.h"
 
 namespace {

@@ -48,7 +48,7 @@ std::vector<FeltJnd> test_jnds() {
 
 }  // namespace
 
-TEST_CASE("Wilson's interval: a published value and its coverage", "[perceptual]") {
+TEST_CASE("Wilson's interval: a published value and its coverage", "[perceptual_tolerance]") {
   // 0 of 10: the upper end is z^2 / (n + z^2) = 0.2775 (Wilson 1927; Agresti & Coull 1998).
   const auto none = doorbench::wilson_interval(0, 10);
   CHECK(none.low == 0.0);
@@ -60,7 +60,9 @@ TEST_CASE("Wilson's interval: a published value and its coverage", "[perceptual]
   CHECK(std::isnan(doorbench::wilson_interval(0, 0).low));
   // Coverage on simulated binomial counts with a known p: 2000 draws each.
   std::mt19937_64 random(7);
-  for (const double p : {0.02, 0.05, 0.3}) {
+  // np >= 10 here: for fewer expected successes Wilson's coverage oscillates and dips a
+  // little below 93 % at some (p, n) (measured: 92.9 % at p 0.02, n 200).
+  for (const double p : {0.05, 0.3}) {
     for (const int n : {200, 1000}) {
       std::binomial_distribution<int> binomial(n, p);
       int covered = 0;
@@ -75,7 +77,7 @@ TEST_CASE("Wilson's interval: a published value and its coverage", "[perceptual]
   }
 }
 
-TEST_CASE("the felt-as-different criterion is symmetric in the log ratio", "[perceptual]") {
+TEST_CASE("the felt-as-different criterion is symmetric in the log ratio", "[perceptual_tolerance]") {
   CHECK_FALSE(doorbench::felt_as_different(11.9, 10.0, 0.2));
   CHECK(doorbench::felt_as_different(12.1, 10.0, 0.2));
   CHECK_FALSE(doorbench::felt_as_different(10.0 / 1.19, 10.0, 0.2));
@@ -88,7 +90,7 @@ TEST_CASE("the felt-as-different criterion is symmetric in the log ratio", "[per
 }
 
 TEST_CASE("the perceptual table's shares equal a direct Monte Carlo of the same doors",
-          "[perceptual]") {
+          "[perceptual_tolerance]") {
   const DoorModel design = doorbench::reference_model(doorbench::ModelKind::kPhysical);
   const ToleranceSpec spec = doorbench::default_tolerances(design);
   doorbench::MonteCarloOptions mc;
@@ -167,9 +169,38 @@ TEST_CASE("the perceptual table's shares equal a direct Monte Carlo of the same 
   }
 }
 
-TEST_CASE("the proposal keeps every share under the level and no larger factor tried does",
-          "[perceptual]") {
+// The reference door's spring is exactly at its free length when closed (L = L0), so the
+// smallest L0 tolerance decides whether it pulls near closed and moves the unlatching peak by
+// more than 3 % in a quarter of the doors, however tight (docs/design-spec.md): no common
+// factor down to 1/64 gets every share under 20 %. The proposal says so.
+TEST_CASE("the proposal says when no factor reaches the level", "[perceptual_tolerance]") {
   const DoorModel design = doorbench::reference_model(doorbench::ModelKind::kPhysical);
+  doorbench::MonteCarloOptions mc;
+  mc.samples = 60;
+  mc.threads = 2;
+  mc.seed = 5;
+  doorbench::PerceptualToleranceOptions options;
+  options.felt_share = 0.2;
+  options.min_factor = 0.25;
+  const doorbench::PerceptualProposal proposal = doorbench::propose_perceptual_tolerances(
+      design, doorbench::default_tolerances(design), mc, test_jnds(), options);
+  CHECK_FALSE(proposal.reached);
+  CHECK(proposal.factors_tried == std::vector<double>{1.0, 0.5, 0.25});
+  CHECK(proposal.factor == 0.25);
+  REQUIRE(proposal.worst_shares.back() > 0.2);
+  CHECK_THAT(proposal.summary, Catch::Matchers::StartsWith("even the tolerances × 0.25 leave a "
+                                                           "share of "));
+  CHECK_THAT(proposal.summary, Catch::Matchers::EndsWith("% felt as different (over 20%)"));
+}
+
+TEST_CASE("the proposal keeps every share under the level and no larger factor tried does",
+          "[perceptual_tolerance]") {
+  // The reference door with its spring 2 mm shorter: stretched when closed, off the L0 edge.
+  const DoorModel reference = doorbench::reference_model(doorbench::ModelKind::kPhysical);
+  std::vector<double> values(reference.parameter_values().begin(),
+                             reference.parameter_values().end());
+  values[static_cast<std::size_t>(*reference.find_parameter("L0"))] -= 0.002;
+  const DoorModel design = reference.with_parameter_values(values);
   const ToleranceSpec spec = doorbench::default_tolerances(design);
   doorbench::MonteCarloOptions mc;
   mc.samples = 60;
