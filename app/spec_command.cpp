@@ -138,6 +138,11 @@ PerceptualSpec perceptual_spec(const CampaignForSpec& campaign, const std::strin
   p.rows = perceptual_shares(given, p.jnds);
   PerceptualToleranceOptions options;
   options.felt_share = felt_share;
+  options.progress = [&progress](double factor, double worst) {
+    progress << "  tolerances x " << format_significant(factor, 3) << ": largest share felt as "
+             << "different " << format_significant(100 * worst, 3) << "%\n"
+             << std::flush;
+  };
   MonteCarloOptions monte_carlo = evaluation_options.monte_carlo;
   monte_carlo.felt = evaluation_options.felt;
   monte_carlo.progress = nullptr;

@@ -160,6 +160,7 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
     e.worst = worst_share(e.rows);
     proposal.factors_tried.push_back(factor);
     proposal.worst_shares.push_back(e.worst);
+    if (options.progress) options.progress(factor, e.worst);
     return e;
   };
   const double level = options.felt_share;

@@ -17,6 +17,7 @@
 // Errors: std::invalid_argument for bad options or a JND that is not a positive number.
 // Thread safety: pure functions; propose_perceptual_tolerances runs tolerance_analysis on
 // its own thread pool.
+#include <functional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -89,6 +90,9 @@ struct PerceptualToleranceOptions {
   double min_factor = 1.0 / 64.0;
   double max_factor = 4.0;
   int bisection_steps = 6;
+  // Called after each factor's Monte Carlo with the factor and its largest share (the
+  // caller's thread). Empty: none.
+  std::function<void(double factor, double worst_share)> progress;
   std::string validate() const;  // empty when usable, else the message naming the option
 };
 

@@ -77,7 +77,8 @@ TEST_CASE("Wilson's interval: a published value and its coverage", "[perceptual_
   }
 }
 
-TEST_CASE("the felt-as-different criterion is symmetric in the log ratio", "[perceptual_tolerance]") {
+TEST_CASE("the felt-as-different criterion is symmetric in the log ratio",
+          "[perceptual_tolerance]") {
   CHECK_FALSE(doorbench::felt_as_different(11.9, 10.0, 0.2));
   CHECK(doorbench::felt_as_different(12.1, 10.0, 0.2));
   CHECK_FALSE(doorbench::felt_as_different(10.0 / 1.19, 10.0, 0.2));
@@ -182,10 +183,13 @@ TEST_CASE("the proposal says when no factor reaches the level", "[perceptual_tol
   doorbench::PerceptualToleranceOptions options;
   options.felt_share = 0.2;
   options.min_factor = 0.25;
+  std::vector<double> reported;
+  options.progress = [&reported](double factor, double) { reported.push_back(factor); };
   const doorbench::PerceptualProposal proposal = doorbench::propose_perceptual_tolerances(
       design, doorbench::default_tolerances(design), mc, test_jnds(), options);
   CHECK_FALSE(proposal.reached);
   CHECK(proposal.factors_tried == std::vector<double>{1.0, 0.5, 0.25});
+  CHECK(reported == proposal.factors_tried);
   CHECK(proposal.factor == 0.25);
   REQUIRE(proposal.worst_shares.back() > 0.2);
   CHECK_THAT(proposal.summary, Catch::Matchers::StartsWith("even the tolerances × 0.25 leave a "
