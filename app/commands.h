@@ -38,6 +38,8 @@ void add_play_command(CLI::App& app, Action& action);
 void add_ab_command(CLI::App& app, Action& action);
 void add_spec_command(CLI::App& app, Action& action);
 void add_hapticmaster_command(CLI::App& app, Action& action);
+// `campaign analyze`, added to the `campaign` verb (app/campaign_analyze_command.cpp).
+void add_campaign_analyze(CLI::App& campaign, Action& action);
 
 // The options every verb that builds a model shares.
 struct ModelOptions {

@@ -15,11 +15,11 @@
 #include <string>
 #include <thread>
 
-#include "acquisition/session/output_file.h"
-#include "acquisition/session/printable.h"
 #include "acquisition/record/recorder.h"
 #include "acquisition/record/recovery.h"
 #include "acquisition/rig/rig_file.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/printable.h"
 #include "acquisition/session/session_csv.h"
 #include "acquisition/session/tdms.h"
 #include "app/commands.h"

@@ -144,6 +144,12 @@ int main(int argc, char** argv) {
   doorbench::app::add_ab_command(app, action);
   doorbench::app::add_spec_command(app, action);
   doorbench::app::add_hapticmaster_command(app, action);
+  {  // TEMPORARY (issue 29a): the `campaign` verb until issue 28's app/campaign_command.cpp
+     // makes it; at merge, call add_campaign_analyze there and drop this block.
+    CLI::App* campaign = app.add_subcommand("campaign", "A panel's campaign: analyze");
+    campaign->require_subcommand(1);
+    doorbench::app::add_campaign_analyze(*campaign, action);
+  }
 
   // `doorbench help VERB`: parsed as `doorbench VERB --help`.
   std::vector<std::string> help_args;

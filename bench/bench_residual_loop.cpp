@@ -16,9 +16,9 @@
 #include <filesystem>
 #include <fstream>
 
+#include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
-#include "analysis/loop/residual_loop.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/tremor_recording.h"
 

@@ -20,6 +20,8 @@
 namespace {
 
 namespace fs = std::filesystem;
+using doorbench::seconds_since;
+using doorbench::StageClock;
 
 constexpr int kChannels = 8;
 constexpr std::size_t kBlock = 1000;

@@ -5,9 +5,9 @@
 #include <vector>
 
 #include "analysis/model/door_model.h"
-#include "analysis/simulation/fit_synthetic.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/sensory_model.h"
+#include "analysis/simulation/fit_synthetic.h"
 
 namespace doorbench::bench {
 

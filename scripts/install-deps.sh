@@ -26,7 +26,10 @@ packages=(
   clang libclang-rt-14-dev    # libFuzzer and the sanitizers for the parsers' fuzz targets (fuzz/)
   libboost-math-dev           # Boost.Math: Student-t quantile (calibration), exact binomial test (A/B)
   zlib1g-dev                  # zlib's crc32() for the recording journal's checksums
-  r-base-core r-cran-ordinal  # tests only: R's ordinal (clmm/clm), the ratings fit's independent check
+  r-base-core                 # tests only: R, the independent checks of the statistics
+  r-cran-ordinal              # tests only: R's ordinal (clmm/clm), the ratings fit's independent check
+  r-cran-bradleyterry2        # tests only: BTm, the preference scale's check (tests/study/preference_oracle.R);
+                              # its namespaces all come through Depends: no recommends needed
 )
 
 missing=()

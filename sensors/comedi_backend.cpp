@@ -8,8 +8,8 @@
 #include <cstring>
 #include <sstream>
 
-#include "sensors/rig_channel.h"
 #include "core/number_format.h"
+#include "sensors/rig_channel.h"
 
 namespace doorbench::sensors {
 

@@ -18,8 +18,8 @@
 #include <vector>
 
 #include "acquisition/record/backend.h"
-#include "acquisition/session/recording_csv.h"
 #include "acquisition/rig/rig_file.h"
+#include "acquisition/session/recording_csv.h"
 #include "analysis/model/door_model.h"
 #include "analysis/simulation/simulator.h"
 #include "analysis/simulation/virtual_hand.h"

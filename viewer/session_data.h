@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "acquisition/session/session_file.h"
-#include "analysis/model/door_model.h"
-#include "analysis/report/plot_style.h"
 #include "analysis/fit/residual_whiteness.h"
+#include "analysis/model/door_model.h"
 #include "analysis/preprocessing/strokes.h"
+#include "analysis/report/plot_style.h"
 #include "viewer/plot_view.h"
 
 namespace doorbench::viewer {

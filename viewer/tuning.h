@@ -11,8 +11,8 @@
 
 #include "analysis/model/door_model.h"
 #include "analysis/model/perceptual_controls.h"
-#include "analysis/report/plot_style.h"
 #include "analysis/preprocessing/strokes.h"
+#include "analysis/report/plot_style.h"
 #include "viewer/plot_view.h"
 
 namespace doorbench::viewer {

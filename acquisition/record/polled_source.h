@@ -15,8 +15,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session/session_file.h"
 #include "acquisition/rig/calibration_record.h"
+#include "acquisition/session/session_file.h"
 
 namespace doorbench {
 

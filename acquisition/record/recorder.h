@@ -30,8 +30,8 @@
 #include "acquisition/record/backend.h"
 #include "acquisition/record/polled_source.h"
 #include "acquisition/record/ring_buffer.h"
-#include "acquisition/session/session_file.h"
 #include "acquisition/record/trigger.h"
+#include "acquisition/session/session_file.h"
 
 namespace doorbench {
 

@@ -20,8 +20,8 @@
 #include <string_view>
 #include <vector>
 
-#include "acquisition/session/session_file.h"
 #include "acquisition/rig/calibration_record.h"
+#include "acquisition/session/session_file.h"
 
 namespace doorbench {
 

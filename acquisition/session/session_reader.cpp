@@ -6,9 +6,9 @@
 #include <iterator>
 #include <utility>
 
+#include "acquisition/session/internal/session_hdf5.h"
 #include "acquisition/session/printable.h"
 #include "acquisition/session/session_file.h"
-#include "acquisition/session/internal/session_hdf5.h"
 #include "core/number_format.h"
 
 namespace doorbench {

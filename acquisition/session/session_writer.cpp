@@ -5,9 +5,9 @@
 #include <cstdio>
 #include <utility>
 
+#include "acquisition/session/internal/session_hdf5.h"
 #include "acquisition/session/printable.h"
 #include "acquisition/session/session_file.h"
-#include "acquisition/session/internal/session_hdf5.h"
 #include "core/number_format.h"
 
 namespace doorbench {

@@ -19,8 +19,8 @@
 #include <vector>
 
 #include "analysis/model/door_model.h"
-#include "analysis/simulation/simulator.h"
 #include "analysis/preprocessing/strokes.h"
+#include "analysis/simulation/simulator.h"
 #include "analysis/simulation/virtual_hand.h"
 
 namespace doorbench {

@@ -27,8 +27,8 @@
 #include <vector>
 
 #include "analysis/fit/commanded_torque.h"
-#include "analysis/model/door_model.h"
 #include "analysis/fit/fitting.h"
+#include "analysis/model/door_model.h"
 #include "analysis/preprocessing/strokes.h"
 
 namespace doorbench {

@@ -13,8 +13,8 @@
 #include <string_view>
 #include <vector>
 
-#include "analysis/model/door_model.h"
 #include "analysis/design/felt_quantities.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench {
 

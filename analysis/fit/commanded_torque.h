@@ -18,8 +18,8 @@
 #include <utility>
 #include <vector>
 
-#include "analysis/model/door_model.h"
 #include "analysis/fit/fitting.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench {
 

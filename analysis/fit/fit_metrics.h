@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/model/door_model.h"
 #include "analysis/fit/fit_windows.h"
+#include "analysis/model/door_model.h"
 #include "analysis/preprocessing/strokes.h"
 
 namespace doorbench {

@@ -19,10 +19,10 @@
 #include <string>
 #include <vector>
 
-#include "analysis/model/door_model.h"
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/fit_start.h"
 #include "analysis/fit/fit_windows.h"
+#include "analysis/model/door_model.h"
 #include "analysis/preprocessing/strokes.h"
 #include "core/units.h"
 

@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
+#include "analysis/fit/fitting.h"
 #include "analysis/model/door_model.h"
 #include "analysis/model/effects.h"
-#include "analysis/fit/fitting.h"
 #include "analysis/preprocessing/strokes.h"
 
 namespace doorbench {

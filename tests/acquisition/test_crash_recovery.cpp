@@ -36,8 +36,8 @@
 #include "acquisition/rig/rig_file.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/fake_polled_source.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

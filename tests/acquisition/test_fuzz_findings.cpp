@@ -17,8 +17,8 @@
 #include <vector>
 
 #include "acquisition/record/journal.h"
-#include "acquisition/session/recording_csv.h"
 #include "acquisition/record/recovery.h"
+#include "acquisition/session/recording_csv.h"
 #include "tests/support/temp_dir.h"
 
 namespace {

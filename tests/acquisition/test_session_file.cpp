@@ -20,10 +20,10 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session/session_file.h"
 #include "acquisition/rig/calibration_record.h"
-#include "tests/support/temp_dir.h"
+#include "acquisition/session/session_file.h"
 #include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

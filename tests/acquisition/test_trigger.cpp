@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/rig/rig_file.h"
 #include "acquisition/record/trigger.h"
+#include "acquisition/rig/rig_file.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/trigger_test_rig.h"
 

@@ -4,9 +4,9 @@
 #include <vector>
 
 #include "analysis/design/felt_quantities.h"
-#include "analysis/simulation/fit_synthetic.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/physical_model.h"
+#include "analysis/simulation/fit_synthetic.h"
 #include "analysis/simulation/run_summary.h"
 
 using Catch::Matchers::Contains;

@@ -9,12 +9,12 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit/fit_problem.h"
-#include "analysis/simulation/fit_synthetic.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
 #include "core/parallel.h"
 #include "analysis/model/sensory_model.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "core/parallel.h"
 
 namespace {
 

@@ -15,14 +15,14 @@
 #include <string>
 #include <vector>
 
-#include "analysis/model/door_model.h"
 #include "analysis/fit/fit_start.h"
-#include "analysis/simulation/fit_synthetic.h"
 #include "analysis/fit/fit_windows.h"
 #include "analysis/fit/fitting.h"
+#include "analysis/model/door_model.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/physical_model.h"
 #include "analysis/model/sensory_model.h"
+#include "analysis/simulation/fit_synthetic.h"
 
 using Catch::Matchers::Contains;
 using doorbench::DoorModel;

@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/simulation/fit_synthetic.h"
 #include "analysis/design/inverse_design.h"
 #include "analysis/model/parameter_file.h"
+#include "analysis/simulation/fit_synthetic.h"
 
 using Catch::Matchers::Contains;
 using doorbench::DesignParameter;

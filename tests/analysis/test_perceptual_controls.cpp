@@ -12,8 +12,8 @@
 #include "analysis/model/door_model.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
-#include "analysis/simulation/run_summary.h"
 #include "analysis/model/sensory_model.h"
+#include "analysis/simulation/run_summary.h"
 #include "analysis/simulation/simulator.h"
 #include "analysis/simulation/virtual_hand.h"
 

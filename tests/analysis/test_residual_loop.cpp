@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/simulation/fit_synthetic.h"
-#include "analysis/model/parameter_file.h"
 #include "analysis/loop/residual_loop.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/simulation/fit_synthetic.h"
 
 namespace {
 

@@ -15,8 +15,8 @@
 #include <vector>
 
 #include "analysis/fit/fitting.h"
-#include "analysis/model/parameter_file.h"
 #include "analysis/loop/residual_loop.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/tremor_recording.h"
 
 namespace {

@@ -12,10 +12,10 @@
 
 #include "acquisition/session/session_file.h"
 #include "haptic/ab_trials.h"
+#include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/run_on_terminal.h"
 #include "tests/support/temp_dir.h"
-#include "tests/support/files.h"
 
 using doorbench::testing::read_file;
 

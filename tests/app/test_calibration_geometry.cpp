@@ -16,10 +16,10 @@
 #include "acquisition/session/session_csv.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "calibration/geometry_calibration.h"
+#include "core/units.h"
+#include "tests/support/files.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
-#include "tests/support/files.h"
-#include "core/units.h"
 
 using doorbench::testing::read_file;
 

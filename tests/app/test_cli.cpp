@@ -32,9 +32,10 @@
 #include "acquisition/session/session_file.h"
 #include "analysis/model/door_model.h"
 #include "analysis/model/parameter_file.h"
-#include "tests/support/files.h"
 #include "core/units.h"
+#include "tests/support/files.h"
 
+using doorbench::kRadPerDeg;
 using doorbench::testing::read_file;
 
 using Catch::Matchers::Contains;

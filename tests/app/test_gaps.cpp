@@ -13,8 +13,8 @@
 #include <vector>
 
 #include "acquisition/record/journal.h"
-#include "acquisition/session/recording_csv.h"
 #include "acquisition/record/recovery.h"
+#include "acquisition/session/recording_csv.h"
 #include "acquisition/session/session_csv.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"

@@ -8,9 +8,9 @@
 #include <string>
 
 #include "acquisition/session/printable.h"
+#include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
-#include "tests/support/files.h"
 
 using doorbench::testing::read_file;
 

@@ -13,10 +13,10 @@
 #include <string>
 
 #include "acquisition/session/output_file.h"
+#include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
-#include "tests/support/files.h"
 
 using doorbench::testing::read_file;
 

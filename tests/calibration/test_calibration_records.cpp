@@ -8,13 +8,13 @@
 #include <sstream>
 
 #include "acquisition/record/recorder.h"
-#include "acquisition/session/session_csv.h"
 #include "acquisition/rig/calibration_store.h"
+#include "acquisition/session/session_csv.h"
 #include "calibration/certificate.h"
 #include "sensors/rig_channel.h"
+#include "tests/support/files.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
-#include "tests/support/files.h"
 
 using doorbench::testing::read_file;
 

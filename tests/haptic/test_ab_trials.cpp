@@ -18,8 +18,8 @@
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
 #include "haptic/ab_trials.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

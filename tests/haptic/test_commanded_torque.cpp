@@ -6,8 +6,8 @@
 #include <cmath>
 
 #include "acquisition/session/session_file.h"
-#include "analysis/fit/commanded_torque.h"
 #include "analysis/design/inverse_design.h"
+#include "analysis/fit/commanded_torque.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "haptic/device_factory.h"

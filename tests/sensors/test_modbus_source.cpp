@@ -17,12 +17,13 @@
 
 #include "acquisition/rig/rig_file.h"
 #include "acquisition/session/session_file.h"
+#include "core/units.h"
+#include "sensors/modbus_source.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/modbus_test_server.h"
-#include "sensors/modbus_source.h"
 #include "tests/support/temp_dir.h"
-#include "core/units.h"
 
+using doorbench::kRadPerDeg;
 using doorbench::PolledEvent;
 using doorbench::PolledSample;
 using doorbench::sensors::ModbusError;
@@ -153,7 +154,7 @@ TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over T
       channel("angle", "inclinometer", "rad",
               "device = \"transmitters\"\nunit_id = 2\nregister = \"input\"\naddress = 8\n"
               "type = \"int16\"\nbyte_order = \"big\"\nscale = " +
-                  num(0.01 * deg) + "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n") +
+                  num(0.01 * kRadPerDeg) + "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n") +
       channel("force_mN", "load_cell", "N",
               "device = \"transmitters\"\nunit_id = 3\nregister = \"holding\"\naddress = 12\n"
               "type = \"int32\"\nbyte_order = \"big\"\nword_order = \"little\"\nscale = 0.001\n"
@@ -161,7 +162,7 @@ TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over T
       channel("angle_shifted", "inclinometer", "rad",
               "device = \"transmitters\"\nregister = \"holding\"\naddress = 14\n"
               "type = \"uint16\"\nbyte_order = \"little\"\nscale = " +
-                  num(0.01 * deg) + "\noffset = " + num(-100 * deg) +
+                  num(0.01 * kRadPerDeg) + "\noffset = " + num(-100 * kRadPerDeg) +
                   "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n");
   ModbusSource source(rig_of(tcp_device(server.port), channels));
   const auto infos = source.channels();
@@ -375,7 +376,7 @@ TEST_CASE("modbus source: RTU over a pseudo-terminal pair", "[modbus]") {
           channel("rate", "gyroscope", "rad/s",
                   "device = \"serial_line\"\nunit_id = 2\nregister = \"input\"\naddress = 9\n"
                   "type = \"int16\"\nbyte_order = \"big\"\nscale = " +
-                      num(0.01 * deg) + "\nrange = [-2.0, 2.0]\npoll_rate_hz = 20\n")));
+                      num(0.01 * kRadPerDeg) + "\nrange = [-2.0, 2.0]\npoll_rate_hz = 20\n")));
   const Collected got = run_for(source, 1.5);
   CHECK(got.events.empty());
   const auto force = of_channel(got, 0);
@@ -478,7 +479,7 @@ TEST_CASE(
       channel("angle", "inclinometer", "rad",
               "device = \"transmitters\"\nregister = \"input\"\naddress = 8\ntype = \"int16\"\n"
               "byte_order = \"big\"\nscale = " +
-                  num(0.01 * deg) + "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n")));
+                  num(0.01 * kRadPerDeg) + "\nrange = [-0.2, 0.2]\npoll_rate_hz = 50\n")));
   const Collected got = run_for(source, 0.5);
   const auto samples = of_channel(got, 0);
   REQUIRE(samples.size() >= 10);

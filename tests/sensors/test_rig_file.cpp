@@ -13,9 +13,9 @@
 
 #include "acquisition/rig/rig_file.h"
 #include "sensors/sensor_models.h"
+#include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/trigger_test_rig.h"
-#include "tests/support/files.h"
 
 using doorbench::testing::read_file;
 

@@ -12,9 +12,10 @@
 #include <string>
 #include <vector>
 
-#include "sensors/sensor_models.h"
 #include "core/units.h"
+#include "sensors/sensor_models.h"
 
+using doorbench::kRadPerDeg;
 using Catch::Matchers::Equals;
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;

@@ -11,6 +11,7 @@
 #include "acquisition/record/recorder.h"
 #include "acquisition/rig/rig_file.h"
 #include "acquisition/session/session_csv.h"
+#include "core/units.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
@@ -166,7 +167,6 @@ TEST_CASE("Simulated bench: the seed makes the session repeatable", "[simulated_
 #include "analysis/model/parameter_file.h"
 #include "analysis/simulation/trajectory_io.h"
 #include "analysis/simulation/virtual_hand.h"
-#include "core/units.h"
 #include "tests/support/allocation_counter.h"
 
 namespace {

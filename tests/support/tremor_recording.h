@@ -28,9 +28,9 @@
 #include <vector>
 
 #include "analysis/model/door_model.h"
+#include "analysis/preprocessing/strokes.h"
 #include "analysis/simulation/fit_synthetic.h"
 #include "analysis/simulation/simulator.h"
-#include "analysis/preprocessing/strokes.h"
 #include "analysis/simulation/virtual_hand.h"
 
 namespace doorbench::testing {

@@ -1,0 +1,121 @@
+// doorbench campaign analyze: a campaign's trials.csv (a campaign folder, or the table
+// alone, even one written by hand) turned into analysis.json, report.html, report.pdf and
+// SVG plots (study/statistics/analysis.h; docs/campaign.md).
+#include <filesystem>
+#include <iostream>
+#include <map>
+#include <memory>
+
+#include "acquisition/session/output_file.h"
+#include "app/commands.h"
+#include "app/progress.h"
+#include "study/statistics/analysis.h"
+#include "study/trials_table.h"
+
+namespace doorbench::app {
+namespace {
+
+struct CampaignAnalyzeOptions {
+  std::string input;  // a campaign folder (its trials.csv) or a trials table
+  std::string out_dir;
+  bool overwrite = false;
+  bool no_pdf = false;
+  int bootstrap = 1000;
+  std::uint64_t seed = 1;
+  std::string reference;
+  std::string real_variant = "real";
+};
+
+std::filesystem::path trials_path(const std::string& input) {
+  const std::filesystem::path path(input);
+  if (std::filesystem::is_directory(path)) {
+    const std::filesystem::path table = path / "trials.csv";
+    if (!std::filesystem::exists(table))
+      throw UsageError(input +
+                       ": is a folder without trials.csv (give a campaign folder or a "
+                       "trials table)");
+    return table;
+  }
+  if (!std::filesystem::exists(path)) throw UsageError(input + ": no such file or folder");
+  return path;
+}
+
+void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
+  if (options.bootstrap < 0 || (options.bootstrap > 0 && options.bootstrap < 100))
+    throw UsageError("--bootstrap: must be 0 (none) or at least 100 resamples, got " +
+                     std::to_string(options.bootstrap));
+  const std::filesystem::path table_path = trials_path(options.input);
+  const std::filesystem::path out(options.out_dir);
+  check_output_folder(out, {table_path}, options.overwrite);
+
+  study::AnalysisOptions analysis_options;
+  analysis_options.preference.bootstrap_replicates = options.bootstrap;
+  analysis_options.preference.seed = options.seed;
+  analysis_options.preference.reference = options.reference;
+  analysis_options.real_variant = options.real_variant;
+  if (const std::string problem = analysis_options.validate(); !problem.empty())
+    throw UsageError(problem);
+
+  const study::TrialsTable table = study::read_trials_table(table_path);
+  std::cerr << "analysing " << table_path.string() << ": " << table.rows.size() << " trials\n";
+  StatusLine status(std::cerr, stderr_is_terminal(), 5.0, stderr_terminal_columns());
+  std::map<std::string, std::function<void(int, int)>> displays;
+  const study::AnalysisProgress progress = [&](const std::string& what, int done, int total) {
+    auto at = displays.find(what);
+    if (at == displays.end())
+      at = displays.emplace(what, count_progress_display(status, what, "resamples")).first;
+    at->second(done, total);
+  };
+  std::vector<study::AnalysisPlot> section_plots;
+  const nlohmann::json analysis =
+      study::analyze_trials(table, analysis_options, progress, &section_plots);
+  status.finish();
+
+  std::filesystem::create_directories(out);
+  std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
+  plots.insert(plots.end(), section_plots.begin(), section_plots.end());
+  write_text_file_atomically(out / "analysis.json", analysis.dump(2) + "\n");
+  for (const study::AnalysisPlot& plot : plots)
+    write_text_file_atomically(out / plot.file, plot.svg);
+  const std::filesystem::path html = out / "report.html";
+  write_text_file_atomically(html, study::analysis_html(analysis, plots));
+  std::string pdf_note = "no PDF (not asked for)";
+  if (!options.no_pdf) {
+    const std::string problem = study::render_pdf(html, out / "report.pdf");
+    pdf_note = problem.empty() ? "wrote " + (out / "report.pdf").string() : "no PDF: " + problem;
+  }
+  std::cout << study::analysis_summary(analysis);
+  std::cout << "wrote " << (out / "analysis.json").string() << ", " << html.string() << " and "
+            << plots.size() << " plot(s)\n"
+            << pdf_note << "\n";
+}
+
+}  // namespace
+
+void add_campaign_analyze(CLI::App& campaign, Action& action) {
+  auto options = std::make_shared<CampaignAnalyzeOptions>();
+  CLI::App* command = campaign.add_subcommand(
+      "analyze",
+      "The panel's statistics from trials.csv: preference scale (Bradley-Terry with ties and "
+      "order effect), real vs virtual (2-AFC d'), 2-AC d' (analysis.json, report.html, "
+      "report.pdf, plots)");
+  command->add_option("INPUT", options->input, "a campaign folder or a trials.csv")->required();
+  command->add_option("--out", options->out_dir, "folder for the analysis")->required();
+  command->add_flag("--overwrite", options->overwrite,
+                    "write into an --out folder that exists and is not empty");
+  command
+      ->add_option("--bootstrap", options->bootstrap,
+                   "participant bootstrap resamples for the preference scale (0: none)")
+      ->capture_default_str();
+  command->add_option("--seed", options->seed, "the bootstrap's seed")->capture_default_str();
+  command->add_option("--reference", options->reference,
+                      "the variant at worth 0 (default: the first in the table)");
+  command
+      ->add_option("--real-variant", options->real_variant,
+                   "the real door's name in identify-real trials")
+      ->capture_default_str();
+  command->add_flag("--no-pdf", options->no_pdf, "do not render report.pdf");
+  command->callback([options, &action] { action = [options] { run_campaign_analyze(*options); }; });
+}
+
+}  // namespace doorbench::app

@@ -1,0 +1,86 @@
+#pragma once
+// `doorbench campaign analyze`: a campaign's trials table turned into analysis.json, a
+// report (report.html, report.pdf) and SVG plots (docs/campaign.md).
+//
+// analysis.json is one object. Its keys come from sections: each section is a function of
+// the trials table that returns a JSON object whose keys are merged into analysis.json, or
+// null when the table has no trials of its kind. Sections today (analysis_sections()):
+//   "preference"      -> preference_scale, ties (when `same` answers exist), order_effect
+//                        (when some pair came in both orders), preference_fit
+//   "identify_real"   -> identify_real
+//   "two_ac"          -> two_ac
+//   "ratings"         -> ratings, ratings_models   (study/statistics/ratings.h)
+//   "jnd"             -> jnd, plus a psychometric plot per parameter (thresholds.h)
+//   "tuning"          -> tuning, plus its plot; tune rows' files are read relative to the
+//                        trials table's folder; measured Weber fractions from "jnd" (tuning.h)
+// plus "input" (the table's path, row and participant counts) and "sections" (each
+// section's name and whether it found data, or its error). A section that fails on its data
+// (separation, an error in the table) stops the analysis with that error: the table is
+// wrong or cannot give an answer, and a report that leaves a part out silently would mislead.
+//
+// Errors: TrialsTableError from the table's rows (naming the line), PreferenceScaleError,
+// OutputError from the writers.
+// Thread safety: free functions without shared state; `progress` on the caller's thread.
+#include <filesystem>
+#include <functional>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "study/statistics/preference_scale.h"
+#include "study/trials_table.h"
+
+namespace doorbench::study {
+
+struct AnalysisOptions {
+  PreferenceOptions preference;
+  std::string real_variant = "real";  // the real door's name in identify-real trials
+  double confidence = 0.95;
+  std::string validate() const;  // empty when usable
+};
+
+// Progress of a long section: what, done, total (a stage begins at done == 0).
+using AnalysisProgress = std::function<void(const std::string& what, int done, int total)>;
+
+// The plots of an analysis: file name (e.g. "preference-scale.svg") and SVG text.
+struct AnalysisPlot {
+  std::string file;
+  std::string title;
+  std::string svg;
+};
+
+// One section of analysis.json.
+struct AnalysisSection {
+  std::string name;
+  std::function<nlohmann::json(const TrialsTable&)> make;  // object of keys, or null
+  // Plots that need more than the JSON (called after make; may be empty).
+  std::function<std::vector<AnalysisPlot>()> plots;
+};
+
+// The sections, in report order, made with `options` and reporting to `progress`.
+std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
+                                               const AnalysisProgress& progress = {});
+
+// analysis.json's object from the table (every section of analysis_sections()) and, in
+// `section_plots` when given, the plots the sections made beyond analysis_plots'.
+nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& options = {},
+                              const AnalysisProgress& progress = {},
+                              std::vector<AnalysisPlot>* section_plots = nullptr);
+
+// The plots drawn from analysis.json alone (preference scale, identify-real, 2-AC).
+std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis);
+
+// report.html: every key of the analysis as a section (the known ones as tables with the
+// model's words; any other key as a generic table), the plots inline.
+std::string analysis_html(const nlohmann::json& analysis, const std::vector<AnalysisPlot>& plots);
+
+// The summary printed by the verb: one line per section.
+std::string analysis_summary(const nlohmann::json& analysis);
+
+// Renders `html_path` to `pdf_path` with `renderer` (weasyprint) through pdf_path's temporary
+// file (acquisition/output_file.h). Returns "" when done, else why not (the renderer missing
+// or failing, with its log's path).
+std::string render_pdf(const std::filesystem::path& html_path,
+                       const std::filesystem::path& pdf_path, const std::string& renderer = "");
+
+}  // namespace doorbench::study
