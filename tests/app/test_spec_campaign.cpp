@@ -9,7 +9,9 @@
 #include "app/commands.h"
 #include "app/spec_campaign.h"
 #include "app/spec_run.h"
+#include "core/number_format.h"
 #include "tests/support/run_doorbench.h"
+#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using doorbench::app::CampaignForSpec;
@@ -244,4 +246,54 @@ TEST_CASE("CLI: spec --campaign writes the perceptual tolerance table",
   CHECK_THAT(html, Contains("Tolerances judged by the panel's perception"));
   CHECK_THAT(html, Contains("The panel's preference scale"));
   CHECK_THAT(html, Contains("Thresholds measured (panel)"));
+}
+
+// The analysis.json `campaign analyze` writes (not one written by hand): a pair block and a
+// jnd block of k_l from a trials table, analysed by the command, then read for the spec.
+TEST_CASE("spec --campaign reads what campaign analyze writes", "[spec][campaign]") {
+  TempDir dir("spec_campaign_analyze");
+  std::string table = "participant,block,trial,question,first,second,answer\n";
+  int trial = 0;
+  for (const char* participant : {"P1", "P2"}) {
+    for (int t = 0; t < 10; ++t) {  // B preferred 7 times of 10
+      const bool a_first = t % 2 == 0;
+      const bool prefer_b = t < 7;
+      table += std::string(participant) + ",pair," + std::to_string(++trial) + ",preference," +
+               (a_first ? "A,B," : "B,A,") + ((prefer_b == a_first) ? "2" : "1") + "\n";
+    }
+    // k_l: comparisons 0.8 .. 1.25 x the reference, "stronger" more often the larger.
+    const double factors[] = {0.8, 0.9, 0.95, 1.05, 1.1, 1.25};
+    const int stronger_of_10[] = {1, 2, 4, 6, 8, 9};
+    for (int level = 0; level < 6; ++level) {
+      for (int t = 0; t < 10; ++t) {
+        const bool comparison_first = t % 2 == 0;
+        const std::string comparison = "k_l*" + doorbench::format_number(factors[level]);
+        const bool stronger = t < stronger_of_10[level];
+        table += std::string(participant) + ",jnd," + std::to_string(++trial) + ",stronger:k_l," +
+                 (comparison_first ? comparison + ",k_l*1.00," : "k_l*1.00," + comparison + ",") +
+                 ((stronger == comparison_first) ? "1" : "2") + "\n";
+      }
+    }
+  }
+  const auto trials = dir.write("trials.csv", table);
+  const auto run = run_doorbench_shell(
+      "campaign analyze '" + trials.string() + "' --out '" + (dir / "out").string() + "'", dir);
+  INFO("stdout: " << run.out << "\nstderr: " << run.err);
+  REQUIRE(run.status == 0);
+  const auto analysis =
+      nlohmann::json::parse(doorbench::read_text_file(dir / "out" / "analysis.json"));
+  const CampaignForSpec c = read_campaign_for_spec(dir / "out");
+  CHECK(c.favourite == "B");
+  REQUIRE(c.preference.size() == 2);
+  double panel_weber = 0;
+  for (const auto& row : analysis["jnd"]) {
+    if (row["participant"] == "panel" && row["parameter"] == "k_l") {
+      panel_weber = row["weber_fraction"].get<double>();
+    }
+  }
+  REQUIRE(panel_weber > 0);
+  CHECK(c.jnds[0].measured);
+  CHECK(c.jnds[0].weber_fraction == panel_weber);
+  CHECK(c.jnds[0].source == "measured: k_l (panel, psychometric fit, pooled)");
+  CHECK_FALSE(c.jnds[3].measured);
 }
