@@ -200,7 +200,7 @@ TEST_CASE("spec: the campaign options refused word for word", "[spec][campaign]"
 }
 
 TEST_CASE("CLI: spec --campaign writes the perceptual tolerance table",
-          "[cli][spec][campaign][slow]") {
+          "[cli][spec][campaign]") {
   TempDir dir("spec_campaign_cli");
   const doorbench::DoorModel asis = doorbench::reference_model(doorbench::ModelKind::kPhysical);
   std::vector<double> values(asis.parameter_values().begin(), asis.parameter_values().end());
