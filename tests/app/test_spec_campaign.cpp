@@ -199,8 +199,7 @@ TEST_CASE("spec: the campaign options refused word for word", "[spec][campaign]"
                     "--campaign needs the tolerance analysis: drop --no-tolerances");
 }
 
-TEST_CASE("CLI: spec --campaign writes the perceptual tolerance table",
-          "[cli][spec][campaign]") {
+TEST_CASE("CLI: spec --campaign writes the perceptual tolerance table", "[cli][spec][campaign]") {
   TempDir dir("spec_campaign_cli");
   const doorbench::DoorModel asis = doorbench::reference_model(doorbench::ModelKind::kPhysical);
   std::vector<double> values(asis.parameter_values().begin(), asis.parameter_values().end());
