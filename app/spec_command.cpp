@@ -11,13 +11,16 @@
 
 #include "acquisition/session/output_file.h"
 #include "analysis/design/inverse_design.h"
+#include "analysis/design/perceptual_tolerance.h"
 #include "analysis/design/spec_report.h"
 #include "analysis/design/tolerance_analysis.h"
 #include "analysis/fit/commanded_torque.h"
 #include "analysis/model/parameter_file.h"
+#include "analysis/simulation/fit_synthetic.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/progress.h"
+#include "app/spec_campaign.h"
 #include "app/spec_run.h"
 #include "core/number_format.h"
 
@@ -102,22 +105,119 @@ std::string describe(const SpecCommandOptions& o) {
   if (o.fixed_given) text += " --fixed " + (o.fixed.empty() ? std::string("''") : o.fixed);
   if (!o.costs.empty()) text += " --costs " + o.costs;
   if (!o.tolerances_path.empty()) text += " --tolerances " + o.tolerances_path;
+  if (!o.campaign_dir.empty()) text += " --campaign " + o.campaign_dir;
+  if (!o.felt_share.empty()) text += " --felt-share " + o.felt_share;
   text += " --samples " + std::to_string(o.samples) + " --seed " + std::to_string(o.seed);
   return text;
 }
 
+// The options of the TO-BE source and the campaign checked; --felt-share's value (5 %
+// when not given). Throws UsageError.
+double checked_felt_share(const SpecCommandOptions& options) {
+  const bool from_campaign = !options.campaign_dir.empty();
+  if (options.tobe_paths.empty() && !from_campaign) {
+    throw UsageError("spec: give TO-BE recordings or --campaign FOLDER");
+  }
+  if (!options.felt_share.empty() && !from_campaign) {
+    throw UsageError("--felt-share needs --campaign");
+  }
+  if (from_campaign && options.no_tolerances) {
+    throw UsageError("--campaign needs the tolerance analysis: drop --no-tolerances");
+  }
+  return options.felt_share.empty() ? 0.05 : parse_felt_share(options.felt_share);
+}
+
+// The TO-BE feel with a campaign: without TO-BE recordings, the panel's door (the favourite
+// variant or the tuned doors' centre) opened and closed by the virtual hand, as synthetic
+// strokes with the bench's noise (fit_synthetic.h) appended to `tobe`. Returns what the
+// report says of it.
+std::string campaign_tobe(const CampaignForSpec& campaign, const DoorModel& asis,
+                          std::vector<PreparedData>& tobe, std::ostream& progress) {
+  for (const std::string& note : campaign.notes) progress << "campaign: " << note << "\n";
+  if (!tobe.empty()) {
+    return "the TO-BE recordings given; the campaign gives the JNDs and the panel's results";
+  }
+  std::string source;
+  const DoorModel door = campaign_tobe_model(campaign, asis, source);
+  progress << "TO-BE feel from the panel: " << source << "\n";
+  PreparedData strokes = synthetic_strokes(door, {});
+  strokes.source = "the panel's door (simulated strokes): " + campaign.analysis_path.string();
+  tobe.push_back(std::move(strokes));
+  return source;
+}
+
+// The panel's side of the specification: the shares felt as different at the tolerances
+// the Monte Carlo used, and the proposal keeping them under the level.
+PerceptualSpec perceptual_spec(const CampaignForSpec& campaign, const std::string& tobe_source,
+                               double felt_share, const DoorModel& design,
+                               const SpecEvaluationOptions& evaluation_options,
+                               const ToleranceResult& given, std::ostream& progress) {
+  PerceptualSpec p;
+  p.campaign = campaign.analysis_path.string();
+  p.tobe_source = tobe_source;
+  p.notes = campaign.notes;
+  p.preference = campaign.preference;
+  p.thresholds = campaign.thresholds;
+  p.jnds = campaign.jnds;
+  p.rows = perceptual_shares(given, p.jnds);
+  PerceptualToleranceOptions options;
+  options.felt_share = felt_share;
+  options.progress = [&progress](double factor, double worst) {
+    progress << "  tolerances x " << format_significant(factor, 3) << ": largest share felt as "
+             << "different " << format_significant(100 * worst, 3) << "%\n"
+             << std::flush;
+  };
+  MonteCarloOptions monte_carlo = evaluation_options.monte_carlo;
+  monte_carlo.felt = evaluation_options.felt;
+  monte_carlo.progress = nullptr;
+  progress << "perceptual tolerances: the common factor on every tolerance keeping each share "
+              "felt as different under "
+           << format_significant(100 * felt_share, 3) << "% (a Monte Carlo of "
+           << monte_carlo.samples << " samples per factor tried)\n";
+  const ToleranceSpec spec{given.tolerances};
+  p.proposal = propose_perceptual_tolerances(design, spec, monte_carlo, p.jnds, options, &given);
+  progress << "  " << p.proposal.summary << "\n";
+  return p;
+}
+
 }  // namespace
+
+// The TO-BE recordings, prepared, and the torque each commanded when every one of them is a
+// haptic playback (else `commanded` stays empty: the design is fitted to the motion).
+void read_tobe_recordings(const SpecCommandOptions& options, std::ostream& progress,
+                          std::vector<PreparedData>& tobe,
+                          std::vector<CommandedTorque>& commanded) {
+  bool all_commanded = true;
+  for (const std::string& path : options.tobe_paths) {
+    progress << "preparing " << path << "\n";
+    tobe.push_back(load_prepared_data(path));
+    std::optional<CommandedTorque> torque;
+    if (!options.motion_only && is_hdf5_file(path)) torque = read_commanded_torque(path);
+    if (torque) {
+      commanded.push_back(std::move(*torque));
+    } else {
+      all_commanded = false;
+    }
+  }
+  if (!all_commanded) commanded.clear();
+}
 
 void run_spec(const SpecCommandOptions& options) {
   if (options.samples < 2) throw UsageError("--samples must be >= 2");
   if (options.threads < 0) throw UsageError("--threads must be >= 0");
+  const bool from_campaign = !options.campaign_dir.empty();
+  const double felt_share = checked_felt_share(options);
   // The output rule (docs/output-files.md): checked before any work; the folder is made
   // once the inputs are read and the design is done.
   std::vector<std::filesystem::path> inputs(options.tobe_paths.begin(), options.tobe_paths.end());
   inputs.emplace_back(options.asis_path);
   if (!options.asis_recording.empty()) inputs.emplace_back(options.asis_recording);
   if (!options.tolerances_path.empty()) inputs.emplace_back(options.tolerances_path);
+  if (from_campaign)
+    inputs.push_back(std::filesystem::path(options.campaign_dir) / "analysis.json");
   check_output_folder(options.out_dir, inputs, options.overwrite);
+  const auto campaign =
+      from_campaign ? std::optional(read_campaign_for_spec(options.campaign_dir)) : std::nullopt;
   // ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
   std::filesystem::path asis_file = options.asis_path;
   if (std::filesystem::is_directory(asis_file)) asis_file /= "fitted-params.json";
@@ -132,19 +232,9 @@ void run_spec(const SpecCommandOptions& options) {
 
   std::vector<PreparedData> tobe;
   std::vector<CommandedTorque> commanded;
-  bool all_commanded = true;
-  for (const std::string& path : options.tobe_paths) {
-    progress << "preparing " << path << "\n";
-    tobe.push_back(load_prepared_data(path));
-    std::optional<CommandedTorque> torque;
-    if (!options.motion_only && is_hdf5_file(path)) torque = read_commanded_torque(path);
-    if (torque) {
-      commanded.push_back(std::move(*torque));
-    } else {
-      all_commanded = false;
-    }
-  }
-  if (!all_commanded) commanded.clear();
+  read_tobe_recordings(options, progress, tobe, commanded);
+  std::string tobe_source;
+  if (campaign) tobe_source = campaign_tobe(*campaign, asis, tobe, progress);
   const std::string bench_warning =
       bench_without_asis_recording(tobe, !commanded.empty(), options);
   if (!bench_warning.empty()) progress << "warning: " << bench_warning << "\n";
@@ -199,6 +289,11 @@ void run_spec(const SpecCommandOptions& options) {
   status.finish();
   evaluation.command = describe(options);
   evaluation.asis_source = asis_file.string();
+  if (campaign && evaluation.tolerances) {
+    evaluation.perceptual =
+        perceptual_spec(*campaign, tobe_source, felt_share, design.solutions.front().model,
+                        evaluation_options, *evaluation.tolerances, progress);
+  }
   if (!bench_warning.empty()) evaluation.warnings.push_back(bench_warning);
 
   std::filesystem::create_directories(options.out_dir);
@@ -210,6 +305,9 @@ void run_spec(const SpecCommandOptions& options) {
   std::cout << design.brief_report() << "\n" << spec_summary(design, evaluation);
   if (evaluation.tolerances) {
     std::cout << "tolerances:\n" << evaluation.tolerances->brief_report();
+  }
+  if (evaluation.perceptual) {
+    std::cout << "tolerances judged by the panel:\n" << evaluation.perceptual->brief_report();
   }
   std::cout << "wrote " << files.json.string() << ", " << files.html.string() << ", "
             << params.string() << "\n"
@@ -225,8 +323,8 @@ void add_spec_command(CLI::App& app, Action& action) {
       "spec.pdf when weasyprint is installed)");
   command
       ->add_option("TOBE_SESSIONS", options->tobe_paths,
-                   "TO-BE recordings (sessions or CSV), e.g. haptic playback sessions")
-      ->required()
+                   "TO-BE recordings (sessions or CSV), e.g. haptic playback sessions; "
+                   "optional with --campaign")
       ->check(CLI::ExistingFile);
   command
       ->add_option("--asis", options->asis_path,
@@ -267,6 +365,13 @@ void add_spec_command(CLI::App& app, Action& action) {
                     "playback commanded");
   command->add_flag("--no-pdf", options->no_pdf, "do not render spec.pdf");
   command->add_flag("--no-tolerances", options->no_tolerances, "skip the tolerance analysis");
+  command->add_option("--campaign", options->campaign_dir,
+                      "a `doorbench campaign analyze` folder (analysis.json): the TO-BE feel "
+                      "from the panel when no recordings are given, and tolerances judged by "
+                      "the panel's JNDs (docs/design-spec.md)");
+  command->add_option("--felt-share", options->felt_share,
+                      "with --campaign: the largest share of manufactured doors a panel member "
+                      "may feel as different, as percent (5%) or fraction (0.05); default 5%");
   command->callback([options, &action] { action = [options] { run_spec(*options); }; });
 }
 

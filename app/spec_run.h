@@ -30,6 +30,12 @@ struct SpecCommandOptions {
   bool motion_only = false;  // ignore the commanded torque of playback sessions
   bool no_pdf = false;
   bool no_tolerances = false;
+  // A `doorbench campaign analyze` folder (analysis.json): the TO-BE feel from the panel
+  // when no TO-BE recordings are given, the JNDs for the perceptual tolerance table
+  // (docs/design-spec.md, "The specification from the panel"). Empty: none.
+  std::string campaign_dir;
+  // --felt-share as typed ("5%" or "0.05"); empty: 5 %. Only with a campaign.
+  std::string felt_share;
   bool show_progress = true;  // progress lines on stderr
   // Write into an --out folder that exists and is not empty (docs/output-files.md); the
   // demo, which owns its folder, sets it.

@@ -292,6 +292,159 @@ json tolerances_json(const ToleranceResult& t) {
           {"elapsed_s", t.elapsed_s}, {"parameters", tolerances}, {"spreads", spreads}};
 }
 
+// The criterion of perceptual_tolerance.h in words.
+std::string felt_criterion_text() {
+  return "a door is felt as different in a quantity when |ln(q / q_nominal)| > ln(1 + w), w the "
+         "quantity's JND as a Weber fraction at the 75 % point of the psychometric function "
+         "(stronger by the factor 1 + w or weaker by 1 / (1 + w)); the share is over the Monte "
+         "Carlo doors, with its Wilson 95 % interval";
+}
+
+json perceptual_row_json(const PerceptualRow& row) {
+  return {{"doors", row.doors},
+          {"felt_different", row.felt_different},
+          {"share", number(row.share)},
+          {"ci_low", number(row.ci_low)},
+          {"ci_high", number(row.ci_high)},
+          {"note", row.note}};
+}
+
+// spec.json's "perceptual": the panel's results and the perceptual tolerance table.
+json perceptual_json(const PerceptualSpec& p) {
+  json preference = json::array();
+  for (const PanelPreference& v : p.preference) {
+    preference.push_back({{"variant", v.variant},
+                          {"worth", number(v.worth)},
+                          {"ci_low", number(v.ci_low)},
+                          {"ci_high", number(v.ci_high)}});
+  }
+  json thresholds = json::array();
+  for (const PanelThreshold& t : p.thresholds) {
+    thresholds.push_back({{"parameter", t.parameter},
+                          {"reference", t.reference},
+                          {"participant", t.participant},
+                          {"method", t.method},
+                          {"weber_fraction", number(t.weber_fraction)},
+                          {"ci_low", number(t.ci_low)},
+                          {"ci_high", number(t.ci_high)},
+                          {"criterion", t.criterion}});
+  }
+  json quantities = json::array();
+  for (std::size_t q = 0; q < p.rows.size(); ++q) {
+    const PerceptualRow& row = p.rows[q];
+    json entry = {{"quantity", row.quantity},
+                  {"nominal", number(row.nominal)},
+                  {"weber_fraction", number(row.jnd.weber_fraction)},
+                  {"jnd_measured", row.jnd.measured},
+                  {"jnd_source", row.jnd.source},
+                  {"jnd_ci_low", number(row.jnd.ci_low)},
+                  {"jnd_ci_high", number(row.jnd.ci_high)},
+                  {"as_given", perceptual_row_json(row)}};
+    if (q < p.proposal.rows.size()) entry["proposed"] = perceptual_row_json(p.proposal.rows[q]);
+    quantities.push_back(entry);
+  }
+  json proposed = json::array();
+  for (const ParameterTolerance& t : p.proposal.tolerances) {
+    proposed.push_back({{"name", t.name},
+                        {"plus_minus", number(t.plus_minus)},
+                        {"percent", t.percent},
+                        {"distribution", std::string(to_string(t.distribution))}});
+  }
+  return {{"campaign", p.campaign},
+          {"tobe_source", p.tobe_source},
+          {"notes", p.notes},
+          {"criterion", felt_criterion_text()},
+          {"preference_scale", preference},
+          {"thresholds", thresholds},
+          {"felt_share", number(p.proposal.felt_share)},
+          {"quantities", quantities},
+          {"proposal",
+           {{"factor", number(p.proposal.factor)},
+            {"reached", p.proposal.reached},
+            {"summary", p.proposal.summary},
+            {"factors_tried", p.proposal.factors_tried},
+            {"worst_shares", p.proposal.worst_shares},
+            {"tolerances", proposed}}}};
+}
+
+std::string share_cell(const PerceptualRow& row) {
+  if (!std::isfinite(row.share)) return "&ndash; (" + escape(row.note) + ")";
+  return printf_text("%.1f %% [%.1f, %.1f] (%d of %d)", 100 * row.share, 100 * row.ci_low,
+                     100 * row.ci_high, row.felt_different, row.doors);
+}
+
+std::string tolerance_text(const ParameterTolerance& t) {
+  return t.percent ? printf_text("%.3g %%", t.plus_minus) : printf_text("%.3g", t.plus_minus);
+}
+
+// The panel's preference scale and thresholds, as analysis.json gave them.
+std::string panel_tables(const PerceptualSpec& p) {
+  std::string html;
+  if (!p.preference.empty()) {
+    html +=
+        "<h3>The panel's preference scale</h3><table><tr><th>variant</th>"
+        "<th>worth (log scale)</th><th>95 % interval</th></tr>\n";
+    for (const PanelPreference& v : p.preference) {
+      html += "<tr><td>" + escape(v.variant) + "</td><td>" + cell(v.worth, "%.3g") + "</td><td>" +
+              cell(v.ci_low, "%.3g") + " to " + cell(v.ci_high, "%.3g") + "</td></tr>\n";
+    }
+    html += "</table>\n";
+  }
+  if (!p.thresholds.empty()) {
+    html +=
+        "<h3>Thresholds measured (panel)</h3><table><tr><th>parameter</th><th>reference</th>"
+        "<th>method</th><th>JND (Weber fraction)</th><th>95 % interval</th><th>criterion</th>"
+        "</tr>\n";
+    for (const PanelThreshold& t : p.thresholds) {
+      html += "<tr><td>" + escape(t.parameter) + "</td><td>" + escape(t.reference) + "</td><td>" +
+              escape(t.method) + "</td><td>" + cell(100 * t.weber_fraction, "%.1f %%") +
+              "</td><td>" + cell(100 * t.ci_low, "%.1f") + " to " +
+              (std::isfinite(t.ci_high) ? cell(100 * t.ci_high, "%.1f %%") : "open") + "</td><td>" +
+              escape(t.criterion) + "</td></tr>\n";
+    }
+    html += "</table>\n";
+  }
+  return html;
+}
+
+// The perceptual tolerance table beside the engineering one, and the proposal.
+std::string perceptual_section(const PerceptualSpec& p) {
+  std::string html = "<p>From the panel: " + escape(p.campaign) +
+                     ". TO-BE feel: " + escape(p.tobe_source) + ".</p>\n";
+  if (!p.notes.empty()) {
+    html += "<ul class=\"small\">\n";
+    for (const std::string& note : p.notes) html += "<li>" + escape(note) + "</li>\n";
+    html += "</ul>\n";
+  }
+  html += panel_tables(p);
+  html += "<h3>Doors a panel member would feel as different</h3><p class=\"small\">" +
+          escape(felt_criterion_text()) + ".</p>\n";
+  html +=
+      "<table><tr><th>quantity</th><th>nominal</th><th>JND</th><th>JND from</th>"
+      "<th>felt as different, tolerances as given</th><th>at the proposed tolerances</th></tr>\n";
+  for (std::size_t q = 0; q < p.rows.size(); ++q) {
+    const PerceptualRow& row = p.rows[q];
+    html +=
+        "<tr><td>" + escape(felt_label(kFeltQuantities[q])) + "</td><td>" +
+        cell(row.nominal, "%.2f") + "</td><td>" + cell(100 * row.jnd.weber_fraction, "%.1f %%") +
+        "</td><td>" + escape(row.jnd.source) + "</td><td>" + share_cell(row) + "</td><td>" +
+        (q < p.proposal.rows.size() ? share_cell(p.proposal.rows[q]) : "&ndash;") + "</td></tr>\n";
+  }
+  html += "</table>\n<p>Proposed (level " + cell(100 * p.proposal.felt_share, "%.3g %%") +
+          "): " + escape(p.proposal.summary) + ".</p>\n";
+  html +=
+      "<table><tr><th>parameter</th><th>&plusmn; as given</th><th>&plusmn; proposed</th>"
+      "<th>distribution</th></tr>\n";
+  for (const ParameterTolerance& t : p.proposal.tolerances) {
+    ParameterTolerance given = t;
+    given.plus_minus = t.plus_minus / p.proposal.factor;
+    html += "<tr><td>" + escape(t.name) + "</td><td>" + tolerance_text(given) + "</td><td>" +
+            tolerance_text(t) + "</td><td>" + std::string(to_string(t.distribution)) +
+            "</td></tr>\n";
+  }
+  return html + "</table>\n";
+}
+
 }  // namespace
 
 std::string SpecEvaluationOptions::validate() const {
@@ -387,6 +540,7 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
   root["design_search"] = {{"steps", steps}, {"stopped", design.sparse_stop}};
   root["check"] = {{"before", check_json(e.check_before)}, {"after", check_json(e.check_after)}};
   root["tolerances"] = e.tolerances ? tolerances_json(*e.tolerances) : json(nullptr);
+  root["perceptual"] = e.perceptual ? perceptual_json(*e.perceptual) : json(nullptr);
   json alternatives = json::array();
   for (std::size_t s = 1; s < design.solutions.size(); ++s) {
     const DesignSolution& alt = design.solutions[s];
@@ -624,6 +778,10 @@ std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& e
   html += "<h2>Manufacturing tolerances</h2>\n";
   html += e.tolerances ? tolerance_section(*e.tolerances, e.felt)
                        : std::string("<p>Not analysed.</p>\n");
+  if (e.perceptual) {
+    html += "<h2>Tolerances judged by the panel's perception</h2>\n" +
+            perceptual_section(*e.perceptual);
+  }
   if (!design.notes.empty()) {
     html += "<h2>Notes</h2><ul class=\"small\">\n";
     for (const std::string& note : design.notes) html += "<li>" + escape(note) + "</li>\n";

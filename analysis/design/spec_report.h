@@ -14,6 +14,7 @@
 
 #include "analysis/design/felt_quantities.h"
 #include "analysis/design/inverse_design.h"
+#include "analysis/design/perceptual_tolerance.h"
 #include "analysis/design/tolerance_analysis.h"
 
 namespace doorbench {
@@ -33,6 +34,9 @@ struct SpecEvaluation {
   FeelCheck check_after;                          // TO-BE model against them
   std::optional<ToleranceResult> tolerances;      // of the TO-BE door
   FeltOptions felt;  // the felt quantities' definition and the standard run used
+  // `spec --campaign`: the panel's preference scale and thresholds, and the perceptual
+  // tolerance table (perceptual_tolerance.h); shown beside the tolerances when present.
+  std::optional<PerceptualSpec> perceptual;
 };
 
 struct SpecEvaluationOptions {

@@ -14,7 +14,6 @@
 #include "core/parallel.h"
 #include "analysis/model/sensory_model.h"
 #include "analysis/simulation/fit_synthetic.h"
-#include "core/parallel.h"
 
 namespace {
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
+#include <limits>
 #include <nlohmann/json.hpp>
 
 #include "analysis/design/spec_report.h"
@@ -243,10 +244,38 @@ TEST_CASE("Spec report: spec.pdf fits A4 portrait, nothing at the right margin",
   step.equivalent = {"F_l0", "k_l", "theta_seal", "alpha_o"};
   known.design.sparse_steps = {as_is_row, step};
   known.design.sparse_stop = "stopped at 1 part(s): " + std::string(200, 'y');
+  // The panel's section (spec --campaign): long sources and criteria, the proposal's table.
+  REQUIRE(known.evaluation.tolerances);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  doorbench::PerceptualSpec panel;
+  panel.campaign = "/some/long/folder/campaign-analysis-of-the-panel/analysis.json";
+  panel.tobe_source = "the panel's favourite variant " + std::string(150, 'z');
+  panel.notes = {
+      "no jnd section in /some/long/folder/campaign-analysis-of-the-panel/"
+      "analysis.json: typical published JNDs used (stiffness 15%, friction 20%)"};
+  panel.preference = {{"a_variant_with_a_long_name", 0.8, 0.3, 1.3}, {"A", 0.0, nan, nan}};
+  panel.thresholds = {{"k_l", "k_l*1.00", "panel", "psychometric fit, pooled",
+                       "75.0% of the lapse-free cumulative normal above its PSE", 0.17, 0.14, nan}};
+  for (const auto& info : doorbench::kFeltQuantities) {
+    doorbench::FeltJnd jnd = doorbench::typical_felt_jnd(info.name);
+    jnd.source = "measured: free_movement_friction (panel, psychometric fit, pooled)";
+    panel.jnds.push_back(jnd);
+  }
+  panel.rows = doorbench::perceptual_shares(*known.evaluation.tolerances, panel.jnds);
+  panel.proposal.felt_share = 0.05;
+  panel.proposal.factor = 0.5;
+  panel.proposal.reached = true;
+  panel.proposal.rows = panel.rows;
+  panel.proposal.tolerances = known.evaluation.tolerances->tolerances;
+  panel.proposal.summary =
+      "every tolerance × 0.5 keeps each felt quantity's share " + std::string(100, 'w');
+  known.evaluation.perceptual = panel;
   doorbench::testing::TempDir dir("spec_pdf");
   const doorbench::SpecReportFiles files =
       doorbench::write_spec_report(dir / "out", known.design, known.evaluation);
   INFO(files.pdf_note);
+  CHECK_THAT(doorbench::read_text_file(files.html),
+             Contains("<h2>Tolerances judged by the panel's perception</h2>"));
   CHECK_THAT(doorbench::read_text_file(files.html),
              Contains("<h2>How the parts were chosen</h2>") &&
                  Contains("<td>k_l (14400.1), theta_seal (14410.9), alpha_o (14420.5)</td>"));
