@@ -34,6 +34,9 @@ void add_play_command(CLI::App& app, Action& action);
 void add_ab_command(CLI::App& app, Action& action);
 void add_spec_command(CLI::App& app, Action& action);
 void add_hapticmaster_command(CLI::App& app, Action& action);
+// Every verb above, then the check of every numeric option (app/number_options.h): what
+// main() registers, and what tests parse command lines with (app/verbs.cpp).
+void add_all_verbs(CLI::App& app, Action& action);
 
 // The options every verb that builds a model shares.
 struct ModelOptions {

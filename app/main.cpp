@@ -126,20 +126,7 @@ int main(int argc, char** argv) {
                "the verb");
   app.fallthrough(true);  // every verb takes --quiet too
   doorbench::app::Action action;
-  doorbench::app::add_model_command(app, action);
-  doorbench::app::add_simulate_command(app, action);
-  doorbench::app::add_session_commands(app, action);
-  doorbench::app::add_fit_command(app, action);
-  doorbench::app::add_loop_command(app, action);
-  doorbench::app::add_demo_command(app, action);
-  doorbench::app::add_calibrate_command(app, action);
-  doorbench::app::add_calibration_command(app, action);
-  doorbench::app::add_devices_command(app, action);
-  doorbench::app::add_view_command(app, action);
-  doorbench::app::add_play_command(app, action);
-  doorbench::app::add_ab_command(app, action);
-  doorbench::app::add_spec_command(app, action);
-  doorbench::app::add_hapticmaster_command(app, action);
+  doorbench::app::add_all_verbs(app, action);
 
   // `doorbench help VERB`: parsed as `doorbench VERB --help`.
   std::vector<std::string> help_args;
