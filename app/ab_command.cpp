@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "app/commands.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"

@@ -10,10 +10,10 @@
 #include <memory>
 #include <numbers>
 
-#include "acquisition/output_file.h"
+#include "acquisition/session/output_file.h"
 #include "app/commands.h"
 #include "app/session_recording.h"
-#include "acquisition/calibration_store.h"
+#include "acquisition/rig/calibration_store.h"
 #include "calibration/certificate.h"
 #include "calibration/geometry_calibration.h"
 #include "calibration/gyro_calibration.h"

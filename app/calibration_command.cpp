@@ -5,10 +5,10 @@
 #include <iostream>
 #include <memory>
 
-#include "acquisition/output_file.h"
-#include "acquisition/session_file.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/session_file.h"
 #include "app/commands.h"
-#include "acquisition/calibration_store.h"
+#include "acquisition/rig/calibration_store.h"
 #include "calibration/certificate.h"
 #include "calibration/procedure.h"
 #include "calibration/range_warnings.h"

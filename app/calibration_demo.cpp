@@ -9,15 +9,16 @@
 #include <ostream>
 #include <sstream>
 
-#include "acquisition/recorder.h"
-#include "acquisition/session_csv.h"
-#include "acquisition/calibration_store.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/calibration_store.h"
+#include "acquisition/session/session_csv.h"
 #include "calibration/demo_rig.h"
 #include "calibration/gyro_calibration.h"
 #include "calibration/inclinometer_calibration.h"
 #include "calibration/load_cell_calibration.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "core/units.h"
 #include "sensors/rig_channel.h"
 #include "simulated_bench/simulated_bench.h"
 
@@ -26,7 +27,6 @@ namespace {
 
 namespace cal = calibration;
 namespace fs = std::filesystem;
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 std::string f(double value, int decimals) {
   return cal::fixed(value, decimals);

@@ -1,7 +1,7 @@
 #pragma once
 // Each verb of the doorbench command registers its options and, when chosen, the action
 // that main() runs after parsing. Actions throw UsageError for wrong combinations of
-// options (exit 2), OutputRefused (acquisition/output_file.h) for an output that exists
+// options (exit 2), OutputRefused (acquisition/session/output_file.h) for an output that exists
 // or is an input (exit 2), and any other std::exception for failures (exit 1); main()
 // prints the message after "doorbench: ", control characters escaped.
 #include <CLI/CLI.hpp>
@@ -9,7 +9,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench::app {
 
@@ -23,7 +23,11 @@ using Action = std::function<void()>;
 void add_model_command(CLI::App& app, Action& action);
 void add_simulate_command(CLI::App& app, Action& action);
 void add_demo_command(CLI::App& app, Action& action);
-void add_session_commands(CLI::App& app, Action& action);
+void add_record_command(CLI::App& app, Action& action);
+void add_recover_command(CLI::App& app, Action& action);
+void add_info_command(CLI::App& app, Action& action);
+void add_export_command(CLI::App& app, Action& action);
+void add_import_command(CLI::App& app, Action& action);
 void add_fit_command(CLI::App& app, Action& action);
 void add_loop_command(CLI::App& app, Action& action);
 void add_calibrate_command(CLI::App& app, Action& action);

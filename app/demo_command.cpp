@@ -10,16 +10,16 @@
 #include <iostream>
 #include <memory>
 
-#include "acquisition/output_file.h"
-#include "acquisition/recording_csv.h"
-#include "acquisition/session_csv.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
-#include "analysis/residual_loop.h"
-#include "analysis/run_summary.h"
-#include "analysis/svg_plot.h"
-#include "analysis/trajectory_io.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/recording_csv.h"
+#include "acquisition/session/session_csv.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/loop/residual_loop.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
+#include "analysis/report/svg_plot.h"
+#include "analysis/simulation/run_summary.h"
+#include "analysis/simulation/trajectory_io.h"
 #include "app/calibration_demo.h"
 #include "app/commands.h"
 #include "app/hand_run.h"
@@ -27,6 +27,7 @@
 #include "app/play_run.h"
 #include "app/session_recording.h"
 #include "app/spec_run.h"
+#include "core/units.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::app {
@@ -36,7 +37,6 @@ struct DemoOptions {
   std::string out_dir = "doorbench-demo";
 };
 
-constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
 
 // The samples of one stroke (1 opening, 2 closing) below an angle, as degrees and newtons.
 struct Curve {

@@ -5,7 +5,7 @@
 #include <iostream>
 #include <memory>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "app/commands.h"
 #include "sensors/comedi_api.h"
 #include "sensors/comedi_devices.h"

@@ -9,16 +9,16 @@
 #include <numbers>
 #include <sstream>
 
-#include "acquisition/output_file.h"
-#include "analysis/constraint_check.h"
-#include "analysis/fit_metrics.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/svg_plot.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/report/svg_plot.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
 #include "app/progress.h"
+#include "core/number_format.h"
 
 namespace doorbench::app {
 namespace {

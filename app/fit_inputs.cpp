@@ -8,13 +8,13 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "acquisition/output_file.h"
-#include "acquisition/recording_csv.h"
-#include "analysis/constraint_check.h"
-#include "analysis/fit_init.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/recording_csv.h"
+#include "analysis/fit/fit_init.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
 #include "app/commands.h"
+#include "core/number_format.h"
 
 namespace doorbench::app {
 

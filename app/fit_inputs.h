@@ -5,9 +5,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/preprocessing.h"
-#include "analysis/strokes.h"
+#include "analysis/model/door_model.h"
+#include "analysis/preprocessing/preprocessing.h"
+#include "analysis/preprocessing/strokes.h"
 #include "app/commands.h"
 
 namespace doorbench::app {
@@ -17,7 +17,7 @@ namespace doorbench::app {
 bool is_hdf5_file(const std::string& path);
 
 // A session (HDF5: by its signature) or a recording in the CSV exchange format, prepared
-// into strokes (analysis/preprocessing.h); empty cells of the CSV are missing samples. A
+// into strokes (analysis/preprocessing/preprocessing.h); empty cells of the CSV are missing samples. A
 // file named *.h5 or *.hdf5 that is not HDF5 is refused ("PATH: not an HDF5 file ...").
 // A handle radius the recording states gets its origin named for the file's kind
 // (PreparedData::handle_radius_origin).
@@ -58,7 +58,7 @@ struct FitDataOptions {
   bool force_geometry = false;  // a handle radius outside 0.05 to 2 m is used, not refused
   // Where the start values come from (--start): "auto" (from the data without --params,
   // else the file's), "data" (from the data, the file or the reference door filling in what
-  // the data do not give: analysis/fit_init.h), "file" (the file's, or the reference door's).
+  // the data do not give: analysis/fit/fit_init.h), "file" (the file's, or the reference door's).
   // From the data for the sensory model only.
   std::string start = "auto";
   bool overwrite = false;  // write into an --out folder that is not empty
@@ -87,7 +87,7 @@ struct FitInputs {
 // --params is a warning on stderr and in report_lines; with strict_geometry it throws
 // std::runtime_error naming both radii and where they came from.
 FitInputs load_fit_inputs(const FitDataOptions& options);
-// The output rule for the --out folder (acquisition/output_file.h), then the inputs are
+// The output rule for the --out folder (acquisition/session/output_file.h), then the inputs are
 // read (load_fit_inputs), and only then is the folder created: a failure leaves no folder.
 // Returns the inputs.
 FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::path& out_dir);

@@ -4,14 +4,14 @@
 #include <cmath>
 #include <numbers>
 
-#include "analysis/fit_metrics.h"
-#include "analysis/residual_whiteness.h"
-#include "analysis/svg_plot.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/residual_whiteness.h"
+#include "analysis/report/svg_plot.h"
+#include "core/units.h"
 
 namespace doorbench::app {
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 }  // namespace
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fitting.h"
-#include "analysis/strokes.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/preprocessing/strokes.h"
 
 namespace doorbench::app {
 
@@ -22,7 +22,7 @@ struct FitPlots {
   std::string whiteness;
 };
 // rate.svg, force-angle.svg, residual-angle.svg, residual-speed.svg and, when there are enough
-// samples for its lags, residual-whiteness.svg (analysis/residual_whiteness.h).
+// samples for its lags, residual-whiteness.svg (analysis/fit/residual_whiteness.h).
 FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
                          const PreparedData& data, const FitOptions& options);
 

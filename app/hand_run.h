@@ -1,6 +1,6 @@
 #pragma once
-#include "analysis/simulator.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/simulation/virtual_hand.h"
 
 namespace doorbench::app {
 

@@ -8,7 +8,7 @@
 #include <iostream>
 #include <memory>
 
-#include "acquisition/output_file.h"
+#include "acquisition/session/output_file.h"
 #include "app/commands.h"
 #include "haptic/hapticmaster_check.h"
 
@@ -30,7 +30,7 @@ void run_check(const CheckOptions& options) {
     throw UsageError("hapticmaster check: '" + options.uri +
                      "' is not hapticmaster://HOST[:PORT]");
   }
-  // The output rule (acquisition/output_file.h): refused before the device is touched.
+  // The output rule (acquisition/session/output_file.h): refused before the device is touched.
   if (!options.json_path.empty()) check_output_file(options.json_path, {}, options.overwrite);
   haptic::HapticMasterCheckOptions check;
   check.exchanges = options.exchanges;

@@ -4,7 +4,8 @@
 #include <cmath>
 #include <utility>
 
-#include "analysis/text_format.h"
+#include "core/number_format.h"
+
 
 namespace doorbench::app {
 

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/recorder.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/channel_limits.h"
 
 namespace doorbench::app {

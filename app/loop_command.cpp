@@ -1,10 +1,10 @@
 // doorbench loop: fit, look at the residual, add the effect the model lacks, refit, and
-// report the error before and after each step (analysis/residual_loop.h).
+// report the error before and after each step (analysis/loop/residual_loop.h).
 #include <filesystem>
 #include <iostream>
 #include <memory>
 
-#include "analysis/residual_loop.h"
+#include "analysis/loop/residual_loop.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/loop_output.h"

@@ -6,8 +6,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "acquisition/output_file.h"
-#include "analysis/parameter_file.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/model/parameter_file.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
 

@@ -5,7 +5,7 @@
 #include <filesystem>
 #include <string>
 
-#include "analysis/residual_loop.h"
+#include "analysis/loop/residual_loop.h"
 
 namespace doorbench::app {
 

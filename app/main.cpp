@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/output_file.h"
-#include "acquisition/printable.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/printable.h"
 #include "app/commands.h"
 
 namespace {

@@ -2,9 +2,9 @@
 #include <fstream>
 #include <memory>
 
-#include "acquisition/csv_table.h"
-#include "acquisition/output_file.h"
-#include "analysis/parameter_file.h"
+#include "acquisition/session/csv_table.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/model/parameter_file.h"
 #include "app/commands.h"
 
 namespace doorbench::app {

@@ -4,8 +4,8 @@
 #include <iostream>
 #include <memory>
 
-#include "acquisition/output_file.h"
-#include "analysis/parameter_file.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/model/parameter_file.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/play_run.h"

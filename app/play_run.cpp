@@ -10,8 +10,8 @@
 #include <iostream>
 #include <system_error>
 
-#include "acquisition/output_file.h"
-#include "acquisition/session_file.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/session_file.h"
 #include "app/session_recording.h"
 
 namespace doorbench::app {
@@ -133,7 +133,7 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
     throw OutputRefused(request.session_path.string() +
                         ": exists (sessions are never overwritten)");
   }
-  // Whole or not at all (acquisition/output_file.h): a failed or full-disk playback leaves
+  // Whole or not at all (acquisition/session/output_file.h): a failed or full-disk playback leaves
   // no file under the session's name to block the next one.
   const std::filesystem::path partial = partial_path_for(request.session_path);
   haptic::PlaybackSummary summary;

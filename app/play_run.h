@@ -7,7 +7,7 @@
 #include <optional>
 #include <string>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"
 
@@ -32,7 +32,7 @@ struct PlayRequest {
 };
 
 // The session is written through a temporary file beside it and renamed into place when
-// complete (acquisition/output_file.h), so a failure leaves no file under its name. Throws
+// complete (acquisition/session/output_file.h), so a failure leaves no file under its name. Throws
 // OutputRefused when it exists, std::runtime_error (device, session: naming the session's
 // path) or std::invalid_argument (options, model).
 haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request);

@@ -11,7 +11,8 @@
 #include <optional>
 #include <ostream>
 
-#include "analysis/text_format.h"
+#include "core/number_format.h"
+
 
 namespace doorbench::app {
 

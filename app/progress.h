@@ -14,8 +14,8 @@
 #include <mutex>
 #include <string>
 
-#include "analysis/fitting.h"
-#include "analysis/residual_loop.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/loop/residual_loop.h"
 
 namespace doorbench::app {
 

@@ -5,8 +5,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/recorder.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/rig_file.h"
 
 namespace doorbench::app {
 

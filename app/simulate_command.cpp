@@ -4,11 +4,11 @@
 #include <memory>
 #include <numbers>
 
-#include "acquisition/output_file.h"
-#include "acquisition/recording_csv.h"
-#include "analysis/parameter_file.h"
-#include "analysis/trajectory_io.h"
-#include "analysis/virtual_hand.h"
+#include "acquisition/session/output_file.h"
+#include "acquisition/session/recording_csv.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/simulation/trajectory_io.h"
+#include "analysis/simulation/virtual_hand.h"
 #include "app/commands.h"
 #include "app/hand_run.h"
 

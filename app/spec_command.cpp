@@ -9,18 +9,17 @@
 #include <optional>
 #include <thread>
 
-#include "acquisition/output_file.h"
-#include "analysis/commanded_torque.h"
-#include "analysis/constraint_check.h"
-#include "analysis/inverse_design.h"
-#include "analysis/parameter_file.h"
-#include "analysis/spec_report.h"
-#include "analysis/text_format.h"
-#include "analysis/tolerance_analysis.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/design/inverse_design.h"
+#include "analysis/design/spec_report.h"
+#include "analysis/design/tolerance_analysis.h"
+#include "analysis/fit/commanded_torque.h"
+#include "analysis/model/parameter_file.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/progress.h"
 #include "app/spec_run.h"
+#include "core/number_format.h"
 
 namespace doorbench::app {
 namespace {

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/inverse_design.h"
+#include "analysis/design/inverse_design.h"
 
 namespace doorbench::app {
 

@@ -8,7 +8,11 @@ namespace doorbench::app {
 void add_all_verbs(CLI::App& app, Action& action) {
   add_model_command(app, action);
   add_simulate_command(app, action);
-  add_session_commands(app, action);
+  add_record_command(app, action);
+  add_recover_command(app, action);
+  add_info_command(app, action);
+  add_export_command(app, action);
+  add_import_command(app, action);
   add_fit_command(app, action);
   add_loop_command(app, action);
   add_demo_command(app, action);

@@ -5,7 +5,7 @@
 // the metrics (whole strokes replayed).
 #include <benchmark/benchmark.h>
 
-#include "analysis/fitting.h"
+#include "analysis/fit/fitting.h"
 #include "bench/fit_benchmark_data.h"
 
 namespace {

@@ -3,7 +3,7 @@
 // simulated HapticMaster's closed loop per 1 kHz tick (docs/haptic-devices.md, "Cost").
 #include <benchmark/benchmark.h>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "bench/haptic_fixed_device.h"
 #include "haptic/render_loop.h"
 #include "haptic/simulated_hapticmaster.h"

@@ -5,8 +5,8 @@
 //   build/bench/doorbench_inverse_design_bench [--benchmark_filter=Sparse]
 #include <benchmark/benchmark.h>
 
-#include "analysis/inverse_design.h"
-#include "analysis/parameter_file.h"
+#include "analysis/design/inverse_design.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/bench_recorded_door.h"
 #include "tests/support/temp_dir.h"
 

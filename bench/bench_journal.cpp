@@ -19,8 +19,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/journal.h"
-#include "acquisition/recorder.h"
+#include "acquisition/record/journal.h"
+#include "acquisition/record/recorder.h"
 
 namespace {
 

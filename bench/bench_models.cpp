@@ -5,7 +5,7 @@
 #include <array>
 #include <vector>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// The whole residual loop (analysis/residual_loop.h), default options, wall clock:
+// The whole residual loop (analysis/loop/residual_loop.h), default options, wall clock:
 //   residual_loop_demo: the demo's recording (docs/residual-loop.md, "On a bench recording"):
 //     the sensory reference door with an undeclared gravity imbalance g1 = 3 N·m recorded on
 //     the simulated bench for 19 s (seed 1, 6 strokes), through the session file and
@@ -16,9 +16,9 @@
 #include <filesystem>
 #include <fstream>
 
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
-#include "analysis/residual_loop.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
+#include "analysis/loop/residual_loop.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/tremor_recording.h"
 

@@ -14,12 +14,12 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
+#include "core/clock.h"
 
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 constexpr int kChannels = 8;
 constexpr std::size_t kBlock = 1000;
@@ -27,9 +27,6 @@ constexpr std::size_t kTotalBytes = 64u << 20;
 constexpr std::size_t kBlocksPerChannel = kTotalBytes / (kChannels * kBlock * sizeof(std::int32_t));
 constexpr double kBytes = double(kBlocksPerChannel) * kChannels * kBlock * sizeof(std::int32_t);
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
 
 void session_vs_fwrite(benchmark::State& state) {
   const fs::path folder =
@@ -49,7 +46,7 @@ void session_vs_fwrite(benchmark::State& state) {
 
   double fwrite_s = 0.0, session_s = 0.0;
   for (auto _ : state) {
-    Clock::time_point start = Clock::now();
+    StageClock::time_point start = StageClock::now();
     std::FILE* file = std::fopen(plain.c_str(), "wb");
     if (!file) {
       state.SkipWithError("cannot create the fwrite file");
@@ -64,7 +61,7 @@ void session_vs_fwrite(benchmark::State& state) {
     fwrite_s += seconds_since(start);
     fs::remove(plain);
 
-    start = Clock::now();
+    start = StageClock::now();
     {
       doorbench::SessionWriter writer(session, doorbench::SessionMetadata{}, options);
       int channels[kChannels];

@@ -3,8 +3,8 @@
 // "realtime_factor" is simulated seconds per wall-clock second.
 #include <benchmark/benchmark.h>
 
-#include "analysis/parameter_file.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/simulation/virtual_hand.h"
 
 namespace {
 

@@ -19,8 +19,8 @@
 #include <sstream>
 #include <string>
 
-#include "acquisition/recorder.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/comedi_backend.h"
 
 namespace {

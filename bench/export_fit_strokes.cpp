@@ -24,9 +24,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "analysis/fit_windows.h"
-#include "analysis/fitting.h"
-#include "analysis/simulator.h"
+#include "analysis/fit/fit_windows.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/simulation/simulator.h"
 #include "bench/fit_benchmark_data.h"
 
 namespace {

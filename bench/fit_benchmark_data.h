@@ -4,10 +4,10 @@
 // bench/compare/ fit exactly the strokes and start that the C++ benchmark times.
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/fit_synthetic.h"
-#include "analysis/parameter_file.h"
-#include "analysis/sensory_model.h"
+#include "analysis/model/door_model.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/sensory_model.h"
 
 namespace doorbench::bench {
 

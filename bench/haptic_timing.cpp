@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
 #include "bench/haptic_fixed_device.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <vector>
 
-#include "acquisition/journal.h"
+#include "acquisition/record/journal.h"
 #include "viewer/live_journal.h"
 
 namespace {

@@ -24,10 +24,10 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit_synthetic.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
-#include "analysis/residual_loop.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
+#include "analysis/loop/residual_loop.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/tremor_recording.h"
 

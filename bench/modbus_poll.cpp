@@ -13,7 +13,7 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/modbus_source.h"
 #include "tests/support/modbus_test_server.h"
 

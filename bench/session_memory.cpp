@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 
 namespace {
 

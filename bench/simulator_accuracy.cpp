@@ -6,8 +6,8 @@
 #include <cmath>
 #include <cstdio>
 
-#include "analysis/parameter_file.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/simulation/virtual_hand.h"
 
 using namespace doorbench;
 

@@ -6,8 +6,8 @@
 #include <cstdlib>
 #include <thread>
 
-#include "analysis/parameter_file.h"
-#include "analysis/tolerance_analysis.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/design/tolerance_analysis.h"
 
 int main(int argc, char** argv) {
   const int samples = argc > 1 ? std::atoi(argv[1]) : 200;

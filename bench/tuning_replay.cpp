@@ -5,8 +5,8 @@
 // docs/PERFORMANCE.md ("Viewer: tuning replay").
 #include <benchmark/benchmark.h>
 
-#include "analysis/fit_synthetic.h"
-#include "analysis/parameter_file.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/model/parameter_file.h"
 #include "viewer/tuning.h"
 
 namespace {

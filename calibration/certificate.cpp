@@ -5,8 +5,9 @@
 #include <fstream>
 #include <stdexcept>
 
-#include "acquisition/output_file.h"
+#include "acquisition/session/output_file.h"
 #include "calibration/procedure.h"
+#include "core/number_format.h"
 
 namespace doorbench::calibration {
 
@@ -36,10 +37,7 @@ std::string escape(const std::string& text) {
 }
 
 std::string number(double value) {
-  if (value == 0) return "0";
-  char text[32];
-  std::snprintf(text, sizeof text, "%.6g", value);
-  return text;
+  return value == 0 ? "0" : format_significant(value, 6);
 }
 
 std::string row(const std::string& name, const std::string& value) {

@@ -6,12 +6,12 @@
 #include <filesystem>
 #include <string>
 
-#include "acquisition/calibration_record.h"
+#include "acquisition/rig/calibration_record.h"
 
 namespace doorbench::calibration {
 
 std::string certificate_html(const CalibrationRecord& record);
-// Writes the certificate whole or not at all (acquisition/output_file.h); throws OutputError
+// Writes the certificate whole or not at all (acquisition/session/output_file.h); throws OutputError
 // "PATH: cannot write: SYSTEM ERROR". The commands refuse an existing file first.
 void write_certificate(const std::filesystem::path& path, const CalibrationRecord& record);
 

@@ -5,11 +5,11 @@
 #include <tuple>
 
 #include "calibration/least_squares.h"
+#include "core/units.h"
 
 namespace doorbench::calibration {
 
 namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // Mean of repeated readings and its uncertainty: their scatter (Student-scaled) combined
 // with the instrument's resolution.

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "acquisition/calibration_record.h"
+#include "acquisition/rig/calibration_record.h"
 #include "calibration/procedure.h"
 
 namespace doorbench::calibration {

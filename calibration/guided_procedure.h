@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/calibration_record.h"
+#include "acquisition/rig/calibration_record.h"
 #include "calibration/static_source.h"
 
 namespace doorbench::calibration {

@@ -4,16 +4,16 @@
 #include <cmath>
 #include <numbers>
 
-#include "acquisition/interpolation.h"
+#include "acquisition/session/interpolation.h"
 #include "calibration/least_squares.h"
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "core/units.h"
 
 namespace doorbench::calibration {
 
 namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 }
 
 std::string StillnessOptions::validate() const {

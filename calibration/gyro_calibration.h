@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "acquisition/session_file.h"
-#include "acquisition/calibration_record.h"
+#include "acquisition/session/session_file.h"
+#include "acquisition/rig/calibration_record.h"
 #include "calibration/procedure.h"
 
 namespace doorbench::calibration {

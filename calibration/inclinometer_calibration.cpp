@@ -8,11 +8,11 @@
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "core/units.h"
 
 namespace doorbench::calibration {
 
 namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 }
 
 std::string InclinometerCalibrationOptions::validate() const {

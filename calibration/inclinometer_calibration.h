@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
-#include "acquisition/calibration_record.h"
+#include "acquisition/session/session_file.h"
+#include "acquisition/rig/calibration_record.h"
 #include "calibration/guided_procedure.h"
 #include "calibration/gyro_calibration.h"
 #include "calibration/procedure.h"

@@ -3,7 +3,7 @@
 #include <charconv>
 #include <cstdio>
 
-#include "acquisition/calibration_store.h"
+#include "acquisition/rig/calibration_store.h"
 
 namespace doorbench::calibration {
 

@@ -4,7 +4,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "acquisition/calibration_record.h"
+#include "acquisition/rig/calibration_record.h"
 
 namespace doorbench::calibration {
 

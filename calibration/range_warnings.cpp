@@ -7,12 +7,12 @@
 #include "calibration/procedure.h"
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
+#include "core/units.h"
 
 namespace doorbench::calibration {
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // "left its ±100 °/s range 3 times for 1.234 s in all (first at 0.980 s)", or "" when no
 // sample is out.

@@ -4,7 +4,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 
 namespace doorbench::calibration {
 

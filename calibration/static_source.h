@@ -9,7 +9,7 @@
 #include <variant>
 #include <vector>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::calibration {

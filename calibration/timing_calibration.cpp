@@ -4,15 +4,15 @@
 #include <cmath>
 #include <numbers>
 
-#include "acquisition/interpolation.h"
+#include "acquisition/session/interpolation.h"
 #include "calibration/least_squares.h"
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
+#include "core/units.h"
 
 namespace doorbench::calibration {
 
 namespace {
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 }
 
 std::string AlignmentOptions::validate() const {

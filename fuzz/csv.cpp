@@ -1,4 +1,4 @@
-// Fuzzes the CSV exchange format (acquisition/csv_table.h, recording_csv.h): any text gives
+// Fuzzes the CSV exchange format (acquisition/session/csv_table.h, recording_csv.h): any text gives
 // a table and a recording, or a CsvError; nothing else may escape, crash or be undefined.
 // A recording read back is written and read again: the writer must accept what the reader
 // gave and give the same samples back.
@@ -9,7 +9,7 @@
 #include <sstream>
 #include <string_view>
 
-#include "acquisition/recording_csv.h"
+#include "acquisition/session/recording_csv.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// Fuzzes the recording journal's reader and recovery (acquisition/journal.h, recovery.h):
+// Fuzzes the recording journal's reader and recovery (acquisition/record/journal.h, recovery.h):
 // any bytes on disk give frames up to the first bad one and a session, or a JournalError /
 // SessionError naming the file; nothing else may escape, crash or be undefined. Each input
 // is tried twice: as it is, and with its CRC-32s made right (the header's and each frame's,
@@ -16,8 +16,8 @@
 #include <string>
 #include <system_error>
 
-#include "acquisition/journal.h"
-#include "acquisition/recovery.h"
+#include "acquisition/record/journal.h"
+#include "acquisition/record/recovery.h"
 
 namespace {
 

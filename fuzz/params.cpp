@@ -1,4 +1,4 @@
-// Fuzzes the parameter and effects files (analysis/parameter_file.h): any text gives a door
+// Fuzzes the parameter and effects files (analysis/model/parameter_file.h): any text gives a door
 // or effects, or a ParameterFileError naming the file; nothing else may escape, crash or be
 // undefined. A parameter file that parses is written and parsed again.
 #include <cstddef>
@@ -6,7 +6,7 @@
 #include <cstdlib>
 #include <string_view>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);

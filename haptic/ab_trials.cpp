@@ -14,11 +14,11 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "acquisition/session_csv.h"
-#include "analysis/constraint_check.h"
-#include "analysis/simulator.h"
-#include "analysis/trajectory_io.h"
-#include "analysis/virtual_hand.h"
+#include "acquisition/session/session_csv.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/simulation/trajectory_io.h"
+#include "analysis/simulation/virtual_hand.h"
+#include "core/number_format.h"
 
 namespace doorbench::haptic {
 namespace {

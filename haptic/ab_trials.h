@@ -17,8 +17,8 @@
 #include <string_view>
 #include <vector>
 
-#include "acquisition/session_file.h"
-#include "analysis/door_model.h"
+#include "acquisition/session/session_file.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench::haptic {
 

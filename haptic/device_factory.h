@@ -9,7 +9,7 @@
 #include <memory>
 #include <string>
 
-#include "analysis/virtual_hand.h"
+#include "analysis/simulation/virtual_hand.h"
 #include "haptic/device.h"
 #include "haptic/door_mapping.h"
 #include "haptic/hapticmaster_device.h"

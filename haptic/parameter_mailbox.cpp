@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <ctime>
 
-#include "analysis/sensory_model.h"
+#include "analysis/model/sensory_model.h"
 
 namespace doorbench::haptic {
 

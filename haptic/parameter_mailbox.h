@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 #include "haptic/door_mapping.h"
 
 namespace doorbench::haptic {

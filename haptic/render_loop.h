@@ -25,8 +25,8 @@
 #include <memory>
 #include <string>
 
-#include "acquisition/ring_buffer.h"
-#include "analysis/door_model.h"
+#include "acquisition/record/ring_buffer.h"
+#include "analysis/model/door_model.h"
 #include "haptic/device.h"
 #include "haptic/door_mapping.h"
 #include "haptic/parameter_mailbox.h"

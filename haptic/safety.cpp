@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <vector>
 
-#include "analysis/constraint_check.h"
+#include "core/number_format.h"
 
 namespace doorbench::haptic {
 namespace {

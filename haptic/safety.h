@@ -32,7 +32,7 @@
 #include <string>
 #include <string_view>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 #include "haptic/device.h"
 #include "haptic/door_mapping.h"
 

@@ -20,7 +20,7 @@
 #include <random>
 #include <string>
 
-#include "analysis/virtual_hand.h"
+#include "analysis/simulation/virtual_hand.h"
 #include "haptic/device.h"
 #include "haptic/door_mapping.h"
 

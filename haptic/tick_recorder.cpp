@@ -5,7 +5,8 @@
 #include <limits>
 #include <sstream>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
+#include "core/number_format.h"
 
 namespace doorbench::haptic {
 namespace {
@@ -82,12 +83,6 @@ double tick_value(const TickRecord& record, int channel) {
     default:
       return record.terms_Nm[channel - kFixedCount];
   }
-}
-
-std::string format_number(double value) {
-  char text[40];
-  std::snprintf(text, sizeof text, "%.17g", value);
-  return text;
 }
 
 ChannelInfo value_channel(const std::string& name, const std::string& kind,

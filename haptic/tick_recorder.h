@@ -24,7 +24,7 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 #include "haptic/render_loop.h"
 
 namespace doorbench::haptic {

@@ -12,8 +12,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "analysis/constraint_check.h"
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
+#include "core/number_format.h"
 
 namespace doorbench::haptic {
 namespace {

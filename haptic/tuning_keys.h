@@ -1,6 +1,6 @@
 #pragma once
 // Live tuning from a keypad (the study's) or the viewer: each key moves one perceptual
-// control (door-models.md §2, analysis/perceptual_controls.h) by one step, and every change
+// control (door-models.md §2, analysis/model/perceptual_controls.h) by one step, and every change
 // is logged. Key map (docs/ab-testing.md):
 //
 //   +  heavier            heaviness      × step      -  lighter          heaviness      ÷ step
@@ -19,9 +19,9 @@
 #include <string_view>
 #include <vector>
 
-#include "acquisition/session_file.h"
-#include "analysis/door_model.h"
-#include "analysis/perceptual_controls.h"
+#include "acquisition/session/session_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/perceptual_controls.h"
 
 namespace doorbench::haptic {
 

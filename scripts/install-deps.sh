@@ -26,6 +26,7 @@ packages=(
   clang libclang-rt-14-dev    # libFuzzer and the sanitizers for the parsers' fuzz targets (fuzz/)
   libboost-math-dev           # Boost.Math: Student-t quantile (calibration), exact binomial test (A/B)
   zlib1g-dev                  # zlib's crc32() for the recording journal's checksums
+  r-base-core r-cran-ordinal  # tests only: R's ordinal (clmm/clm), the ratings fit's independent check
 )
 
 missing=()

@@ -1,5 +1,6 @@
 #!/usr/bin/env bash
-# Installs what is missing, checks the layers (scripts/check_includes.py, docs/architecture.md),
+# Installs what is missing, checks the layers (scripts/check_includes.py, docs/architecture.md)
+# and that no file defines its own degree constant (scripts/check_units.py),
 # builds doorbench with warnings as errors, checks that no function is too long
 # (scripts/check_function_length.py), fuzzes the parsers for a bounded time
 # (scripts/fuzz.sh, docs/fuzzing.md), and runs every test, the slow ones included.
@@ -7,6 +8,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/install-deps.sh
 python3 scripts/check_includes.py
+python3 scripts/check_units.py
 build_dir=${DOORBENCH_BUILD_DIR:-build}
 cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=Release -DDOORBENCH_WERROR=ON
 cmake --build "$build_dir" -j "$(nproc)"

@@ -4,13 +4,13 @@
 #include <cstdio>
 #include <numbers>
 
+#include "core/units.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::sensors {
 
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 constexpr double kLimitFraction = 0.99;  // of the range: at the limit
 
 std::string range_text(double range, const char* unit) {

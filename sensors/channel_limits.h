@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/rig_file.h"
-#include "acquisition/session_file.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_file.h"
 
 namespace doorbench::sensors {
 

@@ -9,16 +9,14 @@
 #include <sstream>
 
 #include "sensors/rig_channel.h"
+#include "core/number_format.h"
 
 namespace doorbench::sensors {
 
 namespace {
 
 std::string number(double value) {
-  std::ostringstream out;
-  out.precision(10);
-  out << value;
-  return out.str();
+  return format_significant(value, 10);
 }
 
 std::string range_text(double min, double max) {

@@ -35,8 +35,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/backend.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/backend.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/comedi_api.h"
 
 namespace doorbench::sensors {

@@ -12,7 +12,7 @@
 #include <sstream>
 #include <thread>
 
-#include "acquisition/ring_buffer.h"
+#include "acquisition/record/ring_buffer.h"
 #include "sensors/modbus_decode.h"
 
 namespace doorbench::sensors {

@@ -1,6 +1,6 @@
 #pragma once
 // Modbus sensors (load-cell transmitters, inclinometers, ...) over libmodbus, TCP or RTU,
-// as a doorbench::PolledSource (acquisition/polled_source.h). docs/modbus.md.
+// as a doorbench::PolledSource (acquisition/record/polled_source.h). docs/modbus.md.
 //
 // One polling thread per device (connection). Each channel is polled at its own rate on
 // absolute deadlines (clock_nanosleep, CLOCK_MONOTONIC); after a slow reply the latest
@@ -17,8 +17,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/polled_source.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/polled_source.h"
+#include "acquisition/rig/rig_file.h"
 
 namespace doorbench::sensors {
 

@@ -3,13 +3,13 @@
 #include <cmath>
 #include <numbers>
 
-#include "acquisition/calibration_store.h"
+#include "acquisition/rig/calibration_store.h"
+#include "core/units.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::sensors {
 
 namespace {
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 }  // namespace
 
 calibration::CalibrationRecord nominal_calibration(const RigChannel& channel) {

@@ -5,9 +5,9 @@
 #include <stdexcept>
 #include <string>
 
-#include "acquisition/rig_file.h"
-#include "acquisition/session_file.h"
-#include "acquisition/calibration_record.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_file.h"
+#include "acquisition/rig/calibration_record.h"
 
 namespace doorbench::sensors {
 

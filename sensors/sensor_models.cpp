@@ -5,10 +5,11 @@
 #include <numbers>
 #include <stdexcept>
 
+#include "core/units.h"
+
 namespace doorbench::sensors {
 namespace {
 
-constexpr double kDegreesPerRadian = 180.0 / std::numbers::pi;
 
 void throw_if_invalid(const std::string& message) {
   if (!message.empty()) throw std::invalid_argument(message);
@@ -63,14 +64,14 @@ Inclinometer::Inclinometer(const InclinometerParameters& parameters, double samp
 
 double Inclinometer::sample_V(double angle_rad) {
   const InclinometerParameters& p = parameters_;
-  const double angle_deg = angle_rad * kDegreesPerRadian;
+  const double angle_deg = angle_rad * kDegPerRad;
   filtered_deg_ += (1.0 - filter_pole_) * (angle_deg - filtered_deg_);
   double reading = filtered_deg_ + p.offset_deg + p.noise_rms_deg * unit_normal_(random_);
   reading = std::clamp(reading, -p.range_deg, p.range_deg);
   return reading * p.output_V_per_deg;
 }
 
-void Inclinometer::settle(double angle_rad) { filtered_deg_ = angle_rad * kDegreesPerRadian; }
+void Inclinometer::settle(double angle_rad) { filtered_deg_ = angle_rad * kDegPerRad; }
 
 // --- gyroscope ------------------------------------------------------------------------
 
@@ -85,7 +86,7 @@ Gyroscope::Gyroscope(const GyroscopeParameters& parameters, double sample_rate_h
 
 double Gyroscope::sample_V(double rate_rad_s) {
   const GyroscopeParameters& p = parameters_;
-  const double rate_dps = rate_rad_s * kDegreesPerRadian;
+  const double rate_dps = rate_rad_s * kDegPerRad;
   double reading = rate_dps * (1.0 + p.scale_factor_error) + bias_dps_ +
                    p.noise_rms_dps * unit_normal_(random_);
   bias_dps_ += p.bias_random_walk_dps_per_sqrt_s * std::sqrt(sample_interval_s_) *

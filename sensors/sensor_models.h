@@ -26,7 +26,7 @@
 #include <string>
 #include <string_view>
 
-#include "acquisition/sensor_parameters.h"
+#include "acquisition/rig/sensor_parameters.h"
 
 namespace doorbench::sensors {
 

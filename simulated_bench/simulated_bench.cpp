@@ -7,15 +7,15 @@
 #include <stdexcept>
 #include <thread>
 
-#include "analysis/constraint_check.h"
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
+#include "core/number_format.h"
+#include "core/units.h"
 #include "sensors/rig_channel.h"
 
 namespace doorbench::sensors {
 
 namespace {
 
-constexpr double kRadPerDeg = std::numbers::pi / 180.0;
 
 VirtualHandOptions hand_options(const RigSimulation& simulation) {
   VirtualHandOptions options;

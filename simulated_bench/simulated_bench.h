@@ -17,12 +17,12 @@
 #include <variant>
 #include <vector>
 
-#include "acquisition/backend.h"
-#include "acquisition/recording_csv.h"
-#include "acquisition/rig_file.h"
-#include "analysis/door_model.h"
-#include "analysis/simulator.h"
-#include "analysis/virtual_hand.h"
+#include "acquisition/record/backend.h"
+#include "acquisition/session/recording_csv.h"
+#include "acquisition/rig/rig_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/simulation/virtual_hand.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::sensors {

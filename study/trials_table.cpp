@@ -9,8 +9,9 @@ namespace {
 
 std::string located(std::string_view source, int line, std::string_view detail) {
   std::string text(source);
-  if (line > 0) text += ":" + std::to_string(line);
-  return text + ": " + std::string(detail);
+  if (line > 0) text.append(":").append(std::to_string(line));
+  text.append(": ").append(detail);
+  return text;
 }
 
 // Splits the text into records of fields, RFC 4180: quotes may hold commas and line breaks.

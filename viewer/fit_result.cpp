@@ -7,7 +7,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 
 namespace doorbench::viewer {
 

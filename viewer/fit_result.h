@@ -6,7 +6,7 @@
 #include <filesystem>
 #include <string>
 
-#include "analysis/door_model.h"
+#include "analysis/model/door_model.h"
 
 namespace doorbench::viewer {
 

@@ -8,7 +8,7 @@
 #include <limits>
 #include <stdexcept>
 
-#include "acquisition/recovery.h"
+#include "acquisition/record/recovery.h"
 #include "viewer/session_data.h"
 
 namespace doorbench::viewer {

@@ -1,6 +1,6 @@
 #pragma once
 // Following a running recording (no GL, no ImGui): `doorbench record` writes S.h5.journal
-// while it records (acquisition/journal.h, docs/crash-safety.md). A LiveJournal polls that
+// while it records (acquisition/record/journal.h, docs/crash-safety.md). A LiveJournal polls that
 // file for frames appended since the last poll, converts them to physical values (the
 // header's channels and calibration records; scans and polled timed samples) and keeps
 // the last `capacity_samples` of each channel in a ring, so memory stays bounded however
@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/journal.h"
+#include "acquisition/record/journal.h"
 #include "viewer/plot_view.h"
 
 namespace doorbench::viewer {

@@ -67,7 +67,7 @@ class Series {
 
   Rgba colour{};
   // How the widget draws the line: its width and stacking (higher layers on top); set from
-  // the curve's meaning by style_series() (viewer/session_data.h, analysis/plot_style.h).
+  // the curve's meaning by style_series() (viewer/session_data.h, analysis/report/plot_style.h).
   float width_px = 2.0f;
   int layer = 0;
   // Samples with x in [x_min, x_max], as [begin, end) (time series only).

@@ -173,7 +173,7 @@ PlotRecord plot_widget(const char* id, PlotView& view, PlotWidgetState& state, f
     state.drawn_revision = view.revision;
     state.drawn = true;
   }
-  // Curves in layer order (analysis/plot_style.h: measured on top of a model's curve).
+  // Curves in layer order (analysis/report/plot_style.h: measured on top of a model's curve).
   int lowest = 0, highest = 0;
   for (const DrawData::Strip& strip : state.draw.strips) {
     lowest = std::min(lowest, strip.layer);

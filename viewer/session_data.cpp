@@ -5,9 +5,9 @@
 #include <limits>
 #include <stdexcept>
 
-#include "analysis/fit_metrics.h"
-#include "analysis/fitting.h"
-#include "analysis/preprocessing.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/preprocessing/preprocessing.h"
 #include "sensors/channel_limits.h"
 
 namespace doorbench::viewer {

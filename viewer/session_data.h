@@ -9,18 +9,18 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
-#include "analysis/door_model.h"
-#include "analysis/plot_style.h"
-#include "analysis/residual_whiteness.h"
-#include "analysis/strokes.h"
+#include "acquisition/session/session_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/report/plot_style.h"
+#include "analysis/fit/residual_whiteness.h"
+#include "analysis/preprocessing/strokes.h"
 #include "viewer/plot_view.h"
 
 namespace doorbench::viewer {
 
 // Distinct colours for series, in order; index wraps.
 Rgba palette(std::size_t index);
-// The colour of a meaning (analysis/plot_style.h, shared with the SVG reports), with the
+// The colour of a meaning (analysis/report/plot_style.h, shared with the SVG reports), with the
 // viewer's opacity as alpha unless `opaque`.
 Rgba meaning_colour(plot_style::Meaning meaning, bool opaque = false);
 // Colour, width and layer of a curve from its meaning: measured on top, a model's curve
@@ -52,7 +52,7 @@ struct SessionData {
   // limit, the sample after the last); empty for a channel without a known limit.
   std::vector<std::vector<Shade>> at_limit;
 
-  // The session prepared into strokes (analysis/preprocessing.h); when that fails,
+  // The session prepared into strokes (analysis/preprocessing/preprocessing.h); when that fails,
   // prepared is false and prepare_message says why (the views that need strokes say so).
   bool prepared = false;
   std::string prepare_message;
@@ -70,7 +70,7 @@ struct LoadOptions {
 SessionData load_session(const std::filesystem::path& path, const LoadOptions& options = {});
 
 // Measured ω against the model's ω̂, simulated window by window from each window's
-// measured start (what a fit compares: analysis/fit_metrics.h), and the residual ω − ω̂;
+// measured start (what a fit compares: analysis/fit/fit_metrics.h), and the residual ω − ω̂;
 // strokes one after the other on the session clock, separated by NaN.
 struct FitComparison {
   std::string model_description;
@@ -79,7 +79,7 @@ struct FitComparison {
   std::shared_ptr<Series> residual;
   double rmse_rad_s = 0.0;
   // The residual's autocorrelation and its cross-correlation with the force, strokes kept
-  // apart, lags up to 0.5 s (analysis/residual_whiteness.h); empty when it cannot be
+  // apart, lags up to 0.5 s (analysis/fit/residual_whiteness.h); empty when it cannot be
   // computed (whiteness_message says why).
   std::optional<ResidualWhiteness> whiteness;
   std::string whiteness_message;

@@ -8,10 +8,10 @@
 #include <stdexcept>
 #include <thread>
 
-#include "analysis/fit_metrics.h"
-#include "analysis/fit_problem.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "core/parallel.h"
 #include "viewer/session_data.h"
 
 namespace doorbench::viewer {

@@ -1,18 +1,18 @@
 #pragma once
 // Tuning (no GL, no ImGui): a door model's parameters and, for the sensory model, the
-// perceptual controls (analysis/perceptual_controls.h, spec §2) changed one at a time; each
+// perceptual controls (analysis/model/perceptual_controls.h, spec §2) changed one at a time; each
 // change re-simulates the selected strokes open-loop under their recorded force (the
-// study's replay, analysis/fit_metrics.h) so that the tuned ω can be seen against the
+// study's replay, analysis/fit/fit_metrics.h) so that the tuned ω can be seen against the
 // measured one; reset to the fitted values; save as a new parameter file.
 #include <filesystem>
 #include <memory>
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/perceptual_controls.h"
-#include "analysis/plot_style.h"
-#include "analysis/strokes.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/perceptual_controls.h"
+#include "analysis/report/plot_style.h"
+#include "analysis/preprocessing/strokes.h"
 #include "viewer/plot_view.h"
 
 namespace doorbench::viewer {

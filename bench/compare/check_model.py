@@ -2,8 +2,8 @@
 """Checks that the numpy model and integrator (sensory.py) agree with doorbench's: replays
 every whole stroke at the TRUE parameters from its first measured state under the measured
 force and compares with cpp_replay.csv, written by doorbench_export_fit_strokes with the
-fit's RK4 (analysis/fit_windows.h, the same scheme) and with the adaptive Dormand-Prince
-simulator (analysis/simulator.h, a different scheme: its difference is integrator error).
+fit's RK4 (analysis/fit/fit_windows.h, the same scheme) and with the adaptive Dormand-Prince
+simulator (analysis/simulation/simulator.h, a different scheme: its difference is integrator error).
 
 Usage: check_model.py DATA_DIR [--out FILE]; exits 1 when the two RK4 replays differ by
 more than LIMIT anywhere.

@@ -5,7 +5,7 @@ Written as a researcher would for a study: the spec's formulas as printed (S wit
 a fixed-step classic Runge-Kutta integrator under the measured force, vectorized over
 strokes (and over parameter sets, for the genetic algorithm), nothing compiled.
 
-The integrator is the one doorbench's fit uses (analysis/fit_windows.h): classic RK4,
+The integrator is the one doorbench's fit uses (analysis/fit/fit_windows.h): classic RK4,
 2 steps per sample interval, the force linear between samples, started from the measured
 state at a sequence's first sample. check_model.py compares it with the C++ one.
 """

@@ -30,10 +30,10 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/journal.h"
-#include "acquisition/recorder.h"
-#include "acquisition/recovery.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/journal.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/record/recovery.h"
+#include "acquisition/rig/rig_file.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/fake_polled_source.h"
 #include "tests/support/temp_dir.h"

@@ -1,4 +1,4 @@
-// The CSV exchange format of door-models.md §5.1: acquisition/csv_table.h and
+// The CSV exchange format of door-models.md §5.1: acquisition/session/csv_table.h and
 // acquisition/recording_csv.h.
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -12,8 +12,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/csv_table.h"
-#include "acquisition/recording_csv.h"
+#include "acquisition/session/csv_table.h"
+#include "acquisition/session/recording_csv.h"
 
 using namespace doorbench;
 

@@ -16,9 +16,9 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/journal.h"
-#include "acquisition/recording_csv.h"
-#include "acquisition/recovery.h"
+#include "acquisition/record/journal.h"
+#include "acquisition/session/recording_csv.h"
+#include "acquisition/record/recovery.h"
 #include "tests/support/temp_dir.h"
 
 namespace {

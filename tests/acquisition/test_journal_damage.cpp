@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/journal.h"
-#include "acquisition/recovery.h"
+#include "acquisition/record/journal.h"
+#include "acquisition/record/recovery.h"
 #include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
 

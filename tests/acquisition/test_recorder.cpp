@@ -1,4 +1,4 @@
-// The recorder's two threads (acquisition/recorder.h): every scan and event reaches the
+// The recorder's two threads (acquisition/record/recorder.h): every scan and event reaches the
 // session through the ring and the journal; the reading side allocates nothing; a full
 // ring is a fault with a gap, never silent; stop requests and backend failures end with a
 // complete session. Sessions are real HDF5 files, read back with SessionReader and h5py.
@@ -13,10 +13,10 @@
 #include <string>
 #include <thread>
 
-#include "acquisition/journal.h"
-#include "acquisition/recorder.h"
-#include "acquisition/recovery.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/journal.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/record/recovery.h"
+#include "acquisition/rig/rig_file.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/temp_dir.h"

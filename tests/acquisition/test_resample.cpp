@@ -1,4 +1,4 @@
-// Resampling for analysis (acquisition/resample.h, docs/synchronization.md): linear
+// Resampling for analysis (acquisition/session/resample.h, docs/synchronization.md): linear
 // interpolation against known signals, no extrapolation, gaps marked; and the export of
 // sessions whose channels have different clocks (session_to_recording).
 #include <catch2/catch.hpp>
@@ -6,8 +6,8 @@
 #include <numbers>
 #include <random>
 
-#include "acquisition/resample.h"
-#include "acquisition/session_csv.h"
+#include "acquisition/session/resample.h"
+#include "acquisition/session/session_csv.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;

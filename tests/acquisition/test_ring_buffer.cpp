@@ -1,11 +1,11 @@
-// The single-producer single-consumer ring (acquisition/ring_buffer.h): order, full and
+// The single-producer single-consumer ring (acquisition/record/ring_buffer.h): order, full and
 // empty, wrap-around, and two real threads passing a million numbered slots.
 #include <array>
 #include <catch2/catch.hpp>
 #include <cstdint>
 #include <thread>
 
-#include "acquisition/ring_buffer.h"
+#include "acquisition/record/ring_buffer.h"
 #include "tests/support/allocation_counter.h"
 
 using doorbench::SpscRing;

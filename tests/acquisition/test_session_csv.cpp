@@ -2,7 +2,7 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 
-#include "acquisition/session_csv.h"
+#include "acquisition/session/session_csv.h"
 #include "tests/support/temp_dir.h"
 
 namespace {

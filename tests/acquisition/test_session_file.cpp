@@ -1,4 +1,4 @@
-// Session files (acquisition/session_file.h, docs/session-format.md): a write–read round
+// Session files (acquisition/session/session_file.h, docs/session-format.md): a write–read round
 // trip that must be bit-identical across chunk boundaries, time-range slices, explicit
 // times, physical values, every error message, and the file read by plain HDF5 tools
 // (h5dump and h5py, run as child processes; scripts/install-deps.sh installs them, and
@@ -20,8 +20,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
-#include "acquisition/calibration_record.h"
+#include "acquisition/session/session_file.h"
+#include "acquisition/rig/calibration_record.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/files.h"
 

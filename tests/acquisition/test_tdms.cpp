@@ -1,4 +1,4 @@
-// TDMS import (acquisition/tdms.h, docs/tdms.md): files written by a writer of NI's
+// TDMS import (acquisition/session/tdms.h, docs/tdms.md): files written by a writer of NI's
 // published layout (tests/support/tdms_writer.h) are read back bit for bit, through segments with
 // new and appended object lists, repeated raw data indexes, chunks, interleaved data, a
 // skipped string channel and a Linear scale; `doorbench import` makes a session of them;
@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_csv.h"
-#include "acquisition/session_file.h"
-#include "acquisition/tdms.h"
+#include "acquisition/session/session_csv.h"
+#include "acquisition/session/session_file.h"
+#include "acquisition/session/tdms.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/tdms_writer.h"
 #include "tests/support/temp_dir.h"

@@ -1,4 +1,4 @@
-// The trigger stage (acquisition/trigger.h, docs/triggering.md) driven with synthetic
+// The trigger stage (acquisition/record/trigger.h, docs/triggering.md) driven with synthetic
 // blocks in the rings' layout, without threads: level crossings with hysteresis, the
 // pre-trigger buffer, every stop, stroke markers, calibrated channels, no allocation per
 // block; and the rig keys that configure it.
@@ -11,8 +11,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/rig_file.h"
-#include "acquisition/trigger.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/record/trigger.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/trigger_test_rig.h"
 

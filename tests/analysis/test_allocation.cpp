@@ -10,8 +10,8 @@
 #include <new>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/allocation_counter.h"
 
 using doorbench::testing::allocations;

@@ -9,8 +9,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
 
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;

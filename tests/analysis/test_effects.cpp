@@ -7,8 +7,8 @@
 #include <string_view>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;

@@ -3,11 +3,11 @@
 #include <cmath>
 #include <vector>
 
-#include "analysis/felt_quantities.h"
-#include "analysis/fit_synthetic.h"
-#include "analysis/parameter_file.h"
-#include "analysis/physical_model.h"
-#include "analysis/run_summary.h"
+#include "analysis/design/felt_quantities.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/physical_model.h"
+#include "analysis/simulation/run_summary.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::Equals;

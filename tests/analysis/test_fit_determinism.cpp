@@ -9,11 +9,11 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit_problem.h"
-#include "analysis/fit_synthetic.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/sensory_model.h"
+#include "analysis/fit/fit_problem.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/sensory_model.h"
 
 namespace {
 

@@ -1,9 +1,9 @@
-// The fitting core (analysis/fitting.h and its parts): windows, the Jacobians through the
+// The fitting core (analysis/fit/fitting.h and its parts): windows, the Jacobians through the
 // simulation, the latch read-off, recovery of known parameters from synthetic strokes
 // (sensory and physical), fixed parameters, bounds, constraints, uncertainties, held-out
 // metrics, the study's objective, options and messages.
 //
-// The data are synthetic_strokes() (analysis/fit_synthetic.h): the reference door driven
+// The data are synthetic_strokes() (analysis/simulation/fit_synthetic.h): the reference door driven
 // by the virtual hand to several target angles over several durations, with the bench's
 // noise (0.2 N, 0.01°, 0.05 °/s), seeded.
 #include <ceres/cost_function.h>
@@ -15,14 +15,14 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/fit_start.h"
-#include "analysis/fit_synthetic.h"
-#include "analysis/fit_windows.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/physical_model.h"
-#include "analysis/sensory_model.h"
+#include "analysis/model/door_model.h"
+#include "analysis/fit/fit_start.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/fit/fit_windows.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/physical_model.h"
+#include "analysis/model/sensory_model.h"
 
 using Catch::Matchers::Contains;
 using doorbench::DoorModel;

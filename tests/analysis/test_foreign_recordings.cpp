@@ -12,12 +12,12 @@
 #include <random>
 #include <sstream>
 
-#include "acquisition/recording_csv.h"
-#include "analysis/fit_init.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
-#include "analysis/sensory_model.h"
+#include "acquisition/session/recording_csv.h"
+#include "analysis/fit/fit_init.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
+#include "analysis/model/sensory_model.h"
 #include "tests/support/foreign_recording.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"

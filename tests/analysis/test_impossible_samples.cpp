@@ -5,10 +5,10 @@
 #include <cmath>
 #include <string>
 
-#include "acquisition/session_csv.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
+#include "acquisition/session/session_csv.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
 

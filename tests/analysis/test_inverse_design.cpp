@@ -1,4 +1,4 @@
-// The inverse design fit (analysis/inverse_design.h): TO-BE strokes simulated from a known
+// The inverse design fit (analysis/design/inverse_design.h): TO-BE strokes simulated from a known
 // physical door (the AS-IS one with a few parameters changed) must lead back to that door.
 #include <catch2/catch.hpp>
 #include <chrono>
@@ -7,9 +7,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit_synthetic.h"
-#include "analysis/inverse_design.h"
-#include "analysis/parameter_file.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/design/inverse_design.h"
+#include "analysis/model/parameter_file.h"
 
 using Catch::Matchers::Contains;
 using doorbench::DesignParameter;

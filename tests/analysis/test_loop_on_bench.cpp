@@ -8,10 +8,10 @@
 #include <limits>
 #include <string>
 
-#include "analysis/parameter_file.h"
-#include "analysis/physical_model.h"
-#include "analysis/preprocessing.h"
-#include "analysis/residual_loop.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/physical_model.h"
+#include "analysis/preprocessing/preprocessing.h"
+#include "analysis/loop/residual_loop.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
 

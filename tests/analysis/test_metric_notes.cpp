@@ -4,7 +4,7 @@
 #include <cmath>
 #include <string>
 
-#include "analysis/metric_notes.h"
+#include "analysis/fit/metric_notes.h"
 
 using namespace doorbench;
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;

@@ -1,4 +1,4 @@
-// The perceptual controls of door-models.md §2 (analysis/perceptual_controls.h): each
+// The perceptual controls of door-models.md §2 (analysis/model/perceptual_controls.h): each
 // control read on the reference sensory door against its hand-computed value, set and
 // read back, the parameters it must keep, the settings it must refuse, and what a
 // control change does to the felt door in a simulated run.
@@ -9,13 +9,13 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
-#include "analysis/run_summary.h"
-#include "analysis/sensory_model.h"
-#include "analysis/simulator.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
+#include "analysis/simulation/run_summary.h"
+#include "analysis/model/sensory_model.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/simulation/virtual_hand.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::Equals;

@@ -11,20 +11,20 @@
 #include <filesystem>
 #include <numbers>
 
-#include "acquisition/recorder.h"
-#include "acquisition/rig_file.h"
-#include "acquisition/session_csv.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
-#include "analysis/trajectory_io.h"
-#include "analysis/virtual_hand.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_csv.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
+#include "analysis/simulation/trajectory_io.h"
+#include "analysis/simulation/virtual_hand.h"
+#include "core/units.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/simulated_session.h"
 
 namespace {
 
 using namespace doorbench;
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // CTest runs each test case as its own process, in parallel: one folder per process,
 // removed when the process ends.
@@ -220,13 +220,13 @@ TEST_CASE("Preprocessing: the fused angle, the rate and the bias match the bench
   // (not a still period: it pushes), so the gyroscope's bias wanders for 5 s between two
   // anchors at the closed door, and only its mean change is removed.
   const Errors e = errors_against_truth(s, data.strokes);
-  INFO("fused theta: RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg
-                           << " deg; omega RMS " << e.omega_rms / kDeg << " deg/s over " << e.n
+  INFO("fused theta: RMS " << e.theta_rms / kRadPerDeg << " deg, max " << e.theta_max / kRadPerDeg
+                           << " deg; omega RMS " << e.omega_rms / kRadPerDeg << " deg/s over " << e.n
                            << " samples");
   CHECK(e.n > 13000);
-  CHECK(e.theta_rms < 0.05 * kDeg);
-  CHECK(e.theta_max < 0.12 * kDeg);
-  CHECK(e.omega_rms < 0.06 * kDeg);
+  CHECK(e.theta_rms < 0.05 * kRadPerDeg);
+  CHECK(e.theta_max < 0.12 * kRadPerDeg);
+  CHECK(e.omega_rms < 0.06 * kRadPerDeg);
 
   // The bias removed is the gyroscope's 0.2 °/s as it wandered during this session: the
   // mean of (rate − true rate).
@@ -235,14 +235,14 @@ TEST_CASE("Preprocessing: the fused angle, the rate and the bias match the bench
     bias_truth += (*s.recording.rate_rad_s)[i] - s.truth_omega[i];
   }
   bias_truth /= static_cast<double>(s.recording.size());
-  INFO("bias: estimated " << data.gyro_bias_rad_s / kDeg << " deg/s, truth " << bias_truth / kDeg);
-  CHECK(std::abs(data.gyro_bias_rad_s / kDeg - 0.2) < 0.03);
-  CHECK(std::abs(data.gyro_bias_rad_s - bias_truth) < 0.003 * kDeg);
+  INFO("bias: estimated " << data.gyro_bias_rad_s / kRadPerDeg << " deg/s, truth " << bias_truth / kRadPerDeg);
+  CHECK(std::abs(data.gyro_bias_rad_s / kRadPerDeg - 0.2) < 0.03);
+  CHECK(std::abs(data.gyro_bias_rad_s - bias_truth) < 0.003 * kRadPerDeg);
 
   // Noise levels from the still periods: the inclinometer's 0.01° and the gyroscope's
   // 0.05 °/s (measured: 0.0098°, 0.0500 °/s).
-  CHECK(data.angle_noise_rad / kDeg == Approx(0.01).epsilon(0.15));
-  CHECK(data.rate_noise_rad_s / kDeg == Approx(0.05).epsilon(0.1));
+  CHECK(data.angle_noise_rad / kRadPerDeg == Approx(0.01).epsilon(0.15));
+  CHECK(data.rate_noise_rad_s / kRadPerDeg == Approx(0.05).epsilon(0.1));
 
   // prepare_session reads the same session to the same result.
   const PreparedData from_file = prepare_session(s.path);
@@ -270,13 +270,13 @@ TEST_CASE("Preprocessing: strokes found without the stroke column", "[preprocess
     CHECK(std::abs(stroke.time_s.front() - s.starts[k].time_s) < 0.05);
     // ... and holds all of the stroke's motion (the truth's |ω| > 1 °/s).
     for (std::size_t i = truth_index(s, s.starts[k].time_s); i < truth_index(s, s.ends_s[k]); ++i) {
-      if (std::abs(s.truth_omega[i]) > 1.0 * kDeg) {
+      if (std::abs(s.truth_omega[i]) > 1.0 * kRadPerDeg) {
         CHECK(stroke.time_s.front() <= s.truth_time[i]);
         CHECK(stroke.time_s.back() >= s.truth_time[i]);
       }
     }
     // It starts at rest: its first sample is its initial state.
-    CHECK(std::abs(stroke.omega_rad_s.front()) < 0.3 * kDeg);
+    CHECK(std::abs(stroke.omega_rad_s.front()) < 0.3 * kRadPerDeg);
   }
   // The door springs back by 0.3° when the hand lets go after each closing: listed, too
   // short for a stroke (measured: about 0.3 s, with the margins).
@@ -285,7 +285,7 @@ TEST_CASE("Preprocessing: strokes found without the stroke column", "[preprocess
     CHECK(contains(segment.reason, "too short"));
     CHECK(segment.end_s - segment.start_s < 0.4);
   }
-  CHECK(errors_against_truth(s, data.strokes).theta_rms < 0.05 * kDeg);
+  CHECK(errors_against_truth(s, data.strokes).theta_rms < 0.05 * kRadPerDeg);
 }
 
 TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed",
@@ -297,7 +297,7 @@ TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed"
     // 40 ms in the middle of the second opening (stroke 3) at the gyroscope's +100 °/s,
     // where the door really turns at about 60 °/s.
     const std::size_t first = index_at(recording, 7.8);
-    for (std::size_t i = first; i < first + 40; ++i) (*recording.rate_rad_s)[i] = 100.0 * kDeg;
+    for (std::size_t i = first; i < first + 40; ++i) (*recording.rate_rad_s)[i] = 100.0 * kRadPerDeg;
     const PreparedData data = prepare(recording);
     // The part before the saturation is kept (its angle is known from the anchor before
     // it); the rest is listed.
@@ -318,13 +318,13 @@ TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed"
     // them the gyroscope's drift is no longer removed (the anchors' difference is put on the
     // lost samples): measured 0.11° RMS, 0.34° at most, on stroke 4.
     const Errors e = errors_against_truth(s, data.strokes);
-    INFO("theta RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg);
-    CHECK(e.theta_rms < 0.2 * kDeg);
-    CHECK(e.theta_max < 0.5 * kDeg);
+    INFO("theta RMS " << e.theta_rms / kRadPerDeg << " deg, max " << e.theta_max / kRadPerDeg);
+    CHECK(e.theta_rms < 0.2 * kRadPerDeg);
+    CHECK(e.theta_max < 0.5 * kRadPerDeg);
   }
   SECTION("a negative saturation between strokes") {
     const std::size_t at = index_at(recording, 6.2);
-    for (std::size_t i = at; i < at + 5; ++i) (*recording.rate_rad_s)[i] = -100.0 * kDeg;
+    for (std::size_t i = at; i < at + 5; ++i) (*recording.rate_rad_s)[i] = -100.0 * kRadPerDeg;
     const PreparedData data = prepare(recording);
     REQUIRE(data.excluded.size() == 1);
     CHECK(contains(data.excluded.front().reason, "outside the strokes: gyroscope saturated"));
@@ -333,7 +333,7 @@ TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed"
     REQUIRE(data.strokes.size() == 6);
     // As above: no drift removed between the anchors around the lost samples (measured
     // 0.49° at most).
-    CHECK(errors_against_truth(s, data.strokes).theta_max < 0.7 * kDeg);
+    CHECK(errors_against_truth(s, data.strokes).theta_max < 0.7 * kRadPerDeg);
   }
   SECTION("a non-finite force") {
     (*recording.rate_rad_s).at(index_at(recording, 13.0)) = 0.0;  // a plain value
@@ -357,8 +357,8 @@ TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed"
     REQUIRE(data.strokes.size() == 6);
     CHECK(data.strokes[1].time_s.front() >= 4.0);
     const Errors e = errors_against_truth(s, data.strokes);
-    INFO("theta RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg);
-    CHECK(e.theta_max < 0.7 * kDeg);
+    INFO("theta RMS " << e.theta_rms / kRadPerDeg << " deg, max " << e.theta_max / kRadPerDeg);
+    CHECK(e.theta_max < 0.7 * kRadPerDeg);
   }
 }
 
@@ -369,13 +369,13 @@ TEST_CASE("Preprocessing: rate only integrates from theta = 0 at the first still
   REQUIRE(data.strokes.size() == 6);
   CHECK(has_note(data, "theta = 0 at the still period from 0.100 s"));
   CHECK(has_note(data, "angle noise: the fallback figure"));
-  CHECK(data.angle_noise_rad == Approx(0.01 * kDeg));
+  CHECK(data.angle_noise_rad == Approx(0.01 * kRadPerDeg));
   // Without an absolute angle the bias's wandering between still periods adds up: measured
   // 0.14° RMS, 0.28° at most over 18 s (the hand holds the door open between strokes).
   const Errors e = errors_against_truth(s, data.strokes);
-  INFO("rate only: theta RMS " << e.theta_rms / kDeg << " deg, max " << e.theta_max / kDeg);
-  CHECK(e.theta_rms < 0.2 * kDeg);
-  CHECK(e.omega_rms < 0.08 * kDeg);
+  INFO("rate only: theta RMS " << e.theta_rms / kRadPerDeg << " deg, max " << e.theta_max / kRadPerDeg);
+  CHECK(e.theta_rms < 0.2 * kRadPerDeg);
+  CHECK(e.omega_rms < 0.08 * kRadPerDeg);
 }
 
 TEST_CASE("Preprocessing: a CSV of an exact simulator run (full-range angle_rad)",
@@ -403,20 +403,20 @@ TEST_CASE("Preprocessing: a CSV of an exact simulator run (full-range angle_rad)
       }
     }
     const double omega_rms = std::sqrt(sq / count);
-    INFO("omega RMS " << omega_rms / kDeg << " deg/s");
+    INFO("omega RMS " << omega_rms / kRadPerDeg << " deg/s");
     CHECK(omega_rms < omega_tolerance_rad_s);
   };
 
   SECTION("angle and rate: the rate needs no correction") {
     const PreparedData data = prepare(recording);
     CHECK(data.handle_radius_m == run.handle_radius_m);
-    CHECK(std::abs(data.gyro_bias_rad_s) < 0.001 * kDeg);
+    CHECK(std::abs(data.gyro_bias_rad_s) < 0.001 * kRadPerDeg);
     CHECK(data.strokes[0].id == 1);
     CHECK(data.strokes[1].id == 2);
-    check_strokes(data, 0.001 * kDeg);
+    check_strokes(data, 0.001 * kRadPerDeg);
     // Noise-free: the estimates sit at their floors, 1% of the bench's figures.
-    CHECK(data.angle_noise_rad == Approx(1e-4 * kDeg));
-    CHECK(data.rate_noise_rad_s == Approx(5e-4 * kDeg));
+    CHECK(data.angle_noise_rad == Approx(1e-4 * kRadPerDeg));
+    CHECK(data.rate_noise_rad_s == Approx(5e-4 * kRadPerDeg));
   }
   SECTION("angle only: the rate is the zero-phase derivative") {
     Recording angle_only = recording;
@@ -425,10 +425,10 @@ TEST_CASE("Preprocessing: a CSV of an exact simulator run (full-range angle_rad)
     CHECK(has_note(data, "zero-phase low-pass at 30 Hz"));
     CHECK(data.gyro_bias_rad_s == 0.0);
     // Measured: 0.10 °/s RMS, from the latch's and the stops' sharp turns.
-    check_strokes(data, 0.15 * kDeg);
+    check_strokes(data, 0.15 * kRadPerDeg);
     SECTION("and without the stroke column") {
       angle_only.stroke.reset();
-      check_strokes(prepare(angle_only), 0.15 * kDeg);
+      check_strokes(prepare(angle_only), 0.15 * kRadPerDeg);
     }
   }
 }
@@ -456,7 +456,7 @@ TEST_CASE("Preprocessing: motion segments merge across short pauses", "[preproce
       }
       recording.time_s.push_back(t);
       recording.force_N.push_back(0.0);
-      recording.angle_rad->push_back(angle_deg * kDeg);
+      recording.angle_rad->push_back(angle_deg * kRadPerDeg);
     }
     return recording;
   };
@@ -475,7 +475,7 @@ TEST_CASE("Preprocessing: motion segments merge across short pauses", "[preproce
   CHECK(apart.strokes[1].direction == StrokeDirection::kOpening);
   CHECK(apart.strokes[2].direction == StrokeDirection::kClosing);
   CHECK(apart.strokes[1].theta_rad.back() - apart.strokes[1].theta_rad.front() ==
-        Approx(20 * kDeg).margin(0.01 * kDeg));
+        Approx(20 * kRadPerDeg).margin(0.01 * kRadPerDeg));
   CHECK(apart.excluded.empty());
 }
 
@@ -523,21 +523,21 @@ TEST_CASE("Preprocessing: options and error messages", "[preprocessing]") {
   CHECK(error_of(synthetic(5)) == "mem: too few samples to prepare (5; at least 10 needed)");
 
   // Rate only, always moving at 10 °/s: nothing to take the bias or theta = 0 from.
-  recording.rate_rad_s = std::vector<double>(2000, 10.0 * kDeg);
+  recording.rate_rad_s = std::vector<double>(2000, 10.0 * kRadPerDeg);
   CHECK(contains(error_of(recording),
                  "mem: rate_rad_s only, and no still period to estimate the gyroscope bias"));
   // Still, but the inclinometer beyond its range: nothing to anchor to.
-  recording.rate_rad_s = std::vector<double>(2000, 0.2 * kDeg);
+  recording.rate_rad_s = std::vector<double>(2000, 0.2 * kRadPerDeg);
   recording.extra_names = {"inclinometer_angle_rad"};
-  recording.extra_columns = {std::vector<double>(2000, 10.0 * kDeg)};
+  recording.extra_columns = {std::vector<double>(2000, 10.0 * kRadPerDeg)};
   CHECK(contains(error_of(recording),
                  "mem: no still period with the inclinometer (inclinometer_angle_rad) inside "
                  "+-9.5 deg to anchor the integrated gyroscope to (1 still periods found;"));
   // In range, it works (and the door stays where the inclinometer says).
-  recording.extra_columns = {std::vector<double>(2000, 5.0 * kDeg)};
+  recording.extra_columns = {std::vector<double>(2000, 5.0 * kRadPerDeg)};
   const PreparedData data = prepare(recording);
   CHECK(data.strokes.empty());
-  CHECK(data.gyro_bias_rad_s == Approx(0.2 * kDeg));
+  CHECK(data.gyro_bias_rad_s == Approx(0.2 * kRadPerDeg));
 
   PreprocessingOptions named;
   named.inclinometer_column = "incl_deg";

@@ -1,4 +1,4 @@
-// The residual loop (analysis/residual_loop.h, docs/residual-loop.md) on short synthetic
+// The residual loop (analysis/loop/residual_loop.h, docs/residual-loop.md) on short synthetic
 // recordings: the sensory reference door, with or without one catalogue effect, opened and
 // closed by the virtual hand three times (six strokes of 1 to 1.6 s at 1 kHz) with the
 // bench's noise, seeded. The loop must add nothing to clean data and name the missing effect
@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit_synthetic.h"
-#include "analysis/parameter_file.h"
-#include "analysis/residual_loop.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/loop/residual_loop.h"
 
 namespace {
 

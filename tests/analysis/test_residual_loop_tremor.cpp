@@ -14,9 +14,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/residual_loop.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/loop/residual_loop.h"
 #include "tests/support/tremor_recording.h"
 
 namespace {

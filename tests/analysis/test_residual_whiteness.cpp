@@ -6,7 +6,7 @@
 #include <random>
 #include <vector>
 
-#include "analysis/residual_whiteness.h"
+#include "analysis/fit/residual_whiteness.h"
 
 using namespace doorbench;
 

@@ -6,9 +6,9 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
-#include "analysis/sensory_model.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/sensory_model.h"
 
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;

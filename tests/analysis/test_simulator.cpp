@@ -1,5 +1,5 @@
-// The simulator (analysis/simulator.h), the virtual hand (analysis/virtual_hand.h) and the
-// run summary (analysis/run_summary.h): energy balance, order of convergence, accuracy
+// The simulator (analysis/simulation/simulator.h), the virtual hand (analysis/simulation/virtual_hand.h) and the
+// run summary (analysis/simulation/run_summary.h): energy balance, order of convergence, accuracy
 // through the latch, replay of a recorded force, exact solutions and every message.
 #include <algorithm>
 #include <catch2/catch.hpp>
@@ -8,14 +8,14 @@
 #include <string>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
-#include "analysis/physical_model.h"
-#include "analysis/run_summary.h"
-#include "analysis/sensory_model.h"
-#include "analysis/simulator.h"
-#include "analysis/trajectory_io.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/physical_model.h"
+#include "analysis/simulation/run_summary.h"
+#include "analysis/model/sensory_model.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/simulation/trajectory_io.h"
+#include "analysis/simulation/virtual_hand.h"
 #include "tests/support/allocation_counter.h"
 
 using Catch::Matchers::Contains;

@@ -1,4 +1,4 @@
-// The sparse design search (analysis/inverse_design.h) on TO-BE doors recorded through the
+// The sparse design search (analysis/design/inverse_design.h) on TO-BE doors recorded through the
 // simulated bench as `doorbench record` records them: the sensors' noise and the session
 // file, not the model's own torque. The first design must change exactly the parts that
 // were changed, to within 5 % of the truth, and nothing else by more than 2 % of its bound
@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/inverse_design.h"
-#include "analysis/parameter_file.h"
+#include "analysis/design/inverse_design.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/bench_recorded_door.h"
 #include "tests/support/temp_dir.h"
 

@@ -7,9 +7,9 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "analysis/fit_synthetic.h"
-#include "analysis/parameter_file.h"
-#include "analysis/spec_report.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/design/spec_report.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;

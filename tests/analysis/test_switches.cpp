@@ -5,7 +5,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "analysis/switches.h"
+#include "analysis/model/switches.h"
 
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;

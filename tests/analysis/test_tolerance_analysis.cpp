@@ -4,8 +4,8 @@
 #include <cmath>
 #include <string>
 
-#include "analysis/parameter_file.h"
-#include "analysis/tolerance_analysis.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/design/tolerance_analysis.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::Equals;

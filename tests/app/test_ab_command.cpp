@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 #include "haptic/ab_trials.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/run_on_terminal.h"

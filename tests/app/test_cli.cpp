@@ -27,12 +27,13 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/csv_table.h"
-#include "acquisition/recording_csv.h"
-#include "acquisition/session_file.h"
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
+#include "acquisition/session/csv_table.h"
+#include "acquisition/session/recording_csv.h"
+#include "acquisition/session/session_file.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/files.h"
+#include "core/units.h"
 
 using doorbench::testing::read_file;
 
@@ -763,7 +764,7 @@ TEST_CASE("CLI: simulate --target-deg and --rate-hz shape the virtual hand's run
   REQUIRE(run.sample_rate_hz);
   CHECK_THAT(*run.sample_rate_hz, WithinRel(200.0, 1e-9));
   const double largest = *std::max_element(run.angle_rad->begin(), run.angle_rad->end());
-  const double target = 45.0 * 3.141592653589793 / 180.0;
+  const double target = 45.0 * kRadPerDeg;
   CHECK(largest > target - 0.1);
   CHECK(largest < target + 0.1);
   CHECK(std::abs(run.angle_rad->back()) < 0.02);

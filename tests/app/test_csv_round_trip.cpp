@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 

@@ -12,13 +12,13 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/journal.h"
-#include "acquisition/recording_csv.h"
-#include "acquisition/recovery.h"
-#include "acquisition/session_csv.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/preprocessing.h"
+#include "acquisition/record/journal.h"
+#include "acquisition/session/recording_csv.h"
+#include "acquisition/record/recovery.h"
+#include "acquisition/session/session_csv.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/preprocessing/preprocessing.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/simulated_session.h"

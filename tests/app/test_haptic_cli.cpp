@@ -3,9 +3,9 @@
 #include <fstream>
 #include <regex>
 
-#include "acquisition/session_file.h"
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
+#include "acquisition/session/session_file.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/run_on_terminal.h"
 

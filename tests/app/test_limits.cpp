@@ -6,9 +6,9 @@
 #include <cstdlib>
 #include <string>
 
-#include "analysis/parameter_file.h"
-#include "analysis/simulator.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/simulation/virtual_hand.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"

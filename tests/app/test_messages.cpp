@@ -7,7 +7,7 @@
 #include <sstream>
 #include <string>
 
-#include "acquisition/printable.h"
+#include "acquisition/session/printable.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/files.h"

@@ -1,4 +1,4 @@
-// One output rule for every verb (issue 18, defects 2, 3 and 8; acquisition/output_file.h,
+// One output rule for every verb (issue 18, defects 2, 3 and 8; acquisition/session/output_file.h,
 // docs/output-files.md): an existing output is refused unless --overwrite, an output is
 // never an input, every file is written whole or not at all, a failure names the path and
 // the system's error, and fit/loop check their input before creating --out.
@@ -12,7 +12,7 @@
 #include <sstream>
 #include <string>
 
-#include "acquisition/output_file.h"
+#include "acquisition/session/output_file.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"

@@ -8,7 +8,7 @@
 #include <regex>
 #include <string>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 #include "app/limit_watcher.h"
 #include "tests/support/run_on_terminal.h"
 #include "tests/support/temp_dir.h"

@@ -11,7 +11,7 @@
 #include <sstream>
 #include <string>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 #include "tests/support/modbus_test_server.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/sine_phase.h"

@@ -3,8 +3,8 @@
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>
 
-#include "acquisition/rig_file.h"
-#include "analysis/parameter_file.h"
+#include "acquisition/rig/rig_file.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/run_doorbench.h"
 
 using Catch::Matchers::Contains;

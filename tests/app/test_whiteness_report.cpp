@@ -8,7 +8,7 @@
 #include <sstream>
 #include <string>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "app/fit_output.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"

@@ -6,11 +6,12 @@
 #include <cmath>
 #include <numbers>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "calibration/gyro_calibration.h"
 #include "calibration/inclinometer_calibration.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "core/units.h"
 #include "sensors/rig_channel.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
@@ -20,7 +21,6 @@ using namespace doorbench::calibration;
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // The door's truth of one recorded session, sampled again by fresh sensor models for each
 // seed: the door is simulated once, only the sensors (and their noise) change.

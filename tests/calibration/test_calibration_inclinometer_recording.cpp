@@ -12,13 +12,14 @@
 #include <sstream>
 #include <tuple>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "calibration/inclinometer_calibration.h"
 #include "calibration/static_source.h"
+#include "core/units.h"
 #include "sensors/rig_channel.h"
 #include "simulated_bench/simulated_bench.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/files.h"
+#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 
@@ -27,7 +28,6 @@ using namespace doorbench::calibration;
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 struct Truth {
   double offset_deg = 0.4;

@@ -7,18 +7,18 @@
 #include <numbers>
 #include <sstream>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "calibration/guided_procedure.h"
 #include "calibration/inclinometer_calibration.h"
 #include "calibration/load_cell_calibration.h"
 #include "calibration/static_source.h"
+#include "core/units.h"
 
 using namespace doorbench;
 using namespace doorbench::calibration;
 
 namespace {
 
-constexpr double kDegPerRad = 180.0 / std::numbers::pi;
 
 // The built-in rig with some of a channel's parameters changed.
 RigDefinition rig_with(const std::string& channel,

@@ -7,9 +7,9 @@
 #include <fstream>
 #include <sstream>
 
-#include "acquisition/recorder.h"
-#include "acquisition/session_csv.h"
-#include "acquisition/calibration_store.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/session/session_csv.h"
+#include "acquisition/rig/calibration_store.h"
 #include "calibration/certificate.h"
 #include "sensors/rig_channel.h"
 #include "tests/support/simulated_session.h"

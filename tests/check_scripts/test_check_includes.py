@@ -1,7 +1,9 @@
 #!/usr/bin/env python3
-"""A test of scripts/check_includes.py: it passes on this repository, and a deliberate
-upward include (acquisition, the bottom layer, including an analysis header) makes it fail
-naming the file, the line and what the folder may use.
+"""A test of scripts/check_includes.py: it passes on this repository, and each deliberate
+fault makes it fail naming the file, the line and what is allowed: an upward include
+(acquisition including an analysis header), a sibling's, a later stage's (the fit including
+the loop), another stage's internal header, and a test that climbs (an analysis test
+including haptic, directly or through a tests/support header).
 
 usage: test_check_includes.py SOURCE_DIR
 """
@@ -30,22 +32,22 @@ expect(clean.returncode == 0, "the repository passes the include check", clean)
 expect("include only what their folder links" in clean.stdout, "the pass says so", clean)
 
 with tempfile.TemporaryDirectory() as tree:
-    folders = ["acquisition", "sensors", "calibration", "analysis", "simulated_bench", "viewer",
-               "haptic", "app", "tests", "bench"]
+    folders = ["core", "acquisition", "sensors", "calibration", "analysis", "simulated_bench",
+               "viewer", "haptic", "study", "app", "tests", "bench"]
     for folder in folders:
         origin = os.path.join(source_dir, folder)
         if os.path.isdir(origin):
             shutil.copytree(origin, os.path.join(tree, folder),
                             ignore=shutil.ignore_patterns("*.py", "*.json", "*.toml", "*.md"))
-    target = os.path.join(tree, "acquisition", "session_file.cpp")
+    target = os.path.join(tree, "acquisition", "session", "session_reader.cpp")
     lines = open(target, encoding="utf-8").read().split("\n")
-    lines.insert(1, '#include "analysis/door_model.h"')
+    lines.insert(1, '#include "analysis/model/door_model.h"')
     open(target, "w", encoding="utf-8").write("\n".join(lines))
 
     climbed = run(tree)
     expect(climbed.returncode == 1, "an upward include fails the check", climbed)
-    expect('acquisition/session_file.cpp:2: includes "analysis/..." but acquisition may use '
-           'only nothing of doorbench (acquisition/CMakeLists.txt)' in climbed.stdout,
+    expect('acquisition/session/session_reader.cpp:2: includes "analysis/..." but acquisition '
+           'may use only core (acquisition/CMakeLists.txt)' in climbed.stdout,
            "the failure names the file, the line and what the folder may use", climbed)
 
     # A sibling of the same layer is not below: the viewer may not include haptic/.
@@ -55,9 +57,40 @@ with tempfile.TemporaryDirectory() as tree:
     open(target, "w", encoding="utf-8").write("\n".join(lines))
     sibling = run(tree)
     expect('viewer/plot_view.cpp:2: includes "haptic/..." but viewer may use only acquisition, '
-           'analysis, sensors (viewer/CMakeLists.txt)' in sibling.stdout, "a sibling include fails",
-           sibling)
+           'analysis, core, sensors (viewer/CMakeLists.txt)' in sibling.stdout,
+           "a sibling include fails", sibling)
     expect("check_includes: 2 include(s) against the layers" in sibling.stdout,
            "the count of problems", sibling)
+
+    def insert(relative, line):
+        path = os.path.join(tree, *relative.split("/"))
+        lines = open(path, encoding="utf-8").read().split("\n")
+        lines.insert(1, line)
+        open(path, "w", encoding="utf-8").write("\n".join(lines))
+
+    # A stage may not include a later stage of its folder.
+    insert("analysis/fit/fit_metrics.cpp", '#include "analysis/loop/residual_loop.h"')
+    # An internal header belongs to its stage alone.
+    insert("analysis/design/felt_quantities.cpp",
+           '#include "analysis/fit/internal/fit_equation_error.h"')
+    # A test may not climb above its folder, nor through a support header.
+    insert("tests/analysis/test_effects.cpp", '#include "haptic/device.h"')
+    support = os.path.join(tree, "tests", "support", "climbing_fixture.h")
+    open(support, "w", encoding="utf-8").write('#pragma once\n#include "viewer/window.h"\n')
+    insert("tests/analysis/test_switches.cpp", '#include "tests/support/climbing_fixture.h"')
+    staged = run(tree)
+    for text in [
+            'analysis/fit/fit_metrics.cpp:2: includes "analysis/loop/..." but stage fit of '
+            'analysis may use only report, model, preprocessing, simulation, fit '
+            '(analysis/CMakeLists.txt DOORBENCH_STAGES)',
+            'analysis/design/felt_quantities.cpp:2: includes '
+            '"analysis/fit/internal/fit_equation_error.h", internal to analysis/fit/',
+            'tests/analysis/test_effects.cpp:2: includes "haptic/device.h" but the tests of '
+            'analysis may use only acquisition, analysis, core and the simulated bench',
+            'tests/analysis/test_switches.cpp:2: includes "tests/support/climbing_fixture.h -> '
+            'viewer/window.h" but the tests of analysis may use only acquisition, analysis, core '
+            'and the simulated bench',
+            "check_includes: 6 include(s) against the layers"]:
+        expect(text in staged.stdout, f"the check reports: {text}", staged)
 
 print("test_check_includes: passed")

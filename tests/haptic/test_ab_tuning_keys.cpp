@@ -12,9 +12,9 @@
 #include <optional>
 #include <string>
 
-#include "acquisition/session_file.h"
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
+#include "acquisition/session/session_file.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
 #include "haptic/tuning_keys.h"
 #include "tests/support/temp_dir.h"
 

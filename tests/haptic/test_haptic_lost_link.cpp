@@ -4,7 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "haptic/hapticmaster_device.h"
 #include "haptic/playback.h"
 #include "tests/support/hapticmaster_emulator_process.h"

@@ -5,10 +5,10 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
-#include "analysis/preprocessing.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
+#include "analysis/preprocessing/preprocessing.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"
 #include "tests/support/temp_dir.h"

@@ -7,9 +7,9 @@
 #include <random>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/parameter_file.h"
-#include "analysis/sensory_model.h"
+#include "analysis/model/door_model.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/sensory_model.h"
 #include "haptic/door_mapping.h"
 #include "haptic/safety.h"
 #include "tests/support/allocation_counter.h"

@@ -9,8 +9,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
 #include "haptic/hapticmaster_device.h"
 #include "haptic/playback.h"
 #include "tests/support/hapticmaster_emulator_process.h"

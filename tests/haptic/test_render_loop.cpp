@@ -4,10 +4,10 @@
 #include <limits>
 #include <cmath>
 
-#include "acquisition/session_csv.h"
-#include "analysis/parameter_file.h"
-#include "analysis/perceptual_controls.h"
-#include "analysis/sensory_model.h"
+#include "acquisition/session/session_csv.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/model/perceptual_controls.h"
+#include "analysis/model/sensory_model.h"
 #include "haptic/playback.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/haptic_test_device.h"

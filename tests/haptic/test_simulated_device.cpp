@@ -11,7 +11,7 @@
 #include <numbers>
 #include <vector>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "haptic/door_mapping.h"
 #include "haptic/rotary_device.h"
 #include "haptic/simulated_hapticmaster.h"

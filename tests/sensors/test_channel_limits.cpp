@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/channel_limits.h"
 
 using namespace doorbench;

@@ -12,8 +12,8 @@
 #include <sstream>
 #include <thread>
 
-#include "acquisition/recorder.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/comedi_backend.h"
 #include "sensors/comedi_devices.h"
 #include "tests/support/allocation_counter.h"

@@ -10,7 +10,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "acquisition/rig_file.h"
+#include "acquisition/rig/rig_file.h"
 #include "sensors/comedi_api.h"
 #include "sensors/comedi_backend.h"
 #include "sensors/comedi_devices.h"

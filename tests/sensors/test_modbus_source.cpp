@@ -15,12 +15,13 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/rig_file.h"
-#include "acquisition/session_file.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_file.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/modbus_test_server.h"
 #include "sensors/modbus_source.h"
 #include "tests/support/temp_dir.h"
+#include "core/units.h"
 
 using doorbench::PolledEvent;
 using doorbench::PolledSample;
@@ -144,7 +145,6 @@ void check_values(const std::vector<PolledSample>& samples, double scale, double
 
 TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over TCP", "[modbus]") {
   TcpTransmitterServer server;
-  const double deg = std::numbers::pi / 180;
   const std::string channels =
       force_channel("force_abcd", 0, "big", "big", 50) +
       force_channel("force_cdab", 2, "big", "little", 50) +
@@ -171,7 +171,7 @@ TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over T
   CHECK(infos[4].raw_type == doorbench::RawType::kValues);
   CHECK(infos[4].unit == "rad");
   CHECK(infos[4].calibration_id.empty());
-  CHECK(infos[4].raw_scale == Approx(0.01 * deg));
+  CHECK(infos[4].raw_scale == Approx(0.01 * kRadPerDeg));
   CHECK(source.description() == "Modbus: modbus device transmitters (tcp 127.0.0.1:" +
                                     std::to_string(server.port) + ") 7 channels");
 
@@ -183,12 +183,12 @@ TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over T
     check_values(of_channel(got, c), 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s,
                  float_resolution);
   }
-  const auto angle_rad = [&](double t) { return server_angle_deg(t) * deg; };
-  check_values(of_channel(got, 4), 0.01 * deg, 0.0, angle_rad, kAngleMaxSlope_deg_per_s * deg,
-               0.006 * deg);
+  const auto angle_rad = [&](double t) { return server_angle_deg(t) * kRadPerDeg; };
+  check_values(of_channel(got, 4), 0.01 * kRadPerDeg, 0.0, angle_rad, kAngleMaxSlope_deg_per_s * kRadPerDeg,
+               0.006 * kRadPerDeg);
   check_values(of_channel(got, 5), 0.001, 0.0, server_force_N, kForceMaxSlope_N_per_s, 0.0006);
-  check_values(of_channel(got, 6), 0.01 * deg, -100 * deg, angle_rad,
-               kAngleMaxSlope_deg_per_s * deg, 0.006 * deg);
+  check_values(of_channel(got, 6), 0.01 * kRadPerDeg, -100 * kRadPerDeg, angle_rad,
+               kAngleMaxSlope_deg_per_s * kRadPerDeg, 0.006 * kRadPerDeg);
   const auto stats = source.statistics();
   CHECK(stats.samples == got.samples.size());
   CHECK(stats.polls == stats.samples);
@@ -369,7 +369,6 @@ TEST_CASE("modbus source: RTU over a pseudo-terminal pair", "[modbus]") {
   TempDir dir("modbus_rtu");
   PtyPair pty(dir.path);
   RtuTransmitterServer server(pty);
-  const double deg = std::numbers::pi / 180;
   ModbusSource source(rig_of(
       rtu_device(pty.client_end.string()),
       force_channel("force", 0, "big", "big", 20, "serial_line") +
@@ -386,8 +385,8 @@ TEST_CASE("modbus source: RTU over a pseudo-terminal pair", "[modbus]") {
   check_values(force, 1.0, 0.0, server_force_N, kForceMaxSlope_N_per_s, 1e-5);
   const double rate_slope_dps2 = 5.0 * std::pow(2 * std::numbers::pi * 0.2, 2);
   check_values(
-      rate, 0.01 * deg, 0.0, [&](double t) { return server_rate_dps(t) * deg; },
-      rate_slope_dps2 * deg, 0.006 * deg);
+      rate, 0.01 * kRadPerDeg, 0.0, [&](double t) { return server_rate_dps(t) * kRadPerDeg; },
+      rate_slope_dps2 * kRadPerDeg, 0.006 * kRadPerDeg);
 }
 
 TEST_CASE("modbus source: RTU replies with a wrong CRC are faults, and polling goes on",
@@ -474,7 +473,6 @@ TEST_CASE(
     "the server's",
     "[modbus]") {
   TcpTransmitterServer server;
-  const double deg = std::numbers::pi / 180;
   ModbusSource source(rig_of(
       tcp_device(server.port),
       channel("angle", "inclinometer", "rad",
@@ -509,7 +507,7 @@ TEST_CASE(
   for (std::size_t i = 0; i < samples.size(); ++i) {
     const double t = seconds(samples[i].midpoint_ns());
     CHECK(slice.time_s[i] == Approx(t - seconds(origin_ns)).margin(1e-9));
-    CHECK(std::abs(physical[i] - server_angle_deg(t) * deg) <=
-          kAngleMaxSlope_deg_per_s * deg * seconds(samples[i].latency_ns()) / 2 + 0.006 * deg);
+    CHECK(std::abs(physical[i] - server_angle_deg(t) * kRadPerDeg) <=
+          kAngleMaxSlope_deg_per_s * kRadPerDeg * seconds(samples[i].latency_ns()) / 2 + 0.006 * kRadPerDeg);
   }
 }

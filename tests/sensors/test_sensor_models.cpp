@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "sensors/sensor_models.h"
+#include "core/units.h"
 
 using Catch::Matchers::Equals;
 using Catch::Matchers::WithinAbs;
@@ -29,7 +30,6 @@ using doorbench::sensors::LoadCellParameters;
 namespace {
 
 constexpr double kPi = std::numbers::pi;
-constexpr double kRadPerDeg = kPi / 180.0;
 
 struct Statistics {
   double mean = 0.0;

@@ -8,9 +8,9 @@
 #include <numbers>
 #include <numeric>
 
-#include "acquisition/recorder.h"
-#include "acquisition/rig_file.h"
-#include "acquisition/session_csv.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_csv.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
@@ -18,7 +18,6 @@
 namespace {
 
 using namespace doorbench;
-constexpr double kDeg = std::numbers::pi / 180.0;
 
 // A file in this process's scratch folder (removed when the process ends).
 std::filesystem::path fresh_path(const std::string& name) {
@@ -70,8 +69,8 @@ TEST_CASE("Simulated bench: signals through the nominal calibration match the tr
 
   // The door really opened (to the hand's 80°) and closed again.
   const double widest = *std::max_element(truth_theta.begin(), truth_theta.end());
-  CHECK(widest > 75 * kDeg);
-  CHECK(std::abs(truth_theta.back()) < 0.5 * kDeg);
+  CHECK(widest > 75 * kRadPerDeg);
+  CHECK(std::abs(truth_theta.back()) < 0.5 * kRadPerDeg);
 
   SECTION("gyroscope: the bias plus white noise") {
     const std::vector<double> rate = session.physical("rate", session.read("rate"));
@@ -79,7 +78,7 @@ TEST_CASE("Simulated bench: signals through the nominal calibration match the tr
     // The door falls open by its weight faster than the gyroscope's ±100 °/s: leave out
     // the clipped samples.
     for (std::size_t i = 0; i < rate.size(); ++i) {
-      if (std::abs(truth_omega[i]) < 95 * kDeg) error.push_back((rate[i] - truth_omega[i]) / kDeg);
+      if (std::abs(truth_omega[i]) < 95 * kRadPerDeg) error.push_back((rate[i] - truth_omega[i]) / kRadPerDeg);
     }
     const Stats s = stats(error);
     INFO("rate error: mean " << s.mean << " deg/s, std " << s.stddev << " deg/s");
@@ -92,8 +91,8 @@ TEST_CASE("Simulated bench: signals through the nominal calibration match the tr
     std::vector<double> error;
     for (std::size_t i = 200; i < angle.size(); ++i) {
       const bool still = std::abs(truth_omega[i]) < 1e-3 && std::abs(truth_omega[i - 200]) < 1e-3;
-      if (still && std::abs(truth_theta[i]) < 9 * kDeg) {
-        error.push_back((angle[i] - truth_theta[i]) / kDeg);
+      if (still && std::abs(truth_theta[i]) < 9 * kRadPerDeg) {
+        error.push_back((angle[i] - truth_theta[i]) / kRadPerDeg);
       }
     }
     const Stats s = stats(error);
@@ -103,7 +102,7 @@ TEST_CASE("Simulated bench: signals through the nominal calibration match the tr
     CHECK(s.stddev < 0.02);  // 0.01° noise plus quantization
     // Beyond its range the inclinometer saturates at 10°.
     const double largest = *std::max_element(angle.begin(), angle.end());
-    CHECK(largest == Approx(10 * kDeg).epsilon(0.002));
+    CHECK(largest == Approx(10 * kRadPerDeg).epsilon(0.002));
   }
   SECTION("load cell: the hand's force, signed by the stroke's mounting") {
     const Recording exported = session_to_recording(session);
@@ -164,9 +163,10 @@ TEST_CASE("Simulated bench: the seed makes the session repeatable", "[simulated_
 
 #include <fstream>
 
-#include "analysis/parameter_file.h"
-#include "analysis/trajectory_io.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/simulation/trajectory_io.h"
+#include "analysis/simulation/virtual_hand.h"
+#include "core/units.h"
 #include "tests/support/allocation_counter.h"
 
 namespace {

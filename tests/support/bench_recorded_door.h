@@ -9,8 +9,8 @@
 #include <utility>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/preprocessing.h"
+#include "analysis/model/door_model.h"
+#include "analysis/preprocessing/preprocessing.h"
 #include "tests/support/simulated_session.h"
 
 namespace doorbench::testing {

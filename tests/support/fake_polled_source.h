@@ -1,5 +1,5 @@
 #pragma once
-// A polled source for tests (PolledSource, acquisition/polled_source.h): one polling
+// A polled source for tests (PolledSource, acquisition/record/polled_source.h): one polling
 // thread reads each channel in turn every period; a "request" is answered after a fake
 // latency, and the value is a known function of the absolute CLOCK_MONOTONIC time at the
 // request/reply midpoint (a sine), or the poll's index (a counter, to find lost samples).
@@ -14,8 +14,8 @@
 #include <thread>
 #include <vector>
 
-#include "acquisition/polled_source.h"
-#include "acquisition/ring_buffer.h"
+#include "acquisition/record/polled_source.h"
+#include "acquisition/record/ring_buffer.h"
 
 namespace doorbench::testing {
 

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/recording_csv.h"
-#include "analysis/door_model.h"
-#include "analysis/simulator.h"
-#include "analysis/virtual_hand.h"
+#include "acquisition/session/recording_csv.h"
+#include "analysis/model/door_model.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/simulation/virtual_hand.h"
 
 namespace doorbench::testing {
 

@@ -12,8 +12,8 @@
 #include <filesystem>
 #include <string>
 
-#include "acquisition/recorder.h"
-#include "acquisition/rig_file.h"
+#include "acquisition/record/recorder.h"
+#include "acquisition/rig/rig_file.h"
 #include "simulated_bench/simulated_bench.h"
 
 namespace doorbench::testing {

@@ -4,7 +4,7 @@
 // different generator from synthetic_strokes' plain virtual hand, so that the loop is not
 // only checked on the data it was tuned on.
 //
-// Each run is the virtual hand (analysis/virtual_hand.h) with
+// Each run is the virtual hand (analysis/simulation/virtual_hand.h) with
 //   - its target angle and duration jittered per seed (±0.05 rad, ±10%),
 //   - a physiological tremor: the hand's grip point shakes along the handle's arc by a sum
 //     of three sinusoids of 8–12 Hz (random frequencies and phases per run) of
@@ -27,11 +27,11 @@
 #include <random>
 #include <vector>
 
-#include "analysis/door_model.h"
-#include "analysis/fit_synthetic.h"
-#include "analysis/simulator.h"
-#include "analysis/strokes.h"
-#include "analysis/virtual_hand.h"
+#include "analysis/model/door_model.h"
+#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/simulation/simulator.h"
+#include "analysis/preprocessing/strokes.h"
+#include "analysis/simulation/virtual_hand.h"
 
 namespace doorbench::testing {
 

@@ -21,7 +21,7 @@
 #include <utility>
 #include <vector>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 #include "viewer/viewer_app.h"
 
 namespace doorbench::testing {

@@ -1,4 +1,4 @@
-// One plotting vocabulary (analysis/plot_style.h) in the SVG reports: measured drawn after
+// One plotting vocabulary (analysis/report/plot_style.h) in the SVG reports: measured drawn after
 // (on top of) the model's curve, the model dashed, the legend outside the data area, a
 // colour per meaning the same as the viewer's.
 #include <catch2/catch.hpp>
@@ -6,8 +6,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/plot_style.h"
-#include "analysis/svg_plot.h"
+#include "analysis/report/plot_style.h"
+#include "analysis/report/svg_plot.h"
 #include "viewer/plot_view.h"
 #include "viewer/session_data.h"
 

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "analysis/parameter_file.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
 #include "viewer/fit_result.h"

@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <numbers>
 
-#include "acquisition/session_file.h"
+#include "acquisition/session/session_file.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"

@@ -5,8 +5,8 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 
-#include "acquisition/printable.h"
-#include "acquisition/session_file.h"
+#include "acquisition/session/printable.h"
+#include "acquisition/session/session_file.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"

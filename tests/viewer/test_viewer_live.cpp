@@ -18,7 +18,7 @@
 #include <sstream>
 #include <thread>
 
-#include "acquisition/journal.h"
+#include "acquisition/record/journal.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/live_journal.h"

@@ -16,8 +16,8 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/session_file.h"
-#include "analysis/parameter_file.h"
+#include "acquisition/session/session_file.h"
+#include "analysis/model/parameter_file.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"

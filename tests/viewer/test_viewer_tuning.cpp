@@ -4,11 +4,11 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "analysis/fit_metrics.h"
-#include "analysis/fitting.h"
-#include "analysis/parameter_file.h"
-#include "analysis/plot_style.h"
-#include "analysis/preprocessing.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fitting.h"
+#include "analysis/model/parameter_file.h"
+#include "analysis/report/plot_style.h"
+#include "analysis/preprocessing/preprocessing.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
 #include "viewer/tuning.h"

@@ -12,11 +12,12 @@
 #include <string>
 #include <vector>
 
-#include "acquisition/rig_file.h"
-#include "acquisition/session_file.h"
+#include "acquisition/rig/rig_file.h"
+#include "acquisition/session/session_file.h"
 #include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
+#include "core/units.h"
 
 namespace fs = std::filesystem;
 using namespace doorbench;
@@ -24,7 +25,7 @@ using namespace doorbench;
 namespace {
 
 constexpr double kRateHz = 1000.0;
-constexpr double kEndRad = 10.0 * std::numbers::pi / 180.0;  // the inclinometer's range
+constexpr double kEndRad = 10.0 * kRadPerDeg;  // the inclinometer's range
 
 // 0 until 0.5 s, up to the range's end at 1.0 s, held there until 1.5 s, back to 0 at 2.0 s,
 // 0 until 3 s. At the limit (99 % of the range): from 0.995 s to 1.505 s.

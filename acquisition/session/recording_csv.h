@@ -1,0 +1,76 @@
+#pragma once
+// Door recordings as CSV text, door-models.md §5.1 (user documentation: docs/csv-format.md).
+// Columns by name in any order: time_s (required, strictly increasing), force_N (required),
+// angle_rad and/or rate_rad_s (at least one), stroke (optional; integer id of the opening
+// or closing a row belongs to, 0 = between strokes), and extra channels whose names end in
+// a unit suffix (`_V`, `_deg`, `tau_Nm`, ...). Every broken rule is a CsvError naming the
+// source and line; nothing is guessed.
+#include <cstddef>
+#include <filesystem>
+#include <optional>
+#include <ostream>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "acquisition/session/csv_table.h"
+
+namespace doorbench {
+
+struct Recording {
+  // Where the recording was read from (a path, or the name given to the parser); used in
+  // messages, never written. The producing program goes into metadata key `source`.
+  std::string source;
+  // Metadata lines in file order, notes with an empty key (see CsvTable::metadata), except
+  // handle_radius_m and sample_rate_hz, which live in the typed fields below.
+  CsvMetadata metadata;
+  std::optional<double> handle_radius_m;  // metadata; positive when present
+  std::optional<double> sample_rate_hz;   // metadata; positive when present
+  std::vector<double> time_s, force_N;
+  std::optional<std::vector<double>> angle_rad, rate_rad_s;  // at least one present
+  std::optional<std::vector<int>> stroke;                    // values >= 0
+  // Further channels in file order; every name ends in a unit suffix, e.g. tau_Nm.
+  std::vector<std::string> extra_names;
+  std::vector<std::vector<double>> extra_columns;
+  // File line of each sample, 1-based; empty for a recording built in memory.
+  std::vector<int> line_numbers;
+
+  std::size_t size() const { return time_s.size(); }
+};
+
+// Column names with a fixed meaning in a recording.
+inline constexpr std::string_view kTimeColumn = "time_s";
+inline constexpr std::string_view kForceColumn = "force_N";
+inline constexpr std::string_view kAngleColumn = "angle_rad";
+inline constexpr std::string_view kRateColumn = "rate_rad_s";
+inline constexpr std::string_view kStrokeColumn = "stroke";
+inline constexpr std::string_view kHandleRadiusKey = "handle_radius_m";
+inline constexpr std::string_view kSampleRateKey = "sample_rate_hz";
+
+// True when `name` ends in a unit suffix: an underscore with text on both sides ("tau_Nm").
+bool has_unit_suffix(std::string_view name);
+
+// `source` names the text in messages (usually its path). With EmptyCells::kMissing an
+// empty cell of force_N, angle_rad, rate_rad_s or an extra column is a missing sample
+// (NaN: a lost scan, a gap); time_s and stroke are never missing ("column time_s: empty
+// cell"). With kRefuse (for a force to replay) every empty cell is an error.
+Recording parse_recording_csv(std::string_view text, std::string_view source,
+                              EmptyCells empty_cells = EmptyCells::kRefuse);
+Recording recording_from_table(const CsvTable& table, std::string_view source);
+// Errors name the path; "PATH: cannot open for reading" when the file cannot be read.
+Recording read_recording_csv(const std::filesystem::path& path,
+                             EmptyCells empty_cells = EmptyCells::kRefuse);
+
+// Writes typed metadata (handle_radius_m, sample_rate_hz), the other metadata, then the
+// columns time_s, force_N, angle_rad, rate_rad_s, stroke (those present) and the extra
+// columns. Numbers are written so that reading gives back identical doubles; a NaN (a
+// missing sample) is an empty cell. Throws
+// std::invalid_argument when the recording breaks a rule the reader enforces (sizes,
+// order of time_s, stroke ids, names, non-finite values, empty recording, ...).
+void write_recording_csv(std::ostream& out, const Recording& recording);
+// Writes the file whole or not at all (acquisition/session/output_file.h: through a temporary file
+// renamed into place); throws OutputError "PATH: cannot write: SYSTEM ERROR". It does not
+// check whether `path` exists: callers apply the output rule (check_output_file) first.
+void write_recording_csv_file(const std::filesystem::path& path, const Recording& recording);
+
+}  // namespace doorbench

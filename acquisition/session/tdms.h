@@ -1,0 +1,83 @@
+#pragma once
+// Reading TDMS files (NI's TDM Streaming format, as LabVIEW, SignalExpress and DAQmx logging
+// write them) from NI's published description of the format, "TDMS File Format Internal
+// Structure", without NI's libraries. User documentation: docs/tdms.md.
+//
+// Supported: TDMS 1.0 and 2.0 segments (lead-in "TDSm", version 4712 or 4713) in
+// little-endian byte order; metadata with new or appended object lists, raw data indexes
+// given, repeated ("same as the previous segment", 0x00000000) or absent (0xFFFFFFFF);
+// interleaved and non-interleaved raw data in whole chunks; channels of the integer types
+// (I8…I64, U8…U64), SGL and DBL (with or without unit); string channels are skipped; every
+// property type but the extended float; scaling properties of the Linear and Polynomial
+// kinds (NI_Scaling_Status "unscaled"); time from wf_start_offset + i × wf_increment.
+// Refused, each by name: big-endian segments, DAQmx raw data (the kTocDAQmxRawData flag or
+// the 0x69120000/0x69130000 raw data indexes), channels of other data types, arrays of more
+// than one dimension, raw data that is not a whole number of chunks, other scale types.
+// Values become doubles: exact for every type but I64/U64 beyond 2^53.
+//
+// Thread safety: free functions without shared state.
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "acquisition/session/recording_csv.h"
+
+namespace doorbench {
+
+// A file that cannot be read, or a layout that is not supported: "PATH: segment N (byte B):
+// what" (or "PATH: what" when no segment is to blame).
+class TdmsError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+struct TdmsProperty {
+  std::string text;              // the value as text (time stamps as ISO 8601 UTC)
+  std::optional<double> number;  // numeric types (and booleans as 0/1)
+};
+
+struct TdmsChannel {
+  std::string group, name;     // unescaped
+  std::string data_type;       // "I32", "DBL", ...; "" when the channel has no raw data
+  std::vector<double> values;  // scaled when the file asks for scaling
+  std::map<std::string, TdmsProperty> properties;
+  std::string scaling;  // how the values were scaled ("" = as stored)
+};
+
+struct TdmsFile {
+  std::map<std::string, TdmsProperty> file_properties;
+  std::map<std::string, std::map<std::string, TdmsProperty>> group_properties;
+  std::vector<TdmsChannel> channels;  // in the order they first appear
+  int segments = 0;
+  // The channel GROUP/NAME; nullptr when there is none.
+  const TdmsChannel* find(const std::string& group, const std::string& name) const;
+};
+
+// Throws TdmsError (a layout that is not supported, a damaged file; "PATH: cannot open for
+// reading" when it cannot be read).
+TdmsFile read_tdms(const std::filesystem::path& path);
+TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& source);
+
+// One item of `doorbench import --map`: TARGET=GROUP/CHANNEL. TARGET is force, angle, rate,
+// time or an extra column name with a unit suffix (e.g. inclinometer_angle_rad).
+struct TdmsMapItem {
+  std::string target, group, channel;
+};
+// "force=Load/Force,angle=Encoder/Angle"; throws std::invalid_argument naming the item.
+std::vector<TdmsMapItem> parse_tdms_map(const std::string& text);
+
+// The mapped channels as a recording: force and angle or rate are required; time from the
+// `time` channel when mapped, else wf_start_offset + i × wf_increment of the force channel
+// (every mapped channel must have as many values and the same wf_increment). Units are
+// checked where the channel states one (unit_string: N for force, rad for angle, rad/s for
+// rate). The file's handle_radius_m property (file or group) becomes the recording's;
+// mapped channels' properties, the file's and wf_start_time go into the metadata. Throws
+// TdmsError "SOURCE: ..." naming the target and channel.
+Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
+                            const std::string& source);
+
+}  // namespace doorbench

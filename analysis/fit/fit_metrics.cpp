@@ -1,0 +1,160 @@
+#include "analysis/fit/fit_metrics.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "analysis/simulation/simulator.h"
+
+namespace doorbench {
+
+void ErrorStats::add(double measured, double simulated, double time_s) {
+  const double error = simulated - measured;
+  ++count;
+  sum_squared_error += error * error;
+  sum_measured += measured;
+  sum_measured_squared += measured * measured;
+  // NaN (a failed simulation) counts as the largest error.
+  if (!(std::abs(error) <= max_abs_error)) {
+    max_abs_error = std::isnan(error) ? std::numeric_limits<double>::infinity() : std::abs(error);
+    time_of_max_s = time_s;
+  }
+}
+
+void ErrorStats::merge(const ErrorStats& other) {
+  if (other.max_abs_error > max_abs_error || count == 0) {
+    max_abs_error = other.max_abs_error;
+    time_of_max_s = other.time_of_max_s;
+  }
+  count += other.count;
+  sum_squared_error += other.sum_squared_error;
+  sum_measured += other.sum_measured;
+  sum_measured_squared += other.sum_measured_squared;
+}
+
+double ErrorStats::rmse() const {
+  if (count == 0) return std::numeric_limits<double>::quiet_NaN();
+  return std::sqrt(sum_squared_error / static_cast<double>(count));
+}
+
+double ErrorStats::fit_percent() const {
+  if (count == 0) return std::numeric_limits<double>::quiet_NaN();
+  const double n = static_cast<double>(count);
+  const double spread = sum_measured_squared - sum_measured * sum_measured / n;
+  if (!(spread > 0)) return std::numeric_limits<double>::quiet_NaN();
+  return 100.0 * (1.0 - std::sqrt(sum_squared_error / spread));
+}
+
+double FitMetrics::study_objective_rad_s() const {
+  if (failed_replays > 0) return std::numeric_limits<double>::infinity();
+  return replay.max_abs_error;
+}
+
+void FitMetrics::add(const StrokeFitMetrics& stroke) {
+  if (strokes.empty() || stroke.window.max_abs_error > window.max_abs_error) {
+    worst_window_stroke_id = stroke.stroke_id;
+  }
+  window.merge(stroke.window);
+  if (stroke.replay_ok) {
+    if (replay.count == 0 || stroke.replay.max_abs_error > replay.max_abs_error) {
+      worst_replay_stroke_id = stroke.stroke_id;
+    }
+    replay.merge(stroke.replay);
+  } else {
+    if (failed_replays == 0) worst_replay_stroke_id = stroke.stroke_id;
+    ++failed_replays;
+  }
+  strokes.push_back(stroke);
+}
+
+WindowSimulation simulate_windows(const DoorModel& model, const PreparedData& data,
+                                  const WindowOptions& options) {
+  WindowSimulation out;
+  out.theta_rad.resize(data.strokes.size());
+  out.omega_rad_s.resize(data.strokes.size());
+  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+    out.theta_rad[s] = data.strokes[s].theta_rad;
+    out.omega_rad_s[s] = data.strokes[s].omega_rad_s;
+  }
+  const std::span<const double> parameters = model.parameter_values();
+  for (const FitWindow& window : split_windows(data, options)) {
+    const Stroke& stroke = data.strokes[window.stroke];
+    std::vector<double>& theta = out.theta_rad[window.stroke];
+    std::vector<double>& omega = out.omega_rad_s[window.stroke];
+    auto sink = [&](int j, double theta_sim, double omega_sim) {
+      theta[window.first + j] = theta_sim;
+      omega[window.first + j] = omega_sim;
+    };
+    for (int j = 1; j < window.count; ++j) {  // NaN unless the integration gets there
+      theta[window.first + j] = omega[window.first + j] = std::numeric_limits<double>::quiet_NaN();
+    }
+    if (!integrate_window(model, parameters.data(), stroke, window, options.substeps_per_sample,
+                          stroke.theta_rad[window.first], stroke.omega_rad_s[window.first], sink)) {
+      out.ok = false;
+    }
+  }
+  return out;
+}
+
+namespace {
+
+void replay_stroke(const DoorModel& model, const Stroke& stroke, StrokeFitMetrics& metrics) {
+  if (stroke.size() < 2) return;
+  try {
+    const RecordedForce force(stroke.time_s, stroke.force_N);
+    DoorState initial;
+    initial.time_s = stroke.time_s.front();
+    initial.theta_rad = stroke.theta_rad.front();
+    initial.omega_rad_s = stroke.omega_rad_s.front();
+    const Trajectory run = simulate(model, force, initial, stroke.time_s);
+    for (std::size_t i = 1; i < stroke.size(); ++i) {
+      metrics.replay.add(stroke.omega_rad_s[i], run.omega_rad_s[i], stroke.time_s[i]);
+    }
+  } catch (const std::exception& error) {
+    metrics.replay_ok = false;
+    metrics.replay_message = error.what();
+  }
+}
+
+}  // namespace
+
+FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
+                               const WindowOptions& options,
+                               const std::vector<int>& stroke_indices) {
+  std::vector<int> indices = stroke_indices;
+  if (indices.empty()) {
+    for (std::size_t s = 0; s < data.strokes.size(); ++s) indices.push_back(static_cast<int>(s));
+  }
+  const WindowSimulation windows = simulate_windows(model, data, options);
+  std::vector<std::size_t> window_count(data.strokes.size(), 0);
+  std::vector<std::vector<char>> is_start(data.strokes.size());
+  for (std::size_t s = 0; s < data.strokes.size(); ++s) {
+    is_start[s].assign(data.strokes[s].size(), 0);
+  }
+  for (const FitWindow& window : split_windows(data, options)) {
+    ++window_count[window.stroke];
+    is_start[window.stroke][window.first] = 1;
+  }
+  FitMetrics metrics;
+  for (int s : indices) {
+    if (s < 0 || s >= static_cast<int>(data.strokes.size())) {
+      throw std::out_of_range("compute_fit_metrics: no stroke at index " + std::to_string(s));
+    }
+    const Stroke& stroke = data.strokes[s];
+    if (stroke.size() < 2) continue;  // nothing to compare
+    StrokeFitMetrics stroke_metrics;
+    stroke_metrics.stroke_id = stroke.id;
+    stroke_metrics.direction = stroke.direction;
+    stroke_metrics.windows = window_count[s];
+    for (std::size_t i = 0; i < stroke.size(); ++i) {
+      if (is_start[s][i]) continue;
+      stroke_metrics.window.add(stroke.omega_rad_s[i], windows.omega_rad_s[s][i], stroke.time_s[i]);
+    }
+    replay_stroke(model, stroke, stroke_metrics);
+    metrics.add(stroke_metrics);
+  }
+  return metrics;
+}
+
+}  // namespace doorbench

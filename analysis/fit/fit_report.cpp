@@ -1,0 +1,281 @@
+// The text reports of a fit: FitSummary::brief_report() and full_report().
+#include <cmath>
+#include <cstdarg>
+#include <cstdio>
+#include <string>
+
+#include "analysis/fit/fitting.h"
+#include "analysis/fit/metric_notes.h"
+#include "core/number_format.h"
+
+namespace doorbench {
+
+namespace {
+
+std::string number(double value) {
+  return format_significant(value, 6);
+}
+
+std::string short_number(double value) {
+  if (std::isnan(value)) return "-";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  return printf_text("%.3g", value);
+}
+
+std::string percent(double value) {
+  if (!std::isfinite(value)) return "-";
+  return printf_text("%.2f%%", value);
+}
+
+std::string objective_name(const FitOptions& options) {
+  if (options.objective == FitOptions::Objective::kWholeStrokeMax) {
+    return "whole strokes replayed, L" + std::to_string(2 * options.max_objective_power) +
+           " norm of the rate error (after the window fit)";
+  }
+  return "least squares on windows (multiple shooting)";
+}
+
+std::string direction_name(StrokeDirection direction) {
+  return direction == StrokeDirection::kOpening ? "open" : "close";
+}
+
+void metric_rows(std::string& out, const FitMetrics& fitted, const FitMetrics* held_out) {
+  auto row = [&](const char* name, double fitted_value, double held_value, const char* unit) {
+    out += printf_text("  %-36s %-12s %-12s %s\n", name, short_number(fitted_value).c_str(),
+                       held_out ? short_number(held_value).c_str() : "-", unit);
+  };
+  auto percent_row = [&](const char* name, double fitted_value, double held_value) {
+    out += printf_text("  %-36s %-12s %-12s\n", name, percent(fitted_value).c_str(),
+                       held_out ? percent(held_value).c_str() : "-");
+  };
+  const double nan = std::nan("");
+  row("windows: RMSE of omega", fitted.window.rmse(), held_out ? held_out->window.rmse() : nan,
+      "rad/s");
+  row("windows: largest |omega error|", fitted.window.max_abs_error,
+      held_out ? held_out->window.max_abs_error : nan, "rad/s");
+  percent_row("windows: FIT%", fitted.window.fit_percent(),
+              held_out ? held_out->window.fit_percent() : nan);
+  row("whole strokes replayed: RMSE of omega", fitted.replay.rmse(),
+      held_out ? held_out->replay.rmse() : nan, "rad/s");
+  percent_row("whole strokes replayed: FIT%", fitted.replay.fit_percent(),
+              held_out ? held_out->replay.fit_percent() : nan);
+  row("study objective: max |omega error|", fitted.study_objective_rad_s(),
+      held_out ? held_out->study_objective_rad_s() : nan, "rad/s (whole strokes replayed)");
+}
+
+}  // namespace
+
+std::string FitSummary::brief_report() const {
+  std::string out = printf_text(
+      "Fit of the %s model (%d free parameters) to %zu strokes, %zu windows: %s after %d "
+      "iterations, %.2f s.\n",
+      std::string(to_string(model_kind)).c_str(), free_parameters, strokes, windows,
+      converged ? "converged" : "NOT converged", iterations, total_time_s);
+  out += "Window RMSE of omega " + short_number(fitted.window.rmse()) + " rad/s fitted";
+  if (held_out) out += ", " + short_number(held_out->window.rmse()) + " held out";
+  out += "; FIT% " + percent(fitted.window.fit_percent());
+  if (held_out) out += " / " + percent(held_out->window.fit_percent());
+  out += ".\n";
+  out += "Study objective (whole strokes replayed): max |omega error| " +
+         short_number(fitted.study_objective_rad_s()) + " rad/s (stroke " +
+         std::to_string(fitted.worst_replay_stroke_id) + ").\n";
+  out += fit_and_max_error_note(fitted);
+  if (!undetermined.empty()) {
+    out += "Undetermined:";
+    for (const std::string& name : undetermined) out += " " + name;
+    out += ".\n";
+  }
+  return out;
+}
+
+namespace {
+
+// The data, the model, the windows, the residuals and the objective.
+void data_section(std::string& out, const FitSummary& summary) {
+  int openings = 0;
+  for (const StrokeFitMetrics& stroke : summary.fitted.strokes) {
+    if (stroke.direction == StrokeDirection::kOpening) ++openings;
+  }
+  out += printf_text("Data       %s: %zu strokes (%d opening, %d closing)\n",
+                     summary.source.empty() ? "(unnamed)" : summary.source.c_str(), summary.strokes,
+                     openings, static_cast<int>(summary.fitted.strokes.size()) - openings);
+  out += printf_text("Model      %s, %d of %zu parameters free\n",
+                     std::string(to_string(summary.model_kind)).c_str(), summary.free_parameters,
+                     summary.parameters.size());
+  out += printf_text(
+      "Windows    %zu of %g s, each started from the state at its first sample (%s); "
+      "RK4, %d sub-steps per sample%s\n",
+      summary.windows, summary.options.window_s,
+      summary.options.estimate_window_states ? "estimated, measured state as its prior"
+                                             : "as measured",
+      summary.options.substeps_per_sample,
+      summary.options.coarse_first ? " (1 in a first pass)" : "");
+  out +=
+      printf_text("Residuals  %zu: omega / %s rad/s%s\n", summary.residuals,
+                  short_number(summary.rate_noise_rad_s).c_str(),
+                  summary.options.angle_residuals
+                      ? (" and theta / " + short_number(summary.angle_noise_rad) + " rad").c_str()
+                      : "");
+  out += "Objective  " + objective_name(summary.options) + "\n\n";
+}
+
+// The start, the solver and where the time went.
+void solver_section(std::string& out, const FitSummary& summary) {
+  if (summary.options.equation_error_start) {
+    out +=
+        printf_text("Start      equation error: %d iterations; %s\n",
+                    summary.equation_error_iterations, summary.equation_error_termination.c_str());
+  }
+  out += printf_text(
+      "Solver     Levenberg-Marquardt (Ceres), %d iterations, %.3f s (total %.3f s)\n",
+      summary.iterations, summary.solve_time_s, summary.total_time_s);
+  out += "           " + summary.termination + "\n";
+  out += "           cost 1/2 sum r^2: " + short_number(summary.initial_cost) + " -> " +
+         short_number(summary.final_cost) +
+         "; residual variance SSR/(n-p) = " + short_number(summary.residual_variance) +
+         " (1 when the weights are the noise)\n";
+  if (!std::isnan(summary.ceres_covariance_difference)) {
+    out += "           ceres::Covariance agrees with the fit's (J'J)^-1 to " +
+           short_number(summary.ceres_covariance_difference) + " (relative)\n";
+  }
+  out += printf_text(
+      "Time       start %.3f s, equation error %.3f s, windows %.3f s, statistics %.3f s, "
+      "metrics %.3f s, held out %.3f s\n\n",
+      summary.times.start_s, summary.times.equation_error_s, summary.times.windows_s,
+      summary.times.statistics_s, summary.times.metrics_s, summary.times.held_out_s);
+}
+
+// The parameters with their uncertainties, strong correlations, the undetermined.
+void parameter_section(std::string& out, const FitSummary& summary) {
+  out += printf_text(
+      "Parameters (u: standard uncertainty, %s; rank %d of %d; n_eff: windows the "
+      "robust u rests on)\n",
+      summary.options.uncertainty == FitOptions::Uncertainty::kWindowRobust
+          ? "window jackknife"
+          : "classical, (J'J)^-1 x SSR/(n-p)",
+      summary.covariance_rank, summary.free_parameters);
+  out += printf_text("  %-16s %-13s %-11s %-8s %-11s %-11s %-6s %-13s %-13s %-21s %s\n", "name",
+                     "value", "u", "u/|v|", "u robust", "u classic", "n_eff", "start", "eq. error",
+                     "bounds", "status");
+  for (const FittedParameter& p : summary.parameters) {
+    const std::string bounds = printf_text("[%s, %s]", short_number(p.bounds.lower).c_str(),
+                                           short_number(p.bounds.upper).c_str());
+    std::string status = p.free ? "free" : "fixed";
+    if (p.free && !p.determined) status += ", UNDETERMINED";
+    if (p.at_bound) status += ", at bound";
+    if (p.start_origin != "start model") status += ", start " + p.start_origin;
+    const double relative = p.uncertainty / std::abs(p.value);
+    out += printf_text(
+        "  %-16s %-13s %-11s %-8s %-11s %-11s %-6s %-13s %-13s %-21s %s\n", p.name.c_str(),
+        number(p.value).c_str(), short_number(p.uncertainty).c_str(),
+        p.free ? percent(100.0 * relative).c_str() : "-",
+        short_number(p.robust_uncertainty).c_str(), short_number(p.classical_uncertainty).c_str(),
+        p.free ? printf_text("%.1f", p.effective_windows).c_str() : "-", number(p.start).c_str(),
+        p.free ? number(p.equation_error).c_str() : "-", bounds.c_str(), status.c_str());
+  }
+  out += printf_text("\nCorrelations above %g:", summary.options.correlation_threshold);
+  if (summary.strong_correlations.empty()) out += " none";
+  out += "\n";
+  for (const ParameterCorrelation& c : summary.strong_correlations) {
+    out += printf_text("  %-16s %-16s %+.3f\n", c.first.c_str(), c.second.c_str(), c.value);
+  }
+  out += "Undetermined (rank-deficient direction or u/|value| above " +
+         short_number(summary.options.undetermined_relative_uncertainty) + "):";
+  if (summary.undetermined.empty()) out += " none";
+  for (const std::string& name : summary.undetermined) out += " " + name;
+  out += "\n";
+}
+
+// The latch read off the data, when it was.
+void latch_section(std::string& out, const FitSummary& summary) {
+  if (summary.latch_start.opening_strokes + summary.latch_start.closing_strokes > 0) {
+    out +=
+        printf_text("\nLatch start read off the data (%d opening, %d closing strokes):\n",
+                    summary.latch_start.opening_strokes, summary.latch_start.closing_strokes);
+    auto reading = [&](const char* name, const std::optional<double>& value, const char* unit) {
+      if (value) out += printf_text("  %-8s %-12s %s\n", name, number(*value).c_str(), unit);
+    };
+    reading("theta0", summary.latch_start.theta0_rad, "rad");
+    reading("theta1", summary.latch_start.theta1_rad, "rad");
+    reading("theta2", summary.latch_start.theta2_rad, "rad");
+    reading("theta3", summary.latch_start.theta3_rad, "rad");
+    reading("k_inf", summary.latch_start.k_inf_Nm_per_rad, "N*m/rad");
+    reading("k_lock", summary.latch_start.k_lock_Nm_per_rad, "N*m/rad");
+  }
+}
+
+// The metrics, fitted and held out, in total and per stroke.
+void metrics_section(std::string& out, const FitSummary& summary) {
+  out += printf_text(
+      "\nMetrics                                %-12s %-12s\n", "fitted",
+      summary.held_out ? ("held out (" + std::to_string(summary.folds) + " folds)").c_str()
+                       : "held out");
+  metric_rows(out, summary.fitted, summary.held_out ? &*summary.held_out : nullptr);
+
+  out += "\nPer stroke (omega errors in rad/s; held out: by the fold that left the stroke out)\n";
+  out += printf_text("  %-7s %-6s %-8s %-8s %-10s %-10s %-8s %-11s %-10s %-11s\n", "stroke", "dir",
+                     "samples", "windows", "win RMSE", "win max", "win FIT%", "replay max",
+                     "held RMSE", "held replay");
+  for (std::size_t i = 0; i < summary.fitted.strokes.size(); ++i) {
+    const StrokeFitMetrics& s = summary.fitted.strokes[i];
+    const StrokeFitMetrics* h = nullptr;
+    if (summary.held_out) {
+      for (const StrokeFitMetrics& candidate : summary.held_out->strokes) {
+        if (candidate.stroke_id == s.stroke_id && candidate.direction == s.direction)
+          h = &candidate;
+      }
+    }
+    const std::string replay =
+        s.replay_ok ? short_number(s.replay.max_abs_error) : std::string("failed");
+    const std::string held_replay =
+        h == nullptr ? "-" : (h->replay_ok ? short_number(h->replay.max_abs_error) : "failed");
+    out += printf_text("  %-7d %-6s %-8zu %-8zu %-10s %-10s %-8s %-11s %-10s %-11s\n", s.stroke_id,
+                       direction_name(s.direction).c_str(), s.window.count, s.windows,
+                       short_number(s.window.rmse()).c_str(),
+                       short_number(s.window.max_abs_error).c_str(),
+                       percent(s.window.fit_percent()).c_str(), replay.c_str(),
+                       h ? short_number(h->window.rmse()).c_str() : "-", held_replay.c_str());
+  }
+}
+
+// The cross-validation folds and the notes.
+void folds_section(std::string& out, const FitSummary& summary) {
+  if (!summary.fold_fits.empty()) {
+    out +=
+        "\nCross-validation folds (each refitted from the full fit without its "
+        "strokes)\n";
+    for (std::size_t f = 0; f < summary.fold_fits.size(); ++f) {
+      const FoldFit& fold = summary.fold_fits[f];
+      std::string left_out;
+      for (int id : fold.held_out_strokes) {
+        left_out.append(left_out.empty() ? "" : ",").append(std::to_string(id));
+      }
+      out += printf_text(
+          "  fold %zu (leaves out %s): %d iterations, %s; window RMSE %s fitted, "
+          "%s "
+          "held out\n",
+          f + 1, left_out.c_str(), fold.iterations, fold.converged ? "converged" : "NOT converged",
+          short_number(fold.fitted_rmse_rad_s).c_str(),
+          short_number(fold.held_out_rmse_rad_s).c_str());
+    }
+  }
+  if (!summary.notes.empty()) {
+    out += "\nNotes\n";
+    for (const std::string& note : summary.notes) out += "  - " + note + "\n";
+  }
+}
+
+}  // namespace
+
+std::string FitSummary::full_report() const {
+  std::string out = "doorbench fit report\n\n";
+  data_section(out, *this);
+  solver_section(out, *this);
+  parameter_section(out, *this);
+  latch_section(out, *this);
+  metrics_section(out, *this);
+  folds_section(out, *this);
+  return out;
+}
+
+}  // namespace doorbench

@@ -1,0 +1,864 @@
+#include "analysis/fit/fitting.h"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <limits>
+#include <mutex>
+#include <stdexcept>
+#include <thread>
+
+#include "analysis/fit/fit_problem.h"
+#include "analysis/model/sensory_model.h"
+#include "core/clock.h"
+#include "core/number_format.h"
+#include "core/parallel.h"
+
+namespace doorbench {
+
+namespace {
+
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+// A robust uncertainty resting on fewer windows than this is flagged in the notes.
+constexpr double kFewEffectiveWindows = 10.0;
+
+bool finite_positive(double value) {
+  return std::isfinite(value) && value > 0;
+}
+
+}  // namespace
+
+std::string FitOptions::validate() const {
+  if (!finite_positive(window_s)) return "fit window_s must be > 0";
+  if (substeps_per_sample < 1 || substeps_per_sample > 100) {
+    return "fit substeps_per_sample must be between 1 and 100";
+  }
+  if (!std::isfinite(rate_noise_rad_s) || rate_noise_rad_s < 0) {
+    return "fit rate_noise_rad_s must be >= 0 (0: the data's)";
+  }
+  if (!std::isfinite(angle_noise_rad) || angle_noise_rad < 0) {
+    return "fit angle_noise_rad must be >= 0 (0: the data's)";
+  }
+  if (max_objective_power < 1 || max_objective_power > 16) {
+    return "fit max_objective_power must be between 1 and 16";
+  }
+  if (max_iterations < 1) return "fit max_iterations must be >= 1";
+  if (!finite_positive(function_tolerance) || !finite_positive(parameter_tolerance) ||
+      !finite_positive(gradient_tolerance) || !finite_positive(uncertainty_tolerance) ||
+      !finite_positive(coarse_tolerance_factor) ||
+      !finite_positive(equation_error_step_tolerance)) {
+    return "fit function_tolerance, parameter_tolerance, gradient_tolerance, "
+           "uncertainty_tolerance, coarse_tolerance_factor and equation_error_step_tolerance "
+           "must be > 0";
+  }
+  if (num_threads < 0) return "fit num_threads must be >= 0 (0: every hardware thread)";
+  if (cross_validation_folds < 0 || cross_validation_folds == 1) {
+    return "fit cross_validation_folds must be 0 (none) or >= 2";
+  }
+  if (held_out_max_iterations < 1) return "fit held_out_max_iterations must be >= 1";
+  if (!(correlation_threshold > 0 && correlation_threshold < 1)) {
+    return "fit correlation_threshold must lie strictly between 0 and 1";
+  }
+  if (!finite_positive(undetermined_relative_uncertainty)) {
+    return "fit undetermined_relative_uncertainty must be > 0";
+  }
+  for (const ParameterPrior& prior : priors) {
+    if (!std::isfinite(prior.center) || !finite_positive(prior.sigma)) {
+      return "fit priors: the prior on '" + prior.parameter +
+             "' needs a finite center and a sigma > 0";
+    }
+  }
+  return "";
+}
+
+int fit_thread_count(const FitOptions& options) {
+  if (options.num_threads > 0) return options.num_threads;
+  return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
+}
+
+SolverSettings solver_settings(const FitOptions& options) {
+  SolverSettings settings;
+  settings.max_iterations = options.max_iterations;
+  settings.function_tolerance = options.function_tolerance;
+  settings.parameter_tolerance = options.parameter_tolerance;
+  settings.gradient_tolerance = options.gradient_tolerance;
+  settings.equation_error_step_tolerance = options.equation_error_step_tolerance;
+  settings.robust_uncertainty = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
+  settings.threads = fit_thread_count(options);
+  return settings;
+}
+
+std::vector<std::string> default_free_parameters(const DoorModel& model) {
+  std::vector<std::string> names;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    const std::string& name = model.parameter_name(i);
+    if (name == "k_stop" || name == "c_stop") continue;
+    if (model.kind() == ModelKind::kSensory && (name == "beta" || name == "beta_f")) continue;
+    names.push_back(name);
+  }
+  return names;
+}
+
+double parameter_scale(double start, const Bounds& bounds) {
+  const double width = bounds.upper - bounds.lower;
+  const bool usable_width = std::isfinite(width) && width > 0;
+  if (std::abs(start) > 0 && (!usable_width || std::abs(start) >= 1e-3 * width)) {
+    return std::abs(start);
+  }
+  if (usable_width) return 0.1 * width;
+  return 1.0;
+}
+
+namespace {
+
+
+
+std::string parameter_list(const DoorModel& model) {
+  std::string list;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    if (i > 0) list += ", ";
+    list += model.parameter_name(i);
+  }
+  return list;
+}
+
+int find_or_throw(const DoorModel& model, const std::string& name, const char* option) {
+  const std::optional<int> index = model.find_parameter(name);
+  if (!index) {
+    throw std::invalid_argument("fit: " + std::string(option) + " names '" + name +
+                                "', which the " + std::string(to_string(model.kind())) +
+                                " model does not have (its parameters: " + parameter_list(model) +
+                                ")");
+  }
+  return *index;
+}
+
+std::vector<int> resolve_free(const DoorModel& model, const FitOptions& options) {
+  const std::vector<std::string> names =
+      options.free_parameters.empty() ? default_free_parameters(model) : options.free_parameters;
+  std::vector<char> free(model.parameter_count(), 0);
+  for (const std::string& name : names) free[find_or_throw(model, name, "free_parameters")] = 1;
+  for (const std::string& name : options.fixed_parameters) {
+    free[find_or_throw(model, name, "fixed_parameters")] = 0;
+  }
+  std::vector<int> indices;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    if (free[i]) indices.push_back(i);
+  }
+  if (indices.empty()) throw std::invalid_argument("fit: no parameter is free");
+  return indices;
+}
+
+void check_data(const PreparedData& data, const DoorModel& model) {
+  if (data.strokes.empty()) throw std::invalid_argument("fit: the data has no strokes");
+  for (const Stroke& stroke : data.strokes) {
+    const std::string which = "fit: stroke " + std::to_string(stroke.id);
+    const std::size_t n = stroke.time_s.size();
+    if (stroke.force_N.size() != n || stroke.theta_rad.size() != n ||
+        stroke.omega_rad_s.size() != n) {
+      throw std::invalid_argument(which + ": time, force, angle and rate differ in length");
+    }
+    for (std::size_t i = 0; i < n; ++i) {
+      if (!std::isfinite(stroke.time_s[i]) || !std::isfinite(stroke.force_N[i]) ||
+          !std::isfinite(stroke.theta_rad[i]) || !std::isfinite(stroke.omega_rad_s[i])) {
+        throw std::invalid_argument(which + ": sample " + std::to_string(i) + " is not finite");
+      }
+      if (i > 0 && !(stroke.time_s[i] > stroke.time_s[i - 1])) {
+        throw std::invalid_argument(which + ": time does not increase at sample " +
+                                    std::to_string(i));
+      }
+    }
+  }
+  const double model_radius = model.geometry().handle_radius_m;
+  if (data.handle_radius_m > 0 &&
+      std::abs(data.handle_radius_m - model_radius) > 1e-6 * model_radius) {
+    throw std::invalid_argument("fit: the data's handle radius (" +
+                                format_number(data.handle_radius_m) +
+                                " m) differs from the model's (" + format_number(model_radius) +
+                                " m); build the model with the bench's geometry");
+  }
+}
+
+// Replaces the start's free latch values with those read off the data, when they keep
+// every constraint. Records the origin of each value.
+void apply_latch_read_off(const DoorModel& start, const LatchReadOff& read,
+                          const std::vector<int>& free_index, std::vector<double>& values,
+                          std::vector<std::string>& origin, std::vector<std::string>& notes) {
+  const std::pair<int, std::optional<double>> readings[] = {
+      {sensory::kTheta0, read.theta0_rad},     {sensory::kTheta1, read.theta1_rad},
+      {sensory::kTheta2, read.theta2_rad},     {sensory::kTheta3, read.theta3_rad},
+      {sensory::kKInf, read.k_inf_Nm_per_rad}, {sensory::kKLock, read.k_lock_Nm_per_rad}};
+  std::vector<double> trial = values;
+  std::vector<int> replaced;
+  const auto bounds = start.parameter_bounds();
+  for (const auto& [index, reading] : readings) {
+    if (!reading || std::find(free_index.begin(), free_index.end(), index) == free_index.end()) {
+      continue;
+    }
+    trial[index] = std::clamp(*reading, bounds[index].lower, bounds[index].upper);
+    replaced.push_back(index);
+  }
+  if (replaced.empty()) return;
+  // When only one side of the latch was read (no stroke unlatched from closed, say), the
+  // angles not read keep their proportion to those read: a start latch scaled to the data
+  // instead of one that crosses it (θ1 above the θ2 read off, and the reading discarded).
+  const bool opening_read = read.theta1_rad.has_value();
+  std::vector<int> scaled;
+  const bool closing_read = read.theta2_rad.has_value();
+  const auto scale_free = [&](std::initializer_list<int> indices, double factor) {
+    for (int index : indices) {
+      if (std::find(free_index.begin(), free_index.end(), index) == free_index.end()) continue;
+      trial[index] = std::clamp(values[index] * factor, bounds[index].lower, bounds[index].upper);
+      scaled.push_back(index);
+    }
+  };
+  if (closing_read && !opening_read && !(trial[sensory::kTheta1] < trial[sensory::kTheta2])) {
+    scale_free({sensory::kTheta0, sensory::kTheta1},
+               trial[sensory::kTheta2] / values[sensory::kTheta2]);
+  } else if (opening_read && !closing_read &&
+             !(trial[sensory::kTheta1] < trial[sensory::kTheta2])) {
+    scale_free({sensory::kTheta2, sensory::kTheta3},
+               trial[sensory::kTheta1] / values[sensory::kTheta1]);
+  }
+  try {
+    (void)start.with_parameter_values(trial);
+  } catch (const std::invalid_argument& error) {
+    notes.push_back(std::string("the latch read off the data was not used: ") + error.what());
+    return;
+  }
+  values = trial;
+  for (int index : replaced) origin[index] = "read off the data";
+  for (int index : scaled) origin[index] = "start scaled to the latch read off";
+}
+
+// Free values of a model, scaled.
+std::vector<double> scaled_values(const ParameterMap& map, std::span<const double> values) {
+  return map.scaled(std::vector<double>(values.begin(), values.end()));
+}
+
+FitWeights resolve_weights(const FitOptions& options, const PreparedData& data,
+                           std::vector<std::string>& notes) {
+  FitWeights weights;
+  weights.angle_residuals = options.angle_residuals;
+  weights.rate_noise_rad_s = options.rate_noise_rad_s > 0 ? options.rate_noise_rad_s
+                             : data.rate_noise_rad_s > 0  ? data.rate_noise_rad_s
+                                                          : kBenchRateNoise_rad_s;
+  weights.angle_noise_rad = options.angle_noise_rad > 0 ? options.angle_noise_rad
+                            : data.angle_noise_rad > 0  ? data.angle_noise_rad
+                                                        : kBenchAngleNoise_rad;
+  if (options.rate_noise_rad_s == 0 && !(data.rate_noise_rad_s > 0)) {
+    notes.push_back("the data gives no rate noise level: sigma_omega is the bench's");
+  }
+  if (options.angle_noise_rad == 0 && !(data.angle_noise_rad > 0)) {
+    notes.push_back("the data gives no angle noise level: sigma_theta is the bench's");
+  }
+  return weights;
+}
+
+WindowOptions metric_windows(const FitOptions& options, const DoorModel& model) {
+  return metric_window_options(options, model);
+}
+
+ProblemKind window_fit_kind(const FitOptions& options, const DoorModel& model) {
+  ProblemKind kind;
+  kind.windows = metric_windows(options, model);
+  kind.windows.disjoint = options.estimate_window_states;
+  kind.estimate_start_states = options.estimate_window_states;
+  return kind;
+}
+
+// The window fit from the problem's x and z: coarse (one RK4 step per sample) then fine.
+// Leaves the result in `problem` (whose kind is the fine one).
+WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorModel& model,
+                                            const PreparedData& data, const ParameterMap& map,
+                                            const FitOptions& options, const FitWeights& weights,
+                                            int max_iterations,
+                                            const std::function<void(int)>& on_iteration = {}) {
+  int used = 0;
+  SolverSettings settings = solver_settings(options);
+  if (on_iteration) {
+    settings.on_iteration = [&on_iteration, &used](int iterations) {
+      on_iteration(used + iterations);
+    };
+  }
+  double initial_cost = kNaN;
+  if (options.coarse_first && options.substeps_per_sample > 1) {
+    ProblemKind coarse_kind = window_fit_kind(options, model);
+    coarse_kind.windows.substeps_per_sample = 1;
+    WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
+    coarse.z() = problem.z();
+    const WindowProblem::Outcome outcome =
+        coarse.solve(settings, max_iterations,
+                     options.coarse_tolerance_factor * options.uncertainty_tolerance);
+    used = outcome.iterations;
+    initial_cost = outcome.initial_cost;
+    if (outcome.usable) {
+      problem.x() = coarse.x();
+      problem.z() = coarse.z();
+    }
+  }
+  WindowProblem::Outcome outcome =
+      problem.solve(settings, std::max(1, max_iterations - used), options.uncertainty_tolerance);
+  outcome.iterations += used;
+  if (used > 0) outcome.initial_cost = initial_cost;
+  return outcome;
+}
+
+// One cross-validation fold's refit: its strokes left out, refitted from the full fit.
+struct FoldOutcome {
+  bool refitted = false;  // false: no window, or the solver failed (note says which)
+  std::string note;
+  std::optional<DoorModel> model;
+  FoldFit fit;
+  std::vector<int> held;  // indices into data.strokes
+  FitMetrics held_out;    // on the held strokes
+};
+
+PreparedData training_data(const PreparedData& data, int folds, int fold, std::vector<int>& held) {
+  PreparedData training;
+  training.source = data.source;
+  training.handle_radius_m = data.handle_radius_m;
+  training.sample_rate_hz = data.sample_rate_hz;
+  training.rate_noise_rad_s = data.rate_noise_rad_s;
+  training.angle_noise_rad = data.angle_noise_rad;
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  for (int s = 0; s < stroke_count; ++s) {
+    if (s % folds == fold) {
+      if (data.strokes[s].size() >= 2) held.push_back(s);
+    } else {
+      training.strokes.push_back(data.strokes[s]);
+    }
+  }
+  return training;
+}
+
+std::vector<std::string> at_bound_names(const DoorModel& model,
+                                        const std::vector<int>& free_index) {
+  std::vector<std::string> names;
+  const auto bounds = model.parameter_bounds();
+  for (int index : free_index) {
+    const double value = model.parameter_values()[index];
+    const double width = bounds[index].upper - bounds[index].lower;
+    if (std::abs(value - bounds[index].lower) <= 1e-6 * width ||
+        std::abs(bounds[index].upper - value) <= 1e-6 * width) {
+      names.push_back(model.parameter_name(index));
+    }
+  }
+  return names;
+}
+
+FoldOutcome refit_fold(const DoorModel& fitted, const PreparedData& data, const ParameterMap& map,
+                       const std::vector<double>& x, const FitOptions& options,
+                       const FitWeights& weights, int folds, int fold) {
+  FoldOutcome out;
+  const PreparedData training = training_data(data, folds, fold, out.held);
+  WindowProblem problem(fitted, training, map, window_fit_kind(options, fitted), weights, x);
+  if (problem.windows().empty()) return out;
+  // Coarse pass first, window states from the measured states: see docs/fitting.md
+  // ("Held out") for why the folds do not start from the full fit's window states.
+  const WindowProblem::Outcome outcome = solve_coarse_to_fine(
+      problem, fitted, training, map, options, weights, options.held_out_max_iterations);
+  if (!outcome.usable) {
+    out.note =
+        "cross-validation fold " + std::to_string(fold + 1) + " failed: " + outcome.termination;
+    return out;
+  }
+  out.refitted = true;
+  out.model = fitted.with_parameter_values(map.values(problem.x().data()));
+  const WindowOptions windows = metric_windows(options, fitted);
+  out.held_out = compute_fit_metrics(*out.model, data, windows, out.held);
+  for (int s : out.held) out.fit.held_out_strokes.push_back(data.strokes[s].id);
+  out.fit.converged = outcome.converged;
+  out.fit.termination = outcome.termination;
+  out.fit.iterations = outcome.iterations;
+  out.fit.fitted_rmse_rad_s = compute_fit_metrics(*out.model, training, windows).window.rmse();
+  out.fit.held_out_rmse_rad_s = out.held_out.window.rmse();
+  out.fit.at_bound = at_bound_names(*out.model, map.free_index);
+  return out;
+}
+
+// Held-out metrics: stroke s is in fold s mod k; each fold is refitted from the full fit
+// without its strokes, and its strokes are measured with that refit. The folds are
+// independent and each deterministic, so they run at once (up to fit_thread_count) and are
+// gathered in fold order: the result is the same as one after another.
+FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
+                          const ParameterMap& map, const std::vector<double>& x,
+                          const FitOptions& options, const FitWeights& weights, int folds,
+                          std::vector<std::string>& notes, std::vector<DoorModel>& fold_models,
+                          std::vector<FoldFit>& fold_fits) {
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  ParameterMap fold_map = map;
+  fold_map.base_values.assign(fitted.parameter_values().begin(), fitted.parameter_values().end());
+  std::vector<FoldOutcome> outcomes(static_cast<std::size_t>(folds));
+  std::mutex progress_mutex;
+  int folds_done = 0;
+  if (options.progress) options.progress({FitProgress::Stage::kFolds, 0, folds});
+  parallel_for(folds, fit_thread_count(options), [&](int fold) {
+    outcomes[static_cast<std::size_t>(fold)] =
+        refit_fold(fitted, data, fold_map, x, options, weights, folds, fold);
+    if (options.progress) {
+      const std::lock_guard lock(progress_mutex);
+      options.progress({FitProgress::Stage::kFolds, ++folds_done, folds});
+    }
+  });
+  std::vector<StrokeFitMetrics> per_stroke(stroke_count);
+  std::vector<char> have(stroke_count, 0);
+  for (FoldOutcome& outcome : outcomes) {
+    if (!outcome.note.empty()) notes.push_back(outcome.note);
+    if (!outcome.refitted) continue;
+    fold_models.push_back(std::move(*outcome.model));
+    fold_fits.push_back(std::move(outcome.fit));
+    for (std::size_t i = 0; i < outcome.held.size() && i < outcome.held_out.strokes.size(); ++i) {
+      per_stroke[outcome.held[i]] = outcome.held_out.strokes[i];
+      have[outcome.held[i]] = 1;
+    }
+  }
+  int unconverged = 0;
+  for (const FoldFit& fold_fit : fold_fits) unconverged += fold_fit.converged ? 0 : 1;
+  if (unconverged > 0) {
+    notes.push_back(std::to_string(unconverged) + " of " + std::to_string(fold_fits.size()) +
+                    " cross-validation folds stopped at held_out_max_iterations (" +
+                    std::to_string(options.held_out_max_iterations) +
+                    ") before converging: the held-out figures are where they stopped");
+  }
+  FitMetrics held_out;
+  for (int s = 0; s < stroke_count; ++s) {
+    if (have[s]) held_out.add(per_stroke[s]);
+  }
+  return held_out;
+}
+
+}  // namespace
+
+FitMetrics evaluate_model(const DoorModel& model, const PreparedData& data,
+                          const FitOptions& options) {
+  return compute_fit_metrics(model, data, metric_windows(options, model));
+}
+
+namespace {
+
+// A fold must fit every stroke at least this much better (RMSE ratio) to restart from it.
+constexpr double kFoldRestartGain = 0.9;
+
+// The start: free parameters, the start values (the latch read off the data when asked,
+// clamped into bounds) and where each value came from.
+struct StartValues {
+  std::vector<int> free_index;
+  std::vector<double> values;
+  std::vector<std::string> origin;
+};
+
+StartValues start_values(const DoorModel& start, const PreparedData& data,
+                         const FitOptions& options, const FitWeights& weights,
+                         FitSummary& summary) {
+  StartValues chosen;
+  chosen.free_index = resolve_free(start, options);
+  const std::vector<int>& free_index = chosen.free_index;
+  std::vector<double>& values = chosen.values;
+  std::vector<std::string>& origin = chosen.origin;
+  values.assign(start.parameter_values().begin(), start.parameter_values().end());
+  origin.assign(static_cast<std::size_t>(start.parameter_count()), "start model");
+  if (options.latch_start_from_data && start.kind() == ModelKind::kSensory) {
+    summary.latch_start = read_latch_start(data, start, weights.rate_noise_rad_s);
+    for (const std::string& note : summary.latch_start.notes) summary.notes.push_back(note);
+    apply_latch_read_off(start, summary.latch_start, free_index, values, origin, summary.notes);
+  }
+  const auto bounds = start.parameter_bounds();
+  for (int index : free_index) {
+    const double clamped = std::clamp(values[index], bounds[index].lower, bounds[index].upper);
+    if (clamped != values[index]) {
+      values[index] = clamped;
+      origin[index] = "clamped into bounds";
+      summary.notes.push_back("the start of " + start.parameter_name(index) +
+                              " lay outside its bounds and was moved onto the nearer one");
+    }
+  }
+  return chosen;
+}
+
+DoorModel checked_start_model(const DoorModel& start, const std::vector<double>& values) {
+  try {
+    return start.with_parameter_values(values);
+  } catch (const std::invalid_argument& error) {
+    throw std::invalid_argument(std::string("fit: the start breaks a constraint: ") + error.what());
+  }
+}
+
+// The solver's map of the free parameters, and the priors on them in its units.
+ParameterMap make_map(const DoorModel& start, const StartValues& chosen, const FitOptions& options,
+                      FitWeights& weights, FitSummary& summary) {
+  const std::vector<int>& free_index = chosen.free_index;
+  const auto bounds = start.parameter_bounds();
+  ParameterMap map;
+  map.base_values = chosen.values;
+  map.free_index = free_index;
+  for (int index : free_index) {
+    map.scale.push_back(parameter_scale(chosen.values[index], bounds[index]));
+  }
+  summary.free_parameters = map.free_count();
+  for (int index : free_index) summary.free_names.push_back(start.parameter_name(index));
+  for (const ParameterPrior& prior : options.priors) {
+    const int index = find_or_throw(start, prior.parameter, "priors");
+    const auto position = std::find(free_index.begin(), free_index.end(), index);
+    if (position == free_index.end()) continue;
+    const std::size_t k = static_cast<std::size_t>(position - free_index.begin());
+    weights.priors.push_back(
+        {static_cast<int>(k), prior.center / map.scale[k], prior.sigma / map.scale[k]});
+  }
+
+  return map;
+}
+
+// "stroke 3 (closing), the window from ... (largest |force| there ...)": where a simulation
+// was not finite.
+std::string describe_window(const WindowProblem& problem, const PreparedData& data, int w) {
+  const FitWindow& window = problem.windows()[static_cast<std::size_t>(w)];
+  const Stroke& stroke = data.strokes[static_cast<std::size_t>(window.stroke)];
+  const auto first = static_cast<std::size_t>(window.first);
+  const auto last = first + static_cast<std::size_t>(window.count) - 1;
+  double largest_force_N = 0.0;
+  for (std::size_t i = first; i <= last; ++i) {
+    largest_force_N = std::max(largest_force_N, std::abs(stroke.force_N[i]));
+  }
+  char text[200];
+  std::snprintf(text, sizeof text,
+                "stroke %d (%s), the window from %.3f s to %.3f s (largest |force| there %.4g N)",
+                stroke.id, stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
+                stroke.time_s[first], stroke.time_s[last], largest_force_N);
+  return std::string(text);
+}
+
+// Refuses a window problem without enough data or whose start does not simulate.
+void check_problem(const WindowProblem& problem, const PreparedData& data, const ParameterMap& map,
+                   FitSummary& summary) {
+  summary.windows = problem.windows().size();
+  summary.window_state_parameters = static_cast<int>(problem.z().size());
+  summary.residuals = static_cast<std::size_t>(problem.residual_count());
+  if (summary.windows == 0) throw std::invalid_argument("fit: no stroke has 2 samples or more");
+  if (static_cast<int>(summary.residuals) <= map.free_count() + summary.window_state_parameters) {
+    throw std::invalid_argument("fit: fewer residuals (" + std::to_string(summary.residuals) +
+                                ") than parameters to estimate (" +
+                                std::to_string(map.free_count() + summary.window_state_parameters) +
+                                ")");
+  }
+  // A fit never runs on non-finite residuals: a start whose simulation blows up is refused
+  // with the window that did (the data there, or the start values, are to be checked).
+  if (const int w = problem.first_non_finite_window(); w >= 0) {
+    throw std::runtime_error("fit: the start model's simulation is not finite in " +
+                             describe_window(problem, data, w) +
+                             "; check that window's data and the start parameters");
+  }
+}
+
+// The equation-error stage: moves the problem's x to its result when that simulates.
+void equation_error_stage(WindowProblem& problem, const DoorModel& start_model,
+                          const PreparedData& data, const ParameterMap& map,
+                          const FitOptions& options, const std::vector<double>& x_start,
+                          FitSummary& summary) {
+  const EquationErrorOutcome equation_error =
+      solve_equation_error(start_model, data, map, solver_settings(options), x_start);
+  summary.equation_error_iterations = equation_error.iterations;
+  summary.equation_error_termination = equation_error.termination;
+  if (equation_error.usable) {
+    problem.x() = equation_error.x;
+    if (const int w = problem.first_non_finite_window(); w >= 0) {
+      problem.x() = x_start;  // its result blows up where the start did not
+      summary.notes.push_back("the equation-error result's simulation is not finite in " +
+                              describe_window(problem, data, w) +
+                              "; the windows started from the start values");
+    }
+  } else {
+    summary.notes.push_back("the equation-error stage failed (" + equation_error.termination +
+                            "); the windows started from the start values");
+  }
+}
+
+// The window fit, and the study's objective from there when asked.
+void window_stage(WindowProblem& problem, const DoorModel& start, const DoorModel& start_model,
+                  const PreparedData& data, const ParameterMap& map, const FitOptions& options,
+                  const FitWeights& weights, FitSummary& summary) {
+  std::function<void(int)> on_iteration;
+  if (options.progress) {
+    options.progress({FitProgress::Stage::kWindows, 0, options.max_iterations});
+    on_iteration = [&options](int iterations) {
+      options.progress({FitProgress::Stage::kWindows, iterations, options.max_iterations});
+    };
+  }
+  const WindowProblem::Outcome outcome = solve_coarse_to_fine(
+      problem, start_model, data, map, options, weights, options.max_iterations, on_iteration);
+  if (!outcome.usable) throw std::runtime_error("fit: the solver failed: " + outcome.termination);
+  summary.converged = outcome.converged;
+  summary.termination = outcome.termination;
+  summary.iterations = outcome.iterations;
+  summary.initial_cost = outcome.initial_cost;
+  summary.final_cost = outcome.final_cost;
+  if (options.objective == FitOptions::Objective::kWholeStrokeMax) {
+    ProblemKind whole;
+    whole.windows = metric_windows(options, start);
+    whole.windows.whole_strokes = true;
+    whole.windows.cut_angles_rad.clear();  // the study replays strokes whole, impacts included
+    whole.residual_power = options.max_objective_power;
+    FitWeights rate_only = weights;  // the study's objective is about ω alone
+    rate_only.angle_residuals = false;
+    WindowProblem refine(start_model, data, map, whole, rate_only, problem.x());
+    // The predicted-step rule assumes least squares: Ceres' own tests only.
+    const WindowProblem::Outcome refined =
+        refine.solve(solver_settings(options), options.max_iterations, 0.0);
+    const std::string norm = "L" + std::to_string(2 * options.max_objective_power);
+    if (refined.usable) {
+      problem.x() = refine.x();
+      summary.converged = refined.converged;
+      summary.termination = "whole strokes, " + norm + " norm: " + refined.termination;
+      summary.iterations += refined.iterations;
+    } else {
+      summary.notes.push_back("the whole-stroke objective failed (" + refined.termination +
+                              "); the result is the window fit's");
+    }
+    summary.notes.push_back("the objective was the study's (whole strokes replayed, " + norm +
+                            " norm of the rate error approximating its maximum); uncertainties "
+                            "are the window least-squares problem's at that result");
+  }
+}
+
+// The statistics of the window problem at the result: covariances, uncertainties, which
+// parameters are determined, strong correlations.
+void statistics_stage(WindowProblem& problem, const DoorModel& start, const ParameterMap& map,
+                      const StartValues& starts, const std::vector<double>& window_start_values,
+                      const std::vector<double>& fitted_values, const FitOptions& options,
+                      FitSummary& summary) {
+  const int parameter_count = start.parameter_count();
+  const std::vector<double>& values = starts.values;
+  const std::vector<std::string>& origin = starts.origin;
+  const auto bounds = start.parameter_bounds();
+  // Statistics of the window problem at the result: (JᵀJ)⁻¹ from the reduced system, the
+  // classical σ² (JᵀJ)⁻¹ and the window-robust (JᵀJ)⁻¹ (Σ g_w g_wᵀ) (JᵀJ)⁻¹ · W/(W − p).
+  ReducedSystem system;
+  if (!problem.reduce(/*cached_only=*/false, system)) {
+    throw std::runtime_error("fit: a window failed to evaluate at the result");
+  }
+  const int p = map.free_count();
+  const InformationInverse inverse = invert_information(system.information);
+  summary.residual_variance = system.residual_variance();
+  summary.covariance_rank = inverse.rank;
+  const Eigen::MatrixXd classical = summary.residual_variance * inverse.inverse;
+  const RobustCovariance robust_result = robust_covariance(system, inverse.inverse);
+  const Eigen::MatrixXd& robust = robust_result.covariance;
+  summary.ceres_covariance_difference = kNaN;
+  if (options.check_covariance_with_ceres) {
+    summary.ceres_covariance_difference =
+        compare_with_ceres_covariance(problem, inverse.inverse, fit_thread_count(options));
+    if (std::isnan(summary.ceres_covariance_difference)) {
+      summary.notes.push_back("ceres::Covariance could not compute the covariance to compare");
+    }
+  }
+  const bool use_robust = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
+  const Eigen::MatrixXd& chosen = use_robust ? robust : classical;
+  summary.covariance.assign(static_cast<std::size_t>(p) * p, 0.0);
+  for (int r = 0; r < p; ++r) {
+    for (int c = 0; c < p; ++c) {
+      summary.covariance[static_cast<std::size_t>(r) * p + c] =
+          chosen(r, c) * map.scale[r] * map.scale[c];
+    }
+  }
+  for (int i = 0; i < parameter_count; ++i) {
+    FittedParameter parameter;
+    parameter.name = start.parameter_name(i);
+    parameter.unit = std::string(start.parameter_unit(i));
+    parameter.start = values[i];
+    parameter.equation_error = window_start_values[i];
+    parameter.value = fitted_values[i];
+    parameter.bounds = bounds[i];
+    parameter.start_origin = origin[i];
+    parameter.uncertainty = parameter.classical_uncertainty = parameter.robust_uncertainty = kNaN;
+    summary.parameters.push_back(parameter);
+  }
+  for (int k = 0; k < p; ++k) {
+    FittedParameter& parameter = summary.parameters[map.free_index[k]];
+    parameter.free = true;
+    parameter.classical_uncertainty = std::sqrt(std::max(0.0, classical(k, k))) * map.scale[k];
+    parameter.robust_uncertainty = std::sqrt(std::max(0.0, robust(k, k))) * map.scale[k];
+    parameter.uncertainty =
+        use_robust ? parameter.robust_uncertainty : parameter.classical_uncertainty;
+    parameter.effective_windows = robust_result.effective_windows(k);
+    const double width = parameter.bounds.upper - parameter.bounds.lower;
+    parameter.at_bound = std::abs(parameter.value - parameter.bounds.lower) <= 1e-6 * width ||
+                         std::abs(parameter.bounds.upper - parameter.value) <= 1e-6 * width;
+    if (inverse.undetermined[k]) {
+      parameter.determined = false;
+      parameter.uncertainty = parameter.classical_uncertainty = parameter.robust_uncertainty = kNaN;
+    } else if (!(parameter.uncertainty <=
+                 options.undetermined_relative_uncertainty * std::abs(parameter.value))) {
+      parameter.determined = false;
+    }
+    if (!parameter.determined) summary.undetermined.push_back(parameter.name);
+    if (parameter.at_bound) {
+      summary.notes.push_back(parameter.name +
+                              " ended on a bound: its uncertainty ignores the bound");
+    }
+  }
+  std::string few_windows;
+  for (int k = 0; k < p && use_robust; ++k) {
+    const FittedParameter& parameter = summary.parameters[map.free_index[k]];
+    if (parameter.determined && parameter.effective_windows < kFewEffectiveWindows) {
+      few_windows += (few_windows.empty() ? "" : ", ") + parameter.name;
+    }
+  }
+  if (!few_windows.empty()) {
+    summary.notes.push_back("the robust uncertainties of " + few_windows + " rest on fewer than " +
+                            std::to_string(static_cast<int>(kFewEffectiveWindows)) +
+                            " windows (n_eff): each is itself uncertain, like a t-distribution's "
+                            "scale with n_eff - 1 degrees of freedom");
+  }
+  for (int r = 0; r < p; ++r) {
+    for (int c = r + 1; c < p; ++c) {
+      if (inverse.undetermined[r] || inverse.undetermined[c]) continue;
+      const double denominator = std::sqrt(chosen(r, r) * chosen(c, c));
+      if (!(denominator > 0)) continue;
+      const double correlation = chosen(r, c) / denominator;
+      if (std::abs(correlation) > options.correlation_threshold) {
+        summary.strong_correlations.push_back(
+            {summary.free_names[r], summary.free_names[c], correlation});
+      }
+    }
+  }
+  std::sort(summary.strong_correlations.begin(), summary.strong_correlations.end(),
+            [](const ParameterCorrelation& a, const ParameterCorrelation& b) {
+              return std::abs(a.value) > std::abs(b.value);
+            });
+}
+
+FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOptions& options,
+                   std::vector<DoorModel>& fold_models) {
+  const StageClock::time_point began = StageClock::now();
+  if (const std::string message = options.validate(); !message.empty()) {
+    throw std::invalid_argument(message);
+  }
+  check_data(data, start);
+  FitSummary summary;
+  summary.model_kind = start.kind();
+  summary.source = data.source;
+  summary.options = options;
+  summary.strokes = data.strokes.size();
+  FitWeights weights = resolve_weights(options, data, summary.notes);
+  summary.rate_noise_rad_s = weights.rate_noise_rad_s;
+  summary.angle_noise_rad = weights.angle_noise_rad;
+
+  const StartValues chosen = start_values(start, data, options, weights, summary);
+  const DoorModel start_model = checked_start_model(start, chosen.values);
+  const ParameterMap map = make_map(start, chosen, options, weights, summary);
+
+  // The window problem (built first: it tells whether there is enough data).
+  const StageClock::time_point solve_began = StageClock::now();
+  const std::vector<double> x_start = scaled_values(map, start_model.parameter_values());
+  WindowProblem problem(start_model, data, map, window_fit_kind(options, start), weights, x_start);
+  check_problem(problem, data, map, summary);
+  summary.times.start_s = seconds_since(began);
+
+  if (options.equation_error_start) {
+    equation_error_stage(problem, start_model, data, map, options, x_start, summary);
+  }
+  const std::vector<double> window_start_values = map.values(problem.x().data());
+  summary.times.equation_error_s = seconds_since(solve_began);
+  window_stage(problem, start, start_model, data, map, options, weights, summary);
+  summary.solve_time_s = seconds_since(solve_began);
+  summary.times.windows_s = summary.solve_time_s - summary.times.equation_error_s;
+
+  const StageClock::time_point statistics_began = StageClock::now();
+  const std::vector<double> fitted_values = map.values(problem.x().data());
+  FitResult result{start.with_parameter_values(fitted_values), FitSummary{}};
+  statistics_stage(problem, start, map, chosen, window_start_values, fitted_values, options,
+                   summary);
+  summary.times.statistics_s = seconds_since(statistics_began);
+
+  // Metrics: on the fitted strokes, then held out.
+  const StageClock::time_point metrics_began = StageClock::now();
+  summary.fitted = compute_fit_metrics(result.model, data, metric_windows(options, start));
+  summary.times.metrics_s = seconds_since(metrics_began);
+  const StageClock::time_point held_out_began = StageClock::now();
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  if (options.cross_validation_folds > 0 && stroke_count >= 2) {
+    summary.folds = std::min(options.cross_validation_folds, stroke_count);
+    summary.held_out = cross_validate(result.model, data, map, problem.x(), options, weights,
+                                      summary.folds, summary.notes, fold_models, summary.fold_fits);
+  } else if (options.cross_validation_folds > 0) {
+    summary.notes.push_back("one stroke only: no held-out metrics");
+  }
+  summary.times.held_out_s = seconds_since(held_out_began);
+  if (!summary.converged) {
+    summary.notes.push_back("the solver did not report convergence: " + summary.termination);
+  }
+  summary.total_time_s = seconds_since(began);
+  result.summary = std::move(summary);
+  return result;
+}
+
+}  // namespace
+
+FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
+  const StageClock::time_point began = StageClock::now();
+  std::vector<DoorModel> fold_models;
+  FitResult result = fit_once(start, data, options, fold_models);
+  // Each cross-validation fold is refitted from the full fit on fewer strokes. When one of
+  // them fits *all* the strokes clearly better than the full fit does, the full fit stopped
+  // in a local minimum (an output-error cost is not convex: a window can settle on the
+  // wrong side of a latch barrier). Restart once from the best such fold.
+  const double fitted_rmse = result.summary.fitted.window.rmse();
+  // Each fold's model on all strokes, at once (independent and deterministic), then in order.
+  std::vector<double> fold_rmse(fold_models.size());
+  parallel_for(static_cast<int>(fold_models.size()), fit_thread_count(options), [&](int k) {
+    fold_rmse[k] = evaluate_model(fold_models[k], data, options).window.rmse();
+  });
+  const DoorModel* best = nullptr;
+  double best_rmse = kFoldRestartGain * fitted_rmse;
+  for (std::size_t k = 0; k < fold_models.size(); ++k) {
+    if (fold_rmse[k] < best_rmse) {
+      best_rmse = fold_rmse[k];
+      best = &fold_models[k];
+    }
+  }
+  if (best == nullptr) return result;
+  FitOptions restart = options;
+  restart.latch_start_from_data = false;  // start exactly at the fold's values
+  restart.equation_error_start = false;
+  std::vector<DoorModel> unused;
+  FitResult second = fit_once(*best, data, restart, unused);
+  if (!(second.summary.fitted.window.rmse() < fitted_rmse)) {
+    result.summary.notes.push_back(
+        "a cross-validation fold fitted all strokes better; a restart from it did not improve");
+    return result;
+  }
+  // Report the parameters' starts as the user gave them, and how the result was reached.
+  for (std::size_t i = 0;
+       i < second.summary.parameters.size() && i < result.summary.parameters.size(); ++i) {
+    second.summary.parameters[i].start = result.summary.parameters[i].start;
+    second.summary.parameters[i].start_origin = result.summary.parameters[i].start_origin;
+    second.summary.parameters[i].equation_error = result.summary.parameters[i].equation_error;
+  }
+  second.summary.latch_start = result.summary.latch_start;
+  second.summary.iterations += result.summary.iterations;
+  second.summary.initial_cost = result.summary.initial_cost;
+  second.summary.options = options;
+  second.summary.notes.insert(second.summary.notes.begin(),
+                              "the full fit stopped in a local minimum (window RMSE " +
+                                  printf_text("%.4g", fitted_rmse) +
+                                  " rad/s); a cross-validation fold's solution fitted every "
+                                  "stroke better (" +
+                                  printf_text("%.4g", best_rmse) +
+                                  " rad/s), and the fit was "
+                                  "restarted from it");
+  second.summary.total_time_s = seconds_since(began);
+  return second;
+}
+
+WindowOptions metric_window_options(const FitOptions& options, const DoorModel& model) {
+  WindowOptions windows;
+  windows.window_s = options.window_s;
+  windows.substeps_per_sample = options.substeps_per_sample;
+  windows.cut_angles_rad = {0.0, model.geometry().theta_max_rad};
+  return windows;
+}
+
+}  // namespace doorbench

@@ -1,0 +1,293 @@
+#pragma once
+// Fits a door model (sensory or physical, with any effects) to prepared strokes
+// (docs/fitting.md). In the manner of Ceres: FitOptions with defaults and validate(), one
+// call, and a FitSummary with a brief and a full text report.
+//
+//   doorbench::FitOptions options;              // windows of 0.2 s, default free set
+//   doorbench::FitResult result = doorbench::fit_model(start_model, prepared, options);
+//   std::cout << result.summary.full_report();
+//   result.model;                                // the fitted, checked DoorModel
+//
+// The method (docs/fitting.md): the sensory latch read off the force–angle curves, an
+// equation-error stage, then multiple shooting on short windows, each started from the
+// state at its first sample (estimated, with the measured state as its prior), integrated
+// by RK4 under the measured force, Jacobians by Ceres' Jets through the integration.
+// Uncertainties from the Gauss–Newton system with the window states eliminated; every
+// figure in the report is defined in docs/fitting.md.
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "analysis/model/door_model.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fit_start.h"
+#include "analysis/fit/fit_windows.h"
+#include "analysis/preprocessing/strokes.h"
+#include "core/units.h"
+
+namespace doorbench {
+
+struct SolverSettings;  // analysis/fit/fit_problem.h
+
+// Where a fit is, for a progress display (FitOptions::progress). Counts, no times: the
+// caller measures time.
+struct FitProgress {
+  enum class Stage {
+    // The window fit's solver iterations (the coarse pass's and the fine one's together):
+    // `done` of at most `total` (max_iterations; a fit that converges stops earlier).
+    kWindows,
+    // The cross-validation folds refitted: `done` of `total`.
+    kFolds,
+  };
+  Stage stage = Stage::kWindows;
+  int done = 0;
+  int total = 0;
+};
+
+// The bench's noise levels (reference-door.json): the weights when neither the options
+// nor the data give them.
+inline constexpr double kBenchRateNoise_rad_s = 0.05 * kRadPerDeg;
+inline constexpr double kBenchAngleNoise_rad = 0.01 * kRadPerDeg;
+
+// A Gaussian prior on one parameter: the residual (value − center) / sigma joins the data's
+// (which are in units of their noise). The inverse design (analysis/design/inverse_design.h) uses
+// them to pull each parameter toward the AS-IS door.
+struct ParameterPrior {
+  std::string parameter;  // its name ("F0", "stribeck.d_s")
+  double center = 0.0;    // in the parameter's unit
+  double sigma = 1.0;     // > 0, in the parameter's unit
+};
+
+struct FitOptions {
+  // --- Windows (multiple shooting) ---
+  double window_s = 0.2;        // each window's length on the recording's clock
+  int substeps_per_sample = 2;  // RK4 steps per sample interval
+  // Solve with one RK4 step per sample first (half the cost), then refine with
+  // substeps_per_sample from there.
+  bool coarse_first = true;
+  bool angle_residuals = true;  // residuals (θ_sim − θ_meas)/σ_θ beside (ω_sim − ω_meas)/σ_ω
+  // Estimate each window's start state too, tied to the measured state by its noise level
+  // (errors in variables; docs/fitting.md). false: start exactly from the measured state.
+  bool estimate_window_states = true;
+  // σ_ω and σ_θ, the residuals' weights. 0: the data's noise levels (PreparedData), or the
+  // bench's (kBench*) when the data has none.
+  double rate_noise_rad_s = 0.0;
+  double angle_noise_rad = 0.0;
+
+  // --- Parameters ---
+  // Free parameters by name ("k_inf", "stribeck.d_s"). Empty: default_free_parameters().
+  std::vector<std::string> free_parameters;
+  // Taken out of the free set (handy with the default set).
+  std::vector<std::string> fixed_parameters;
+  // Sensory model: replace the start's free θ0…θ3, k_inf and k_lock with values read off
+  // the force–angle curves near closed (analysis/fit/fit_start.h).
+  bool latch_start_from_data = true;
+  // Fit the equation of motion sample by sample first (analysis/fit/internal/fit_equation_error.h) and
+  // start the windows from its result.
+  bool equation_error_start = true;
+  // Priors on free parameters (those on fixed parameters are ignored). They act in the
+  // window fit and its statistics, not in the equation-error stage (only a start). None:
+  // the fit is exactly the plain one.
+  std::vector<ParameterPrior> priors;
+
+  // --- Objective ---
+  enum class Objective {
+    kWindows,  // least squares on windows started from measured states
+    // The study's objective, max |ω_meas − ω_sim| over whole strokes replayed open-loop,
+    // approximated by the L_(2·max_objective_power) norm of the rate errors. It starts from
+    // the window fit's result. Ill-posed on realistic data (door-models.md §6).
+    kWholeStrokeMax,
+  };
+  Objective objective = Objective::kWindows;
+  int max_objective_power = 4;  // the L8 norm
+
+  // --- Uncertainty ---
+  enum class Uncertainty {
+    // The delete-one-window jackknife of the estimate (analysis/fit/fit_problem.h): robust to
+    // errors correlated within a window (the force noise the simulation integrates, a start
+    // state's error), which the classical one ignores and so understates 2 to 10 times.
+    kWindowRobust,
+    // (JᵀJ)⁻¹ · σ², σ² = SSR/(n − p): the residuals taken as independent.
+    kClassical,
+  };
+  Uncertainty uncertainty = Uncertainty::kWindowRobust;
+  // Also compute (JᵀJ)⁻¹ with ceres::Covariance over the whole problem and report the
+  // largest difference from the fit's own (Schur-complement) computation.
+  bool check_covariance_with_ceres = false;
+
+  // --- Solver (Levenberg–Marquardt, ceres::Solver) ---
+  int max_iterations = 100;
+  double function_tolerance = 1e-6;
+  double parameter_tolerance = 1e-8;
+  double gradient_tolerance = 1e-10;
+  // Also stop once the Gauss–Newton step predicts that no free parameter would move by
+  // more than this many of its standard uncertainties (coarse_tolerance_factor times this
+  // for the coarse pass).
+  double uncertainty_tolerance = 0.1;
+  // The coarse pass's stopping rule against the fine pass's (> 0). Far from the data σ is
+  // inflated and 10 stops the coarse pass at once, leaving the iterations to the fine pass
+  // at twice the cost; the residual loop's refit starts use 1 (docs/residual-loop.md).
+  double coarse_tolerance_factor = 10.0;
+  // The equation-error stage stops after two accepted steps that change no free parameter
+  // by more than this fraction of its scale.
+  double equation_error_step_tolerance = 1e-2;
+  // Evaluation threads per solve (0: every hardware thread); the cross-validation folds also
+  // run at once, up to this many, each with its own evaluation threads. The result does not
+  // depend on it (docs/fitting.md, "Threads and determinism").
+  int num_threads = 0;
+
+  // --- Report ---
+  // Held-out metrics by k-fold cross-validation over strokes; 0: none; at least the
+  // number of strokes: leave-one-stroke-out.
+  int cross_validation_folds = 4;
+  int held_out_max_iterations = 30;                // each fold's refit starts from the full fit
+  double correlation_threshold = 0.9;              // |correlations| above are named
+  double undetermined_relative_uncertainty = 1.0;  // u/|value| above: "undetermined"
+
+  // Called as each stage begins (done 0), after each solver iteration of the window fit and
+  // after each cross-validation fold (for a fold from the thread that refitted it, never two
+  // at once); may be empty.
+  // The equation-error stage, the statistics and the whole-stroke objective do not report.
+  // A restart from a fold (docs/fitting.md) reports its window fit again from 0.
+  std::function<void(const FitProgress&)> progress;
+
+  // Empty when usable, else a one-line message naming the option.
+  std::string validate() const;
+};
+
+// The default free set: every parameter except k_stop and c_stop (the end stops, which
+// strokes that stay between the stops cannot tell apart), and for the sensory model beta and
+// beta_f too (switch sharpness: nearly unidentifiable, and sharp switches make the cost
+// rough).
+std::vector<std::string> default_free_parameters(const DoorModel& model);
+
+// The windows on which metrics are reported (and on which the residual loop examines the
+// residual): the fit's window length and sub-steps, cut at the end stops.
+WindowOptions metric_window_options(const FitOptions& options, const DoorModel& model);
+
+struct FittedParameter {
+  std::string name;
+  std::string unit;
+  bool free = false;
+  double start = 0.0;           // the start (the start model's value, or read off the data)
+  double equation_error = 0.0;  // after the equation-error stage: where the windows started
+  double value = 0.0;
+  // Standard uncertainty (the kind chosen in FitOptions); NaN for fixed parameters and
+  // for parameters in a direction the data does not determine.
+  double uncertainty = 0.0;
+  double classical_uncertainty = 0.0;  // σ²-scaled covariance, for comparison
+  double robust_uncertainty = 0.0;     // the window-robust (jackknife) one
+  // How many windows the robust uncertainty effectively rests on (docs/fitting.md): below
+  // about 10 it is itself rough.
+  double effective_windows = 0.0;
+  Bounds bounds;
+  bool at_bound = false;
+  bool determined = true;
+  std::string start_origin;  // "start model", "read off the data", "clamped into bounds"
+};
+
+struct ParameterCorrelation {
+  std::string first, second;
+  double value = 0.0;
+};
+
+// One cross-validation fold's refit (held-out metrics): how it ended, and how well it did
+// on the strokes it fitted and on those it left out.
+struct FoldFit {
+  std::vector<int> held_out_strokes;  // stroke ids
+  bool converged = false;
+  std::string termination;
+  int iterations = 0;
+  double fitted_rmse_rad_s = 0.0;     // window RMSE of ω on its own strokes
+  double held_out_rmse_rad_s = 0.0;   // on the strokes it left out
+  std::vector<std::string> at_bound;  // free parameters that ended on a bound
+};
+
+struct FitSummary {
+  ModelKind model_kind = ModelKind::kSensory;
+  std::string source;
+  FitOptions options;
+  double rate_noise_rad_s = 0.0;  // the weights used
+  double angle_noise_rad = 0.0;
+
+  // Problem size.
+  std::size_t strokes = 0;
+  std::size_t windows = 0;
+  std::size_t residuals = 0;
+  int free_parameters = 0;
+  int window_state_parameters = 0;  // 2 per window when their start states are estimated
+
+  // Solver.
+  int equation_error_iterations = 0;
+  std::string equation_error_termination;
+  bool converged = false;   // the window fit converged (Ceres' tests or the stopping rule)
+  std::string termination;  // why it stopped
+  int iterations = 0;
+  double initial_cost = 0.0;  // ½ Σ r² at the start and at the end (window objective)
+  double final_cost = 0.0;
+  double solve_time_s = 0.0;  // the local solve(s): equation error, windows, whole strokes
+  double total_time_s = 0.0;  // everything, cross-validation included
+  // Where the time went (wall clock, s).
+  struct Times {
+    double start_s = 0.0;           // checks, latch read-off, problem set-up
+    double equation_error_s = 0.0;  // the equation-error stage
+    double windows_s = 0.0;         // the window fit (and the whole-stroke one, if asked)
+    double statistics_s = 0.0;      // covariances
+    double metrics_s = 0.0;         // metrics on the fitted strokes (replays included)
+    double held_out_s = 0.0;        // cross-validation
+  } times;
+
+  // Statistics at the result (window objective).
+  // σ² = SSR / (n − p), in units of the weights; p counts the window states too.
+  double residual_variance = 0.0;
+  int covariance_rank = 0;  // of the free parameters' covariance
+  // With check_covariance_with_ceres: the largest |difference| between ceres::Covariance and
+  // the fit's (JᵀJ)⁻¹, element by element, relative to √(C_ii C_jj). NaN when not checked.
+  double ceres_covariance_difference = 0.0;
+  std::vector<FittedParameter> parameters;  // every parameter, in the model's order
+  // Covariance of the free parameters (in their units, FitOptions' kind), row-major,
+  // in the order of free_names.
+  std::vector<std::string> free_names;
+  std::vector<double> covariance;
+  std::vector<ParameterCorrelation> strong_correlations;
+  std::vector<std::string> undetermined;  // parameters the data cannot determine
+
+  LatchReadOff latch_start;  // the sensory latch read off the data (when asked)
+
+  FitMetrics fitted;                   // on the strokes fitted (all of them)
+  std::optional<FitMetrics> held_out;  // each stroke by the fit that left it out
+  int folds = 0;
+  std::vector<FoldFit> fold_fits;  // one per fold refitted
+
+  std::vector<std::string> notes;  // anything the reader should know
+
+  std::string brief_report() const;  // a few lines
+  std::string full_report() const;   // parameters, correlations, metrics per stroke, solver
+};
+
+struct FitResult {
+  DoorModel model;  // the fitted model; every constraint holds
+  FitSummary summary;
+};
+
+// Fits `start` (its values are the start, its bounds the search range) to `data`. Throws
+// std::invalid_argument for unusable options (the validate() message), unknown parameter
+// names, a start that breaks a constraint, or data without usable strokes or whose handle
+// radius differs from the model's; std::runtime_error when the solver cannot evaluate the
+// start at all.
+FitResult fit_model(const DoorModel& start, const PreparedData& data,
+                    const FitOptions& options = {});
+
+// What the least-squares solvers (analysis/fit/fit_problem.h) take of `options`: tolerances,
+// iteration limit, the kind of uncertainty of the stopping rule, and the threads
+// (num_threads, 0: every hardware thread).
+SolverSettings solver_settings(const FitOptions& options);
+int fit_thread_count(const FitOptions& options);
+
+// The metrics of any model on `data` with the options' windows (the residual loop's
+// "error before and after").
+FitMetrics evaluate_model(const DoorModel& model, const PreparedData& data,
+                          const FitOptions& options = {});
+
+}  // namespace doorbench

@@ -1,0 +1,36 @@
+#pragma once
+// A small unconstrained minimiser for the study's likelihoods (ratings, thresholds): damped
+// Newton steps (Levenberg–Marquardt damping of the Hessian) on central-difference gradients
+// and Hessians. Meant for a handful to a few dozen parameters and smooth objectives; the
+// objective may return +inf or NaN where it is undefined, which rejects the step.
+// Internal to study/statistics (not part of any verb's interface).
+// Thread safety: free functions without shared state; `f` is called from the caller's thread.
+#include <functional>
+
+#include <Eigen/Dense>
+
+namespace doorbench::study::statistics {
+
+using Objective = std::function<double(const Eigen::VectorXd&)>;
+
+struct MinimizeOptions {
+  int max_iterations = 200;
+  double gradient_tolerance = 1e-8;  // stop when max |gradient| falls below (absolute)
+  double step_tolerance = 1e-11;     // or when a step moves every coordinate less than this
+};
+
+struct MinimizeResult {
+  Eigen::VectorXd x;
+  double value = 0.0;
+  int iterations = 0;
+  bool converged = false;
+};
+
+// Central-difference gradient and Hessian at x with steps h_i = step * max(1, |x_i|).
+Eigen::VectorXd numeric_gradient(const Objective& f, const Eigen::VectorXd& x, double step = 1e-6);
+Eigen::MatrixXd numeric_hessian(const Objective& f, const Eigen::VectorXd& x, double step = 1e-4);
+
+// Minimises f from x0. Throws std::invalid_argument when f(x0) is not finite.
+MinimizeResult minimize(const Objective& f, Eigen::VectorXd x0, const MinimizeOptions& options = {});
+
+}  // namespace doorbench::study::statistics
