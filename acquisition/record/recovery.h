@@ -62,8 +62,9 @@ struct ConvertOptions {
 };
 
 // Writes `session` from `journal` (via SESSION.partial and a rename); the journal is left
-// as it is (the recorder removes its own; recovery renames it). The session must not exist. Throws JournalError / SessionError naming the
-// file; on failure the journal is kept and the partial file removed.
+// as it is (the recorder removes its own; recovery renames it). The session must not
+// exist. Throws JournalError / SessionError naming the file; on failure the partial file
+// is removed.
 ConvertResult convert_journal(const std::filesystem::path& journal,
                               const std::filesystem::path& session, const ConvertOptions& options);
 

@@ -32,9 +32,10 @@
 #include "acquisition/session/session_file.h"
 #include "analysis/model/door_model.h"
 #include "analysis/model/parameter_file.h"
-#include "tests/support/files.h"
 #include "core/units.h"
+#include "tests/support/files.h"
 
+using doorbench::kRadPerDeg;
 using doorbench::testing::read_file;
 
 using Catch::Matchers::Contains;
@@ -764,7 +765,7 @@ TEST_CASE("CLI: simulate --target-deg and --rate-hz shape the virtual hand's run
   REQUIRE(run.sample_rate_hz);
   CHECK_THAT(*run.sample_rate_hz, WithinRel(200.0, 1e-9));
   const double largest = *std::max_element(run.angle_rad->begin(), run.angle_rad->end());
-  const double target = 45.0 * kRadPerDeg;
+  const double target = 45.0 * doorbench::kRadPerDeg;
   CHECK(largest > target - 0.1);
   CHECK(largest < target + 0.1);
   CHECK(std::abs(run.angle_rad->back()) < 0.02);
