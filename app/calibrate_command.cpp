@@ -4,6 +4,7 @@
 // timing work from a recording (--from SESSION) or record one on the live bench first.
 // Every result is a new record version in the calibration store.
 
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -54,6 +55,7 @@ struct CalibrateOptions {
   double inclinometer_range_deg = 0.0;
   // geometry
   std::vector<double> radius_m;
+  bool force_geometry = false;  // radii outside 0.05 to 2 m used, not refused
   std::vector<double> angle_deg;
   std::vector<double> check_reference_N, check_reading_N;
   std::string bench_name;
@@ -333,6 +335,15 @@ void run_geometry(const CalibrateOptions& o) {
   if (o.check_reference_N.size() != o.check_reading_N.size()) {
     throw UsageError("--check-reference-N and --check-reading-N need as many values each");
   }
+  for (const double radius : o.radius_m) {
+    if (!o.force_geometry && (radius < 0.05 || radius > 2.0)) {
+      char text[40];
+      std::snprintf(text, sizeof text, "%.6g", radius);
+      throw UsageError(std::string("--radius-m: ") + text +
+                       " m is outside 0.05 to 2 m, where a door handle is; give "
+                       "--force-geometry to use it anyway");
+    }
+  }
   cal::GeometryInputs inputs;
   inputs.handle_radius_m = o.radius_m;
   inputs.mounting_angle_deg = o.angle_deg;
@@ -386,13 +397,19 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   CLI::App* loadcell = calibrate->add_subcommand(
       "loadcell", "Load cell: reference masses (or forces) loading and unloading; or --tare");
   add_common(loadcell, *o, true, true);
-  loadcell->add_option("--masses-kg", o->masses_kg, "Reference masses, comma-separated")
-      ->delimiter(',');
-  loadcell->add_option("--forces-N", o->forces_N, "Reference forces instead of masses")
-      ->delimiter(',');
-  loadcell->add_flag("--tare", o->tare,
-                     "Tare: a new version whose offset makes the unloaded cell read 0 (live, or "
-                     "from the unloaded start of --from SESSION)");
+  CLI::Option* masses =
+      loadcell->add_option("--masses-kg", o->masses_kg, "Reference masses, comma-separated")
+          ->delimiter(',');
+  CLI::Option* forces =
+      loadcell->add_option("--forces-N", o->forces_N, "Reference forces instead of masses")
+          ->delimiter(',');
+  // A tare loads nothing: masses or forces given with it would be ignored (issue 33).
+  loadcell
+      ->add_flag("--tare", o->tare,
+                 "Tare: a new version whose offset makes the unloaded cell read 0 (live, or "
+                 "from the unloaded start of --from SESSION)")
+      ->excludes(masses)
+      ->excludes(forces);
   loadcell->add_option("--window-s", o->window_s, "Stable window averaged per point")
       ->check(CLI::Range(0.01, 600.0));
   loadcell->callback([o, &action] { action = [o] { checked(*o, run_load_cell); }; });
@@ -435,6 +452,8 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   geometry->add_option("--radius-m", o->radius_m, "Measurements of the handle radius")
       ->delimiter(',')
       ->required();
+  geometry->add_flag("--force-geometry", o->force_geometry,
+                     "Use --radius-m values outside 0.05 to 2 m");
   geometry->add_option("--angle-deg", o->angle_deg, "Measurements of the mounting angle")
       ->delimiter(',');
   geometry

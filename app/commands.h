@@ -47,6 +47,9 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action);
 void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out);
 // `campaign analyze`, added to the `campaign` verb (app/campaign_analyze_command.cpp).
 void add_campaign_analyze(CLI::App& campaign, Action& action);
+// Every verb above, then the check of every numeric option (app/number_options.h): what
+// main() registers, and what tests parse command lines with (app/verbs.cpp).
+void add_all_verbs(CLI::App& app, Action& action);
 
 // The options every verb that builds a model shares.
 struct ModelOptions {

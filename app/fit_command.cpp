@@ -1,4 +1,5 @@
 // doorbench fit: a door model fitted to a session or a CSV, with its report.
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -52,6 +53,13 @@ void write_start(const std::filesystem::path& dir, const FitInputs& inputs) {
 }
 
 void run_fit(const FitCommandOptions& options) {
+  // Before any reading: a parameter is free or held, not both (issue 33).
+  for (const std::string& name : split_names(options.free)) {
+    const std::vector<std::string> fixed = split_names(options.fixed);
+    if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) {
+      throw UsageError("--free and --fixed both name " + name + " (a parameter is free or held)");
+    }
+  }
   const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   const PreparedData& data = inputs.data;
   const DoorModel& start = inputs.start;

@@ -137,6 +137,8 @@ void add_fit_data_options(CLI::App& command, FitDataOptions& options,
   command.add_flag("--strict-geometry", options.strict_geometry,
                    "A handle radius stated by the recording that differs from the --params "
                    "file's is an error (default: a warning; the recording's is used)");
+  command.add_flag("--force-geometry", options.force_geometry,
+                   "Use a handle radius the recording states outside 0.05 to 2 m");
   command.add_flag("--overwrite", options.overwrite,
                    "Write into an --out folder that exists and is not empty (files of the same "
                    "names are replaced)");
@@ -149,6 +151,21 @@ std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options
   return inputs;
 }
 
+void check_handle_radius(const PreparedData& data, bool force_geometry) {
+  if (force_geometry || data.handle_radius_m <= 0) return;  // 0: not stated
+  if (data.handle_radius_m < kHandleRadiusMinM || data.handle_radius_m > kHandleRadiusMaxM) {
+    char radius[40];
+    std::snprintf(radius, sizeof radius, "%.6g", data.handle_radius_m);
+    const std::string origin = handle_radius_origin(data).empty()
+                                   ? "the geometry calibration record " +
+                                         data.geometry_calibration_id
+                                   : handle_radius_origin(data);
+    throw UsageError(std::string("handle radius ") + radius + " m (from " + origin +
+                     ") is outside 0.05 to 2 m, where a door handle is; give --force-geometry "
+                     "to use it anyway");
+  }
+}
+
 FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::path& out_dir) {
   check_output_folder(out_dir, fit_input_paths(options), options.overwrite);
   FitInputs inputs = load_fit_inputs(options);
@@ -159,6 +176,7 @@ FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::
 FitInputs load_fit_inputs(const FitDataOptions& options) {
   std::cerr << "preparing " << options.data_path << "\n";
   PreparedData data = load_prepared_data(options.data_path, options.preprocessing);
+  check_handle_radius(data, options.force_geometry);
   std::cerr << "  " << data.strokes.size() << " strokes, " << data.excluded.size()
             << " segments excluded\n"
             << "  " << data.rate_summary << "\n";

@@ -27,6 +27,13 @@ PreparedData load_prepared_data(const std::string& path,
 // PreparedData::handle_radius_origin: "" when the data states no radius.
 std::string handle_radius_origin(const PreparedData& data);
 
+// A handle radius where a door handle can be: 0.05 to 2 m from the hinge (issue 33: a
+// CSV's 1e9 m was fitted). check_handle_radius throws UsageError naming the radius and
+// where it came from when the data's is outside (unless `force_geometry`).
+inline constexpr double kHandleRadiusMinM = 0.05;
+inline constexpr double kHandleRadiusMaxM = 2.0;
+void check_handle_radius(const PreparedData& data, bool force_geometry);
+
 // "a,b,,c" -> {"a", "b", "c"}: the parameter lists of --free and --fixed (empty items dropped).
 std::vector<std::string> split_names(const std::string& list);
 
@@ -48,6 +55,7 @@ struct FitDataOptions {
   // A handle radius stated by the recording that differs from the parameter file's is an
   // error (default: a warning, and the recording's is used).
   bool strict_geometry = false;
+  bool force_geometry = false;  // a handle radius outside 0.05 to 2 m is used, not refused
   // Where the start values come from (--start): "auto" (from the data without --params,
   // else the file's), "data" (from the data, the file or the reference door filling in what
   // the data do not give: analysis/fit/fit_init.h), "file" (the file's, or the reference door's).

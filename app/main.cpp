@@ -1,7 +1,11 @@
 // doorbench: record, model, fit and play back the feel of a product mechanism.
 // Exit status: 0 success, 1 failure, 2 bad usage. Errors go to stderr on one line; a usage
 // error points at the verb's own help (`doorbench VERB --help`, also `doorbench help VERB`).
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <cstdio>
 #include <exception>
 #include <iostream>
 #include <streambuf>
@@ -94,15 +98,30 @@ bool help_command_line(const CLI::App& app, int argc, char** argv, std::vector<s
 
 // --quiet: stderr's progress, stage and warning lines are dropped while the verb runs;
 // its error (printed by main after the verb returns) and stdout are kept.
+// Lines written with stdio (fprintf(stderr, ...): record's live status) go too: file
+// descriptor 2 points at /dev/null meanwhile (issue 33: -q left record's status lines).
 class QuietStderr {
  public:
-  explicit QuietStderr(bool quiet) : saved_(quiet ? std::cerr.rdbuf(&null_) : nullptr) {}
+  explicit QuietStderr(bool quiet) : saved_(quiet ? std::cerr.rdbuf(&null_) : nullptr) {
+    if (!quiet) return;
+    std::fflush(stderr);
+    saved_fd_ = ::dup(2);
+    const int null_fd = ::open("/dev/null", O_WRONLY | O_CLOEXEC);
+    if (saved_fd_ >= 0 && null_fd >= 0) ::dup2(null_fd, 2);
+    if (null_fd >= 0) ::close(null_fd);
+  }
   ~QuietStderr() { restore(); }
   QuietStderr(const QuietStderr&) = delete;
   QuietStderr& operator=(const QuietStderr&) = delete;
   void restore() {
     if (saved_ != nullptr) std::cerr.rdbuf(saved_);
     saved_ = nullptr;
+    if (saved_fd_ >= 0) {
+      std::fflush(stderr);
+      ::dup2(saved_fd_, 2);
+      ::close(saved_fd_);
+      saved_fd_ = -1;
+    }
   }
 
  private:
@@ -110,6 +129,7 @@ class QuietStderr {
     int overflow(int c) override { return traits_type::not_eof(c); }
   } null_;
   std::streambuf* saved_;
+  int saved_fd_ = -1;
 };
 
 }  // namespace
@@ -126,26 +146,7 @@ int main(int argc, char** argv) {
                "the verb");
   app.fallthrough(true);  // every verb takes --quiet too
   doorbench::app::Action action;
-  doorbench::app::add_model_command(app, action);
-  doorbench::app::add_simulate_command(app, action);
-  doorbench::app::add_record_command(app, action);
-  doorbench::app::add_recover_command(app, action);
-  doorbench::app::add_info_command(app, action);
-  doorbench::app::add_export_command(app, action);
-  doorbench::app::add_import_command(app, action);
-  doorbench::app::add_fit_command(app, action);
-  doorbench::app::add_loop_command(app, action);
-  doorbench::app::add_demo_command(app, action);
-  doorbench::app::add_calibrate_command(app, action);
-  doorbench::app::add_calibration_command(app, action);
-  doorbench::app::add_devices_command(app, action);
-  doorbench::app::add_view_command(app, action);
-  doorbench::app::add_play_command(app, action);
-  doorbench::app::add_ab_command(app, action);
-  doorbench::app::add_spec_command(app, action);
-  doorbench::app::add_hapticmaster_command(app, action);
-  CLI::App* campaign = doorbench::app::add_campaign_command(app, action);
-  doorbench::app::add_campaign_analyze(*campaign, action);
+  doorbench::app::add_all_verbs(app, action);
 
   // `doorbench help VERB`: parsed as `doorbench VERB --help`.
   std::vector<std::string> help_args;
@@ -159,6 +160,11 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& help) {
+    // `doorbench NOSUCHVERB --help`: the word is a mistake, not a request for help.
+    if (const std::string message = unknown_verb_message(app, argc, argv); !message.empty()) {
+      std::cerr << "doorbench: " << doorbench::printable(message) << " (see doorbench --help)\n";
+      return 2;
+    }
     return app.exit(help);
   } catch (const CLI::CallForAllHelp& help) {
     return app.exit(help);
@@ -167,7 +173,8 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& error) {
     std::string message = unknown_verb_message(app, argc, argv);
     if (message.empty()) message = error.what();
-    std::cerr << "doorbench: " << message << help_hint(app, argc, argv) << "\n";
+    std::cerr << "doorbench: " << doorbench::printable(doorbench::shortened(message))
+              << help_hint(app, argc, argv) << "\n";
     return 2;
   }
 
@@ -177,17 +184,18 @@ int main(int argc, char** argv) {
     return 0;
   } catch (const doorbench::app::UsageError& error) {
     quiet_stderr.restore();
-    std::cerr << "doorbench: " << doorbench::printable(error.what()) << help_hint(app, argc, argv)
+    std::cerr << "doorbench: " << doorbench::printable(doorbench::shortened(error.what()))
+              << help_hint(app, argc, argv)
               << "\n";
     return 2;
   } catch (const doorbench::OutputRefused& error) {  // an existing output, or an input
     quiet_stderr.restore();
-    std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
+    std::cerr << "doorbench: " << doorbench::printable(doorbench::shortened(error.what())) << "\n";
     return 2;
   } catch (const std::exception& error) {
     quiet_stderr.restore();
     // Messages quote files' text: control characters are shown escaped.
-    std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
+    std::cerr << "doorbench: " << doorbench::printable(doorbench::shortened(error.what())) << "\n";
     return 1;
   }
 }

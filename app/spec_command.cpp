@@ -346,10 +346,11 @@ void add_spec_command(CLI::App& app, Action& action) {
   command->add_option("--costs", options->costs,
                       "costs of change overriding the defaults, e.g. F0=1,k_s=5 (a parameter "
                       "the data cannot tell from another: the cheaper one is changed)");
-  command
-      ->add_option("--tolerances", options->tolerances_path,
-                   "tolerance file overriding the defaults (docs/design-spec.md)")
-      ->check(CLI::ExistingFile);
+  CLI::Option* tolerances =
+      command
+          ->add_option("--tolerances", options->tolerances_path,
+                       "tolerance file overriding the defaults (docs/design-spec.md)")
+          ->check(CLI::ExistingFile);
   command->add_option("--samples", options->samples, "Monte Carlo samples")->capture_default_str();
   command->add_option("--threads", options->threads, "threads for the Monte Carlo (0: all cores)")
       ->capture_default_str();
@@ -364,7 +365,11 @@ void add_spec_command(CLI::App& app, Action& action) {
                     "fit the recorded motion even when the sessions carry the torque a haptic "
                     "playback commanded");
   command->add_flag("--no-pdf", options->no_pdf, "do not render spec.pdf");
-  command->add_flag("--no-tolerances", options->no_tolerances, "skip the tolerance analysis");
+  // Either would be ignored with --no-tolerances (issue 33).
+  CLI::Option* samples = command->get_option("--samples");
+  command->add_flag("--no-tolerances", options->no_tolerances, "skip the tolerance analysis")
+      ->excludes(tolerances)
+      ->excludes(samples);
   command->add_option("--campaign", options->campaign_dir,
                       "a `doorbench campaign analyze` folder (analysis.json): the TO-BE feel "
                       "from the panel when no recordings are given, and tolerances judged by "

@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
+#include <string.h>  // memmem
 #include <zlib.h>
 
 #include <algorithm>
@@ -385,39 +386,269 @@ JournalReader::JournalReader(const std::filesystem::path& path) : path_(path) {
   struct stat status {};
   ::fstat(fd_, &status);
   file_bytes_ = static_cast<std::uint64_t>(status.st_size);
-  const auto damaged = [&](const std::string& why) {
+  try {
+    read_header();
+  } catch (...) {
     ::close(fd_);
     fd_ = -1;
-    return JournalError(path.string() + ": " + why);
+    throw;
+  }
+}
+
+namespace {
+
+constexpr std::uint64_t kHeadBytes = kMagic.size() + 12;
+
+// The raw CRC register (no initial or final XOR) of the byte `value` followed by zeros:
+// by CRC-32's linearity, crc32(a) ^ crc32(a with that byte XORed by `value` at the
+// position k bytes before the end) is the register after k more zero bytes.
+std::uint32_t crc_register_of(std::uint32_t value) {
+  for (int bit = 0; bit < 8; ++bit) value = (value & 1u) ? (value >> 1) ^ 0xEDB88320u : value >> 1;
+  return value;
+}
+
+// The one flipped bit that makes `text` match `crc`: its byte index and bit, or -1.
+std::pair<long long, int> single_flipped_bit(const std::string& text, std::uint32_t crc) {
+  const std::uint32_t difference =
+      crc32({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}) ^ crc;
+  if (difference == 0) return {-1, 0};
+  std::array<std::uint32_t, 8> registers{};
+  for (int bit = 0; bit < 8; ++bit) registers[bit] = crc_register_of(1u << bit);
+  for (std::size_t after = 0; after < text.size(); ++after) {
+    for (int bit = 0; bit < 8; ++bit) {
+      if (registers[bit] == difference) {
+        return {static_cast<long long>(text.size() - 1 - after), bit};
+      }
+      registers[bit] = crc_register_of(registers[bit] & 0xFFu) ^ (registers[bit] >> 8);
+    }
+  }
+  return {-1, 0};
+}
+
+// Differs from `crc` in one byte of the checksum field only (that field was damaged).
+bool differs_in_one_byte(std::uint32_t a, std::uint32_t b) {
+  const std::uint32_t difference = a ^ b;
+  for (int byte = 0; byte < 4; ++byte) {
+    if ((difference & ~(0xFFu << (8 * byte))) == 0) return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+std::string JournalReader::read_bytes(std::uint64_t at, std::uint64_t count) const {
+  std::string bytes(count, '\0');
+  if (count > 0 && ::pread(fd_, bytes.data(), count, static_cast<off_t>(at)) !=
+                       static_cast<ssize_t>(count)) {
+    throw JournalError(path_.string() + ": cannot read " + std::to_string(count) +
+                       " bytes at byte " + std::to_string(at) + ": " + errno_text(errno));
+  }
+  return bytes;
+}
+
+void JournalReader::note_repair(const std::string& what) {
+  header_repair_ += (header_repair_.empty() ? "" : "; ") + what;
+}
+
+bool JournalReader::frame_checks_out(std::uint64_t at, std::vector<std::uint8_t>& payload) const {
+  if (at + kFrameHeaderBytes > file_bytes_) return false;
+  std::array<std::uint8_t, kFrameHeaderBytes> head{};
+  if (::pread(fd_, head.data(), head.size(), static_cast<off_t>(at)) !=
+      static_cast<ssize_t>(head.size())) {
+    return false;
+  }
+  const std::uint8_t* in = head.data();
+  const auto magic = get<std::uint32_t>(in);
+  const auto type = get<std::uint32_t>(in);
+  const auto payload_bytes = get<std::uint32_t>(in);
+  const auto crc = get<std::uint32_t>(in);
+  if (magic != kFrameMagic || type < 1 || type > 5 || payload_bytes > kMaxPayloadBytes ||
+      file_bytes_ - at - kFrameHeaderBytes < payload_bytes) {
+    return false;
+  }
+  payload.resize(payload_bytes);
+  if (::pread(fd_, payload.data(), payload_bytes, static_cast<off_t>(at + kFrameHeaderBytes)) !=
+      static_cast<ssize_t>(payload_bytes)) {
+    return false;
+  }
+  return crc32(payload, crc32({head.data() + 4, 8})) == crc;
+}
+
+std::uint64_t JournalReader::find_frame(std::uint64_t from) const {
+  constexpr std::size_t kChunk = 1u << 20;
+  std::vector<std::uint8_t> chunk, payload;
+  for (std::uint64_t at = from; at + kFrameHeaderBytes <= file_bytes_; at += kChunk) {
+    // 3 bytes more, so that a marker across two chunks is found.
+    const auto size = static_cast<std::size_t>(std::min<std::uint64_t>(kChunk + 3, file_bytes_ - at));
+    chunk.resize(size);
+    if (::pread(fd_, chunk.data(), size, static_cast<off_t>(at)) != static_cast<ssize_t>(size)) {
+      return file_bytes_;
+    }
+    const std::uint8_t* begin = chunk.data();
+    const std::uint8_t* const end = chunk.data() + size;
+    while (begin < end) {
+      const void* found = ::memmem(begin, static_cast<std::size_t>(end - begin), "DBFR", 4);
+      if (found == nullptr) break;
+      const auto index = static_cast<std::size_t>(static_cast<const std::uint8_t*>(found) - chunk.data());
+      if (index >= kChunk) break;  // the next chunk starts there
+      if (frame_checks_out(at + index, payload)) return at + index;
+      begin = static_cast<const std::uint8_t*>(found) + 1;
+    }
+  }
+  return file_bytes_;
+}
+
+std::uint64_t JournalReader::skip_to_next_frame() {
+  if (stop_reason_.empty() || offset_ >= file_bytes_) return 0;
+  const std::uint64_t found = find_frame(offset_ + 1);
+  if (found >= file_bytes_) return 0;
+  const std::uint64_t skipped = found - offset_;
+  offset_ = found;
+  return skipped;
+}
+
+// The JSON text of the header, found by its CRC; its end is where the frames begin.
+std::string JournalReader::locate_header_json(std::uint32_t json_bytes, std::uint32_t json_crc) {
+  const auto matches = [&](const std::string& text) {
+    return crc32({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()}) == json_crc;
   };
-  std::array<std::uint8_t, kMagic.size() + 12> head{};
-  if (::pread(fd_, head.data(), head.size(), 0) != static_cast<ssize_t>(head.size()) ||
-      std::memcmp(head.data(), kMagic.data(), kMagic.size()) != 0) {
+  const bool length_plausible =
+      json_bytes <= kMaxHeaderBytes && kHeadBytes + json_bytes <= file_bytes_;
+  std::string by_length;
+  if (length_plausible) {
+    by_length = read_bytes(kHeadBytes, json_bytes);
+    if (matches(by_length)) return by_length;
+  }
+  const std::uint64_t first_frame = find_frame(kHeadBytes);
+  if (first_frame >= file_bytes_ && !length_plausible) {
+    throw JournalHeaderIncomplete(
+        path_.string() + ": the journal's header is incomplete (the recording died while creating it)");
+  }
+  const std::string before_frames =
+      read_bytes(kHeadBytes, std::min<std::uint64_t>(first_frame - kHeadBytes, kMaxHeaderBytes));
+  const auto length_repaired = [&](std::size_t size) {
+    note_repair("its length field (bytes 12-15) said " + std::to_string(json_bytes) +
+                " bytes, but the header's text is " + std::to_string(size) + " bytes long (ending at byte " +
+                std::to_string(kHeadBytes + size) + ")");
+  };
+  // The text ends at the first frame, or (a damaged first frame) at a closing brace: one
+  // pass, the CRC continued from brace to brace.
+  std::uint32_t running = 0;
+  std::size_t done = 0;
+  for (std::size_t size = 1; size <= before_frames.size(); ++size) {
+    if (before_frames[size - 1] != '}' && size != before_frames.size()) continue;
+    running = crc32({reinterpret_cast<const std::uint8_t*>(before_frames.data()) + done, size - done},
+                    running);
+    done = size;
+    if (running != json_crc) continue;
+    if (size != json_bytes) length_repaired(size);
+    return before_frames.substr(0, size);
+  }
+  // One flipped bit (the checksum locates it), or a damaged checksum field.
+  for (const std::string* candidate : std::array<const std::string*, 2>{&by_length, &before_frames}) {
+    if (candidate->empty()) continue;
+    std::string text = *candidate;
+    const auto [at, bit] = single_flipped_bit(text, json_crc);
+    if (at >= 0) {
+      text[static_cast<std::size_t>(at)] = static_cast<char>(text[static_cast<std::size_t>(at)] ^ (1 << bit));
+      if (text.size() != json_bytes) length_repaired(text.size());
+      note_repair("bit " + std::to_string(bit) + " of byte " + std::to_string(kHeadBytes + at) +
+                  " was flipped (found by the header's checksum) and is set right");
+      return text;
+    }
+    const std::uint32_t crc =
+        crc32({reinterpret_cast<const std::uint8_t*>(text.data()), text.size()});
+    if (differs_in_one_byte(crc, json_crc) && nlohmann::json::accept(text)) {
+      if (text.size() != json_bytes) length_repaired(text.size());
+      note_repair("its checksum field (bytes 16-19) is damaged; the text it covers is whole");
+      return text;
+    }
+  }
+  std::string where = "bytes " + std::to_string(kHeadBytes) + "-" +
+                      std::to_string(kHeadBytes + before_frames.size());
+  try {
+    const nlohmann::json parsed = nlohmann::json::parse(before_frames);
+  } catch (const nlohmann::json::parse_error& error) {
+    where += ", first unreadable at byte " + std::to_string(kHeadBytes + error.byte - 1);
+  }
+  throw JournalError(path_.string() + ": the journal's header is damaged (" + where +
+                     ": checksum mismatch, more than one flipped bit); the frames from byte " +
+                     std::to_string(first_frame) +
+                     " on check out, but their channels, scan rate and calibration are described "
+                     "only in the header, so they cannot be recovered without it; the journal is "
+                     "left as it is");
+}
+
+void JournalReader::read_header() {
+  const auto damaged = [&](const std::string& why) { return JournalError(path_.string() + ": " + why); };
+  std::array<std::uint8_t, kHeadBytes> head{};
+  const ssize_t got = ::pread(fd_, head.data(), head.size(), 0);
+  if (got < 0) throw damaged(errno_text(errno));
+  const auto have = static_cast<std::size_t>(got);
+  const bool magic_ok = have >= kMagic.size() && std::memcmp(head.data(), kMagic.data(), kMagic.size()) == 0;
+  if (have < head.size()) {
+    if (std::memcmp(head.data(), kMagic.data(), std::min(have, kMagic.size())) == 0) {
+      throw JournalHeaderIncomplete(
+          damaged("the journal's header is incomplete (the recording died while creating it)").what());
+    }
     throw damaged("not a doorbench journal");
+  }
+  if (!magic_ok) {
+    // A damaged magic, or not a journal at all: the JSON text that follows says.
+    const std::string start = read_bytes(kHeadBytes, std::min<std::uint64_t>(file_bytes_ - kHeadBytes, 4096));
+    if (start.empty() || start[0] != '{' || start.find("\"doorbench-journal\"") == std::string::npos) {
+      throw damaged("not a doorbench journal");
+    }
+    note_repair("its magic (bytes 0-7) is damaged; the text after it is a journal's header");
   }
   const std::uint8_t* in = head.data() + kMagic.size();
   const auto version = get<std::uint32_t>(in);
   const auto json_bytes = get<std::uint32_t>(in);
   const auto json_crc = get<std::uint32_t>(in);
-  if (version > static_cast<std::uint32_t>(kJournalFormatVersion)) {
-    throw damaged("journal format version " + std::to_string(version) +
-                  " is newer than this doorbench (" + std::to_string(kJournalFormatVersion) + ")");
+  const auto newer = [&](std::uint64_t v) {
+    return damaged("journal format version " + std::to_string(v) +
+                   " is newer than this doorbench (" + std::to_string(kJournalFormatVersion) + ")");
+  };
+  std::string json;
+  try {
+    json = locate_header_json(json_bytes, json_crc);
+  } catch (const JournalHeaderIncomplete&) {
+    if (version > static_cast<std::uint32_t>(kJournalFormatVersion) && version < 256) throw newer(version);
+    throw;
+  } catch (const JournalError&) {
+    if (version > static_cast<std::uint32_t>(kJournalFormatVersion) && version < 256) throw newer(version);
+    throw;
   }
-  if (json_bytes > kMaxHeaderBytes || head.size() + json_bytes > file_bytes_) {
-    throw damaged("the journal's header is incomplete (the recording died while creating it)");
+  std::uint64_t own_version = version;
+  try {
+    const nlohmann::json parsed = nlohmann::json::parse(json);
+    if (parsed.contains("format_version") && parsed["format_version"].is_number_unsigned()) {
+      own_version = parsed["format_version"].get<std::uint64_t>();
+    }
+  } catch (const std::exception&) {
+    // parse_header below says what is wrong
   }
-  std::string json(json_bytes, '\0');
-  if (::pread(fd_, json.data(), json_bytes, head.size()) != static_cast<ssize_t>(json_bytes) ||
-      crc32({reinterpret_cast<const std::uint8_t*>(json.data()), json.size()}) != json_crc) {
-    throw damaged("the journal's header is damaged (checksum mismatch)");
+  const auto known = [](std::uint64_t v) {
+    return v >= 1 && v <= static_cast<std::uint64_t>(kJournalFormatVersion);
+  };
+  if (known(version)) {
+    own_version = version;  // the field decides the frames' layout
+  } else if (known(own_version)) {
+    note_repair("its version field (bytes 8-11) said " + std::to_string(version) +
+                "; the header's text says format_version " + std::to_string(own_version));
+  } else if (version > static_cast<std::uint32_t>(kJournalFormatVersion)) {
+    throw newer(version);
+  } else {
+    throw damaged("its version field (bytes 8-11) says " + std::to_string(version) +
+                  ", which no doorbench writes");
   }
   try {
-    header_ = parse_header(json, path.string() + " (journal header)");
+    header_ = parse_header(json, path_.string() + " (journal header)");
   } catch (const std::exception& error) {
     throw damaged(std::string("the journal's header is not valid: ") + error.what());
   }
-  version_ = static_cast<int>(version);
-  offset_ = head.size() + json_bytes;
+  version_ = static_cast<int>(own_version);
+  offset_ = kHeadBytes + json.size();
 }
 
 JournalReader::~JournalReader() {

@@ -28,6 +28,13 @@ class JournalError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+// The file ends inside the journal's header and no frame follows: the recording died while
+// creating the journal, before its first scan.
+class JournalHeaderIncomplete : public JournalError {
+ public:
+  using JournalError::JournalError;
+};
+
 // 2: timed-sample frames and the UTC time of the origin in the start frame; version 1
 // journals (scans only) are still read.
 inline constexpr int kJournalFormatVersion = 2;
@@ -146,7 +153,13 @@ struct JournalFrame {
 class JournalReader {
  public:
   // Opens and reads the header; throws JournalError ("not a doorbench journal", "its
-  // header is damaged", a newer version).
+  // header is damaged ... at byte N", a newer version), JournalHeaderIncomplete.
+  // A header whose fixed fields are damaged is rebuilt where the bytes allow it, and
+  // header_repair() says what was repaired: a damaged magic (when the JSON text that
+  // follows is a journal's), length field (the header ends where the first frame that
+  // checks out begins, or at the end of the JSON text whose CRC matches), checksum field
+  // (the JSON text parses and only one byte of the checksum differs), version field (the
+  // JSON's own format_version), or one flipped bit of the JSON text (located by its CRC).
   explicit JournalReader(const std::filesystem::path& path);
   ~JournalReader();
   JournalReader(const JournalReader&) = delete;
@@ -165,9 +178,23 @@ class JournalReader {
   std::uint64_t file_bytes() const { return file_bytes_; }
   std::uint64_t bytes_dropped() const { return file_bytes_ - offset_; }
   const std::string& stop_reason() const { return stop_reason_; }  // "" at a clean end
+  // After next() returned false with a stop reason: looks in the rest of the file for the
+  // next frame whose header and CRC check out (a frame marker "DBFR" found byte by byte);
+  // if there is one, next() continues there and the bytes skipped are returned, else 0
+  // (what is left is a damaged tail) and nothing changes. Reads the rest of the file in
+  // chunks of 1 MiB.
+  std::uint64_t skip_to_next_frame();
+  // "" when the header was intact; otherwise what was repaired ("its length field ...").
+  const std::string& header_repair() const { return header_repair_; }
 
  private:
   bool fail(std::string reason);
+  void read_header();
+  std::string locate_header_json(std::uint32_t json_bytes, std::uint32_t json_crc);
+  std::string read_bytes(std::uint64_t at, std::uint64_t count) const;
+  bool frame_checks_out(std::uint64_t at, std::vector<std::uint8_t>& payload) const;
+  std::uint64_t find_frame(std::uint64_t from) const;  // file_bytes_ when there is none
+  void note_repair(const std::string& what);
   std::filesystem::path path_;
   int fd_ = -1;
   JournalHeader header_;
@@ -175,6 +202,7 @@ class JournalReader {
   std::uint64_t offset_ = 0;
   std::uint64_t file_bytes_ = 0;
   std::string stop_reason_;
+  std::string header_repair_;
   std::vector<std::uint8_t> payload_;
 };
 

@@ -3,6 +3,9 @@
 // converts its journal into the session. The reading side is realtime_reader.cpp.
 #include "acquisition/record/recorder.h"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -82,6 +85,16 @@ void convert_to_session(const RecordingPlan& plan, const std::filesystem::path& 
     const std::string journal = plan.journal_path.string();
     throw SessionError(std::string(error.what()) + "; the recording is kept in " + journal +
                        " (free space, then: doorbench recover " + journal + ")");
+  }
+  // This recording's own journal, whole, in a complete session that is synced under its
+  // name: the one journal doorbench removes (recovery keeps those it converts).
+  std::error_code ignored;
+  std::filesystem::remove(plan.journal_path, ignored);
+  const std::filesystem::path folder =
+      plan.journal_path.parent_path().empty() ? "." : plan.journal_path.parent_path();
+  if (const int fd = ::open(folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC); fd >= 0) {
+    ::fsync(fd);
+    ::close(fd);
   }
 }
 

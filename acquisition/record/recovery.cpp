@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
+#include <stdio.h>  // renameat2
 #include <set>
 
 namespace doorbench {
@@ -71,22 +72,50 @@ bool ends_with(const std::string& text, const std::string& suffix) {
          text.compare(text.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
-// True when `journal` ends before its header does: the recording died while creating it,
-// before any scan.
+// True when `journal` ends inside its header and no frame follows: the recording died
+// while creating it, before any scan.
 bool header_incomplete(const std::filesystem::path& journal) {
-  const int fd = ::open(journal.c_str(), O_RDONLY | O_CLOEXEC);
-  if (fd < 0) return false;
-  std::array<std::uint8_t, 20> head{};
-  const ssize_t got = ::pread(fd, head.data(), head.size(), 0);
-  const auto size = static_cast<std::uint64_t>(::lseek(fd, 0, SEEK_END));
-  ::close(fd);
-  if (got < 0) return false;
-  const auto have = static_cast<std::size_t>(got);
-  if (std::memcmp(head.data(), kJournalMagic, std::min<std::size_t>(have, 8)) != 0) return false;
-  if (have < head.size()) return true;
-  std::uint32_t header_bytes = 0;
-  std::memcpy(&header_bytes, head.data() + 12, 4);
-  return size < head.size() + header_bytes;
+  try {
+    JournalReader reader(journal);
+  } catch (const JournalHeaderIncomplete&) {
+    return true;
+  } catch (const JournalError&) {
+    return false;
+  }
+  return false;
+}
+
+// Renames `journal` "JOURNAL.recovered" (or "-2", "-3", ... after it when that exists;
+// never replacing a file) and syncs the folder. Returns the new name, or "" and `problem`.
+std::filesystem::path keep_journal(const std::filesystem::path& journal, std::string& problem) {
+  for (int n = 1; n <= 1000; ++n) {
+    std::filesystem::path kept = journal;
+    kept += ".recovered";
+    if (n > 1) kept += "-" + std::to_string(n);
+    if (::renameat2(AT_FDCWD, journal.c_str(), AT_FDCWD, kept.c_str(), RENAME_NOREPLACE) == 0) {
+      sync_path(folder_of(journal), true);
+      return kept;
+    }
+    const int error = errno;
+    if (error == EEXIST) continue;
+    if ((error == EINVAL || error == ENOSYS) && !std::filesystem::exists(kept)) {
+      // A file system without RENAME_NOREPLACE.
+      std::error_code failed;
+      std::filesystem::rename(journal, kept, failed);
+      if (!failed) {
+        sync_path(folder_of(journal), true);
+        return kept;
+      }
+      problem = failed.message();
+      return {};
+    }
+    if (error != EINVAL && error != ENOSYS) {
+      problem = std::strerror(error);
+      return {};
+    }
+  }
+  problem = "1000 recovered copies of it are already there";
+  return {};
 }
 
 }  // namespace
@@ -101,12 +130,25 @@ std::string ConvertResult::brief_report() const {
   if (gap_scans > 0) {
     report += "; " + std::to_string(gap_scans) + " scans lost to ring overflows (marked as gaps)";
   }
-  if (already_complete) report += "; the session was already complete, the journal is removed";
+  if (damaged_stretches > 0) {
+    report += "; " + std::to_string(damaged_stretches) + " damaged stretch" +
+              (damaged_stretches == 1 ? "" : "es") + " of the journal skipped (" +
+              std::to_string(damaged_bytes) + " bytes; the first: " + first_damage + "), " +
+              std::to_string(damaged_scans) + " scans lost there (marked as gaps)";
+  }
+  if (!header_repair.empty()) report += "; the journal's header was repaired: " + header_repair;
+  if (already_complete) report += "; the session was already complete";
   if (bytes_dropped > 0) {
     report += "; " + std::to_string(bytes_dropped) + " bytes after the last whole block dropped (" +
               drop_reason + ")";
-  } else if (!already_complete) {
+  } else if (!already_complete && damaged_stretches == 0) {
     report += ", nothing dropped";
+  }
+  if (!kept_journal.empty()) {
+    report += "; the journal is kept as " + kept_journal.string() + " (remove it when you like)";
+  } else if (!keep_problem.empty()) {
+    report += "; the journal could not be renamed (" + keep_problem + ") and is left as " +
+              journal.string();
   }
   return report;
 }
@@ -180,6 +222,15 @@ class FrameWriter {
     }
   }
 
+  // A damaged stretch of `bytes` from byte `from` was skipped: the scans the next block
+  // shows missing are lost to it (its gap event says so).
+  void damaged(std::uint64_t from, std::uint64_t bytes, const std::string& reason) {
+    if (result_.damaged_stretches++ == 0) result_.first_damage = reason;
+    result_.damaged_bytes += bytes;
+    if (!damage_.empty()) damage_ += ", ";
+    damage_ += "bytes " + std::to_string(from) + "-" + std::to_string(from + bytes) + " skipped";
+  }
+
   // After the last frame: the fault for unordered samples, the session clock's origin.
   void finish() {
     if (result_.unordered_samples > 0) {
@@ -246,6 +297,7 @@ class FrameWriter {
                          std::to_string(result_.scans) + " that the journal already has");
     }
     if (frame.first_scan > result_.scans) fill_gap(frame);
+    damage_.clear();
     for (int c = 0; c < channel_count_; ++c) {
       writer_.append_counts(c, std::span<const std::int32_t>(
                                    frame.counts.data() + c * frame.scan_count, frame.scan_count));
@@ -266,12 +318,13 @@ class FrameWriter {
                          std::to_string(missing) + " scans after the last one the " +
                          "journal has (more than an hour): the journal is damaged");
     }
-    char detail[200];
+    const std::string cause =
+        damage_.empty() ? std::string("ring buffer overflow") : "damaged journal: " + damage_;
+    char detail[400];
     std::snprintf(detail, sizeof detail,
-                  "%llu scans from scan %llu lost (ring buffer overflow); their raw "
-                  "values are %d",
+                  "%llu scans from scan %llu lost (%s); their raw values are %d",
                   static_cast<unsigned long long>(missing),
-                  static_cast<unsigned long long>(result_.scans), kGapFillCount);
+                  static_cast<unsigned long long>(result_.scans), cause.c_str(), kGapFillCount);
     writer_.add_event(
         {static_cast<double>(result_.scans) / header_.scan_rate_hz, "gap", "", detail});
     ++result_.events;
@@ -283,7 +336,7 @@ class FrameWriter {
       }
       left -= n;
     }
-    result_.gap_scans += missing;
+    (damage_.empty() ? result_.gap_scans : result_.damaged_scans) += missing;
     result_.scans = frame.first_scan;
   }
 
@@ -297,6 +350,7 @@ class FrameWriter {
   std::vector<std::int64_t> last_time_ns_;  // per channel: the last time written
   std::vector<double> times_s_, latencies_s_, raws_;
   std::vector<std::int32_t> fill_;
+  std::string damage_;  // the damaged stretches since the last scans frame
 };
 
 // The whole session into `partial`, closed.
@@ -307,8 +361,16 @@ void write_partial_session(const std::filesystem::path& journal, JournalReader& 
   SessionWriter writer(partial, metadata_with_start_time(journal, header), options.writer);
   FrameWriter frames(journal, header, writer, result);
   JournalFrame frame;
-  while (reader.next(frame)) frames.write(frame);
+  for (;;) {
+    while (reader.next(frame)) frames.write(frame);
+    const std::uint64_t from = reader.valid_bytes();
+    const std::string reason = reader.stop_reason();
+    const std::uint64_t skipped = reader.skip_to_next_frame();
+    if (skipped == 0) break;  // the rest is the damaged tail
+    frames.damaged(from, skipped, reason);
+  }
   frames.finish();
+  result.header_repair = reader.header_repair();
   result.journal_bytes = reader.file_bytes();
   result.bytes_dropped = reader.bytes_dropped();
   result.drop_reason = reader.stop_reason();
@@ -370,10 +432,74 @@ ConvertResult convert_journal(const std::filesystem::path& journal,
     std::filesystem::remove(partial, ignored);
     throw;
   }
-  std::filesystem::remove(journal);
-  sync_path(folder_of(journal), true);
   return result;
 }
+
+namespace {
+
+// The session already exists: the recording was killed between the rename of its
+// complete session and the journal's removal, if the session holds the journal's scans
+// and the journal its end mark; otherwise refused.
+ConvertResult check_already_complete(const std::filesystem::path& journal,
+                                     const std::filesystem::path& session) {
+  JournalReader reader(journal);
+  JournalFrame frame;
+  std::uint64_t scans = 0;
+  bool ended = false;
+  do {
+    while (reader.next(frame)) {
+      if (frame.type == FrameType::kScans) scans = frame.first_scan + frame.scan_count;
+      if (frame.type == FrameType::kEnd) ended = true;
+    }
+  } while (reader.skip_to_next_frame() > 0);
+  const SessionReader existing(session);
+  // Scans of the first channel on the scan clock (a polled-only session has none).
+  const std::size_t has = scan_channel_count(reader.header()) == 0 || existing.channels().empty()
+                              ? 0
+                              : existing.sample_count(existing.channels().front().name);
+  if (!ended || has != scans) {
+    throw JournalError(journal.string() + ": " + session.string() +
+                       " already exists and does not hold this journal's " +
+                       std::to_string(scans) + " scans (it has " + std::to_string(has) +
+                       "); move one of them away, or recover with another output path");
+  }
+  ConvertResult result;
+  result.journal = journal;
+  result.session = session;
+  result.channels = existing.channels().size();
+  result.scans = scans;
+  result.events = existing.events().size();
+  result.scan_rate_hz = reader.header().scan_rate_hz;
+  result.ended_cleanly = true;
+  result.already_complete = true;
+  return result;
+}
+
+// The "recovered" event: where from, what was kept and what was lost.
+std::vector<SessionEvent> recovered_event(const std::string& journal_name,
+                                          const ConvertResult& so_far) {
+  std::string detail = "recovered from " + journal_name;
+  detail += so_far.ended_cleanly ? " (the recording had ended; its conversion was interrupted)"
+                                 : " after the recording was interrupted";
+  detail += ": " + std::to_string(so_far.scans) + " scans";
+  if (so_far.damaged_stretches > 0) {
+    detail += "; " + std::to_string(so_far.damaged_stretches) + " damaged stretches skipped (" +
+              std::to_string(so_far.damaged_bytes) + " bytes), " +
+              std::to_string(so_far.damaged_scans) + " scans lost there (marked as gaps)";
+  }
+  if (!so_far.header_repair.empty()) {
+    detail += "; the journal's header was repaired: " + so_far.header_repair;
+  }
+  if (so_far.bytes_dropped > 0) {
+    detail += "; " + std::to_string(so_far.bytes_dropped) +
+              " bytes after the last whole block dropped (" + so_far.drop_reason + ")";
+  }
+  const double time_s =
+      so_far.scan_rate_hz > 0 ? static_cast<double>(so_far.scans) / so_far.scan_rate_hz : 0.0;
+  return {{time_s, "recovered", "", detail}};
+}
+
+}  // namespace
 
 ConvertResult recover_session(const std::filesystem::path& file, const RecoverOptions& options) {
   if (std::string problem = options.validate(); !problem.empty()) {
@@ -389,10 +515,15 @@ ConvertResult recover_session(const std::filesystem::path& file, const RecoverOp
   }
   const JournalLock lock(journal);
   if (header_incomplete(journal)) {
-    std::filesystem::remove(journal);
+    std::string problem;
+    const std::filesystem::path kept = keep_journal(journal, problem);
     throw JournalError(journal.string() +
                        ": the recording died while creating this journal, before its first "
-                       "scan; there is nothing to recover, so it is removed");
+                       "scan; there is nothing to recover" +
+                       (kept.empty() ? "; it is left as it is (it could not be renamed: " +
+                                           problem + ")"
+                                     : "; it is kept as " + kept.string() +
+                                           " (remove it when you like)"));
   }
   std::filesystem::path session = options.out;
   if (session.empty()) {
@@ -403,58 +534,21 @@ ConvertResult recover_session(const std::filesystem::path& file, const RecoverOp
       session = journal.parent_path() / JournalReader(journal).header().session_name;
     }
   }
-
+  ConvertResult result;
   if (std::filesystem::exists(session)) {
-    // Killed between the rename of the complete session and the journal's removal?
-    JournalReader reader(journal);
-    JournalFrame frame;
-    std::uint64_t scans = 0;
-    bool ended = false;
-    while (reader.next(frame)) {
-      if (frame.type == FrameType::kScans) scans = frame.first_scan + frame.scan_count;
-      if (frame.type == FrameType::kEnd) ended = true;
-    }
-    const SessionReader existing(session);
-    // Scans of the first channel on the scan clock (a polled-only session has none).
-    const std::size_t has = scan_channel_count(reader.header()) == 0 || existing.channels().empty()
-                                ? 0
-                                : existing.sample_count(existing.channels().front().name);
-    if (!ended || has != scans) {
-      throw JournalError(journal.string() + ": " + session.string() +
-                         " already exists and does not hold this journal's " +
-                         std::to_string(scans) + " scans (it has " + std::to_string(has) +
-                         "); move one of them away, or recover with another output path");
-    }
-    std::filesystem::remove(journal);
-    ConvertResult result;
-    result.journal = journal;
-    result.session = session;
-    result.channels = existing.channels().size();
-    result.scans = scans;
-    result.events = existing.events().size();
-    result.scan_rate_hz = reader.header().scan_rate_hz;
-    result.ended_cleanly = true;
-    result.already_complete = true;
-    return result;
+    result = check_already_complete(journal, session);
+  } else {
+    ConvertOptions convert;
+    convert.writer = options.writer;
+    const std::string journal_name = journal.filename().string();
+    convert.closing_events = [journal_name](const ConvertResult& so_far) {
+      return recovered_event(journal_name, so_far);
+    };
+    result = convert_journal(journal, session, convert);
   }
-
-  ConvertOptions convert;
-  convert.writer = options.writer;
-  const std::string journal_name = journal.filename().string();
-  convert.closing_events = [journal_name](const ConvertResult& so_far) {
-    std::string detail = "recovered from " + journal_name;
-    detail += so_far.ended_cleanly ? " (the recording had ended; its conversion was interrupted)"
-                                   : " after the recording was interrupted";
-    detail += ": " + std::to_string(so_far.scans) + " scans";
-    if (so_far.bytes_dropped > 0) {
-      detail += "; " + std::to_string(so_far.bytes_dropped) +
-                " bytes after the last whole block dropped (" + so_far.drop_reason + ")";
-    }
-    const double time_s =
-        so_far.scan_rate_hz > 0 ? static_cast<double>(so_far.scans) / so_far.scan_rate_hz : 0.0;
-    return std::vector<SessionEvent>{{time_s, "recovered", "", detail}};
-  };
-  return convert_journal(journal, session, convert);
+  // Kept, under a name that no recording and no recovery takes for unfinished.
+  result.kept_journal = keep_journal(journal, result.keep_problem);
+  return result;
 }
 
 std::vector<std::filesystem::path> find_unfinished_sessions(const std::filesystem::path& folder) {

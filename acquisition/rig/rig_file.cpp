@@ -204,6 +204,57 @@ std::filesystem::path RigDefinition::resolve(const std::string& path) const {
   return base_dir / written;
 }
 
+namespace {
+
+std::string trimmed(std::string_view text) {
+  const auto begin = text.find_first_not_of(" \t\r");
+  if (begin == std::string_view::npos) return "";
+  const auto end = text.find_last_not_of(" \t\r");
+  return std::string(text.substr(begin, end - begin + 1));
+}
+
+// toml++ refuses a key or table given twice naming only the second ("cannot redefine
+// existing string 'name'"): the line of the first, found in the text (the table header
+// `[name]`, or `name =` under the same header), or 0.
+int first_definition_line(std::string_view text, int second_line, std::string_view description) {
+  const auto close = description.rfind('\'');
+  const auto open = close == std::string_view::npos ? close : description.rfind('\'', close - 1);
+  if (open == std::string_view::npos || description.find("cannot redefine existing") == std::string_view::npos) {
+    return 0;
+  }
+  const std::string name(description.substr(open + 1, close - open - 1));
+  const bool table = description.find("existing table") != std::string_view::npos;
+  std::vector<std::string> lines;
+  for (std::size_t start = 0; start <= text.size();) {
+    const auto end = std::min(text.find('\n', start), text.size());
+    lines.push_back(trimmed(text.substr(start, end - start)));
+    start = end + 1;
+  }
+  const int last = std::min<int>(second_line - 1, static_cast<int>(lines.size()));
+  int from = 1;  // a key: under the header that holds the second one
+  if (!table) {
+    for (int n = last; n >= 1; --n) {
+      if (lines[n - 1].starts_with("[")) {
+        from = n + 1;
+        break;
+      }
+    }
+  }
+  const std::string key = name.substr(name.rfind('.') + 1);
+  for (int n = from; n <= last; ++n) {
+    const std::string& line = lines[n - 1];
+    if (table && (line == "[" + name + "]" || line == "[[" + name + "]]")) return n;
+    if (!table && (line.starts_with(key) || line.starts_with("\"" + key + "\""))) {
+      const std::size_t after = line.starts_with(key) ? key.size() : key.size() + 2;
+      const std::string rest = trimmed(std::string_view(line).substr(after));
+      if (rest.starts_with("=")) return n;
+    }
+  }
+  return 0;
+}
+
+}  // namespace
+
 RigDefinition parse_rig(std::string_view text, std::string_view source,
                         const std::filesystem::path& base_dir) {
   const Failer failer(source);
@@ -211,7 +262,13 @@ RigDefinition parse_rig(std::string_view text, std::string_view source,
   try {
     root_table = toml::parse(text, source);
   } catch (const toml::parse_error& error) {
-    failer.fail(line_of(error.source()), "syntax", error.description());
+    std::string what(error.description());
+    const int line = line_of(error.source());
+    if (const int first = first_definition_line(text, line, what); first > 0) {
+      what += " (given twice: lines " + std::to_string(first) + " and " + std::to_string(line) +
+              "; a file says each thing once)";
+    }
+    failer.fail(line, "syntax", what);
   }
 
   RigDefinition rig;

@@ -114,6 +114,16 @@ void check_output_folder(const fs::path& folder, const std::vector<fs::path>& in
   if (!overwrite && !fs::is_empty(folder, error)) {
     throw OutputRefused(where + "exists and is not empty (give --overwrite to write into it)");
   }
+  // A file in it that is an input under another name (a link to it): --overwrite would
+  // replace that name (issue 33).
+  for (const fs::directory_entry& entry : fs::directory_iterator(folder, error)) {
+    for (const fs::path& input : inputs) {
+      if (same_file(entry.path(), input)) {
+        throw OutputRefused(entry.path().string() + ": is an input of this command (" +
+                            input.string() + ") (doorbench never writes onto its input)");
+      }
+    }
+  }
 }
 
 fs::path partial_path_for(const fs::path& path) {

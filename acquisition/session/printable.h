@@ -4,6 +4,7 @@
 // the others as \xHH, so that a file cannot clear the screen, set the title or forge a line
 // of output. Other bytes (UTF-8 text, backslashes) pass unchanged, so escaping twice (a
 // message escaped where it is made and again where it is printed) changes nothing more.
+#include <algorithm>
 #include <string>
 #include <string_view>
 
@@ -30,6 +31,41 @@ inline std::string printable(std::string_view text) {
         out += kHex[byte >> 4];
         out += kHex[byte & 0xf];
     }
+  }
+  return out;
+}
+
+// A message with its long values cut (issue 33: a 10 MB value echoed on one line): a quoted
+// value ('...' or "...") longer than 80 characters keeps its first 60 and its size ("'xxx...
+// (10000000 characters)'"); a run without spaces longer than 1000 characters (a value not
+// quoted; paths are shorter) the same. Everything else is left as it is.
+inline std::string shortened(std::string_view text) {
+  const auto cut = [](std::string_view value) {
+    return std::string(value.substr(0, 60)) + "... (" + std::to_string(value.size()) +
+           " characters)";
+  };
+  std::string out;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    if (c == '\'' || c == '"') {
+      const std::size_t close = text.find(c, i + 1);
+      if (close != std::string_view::npos && close - i - 1 > 80) {
+        out += c + cut(text.substr(i + 1, close - i - 1)) + c;
+        i = close + 1;
+        continue;
+      }
+    }
+    if (c != ' ' && (i == 0 || text[i - 1] == ' ')) {
+      const std::size_t end = std::min(text.find(' ', i), text.size());
+      if (end - i > 1000) {
+        out += cut(text.substr(i, end - i));
+        i = end;
+        continue;
+      }
+    }
+    out += c;
+    ++i;
   }
   return out;
 }

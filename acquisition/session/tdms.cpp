@@ -212,6 +212,15 @@ class Reader {
            std::to_string(bytes_.size() - std::min(position_, bytes_.size())) + " left)");
     }
   }
+  // A count read from the file, checked against the bytes left before it is believed
+  // (issue 33: 4294967295 properties claimed); each item takes at least `min_bytes`.
+  void need_items(std::uint64_t count, std::size_t min_bytes, const std::string& what) const {
+    const std::size_t left = bytes_.size() - std::min(position_, bytes_.size());
+    if (count > left / min_bytes) {
+      fail("claims " + std::to_string(count) + " " + what + ", but only " + std::to_string(left) +
+           " bytes are left (each takes at least " + std::to_string(min_bytes) + ")");
+    }
+  }
   template <typename T>
   T read() {
     need(sizeof(T));
@@ -440,6 +449,7 @@ class TdmsParser {
     if (layout.toc & kTocNewObjList) active_.clear();
     in_.seek(layout.meta_start);
     const auto count = in_.read<std::uint32_t>();
+    in_.need_items(count, 12, "objects");  // path length, raw index, property count
     for (std::uint32_t o = 0; o < count; ++o) {
       const std::string path = in_.read_string();
       ObjectState& object = object_at(path);
@@ -571,6 +581,7 @@ class TdmsParser {
   // The object's properties: the file's, a group's or a channel's.
   void read_properties(const ObjectState& object) {
     const auto properties = in_.read<std::uint32_t>();
+    in_.need_items(properties, 9, "properties");  // name length, type, a value's byte
     for (std::uint32_t p = 0; p < properties; ++p) {
       const std::string name = in_.read_string();
       const auto type = in_.read<std::uint32_t>();
@@ -710,6 +721,7 @@ TdmsFile read_tdms(const std::filesystem::path& path) {
   if (!in) throw TdmsError(path.string() + ": cannot open for reading");
   const std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
                                         std::istreambuf_iterator<char>());
+  if (bytes.empty()) throw TdmsError(path.string() + ": the file is empty (0 bytes)");
   return parse_tdms(bytes, path.string());
 }
 

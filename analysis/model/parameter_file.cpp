@@ -1,6 +1,8 @@
 #include "analysis/model/parameter_file.h"
 
 #include <algorithm>
+#include <cctype>
+#include <map>
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <sstream>
@@ -17,9 +19,61 @@ using json = nlohmann::ordered_json;
   throw ParameterFileError(std::string(source) + ": " + message);
 }
 
+// A key given twice in one object (issue 33: J given twice, the last one silently won):
+// refused with both lines. Runs on text that parsed, so the scan only follows strings,
+// nesting and the ':' after a key. Keys are compared as written (escapes decoded).
+void refuse_duplicate_keys(std::string_view text, std::string_view source) {
+  struct Level {
+    bool object = false;
+    std::string path;                  // "sensory" ("" at the top)
+    std::map<std::string, int> lines;  // key -> its line
+    std::string last_key;
+  };
+  std::vector<Level> levels;
+  int line = 1;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (c == '\n') ++line;
+    if (c == '{' || c == '[') {
+      std::string path = levels.empty() ? "" : levels.back().path;
+      if (!levels.empty() && levels.back().object && !levels.back().last_key.empty()) {
+        path += (path.empty() ? "" : ".") + levels.back().last_key;
+      }
+      levels.push_back({c == '{', path, {}, ""});
+    } else if ((c == '}' || c == ']') && !levels.empty()) {
+      levels.pop_back();
+    } else if (c == '"') {
+      const std::size_t start = i;
+      for (++i; i < text.size() && text[i] != '"'; ++i) {
+        if (text[i] == '\\') ++i;
+      }
+      std::size_t next = i + 1;
+      while (next < text.size() && std::isspace(static_cast<unsigned char>(text[next]))) ++next;
+      if (levels.empty() || !levels.back().object || next >= text.size() || text[next] != ':') {
+        continue;
+      }
+      const std::string_view raw = text.substr(start, i - start + 1);
+      const std::string key = raw.find('\\') == std::string_view::npos
+                                  ? std::string(raw.substr(1, raw.size() - 2))
+                                  : json::parse(raw).get<std::string>();
+      Level& level = levels.back();
+      level.last_key = key;
+      const auto [at, inserted] = level.lines.emplace(key, line);
+      if (!inserted) {
+        fail(source, "line " + std::to_string(line) + ": " +
+                         (level.path.empty() ? "" : level.path + ".") + key +
+                         " is given twice (lines " + std::to_string(at->second) + " and " +
+                         std::to_string(line) + "); a file says each thing once");
+      }
+    }
+  }
+}
+
 json parse_json(std::string_view text, std::string_view source) {
   try {
-    return json::parse(text.begin(), text.end());
+    json root = json::parse(text.begin(), text.end());
+    refuse_duplicate_keys(text, source);
+    return root;
   } catch (const json::parse_error& error) {
     // nlohmann's message already gives line and column.
     std::string what = error.what();

@@ -214,10 +214,18 @@ void measure_intervals(const PreprocessingOptions& options, Input& in) {
       std::max(in.max_interval_s - in.median_interval_s, in.median_interval_s - in.min_interval_s) >
       kJitterFraction * in.median_interval_s;
   if (in.rate_hz < options.min_sample_rate_hz) {
-    throw PreprocessingError(in.source + ": sampled at " + text(in.rate_hz) +
+    // Enough digits that the two rates differ (issue 33: "at 20 Hz, below the 20 Hz").
+    int digits = 3;
+    while (digits < 12 && text(in.rate_hz, digits) == text(options.min_sample_rate_hz, digits)) {
+      ++digits;
+    }
+    throw PreprocessingError(in.source + ": sampled at " + text(in.rate_hz, digits) +
                              " Hz (1 / the median interval), below the " +
-                             text(options.min_sample_rate_hz) +
-                             " Hz preprocessing supports (the min_sample_rate_hz option)");
+                             text(options.min_sample_rate_hz, digits) +
+                             " Hz preprocessing supports by default; rates from " +
+                             text(options.min_sample_rate_hz, digits) +
+                             " Hz up are used as they are (give --min-sample-rate-hz to "
+                             "accept a slower recording, at the cost of the fastest motion)");
   }
 }
 

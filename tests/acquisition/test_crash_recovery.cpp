@@ -225,15 +225,18 @@ void check_killed(const KillRun& run, const std::vector<std::vector<std::int32_t
       if (frame.type == FrameType::kStart) start_ns = frame.monotonic_ns;
     }
   } catch (const JournalError& error) {
-    // Killed while writing the header: recovery removes the empty journal.
+    // Killed while writing the header: recovery keeps the empty journal, renamed.
     CHECK_THROWS_WITH(recover_session(journal), Contains("before its first scan"));
     CHECK(!fs::exists(journal));
+    CHECK(fs::exists(fs::path(journal.string() + ".recovered")));
     ++stats.header_only;
     return;
   }
   const bool session_was_there = fs::exists(run.session);
   const ConvertResult result = recover_session(journal);
   CHECK(!fs::exists(journal));
+  CHECK(result.kept_journal == fs::path(journal.string() + ".recovered"));
+  CHECK(fs::exists(result.kept_journal));
   CHECK(result.session == run.session);
   const std::size_t scans = check_against_reference(run.session, reference);
   CHECK(scans == result.scans);
@@ -560,15 +563,23 @@ TEST_CASE("Recovery: refusals and the cases around a complete session", "[journa
     CHECK_THROWS_WITH(recover_session(file), file.string() + ": not a doorbench journal");
     CHECK(find_unfinished_sessions(dir.path).empty());
   }
-  SECTION("killed while creating the journal: removed, nothing to recover") {
+  SECTION("killed while creating the journal: kept, nothing to recover") {
     const fs::path file = dir.write("x.h5.journal", "DBJRN");
     CHECK(find_unfinished_sessions(dir.path) == std::vector<fs::path>{file});
     CHECK_THROWS_WITH(recover_session(file),
                       file.string() +
                           ": the recording died while creating this journal, "
-                          "before its first scan; there is nothing to recover, so it "
-                          "is removed");
+                          "before its first scan; there is nothing to recover; it is kept as " +
+                          file.string() + ".recovered (remove it when you like)");
     CHECK(!fs::exists(file));
+    CHECK(read_file(dir / "x.h5.journal.recovered") == "DBJRN");
+    CHECK(find_unfinished_sessions(dir.path).empty());
+    // A second one of the same name does not replace the first.
+    dir.write("x.h5.journal", "DBJRNL\r\n");
+    CHECK_THROWS_WITH(recover_session(file), Contains("it is kept as " + file.string() +
+                                                      ".recovered-2 (remove it when you like)"));
+    CHECK(read_file(dir / "x.h5.journal.recovered") == "DBJRN");
+    CHECK(read_file(dir / "x.h5.journal.recovered-2") == "DBJRNL\r\n");
   }
   SECTION("a running recording's journal is left alone") {
     JournalWriter running(dir / "live.h5.journal", small_header(), 7);
@@ -578,22 +589,22 @@ TEST_CASE("Recovery: refusals and the cases around a complete session", "[journa
   }
   SECTION("killed after the session was complete, before the journal was removed") {
     const fs::path journal = write_small_journal(dir.path);
-    fs::copy_file(journal, dir / "keep");
+    const std::string bytes = read_file(journal);
     convert_journal(journal, dir / "s.h5", {});
-    CHECK(!fs::exists(journal));
-    fs::rename(dir / "keep", journal);
+    CHECK(read_file(journal) == bytes);  // left as it was
     CHECK(find_unfinished_sessions(dir.path) == std::vector<fs::path>{journal});
     const ConvertResult result = recover_session(journal);
     CHECK(result.already_complete);
     CHECK(result.scans == 70);
     CHECK(!fs::exists(journal));
-    CHECK_THAT(result.brief_report(), Contains("the session was already complete"));
+    CHECK(read_file(dir / "s.h5.journal.recovered") == bytes);
+    CHECK_THAT(result.brief_report(),
+               Contains("; the session was already complete; the journal is kept as " +
+                        (dir / "s.h5.journal.recovered").string() + " (remove it when you like)"));
   }
   SECTION("a different session in the way") {
     const fs::path journal = write_small_journal(dir.path, false);
-    fs::copy_file(journal, dir / "keep");
     convert_journal(journal, dir / "s.h5", {});
-    fs::rename(dir / "keep", journal);
     std::ofstream(journal, std::ios::binary | std::ios::app) << "torn";
     fs::resize_file(journal, fs::file_size(journal) - 100);
     CHECK_THROWS_WITH(recover_session(journal),
@@ -804,6 +815,7 @@ TEST_CASE(
                         "\nrecovered " + (dir / "b" / "b.h5").string() + ": "));
   CHECK(check_against_reference(dir / "b" / "b.h5", reference) > 100);
   CHECK(!fs::exists(dir / "b" / "b.h5.journal"));
+  CHECK(fs::exists(dir / "b" / "b.h5.journal.recovered"));  // kept
   CHECK(SessionReader(dir / "b" / "c.h5").sample_count("force") == 200);
 }
 

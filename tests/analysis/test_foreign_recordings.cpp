@@ -169,7 +169,20 @@ TEST_CASE("Foreign recordings: rates below the supported one are refused by name
   } catch (const PreprocessingError& error) {
     CHECK(std::string(error.what()) ==
           "mem: sampled at 10 Hz (1 / the median interval), below the 20 Hz preprocessing "
-          "supports (the min_sample_rate_hz option)");
+          "supports by default; rates from 20 Hz up are used as they are (give "
+          "--min-sample-rate-hz to accept a slower recording, at the cost of the fastest "
+          "motion)");
+  }
+  // Issue 33: a rate just under the limit is not "20 Hz, below the 20 Hz".
+  Recording nearly = recording;
+  for (std::size_t i = 0; i < nearly.time_s.size(); ++i) nearly.time_s[i] = 0.0500001 * double(i);
+  try {
+    prepare(nearly);
+    FAIL("no error");
+  } catch (const PreprocessingError& error) {
+    CHECK_THAT(std::string(error.what()),
+               Catch::StartsWith("mem: sampled at 19.99996 Hz (1 / the median interval), below "
+                                 "the 20 Hz preprocessing supports by default"));
   }
   PreprocessingOptions options;
   options.min_sample_rate_hz = 5.0;

@@ -280,3 +280,40 @@ TEST_CASE("Parameter file: written files list the sensory parameters in the spec
     previous = at;
   }
 }
+
+TEST_CASE("Parameter file: a key or a section given twice is refused with both lines",
+          "[parameter_file]") {
+  // Issue 33: J given twice (4.0, then 0.95), and a section given twice; the last won.
+  CHECK_THROWS_WITH(parse_parameter_file("{\n"
+                                         "  \"handle_radius_m\": 0.7,\n"
+                                         "  \"sensory\": {\n"
+                                         "    \"J\": {\"value\": 4.0},\n"
+                                         "    \"J\": {\"value\": 0.95}\n"
+                                         "  }\n"
+                                         "}\n",
+                                         "door.json"),
+                    std::string("door.json: line 5: sensory.J is given twice (lines 4 and 5); a "
+                                "file says each thing once"));
+  CHECK_THROWS_WITH(parse_parameter_file("{\n"
+                                         "  \"sensory\": {},\n"
+                                         "  \"theta_max_rad\": 1.5,\n"
+                                         "  \"sensory\": {\"J\": {\"value\": 1}}\n"
+                                         "}\n",
+                                         "door.json"),
+                    std::string("door.json: line 4: sensory is given twice (lines 2 and 4); a "
+                                "file says each thing once"));
+  // Written differently, the same key (an escape), and in an effects file.
+  CHECK_THROWS_WITH(parse_parameter_file("{\"physical\": {\"k\": 1,\n\"\\u006b\": 2}}", "door.json"),
+                    std::string("door.json: line 2: physical.k is given twice (lines 1 and 2); a "
+                                "file says each thing once"));
+  CHECK_THROWS_WITH(doorbench::parse_effects_file("{\"viscous_damping\": {},\n\n"
+                                                  "\"viscous_damping\": {}}",
+                                                  "effects.json"),
+                    std::string("effects.json: line 3: viscous_damping is given twice (lines 1 "
+                                "and 3); a file says each thing once"));
+  // The same name in two different objects is two things.
+  CHECK_THROWS_WITH(parse_parameter_file("{\"sensory\": {\"J\": 1}, \"physical\": {\"J\": 1}, "
+                                         "\"list\": [{\"a\": 1}, {\"a\": 2}]}",
+                                         "door.json"),
+                    !Contains("twice"));
+}

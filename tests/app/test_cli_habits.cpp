@@ -50,6 +50,25 @@ TEST_CASE("CLI habits: -V, help VERB, --quiet, errors naming the verb's help", "
     r = run_doorbench_shell("--no-such-option", dir);
     CHECK(r.status == 2);
     CHECK(r.err.find("(see doorbench --help)\n") != std::string::npos);
+    // A mistyped verb asking for help is still a mistake (issue 33: exit 0, general help).
+    r = run_doorbench_shell("NOSUCHVERB --help", dir);
+    CHECK(r.status == 2);
+    CHECK(r.out.empty());
+    CHECK(r.err.rfind("doorbench: unknown verb 'NOSUCHVERB' (expected model, simulate, ", 0) == 0);
+    CHECK(r.err.find(") (see doorbench --help)\n") != std::string::npos);
+  }
+  SECTION("--quiet silences record's live status, written with stdio (issue 33)") {
+    const std::string out = (dir / "q.h5").string();
+    const auto loud = run_doorbench_shell("record --duration-s 0.3 --out '" + out + "'", dir);
+    REQUIRE(loud.status == 0);
+    REQUIRE_FALSE(loud.err.empty());
+    const auto quiet = run_doorbench_shell("record -q --duration-s 0.3 --out '" + out + "2'", dir);
+    CHECK(quiet.status == 0);
+    CHECK(quiet.err.empty());
+    // Its error still shows.
+    const auto failing = run_doorbench_shell("record -q --duration-s 0.3 --out '" + out + "'", dir);
+    CHECK(failing.status == 2);
+    CHECK(failing.err == "doorbench: " + out + ": exists (sessions are never overwritten)\n");
   }
   SECTION("--quiet drops stderr's progress lines, keeps stdout and errors") {
     const std::string csv = (dir / "sim.csv").string();

@@ -143,3 +143,28 @@ TEST_CASE("Messages: control characters from files reach the terminal escaped",
                              ": /channels/r\\e[2J: a channel name is letters, digits and _ only\n");
   }
 }
+
+TEST_CASE("Messages: a value longer than 80 characters is cut, with its size", "[messages]") {
+  const std::string value(10000000, '7');
+  const std::string cut = std::string(60, '7') + "... (10000000 characters)";
+  CHECK(doorbench::shortened("x.csv:3: 'abc' is not a number") == "x.csv:3: 'abc' is not a number");
+  CHECK(doorbench::shortened("x.csv:3: '" + value + "' is not a number") ==
+        "x.csv:3: '" + cut + "' is not a number");
+  CHECK(doorbench::shortened("name \"" + std::string(81, 'n') + "\" unknown") ==
+        "name \"" + std::string(60, 'n') + "... (81 characters)\" unknown");
+  CHECK(doorbench::shortened("unquoted " + value + " here") == "unquoted " + cut + " here");
+  const std::string path = "/data/" + std::string(200, 'p') + ".csv: cannot open";
+  CHECK(doorbench::shortened(path) == path);  // paths are not values
+}
+
+TEST_CASE("Messages: a 10 MB value in a file reaches stderr cut", "[messages][cli]") {
+  const TempDir dir("long_value");
+  const std::string value(10000000, '7');
+  const auto csv = dir.write("long.csv", "# sample_rate_hz: x" + value + "\ntime_s,force_N\n0,1\n");
+  const DoorbenchRun run =
+      run_doorbench_shell("import '" + csv.string() + "' --out '" + (dir / "s.h5").string() + "'", dir);
+  CHECK(run.status != 0);
+  INFO(run.err.substr(0, 400));
+  CHECK(run.err.size() < 400);
+  CHECK(run.err.find("x" + std::string(59, '7') + "... (10000001 characters)") != std::string::npos);
+}

@@ -175,6 +175,17 @@ TEST_CASE("Outputs: fit and loop check their input before creating --out", "[out
   CHECK(holds.status == 2);
   CHECK(holds.err == "doorbench: " + dir.path.string() + ": holds an input of this command (" +
                          bad.string() + ") (doorbench never writes onto its input)\n");
+  // A link in the folder to the input (issue 33: --overwrite replaced the link).
+  const fs::path linked = dir / "linked";
+  fs::create_directories(linked);
+  fs::create_symlink(bad, linked / "result.json");
+  const DoorbenchRun link =
+      run_doorbench_shell("fit " + bad.string() + " --out " + linked.string() + " --overwrite", dir);
+  CHECK(link.status == 2);
+  CHECK(link.err == "doorbench: " + (linked / "result.json").string() +
+                        ": is an input of this command (" + bad.string() +
+                        ") (doorbench never writes onto its input)\n");
+  CHECK(fs::is_symlink(linked / "result.json"));
 }
 
 TEST_CASE("Outputs: spec refuses a folder that is not empty before any work", "[outputs][cli]") {

@@ -245,7 +245,17 @@ TEST_CASE("Rig file: TOML syntax errors give toml++'s message and line", "[rig_f
         "rig.toml:4: syntax: Error while parsing key-value pair: expected value, saw '\\n'");
   CHECK(error_of(edit(minimal(), "serial = \"LC-1\"\n", "serial = \"LC-1\"\nname = \"x\"\n")) ==
         "rig.toml:9: syntax: Error while parsing key-value pair: cannot redefine existing "
-        "string 'name'");
+        "string 'name' (given twice: lines 6 and 9; a file says each thing once)");
+}
+
+TEST_CASE("Rig file: a key or a table given twice is refused with both lines", "[rig_file]") {
+  CHECK(error_of(edit(minimal(), "[simulation]\n", "[simulation]\n[daq]\ndevice = \"x\"\n")) ==
+        "rig.toml:14: syntax: Error while parsing table header: cannot redefine existing table "
+        "'daq' (given twice: lines 3 and 14; a file says each thing once)");
+  CHECK(error_of(edit(minimal(), "name = \"test bench\"\n",
+                      "name = \"test bench\"\nname = \"other\"\n")) ==
+        "rig.toml:3: syntax: Error while parsing key-value pair: cannot redefine existing "
+        "string 'name' (given twice: lines 2 and 3; a file says each thing once)");
 }
 
 TEST_CASE("Rig file: [bench] and its name are required", "[rig_file]") {

@@ -1,0 +1,133 @@
+#include "app/number_options.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+
+namespace doorbench::app {
+
+namespace {
+
+// Ranges of options whose verb gives none itself and whose underlying Options' validate()
+// would otherwise see the value only after work began (or never, e.g. an allocation).
+struct NamedRange {
+  const char* verb;  // the verb's path, "calibrate geometry"
+  const char* option;
+  double min, max;
+};
+constexpr NamedRange kRanges[] = {
+    {"spec", "--samples", 2, 1e6},  // the Monte Carlo's samples (tolerance_analysis: >= 2)
+    {"spec", "--threads", 0, 1024},
+    {"spec", "--lambda", 0, 1e9},
+    {"spec", "--starts", 1, 32},  // InverseDesignOptions::validate()
+    {"ab", "--presentation-s", 0.01, 3600},  // AbOptions::validate(): > 0, at most an hour
+    {"view", "--width", 200, 16384},         // WindowOptions::validate()
+    {"view", "--height", 150, 16384},
+    {"view", "--window-s", 0.001, 86400},  // LiveOptions::validate(): > 0
+    {"view", "--live-samples", 2, 1e9},
+    {"calibrate gyro", "--inclinometer-range-deg", 0, 360},  // 0: the rig's
+    {"calibrate inclinometer", "--inclinometer-range-deg", 0, 360},
+    {"calibrate timing", "--inclinometer-range-deg", 0, 360},
+    {"calibrate loadcell", "--masses-kg", 0, 10000},
+    // Physical bounds (0.05 to 2 m) are checked by the verb, which --force-geometry lifts.
+    {"calibrate geometry", "--radius-m", 0.001, 1000},
+};
+
+constexpr double kLargestValue = 1e9;
+
+std::string shown(const std::string& text) {
+  // Long values are cut, with their size (issue 33: a 10 MB value echoed on one line).
+  if (text.size() <= 80) return text;
+  return text.substr(0, 60) + "... (" + std::to_string(text.size()) + " characters)";
+}
+
+std::string number_text(double value) {
+  char text[40];
+  std::snprintf(text, sizeof text, "%.10g", value);
+  return text;
+}
+
+// The verb's path: "spec", "calibrate geometry".
+std::string verb_path(const CLI::App* app) {
+  std::string path;
+  for (; app != nullptr && app->get_parent() != nullptr; app = app->get_parent()) {
+    path = app->get_name() + (path.empty() ? "" : " " + path);
+  }
+  return path;
+}
+
+CLI::Validator number_validator(NumberKind kind, const NamedRange* range) {
+  return CLI::Validator(
+      [kind, range](std::string& text) -> std::string {
+        std::string problem = number_problem(text, kind);
+        if (!problem.empty() || range == nullptr) return problem;
+        const double value = std::strtod(text.c_str(), nullptr);
+        if (value < range->min || value > range->max) {
+          return text + " is outside " + number_text(range->min) + " to " +
+                 number_text(range->max);
+        }
+        return "";
+      },
+      "");  // no description: the help keeps its type names
+}
+
+void check_recursively(CLI::App& app) {
+  const std::string verb = verb_path(&app);
+  for (CLI::Option* option : app.get_options()) {
+    const NumberKind kind = number_kind(*option);
+    if (kind == NumberKind::kNone) continue;
+    const NamedRange* range = nullptr;
+    for (const NamedRange& named : kRanges) {
+      if (verb == named.verb && option->check_lname(std::string(named.option).substr(2))) {
+        range = &named;
+      }
+    }
+    option->check(number_validator(kind, range));
+  }
+  for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
+    check_recursively(*sub);
+  }
+}
+
+}  // namespace
+
+NumberKind number_kind(const CLI::Option& option) {
+  std::string type = option.get_type_name();
+  type = type.substr(0, type.find(':'));
+  if (type == "FLOAT") return NumberKind::kFloat;
+  if (type == "INT") return NumberKind::kInt;
+  if (type == "UINT") return NumberKind::kUint;
+  return NumberKind::kNone;
+}
+
+std::string number_problem(const std::string& text, NumberKind kind) {
+  if (kind == NumberKind::kNone) return "";
+  const char* const begin = text.c_str();
+  char* end = nullptr;
+  errno = 0;
+  const double value = std::strtod(begin, &end);
+  const bool whole = end != begin && *end == '\0' && !std::isspace(static_cast<unsigned char>(text[0]));
+  if (!whole) return "'" + shown(text) + "' is not a number";
+  if (!std::isfinite(value)) return shown(text) + " is not a finite number";
+  if (kind == NumberKind::kUint && text.find('-') != std::string::npos) {
+    return shown(text) + " is negative (0 or more)";
+  }
+  if (kind != NumberKind::kFloat &&
+      text.find_first_not_of("0123456789", text[0] == '-' || text[0] == '+' ? 1 : 0) !=
+          std::string::npos) {
+    return shown(text) + " is not a whole number";
+  }
+  if (kind != NumberKind::kFloat && std::fabs(value) > 9.2e18) {
+    return shown(text) + " is beyond the whole numbers this option takes";
+  }
+  if (kind == NumberKind::kFloat && std::fabs(value) > kLargestValue) {
+    return shown(text) + " is beyond " + number_text(kLargestValue) +
+           ", the largest value any option takes";
+  }
+  return "";
+}
+
+void check_numeric_options(CLI::App& app) { check_recursively(app); }
+
+}  // namespace doorbench::app

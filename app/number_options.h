@@ -1,0 +1,33 @@
+#pragma once
+// Every number given on the command line is checked where it enters (issue 33): one
+// validator, attached by check_numeric_options() to every numeric option of every verb
+// (and of their sub-verbs) after they are registered, so that a new option is covered by
+// itself. An option is numeric when CLI11 gives its type as FLOAT, INT or UINT (a vector of
+// them too). Its values must then
+//   - be numbers: "--rate-hz: 'abc' is not a number";
+//   - be finite: "--duration-s: nan is not a finite number" (also inf, -inf);
+//   - for UINT, not be negative: "--seed: -1 is negative (0 or more)", where C++ would
+//     otherwise wrap it around to 18446744073709551615;
+//   - lie within the option's range: its own CLI::Range where the verb gives one, else
+//     the range listed for it in number_options.cpp (kRanges), else |x| <= 1e9 for FLOAT
+//     ("--lambda: 1e+308 is beyond 1e+09, the largest value any option takes").
+// A refusal is a CLI::ValidationError naming the option: main() prints it and exits 2.
+// Not thread-safe (it changes `app`); call once, before parsing.
+#include <CLI/CLI.hpp>
+#include <string>
+#include <vector>
+
+namespace doorbench::app {
+
+enum class NumberKind { kNone, kFloat, kInt, kUint };
+
+// What CLI11 says `option` holds (its type name before any ':').
+NumberKind number_kind(const CLI::Option& option);
+
+// Attaches the check to every numeric option of `app` and its subcommands, recursively.
+void check_numeric_options(CLI::App& app);
+
+// The checks above for one value, "" when it passes (used by the validator; tested).
+std::string number_problem(const std::string& text, NumberKind kind);
+
+}  // namespace doorbench::app

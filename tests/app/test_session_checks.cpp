@@ -1,0 +1,81 @@
+// A session is checked as a whole when `info` reads it (issue 33): a channel cut short, a
+// calibration record that is missing and times that go backwards are each named on a
+// "problem:" line, and a session that cannot be used as it is ends with exit status 1.
+// The damage is done with h5py (Debian's python3-h5py), as a file from elsewhere would be.
+#include <catch2/catch.hpp>
+#include <cstdlib>
+#include <string>
+
+#include "tests/support/run_doorbench.h"
+#include "tests/support/simulated_session.h"
+#include "tests/support/temp_dir.h"
+
+namespace {
+
+using doorbench::testing::DoorbenchRun;
+using doorbench::testing::run_doorbench_shell;
+using doorbench::testing::TempDir;
+
+void h5py(const std::string& script, const TempDir& dir) {
+  const auto file = dir.write("edit.py", "import h5py\n" + script + "\n");
+  REQUIRE(std::system(("/usr/bin/python3 '" + file.string() + "'").c_str()) == 0);
+}
+
+// The lines of `text` that start with `prefix`, joined.
+std::string lines_starting(const std::string& text, const std::string& prefix) {
+  std::string found;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t end = std::min(text.find('\n', start), text.size());
+    if (text.compare(start, prefix.size(), prefix) == 0) {
+      found += text.substr(start, end - start) + "\n";
+    }
+    start = end + 1;
+  }
+  return found;
+}
+
+}  // namespace
+
+TEST_CASE("Session checks: info names a channel cut short and a missing calibration record",
+          "[session][cli]") {
+  const TempDir dir("session_checks");
+  const auto session = dir / "s.h5";
+  REQUIRE(doorbench::testing::record_built_in_session(session, 2.0, 3, "sensory") == 2000);
+  const DoorbenchRun whole = run_doorbench_shell("info '" + session.string() + "'", dir);
+  REQUIRE(whole.status == 0);
+  CHECK(lines_starting(whole.out, "problem:").empty());
+
+  // The force channel cut to half its length (1000 of 2000 samples at 1 kHz); the rate
+  // channel, sampled 20 us after the force in each scan, ends last.
+  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
+       "raw = f['channels/force/raw'][:1000]\n"
+       "attrs = dict(f['channels/force/raw'].attrs)\n"
+       "del f['channels/force/raw']\n"
+       "d = f['channels/force'].create_dataset('raw', data=raw)\n"
+       "for k, v in attrs.items(): d.attrs[k] = v\n"
+       "f.close()",
+       dir);
+  const DoorbenchRun cut = run_doorbench_shell("info '" + session.string() + "'", dir);
+  CHECK(cut.status == 0);  // usable: export leaves cells empty, fit uses the common time
+  CHECK(lines_starting(cut.out, "problem:") ==
+        "problem: channel force has 1000 samples and ends at 1 s, 1.00002 s before rate (export "
+        "leaves its cells empty from there; fit uses only the time where every channel has "
+        "samples)\n");
+
+  // And the force's calibration record removed.
+  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
+       "del f['calibrations/' + f['channels/force'].attrs['calibration_id']]\n"
+       "f.close()",
+       dir);
+  const DoorbenchRun missing = run_doorbench_shell("info '" + session.string() + "'", dir);
+  CHECK(missing.status == 1);
+  CHECK(lines_starting(missing.out, "problem:") ==
+        "problem: channel force uses calibration record nominal-SIM-LC445-0001, which is not in "
+        "the session: its values cannot be calibrated (export and fit refuse the session)\n"
+        "problem: channel force has 1000 samples and ends at 1 s, 1.00002 s before rate (export "
+        "leaves its cells empty from there; fit uses only the time where every channel has "
+        "samples)\n");
+  CHECK(missing.err == "doorbench: " + session.string() +
+                           ": cannot be used as it is (1 problem above)\n");
+}
