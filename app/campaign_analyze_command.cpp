@@ -106,7 +106,8 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
   command
       ->add_option("--bootstrap", options->bootstrap,
                    "participant bootstrap resamples for the preference scale (0: none)")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(0, 1000000));
   command->add_option("--seed", options->seed, "the bootstrap's seed")->capture_default_str();
   command->add_option("--reference", options->reference,
                       "the variant at worth 0 (default: the first in the table)");

@@ -273,7 +273,8 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   run->add_option("--answers", run_options->answers_path, "A person's answers, one a line (default: stdin)");
   run->add_option("--presentation-s", run_options->presentation_s,
-                  "Length of each presentation (default: the campaign file's)");
+                  "Length of each presentation (default: the campaign file's)")
+      ->check(CLI::Range(0.001, 600.0));
   run->add_flag("--redo", run_options->redo, "Run a finished participant again (earlier answers kept, marked)");
   run->callback([run_options, &action] { action = [run_options] { run_run(*run_options); }; });
 

@@ -91,7 +91,7 @@ std::filesystem::path keep_journal(const std::filesystem::path& journal, std::st
   for (int n = 1; n <= 1000; ++n) {
     std::filesystem::path kept = journal;
     kept += ".recovered";
-    if (n > 1) kept += "-" + std::to_string(n);
+    if (n > 1) kept += std::string("-").append(std::to_string(n));
     if (::renameat2(AT_FDCWD, journal.c_str(), AT_FDCWD, kept.c_str(), RENAME_NOREPLACE) == 0) {
       sync_path(folder_of(journal), true);
       return kept;

@@ -5,6 +5,7 @@
 // of output. Other bytes (UTF-8 text, backslashes) pass unchanged, so escaping twice (a
 // message escaped where it is made and again where it is printed) changes nothing more.
 #include <algorithm>
+#include <cctype>
 #include <string>
 #include <string_view>
 
@@ -48,8 +49,14 @@ inline std::string shortened(std::string_view text) {
   std::size_t i = 0;
   while (i < text.size()) {
     const char c = text[i];
-    if (c == '\'' || c == '"') {
-      const std::size_t close = text.find(c, i + 1);
+    // A quote opens after a space or punctuation, never inside a word ("the file's"), and
+    // closes where no letter or digit follows it.
+    const auto word_char = [&text](std::size_t at) {
+      return at < text.size() && std::isalnum(static_cast<unsigned char>(text[at])) != 0;
+    };
+    if ((c == '\'' || c == '"') && !(i > 0 && word_char(i - 1))) {
+      std::size_t close = text.find(c, i + 1);
+      while (close != std::string_view::npos && word_char(close + 1)) close = text.find(c, close + 1);
       if (close != std::string_view::npos && close - i - 1 > 80) {
         out += c + cut(text.substr(i + 1, close - i - 1)) + c;
         i = close + 1;

@@ -155,6 +155,14 @@ TEST_CASE("Messages: a value longer than 80 characters is cut, with its size", "
   CHECK(doorbench::shortened("unquoted " + value + " here") == "unquoted " + cut + " here");
   const std::string path = "/data/" + std::string(200, 'p') + ".csv: cannot open";
   CHECK(doorbench::shortened(path) == path);  // paths are not values
+  // An apostrophe inside a word is not a quote: a long message with "file's" and
+  // "recording's" between them is left whole (it was cut as a quoted value).
+  const std::string english =
+      "the door file's handle radius 0.58 m (/work/door/analysis/data/reference-door.json) "
+      "differs from the recording's 0.8 m; the file's channels: Door/Force, Door/Angle";
+  CHECK(doorbench::shortened(english) == english);
+  CHECK(doorbench::shortened("the file's '" + value + "' value") ==
+        "the file's '" + cut + "' value");
 }
 
 TEST_CASE("Messages: a 10 MB value in a file reaches stderr cut", "[messages][cli]") {

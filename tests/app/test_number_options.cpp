@@ -150,7 +150,8 @@ TEST_CASE("CLI numbers: every numeric option of every verb refuses what is not a
       "fit --folds 0", "fit --force-cutoff-hz 0", "loop --derivative-cutoff-hz 0",
       "loop --force-cutoff-hz 0", "play --push-N 0", "play --pushes-hz 0", "play --seed 0",
       "record --max-wait-s 0", "spec --lambda 0", "spec --seed 0", "spec --threads 0",
-      "ab --seed 0"};
+      "ab --seed 0", "campaign analyze --bootstrap 0", "campaign analyze --seed 0",
+      "campaign plan --seed 0"};
   std::string listed;
   for (const std::string& a : accepted) listed += "\"" + a + "\",\n";
   INFO("accepted:\n" << listed);

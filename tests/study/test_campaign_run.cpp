@@ -209,7 +209,7 @@ TEST_CASE("campaign run: 20 simulated participants, three killed mid-trial, equa
   kill_and_compare(20, {{2, 5}, {9, 17}, {20, 27}});
 }
 
-TEST_CASE("campaign run: the operator's output names no variant; a finished participant is refused",
+TEST_CASE("campaign run: the operator's output names no variant, and a finished participant is refused",
           "[study][campaign][cli]") {
   TempDir dir("campaign_blind");
   const fs::path folder = plan(dir, "c", 2);
@@ -247,7 +247,7 @@ TEST_CASE("campaign run: the operator's output names no variant; a finished part
                                                    "address; use a pseudonymous id such as P07"));
 }
 
-TEST_CASE("campaign run: answers that end, a wrong answer and a device fault stop the run; the answers given stay",
+TEST_CASE("campaign run: answers that end, a wrong answer and a device fault stop the run, and the answers given stay",
           "[study][campaign][cli]") {
   TempDir dir("campaign_fault");
   // A person's answers: no tune block (a person cannot tune inside a campaign yet).
