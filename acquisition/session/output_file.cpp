@@ -87,6 +87,13 @@ void check_output_file(const fs::path& output, const std::vector<fs::path>& inpu
   if (fs::is_directory(fs::status(output, error))) {
     throw OutputRefused(where + "is a directory, not a file");
   }
+  // A device, pipe or socket (e.g. --csv /dev/null as root): the temporary file renamed onto
+  // it would replace the node itself, so it is refused even with --overwrite.
+  if (!fs::is_regular_file(fs::status(output, error))) {
+    throw OutputRefused(where +
+                        "is not a regular file (a device, pipe or socket): doorbench writes "
+                        "through a temporary file renamed onto the name, which would replace it");
+  }
   if (!overwrite) throw OutputRefused(where + "exists (give --overwrite to replace it)");
 }
 

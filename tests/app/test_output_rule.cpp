@@ -6,6 +6,8 @@
 // A full disk is a real one where the machine permits it: a 64 KiB tmpfs mounted in a
 // private mount namespace of the command (`unshare -m`, so it vanishes with it); and always
 // a file size limit (`ulimit -f`), which makes write() fail the same way (EFBIG).
+#include <sys/stat.h>
+
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
@@ -107,6 +109,17 @@ TEST_CASE("Outputs: export never writes onto its input or an existing file", "[o
   CHECK(forced.status == 0);
   CHECK(read_file(csv).find("\ntime_s,force_N,") != std::string::npos);
   CHECK(files_in(dir.path).find(".partial") == std::string::npos);
+  // A pipe (as a device like /dev/null) is never replaced, --overwrite or not.
+  const std::filesystem::path pipe = dir.path / "pipe.csv";
+  REQUIRE(::mkfifo(pipe.c_str(), 0600) == 0);
+  const DoorbenchRun onto_pipe = run_doorbench_shell(
+      "export " + session.string() + " --csv " + pipe.string() + " --overwrite", dir);
+  CHECK(onto_pipe.status == 2);
+  CHECK(onto_pipe.err == "doorbench: " + pipe.string() +
+                             ": is not a regular file (a device, pipe or socket): doorbench "
+                             "writes through a temporary file renamed onto the name, which "
+                             "would replace it\n");
+  CHECK(std::filesystem::is_fifo(pipe));
 }
 
 TEST_CASE("Outputs: simulate, model torque and import follow the same rule", "[outputs][cli]") {
