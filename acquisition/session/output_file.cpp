@@ -89,7 +89,8 @@ void check_output_file(const fs::path& output, const std::vector<fs::path>& inpu
   }
   // A device, pipe or socket (e.g. --csv /dev/null as root): the temporary file renamed onto
   // it would replace the node itself, so it is refused even with --overwrite.
-  if (!fs::is_regular_file(fs::status(output, error))) {
+  const fs::file_status target = fs::status(output, error);
+  if (fs::exists(target) && !fs::is_regular_file(target)) {
     throw OutputRefused(where +
                         "is not a regular file (a device, pipe or socket): doorbench writes "
                         "through a temporary file renamed onto the name, which would replace it");
