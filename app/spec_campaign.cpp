@@ -11,12 +11,12 @@
 #include "analysis/model/parameter_file.h"
 #include "app/commands.h"
 #include "core/number_format.h"
+#include "core/numbers.h"
 
 namespace doorbench::app {
 namespace {
 
 using json = nlohmann::json;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Field access with errors naming the file and the field ("jnd[1].weber_fraction").
 struct Reader {

@@ -392,7 +392,7 @@ InclinometerRecordingPoints inclinometer_points_from_recording(
   result.holds = holds_from_periods(s, angle_deg, periods, options.merge_deg);
 
   std::string references;
-  for (double a : angles_deg) references += (references.empty() ? "" : ",") + shortest(a);
+  for (double a : angles_deg) references.append(references.empty() ? "" : ",").append(shortest(a));
   check_one_hold_per_reference(result.holds, angles_deg, references, where, name,
                                options.stillness);
   check_holds_follow_references(result.holds, angles_deg, references, where);

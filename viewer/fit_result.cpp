@@ -8,29 +8,23 @@
 #include <stdexcept>
 
 #include "analysis/model/parameter_file.h"
+#include "core/numbers.h"
+#include "viewer/json_field.h"
 
 namespace doorbench::viewer {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
-const nlohmann::json& field(const nlohmann::json& object, const char* name,
-                            const std::string& where) {
-  if (!object.is_object() || !object.contains(name)) {
-    throw std::runtime_error(std::string(where).append(": no field '").append(name).append("'"));
-  }
-  return object.at(name);
-}
 
 // The window RMSE of a metrics block ("fitted" or "held_out"); NaN when the block or the
 // number is null (no cross-validation, or no samples).
 double window_rmse(const nlohmann::json& json, const char* block, const std::string& file) {
-  const nlohmann::json& metrics = field(json, block, file);
+  const nlohmann::json& metrics = json_field(json, block, file);
   if (metrics.is_null()) return kNaN;
   const std::string where = std::string(file).append(": ").append(block);
-  const nlohmann::json& windows = field(metrics, "windows", where);
-  const nlohmann::json& rmse = field(windows, "rmse_rad_s", where + ".windows");
+  const nlohmann::json& windows = json_field(metrics, "windows", where);
+  const nlohmann::json& rmse = json_field(windows, "rmse_rad_s", where + ".windows");
   if (rmse.is_null()) return kNaN;
   if (!rmse.is_number()) {
     throw std::runtime_error(where + ".windows: 'rmse_rad_s' is not a number");
@@ -57,7 +51,7 @@ FitResultFolder read_fit_result(const std::filesystem::path& dir) {
   if (json.is_object() && json.contains("steps")) {
     throw std::runtime_error(file + ": a `doorbench loop` result; open it with --loop");
   }
-  const nlohmann::json& model = field(json, "model", file);
+  const nlohmann::json& model = json_field(json, "model", file);
   const std::optional<ModelKind> kind =
       model.is_string() ? parse_model_kind(model.get<std::string>()) : std::nullopt;
   if (!kind) {
@@ -78,15 +72,15 @@ FitResultFolder read_fit_result(const std::filesystem::path& dir) {
                          .fitted_window_rmse_rad_s = kNaN,
                          .held_out_window_rmse_rad_s = kNaN,
                          .model = load_model(*kind, params, has_effects ? effects : "")};
-  const nlohmann::json& source = field(json, "source", file);
+  const nlohmann::json& source = json_field(json, "source", file);
   if (!source.is_string()) throw std::runtime_error(file + ": 'source' is not a string");
   result.source = source.get<std::string>();
-  const nlohmann::json& converged = field(json, "converged", file);
+  const nlohmann::json& converged = json_field(json, "converged", file);
   if (!converged.is_boolean()) throw std::runtime_error(file + ": 'converged' is not true/false");
   result.converged = converged.get<bool>();
-  const nlohmann::json& termination = field(json, "termination", file);
+  const nlohmann::json& termination = json_field(json, "termination", file);
   if (termination.is_string()) result.termination = termination.get<std::string>();
-  const nlohmann::json& strokes = field(json, "strokes", file);
+  const nlohmann::json& strokes = json_field(json, "strokes", file);
   if (!strokes.is_number_integer()) throw std::runtime_error(file + ": 'strokes' is not a count");
   result.strokes = strokes.get<int>();
   result.fitted_window_rmse_rad_s = window_rmse(json, "fitted", file);

@@ -7,21 +7,15 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
+#include "viewer/json_field.h"
 
 namespace doorbench::viewer {
 
 namespace {
 
-const nlohmann::json& field(const nlohmann::json& object, const char* name,
-                            const std::string& where) {
-  if (!object.is_object() || !object.contains(name)) {
-    throw std::runtime_error(std::string(where).append(": no field '").append(name).append("'"));
-  }
-  return object.at(name);
-}
 
 double number(const nlohmann::json& object, const char* name, const std::string& where) {
-  const nlohmann::json& value = field(object, name, where);
+  const nlohmann::json& value = json_field(object, name, where);
   if (value.is_null()) return std::numeric_limits<double>::quiet_NaN();
   if (!value.is_number()) {
     throw std::runtime_error(
@@ -47,7 +41,7 @@ LoopSteps read_loop_steps(const std::filesystem::path& dir_or_file) {
   result.path = path;
   const std::string file = path.string();
   if (json.contains("source") && json["source"].is_string()) result.source = json["source"];
-  const nlohmann::json& steps = field(json, "steps", file);
+  const nlohmann::json& steps = json_field(json, "steps", file);
   if (!steps.is_array()) throw std::runtime_error(file + ": 'steps' is not an array");
   for (std::size_t i = 0; i < steps.size(); ++i) {
     const std::string where =
@@ -55,9 +49,9 @@ LoopSteps read_loop_steps(const std::filesystem::path& dir_or_file) {
     const nlohmann::json& s = steps[i];
     LoopStep step;
     step.number = int(number(s, "step", where));
-    step.effect = field(s, "effect", where).get<std::string>();
-    const nlohmann::json& before = field(s, "before", where);
-    const nlohmann::json& after = field(s, "after", where);
+    step.effect = json_field(s, "effect", where).get<std::string>();
+    const nlohmann::json& before = json_field(s, "before", where);
+    const nlohmann::json& after = json_field(s, "after", where);
     step.fitted_before_rad_s = number(before, "fitted_rmse_rad_s", where + ".before");
     step.held_out_before_rad_s = number(before, "held_out_rmse_rad_s", where + ".before");
     step.fitted_after_rad_s = number(after, "fitted_rmse_rad_s", where + ".after");

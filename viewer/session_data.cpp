@@ -9,12 +9,12 @@
 #include "analysis/fit/fitting.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "sensors/channel_limits.h"
+#include "core/numbers.h"
 
 namespace doorbench::viewer {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // A channel's series; `limit` (or null): its stretches at the limit as shades in `at_limit`.
 std::shared_ptr<Series> channel_series(const SessionReader& reader, const ChannelInfo& info,

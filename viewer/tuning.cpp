@@ -13,11 +13,11 @@
 #include "analysis/model/parameter_file.h"
 #include "core/parallel.h"
 #include "viewer/session_data.h"
+#include "core/numbers.h"
 
 namespace doorbench::viewer {
 
 namespace {
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr std::size_t kDefaultStrokes = 12;
 }  // namespace
 

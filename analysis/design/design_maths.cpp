@@ -6,12 +6,12 @@
 
 #include "analysis/design/internal/design_maths.h"
 #include "core/number_format.h"
+#include "core/numbers.h"
 
 namespace doorbench::design_detail {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A parameter counts as a changed part when it moves by more than this fraction of its
 // scale (the bound width).
 constexpr double kChangedFraction = 1e-3;

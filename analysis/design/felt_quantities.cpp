@@ -8,12 +8,12 @@
 #include "analysis/preprocessing/preprocessing.h"
 #include "core/number_format.h"
 #include "core/units.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double median(std::vector<double> values) {
   std::erase_if(values, [](double v) { return !std::isfinite(v); });

@@ -6,12 +6,12 @@
 #include <stdexcept>
 
 #include "core/number_format.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 const FeltQuantityInfo* find_quantity(std::string_view name) {
   for (const FeltQuantityInfo& info : kFeltQuantities) {

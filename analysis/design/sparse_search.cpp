@@ -9,12 +9,12 @@
 
 #include "analysis/design/internal/design_run.h"
 #include "core/number_format.h"
+#include "core/numbers.h"
 
 namespace doorbench::design_detail {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // Two refits of the sparse search whose data costs differ by less than this fraction fit
 // the same (a degenerate pair of parameters).
 constexpr double kSameCost = 1e-4;

@@ -12,13 +12,13 @@
 #include "analysis/report/svg_plot.h"
 #include "core/number_format.h"
 #include "core/units.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
 namespace {
 
 using json = nlohmann::ordered_json;
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // NaN and infinities become null (JSON has no NaN).
 json number(double value) {

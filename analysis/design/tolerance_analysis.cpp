@@ -13,13 +13,13 @@
 #include <thread>
 
 #include "core/number_format.h"
+#include "core/numbers.h"
 
 
 namespace doorbench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 struct DefaultTolerance {
   std::string_view name;

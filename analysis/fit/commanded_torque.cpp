@@ -8,12 +8,12 @@
 
 #include "acquisition/session/session_file.h"
 #include "analysis/fit/fit_problem.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 bool is_inertia(const std::string& name) {
   return name == "J_d" || name == "J";

@@ -19,12 +19,12 @@
 #include <thread>
 
 #include "analysis/fit/internal/fit_equation_error.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // DOORBENCH_FIT_TRACE=1 prints Ceres' progress and summaries to stderr.
 bool tracing() {

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "analysis/model/sensory_model.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
@@ -27,7 +28,6 @@ std::vector<double> rate_derivative(const Stroke& stroke, double half_width_s) {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr int kHingeGrid = 40;  // points per scan (two scans: coarse, fine)
 constexpr std::size_t kMinimumRampSamples = 10;
 // dω/dt where the peaks are read: the shortest central difference. The latch's events

@@ -17,6 +17,7 @@
 #include "core/clock.h"
 #include "core/number_format.h"
 #include "core/parallel.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
@@ -24,7 +25,6 @@ using namespace fit_detail;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 // A robust uncertainty resting on fewer windows than this is flagged in the notes.
 constexpr double kFewEffectiveWindows = 10.0;
 

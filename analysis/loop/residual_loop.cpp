@@ -18,6 +18,7 @@
 #include "core/clock.h"
 #include "core/number_format.h"
 #include "core/parallel.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
@@ -25,7 +26,6 @@ using namespace loop_detail;
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 bool finite_in(double value, double lower, double upper) {
   return std::isfinite(value) && value >= lower && value <= upper;

@@ -14,12 +14,13 @@
 #include <stdexcept>
 
 #include "haptic/ab_trials.h"
+#include "core/numbers.h"
+#include "study/statistics/json_number.h"
 
 namespace doorbench::study {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 const double kSqrt2 = std::sqrt(2.0);
 
 double normal_quantile(double p) {
@@ -40,9 +41,6 @@ double z_for(double confidence) {
   return normal_quantile((1 + confidence) / 2);
 }
 
-nlohmann::json number(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
 
 std::string format_number(double value) {
   if (std::isnan(value)) return "n/a";
@@ -260,9 +258,9 @@ nlohmann::json identify_real_json(const IdentifyReal& result) {
                         {"pc", r.pc},
                         {"pc_low", r.pc_low},
                         {"pc_high", r.pc_high},
-                        {"dprime", number(r.dprime)},
-                        {"ci_low", number(r.ci_low)},
-                        {"ci_high", number(r.ci_high)},
+                        {"dprime", json_number(r.dprime)},
+                        {"ci_low", json_number(r.ci_low)},
+                        {"ci_high", json_number(r.ci_high)},
                         {"p", r.p}};
     if (!r.participant.empty()) j["participant"] = r.participant;
     return j;
@@ -281,13 +279,13 @@ nlohmann::json two_ac_json(const std::vector<TwoAcResult>& results) {
                    {"prefer_first", r.prefer_first},
                    {"no_preference", r.no_preference},
                    {"prefer_second", r.prefer_second},
-                   {"tau", number(r.tau)},
-                   {"se_tau", number(r.se_tau)},
-                   {"dprime", number(r.dprime)},
-                   {"se_dprime", number(r.se_dprime)},
-                   {"ci_low", number(r.ci_low)},
-                   {"ci_high", number(r.ci_high)},
-                   {"p", number(r.p)},
+                   {"tau", json_number(r.tau)},
+                   {"se_tau", json_number(r.se_tau)},
+                   {"dprime", json_number(r.dprime)},
+                   {"se_dprime", json_number(r.se_dprime)},
+                   {"ci_low", json_number(r.ci_low)},
+                   {"ci_high", json_number(r.ci_high)},
+                   {"p", json_number(r.p)},
                    {"note", r.note}});
   }
   return out;

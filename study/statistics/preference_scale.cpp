@@ -10,11 +10,12 @@
 #include <random>
 #include <set>
 #include <tuple>
+#include "core/numbers.h"
+#include "study/statistics/json_number.h"
 
 namespace doorbench::study {
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 // Answers of one ordered pair (first, second), summed over trials.
 struct Cell {
@@ -432,9 +433,6 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
 }
 
 namespace {
-nlohmann::json number(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
 }  // namespace
 
 nlohmann::json preference_scale_json(const PreferenceScale& scale) {
@@ -446,7 +444,7 @@ nlohmann::json preference_scale_json(const PreferenceScale& scale) {
                       {"ci_low", w.worth.ci_low},
                       {"ci_high", w.worth.ci_high},
                       {"se_wald", w.worth.se_wald},
-                      {"se_bootstrap", number(w.worth.se_bootstrap)},
+                      {"se_bootstrap", json_number(w.worth.se_bootstrap)},
                       {"interval", w.worth.interval},
                       {"p_favourite", w.p_favourite},
                       {"wins", w.wins},

@@ -15,6 +15,7 @@
 
 #include "study/statistics/gauss_hermite.h"
 #include "study/statistics/numeric_minimize.h"
+#include "study/statistics/logistic.h"
 
 namespace doorbench::study {
 namespace {
@@ -22,7 +23,6 @@ namespace {
 using statistics::minimize;
 using statistics::numeric_hessian;
 
-double logistic(double x) { return 1.0 / (1.0 + std::exp(-x)); }
 
 // log P(Y = y | eta) and its first two derivatives in eta, for thresholds `theta`
 // (C - 1 of them for C categories; y in 0..C-1).

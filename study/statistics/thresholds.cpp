@@ -15,6 +15,7 @@
 
 #include "analysis/report/svg_plot.h"
 #include "study/statistics/numeric_minimize.h"
+#include "study/statistics/logistic.h"
 
 namespace doorbench::study {
 namespace {
@@ -42,10 +43,9 @@ double z_of(PsychometricShape shape, double level, double pse, double spread) {
   return shape == PsychometricShape::kWeibull ? z + std::log(std::log(2.0)) : z;
 }
 
-double logistic(double a) { return 1.0 / (1.0 + std::exp(-a)); }
 
 // The free parameters: [pse unless fixed, ln spread, lapse logit unless max_lapse = 0].
-struct Layout {
+struct PsychometricLayout {
   bool fit_pse = true;
   bool fit_lapse = true;
   double max_lapse = 0.1;
@@ -56,7 +56,7 @@ struct Values {
   double pse = 0.0, log_spread = 0.0, lapse = 0.0;
 };
 
-Values unpack(const Eigen::VectorXd& x, const Layout& layout) {
+Values unpack(const Eigen::VectorXd& x, const PsychometricLayout& layout) {
   Values v;
   int i = 0;
   if (layout.fit_pse) v.pse = x[i++];
@@ -65,7 +65,7 @@ Values unpack(const Eigen::VectorXd& x, const Layout& layout) {
   return v;
 }
 
-int spread_index(const Layout& layout) { return layout.fit_pse ? 1 : 0; }
+int spread_index(const PsychometricLayout& layout) { return layout.fit_pse ? 1 : 0; }
 
 }  // namespace
 
@@ -105,7 +105,7 @@ namespace {
 struct Problem {
   std::span<const StrongerObservation> trials;
   PsychometricShape shape;
-  Layout layout;
+  PsychometricLayout layout;
 };
 
 double negative_log_likelihood(const Problem& problem, const Eigen::VectorXd& x) {
