@@ -65,6 +65,8 @@ void run_plan(const PlanCommandOptions& options) {
     std::cout << "campaign " << campaign.name << ": " << campaign.participants.size() << " participants, "
               << campaign.blocks.size() << " blocks, " << plan.rows.size() << " trials (seed " << seed << ") in "
               << options.out_dir << " (plan.csv, campaign.toml, plan-id.txt)\n";
+    const std::string note = study::balance_note(campaign);
+    if (!note.empty()) std::cout << note << "\n";
   }
   if (options.simulate > 0) {
     study::PowerOptions power;
