@@ -159,6 +159,13 @@ std::unique_ptr<study::Respondent> make_respondent(const RunCommandOptions& opti
 }
 
 void run_run(const RunCommandOptions& options) {
+  // The spelling `--participant sim:SEED`: a participant is one of the plan's ids (its
+  // schedule); who answers is --respondent (docs/campaign.md, "Running a participant").
+  if (options.participant == "sim" || options.participant.rfind("sim:", 0) == 0) {
+    throw UsageError("--participant names a participant of the plan (such as P01), not " + options.participant +
+                     "; a simulated participant answers that participant's trials with --participant P01 --respondent " +
+                     (options.participant == "sim" ? std::string("sim") : options.participant));
+  }
   if (const std::string problem = study::participant_id_problem(options.participant); !problem.empty()) {
     throw UsageError(problem);
   }

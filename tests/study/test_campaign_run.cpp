@@ -241,6 +241,12 @@ TEST_CASE("campaign run: the operator's output names no variant, and a finished 
   CHECK(named.status == 2);
   CHECK_THAT(named.err, Catch::Matchers::StartsWith("doorbench: participant id 'Anna Berg' looks like a name (it holds "
                                                     "a space); use a pseudonymous id such as P07"));
+  // The issue's spelling: the participant is the plan's, the simulated respondent is --respondent.
+  const Result sim = run({"campaign", "run", folder.string(), "--participant", "sim:42"}, dir.path);
+  CHECK(sim.status == 2);
+  CHECK_THAT(sim.err, Catch::Matchers::StartsWith("doorbench: --participant names a participant of the plan (such as "
+                                                  "P01), not sim:42; a simulated participant answers that participant's "
+                                                  "trials with --participant P01 --respondent sim:42 (see doorbench campaign run --help)\n"));
   const Result mail = run({"campaign", "run", folder.string(), "--participant", "a.b@example.org"}, dir.path);
   CHECK(mail.status == 2);
   CHECK_THAT(mail.err, Catch::Matchers::StartsWith("doorbench: participant id 'a.b@example.org' looks like an e-mail "
