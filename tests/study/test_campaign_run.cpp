@@ -24,6 +24,7 @@
 #include "study/trials_table.h"
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
+#include "tests/support/run_on_terminal.h"
 #include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
@@ -379,6 +380,40 @@ TEST_CASE("campaign run: a person tunes in a tune trial with the keys, scripted 
   // The operator's screen names no variant.
   for (const char* name : {"reference", "heavier", "easier_unlatch", "lighter_smoother"}) {
     CHECK(tuned_run.err.find(name) == std::string::npos);
+  }
+}
+
+TEST_CASE("campaign run: a person tunes on the terminal's keys until Enter, then answers there",
+          "[study][campaign][cli]") {
+  // stdin is a pseudo-terminal (openpty), as the participant's keypad and the operator's
+  // keyboard would be: "+" and "u" while the start plays (in real time), Enter, then the 12
+  // pair answers as lines.
+  TempDir dir("campaign_terminal_tune");
+  std::string text = campaign_text(1);
+  text.erase(text.find("[[blocks]]\nname = \"rating\""));
+  const fs::path campaign_path = dir.write("tune.toml", text);
+  REQUIRE(run({"campaign", "plan", campaign_path.string(), "--out", (dir / "t").string()}, dir.path).status == 0);
+  const fs::path folder = dir / "t";
+  std::string typed = "+u\n";
+  for (int i = 0; i < 12; ++i) typed += "2\n";
+  const doorbench::testing::DoorbenchRun result = doorbench::testing::run_doorbench_on_terminal(
+      {"campaign", "run", folder.string(), "--participant", "P01"}, dir, typed, 300);
+  INFO(result.err);
+  REQUIRE(result.status == 0);
+  CHECK_THAT(result.err, Catch::Matchers::Contains("trial 1: tune with the keys, Enter when done\n"));
+  CHECK_THAT(result.err, Catch::Matchers::Contains("key +: played\nkey u: played\n"));
+  const auto table = doorbench::study::read_trials_table(folder / "trials.csv");
+  REQUIRE(table.rows.size() == 13);
+  CHECK(table.value(0, "answer") == "sessions/P01/a1/t001-tuned.json");
+  for (std::size_t r = 1; r < 13; ++r) CHECK(table.value(r, "answer") == "2");
+  const doorbench::study::CampaignFolder opened = doorbench::study::open_campaign_folder(folder);
+  doorbench::DoorModel expected = doorbench::study::apply_steps(doorbench::study::base_model(opened.campaign),
+                                                                doorbench::study::parse_steps(opened.plan.rows[0].first));
+  for (char key : {'+', 'u'}) expected = *doorbench::haptic::apply_key(expected, key).model;
+  const doorbench::DoorModel tuned =
+      doorbench::load_model(doorbench::ModelKind::kSensory, folder / "sessions" / "P01" / "a1" / "t001-tuned.json", "");
+  for (std::size_t i = 0; i < tuned.parameter_values().size(); ++i) {
+    CHECK(tuned.parameter_values()[i] == Approx(expected.parameter_values()[i]).epsilon(1e-9));
   }
 }
 
