@@ -263,9 +263,11 @@ std::string LineRespondent::answer(const PlanRow& row, const Stimulus&, const St
 }
 
 DoorModel LineRespondent::tune(const PlanRow& row, const DoorModel&, std::ostream&) {
+  // Only reached by a LineRespondent made without tunes_at_the_device (campaign run makes it
+  // with): its lines cannot tune a door after the presentation.
   throw std::runtime_error("trial " + std::to_string(row.trial) +
-                           ": tuning by a person inside a campaign is not supported yet (use `doorbench play --keys` "
-                           "and give the tuned file); run this participant with --respondent sim:SEED or drop the tune block");
+                           ": this respondent answers lines and cannot tune after a presentation (a person tunes "
+                           "during it, with the keys: docs/campaign.md, A person's tune trial)");
 }
 
 // --- stimuli -----------------------------------------------------------------------------
