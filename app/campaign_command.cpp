@@ -397,10 +397,10 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action) {
   run->add_option("--device", run_options->device, "sim (simulated time) or hapticmaster://HOST[:PORT]")
       ->capture_default_str();
   run->add_option("--respondent", run_options->respondent,
-                  "person (answers from stdin or --answers), sim (a simulated participant seeded from the plan) "
+                  "person (answers from stdin or --answers; a tune trial tuned with the keys), sim (a simulated participant seeded from the plan) "
                   "or sim:SEED")
       ->capture_default_str();
-  run->add_option("--answers", run_options->answers_path, "A person's answers, one a line (default: stdin)");
+  run->add_option("--answers", run_options->answers_path, "A person's answers, one a line (a tune trial's line: the keys pressed; default: stdin)");
   run->add_option("--presentation-s", run_options->presentation_s,
                   "Length of each presentation (default: the campaign file's)")
       ->check(CLI::Range(0.001, 600.0));

@@ -18,7 +18,8 @@
 //    i mod A), passes alternately forwards and backwards, each pair's presentation order
 //    swapped from pass to pass;
 //  - jnd, constant stimuli: each level × repetitions, the comparison ("J*1.1") first in half
-//    of them and the standard ("J*1") in the other; question stronger:PARAM;
+//    of them and the standard ("J*1") in the other, in an order shuffled by the
+//    participant's and the block's own substream; question stronger:PARAM;
 //  - jnd, staircase: `trials` slots whose comparison is written "J*?": its level is decided at
 //    run time from the answers before it (Levitt's rule, study/staircase.h); only the
 //    positions (comparison first or second, balanced and shuffled) are planned.
