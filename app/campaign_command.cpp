@@ -21,6 +21,7 @@
 #include "app/commands.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
+#include "haptic/tuning_keys.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
 #include "study/campaign_summary.h"
@@ -65,6 +66,8 @@ void run_plan(const PlanCommandOptions& options) {
     std::cout << "campaign " << campaign.name << ": " << campaign.participants.size() << " participants, "
               << campaign.blocks.size() << " blocks, " << plan.rows.size() << " trials (seed " << seed << ") in "
               << options.out_dir << " (plan.csv, campaign.toml, plan-id.txt)\n";
+    const std::string note = study::balance_note(campaign);
+    if (!note.empty()) std::cout << note << "\n";
   }
   if (options.simulate > 0) {
     study::PowerOptions power;
@@ -77,9 +80,121 @@ void run_plan(const PlanCommandOptions& options) {
   }
 }
 
+// A person's tuning during a tune trial's first presentation (docs/campaign.md, "A person's
+// tune trial"): the keys of haptic/tuning_keys.h move the playing door. Each press is applied
+// with haptic::apply_key to the door being played and handed to the loop with
+// Playback::change_parameters (on this control thread: the new set is checked, recorded and
+// taken by the tick through the mailbox; the tick never waits, allocates or does I/O for it);
+// a press the model or the playback refuses leaves the door as it was. Every press is a
+// "tuning" event of the session. The operator sees the key and its outcome, never a value.
+class PresentationTuning {
+ public:
+  explicit PresentationTuning(const DoorModel& start) : start_(start), current_(start) {}
+
+  void press(haptic::Playback& playback, char key) {
+    const double time_s = playback.loop().status().time_s;
+    std::string outcome, brief = "refused";
+    const haptic::KeyOutcome result =
+        key == haptic::kResetKey ? haptic::KeyOutcome{start_, "reset", "", "", 0.0, 0.0, "back to the start"}
+                                 : haptic::apply_key(current_, key);
+    if (result.model) {
+      const std::string problem =
+          playback.change_parameters(*result.model, std::string("key ").append(1, key).append(": ").append(result.action));
+      if (problem.empty()) {
+        current_ = *result.model;
+        outcome = "played (" + result.action + ")";
+        brief = "played";
+      } else {
+        outcome = "not played: " + problem;
+        brief = "not played (the playback refused it)";
+      }
+    } else {
+      outcome = "refused: " + result.message;
+    }
+    playback.recorder().add_event({.time_s = time_s,
+                                   .kind = "tuning",
+                                   .channel = "",
+                                   .detail = std::string("key ").append(1, key).append(": ").append(result.message)
+                                                 .append(" (").append(outcome).append(")")});
+    std::cerr << "key " << key << ": " << brief << "\n";
+  }
+  const DoorModel& current() const { return current_; }
+
+ private:
+  DoorModel start_, current_;
+};
+
+bool is_tuning_key(char key) {
+  if (key == haptic::kResetKey) return true;
+  for (const haptic::TuningKey& tuning : haptic::tuning_keys()) {
+    if (tuning.key == key) return true;
+  }
+  return false;
+}
+
+// Plays `start` for a tune trial with the person's keys and returns the door they ended on.
+// From a terminal: real time (also on the simulated device), until Enter, at most 600 s. From
+// an answers file: the trial's line holds the keys (spaces ignored; empty: the start kept),
+// pressed one per control call (every 0.1 s of the presentation, simulated time on the
+// simulated device).
+DoorModel play_tuning(PlayRequest play, const DoorModel& start, study::LineRespondent& person, int trial) {
+  const std::string at_trial = "trial " + std::to_string(trial);
+  auto tuning = std::make_shared<PresentationTuning>(start);
+  bool ended_by_person = false;
+  std::string keys;
+  std::size_t pressed = 0;
+  if (person.interactive()) {
+    auto terminal = std::make_shared<haptic::TerminalKeys>(STDIN_FILENO, "stdin");
+    std::cerr << at_trial << ": tune with the keys, Enter when done\n" << haptic::key_map_text();
+    play.device.simulated_time = false;
+    play.playback.duration_s = 600.0;
+    play.control = [terminal, tuning, &ended_by_person](haptic::Playback& playback) {
+      while (const std::optional<char> key = terminal->poll(0.0)) {
+        if (*key == '\n' || *key == '\r') {
+          ended_by_person = true;
+          return false;
+        }
+        tuning->press(playback, *key);
+      }
+      return true;
+    };
+  } else {
+    const std::optional<std::string> line = person.next_line();
+    const std::string where = person.source() + ":" + std::to_string(person.line_number());
+    if (!line) throw std::runtime_error(person.source() + ": the answers ended at " + at_trial);
+    for (char key : *line) {
+      if (key == ' ' || key == '\t') continue;
+      if (!is_tuning_key(key)) {
+        throw std::runtime_error(where + ": " + at_trial + ": a tune trial's line holds the keys pressed (+ - U u C c S s N n r; "
+                                 "empty: the start kept), not '" + std::string(1, key) + "'");
+      }
+      keys.push_back(key);
+    }
+    std::cerr << at_trial << ": tuning with " << keys.size() << " keys from " << where << "\n";
+    play.control = [tuning, &keys, &pressed](haptic::Playback& playback) {
+      if (pressed < keys.size()) tuning->press(playback, keys[pressed++]);
+      return true;
+    };
+  }
+  const haptic::PlaybackSummary summary = play_model(start, play);
+  if (!ended_by_person && summary.final_state == haptic::SafetyState::kStopped &&
+      summary.duration_s + 0.05 < play.playback.duration_s) {
+    throw std::runtime_error("the safety layer stopped the tuning after " + std::to_string(summary.duration_s) +
+                             " s: " + summary.brief_report());
+  }
+  if (pressed < keys.size()) {
+    throw std::runtime_error(at_trial + ": the presentation ended after " + std::to_string(pressed) + " of the " +
+                             std::to_string(keys.size()) + " keys (one is pressed every 0.1 s); give a longer --presentation-s");
+  }
+  return tuning->current();
+}
+
 // Plays a presentation on the device and records it: a model rendered by the render loop
 // (simulated time on the simulated device), the real door recorded from the campaign's rig.
-study::Presenter make_presenter(const RunCommandOptions& options, const study::Campaign& campaign) {
+// A tune trial's first presentation for a person (`person`, PresentationCall::tuned) is the
+// tuning itself (play_tuning).
+study::Presenter make_presenter(const RunCommandOptions& options, const study::Campaign& campaign,
+                                study::LineRespondent* person) {
   const bool simulated = options.device.rfind("sim", 0) == 0;
   if (!simulated && options.device.rfind("hapticmaster://", 0) != 0) {
     throw UsageError("--device must be sim or hapticmaster://HOST[:PORT], not " + options.device);
@@ -90,7 +205,7 @@ study::Presenter make_presenter(const RunCommandOptions& options, const study::C
   std::shared_ptr<RigDefinition> rig;
   if (!campaign.real_rig.empty()) rig = std::make_shared<RigDefinition>(load_rig(campaign.real_rig.string()));
   const std::string device = options.device;
-  return [device, simulated, duration_s, rig](const study::PresentationCall& call) {
+  return [device, simulated, duration_s, rig, person](const study::PresentationCall& call) {
     const std::string notes = "doorbench campaign: participant " + call.participant + ", trial " +
                               std::to_string(call.trial) + ", presentation " + std::to_string(call.position) +
                               ", stimulus " + call.stimulus->name;
@@ -114,6 +229,11 @@ study::Presenter make_presenter(const RunCommandOptions& options, const study::C
     play.operator_name = "doorbench campaign";
     play.notes = notes;
     play.show_status = false;
+    if (call.tuned) {
+      if (!person) throw std::logic_error("a tune trial at the device needs a person's respondent");
+      *call.tuned = play_tuning(play, *call.stimulus->model, *person, call.trial);
+      return;
+    }
     const haptic::PlaybackSummary summary = play_model(*call.stimulus->model, play);
     if (summary.final_state == haptic::SafetyState::kStopped && summary.duration_s + 0.05 < duration_s) {
       throw std::runtime_error("the safety layer stopped the presentation after " + std::to_string(summary.duration_s) +
@@ -137,7 +257,8 @@ std::unique_ptr<study::Respondent> make_respondent(const RunCommandOptions& opti
       return line;
     };
     const bool interactive = !file && ::isatty(STDIN_FILENO) == 1;
-    return std::make_unique<study::LineRespondent>(next, file ? options.answers_path : "stdin", interactive);
+    return std::make_unique<study::LineRespondent>(next, file ? options.answers_path : "stdin", interactive,
+                                                   /*tunes_at_the_device=*/true);
   }
   if (!options.answers_path.empty()) throw UsageError("--answers is for --respondent person");
   std::uint64_t seed = 0;
@@ -157,12 +278,20 @@ std::unique_ptr<study::Respondent> make_respondent(const RunCommandOptions& opti
 }
 
 void run_run(const RunCommandOptions& options) {
+  // The issue's spelling `--participant sim:SEED`: a participant is one of the plan's ids (its
+  // schedule); who answers is --respondent (docs/campaign.md, "Running a participant").
+  if (options.participant == "sim" || options.participant.rfind("sim:", 0) == 0) {
+    throw UsageError("--participant names a participant of the plan (such as P01), not " + options.participant +
+                     "; a simulated participant answers that participant's trials with --participant P01 --respondent " +
+                     (options.participant == "sim" ? std::string("sim") : options.participant));
+  }
   if (const std::string problem = study::participant_id_problem(options.participant); !problem.empty()) {
     throw UsageError(problem);
   }
   const study::CampaignFolder folder = study::open_campaign_folder(options.dir);
-  const study::Presenter presenter = make_presenter(options, folder.campaign);
   const std::unique_ptr<study::Respondent> respondent = make_respondent(options, folder);
+  const study::Presenter presenter =
+      make_presenter(options, folder.campaign, dynamic_cast<study::LineRespondent*>(respondent.get()));
   std::cerr << "doorbench campaign run: participant " << options.participant << " on " << options.device << "\n";
   study::RunOptions run;
   run.participant = options.participant;
@@ -225,7 +354,7 @@ void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
   RunCommandOptions options;
   options.dir = folder.string();
   options.respondent = "sim";
-  const study::Presenter presenter = make_presenter(options, opened.campaign);
+  const study::Presenter presenter = make_presenter(options, opened.campaign, nullptr);
   std::ostringstream prompts;  // the operator's lines, not shown in the demo
   for (const std::string& participant : opened.campaign.participants) {
     options.participant = participant;
@@ -268,10 +397,10 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action) {
   run->add_option("--device", run_options->device, "sim (simulated time) or hapticmaster://HOST[:PORT]")
       ->capture_default_str();
   run->add_option("--respondent", run_options->respondent,
-                  "person (answers from stdin or --answers), sim (a simulated participant seeded from the plan) "
+                  "person (answers from stdin or --answers; a tune trial tuned with the keys), sim (a simulated participant seeded from the plan) "
                   "or sim:SEED")
       ->capture_default_str();
-  run->add_option("--answers", run_options->answers_path, "A person's answers, one a line (default: stdin)");
+  run->add_option("--answers", run_options->answers_path, "A person's answers, one a line (a tune trial's line: the keys pressed; default: stdin)");
   run->add_option("--presentation-s", run_options->presentation_s,
                   "Length of each presentation (default: the campaign file's)")
       ->check(CLI::Range(0.001, 600.0));

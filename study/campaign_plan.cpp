@@ -4,6 +4,7 @@
 #include <cstdio>
 #include <fstream>
 #include <iterator>
+#include <numeric>
 #include <random>
 #include <sstream>
 
@@ -65,33 +66,71 @@ std::string tune_start(const Campaign& campaign, const Block& block, std::mt1993
                               level_text(block.start_spread, 3) + ")");
 }
 
+// The passes of a pair or rating block: a pair block repeats (the pairs one way, the pairs the
+// other way) `repetitions` times; a rating block has one pass per repetition and attribute,
+// the attributes of a repetition in cyclic order starting at attribute p mod A.
+std::vector<std::string> pass_questions(const Block& block, int participant) {
+  std::vector<std::string> questions;
+  for (int r = 0; r < block.repetitions; ++r) {
+    if (block.type == BlockType::kPair) {
+      questions.insert(questions.end(), 2, std::string(to_string(block.question)));
+      continue;
+    }
+    const int count = static_cast<int>(block.attributes.size());
+    for (int a = 0; a < count; ++a) {
+      questions.push_back("rating:" + block.attributes[(a + participant) % count] + ":" + std::to_string(block.scale));
+    }
+  }
+  return questions;
+}
+
+// A pair or rating block (docs/campaign.md, "Counterbalancing"): participant p takes row
+// p mod R of the Williams design over the block's M pairs, its conditions relabelled by
+// `labels` (the campaign's own permutation of the pairs). Pass k plays the row forwards
+// when k is even and backwards when odd; pair j of the row is played as listed (a, b) when
+// j + k + (p div R) is even, else (b, a). So each pair is played both ways in consecutive
+// passes, and participants p and p + R see the same pair order with every presentation
+// order swapped.
+std::vector<Pending> paired_trials(const Block& block, int participant, const std::vector<int>& labels) {
+  const std::vector<std::vector<int>> design = williams_design(static_cast<int>(block.pairs.size()));
+  const std::vector<int>& row = design[participant % design.size()];
+  const int swap = participant / static_cast<int>(design.size()) % 2;
+  const std::vector<std::string> questions = pass_questions(block, participant);
+  std::vector<Pending> trials;
+  for (std::size_t k = 0; k < questions.size(); ++k) {
+    for (std::size_t i = 0; i < row.size(); ++i) {
+      const std::size_t position = k % 2 == 0 ? i : row.size() - 1 - i;
+      const int j = labels[row[position]];
+      const auto& [a, b] = block.pairs[j];
+      const bool as_listed = (static_cast<std::size_t>(j) + k + swap) % 2 == 0;
+      trials.push_back(as_listed ? Pending{questions[k], a, b} : Pending{questions[k], b, a});
+    }
+  }
+  return trials;
+}
+
+// A random relabelling of a pair or rating block's pairs, one per campaign and block: the
+// Williams design's condition c stands for pair labels[c]. Identity for other blocks.
+std::vector<int> pair_labels(const Block& block, std::uint64_t seed, std::size_t block_index) {
+  std::vector<int> labels(block.pairs.size());
+  for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<int>(i);
+  if (block.type == BlockType::kPair || block.type == BlockType::kRating) {
+    std::mt19937_64 random(substream_seed(seed, 0, block_index, Purpose::kSquareLabels));
+    shuffle_in_place(labels, random);
+  }
+  return labels;
+}
+
 std::vector<Pending> block_trials(const Campaign& campaign, const Block& block, int participant,
-                                  std::mt19937_64& random) {
+                                  const std::vector<int>& labels, std::mt19937_64& random) {
   std::vector<Pending> trials;
   switch (block.type) {
     case BlockType::kTune:
       trials.push_back({"tune", tune_start(campaign, block, random), ""});
       return trials;
     case BlockType::kPair:
-      for (int r = 0; r < block.repetitions; ++r) {
-        for (const auto& [a, b] : block.pairs) {
-          trials.push_back({std::string(to_string(block.question)), a, b});
-          trials.push_back({std::string(to_string(block.question)), b, a});
-        }
-      }
-      break;
-    case BlockType::kRating: {
-      int k = participant;
-      for (int r = 0; r < block.repetitions; ++r) {
-        for (const std::string& attribute : block.attributes) {
-          const std::string question = "rating:" + attribute + ":" + std::to_string(block.scale);
-          for (const auto& [a, b] : block.pairs) {
-            trials.push_back(++k % 2 == 0 ? Pending{question, a, b} : Pending{question, b, a});
-          }
-        }
-      }
-      break;
-    }
+    case BlockType::kRating:
+      return paired_trials(block, participant, labels);
     case BlockType::kJnd: {
       const std::string question = "stronger:" + block.parameter;
       const std::string standard = jnd_stimulus_name(block.parameter, 1.0);
@@ -138,6 +177,8 @@ Plan make_plan(const Campaign& campaign, std::uint64_t seed) {
   Plan plan;
   plan.seed = seed;
   const std::vector<std::vector<int>> orders = williams_design(static_cast<int>(campaign.blocks.size()));
+  std::vector<std::vector<int>> labels;
+  for (std::size_t b = 0; b < campaign.blocks.size(); ++b) labels.push_back(pair_labels(campaign.blocks[b], seed, b));
   for (std::size_t p = 0; p < campaign.participants.size(); ++p) {
     const std::vector<int>& order = orders[p % orders.size()];
     int trial = 0;
@@ -145,7 +186,7 @@ Plan make_plan(const Campaign& campaign, std::uint64_t seed) {
       const Block& block = campaign.blocks[b];
       std::mt19937_64 random(substream_seed(seed, p, b, Purpose::kTrialOrder));
       int block_trial = 0;
-      for (Pending& pending : block_trials(campaign, block, static_cast<int>(p), random)) {
+      for (Pending& pending : block_trials(campaign, block, static_cast<int>(p), labels[b], random)) {
         PlanRow row;
         row.participant = campaign.participants[p];
         row.block = block.name;
@@ -159,6 +200,33 @@ Plan make_plan(const Campaign& campaign, std::uint64_t seed) {
     }
   }
   return plan;
+}
+
+BalancedCount balanced_participant_count(const Campaign& campaign) {
+  BalancedCount count;
+  const auto add = [&count](long long rows, std::string part) {
+    count.participants = std::lcm(count.participants, rows);
+    count.parts.push_back(std::move(part.append(" ").append(std::to_string(rows))));
+  };
+  add(static_cast<long long>(williams_design(static_cast<int>(campaign.blocks.size())).size()), "block order");
+  for (const Block& block : campaign.blocks) {
+    if (block.type != BlockType::kPair && block.type != BlockType::kRating) continue;
+    long long rows = 2 * static_cast<long long>(williams_design(static_cast<int>(block.pairs.size())).size());
+    if (block.type == BlockType::kRating) rows = std::lcm(rows, static_cast<long long>(block.attributes.size()));
+    add(rows, std::string("block '").append(block.name).append("'"));
+  }
+  return count;
+}
+
+std::string balance_note(const Campaign& campaign) {
+  const BalancedCount count = balanced_participant_count(campaign);
+  const long long n = static_cast<long long>(campaign.participants.size());
+  if (n % count.participants == 0) return "";
+  std::string parts;
+  for (const std::string& part : count.parts) parts.append(parts.empty() ? "" : ", ").append(part);
+  return std::string("note: ").append(std::to_string(n)).append(" participants; the counterbalancing is exact for a multiple of ")
+      .append(std::to_string(count.participants)).append(" (").append(parts)
+      .append("); participant i takes row i mod rows of each design (docs/campaign.md, Counterbalancing)");
 }
 
 std::string plan_csv(const Plan& plan) {

@@ -4,15 +4,22 @@
 // The same campaign text and seed give the same plan on any machine (study/random_stream.h).
 //
 // Per participant i (0-based, in the campaign's order): the blocks in the order of row
-// i mod rows of a Williams design over the blocks (study/latin_square.h); within a block the
-// trials in an order shuffled by the participant's and the block's own substream:
+// i mod rows of a Williams design over the blocks (study/latin_square.h); within a block:
 //  - tune: one trial; `first` is the randomised start as steps from the base
 //    ("heaviness*1.083,latch_effort*0.912,...");
-//  - pair: each pair in both presentation orders, × repetitions;
-//  - rating: each pair × attribute × repetitions, the presentation order alternating over
-//    pairs, repetitions and participants (question rating:ATTRIBUTE:K);
+//  - pair: the block's pairs in the order of row i mod R of a Williams design over the
+//    pairs (randomly relabelled once per campaign and block from the seed), forwards, then
+//    backwards with every presentation order swapped, × repetitions: each pair in both
+//    presentation orders, each pair in each position equally often and each pair directly
+//    after each other pair equally often over a multiple of R participants; the presentation
+//    orders (so each variant in each place) balanced over a multiple of 2R;
+//  - rating: the same design, one pass per repetition × attribute (question
+//    rating:ATTRIBUTE:K; the attributes of a repetition in cyclic order from attribute
+//    i mod A), passes alternately forwards and backwards, each pair's presentation order
+//    swapped from pass to pass;
 //  - jnd, constant stimuli: each level × repetitions, the comparison ("J*1.1") first in half
-//    of them and the standard ("J*1") in the other; question stronger:PARAM;
+//    of them and the standard ("J*1") in the other, in an order shuffled by the
+//    participant's and the block's own substream; question stronger:PARAM;
 //  - jnd, staircase: `trials` slots whose comparison is written "J*?": its level is decided at
 //    run time from the answers before it (Levitt's rule, study/staircase.h); only the
 //    positions (comparison first or second, balanced and shuffled) are planned.
@@ -45,6 +52,21 @@ struct Plan {
 
 // The plan of `campaign` with `seed`. std::invalid_argument when a tune start cannot be drawn.
 Plan make_plan(const Campaign& campaign, std::uint64_t seed);
+
+// How many participants make the counterbalancing exact (docs/campaign.md,
+// "Counterbalancing"): the least common multiple of the rows of the block order's design
+// and, for each pair or rating block, of 2 × its design's rows (and its attribute count).
+// `parts` names each: "block order 10", "block 'pair' 12", ...
+struct BalancedCount {
+  long long participants = 1;
+  std::vector<std::string> parts;
+};
+BalancedCount balanced_participant_count(const Campaign& campaign);
+// "" when the campaign's participant count is a multiple of balanced_participant_count,
+// else one line saying so, e.g. "note: 13 participants; the counterbalancing is exact for a
+// multiple of 60 (block order 10, block 'pair' 12, block 'rating' 12); the first 13 rows of
+// each design are used (docs/campaign.md, Counterbalancing)".
+std::string balance_note(const Campaign& campaign);
 
 // plan.csv: participant,block,trial,question,first,second,block_trial (RFC 4180).
 std::string plan_csv(const Plan& plan);

@@ -229,15 +229,23 @@ DoorModel SimulatedRespondent::tune(const PlanRow& row, const DoorModel& start, 
 }
 
 LineRespondent::LineRespondent(std::function<std::optional<std::string>()> next_line,
-                               std::string source, bool interactive)
-    : next_line_(std::move(next_line)), source_(std::move(source)), interactive_(interactive) {}
+                               std::string source, bool interactive, bool tunes_at_the_device)
+    : next_line_(std::move(next_line)),
+      source_(std::move(source)),
+      interactive_(interactive),
+      tunes_at_the_device_(tunes_at_the_device) {}
+
+std::optional<std::string> LineRespondent::next_line() {
+  std::optional<std::string> text = next_line_();
+  ++line_;
+  return text;
+}
 
 std::string LineRespondent::answer(const PlanRow& row, const Stimulus&, const Stimulus&,
                                    std::ostream& prompts) {
   for (;;) {
     prompts << neutral_question(row.question) << std::flush;
-    const std::optional<std::string> text = next_line_();
-    ++line_;
+    const std::optional<std::string> text = next_line();
     if (!text) {
       prompts << "\n";
       throw std::runtime_error(source_ + ": the answers ended at trial " + std::to_string(row.trial));
@@ -255,9 +263,11 @@ std::string LineRespondent::answer(const PlanRow& row, const Stimulus&, const St
 }
 
 DoorModel LineRespondent::tune(const PlanRow& row, const DoorModel&, std::ostream&) {
+  // Only reached by a LineRespondent made without tunes_at_the_device (campaign run makes it
+  // with): its lines cannot tune a door after the presentation.
   throw std::runtime_error("trial " + std::to_string(row.trial) +
-                           ": tuning by a person inside a campaign is not supported yet (use `doorbench play --keys` "
-                           "and give the tuned file); run this participant with --respondent sim:SEED or drop the tune block");
+                           ": this respondent answers lines and cannot tune after a presentation (a person tunes "
+                           "during it, with the keys: docs/campaign.md, A person's tune trial)");
 }
 
 // --- stimuli -----------------------------------------------------------------------------
@@ -358,18 +368,24 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
   fs::create_directories(state.session_dir);
   const fs::path relative_dir = fs::path("sessions") / state.participant / (std::string("a") + std::to_string(state.attempt));
   std::string sessions, answer;
-  auto present = [&](int position, const Stimulus& stimulus) {
+  auto present = [&](int position, const Stimulus& stimulus, std::optional<DoorModel>* tuned = nullptr) {
     prompts << "trial " << row.trial << " of " << planned << ": presentation " << position << std::endl;
     const std::string file = trial_file(row.trial, std::string("-") + std::to_string(position) + ".h5");
-    PresentationCall call{state.participant, row.trial, position, &stimulus, state.session_dir / file};
+    PresentationCall call{state.participant, row.trial, position, &stimulus, state.session_dir / file, tuned};
     presenter(call);
     if (!sessions.empty()) sessions += ' ';
     sessions += (relative_dir / file).generic_string();
   };
   if (block.type == BlockType::kTune) {
-    present(1, first);
-    prompts << "trial " << row.trial << " of " << planned << ": tuning with the keys" << std::endl;
-    const DoorModel tuned = respondent.tune(row, *first.model, prompts);
+    std::optional<DoorModel> tuned_at_the_device;
+    if (respondent.tunes_at_the_device()) {
+      present(1, first, &tuned_at_the_device);
+      if (!tuned_at_the_device) throw std::logic_error("the presenter gave no tuned door for trial " + std::to_string(row.trial));
+    } else {
+      present(1, first);
+      prompts << "trial " << row.trial << " of " << planned << ": tuning with the keys" << std::endl;
+    }
+    const DoorModel tuned = tuned_at_the_device ? *tuned_at_the_device : respondent.tune(row, *first.model, prompts);
     const std::string file = trial_file(row.trial, "-tuned.json");
     write_file_atomically(state.session_dir / file, [&](std::ostream& out) { out << to_parameter_json(tuned); });
     second = Stimulus{"tuned", tuned, rendered_parameters(tuned)};

@@ -45,6 +45,10 @@ struct PresentationCall {
   int position = 1;  // 1 or 2
   const Stimulus* stimulus = nullptr;
   std::filesystem::path session_path;  // must not exist; the presenter records it there
+  // Set for a tune trial's first presentation when the respondent tunes at the device
+  // (Respondent::tunes_at_the_device): the presenter plays `stimulus` with the tuning keys
+  // live and puts the door the keys ended on here.
+  std::optional<DoorModel>* tuned = nullptr;
 };
 // Plays one presentation and records it; throws (std::exception) on a device fault.
 using Presenter = std::function<void(const PresentationCall&)>;
@@ -56,8 +60,13 @@ class Respondent {
   // when none can be had (the answers ran out, a wrong scripted answer).
   virtual std::string answer(const PlanRow& row, const Stimulus& first, const Stimulus& second,
                              std::ostream& prompts) = 0;
-  // The tuned door from `start`.
+  // The tuned door from `start` (called after the tune trial's first presentation when
+  // tunes_at_the_device() is false).
   virtual DoorModel tune(const PlanRow& row, const DoorModel& start, std::ostream& prompts) = 0;
+  // True: the tune trial's first presentation is the tuning itself (a person pressing keys
+  // while the start plays); the Presenter is called with PresentationCall::tuned and tune()
+  // is not called.
+  virtual bool tunes_at_the_device() const { return false; }
 };
 
 // The simulated participant of study/participant_model.h, drawn from `seed`; each trial's
@@ -81,19 +90,30 @@ class SimulatedRespondent : public Respondent {
 };
 
 // A person: answer lines from `next_line` (stdin or a file). A wrong answer is asked again
-// when `interactive`, else ends the run naming `source` and the line.
+// when `interactive`, else ends the run naming `source` and the line. With
+// `tunes_at_the_device` the tune trials are the presenter's (the keys live during the first
+// presentation; from a file, the trial's line holds the keys: app/campaign_command.cpp),
+// else tune() refuses.
 class LineRespondent : public Respondent {
  public:
   LineRespondent(std::function<std::optional<std::string>()> next_line, std::string source,
-                 bool interactive);
+                 bool interactive, bool tunes_at_the_device = false);
   std::string answer(const PlanRow& row, const Stimulus& first, const Stimulus& second,
                      std::ostream& prompts) override;
   DoorModel tune(const PlanRow& row, const DoorModel& start, std::ostream& prompts) override;
+  bool tunes_at_the_device() const override { return tunes_at_the_device_; }
+  // The next line of the source (counted for line_number()), for a presenter that reads a
+  // tune trial's keys from it.
+  std::optional<std::string> next_line();
+  int line_number() const { return line_; }
+  const std::string& source() const { return source_; }
+  bool interactive() const { return interactive_; }
 
  private:
   std::function<std::optional<std::string>()> next_line_;
   std::string source_;
   bool interactive_;
+  bool tunes_at_the_device_;
   int line_ = 0;
 };
 

@@ -22,6 +22,7 @@ enum class Purpose : std::uint64_t {
   kTuneStart = 3,
   kParticipantModel = 4,
   kAnswer = 5,
+  kSquareLabels = 6,  // a block's relabelling of its Williams design (campaign-wide)
 };
 
 inline std::uint64_t mix64(std::uint64_t x) {

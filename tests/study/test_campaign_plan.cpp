@@ -1,7 +1,9 @@
 // The campaign file, the plan and its counterbalancing (docs/campaign.md).
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <map>
 #include <set>
+#include <tuple>
 
 #include "study/campaign_file.h"
 #include "study/campaign_plan.h"
@@ -30,6 +32,73 @@ std::string campaign_text(const std::string& participants = "count = 20",
 }
 
 Campaign parsed(const std::string& text) { return parse_campaign(text, "c.toml", "."); }
+
+// A campaign of `variants` variants (v1 = the base, v2... steps of J) and `participants`
+// participants with a pair block and a rating block over `pairs`; `rating` holds the rating
+// block's extra keys.
+std::string paired_campaign(int variants, int participants, const std::string& pairs = "\"all\"",
+                            const std::string& rating = "attributes = [\"heavy-light\"]\n") {
+  std::string text = "[campaign]\nname = \"t\"\nseed = 11\n[variants]\nv1 = \"base\"\n";
+  for (int v = 2; v <= variants; ++v) {
+    text.append("v").append(std::to_string(v)).append(" = \"J*1.").append(std::to_string(v)).append("\"\n");
+  }
+  return text.append("[participants]\ncount = ").append(std::to_string(participants)).append("\n")
+      .append("[[blocks]]\nname = \"pair\"\ntype = \"pair\"\npairs = ").append(pairs).append("\n")
+      .append("[[blocks]]\nname = \"rating\"\ntype = \"rating\"\npairs = ").append(pairs).append("\n").append(rating);
+}
+
+// A plan.csv written by `campaign plan` into a folder and read back.
+Plan plan_from_folder(const std::string& text, const std::string& name) {
+  TempDir dir(name);
+  const Campaign campaign = read_campaign(dir.write("c.toml", text));
+  write_campaign_folder(dir / "out", campaign, make_plan(campaign, campaign.seed), false);
+  return open_campaign_folder(dir / "out").plan;
+}
+
+// Counts over one block of a plan: which pair (unordered, "a|b") is at each block_trial,
+// which variant at each (block_trial, place 1 or 2), and which pair directly follows which.
+struct BlockCounts {
+  std::map<std::pair<std::string, int>, int> pair_at;
+  std::map<std::tuple<std::string, int, int>, int> variant_at;
+  std::map<std::pair<std::string, std::string>, int> pair_after_pair;
+  std::set<std::string> pairs, variants;
+  std::set<int> positions;
+};
+
+BlockCounts count_block(const Plan& plan, const std::string& block) {
+  BlockCounts counts;
+  std::string previous, previous_participant;
+  for (const PlanRow& row : plan.rows) {
+    if (row.block != block) continue;
+    const std::string pair = std::min(row.first, row.second) + "|" + std::max(row.first, row.second);
+    counts.pairs.insert(pair);
+    counts.variants.insert(row.first);
+    counts.variants.insert(row.second);
+    counts.positions.insert(row.block_trial);
+    ++counts.pair_at[{pair, row.block_trial}];
+    ++counts.variant_at[{row.first, row.block_trial, 1}];
+    ++counts.variant_at[{row.second, row.block_trial, 2}];
+    if (row.participant == previous_participant) ++counts.pair_after_pair[{previous, pair}];
+    previous = pair;
+    previous_participant = row.participant;
+  }
+  return counts;
+}
+
+// The spread (largest − smallest count) over all cells of `keys` × `positions`.
+template <typename Key, typename Map, typename MakeKey>
+int spread(const std::set<Key>& keys, const std::set<int>& positions, const Map& map, MakeKey make_key) {
+  int lo = 1 << 30, hi = 0;
+  for (const Key& key : keys) {
+    for (int position : positions) {
+      const auto it = map.find(make_key(key, position));
+      const int n = it == map.end() ? 0 : it->second;
+      lo = std::min(lo, n);
+      hi = std::max(hi, n);
+    }
+  }
+  return hi - lo;
+}
 
 }  // namespace
 
@@ -99,7 +168,116 @@ TEST_CASE("A plan's block order is balanced across participants and the same see
   CHECK(plan_csv(make_plan(campaign, 8)) != plan_csv(plan));
   // The same on any machine: pinned (mt19937_64 and our own draws; a change here changes
   // every plan made before).
-  CHECK(fnv1a64_hex(plan_csv(plan)) == "e3f62e997f0cd128");
+  CHECK(fnv1a64_hex(plan_csv(plan)) == "1e2d209105b12fa8");  // since pair and rating blocks follow Williams designs
+}
+
+TEST_CASE("Pair and rating blocks: each pair and each variant in each position equally often, carry-over balanced",
+          "[study][campaign]") {
+  // 3 variants: 3 pairs (odd: the square and its mirror, 6 rows); 4: 6 pairs (6 rows);
+  // 5: 10 pairs (10 rows). A full set is 2 x rows participants; take two full sets.
+  for (const auto& [variants, rows] : {std::pair{3, 6}, std::pair{4, 6}, std::pair{5, 10}}) {
+    CAPTURE(variants);
+    const std::string text = paired_campaign(variants, 4 * rows);
+    CHECK(balanced_participant_count(parsed(text)).participants == 2 * rows);
+    CHECK(balance_note(parsed(text)) == "");
+    const Plan plan = plan_from_folder(text, "balanced");
+    const int pairs = variants * (variants - 1) / 2;
+    for (const std::string block : {"pair", "rating"}) {
+      CAPTURE(block);
+      const BlockCounts counts = count_block(plan, block);
+      REQUIRE(static_cast<int>(counts.pairs.size()) == pairs);
+      REQUIRE(static_cast<int>(counts.positions.size()) == (block == std::string("pair") ? 2 * pairs : pairs));
+      const int participants = 4 * rows;
+      // Each pair at each trial position: participants / pairs times.
+      for (const std::string& pair : counts.pairs) {
+        for (int position : counts.positions) CHECK(counts.pair_at.at({pair, position}) * pairs == participants);
+      }
+      // Each variant in each place of each trial: it is in (variants − 1) of the pairs and
+      // in each place of them half of the time.
+      for (const std::string& variant : counts.variants) {
+        for (int position : counts.positions) {
+          for (int place : {1, 2}) {
+            CHECK(2 * pairs * counts.variant_at.at({variant, position, place}) == participants * (variants - 1));
+          }
+        }
+      }
+      // First-order carry-over: each pair directly after each other pair equally often;
+      // in a pair block the turn (forwards, then backwards) repeats one pair, each equally often.
+      std::set<int> seen;
+      for (const std::string& a : counts.pairs) {
+        for (const std::string& b : counts.pairs) {
+          const auto it = counts.pair_after_pair.find({a, b});
+          const int n = it == counts.pair_after_pair.end() ? 0 : it->second;
+          if (a != b) seen.insert(n);
+          if (a == b) CHECK(n * pairs == (block == std::string("pair") ? participants : 0));
+        }
+      }
+      CHECK(seen.size() == 1);
+      CHECK(*seen.begin() > 0);
+    }
+    // Within one participant's pair block each pair is played both ways once.
+    std::map<std::pair<std::string, std::string>, int> ordered;
+    for (const PlanRow& row : plan.of("P03")) {
+      if (row.block == "pair") ++ordered[{row.first, row.second}];
+    }
+    CHECK(static_cast<int>(ordered.size()) == 2 * pairs);
+  }
+}
+
+TEST_CASE("Named pairs, repetitions and attributes keep the balance over a full set", "[study][campaign]") {
+  // 5 named pairs (odd: 10 rows, 20 participants a full set), 2 repetitions; the rating
+  // block's 2 attributes in cyclic order.
+  const std::string pairs = "[[\"v1\", \"v2\"], [\"v1\", \"v3\"], [\"v2\", \"v3\"], [\"v3\", \"v4\"], [\"v1\", \"v4\"]]";
+  std::string text = paired_campaign(4, 20, pairs, "attributes = [\"heavy-light\", \"pleasant\"]\nrepetitions = 2\n");
+  text.insert(text.find("[[blocks]]\nname = \"rating\""), "repetitions = 2\n");
+  REQUIRE(balanced_participant_count(parsed(text)).participants == 20);
+  const Plan plan = plan_from_folder(text, "named");
+  for (const std::string block : {"pair", "rating"}) {
+    CAPTURE(block);
+    const BlockCounts counts = count_block(plan, block);
+    REQUIRE(counts.positions.size() == 20);  // 5 pairs x 2 orders (pair) or x 2 attributes (rating), x 2
+    for (const std::string& pair : counts.pairs) {
+      for (int position : counts.positions) CHECK(counts.pair_at.at({pair, position}) == 4);
+    }
+    std::set<int> seen;
+    for (const auto& [key, n] : counts.pair_after_pair) {
+      if (key.first != key.second) seen.insert(n);
+    }
+    CHECK(seen.size() == 1);
+    CHECK(counts.pair_after_pair.size() == 25);  // every ordered pair of pairs, and each after itself
+  }
+  // Each attribute first for half of the participants, each rated on every pair twice.
+  int heavy_first = 0;
+  for (int p = 1; p <= 20; ++p) {
+    const std::string id = std::string(p < 10 ? "P0" : "P").append(std::to_string(p));
+    std::map<std::string, int> per_question;
+    bool first_seen = false;
+    for (const PlanRow& row : plan.of(id)) {
+      if (row.block != "rating") continue;
+      if (!first_seen) heavy_first += row.question == "rating:heavy-light:7";
+      first_seen = true;
+      ++per_question[row.question];
+    }
+    CHECK(per_question["rating:heavy-light:7"] == 10);
+    CHECK(per_question["rating:pleasant:7"] == 10);
+  }
+  CHECK(heavy_first == 10);
+}
+
+TEST_CASE("A participant count that is not a multiple of the design is noted and stays nearly balanced",
+          "[study][campaign]") {
+  // 4 variants: 6 pairs, 6 rows, full set 12 (2 blocks: block order 2). 15 participants:
+  // rows 0..2 are taken three times, rows 3..5 twice, so a pair's count at a position is 3 or 2.
+  const std::string text = paired_campaign(4, 15);
+  CHECK(balance_note(parsed(text)) ==
+        "note: 15 participants; the counterbalancing is exact for a multiple of 12 (block order 2, block 'pair' 12, "
+        "block 'rating' 12); participant i takes row i mod rows of each design (docs/campaign.md, Counterbalancing)");
+  const Plan plan = plan_from_folder(text, "partial");
+  for (const std::string block : {"pair", "rating"}) {
+    const BlockCounts counts = count_block(plan, block);
+    CHECK(spread(counts.pairs, counts.positions, counts.pair_at,
+                 [](const std::string& pair, int position) { return std::pair{pair, position}; }) == 1);
+  }
 }
 
 TEST_CASE("A plan folder keeps the campaign, the plan and its identity, read back and checked",

@@ -7,6 +7,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <chrono>
 #include <filesystem>
@@ -15,10 +16,15 @@
 #include <thread>
 #include <vector>
 
+#include "acquisition/session/session_file.h"
+#include "analysis/model/parameter_file.h"
+#include "haptic/tuning_keys.h"
 #include "study/campaign_file.h"
+#include "study/campaign_plan.h"
 #include "study/trials_table.h"
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
+#include "tests/support/run_on_terminal.h"
 #include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
@@ -241,6 +247,12 @@ TEST_CASE("campaign run: the operator's output names no variant, and a finished 
   CHECK(named.status == 2);
   CHECK_THAT(named.err, Catch::Matchers::StartsWith("doorbench: participant id 'Anna Berg' looks like a name (it holds "
                                                     "a space); use a pseudonymous id such as P07"));
+  // The issue's spelling: the participant is the plan's, the simulated respondent is --respondent.
+  const Result sim = run({"campaign", "run", folder.string(), "--participant", "sim:42"}, dir.path);
+  CHECK(sim.status == 2);
+  CHECK_THAT(sim.err, Catch::Matchers::StartsWith("doorbench: --participant names a participant of the plan (such as "
+                                                  "P01), not sim:42; a simulated participant answers that participant's "
+                                                  "trials with --participant P01 --respondent sim:42 (see doorbench campaign run --help)\n"));
   const Result mail = run({"campaign", "run", folder.string(), "--participant", "a.b@example.org"}, dir.path);
   CHECK(mail.status == 2);
   CHECK_THAT(mail.err, Catch::Matchers::StartsWith("doorbench: participant id 'a.b@example.org' looks like an e-mail "
@@ -250,7 +262,7 @@ TEST_CASE("campaign run: the operator's output names no variant, and a finished 
 TEST_CASE("campaign run: answers that end, a wrong answer and a device fault stop the run, and the answers given stay",
           "[study][campaign][cli]") {
   TempDir dir("campaign_fault");
-  // A person's answers: no tune block (a person cannot tune inside a campaign yet).
+  // A person's answers, without the tune block (a person's tuning is the next test's).
   std::string text = campaign_text(1);
   text.erase(text.find("[[blocks]]\nname = \"tune\""), std::string("[[blocks]]\nname = \"tune\"\ntype = \"tune\"\n").size());
   const fs::path campaign = dir.write("person.toml", text);
@@ -292,6 +304,117 @@ TEST_CASE("campaign run: answers that end, a wrong answer and a device fault sto
   CHECK(table.value(0, "answer") == "1");
   CHECK(table.value(1, "answer") == "same");
   CHECK(table.value(2, "answer") == "2");
+}
+
+TEST_CASE("campaign run: a person tunes in a tune trial with the keys, scripted in the answers file",
+          "[study][campaign][cli]") {
+  TempDir dir("campaign_person_tune");
+  // Tune then pair (2 blocks: P01 takes them in this order).
+  std::string text = campaign_text(1);
+  const std::size_t rating = text.find("[[blocks]]\nname = \"rating\"");
+  text.erase(rating);
+  const fs::path campaign_path = dir.write("tune.toml", text);
+  REQUIRE(run({"campaign", "plan", campaign_path.string(), "--out", (dir / "t").string()}, dir.path).status == 0);
+  const fs::path folder = dir / "t";
+  const doorbench::study::CampaignFolder opened = doorbench::study::open_campaign_folder(folder);
+  REQUIRE(opened.plan.rows.at(0).question == "tune");
+  REQUIRE(opened.plan.rows.size() == 13);
+  std::vector<std::string> person = {"campaign", "run", folder.string(), "--participant", "P01", "--answers",
+                                     (dir / "answers.txt").string()};
+
+  // An unknown key: the run stops naming the file, the line and the key; nothing answered.
+  dir.write("answers.txt", "+x\n");
+  const Result wrong = run(person, dir.path);
+  CHECK(wrong.status == 1);
+  CHECK_THAT(wrong.err, Catch::Matchers::EndsWith(
+                            "doorbench: trial 1 of 13 stopped: " + (dir / "answers.txt").string() +
+                            ":1: trial 1: a tune trial's line holds the keys pressed (+ - U u C c S s N n r; empty: the "
+                            "start kept), not 'x' (the 0 answers before it are in " + (folder / "trials.csv").string() +
+                            "; run the same command again to resume)\n"));
+  // More keys than the presentation (0.2 s: one press every 0.1 s) has room for.
+  dir.write("answers.txt", "++u+\n");
+  const Result short_run = run(person, dir.path);
+  CHECK(short_run.status == 1);
+  CHECK_THAT(short_run.err, Catch::Matchers::Contains("trial 1: the presentation ended after "));
+  CHECK_THAT(short_run.err, Catch::Matchers::Contains(" of the 4 keys (one is pressed every 0.1 s); give a longer --presentation-s"));
+  CHECK_FALSE((fs::exists(folder / "trials.csv") && count_rows_of(folder / "trials.csv", "P01") > 0));
+
+  // Heavier twice, easier to unlatch, then the 12 pair answers.
+  std::string answers = "+ + u\n";
+  for (int i = 0; i < 12; ++i) answers += i % 3 == 0 ? "same\n" : "1\n";
+  dir.write("answers.txt", answers);
+  person.insert(person.end(), {"--presentation-s", "1"});
+  const Result tuned_run = run(person, dir.path);
+  INFO(tuned_run.err);
+  REQUIRE(tuned_run.status == 0);
+  CHECK_THAT(tuned_run.err, Catch::Matchers::Contains("trial 1: tuning with 3 keys from " + (dir / "answers.txt").string() + ":1\n"));
+  CHECK_THAT(tuned_run.err, Catch::Matchers::Contains("key +: played\nkey +: played\nkey u: played\n"));
+  const auto table = doorbench::study::read_trials_table(folder / "trials.csv");
+  REQUIRE(table.rows.size() == 13);
+  CHECK(table.value(0, "question") == "tune");
+  CHECK(table.value(0, "answer") == "sessions/P01/a1/t001-tuned.json");
+  CHECK(table.value(1, "answer") == "same");
+  // The tuned file is the start with the three keys applied, as a person's presses would.
+  const doorbench::DoorModel start = doorbench::study::apply_steps(
+      doorbench::study::base_model(opened.campaign), doorbench::study::parse_steps(opened.plan.rows[0].first));
+  doorbench::DoorModel expected = start;
+  for (char key : {'+', '+', 'u'}) expected = *doorbench::haptic::apply_key(expected, key).model;
+  const doorbench::DoorModel tuned =
+      doorbench::load_model(doorbench::ModelKind::kSensory, folder / "sessions" / "P01" / "a1" / "t001-tuned.json", "");
+  REQUIRE(tuned.parameter_values().size() == expected.parameter_values().size());
+  for (std::size_t i = 0; i < tuned.parameter_values().size(); ++i) {
+    CHECK(tuned.parameter_values()[i] == Approx(expected.parameter_values()[i]).epsilon(1e-9));
+  }
+  const auto tuned_values = tuned.parameter_values(), start_values = start.parameter_values();
+  CHECK_FALSE(std::equal(tuned_values.begin(), tuned_values.end(), start_values.begin()));
+  // Each press is a tuning event of the tuning presentation's session, each change a
+  // parameter set played.
+  const doorbench::SessionReader reader(folder / "sessions" / "P01" / "a1" / "t001-1.h5");
+  int tuning_events = 0, parameter_events = 0;
+  for (const doorbench::SessionEvent& event : reader.events()) {
+    tuning_events += event.kind == "tuning";
+    parameter_events += event.kind == "parameters";
+  }
+  CHECK(tuning_events == 3);
+  CHECK(parameter_events >= 3);
+  // The operator's screen names no variant.
+  for (const char* name : {"reference", "heavier", "easier_unlatch", "lighter_smoother"}) {
+    CHECK(tuned_run.err.find(name) == std::string::npos);
+  }
+}
+
+TEST_CASE("campaign run: a person tunes on the terminal's keys until Enter, then answers there",
+          "[study][campaign][cli]") {
+  // stdin is a pseudo-terminal (openpty), as the participant's keypad and the operator's
+  // keyboard would be: "+" and "u" while the start plays (in real time), Enter, then the 12
+  // pair answers as lines.
+  TempDir dir("campaign_terminal_tune");
+  std::string text = campaign_text(1);
+  text.erase(text.find("[[blocks]]\nname = \"rating\""));
+  const fs::path campaign_path = dir.write("tune.toml", text);
+  REQUIRE(run({"campaign", "plan", campaign_path.string(), "--out", (dir / "t").string()}, dir.path).status == 0);
+  const fs::path folder = dir / "t";
+  std::string typed = "+u\n";
+  for (int i = 0; i < 12; ++i) typed += "2\n";
+  const doorbench::testing::DoorbenchRun result = doorbench::testing::run_doorbench_on_terminal(
+      {"campaign", "run", folder.string(), "--participant", "P01"}, dir, typed, 300);
+  INFO(result.err);
+  REQUIRE(result.status == 0);
+  CHECK_THAT(result.err, Catch::Matchers::Contains("trial 1: tune with the keys, Enter when done\n"));
+  CHECK_THAT(result.err, Catch::Matchers::Contains("key +: played\nkey u: played\n"));
+  const auto table = doorbench::study::read_trials_table(folder / "trials.csv");
+  REQUIRE(table.rows.size() == 13);
+  CHECK(table.value(0, "answer") == "sessions/P01/a1/t001-tuned.json");
+  for (std::size_t r = 1; r < 13; ++r) CHECK(table.value(r, "answer") == "2");
+  const doorbench::study::CampaignFolder opened = doorbench::study::open_campaign_folder(folder);
+  doorbench::DoorModel expected = doorbench::study::apply_steps(doorbench::study::base_model(opened.campaign),
+                                                                doorbench::study::parse_steps(opened.plan.rows[0].first));
+  for (char key : {'+', 'u'}) expected = *doorbench::haptic::apply_key(expected, key).model;
+  const doorbench::DoorModel tuned =
+      doorbench::load_model(doorbench::ModelKind::kSensory, folder / "sessions" / "P01" / "a1" / "t001-tuned.json", "");
+  for (std::size_t i = 0; i < tuned.parameter_values().size(); ++i) {
+    CHECK(tuned.parameter_values()[i] == Approx(expected.parameter_values()[i]).epsilon(1e-9));
+  }
 }
 
 TEST_CASE("campaign merge joins folders of one plan and refuses another plan's", "[study][campaign][cli]") {
