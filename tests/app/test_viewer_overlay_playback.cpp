@@ -100,7 +100,11 @@ TEST_CASE("a playback session gets stroke events on read and overlays a bench se
   INFO("stderr: " << err);
   REQUIRE(status == 0);
   const testing::Screenshot shot = testing::load_screenshot(png);
-  const auto& plot = shot.plot("rate (");  // the door's rate from the prepared strokes
+  // The door's angle, force and rate from the prepared strokes, not the raw channels.
+  CHECK_NOTHROW(shot.plot("angle (fused): A and B"));
+  CHECK_NOTHROW(shot.plot("force (handle, + opening): A and B"));
+  CHECK_THROWS(shot.plot("channel "));
+  const auto& plot = shot.plot("rate (");
   REQUIRE(plot["series"].size() == 2);
   const std::vector<int> rgb_a = plot["series"][0]["rgb"], rgb_b = plot["series"][1]["rgb"];
   const testing::PlotGeometry g(plot);
@@ -219,7 +223,7 @@ TEST_CASE(
   CHECK(angle.series[0]->unit() == angle.series[1]->unit());
   CHECK(a_high > 60.0);
   CHECK(b_high > 60.0);
-  CHECK(std::abs(a_high - b_high) < 0.15 * b_high);
+  CHECK(std::abs(a_high - b_high) < 0.2 * b_high);  // the bench's door falls open to its stop
   CHECK(std::abs(a_low) < 5.0);
   CHECK(std::abs(b_low) < 5.0);
 
