@@ -149,6 +149,18 @@ std::string verdict(const SolutionEquivalence& e, const EquivalenceOptions& opti
   return text;
 }
 
+// Where the JNDs come from: "the typical published ones", or "the panel's measured ones for
+// 2 quantities, the typical published ones for the rest".
+std::string jnd_sources(const EquivalenceOptions& options) {
+  std::size_t measured = 0;
+  for (const FeltJnd& jnd : options.jnds) measured += jnd.measured ? 1 : 0;
+  if (measured == 0) return "the typical published ones";
+  return printf_text(
+      "the panel's measured ones for %zu quantit%s, the typical published ones "
+      "for the rest",
+      measured, measured == 1 ? "y" : "ies");
+}
+
 }  // namespace
 
 std::string EquivalenceOptions::validate() const {
@@ -180,8 +192,7 @@ std::string equivalence_criterion(const EquivalenceOptions& options) {
       "uncertainties and %.3g %% of its bound width; the measurement that tells them apart is "
       "the hand force (standard run, %.3g times faster, or holding still, per %.3g deg of "
       "angle) where they differ most, told apart when by more than %.3g N",
-      100.0 * options.data_cost_margin,
-      options.jnds.empty() ? "the typical published ones" : "as given, else the typical ones",
+      100.0 * options.data_cost_margin, jnd_sources(options).c_str(),
       100.0 * options.parameter_fraction_of_bounds, options.fast_factor,
       options.felt.bin_width_rad * kDegPerRad, options.force_resolution_N);
 }
