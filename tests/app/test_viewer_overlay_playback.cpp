@@ -240,4 +240,14 @@ TEST_CASE(
   CHECK(fb.opening_N > 10.0);
   CHECK(fa.closing_N < -10.0);
   CHECK(fb.closing_N < -10.0);
+
+  // Asked for, the raw channels both sessions have follow the door's three plots.
+  const viewer::Overlay with_raw = viewer::overlay_plots(a, b, "", true);
+  REQUIRE(with_raw.plots.size() > 3);
+  CHECK(with_raw.shown == overlay.shown + " and the raw channels");
+  for (std::size_t i = 0; i < with_raw.plots.size(); ++i) {
+    INFO(with_raw.plots[i].title);
+    CHECK((with_raw.plots[i].title.rfind("channel ", 0) == 0) == (i >= 3));
+    CHECK(with_raw.plots[i].x == with_raw.plots.front().x);  // time axes linked
+  }
 }
