@@ -39,6 +39,7 @@ struct ImportOptions {
   std::string out_path;
   std::string operator_name, product_id, notes;
   std::string tdms_map;  // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h)
+  bool keep_raw = false;  // TDMS files: the DAQmx scalers' raw values beside the scaled ones
 };
 
 // A TDMS file (by its .tdms extension, any case) through --map, else the CSV exchange format.
@@ -55,6 +56,7 @@ Recording read_import(const ImportOptions& options) {
   }
   if (extension != ".tdms") {
     if (!options.tdms_map.empty()) throw UsageError("--map is for TDMS files (*.tdms)");
+    if (options.keep_raw) throw UsageError("--keep-raw is for TDMS files (*.tdms)");
     return read_recording_csv(options.csv_path, EmptyCells::kMissing);  // empty: lost samples
   }
   // The file first: a missing or malformed --map is answered with the channels to map.
@@ -72,7 +74,7 @@ Recording read_import(const ImportOptions& options) {
     throw UsageError(std::string(error.what()) + "; the file's channels: " +
                      tdms_channel_list(file));
   }
-  return tdms_to_recording(file, map, options.csv_path);
+  return tdms_to_recording(file, map, options.csv_path, options.keep_raw);
 }
 
 void run_import(const ImportOptions& options) {
@@ -119,6 +121,9 @@ void add_import_command(CLI::App& app, Action& action) {
   import_command->add_option("--map", import->tdms_map,
                              "TDMS channels: force=GROUP/CHANNEL,angle=GROUP/CHANNEL[,rate=...]"
                              "[,time=...][,NAME_UNIT=...]");
+  import_command->add_flag("--keep-raw", import->keep_raw,
+                           "TDMS files: also each mapped channel's DAQmx raw values as stored "
+                           "(ADC counts), as columns TARGET_raw");
   import_command->callback([import, &action] { action = [import] { run_import(*import); }; });
 }
 

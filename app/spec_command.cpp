@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "acquisition/session/output_file.h"
+#include "analysis/design/equivalent_solutions.h"
 #include "analysis/design/inverse_design.h"
 #include "analysis/design/perceptual_tolerance.h"
 #include "analysis/design/spec_report.h"
@@ -293,6 +294,12 @@ void run_spec(const SpecCommandOptions& options) {
     evaluation.perceptual =
         perceptual_spec(*campaign, tobe_source, felt_share, design.solutions.front().model,
                         evaluation_options, *evaluation.tolerances, progress);
+    // The alternatives judged with the panel's JNDs where it measured them.
+    EquivalenceOptions equivalence = evaluation_options.equivalence;
+    equivalence.felt = evaluation_options.felt;
+    equivalence.jnds = evaluation.perceptual->jnds;
+    evaluation.equivalence = assess_equivalence(design, equivalence);
+    evaluation.equivalence_criterion = equivalence_criterion(equivalence);
   }
   if (!bench_warning.empty()) evaluation.warnings.push_back(bench_warning);
 

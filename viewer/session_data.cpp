@@ -67,6 +67,32 @@ std::shared_ptr<Series> loop_series(const PreparedData& data, StrokeDirection di
   return series;
 }
 
+// One of the door's quantities over the prepared strokes on the session clock, strokes in
+// time order separated by a NaN sample between them (SessionData::door_angle, ...).
+std::shared_ptr<Series> door_series(const PreparedData& data, const std::string& name,
+                                    const std::string& stored_unit,
+                                    std::vector<double> Stroke::*member) {
+  std::vector<const Stroke*> strokes;
+  for (const Stroke& stroke : data.strokes) {
+    if (!stroke.time_s.empty()) strokes.push_back(&stroke);
+  }
+  std::stable_sort(strokes.begin(), strokes.end(), [](const Stroke* x, const Stroke* y) {
+    return x->time_s.front() < y->time_s.front();
+  });
+  std::vector<double> t, values;
+  for (const Stroke* stroke : strokes) {
+    if (!t.empty()) {
+      if (stroke->time_s.front() < t.back()) continue;  // overlaps the one before: left out
+      t.push_back(0.5 * (t.back() + stroke->time_s.front()));
+      values.push_back(kNaN);
+    }
+    t.insert(t.end(), stroke->time_s.begin(), stroke->time_s.end());
+    values.insert(values.end(), (stroke->*member).begin(), (stroke->*member).end());
+  }
+  const std::string unit = to_display_units(stored_unit, values);
+  return std::make_shared<Series>(Series::timed(name, unit, std::move(t), std::move(values)));
+}
+
 // Stroke events for a session whose file has none (see SessionData::events).
 void add_found_stroke_events(SessionData& session) {
   for (const SessionEvent& e : session.events) {
@@ -151,6 +177,11 @@ SessionData load_session(const std::filesystem::path& path, const LoadOptions& o
     session.prepare_message = "strokes not prepared";
   }
   add_found_stroke_events(session);
+  if (session.prepared && !session.data.strokes.empty()) {
+    session.door_angle = door_series(session.data, "angle", "rad", &Stroke::theta_rad);
+    session.door_force = door_series(session.data, "force", "N", &Stroke::force_N);
+    session.door_rate = door_series(session.data, "rate", "rad/s", &Stroke::omega_rad_s);
+  }
   session.opening_loop = loop_series(session.data, StrokeDirection::kOpening, "opening",
                                      plot_style::Meaning::kOpening);
   session.closing_loop = loop_series(session.data, StrokeDirection::kClosing, "closing",
@@ -392,7 +423,34 @@ double first_motion_onset_s(const SessionData& session, const std::string& direc
   return first;
 }
 
-Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::string& direction) {
+namespace {
+
+// One overlay plot: A's and B's series shifted to their stroke starts, A as measured on top,
+// B opaque and wider beneath, so that both show where they coincide.
+PlotView overlay_plot(const Overlay& overlay, const SessionData& a, const Series& series_a,
+                      const SessionData& b, const Series& series_b, std::string title,
+                      std::string y_label) {
+  PlotView plot;
+  plot.title = std::move(title);
+  plot.x_label = "time since stroke start";
+  plot.y_label = std::move(y_label);
+  auto sa = std::make_shared<Series>(
+      series_a.shifted(-overlay.a_start_s, "A " + a.path.filename().string()));
+  auto sb = std::make_shared<Series>(
+      series_b.shifted(-overlay.b_start_s, "B " + b.path.filename().string()));
+  style_series(*sa, plot_style::Meaning::kMeasured);
+  sb->colour = meaning_colour(plot_style::Meaning::kSimulated, true);
+  sb->width_px = 4.0f;
+  sb->layer = 1;
+  plot.add(sa);
+  plot.add(sb);
+  return plot;
+}
+
+}  // namespace
+
+Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::string& direction,
+                      bool raw_channels) {
   Overlay overlay;
   const bool by_events = !a.strokes_found_on_read && !b.strokes_found_on_read;
   overlay.alignment = by_events ? "stroke_start events" : "motion onset";
@@ -400,29 +458,39 @@ Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::str
       by_events ? first_stroke_start_s(a, direction) : first_motion_onset_s(a, direction);
   overlay.b_start_s =
       by_events ? first_stroke_start_s(b, direction) : first_motion_onset_s(b, direction);
-  for (std::size_t i = 0; i < a.channels.size(); ++i) {
-    for (std::size_t j = 0; j < b.channels.size(); ++j) {
-      if (a.channels[i].name != b.channels[j].name) continue;
-      PlotView plot;
-      plot.title =
-          a.channels[i].name + ": A and B, aligned on stroke start (" + overlay.alignment + ")";
-      plot.x_label = "time since stroke start";
-      plot.y_label = a.channels[i].name;
-      auto sa = std::make_shared<Series>(
-          a.channel_series[i]->shifted(-overlay.a_start_s, "A " + a.path.filename().string()));
-      auto sb = std::make_shared<Series>(
-          b.channel_series[j]->shifted(-overlay.b_start_s, "B " + b.path.filename().string()));
-      // A as measured, on top; B opaque and wider beneath, so that both show where they
-      // coincide.
-      style_series(*sa, plot_style::Meaning::kMeasured);
-      sb->colour = meaning_colour(plot_style::Meaning::kSimulated, true);
-      sb->width_px = 4.0f;
-      sb->layer = 1;
-      plot.add(sa);
-      plot.add(sb);
-      if (!overlay.plots.empty()) plot.link_x_to(overlay.plots.front());
-      overlay.plots.push_back(std::move(plot));
+  const std::string aligned = ": A and B, aligned on stroke start (" + overlay.alignment + ")";
+  const bool physical = a.door_angle && b.door_angle;
+  if (physical) {
+    overlay.shown =
+        "the door's angle (fused from inclinometer and gyroscope), hand force (+ opening, as "
+        "export signs it) and rate, from the prepared strokes";
+    overlay.plots.push_back(overlay_plot(overlay, a, *a.door_angle, b, *b.door_angle,
+                                         "angle (fused)" + aligned, "door angle"));
+    overlay.plots.push_back(overlay_plot(overlay, a, *a.door_force, b, *b.door_force,
+                                         "force (handle, + opening)" + aligned, "hand force"));
+    overlay.plots.push_back(overlay_plot(overlay, a, *a.door_rate, b, *b.door_rate,
+                                         "rate (bias removed)" + aligned, "door rate"));
+    if (raw_channels) overlay.shown += " and the raw channels";
+  } else {
+    const SessionData& unprepared = a.door_angle ? b : a;
+    overlay.shown = std::string("raw channels: ")
+                        .append(unprepared.path.filename().string())
+                        .append(" is not prepared into strokes (")
+                        .append(unprepared.prepared ? "none found" : unprepared.prepare_message)
+                        .append(")");
+  }
+  if (!physical || raw_channels) {
+    for (std::size_t i = 0; i < a.channels.size(); ++i) {
+      for (std::size_t j = 0; j < b.channels.size(); ++j) {
+        if (a.channels[i].name != b.channels[j].name) continue;
+        overlay.plots.push_back(
+            overlay_plot(overlay, a, *a.channel_series[i], b, *b.channel_series[j],
+                         "channel " + a.channels[i].name + aligned, a.channels[i].name));
+      }
     }
+  }
+  for (std::size_t i = 1; i < overlay.plots.size(); ++i) {
+    overlay.plots[i].link_x_to(overlay.plots.front());
   }
   if (!overlay.plots.empty()) {
     overlay.plots.front().fit_x();

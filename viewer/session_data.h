@@ -57,6 +57,14 @@ struct SessionData {
   bool prepared = false;
   std::string prepare_message;
   PreparedData data;
+  // The door's physical quantities read off the prepared strokes, on the session clock, the
+  // strokes separated by NaN (empty when not prepared): door_angle the door's angle as
+  // preprocessing fuses it (inclinometer and gyroscope) in deg, door_force the hand force
+  // at the handle signed as `export` signs it (positive opening, the load cell's mounting
+  // applied) in N, door_rate the rate (bias removed) in deg/s. A bench's raw channels are a
+  // sensor's view (an inclinometer flat at its ±10° range, a compression-only load cell);
+  // these compare with a haptic playback's like for like.
+  std::shared_ptr<Series> door_angle, door_force, door_rate;
   // Handle force against angle, one series per direction, strokes separated by NaN.
   std::shared_ptr<Series> opening_loop;
   std::shared_ptr<Series> closing_loop;
@@ -120,18 +128,27 @@ double motion_end_s(const Stroke& stroke);
 // Throws std::invalid_argument naming the session when it has none (with why).
 double first_motion_onset_s(const SessionData& session, const std::string& direction = "");
 
-// The A/B overlay: for each channel both sessions have (by name), A's and B's series on
-// time since their first stroke start (of `direction`), so that the strokes line up. Both
-// sessions are aligned the same way: on their first stroke_start event when both files
+// The A/B overlay: A's and B's series on time since their first stroke start (of
+// `direction`), so that the strokes line up. When both sessions were prepared into strokes,
+// the door's physical quantities (SessionData::door_angle, door_force, door_rate: plots
+// titled "angle: ...", "force: ...", "rate: ...") — a bench recording and its haptic
+// playback then show the same quantities in one sign convention; the raw channels both
+// sessions have (by name, plots titled "channel NAME: ...") follow when `raw_channels` is
+// set, and are all that is shown when either session is not prepared (`shown` says why).
+// Both sessions are aligned the same way: on their first stroke_start event when both files
 // carry stroke events, else (one of them is e.g. a haptic playback, whose strokes are found
 // on read) on both first strokes' motion onset. A is drawn as measured on top, B under it.
 struct Overlay {
   double a_start_s = 0.0, b_start_s = 0.0;  // the stroke starts aligned to 0
   std::string alignment;                    // "stroke_start events" or "motion onset"
-  std::vector<PlotView> plots;              // time axes linked
+  // What the plots show: "the door's angle (fused ...), hand force (+ opening ...) and rate,
+  // from the prepared strokes", with " and the raw channels" when asked, or "raw channels: NAME is
+  // not prepared into strokes (why)" when a session was not prepared.
+  std::string shown;
+  std::vector<PlotView> plots;  // time axes linked
 };
-Overlay overlay_plots(const SessionData& a, const SessionData& b,
-                      const std::string& direction = "");
+Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::string& direction = "",
+                      bool raw_channels = false);
 
 // The group a channel is shown in, by its sensor kind: a haptic playback's channels
 // (haptic/tick_recorder.cpp) as "door" (force, angle, rate: what a fit reads), "device"

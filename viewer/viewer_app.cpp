@@ -70,16 +70,22 @@ Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitC
     }
     sessions_.push_back(std::move(view));
   }
+  make_overlay();
+}
+
+void Viewer::make_overlay() {
+  overlay_.reset();
+  overlay_states_.clear();
   if (sessions_.size() < 2) {
     overlay_message_ = "The A/B overlay needs two sessions: doorbench view A.h5 B.h5";
-  } else {
-    try {
-      overlay_ = overlay_plots(sessions_[0].data, sessions_[1].data);
-      overlay_states_.resize(overlay_->plots.size());
-      if (overlay_->plots.empty()) overlay_message_ = "The two sessions share no channel name.";
-    } catch (const std::invalid_argument& error) {
-      overlay_message_ = error.what();
-    }
+    return;
+  }
+  try {
+    overlay_ = overlay_plots(sessions_[0].data, sessions_[1].data, "", overlay_raw_);
+    overlay_states_.resize(overlay_->plots.size());
+    if (overlay_->plots.empty()) overlay_message_ = "The two sessions share no channel name.";
+  } catch (const std::invalid_argument& error) {
+    overlay_message_ = error.what();
   }
 }
 
@@ -452,6 +458,11 @@ void Viewer::overlay() {
               sessions_[0].data.path.string().c_str(), overlay_->a_start_s,
               sessions_[1].data.path.string().c_str(), overlay_->b_start_s,
               overlay_->alignment.c_str());
+  ImGui::TextWrapped("showing %s", overlay_->shown.c_str());
+  if (controls_ && ImGui::Checkbox("raw channels too", &overlay_raw_)) {
+    make_overlay();  // the next frame draws the new plots
+    return;
+  }
   const float avail = ImGui::GetContentRegionAvail().y;
   const float each = stacked_height(avail, overlay_->plots.size());
   ImGui::BeginChild("overlay");

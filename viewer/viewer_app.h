@@ -4,7 +4,8 @@
 //   channels  every channel over time, time axes linked
 //   loop      force against angle, opening and closing strokes in their colours
 //   fit       measured rate against a door model's simulation, the residual below
-//   overlay   A/B: the first two sessions' common channels aligned on their first stroke
+//   overlay   A/B: the first two sessions' door angle, force and rate (their raw channels
+//             on request) aligned on their first stroke
 //   steps     the residual loop's steps (a `doorbench loop` folder): error before and after
 //   tuning    sliders for the model's parameters and perceptual controls; strokes replayed
 // The interactive window shows them as tabs with a session selector; a screenshot shows
@@ -96,6 +97,8 @@ class Viewer {
   std::optional<Overlay> overlay_;
   std::string overlay_message_;
   std::vector<PlotWidgetState> overlay_states_;
+  bool overlay_raw_ = false;  // the overlay shows the raw channels too (its checkbox)
+  void make_overlay();
   std::optional<LoopSteps> steps_;
   PlotView steps_plot_;
   PlotWidgetState steps_state_;

@@ -101,7 +101,12 @@ std::string tdms_channel_list(const TdmsFile& file);
 // mapped channels' properties, the file's and the force channel's wf_start_time (metadata
 // tdms_wf_start_time, ISO 8601 UTC) go into the metadata. Throws TdmsError "SOURCE: ..."
 // naming the target and channel and ending with the file's channels (tdms_channel_list).
+// keep_raw (import --keep-raw): also each mapped channel's DAQmx scalers as stored
+// (daqmx_raw: ADC counts, digital lines), as extra columns TARGET_raw ("force_raw"; an extra
+// target's stem, "incl_raw" for incl_V; the scaler id appended when a channel has several),
+// each with a metadata line tdms_raw_NAME saying which scaler of which channel it is; a
+// channel without DAQmx raw data adds no column.
 Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
-                            const std::string& source);
+                            const std::string& source, bool keep_raw = false);
 
 }  // namespace doorbench

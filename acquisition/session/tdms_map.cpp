@@ -281,10 +281,55 @@ void file_properties_as_metadata(const TdmsFile& file, Recording& recording) {
   }
 }
 
+// --keep-raw: each mapped channel's DAQmx scalers as stored (TdmsChannel::daqmx_raw), as
+// extra columns named after the target ("force_raw"; "incl_raw" for incl_V; the scaler id
+// appended when the channel has several: "force_raw0"), each with a metadata line saying
+// what it holds. Channels without DAQmx raw data add nothing.
+void add_raw_columns(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
+                     const std::string& source, Recording& recording) {
+  for (const TdmsMapItem& item : map) {
+    if (item.target == "time") continue;
+    const TdmsChannel& channel = mapped_channel(file, item, source);
+    if (channel.daqmx_raw.empty()) continue;
+    const bool physical =
+        item.target == "force" || item.target == "angle" || item.target == "rate";
+    const std::string stem =
+        physical ? item.target : item.target.substr(0, item.target.rfind('_'));
+    for (const auto& [id, values] : channel.daqmx_raw) {
+      const std::string name =
+          stem + "_raw" + (channel.daqmx_raw.size() > 1 ? std::to_string(id) : std::string());
+      if (values.size() != recording.time_s.size()) {
+        throw TdmsError(std::string(source)
+                            .append(": --keep-raw: DAQmx scaler ")
+                            .append(std::to_string(id))
+                            .append(" of ")
+                            .append(map_name(channel))
+                            .append(" holds ")
+                            .append(std::to_string(values.size()))
+                            .append(" values for ")
+                            .append(std::to_string(recording.time_s.size()))
+                            .append(" samples"));
+      }
+      recording.extra_names.push_back(name);
+      recording.extra_columns.push_back(values);
+      recording.metadata.emplace_back("tdms_raw_" + name,
+                                      std::string("DAQmx scaler ")
+                                          .append(std::to_string(id))
+                                          .append(" of ")
+                                          .append(map_name(channel))
+                                          .append(" as stored (")
+                                          .append(item.target)
+                                          .append(" is it through ")
+                                          .append(channel.scaling)
+                                          .append(")"));
+    }
+  }
+}
+
 }  // namespace
 
 Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
-                            const std::string& source) {
+                            const std::string& source, bool keep_raw) {
   Recording recording;
   recording.source = source;
   const TdmsChannel& force = mapped_channel(file, check_map(file, map, source), source);
@@ -323,6 +368,7 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
     recording.handle_radius_m = radius;
   }
   file_properties_as_metadata(file, recording);
+  if (keep_raw) add_raw_columns(file, map, source, recording);
   return recording;
 }
 

@@ -28,6 +28,7 @@ std::string parameter_table(const DesignSolution& solution, bool changed_only) {
 std::string solution_header(const DesignSolution& solution, int rank) {
   std::string origin = printf_text("start %d", solution.start_index);
   if (solution.start_index == DesignSolution::kSparseSearch) origin = "sparse design search";
+  if (!solution.swapped.empty()) origin = "sparse design, " + solution.swapped;
   if (!solution.held_at_as_is.empty()) {
     origin = "fewest changes, AS-IS kept for";
     for (const std::string& name : solution.held_at_as_is) origin += " " + name;

@@ -409,6 +409,7 @@ void DesignRun::sparse_then_smallest_change() {
   result_.solutions.push_back(sparse);
   found_.push_back(std::move(sparse));
   best_ = &found_.front();
+  keep_sparse_swaps();
   if (options_.smallest_change_alongside && result_.sparse_steps.size() > 1) {
     // The smallest change, every parameter free, from the sparse design, with the priors
     // strengthened by the sparse design's φ.

@@ -184,6 +184,9 @@ struct DesignSolution {
   int data_residuals = 0;  // n of the data cost
   // Free parameters held at their AS-IS values (the fewest-changes alternative).
   std::vector<std::string> held_at_as_is;
+  // The sparse design with one part swapped for one its step could not tell from it:
+  // "F0 -> L0" (the part, then the one in its place); empty otherwise.
+  std::string swapped{};
   bool converged = false;
   std::vector<std::string> at_bound;  // free parameters on a bound
   FitSummary summary;                 // the underlying fit's summary
@@ -206,7 +209,9 @@ struct InverseDesignResult {
   // Distinct solutions that fit the TO-BE data equally well, ranked by the size of the
   // change: the fewest parts first (parts_changed_cost), then the smallest size_of_change.
   // With the sparse search its design is first whatever the ranking (the smallest change
-  // beside it is kept when it fits equivalently; a note says when it fits clearly better).
+  // beside it is kept when it fits equivalently; a note says when it fits clearly better;
+  // so is the sparse design with a part swapped for a candidate of its step that fitted
+  // alike, refitted: DesignSolution::swapped).
   std::vector<DesignSolution> solutions;
   bool feasible = true;
   // When infeasible: which parameters bind at which bound and what the data asked for

@@ -79,6 +79,7 @@ DesignSolution DesignRun::sparse_search() {
                                                               : "sparse_max_parts reached");
   }
   refine_sparse(chosen, current);
+  sparse_swaps(chosen, current);
   sparse_held_ = names_except(chosen);
   current.held_at_as_is.clear();
   current.start_index = DesignSolution::kSparseSearch;
@@ -158,6 +159,62 @@ void DesignRun::refine_sparse(std::vector<int>& chosen, DesignSolution& current)
     chosen = trial;
     current = std::move(*refit);
     result_.sparse_steps.push_back(sparse_row(current, what, names_of(chosen)));
+  }
+}
+
+void DesignRun::sparse_swaps(const std::vector<int>& chosen, const DesignSolution& current) {
+  const auto name_of = [&](int k) { return asis_.parameter_name(setup_.free_index[k]); };
+  std::vector<std::string> chosen_names;
+  for (int k : chosen) chosen_names.push_back(name_of(k));
+  for (std::size_t c = 0; c < chosen.size(); ++c) {
+    // The candidates of the step that added this part, or of the step that found it alike.
+    std::vector<std::string> alike;
+    for (const SparseStep& step : result_.sparse_steps) {
+      const bool here =
+          step.added == chosen_names[c] || std::find(step.equivalent.begin(), step.equivalent.end(),
+                                                     chosen_names[c]) != step.equivalent.end();
+      if (!here) continue;
+      for (const std::string& name : step.equivalent) {
+        if (name == chosen_names[c] || name.find(' ') != std::string::npos) continue;
+        if (std::find(chosen_names.begin(), chosen_names.end(), name) != chosen_names.end()) {
+          continue;
+        }
+        if (std::find(alike.begin(), alike.end(), name) == alike.end()) alike.push_back(name);
+      }
+    }
+    for (const std::string& name : alike) {
+      const int index = *asis_.find_parameter(name);
+      const auto position = std::find(setup_.free_index.begin(), setup_.free_index.end(), index);
+      if (position == setup_.free_index.end()) continue;
+      std::vector<int> trial = chosen;
+      trial[c] = static_cast<int>(position - setup_.free_index.begin());
+      const std::string what = chosen_names[c] + " -> " + name;
+      std::optional<DesignSolution> refit = refit_set(current, chosen[c], trial, what);
+      if (!refit) continue;
+      refit->swapped = what;
+      refit->start_index = DesignSolution::kSparseSearch;
+      refit->held_at_as_is.clear();
+      sparse_swaps_.push_back(std::move(*refit));
+    }
+  }
+}
+
+void DesignRun::keep_sparse_swaps() {
+  const DesignSolution& sparse = found_.front();
+  for (const DesignSolution& swap : sparse_swaps_) {
+    const bool alike = equivalent_cost(swap.data_cost, sparse.data_cost, sparse.data_residuals,
+                                       options_.equivalent_cost_tolerance);
+    bool distinct = true;
+    for (const DesignSolution& kept : result_.solutions) {
+      distinct = distinct && scaled_distance(swap, kept, setup_) > options_.distinct_threshold;
+    }
+    result_.notes.push_back(
+        printf_text("sparse search, %s: data cost %.6g against the sparse design's %.6g: %s",
+                    swap.swapped.c_str(), swap.data_cost, sparse.data_cost,
+                    !alike      ? "dropped (fits clearly worse)"
+                    : !distinct ? "dropped (the same design as one kept)"
+                                : "kept as an alternative"));
+    if (alike && distinct) result_.solutions.push_back(swap);
   }
 }
 

@@ -293,6 +293,23 @@ json tolerances_json(const ToleranceResult& t) {
 }
 
 // The criterion of perceptual_tolerance.h in words.
+// An alternative's equivalence to the design (equivalent_solutions.h).
+json equivalence_json(const SolutionEquivalence& q) {
+  return {{"equivalent", q.equivalent},
+          {"data_cost_difference", number(q.data_cost_difference)},
+          {"same_data", q.same_data},
+          {"same_feel", q.same_feel},
+          {"felt_different", q.felt_different},
+          {"parameters_differ", q.parameters_differ},
+          {"tell_apart",
+           {{"measurement", q.tell_apart.measurement},
+            {"design_N", number(q.tell_apart.design_N)},
+            {"alternative_N", number(q.tell_apart.alternative_N)},
+            {"difference_N", number(q.tell_apart.difference_N)},
+            {"resolvable", q.tell_apart.resolvable}}},
+          {"verdict", q.verdict}};
+}
+
 std::string felt_criterion_text() {
   return "a door is felt as different in a quantity when |ln(q / q_nominal)| > ln(1 + w), w the "
          "quantity's JND as a Weber fraction at the 75 % point of the psychometric function "
@@ -449,6 +466,7 @@ std::string perceptual_section(const PerceptualSpec& p) {
 
 std::string SpecEvaluationOptions::validate() const {
   if (std::string error = felt.validate(); !error.empty()) return error;
+  if (std::string error = equivalence.validate(); !error.empty()) return error;
   if (run_tolerances) return monte_carlo.validate();
   return "";
 }
@@ -466,6 +484,10 @@ SpecEvaluation evaluate_spec(const DoorModel& asis, const InverseDesignResult& d
   for (std::size_t s = 1; s < design.solutions.size(); ++s) {
     e.felt_alternatives.push_back(felt_quantities(design.solutions[s].model, options.felt));
   }
+  EquivalenceOptions equivalence = options.equivalence;
+  equivalence.felt = options.felt;
+  e.equivalence = assess_equivalence(design, equivalence);
+  e.equivalence_criterion = equivalence_criterion(equivalence);
   e.check_before = compare_feel(asis, tobe, options.felt);
   e.check_after = compare_feel(tobe_model, tobe, options.felt);
   e.felt = options.felt;
@@ -555,11 +577,19 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
                   {"data_cost", number(alt.data_cost)},
                   {"window_rmse_rad_s", number(alt.fit.window.rmse())},
                   {"held_at_as_is", alt.held_at_as_is},
+                  {"swapped", alt.swapped},
                   {"changes", changes}};
     if (s - 1 < e.felt_alternatives.size()) entry["felt"] = felt_json(e.felt_alternatives[s - 1]);
+    if (s - 1 < e.equivalence.size()) entry["equivalence"] = equivalence_json(e.equivalence[s - 1]);
     alternatives.push_back(entry);
   }
   root["alternatives"] = alternatives;
+  json equivalent = json::array();
+  for (const SolutionEquivalence& q : e.equivalence) {
+    if (q.equivalent) equivalent.push_back(q.solution + 1);
+  }
+  root["equivalence"] = {{"criterion", e.equivalence_criterion},
+                         {"equivalent_alternatives", equivalent}};
   return root.dump(2) + "\n";
 }
 
@@ -706,11 +736,13 @@ std::string alternatives_section(const InverseDesignResult& design, const SpecEv
   }
   html +=
       "<table><tr><th>#</th><th>parts</th><th>cost</th><th>data cost</th><th>changes</th>"
-      "</tr>\n";
+      "<th>equivalent to the design?</th></tr>\n";
   for (std::size_t s = 1; s < design.solutions.size(); ++s) {
     const DesignSolution& alt = design.solutions[s];
     std::string changes;
-    if (!alt.held_at_as_is.empty()) {
+    if (!alt.swapped.empty()) {
+      changes = "<em>sparse design, " + escape(alt.swapped) + "</em>: ";
+    } else if (!alt.held_at_as_is.empty()) {
       changes = "<em>fewest changes</em>: ";
     } else if (alt.start_index >= 0) {
       changes = "<em>smallest change</em>: ";
@@ -718,10 +750,15 @@ std::string alternatives_section(const InverseDesignResult& design, const SpecEv
     for (const DesignParameter* p : changed_parts(alt)) changes += change_text(*p) + "; ";
     html += printf_text("<tr><td>%zu</td><td>%d</td><td>%.4g</td><td>%.6g</td><td class=\"l\">",
                         s + 1, alt.parts_changed, alt.parts_changed_cost, alt.data_cost) +
-            changes + "</td></tr>\n";
+            changes + "</td><td class=\"l\">" +
+            (s - 1 < e.equivalence.size()
+                 ? (e.equivalence[s - 1].equivalent ? "<b>equivalent</b>: " : "") +
+                       escape(e.equivalence[s - 1].verdict)
+                 : std::string()) +
+            "</td></tr>\n";
   }
-  (void)e;
-  return html + "</table>\n";
+  return html + "</table>\n<p class=\"small\">Equivalent: " + escape(e.equivalence_criterion) +
+         ".</p>\n";
 }
 
 }  // namespace
@@ -757,6 +794,12 @@ std::string spec_summary(const InverseDesignResult& design, const SpecEvaluation
   for (const FeltQuantityInfo& info : kFeltQuantities) {
     text += printf_text("  %-34s %9.2f %9.2f\n", felt_label(info).c_str(),
                         e.felt_before.*info.member, e.felt_after.*info.member);
+  }
+  if (!e.equivalence.empty()) {
+    text += "alternatives (" + e.equivalence_criterion + "):\n";
+    for (const SolutionEquivalence& q : e.equivalence) {
+      text += printf_text("  #%zu %s\n", q.solution + 1, q.verdict.c_str());
+    }
   }
   return text;
 }

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/design/equivalent_solutions.h"
 #include "analysis/design/felt_quantities.h"
 #include "analysis/design/inverse_design.h"
 #include "analysis/design/perceptual_tolerance.h"
@@ -37,6 +38,10 @@ struct SpecEvaluation {
   // `spec --campaign`: the panel's preference scale and thresholds, and the perceptual
   // tolerance table (perceptual_tolerance.h); shown beside the tolerances when present.
   std::optional<PerceptualSpec> perceptual;
+  // Each alternative judged against the design (equivalent_solutions.h), in the solutions'
+  // order, and the criterion as one sentence.
+  std::vector<SolutionEquivalence> equivalence;
+  std::string equivalence_criterion;
 };
 
 struct SpecEvaluationOptions {
@@ -44,6 +49,8 @@ struct SpecEvaluationOptions {
   bool run_tolerances = true;
   ToleranceSpec tolerances;  // empty: default_tolerances(the TO-BE model)
   MonteCarloOptions monte_carlo;
+  // Which alternatives are equivalent (its felt options are replaced by `felt`).
+  EquivalenceOptions equivalence;
   std::string validate() const;
 };
 

@@ -211,4 +211,40 @@ TEST_CASE("TDMS DAQmx: what is not read is refused by name", "[tdms][daqmx]") {
         "not supported");
 }
 
+TEST_CASE("TDMS DAQmx: import --keep-raw keeps the raw counts beside the scaled values",
+          "[tdms][daqmx][cli]") {
+  const std::vector<std::uint8_t> bytes = daqmx_file(true);
+  const testing::TempDir dir("tdms_daqmx_raw");
+  const std::string tdms = (dir / "daqmx.tdms").string();
+  std::ofstream(tdms, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
+  const testing::DoorbenchRun run = testing::run_doorbench_shell(
+      "import '" + tdms +
+          "' --map 'force=Dev1/Force,angle=Dev1/Angle,incl_V=Dev1/Incl' --keep-raw --out '" +
+          (dir / "s.h5").string() + "'",
+      dir);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  const Recording recording = session_to_recording(SessionReader(dir / "s.h5"));
+  REQUIRE(recording.size() == 3 * kChunk);
+  REQUIRE(recording.extra_names ==
+          std::vector<std::string>{"incl_V", "force_raw", "angle_raw", "incl_raw"});
+  for (int k = 0; k < 3 * kChunk; ++k) {
+    INFO("sample " << k);
+    CHECK(recording.force_N[k] == Approx(force_N(k)).epsilon(1e-12).margin(1e-15));
+    CHECK(recording.extra_columns[1][k] == force_counts(k));
+    CHECK(recording.extra_columns[2][k] == angle_counts(k));
+    CHECK(recording.extra_columns[3][k] == static_cast<double>(incl_volts(k)));
+  }
+  // Only for TDMS files.
+  const testing::DoorbenchRun csv = testing::run_doorbench_shell(
+      "import '" + (dir / "r.csv").string() + "' --keep-raw --out '" + (dir / "c.h5").string() +
+          "'",
+      dir);
+  CHECK(csv.status == 2);
+  CHECK(csv.err ==
+        "doorbench: --keep-raw is for TDMS files (*.tdms) (see doorbench import --help)\n");
+}
+
 }  // namespace doorbench

@@ -240,6 +240,9 @@ TEST_CASE("CLI: spec --campaign writes the perceptual tolerance table", "[cli][s
   }
   CHECK(p["quantities"][0]["jnd_source"] == "measured: k_l (panel, psychometric fit, pooled)");
   CHECK(p["quantities"][3]["jnd_source"] == "typical: friction 20%");
+  // The alternatives are judged with the panel's JNDs where it measured them.
+  CHECK_THAT(json["equivalence"]["criterion"].get<std::string>(),
+             Contains("its JND (the panel's measured ones for "));
   CHECK(p["proposal"]["tolerances"].size() == json["tolerances"]["parameters"].size());
   const std::string html = doorbench::read_text_file(dir / "spec" / "spec.html");
   CHECK_THAT(html, Contains("Tolerances judged by the panel's perception"));

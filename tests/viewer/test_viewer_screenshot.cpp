@@ -185,7 +185,10 @@ TEST_CASE("the A/B overlay aligns two sessions on their first stroke start", "[v
   REQUIRE(overlay.a_start_s == 1.5);
   REQUIRE(overlay.b_start_s == 2.75);
   REQUIRE(overlay.plots.size() == 1);
+  // Not prepared into strokes: the raw channels, and the header says why.
+  CHECK(overlay.shown == "raw channels: a.h5 is not prepared into strokes (strokes not prepared)");
   const auto& plot = overlay.plots[0];
+  CHECK(plot.title.rfind("channel ", 0) == 0);
   REQUIRE(plot.series.size() == 2);
   REQUIRE(plot.series[0]->name() == "A a.h5");
   REQUIRE(plot.series[1]->name() == "B b.h5");

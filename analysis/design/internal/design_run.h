@@ -40,6 +40,11 @@ class DesignRun {
   DesignSolution sparse_search();
   bool sparse_step(std::vector<int>& chosen, DesignSolution& current);
   void refine_sparse(std::vector<int>& chosen, DesignSolution& current);
+  // The sparse design with one of its parts swapped for a candidate its step could not tell
+  // from it, refitted (DesignSolution::swapped): into sparse_swaps_.
+  void sparse_swaps(const std::vector<int>& chosen, const DesignSolution& current);
+  // Keeps the swaps that fit like the sparse design and differ from every solution kept.
+  void keep_sparse_swaps();
   std::optional<DesignSolution> refit_set(const DesignSolution& current, int reset_position,
                                           const std::vector<int>& set, const std::string& what);
   void keep_equivalent(const std::vector<DesignSolution>& found, const DesignSolution* reference);
@@ -58,6 +63,7 @@ class DesignRun {
   const DesignSolution* best_ = nullptr;  // the best data cost among the solutions found
   std::vector<DesignSolution> found_;
   std::vector<std::string> sparse_held_;  // the free parameters the sparse design keeps
+  std::vector<DesignSolution> sparse_swaps_;
 };
 
 }  // namespace doorbench::design_detail
