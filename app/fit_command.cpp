@@ -60,6 +60,11 @@ void run_fit(const FitCommandOptions& options) {
       throw UsageError("--free and --fixed both name " + name + " (a parameter is free or held)");
     }
   }
+  // The names, against the start model's parameters (effects included), before the data.
+  const DoorModel named = start_model(options.input.model.model, options.input.model.params_path,
+                                      options.input.model.effects_path);
+  check_parameter_names(named, "--free", split_names(options.free));
+  check_parameter_names(named, "--fixed", split_names(options.fixed));
   const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   const PreparedData& data = inputs.data;
   const DoorModel& start = inputs.start;

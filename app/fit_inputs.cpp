@@ -102,6 +102,25 @@ std::vector<EffectSetting> effects_from_argument(const std::string& argument) {
   return settings;
 }
 
+void check_parameter_names(const DoorModel& model, const std::string& option,
+                           const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    if (model.find_parameter(name)) continue;
+    std::string list;
+    for (int i = 0; i < model.parameter_count(); ++i) {
+      list += (i > 0 ? ", " : "") + model.parameter_name(i);
+    }
+    throw UsageError(std::string(option)
+                         .append(": the ")
+                         .append(to_string(model.kind()))
+                         .append(" model has no parameter '")
+                         .append(name)
+                         .append("' (its parameters: ")
+                         .append(list)
+                         .append(")"));
+  }
+}
+
 DoorModel start_model(const std::string& model_kind, const std::string& params_path,
                       const std::string& effects_argument) {
   const std::optional<ModelKind> kind = parse_model_kind(model_kind);
