@@ -36,10 +36,10 @@ struct FitCommandOptions {
   bool init_only = false;
   std::string out_dir;
 
-  // About a minute and a half of window fit, and as much again for the folds, on the
-  // two-core machine: the 5-million-row CSV of issue 33 took 4.3 s per iteration for about
-  // 25,000 windows, 0.17 ms per window and iteration, up to 100 iterations (docs/fitting.md,
-  // "The fit's size").
+  // A few minutes of window fit on the two-core machine at most: a sensory fit of 54 windows
+  // at 1 kHz took 1.6 s of CPU for 101 iterations, 0.3 ms per window and iteration, so 5000
+  // windows take at most about 2.5 min of CPU for 100 iterations (docs/fitting.md, "The fit's
+  // size").
   static constexpr int kDefaultMaxWindows = 5000;
 };
 
