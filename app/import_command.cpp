@@ -114,7 +114,7 @@ Recording resampled(const Recording& in, double rate_hz) {
   out.metadata.emplace_back(
       std::string(kResampledKey),
       std::string("from ")
-          .append(format_number(1.0 / median_s))
+          .append(format_significant(1.0 / median_s, 6))
           .append(" Hz (1 / the median interval) to ")
           .append(format_number(rate_hz))
           .append(" Hz, ")
