@@ -66,7 +66,7 @@ void run_export(const ExportOptions& options) {
   std::cerr << "wrote " << csv_path << ": " << recording.size() << " rows";
   // A channel cut short (session_to_recording): the rows go on, its cells empty.
   for (const auto& [key, value] : recording.metadata) {
-    if (key == "cut_short") std::cerr << "; cells left empty where a channel ends early: " << value;
+    if (key == kCutShortKey) std::cerr << "; cells left empty where a channel ends early: " << value;
   }
   std::cerr << "\n";
 }

@@ -46,7 +46,7 @@ PreparedData load_prepared_data(const std::string& path,
                                       : read_recording_csv(path, EmptyCells::kMissing);
   PreparedData data = prepare(recording, preprocessing);
   for (const auto& [key, value] : recording.metadata) {
-    if (key != "cut_short") continue;
+    if (key != kCutShortKey) continue;
     data.warnings.push_back(std::string(kCutShortWarning) + value +
                             "; only the time where every channel has samples is fitted");
   }

@@ -1,7 +1,8 @@
 // doorbench: record, model, fit and play back the feel of a product mechanism.
 // Exit status: 0 success, 1 failure, 2 bad usage, 128 + N when signal N stopped a verb
-// that writes what it finished, marked interrupted (app/stop_signals.h). Errors go to stderr on one line; a usage
-// error points at the verb's own help (`doorbench VERB --help`, also `doorbench help VERB`).
+// that writes what it finished, marked interrupted (app/stop_signals.h). Errors go to stderr
+// on one line; a usage error points at the verb's own help (`doorbench VERB --help`, also
+// `doorbench help VERB`).
 #include <fcntl.h>
 #include <unistd.h>
 

@@ -231,7 +231,7 @@ bool on_one_clock_cut_short(const std::vector<const ChannelInfo*>& exported,
     cut += exported[i]->name + " from " + format_csv_number(recording.time_s[count]) + " s (" +
            std::to_string(count) + " of " + std::to_string(longest) + " rows)";
   }
-  recording.metadata.emplace_back("cut_short", cut);
+  recording.metadata.emplace_back(std::string(kCutShortKey), cut);
   return true;
 }
 
