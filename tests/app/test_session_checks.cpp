@@ -4,6 +4,7 @@
 // The damage is done with h5py (Debian's python3-h5py), as a file from elsewhere would be.
 #include <catch2/catch.hpp>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -140,4 +141,33 @@ TEST_CASE("Session checks: export leaves a channel cut short empty, fit says wha
   std::stringstream report;
   report << report_file.rdbuf();
   CHECK_THAT(report.str(), Catch::Contains("\n\n" + warning + ".\n\n"));
+}
+
+// The calibration record a channel names, missing: info names it (above), export and fit
+// refuse the session with the same words (exit 1), before writing anything.
+TEST_CASE("Session checks: export and fit refuse a session whose calibration record is "
+          "missing, word for word",
+          "[session][cli]") {
+  const TempDir dir("session_missing_record");
+  const auto session = dir / "s.h5";
+  REQUIRE(doorbench::testing::record_built_in_session(session, 2.0, 3, "sensory") == 2000);
+  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
+       "del f['calibrations/' + f['channels/force'].attrs['calibration_id']]\n"
+       "f.close()",
+       dir);
+  const std::string refusal = "doorbench: " + session.string() +
+                              ": channel force uses calibration record nominal-SIM-LC445-0001, "
+                              "which is not in the session\n";
+  const auto csv = dir / "s.csv";
+  const DoorbenchRun exported =
+      run_doorbench_shell("export '" + session.string() + "' --csv '" + csv.string() + "'", dir);
+  CHECK(exported.status == 1);
+  CHECK(exported.err == refusal);
+  CHECK_FALSE(std::filesystem::exists(csv));
+  const auto out = dir / "fit";
+  const DoorbenchRun fit =
+      run_doorbench_shell("fit '" + session.string() + "' --out '" + out.string() + "'", dir);
+  CHECK(fit.status == 1);
+  CHECK(fit.err == "preparing " + session.string() + "\n" + refusal);
+  CHECK_FALSE(std::filesystem::exists(out / "result.json"));
 }
