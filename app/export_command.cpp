@@ -63,7 +63,12 @@ void run_export(const ExportOptions& options) {
     if (!value.empty()) recording.metadata.emplace_back(key, one_line(value));
   }
   write_recording_csv_file(csv_path, recording);
-  std::cerr << "wrote " << csv_path << ": " << recording.size() << " rows\n";
+  std::cerr << "wrote " << csv_path << ": " << recording.size() << " rows";
+  // A channel cut short (session_to_recording): the rows go on, its cells empty.
+  for (const auto& [key, value] : recording.metadata) {
+    if (key == kCutShortKey) std::cerr << "; cells left empty where a channel ends early: " << value;
+  }
+  std::cerr << "\n";
 }
 
 }  // namespace

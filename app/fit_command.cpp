@@ -11,6 +11,7 @@
 
 #include "acquisition/session/output_file.h"
 #include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fit_windows.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/report/svg_plot.h"
@@ -29,9 +30,63 @@ struct FitCommandOptions {
   std::string fixed;
   std::string objective = "windows";
   int folds = 4;
+  // The window fit's size: more windows than this, and whole strokes spread evenly over
+  // the recording are kept (fit_size). 0: every window.
+  int max_windows = kDefaultMaxWindows;
   bool init_only = false;
   std::string out_dir;
+
+  // A few minutes of window fit on the two-core machine at most: a sensory fit of 54 windows
+  // at 1 kHz took 1.6 s of CPU for 101 iterations, 0.3 ms per window and iteration, so 5000
+  // windows take at most about 2.5 min of CPU for 100 iterations (docs/fitting.md, "The fit's
+  // size").
+  static constexpr int kDefaultMaxWindows = 5000;
 };
+
+// The window fit's size, said before it starts (issue 33: a fit of a 5-million-row CSV was
+// at iteration 28 of 100 after 120 s): its windows, as the fit cuts them. With more than
+// max_windows (> 0), whole pairs of consecutive strokes are kept evenly over the recording
+// (the first pair, the last and others evenly between), about as many as keep the windows at
+// most max_windows (from the share of them, then fewer until they do), at least one pair;
+// the others are left out, and the line says so. Returns the line (for stderr and the report).
+std::string fit_size(PreparedData& data, const DoorModel& start, const FitOptions& fit,
+                     int max_windows) {
+  WindowOptions windows = metric_window_options(fit, start);
+  windows.disjoint = fit.estimate_window_states;  // as the window fit cuts them
+  const auto count_windows = [&windows](const PreparedData& d) {
+    return split_windows(d, windows).size();
+  };
+  const std::size_t all = count_windows(data);
+  const std::size_t strokes = data.strokes.size();
+  const std::string window_text =
+      "windows of " + format_number(fit.window_s) + " s";
+  if (max_windows <= 0 || all <= static_cast<std::size_t>(max_windows) || strokes <= 2) {
+    return "the window fit: " + std::to_string(all) + " " + window_text + " on " +
+           std::to_string(strokes) + " strokes";
+  }
+  // The most pairs of consecutive strokes (an opening and its closing, so that both
+  // directions stay in the fit), spread evenly, whose windows stay within max_windows.
+  const std::vector<Stroke> every = std::move(data.strokes);
+  const std::size_t pairs = (strokes + 1) / 2;
+  for (std::size_t keep = std::max<std::size_t>(1, pairs * max_windows / all);; --keep) {
+    data.strokes.clear();
+    for (std::size_t j = 0; j < keep; ++j) {
+      const std::size_t pair = keep == 1 ? 0 : j * (pairs - 1) / (keep - 1);
+      for (std::size_t s = 2 * pair; s < std::min(2 * pair + 2, strokes); ++s) {
+        data.strokes.push_back(every[s]);
+      }
+    }
+    if (keep == 1 || count_windows(data) <= static_cast<std::size_t>(max_windows)) break;
+  }
+  const std::size_t kept_strokes = data.strokes.size();
+  return "the window fit: " + std::to_string(count_windows(data)) + " " + window_text +
+         " on " + std::to_string(kept_strokes) + " of the " + std::to_string(strokes) +
+         " strokes, spread evenly over the recording (all " + std::to_string(all) +
+         " windows would exceed --max-windows " + std::to_string(max_windows) +
+         (count_windows(data) > static_cast<std::size_t>(max_windows)
+              ? "; one pair of strokes is the least the fit takes)"
+              : ")");
+}
 
 // --init-only: the start parameter file and a page saying where each value came from.
 void write_start(const std::filesystem::path& dir, const FitInputs& inputs) {
@@ -60,7 +115,12 @@ void run_fit(const FitCommandOptions& options) {
       throw UsageError("--free and --fixed both name " + name + " (a parameter is free or held)");
     }
   }
-  const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
+  // The names, against the start model's parameters (effects included), before the data.
+  const DoorModel named = start_model(options.input.model.model, options.input.model.params_path,
+                                      options.input.model.effects_path);
+  check_parameter_names(named, "--free", split_names(options.free));
+  check_parameter_names(named, "--fixed", split_names(options.fixed));
+  FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   const PreparedData& data = inputs.data;
   const DoorModel& start = inputs.start;
   if (options.init_only) {
@@ -77,6 +137,9 @@ void run_fit(const FitCommandOptions& options) {
     fit_options.objective = FitOptions::Objective::kWholeStrokeMax;
   }
   fit_options.cross_validation_folds = options.folds;
+  const std::string size = fit_size(inputs.data, start, fit_options, options.max_windows);
+  std::cerr << size << "\n";
+  inputs.report_lines.push_back(size);
   StatusLine status(std::cerr, stderr_is_terminal(), 5.0, stderr_terminal_columns());
   status.line("fitting the " + options.input.model.model + " model" +
               (options.folds > 0
@@ -129,6 +192,11 @@ void add_fit_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   fit->add_option("--folds", options->folds, "Cross-validation folds over strokes (0: none)")
       ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+  fit->add_option("--max-windows", options->max_windows,
+                  "Most windows in the window fit: beyond, whole strokes spread evenly over the "
+                  "recording are fitted (0: every window)")
+      ->check(CLI::Range(0, 100000000))
       ->capture_default_str();
   fit->add_flag("--init-only", options->init_only,
                 "Only write the start: start-params.json (a parameter file) and start.md "

@@ -10,6 +10,8 @@
 
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/recording_csv.h"
+#include "acquisition/session/session_csv.h"
+#include "acquisition/session/session_file.h"
 #include "analysis/fit/fit_init.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
@@ -28,6 +30,9 @@ bool is_hdf5_file(const std::string& path) {
   return in.gcount() == 8 && std::equal(head, head + 8, kSignature);
 }
 
+// The start of the warning for a session's channel cut short, which report.md repeats.
+constexpr std::string_view kCutShortWarning = "a channel ends before the others: ";
+
 PreparedData load_prepared_data(const std::string& path,
                                 const PreprocessingOptions& preprocessing) {
   const bool session = is_hdf5_file(path);
@@ -35,10 +40,16 @@ PreparedData load_prepared_data(const std::string& path,
     throw std::runtime_error(path + ": not an HDF5 file (a session starts with the HDF5 "
                                     "signature; a CSV recording is read only under another name)");
   }
-  // Empty cells of a CSV are lost samples.
-  PreparedData data =
-      session ? prepare_session(path, preprocessing)
-              : prepare(read_recording_csv(path, EmptyCells::kMissing), preprocessing);
+  // Empty cells of a CSV are lost samples. A session is prepare_session's reading, kept
+  // here to name a channel cut short (its cells are missing from its end).
+  const Recording recording = session ? session_to_recording(SessionReader(path))
+                                      : read_recording_csv(path, EmptyCells::kMissing);
+  PreparedData data = prepare(recording, preprocessing);
+  for (const auto& [key, value] : recording.metadata) {
+    if (key != kCutShortKey) continue;
+    data.warnings.push_back(std::string(kCutShortWarning) + value +
+                            "; only the time where every channel has samples is fitted");
+  }
   if (data.handle_radius_m > 0 && data.geometry_calibration_id.empty()) {
     data.handle_radius_origin = session ? "the session's handle_radius_m attribute"
                                         : "the CSV's metadata (# handle_radius_m)";
@@ -89,6 +100,25 @@ std::vector<EffectSetting> effects_from_argument(const std::string& argument) {
     start = comma + 1;
   }
   return settings;
+}
+
+void check_parameter_names(const DoorModel& model, const std::string& option,
+                           const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    if (model.find_parameter(name)) continue;
+    std::string list;
+    for (int i = 0; i < model.parameter_count(); ++i) {
+      list += (i > 0 ? ", " : "") + model.parameter_name(i);
+    }
+    throw UsageError(std::string(option)
+                         .append(": the ")
+                         .append(to_string(model.kind()))
+                         .append(" model has no parameter '")
+                         .append(name)
+                         .append("' (its parameters: ")
+                         .append(list)
+                         .append(")"));
+  }
 }
 
 DoorModel start_model(const std::string& model_kind, const std::string& params_path,
@@ -190,6 +220,9 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
   DoorModel start =
       start_model(options.model.model, options.model.params_path, options.model.effects_path);
   std::vector<std::string> report_lines;
+  for (const std::string& warning : data.warnings) {
+    if (warning.starts_with(kCutShortWarning)) report_lines.push_back("warning: " + warning);
+  }
   const double file_radius_m = start.geometry().handle_radius_m;
   if (data.handle_radius_m > 0 &&
       std::abs(data.handle_radius_m - file_radius_m) > 1e-6 * file_radius_m) {

@@ -37,6 +37,13 @@ void check_handle_radius(const PreparedData& data, bool force_geometry);
 // "a,b,,c" -> {"a", "b", "c"}: the parameter lists of --free and --fixed (empty items dropped).
 std::vector<std::string> split_names(const std::string& list);
 
+// Each of `names` (given to `option`, e.g. "--free") must be a parameter of `model`; else
+// UsageError (exit 2) naming the option, the name and the model's parameters: "--free: the
+// sensory model has no parameter 'bogus' (its parameters: J, k, ...)". For the names of
+// fit --free/--fixed and spec --fixed/--costs, checked before any data is read.
+void check_parameter_names(const DoorModel& model, const std::string& option,
+                           const std::vector<std::string>& names);
+
 // --effects takes an effects file (*.json) or a comma-separated list of catalogue names,
 // each switched on at its catalogue default values and bounds.
 std::vector<EffectSetting> effects_from_argument(const std::string& argument);

@@ -3,12 +3,15 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "analysis/loop/residual_loop.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/loop_output.h"
 #include "app/progress.h"
+#include "app/stop_signals.h"
 
 namespace doorbench::app {
 namespace {
@@ -19,6 +22,19 @@ struct LoopCommandOptions {
   int max_steps = 4;
   std::string out_dir;
 };
+
+// The first line of an interrupted loop's report.md, and its message.
+std::string interrupted_line(const LoopResult& result, int signal_number) {
+  const std::size_t steps = result.steps.size();
+  return signal_name(signal_number) + " stopped the loop: " + result.stop_reason + "; " +
+         (steps == 0 ? std::string("no step was finished before it")
+                     : std::string("the ")
+                           .append(std::to_string(steps))
+                           .append(steps == 1 ? " step" : " steps")
+                           .append(" finished before it ")
+                           .append(steps == 1 ? "is" : "are")
+                           .append(" kept, the structure check was not run"));
+}
 
 void run_loop(const LoopCommandOptions& options) {
   const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
@@ -32,14 +48,32 @@ void run_loop(const LoopCommandOptions& options) {
   loop_options.progress = [&status](const std::string& line) { status.line(line); };
   loop_options.fit.progress = fit_progress_display(status);
   loop_options.step_progress = loop_progress_display(status);
+  // SIGINT/SIGTERM: the loop stops at its next stage boundary and the steps finished so far
+  // are written, marked interrupted; a second signal ends doorbench at once.
+  const StopSignals signals;
+  loop_options.stop_requested = [&signals] { return signals.received() != 0; };
   const LoopResult result = run_residual_loop(inputs.start, inputs.data, loop_options);
   status.finish();
-  const std::string table =
-      write_loop_outputs(options.out_dir, result, inputs.data, options.input.model.model,
-                         loop_options.fit, inputs.report_lines);
+  std::vector<std::string> report_lines = inputs.report_lines;
+  const int signal_number = signals.received();
+  if (result.interrupted) {
+    report_lines.insert(report_lines.begin(), interrupted_line(result, signal_number));
+  }
+  const std::string table = write_loop_outputs(options.out_dir, result, inputs.data,
+                                               options.input.model.model, loop_options.fit,
+                                               report_lines);
   std::cout << result.brief_report() << "\n"
             << table << "\nresult.json, report.md, the fitted "
             << "parameter and effects files and plots are in " << options.out_dir << "/\n";
+  if (result.interrupted) {
+    throw Interrupted(signal_number, "loop: " + interrupted_line(result, signal_number) +
+                                         "; the results in " + options.out_dir +
+                                         "/ are marked interrupted");
+  }
+  if (signal_number != 0) {
+    std::cerr << signal_name(signal_number)
+              << " arrived after the loop's last stage: its result is complete\n";
+  }
 }
 
 }  // namespace

@@ -59,6 +59,8 @@ nlohmann::ordered_json loop_json(const LoopResult& result, const PreparedData& d
     structure["verdict"] = check.verdict;
   }
   return {{"source", data.source},
+          {"interrupted", result.interrupted},
+          {"stop_reason", result.stop_reason},
           {"steps", steps},
           {"structure_check", structure},
           {"start_fit", fit_result_json(result.start_fit, data)},

@@ -1,6 +1,8 @@
 // doorbench: record, model, fit and play back the feel of a product mechanism.
-// Exit status: 0 success, 1 failure, 2 bad usage. Errors go to stderr on one line; a usage
-// error points at the verb's own help (`doorbench VERB --help`, also `doorbench help VERB`).
+// Exit status: 0 success, 1 failure, 2 bad usage, 128 + N when signal N stopped a verb
+// that writes what it finished, marked interrupted (app/stop_signals.h). Errors go to stderr
+// on one line; a usage error points at the verb's own help (`doorbench VERB --help`, also
+// `doorbench help VERB`).
 #include <fcntl.h>
 #include <unistd.h>
 
@@ -15,6 +17,7 @@
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/printable.h"
 #include "app/commands.h"
+#include "app/stop_signals.h"
 
 namespace {
 
@@ -188,6 +191,10 @@ int main(int argc, char** argv) {
               << help_hint(app, argc, argv)
               << "\n";
     return 2;
+  } catch (const doorbench::app::Interrupted& error) {  // its marked result is written
+    quiet_stderr.restore();
+    std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
+    return error.exit_status();
   } catch (const doorbench::OutputRefused& error) {  // an existing output, or an input
     quiet_stderr.restore();
     std::cerr << "doorbench: " << doorbench::printable(doorbench::shortened(error.what())) << "\n";

@@ -3,6 +3,8 @@
 
 #include <iostream>
 #include <memory>
+#include <string>
+#include <string_view>
 
 #include "acquisition/session/output_file.h"
 #include "analysis/model/parameter_file.h"
@@ -116,7 +118,22 @@ class ParameterFileWatcher {
   std::filesystem::file_time_type last_{};
 };
 
+// --device's form, before anything is read or opened: a usage error (exit 2) naming the
+// devices there are (haptic/device_factory.h opens them).
+void check_device(const std::string& uri) {
+  if (uri == "sim" || uri == "sim:hapticmaster" || uri == "sim:rotary") return;
+  constexpr std::string_view kHapticMaster = "hapticmaster://";
+  if (uri.starts_with(kHapticMaster)) {
+    if (uri.size() > kHapticMaster.size()) return;
+    throw UsageError("--device '" + uri + "': no host (hapticmaster://HOST[:PORT])");
+  }
+  throw UsageError("--device '" + uri +
+                   "': not a device (use sim, sim:hapticmaster, sim:rotary or "
+                   "hapticmaster://HOST[:PORT])");
+}
+
 void run_play(const PlayOptions& options) {
+  check_device(options.device);
   const DoorModel model =
       start_model(options.model.model, options.model.params_path, options.model.effects_path);
   PlayRequest request;

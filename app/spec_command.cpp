@@ -228,6 +228,11 @@ void run_spec(const SpecCommandOptions& options) {
                              "parameter file or a doorbench fit folder)");
   }
   DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
+  // Parameter names, before the TO-BE recordings are read: exit 2 with the valid ones.
+  check_parameter_names(asis, "--fixed", split_names(options.fixed));
+  std::map<std::string, double> costs;
+  parse_costs(options.costs, costs);
+  for (const auto& [name, cost] : costs) check_parameter_names(asis, "--costs", {name});
   std::ostream& progress = options.show_progress ? std::cerr : null_stream();
   progress << "AS-IS door: " << asis_file.string() << "\n";
 

@@ -190,6 +190,51 @@ bool on_one_clock(const std::vector<const ChannelInfo*>& exported,
   return true;
 }
 
+// Channels on one uniform clock of which some end before the others (a channel cut short,
+// issue 33): the rows go on to the longest channel's end, on the first channel's clock
+// continued, and a shorter channel's cells past its end are missing (NaN: empty cells in a
+// CSV; preprocessing leaves out a stroke with missing samples and says so). Fills `columns`,
+// recording.time_s and the `cut_short` metadata ("force from 1.001 s (1000 of 2000 rows)");
+// false, touching nothing, unless every channel has the same uniform rate and start (within
+// half a sample) and the counts differ.
+bool on_one_clock_cut_short(const std::vector<const ChannelInfo*>& exported,
+                            std::vector<OwnClock>& own,
+                            std::vector<std::vector<double>>& columns, Recording& recording) {
+  const double rate_hz = exported[0]->sample_rate_hz;
+  std::size_t longest = 0;
+  bool counts_differ = false;
+  for (std::size_t i = 0; i < exported.size(); ++i) {
+    const double rate_i = exported[i]->sample_rate_hz;
+    if (!(rate_i > 0) || !(std::abs(rate_i - rate_hz) <= 1e-9 * rate_hz)) return false;
+    // The same start (the converters' skews of a few µs aside): a channel that starts late
+    // is resampled onto the common span instead.
+    if (own[i].time_s.empty() ||
+        !(std::abs(own[i].time_s.front() - own[0].time_s.front()) < 0.5 / rate_hz)) {
+      return false;
+    }
+    counts_differ = counts_differ || own[i].time_s.size() != own[0].time_s.size();
+    longest = std::max(longest, own[i].time_s.size());
+  }
+  if (!counts_differ) return false;
+  recording.time_s = own[0].time_s;
+  const double first_s = own[0].time_s.front();
+  for (std::size_t j = recording.time_s.size(); j < longest; ++j) {
+    recording.time_s.push_back(first_s + static_cast<double>(j) / rate_hz);
+  }
+  std::string cut;
+  for (std::size_t i = 0; i < exported.size(); ++i) {
+    const std::size_t count = own[i].values.size();
+    columns[i] = std::move(own[i].values);
+    if (count == longest) continue;
+    columns[i].resize(longest, std::numeric_limits<double>::quiet_NaN());
+    if (!cut.empty()) cut += "; ";
+    cut += exported[i]->name + " from " + format_csv_number(recording.time_s[count]) + " s (" +
+           std::to_string(count) + " of " + std::to_string(longest) + " rows)";
+  }
+  recording.metadata.emplace_back(std::string(kCutShortKey), cut);
+  return true;
+}
+
 // The time span every channel has samples in. Throws SessionError for a channel of fewer
 // than two samples or no span in common.
 std::pair<double, double> common_span_s(const std::string& where,
@@ -376,6 +421,8 @@ Recording session_to_recording(const SessionReader& session) {
     // resampled; explicit times shared by every channel, as imports have them, are kept).
     recording.time_s = own[0].time_s;
     for (std::size_t i = 0; i < exported.all.size(); ++i) columns[i] = std::move(own[i].values);
+  } else if (on_one_clock_cut_short(exported.all, own, columns, recording)) {
+    // A channel cut short: its cells are missing from its end (the rows go on).
   } else {
     columns = resample_onto_common_clock(where, exported.all, own, recording);
   }

@@ -48,6 +48,10 @@ inline constexpr std::string_view kGeometryCalibrationKey = "geometry_calibratio
 // (export adds it; import names the channels so, so that a round trip keeps their names).
 inline constexpr std::string_view kChannelNamesKey = "channel_names";
 
+// The metadata key session_to_recording adds when a channel ends before the others on the
+// same clock: "force from 3 s (3000 of 6000 rows)" (its cells are missing from there).
+inline constexpr std::string_view kCutShortKey = "cut_short";
+
 Recording session_to_recording(const SessionReader& session);
 
 // Per sample of `time_s`: the stroke it belongs to (0: none) and the load cell's mounting

@@ -93,7 +93,9 @@ std::string LoopResult::brief_report() const {
   const ModelFigures first = model_figures(start_fit.summary);
   const ModelFigures last = model_figures(final_fit.summary);
   std::string out;
-  out += printf_text("Residual loop: %zu effect%s added%s; %d fits, %.2f s.\n", steps.size(),
+  out += printf_text("Residual loop%s: %zu effect%s added%s; %d fits, %.2f s.\n",
+                     interrupted ? " (interrupted: the steps finished before it)" : "",
+                     steps.size(),
                      steps.size() == 1 ? "" : "s",
                      steps.empty() ? "" : (" (" + effect_list(steps) + ")").c_str(), fits,
                      total_time_s);

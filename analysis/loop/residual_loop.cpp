@@ -571,6 +571,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
                     .last_candidates = {},
                     .last_speed_bands = {},
                     .stop_reason = "",
+                    .interrupted = false,
                     .fits = 1,
                     .total_time_s = 0.0,
                     .options = options,
@@ -582,7 +583,17 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   FitOptions current_options = options.fit;  // the options current was fitted with
   current_options.progress = nullptr;        // the refits run several at once
   ResidualExamination last;                  // the examination that ended the loop
+  // LoopOptions::stop_requested, asked at the stage boundaries; true stops the loop there.
+  const auto stopping = [&](const std::string& where) {
+    if (!options.stop_requested || !options.stop_requested()) return false;
+    result.interrupted = true;
+    result.stop_reason += (result.stop_reason.empty() ? "interrupted " : "; then interrupted ");
+    result.stop_reason += where;
+    return true;
+  };
   for (int step_number = 1;; ++step_number) {
+    const std::string step_text = "step " + std::to_string(step_number);
+    if (step_number <= options.max_steps && stopping("before " + step_text)) break;
     if (step_number > options.max_steps) {
       result.stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
       // The structure check's evidence: the final model's residual (no refits).
@@ -596,6 +607,7 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
       break;
     }
     say(ranking_line(step_number, examination));
+    if (stopping("during " + step_text + ", before its refits (the step is abandoned)")) break;
     const ModelFigures before = model_figures(current.summary);
     const std::vector<std::size_t> to_refit = select_refits(examination, options, step_number, say);
     std::vector<std::optional<FitResult>> refits =
@@ -624,8 +636,13 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
     current_options = refit_options(current_options, options, accepted);
     result.steps.push_back(std::move(step));
   }
+  if (!result.interrupted) stopping("before the structure check");
   say("stopped: " + result.stop_reason);
-  result.structure = check_structure(current, data, options, last, result.fits, say);
+  if (result.interrupted) {
+    result.structure.reason = "not run: the loop was interrupted";
+  } else {
+    result.structure = check_structure(current, data, options, last, result.fits, say);
+  }
   result.final_fit = std::move(current);
   result.total_time_s = seconds_since(began);
   return result;

@@ -128,6 +128,14 @@ struct LoopOptions {
   // once); may be empty. fit.progress reports the start
   // model's fit and the structure check's; the refits (several at once) do not report.
   std::function<void(const LoopProgress&)> step_progress;
+  // Asked, on the caller's thread, at the loop's stage boundaries: before each step, after
+  // each step's residual examination (before its refits) and before the structure check.
+  // When it returns true the loop stops there: the steps accepted so far are kept, the
+  // step under way is abandoned (a step whose refits have run is finished first), the
+  // structure check is not run and LoopResult::interrupted is set. Refits and fits under
+  // way are not cut short. May be empty (never stop). `doorbench loop` sets it from a
+  // SIGINT/SIGTERM flag (a lock-free atomic the signal handler sets).
+  std::function<bool()> stop_requested;
 
   // Empty when usable, else a one-line message naming the option.
   std::string validate() const;
@@ -275,6 +283,9 @@ struct LoopResult {
   std::vector<CandidateEvidence> last_candidates;
   std::vector<SpeedBand> last_speed_bands;  // that examination's residual by speed
   std::string stop_reason;
+  // LoopOptions::stop_requested stopped the loop before its end: `steps` are those finished
+  // before it, stop_reason says where it stopped, and the structure check did not run.
+  bool interrupted = false;
   int fits = 0;  // calls of fit_model
   double total_time_s = 0.0;
   LoopOptions options;  // as given
