@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/progress.h"
 #include "study/statistics/analysis.h"
+#include "study/statistics/variant_files.h"
 #include "study/trials_table.h"
 
 namespace doorbench::app {
@@ -67,11 +68,15 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
     at->second(done, total);
   };
   std::vector<study::AnalysisPlot> section_plots;
-  const nlohmann::json analysis =
+  nlohmann::json analysis =
       study::analyze_trials(table, analysis_options, progress, &section_plots);
   status.finish();
+  const study::VariantFiles variants = study::variant_parameter_files(table, analysis);
 
   std::filesystem::create_directories(out);
+  if (!variants.files.empty()) std::filesystem::create_directories(out / "variants");
+  for (const study::VariantFile& variant : variants.files)
+    write_text_file_atomically(out / variant.file, variant.text);
   std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
   plots.insert(plots.end(), section_plots.begin(), section_plots.end());
   write_text_file_atomically(out / "analysis.json", analysis.dump(2) + "\n");
@@ -85,8 +90,9 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
     pdf_note = problem.empty() ? "wrote " + (out / "report.pdf").string() : "no PDF: " + problem;
   }
   std::cout << study::analysis_summary(analysis);
-  std::cout << "wrote " << (out / "analysis.json").string() << ", " << html.string() << " and "
-            << plots.size() << " plot(s)\n"
+  std::cout << "wrote " << (out / "analysis.json").string() << ", " << html.string() << ", "
+            << plots.size() << " plot(s) and " << variants.files.size()
+            << " variant parameter file(s)\n"
             << pdf_note << "\n";
 }
 

@@ -23,15 +23,20 @@ const FeltQuantityInfo* find_quantity(std::string_view name) {
 }  // namespace
 
 const std::vector<FeltJndKind>& felt_jnd_kinds() {
-  // The latch's peaks come from the catch's spring, the balance from the door's spring
+  // The latch's peaks come from the catch's spring (the sensory model's k_inf and k_lock; the
+  // perceptual controls latch_effort, the peak handle force to unlatch, and closing_effort,
+  // analysis/model/perceptual_controls.h), the balance from the door's spring
   // (stiffness, 15 %: the low end of the published 15-20 %); the friction quantities are
-  // felt as friction (20 %). docs/design-spec.md gives the sources.
+  // felt as friction (20 %; the control smoothness is the dry friction felt at the handle).
+  // docs/design-spec.md gives the sources.
   static const std::vector<FeltJndKind> kinds = {
-      {"peak_unlatch_force_N", "stiffness", 0.15, {"k_l", "F_l0"}},
-      {"peak_latch_force_N", "stiffness", 0.15, {"k_l", "F_l0"}},
-      {"friction_near_closed_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2"}},
-      {"friction_open_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2"}},
-      {"free_movement_friction_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2"}},
+      {"peak_unlatch_force_N", "stiffness", 0.15, {"k_l", "F_l0", "latch_effort", "k_inf"}},
+      {"peak_latch_force_N", "stiffness", 0.15, {"k_l", "F_l0", "closing_effort", "k_lock"}},
+      {"friction_near_closed_N", "friction", 0.20,
+       {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
+      {"friction_open_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
+      {"free_movement_friction_N", "friction", 0.20,
+       {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
       {"balance_force_N", "stiffness", 0.15, {"k_s", "F0", "k"}},
   };
   return kinds;
