@@ -28,7 +28,8 @@ CampaignReportFiles write_campaign_report(const std::filesystem::path& out,
   if (pdf) {
     progress << "rendering " << (out / "report.pdf").string() << "\n" << std::flush;
     const std::string problem = study::render_pdf(files.html, out / "report.pdf");
-    files.pdf_note = problem.empty() ? "wrote " + (out / "report.pdf").string() : "no PDF: " + problem;
+    files.pdf_note =
+        problem.empty() ? "wrote " + (out / "report.pdf").string() : "no PDF: " + problem;
   }
   return files;
 }
@@ -47,11 +48,13 @@ struct CampaignReportOptions {
 nlohmann::json read_analysis(const std::filesystem::path& folder) {
   const std::filesystem::path file = folder / "analysis.json";
   if (!std::filesystem::is_directory(folder))
-    throw UsageError(folder.string() + ": no such folder (give a `doorbench campaign analyze` "
-                                       "output folder)");
+    throw UsageError(folder.string() +
+                     ": no such folder (give a `doorbench campaign analyze` "
+                     "output folder)");
   if (!std::filesystem::is_regular_file(file))
-    throw UsageError(file.string() + ": no such file (give a `doorbench campaign analyze` "
-                                     "output folder)");
+    throw UsageError(file.string() +
+                     ": no such file (give a `doorbench campaign analyze` "
+                     "output folder)");
   nlohmann::json analysis;
   try {
     analysis = nlohmann::json::parse(read_text_file(file));

@@ -230,7 +230,12 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
 }
 
 std::string PerceptualSpec::brief_report() const {
-  std::string text = printf_text("  %-34s %6s  %-48s %s\n", "quantity (standard run)", "JND",
+  // The source column as wide as its longest entry (a measured JND names its parameter).
+  int width = 8;
+  for (const PerceptualRow& row : rows) {
+    width = std::max(width, static_cast<int>(row.jnd.source.size()));
+  }
+  std::string text = printf_text("  %-34s %6s  %-*s %s\n", "quantity (standard run)", "JND", width,
                                  "JND from", "felt as different: as given -> proposed");
   auto share = [](const PerceptualRow& row) {
     return std::isfinite(row.share) ? printf_text("%5.1f%% [%.1f, %.1f]", 100 * row.share,
@@ -240,8 +245,9 @@ std::string PerceptualSpec::brief_report() const {
   for (std::size_t q = 0; q < rows.size(); ++q) {
     const PerceptualRow& row = rows[q];
     const std::string label = felt_label(kFeltQuantities[q]);
-    text += printf_text("  %-34s %5.1f%%  %-48s %s -> %s\n", label.c_str(),
-                        100 * row.jnd.weber_fraction, row.jnd.source.c_str(), share(row).c_str(),
+    text += printf_text("  %-34s %5.1f%%  %-*s %s -> %s\n", label.c_str(),
+                        100 * row.jnd.weber_fraction, width, row.jnd.source.c_str(),
+                        share(row).c_str(),
                         q < proposal.rows.size() ? share(proposal.rows[q]).c_str() : "-");
   }
   return text + "  " + proposal.summary + "\n";

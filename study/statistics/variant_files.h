@@ -7,9 +7,9 @@
 // (app/spec_campaign.h).
 //
 // No variant gets a file when the table has no parameter columns (a table written by hand:
-// one note says so); a variant gets none when none of its rows carries its parameters, when the rendered names are not all of one
-// model's (sensory or physical) parameters, or when two rows render it differently: the note
-// says which and why.
+// one note says so); a variant gets none when none of its rows carries its parameters, when the
+// rendered names are not all of one model's (sensory or physical) parameters, or when two rows
+// render it differently: the note says which and why.
 //
 // Errors: none thrown for the table's content (a variant without a file is a note); the
 // JSON must hold analyze_trials' preference_scale array when it has the key.

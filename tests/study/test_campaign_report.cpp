@@ -84,18 +84,19 @@ TEST_CASE("campaign report redraws what campaign analyze drew from analysis.json
   TempDir dir("campaign_report");
   write_campaign(dir);
   const auto analyzed = run_verb("campaign analyze '" + (dir / "campaign").string() +
-                                      "' --no-pdf --out '" + (dir / "analysis").string() + "'",
-                                  dir);
+                                     "' --no-pdf --out '" + (dir / "analysis").string() + "'",
+                                 dir);
   INFO("analyze: " << analyzed.err);
   REQUIRE(analyzed.status == 0);
   const auto reported = run_verb("campaign report '" + (dir / "analysis").string() +
-                                      "' --no-pdf --out '" + (dir / "report").string() + "'",
-                                  dir);
+                                     "' --no-pdf --out '" + (dir / "report").string() + "'",
+                                 dir);
   INFO("report: " << reported.out << reported.err);
   REQUIRE(reported.status == 0);
   CHECK(reported.err.empty());
-  CHECK_THAT(reported.out, Catch::Matchers::Contains("wrote " + (dir / "report" / "report.html").string() +
-                                                     " and 6 plot(s)\nno PDF (not asked for)\n"));
+  CHECK_THAT(reported.out,
+             Catch::Matchers::Contains("wrote " + (dir / "report" / "report.html").string() +
+                                       " and 6 plot(s)\nno PDF (not asked for)\n"));
   // Every plot the issue asks for, byte for byte the same in both folders.
   for (const char* file : {"preference-scale.svg", "identify-real.svg", "two-ac.svg",
                            "ratings-heavy.svg", "jnd-J_d.svg", "tuning.svg", "report.html"}) {
@@ -164,23 +165,24 @@ TEST_CASE("the plots redrawn from analysis.json equal the ones the sections draw
 TEST_CASE("campaign report's errors word for word", "[study][campaign]") {
   TempDir dir("campaign_report_errors");
   const std::string missing = (dir / "nothing").string();
-  auto run = run_verb("campaign report '" + missing + "' --out '" + (dir / "r").string() + "'", dir);
+  auto run =
+      run_verb("campaign report '" + missing + "' --out '" + (dir / "r").string() + "'", dir);
   CHECK(run.status == 2);
   CHECK(run.err == "doorbench: " + missing +
                        ": no such folder (give a `doorbench campaign analyze` output folder) (see "
                        "doorbench campaign report --help)\n");
   std::filesystem::create_directories(dir / "empty");
-  run = run_verb("campaign report '" + (dir / "empty").string() + "' --out '" +
-                      (dir / "r").string() + "'",
-                  dir);
+  run = run_verb(
+      "campaign report '" + (dir / "empty").string() + "' --out '" + (dir / "r").string() + "'",
+      dir);
   CHECK(run.status == 2);
   CHECK(run.err == "doorbench: " + (dir / "empty" / "analysis.json").string() +
                        ": no such file (give a `doorbench campaign analyze` output folder) (see "
                        "doorbench campaign report --help)\n");
   dir.write("other/analysis.json", "{\"preference_scale\": []}");
-  run = run_verb("campaign report '" + (dir / "other").string() + "' --out '" +
-                      (dir / "r").string() + "'",
-                  dir);
+  run = run_verb(
+      "campaign report '" + (dir / "other").string() + "' --out '" + (dir / "r").string() + "'",
+      dir);
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + (dir / "other" / "analysis.json").string() +
                        ": not a campaign analysis (no input object; written by `doorbench "
@@ -189,26 +191,26 @@ TEST_CASE("campaign report's errors word for word", "[study][campaign]") {
   // The output rule: not into the analysis folder (it holds the input), not over a report.
   write_campaign(dir);
   REQUIRE(run_verb("campaign analyze '" + (dir / "campaign").string() + "' --no-pdf --out '" +
-                        (dir / "analysis").string() + "'",
-                    dir)
+                       (dir / "analysis").string() + "'",
+                   dir)
               .status == 0);
   run = run_verb("campaign report '" + (dir / "analysis").string() + "' --no-pdf --out '" +
-                      (dir / "analysis").string() + "' --overwrite",
-                  dir);
+                     (dir / "analysis").string() + "' --overwrite",
+                 dir);
   CHECK(run.err == "doorbench: " + (dir / "analysis").string() +
                        ": holds an input of this command (" +
                        (dir / "analysis" / "analysis.json").string() +
                        ") (doorbench never writes onto its input)\n");
   dir.write("r/report.html", "an earlier report");
   run = run_verb("campaign report '" + (dir / "analysis").string() + "' --no-pdf --out '" +
-                      (dir / "r").string() + "'",
-                  dir);
+                     (dir / "r").string() + "'",
+                 dir);
   CHECK(run.err == "doorbench: " + (dir / "r").string() +
                        ": exists and is not empty (give --overwrite to write into it)\n");
   CHECK(read_file(dir / "r" / "report.html") == "an earlier report");
   run = run_verb("campaign report '" + (dir / "analysis").string() + "' --no-pdf --out '" +
-                      (dir / "r").string() + "' --overwrite",
-                  dir);
+                     (dir / "r").string() + "' --overwrite",
+                 dir);
   CHECK(run.status == 0);
   CHECK(read_file(dir / "r" / "report.html") == read_file(dir / "analysis" / "report.html"));
 }
