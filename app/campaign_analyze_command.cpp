@@ -11,6 +11,7 @@
 #include "app/campaign_report.h"
 #include "app/commands.h"
 #include "app/progress.h"
+#include "study/campaign_plan.h"
 #include "study/statistics/analysis.h"
 #include "study/statistics/variant_files.h"
 #include "study/trials_table.h"
@@ -30,6 +31,29 @@ std::filesystem::path trials_path(const std::string& input) {
   }
   if (!std::filesystem::exists(path)) throw UsageError(input + ": no such file or folder");
   return path;
+}
+
+// The variant at worth 0 when --reference is not given: a campaign folder's first variant
+// (its campaign.toml's order, as the plan) when the table compares it in pairs; else "" (the
+// first in the table).
+std::string plan_reference(const std::string& input, const study::TrialsTable& table) {
+  const std::filesystem::path folder(input);
+  if (!std::filesystem::is_directory(folder) ||
+      !std::filesystem::exists(folder / "campaign.toml"))
+    return "";
+  std::string first;
+  try {
+    const study::CampaignFolder opened = study::open_campaign_folder(folder);
+    if (opened.campaign.variants.empty()) return "";
+    first = opened.campaign.variants.front().name;
+  } catch (const std::exception&) {
+    return "";  // not a readable campaign folder: its table alone decides
+  }
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    if (!table.value(r, "question").starts_with("preference")) continue;
+    if (table.value(r, "first") == first || table.value(r, "second") == first) return first;
+  }
+  return "";
 }
 
 }  // namespace
@@ -52,6 +76,8 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
     throw UsageError(problem);
 
   const study::TrialsTable table = study::read_trials_table(table_path);
+  if (options.reference.empty())
+    analysis_options.preference.reference = plan_reference(options.input, table);
   progress_out << "analysing " << table_path.string() << ": " << table.rows.size() << " trials\n";
   StatusLine status(progress_out, terminal, 5.0, terminal ? stderr_terminal_columns() : 0);
   std::map<std::string, std::function<void(int, int)>> displays;
@@ -116,7 +142,8 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
       ->check(CLI::Range(0, 1000000));
   command->add_option("--seed", options->seed, "the bootstrap's seed")->capture_default_str();
   command->add_option("--reference", options->reference,
-                      "the variant at worth 0 (default: the first in the table)");
+                      "the variant at worth 0 (default: a campaign folder's first variant, else the first in "
+                      "the table)");
   command
       ->add_option("--real-variant", options->real_variant,
                    "the real door's name in identify-real trials")

@@ -179,6 +179,13 @@ TEST_CASE("campaign analyze writes each ranked variant's parameter file from the
   const auto table =
       doorbench::study::read_trials_table(dir / "campaign" / "folder" / "trials.csv");
   REQUIRE(analysis.at("preference_scale").size() == 4);
+  // A campaign folder's scale has the campaign file's first variant at 0 (the plan's order),
+  // not the table's first.
+  for (const json& row : analysis.at("preference_scale")) {
+    INFO(row.dump());
+    CHECK((row.at("interval") == "reference") == (row.at("variant") == "reference"));
+    if (row.at("variant") == "reference") CHECK(row.at("worth") == 0.0);
+  }
   for (const json& row : analysis.at("preference_scale")) {
     const std::string variant = row.at("variant").get<std::string>();
     INFO(variant);
@@ -250,6 +257,14 @@ TEST_CASE("spec --campaign's TO-BE door is the favourite's file or else the tune
   CHECK_THAT(run.out, Contains(" and 0 variant parameter file(s)\n"));
   const json by_hand = read_json(dir / "by-hand" / "analysis.json");
   CHECK_FALSE(by_hand.at("preference_scale").at(0).contains("file"));
+  // A table alone: its first variant in a pair is at 0.
+  std::string first_in_table;
+  for (std::size_t r = 0; r < table.rows.size() && first_in_table.empty(); ++r) {
+    if (table.value(r, "block") == "pair") first_in_table = table.value(r, "first");
+  }
+  for (const json& row : by_hand.at("preference_scale")) {
+    CHECK((row.at("interval") == "reference") == (row.at("variant") == first_in_table));
+  }
   CHECK(by_hand.at("preference_fit").at("notes").back() ==
         "no variant parameter files: the trials table has no first_parameters or "
         "second_parameters column");
