@@ -63,7 +63,9 @@ std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
                                                const AnalysisProgress& progress = {});
 
 // analysis.json's object from the table (every section of analysis_sections()) and, in
-// `section_plots` when given, the plots the sections made beyond analysis_plots'.
+// `section_plots` when given, the plots the sections drew from their fits (psychometric
+// curves, tuned doors). analysis_plots draws the same from the JSON alone, which is what the
+// verbs write (tests/study/test_campaign_report.cpp checks that the two agree).
 nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& options = {},
                               const AnalysisProgress& progress = {},
                               std::vector<AnalysisPlot>* section_plots = nullptr);
