@@ -129,8 +129,8 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
   CLI::App* command = campaign.add_subcommand(
       "analyze",
       "The panel's statistics from trials.csv: preference scale (Bradley-Terry with ties and "
-      "order effect), real vs virtual (2-AFC d'), 2-AC d' (analysis.json, report.html, "
-      "report.pdf, plots)");
+      "order effect), real vs virtual (2-AFC d'), 2-AC d', ratings, thresholds, tuned doors "
+      "(analysis.json, report.html, report.pdf, plots, the variants' parameter files)");
   command->add_option("INPUT", options->input, "a campaign folder or a trials.csv")->required();
   command->add_option("--out", options->out_dir, "folder for the analysis")->required();
   command->add_flag("--overwrite", options->overwrite,
