@@ -5,26 +5,19 @@
 #include <iostream>
 #include <map>
 #include <memory>
+#include <sstream>
 
 #include "acquisition/session/output_file.h"
+#include "app/campaign_report.h"
 #include "app/commands.h"
 #include "app/progress.h"
+#include "study/campaign_plan.h"
 #include "study/statistics/analysis.h"
+#include "study/statistics/variant_files.h"
 #include "study/trials_table.h"
 
 namespace doorbench::app {
 namespace {
-
-struct CampaignAnalyzeOptions {
-  std::string input;  // a campaign folder (its trials.csv) or a trials table
-  std::string out_dir;
-  bool overwrite = false;
-  bool no_pdf = false;
-  int bootstrap = 1000;
-  std::uint64_t seed = 1;
-  std::string reference;
-  std::string real_variant = "real";
-};
 
 std::filesystem::path trials_path(const std::string& input) {
   const std::filesystem::path path(input);
@@ -40,13 +33,39 @@ std::filesystem::path trials_path(const std::string& input) {
   return path;
 }
 
-void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
+// The variant at worth 0 when --reference is not given: a campaign folder's first variant
+// (its campaign.toml's order, as the plan) when the table compares it in pairs; else "" (the
+// first in the table).
+std::string plan_reference(const std::string& input, const study::TrialsTable& table) {
+  const std::filesystem::path folder(input);
+  if (!std::filesystem::is_directory(folder) ||
+      !std::filesystem::exists(folder / "campaign.toml"))
+    return "";
+  std::string first;
+  try {
+    const study::CampaignFolder opened = study::open_campaign_folder(folder);
+    if (opened.campaign.variants.empty()) return "";
+    first = opened.campaign.variants.front().name;
+  } catch (const std::exception&) {
+    return "";  // not a readable campaign folder: its table alone decides
+  }
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    if (!table.value(r, "question").starts_with("preference")) continue;
+    if (table.value(r, "first") == first || table.value(r, "second") == first) return first;
+  }
+  return "";
+}
+
+}  // namespace
+
+void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& progress_out,
+                          bool terminal, std::ostream& out) {
   if (options.bootstrap < 0 || (options.bootstrap > 0 && options.bootstrap < 100))
     throw UsageError("--bootstrap: must be 0 (none) or at least 100 resamples, got " +
                      std::to_string(options.bootstrap));
   const std::filesystem::path table_path = trials_path(options.input);
-  const std::filesystem::path out(options.out_dir);
-  check_output_folder(out, {table_path}, options.overwrite);
+  const std::filesystem::path folder(options.out_dir);
+  check_output_folder(folder, {table_path}, options.overwrite);
 
   study::AnalysisOptions analysis_options;
   analysis_options.preference.bootstrap_replicates = options.bootstrap;
@@ -57,8 +76,10 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
     throw UsageError(problem);
 
   const study::TrialsTable table = study::read_trials_table(table_path);
-  std::cerr << "analysing " << table_path.string() << ": " << table.rows.size() << " trials\n";
-  StatusLine status(std::cerr, stderr_is_terminal(), 5.0, stderr_terminal_columns());
+  if (options.reference.empty())
+    analysis_options.preference.reference = plan_reference(options.input, table);
+  progress_out << "analysing " << table_path.string() << ": " << table.rows.size() << " trials\n";
+  StatusLine status(progress_out, terminal, 5.0, terminal ? stderr_terminal_columns() : 0);
   std::map<std::string, std::function<void(int, int)>> displays;
   const study::AnalysisProgress progress = [&](const std::string& what, int done, int total) {
     auto at = displays.find(what);
@@ -66,39 +87,50 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options) {
       at = displays.emplace(what, count_progress_display(status, what, "resamples")).first;
     at->second(done, total);
   };
-  std::vector<study::AnalysisPlot> section_plots;
-  const nlohmann::json analysis =
-      study::analyze_trials(table, analysis_options, progress, &section_plots);
+  nlohmann::json analysis = study::analyze_trials(table, analysis_options, progress);
   status.finish();
+  const study::VariantFiles variants = study::variant_parameter_files(table, analysis);
 
-  std::filesystem::create_directories(out);
-  std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
-  plots.insert(plots.end(), section_plots.begin(), section_plots.end());
-  write_text_file_atomically(out / "analysis.json", analysis.dump(2) + "\n");
-  for (const study::AnalysisPlot& plot : plots)
-    write_text_file_atomically(out / plot.file, plot.svg);
-  const std::filesystem::path html = out / "report.html";
-  write_text_file_atomically(html, study::analysis_html(analysis, plots));
-  std::string pdf_note = "no PDF (not asked for)";
-  if (!options.no_pdf) {
-    const std::string problem = study::render_pdf(html, out / "report.pdf");
-    pdf_note = problem.empty() ? "wrote " + (out / "report.pdf").string() : "no PDF: " + problem;
-  }
-  std::cout << study::analysis_summary(analysis);
-  std::cout << "wrote " << (out / "analysis.json").string() << ", " << html.string() << " and "
-            << plots.size() << " plot(s)\n"
-            << pdf_note << "\n";
+  std::filesystem::create_directories(folder);
+  if (!variants.files.empty()) std::filesystem::create_directories(folder / "variants");
+  for (const study::VariantFile& variant : variants.files)
+    write_text_file_atomically(folder / variant.file, variant.text);
+  write_text_file_atomically(folder / "analysis.json", analysis.dump(2) + "\n");
+  const CampaignReportFiles report =
+      write_campaign_report(folder, analysis, !options.no_pdf, progress_out);
+  out << study::analysis_summary(analysis);
+  out << "wrote " << (folder / "analysis.json").string() << ", " << report.html.string() << ", "
+      << report.plots << " plot(s) and " << variants.files.size()
+      << " variant parameter file(s)\n"
+      << report.pdf_note << "\n";
 }
 
-}  // namespace
+void analyze_demo_campaign(const std::filesystem::path& dir,
+                           const std::filesystem::path& asis_params, std::ostream& out) {
+  CampaignAnalyzeOptions options;
+  options.input = (dir / "folder").string();
+  options.out_dir = (dir / "analysis").string();
+  options.overwrite = true;  // the demo owns its folder
+  options.no_pdf = true;
+  std::ostringstream ignored, summary;
+  run_campaign_analyze(options, ignored, false, summary);
+  out << "\nthe panel's statistics (doorbench campaign analyze " << options.input << " --out "
+      << options.out_dir << "):\n";
+  std::istringstream lines(summary.str());
+  for (std::string line; std::getline(lines, line);) out << "  " << line << "\n";
+  out << "  the specification on the panel's perception (the favourite variant as the TO-BE "
+         "feel, tolerances judged by the panel's JNDs; a few minutes):\n"
+      << "    doorbench spec --campaign " << options.out_dir << " --asis " << asis_params.string()
+      << " --out " << (dir / "spec").string() << " --felt-share 5%\n";
+}
 
 void add_campaign_analyze(CLI::App& campaign, Action& action) {
   auto options = std::make_shared<CampaignAnalyzeOptions>();
   CLI::App* command = campaign.add_subcommand(
       "analyze",
       "The panel's statistics from trials.csv: preference scale (Bradley-Terry with ties and "
-      "order effect), real vs virtual (2-AFC d'), 2-AC d' (analysis.json, report.html, "
-      "report.pdf, plots)");
+      "order effect), real vs virtual (2-AFC d'), 2-AC d', ratings, thresholds, tuned doors "
+      "(analysis.json, report.html, report.pdf, plots, the variants' parameter files)");
   command->add_option("INPUT", options->input, "a campaign folder or a trials.csv")->required();
   command->add_option("--out", options->out_dir, "folder for the analysis")->required();
   command->add_flag("--overwrite", options->overwrite,
@@ -110,13 +142,16 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
       ->check(CLI::Range(0, 1000000));
   command->add_option("--seed", options->seed, "the bootstrap's seed")->capture_default_str();
   command->add_option("--reference", options->reference,
-                      "the variant at worth 0 (default: the first in the table)");
+                      "the variant at worth 0 (default: a campaign folder's first variant, else the first in "
+                      "the table)");
   command
       ->add_option("--real-variant", options->real_variant,
                    "the real door's name in identify-real trials")
       ->capture_default_str();
   command->add_flag("--no-pdf", options->no_pdf, "do not render report.pdf");
-  command->callback([options, &action] { action = [options] { run_campaign_analyze(*options); }; });
+  command->callback([options, &action] {
+    action = [options] { run_campaign_analyze(*options, std::cerr, stderr_is_terminal(), std::cout); };
+  });
 }
 
 }  // namespace doorbench::app

@@ -47,6 +47,8 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action);
 void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out);
 // `campaign analyze`, added to the `campaign` verb (app/campaign_analyze_command.cpp).
 void add_campaign_analyze(CLI::App& campaign, Action& action);
+// `campaign report`, the report again from an analysis (app/campaign_report_command.cpp).
+void add_campaign_report(CLI::App& campaign, Action& action);
 // Every verb above, then the check of every numeric option (app/number_options.h): what
 // main() registers, and what tests parse command lines with (app/verbs.cpp).
 void add_all_verbs(CLI::App& app, Action& action);

@@ -21,6 +21,7 @@
 #include "analysis/simulation/run_summary.h"
 #include "analysis/simulation/trajectory_io.h"
 #include "app/calibration_demo.h"
+#include "app/campaign_report.h"
 #include "app/commands.h"
 #include "app/hand_run.h"
 #include "app/loop_output.h"
@@ -350,6 +351,7 @@ void run_demo(const DemoOptions& options) {
   play_and_fit_back(dir, fitted);
   specify_tuned_variant(dir);
   run_demo_campaign(dir / "campaign", std::cout);
+  analyze_demo_campaign(dir / "campaign", dir / "physical-params.json", std::cout);
   std::cout << "\nruns, parameter files and plots (angle.svg, hand-force.svg, "
                "force-angle-latch.svg) are in "
             << dir.string() << "/\n";

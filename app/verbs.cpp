@@ -26,6 +26,7 @@ void add_all_verbs(CLI::App& app, Action& action) {
   add_hapticmaster_command(app, action);
   CLI::App* campaign = add_campaign_command(app, action);
   add_campaign_analyze(*campaign, action);
+  add_campaign_report(*campaign, action);
   // After every verb, so that each numeric option is covered by itself.
   check_numeric_options(app);
 }

@@ -23,15 +23,20 @@ const FeltQuantityInfo* find_quantity(std::string_view name) {
 }  // namespace
 
 const std::vector<FeltJndKind>& felt_jnd_kinds() {
-  // The latch's peaks come from the catch's spring, the balance from the door's spring
+  // The latch's peaks come from the catch's spring (the sensory model's k_inf and k_lock; the
+  // perceptual controls latch_effort, the peak handle force to unlatch, and closing_effort,
+  // analysis/model/perceptual_controls.h), the balance from the door's spring
   // (stiffness, 15 %: the low end of the published 15-20 %); the friction quantities are
-  // felt as friction (20 %). docs/design-spec.md gives the sources.
+  // felt as friction (20 %; the control smoothness is the dry friction felt at the handle).
+  // docs/design-spec.md gives the sources.
   static const std::vector<FeltJndKind> kinds = {
-      {"peak_unlatch_force_N", "stiffness", 0.15, {"k_l", "F_l0"}},
-      {"peak_latch_force_N", "stiffness", 0.15, {"k_l", "F_l0"}},
-      {"friction_near_closed_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2"}},
-      {"friction_open_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2"}},
-      {"free_movement_friction_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2"}},
+      {"peak_unlatch_force_N", "stiffness", 0.15, {"k_l", "F_l0", "latch_effort", "k_inf"}},
+      {"peak_latch_force_N", "stiffness", 0.15, {"k_l", "F_l0", "closing_effort", "k_lock"}},
+      {"friction_near_closed_N", "friction", 0.20,
+       {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
+      {"friction_open_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
+      {"free_movement_friction_N", "friction", 0.20,
+       {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
       {"balance_force_N", "stiffness", 0.15, {"k_s", "F0", "k"}},
   };
   return kinds;
@@ -225,7 +230,12 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
 }
 
 std::string PerceptualSpec::brief_report() const {
-  std::string text = printf_text("  %-34s %6s  %-48s %s\n", "quantity (standard run)", "JND",
+  // The source column as wide as its longest entry (a measured JND names its parameter).
+  int width = 8;
+  for (const PerceptualRow& row : rows) {
+    width = std::max(width, static_cast<int>(row.jnd.source.size()));
+  }
+  std::string text = printf_text("  %-34s %6s  %-*s %s\n", "quantity (standard run)", "JND", width,
                                  "JND from", "felt as different: as given -> proposed");
   auto share = [](const PerceptualRow& row) {
     return std::isfinite(row.share) ? printf_text("%5.1f%% [%.1f, %.1f]", 100 * row.share,
@@ -235,8 +245,9 @@ std::string PerceptualSpec::brief_report() const {
   for (std::size_t q = 0; q < rows.size(); ++q) {
     const PerceptualRow& row = rows[q];
     const std::string label = felt_label(kFeltQuantities[q]);
-    text += printf_text("  %-34s %5.1f%%  %-48s %s -> %s\n", label.c_str(),
-                        100 * row.jnd.weber_fraction, row.jnd.source.c_str(), share(row).c_str(),
+    text += printf_text("  %-34s %5.1f%%  %-*s %s -> %s\n", label.c_str(),
+                        100 * row.jnd.weber_fraction, width, row.jnd.source.c_str(),
+                        share(row).c_str(),
                         q < proposal.rows.size() ? share(proposal.rows[q]).c_str() : "-");
   }
   return text + "  " + proposal.summary + "\n";

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <algorithm>
 #include <cstdlib>
 #include <memory>
 #include <optional>
@@ -25,6 +26,26 @@ std::string AnalysisOptions::validate() const {
 
 namespace {
 
+// The pooled counts per comparison level behind each panel fit (what the psychometric plot
+// draws as data; `campaign report` redraws it from analysis.json alone).
+nlohmann::json jnd_levels_json(const ThresholdsResult& thresholds) {
+  nlohmann::json rows = nlohmann::json::array();
+  for (const ParameterThresholds& p : thresholds.parameters) {
+    nlohmann::json counts = nlohmann::json::array();
+    for (const LevelCount& c : p.counts)
+      counts.push_back({{"ratio", std::exp(c.level)},
+                        {"log_ratio", c.level},
+                        {"trials", c.trials},
+                        {"stronger", c.stronger}});
+    rows.push_back({{"parameter", p.parameter},
+                    {"reference", p.reference},
+                    {"shape", p.panel.shape == PsychometricShape::kWeibull ? "weibull"
+                                                                           : "cumulative normal"},
+                    {"counts", counts}});
+  }
+  return rows;
+}
+
 // The ratings, thresholds (jnd) and tuning sections (issue 29's other half,
 // study/statistics/ratings.h, thresholds.h, tuning.h). The thresholds are kept for tuning's
 // perceptual steps and for the psychometric plots.
@@ -44,7 +65,8 @@ void add_ratings_thresholds_tuning(std::vector<AnalysisSection>& sections) {
                         const auto observations = stronger_observations(table);
                         if (observations.empty()) return nlohmann::json(nullptr);
                         *thresholds = fit_thresholds(observations);
-                        return nlohmann::json{{"jnd", (*thresholds)->to_json()}};
+                        return nlohmann::json{{"jnd", (*thresholds)->to_json()},
+                                              {"jnd_levels", jnd_levels_json(**thresholds)}};
                       },
                       [thresholds] {
                         std::vector<AnalysisPlot> plots;
@@ -249,6 +271,82 @@ double number_or_nan(const nlohmann::json& value) {
   return value.is_number() ? value.get<double>() : std::nan("");
 }
 
+// A name for a file: every character outside [A-Za-z0-9._-] as '_'.
+std::string file_safe(const std::string& name) {
+  std::string out;
+  for (const char c : name) {
+    const bool plain = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
+                       c == '.' || c == '_' || c == '-';
+    out += plain ? c : '_';
+  }
+  return out;
+}
+
+// The panel's psychometric curve with its data, from the jnd rows and jnd_levels.
+void add_psychometric_plots(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
+  if (!analysis.contains("jnd_levels") || !analysis.contains("jnd")) return;
+  for (const nlohmann::json& levels : analysis["jnd_levels"]) {
+    ParameterThresholds t;
+    t.parameter = levels.at("parameter").get<std::string>();
+    t.reference = levels.at("reference").get<std::string>();
+    for (const nlohmann::json& c : levels.at("counts"))
+      t.counts.push_back({c.at("log_ratio").get<double>(), c.at("trials").get<int>(),
+                          c.at("stronger").get<int>()});
+    bool found = false;
+    for (const nlohmann::json& row : analysis["jnd"]) {
+      if (row.value("participant", "") != "panel" ||
+          row.value("method", "") != "psychometric fit, pooled" ||
+          row.value("parameter", "") != t.parameter || row.value("reference", "") != t.reference)
+        continue;
+      t.panel.shape = levels.value("shape", "") == "weibull" ? PsychometricShape::kWeibull
+                                                             : PsychometricShape::kCumulativeNormal;
+      t.panel.pse = row.at("pse").get<double>();
+      t.panel.spread = row.at("spread").get<double>();
+      t.panel.lapse = row.at("lapse").get<double>();
+      t.panel.weber_fraction = row.at("weber_fraction").get<double>();
+      found = true;
+    }
+    if (!found || t.counts.empty()) continue;
+    plots.push_back({"jnd-" + file_safe(t.parameter) + ".svg",
+                     "Psychometric function: " + t.parameter, render_psychometric_plot(t)});
+  }
+}
+
+// The tuned doors in perceptual steps, from the tuning section.
+void add_tuning_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
+  if (!analysis.contains("tuning")) return;
+  const nlohmann::json& tuning = analysis["tuning"];
+  TuningResult t;
+  for (const nlohmann::json& row : tuning.at("parameters")) {
+    ParameterDistribution d;
+    d.parameter = row.at("parameter").get<std::string>();
+    d.centre = number_or_nan(row.at("centre"));
+    if (row.at("weber_fraction").is_number()) d.weber_fraction = row["weber_fraction"].get<double>();
+    if (row.at("spread_steps").is_number()) d.spread_steps = row["spread_steps"].get<double>();
+    t.parameters.push_back(d);
+  }
+  const nlohmann::json& groups = tuning.at("clusters").at("groups");
+  t.clusters.split = tuning.at("clusters").at("split").get<bool>();
+  for (const nlohmann::json& door : tuning.at("doors")) {
+    TunedDoor d{door.at("participant").get<std::string>(), door.value("file", ""), {}};
+    for (const ParameterDistribution& p : t.parameters)
+      d.parameters.emplace_back(p.parameter, door.at("parameters").contains(p.parameter)
+                                                 ? number_or_nan(door["parameters"][p.parameter])
+                                                 : std::nan(""));
+    int group = 0;
+    for (std::size_t g = 0; g < groups.size(); ++g)
+      for (const nlohmann::json& member : groups[g].at("participants"))
+        if (member == d.participant) group = static_cast<int>(g);
+    t.clusters.group.push_back(std::min(group, 1));
+    t.doors.push_back(std::move(d));
+  }
+  try {
+    plots.push_back({"tuning.svg", "The panel's tuned doors", render_tuning_plot(t)});
+  } catch (const std::invalid_argument&) {
+    // No parameter has perceptual steps: nothing to draw (the JSON says why).
+  }
+}
+
 }  // namespace
 
 std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis) {
@@ -284,6 +382,22 @@ std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis) {
                        number_or_nan(r["ci_high"])});
     add("two-ac.svg", "2-AC: d' per pair (> 0: second preferred), 95 % intervals", "d' [-]", items);
   }
+  if (analysis.contains("ratings") && analysis.contains("ratings_models")) {
+    for (const auto& model : analysis["ratings_models"]) {
+      if (!model.value("converged", false)) continue;  // the table says so; no picture of it
+      const std::string attribute = model.at("attribute").get<std::string>();
+      std::vector<Interval> items;
+      for (const auto& r : analysis["ratings"])
+        if (r.at("attribute") == attribute)
+          items.push_back({r.at("variant").get<std::string>(), number_or_nan(r["estimate"]),
+                           number_or_nan(r["ci_low"]), number_or_nan(r["ci_high"])});
+      add("ratings-" + file_safe(attribute) + ".svg",
+          "Ratings of " + attribute + ": each variant's shift on the latent scale, 95 % intervals",
+          "shift against the reference variant (logit) [-]", items);
+    }
+  }
+  add_psychometric_plots(analysis, plots);
+  add_tuning_plot(analysis, plots);
   return plots;
 }
 
@@ -339,7 +453,8 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
   html += "<p>" + cell(input["trials_table"]) + ": " + cell(input["rows"]) + " trials, " +
           cell(input["participants"]) + " participants; intervals at " + cell(input["confidence"]) +
           ".</p>\n";
-  std::set<std::string> shown{"input", "sections", "preference_fit", "ties", "order_effect"};
+  std::set<std::string> shown{"input",        "sections",  "preference_fit",
+                              "ties",         "order_effect", "jnd_levels"};
   if (a.contains("preference_scale")) {
     html += preference_html(a, plots);
     shown.insert("preference_scale");
@@ -360,7 +475,7 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
   for (const auto& [key, value] : a.items()) {  // sections without words here (ratings, ...)
     if (shown.count(key)) continue;
     html += "<h2>" + escape(key) + "</h2>\n" + generic_html(value);
-    if (key == "jnd" || key == "tuning") {
+    if (key == "jnd" || key == "tuning" || key == "ratings") {
       for (const AnalysisPlot& plot : plots)
         if (plot.file.rfind(key, 0) == 0) html += "<figure>" + plot.svg + "</figure>\n";
     }

@@ -10,7 +10,8 @@
 //   "identify_real"   -> identify_real
 //   "two_ac"          -> two_ac
 //   "ratings"         -> ratings, ratings_models   (study/statistics/ratings.h)
-//   "jnd"             -> jnd, plus a psychometric plot per parameter (thresholds.h)
+//   "jnd"             -> jnd, jnd_levels (the pooled answers per comparison level), plus a
+//                        psychometric plot per parameter (thresholds.h)
 //   "tuning"          -> tuning, plus its plot; tune rows' files are read relative to the
 //                        trials table's folder; measured Weber fractions from "jnd" (tuning.h)
 // plus "input" (the table's path, row and participant counts) and "sections" (each
@@ -62,12 +63,18 @@ std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
                                                const AnalysisProgress& progress = {});
 
 // analysis.json's object from the table (every section of analysis_sections()) and, in
-// `section_plots` when given, the plots the sections made beyond analysis_plots'.
+// `section_plots` when given, the plots the sections drew from their fits (psychometric
+// curves, tuned doors). analysis_plots draws the same from the JSON alone, which is what the
+// verbs write (tests/study/test_campaign_report.cpp checks that the two agree).
 nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& options = {},
                               const AnalysisProgress& progress = {},
                               std::vector<AnalysisPlot>* section_plots = nullptr);
 
-// The plots drawn from analysis.json alone (preference scale, identify-real, 2-AC).
+// Every plot, drawn from analysis.json alone (what `campaign analyze` and `campaign report`
+// write): preference-scale.svg, identify-real.svg, two-ac.svg, ratings-ATTRIBUTE.svg (for each
+// converged ratings model), jnd-PARAMETER.svg (the panel's psychometric curve with the pooled
+// answers of jnd_levels) and tuning.svg (the tuned doors in perceptual steps). Throws
+// nlohmann::json::exception for a section without the fields these plots read.
 std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis);
 
 // report.html: every key of the analysis as a section (the known ones as tables with the
