@@ -6,14 +6,21 @@ usage: check_units.py [SOURCE_DIR]   (default: the repository this script is in)
 
 Reported, as `FILE:LINE: defines a degree constant (...); use kRadPerDeg or kDegPerRad from
 core/units.h`: a declaration (constexpr, const, #define) whose value divides by or into 180
-and pi (std::numbers::pi, M_PI or a pi literal), and any declaration of `kDeg`. Exit status 1
-when anything is reported.
+and pi (std::numbers::pi, M_PI or a pi literal), and any declaration of `kDeg`.
+
+Also reported, as `FILE:LINE: defines a NaN constant (...); use kNaN from core/numbers.h`: a
+named constant (kSomething) set to a quiet NaN anywhere but core/numbers.h (seventeen files had
+their own kNaN, which a unity build of a library sees twice). Exit status 1 when anything is
+reported.
 """
 import os
 import re
 import sys
 
 HOME = os.path.join("core", "units.h")
+NAN_HOME = os.path.join("core", "numbers.h")
+NAN = re.compile(r"\b(?:constexpr|const)\b[^;=]*\bk[A-Z]\w*\s*=\s*std::numeric_limits<double>::"
+                 r"quiet_NaN\(\)")
 PI = r"(?:std::numbers::pi|M_PI|3\.14159\d*|kPi)"
 DEGREE = re.compile(
     r"(?:\b(?:constexpr|const)\b[^;=]*=\s*[^;]*(?:180(?:\.0*)?\s*/\s*" + PI + r"|" + PI +
@@ -26,7 +33,7 @@ FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis", "simulat
 def main():
     root = os.path.abspath(sys.argv[1] if len(sys.argv) > 1 else
                            os.path.join(os.path.dirname(__file__), ".."))
-    problems, checked = [], 0
+    problems, nans, checked = [], [], 0
     for folder in FOLDERS:
         for directory, _, files in os.walk(os.path.join(root, folder)):
             for name in sorted(files):
@@ -34,7 +41,7 @@ def main():
                     continue
                 path = os.path.join(directory, name)
                 relative = os.path.relpath(path, root)
-                if relative == HOME:
+                if relative in (HOME, NAN_HOME):
                     continue
                 checked += 1
                 with open(path, encoding="utf-8", errors="replace") as source:
@@ -44,12 +51,19 @@ def main():
                             problems.append(f"{relative}:{number}: defines a degree constant "
                                             f"({code.strip()}); use kRadPerDeg or kDegPerRad "
                                             "from core/units.h")
-    for problem in problems:
+                        if NAN.search(code):
+                            nans.append(f"{relative}:{number}: defines a NaN constant "
+                                        f"({code.strip()}); use kNaN from core/numbers.h")
+    for problem in problems + nans:
         print(problem)
     if problems:
         print(f"check_units: {len(problems)} local degree constant(s)")
+    if nans:
+        print(f"check_units: {len(nans)} local NaN constant(s)")
+    if problems or nans:
         return 1
-    print(f"check_units: {checked} files, no degree constant outside {HOME}")
+    print(f"check_units: {checked} files, no degree constant outside {HOME}, no NaN constant "
+          f"outside {NAN_HOME}")
     return 0
 
 

@@ -7,12 +7,12 @@
 
 #include "core/number_format.h"
 #include "core/units.h"
+#include "core/numbers.h"
 
 namespace doorbench {
 
 namespace {
 
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 
 double weber_fraction(const EquivalenceOptions& options, std::string_view quantity) {
   for (const FeltJnd& jnd : options.jnds) {

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """A test of scripts/check_units.py: it passes on this repository, and a local degree
-constant (a `kDeg` of either meaning, a pi/180 under another name, a #define) makes it fail
-naming the file and the line.
+constant (a `kDeg` of either meaning, a pi/180 under another name, a #define) or a local NaN
+constant makes it fail naming the file and the line.
 
 usage: test_check_units.py SOURCE_DIR
 """
@@ -47,5 +47,16 @@ with tempfile.TemporaryDirectory() as tree:
         expect(f"{relative}:2: defines a degree constant ({line}); use kRadPerDeg or kDegPerRad "
                "from core/units.h" in faulty.stdout, f"the failure names {relative}:2", faulty)
     expect("check_units: 3 local degree constant(s)" in faulty.stdout, "the count", faulty)
+    expect("NaN" not in faulty.stdout, "no NaN constant reported where there is none", faulty)
+
+    nan_line = "constexpr double kMissing = std::numeric_limits<double>::quiet_NaN();"
+    path = os.path.join(tree, "analysis", "model", "door_model.cpp")
+    lines = open(path, encoding="utf-8").read().split("\n")
+    lines.insert(2, nan_line)
+    open(path, "w", encoding="utf-8").write("\n".join(lines))
+    faulty = run(tree)
+    expect(f"analysis/model/door_model.cpp:3: defines a NaN constant ({nan_line}); use kNaN "
+           "from core/numbers.h" in faulty.stdout, "the failure names door_model.cpp:3", faulty)
+    expect("check_units: 1 local NaN constant(s)" in faulty.stdout, "the NaN count", faulty)
 
 print("test_check_units: passed")
