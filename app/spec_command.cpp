@@ -203,6 +203,29 @@ void read_tobe_recordings(const SpecCommandOptions& options, std::ostream& progr
   if (!all_commanded) commanded.clear();
 }
 
+// ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
+std::filesystem::path asis_parameter_file(const SpecCommandOptions& options) {
+  std::filesystem::path asis_file = options.asis_path;
+  if (std::filesystem::is_directory(asis_file)) asis_file /= "fitted-params.json";
+  if (!std::filesystem::exists(asis_file)) {
+    throw std::runtime_error(asis_file.string() +
+                             ": no such file (--asis takes a physical "
+                             "parameter file or a doorbench fit folder)");
+  }
+  return asis_file;
+}
+
+// The AS-IS door, and the parameter names of --fixed and --costs checked against it before
+// the TO-BE recordings are read: exit 2 with the valid ones.
+DoorModel load_asis(const SpecCommandOptions& options, const std::filesystem::path& asis_file) {
+  DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
+  check_parameter_names(asis, "--fixed", split_names(options.fixed));
+  std::map<std::string, double> costs;
+  parse_costs(options.costs, costs);
+  for (const auto& [name, cost] : costs) check_parameter_names(asis, "--costs", {name});
+  return asis;
+}
+
 void run_spec(const SpecCommandOptions& options) {
   if (options.samples < 2) throw UsageError("--samples must be >= 2");
   if (options.threads < 0) throw UsageError("--threads must be >= 0");
@@ -219,20 +242,8 @@ void run_spec(const SpecCommandOptions& options) {
   check_output_folder(options.out_dir, inputs, options.overwrite);
   const auto campaign =
       from_campaign ? std::optional(read_campaign_for_spec(options.campaign_dir)) : std::nullopt;
-  // ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
-  std::filesystem::path asis_file = options.asis_path;
-  if (std::filesystem::is_directory(asis_file)) asis_file /= "fitted-params.json";
-  if (!std::filesystem::exists(asis_file)) {
-    throw std::runtime_error(asis_file.string() +
-                             ": no such file (--asis takes a physical "
-                             "parameter file or a doorbench fit folder)");
-  }
-  DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
-  // Parameter names, before the TO-BE recordings are read: exit 2 with the valid ones.
-  check_parameter_names(asis, "--fixed", split_names(options.fixed));
-  std::map<std::string, double> costs;
-  parse_costs(options.costs, costs);
-  for (const auto& [name, cost] : costs) check_parameter_names(asis, "--costs", {name});
+  const std::filesystem::path asis_file = asis_parameter_file(options);
+  DoorModel asis = load_asis(options, asis_file);
   std::ostream& progress = options.show_progress ? std::cerr : null_stream();
   progress << "AS-IS door: " << asis_file.string() << "\n";
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""Fails on a C++ function longer than the limit (120 lines) that docs/architecture.md
-does not name.
+"""Fails on a C++ function longer than the limit (120 lines), or a source file longer than
+its limit (800 lines), that docs/architecture.md does not name.
 
     scripts/check_function_length.py [--limit N] [--root DIR] [--exceptions FILE] [--all]
                                      [FOLDER ...]
@@ -21,7 +21,11 @@ as this script names it (e.g. `record_session`, `SafetyLayer::step`), the reason
 empty. A row whose function is not (or no longer) too long also fails the check, so the
 list stays true.
 
-Exit status: 0 when every function fits or is listed, 1 when one does not (each named as
+Files: every checked file longer than --file-limit lines (default 800) fails unless a row of
+the table under "## Files longer than 800 lines" (| file | why |) names it with a reason
+(tables of data, say); a listed file that is no longer too long fails too.
+
+Exit status: 0 when every function and file fits or is listed, 1 when one does not (each named as
 file:line with its length, on stdout), 2 on a usage error. --all prints every function
 with its length (exit 0 unless a usage error).
 
@@ -38,6 +42,7 @@ DEFAULT_FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis",
                    "simulated_bench", "viewer", "haptic", "study", "app", "bench", "fuzz"]
 SOURCE_SUFFIXES = (".h", ".hpp", ".cpp", ".cc", ".cxx")
 EXCEPTIONS_HEADING = "## Functions longer than 120 lines"
+FILE_EXCEPTIONS_HEADING = "## Files longer than 800 lines"
 
 
 # ---------------------------------------------------------------------------------------
@@ -320,6 +325,61 @@ def read_exceptions(path):
     return exceptions
 
 
+def read_file_exceptions(path):
+    """{file: reason} from the table under FILE_EXCEPTIONS_HEADING in `path` (empty if the
+    file or the heading is missing). Raises ValueError naming the line of a row without two
+    cells or without a reason."""
+    if not os.path.exists(path):
+        return {}
+    exceptions = {}
+    in_section = False
+    with open(path, encoding="utf-8") as f:
+        for number, line in enumerate(f, 1):
+            stripped = line.strip()
+            if stripped.startswith("## ") or stripped.startswith("# "):
+                in_section = stripped == FILE_EXCEPTIONS_HEADING
+                continue
+            if not in_section or not stripped.startswith("|"):
+                continue
+            cells = [cell.strip().strip("`").strip() for cell in stripped.strip("|").split("|")]
+            if all(re.fullmatch(r":?-+:?", cell) for cell in cells):
+                continue
+            if len(cells) != 2:
+                raise ValueError(f"{path}:{number}: a row needs two cells: file | why")
+            if cells[0].lower() == "file" and cells[1].lower() == "why":
+                continue
+            if not cells[1]:
+                raise ValueError(f"{path}:{number}: {cells[0]}: the reason is empty")
+            exceptions[cells[0]] = cells[1]
+    return exceptions
+
+
+def check_file_lengths(root, folders, limit, exceptions, shown_path):
+    """Prints each file over `limit` lines that `exceptions` does not name, and each listed
+    file that is not over it; True when something was printed."""
+    failed = False
+    long_files = set()
+    for relative in source_files(root, folders):
+        with open(os.path.join(root, relative), encoding="utf-8", errors="replace") as f:
+            lines = sum(1 for _ in f)
+        name = relative.replace(os.sep, "/")
+        if lines <= limit:
+            continue
+        long_files.add(name)
+        if name in exceptions:
+            continue
+        print(f"{name}: {lines} lines (limit {limit}): split it along its seams, or list it "
+              f"with the reason in {shown_path} under \"{FILE_EXCEPTIONS_HEADING}\"")
+        failed = True
+    checked = tuple(folder.rstrip("/") + "/" for folder in folders)
+    for name in sorted(exceptions):
+        if name.startswith(checked) and name not in long_files:
+            print(f"{shown_path}: {name} is listed but is not longer than {limit} lines (or no "
+                  "longer exists): remove the row")
+            failed = True
+    return failed
+
+
 # ---------------------------------------------------------------------------------------
 # The check
 
@@ -348,6 +408,7 @@ def main(argv):
     parser.add_argument("folders", nargs="*", help="more folders to check (under --root)")
     parser.add_argument("--limit", type=int, default=120, help="the most lines a function has")
     parser.add_argument("--root", default=os.path.join(os.path.dirname(__file__), ".."))
+    parser.add_argument("--file-limit", type=int, default=800, help="the most lines a file has")
     parser.add_argument("--exceptions", help="default: ROOT/docs/architecture.md")
     parser.add_argument("--all", action="store_true", help="print every function's length")
     options = parser.parse_args(argv)
@@ -368,6 +429,7 @@ def main(argv):
         shown_path = exceptions_path
     try:
         exceptions = read_exceptions(exceptions_path)
+        file_exceptions = read_file_exceptions(exceptions_path)
     except ValueError as error:
         print(f"check_function_length: {error}", file=sys.stderr)
         return 2
@@ -395,6 +457,8 @@ def main(argv):
             print(f"{shown_path}: {file} {name} is listed but is not longer than "
                   f"{options.limit} lines (or no longer exists): remove the row")
             failed = True
+    if check_file_lengths(root, folders, options.file_limit, file_exceptions, shown_path):
+        failed = True
     return 1 if failed else 0
 
 

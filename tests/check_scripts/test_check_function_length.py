@@ -114,6 +114,37 @@ class CheckFunctionLength(unittest.TestCase):
         self.assertEqual(err, f"check_function_length: nowhere: no such folder under "
                               f"{os.path.normpath(self.root)}\n")
 
+    def test_a_file_of_800_lines_passes_and_one_of_801_fails(self):
+        short_functions = "".join(function_of_lines(f"f{i}", 10) for i in range(80))
+        write(self.root, "analysis/fits.cpp", short_functions)  # 80 x 10 lines = 800
+        self.assertEqual(run_check("--root", self.root), (0, "", ""))
+        write(self.root, "analysis/fits.cpp", short_functions + "\n")
+        status, out, _ = run_check("--root", self.root)
+        self.assertEqual(status, 1)
+        self.assertEqual(out, "analysis/fits.cpp: 801 lines (limit 800): split it along its "
+                              "seams, or list it with the reason in docs/architecture.md under "
+                              "\"## Files longer than 800 lines\"\n")
+
+    def test_a_listed_long_file_passes_and_a_listed_short_one_fails(self):
+        write(self.root, "haptic/table.cpp", "int x;\n" * 900)
+        write(self.root, "haptic/small.cpp", "int y;\n")
+        files = textwrap.dedent("""\
+            # Architecture
+
+            ## Files longer than 800 lines
+
+            | file | why |
+            |------|-----|
+            | haptic/table.cpp | a table of data |
+            """)
+        write(self.root, "docs/architecture.md", files)
+        self.assertEqual(run_check("--root", self.root), (0, "", ""))
+        write(self.root, "docs/architecture.md", files + "| haptic/small.cpp | too |\n")
+        status, out, _ = run_check("--root", self.root)
+        self.assertEqual(status, 1)
+        self.assertEqual(out, "docs/architecture.md: haptic/small.cpp is listed but is not "
+                              "longer than 800 lines (or no longer exists): remove the row\n")
+
     def test_a_listed_exception_passes(self):
         write(self.root, "haptic/long.cpp", function_of_lines("too_long", 121))
         write(self.root, "docs/architecture.md",
