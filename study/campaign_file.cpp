@@ -187,9 +187,27 @@ std::vector<std::pair<std::string, std::string>> parse_pairs(const Table& block,
   return pairs;
 }
 
+// method = "quest+" (study/quest_plus.h).
+void parse_quest_plus(const Table& table, Block& block) {
+  for (const char* key : {"levels", "repetitions", "down", "start_level", "step_factor"}) {
+    if (table.get(key)) table.fail(key, "is not an option of quest+ (trials, min_level, max_level, stimuli, thresholds, lapse)");
+  }
+  block.method = JndMethod::kQuestPlus;
+  block.min_level = table.number("min_level", 1.0001, 10.0).value_or(1.01);
+  block.max_level = table.number("max_level", 1.0001, 10.0).value_or(2.0);
+  block.trials = table.integer("trials", 1, 1000).value_or(40);
+  block.quest_levels = table.integer("stimuli", 2, 200).value_or(30);
+  block.quest_thresholds = table.integer("thresholds", 2, 400).value_or(40);
+  block.lapse = table.number("lapse", 0.0, 0.2).value_or(0.03);
+  if (!(block.max_level >= block.min_level * 1.01)) {
+    table.fail("max_level", "must be at least 1 % above min_level");
+  }
+}
+
 void parse_jnd(const Table& table, Block& block, const Campaign& campaign) {
   table.allow_only({"name", "type", "parameter", "method", "levels", "repetitions", "down",
-                    "start_level", "step_factor", "min_level", "max_level", "trials"});
+                    "start_level", "step_factor", "min_level", "max_level", "trials", "stimuli",
+                    "thresholds", "lapse"});
   block.parameter = table.string("parameter").value_or("");
   if (block.parameter.empty()) table.fail("parameter", "missing: the parameter whose JND is measured");
   try {
@@ -223,8 +241,10 @@ void parse_jnd(const Table& table, Block& block, const Campaign& campaign) {
     if (!(block.min_level <= block.start_level && block.start_level <= block.max_level)) {
       table.fail("start_level", "must lie between min_level and max_level");
     }
+  } else if (method == "quest+") {
+    parse_quest_plus(table, block);
   } else {
-    table.fail("method", "must be constant or staircase, not '" + method + "'");
+    table.fail("method", "must be constant, staircase or quest+, not '" + method + "'");
   }
 }
 

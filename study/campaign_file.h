@@ -46,7 +46,7 @@ struct Variant {
 
 enum class BlockType { kTune, kPair, kRating, kJnd };
 enum class PairQuestion { kPreference, kPreference2ac, kIdentifyReal };
-enum class JndMethod { kConstantStimuli, kStaircase };
+enum class JndMethod { kConstantStimuli, kStaircase, kQuestPlus };
 std::string_view to_string(BlockType type);       // tune | pair | rating | jnd
 std::string_view to_string(PairQuestion question);  // preference | preference-2ac | identify-real
 
@@ -74,7 +74,11 @@ struct Block {
   // answers in a row make it smaller (÷ step_factor), one wrong answer larger (× step_factor)
   int down = 2;
   double start_level = 1.4, step_factor = 1.5, min_level = 1.01, max_level = 3.0;
-  int trials = 20;
+  int trials = 20;  // staircase and quest+
+  // quest+ (study/quest_plus.h): `quest_levels` comparison levels and `quest_thresholds`
+  // threshold grid points over [min_level, max_level] (its defaults 1.01 and 2), lapse fixed
+  int quest_levels = 30, quest_thresholds = 40;
+  double lapse = 0.03;
 };
 
 struct Campaign {

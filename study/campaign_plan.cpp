@@ -151,7 +151,7 @@ std::vector<Pending> block_trials(const Campaign& campaign, const Block& block, 
         trials.push_back(first[i] ? Pending{question, comparisons[i], standard}
                                   : Pending{question, standard, comparisons[i]});
       }
-      if (block.method == JndMethod::kStaircase) return trials;  // slots stay in order
+      if (block.method != JndMethod::kConstantStimuli) return trials;  // adaptive: slots stay in order
       break;
     }
   }

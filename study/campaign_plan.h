@@ -23,6 +23,7 @@
 //  - jnd, staircase: `trials` slots whose comparison is written "J*?": its level is decided at
 //    run time from the answers before it (Levitt's rule, study/staircase.h); only the
 //    positions (comparison first or second, balanced and shuffled) are planned.
+//  - jnd, quest+: the same slots, each level chosen at run time by QUEST+ (study/quest_plus.h).
 // Thread safety: free functions without shared state.
 #include <cstdint>
 #include <filesystem>

@@ -19,6 +19,7 @@
 #include "acquisition/session/output_file.h"
 #include "analysis/model/parameter_file.h"
 #include "study/random_stream.h"
+#include "study/quest_plus.h"
 #include "study/staircase.h"
 #include "study/trials_table.h"
 
@@ -298,8 +299,10 @@ const Block& block_of(const Campaign& campaign, const PlanRow& row) {
 std::pair<Stimulus, Stimulus> StimulusMaker::make(const PlanRow& row, const std::vector<bool>& correct) {
   std::string first = row.first, second = row.second;
   const Block& block = block_of(*campaign_, row);
-  if (block.type == BlockType::kJnd && block.method == JndMethod::kStaircase) {
-    const std::string level = jnd_stimulus_name(block.parameter, staircase_level(block, correct));
+  if (block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli) {
+    const double adaptive = block.method == JndMethod::kStaircase ? staircase_level(block, correct)
+                                                                   : quest_plus_level(block, correct);
+    const std::string level = jnd_stimulus_name(block.parameter, adaptive);
     if (first == block.parameter + "*?") first = level;
     if (second == block.parameter + "*?") second = level;
   }
@@ -334,7 +337,8 @@ struct RunState {
   std::map<std::string, std::vector<bool>> staircase;  // block -> answers named the comparison
 };
 
-// Checks the participant's rows of this attempt against the plan and rebuilds the staircases.
+// Checks the participant's rows of this attempt against the plan and rebuilds the staircases
+// (and QUEST+ posteriors: both are replayed from the block's answers).
 void check_existing(const TrialsTable& table, const std::vector<std::size_t>& rows,
                     const std::vector<PlanRow>& plan, RunState& state) {
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -343,7 +347,7 @@ void check_existing(const TrialsTable& table, const std::vector<std::size_t>& ro
     if (i >= plan.size()) throw TrialsTableError(table.source, line, "more rows for " + state.participant + " than the plan has trials");
     const PlanRow& planned = plan[i];
     const Block& block = block_of(state.folder->campaign, planned);
-    const bool staircase = block.type == BlockType::kJnd && block.method == JndMethod::kStaircase;
+    const bool staircase = block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli;  // or quest+
     const bool same = table.value(r, "trial") == std::to_string(planned.trial) && table.value(r, "block") == planned.block &&
                       table.value(r, "question") == planned.question &&
                       (staircase || (table.value(r, "first") == planned.first && table.value(r, "second") == planned.second));

@@ -126,7 +126,8 @@ std::string normalized_answer(std::string_view question, std::string_view text);
 class StimulusMaker {
  public:
   explicit StimulusMaker(const Campaign& campaign);
-  // `staircase_correct`: the answers so far in this row's block (a staircase slot's level).
+  // `staircase_correct`: the answers so far in this row's block (a staircase or QUEST+ slot's
+  // level, study/staircase.h, study/quest_plus.h).
   std::pair<Stimulus, Stimulus> make(const PlanRow& row, const std::vector<bool>& staircase_correct);
   Stimulus named(const std::string& name);
   const Campaign& campaign() const { return *campaign_; }

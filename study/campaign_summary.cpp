@@ -7,6 +7,7 @@
 
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
+#include "study/quest_plus.h"
 #include "study/staircase.h"
 
 namespace doorbench::study {
@@ -16,6 +17,27 @@ std::string format(const char* pattern, double value) {
   char buffer[64];
   std::snprintf(buffer, sizeof buffer, pattern, value);
   return buffer;
+}
+
+// "; median threshold J*1.12 over 3 participants; QUEST+ posterior mean Weber fraction
+// [95 % credible interval]: P01 0.12 [0.08, 0.18], ..." (study/quest_plus.h).
+std::string quest_plus_summary(const Block& block, const std::map<std::string, std::vector<bool>>& tracks) {
+  std::vector<double> means;
+  std::string each;
+  for (const auto& [participant, track] : tracks) {
+    const QuestPlusEstimate estimate = quest_plus_estimate(block, track);
+    means.push_back(estimate.weber_fraction);
+    each += std::string(each.empty() ? " " : ", ").append(participant).append(" ") +
+            format("%.3f", estimate.weber_fraction) + " [" + format("%.3f", estimate.ci_low) + ", " +
+            format("%.3f", estimate.ci_high) + "]";
+  }
+  if (means.empty()) return "; no answers for a threshold";
+  std::sort(means.begin(), means.end());
+  const double median = means.size() % 2 ? means[means.size() / 2]
+                                         : 0.5 * (means[means.size() / 2 - 1] + means[means.size() / 2]);
+  return "; median threshold " + jnd_stimulus_name(block.parameter, 1.0 + median) + " over " +
+         std::to_string(means.size()) + " participants; QUEST+ posterior mean Weber fraction [95 % credible interval]:" +
+         each;
 }
 
 // The rows of each participant's latest attempt.
@@ -56,7 +78,7 @@ std::string summary_of(const Block& block, const TrialsTable& trials, const std:
       ++count[attribute + " " + second];
     } else if (block.type == BlockType::kJnd) {
       const bool right = names_comparison(first, second, answer, block.parameter);
-      if (block.method == JndMethod::kStaircase) {
+      if (block.method != JndMethod::kConstantStimuli) {
         tracks[trials.value(r, "participant")].push_back(right);
       } else {
         const std::string level = first == jnd_stimulus_name(block.parameter, 1.0) ? second : first;
@@ -84,6 +106,7 @@ std::string summary_of(const Block& block, const TrialsTable& trials, const std:
     if (line.back() == ',') line.pop_back();
     return line;
   }
+  if (block.method == JndMethod::kQuestPlus) return line + quest_plus_summary(block, tracks);
   std::vector<double> thresholds;
   for (const auto& [participant, track] : tracks) {
     const double threshold = staircase_threshold(block, track);

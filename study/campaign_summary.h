@@ -6,6 +6,8 @@
 //   rating: each variant's mean rating per attribute
 //   jnd (constant stimuli): per level, how often the comparison was named stronger
 //   jnd (staircase): the participants' median threshold (study/staircase.h)
+//   jnd (quest+): the participants' median threshold and each one's posterior mean Weber
+//     fraction with its 95 % credible interval (study/quest_plus.h)
 // Rows of earlier attempts (a redo) are left out. Thread safety: a free function.
 #include <string>
 #include <vector>

@@ -11,6 +11,7 @@
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
 #include "study/random_stream.h"
+#include "study/quest_plus.h"
 #include "study/staircase.h"
 
 namespace doorbench::study {
@@ -70,8 +71,10 @@ void run_panel(const Campaign& campaign, const Plan& plan, std::uint64_t panel_s
       }
     }
     for (const Block& block : campaign.blocks) {
-      if (block.type == BlockType::kJnd && block.method == JndMethod::kStaircase) {
-        const double threshold = staircase_threshold(block, staircase[block.name]);
+      if (block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli) {
+        const double threshold = block.method == JndMethod::kStaircase
+                                     ? staircase_threshold(block, staircase[block.name])
+                                     : 1.0 + quest_plus_estimate(block, staircase[block.name]).weber_fraction;
         if (std::isfinite(threshold)) thresholds[block.name].push_back(threshold);
       }
     }
@@ -137,7 +140,8 @@ std::vector<PowerLine> simulate_power(const Campaign& campaign, std::uint64_t se
   for (const auto& [block, values] : medians) {
     PowerLine line;
     line.block = block;
-    line.question = "stronger:" + block_of(campaign, PlanRow{"", block, 0, "", "", "", 0}).parameter + " (staircase)";
+    const Block& jnd = block_of(campaign, PlanRow{"", block, 0, "", "", "", 0});
+    line.question = "stronger:" + jnd.parameter + (jnd.method == JndMethod::kQuestPlus ? " (quest+)" : " (staircase)");
     line.is_threshold = true;
     line.panels = static_cast<int>(values.size());
     line.threshold_median = percentile(values, 0.5);

@@ -9,7 +9,8 @@
 //    each trial (ties left out);
 //  - jnd, constant stimuli: per level, the binomial test of "the comparison named stronger";
 //  - jnd, staircase: no test; the panel's median threshold (study/staircase.h), summarised
-//    over the panels (median and the 5th–95th percentiles);
+//    over the panels (median and the 5th–95th percentiles); quest+ likewise with each
+//    participant's posterior-mean threshold as a level (study/quest_plus.h);
 //  - tune: no test; not reported.
 // A detection rate comes with its Wilson score interval (95 %) for the N panels.
 // Thread safety: free functions without shared state.

@@ -344,3 +344,36 @@ TEST_CASE("Steps from the base move exactly what they name", "[study][campaign]"
   CHECK(lighter.parameter_values()[j] == Approx(0.85 * base.parameter_values()[j]).epsilon(1e-12));
   CHECK(steps_text(parse_steps("J*1.2, latch_effort*0.7")) == "J*1.2,latch_effort*0.7");
 }
+
+TEST_CASE("A quest+ jnd block: its defaults, its errors word for word, its slots in the plan", "[study][campaign][quest]") {
+  const std::string quest = "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\n";
+  const Campaign campaign = parsed(campaign_text("count = 2", quest));
+  const Block& block = campaign.blocks.back();
+  CHECK(block.method == JndMethod::kQuestPlus);
+  CHECK(block.trials == 40);
+  CHECK(block.min_level == 1.01);
+  CHECK(block.max_level == 2.0);
+  CHECK(block.quest_levels == 30);
+  CHECK(block.quest_thresholds == 40);
+  CHECK(block.lapse == 0.03);
+  int slots = 0;
+  for (const PlanRow& row : make_plan(campaign, 5).of("P01")) {
+    if (row.block != "q") continue;
+    ++slots;
+    CHECK(row.block_trial == slots);
+    CHECK(row.question == "stronger:J");
+    CHECK((row.first == "J*?") != (row.second == "J*?"));
+  }
+  CHECK(slots == 40);
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", quest + "lapse = 0.5\n")),
+                    "c.toml:40: blocks[6].lapse: must be from 0 to 0.2, got 0.5");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", quest + "stimuli = 1\n")),
+                    "c.toml:40: blocks[6].stimuli: must be from 2 to 200, got 1");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", quest + "min_level = 1.5\nmax_level = 1.4\n")),
+                    "c.toml:41: blocks[6].max_level: must be at least 1 % above min_level");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", quest + "step_factor = 1.5\n")),
+                    "c.toml:40: blocks[6].step_factor: is not an option of quest+ (trials, min_level, max_level, "
+                    "stimuli, thresholds, lapse)");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest\"\n")),
+                    "c.toml:39: blocks[6].method: must be constant, staircase or quest+, not 'quest'");
+}

@@ -21,6 +21,8 @@
 #include "haptic/tuning_keys.h"
 #include "study/campaign_file.h"
 #include "study/campaign_plan.h"
+#include "study/campaign_summary.h"
+#include "study/quest_plus.h"
 #include "study/trials_table.h"
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
@@ -87,7 +89,8 @@ Result run(const std::vector<std::string>& args, const fs::path& dir, const std:
 }
 
 // 4 variants; tune, pair (2-AC), rating, jnd by constant stimuli and by a staircase.
-std::string campaign_text(int participants) {
+// `extra`: more blocks appended.
+std::string campaign_text(int participants, const std::string& extra = "") {
   return "[campaign]\nname = \"kill\"\nseed = 11\nsimulated_presentation_s = 0.2\n"
          "[variants]\nreference = \"base\"\nheavier = \"heaviness*1.2\"\n"
          "easier_unlatch = \"latch_effort*0.7\"\nlighter_smoother = \"J*0.85,smoothness*0.8\"\n"
@@ -96,11 +99,12 @@ std::string campaign_text(int participants) {
          "[[blocks]]\nname = \"pair\"\ntype = \"pair\"\nquestion = \"preference-2ac\"\n"
          "[[blocks]]\nname = \"rating\"\ntype = \"rating\"\nattributes = [\"heavy-light\"]\nscale = 7\n"
          "[[blocks]]\nname = \"jnd-J\"\ntype = \"jnd\"\nparameter = \"J\"\nlevels = [1.1, 1.3]\nrepetitions = 2\n"
-         "[[blocks]]\nname = \"jnd-latch\"\ntype = \"jnd\"\nparameter = \"latch_effort\"\nmethod = \"staircase\"\ntrials = 6\n";
+         "[[blocks]]\nname = \"jnd-latch\"\ntype = \"jnd\"\nparameter = \"latch_effort\"\nmethod = \"staircase\"\ntrials = 6\n" + extra;
 }
 
-fs::path plan(const TempDir& dir, const std::string& name, int participants, const std::string& seed = "11") {
-  const fs::path campaign = dir.write("c.toml", campaign_text(participants));
+fs::path plan(const TempDir& dir, const std::string& name, int participants, const std::string& seed = "11",
+              const std::string& extra = "") {
+  const fs::path campaign = dir.write("c.toml", campaign_text(participants, extra));
   const Result result = run({"campaign", "plan", campaign.string(), "--out", (dir / name).string(), "--seed", seed},
                             dir.path);
   REQUIRE(result.status == 0);
@@ -170,10 +174,11 @@ void run_killed(const fs::path& folder, const std::string& participant, int kill
   if (kept > 0) CHECK_THAT(again.err, Catch::Matchers::Contains("resuming at trial " + std::to_string(kept + 1)));
 }
 
-void kill_and_compare(int participants, const std::vector<std::pair<int, int>>& kills) {
+void kill_and_compare(int participants, const std::vector<std::pair<int, int>>& kills, const std::string& extra = "",
+                      int trials_each = 29) {
   TempDir dir("campaign_kill");
-  const fs::path whole = plan(dir, "whole", participants);
-  const fs::path killed = plan(dir, "killed", participants);
+  const fs::path whole = plan(dir, "whole", participants, "11", extra);
+  const fs::path killed = plan(dir, "killed", participants, "11", extra);
   for (int p = 1; p <= participants; ++p) {
     char id[8];
     std::snprintf(id, sizeof id, "P%02d", p);
@@ -189,7 +194,7 @@ void kill_and_compare(int participants, const std::vector<std::pair<int, int>>& 
   }
   const auto expected = timeless_rows(whole);
   const auto got = timeless_rows(killed);
-  REQUIRE(expected.size() == static_cast<std::size_t>(participants * 29));
+  REQUIRE(expected.size() == static_cast<std::size_t>(participants * trials_each));
   REQUIRE(got.size() == expected.size());
   for (std::size_t r = 0; r < expected.size(); ++r) {
     INFO("row " << r + 1);
@@ -453,4 +458,44 @@ TEST_CASE("campaign run: the same plan on the HapticMaster emulator", "[study][c
   REQUIRE(result.status == 0);
   CHECK(count_rows_of(folder / "trials.csv", "P01") == 29);
   CHECK(fs::exists(folder / "sessions" / "P01" / "a1" / "t029-2.h5"));
+}
+
+TEST_CASE("campaign run: a quest+ jnd block runs with --respondent sim, its levels are QUEST+'s, and a kill resumes",
+          "[study][campaign][cli][quest]") {
+  const std::string quest = "[[blocks]]\nname = \"jnd-q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\ntrials = 8\n";
+  TempDir dir("campaign_quest");
+  const fs::path folder = plan(dir, "c", 2, "11", quest);
+  const doorbench::study::CampaignFolder opened = doorbench::study::open_campaign_folder(folder);
+  const doorbench::study::Block& block = opened.campaign.blocks.back();
+  REQUIRE(block.method == doorbench::study::JndMethod::kQuestPlus);
+  // Each participant's trial number of the quest+ block's 5th slot: where the kills go.
+  std::vector<std::pair<int, int>> kills;
+  for (const doorbench::study::PlanRow& row : opened.plan.rows) {
+    if (row.block == "jnd-q" && row.block_trial == 5) kills.emplace_back(std::stoi(row.participant.substr(1)), row.trial);
+  }
+  REQUIRE(kills.size() == 2);
+  REQUIRE(run(run_args(folder, "P01"), dir.path).status == 0);
+  REQUIRE(run(run_args(folder, "P02"), dir.path).status == 0);
+  const doorbench::study::TrialsTable table = doorbench::study::read_trials_table(folder / "trials.csv");
+  for (const std::string participant : {"P01", "P02"}) {
+    std::vector<bool> answers;
+    for (std::size_t r = 0; r < table.rows.size(); ++r) {
+      if (table.value(r, "participant") != participant || table.value(r, "block") != "jnd-q") continue;
+      const std::string& first = table.value(r, "first");
+      const std::string& second = table.value(r, "second");
+      const std::string comparison = first == "J*1" ? second : first;
+      INFO(participant << " " << first << " " << second);
+      CHECK(table.value(r, "question") == "stronger:J");
+      CHECK(comparison == doorbench::study::jnd_stimulus_name("J", doorbench::study::quest_plus_level(block, answers)));
+      answers.push_back(table.value(r, "answer") == (first == "J*1" ? "2" : "1"));
+    }
+    CHECK(answers.size() == 8);
+  }
+  const std::vector<std::string> lines = doorbench::study::block_summaries(opened.campaign, table);
+  INFO(lines.back());
+  CHECK_THAT(lines.back(), Catch::Matchers::Contains("16 answers; median threshold J*1."));
+  CHECK_THAT(lines.back(), Catch::Matchers::Contains("over 2 participants; QUEST+ posterior mean Weber fraction [95 % "
+                                                     "credible interval]: P01 0."));
+  // Killed in the middle of the quest+ block: the resumed trials.csv equals an uninterrupted run's.
+  kill_and_compare(2, kills, quest, 37);
 }
