@@ -301,13 +301,31 @@ std::pair<Stimulus, Stimulus> StimulusMaker::make(const PlanRow& row, const std:
   const Block& block = block_of(*campaign_, row);
   if (block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli) {
     const double adaptive = block.method == JndMethod::kStaircase ? staircase_level(block, correct)
-                                                                   : quest_plus_level(block, correct);
+                                                                   : quest_level(block, correct);
     const std::string level = jnd_stimulus_name(block.parameter, adaptive);
     if (first == block.parameter + "*?") first = level;
     if (second == block.parameter + "*?") second = level;
   }
   if (block.type == BlockType::kTune) return {named(first), Stimulus{}};
   return {named(first), named(second)};
+}
+
+double StimulusMaker::quest_level(const Block& block, const std::vector<bool>& answers) {
+  auto kept = quests_.find(block.name);
+  if (kept == quests_.end() || answers.size() < kept->second.answers.size() ||
+      !std::equal(kept->second.answers.begin(), kept->second.answers.end(), answers.begin())) {
+    QuestPlus fresh(quest_plus_grid(block));
+    const std::size_t next = fresh.next_level();
+    kept = quests_.insert_or_assign(block.name, QuestTrack{std::move(fresh), {}, next}).first;
+  }
+  QuestTrack& track = kept->second;
+  while (track.answers.size() < answers.size()) {
+    const bool answer = answers[track.answers.size()];
+    track.quest.update(track.next, answer);
+    track.answers.push_back(answer);
+    track.next = track.quest.next_level();
+  }
+  return track.quest.grid().levels[track.next];
 }
 
 bool names_comparison(const std::string& first, const std::string& second, const std::string& answer,

@@ -29,6 +29,7 @@
 #include "analysis/model/door_model.h"
 #include "study/campaign_plan.h"
 #include "study/participant_model.h"
+#include "study/quest_plus.h"
 
 namespace doorbench::study {
 
@@ -134,9 +135,19 @@ class StimulusMaker {
   const DoorModel& base() const { return base_; }
 
  private:
+  // A QUEST+ block's level after `answers`: its posterior kept per block and updated by the
+  // answers added since the last call (replayed from the prior when they do not extend the
+  // kept ones, e.g. for the next participant); the same level as quest_plus_level.
+  double quest_level(const Block& block, const std::vector<bool>& answers);
+  struct QuestTrack {
+    QuestPlus quest;
+    std::vector<bool> answers;
+    std::size_t next = 0;  // quest.next_level() after `answers`
+  };
   const Campaign* campaign_;
   DoorModel base_;
   std::map<std::string, Stimulus> cache_;
+  std::map<std::string, QuestTrack> quests_;
 };
 
 // The block of `row` (std::invalid_argument when the campaign has none of that name).

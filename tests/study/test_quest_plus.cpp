@@ -5,6 +5,8 @@
 #include <random>
 #include <vector>
 
+#include "study/campaign_file.h"
+#include "study/campaign_run.h"
 #include "study/quest_plus.h"
 #include "threshold_simulation.h"
 
@@ -125,4 +127,29 @@ TEST_CASE("QUEST+ converges on simulated observers and its 95 % credible interva
   CHECK(covered >= 90);
   CHECK(covered <= 99);
   CHECK(std::abs(sum_error / runs) < 0.15);  // -0.084 with this seed: little bias
+}
+
+TEST_CASE("The run's kept QUEST+ track gives the replay's levels, also when the answers start again",
+          "[study][quest]") {
+  const Campaign campaign = parse_campaign(
+      "[campaign]\nname = \"q\"\n[variants]\nreference = \"base\"\n[participants]\ncount = 2\n"
+      "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\ntrials = 12\n",
+      "q.toml", ".");
+  const Block& block = campaign.blocks.back();
+  StimulusMaker maker(campaign);
+  PlanRow row{"P01", "q", 1, "stronger:J", "J*?", "J*1", 1};
+  // Two participants' answers one after the other (as the power simulation asks).
+  const std::vector<std::vector<bool>> tracks{{true, true, false, true, true, false, true, false, true, true},
+                                              {false, false, true, false}};
+  for (const std::vector<bool>& answers : tracks) {
+    std::vector<bool> so_far;
+    for (std::size_t i = 0; i <= answers.size(); ++i) {
+      INFO("after " << i << " answers");
+      CHECK(maker.make(row, so_far).first.name == jnd_stimulus_name("J", quest_plus_level(block, so_far)));
+      if (i < answers.size()) so_far.push_back(answers[i]);
+    }
+  }
+  // Answers as many as the kept ones but not extending them: replayed.
+  const std::vector<bool> branch{false, false, true, true, true};
+  CHECK(maker.make(row, branch).first.name == jnd_stimulus_name("J", quest_plus_level(block, branch)));
 }
