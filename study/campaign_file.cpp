@@ -216,6 +216,11 @@ void parse_jnd(const Table& table, Block& block, const Campaign& campaign) {
     table.fail("parameter", wrong.what());
   }
   const std::string method = table.string("method").value_or("constant");
+  if (method != "quest+") {
+    for (const char* key : {"stimuli", "thresholds", "lapse"}) {
+      if (table.get(key)) table.fail(key, "is an option of method = \"quest+\" only");
+    }
+  }
   if (method == "constant") {
     block.method = JndMethod::kConstantStimuli;
     const toml::node* levels = table.get("levels");

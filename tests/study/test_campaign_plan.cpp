@@ -376,4 +376,6 @@ TEST_CASE("A quest+ jnd block: its defaults, its errors word for word, its slots
                     "stimuli, thresholds, lapse)");
   CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest\"\n")),
                     "c.toml:39: blocks[6].method: must be constant, staircase or quest+, not 'quest'");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"staircase\"\nlapse = 0.02\n")),
+                    "c.toml:40: blocks[6].lapse: is an option of method = \"quest+\" only");
 }
