@@ -11,10 +11,11 @@
 //    k = 1 is a curve through 50 % at the reference (an unbiased observer, the participant
 //    model's own curve), k > 1 steeper, k < 1 shallower;
 //  - lapse fixed (the block's `lapse`, default 0.03, the participant model's mean).
-// Grids: w log-spaced over [min_level - 1, max_level - 1] (`thresholds` points), k in
-// kQuestPlusSlopes; prior uniform over that grid (so uniform in ln w). Stimuli: `levels`
-// comparison levels 1 + Δ, Δ log-spaced over the same range, each rounded to the 4 decimals
-// of its name in trials.csv (jnd_stimulus_name), so the level updated is the level shown.
+// Grids: w log-spaced over [min_level - 1, max_level - 1] (the campaign file's `thresholds`
+// points, Block::quest_thresholds), k in kQuestPlusSlopes; prior uniform over that grid (so
+// uniform in ln w). Stimuli: `stimuli` (Block::quest_levels) comparison levels 1 + Δ, Δ
+// log-spaced over the same range, each rounded to the 4 decimals of its name in trials.csv
+// (jnd_stimulus_name), so the level updated is the level shown.
 //
 // Each trial presents the stimulus that minimises the expected entropy (nats) of the
 // posterior after the answer (the lowest level on a tie) and updates the posterior by the
@@ -22,9 +23,9 @@
 // them back from trials.csv continues with the same levels.
 //
 // The estimate: the posterior mean of ln w (over the grid, marginal over k), reported as the
-// Weber fraction w = exp(E[ln w]); its 95 % credible interval:
-// the 2.5 % and 97.5 % quantiles of the marginal posterior of ln w, each grid point's mass
-// spread evenly over its cell (half-way to its neighbours).
+// Weber fraction w = exp(E[ln w]); its 95 % credible interval: the 2.5 % and 97.5 %
+// quantiles of the marginal posterior of ln w, each grid point's mass spread evenly over its
+// cell (half-way to its neighbours).
 // Thread safety: QuestPlus objects are not shared between threads; free functions are pure.
 #include <array>
 #include <cstddef>
