@@ -7,6 +7,7 @@
 
 #include "study/campaign_file.h"
 #include "study/campaign_run.h"
+#include "study/power.h"
 #include "study/quest_plus.h"
 #include "threshold_simulation.h"
 
@@ -152,4 +153,25 @@ TEST_CASE("The run's kept QUEST+ track gives the replay's levels, also when the 
   // Answers as many as the kept ones but not extending them: replayed.
   const std::vector<bool> branch{false, false, true, true, true};
   CHECK(maker.make(row, branch).first.name == jnd_stimulus_name("J", quest_plus_level(block, branch)));
+}
+
+TEST_CASE("Power: a quest+ block's line is the panels' median QUEST+ threshold, near the simulated JND",
+          "[study][quest][power]") {
+  // The simulated participants' heaviness (J) Weber fractions are log-normal around 10 %
+  // (study/participant_model.h), so the panels' median threshold lies near the level 1.10.
+  const Campaign campaign = parse_campaign(
+      "[campaign]\nname = \"q\"\n[variants]\nreference = \"base\"\n[participants]\ncount = 12\n"
+      "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\ntrials = 40\n",
+      "q.toml", ".");
+  PowerOptions options;
+  options.panels = 20;
+  const std::vector<PowerLine> lines = simulate_power(campaign, 7, options);
+  REQUIRE(lines.size() == 1);
+  CHECK(lines[0].question == "stronger:J (quest+)");
+  CHECK(lines[0].is_threshold);
+  CHECK(lines[0].panels == 20);
+  CHECK(lines[0].threshold_median > 1.08);
+  CHECK(lines[0].threshold_median < 1.125);
+  CHECK(lines[0].threshold_p05 <= lines[0].threshold_median);
+  CHECK(lines[0].threshold_median <= lines[0].threshold_p95);
 }
