@@ -10,8 +10,8 @@
 #include "haptic/ab_trials.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
-#include "study/random_stream.h"
 #include "study/quest_plus.h"
+#include "study/random_stream.h"
 #include "study/staircase.h"
 
 namespace doorbench::study {
@@ -71,7 +71,8 @@ void run_panel(const Campaign& campaign, const Plan& plan, std::uint64_t panel_s
       }
     }
     for (const Block& block : campaign.blocks) {
-      if (block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli) {
+      if (block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli &&
+          !staircase[block.name].empty()) {
         const double threshold = block.method == JndMethod::kStaircase
                                      ? staircase_threshold(block, staircase[block.name])
                                      : 1.0 + quest_plus_estimate(block, staircase[block.name]).weber_fraction;
