@@ -61,7 +61,7 @@ TEST_CASE("QUEST+ presents the level of least expected entropy, computed by hand
   CHECK(quest.estimate().trials == 1);
 }
 
-TEST_CASE("QUEST+'s replay is a pure function of the answers; its levels lie on the block's grid",
+TEST_CASE("QUEST+'s replay is a pure function of the answers, and its levels lie on the block's grid",
           "[study][quest]") {
   Block block;
   block.type = BlockType::kJnd;
