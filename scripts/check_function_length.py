@@ -296,62 +296,47 @@ def find_functions(code):
 # ---------------------------------------------------------------------------------------
 # The exceptions
 
-def read_exceptions(path):
-    """{(file, function): reason} from the table under EXCEPTIONS_HEADING in `path` (an
-    empty dict if the file or the heading is missing). Raises ValueError naming the line
-    of a row without three cells or without a reason."""
+def read_table(path, heading, header):
+    """The rows (lists of cells, backticks stripped) of the Markdown table under `heading`
+    in `path`, header and separator rows left out ([] if the file or the heading is
+    missing). Raises ValueError naming the line of a row without len(header) cells or
+    with an empty last cell (the reason)."""
     if not os.path.exists(path):
-        return {}
-    exceptions = {}
+        return []
+    rows = []
     in_section = False
     with open(path, encoding="utf-8") as f:
         for number, line in enumerate(f, 1):
             stripped = line.strip()
             if stripped.startswith("## ") or stripped.startswith("# "):
-                in_section = stripped == EXCEPTIONS_HEADING
+                in_section = stripped == heading
                 continue
             if not in_section or not stripped.startswith("|"):
                 continue
             cells = [cell.strip().strip("`").strip() for cell in stripped.strip("|").split("|")]
             if all(re.fullmatch(r":?-+:?", cell) for cell in cells):
                 continue  # the separator row
-            if len(cells) != 3:
-                raise ValueError(f"{path}:{number}: a row needs three cells: file | function | why")
-            if cells[0].lower() == "file" and cells[1].lower() == "function":
+            if len(cells) != len(header):
+                count = {2: "two", 3: "three"}.get(len(header), str(len(header)))
+                raise ValueError(f"{path}:{number}: a row needs {count} cells: "
+                                 + " | ".join(header))
+            if [cell.lower() for cell in cells] == list(header):
                 continue  # the header row
-            if not cells[2]:
-                raise ValueError(f"{path}:{number}: {cells[0]} {cells[1]}: the reason is empty")
-            exceptions[(cells[0], cells[1])] = cells[2]
-    return exceptions
+            if not cells[-1]:
+                raise ValueError(f"{path}:{number}: {' '.join(cells[:-1])}: the reason is empty")
+            rows.append(cells)
+    return rows
+
+
+def read_exceptions(path):
+    """{(file, function): reason} from the table under EXCEPTIONS_HEADING in `path`."""
+    rows = read_table(path, EXCEPTIONS_HEADING, ("file", "function", "why"))
+    return {(file, function): why for file, function, why in rows}
 
 
 def read_file_exceptions(path):
-    """{file: reason} from the table under FILE_EXCEPTIONS_HEADING in `path` (empty if the
-    file or the heading is missing). Raises ValueError naming the line of a row without two
-    cells or without a reason."""
-    if not os.path.exists(path):
-        return {}
-    exceptions = {}
-    in_section = False
-    with open(path, encoding="utf-8") as f:
-        for number, line in enumerate(f, 1):
-            stripped = line.strip()
-            if stripped.startswith("## ") or stripped.startswith("# "):
-                in_section = stripped == FILE_EXCEPTIONS_HEADING
-                continue
-            if not in_section or not stripped.startswith("|"):
-                continue
-            cells = [cell.strip().strip("`").strip() for cell in stripped.strip("|").split("|")]
-            if all(re.fullmatch(r":?-+:?", cell) for cell in cells):
-                continue
-            if len(cells) != 2:
-                raise ValueError(f"{path}:{number}: a row needs two cells: file | why")
-            if cells[0].lower() == "file" and cells[1].lower() == "why":
-                continue
-            if not cells[1]:
-                raise ValueError(f"{path}:{number}: {cells[0]}: the reason is empty")
-            exceptions[cells[0]] = cells[1]
-    return exceptions
+    """{file: reason} from the table under FILE_EXCEPTIONS_HEADING in `path`."""
+    return {file: why for file, why in read_table(path, FILE_EXCEPTIONS_HEADING, ("file", "why"))}
 
 
 def check_file_lengths(root, folders, limit, exceptions, shown_path):
