@@ -45,9 +45,11 @@ class CountingBackend final : public AcquisitionBackend {
     std::vector<ChannelInfo> infos;
     for (std::size_t c = 0; c < channels_; ++c) {
       ChannelInfo info;
-      info.name = "ch" + std::to_string(c);
-      info.sensor_kind = "test";
-      info.unit = "V";
+      info.name = std::string("ch").append(std::to_string(c));
+      info.sensor_kind = std::string("test");
+      // Strings, not operator=(const char*): GCC 12's -Wrestrict false positive once the
+      // unity build inlines it.
+      info.unit = std::string("V");
       info.sample_rate_hz = rate_hz_;
       info.range_min = -INFINITY;  // survives the journal's JSON
       infos.push_back(info);

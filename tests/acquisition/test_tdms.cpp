@@ -13,6 +13,7 @@
 #include "acquisition/session/session_file.h"
 #include "acquisition/session/tdms.h"
 #include "tests/support/run_doorbench.h"
+#include "tests/support/tdms_error.h"
 #include "tests/support/tdms_writer.h"
 #include "tests/support/temp_dir.h"
 
@@ -131,15 +132,6 @@ std::vector<std::uint8_t> door_file() {
                       raw_block(75, 20, true, false)));
   file.append(segment(kTocRawData | kTocInterleavedData, {}, raw_block(95, 20, true, false)));
   return file.data;
-}
-
-std::string error_of(const std::vector<std::uint8_t>& bytes) {
-  try {
-    parse_tdms(bytes, "mem.tdms");
-  } catch (const TdmsError& error) {
-    return error.what();
-  }
-  return "(no error)";
 }
 
 }  // namespace

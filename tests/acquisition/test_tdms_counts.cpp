@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "acquisition/session/tdms.h"
+#include "tests/support/tdms_error.h"
 #include "tests/support/tdms_writer.h"
 #include "tests/support/temp_dir.h"
 
@@ -15,15 +16,6 @@ namespace doorbench {
 namespace {
 
 using namespace testing::tdms;
-
-std::string error_of(const std::vector<std::uint8_t>& bytes) {
-  try {
-    parse_tdms(bytes, "mem.tdms");
-  } catch (const TdmsError& error) {
-    return error.what();
-  }
-  return "(no error)";
-}
 
 // One segment with the file object "/" (no raw data, no properties): the object count at
 // byte 28, the path at 32 (5 bytes), the raw index at 37, the property count at 41.

@@ -35,7 +35,7 @@ constexpr double kJ = 0.95, kK = 40.0, kKInf = 1054.0, kKLock = 767.0, kTheta0 =
                  kTheta1 = 0.02793, kTheta2 = 0.0384, kTheta3 = 0.06109, kC = 3.0, kD1 = 2.6,
                  kD2 = 1.3, kTheta4 = 0.6109, kRh = 0.58;
 
-const DoorModel& reference() {
+const DoorModel& controls_reference() {
   static const DoorModel model = doorbench::reference_model(ModelKind::kSensory);
   return model;
 }
@@ -94,7 +94,7 @@ TEST_CASE("Perceptual controls: the catalogue", "[perceptual]") {
 }
 
 TEST_CASE("Perceptual controls: reading the reference door", "[perceptual]") {
-  const DoorModel& door = reference();
+  const DoorModel& door = controls_reference();
   CHECK(perceptual::read(door, Control::kHeaviness) == kJ);
   CHECK_THAT(perceptual::read(door, Control::kLatchEffort),
              WithinRel((40 * 0.02793 + 1054 * (0.02793 - 0.00698)) / 0.58, 1e-12));
@@ -116,7 +116,7 @@ TEST_CASE("Perceptual controls: reading the reference door", "[perceptual]") {
 }
 
 TEST_CASE("Perceptual controls: setting each control and reading it back", "[perceptual]") {
-  const DoorModel& door = reference();
+  const DoorModel& door = controls_reference();
 
   SECTION("heaviness sets J only") {
     const DoorModel changed = perceptual::set(door, Control::kHeaviness, 1.4);
@@ -197,7 +197,7 @@ TEST_CASE("Perceptual controls: setting each control and reading it back", "[per
 }
 
 TEST_CASE("Perceptual controls: impossible settings are refused with a reason", "[perceptual]") {
-  const DoorModel& door = reference();
+  const DoorModel& door = controls_reference();
   // Below what the soft spring alone gives: k θ1 / r_h ≈ 1.926 N.
   const std::string latch =
       throw_message([&] { perceptual::set(door, Control::kLatchEffort, 1.0); });
@@ -251,7 +251,7 @@ TEST_CASE("Perceptual controls: the physical model is refused", "[perceptual]") 
 
 TEST_CASE("Perceptual controls: 30% less latch effort is felt as about 30% less",
           "[perceptual][simulation]") {
-  const DoorModel& door = reference();
+  const DoorModel& door = controls_reference();
   const double effort = perceptual::read(door, Control::kLatchEffort);
   const DoorModel lighter = perceptual::set(door, Control::kLatchEffort, 0.7 * effort);
   const doorbench::RunSummary before = hand_summary(door);

@@ -51,7 +51,7 @@ DoorModel model_with(int index, double value) {
   return model_from(values);
 }
 
-const DoorModel& reference() {
+const DoorModel& physical_reference() {
   static const DoorModel model = model_from(kReference);
   return model;
 }
@@ -67,14 +67,14 @@ double term(const DoorModel& model, std::string_view name, double theta, double 
   return 0.0;
 }
 double term(std::string_view name, double theta, double omega) {
-  return term(reference(), name, theta, omega);
+  return term(physical_reference(), name, theta, omega);
 }
 
 }  // namespace
 
 TEST_CASE("Physical: the reference door's parts, inertia and parameters", "[physical]") {
-  CHECK(reference().term_count() == 7);
-  CHECK(reference().inertia_kg_m2() == 0.95);  // J = J_d
+  CHECK(physical_reference().term_count() == 7);
+  CHECK(physical_reference().inertia_kg_m2() == 0.95);  // J = J_d
   const DoorModel shipped = doorbench::reference_model(ModelKind::kPhysical);
   REQUIRE(shipped.parameter_count() == kCount);
   for (int i = 0; i < kCount; ++i) CHECK(shipped.parameter_values()[i] == kReference[i]);
@@ -245,16 +245,16 @@ TEST_CASE("Physical: tau_m is the sum of the parts", "[physical]") {
   // θ = π/2, ω = 0.5: gravity 22.0649625, spring −18.8687248, hinge −0.625,
   // guide −2.2872348, latch 0, seal 0, stops (π/2 = 1.5707963 < θ_max = 1.5708) 0:
   // τ_m = 0.2840029.
-  CHECK_THAT(reference().torque_Nm(kPi / 2, 0.5),
+  CHECK_THAT(physical_reference().torque_Nm(kPi / 2, 0.5),
              WithinRel(22.0649625 - 18.868724778716712 - 0.625 - 2.2872348417211243, 1e-9));
   for (double theta : {-0.01, 0.0, 0.005, 0.0072, 0.012, 0.02, 0.04, 0.5, 1.2, 1.6}) {
     for (double omega : {-0.6, -0.01, 0.0, 0.03, 0.7}) {
       std::array<double, 7> t{};
-      const double total = reference().torque_Nm(theta, omega, t);
+      const double total = physical_reference().torque_Nm(theta, omega, t);
       double sum = 0.0;
       for (double v : t) sum += v;
       CHECK_THAT(total, WithinAbs(sum, 1e-12));
-      CHECK(reference().torque_Nm(theta, omega) == total);
+      CHECK(physical_reference().torque_Nm(theta, omega) == total);
     }
   }
 }

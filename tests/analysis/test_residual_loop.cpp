@@ -13,6 +13,7 @@
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/simulation/fit_synthetic.h"
+#include "tests/support/reference_doors.h"
 
 namespace {
 
@@ -23,7 +24,7 @@ using doorbench::ModelKind;
 using doorbench::PreparedData;
 namespace effects = doorbench::effects;
 
-DoorModel sensory_reference() { return doorbench::reference_model(ModelKind::kSensory); }
+using doorbench::testing::sensory_reference;
 
 // The reference door with one effect at `values` (catalogue bounds).
 DoorModel with_effect(const DoorModel& model, effects::Kind kind, std::vector<double> values) {

@@ -17,6 +17,7 @@
 #include "analysis/fit/fitting.h"
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
+#include "tests/support/reference_doors.h"
 #include "tests/support/tremor_recording.h"
 
 namespace {
@@ -29,7 +30,7 @@ namespace effects = doorbench::effects;
 constexpr double kBreakaway_N_m = 1.5;  // d_s − d1
 constexpr double kBreakawaySpeed_rad_s = 0.05;
 
-DoorModel sensory_reference() { return doorbench::reference_model(ModelKind::kSensory); }
+using doorbench::testing::sensory_reference;
 
 double reference_d1() {
   const DoorModel model = sensory_reference();

@@ -41,14 +41,14 @@ DoorModel model_with(int index, double value) {
   return DoorModel(ModelKind::kSensory, kGeometry, values, wide_bounds());
 }
 
-const DoorModel& reference() {
+const DoorModel& wide_sensory_reference() {
   static const DoorModel model(ModelKind::kSensory, kGeometry, kReference, wide_bounds());
   return model;
 }
 
 std::array<double, 5> terms_at(double theta, double omega) {
   std::array<double, 5> terms{};
-  reference().torque_Nm(theta, omega, terms);
+  wide_sensory_reference().torque_Nm(theta, omega, terms);
   return terms;
 }
 
@@ -61,8 +61,8 @@ std::array<double, 17> as_array(const std::vector<double>& v) {
 }  // namespace
 
 TEST_CASE("Sensory: the reference door has 5 terms and J = 0.95", "[sensory]") {
-  REQUIRE(reference().term_count() == 5);
-  CHECK(reference().inertia_kg_m2() == 0.95);
+  REQUIRE(wide_sensory_reference().term_count() == 5);
+  CHECK(wide_sensory_reference().inertia_kg_m2() == 0.95);
   // The compiled-in reference door carries the same values as the spec's file.
   const DoorModel shipped = doorbench::reference_model(ModelKind::kSensory);
   REQUIRE(shipped.parameter_count() == 17);
@@ -147,21 +147,21 @@ TEST_CASE("Sensory: end stops beyond theta_max and below 0", "[sensory]") {
 
 TEST_CASE("Sensory: tau_m is the sum of the five terms", "[sensory]") {
   // θ = 0.02, ω = 0: only the unlatching term: −14.52308.
-  CHECK_THAT(reference().torque_Nm(0.02, 0.0), WithinRel(-14.52308, 1e-9));
+  CHECK_THAT(wide_sensory_reference().torque_Nm(0.02, 0.0), WithinRel(-14.52308, 1e-9));
   // θ = 0.045, ω = −0.4: latch 12.34103, friction −tanh(−10) · (2.6 − 1.3 · S̄(0.045; θ4, 10))
   // = +1.30001579231425, snap ≈ −8e−18: 13.64104579231425.
-  CHECK_THAT(reference().torque_Nm(0.045, -0.4), WithinRel(13.641045792314245, 1e-12));
+  CHECK_THAT(wide_sensory_reference().torque_Nm(0.045, -0.4), WithinRel(13.641045792314245, 1e-12));
   // θ = −0.01, ω = −0.2: unlatch +0.4, friction +1.29988722369518, stops +54 = 55.6998872236952.
-  CHECK_THAT(reference().torque_Nm(-0.01, -0.2), WithinRel(55.699887223695178, 1e-12));
+  CHECK_THAT(wide_sensory_reference().torque_Nm(-0.01, -0.2), WithinRel(55.699887223695178, 1e-12));
   // θ = 1.6, ω = 0.1: friction −tanh(2.5) (2.6 − 1.3 S̄) = −2.56519717190613, stops −148.
-  CHECK_THAT(reference().torque_Nm(1.6, 0.1), WithinRel(-150.56519717190613, 1e-12));
+  CHECK_THAT(wide_sensory_reference().torque_Nm(1.6, 0.1), WithinRel(-150.56519717190613, 1e-12));
   // And the terms add to the total everywhere.
   for (double theta : {-0.02, 0.0, 0.005, 0.01, 0.028, 0.035, 0.04, 0.06, 0.3, 0.6, 1.4, 1.6}) {
     for (double omega : {-1.0, -0.03, 0.0, 0.02, 0.8}) {
       std::array<double, 5> t{};
-      const double total = reference().torque_Nm(theta, omega, t);
+      const double total = wide_sensory_reference().torque_Nm(theta, omega, t);
       CHECK_THAT(total, WithinAbs(t[0] + t[1] + t[2] + t[3] + t[4], 1e-12));
-      CHECK(reference().torque_Nm(theta, omega) == total);
+      CHECK(wide_sensory_reference().torque_Nm(theta, omega) == total);
     }
   }
 }

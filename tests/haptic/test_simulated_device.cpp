@@ -13,6 +13,7 @@
 
 #include "analysis/model/parameter_file.h"
 #include "haptic/door_mapping.h"
+#include "haptic/parameter_mailbox.h"
 #include "haptic/rotary_device.h"
 #include "haptic/simulated_hapticmaster.h"
 #include "tests/support/allocation_counter.h"
@@ -38,12 +39,6 @@ double distance_from_arc(const DoorMapping& mapping, const Vec3& position) {
 void sleep_s(double seconds) {
   timespec pause{0, static_cast<long>(seconds * 1e9)};
   nanosleep(&pause, nullptr);
-}
-
-double monotonic_now_s() {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
 const DoorMapping& reference_mapping() {

@@ -17,6 +17,7 @@
 #include "sensors/comedi_backend.h"
 #include "sensors/comedi_devices.h"
 #include "tests/support/allocation_counter.h"
+#include "tests/support/comedi_emulator.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 
@@ -30,13 +31,10 @@ using doorbench::SessionReader;
 using doorbench::sensors::ComediBackend;
 using doorbench::sensors::ComediError;
 using doorbench::sensors::ComediOptions;
+using doorbench::testing::comedi_emulator;
 using doorbench::testing::TempDir;
 
 namespace {
-
-const doorbench::sensors::ComediApi& emulator() {
-  return doorbench::sensors::load_comedi_library(DOORBENCH_COMEDI_EMULATOR);
-}
 
 struct RigSpec {
   std::string device;
@@ -127,7 +125,7 @@ TEST_CASE("comedi command test: timers rounded to the board's clock, the achieve
   spec.device = device.string();
   spec.rate_hz = 3000;
   spec.convert_s = 10.4e-6;  // 10400 ns → 10000 ns
-  ComediBackend backend(make_rig(spec), emulator());
+  ComediBackend backend(make_rig(spec), comedi_emulator());
   const auto& setup = backend.setup();
   CHECK(setup.requested_scan_rate_hz == 3000);
   CHECK(backend.scan_rate_hz() == Approx(1e9 / 333000.0).epsilon(1e-12));
@@ -154,7 +152,7 @@ TEST_CASE("comedi command test: a scan faster than the converter is raised to it
   spec.device = device.string();
   spec.rate_hz = 200000;  // 5000 ns per scan
   spec.convert_s = 1e-6;  // 1000 ns per conversion
-  ComediBackend backend(make_rig(spec), emulator());
+  ComediBackend backend(make_rig(spec), comedi_emulator());
   const std::string adjustments = joined(backend.setup().adjustments);
   CHECK_THAT(adjustments, Contains("convert_arg 1000 -> 4000 ns (test 1 returned 3)"));
   CHECK_THAT(adjustments, Contains("scan_begin_arg 5000 -> 12000 ns (test 1 returned 3)"));
@@ -168,14 +166,14 @@ TEST_CASE("comedi command test: sources the board lacks are errors naming them",
   RigSpec spec;
   spec.device = device.string();
   spec.convert_s = 0;  // TRIG_NOW: simultaneous sampling, which a multiplexed M-series lacks
-  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), emulator()),
+  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), comedi_emulator()),
                       Contains(device.string() + " subdevice 0 (ni_pcimio pci-6221) refuses the "
                                                  "command: a trigger source is not supported") &&
                           Contains("convert_src TRIG_NOW -> none"));
   // A simultaneous-sampling board takes it.
   const auto simultaneous = dir.write("comedi1", "simultaneous = 1\n");
   spec.device = simultaneous.string();
-  ComediBackend backend(make_rig(spec), emulator());
+  ComediBackend backend(make_rig(spec), comedi_emulator());
   CHECK(backend.setup().achieved_convert_interval_s == 0);
   CHECK(backend.channels()[2].first_sample_time_s == 0);
 }
@@ -189,7 +187,7 @@ TEST_CASE("comedi ranges, aref and maxdata come from the rig and are checked", "
   spec.first_channel_range = "[-5.0, 5.0]";
   spec.channel_range = "[-1.0, 1.0]";
   {
-    ComediBackend backend(make_rig(spec), emulator());
+    ComediBackend backend(make_rig(spec), comedi_emulator());
     CHECK(backend.setup().channels[0].range == 1);
     CHECK(backend.setup().channels[1].range == 2);
     CHECK(backend.channels()[0].raw_offset == Approx(-5.0));
@@ -197,25 +195,25 @@ TEST_CASE("comedi ranges, aref and maxdata come from the rig and are checked", "
     CHECK(backend.channels()[1].range_max == Approx(1.0));
   }
   spec.first_channel_range = "[-2.0, 2.0]";
-  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), emulator()),
+  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), comedi_emulator()),
                       device.string() +
                           " subdevice 0: channel ch0 (0/0): the board has no range "
                           "[-2, 2] V; its voltage ranges are [-10, 10] V, [-5, 5] "
                           "V, [-1, 1] V, [-0.2, 0.2] V");
   spec.first_channel_range = "";
   spec.aref = "common";
-  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), emulator()),
+  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), comedi_emulator()),
                       device.string() +
                           " subdevice 0: channel ch0 (0/0): aref common is not "
                           "supported by the subdevice");
   spec.aref = "diff";
   {
-    ComediBackend backend(make_rig(spec), emulator());
+    ComediBackend backend(make_rig(spec), comedi_emulator());
     CHECK(backend.setup().channels[2].aref == AREF_DIFF);
   }
   spec.aref = "";
   spec.bits = 12;
-  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), emulator()),
+  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), comedi_emulator()),
                       Contains("channel ch0 (0/0): maxdata is 65535 but the rig says "
                                "resolution_bits = 12 (maxdata 4095)"));
 }
@@ -234,7 +232,7 @@ TEST_CASE("comedi recording: known signals at the achieved rate, EOF at the stop
   spec.convert_s = 100e-6;
   ComediOptions options;
   options.duration_s = 0.5;
-  ComediBackend backend(make_rig(spec), emulator(), options);
+  ComediBackend backend(make_rig(spec), comedi_emulator(), options);
   const double rate = backend.scan_rate_hz();
   REQUIRE(rate == Approx(1e9 / 333000.0));
   CHECK(backend.setup().stop_scans == static_cast<std::size_t>(std::llround(0.5 * rate)));
@@ -295,7 +293,7 @@ TEST_CASE("comedi soft calibration: counts convert through the board's polynomia
   spec.rate_hz = 2000;
   ComediOptions options;
   options.duration_s = 0.25;
-  ComediBackend backend(make_rig(spec), emulator(), options);
+  ComediBackend backend(make_rig(spec), comedi_emulator(), options);
   const auto& channel = backend.setup().channels[0];
   CHECK(channel.conversion == "softcal");
   REQUIRE(channel.polynomial.size() == 4);
@@ -328,7 +326,7 @@ TEST_CASE("comedi soft-calibrated board without its file falls back and says so"
       dir.write("comedi0", "calibration_file = " + (dir / "missing.cal").string() + "\n");
   RigSpec spec;
   spec.device = device.string();
-  ComediBackend backend(make_rig(spec), emulator());
+  ComediBackend backend(make_rig(spec), comedi_emulator());
   CHECK(backend.setup().channels[0].conversion == "comedi_to_phys");
   REQUIRE(backend.setup().warnings.size() == 1);
   CHECK_THAT(backend.setup().warnings[0],
@@ -345,7 +343,7 @@ TEST_CASE("comedi buffer overrun: drained, then a fault event with its time", "[
   spec.device = device.string();
   spec.channels = 2;
   spec.rate_hz = 10000;
-  ComediBackend backend(make_rig(spec), emulator());
+  ComediBackend backend(make_rig(spec), comedi_emulator());
   backend.start();
   ScanBlock block(2, 64);
   REQUIRE(backend.read(block) > 0);
@@ -381,7 +379,7 @@ TEST_CASE("comedi start on an external line (TRIG_EXT PFI0) waits for it", "[com
   spec.start_trigger = "external";
   ComediOptions options;
   options.duration_s = 0.05;
-  ComediBackend backend(make_rig(spec), emulator(), options);
+  ComediBackend backend(make_rig(spec), comedi_emulator(), options);
   CHECK(backend.setup().start == "external PFI0 (TRIG_EXT " + std::to_string(CR_EDGE) + ")");
   const auto started = std::chrono::steady_clock::now();
   backend.start();
@@ -394,7 +392,7 @@ TEST_CASE("comedi start on an external line (TRIG_EXT PFI0) waits for it", "[com
 
   // A software start_trigger is TRIG_INT.
   spec.start_trigger = "software";
-  ComediBackend software(make_rig(spec), emulator(), options);
+  ComediBackend software(make_rig(spec), comedi_emulator(), options);
   CHECK(software.setup().start == "software, trigger go (TRIG_INT 0)");
 }
 
@@ -409,7 +407,7 @@ TEST_CASE("comedi out-of-range samples are flagged as events", "[comedi]") {
   spec.rate_hz = 1000;
   ComediOptions options;
   options.duration_s = 0.2;
-  ComediBackend backend(make_rig(spec), emulator(), options);
+  ComediBackend backend(make_rig(spec), comedi_emulator(), options);
   backend.start();
   const Drained drained = drain(backend);
   REQUIRE(drained.counts[0].size() == 200);
@@ -442,7 +440,7 @@ TEST_CASE("comedi 32-bit samples (SDF_LSAMPL) of an 18-bit board", "[comedi]") {
   spec.channels = 1;
   ComediOptions options;
   options.duration_s = 0.02;
-  ComediBackend backend(make_rig(spec), emulator(), options);
+  ComediBackend backend(make_rig(spec), comedi_emulator(), options);
   CHECK(backend.setup().sample_bytes == 4);
   backend.start();
   const Drained drained = drain(backend);
@@ -461,7 +459,7 @@ TEST_CASE("comedi reads allocate nothing in steady state", "[comedi]") {
   spec.channels = 4;
   spec.rate_hz = 20000;
   spec.convert_s = 2e-6;
-  ComediBackend backend(make_rig(spec), emulator());
+  ComediBackend backend(make_rig(spec), comedi_emulator());
   backend.start();
   ScanBlock block(4, 200);
   block.events.clear();
@@ -485,13 +483,13 @@ TEST_CASE("comedi device open errors and addresses name the device and channel",
   RigSpec spec;
   spec.device = (dir / "comedi7").string();
   REQUIRE_THROWS_WITH(
-      ComediBackend(make_rig(spec), emulator()),
+      ComediBackend(make_rig(spec), comedi_emulator()),
       Contains(spec.device + ": cannot open the comedi device: No such file or directory"));
   const auto device = dir.write("comedi0", "ai_channels = 2\n");
   spec.device = device.string();
-  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), emulator()),
+  REQUIRE_THROWS_WITH(ComediBackend(make_rig(spec), comedi_emulator()),
                       Contains("channel ch2 (0/2): no channel 2 (the subdevice has 2)"));
-  const std::string text = doorbench::sensors::comedi_devices_report(emulator(), dir.path);
+  const std::string text = doorbench::sensors::comedi_devices_report(comedi_emulator(), dir.path);
   CHECK_THAT(text, Contains(device.string() + ": driver ni_pcimio, board pci-6221, 3 subdevices"));
 }
 
@@ -500,7 +498,7 @@ TEST_CASE("comedi devices lists the emulated boards", "[comedi]") {
   dir.write("comedi0", "board = pcie-6251\nranges = -10 10, -5 5, -2 2, -1 1, -0.5 0.5\n");
   dir.write("comedi1", "board = pci-6221\nlsampl = 0\ncalibration_file = /nonexistent.cal\n");
   dir.write("comedi0_subd2", "not a device");
-  const std::string text = doorbench::sensors::comedi_devices_report(emulator(), dir.path);
+  const std::string text = doorbench::sensors::comedi_devices_report(comedi_emulator(), dir.path);
   CHECK_THAT(text, Contains((dir / "comedi0").string() +
                             ": driver ni_pcimio, board pcie-6251, 3 subdevices"));
   CHECK_THAT(text, Contains("  subdevice 0: analog input, 16 channels, maxdata 65535, aref ground "
@@ -514,7 +512,7 @@ TEST_CASE("comedi devices lists the emulated boards", "[comedi]") {
   CHECK(text.find((dir / "comedi0").string()) < text.find((dir / "comedi1").string()));
 
   TempDir empty("comedi_empty");
-  CHECK(doorbench::sensors::comedi_devices_report(emulator(), empty.path) ==
+  CHECK(doorbench::sensors::comedi_devices_report(comedi_emulator(), empty.path) ==
         "no comedi devices: " + (empty.path / "comedi*").string() +
             " does not exist (comedi needs a supported card and its kernel driver; the study's "
             "USB cDAQ-9172 has no comedi driver)\n");
@@ -601,7 +599,7 @@ TEST_CASE("comedi: a duration beyond the board's stop count acquires with TRIG_N
   spec.rate_hz = 50000;
   ComediOptions options;
   options.duration_s = 400;  // 20 million scans; the board counts at most 2^24 − 1
-  ComediBackend backend(make_rig(spec), emulator(), options);
+  ComediBackend backend(make_rig(spec), comedi_emulator(), options);
   CHECK(backend.setup().stop_scans == 0);
   REQUIRE(backend.setup().warnings.size() == 1);
   CHECK(backend.setup().warnings[0] ==
@@ -610,6 +608,6 @@ TEST_CASE("comedi: a duration beyond the board's stop count acquires with TRIG_N
   CHECK_THAT(joined(backend.setup().tests), Contains("round 3, test 1: comedi_command_test "
                                                      "returned 0 (valid)"));
   options.duration_s = 300;  // 15 million: fits
-  ComediBackend fits(make_rig(spec), emulator(), options);
+  ComediBackend fits(make_rig(spec), comedi_emulator(), options);
   CHECK(fits.setup().stop_scans == 15000000);
 }

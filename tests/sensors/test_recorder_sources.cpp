@@ -17,14 +17,18 @@
 #include "acquisition/record/recovery.h"
 #include "acquisition/rig/rig_file.h"
 #include "sensors/comedi_backend.h"
+#include "tests/support/comedi_emulator.h"
 #include "tests/support/fake_polled_source.h"
+#include "tests/support/session_origin.h"
 #include "tests/support/sine_phase.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using namespace doorbench;
 using doorbench::testing::FakePolledOptions;
+using doorbench::testing::comedi_emulator;
 using doorbench::testing::FakePolledSource;
+using doorbench::testing::session_origin_ns;
 using doorbench::testing::sine_phase;
 using doorbench::testing::TempDir;
 
@@ -47,14 +51,6 @@ RigDefinition comedi_rig(const std::string& device, int channels, double rate_hz
   return parse_rig(rig.str(), "sources-test.toml", ".");
 }
 
-const sensors::ComediApi& emulator() {
-  return sensors::load_comedi_library(DOORBENCH_COMEDI_EMULATOR);
-}
-
-std::int64_t origin_ns(const SessionReader& session) {
-  return std::stoll(session.read_group_attribute("clock", "origin_monotonic_ns"));
-}
-
 // How much later on the session axis signal 2 places the same signal instant than
 // signal 1 does (both R·sin(ωt + φ)), in (−π/ω, π/ω].
 double lag_s(double phase_1, double phase_2, double omega) {
@@ -72,7 +68,7 @@ TEST_CASE("Recorder sources: a DAQ and a polled source on one clock, latency and
   const auto device = dir.write("comedi0", "signal.0 = counter\n");
   sensors::ComediOptions comedi;
   comedi.duration_s = 1.0;
-  sensors::ComediBackend backend(comedi_rig(device.string(), 3, 1000), emulator(), comedi);
+  sensors::ComediBackend backend(comedi_rig(device.string(), 3, 1000), comedi_emulator(), comedi);
   FakePolledOptions fake;
   fake.names = {"p_force", "p_angle"};
   fake.period_s = 0.004;
@@ -106,7 +102,7 @@ TEST_CASE("Recorder sources: a DAQ and a polled source on one clock, latency and
   CHECK(session.channels()[6].name == "p_angle_latency");
   CHECK(session.sample_count("ch0") == 1000);
   // The origin: UTC and monotonic, recorded together.
-  const std::int64_t origin = origin_ns(session);
+  const std::int64_t origin = session_origin_ns(session);
   CHECK(session.read_group_attribute("clock", "origin_utc") == session.metadata().start_time_utc);
   CHECK(session.metadata().start_time_utc.size() == 30);
   for (const std::string name : {"p_force", "p_angle"}) {
@@ -231,7 +227,7 @@ TEST_CASE("Timing: one signal of CLOCK_MONOTONIC on a DAQ channel and a polled c
   const auto device = dir.write("comedi0", "signal.0 = monotonic_sine 2.0 5.0 0.0\n");
   sensors::ComediOptions comedi;
   comedi.duration_s = 2.0;
-  sensors::ComediBackend backend(comedi_rig(device.string(), 1, rate_hz), emulator(), comedi);
+  sensors::ComediBackend backend(comedi_rig(device.string(), 1, rate_hz), comedi_emulator(), comedi);
   FakePolledOptions fake;
   fake.names = {"polled"};
   fake.period_s = 0.003;

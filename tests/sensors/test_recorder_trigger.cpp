@@ -12,12 +12,14 @@
 #include "acquisition/rig/rig_file.h"
 #include "sensors/comedi_backend.h"
 #include "tests/support/fake_polled_source.h"
+#include "tests/support/session_origin.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using namespace doorbench;
 using doorbench::testing::FakePolledOptions;
 using doorbench::testing::FakePolledSource;
+using doorbench::testing::session_origin_ns;
 using doorbench::testing::TempDir;
 
 namespace {
@@ -32,10 +34,6 @@ RigDefinition one_channel_rig(const std::string& device) {
          "serial = \"S0\"\nbackend = \"comedi\"\naddress = \"0/0\"\nrange_V = [-10.0, 10.0]\n"
          "calibration = \"nominal\"\nunit = \"N\"\n";
   return parse_rig(rig.str(), "trigger-test.toml", ".");
-}
-
-std::int64_t origin_ns(const SessionReader& session) {
-  return std::stoll(session.read_group_attribute("clock", "origin_monotonic_ns"));
 }
 
 double sine_at(double amplitude, double frequency_hz, std::int64_t monotonic_ns) {
@@ -113,7 +111,7 @@ TEST_CASE(
 
   // Session time 0 is the first kept scan: the origin recorded with the session maps
   // both channels' times back to the absolute clock their signal was made of.
-  const std::int64_t origin = origin_ns(session);
+  const std::int64_t origin = session_origin_ns(session);
   const ChannelSlice scans = session.read("volts");
   const std::vector<double> volts_N = session.physical("volts", scans);
   const ChannelInfo& volts = session.channel("volts");

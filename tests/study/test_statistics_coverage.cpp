@@ -21,7 +21,7 @@ namespace {
 
 constexpr int kCampaigns = 50;
 
-struct Tally {
+struct CoverageTally {
   const char* what;
   int covered = 0, draws = 0;
   void add(bool inside) {
@@ -31,9 +31,9 @@ struct Tally {
   double share() const { return static_cast<double>(covered) / draws; }
 };
 
-void print(const std::vector<Tally>& tallies) {
+void print(const std::vector<CoverageTally>& tallies) {
   std::printf("| interval | draws | covered | coverage |\n|---|---:|---:|---:|\n");
-  for (const Tally& t : tallies) {
+  for (const CoverageTally& t : tallies) {
     std::printf("| %s | %d | %d | %.1f %% |\n", t.what, t.draws, t.covered, 100.0 * t.share());
   }
 }
@@ -45,7 +45,7 @@ TEST_CASE("coverage: rating effects' Wald intervals cover the truth in 90-99% of
   RatingTruth truth;  // 4 variants, 5 categories
   truth.participants = 20;
   truth.participant_sd = 1.0;
-  Tally laplace{"rating effect (clmm, 10-node AGQ), 20 participants x 4 variants x 2"};
+  CoverageTally laplace{"rating effect (clmm, 10-node AGQ), 20 participants x 4 variants x 2"};
   for (int campaign = 0; campaign < kCampaigns; ++campaign) {
     const auto data = doorbench::testing::simulate_ratings(truth, 1000 + campaign);
     const auto result = fit_ratings(data);
@@ -70,8 +70,8 @@ TEST_CASE("coverage: Weber fractions' profile intervals cover the truth in 90-99
   stiffness.weber_fraction = 0.18;
   stiffness.lapse = 0.05;
   const std::vector<double> factors{0.75, 0.85, 0.92, 0.97, 1.03, 1.08, 1.15, 1.3};
-  Tally panel{"Weber fraction, panel (pooled fit), 20 participants x 8 levels x 10"};
-  Tally each{"Weber fraction, one participant (80 trials)"};
+  CoverageTally panel{"Weber fraction, panel (pooled fit), 20 participants x 8 levels x 10"};
+  CoverageTally each{"Weber fraction, one participant (80 trials)"};
   std::mt19937_64 random(2029);
   for (int campaign = 0; campaign < kCampaigns; ++campaign) {
     for (const ObserverTruth* truth : {&inertia, &stiffness}) {
