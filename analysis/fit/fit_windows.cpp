@@ -1,9 +1,9 @@
 #include "analysis/fit/fit_windows.h"
 
-#include <ceres/dynamic_autodiff_cost_function.h>
-
 #include <algorithm>
 #include <cmath>
+
+#include "analysis/fit/internal/window_residual.h"
 
 namespace doorbench {
 
@@ -93,80 +93,16 @@ int window_residual_count(const WindowResidualSetup& setup, const FitWindow& win
          (setup.estimate_start_state ? 2 : 0);
 }
 
-namespace {
-
-// The window's residuals as a functor for ceres::DynamicAutoDiffCostFunction: the scaled
-// free parameters, and the window's start-state offset z when it is estimated.
-class WindowResidual {
- public:
-  WindowResidual(const WindowResidualSetup& setup, const FitWindow& window)
-      : setup_(setup), window_(window) {}
-
-  // flatten: GCC inlines the whole integration, model and Jet arithmetic into one body; the
-  // Jacobian costs 30% less than with its own inlining choices (measured).
-  template <typename T>
-  __attribute__((flatten)) bool operator()(T const* const* blocks, T* residuals) const {
-    if (setup_.feasible != nullptr && !*setup_.feasible) return false;
-    T parameters[DoorModel::kMaxParameters];
-    setup_.map->fill(blocks[0], parameters);
-    const Stroke& stroke = setup_.data->strokes[window_.stroke];
-    const double rate_weight = 1.0 / setup_.rate_noise_rad_s;
-    const double angle_weight = 1.0 / setup_.angle_noise_rad;
-    const bool with_angle = setup_.angle_residuals;
-    const int power = setup_.residual_power;
-    auto shape = [power](T r) {
-      if (power == 1) return r;
-      using std::abs;
-      const T magnitude = abs(r);
-      for (int i = 1; i < power; ++i) r *= magnitude;
-      return r;
-    };
-    T* out = residuals;
-    T theta0(stroke.theta_rad[window_.first]);
-    T omega0(stroke.omega_rad_s[window_.first]);
-    if (setup_.estimate_start_state) {
-      const T* z = blocks[1];
-      theta0 += z[0] * setup_.angle_noise_rad;
-      omega0 += z[1] * setup_.rate_noise_rad_s;
-      *out++ = z[0];
-      *out++ = z[1];
-    }
-    auto sink = [&](int j, const T& theta, const T& omega) {
-      const int sample = window_.first + j;
-      *out++ = shape((omega - stroke.omega_rad_s[sample]) * rate_weight);
-      if (with_angle) *out++ = shape((theta - stroke.theta_rad[sample]) * angle_weight);
-    };
-    return integrate_window(*setup_.model, static_cast<const T*>(parameters), stroke, window_,
-                            setup_.substeps_per_sample, theta0, omega0, sink);
-  }
-
- private:
-  const WindowResidualSetup& setup_;
-  FitWindow window_;
-};
-
-template <int Stride>
-ceres::CostFunction* make_cost(const WindowResidualSetup& setup, const FitWindow& window) {
-  auto* cost = new ceres::DynamicAutoDiffCostFunction<WindowResidual, Stride>(
-      new WindowResidual(setup, window));
-  cost->AddParameterBlock(setup.map->free_count());
-  if (setup.estimate_start_state) cost->AddParameterBlock(2);
-  cost->SetNumResiduals(window_residual_count(setup, window));
-  return cost;
-}
-
-}  // namespace
-
 ceres::CostFunction* make_window_cost(const WindowResidualSetup& setup, const FitWindow& window) {
   // The Jacobian takes ceil(active / Stride) passes of Jets with Stride derivative parts:
   // pick the stride that needs one pass for the usual sizes without wasting many parts. A
   // loop's refit adds one to three effect parameters to the default 13-14 (17-19 with the
   // window states): one pass of 24 instead of two of 16.
   const int free = setup.map->free_count() + (setup.estimate_start_state ? 2 : 0);
-  if (free <= 4) return make_cost<4>(setup, window);
-  if (free <= 8) return make_cost<8>(setup, window);
-  if (free <= 16) return make_cost<16>(setup, window);
-  return make_cost<24>(setup, window);
+  if (free <= 4) return fit_detail::make_cost<4>(setup, window);
+  if (free <= 8) return fit_detail::make_cost<8>(setup, window);
+  if (free <= 16) return fit_detail::make_cost<16>(setup, window);
+  return fit_detail::make_wide_window_cost(setup, window);
 }
 
 }  // namespace doorbench
