@@ -15,7 +15,9 @@ if ((${#targets[@]} == 0)); then targets=(csv rig params journal hapticmaster); 
 build_dir=${DOORBENCH_FUZZ_BUILD_DIR:-build-fuzz}
 root=$(pwd)
 
-CC=clang CXX=clang++ cmake -S . -B "$build_dir" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+generator=()  # Ninja for a new folder, as scripts/test.sh
+if [[ ! -e $build_dir/CMakeCache.txt ]] && command -v ninja > /dev/null; then generator=(-G Ninja); fi
+CC=clang CXX=clang++ cmake -S . -B "$build_dir" "${generator[@]}" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
   -DDOORBENCH_FUZZ=ON -DDOORBENCH_BUILD_TESTS=OFF -DDOORBENCH_BUILD_BENCH=OFF > /dev/null
 cmake --build "$build_dir" -j "$(nproc)" --target "${targets[@]/#/fuzz_}"
 

@@ -5,6 +5,8 @@ set -euo pipefail
 
 packages=(
   build-essential cmake pkg-config
+  ninja-build            # the build tool scripts/test.sh configures (objects of a library's dependents
+                         # compile while it links; docs/PERFORMANCE.md)
   catch2                 # Catch2 v2 (tests)
   libbenchmark-dev       # Google Benchmark (bench/)
   nlohmann-json3-dev     # parameter files
