@@ -61,8 +61,15 @@ std::string fit_size(PreparedData& data, const DoorModel& start, const FitOption
   const std::string window_text =
       "windows of " + format_number(fit.window_s) + " s";
   if (max_windows <= 0 || all <= static_cast<std::size_t>(max_windows) || strokes <= 2) {
+    // Windows that span a recording gap are not in the count; say how many (listed above).
+    const std::size_t across = split_windows_and_gaps(data, windows).across_gaps.size();
     return "the window fit: " + std::to_string(all) + " " + window_text + " on " +
-           std::to_string(strokes) + " strokes";
+           std::to_string(strokes) + " strokes" +
+           (across == 0 ? std::string()
+                        : std::string(" (").append(std::to_string(across))
+                              .append(across == 1
+                                          ? " window spans a recording gap and is left out)"
+                                          : " windows span a recording gap and are left out)"));
   }
   // The most pairs of consecutive strokes (an opening and its closing, so that both
   // directions stay in the fit), spread evenly, whose windows stay within max_windows.
