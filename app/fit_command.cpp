@@ -108,9 +108,9 @@ std::string joined(const std::vector<std::string>& names) {
 // Each choice is said on stderr and in the report. Throws std::runtime_error when no
 // parameter is identifiable.
 FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOptions fit,
-                        std::vector<std::string>& report_lines) {
-  auto say = [&report_lines](const std::string& line) {
-    std::cerr << line << "\n";
+                        StatusLine& status, std::vector<std::string>& report_lines) {
+  auto say = [&](const std::string& line) {
+    status.line(line);  // a line that stays, above the fit's status line
     report_lines.push_back(line);
   };
   FitOptions trial_options = fit;
@@ -216,7 +216,7 @@ void run_fit(const FitCommandOptions& options) {
                    ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
                    : ""));
   fit_options.progress = fit_progress_display(status);
-  const FitResult result = free_auto ? fit_free_auto(start, data, fit_options, inputs.report_lines)
+  const FitResult result = free_auto ? fit_free_auto(start, data, fit_options, status, inputs.report_lines)
                                      : fit_model(start, data, fit_options);
   status.finish();
 
