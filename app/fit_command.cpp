@@ -61,8 +61,15 @@ std::string fit_size(PreparedData& data, const DoorModel& start, const FitOption
   const std::string window_text =
       "windows of " + format_number(fit.window_s) + " s";
   if (max_windows <= 0 || all <= static_cast<std::size_t>(max_windows) || strokes <= 2) {
+    // Windows that span a recording gap are not in the count; say how many (listed above).
+    const std::size_t across = split_windows_and_gaps(data, windows).across_gaps.size();
     return "the window fit: " + std::to_string(all) + " " + window_text + " on " +
-           std::to_string(strokes) + " strokes";
+           std::to_string(strokes) + " strokes" +
+           (across == 0 ? std::string()
+                        : std::string(" (").append(std::to_string(across))
+                              .append(across == 1
+                                          ? " window spans a recording gap and is left out)"
+                                          : " windows span a recording gap and are left out)"));
   }
   // The most pairs of consecutive strokes (an opening and its closing, so that both
   // directions stay in the fit), spread evenly, whose windows stay within max_windows.
@@ -86,6 +93,68 @@ std::string fit_size(PreparedData& data, const DoorModel& start, const FitOption
          (count_windows(data) > static_cast<std::size_t>(max_windows)
               ? "; one pair of strokes is the least the fit takes)"
               : ")");
+}
+
+std::string joined(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& name : names) out += (out.empty() ? "" : ", ") + name;
+  return out;
+}
+
+// --free auto (docs/fitting.md, "Identifiable parameters"): the default free set (less
+// --fixed) is fitted once without folds; when it leaves parameters undetermined, its
+// identifiable set (FitSummary::identifiable) is fitted with the others held at their start
+// values, and what that fit still leaves undetermined is held too (at most twice more).
+// Each choice is said on stderr and in the report. Throws std::runtime_error when no
+// parameter is identifiable.
+FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOptions fit,
+                        StatusLine& status, std::vector<std::string>& report_lines) {
+  auto say = [&](const std::string& line) {
+    status.line(line);  // a line that stays, above the fit's status line
+    report_lines.push_back(line);
+  };
+  FitOptions trial_options = fit;
+  trial_options.cross_validation_folds = 0;
+  const FitSummary trial = fit_model(start, data, trial_options).summary;
+  const std::size_t count = trial.free_names.size();
+  if (trial.undetermined.empty()) {
+    say("--free auto: the default free set's " + std::to_string(count) +
+        " parameters are all determined; it is fitted as it is");
+    fit.free_parameters = trial.free_names;
+    return fit_model(start, data, fit);
+  }
+  if (trial.identifiable.empty()) {
+    throw std::runtime_error("fit --free auto: the default free set leaves " +
+                             joined(trial.undetermined) +
+                             " undetermined and no subset of it is determined; give --free");
+  }
+  std::vector<std::string> held;
+  for (const std::string& name : trial.free_names) {
+    if (std::find(trial.identifiable.begin(), trial.identifiable.end(), name) ==
+        trial.identifiable.end()) {
+      held.push_back(name);
+    }
+  }
+  say("--free auto: the default free set leaves " + std::to_string(trial.undetermined.size()) +
+      " of its " + std::to_string(count) + " parameters undetermined (" +
+      joined(trial.undetermined) + "); fitting the " + std::to_string(trial.identifiable.size()) +
+      " the data determine with the others held (from the Jacobian's singular vectors at its "
+      "optimum): " + joined(trial.identifiable) + "; held at their start values: " +
+      joined(held));
+  fit.free_parameters = trial.identifiable;
+  FitResult result = fit_model(start, data, fit);
+  for (int round = 0; round < 2 && !result.summary.undetermined.empty(); ++round) {
+    const std::vector<std::string> still = result.summary.undetermined;
+    std::erase_if(fit.free_parameters, [&still](const std::string& name) {
+      return std::find(still.begin(), still.end(), name) != still.end();
+    });
+    if (fit.free_parameters.empty()) break;
+    say("--free auto: that fit leaves " + joined(still) + " undetermined; refitting with " +
+        (still.size() == 1 ? "it" : "them") + " held at the start value" +
+        (still.size() == 1 ? "" : "s"));
+    result = fit_model(start, data, fit);
+  }
+  return result;
 }
 
 // --init-only: the start parameter file and a page saying where each value came from.
@@ -118,7 +187,8 @@ void run_fit(const FitCommandOptions& options) {
   // The names, against the start model's parameters (effects included), before the data.
   const DoorModel named = start_model(options.input.model.model, options.input.model.params_path,
                                       options.input.model.effects_path);
-  check_parameter_names(named, "--free", split_names(options.free));
+  const bool free_auto = options.free == "auto";
+  if (!free_auto) check_parameter_names(named, "--free", split_names(options.free));
   check_parameter_names(named, "--fixed", split_names(options.fixed));
   FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
   const PreparedData& data = inputs.data;
@@ -131,7 +201,7 @@ void run_fit(const FitCommandOptions& options) {
 
   FitOptions fit_options;
   fit_options.substeps_per_sample = substeps_for(data);
-  fit_options.free_parameters = split_names(options.free);
+  if (!free_auto) fit_options.free_parameters = split_names(options.free);
   fit_options.fixed_parameters = split_names(options.fixed);
   if (options.objective == "study-max") {
     fit_options.objective = FitOptions::Objective::kWholeStrokeMax;
@@ -146,7 +216,8 @@ void run_fit(const FitCommandOptions& options) {
                    ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
                    : ""));
   fit_options.progress = fit_progress_display(status);
-  const FitResult result = fit_model(start, data, fit_options);
+  const FitResult result = free_auto ? fit_free_auto(start, data, fit_options, status, inputs.report_lines)
+                                     : fit_model(start, data, fit_options);
   status.finish();
 
   const std::filesystem::path dir = options.out_dir;
@@ -183,7 +254,9 @@ void add_fit_command(CLI::App& app, Action& action) {
       *fit, options->input,
       "Effects to add: an effects file (*.json) or names, e.g. stribeck,viscous_damping");
   fit->add_option("--free", options->free,
-                  "Free parameters, comma-separated (default: docs/fitting.md)");
+                  "Free parameters, comma-separated (default: docs/fitting.md); auto: the "
+                  "default set fitted once, then only the parameters its data determine, the "
+                  "others held at their start values");
   fit->add_option("--fixed", options->fixed, "Parameters held at their start values");
   fit->add_option("--objective", options->objective,
                   "windows (least squares on windows) or study-max (the study's largest rate "

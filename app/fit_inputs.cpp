@@ -13,6 +13,8 @@
 #include "acquisition/session/session_csv.h"
 #include "acquisition/session/session_file.h"
 #include "analysis/fit/fit_init.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "app/commands.h"
@@ -203,23 +205,45 @@ FitInputs prepare_fit_run(const FitDataOptions& options, const std::filesystem::
   return inputs;
 }
 
-FitInputs load_fit_inputs(const FitDataOptions& options) {
-  std::cerr << "preparing " << options.data_path << "\n";
-  PreparedData data = load_prepared_data(options.data_path, options.preprocessing);
-  check_handle_radius(data, options.force_geometry);
+void list_excluded(PreparedData& data, const DoorModel& start,
+                   std::vector<std::string>& report_lines) {
+  WindowOptions windows = metric_window_options(FitOptions{}, start);
+  windows.disjoint = FitOptions{}.estimate_window_states;  // as the window fit cuts them
+  for (ExcludedSegment& window : gap_window_exclusions(data, windows)) {
+    data.excluded.push_back(std::move(window));
+  }
+  std::stable_sort(
+      data.excluded.begin(), data.excluded.end(),
+      [](const ExcludedSegment& a, const ExcludedSegment& b) { return a.start_s < b.start_s; });
   std::cerr << "  " << data.strokes.size() << " strokes, " << data.excluded.size()
             << " segments excluded\n"
             << "  " << data.rate_summary << "\n";
   for (const std::string& warning : data.warnings) std::cerr << "warning: " << warning << "\n";
-  for (const ExcludedSegment& e : data.excluded) {
-    if (!e.lost_samples) continue;  // gaps are never silent
-    char span[64];
+  if (data.excluded.empty()) return;
+  std::string report = "excluded (" + std::to_string(data.excluded.size()) + "):";
+  for (std::size_t k = 0; k < data.excluded.size(); ++k) {
+    const ExcludedSegment& e = data.excluded[k];
+    char span[80];
     std::snprintf(span, sizeof span, "%.3f s to %.3f s", e.start_s, e.end_s);
-    std::cerr << "  excluded " << span << ": " << e.reason << "\n";
+    const std::string line = "excluded " + std::string(span) + ": " + e.reason;
+    if (k < kExcludedListed) std::cerr << "  " << line << "\n";
+    report += "\n- " + line;
   }
+  if (data.excluded.size() > kExcludedListed) {
+    std::cerr << "  ... and " << data.excluded.size() - kExcludedListed
+              << " more excluded segments (report.md and result.json list every one)\n";
+  }
+  report_lines.push_back(report);
+}
+
+FitInputs load_fit_inputs(const FitDataOptions& options) {
+  std::cerr << "preparing " << options.data_path << "\n";
+  PreparedData data = load_prepared_data(options.data_path, options.preprocessing);
+  check_handle_radius(data, options.force_geometry);
   DoorModel start =
       start_model(options.model.model, options.model.params_path, options.model.effects_path);
   std::vector<std::string> report_lines;
+  list_excluded(data, start, report_lines);
   for (const std::string& warning : data.warnings) {
     if (warning.starts_with(kCutShortWarning)) report_lines.push_back("warning: " + warning);
   }

@@ -73,6 +73,17 @@ struct FitDataOptions {
 // DATA, --params and an --effects file: what the --out folder must not hold.
 std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options);
 
+// Every segment left out of the fit, named with its reason: preprocessing's exclusions
+// (PreparedData::excluded) and the window fit's windows that span a recording gap (with the
+// default window options of `start`: gap_window_exclusions), which are added to
+// data.excluded (so that result.json lists them), in time order. Prints "N strokes, M
+// segments excluded", the rate summary, the warnings and the first kExcludedListed
+// exclusions ("excluded T1 s to T2 s: REASON") on stderr, and appends one report line
+// listing them all.
+inline constexpr std::size_t kExcludedListed = 20;
+void list_excluded(PreparedData& data, const DoorModel& start,
+                   std::vector<std::string>& report_lines);
+
 // RK4 sub-steps per sample for a fit of `data`: steps of at most 1 ms, and at least 2 per
 // sample (the fit's default, kept at 500 Hz and above). At 50 Hz: 20.
 int substeps_for(const PreparedData& data);

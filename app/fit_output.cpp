@@ -95,6 +95,7 @@ nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedDa
           {"parameters", parameters},
           {"correlations_above_threshold", correlations},
           {"undetermined", s.undetermined},
+          {"identifiable", s.identifiable},
           {"fitted", metrics_json(s.fitted)},
           {"held_out", s.held_out ? metrics_json(*s.held_out) : nlohmann::ordered_json(nullptr)},
           {"folds", s.folds},

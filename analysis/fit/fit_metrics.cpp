@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <stdexcept>
 
@@ -97,19 +98,53 @@ WindowSimulation simulate_windows(const DoorModel& model, const PreparedData& da
   return out;
 }
 
+std::vector<ExcludedSegment> gap_window_exclusions(const PreparedData& data,
+                                                   const WindowOptions& options) {
+  std::vector<ExcludedSegment> out;
+  for (const FitWindow& window : split_windows_and_gaps(data, options).across_gaps) {
+    const Stroke& stroke = data.strokes[window.stroke];
+    const std::vector<int> gaps = stroke_gaps(stroke);
+    const int last = window.first + window.count - 1;
+    const int gap = *std::upper_bound(gaps.begin(), gaps.end(), window.first);
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "stroke %d (%s): the window from %.3f s to %.3f s spans the recording gap "
+                  "from %.3f s to %.3f s and is not fitted",
+                  stroke.id, stroke.direction == StrokeDirection::kOpening ? "opening" : "closing",
+                  stroke.time_s[window.first], stroke.time_s[last], stroke.time_s[gap - 1],
+                  stroke.time_s[gap]);
+    out.push_back({stroke.time_s[window.first], stroke.time_s[last], text, true});
+  }
+  return out;
+}
+
 namespace {
 
+// The stroke replayed open-loop from its first measured state; after a gap in the recording
+// (stroke_gaps) the replay restarts from the measured state there, as a new stroke would.
 void replay_stroke(const DoorModel& model, const Stroke& stroke, StrokeFitMetrics& metrics) {
   if (stroke.size() < 2) return;
+  std::vector<int> starts = stroke_gaps(stroke);
+  starts.insert(starts.begin(), 0);
+  starts.push_back(static_cast<int>(stroke.size()));
   try {
-    const RecordedForce force(stroke.time_s, stroke.force_N);
-    DoorState initial;
-    initial.time_s = stroke.time_s.front();
-    initial.theta_rad = stroke.theta_rad.front();
-    initial.omega_rad_s = stroke.omega_rad_s.front();
-    const Trajectory run = simulate(model, force, initial, stroke.time_s);
-    for (std::size_t i = 1; i < stroke.size(); ++i) {
-      metrics.replay.add(stroke.omega_rad_s[i], run.omega_rad_s[i], stroke.time_s[i]);
+    for (std::size_t p = 0; p + 1 < starts.size(); ++p) {
+      const auto first = static_cast<std::ptrdiff_t>(starts[p]);
+      const auto end = static_cast<std::ptrdiff_t>(starts[p + 1]);
+      if (end - first < 2) continue;
+      const std::vector<double> time_s(stroke.time_s.begin() + first, stroke.time_s.begin() + end);
+      const RecordedForce force(
+          time_s, std::vector<double>(stroke.force_N.begin() + first, stroke.force_N.begin() + end));
+      DoorState initial;
+      initial.time_s = time_s.front();
+      initial.theta_rad = stroke.theta_rad[first];
+      initial.omega_rad_s = stroke.omega_rad_s[first];
+      const Trajectory run = simulate(model, force, initial, time_s);
+      for (std::ptrdiff_t i = 1; i < end - first; ++i) {
+        const auto k = static_cast<std::size_t>(first + i);
+        metrics.replay.add(stroke.omega_rad_s[k], run.omega_rad_s[static_cast<std::size_t>(i)],
+                           stroke.time_s[k]);
+      }
     }
   } catch (const std::exception& error) {
     metrics.replay_ok = false;
@@ -127,15 +162,19 @@ FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
     for (std::size_t s = 0; s < data.strokes.size(); ++s) indices.push_back(static_cast<int>(s));
   }
   const WindowSimulation windows = simulate_windows(model, data, options);
+  // The samples measured: those in a window but not its first (a window left out because
+  // it spans a gap measures none).
   std::vector<std::size_t> window_count(data.strokes.size(), 0);
-  std::vector<std::vector<char>> is_start(data.strokes.size());
+  std::vector<std::vector<char>> counted(data.strokes.size());
   for (std::size_t s = 0; s < data.strokes.size(); ++s) {
-    is_start[s].assign(data.strokes[s].size(), 0);
+    counted[s].assign(data.strokes[s].size(), 0);
   }
-  for (const FitWindow& window : split_windows(data, options)) {
+  const std::vector<FitWindow> windows_used = split_windows(data, options);
+  for (const FitWindow& window : windows_used) {
     ++window_count[window.stroke];
-    is_start[window.stroke][window.first] = 1;
+    for (int j = 1; j < window.count; ++j) counted[window.stroke][window.first + j] = 1;
   }
+  for (const FitWindow& window : windows_used) counted[window.stroke][window.first] = 0;
   FitMetrics metrics;
   for (int s : indices) {
     if (s < 0 || s >= static_cast<int>(data.strokes.size())) {
@@ -148,7 +187,7 @@ FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
     stroke_metrics.direction = stroke.direction;
     stroke_metrics.windows = window_count[s];
     for (std::size_t i = 0; i < stroke.size(); ++i) {
-      if (is_start[s][i]) continue;
+      if (!counted[s][i]) continue;
       stroke_metrics.window.add(stroke.omega_rad_s[i], windows.omega_rad_s[s][i], stroke.time_s[i]);
     }
     replay_stroke(model, stroke, stroke_metrics);

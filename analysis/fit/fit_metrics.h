@@ -7,8 +7,9 @@
 //   recorded force (the adaptive Dormand–Prince simulator); its largest error of ω is the
 //   study's objective, max |ω_meas − ω_sim|.
 //
-// Errors are taken at every sample that is not a window's start (windows) or not the
-// stroke's first sample (replay).
+// Errors are taken at every sample of a window that is not its start (windows; a window
+// left out because it spans a recording gap measures none), or at every sample that is not
+// the first of the stroke or of a part after a gap (replay, which restarts after a gap).
 #include <string>
 #include <vector>
 
@@ -70,6 +71,13 @@ struct WindowSimulation {
 
 WindowSimulation simulate_windows(const DoorModel& model, const PreparedData& data,
                                   const WindowOptions& options);
+
+// The windows of `options` left out because they span a recording gap (split_windows_and_gaps),
+// each as an excluded segment from its first to its last sample, named for the user:
+// "stroke 3 (opening): the window from 7.400 s to 7.600 s spans the recording gap from
+// 7.499 s to 7.510 s and is not fitted". In stroke and time order.
+std::vector<ExcludedSegment> gap_window_exclusions(const PreparedData& data,
+                                                   const WindowOptions& options);
 
 // Metrics of `model` on the strokes of `data` whose indices are listed (all when empty).
 FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,

@@ -111,6 +111,16 @@ RobustCovariance robust_covariance(const ReducedSystem& system, const Eigen::Mat
 // √ of the diagonal of the robust or the classical (σ² H⁺) covariance, in solver units.
 Eigen::VectorXd standard_uncertainties(const ReducedSystem& system, bool robust);
 
+// The identifiable free set at the optimum (docs/fitting.md, "Identifiable parameters"):
+// the free parameters (indices into the system's rows, increasing) that, with the others
+// held where they are, the data determine — none in a direction of H below kRankTolerance
+// and each with a standard uncertainty (robust or classical, in solver units like x) at most
+// relative_limit × |x|. Backward elimination: while one is not determined, the one of those
+// with the largest part in the weakest eigenvector of the normalized H (the Jacobian's
+// smallest singular vector) is dropped. Linearized at x: a refit of the set can move.
+std::vector<int> identifiable_subset(const ReducedSystem& system, const Eigen::VectorXd& x,
+                                     bool robust, double relative_limit);
+
 class CachingCost;
 class EvaluationPreparer;
 

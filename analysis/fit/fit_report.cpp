@@ -1,4 +1,5 @@
 // The text reports of a fit: FitSummary::brief_report() and full_report().
+#include <algorithm>
 #include <cmath>
 #include <cstdarg>
 #include <cstdio>
@@ -84,9 +85,27 @@ std::string FitSummary::brief_report() const {
   if (!undetermined.empty()) {
     out += "Undetermined:";
     for (const std::string& name : undetermined) out += " " + name;
-    out += ".\n";
+    out += ".\n" + identifiable_line() + "\n";
   }
   return out;
+}
+
+std::string FitSummary::identifiable_line() const {
+  if (undetermined.empty()) return "";
+  if (identifiable.empty()) {
+    return "Identifiable free set: none (with any of the free parameters held, the others are "
+           "still undetermined).";
+  }
+  std::string out = "Identifiable free set (determined with the others held, from the "
+                    "Jacobian's singular vectors at the optimum):";
+  for (const std::string& name : identifiable) out += " " + name;
+  std::string held;
+  for (const std::string& name : free_names) {
+    if (std::find(identifiable.begin(), identifiable.end(), name) == identifiable.end()) {
+      held += " " + name;
+    }
+  }
+  return out + "; held:" + held + " (doorbench fit --free auto fits this set).";
 }
 
 namespace {
@@ -185,6 +204,7 @@ void parameter_section(std::string& out, const FitSummary& summary) {
   if (summary.undetermined.empty()) out += " none";
   for (const std::string& name : summary.undetermined) out += " " + name;
   out += "\n";
+  if (!summary.undetermined.empty()) out += summary.identifiable_line() + "\n";
 }
 
 // The latch read off the data, when it was.

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 
+#include "analysis/fit/fit_windows.h"
 #include "analysis/model/sensory_model.h"
 #include "core/numbers.h"
 
@@ -13,15 +14,22 @@ namespace doorbench {
 std::vector<double> rate_derivative(const Stroke& stroke, double half_width_s) {
   const int n = static_cast<int>(stroke.size());
   std::vector<double> derivative(n, 0.0);
-  for (int i = 0; i < n; ++i) {
-    // At least one sample each side; more while they lie within the half width.
-    int lo = std::max(0, i - 1), hi = std::min(n - 1, i + 1);
-    while (lo > 0 && stroke.time_s[i] - stroke.time_s[lo - 1] <= half_width_s) --lo;
-    while (hi < n - 1 && stroke.time_s[hi + 1] - stroke.time_s[i] <= half_width_s) ++hi;
-    if (hi > lo) {
-      derivative[i] = (stroke.omega_rad_s[hi] - stroke.omega_rad_s[lo]) /
-                      (stroke.time_s[hi] - stroke.time_s[lo]);
+  // Piece by piece between the recording's gaps: no difference spans one.
+  std::vector<int> ends = stroke_gaps(stroke);
+  ends.push_back(n);
+  int begin = 0;
+  for (const int end : ends) {
+    for (int i = begin; i < end; ++i) {
+      // At least one sample each side; more while they lie within the half width.
+      int lo = std::max(begin, i - 1), hi = std::min(end - 1, i + 1);
+      while (lo > begin && stroke.time_s[i] - stroke.time_s[lo - 1] <= half_width_s) --lo;
+      while (hi < end - 1 && stroke.time_s[hi + 1] - stroke.time_s[i] <= half_width_s) ++hi;
+      if (hi > lo) {
+        derivative[i] = (stroke.omega_rad_s[hi] - stroke.omega_rad_s[lo]) /
+                        (stroke.time_s[hi] - stroke.time_s[lo]);
+      }
     }
+    begin = end;
   }
   return derivative;
 }

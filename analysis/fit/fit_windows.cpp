@@ -19,9 +19,16 @@ double median_step_s(const Stroke& stroke) {
   return *middle;
 }
 
-// Windows over samples [begin, end) of one stroke, a piece without gaps.
+// Whether `window` has one of the (increasing) `gaps` between two of its samples.
+bool spans_gap(const FitWindow& window, const std::vector<int>& gaps) {
+  const auto gap = std::upper_bound(gaps.begin(), gaps.end(), window.first);
+  return gap != gaps.end() && *gap <= window.first + window.count - 1;
+}
+
+// Windows over samples [begin, end) of one stroke, a piece without impacts. A short last
+// window joins the one before it unless one of them spans a gap (both would be left out).
 void split_piece(int stroke_index, const Stroke& stroke, int begin, int end, double window_s,
-                 bool disjoint, std::vector<FitWindow>& windows) {
+                 bool disjoint, const std::vector<int>& gaps, std::vector<FitWindow>& windows) {
   if (end - begin < 2) return;
   const std::size_t first_of_piece = windows.size();
   int start = begin;
@@ -33,11 +40,12 @@ void split_piece(int stroke_index, const Stroke& stroke, int begin, int end, dou
   }
   // Disjoint windows can leave one sample over: it joins the last window.
   if (disjoint && start == end - 1 && windows.size() > first_of_piece) ++windows.back().count;
-  // A short last piece joins the window before it (in the same gap-free piece).
+  // A short last piece joins the window before it (in the same piece).
   if (windows.size() - first_of_piece >= 2) {
     const FitWindow tail = windows.back();
     const double tail_s = stroke.time_s[tail.first + tail.count - 1] - stroke.time_s[tail.first];
-    if (tail_s < 0.5 * window_s) {
+    if (tail_s < 0.5 * window_s && !spans_gap(tail, gaps) &&
+        !spans_gap(windows[windows.size() - 2], gaps)) {
       windows.pop_back();
       windows.back().count += tail.count - (disjoint ? 0 : 1);
     }
@@ -46,13 +54,25 @@ void split_piece(int stroke_index, const Stroke& stroke, int begin, int end, dou
 
 }  // namespace
 
-std::vector<FitWindow> split_windows(const PreparedData& data, const WindowOptions& options) {
-  std::vector<FitWindow> windows;
+std::vector<int> stroke_gaps(const Stroke& stroke) {
+  std::vector<int> gaps;
+  const int n = static_cast<int>(stroke.size());
+  if (n < 2) return gaps;
+  const double gap_s = kWindowGapFactor * median_step_s(stroke);
+  for (int i = 1; i < n; ++i) {
+    const bool marked = std::binary_search(stroke.gap_before.begin(), stroke.gap_before.end(), i);
+    if (marked || stroke.time_s[i] - stroke.time_s[i - 1] > gap_s) gaps.push_back(i);
+  }
+  return gaps;
+}
+
+WindowSplit split_windows_and_gaps(const PreparedData& data, const WindowOptions& options) {
+  WindowSplit split;
   for (std::size_t s = 0; s < data.strokes.size(); ++s) {
     const Stroke& stroke = data.strokes[s];
     const int n = static_cast<int>(stroke.size());
     if (n < 2) continue;
-    const double gap_s = kWindowGapFactor * median_step_s(stroke);
+    const std::vector<int> gaps = stroke_gaps(stroke);
     const double window_s = options.whole_strokes ? INFINITY : options.window_s;
     auto impact = [&](int i) {
       if (std::abs(stroke.omega_rad_s[i - 1]) <= options.cut_rate_rad_s ||
@@ -64,16 +84,28 @@ std::vector<FitWindow> split_windows(const PreparedData& data, const WindowOptio
       }
       return false;
     };
+    // Whole strokes are cut at gaps as at impacts (a replay restarts after one); windows
+    // are laid over gaps as if the samples were there, and those that span one are left out.
+    std::vector<FitWindow> windows;
     int begin = 0;
     for (int i = 1; i < n; ++i) {
-      if (stroke.time_s[i] - stroke.time_s[i - 1] > gap_s || impact(i)) {
-        split_piece(static_cast<int>(s), stroke, begin, i, window_s, options.disjoint, windows);
+      const bool gap = std::binary_search(gaps.begin(), gaps.end(), i);
+      if ((options.whole_strokes && gap) || impact(i)) {
+        split_piece(static_cast<int>(s), stroke, begin, i, window_s, options.disjoint, gaps,
+                    windows);
         begin = i;
       }
     }
-    split_piece(static_cast<int>(s), stroke, begin, n, window_s, options.disjoint, windows);
+    split_piece(static_cast<int>(s), stroke, begin, n, window_s, options.disjoint, gaps, windows);
+    for (const FitWindow& window : windows) {
+      (spans_gap(window, gaps) ? split.across_gaps : split.windows).push_back(window);
+    }
   }
-  return windows;
+  return split;
+}
+
+std::vector<FitWindow> split_windows(const PreparedData& data, const WindowOptions& options) {
+  return split_windows_and_gaps(data, options).windows;
 }
 
 std::vector<double> ParameterMap::values(const double* x) const {

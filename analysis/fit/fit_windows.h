@@ -48,15 +48,31 @@ struct WindowOptions {
 };
 
 // A time step longer than this many times the stroke's median step is a gap in the
-// recording: no window spans it.
+// recording, as is every gap preprocessing marks (Stroke::gap_before).
 inline constexpr double kWindowGapFactor = 5.0;
+
+// The gaps of `stroke`, increasing: each sample i such that the recording has a gap between
+// samples i − 1 and i (marked in Stroke::gap_before, or a step longer than kWindowGapFactor
+// times the stroke's median step).
+std::vector<int> stroke_gaps(const Stroke& stroke);
 
 // Cuts every stroke into windows of window_s (measured on the stroke's clock). Consecutive
 // windows share their boundary sample unless `disjoint`: the end of one window is the
 // start state of the next, so every sample except a stroke's first is a residual exactly
-// once. Gaps and impacts (see WindowOptions) end a piece: windows restart after them. A
-// last piece shorter than half a window joins the window before it. Strokes with fewer than
-// 2 samples give no window.
+// once. Impacts (see WindowOptions) end a piece: windows restart after them. A last piece
+// shorter than half a window joins the window before it. Strokes with fewer than 2 samples
+// give no window.
+//
+// Gaps cost windows, not strokes: the windows are laid over a gap as if its samples were
+// there (a window still ends where window_s has passed on the clock), and every window that
+// spans a gap (has the gap between two of its samples) is left out; the stroke's other
+// windows are the same as without the gap. With whole_strokes a gap ends a piece as an
+// impact does.
+struct WindowSplit {
+  std::vector<FitWindow> windows;      // the windows fitted
+  std::vector<FitWindow> across_gaps;  // those left out: each spans a gap (stroke_gaps)
+};
+WindowSplit split_windows_and_gaps(const PreparedData& data, const WindowOptions& options);
 std::vector<FitWindow> split_windows(const PreparedData& data, const WindowOptions& options);
 
 // Where every model parameter's value comes from: a free parameter k is x[k] · scale[k]

@@ -473,6 +473,13 @@ void statistics_stage(WindowProblem& problem, const DoorModel& start, const Para
                               " ended on a bound: its uncertainty ignores the bound");
     }
   }
+  if (!summary.undetermined.empty()) {
+    const Eigen::Map<const Eigen::VectorXd> x(problem.x().data(), p);
+    for (int k : identifiable_subset(system, x, use_robust,
+                                     options.undetermined_relative_uncertainty)) {
+      summary.identifiable.push_back(summary.free_names[k]);
+    }
+  }
   std::string few_windows;
   for (int k = 0; k < p && use_robust; ++k) {
     const FittedParameter& parameter = summary.parameters[map.free_index[k]];

@@ -252,6 +252,10 @@ struct FitSummary {
   std::vector<double> covariance;
   std::vector<ParameterCorrelation> strong_correlations;
   std::vector<std::string> undetermined;  // parameters the data cannot determine
+  // When some are undetermined: the free parameters the data would determine with the
+  // others held (identifiable_subset at the optimum, in the order of free_names); a fit of
+  // just these (doorbench fit --free auto) is the proposal. Empty when all are determined.
+  std::vector<std::string> identifiable;
 
   LatchReadOff latch_start;  // the sensory latch read off the data (when asked)
 
@@ -263,6 +267,9 @@ struct FitSummary {
   std::vector<std::string> notes;  // anything the reader should know
 
   std::string brief_report() const;  // a few lines
+  // With undetermined parameters, the proposal: "Identifiable free set (...): J c d1; held:
+  // k s (doorbench fit --free auto fits this set)."; "" when all are determined.
+  std::string identifiable_line() const;
   std::string full_report() const;   // parameters, correlations, metrics per stroke, solver
 };
 

@@ -319,8 +319,8 @@ void fill_non_finite_values(Input& in) {
 
 // A short run of lost scans (a ring overflow of a few blocks) is bridged: the rate
 // interpolated across it stands for the rate, so the drift between the anchors around it
-// is still removed and the strokes beside it keep their accuracy. (The strokes holding it
-// are left out all the same.) A longer loss, like any other fault, makes the rate unknown.
+// is still removed and the strokes beside it keep their accuracy (and the stroke holding it
+// keeps its angle across it). A longer loss, like any other fault, makes the rate unknown.
 // Returns, per sample, whether it is bridged.
 std::vector<bool> bridged_losses(const PreprocessingOptions& options, const Input& in) {
   const std::vector<double>& t = in.t;
@@ -355,7 +355,7 @@ std::vector<std::uint8_t> motion_faults(const Input& in,
 }
 
 // unknown[i]: the intervals in (0, i] over which the rate is unknown (a rate fault not
-// bridged at either end, or a gap).
+// bridged at either end, or a gap longer than a bridged loss).
 std::vector<std::size_t> count_unknown_intervals(const Recording& recording,
                                                  const PreprocessingOptions& options,
                                                  const Input& in,
@@ -373,8 +373,14 @@ std::vector<std::size_t> count_unknown_intervals(const Recording& recording,
   auto rate_fault = [&](std::size_t i) {
     return ((in.fault[i] & rate_faults) || rate_impossible[i]) && !bridged[i];
   };
+  // A jump of the clock no longer than a bridged loss is bridged the same way: the rate
+  // integrated across it is the line between the samples around it.
+  auto unbridged_gap = [&](std::size_t i) {
+    return (in.fault[i] & kGapBefore) &&
+           in.t[i] - in.t[i - 1] > options.max_bridged_loss_s + 0.5 * in.median_interval_s;
+  };
   for (std::size_t i = 1; i < n; ++i) {
-    const bool u = rate_fault(i) || (in.fault[i] & kGapBefore) || rate_fault(i - 1);
+    const bool u = rate_fault(i) || unbridged_gap(i) || rate_fault(i - 1);
     unknown[i] = unknown[i - 1] + (u ? 1 : 0);
   }
   return unknown;

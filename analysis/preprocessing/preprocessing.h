@@ -109,13 +109,16 @@ struct PreprocessingOptions {
   double min_stroke_angle_rad = 1.0 * kRadPerDeg;
 
   // An interval between samples longer than max_gap_factor × the median interval is a
-  // gap: the rate across it is unknown.
+  // gap in time_s (a jump of the clock).
   double max_gap_factor = 10.0;
-  // Scans lost in recording (rows where every measured column is missing): a stroke holding
-  // one is left out whole. A run of them lasting at most max_bridged_loss_s (from the last
-  // sample before to the first after) is bridged for the angle: the interpolated rate
-  // stands in, so the drift between the anchors around it is still removed; a longer one
-  // makes the rate unknown there, as any fault does. 0: never bridged.
+  // Scans lost in recording (rows where every measured column is missing) and gaps in
+  // time_s: a stroke holding one keeps its samples on both sides (Stroke::gap_before) when
+  // its angle is known on both, and the fit leaves out the windows that span the gap; else
+  // its longest gap-free part is kept. Every gap is listed in PreparedData::excluded. A gap
+  // lasting at most max_bridged_loss_s (from the last sample before to the first after) is
+  // bridged for the angle: the rate interpolated across it stands in, so the drift between
+  // the anchors around it is still removed and the angle is known on both sides; a longer
+  // one makes the rate unknown there, as any fault does. 0: never bridged.
   double max_bridged_loss_s = 0.05;
 
   // Physically impossible samples: a value beyond these limits (or, for the rate and the

@@ -168,9 +168,15 @@ class StrokeCutter {
            std::abs(motion_.theta[piece.last] - motion_.theta[piece.first]) >=
                options_.min_stroke_angle_rad;
   }
-  void exclude_lost(const Range& r, const std::string& name);
+  bool lost(std::size_t i) const { return (in_.fault[i] & kLost) != 0; }
+  // A sample that ends a usable part: one not lost with a fault other than a gap before it.
+  bool breaks(const Range& r, std::size_t i) const {
+    return !lost(i) && (fault_at(r, i) & ~kGapBefore) != 0;
+  }
+  std::optional<Range> best_part(const Range& segment, std::optional<Range> best) const;
   std::optional<Range> keep_good_part(const Range& r, const std::string& name,
                                       const Faults& faults);
+  void list_gaps(const Range& part, const std::string& name);
   std::string reason_to_leave_out(const Range& r, const std::string& name, double net) const;
   void keep(const Candidate& candidate, const Range& r, StrokeDirection direction);
 
@@ -188,7 +194,8 @@ StrokeCutter::Faults StrokeCutter::faults_in(const Range& r) const {
   Faults faults;
   faults.first = in_.size();
   for (std::size_t i = r.first; i <= r.last; ++i) {
-    const std::uint8_t f = fault_at(r, i);
+    // A lost sample's channels are all missing: the loss says it.
+    const std::uint8_t f = lost(i) ? static_cast<std::uint8_t>(kLost) : fault_at(r, i);
     if (f == 0) continue;
     faults.kinds |= f;
     ++faults.count;
@@ -213,62 +220,100 @@ bool StrokeCutter::angle_known(std::size_t first, std::size_t last) const {
          (right != nullptr && in_.unknown[right->index] == in_.unknown[first]);
 }
 
-// Scans lost in recording: the stroke is cut there, and neither part is fitted, so that a
-// fit sees the recording as if the stroke had not been made.
-void StrokeCutter::exclude_lost(const Range& r, const std::string& name) {
-  std::size_t first_lost = r.first, lost_count = 0;
-  while (!(fault_at(r, first_lost) & kLost)) ++first_lost;
-  std::size_t last_lost = first_lost;
-  for (std::size_t i = r.first; i <= r.last; ++i) {
-    if (!(fault_at(r, i) & kLost)) continue;
-    ++lost_count;
-    last_lost = i;
+// The better of `best` and the parts of `segment` (no fault but gaps in it; it starts and
+// ends with a sample not lost): the whole segment when the angle is known on every piece
+// between its gaps (the fit then leaves out only the windows that span a gap), else its
+// longest gap-free piece whose angle is known. Long enough for a stroke, or not taken.
+std::optional<Range> StrokeCutter::best_part(const Range& segment,
+                                             std::optional<Range> best) const {
+  std::vector<Range> pieces;
+  for (std::size_t i = segment.first; i <= segment.last;) {
+    if (lost(i)) {
+      ++i;
+      continue;
+    }
+    Range piece{i, i};
+    while (piece.last + 1 <= segment.last && !lost(piece.last + 1) &&
+           !(in_.fault[piece.last + 1] & kGapBefore)) {
+      ++piece.last;
+    }
+    pieces.push_back(piece);
+    i = piece.last + 1;
   }
-  excluded_.push_back({t_[r.first], t_[r.last],
-                       name + ": recording gap: " + std::to_string(lost_count) +
-                           " samples lost from " + seconds(t_[first_lost]) + " to " +
-                           seconds(t_[last_lost]) +
-                           "; the stroke is cut there and neither part is fitted",
-                       true});
+  const bool across_gaps = std::all_of(pieces.begin(), pieces.end(), [&](const Range& piece) {
+    return angle_known(piece.first, piece.last);
+  });
+  std::vector<Range> candidates = across_gaps ? std::vector<Range>{segment} : pieces;
+  for (const Range& part : candidates) {
+    if ((across_gaps || angle_known(part.first, part.last)) && long_enough(part) &&
+        (!best || part.last - part.first > best->last - best->first)) {
+      best = part;
+    }
+  }
+  return best;
 }
 
-// A brisk stroke saturates the gyroscope for part of its course: its longest fault-free
-// part whose angle is known (before the faults, from the anchor before it; after them,
-// from the anchor after it) is kept, the rest listed. nullopt: no part is.
+// A stroke with faults: a brisk stroke saturates the gyroscope for part of its course, a
+// ring overflow loses scans. Split at its faulty samples (not at gaps: lost scans and jumps
+// of the clock), the best part (best_part) is kept and the rest listed, each gap kept inside
+// it too (list_gaps). nullopt: no part is.
 std::optional<Range> StrokeCutter::keep_good_part(const Range& r, const std::string& name,
                                                   const Faults& faults) {
   const std::string described = describe_faults(faults.kinds, in_.saturation_limit) + " in " +
                                 std::to_string(faults.count) + " samples from " +
                                 seconds(t_[faults.first]);
+  const bool any_lost = (faults.kinds & kLost) != 0;
   std::optional<Range> best;
   std::size_t i = r.first;
   while (i <= r.last) {
-    if (fault_at(r, i) != 0 && !(i > r.first && in_.fault[i] == kGapBefore)) {
+    if (breaks(r, i) || lost(i)) {
       ++i;
       continue;
     }
-    // A gap before i ends the previous piece but i itself is a good sample.
-    Range piece{i, i};
-    while (piece.last + 1 <= r.last && in_.fault[piece.last + 1] == 0) ++piece.last;
-    if (angle_known(piece.first, piece.last) && long_enough(piece) &&
-        (!best || piece.last - piece.first > best->last - best->first)) {
-      best = piece;
-    }
-    i = piece.last + 1;
+    Range segment{i, i};
+    while (segment.last + 1 <= r.last && !breaks(r, segment.last + 1)) ++segment.last;
+    i = segment.last + 1;
+    while (lost(segment.last)) --segment.last;  // it starts with a sample not lost
+    best = best_part(segment, best);
   }
   if (!best) {
-    excluded_.push_back({t_[r.first], t_[r.last], name + ": " + described});
+    excluded_.push_back({t_[r.first], t_[r.last], name + ": " + described, any_lost});
     return std::nullopt;
   }
   if (best->first > r.first) {
-    excluded_.push_back(
-        {t_[r.first], t_[best->first - 1], name + ", before the part kept: " + described});
+    excluded_.push_back({t_[r.first], t_[best->first - 1],
+                         name + ", before the part kept: " + described, any_lost});
   }
   if (best->last < r.last) {
     excluded_.push_back(
-        {t_[best->last + 1], t_[r.last], name + ", after the part kept: " + described});
+        {t_[best->last + 1], t_[r.last], name + ", after the part kept: " + described, any_lost});
   }
+  list_gaps(*best, name);
   return best;
+}
+
+// Each gap inside the part kept, listed: its samples are missing, and the fit leaves out the
+// windows that span it (analysis/fit/fit_windows.h); the rest of the stroke is fitted.
+void StrokeCutter::list_gaps(const Range& part, const std::string& name) {
+  const std::string fitted = "; the fit leaves out the windows that span it and fits the rest "
+                             "of the stroke";
+  for (std::size_t i = part.first + 1; i <= part.last; ++i) {
+    if (lost(i)) {
+      std::size_t last = i;
+      while (lost(last + 1)) ++last;
+      excluded_.push_back({t_[i], t_[last],
+                           name + ": recording gap: " + std::to_string(last - i + 1) +
+                               " samples lost from " + seconds(t_[i]) + " to " +
+                               seconds(t_[last]) + fitted,
+                           true});
+      i = last;
+    } else if (in_.fault[i] & kGapBefore) {
+      excluded_.push_back({t_[i - 1], t_[i],
+                           name + ": gap in time_s: no sample from " + seconds(t_[i - 1]) +
+                               " to " + seconds(t_[i]) + fitted,
+                           true});
+    }
+  }
 }
 
 // Why a fault-free stroke is left out: its angle is unknown, or it is too short ("" when
@@ -294,12 +339,23 @@ void StrokeCutter::keep(const Candidate& candidate, const Range& r, StrokeDirect
   Stroke stroke;
   stroke.id = candidate.id;
   stroke.direction = direction;
-  const auto begin = static_cast<std::ptrdiff_t>(r.first);
-  const auto end = static_cast<std::ptrdiff_t>(r.last + 1);
-  stroke.time_s.assign(t_.begin() + begin, t_.begin() + end);
-  stroke.force_N.assign(in_.force.begin() + begin, in_.force.begin() + end);
-  stroke.theta_rad.assign(motion_.theta.begin() + begin, motion_.theta.begin() + end);
-  stroke.omega_rad_s.assign(motion_.omega.begin() + begin, motion_.omega.begin() + end);
+  // Lost samples are left out (their values were only bridged), so the clock jumps there;
+  // each gap is marked where it ends.
+  bool gap = false;
+  for (std::size_t i = r.first; i <= r.last; ++i) {
+    if (lost(i)) {
+      gap = true;
+      continue;
+    }
+    if (i > r.first && (gap || (in_.fault[i] & kGapBefore))) {
+      stroke.gap_before.push_back(static_cast<int>(stroke.time_s.size()));
+    }
+    gap = false;
+    stroke.time_s.push_back(t_[i]);
+    stroke.force_N.push_back(in_.force[i]);
+    stroke.theta_rad.push_back(motion_.theta[i]);
+    stroke.omega_rad_s.push_back(motion_.omega[i]);
+  }
   data_.strokes.push_back(std::move(stroke));
 }
 
@@ -311,10 +367,6 @@ void StrokeCutter::cut(const Candidate& candidate) {
   const std::string name = "stroke " + std::to_string(candidate.id) + " (" +
                            (direction == StrokeDirection::kOpening ? "opening" : "closing") + ")";
   const Faults faults = faults_in(r);
-  if (faults.kinds & kLost) {
-    exclude_lost(r, name);
-    return;
-  }
   if (faults.kinds != 0) {
     const std::optional<Range> part = keep_good_part(r, name, faults);
     if (!part) return;

@@ -16,6 +16,11 @@ struct Stroke {
   std::vector<double> force_N;      // F_u at the handle, positive = opening
   std::vector<double> theta_rad;    // full-range angle (fused)
   std::vector<double> omega_rad_s;  // rate (bias removed)
+  // Recording gaps inside the stroke: each i (>= 1, increasing) such that samples were lost
+  // (a ring overflow), or the clock jumps, between time_s[i - 1] and time_s[i]. The samples
+  // around a gap are kept; the fit leaves out every window that spans one
+  // (analysis/fit/fit_windows.h).
+  std::vector<int> gap_before;
   std::size_t size() const { return time_s.size(); }
 };
 

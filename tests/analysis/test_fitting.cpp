@@ -114,7 +114,8 @@ std::vector<double> uniform(double start, double step, int count) {
 
 }  // namespace
 
-TEST_CASE("windows cover every sample once, restart after gaps and impacts", "[fitting]") {
+TEST_CASE("windows cover every sample once, restart after impacts, leave out those across gaps",
+          "[fitting]") {
   WindowOptions options;  // 0.2 s
   SECTION("shared boundaries, a short tail joins the window before") {
     const PreparedData data = one_stroke(uniform(0.0, 0.001, 851));  // 0 .. 0.85 s
@@ -138,14 +139,69 @@ TEST_CASE("windows cover every sample once, restart after gaps and impacts", "[f
     }
     CHECK(next == 1000);
   }
-  SECTION("a gap ends a window") {
-    std::vector<double> times = uniform(0.0, 0.001, 100);
-    const std::vector<double> later = uniform(0.5, 0.001, 100);
-    times.insert(times.end(), later.begin(), later.end());
-    const std::vector<FitWindow> windows = doorbench::split_windows(one_stroke(times), options);
-    REQUIRE(windows.size() == 2);
-    CHECK(windows[0].count == 100);
-    CHECK(windows[1].first == 100);
+  SECTION("a gap costs the windows that span it, the others are as without it") {
+    // 0 .. 0.85 s at 1 kHz: windows 0-0.2, 0.2-0.4, 0.4-0.6, 0.6-0.85 (shared boundaries).
+    const std::vector<double> all = uniform(0.0, 0.001, 851);
+    auto without = [&](int first, int count) {
+      std::vector<double> times = all;
+      times.erase(times.begin() + first, times.begin() + first + count);
+      return one_stroke(times);
+    };
+    auto spans = [](const PreparedData& data, const std::vector<FitWindow>& windows) {
+      std::vector<std::pair<double, double>> out;
+      for (const FitWindow& w : windows) {
+        const doorbench::Stroke& stroke = data.strokes[w.stroke];
+        out.emplace_back(stroke.time_s[w.first], stroke.time_s[w.first + w.count - 1]);
+      }
+      return out;
+    };
+    using Spans = std::vector<std::pair<double, double>>;
+    auto same = [](const Spans& a, const Spans& b) {
+      if (a.size() != b.size()) return false;
+      for (std::size_t k = 0; k < a.size(); ++k) {
+        if (std::abs(a[k].first - b[k].first) > 1e-9 || std::abs(a[k].second - b[k].second) > 1e-9) {
+          return false;
+        }
+      }
+      return true;
+    };
+    const PreparedData whole = one_stroke(all);
+    const std::vector<FitWindow> whole_windows = doorbench::split_windows(whole, options);
+    REQUIRE(whole_windows.size() == 4);
+    // 10 ms lost from 0.25 s (a clock jump of 11 sample intervals): the window 0.2-0.4 s is
+    // left out, the three others are the same.
+    const PreparedData gapped = without(250, 10);
+    const doorbench::WindowSplit split = doorbench::split_windows_and_gaps(gapped, options);
+    REQUIRE(split.across_gaps.size() == 1);
+    CHECK(same(spans(gapped, split.across_gaps), {{0.2, 0.4}}));
+    Spans expected = spans(whole, whole_windows);
+    expected.erase(expected.begin() + 1);
+    CHECK(same(spans(gapped, split.windows), expected));
+    CHECK(doorbench::split_windows(gapped, options).size() == 3);
+    // A gap marked by preprocessing (Stroke::gap_before) counts however short: one sample
+    // lost is a step of 2 intervals, below kWindowGapFactor.
+    PreparedData marked = without(250, 1);
+    CHECK(doorbench::split_windows_and_gaps(marked, options).across_gaps.empty());
+    marked.strokes[0].gap_before = {250};
+    CHECK(doorbench::split_windows_and_gaps(marked, options).across_gaps.size() == 1);
+    // A gap over a window's boundary: the window that reaches over it is left out; the next
+    // starts at the first sample after the gap, so the later windows start up to the gap's
+    // length later.
+    const PreparedData boundary = without(195, 10);
+    const doorbench::WindowSplit at_boundary = doorbench::split_windows_and_gaps(boundary, options);
+    CHECK(same(spans(boundary, at_boundary.across_gaps), {{0.0, 0.205}}));
+    const Spans after = spans(boundary, at_boundary.windows);
+    REQUIRE(after.size() == 3);
+    CHECK(after.front().first == Approx(0.205).margin(1e-9));
+    for (std::size_t k = 0; k + 1 < after.size(); ++k) {
+      CHECK(after[k].second - after[k].first == Approx(0.2).margin(0.0011));  // on the clock
+      CHECK(after[k + 1].first == after[k].second);  // shared boundaries
+    }
+    CHECK(after.back().second == Approx(0.85).margin(1e-9));
+    // Whole strokes (the study's objective) restart after a gap, as after an impact.
+    options.whole_strokes = true;
+    const std::vector<FitWindow> whole_strokes = doorbench::split_windows(gapped, options);
+    CHECK(same(spans(gapped, whole_strokes), {{0.0, 0.249}, {0.26, 0.85}}));
   }
   SECTION("an impact on a stop at speed ends a window, a door resting on it does not") {
     options.cut_angles_rad = {0.0};

@@ -1,5 +1,7 @@
 // Gaps are first-class (issue 18, defect 1): scans a recording lost (a ring overflow kept on
-// the clock as kGapFillCount) are missing in every reader, never a number. A recovered
+// the clock as kGapFillCount) are missing in every reader, never a number; and they cost
+// windows, not strokes (issue 30): the fit leaves out the windows that span a gap and fits
+// the rest of the stroke, and every segment left out is named with its reason. A recovered
 // session with a 10 ms gap in its third stroke is made the way `recover` makes one: a
 // journal of the simulated bench's scans with one block left out, recovered. Its twin
 // without the gap is recovered from the same scans.
@@ -8,6 +10,7 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -16,6 +19,8 @@
 #include "acquisition/record/recovery.h"
 #include "acquisition/session/recording_csv.h"
 #include "acquisition/session/session_csv.h"
+#include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fit_windows.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
@@ -192,64 +197,206 @@ TEST_CASE("Gaps: doorbench info lists the gap, export writes empty cells", "[gap
   CHECK(!contains(text, "-2.9164"));
 }
 
-TEST_CASE("Gaps: preprocessing cuts the stroke at the gap and says so", "[gaps][preprocessing]") {
+TEST_CASE("Gaps: preprocessing keeps the stroke without the lost samples and lists the gap",
+          "[gaps][preprocessing]") {
   const GapSessions& s = gap_sessions();
-  const PreparedData data = prepare_session(s.gapped);
-  REQUIRE(data.strokes.size() == 5);
-  for (const Stroke& stroke : data.strokes) CHECK(stroke.id != 3);
+  const PreparedData gapped = prepare_session(s.gapped);
+  const PreparedData whole = prepare_session(s.whole);
+  REQUIRE(gapped.strokes.size() == 6);
+  REQUIRE(whole.strokes.size() == 6);
+  for (std::size_t k = 0; k < gapped.strokes.size(); ++k) {
+    const Stroke& g = gapped.strokes[k];
+    const Stroke& w = whole.strokes[k];
+    INFO("stroke " << g.id);
+    REQUIRE(g.id == w.id);
+    if (g.id != 3) {
+      CHECK(g.gap_before.empty());
+      CHECK(g.time_s == w.time_s);
+      continue;
+    }
+    // The stroke's samples are the whole session's less the 10 lost; the clock jumps there.
+    REQUIRE(g.size() + kGapScans == w.size());
+    REQUIRE(g.gap_before.size() == 1);
+    const auto at = static_cast<std::size_t>(g.gap_before[0]);
+    CHECK(g.time_s[at - 1] == Approx(7.499).margin(1e-9));
+    CHECK(g.time_s[at] == Approx(7.510).margin(1e-9));
+    for (std::size_t i = 0; i < g.size(); ++i) {
+      const std::size_t j = i < at ? i : i + kGapScans;
+      REQUIRE(g.time_s[i] == w.time_s[j]);
+      REQUIRE(g.force_N[i] == w.force_N[j]);
+      // The angle across the gap rests on the rate interpolated over it (bridged).
+      if (std::abs(g.theta_rad[i] - w.theta_rad[j]) > 2e-5) FAIL("sample " << i);
+    }
+  }
   std::vector<ExcludedSegment> gaps;
-  for (const ExcludedSegment& e : data.excluded) {
+  for (const ExcludedSegment& e : gapped.excluded) {
     if (e.lost_samples) gaps.push_back(e);
   }
   REQUIRE(gaps.size() == 1);
   CHECK(gaps[0].reason ==
-        "stroke 3 (opening): recording gap: 10 samples lost from 7.500 s to 7.509 s; the "
-        "stroke is cut there and neither part is fitted");
+        "stroke 3 (opening): recording gap: 10 samples lost from 7.500 s to 7.509 s; the fit "
+        "leaves out the windows that span it and fits the rest of the stroke");
+  CHECK(gaps[0].start_s == Approx(7.5).margin(1e-9));
+  CHECK(gaps[0].end_s == Approx(7.509).margin(1e-9));
 }
 
-TEST_CASE("Gaps: a fit never sees them: the same parameters as without the gapped stroke",
+namespace {
+
+using Spans = std::vector<std::pair<double, double>>;
+
+// Each window's first and last sample times.
+Spans window_spans(const PreparedData& data, const std::vector<FitWindow>& windows) {
+  Spans spans;
+  for (const FitWindow& w : windows) {
+    const Stroke& stroke = data.strokes[w.stroke];
+    spans.emplace_back(stroke.time_s[w.first], stroke.time_s[w.first + w.count - 1]);
+  }
+  return spans;
+}
+
+// The windows of the fit (disjoint, estimated start states) and of the metrics (shared
+// boundaries), cut at the reference door's stops.
+std::vector<WindowOptions> both_window_kinds() {
+  WindowOptions fit = metric_window_options(FitOptions{}, reference_model(ModelKind::kSensory));
+  fit.disjoint = true;
+  WindowOptions metric = fit;
+  metric.disjoint = false;
+  return {fit, metric};
+}
+
+}  // namespace
+
+TEST_CASE("Gaps: a 10 ms gap in a stroke costs only the windows that span it",
           "[gaps][fitting]") {
   const GapSessions& s = gap_sessions();
   const PreparedData gapped = prepare_session(s.gapped);
-  PreparedData without = prepare_session(s.whole);
-  REQUIRE(without.strokes.size() == 6);
-  std::erase_if(without.strokes, [](const Stroke& stroke) { return stroke.id == 3; });
-  // The strokes both fits see are the same but for the angle of stroke 4 (the closing that
-  // shares its anchors with the gapped opening): the 10 ms of rate interpolated across the
-  // gap stand in for the measured ones there (measured: 4e-6 rad at most).
-  REQUIRE(gapped.strokes.size() == without.strokes.size());
-  for (std::size_t k = 0; k < gapped.strokes.size(); ++k) {
-    const Stroke& g = gapped.strokes[k];
-    const Stroke& w = without.strokes[k];
-    REQUIRE(g.id == w.id);
-    REQUIRE(g.time_s == w.time_s);
-    CHECK(g.force_N == w.force_N);
-    for (std::size_t i = 0; i < g.size(); ++i) {
-      if (std::abs(g.theta_rad[i] - w.theta_rad[i]) > 2e-5) FAIL("stroke " << g.id << " sample " << i);
+  const PreparedData whole = prepare_session(s.whole);
+  for (const WindowOptions& options : both_window_kinds()) {
+    INFO("disjoint " << options.disjoint);
+    const WindowSplit with_gap = split_windows_and_gaps(gapped, options);
+    const WindowSplit without = split_windows_and_gaps(whole, options);
+    REQUIRE(without.across_gaps.empty());
+    // The windows without the gap that overlap the lost samples (7.500 to 7.509 s).
+    Spans touched, untouched;
+    for (const auto& span : window_spans(whole, without.windows)) {
+      (span.first <= 7.509 + 1e-9 && span.second >= 7.5 - 1e-9 ? touched : untouched)
+          .push_back(span);
     }
+    REQUIRE(touched.size() == 1);
+    CHECK(with_gap.across_gaps.size() == touched.size());
+    CHECK(with_gap.windows.size() == without.windows.size() - touched.size());
+    // Every other window, of stroke 3 and of the others, is fitted as without the gap.
+    CHECK(window_spans(gapped, with_gap.windows) == untouched);
+    // The window left out is the one that overlapped the gap, its last sample the first
+    // after it.
+    const Spans lost = window_spans(gapped, with_gap.across_gaps);
+    REQUIRE(lost.size() == 1);
+    CHECK(lost[0].first == touched[0].first);
+    CHECK(lost[0].second == touched[0].second);
   }
+  // Named for the user, with the gap's place in the stroke.
+  const std::vector<ExcludedSegment> named =
+      gap_window_exclusions(gapped, both_window_kinds().front());
+  REQUIRE(named.size() == 1);
+  CHECK(named[0].reason ==
+        "stroke 3 (opening): the window from 7.405 s to 7.605 s spans the recording gap from "
+        "7.499 s to 7.510 s and is not fitted");
+}
+
+TEST_CASE("Gaps: the fit uses every window the gap does not span", "[gaps][fitting]") {
+  const GapSessions& s = gap_sessions();
+  const PreparedData gapped = prepare_session(s.gapped);
+  const PreparedData whole = prepare_session(s.whole);
   FitOptions options;
   options.cross_validation_folds = 0;
   const DoorModel start = reference_model(ModelKind::kSensory);
   const FitResult a = fit_model(start, gapped, options);
-  const FitResult b = fit_model(start, without, options);
+  const FitResult b = fit_model(start, whole, options);
+  WindowOptions windows = metric_window_options(options, start);
+  windows.disjoint = true;
+  CHECK(a.summary.windows == split_windows(gapped, windows).size());
+  CHECK(a.summary.windows + 1 == b.summary.windows);
+  CHECK(a.summary.strokes == 6);
   REQUIRE(a.summary.parameters.size() == b.summary.parameters.size());
   for (std::size_t i = 0; i < a.summary.parameters.size(); ++i) {
     const FittedParameter& p = a.summary.parameters[i];
     const FittedParameter& q = b.summary.parameters[i];
-    INFO(p.name << ": " << p.value << " and " << q.value << " +- " << q.uncertainty);
+    INFO(p.name << ": " << p.value << " +- " << p.uncertainty << " and " << q.value << " +- "
+                << q.uncertainty);
     REQUIRE(std::isfinite(p.value));
     if (!q.free) {
       CHECK(p.value == q.value);
       continue;
     }
-    // Measured: 0.003 uncertainties at most (s); before gaps were missing, the fill value
-    // made the fit fail, and before the gap was bridged, stroke 4's angle was 0.34 deg off
-    // and the parameters moved by up to 2 uncertainties.
-    CHECK(std::abs(p.value - q.value) <= 0.01 * q.uncertainty);
+    // One window of 67 fewer: the estimates move by a small fraction of their uncertainty
+    // (measured: 0.08 at most, theta4).
+    CHECK(std::abs(p.value - q.value) <= 0.25 * q.uncertainty);
   }
-  CHECK(a.summary.strokes == b.summary.strokes);
-  CHECK(a.summary.final_cost == Approx(b.summary.final_cost).epsilon(1e-3));
+  // The metrics count only samples of windows fitted (the left-out window's 200 samples are
+  // not errors of 0).
+  CHECK(a.summary.fitted.window.count < b.summary.fitted.window.count);
+}
+
+TEST_CASE("Gaps: the same gap as a jump of the clock (rows missing from a CSV)",
+          "[gaps][preprocessing][csv]") {
+  const GapSessions& s = gap_sessions();
+  Recording recording = session_to_recording(SessionReader(s.whole));
+  const auto first = static_cast<std::ptrdiff_t>(gap_index());
+  const auto end = first + static_cast<std::ptrdiff_t>(kGapScans);
+  auto erase = [&](std::vector<double>& column) {
+    column.erase(column.begin() + first, column.begin() + end);
+  };
+  erase(recording.time_s);
+  erase(recording.force_N);
+  erase(*recording.rate_rad_s);
+  for (std::vector<double>& column : recording.extra_columns) erase(column);
+  if (recording.angle_rad) erase(*recording.angle_rad);
+  if (recording.stroke) recording.stroke->erase(recording.stroke->begin() + first,
+                                                recording.stroke->begin() + end);
+  const PreparedData jumped = prepare(recording);
+  const PreparedData lost = prepare_session(s.gapped);
+  REQUIRE(jumped.strokes.size() == 6);
+  const Stroke& stroke = jumped.strokes[2];
+  REQUIRE(stroke.gap_before == lost.strokes[2].gap_before);
+  CHECK(stroke.time_s == lost.strokes[2].time_s);
+  std::vector<std::string> reasons;
+  for (const ExcludedSegment& e : jumped.excluded) reasons.push_back(e.reason);
+  CHECK(reasons == std::vector<std::string>{
+                       "stroke 3 (opening): gap in time_s: no sample from 7.499 s to 7.510 s; the "
+                       "fit leaves out the windows that span it and fits the rest of the stroke"});
+  const WindowOptions options = both_window_kinds().front();
+  CHECK(window_spans(jumped, split_windows(jumped, options)) ==
+        window_spans(lost, split_windows(lost, options)));
+}
+
+TEST_CASE("Gaps: doorbench fit names every segment it leaves out, with its reason",
+          "[gaps][cli][fitting]") {
+  const GapSessions& s = gap_sessions();
+  const testing::TempDir dir("gaps_fit");
+  const auto out = dir / "fit";
+  const testing::DoorbenchRun run = testing::run_doorbench_shell(
+      "fit '" + s.gapped.string() + "' --folds 0 --out '" + out.string() + "'", dir);
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  const std::string gap_line =
+      "excluded 7.500 s to 7.509 s: stroke 3 (opening): recording gap: 10 samples lost from "
+      "7.500 s to 7.509 s; the fit leaves out the windows that span it and fits the rest of the "
+      "stroke";
+  const std::string window_line =
+      "excluded 7.405 s to 7.605 s: stroke 3 (opening): the window from 7.405 s to 7.605 s spans "
+      "the recording gap from 7.499 s to 7.510 s and is not fitted";
+  CHECK(contains(run.err, "  6 strokes, 2 segments excluded\n"));
+  CHECK(contains(run.err, "\n  " + window_line + "\n  " + gap_line + "\n"));
+  CHECK(contains(run.err, " windows of 0.2 s on 6 strokes (1 window spans a recording gap and "
+                          "is left out)\n"));
+  const std::string report = testing::read_file(out / "report.md");
+  CHECK(contains(report, "excluded (2):\n- " + window_line + "\n- " + gap_line + ".\n\n"));
+  const nlohmann::json result = nlohmann::json::parse(testing::read_file(out / "result.json"));
+  std::vector<std::string> reasons;
+  for (const auto& e : result.at("excluded_segments")) reasons.push_back(e.at("reason"));
+  REQUIRE(reasons.size() == 2);
+  CHECK("excluded 7.405 s to 7.605 s: " + reasons[0] == window_line);
+  CHECK("excluded 7.500 s to 7.509 s: " + reasons[1] == gap_line);
 }
 
 TEST_CASE("Gaps: the viewer's channel series break at the gap", "[gaps][viewer]") {
