@@ -177,7 +177,7 @@ TEST_CASE(
 // and the check waits for a candidate explaining less than 10 % of the residual): the loop
 // adds it to the sensory model, finds no candidate left, switches to the physical model,
 // refits the offset there whatever its evidence, and drops it.
-TEST_CASE("residual loop: after a switch to the physical family, an effect added before is "
+TEST_CASE("residual loop: after a switch to the physical family an effect added before is "
           "re-examined and dropped",
           "[residual_loop][tremor][slow]") {
   const doorbench::PreparedData data =
