@@ -205,6 +205,31 @@ TEST_CASE("residual loop: after a switch to the physical family an effect added 
   check_ends_physical_without_spurious_effects(loop);
 }
 
+// Nested refits never lose (issue 30), where they lost: the sensory model stacking effects on
+// a physical door with the structure check off. Before, step 2 refitted a soft close from the
+// start model to a fitted sum of squares far above its parent's (BIC +1.05e5, held-out
+// -7.5 %) and rejected it for that; every refit must now end at or below its parent, and no
+// step may add an effect with a free parameter at a bound or undetermined.
+TEST_CASE("residual loop: on a physical door fitted with the sensory model no refit ends above "
+          "its parent",
+          "[residual_loop][tremor][slow]") {
+  const doorbench::PreparedData data =
+      tremor_data(doorbench::reference_model(ModelKind::kPhysical), 1);
+  doorbench::LoopOptions options;
+  options.structure_check = false;
+  options.max_steps = 2;
+  const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), data, options);
+  INFO(loop.full_report());
+  CHECK(doorbench::testing::check_nested_refits(loop) >= 4);
+  for (const doorbench::LoopStep& step : loop.steps) {
+    for (const doorbench::FittedParameter& p : step.parameters) {
+      INFO("step " << step.number << ": " << p.name);
+      if (p.free) CHECK_FALSE(p.at_bound);
+      if (p.free) CHECK(p.determined);
+    }
+  }
+}
+
 TEST_CASE("residual loop: the structure check does not run at the noise floor",
           "[residual_loop][tremor]") {
   const LoopResult clean =
