@@ -62,10 +62,10 @@ struct RefitOutcome {
 };
 
 // Refits `current` with the candidate effect added (LoopOptions::RefitStart). With kBest, the
-// better of the two starts is fitted again with cross-validation, or, when neither ended at
-// or below the parent's fitted sum of squares, the parent's optimum with the effect at its
-// neutral value is. A final fit still above the parent's is not kept: the parent stands.
-// `fits` counts the calls of fit_model.
+// better of the two starts is fitted again with cross-validation (the parent's optimum with
+// the effect at its neutral value when both failed). A cross-validated fit that ends above
+// the parent's fitted sum of squares is fitted again from that neutral start; one still above
+// is not kept: the parent stands. `fits` counts the calls of fit_model.
 RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
                    const FitOptions& current_options, const PreparedData& data,
                    const LoopOptions& options, const CandidateEvidence& candidate, int& fits) {
@@ -82,13 +82,34 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
     }
     return current.model.with_parameter_values(std::move(values)).with_effect(setting);
   };
+  const DoorModel neutral = current.model.with_effect(
+      refit_setting(candidate.kind, neutral_values(candidate, current.model)));
+  // The final fit starts at an optimum of the fine problem: no equation-error stage and no
+  // coarse pass (which would leave that optimum for the coarse one's and come back).
+  FitOptions final_fit = from_fit;
+  final_fit.equation_error_start = false;
+  final_fit.coarse_first = false;
   RefitOutcome out;
-  auto finish = [&](FitResult fitted, const std::string& origin) {
-    const double reached = fitted_sum_of_squares(fitted);
-    if (!(reached >= out.best_sum_of_squares)) out.best_sum_of_squares = reached;
+  // A refit that ends above the parent is fitted again from the parent's optimum with the
+  // effect at neutral (a point of the refit's problem); if that too ends above, the parent
+  // stands.
+  auto finish = [&](FitResult fitted, const std::string& origin, bool from_neutral) {
     out.origin = origin;
-    if (reached <= parent) {
+    out.best_sum_of_squares = fitted_sum_of_squares(fitted);
+    if (out.best_sum_of_squares <= parent) {
       out.result = std::move(fitted);
+      return;
+    }
+    if (from_neutral) {
+      out.origin += " (the parent's fit stands)";
+      return;
+    }
+    ++fits;
+    FitResult again = fit_model(neutral, data, final_fit);
+    out.origin = origin + ", then the parent's optimum (the effect at neutral)";
+    out.best_sum_of_squares = std::min(out.best_sum_of_squares, fitted_sum_of_squares(again));
+    if (fitted_sum_of_squares(again) <= parent) {
+      out.result = std::move(again);
     } else {
       out.origin += " (the parent's fit stands)";
     }
@@ -96,11 +117,12 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
   switch (options.refit_start) {
     case LoopOptions::RefitStart::kCurrentFit:
       ++fits;
-      finish(fit_model(current.model.with_effect(setting), data, from_fit), "the current fit");
+      finish(fit_model(current.model.with_effect(setting), data, from_fit), "the current fit",
+             false);
       return out;
     case LoopOptions::RefitStart::kStartModel:
       ++fits;
-      finish(fit_model(fresh_start(), data, from_start), "the start model");
+      finish(fit_model(fresh_start(), data, from_start), "the start model", false);
       return out;
     case LoopOptions::RefitStart::kBest:
       break;
@@ -129,35 +151,19 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
   };
   parallel_for(2, refit_threads(options.parallel_refits, 2), attempt);
   std::optional<FitResult> best;
-  std::string origin;
+  std::string origin = "the parent's optimum (the effect at neutral)";
   for (std::size_t which = 0; which < 2; ++which) {
     ++fits;
     Attempt& tried = attempts[which];
     if (!tried.result) continue;
-    const double reached = fitted_sum_of_squares(*tried.result);
-    if (!(reached >= out.best_sum_of_squares)) out.best_sum_of_squares = reached;
-    if (!best || reached < fitted_sum_of_squares(*best)) {
+    if (!best || fitted_sum_of_squares(*tried.result) < fitted_sum_of_squares(*best)) {
       best = std::move(tried.result);
       origin = names[which];
     }
   }
-  // The final fit starts at an optimum of the fine problem: no equation-error stage and no
-  // coarse pass (which would leave that optimum for the coarse one's and come back). The
-  // parent's optimum with the effect at neutral is that start when neither start reached it:
-  // the parent's fit is a point of the refit's problem, so the refit need not end above it.
-  FitOptions final_fit = from_fit;
-  final_fit.equation_error_start = false;
-  final_fit.coarse_first = false;
-  DoorModel final_start = current.model;
-  if (best && fitted_sum_of_squares(*best) <= parent) {
-    final_start = best->model;
-  } else {
-    final_start = current.model.with_effect(
-        refit_setting(candidate.kind, neutral_values(candidate, current.model)));
-    origin = "the parent's optimum (the effect at neutral)";
-  }
+  // The better start's optimum, or the parent's with the effect at neutral when both failed.
   ++fits;
-  finish(fit_model(final_start, data, final_fit), origin);
+  finish(fit_model(best ? best->model : neutral, data, final_fit), origin, !best);
   return out;
 }
 
@@ -232,9 +238,10 @@ void judge_parent_stands(CandidateEvidence& candidate, const DoorModel& parent,
   candidate.held_out_improvement = 0.0;
   candidate.bic_change = after.bic - before.bic;
   candidate.qualifies = false;
-  candidate.verdict = "rejected: no refit ended below the parent's fitted sum of squares (" +
-                      number(best_sum_of_squares) + " against " + number(before.sum_of_squares) +
-                      "): the parent's fit stands with " + candidate.name +
+  candidate.verdict = "rejected: no refit ended at or below the parent's fitted sum of squares "
+                      "(the lowest " + number(best_sum_of_squares) + " against " +
+                      number(before.sum_of_squares) + "): the parent's fit stands with " +
+                      candidate.name +
                       " at its neutral value, held-out RMSE unchanged, BIC " +
                       printf_text("%+.4g", candidate.bic_change);
 }
