@@ -218,6 +218,12 @@ FamilyCheck family_check(LoopRun& run, const ResidualExamination& examination) {
   }
   check.switched = true;
   check.candidates = examination.candidates;  // the abandoned step's ranking and refits
+  for (CandidateEvidence& candidate : check.candidates) {
+    if (candidate.qualifies) {
+      candidate.verdict += "; not added: the loop switched to the " +
+                           std::string(to_string(check.other_kind)) + " model first";
+    }
+  }
   std::string names;
   for (const LoopStep& step : run.result.steps) {
     if (step.model_kind != run.current.model.kind()) continue;
