@@ -14,37 +14,93 @@
 namespace doorbench::app {
 namespace {
 
+nlohmann::ordered_json finite_or_null(double value) {
+  return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
+}
+
 nlohmann::ordered_json figures_json(const ModelFigures& f) {
-  return {{"fitted_rmse_rad_s", f.fitted_rmse_rad_s},
-          {"fitted_fit_percent", f.fitted_fit_percent},
-          {"held_out_rmse_rad_s", f.held_out_rmse_rad_s},
-          {"held_out_fit_percent", f.held_out_fit_percent},
-          {"bic", f.bic}};
+  return {{"fitted_rmse_rad_s", finite_or_null(f.fitted_rmse_rad_s)},
+          {"fitted_fit_percent", finite_or_null(f.fitted_fit_percent)},
+          {"held_out_rmse_rad_s", finite_or_null(f.held_out_rmse_rad_s)},
+          {"held_out_fit_percent", finite_or_null(f.held_out_fit_percent)},
+          {"bic", finite_or_null(f.bic)},
+          {"sum_of_squares", finite_or_null(f.sum_of_squares)},
+          {"residuals", f.residuals},
+          {"parameters", f.parameters},
+          {"free_parameters", f.free_parameters},
+          {"fitted_samples", f.fitted_samples},
+          {"held_out_samples", f.held_out_samples}};
+}
+
+nlohmann::ordered_json loop_parameters_json(const std::vector<FittedParameter>& list) {
+  nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
+  for (const FittedParameter& p : list) {
+    parameters.push_back({{"name", p.name},
+                          {"unit", p.unit},
+                          {"value", p.value},
+                          {"standard_uncertainty", finite_or_null(p.uncertainty)},
+                          {"free", p.free},
+                          {"at_bound", p.at_bound},
+                          {"determined", p.determined}});
+  }
+  return parameters;
+}
+
+// One candidate of an examination: its evidence and, when refitted, the refit's figures
+// against its parent's, the effect's parameters and the verdict (kept or rejected, and why).
+nlohmann::ordered_json candidate_json(const CandidateEvidence& c) {
+  nlohmann::ordered_json out = {{"rank", c.rank},
+                                {"effect", c.name},
+                                {"explained_fraction", c.explained_fraction},
+                                {"score_z", c.score_z},
+                                {"independent_share", c.independent_share},
+                                {"scan", c.scan}};
+  if (c.screened) {
+    out["second_look"] = {{"explained_fraction", c.screen_explained_fraction},
+                          {"score_z", c.screen_score_z},
+                          {"promoted", c.promoted}};
+  }
+  out["refitted"] = c.refitted;
+  if (c.refitted) {
+    out["reexamined_after_family_switch"] = c.reexamined;
+    out["refit_start"] = c.refit_start;
+    out["parent_stands"] = c.parent_stands;
+    out["before"] = figures_json(c.before);
+    if (c.after) {
+      out["after"] = figures_json(*c.after);
+      out["held_out_improvement"] = finite_or_null(c.held_out_improvement);
+      out["bic_change"] = finite_or_null(c.bic_change);
+      out["parameters"] = loop_parameters_json(c.parameters);
+    }
+  }
+  out["qualifies"] = c.qualifies;
+  out["verdict"] = c.verdict;
+  return out;
+}
+
+nlohmann::ordered_json candidates_json(const std::vector<CandidateEvidence>& candidates) {
+  nlohmann::ordered_json list = nlohmann::ordered_json::array();
+  for (const CandidateEvidence& c : candidates) list.push_back(candidate_json(c));
+  return list;
 }
 
 nlohmann::ordered_json loop_json(const LoopResult& result, const PreparedData& data) {
   nlohmann::ordered_json steps = nlohmann::ordered_json::array();
   for (const LoopStep& step : result.steps) {
-    nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
-    for (const FittedParameter& p : step.parameters) {
-      parameters.push_back({{"name", p.name},
-                            {"unit", p.unit},
-                            {"value", p.value},
-                            {"standard_uncertainty", std::isfinite(p.uncertainty)
-                                                         ? nlohmann::ordered_json(p.uncertainty)
-                                                         : nlohmann::ordered_json(nullptr)}});
-    }
     steps.push_back({{"step", step.number},
+                     {"model", std::string(to_string(step.model_kind))},
                      {"effect", step.effect_name},
                      {"evidence",
                       {{"explained_fraction", step.explained_fraction},
                        {"score_z", step.score_z},
+                       {"second_look", step.second_look},
                        {"rank", step.rank}}},
-                     {"parameters", parameters},
+                     {"parameters", loop_parameters_json(step.parameters)},
                      {"before", figures_json(step.before)},
                      {"after", figures_json(step.after)},
                      {"held_out_improvement", step.held_out_improvement},
-                     {"bic_change", step.bic_change}});
+                     {"bic_change", step.bic_change},
+                     {"candidates", candidates_json(step.candidates)}});
   }
   const StructureCheck& check = result.structure;
   nlohmann::ordered_json structure = {
@@ -55,16 +111,44 @@ nlohmann::ordered_json loop_json(const LoopResult& result, const PreparedData& d
     structure["current"] = figures_json(check.current);
     structure["other"] = figures_json(check.other);
     structure["other_free_parameters"] = check.other_free;
+    structure["other_undetermined_parameters"] = check.other_undetermined;
     structure["other_is_better"] = check.other_better;
     structure["verdict"] = check.verdict;
+    structure["after_steps"] = check.after_steps;
+    structure["switched"] = check.switched;
+    structure["reexamined"] = check.reexamined;
+    structure["abandoned_step_candidates"] = candidates_json(check.candidates);
+    structure["remaining"] = candidates_json(check.remaining);
   }
   return {{"source", data.source},
           {"interrupted", result.interrupted},
           {"stop_reason", result.stop_reason},
+          {"final_model", std::string(to_string(result.model().kind()))},
           {"steps", steps},
+          {"last_candidates", candidates_json(result.last_candidates)},
           {"structure_check", structure},
           {"start_fit", fit_result_json(result.start_fit, data)},
           {"final_fit", fit_result_json(result.final_fit, data)}};
+}
+
+}  // namespace
+
+namespace {
+
+// The structure check's row of the steps table (labelled `label`).
+std::string structure_row(const StructureCheck& check, const std::string& label) {
+  const std::string other(to_string(check.other_kind));
+  const std::string current(to_string(check.current_kind));
+  char row[512];
+  std::snprintf(row, sizeof row,
+                "| %s | structure: %s model is better%s | held out: %s %.4g, %s %.4g rad/s; BIC "
+                "%+.4g | %.4g → %.4g | %.4g → %.4g |\n",
+                label.c_str(), check.other_better ? other.c_str() : current.c_str(),
+                check.switched ? " (the loop goes on with it)" : "", current.c_str(),
+                check.current.held_out_rmse_rad_s, other.c_str(), check.other.held_out_rmse_rad_s,
+                check.bic_change, check.current.fitted_rmse_rad_s, check.other.fitted_rmse_rad_s,
+                check.current.held_out_rmse_rad_s, check.other.held_out_rmse_rad_s);
+  return row;
 }
 
 }  // namespace
@@ -78,7 +162,13 @@ std::string steps_table(const LoopResult& result) {
   std::snprintf(row, sizeof row, "| 0 | (start model) | | %.4g | %.4g |\n", start.fitted_rmse_rad_s,
                 start.held_out_rmse_rad_s);
   table += row;
-  for (const LoopStep& step : result.steps) {
+  const StructureCheck& check = result.structure;
+  const bool check_row = check.ran && check.other_fit;
+  for (std::size_t i = 0; i < result.steps.size(); ++i) {
+    const LoopStep& step = result.steps[i];
+    if (check_row && check.switched && static_cast<int>(i) == check.after_steps) {
+      table += structure_row(check, "-");
+    }
     std::string parameters;
     for (const FittedParameter& p : step.parameters) {
       char text[128];
@@ -86,25 +176,16 @@ std::string steps_table(const LoopResult& result) {
                     p.name.c_str(), p.value, p.uncertainty, p.unit.c_str());
       parameters += text;
     }
-    std::snprintf(row, sizeof row, "| %d | %s | %s | %.4g → %.4g | %.4g → %.4g |\n", step.number,
-                  step.effect_name.c_str(), parameters.c_str(), step.before.fitted_rmse_rad_s,
-                  step.after.fitted_rmse_rad_s, step.before.held_out_rmse_rad_s,
-                  step.after.held_out_rmse_rad_s);
+    std::snprintf(row, sizeof row, "| %d | %s%s | %s | %.4g → %.4g | %.4g → %.4g |\n", step.number,
+                  step.effect_name.c_str(),
+                  check.switched ? (" (" + std::string(to_string(step.model_kind)) + ")").c_str()
+                                 : "",
+                  parameters.c_str(), step.before.fitted_rmse_rad_s, step.after.fitted_rmse_rad_s,
+                  step.before.held_out_rmse_rad_s, step.after.held_out_rmse_rad_s);
     table += row;
   }
-  const StructureCheck& check = result.structure;
-  if (check.ran && check.other_fit) {
-    const std::string other(to_string(check.other_kind));
-    const std::string current(to_string(check.current_kind));
-    std::snprintf(row, sizeof row,
-                  "| %zu | structure: %s model is better | held out: %s %.4g, %s %.4g rad/s; BIC "
-                  "%+.4g | %.4g → %.4g | %.4g → %.4g |\n",
-                  result.steps.size() + 1, check.other_better ? other.c_str() : current.c_str(),
-                  current.c_str(), check.current.held_out_rmse_rad_s, other.c_str(),
-                  check.other.held_out_rmse_rad_s, check.bic_change,
-                  check.current.fitted_rmse_rad_s, check.other.fitted_rmse_rad_s,
-                  check.current.held_out_rmse_rad_s, check.other.held_out_rmse_rad_s);
-    table += row;
+  if (check_row && !(check.switched && check.after_steps < static_cast<int>(result.steps.size()))) {
+    table += structure_row(check, check.switched ? "-" : std::to_string(result.steps.size() + 1));
   }
   return table;
 }

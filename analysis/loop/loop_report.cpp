@@ -42,6 +42,15 @@ void candidate_table(std::string& out, const std::vector<CandidateEvidence>& can
     if (!candidate.refit_start.empty()) {
       out += printf_text("         refit from %s\n", candidate.refit_start.c_str());
     }
+    if (!candidate.parameters.empty()) {
+      out += "         parameters:";
+      for (const FittedParameter& parameter : candidate.parameters) {
+        out += ' ';
+        out += parameter_text(parameter);
+        out += ';';
+      }
+      out += "\n";
+    }
   }
 }
 
@@ -62,6 +71,18 @@ void structure_section(std::string& out, const StructureCheck& check) {
   out += "\nStructure check: " + check.reason + "\n";
   if (!check.ran) return;
   out += "  " + check.verdict + "\n";
+  out += printf_text("  checked after %d step%s", check.after_steps, check.after_steps == 1 ? "" : "s");
+  if (check.switched) {
+    out += "; the loop went on with the " + std::string(to_string(check.other_kind)) +
+           " model (the step under way abandoned)\n";
+    for (const std::string& line : check.reexamined) out += "  re-examined " + line + "\n";
+    if (!check.candidates.empty()) {
+      out += "  the abandoned step's candidates:\n";
+      candidate_table(out, check.candidates);
+    }
+  } else {
+    out += "\n";
+  }
   if (!check.other_fit) return;
   out += "  " + std::string(to_string(check.other_kind)) + " model, free:";
   for (const std::string& name : check.other_free) out += " " + name;
@@ -103,6 +124,7 @@ std::string LoopResult::brief_report() const {
          number(last.held_out_rmse_rad_s) + " rad/s; fitted: " + number(first.fitted_rmse_rad_s) +
          " -> " + number(last.fitted_rmse_rad_s) + " rad/s.\n";
   for (const LoopStep& step : steps) {
+    if (structure.switched) out.append("[").append(to_string(step.model_kind)).append("] ");
     out += printf_text(
         "Step %d: %s (explains %s of the residual, z %.3g%s, rank %d of %zu):", step.number,
         step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z,
@@ -117,7 +139,13 @@ std::string LoopResult::brief_report() const {
            printf_text("%+.4g", step.bic_change) + ".\n";
   }
   out += "Stopped: " + stop_reason + ".\n";
-  if (structure.ran) out += "Structure check: " + structure.verdict + ".\n";
+  if (structure.ran) {
+    out += "Structure check: " + structure.verdict +
+           (structure.switched ? "; the loop went on with the " +
+                                     std::string(to_string(structure.other_kind)) + " model"
+                               : "") +
+           ".\n";
+  }
   return out;
 }
 

@@ -14,6 +14,7 @@
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/loop/internal/examination.h"
 #include "analysis/loop/internal/loop_common.h"
+#include "analysis/loop/internal/loop_steps.h"
 #include "analysis/model/parameter_file.h"
 #include "core/clock.h"
 #include "core/number_format.h"
@@ -136,292 +137,19 @@ ModelFigures model_figures(const FitSummary& summary) {
   figures.bic = n > 0 && figures.sum_of_squares > 0
                     ? n * std::log(figures.sum_of_squares / n) + figures.parameters * std::log(n)
                     : kNaN;
+  figures.fitted_samples = summary.fitted.window.count;
+  figures.held_out_samples = summary.held_out ? summary.held_out->window.count : 0;
   return figures;
 }
 
 namespace {
-
-std::vector<std::string> effect_parameter_names(effects::Kind kind) {
-  const effects::EffectInfo& info = effects::info(kind);
-  std::vector<std::string> names;
-  for (const effects::EffectParameter& parameter : info.parameters) {
-    names.push_back(std::string(info.name) + "." + std::string(parameter.info.name));
-  }
-  return names;
-}
-
-// The fit options of a refit with `kind` added to a model fitted with `current`.
-FitOptions refit_options(const FitOptions& current, const LoopOptions& options,
-                         effects::Kind kind) {
-  FitOptions fit = current;
-  fit.latch_start_from_data = false;  // the start is already a fit
-  for (const std::string& name : effect_parameter_names(kind)) {
-    const bool fixed =
-        std::find(options.fixed_effect_parameters.begin(), options.fixed_effect_parameters.end(),
-                  name) != options.fixed_effect_parameters.end();
-    if (fixed) {
-      fit.fixed_parameters.push_back(name);
-    } else if (!fit.free_parameters.empty()) {
-      fit.free_parameters.push_back(name);
-    }
-  }
-  return fit;
-}
-
-// Refits `current` with the candidate effect added (LoopOptions::RefitStart). `fits` counts
-// the calls of fit_model; `origin` says which start won.
-FitResult refit(const DoorModel& start, const FitResult& current, const FitOptions& current_options,
-                const PreparedData& data, const LoopOptions& options,
-                const CandidateEvidence& candidate, int& fits, std::string& origin) {
-  const effects::EffectInfo& info = effects::info(candidate.kind);
-  EffectSetting setting{candidate.kind, candidate.start_values, {}};
-  for (const effects::EffectParameter& parameter : info.parameters) {
-    setting.bounds.push_back(parameter.default_bounds);
-  }
-  const FitOptions from_fit = refit_options(current_options, options, candidate.kind);
-  FitOptions from_start = from_fit;
-  from_start.latch_start_from_data = options.fit.latch_start_from_data;
-  auto fresh_start = [&] {
-    std::vector<double> values(current.model.parameter_values().begin(),
-                               current.model.parameter_values().end());
-    for (int i = 0; i < current.model.base_parameter_count(); ++i) {
-      values[i] = start.parameter_values()[i];
-    }
-    return current.model.with_parameter_values(std::move(values)).with_effect(setting);
-  };
-  switch (options.refit_start) {
-    case LoopOptions::RefitStart::kCurrentFit:
-      origin = "the current fit";
-      ++fits;
-      return fit_model(current.model.with_effect(setting), data, from_fit);
-    case LoopOptions::RefitStart::kStartModel:
-      origin = "the start model";
-      ++fits;
-      return fit_model(fresh_start(), data, from_start);
-    case LoopOptions::RefitStart::kBest:
-      break;
-  }
-  // Both starts without cross-validation (at once when options.parallel_refits: each fit
-  // is the same on any thread); the better one again, with it, from its result.
-  struct Attempt {
-    std::optional<FitResult> result;
-    std::string error;
-  };
-  Attempt attempts[2];
-  const char* names[2] = {"the current fit", "the start model"};
-  auto attempt = [&](std::size_t which) {
-    FitOptions fit = which == 0 ? from_fit : from_start;
-    fit.cross_validation_folds = 0;
-    // A start is the loop's search, not its measurement: its coarse pass goes on to the fine
-    // pass's own precision instead of stopping at once where σ is inflated (a model lacking
-    // an effect), so the iterations run at the coarse problem's half cost.
-    fit.coarse_tolerance_factor = 1.0;
-    try {
-      const DoorModel model = which == 0 ? current.model.with_effect(setting) : fresh_start();
-      attempts[which].result = fit_model(model, data, fit);
-    } catch (const std::exception& error) {
-      attempts[which].error = error.what();
-    }
-  };
-  parallel_for(2, refit_threads(options.parallel_refits, 2), attempt);
-  std::optional<FitResult> best;
-  std::string failures;
-  for (std::size_t which = 0; which < 2; ++which) {
-    ++fits;
-    Attempt& tried = attempts[which];
-    if (!tried.result) {
-      failures += std::string(failures.empty() ? "" : "; ") + "from " + names[which] + ": " +
-                  tried.error;
-      continue;
-    }
-    if (!best || model_figures(tried.result->summary).sum_of_squares <
-                     model_figures(best->summary).sum_of_squares) {
-      best = std::move(tried.result);
-      origin = names[which];
-    }
-  }
-  if (!best) throw std::runtime_error(failures);
-  // It starts at the better start's optimum of the fine problem: no equation-error stage and
-  // no coarse pass (which would leave that optimum for the coarse one's and come back).
-  FitOptions final_fit = from_fit;
-  final_fit.equation_error_start = false;
-  final_fit.coarse_first = false;
-  ++fits;
-  return fit_model(best->model, data, final_fit);
-}
-
-}  // namespace
-
-namespace {
-
-using Say = std::function<void(const std::string&)>;
-
-std::string ranking_line(int step_number, const ResidualExamination& examination) {
-  std::string ranking = "step " + std::to_string(step_number) + ": the residual ranks ";
-  for (std::size_t k = 0; k < examination.candidates.size() && k < 4; ++k) {
-    if (k > 0) ranking += ", ";
-    ranking += examination.candidates[k].name + " (" +
-               percent(examination.candidates[k].explained_fraction) +
-               printf_text(", z %.3g)", examination.candidates[k].score_z);
-  }
-  return ranking;
-}
-
-// Who is refitted: the candidates whose linear share and z pass, in rank order, then those
-// the second look promotes, while refit slots are left. Gives the others their verdicts.
-std::vector<std::size_t> select_refits(ResidualExamination& examination, const LoopOptions& options,
-                                       int step_number, const Say& say) {
-  std::vector<std::size_t> order, promoted;
-  for (std::size_t k = 0; k < examination.candidates.size(); ++k) {
-    CandidateEvidence& candidate = examination.candidates[k];
-    const bool share_ok = candidate.explained_fraction >= options.min_explained_fraction;
-    if (share_ok && candidate.score_z >= options.min_score_z) {
-      order.push_back(k);
-    } else if (candidate.screened &&
-               candidate.screen_explained_fraction >= options.min_explained_fraction &&
-               candidate.screen_score_z >= options.min_score_z) {
-      promoted.push_back(k);
-    } else if (!share_ok) {
-      candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
-                          " of the residual (needs " + percent(options.min_explained_fraction) +
-                          ")";
-    } else {
-      candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
-                          " (needs " + printf_text("%.2g", options.min_score_z) + ")";
-      if (candidate.screened) {
-        candidate.verdict +=
-            printf_text(", second look %.1f%%, z %.2g", 100.0 * candidate.screen_explained_fraction,
-                        candidate.screen_score_z);
-      }
-    }
-  }
-  for (std::size_t k : promoted) {
-    CandidateEvidence& candidate = examination.candidates[k];
-    candidate.promoted = true;
-    candidate.start_values = candidate.screen_values;
-    candidate.scan +=
-        std::string(candidate.scan.empty() ? "" : "; ") +
-        printf_text("second look: %.1f%%, z %.3g", 100.0 * candidate.screen_explained_fraction,
-                    candidate.screen_score_z);
-  }
-  order.insert(order.end(), promoted.begin(), promoted.end());
-  std::vector<std::size_t> to_refit;
-  for (std::size_t k : order) {
-    CandidateEvidence& candidate = examination.candidates[k];
-    if (static_cast<int>(to_refit.size()) >= options.refit_candidates) {
-      candidate.verdict = "not refitted: ranked below the " +
-                          std::to_string(options.refit_candidates) + " refitted";
-      continue;
-    }
-    to_refit.push_back(k);
-    candidate.refitted = true;
-    say("step " + std::to_string(step_number) + ": refitting with " + candidate.name +
-        (candidate.scan.empty() ? "" : " (" + candidate.scan + ")"));
-  }
-  return to_refit;
-}
-
-// A refitted candidate's figures and verdict against `before`.
-void judge(CandidateEvidence& candidate, const ModelFigures& before, const ModelFigures& after,
-           const LoopOptions& options) {
-  candidate.after = after;
-  candidate.held_out_improvement =
-      (before.held_out_rmse_rad_s - after.held_out_rmse_rad_s) / before.held_out_rmse_rad_s;
-  candidate.bic_change = after.bic - before.bic;
-  const bool held_out_ok = candidate.held_out_improvement > options.min_held_out_improvement;
-  const bool bic_ok = candidate.bic_change < -options.min_bic_decrease;
-  candidate.qualifies = held_out_ok && bic_ok;
-  const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) + " -> " +
-                                    number(after.held_out_rmse_rad_s) + " rad/s (" +
-                                    signed_percent(-candidate.held_out_improvement) + ")";
-  const std::string bic_text = "BIC " + printf_text("%+.4g", candidate.bic_change);
-  if (candidate.qualifies) {
-    candidate.verdict = "qualifies: " + held_out_text + ", " + bic_text;
-  } else if (!held_out_ok) {
-    candidate.verdict = "rejected: " + held_out_text + ", needs a fall of more than " +
-                        percent(options.min_held_out_improvement);
-  } else {
-    candidate.verdict = "rejected: " + bic_text + " (must fall by more than " +
-                        number(options.min_bic_decrease) + "), " + held_out_text;
-  }
-}
-
-// The refits of one step (LoopOptions::parallel_refits): fit_model gives the same result bit
-// for bit on any thread and with any num_threads (docs/fitting.md), so running them at once
-// changes no verdict, only the time. Returns the refits by candidate index; counts fits.
-std::vector<std::optional<FitResult>> run_refits(
-    const DoorModel& start, const FitResult& current, const FitOptions& current_options,
-    const PreparedData& data, const LoopOptions& options, const std::vector<std::size_t>& to_refit,
-    ResidualExamination& examination, int& fits, const Say& say, int step_number) {
-  std::vector<std::optional<FitResult>> refits(examination.candidates.size());
-  const ModelFigures before = model_figures(current.summary);
-  std::vector<std::string> refit_errors(to_refit.size());
-  std::vector<int> refit_fits(to_refit.size(), 0);
-  std::vector<double> refit_seconds(to_refit.size(), 0.0);
-  LoopProgress progress{step_number, options.max_steps, 0, static_cast<int>(to_refit.size())};
-  std::mutex progress_mutex;
-  std::exception_ptr progress_error;
-  if (options.step_progress && !to_refit.empty()) options.step_progress(progress);
-  auto run_refit = [&](std::size_t j) {
-    CandidateEvidence& candidate = examination.candidates[to_refit[j]];
-    const StageClock::time_point refit_began = StageClock::now();
-    try {
-      refits[to_refit[j]] = refit(start, current, current_options, data, options, candidate,
-                                  refit_fits[j], candidate.refit_start);
-    } catch (const std::exception& error) {
-      refit_errors[j] = error.what();
-    } catch (...) {
-      refit_errors[j] = "an exception that is not a std::exception";
-    }
-    refit_seconds[j] = seconds_since(refit_began);
-    if (options.step_progress) {
-      const std::lock_guard lock(progress_mutex);
-      ++progress.refits_done;
-      try {  // on a refit's thread: what it throws is rethrown on the caller's, after the join
-        options.step_progress(progress);
-      } catch (...) {
-        if (!progress_error) progress_error = std::current_exception();
-      }
-    }
-  };
-  parallel_for(static_cast<int>(to_refit.size()),
-               refit_threads(options.parallel_refits, to_refit.size()), run_refit);
-  if (progress_error) std::rethrow_exception(progress_error);
-  for (std::size_t j = 0; j < to_refit.size(); ++j) {
-    const std::size_t k = to_refit[j];
-    CandidateEvidence& candidate = examination.candidates[k];
-    fits += refit_fits[j];
-    if (!refits[k]) {
-      candidate.verdict = "refit failed: " + refit_errors[j];
-      say("  " + candidate.name + ": " + candidate.verdict);
-      continue;
-    }
-    judge(candidate, before, model_figures(refits[k]->summary), options);
-    say("  " + candidate.name + ": " + candidate.verdict +
-        printf_text(" [refit from %s, %.1f s]", candidate.refit_start.c_str(), refit_seconds[j]));
-  }
-  return refits;
-}
-
-// The qualifying candidate with the lowest held-out RMSE; -1 when none qualifies.
-int choose(const std::vector<CandidateEvidence>& candidates) {
-  int chosen = -1;
-  for (std::size_t k = 0; k < candidates.size(); ++k) {
-    const CandidateEvidence& candidate = candidates[k];
-    if (!candidate.qualifies) continue;
-    if (chosen < 0 ||
-        candidate.after->held_out_rmse_rad_s < candidates[chosen].after->held_out_rmse_rad_s) {
-      chosen = static_cast<int>(k);
-    }
-  }
-  return chosen;
-}
 
 LoopStep make_step(int step_number, ResidualExamination& examination, int chosen,
                    const FitResult& refit_result, const ModelFigures& before) {
   const CandidateEvidence& accepted = examination.candidates[chosen];
   LoopStep step;
   step.number = step_number;
+  step.model_kind = refit_result.model.kind();
   step.effect = accepted.kind;
   step.effect_name = accepted.name;
   step.second_look = accepted.promoted;
@@ -429,10 +157,7 @@ LoopStep make_step(int step_number, ResidualExamination& examination, int chosen
       accepted.promoted ? accepted.screen_explained_fraction : accepted.explained_fraction;
   step.score_z = accepted.promoted ? accepted.screen_score_z : accepted.score_z;
   step.rank = accepted.rank;
-  const std::string prefix = accepted.name + ".";
-  for (const FittedParameter& parameter : refit_result.summary.parameters) {
-    if (parameter.name.rfind(prefix, 0) == 0) step.parameters.push_back(parameter);
-  }
+  step.parameters = accepted.parameters;
   step.before = before;
   step.after = *accepted.after;
   step.held_out_improvement = accepted.held_out_improvement;
@@ -442,104 +167,166 @@ LoopStep make_step(int step_number, ResidualExamination& examination, int chosen
   return step;
 }
 
-// The reference door of the other family with the structure check's free set.
-FitOptions structure_fit_options(const LoopOptions& options, ModelKind other) {
-  FitOptions fit = options.fit;
-  fit.fixed_parameters.clear();
-  fit.free_parameters = options.structure_free_parameters;
-  if (fit.free_parameters.empty() && other == ModelKind::kPhysical) {
-    fit.free_parameters = {"J_d", "k_s", "F0", "T_h", "mu_g"};
-  }
-  return fit;
-}
+// The loop's state between its stages.
+struct LoopRun {
+  const PreparedData& data;
+  const LoopOptions& options;
+  const Say& say;
+  LoopResult& result;
+  FitResult current;          // the current model's fit
+  FitOptions current_options;  // the options it was fitted with
+  DoorModel family_start;     // the start model of the current family
+  int steps_in_family = 0;    // effects added in the current family
+  bool family_checked = false;  // the structure check ran (it runs once)
+  // Effects added before a family switch, not yet judged in the new family.
+  std::vector<effects::Kind> reexamine;
+  // The structure check's examination of the new family's fit, the next step's.
+  std::optional<ResidualExamination> next_examination;
 
-// Whether the structure check runs, and why (or why not).
-bool structure_check_due(const LoopOptions& options, const ModelFigures& figures,
-                         const ResidualExamination& last, StructureCheck& check) {
-  for (const CandidateEvidence& candidate : last.candidates) {
-    check.best_explained_fraction =
-        std::max(check.best_explained_fraction, candidate.explained_fraction);
-  }
-  check.noise_floor_rad_s = last.noise_floor_rad_s;
-  const double ratio = last.noise_floor_rad_s > 0
-                           ? figures.held_out_rmse_rad_s / last.noise_floor_rad_s
-                           : std::numeric_limits<double>::infinity();
-  if (!options.structure_check) {
-    check.reason = "off (structure_check)";
-  } else if (check.best_explained_fraction >= options.structure_max_explained_fraction) {
-    check.reason = "not run: the best candidate explains " +
-                   percent(check.best_explained_fraction) + " of the residual (at least " +
-                   percent(options.structure_max_explained_fraction) + ")";
-  } else if (ratio <= options.structure_noise_ratio) {
-    check.reason = "not run: the held-out RMSE " + number(figures.held_out_rmse_rad_s) +
-                   " rad/s is " + printf_text("%.2g", ratio) + " times the noise floor " +
-                   number(last.noise_floor_rad_s) + " rad/s (needs more than " +
-                   printf_text("%.3g", options.structure_noise_ratio) + ")";
-  } else {
-    check.reason = "no effect closes the gap: the best remaining candidate explains " +
-                   percent(check.best_explained_fraction) +
-                   " of the residual and the held-out "
-                   "RMSE " +
-                   number(figures.held_out_rmse_rad_s) + " rad/s is " + printf_text("%.3g", ratio) +
-                   " times the noise floor " + number(last.noise_floor_rad_s) + " rad/s";
+  // LoopOptions::stop_requested, asked at the stage boundaries; true stops the loop there.
+  bool stopping(const std::string& where) {
+    if (result.interrupted) return true;
+    if (!options.stop_requested || !options.stop_requested()) return false;
+    result.interrupted = true;
+    result.stop_reason += (result.stop_reason.empty() ? "interrupted " : "; then interrupted ");
+    result.stop_reason += where;
     return true;
   }
-  return false;
-}
+};
 
-// The structure check: the other family fitted and compared, then examined for what it
-// leaves. Counts its fit in `fits`.
-StructureCheck check_structure(const FitResult& current, const PreparedData& data,
-                               const LoopOptions& options, const ResidualExamination& last,
-                               int& fits, const Say& say) {
+enum class FamilyCheck { kKept, kSwitched, kInterrupted };
+
+// The structure check, once, when it is due on `examination` (the step's refits judged, if
+// any): the other family fitted and compared. When it is the better structure the loop goes
+// on in it from its fit, and the effects added before are re-examined there.
+FamilyCheck family_check(LoopRun& run, const ResidualExamination& examination) {
+  if (run.family_checked) return FamilyCheck::kKept;
   StructureCheck check;
-  check.current_kind = current.model.kind();
-  check.other_kind =
-      check.current_kind == ModelKind::kSensory ? ModelKind::kPhysical : ModelKind::kSensory;
-  check.current = model_figures(current.summary);
-  if (!structure_check_due(options, check.current, last, check)) {
-    return check;
+  check.after_steps = static_cast<int>(run.result.steps.size());
+  if (!structure_check_due(run.options, model_figures(run.current.summary), examination, check)) {
+    run.result.structure = std::move(check);  // the reason it did not run, so far
+    return FamilyCheck::kKept;
   }
-  check.ran = true;
-  const std::string other_name(to_string(check.other_kind));
-  say("structure check: " + check.reason + "; fitting the " + other_name + " model");
-  const FitOptions fit = structure_fit_options(options, check.other_kind);
-  try {
-    ++fits;
-    check.other_fit = fit_model(reference_model(check.other_kind), data, fit);
-  } catch (const std::exception& error) {
-    check.verdict = "the " + other_name + " model's fit failed: " + error.what();
-    say("structure check: " + check.verdict);
-    return check;
+  if (run.stopping("before the structure check")) return FamilyCheck::kInterrupted;
+  run.family_checked = true;
+  ResidualExamination other_examination;
+  check = check_structure(std::move(check), run.current, run.data, run.options, run.result.fits,
+                          run.say, other_examination);
+  if (!check.other_better || !check.other_fit) {
+    run.result.structure = std::move(check);
+    return FamilyCheck::kKept;
   }
-  const FitSummary& other = check.other_fit->summary;
-  check.other = model_figures(other);
-  for (const FittedParameter& parameter : other.parameters) {
-    if (parameter.free) check.other_free.push_back(parameter.name);
-  }
-  check.other_undetermined = other.undetermined;
-  check.held_out_improvement =
-      (check.current.held_out_rmse_rad_s - check.other.held_out_rmse_rad_s) /
-      check.current.held_out_rmse_rad_s;
-  check.bic_change = check.other.bic - check.current.bic;
-  check.other_better = check.held_out_improvement > options.min_held_out_improvement &&
-                       check.bic_change < -options.min_bic_decrease;
-  ResidualExamination examination = examine(check.other_fit->model, data, options, fit);
-  for (const CandidateEvidence& candidate : examination.candidates) {
-    if (candidate.explained_fraction >= options.min_explained_fraction &&
-        candidate.score_z >= options.min_score_z) {
-      check.remaining.push_back(candidate);
+  check.switched = true;
+  check.candidates = examination.candidates;  // the abandoned step's ranking and refits
+  for (CandidateEvidence& candidate : check.candidates) {
+    if (candidate.qualifies) {
+      candidate.verdict += "; not added: the loop switched to the " +
+                           std::string(to_string(check.other_kind)) + " model first";
     }
   }
-  const std::string current_name(to_string(check.current_kind));
-  check.verdict = std::string(check.other_better ? "the " + other_name : "the " + current_name) +
-                  " model is the better structure: held-out RMSE " +
-                  number(check.current.held_out_rmse_rad_s) + " rad/s (" + current_name +
-                  ") against " + number(check.other.held_out_rmse_rad_s) + " (" + other_name +
-                  ", " + signed_percent(-check.held_out_improvement) + "), BIC " +
-                  printf_text("%+.4g", check.bic_change);
-  say("structure check: " + check.verdict);
-  return check;
+  std::string names;
+  for (const LoopStep& step : run.result.steps) {
+    if (step.model_kind != run.current.model.kind()) continue;
+    run.reexamine.push_back(step.effect);
+    names += (names.empty() ? "" : ", ") + step.effect_name;
+  }
+  run.current = *check.other_fit;
+  run.current_options = structure_fit_options(run.options, check.other_kind);
+  run.current_options.progress = nullptr;
+  run.family_start = reference_model(check.other_kind);
+  run.steps_in_family = 0;
+  run.next_examination = std::move(other_examination);
+  run.result.stop_reason.clear();
+  run.say("switching to the " + std::string(to_string(check.other_kind)) + " model" +
+          (names.empty() ? "" : "; refitting there the effects added before it: " + names));
+  run.result.structure = std::move(check);
+  return FamilyCheck::kSwitched;
+}
+
+// What became of the effects re-examined after a family switch in this step: kept (the
+// chosen one), dropped (rejected); one that qualified but was not chosen is tried again.
+void settle_reexamined(LoopRun& run, const std::vector<CandidateEvidence>& candidates, int chosen,
+                       int step_number) {
+  for (std::size_t k = 0; k < candidates.size(); ++k) {
+    const CandidateEvidence& candidate = candidates[k];
+    if (!candidate.reexamined) continue;
+    std::string fate;
+    if (static_cast<int>(k) == chosen) {
+      fate = candidate.name + ": kept (step " + std::to_string(step_number) + ")";
+    } else if (!candidate.qualifies) {
+      fate = candidate.name + ": dropped: " + candidate.verdict;
+    } else {
+      continue;
+    }
+    run.result.structure.reexamined.push_back(fate);
+    run.say("  after the family switch, " + fate);
+    std::erase(run.reexamine, candidate.kind);
+  }
+}
+
+// Accepts the chosen candidate's refit as the step.
+void accept_step(LoopRun& run, ResidualExamination& examination, int chosen,
+                 std::optional<FitResult>& refit, int step_number) {
+  const effects::Kind accepted = examination.candidates[chosen].kind;
+  LoopStep step = make_step(step_number, examination, chosen, *refit,
+                            model_figures(run.current.summary));
+  std::string added = "step " + std::to_string(step_number) + ": added " + step.effect_name + ":";
+  for (const FittedParameter& parameter : step.parameters) {
+    added += ' ';
+    added += parameter_text(parameter);
+  }
+  run.say(added);
+  run.current = std::move(*refit);
+  run.current_options = refit_options(run.current_options, run.options, accepted);
+  run.result.steps.push_back(std::move(step));
+  ++run.steps_in_family;
+}
+
+// One step: examine, refit, check the family, choose. False when the loop stops.
+bool loop_step(LoopRun& run) {
+  const LoopOptions& options = run.options;
+  LoopResult& result = run.result;
+  const int step_number = static_cast<int>(result.steps.size()) + 1;
+  const std::string step_text = "step " + std::to_string(step_number);
+  if (run.steps_in_family >= options.max_steps) {
+    result.stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
+    // The structure check's evidence: the final model's residual (no refits).
+    if (run.family_checked || !options.structure_check) return false;
+    const ResidualExamination last = examine(run.current.model, run.data, options, run.current_options);
+    return family_check(run, last) == FamilyCheck::kSwitched;
+  }
+  if (run.stopping("before " + step_text)) return false;
+  ResidualExamination examination =
+      run.next_examination ? std::move(*run.next_examination)
+                           : examine(run.current.model, run.data, options, run.current_options);
+  run.next_examination.reset();
+  if (examination.candidates.empty()) {
+    result.stop_reason = "no candidate effect is left (every candidate is in the model)";
+    return family_check(run, examination) == FamilyCheck::kSwitched;
+  }
+  run.say(ranking_line(step_number, examination));
+  if (run.stopping("during " + step_text + ", before its refits (the step is abandoned)")) {
+    return false;
+  }
+  const std::vector<std::size_t> to_refit =
+      select_refits(examination, options, step_number, run.reexamine, run.say);
+  std::vector<std::optional<FitResult>> refits =
+      run_refits(run.family_start, run.current, run.current_options, run.data, options, to_refit,
+                 examination, result.fits, run.say, step_number);
+  if (family_check(run, examination) == FamilyCheck::kSwitched) return true;
+  const int chosen = choose(examination.candidates);
+  settle_reexamined(run, examination.candidates, chosen, step_number);
+  if (chosen < 0) {
+    result.stop_reason =
+        to_refit.empty()
+            ? "no candidate was worth a refit (explained share or z below the thresholds)"
+            : "no refitted candidate qualified";
+    result.last_candidates = examination.candidates;
+    result.last_speed_bands = examination.speed_bands;
+    return false;
+  }
+  accept_step(run, examination, chosen, refits[chosen], step_number);
+  return !result.interrupted;
 }
 
 }  // namespace
@@ -579,71 +366,31 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   say("start model: " + describe_figures(model_figures(result.start_fit.summary)) +
       printf_text(" [%.1f s]", result.start_fit.summary.total_time_s));
 
-  FitResult current = result.start_fit;
-  FitOptions current_options = options.fit;  // the options current was fitted with
-  current_options.progress = nullptr;        // the refits run several at once
-  ResidualExamination last;                  // the examination that ended the loop
-  // LoopOptions::stop_requested, asked at the stage boundaries; true stops the loop there.
-  const auto stopping = [&](const std::string& where) {
-    if (!options.stop_requested || !options.stop_requested()) return false;
-    result.interrupted = true;
-    result.stop_reason += (result.stop_reason.empty() ? "interrupted " : "; then interrupted ");
-    result.stop_reason += where;
-    return true;
-  };
-  for (int step_number = 1;; ++step_number) {
-    const std::string step_text = "step " + std::to_string(step_number);
-    if (step_number <= options.max_steps && stopping("before " + step_text)) break;
-    if (step_number > options.max_steps) {
-      result.stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
-      // The structure check's evidence: the final model's residual (no refits).
-      if (options.structure_check) last = examine(current.model, data, options, current_options);
-      break;
-    }
-    ResidualExamination examination = examine(current.model, data, options, current_options);
-    if (examination.candidates.empty()) {
-      result.stop_reason = "no candidate effect is left (every candidate is in the model)";
-      last = std::move(examination);
-      break;
-    }
-    say(ranking_line(step_number, examination));
-    if (stopping("during " + step_text + ", before its refits (the step is abandoned)")) break;
-    const ModelFigures before = model_figures(current.summary);
-    const std::vector<std::size_t> to_refit = select_refits(examination, options, step_number, say);
-    std::vector<std::optional<FitResult>> refits =
-        run_refits(start, current, current_options, data, options, to_refit, examination,
-                   result.fits, say, step_number);
-    const int chosen = choose(examination.candidates);
-    if (chosen < 0) {
-      result.stop_reason =
-          to_refit.empty()
-              ? "no candidate was worth a refit (explained share or z below the thresholds)"
-              : "no refitted candidate qualified";
-      result.last_candidates = examination.candidates;
-      result.last_speed_bands = examination.speed_bands;
-      last = std::move(examination);
-      break;
-    }
-    const effects::Kind accepted = examination.candidates[chosen].kind;
-    LoopStep step = make_step(step_number, examination, chosen, *refits[chosen], before);
-    std::string added = "step " + std::to_string(step_number) + ": added " + step.effect_name + ":";
-    for (const FittedParameter& parameter : step.parameters) {
-      added += ' ';
-      added += parameter_text(parameter);
-    }
-    say(added);
-    current = std::move(*refits[chosen]);
-    current_options = refit_options(current_options, options, accepted);
-    result.steps.push_back(std::move(step));
+  LoopRun run{.data = data,
+              .options = options,
+              .say = say,
+              .result = result,
+              .current = result.start_fit,
+              .current_options = options.fit,
+              .family_start = start,
+              .steps_in_family = 0,
+              .family_checked = false,
+              .reexamine = {},
+              .next_examination = std::nullopt};
+  run.current_options.progress = nullptr;  // the refits run several at once
+  while (loop_step(run)) {
   }
-  if (!result.interrupted) stopping("before the structure check");
+  for (effects::Kind kind : run.reexamine) {
+    result.structure.reexamined.push_back(std::string(effects::info(kind).name) +
+                                          ": not judged in the new family before the loop "
+                                          "stopped (" + result.stop_reason + ")");
+  }
   say("stopped: " + result.stop_reason);
-  if (result.interrupted) {
+  if (result.interrupted && !run.family_checked) {
+    result.structure = StructureCheck{};
     result.structure.reason = "not run: the loop was interrupted";
-  } else {
-    result.structure = check_structure(current, data, options, last, result.fits, say);
   }
-  result.final_fit = std::move(current);
+  result.final_fit = std::move(run.current);
   result.total_time_s = seconds_since(began);
   return result;
 }

@@ -105,15 +105,20 @@ struct LoopOptions {
   // time changes.
   bool parallel_refits = true;
 
-  // --- The structure check (docs/residual-loop.md, "The structure check") ---
-  // When the loop has stopped (no candidate qualified, none is left, or max_steps: then the
-  // final model is examined once more), the best remaining candidate explains less than
-  // structure_max_explained_fraction of the residual, and the held-out window RMSE is more than structure_noise_ratio times the
-  // noise floor the examination estimates from the residual itself
-  // (ResidualExamination::noise_floor_rad_s), the loop fits the other model family (sensory
-  // <-> physical, the reference door of that family as the start) and reports the
-  // comparison as its last step. It names the other family the better structure when its
-  // held-out RMSE is lower by more than min_held_out_improvement and its BIC lower too.
+  // --- The structure check (docs/residual-loop.md, "The structure check" and "Family before
+  // stacking") ---
+  // At each step, once the step's refits are judged (or when the loop stops: no candidate is
+  // left, or max_steps, then the final model is examined once more without refits): when the
+  // held-out window RMSE is more than structure_noise_ratio times the noise floor the
+  // examination estimates from the residual itself (ResidualExamination::noise_floor_rad_s),
+  // and neither the best candidate's share of the residual (linear or second look) nor the
+  // best refit's fall of the held-out RMSE reaches structure_max_explained_fraction, the loop
+  // fits the other model family (sensory <-> physical, the reference door of that family as
+  // the start) before it adds anything more. It does so once. It names the other family the
+  // better structure when its held-out RMSE is lower by more than min_held_out_improvement
+  // and its BIC lower too; then the loop goes on in that family (the step under way is
+  // abandoned) and refits the effects it had added before in the new family, keeping each
+  // only if it qualifies there.
   bool structure_check = true;
   double structure_max_explained_fraction = 0.5;
   double structure_noise_ratio = 4.0;
@@ -155,6 +160,10 @@ struct ModelFigures {
   int parameters = 0;       // p: free parameters plus window start states
   double sum_of_squares = 0.0;
   double bic = 0.0;
+  // The window samples behind the two RMSEs: a refit is compared with its parent on the same
+  // windows, so these (and `residuals`) are equal for both.
+  std::size_t fitted_samples = 0;
+  std::size_t held_out_samples = 0;
 };
 ModelFigures model_figures(const FitSummary& summary);
 
@@ -193,11 +202,27 @@ struct CandidateEvidence {
   std::vector<double> screen_values;
 
   bool refitted = false;
-  std::string refit_start;            // "the current fit" or "the start model"
+  // Refitted after a family switch because the loop had added it in the other family
+  // (docs/residual-loop.md, "Family before stacking"), whatever its share and z: it is kept
+  // only if it qualifies in the new family.
+  bool reexamined = false;
+  // "the current fit", "the start model" or "the parent's optimum (the effect at neutral)"
+  // (LoopOptions::RefitStart), with " (the parent's fit stands)" when parent_stands.
+  std::string refit_start;
+  // No refit ended with a fitted sum of squares at or below the parent's: the refit is the
+  // parent's optimum with the effect at its neutral value (zero torque), whose figures are
+  // the parent's with p larger by the effect's free parameters. Never qualifies.
+  bool parent_stands = false;
+  ModelFigures before;                // the parent's figures: the model the refit extends
   std::optional<ModelFigures> after;  // the refit's figures
+  // The effect's parameters as the refit left them ("<effect>.<param>", with standard
+  // uncertainty, at_bound and determined); at neutral, without uncertainty, when
+  // parent_stands.
+  std::vector<FittedParameter> parameters;
   double held_out_improvement = 0.0;  // (before − after) / before, held-out window RMSE
   double bic_change = 0.0;            // after − before
-  bool qualifies = false;             // passed both tests
+  // Passed both tests, and no free parameter of the effect ended at a bound or undetermined.
+  bool qualifies = false;
   std::string verdict;  // "not refitted: ...", "held-out RMSE fell 0.8% (needs > 2%)", ...
 };
 
@@ -234,6 +259,7 @@ struct ResidualExamination {
 
 struct LoopStep {
   int number = 0;  // 1, 2, ...
+  ModelKind model_kind = ModelKind::kSensory;  // the family the effect was added to
   effects::Kind effect = effects::Kind::kViscousDamping;
   std::string effect_name;
   // The evidence that had it refitted: the examination's linear share and z, or the second
@@ -272,6 +298,16 @@ struct StructureCheck {
   std::vector<CandidateEvidence> remaining;
   std::optional<FitResult> other_fit;
   std::string verdict;
+  // When it ran: after this many steps had been accepted, on the examination and refits of
+  // the step under way (`candidates`, with their verdicts). When the other family is the
+  // better structure the loop switches to it (`switched`): that step is abandoned, the other
+  // family's fit is the new current model, and the effects added before are refitted in it
+  // (CandidateEvidence::reexamined); `reexamined` says what became of each ("force_offset:
+  // dropped: ...", "gravity_imbalance: kept (step 3)").
+  int after_steps = 0;
+  bool switched = false;
+  std::vector<CandidateEvidence> candidates;
+  std::vector<std::string> reexamined;
 };
 
 struct LoopResult {
@@ -295,6 +331,15 @@ struct LoopResult {
   std::string brief_report() const;  // a few lines: the effects added and the error
   std::string full_report() const;   // every step's evidence, parameters, figures, verdicts
 };
+
+// Why a refit's effect parameters rule the effect out (empty when they do not): each free
+// parameter of `parameters` (the effect's, "<effect>.<param>", in the catalogue's order) that
+// ended at a bound or undetermined, e.g. "end_stop.theta_e = -0.1 rad at its lower bound -0.1
+// (the end of the search range, not a physical limit), undetermined". A bound at the
+// catalogue's physical minimum (EffectParameter::minimum) is called a physical limit, and
+// for an amplitude there "where the effect vanishes"; "; " between parameters.
+std::string refit_parameter_problems(effects::Kind kind,
+                                     const std::vector<FittedParameter>& parameters);
 
 // Step 2 alone: how much of the rate residual of `model` on `data` (windows as in
 // options.fit) each candidate effect of options.candidates would explain, best first.

@@ -19,6 +19,7 @@
 #include "analysis/model/sensory_model.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "tests/support/foreign_recording.h"
+#include "tests/support/nested_refits.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 
@@ -229,6 +230,10 @@ TEST_CASE("Foreign recordings: fit takes a 50 Hz jittered CSV and its handle rad
     CHECK_THAT(report, Contains("start values from the data: J, d1, d2 from ") &&
                            Contains("Data: sample rate 50") &&
                            Contains("handle radius 0.8 m, from the CSV's metadata"));
+    // Issue 30 saw a nested refit end above its parent on a real 50 Hz recording with the
+    // handle at 0.8 m: none of this loop's refits may.
+    testing::check_nested_refits_json(
+        nlohmann::json::parse(read_text_file(dir / "loop" / "result.json")));
   }
   SECTION("a parameter file with another radius: a warning, or an error when strict") {
     const std::filesystem::path door =

@@ -12,6 +12,7 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/physical_model.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "tests/support/nested_refits.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
 
@@ -33,6 +34,7 @@ TEST_CASE("residual loop: names an undeclared gravity imbalance in a bench recor
   const LoopResult loop =
       doorbench::run_residual_loop(doorbench::reference_model(ModelKind::kSensory), data);
   INFO(loop.full_report());
+  CHECK(doorbench::testing::check_nested_refits(loop) >= 1);
   REQUIRE(loop.steps.size() == 1);
   const doorbench::LoopStep& step = loop.steps.front();
   CHECK(step.effect_name == "gravity_imbalance");
@@ -85,6 +87,7 @@ TEST_CASE(
   const LoopResult loop =
       doorbench::run_residual_loop(doorbench::reference_model(ModelKind::kSensory), data, options);
   INFO(loop.full_report());
+  CHECK(doorbench::testing::check_nested_refits(loop) >= 1);
   REQUIRE(loop.steps.size() == 1);
   const doorbench::LoopStep& step = loop.steps.front();
   CHECK(step.effect_name == "gravity_imbalance");

@@ -13,6 +13,7 @@
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/simulation/fit_synthetic.h"
+#include "tests/support/nested_refits.h"
 #include "tests/support/reference_doors.h"
 
 namespace {
@@ -79,6 +80,7 @@ LoopResult expect_first_step(const DoorModel& truth, effects::Kind expected,
   options.fit.progress = [&](const doorbench::FitProgress& p) { fits.push_back(p); };
   const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), data, options);
   INFO(loop.full_report());
+  CHECK(doorbench::testing::check_nested_refits(loop) >= 1);
   // The counts for a progress display (app/progress.h): each step's refits from 0 to all of
   // them, and the start fit's iterations and folds (the refits do not report).
   REQUIRE(steps.size() >= 2);
@@ -142,6 +144,7 @@ LoopResult expect_first_step(const DoorModel& truth, effects::Kind expected,
 TEST_CASE("residual loop: clean data fitted with its own model adds nothing", "[residual_loop]") {
   const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), clean_recording());
   INFO(loop.full_report());
+  doorbench::testing::check_nested_refits(loop);
   CHECK(loop.steps.empty());
   CHECK(loop.final_fit.model.effects().empty());
   CHECK_FALSE(loop.stop_reason.empty());
@@ -167,6 +170,7 @@ TEST_CASE("residual loop: on clean data a forced refit is rejected by the held-o
   options.candidates = {effects::Kind::kGravityImbalance};
   const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), clean_recording(), options);
   INFO(loop.full_report());
+  CHECK(doorbench::testing::check_nested_refits(loop) == 1);
   CHECK(loop.steps.empty());
   REQUIRE(loop.last_candidates.size() == 1);
   const doorbench::CandidateEvidence& candidate = loop.last_candidates.front();
@@ -343,4 +347,47 @@ TEST_CASE("residual loop: options are validated with a message naming the option
   one_stroke.strokes.resize(1);
   CHECK_THROWS_WITH(doorbench::run_residual_loop(sensory_reference(), one_stroke),
                     Contains("2 strokes"));
+}
+
+// Issue 30: an effect with a free parameter at a bound or undetermined is never added; the
+// refit's verdict names each such parameter, and says whether the bound is a physical limit
+// (the catalogue's minimum, where an amplitude's effect vanishes) or the end of the search
+// range. The issue's case: an end stop whose θ_e sat at the range's −0.1 rad, undetermined.
+TEST_CASE("residual loop: a refit's parameters at a bound or undetermined are named as the "
+          "reason for its rejection",
+          "[residual_loop]") {
+  auto parameter = [](const std::string& name, const std::string& unit, double value,
+                      doorbench::Bounds bounds, bool at_bound, bool determined) {
+    doorbench::FittedParameter p;
+    p.name = name;
+    p.unit = unit;
+    p.free = true;
+    p.value = value;
+    p.uncertainty = determined ? 0.01 : std::nan("");
+    p.bounds = bounds;
+    p.at_bound = at_bound;
+    p.determined = determined;
+    return p;
+  };
+  const std::vector<doorbench::FittedParameter> end_stop = {
+      parameter("end_stop.k_e", "N*m/rad", 150.0, {0.0, 100000.0}, false, true),
+      parameter("end_stop.theta_e", "rad", -0.1, {-0.1, 1.7}, true, false)};
+  CHECK(doorbench::refit_parameter_problems(effects::Kind::kEndStop, end_stop) ==
+        "end_stop.theta_e = -0.1 rad at its lower bound -0.1 (the end of the search range, not a "
+        "physical limit), undetermined");
+  const std::vector<doorbench::FittedParameter> damping = {
+      parameter("viscous_damping.b", "N*m*s/rad", 0.0, {0.0, 5.0}, true, true)};
+  CHECK(doorbench::refit_parameter_problems(effects::Kind::kViscousDamping, damping) ==
+        "viscous_damping.b = 0 N*m*s/rad at its lower bound 0 (a physical limit, where the "
+        "effect vanishes)");
+  const std::vector<doorbench::FittedParameter> stribeck = {
+      parameter("stribeck.d_s", "N*m", 4.0, {0.0, 20.0}, false, false),
+      parameter("stribeck.w_s", "rad/s", 1.0, {0.001, 1.0}, true, true)};
+  CHECK(doorbench::refit_parameter_problems(effects::Kind::kStribeck, stribeck) ==
+        "stribeck.d_s = 4 N*m undetermined; stribeck.w_s = 1 rad/s at its upper bound 1 (the end "
+        "of the search range, not a physical limit)");
+  // A held parameter at its bound is no reason; nothing wrong: empty.
+  std::vector<doorbench::FittedParameter> held = end_stop;
+  held[1].free = false;
+  CHECK(doorbench::refit_parameter_problems(effects::Kind::kEndStop, held).empty());
 }
