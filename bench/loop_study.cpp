@@ -251,8 +251,9 @@ void print_examination(const DoorModel& sensory, const PreparedData& data,
                 band.samples, band.rms_rad_s);
   }
   for (const CandidateEvidence& c : exam.candidates) {
-    std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s\n", c.name.c_str(),
-                100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str());
+    std::printf("  %-18s %6.2f%%  z %6.2f  indep %.3f  %s  start %g\n", c.name.c_str(),
+                100 * c.explained_fraction, c.score_z, c.independent_share, c.scan.c_str(),
+                c.start_values.empty() ? 0.0 : c.start_values[0]);
     if (c.screened) {
       std::printf("      second look: %6.2f%%  z %6.2f  values", 100 * c.screen_explained_fraction,
                   c.screen_score_z);

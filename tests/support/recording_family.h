@@ -34,9 +34,10 @@
 // Every drawn recording is `strokes` strokes (opening, closing, alternating; ids 1, 2, ...)
 // in runs of two that start and end with the door at rest at closed (0.6 s of rest
 // between runs, so that `prepare` finds still periods), 0.25 s of rest kept before each
-// stroke. The door is simulated under the hand, the force sampled at the (jittered) sample
-// times, and simulated again under that sampled force (RecordedForce), so the data are
-// what a model driven by the recorded force does (as in analysis/simulation/fit_synthetic.h).
+// stroke. The door is simulated under the hand and sampled at the (jittered) sample times,
+// the hand's force with it: the fit's linear interpolation of the force between samples is
+// then an approximation, as on a real bench (RecordingConditions::replay_sampled_force for
+// the other generators' way).
 // `prepare` may leave strokes out (a saturated gyroscope, too short): PreparedData::excluded.
 //
 // Contract: deterministic for (conditions, seed); draw_conditions deterministic for
@@ -97,6 +98,12 @@ struct RecordingConditions {
   double inclinometer_range_rad = 10.0 * kRadPerDeg;
   double inclinometer_bandwidth_hz = 10.0;
   int encoder_counts = 16384;  // per turn
+  // The data are the door as the hand moved it, sampled (a continuous force, as a real
+  // bench samples it); true: the door simulated again under the sampled force, linearly
+  // interpolated (as fit_synthetic's and the tremor hand's generators do), so that the data
+  // are exactly what a model driven by the recorded force does. At low rates that replay is
+  // another door: a stiff grip's force, sampled at 50 Hz, left the door standing.
+  bool replay_sampled_force = false;
 
   // One line for tables and failure messages, e.g. "pd 1200 N/m, 1000 Hz ±5 %,
   // inclinometer+gyro, tremor 0.3 N 1-8 Hz, latch, openings 1.05-1.34 rad, ...".
@@ -131,6 +138,7 @@ struct RecordingConditions {
       text.append(latch ? printf_text(", latch (aim %.3f rad past closed)", latch_overshoot_rad)
                         : printf_text(", no latch (stop at %.3f rad)", stop_short_rad));
     }
+    if (replay_sampled_force) text.append(", replayed under the sampled force");
     text.append(printf_text(", noise %.2f N %.4f deg %.3f deg/s", force_noise_N,
                             angle_noise_rad * kDegPerRad, rate_noise_rad_s * kDegPerRad));
     return text;
@@ -565,9 +573,17 @@ inline PreparedData family_recording(const DoorModel& truth, const RecordingCond
   }
   // Odd counts: drop the last closing's id.
   if (c.strokes % 2 == 1) std::replace(b.stroke.begin(), b.stroke.end(), c.strokes + 1, 0);
-  // The data: the door again under the force as sampled (RecordedForce).
-  const RecordedForce recorded(b.times, b.force);
-  const Trajectory door = simulate(truth, recorded, DoorState{}, b.times);
+  // The data: the door as the hand moved it, sampled; or (replay_sampled_force) the door
+  // again under the force as sampled (RecordedForce).
+  Trajectory door;
+  if (c.replay_sampled_force) {
+    door = simulate(truth, RecordedForce(b.times, b.force), DoorState{}, b.times);
+  } else {
+    door.time_s = b.times;
+    door.force_N = b.force;
+    door.theta_rad = b.theta;
+    door.omega_rad_s = b.omega;
+  }
   if (c.sensors == "state") return family_detail::state_data(b, door, random);
   Recording recording = family_detail::sensor_recording(b, door, random);
   recording.source = "recording family seed " + std::to_string(seed);
