@@ -11,12 +11,15 @@
 //   --tremor-mm A, --drift-N F: the tremor hand's amplitudes (defaults 0.5 mm, 1 N)
 //   --min-z Z: LoopOptions::min_score_z; --only EFFECT: the one candidate (catalogue name);
 //   --screen-steps N: LoopOptions::screen_steps
+//   --compare-exam: after the loop, the examination's sum of squares at the start fit and
+//     at the final model
 //   --strokes: each stroke's angle range and its speed through a few angles, then stop
 //   family-clean | family-stribeck: a recording of the recording family
 //     (tests/support/recording_family.h), conditions drawn from SEED, breakaway friction of
 //     the issue-30 size (d_s - d1 = 1.5 N m, w_s = 0.05 rad/s) or none; issue-stribeck: the
 //     issue's case (a PD hand, 0.3 N of 1-8 Hz tremor, openings to 60-77 deg, latch, 1 kHz).
-//     --hand H, --rate HZ, --sensors S override the drawn conditions.
+//     --hand H, --rate HZ, --sensors S override the drawn conditions; --replay: the data
+//     simulated again under the sampled force (RecordingConditions::replay_sampled_force).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -140,6 +143,7 @@ testing::RecordingConditions family_conditions(const std::string& which, unsigne
     if (std::strcmp(argv[i], "--rate") == 0) c.sample_rate_hz = std::stod(argv[i + 1]);
     if (std::strcmp(argv[i], "--sensors") == 0) c.sensors = argv[i + 1];
   }
+  c.replay_sampled_force = has_flag(argc, argv, "--replay");
   return c;
 }
 
@@ -296,5 +300,14 @@ int main(int argc, char** argv) {
   }
   const LoopResult loop = run_residual_loop(sensory, data, options);
   std::printf("%s", loop.full_report().c_str());
+  if (has_flag(argc, argv, "--compare-exam")) {
+    // The examination's own objective (measured-state windows, rate residual) at the start
+    // fit and at the final model: does it agree with the fit's?
+    LoopOptions plain = options;
+    plain.screen_steps = 0;
+    std::printf("examination sum of squares: start fit %.6g, final model %.6g\n",
+                examine_residual(loop.start_fit.model, data, plain).rate_sum_of_squares,
+                examine_residual(loop.model(), data, plain).rate_sum_of_squares);
+  }
   return 0;
 }
