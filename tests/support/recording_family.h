@@ -47,7 +47,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <memory>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -560,7 +559,7 @@ inline PreparedData family_recording(const DoorModel& truth, const RecordingCond
   std::uniform_real_distribution<double> unit(0.0, 1.0);
   const int runs = (c.strokes + 1) / 2;
   for (int r = 0; r < runs; ++r) {
-    // Targets spread over the range (a shuffled ladder), each jittered within its rung.
+    // Targets spread over the range in rising rungs, each drawn within its rung.
     const double rung = (r + unit(random)) / runs;
     if (c.hand == "impulse") {
       family_detail::impulse_run(
