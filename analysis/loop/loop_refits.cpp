@@ -294,6 +294,11 @@ std::vector<std::size_t> select_refits(ResidualExamination& examination, const L
       candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
                           " of the residual (needs " + percent(options.min_explained_fraction) +
                           ")";
+      if (candidate.screened) {
+        candidate.verdict +=
+            printf_text(", second look %.1f%%, z %.2g", 100.0 * candidate.screen_explained_fraction,
+                        candidate.screen_score_z);
+      }
     } else {
       candidate.verdict = "not refitted: score z = " + printf_text("%.2g", candidate.score_z) +
                           " (needs " + printf_text("%.2g", options.min_score_z) + ")";

@@ -8,7 +8,9 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <stdexcept>
+#include <utility>
 
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/fit_windows.h"
@@ -211,11 +213,29 @@ struct SecondLook {
   CandidateEvidence* candidate = nullptr;
   DoorModel with;
   std::vector<int> parameters;
+  // The same with the amplitude at the far end of its first-order 3-standard-error interval
+  // (when that is another value within the bounds): a second start for the refinement.
+  std::optional<DoorModel> with_far;
 };
+
+// The second look's far start for each effect: parameter 0 (offset + amplitude) at
+// â + 3 SE(â) (away from 0), clamped into the amplitude's range; only for effects whose
+// first look gave an amplitude.
+using FarStarts = std::vector<std::pair<effects::Kind, double>>;
+
+// `model` with `setting`, or nothing when the values break a constraint.
+std::optional<DoorModel> try_with_effect(const DoorModel& model, const EffectSetting& setting) {
+  try {
+    return model.with_effect(setting);
+  } catch (const std::invalid_argument&) {
+    return std::nullopt;
+  }
+}
 
 // The candidates the second look takes (those the linear score leaves refit slots for).
 std::vector<SecondLook> second_look_candidates(const DoorModel& model, const LoopOptions& options,
                                                const std::vector<int>& free,
+                                               const FarStarts& far_starts,
                                                ResidualExamination& examination) {
   std::vector<SecondLook> chosen;
   // Only refit slots that the linear score leaves free are worth a second look.
@@ -229,8 +249,13 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
   int taken = 0;  // slots used, by a candidate the second look then takes or not
   for (CandidateEvidence& candidate : examination.candidates) {
     if (taken >= slots) break;
-    if (candidate.explained_fraction < options.min_explained_fraction ||
-        candidate.score_z >= options.min_score_z || candidate.start_values.empty()) {
+    // Every candidate that does not pass both thresholds, whatever its share: an effect
+    // acting on a few windows explains little of the whole residual even when it is what
+    // those windows lack (breakaway friction under impulses, docs/residual-loop.md,
+    // "Breakaway friction on the recording family").
+    if ((candidate.explained_fraction >= options.min_explained_fraction &&
+         candidate.score_z >= options.min_score_z) ||
+        candidate.start_values.empty()) {
       continue;
     }
     ++taken;
@@ -239,11 +264,14 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
     for (const effects::EffectParameter& parameter : info.parameters) {
       setting.bounds.push_back(parameter.default_bounds);
     }
-    std::optional<DoorModel> with;
-    try {
-      with = model.with_effect(setting);
-    } catch (const std::invalid_argument&) {
-      continue;  // the start breaks a constraint: no second look
+    std::optional<DoorModel> with = try_with_effect(model, setting);
+    if (!with) continue;  // the start breaks a constraint: no second look
+    std::optional<DoorModel> with_far;
+    for (const auto& [kind, far] : far_starts) {
+      if (kind != candidate.kind || far == setting.values[0]) continue;
+      EffectSetting far_setting = setting;
+      far_setting.values[0] = far;
+      with_far = try_with_effect(model, far_setting);
     }
     std::vector<int> parameters = free;
     int amplitude = -1;
@@ -263,39 +291,51 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
     }
     if (amplitude < 0) continue;
     parameters.push_back(amplitude);
-    chosen.push_back({&candidate, std::move(*with), std::move(parameters)});
+    chosen.push_back({&candidate, std::move(*with), std::move(parameters), std::move(with_far)});
   }
   return chosen;
 }
 
-// The second look (LoopOptions::screen_steps): the best-ranked candidates that explain at
-// least min_explained_fraction but score z below min_score_z, as many as refit slots are
-// left by the candidates that pass both, are each added at their examination start
-// and refined, with the free parameters, by a few Gauss–Newton steps on the examination's
-// windows (refine_parameters); the model without it is refined the same way. Its screened
+// The second look (LoopOptions::screen_steps): the best-ranked candidates that do not pass
+// both thresholds (share and z), as many as refit slots are left by the candidates that
+// pass both, are each added at their examination start, and again at the far end of its
+// amplitude's 3-standard-error interval, and refined from both, with the free parameters,
+// by a few Gauss–Newton steps on the examination's windows (refine_parameters; the
+// better of the two is kept); the model without it is refined the same way. Its screened
 // share is the fall of Σe² between the two over the examination's Σe², its screened z the
 // refined amplitude over its window-clustered standard error there. A linear score is
 // poor where the effect's response is not linear in its amplitude: breakaway friction
 // that holds the door a few milliseconds longer before the latch snaps.
 void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
                             const LoopOptions& options, const WindowOptions& windows,
-                            const std::vector<int>& free, ResidualExamination& examination) {
+                            const std::vector<int>& free, const FarStarts& far_starts,
+                            ResidualExamination& examination) {
   if (options.screen_steps <= 0) return;
   const std::vector<SecondLook> chosen =
-      second_look_candidates(model, options, free, examination);
+      second_look_candidates(model, options, free, far_starts, examination);
   if (chosen.empty()) return;
-  // The model without any candidate and each candidate's, refined at once (each is
-  // deterministic and independent: the same results as one after another).
-  std::vector<std::optional<Refined>> refined(chosen.size() + 1);
-  std::vector<std::exception_ptr> errors(chosen.size() + 1);
-  parallel_for(static_cast<int>(refined.size()), refit_threads(options.parallel_refits, refined.size()),
-               [&](std::size_t j) {
+  // The model without any candidate, and each candidate's from both its starts, refined at
+  // once (each is deterministic and independent: the same results as one after another).
+  // Task 0 is the model without; task 2j + 1 candidate j's start, 2j + 2 its far start.
+  const std::size_t tasks = 2 * chosen.size() + 1;
+  std::vector<std::optional<Refined>> refined(tasks);
+  std::vector<std::exception_ptr> errors(tasks);
+  parallel_for(static_cast<int>(tasks), refit_threads(options.parallel_refits, tasks),
+               [&](std::size_t t) {
     try {
-      refined[j] = j == 0 ? refine_parameters(model, data, windows, free, options.screen_steps)
-                          : refine_parameters(chosen[j - 1].with, data, windows,
-                                              chosen[j - 1].parameters, options.screen_steps);
+      if (t == 0) {
+        refined[t] = refine_parameters(model, data, windows, free, options.screen_steps);
+        return;
+      }
+      const SecondLook& look = chosen[(t - 1) / 2];
+      const std::optional<DoorModel>& start = t % 2 == 1 ? std::optional<DoorModel>(look.with)
+                                                         : look.with_far;
+      if (start) {
+        refined[t] =
+            refine_parameters(*start, data, windows, look.parameters, options.screen_steps);
+      }
     } catch (...) {
-      errors[j] = std::current_exception();
+      errors[t] = std::current_exception();
     }
   });
   for (const std::exception_ptr& error : errors) {
@@ -304,7 +344,12 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
   const Refined& without = *refined[0];
   for (std::size_t j = 0; j < chosen.size(); ++j) {
     CandidateEvidence& candidate = *chosen[j].candidate;
-    const Refined& with = *refined[j + 1];
+    // The better of the two starts' refinements (the lower sum of squares).
+    const std::optional<Refined>& near = refined[2 * j + 1];
+    const std::optional<Refined>& far = refined[2 * j + 2];
+    const Refined& with = far && far->linear.rate_sum_of_squares < near->linear.rate_sum_of_squares
+                              ? *far
+                              : *near;
     const effects::EffectInfo& info = effects::info(candidate.kind);
     const ColumnScore score = last_column_score(with.linear);
     const double offset =
@@ -364,6 +409,7 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   };
   const int e_column = columns - 1;
   const Eigen::VectorXd beta_e = coefficients(e_column);
+  FarStarts far_starts;
 
   // Each effect's best configuration: the amplitude minimizing |Pe − a Px|² within its
   // range, and the share of Σe² it removes.
@@ -418,6 +464,12 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
     candidate.score_z = best_amplitude != 0.0 ? best_score : 0.0;
     candidate.start_values = regressors[best].unit_values;
     candidate.start_values[0] = regressors[best].amplitude_offset + best_amplitude;
+    if (best_amplitude != 0.0 && best_score > 0) {
+      const Regressor& regressor = regressors[best];
+      const double far = best_amplitude * (1.0 + 3.0 / best_score);  // â + 3 SE(â), away from 0
+      far_starts.emplace_back(kind, regressor.amplitude_offset +
+                                        std::clamp(far, regressor.lower, regressor.upper));
+    }
     candidate.scan = regressors[best].scan;
     examination.candidates.push_back(std::move(candidate));
   }
@@ -429,7 +481,7 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
     examination.candidates[k].rank = static_cast<int>(k) + 1;
   }
   const StageClock::time_point screen_began = StageClock::now();
-  screen_weak_candidates(model, data, options, windows, free, examination);
+  screen_weak_candidates(model, data, options, windows, free, far_starts, examination);
   examination.screen_time_s = seconds_since(screen_began);
   examination.time_s = seconds_since(began);
   return examination;

@@ -67,10 +67,11 @@ struct LoopOptions {
   // ... and BIC = n ln(SSR/n) + p ln(n) falls by more than this (0: falls at all).
   double min_bic_decrease = 0.0;
   // The second look at weak candidates (docs/residual-loop.md, "The second look"): the
-  // best-ranked candidates that explain at least min_explained_fraction but score z below
-  // min_score_z, as many as the refit slots the passing candidates leave free, are each
-  // added at their examination start and refined with the free parameters by at most this
-  // many Gauss–Newton steps on the examination's windows (no fit_model call); a candidate
+  // best-ranked candidates that do not pass both min_explained_fraction and min_score_z,
+  // as many as the refit slots the passing candidates leave free, are each added at their
+  // examination start (and at a far start: the amplitude 3 standard errors further from 0)
+  // and refined with the free parameters by at most this many Gauss–Newton steps on the
+  // examination's windows (no fit_model call); a candidate
   // is refitted when its refined share and z pass both thresholds. 0: off.
   int screen_steps = 5;
 
