@@ -12,6 +12,11 @@
 //   --min-z Z: LoopOptions::min_score_z; --only EFFECT: the one candidate (catalogue name);
 //   --screen-steps N: LoopOptions::screen_steps
 //   --strokes: each stroke's angle range and its speed through a few angles, then stop
+//   family-clean | family-stribeck: a recording of the recording family
+//     (tests/support/recording_family.h), conditions drawn from SEED, breakaway friction of
+//     the issue-30 size (d_s - d1 = 1.5 N m, w_s = 0.05 rad/s) or none; issue-stribeck: the
+//     issue's case (a PD hand, 0.3 N of 1-8 Hz tremor, openings to 60-77 deg, latch, 1 kHz).
+//     --hand H, --rate HZ, --sensors S override the drawn conditions.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -28,6 +33,7 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "analysis/simulation/fit_synthetic.h"
+#include "tests/support/recording_family.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/tremor_recording.h"
 
@@ -114,10 +120,33 @@ PreparedData demo_recording(unsigned seed) {
   return prepare_session(session_path);
 }
 
+// The family cases' conditions: drawn from `seed` (issue-stribeck: the issue's case), then
+// the arguments' overrides (--hand, --rate, --sensors).
+testing::RecordingConditions family_conditions(const std::string& which, unsigned seed, int argc,
+                                               char** argv) {
+  testing::RecordingConditions c = testing::draw_conditions(seed);
+  if (which == "issue-stribeck") {
+    c = testing::RecordingConditions{};
+    c.hand = "pd";
+    c.tremor_low_hz = 1.0;
+    c.tremor_high_hz = 8.0;
+    c.tremor_force_N = 0.3;
+    c.open_min_rad = 60.0 * kRadPerDeg;
+    c.open_max_rad = 77.0 * kRadPerDeg;
+    c.sensors = "state";
+  }
+  for (int i = 2; i + 1 < argc; ++i) {
+    if (std::strcmp(argv[i], "--hand") == 0) c.hand = argv[i + 1];
+    if (std::strcmp(argv[i], "--rate") == 0) c.sample_rate_hz = std::stod(argv[i + 1]);
+    if (std::strcmp(argv[i], "--sensors") == 0) c.sensors = argv[i + 1];
+  }
+  return c;
+}
+
 // The recording of the case `which` into `data`; false for an unknown case.
 bool make_recording(const std::string& which, const DoorModel& sensory,
-                    const testing::TremorRecordingOptions& recording, unsigned seed,
-                    PreparedData& data) {
+                    const testing::TremorRecordingOptions& recording, unsigned seed, int argc,
+                    char** argv, PreparedData& data) {
   const double d1 = sensory.parameter_values()[sensory.find_parameter("d1").value()];
   // The catalogue's other effects at the plain-hand tests' sizes, on the tremor hand.
   struct TremorCase {
@@ -157,6 +186,13 @@ bool make_recording(const std::string& which, const DoorModel& sensory,
     data = testing::tremor_recording(reference_model(ModelKind::kPhysical), recording);
   } else if (which == "demo") {
     data = demo_recording(seed);
+  } else if (which.rfind("family-", 0) == 0 || which == "issue-stribeck") {
+    const testing::RecordingConditions c = family_conditions(which, seed, argc, argv);
+    const DoorModel truth = which == "family-clean"
+                                ? sensory
+                                : with_effect(sensory, effects::Kind::kStribeck, {d1 + 1.5, 0.05});
+    std::printf("conditions: %s\n", c.describe().c_str());
+    data = testing::family_recording(truth, c, seed + 1000);
   } else {
     return false;
   }
@@ -242,7 +278,7 @@ int main(int argc, char** argv) {
 
   const DoorModel sensory = reference_model(ModelKind::kSensory);
   PreparedData data;
-  if (!make_recording(which, sensory, recording, seed, data)) {
+  if (!make_recording(which, sensory, recording, seed, argc, argv, data)) {
     std::fprintf(stderr, "unknown case %s\n", which.c_str());
     return 2;
   }
