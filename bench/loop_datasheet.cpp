@@ -39,49 +39,17 @@
 #include "bench/loop_datasheet_table.h"
 #include "core/parallel.h"
 
-#if __has_include("tests/support/recording_family.h")
 #include "tests/support/recording_family.h"
-#define DOORBENCH_DATASHEET_FAMILY 1
-#else
-#include "tests/support/tremor_recording.h"
-#define DOORBENCH_DATASHEET_FAMILY 0
-#endif
 
 using namespace doorbench;
 using datasheet::RunRecord;
 
 namespace {
 
-#if !DOORBENCH_DATASHEET_FAMILY
-// Until the recording family lands: the tremor hand behind the family's interface.
-struct RecordingConditions {
-  std::string hand = "tremor";
-  double sample_rate_hz = 1000.0;
-  std::string sensors = "angle + rate";
-  int strokes = 12;
-  std::string describe() const { return "tremor hand, 1 kHz, " + std::to_string(strokes) + " strokes"; }
-};
-struct FamilyOptions {
-  int strokes = 12;
-};
-RecordingConditions draw_conditions(std::uint32_t, const FamilyOptions& options) {
-  RecordingConditions c;
-  c.strokes = options.strokes;
-  return c;
-}
-PreparedData family_recording(const DoorModel& truth, const RecordingConditions& conditions,
-                              std::uint32_t seed) {
-  testing::TremorRecordingOptions options;
-  options.runs = std::max(1, conditions.strokes / 2);
-  options.seed = seed;
-  return testing::tremor_recording(truth, options);
-}
-#else
 using testing::draw_conditions;
 using testing::FamilyOptions;
 using testing::family_recording;
 using testing::RecordingConditions;
-#endif
 
 // An effect's ladder of sizes: its amplitude (d_s − d1 for stribeck), from small to the size
 // of the loop's tests (docs/residual-loop.md, "Measured"); the truth's other parameters are
