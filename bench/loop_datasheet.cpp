@@ -58,18 +58,19 @@ struct EffectLadder {
   effects::Kind kind;
   std::vector<double> sizes;
   std::string unit;
+  std::size_t typical = 0;  // the size of the loop's tests: run first
 };
 
 const std::vector<EffectLadder>& ladders() {
   static const std::vector<EffectLadder> all = {
-      {effects::Kind::kViscousDamping, {0.05, 0.15, 0.5}, "N·m·s/rad"},
-      {effects::Kind::kGravityImbalance, {0.3, 1.0, 3.0}, "N·m"},
-      {effects::Kind::kStribeck, {0.5, 1.0, 1.5, 3.0}, "N·m"},
-      {effects::Kind::kDirectionFriction, {0.15, 0.5, 1.5}, "N·m"},
-      {effects::Kind::kSoftClose, {0.5, 1.5, 5.0}, "N·m·s/rad"},
-      {effects::Kind::kEndStop, {20.0, 60.0, 200.0}, "N·m/rad"},
-      {effects::Kind::kForceOffset, {0.3, 1.0, 3.0}, "N"},
-      {effects::Kind::kInertiaError, {0.02, 0.06, 0.2}, "kg·m²"},
+      {effects::Kind::kViscousDamping, {0.05, 0.15, 0.5}, "N·m·s/rad", 2},
+      {effects::Kind::kGravityImbalance, {0.3, 1.0, 3.0}, "N·m", 2},
+      {effects::Kind::kStribeck, {0.5, 1.0, 1.5, 3.0}, "N·m", 2},
+      {effects::Kind::kDirectionFriction, {0.15, 0.5, 1.5}, "N·m", 2},
+      {effects::Kind::kSoftClose, {0.5, 1.5, 5.0}, "N·m·s/rad", 2},
+      {effects::Kind::kEndStop, {20.0, 60.0, 200.0}, "N·m/rad", 2},
+      {effects::Kind::kForceOffset, {0.3, 1.0, 3.0}, "N", 2},
+      {effects::Kind::kInertiaError, {0.02, 0.06, 0.2}, "kg·m²", 2},
   };
   return all;
 }
@@ -171,24 +172,36 @@ Settings parse_arguments(int argc, char** argv) {
   return s;
 }
 
-// The runs the settings ask for, clean ones first, then effect by effect, size by size.
+// The runs the settings ask for, in the order they run, so that a run cut short leaves
+// whole rows of the most useful kind: the clean recordings first, then every effect at its
+// typical size, then each effect's next smaller size, and so on, the sizes above the
+// typical one last; within a row the draws in order.
 std::vector<Job> planned_jobs(const Settings& s) {
-  std::vector<Job> jobs;
+  struct Ranked {
+    std::size_t level;
+    Job job;
+  };
+  std::vector<Ranked> ranked;
   for (const std::string& e : s.effects) {
-    if (e != "clean") continue;
-    for (int d = 1; d <= s.clean_draws; ++d) jobs.push_back({"clean", 0, 0.0, "", d});
-  }
-  for (const std::string& e : s.effects) {
-    if (e == "clean") continue;
+    if (e == "clean") {
+      for (int d = 1; d <= s.clean_draws; ++d) ranked.push_back({0, {"clean", 0, 0.0, "", d}});
+      continue;
+    }
     const effects::Kind kind = effects::find(e).value();
     const EffectLadder& ladder = ladders()[static_cast<std::size_t>(kind)];
     const std::vector<double>& sizes = s.sizes.empty() ? ladder.sizes : s.sizes;
+    const std::size_t typical = s.sizes.empty() ? ladder.typical : sizes.size() - 1;
     for (std::size_t k = 0; k < sizes.size(); ++k) {
+      const std::size_t level = 1 + (k <= typical ? typical - k : k + sizes.size());
       for (int d = 1; d <= s.draws; ++d) {
-        jobs.push_back({e, static_cast<int>(k) + 1, sizes[k], ladder.unit, d});
+        ranked.push_back({level, {e, static_cast<int>(k) + 1, sizes[k], ladder.unit, d}});
       }
     }
   }
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const Ranked& a, const Ranked& b) { return a.level < b.level; });
+  std::vector<Job> jobs;
+  for (const Ranked& r : ranked) jobs.push_back(r.job);
   return jobs;
 }
 

@@ -129,6 +129,16 @@ std::vector<Row> rows_of(const std::vector<RunRecord>& records) {
     }
     row->runs.push_back(&r);
   }
+  // Effects in order of first appearance, each effect's sizes small to large.
+  std::vector<std::string> order;
+  for (const Row& row : rows) {
+    if (std::find(order.begin(), order.end(), row.effect) == order.end()) order.push_back(row.effect);
+  }
+  std::stable_sort(rows.begin(), rows.end(), [&](const Row& a, const Row& b) {
+    const auto ia = std::find(order.begin(), order.end(), a.effect) - order.begin();
+    const auto ib = std::find(order.begin(), order.end(), b.effect) - order.begin();
+    return ia != ib ? ia < ib : a.size < b.size;
+  });
   return rows;
 }
 
@@ -281,6 +291,61 @@ std::string clean_table(const std::vector<Row>& rows) {
   return out;
 }
 
+// The rate band of a sample rate, for the breakdown: "50–100 Hz" or "200–1000 Hz".
+std::string rate_band(double rate_hz) { return rate_hz <= 100.0 ? "≤ 100 Hz" : "≥ 200 Hz"; }
+
+// Found first (clean: nothing added) by hand, sensor set and rate band: k/n per column.
+std::string breakdown_table(const std::vector<Row>& rows) {
+  std::vector<std::string> columns;
+  const auto add_column = [&](const std::string& c) {
+    if (std::find(columns.begin(), columns.end(), c) == columns.end()) columns.push_back(c);
+  };
+  for (const Row& row : rows) {
+    for (const RunRecord* r : row.runs) {
+      if (ok(*r)) add_column(r->hand);
+    }
+  }
+  std::sort(columns.begin(), columns.end());
+  const std::size_t hands = columns.size();
+  std::vector<std::string> sensors;
+  for (const Row& row : rows) {
+    for (const RunRecord* r : row.runs) {
+      if (ok(*r) && std::find(sensors.begin(), sensors.end(), r->sensors) == sensors.end()) {
+        sensors.push_back(r->sensors);
+      }
+    }
+  }
+  std::sort(sensors.begin(), sensors.end());
+  for (const std::string& c : sensors) add_column(c);
+  add_column("≤ 100 Hz");
+  add_column("≥ 200 Hz");
+  std::string out = "| effect | size |";
+  std::string rule = "|---|---|";
+  for (const std::string& c : columns) {
+    out += " " + c + " |";
+    rule += "---|";
+  }
+  out += "\n" + rule + "\n";
+  for (const Row& row : rows) {
+    out += "| " + row.effect + " (" + (row.effect == "clean" ? "nothing added" : "found first") +
+           ") | " + (row.effect == "clean" ? "—" : format_significant(row.size, 4) + " " + row.size_unit) + " |";
+    for (std::size_t c = 0; c < columns.size(); ++c) {
+      int n = 0, k = 0;
+      for (const RunRecord* r : row.runs) {
+        if (!ok(*r)) continue;
+        const std::string& key =
+            c < hands ? r->hand : c < hands + sensors.size() ? r->sensors : rate_band(r->sample_rate_hz);
+        if (key != columns[c]) continue;
+        ++n;
+        k += row.effect == "clean" ? r->first_added == "none" : r->first_added == row.effect;
+      }
+      out += " " + std::to_string(k) + "/" + std::to_string(n) + " |";
+    }
+    out += "\n";
+  }
+  return out;
+}
+
 }  // namespace
 
 std::string share_with_interval(int successes, int trials) {
@@ -363,7 +428,9 @@ std::string datasheet_tables(const std::vector<RunRecord>& records) {
   const std::vector<Row> rows = rows_of(records);
   return "### Detection and recovery by size\n\n" + detection_table(rows) +
          "\n### The smallest size found first\n\n" + threshold_table(rows) +
-         "\n### False additions on clean recordings\n\n" + clean_table(rows);
+         "\n### False additions on clean recordings\n\n" + clean_table(rows) +
+         "\n### By hand, sensor set and rate (found first; clean: nothing added)\n\n" +
+         breakdown_table(rows);
 }
 
 }  // namespace doorbench::datasheet
