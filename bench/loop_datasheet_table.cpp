@@ -186,17 +186,19 @@ void recovery_cells(const Row& row, std::string& bias, std::string& coverage) {
 
 // Why the runs that missed the effect missed it, from the true effect's verdict in the first
 // examination: "share < 1 % 7, z < 4 3, rejected 2, lost 1" (lost: it qualified, another
-// effect's refit did better; not ranked: the examination did not list it).
+// effect's refit did better; ranked below the refits: refit_candidates better-ranked ones were
+// refitted instead).
 std::string miss_reasons(const Row& row) {
   std::map<std::string, int> counts;
-  const std::vector<std::string> order = {"share < 1 %", "z < 4", "refit rejected",
-                                          "qualified, another won", "other"};
+  const std::vector<std::string> order = {"share < 1 %", "z < 4", "ranked below the refits",
+                                          "refit rejected", "qualified, another won", "other"};
   for (const RunRecord* r : row.runs) {
     if (!ok(*r) || r->first_added == r->effect) continue;
     const std::string& v = r->true_verdict;
     const auto starts = [&](const char* prefix) { return v.rfind(prefix, 0) == 0; };
     if (starts("not refitted: explains")) ++counts["share < 1 %"];
     else if (starts("not refitted: score z")) ++counts["z < 4"];
+    else if (starts("not refitted: ranked below")) ++counts["ranked below the refits"];
     else if (starts("rejected")) ++counts["refit rejected"];
     else if (starts("qualifies")) ++counts["qualified, another won"];
     else ++counts["other"];
@@ -265,7 +267,7 @@ std::string threshold_table(const std::vector<Row>& rows) {
     }
     std::sort(ladder.begin(), ladder.end(),
               [](const Row* a, const Row* b) { return a->size < b->size; });
-    std::string sizes, smallest = "none of them";
+    std::string sizes, smallest = "none of those tried";
     for (const Row* row : ladder) {
       int n = 0, first = 0;
       for (const RunRecord* r : row->runs) {
@@ -274,7 +276,7 @@ std::string threshold_table(const std::vector<Row>& rows) {
       }
       if (!sizes.empty()) sizes += ", ";
       sizes += format_significant(row->size, 4);
-      if (smallest == "none of them" && n > 0 && first >= 0.9 * n) {
+      if (smallest == "none of those tried" && n > 0 && first >= 0.9 * n) {
         smallest = format_significant(row->size, 4) + " " + row->size_unit + " (" +
                    std::to_string(first) + "/" + std::to_string(n) + ")";
       }
