@@ -357,7 +357,8 @@ std::string missing_rows(const Settings& s, const std::vector<RunRecord>& record
   if (rows.empty()) return "";
   std::string out = "\n### Not run yet\n\n";
   for (const auto& [name, missing] : rows) {
-    out += "- " + name + ": " + std::to_string(missing) + " runs missing\n";
+    out += "- " + name + ": " + std::to_string(missing) + (missing == 1 ? " run" : " runs") +
+           " missing\n";
   }
   return out;
 }
