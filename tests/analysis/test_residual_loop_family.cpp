@@ -19,6 +19,7 @@
 #include "analysis/model/parameter_file.h"
 #include "core/number_format.h"
 #include "tests/support/recording_family.h"
+#include "tests/support/reference_doors.h"
 
 namespace {
 
@@ -29,17 +30,7 @@ namespace effects = doorbench::effects;
 
 constexpr int kDraws = 20;
 
-DoorModel sensory_reference() { return doorbench::reference_model(ModelKind::kSensory); }
-
-DoorModel with_breakaway() {
-  const DoorModel base = sensory_reference();
-  const double d1 = base.parameter_values()[*base.find_parameter("d1")];
-  doorbench::EffectSetting setting{effects::Kind::kStribeck, {d1 + 1.5, 0.05}, {}};
-  for (const effects::EffectParameter& p : effects::info(effects::Kind::kStribeck).parameters) {
-    setting.bounds.push_back(p.default_bounds);
-  }
-  return base.with_effect(std::move(setting));
-}
+using doorbench::testing::sensory_reference;
 
 // Where the loop finds breakaway friction now (docs/residual-loop.md, "Breakaway friction
 // on the recording family"): the hands that move the door through low speeds (not the
@@ -95,7 +86,8 @@ struct FamilyRun {
 
 FamilyRun run_family(const doorbench::testing::FamilyOptions& family, std::uint32_t first_seed) {
   const DoorModel start = sensory_reference();
-  const DoorModel truth = with_breakaway();
+  // The issue's breakaway friction: d_s - d1 = 1.5 N·m, w_s = 0.05 rad/s.
+  const DoorModel truth = doorbench::testing::sensory_reference_with_breakaway(1.5, 0.05);
   FamilyRun run;
   for (int draw = 0; draw < kDraws; ++draw) {
     const doorbench::testing::RecordingConditions conditions =

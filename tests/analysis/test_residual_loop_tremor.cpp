@@ -33,20 +33,7 @@ constexpr double kBreakawaySpeed_rad_s = 0.05;
 
 using doorbench::testing::sensory_reference;
 
-double reference_d1() {
-  const DoorModel model = sensory_reference();
-  return model.parameter_values()[*model.find_parameter("d1")];
-}
-
-DoorModel with_breakaway() {
-  doorbench::EffectSetting setting{effects::Kind::kStribeck,
-                                   {reference_d1() + kBreakaway_N_m, kBreakawaySpeed_rad_s},
-                                   {}};
-  for (const effects::EffectParameter& parameter : effects::info(effects::Kind::kStribeck).parameters) {
-    setting.bounds.push_back(parameter.default_bounds);
-  }
-  return sensory_reference().with_effect(std::move(setting));
-}
+double reference_d1() { return doorbench::testing::sensory_reference_d1(); }
 
 doorbench::PreparedData tremor_data(const DoorModel& truth, std::uint32_t seed) {
   doorbench::testing::TremorRecordingOptions options;
@@ -90,7 +77,9 @@ TEST_CASE("residual loop: names breakaway friction first on tremor-hand recordin
     }
   }
 
-  const doorbench::PreparedData data = tremor_data(with_breakaway(), seed);
+  const doorbench::PreparedData data = tremor_data(
+      doorbench::testing::sensory_reference_with_breakaway(kBreakaway_N_m, kBreakawaySpeed_rad_s),
+      seed);
   REQUIRE(data.strokes.size() == 12);
   const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), data);
   INFO(loop.full_report());
