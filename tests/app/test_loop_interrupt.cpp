@@ -15,16 +15,17 @@
 #include <chrono>
 #include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 
 namespace {
 
+using doorbench::testing::read_file;
 using doorbench::testing::TempDir;
 
 // doorbench as a child process, its stderr on a pipe the test reads, stdout in a file.
@@ -111,13 +112,6 @@ class DoorbenchProcess {
   std::string err_;
 };
 
-std::string read_text(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
 }  // namespace
 
 TEST_CASE("loop: SIGINT or SIGTERM after the first step leaves a readable result marked "
@@ -147,7 +141,7 @@ TEST_CASE("loop: SIGINT or SIGTERM after the first step leaves a readable result
       INFO(loop.err());
       CHECK(status == 128 + signal_number);
 
-      const nlohmann::json result = nlohmann::json::parse(read_text(out / "result.json"));
+      const nlohmann::json result = nlohmann::json::parse(read_file(out / "result.json"));
       CHECK(result.at("interrupted") == true);
       const std::string stop_reason = result.at("stop_reason");
       CHECK(stop_reason.rfind("interrupted ", 0) == 0);
@@ -162,14 +156,14 @@ TEST_CASE("loop: SIGINT or SIGTERM after the first step leaves a readable result
       const std::string line = name + " stopped the loop: " + stop_reason + "; " + kept +
                                ", the structure check was not run";
       // report.md: its title, then the line.
-      const std::string report = read_text(out / "report.md");
+      const std::string report = read_file(out / "report.md");
       CHECK_THAT(report, Catch::StartsWith("# Residual loop: the sensory model on "));
       const std::size_t title_end = report.find("\n\n");
       REQUIRE(title_end != std::string::npos);
       CHECK(report.substr(title_end + 2, line.size() + 3) == line + ".\n\n");
       CHECK_THAT(loop.err(), Catch::EndsWith("\ndoorbench: loop: " + line + "; the results in " +
                                              out.string() + "/ are marked interrupted\n"));
-      CHECK_THAT(read_text(dir / ("stdout-" + name + ".txt")),
+      CHECK_THAT(read_file(dir / ("stdout-" + name + ".txt")),
                  Catch::StartsWith("Residual loop (interrupted: the steps finished before it): " +
                                    std::to_string(steps) + " effect"));
       // The fitted files are the last accepted model's, written beside it.

@@ -4,25 +4,13 @@
 // docs/residual-loop.md "What result.json holds"); the nested-refit inequality holds on every
 // refit it lists.
 #include <catch2/catch.hpp>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <sstream>
 #include <string>
 
+#include "tests/support/files.h"
 #include "tests/support/nested_refits.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
-
-namespace {
-
-std::string read_result(const std::filesystem::path& path) {
-  std::ifstream in(path);
-  std::stringstream text;
-  text << in.rdbuf();
-  return text.str();
-}
-
-}  // namespace
 
 TEST_CASE("loop: result.json lists every refit, kept or rejected, with its figures, "
           "parameters and verdict",
@@ -45,7 +33,8 @@ TEST_CASE("loop: result.json lists every refit, kept or rejected, with its figur
       doorbench::testing::run_doorbench_shell("loop '" + csv + "' --out '" + out.string() + "'", dir);
   INFO(run.err);
   REQUIRE(run.status == 0);
-  const nlohmann::json result = nlohmann::json::parse(read_result(out / "result.json"));
+  const nlohmann::json result =
+      nlohmann::json::parse(doorbench::testing::read_file(out / "result.json"));
   INFO(result.dump(1));
   CHECK(doorbench::testing::check_nested_refits_json(result) >= 4);
   REQUIRE(result.at("steps").size() == 2);
