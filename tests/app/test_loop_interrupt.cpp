@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "tests/support/files.h"
+#include "tests/support/loop_recording.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 
@@ -120,15 +121,7 @@ TEST_CASE("loop: SIGINT or SIGTERM after the first step leaves a readable result
   const TempDir dir("loop_interrupt");
   // The reference door with two effects its start model lacks: the loop adds the gravity
   // imbalance at step 1, the viscous damping at step 2, then runs the structure check.
-  const std::string effects =
-      dir.write("effects.json", R"({"gravity_imbalance": {"g1": 3.0}, "viscous_damping": {"b": 0.5}})")
-          .string();
-  const std::string csv = (dir / "run.csv").string();
-  REQUIRE(doorbench::testing::run_doorbench_shell(
-              "simulate --model sensory --effects '" + effects +
-                  "' --hand open-close --duration-s 10 --rate-hz 200 --out '" + csv + "'",
-              dir)
-              .status == 0);
+  const std::string csv = doorbench::testing::simulate_loop_recording(dir);
   for (const int signal_number : {SIGINT, SIGTERM}) {
     const std::string name = signal_number == SIGINT ? "SIGINT" : "SIGTERM";
     DYNAMIC_SECTION(name) {

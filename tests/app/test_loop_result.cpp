@@ -8,6 +8,7 @@
 #include <string>
 
 #include "tests/support/files.h"
+#include "tests/support/loop_recording.h"
 #include "tests/support/nested_refits.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
@@ -19,15 +20,7 @@ TEST_CASE("loop: result.json lists every refit, kept or rejected, with its figur
   // The reference door with a gravity imbalance and viscous damping the start model lacks
   // (the recording of tests/app/test_loop_interrupt.cpp): the loop adds both, and step 1
   // refits and rejects a soft close whose damping the data does not determine.
-  const std::string effects =
-      dir.write("effects.json", R"({"gravity_imbalance": {"g1": 3.0}, "viscous_damping": {"b": 0.5}})")
-          .string();
-  const std::string csv = (dir / "run.csv").string();
-  REQUIRE(doorbench::testing::run_doorbench_shell(
-              "simulate --model sensory --effects '" + effects +
-                  "' --hand open-close --duration-s 10 --rate-hz 200 --out '" + csv + "'",
-              dir)
-              .status == 0);
+  const std::string csv = doorbench::testing::simulate_loop_recording(dir);
   const auto out = dir / "out";
   const doorbench::testing::DoorbenchRun run =
       doorbench::testing::run_doorbench_shell("loop '" + csv + "' --out '" + out.string() + "'", dir);
