@@ -19,7 +19,8 @@
 //     the issue-30 size (d_s - d1 = 1.5 N m, w_s = 0.05 rad/s) or none; issue-stribeck: the
 //     issue's case (a PD hand, 0.3 N of 1-8 Hz tremor, openings to 60-77 deg, latch, 1 kHz).
 //     --hand H, --rate HZ, --sensors S override the drawn conditions; --replay: the data
-//     simulated again under the sampled force (RecordingConditions::replay_sampled_force).
+//     simulated again under the sampled force (RecordingConditions::replay_sampled_force);
+//     --datasheet-seed: the recording of the datasheet's draw SEED (bench/loop_datasheet.cpp).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -196,7 +197,9 @@ bool make_recording(const std::string& which, const DoorModel& sensory,
                                 ? sensory
                                 : with_effect(sensory, effects::Kind::kStribeck, {d1 + 1.5, 0.05});
     std::printf("conditions: %s\n", c.describe().c_str());
-    data = testing::family_recording(truth, c, seed + 1000);
+    // --datasheet-seed: the recording's seed is the draw's, as doorbench_loop_datasheet makes it.
+    data = testing::family_recording(truth, c,
+                                     has_flag(argc, argv, "--datasheet-seed") ? seed : seed + 1000);
   } else {
     return false;
   }

@@ -179,15 +179,21 @@ std::vector<FittedParameter> effect_parameters(const FitSummary& summary, const 
 
 // A refitted candidate's figures and verdict against `before`. An effect with a free
 // parameter at a bound or undetermined is not added, whatever the figures say.
+// An effect whose amplitude the refit cannot tell apart from its neutral value
+// (`amplitude_neutral`; LoopOptions::min_amplitude_z) is not added either.
 void judge(CandidateEvidence& candidate, const ModelFigures& before, const ModelFigures& after,
-           const LoopOptions& options) {
+           double amplitude_neutral, const LoopOptions& options) {
   candidate.after = after;
   candidate.held_out_improvement =
       (before.held_out_rmse_rad_s - after.held_out_rmse_rad_s) / before.held_out_rmse_rad_s;
   candidate.bic_change = after.bic - before.bic;
   const bool held_out_ok = candidate.held_out_improvement > options.min_held_out_improvement;
   const bool bic_ok = candidate.bic_change < -options.min_bic_decrease;
-  const std::string problems = refit_parameter_problems(candidate.kind, candidate.parameters);
+  std::string problems = refit_parameter_problems(candidate.kind, candidate.parameters);
+  if (problems.empty()) {
+    problems = weak_amplitude_problem(candidate.parameters, amplitude_neutral,
+                                      options.min_amplitude_z);
+  }
   candidate.qualifies = held_out_ok && bic_ok && problems.empty();
   const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) + " -> " +
                                     number(after.held_out_rmse_rad_s) + " rad/s (" +
@@ -392,7 +398,11 @@ std::vector<std::optional<FitResult>> run_refits(
     }
     if (outcomes[j].result) {
       candidate.parameters = effect_parameters(outcomes[j].result->summary, candidate.name);
-      judge(candidate, before, model_figures(outcomes[j].result->summary), options);
+      const DoorModel& refitted = outcomes[j].result->model;
+      const double neutral = candidate.kind == effects::Kind::kStribeck
+                                 ? base_friction(refitted).level_Nm
+                                 : 0.0;
+      judge(candidate, before, model_figures(outcomes[j].result->summary), neutral, options);
       refits[k] = std::move(outcomes[j].result);
     } else {
       judge_parent_stands(candidate, current.model, before, options,
@@ -449,6 +459,21 @@ std::string refit_parameter_problems(effects::Kind kind,
     problems += text;
   }
   return problems;
+}
+
+std::string weak_amplitude_problem(const std::vector<FittedParameter>& parameters,
+                                   double neutral, double min_z) {
+  if (parameters.empty() || min_z <= 0) return "";
+  const FittedParameter& amplitude = parameters.front();
+  if (!amplitude.free || !amplitude.determined || !(amplitude.uncertainty > 0)) return "";
+  const double z = std::abs(amplitude.value - neutral) / amplitude.uncertainty;
+  if (z >= min_z) return "";
+  std::string text = amplitude.name + " = " + loop_detail::number(amplitude.value) + " +- " +
+                     loop_detail::number(amplitude.uncertainty);
+  if (!amplitude.unit.empty()) text.append(" ").append(amplitude.unit);
+  text.append(printf_text(" is %.3g standard uncertainties from its neutral value ", z));
+  text.append(loop_detail::number(neutral)).append(printf_text(" (needs %.3g)", min_z));
+  return text;
 }
 
 }  // namespace doorbench

@@ -162,10 +162,11 @@ std::string LoopResult::full_report() const {
                      fit.window_s);
   out += printf_text(
       "  refit at most %d per step if it explains >= %s and z >= %.3g; accept if the "
-      "held-out RMSE falls > %s and BIC falls > %.3g\n",
+      "held-out RMSE falls > %s, BIC falls > %.3g and the amplitude is >= %.3g u from "
+      "neutral\n",
       options.refit_candidates, percent(options.min_explained_fraction).c_str(),
       options.min_score_z, percent(options.min_held_out_improvement).c_str(),
-      options.min_bic_decrease);
+      options.min_bic_decrease, options.min_amplitude_z);
   out += "\nStart model: " + std::string(to_string(start_fit.model.kind())) + ", " +
          describe_figures(model_figures(start_fit.summary)) + ", BIC " +
          number(model_figures(start_fit.summary).bic) + "\n";

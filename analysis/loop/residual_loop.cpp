@@ -78,6 +78,9 @@ std::string LoopOptions::validate() const {
   if (!std::isfinite(min_bic_decrease) || min_bic_decrease < 0) {
     return "loop min_bic_decrease must be >= 0";
   }
+  if (!std::isfinite(min_amplitude_z) || min_amplitude_z < 0) {
+    return "loop min_amplitude_z must be >= 0";
+  }
   if (std::string message =
           check_grid(stribeck_speeds_rad_s, "stribeck_speeds_rad_s", effects::Kind::kStribeck, 1);
       !message.empty()) {

@@ -64,8 +64,15 @@ struct LoopOptions {
   // Accept only if the held-out window RMSE of ω falls by more than this fraction of its
   // value before the step ...
   double min_held_out_improvement = 0.02;
-  // ... and BIC = n ln(SSR/n) + p ln(n) falls by more than this (0: falls at all).
+  // ... and BIC = n ln(SSR/n) + p ln(n) falls by more than this (0: falls at all) ...
   double min_bic_decrease = 0.0;
+  // ... and the refit's amplitude (the effect's first parameter; Stribeck: d_s − d1) lies at
+  // least this many of its standard uncertainties from its neutral value (0; Stribeck: the
+  // refit's d1). The refit must confirm, with its own (window-robust) uncertainty, what the
+  // examination's z promised: an effect that lowers the error without being told apart from
+  // nothing is the fit bending to the data route's misfit (docs/residual-loop.md, "An
+  // amplitude told apart from nothing"). 0: off.
+  double min_amplitude_z = 4.0;
   // The second look at weak candidates (docs/residual-loop.md, "The second look"): the
   // best-ranked candidates that do not pass both min_explained_fraction and min_score_z,
   // as many as the refit slots the passing candidates leave free, are each added at their
@@ -341,6 +348,15 @@ struct LoopResult {
 // for an amplitude there "where the effect vanishes"; "; " between parameters.
 std::string refit_parameter_problems(effects::Kind kind,
                                      const std::vector<FittedParameter>& parameters);
+
+// Why a refit's amplitude does not tell the effect apart from nothing (empty when it does):
+// the effect's first parameter (`parameters[0]`, free and determined) lies fewer than
+// `min_z` of its standard uncertainties from `neutral` (0; for Stribeck the refit's d1),
+// e.g. "viscous_damping.b = 1.626 +- 1.611 N*m*s/rad is 1.01 standard uncertainties from
+// its neutral value 0 (needs 4)". Empty for a held, undetermined or missing amplitude (the
+// first two are refit_parameter_problems' to name) and for min_z 0.
+std::string weak_amplitude_problem(const std::vector<FittedParameter>& parameters,
+                                   double neutral, double min_z);
 
 // Step 2 alone: how much of the rate residual of `model` on `data` (windows as in
 // options.fit) each candidate effect of options.candidates would explain, best first.
