@@ -10,7 +10,7 @@
 //   --serial: refits one after another; --no-second-look: screen_steps = 0
 //   --tremor-mm A, --drift-N F: the tremor hand's amplitudes (defaults 0.5 mm, 1 N)
 //   --min-z Z: LoopOptions::min_score_z; --only EFFECT: the one candidate (catalogue name);
-//   --screen-steps N: LoopOptions::screen_steps
+//   --screen-steps N: LoopOptions::screen_steps; --substeps N: fit.substeps_per_sample
 //   --compare-exam: after the loop, the examination's sum of squares at the start fit and
 //     at the final model
 //   --strokes: each stroke's angle range and its speed through a few angles, then stop
@@ -219,6 +219,9 @@ LoopOptions loop_options(const std::string& which, int argc, char** argv) {
     }
     if (std::strcmp(argv[i], "--min-z") == 0 && i + 1 < argc) {
       options.min_score_z = std::stod(argv[i + 1]);
+    }
+    if (std::strcmp(argv[i], "--substeps") == 0 && i + 1 < argc) {
+      options.fit.substeps_per_sample = std::stoi(argv[i + 1]);
     }
     if (std::strcmp(argv[i], "--only") == 0 && i + 1 < argc) {
       options.candidates = {effects::find(argv[i + 1]).value()};
