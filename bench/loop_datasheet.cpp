@@ -11,7 +11,7 @@
 //   --effects: catalogue names and/or "clean", comma-separated (default: all and clean)
 //   --sizes: amplitudes in the effect's unit (d_s - d1 for stribeck), with one effect only
 //            (default: the effect's ladder)
-//   --draws N: recordings per size (default 20); --clean-draws N: clean ones (default 40)
+//   --draws N: recordings per size (default 20); --clean-draws N: clean ones (default 100)
 //   --strokes N: FamilyOptions::strokes (default 12); --jobs N: runs at once (default 1)
 //   --first-seed S: draw d (from 1) has seed S + d - 1 (default 1)
 //   --table-only: no runs, the tables of FILE; with the same choice of runs, it also lists
@@ -108,7 +108,7 @@ struct Settings {
   std::string csv;
   std::vector<std::string> effects;
   std::vector<double> sizes;
-  int draws = 20, clean_draws = 40, strokes = 12, jobs = 1;
+  int draws = 20, clean_draws = 100, strokes = 12, jobs = 1;
   unsigned long first_seed = 1;
   bool table_only = false;
 };

@@ -114,14 +114,17 @@ FamilyRun run_family(const doorbench::testing::FamilyOptions& family, std::uint3
 
 // Issue 30's done-when asks for breakaway friction named first in at least 90 % of the
 // draws (18 of 20) and at most 10 % of clean recordings with an addition. Not met yet: on
-// these 20 draws the loop names it first in 10 and adds an effect to 4 clean recordings
-// (measured 2026-11-27; the misses and false additions, draw by draw, are in
-// docs/residual-loop.md, "Breakaway friction on the recording family"). Until then this
-// test holds the measured level, so that a change that loses a detection or adds a false
-// addition fails it; raise the bars to the target as the loop gets there.
+// these 20 draws the loop names it first in 10; no clean recording gets an addition since the
+// refit's amplitude must lie 4 standard uncertainties from neutral (min_amplitude_z; before,
+// 4 of 20). Measured 2026-11-28 on main at 46fa2a0; the misses, draw by draw, are in
+// docs/residual-loop.md, "Breakaway friction on the recording family": all 6 impulse draws,
+// and 4 of the 14 PD and minimum-jerk ones. Until then this test holds the measured level, so
+// that a change that loses a detection or adds a false addition fails it, with one clean
+// recording of slack (a borderline verdict may move with another machine's vector width);
+// raise the bars to the target as the loop gets there.
 constexpr int kTargetFound = (9 * kDraws + 9) / 10;  // 18
 constexpr int kMeasuredFound = 10;
-constexpr int kMeasuredFalseAdditions = 4;
+constexpr int kMeasuredFalseAdditions = 0;
 
 TEST_CASE("residual loop: breakaway friction on 20 recordings drawn from the recording "
           "family's hands at 100 Hz to 1 kHz (issue 30: named first, and false additions on "
@@ -134,5 +137,5 @@ TEST_CASE("residual loop: breakaway friction on 20 recordings drawn from the rec
                                             << "); clean recordings with an addition: "
                                             << run.false_additions);
   CHECK(run.found >= kMeasuredFound);
-  CHECK(run.false_additions <= kMeasuredFalseAdditions);
+  CHECK(run.false_additions <= kMeasuredFalseAdditions + 1);
 }
