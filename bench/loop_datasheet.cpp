@@ -7,7 +7,7 @@
 //
 //   doorbench_loop_datasheet --csv FILE [--effects LIST] [--sizes LIST] [--draws N]
 //                            [--clean-draws N] [--strokes N] [--jobs N] [--first-seed S]
-//                            [--table-only]
+//                            [--table-only] [--full-loop]
 //   --effects: catalogue names and/or "clean", comma-separated (default: all and clean)
 //   --sizes: amplitudes in the effect's unit (d_s - d1 for stribeck), with one effect only
 //            (default: the effect's ladder)
@@ -16,6 +16,9 @@
 //   --first-seed S: draw d (from 1) has seed S + d - 1 (default 1)
 //   --table-only: no runs, the tables of FILE; with the same choice of runs, it also lists
 //                 the runs asked for that FILE does not hold yet
+//   --full-loop: the whole loop (max_steps and the structure check at their defaults), for
+//                its CPU time per recording (docs/PERFORMANCE.md); "found first" is still
+//                the first step's effect. Keep its runs in a CSV of their own.
 //
 // Each run: LoopOptions' defaults but max_steps = 1 (the first added effect is the answer),
 // no structure check, one fit thread and the refits one after another (the jobs run
@@ -111,6 +114,7 @@ struct Settings {
   int draws = 20, clean_draws = 100, strokes = 12, jobs = 1;
   unsigned long first_seed = 1;
   bool table_only = false;
+  bool full_loop = false;
 };
 
 std::vector<std::string> split(const std::string& text, char by) {
@@ -141,8 +145,8 @@ Settings parse_arguments(int argc, char** argv) {
   Settings s;
   for (int i = 1; i < argc; ++i) {
     const std::string flag = argv[i];
-    if (flag == "--table-only") {
-      s.table_only = true;
+    if (flag == "--table-only" || flag == "--full-loop") {
+      (flag == "--table-only" ? s.table_only : s.full_loop) = true;
       continue;
     }
     if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
@@ -217,13 +221,17 @@ double thread_cpu_s() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-LoopOptions loop_options_for(const Job& job, std::string& described) {
+LoopOptions loop_options_for(const Job& job, bool full_loop, std::string& described) {
   LoopOptions options;
-  options.max_steps = 1;
-  options.structure_check = false;
+  if (!full_loop) {
+    options.max_steps = 1;
+    options.structure_check = false;
+  }
   options.parallel_refits = false;
   options.fit.num_threads = 1;
-  described = "max_steps 1, no structure check";
+  described = full_loop ? "the whole loop (max_steps " + std::to_string(options.max_steps) +
+                              ", structure check)"
+                        : std::string("max_steps 1, no structure check");
   if (job.effect == "inertia_error") {
     options.fit.fixed_parameters = {"J"};
     described += ", J held";
@@ -277,7 +285,7 @@ RunRecord run_one(const Job& job, const Settings& s, const DoorModel& reference,
   r.size_unit = job.unit;
   r.draw = job.draw;
   r.seed = s.first_seed + static_cast<unsigned long>(job.draw) - 1;
-  const LoopOptions options = loop_options_for(job, r.loop_options);
+  const LoopOptions options = loop_options_for(job, s.full_loop, r.loop_options);
   std::vector<double> truth;
   DoorModel model = reference;
   if (job.effect != "clean") {
