@@ -212,6 +212,26 @@ std::string miss_reasons(const Row& row) {
   return out.empty() ? "—" : out;
 }
 
+// A row's runs that ended (`done`), those that failed, and every run's CPU time.
+struct RowTally {
+  std::vector<const RunRecord*> done;
+  int failed = 0;
+  std::vector<double> cpu;
+};
+
+RowTally tally(const Row& row) {
+  RowTally t;
+  for (const RunRecord* r : row.runs) {
+    t.cpu.push_back(r->cpu_s);
+    if (ok(*r)) {
+      t.done.push_back(r);
+    } else {
+      ++t.failed;
+    }
+  }
+  return t;
+}
+
 std::string detection_table(const std::vector<Row>& rows) {
   std::string out =
       "| effect | size | runs | found first (95 % interval) | another effect first | "
@@ -221,16 +241,12 @@ std::string detection_table(const std::vector<Row>& rows) {
       "median (s) |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const Row& row : rows) {
     if (row.effect == "clean") continue;
-    int n = 0, first = 0, other = 0, none = 0, failed = 0;
-    std::vector<double> z, cpu;
+    const RowTally t = tally(row);
+    const int n = static_cast<int>(t.done.size()), failed = t.failed;
+    int first = 0, other = 0, none = 0;
+    std::vector<double> z;
     int second_looks = 0;
-    for (const RunRecord* r : row.runs) {
-      cpu.push_back(r->cpu_s);
-      if (!ok(*r)) {
-        ++failed;
-        continue;
-      }
-      ++n;
+    for (const RunRecord* r : t.done) {
       z.push_back(r->true_z);
       second_looks += r->true_screen_z != 0.0;
       if (r->first_added == r->effect) ++first;
@@ -243,7 +259,7 @@ std::string detection_table(const std::vector<Row>& rows) {
            " | " + std::to_string(n) + " | " + share_with_interval(first, n) + " | " +
            std::to_string(other) + " | " + std::to_string(none) + " | " + std::to_string(failed) +
            " | " + miss_reasons(row) + " | " + printf_text("%.1f (%d)", median(z), second_looks) + " | " + bias +
-           " | " + coverage + " | " + printf_text("%.1f", median(cpu)) + " |\n";
+           " | " + coverage + " | " + printf_text("%.1f", median(t.cpu)) + " |\n";
   }
   return out;
 }
@@ -293,16 +309,11 @@ std::string clean_table(const std::vector<Row>& rows) {
       "options | CPU per run, median (s) |\n|---|---|---|---|---|---|\n";
   for (const Row& row : rows) {
     if (row.effect != "clean") continue;
-    int n = 0, added = 0, failed = 0;
+    const RowTally t = tally(row);
+    const int n = static_cast<int>(t.done.size()), failed = t.failed;
+    int added = 0;
     std::map<std::string, int> which;
-    std::vector<double> cpu;
-    for (const RunRecord* r : row.runs) {
-      cpu.push_back(r->cpu_s);
-      if (!ok(*r)) {
-        ++failed;
-        continue;
-      }
-      ++n;
+    for (const RunRecord* r : t.done) {
       if (r->first_added != "none") {
         ++added;
         ++which[r->first_added];
@@ -315,7 +326,7 @@ std::string clean_table(const std::vector<Row>& rows) {
     }
     out += "| " + std::to_string(n) + " | " + share_with_interval(added, n) + " | " +
            (names.empty() ? "—" : names) + " | " + std::to_string(failed) + " | " +
-           row.loop_options + " | " + printf_text("%.1f", median(cpu)) + " |\n";
+           row.loop_options + " | " + printf_text("%.1f", median(t.cpu)) + " |\n";
   }
   return out;
 }
