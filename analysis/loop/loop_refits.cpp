@@ -398,10 +398,8 @@ std::vector<std::optional<FitResult>> run_refits(
     }
     if (outcomes[j].result) {
       candidate.parameters = effect_parameters(outcomes[j].result->summary, candidate.name);
-      const DoorModel& refitted = outcomes[j].result->model;
-      const double neutral = candidate.kind == effects::Kind::kStribeck
-                                 ? base_friction(refitted).level_Nm
-                                 : 0.0;
+      // The amplitude's neutral value at the refit (Stribeck: its own d1).
+      const double neutral = neutral_values(candidate, outcomes[j].result->model).front();
       judge(candidate, before, model_figures(outcomes[j].result->summary), neutral, options);
       refits[k] = std::move(outcomes[j].result);
     } else {
