@@ -33,17 +33,11 @@ constexpr int kDraws = 20;
 using doorbench::testing::sensory_reference;
 
 // Where the loop finds breakaway friction now (docs/residual-loop.md, "Breakaway friction
-// on the recording family"): the hands that move the door through low speeds (not the
-// robot's constant speed), 100 Hz to 1 kHz, the bench's inclinometer + gyroscope or an angle
-// alone. The issue's whole family (every hand, 50 Hz too: hands and sample_rates_hz left at
-// their defaults) is measured there, not asserted: it fails.
-doorbench::testing::FamilyOptions hand_family() {
-  doorbench::testing::FamilyOptions options;
-  options.sensors = {"inclinometer+gyro", "angle"};
-  options.hands = {"pd", "minimum-jerk", "impulse"};
-  options.sample_rates_hz = {100.0, 200.0, 500.0, 1000.0};
-  return options;
-}
+// on the recording family"): breakaway_test_family(), the hands that move the door through
+// low speeds (not the robot's constant speed), 100 Hz to 1 kHz, the bench's inclinometer +
+// gyroscope or an angle alone. The issue's whole family (every hand, 50 Hz too) is measured
+// there, not asserted: it fails.
+using doorbench::testing::breakaway_test_family;
 
 doorbench::LoopOptions first_step_only() {
   doorbench::LoopOptions options;
@@ -130,7 +124,7 @@ TEST_CASE("residual loop: breakaway friction on 20 recordings drawn from the rec
           "family's hands at 100 Hz to 1 kHz (issue 30: named first, and false additions on "
           "the clean ones, at least at the measured level)",
           "[residual_loop][family][slow]") {
-  const FamilyRun run = run_family(hand_family(), 2000);
+  const FamilyRun run = run_family(breakaway_test_family(), 2000);
   INFO(run.table);
   WARN("breakaway friction named first in " << run.found << " of " << kDraws
                                             << " draws (target " << kTargetFound

@@ -536,6 +536,17 @@ inline RecordingConditions draw_conditions(std::uint32_t seed, const FamilyOptio
   return c;
 }
 
+// The family of tests/analysis/test_residual_loop_family.cpp and bench/breakaway_oracle.cpp:
+// the hands that take the door through low speeds (PD, minimum-jerk, impulses) at 100 Hz to
+// 1 kHz, with the bench's inclinometer + gyroscope or an angle alone.
+inline FamilyOptions breakaway_test_family() {
+  FamilyOptions options;
+  options.sensors = {"inclinometer+gyro", "angle"};
+  options.hands = {"pd", "minimum-jerk", "impulse"};
+  options.sample_rates_hz = {100.0, 200.0, 500.0, 1000.0};
+  return options;
+}
+
 // The recording of `truth` under `conditions`, its random parts (targets, tremor, noise,
 // jitter) from `seed`. See the header comment.
 inline PreparedData family_recording(const DoorModel& truth, const RecordingConditions& conditions,
