@@ -11,29 +11,23 @@ usage: check_breakaway_oracle.py ORACLE_EXECUTABLE TABLE_SCRIPT WORK_DIR
 import csv
 import io
 import os
-import subprocess
 import sys
+
+sys.dont_write_bytecode = True  # nothing written into the source tree
+from script_checks import check, problems, run  # noqa: E402
 
 HEADER = ("draw,hand,rate_hz,sensors,recording,base_held_out_rad_s,oracle_held_out_rad_s,"
           "held_out_fall,bic_change,amplitude_N_m,amplitude_u_N_m,amplitude_z,w_s_rad_s,"
           "bound_or_undetermined,qualifies,loop_first")
-problems = []
 
 
-def check(condition, what):
-    if not condition:
-        problems.append(what)
-
-
-def run(*args):
-    done = subprocess.run(list(args), capture_output=True, text=True)
-    check(done.returncode == 0, f"{' '.join(args)}: exit {done.returncode}: {done.stderr}")
-    return done.stdout
+def output(*args):
+    return run(*args).stdout
 
 
 def real_draw(exe):
-    check(run(exe, "--header").strip() == HEADER, "the header line")
-    rows = list(csv.DictReader(io.StringIO(HEADER + "\n" + run(exe, "8"))))
+    check(output(exe, "--header").strip() == HEADER, "the header line")
+    rows = list(csv.DictReader(io.StringIO(HEADER + "\n" + output(exe, "8"))))
     check(len(rows) == 2, f"draw 8: {len(rows)} lines, expected 2")
     if len(rows) != 2:
         return
@@ -65,7 +59,7 @@ def hand_written_table(script, work):
     path = os.path.join(work, "hand_written.csv")
     with open(path, "w") as f:
         f.write("\n".join(lines) + "\n")
-    table = run(sys.executable, script, path)
+    table = output(sys.executable, script, path)
     # 9 of 10 qualify; none of the clean ones (Wilson upper bound z²/(n + z²) = 27.8 %);
     # 1.5 / 0.3 = 5 >= 2.93 for all ten (lower bound n/(n + z²) = 72.2 %).
     # The loop names it where the refit qualifies, and adds nothing to the clean ones.

@@ -9,26 +9,15 @@ usage: check_loop_datasheet.py DATASHEET_EXECUTABLE WORK_DIR
 import csv
 import os
 import shutil
-import subprocess
 import sys
+
+sys.dont_write_bytecode = True  # nothing written into the source tree
+from script_checks import check, problems, run  # noqa: E402
 
 HEADER = ("effect,size_rank,size,size_unit,draw,seed,hand,sample_rate_hz,sensors,strokes,"
           "conditions,loop_options,status,first_added,start_held_out_rad_s,final_held_out_rad_s,"
           "true_rank,true_share,true_z,true_screen_share,true_screen_z,true_verdict,best_name,"
           "best_share,best_z,parameters,cpu_s,wall_s")
-problems = []
-
-
-def check(condition, what):
-    if not condition:
-        problems.append(what)
-
-
-def run(exe, *args, expect=0):
-    done = subprocess.run([exe, *args], capture_output=True, text=True)
-    check(done.returncode == expect,
-          f"{' '.join(args)}: exit {done.returncode}, expected {expect}: {done.stderr}")
-    return done
 
 
 def real_runs(exe, work):
