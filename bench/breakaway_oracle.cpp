@@ -22,7 +22,6 @@
 //                                    1 kHz, the same two sensor sets; conditions drawn from
 //                                    seed 5000 + DRAW, recordings from 6000 + DRAW)
 //   doorbench_breakaway_oracle --header           the CSV's header line
-#include <cmath>
 #include <cstdint>
 #include <cstdlib>
 #include <cstdio>
@@ -30,10 +29,8 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit/fitting.h"
 #include "analysis/loop/residual_loop.h"
-#include "analysis/model/effects.h"
-#include "core/numbers.h"
+#include "tests/support/breakaway_refit.h"
 #include "tests/support/recording_family.h"
 #include "tests/support/reference_doors.h"
 
@@ -46,82 +43,35 @@ constexpr double kWidth_rad_s = 0.05;
 constexpr std::uint32_t kFirstSeed = 2000;        // the family test's
 constexpr std::uint32_t kWholeFamilySeed = 5000;  // --whole-family
 
-const FittedParameter* find_parameter(const FitSummary& summary, const std::string& name) {
-  for (const FittedParameter& p : summary.parameters) {
-    if (p.name == name) return &p;
-  }
-  return nullptr;
-}
-
-DoorModel with_breakaway(const DoorModel& model, double d1_N_m) {
-  EffectSetting setting{effects::Kind::kStribeck, {d1_N_m + kExcess_N_m, kWidth_rad_s}, {}};
-  for (const effects::EffectParameter& p : effects::info(effects::Kind::kStribeck).parameters) {
-    setting.bounds.push_back(p.default_bounds);
-  }
-  return model.with_effect(std::move(setting));
-}
-
 struct Verdict {
-  ModelFigures base, oracle;
-  double amplitude_N_m = kNaN, amplitude_u_N_m = kNaN, width_rad_s = kNaN;
-  bool bound_or_undetermined = false;
-  bool qualifies = false;
+  testing::BreakawayRefit refit;
   std::string loop_first = "none";  // the loop's first added effect
 };
 
 Verdict judge(const PreparedData& data, const LoopOptions& loop) {
-  const DoorModel reference = testing::sensory_reference();
-  const FitResult base = fit_model(reference, data, loop.fit);
-  FitOptions refit = loop.fit;
-  refit.latch_start_from_data = false;
-  const double d1 = find_parameter(base.summary, "d1")->value;
-  const FitResult informed = fit_model(with_breakaway(base.model, d1), data, refit);
-  const FitResult from_truth =
-      fit_model(testing::sensory_reference_with_breakaway(kExcess_N_m, kWidth_rad_s), data, refit);
-  const FitResult& oracle = model_figures(informed.summary).sum_of_squares <=
-                                    model_figures(from_truth.summary).sum_of_squares
-                                ? informed
-                                : from_truth;
-  Verdict v;
+  Verdict v{testing::refit_from_true_breakaway(data, loop, kExcess_N_m, kWidth_rad_s), "none"};
   if (std::getenv("ORACLE_REPORTS") != nullptr) {
-    std::fprintf(stderr, "base fit:\n%s\noracle refit:\n%s\n", base.summary.full_report().c_str(),
-                 oracle.summary.full_report().c_str());
+    std::fprintf(stderr, "base fit:\n%s\noracle refit:\n%s\n",
+                 v.refit.base.full_report().c_str(),
+                 v.refit.refit.full_report().c_str());
   }
-  v.base = model_figures(base.summary);
-  v.oracle = model_figures(oracle.summary);
-  const FittedParameter* d_s = find_parameter(oracle.summary, "stribeck.d_s");
-  const FittedParameter* w_s = find_parameter(oracle.summary, "stribeck.w_s");
-  const FittedParameter* d1_refit = find_parameter(oracle.summary, "d1");
-  v.amplitude_N_m = d_s->value - d1_refit->value;
-  v.amplitude_u_N_m = d_s->uncertainty;
-  v.width_rad_s = w_s->value;
-  for (const FittedParameter& p : oracle.summary.parameters) {
-    if (p.free && (p.at_bound || !p.determined)) v.bound_or_undetermined = true;
-  }
-  const double held_out_fall =
-      (v.base.held_out_rmse_rad_s - v.oracle.held_out_rmse_rad_s) / v.base.held_out_rmse_rad_s;
-  const double z = std::abs(v.amplitude_N_m) / v.amplitude_u_N_m;
-  v.qualifies = held_out_fall > loop.min_held_out_improvement &&
-                v.oracle.bic - v.base.bic < -loop.min_bic_decrease && z >= loop.min_amplitude_z &&
-                !v.bound_or_undetermined;
   LoopOptions first_step = loop;
   first_step.max_steps = 1;
   first_step.structure_check = false;
-  const LoopResult found = run_residual_loop(reference, data, first_step);
+  const LoopResult found = run_residual_loop(testing::sensory_reference(), data, first_step);
   if (!found.steps.empty()) v.loop_first = found.steps.front().effect_name;
   return v;
 }
 
 void print_line(int draw, const testing::RecordingConditions& c, const char* recording,
                 const Verdict& v) {
-  const double fall =
-      (v.base.held_out_rmse_rad_s - v.oracle.held_out_rmse_rad_s) / v.base.held_out_rmse_rad_s;
+  const testing::BreakawayRefit& r = v.refit;
   std::printf("%d,%s,%g,%s,%s,%.6g,%.6g,%.4f,%.6g,%.6g,%.6g,%.3g,%.6g,%d,%d,%s\n", draw,
               c.hand.c_str(), c.sample_rate_hz, c.sensors.c_str(), recording,
-              v.base.held_out_rmse_rad_s, v.oracle.held_out_rmse_rad_s, fall,
-              v.oracle.bic - v.base.bic, v.amplitude_N_m, v.amplitude_u_N_m,
-              std::abs(v.amplitude_N_m) / v.amplitude_u_N_m, v.width_rad_s,
-              v.bound_or_undetermined ? 1 : 0, v.qualifies ? 1 : 0, v.loop_first.c_str());
+              r.base_figures.held_out_rmse_rad_s, r.refit_figures.held_out_rmse_rad_s,
+              r.held_out_fall(), r.refit_figures.bic - r.base_figures.bic, r.amplitude_N_m,
+              r.amplitude_u_N_m, r.amplitude_z(), r.width_rad_s, r.bound_or_undetermined ? 1 : 0,
+              r.qualifies ? 1 : 0, v.loop_first.c_str());
   std::fflush(stdout);
 }
 

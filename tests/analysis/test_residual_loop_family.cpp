@@ -18,6 +18,7 @@
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
 #include "core/number_format.h"
+#include "tests/support/breakaway_refit.h"
 #include "tests/support/recording_family.h"
 #include "tests/support/reference_doors.h"
 
@@ -75,6 +76,7 @@ std::string outcome(const LoopResult& loop) {
 // where the clean door gets an effect.
 struct FamilyRun {
   int found = 0, false_additions = 0;
+  std::vector<int> missed_where_the_data_allow;  // draws
   std::string table;
 };
 
@@ -87,17 +89,30 @@ FamilyRun run_family(const doorbench::testing::FamilyOptions& family, std::uint3
     const doorbench::testing::RecordingConditions conditions =
         doorbench::testing::draw_conditions(first_seed + static_cast<std::uint32_t>(draw), family);
     const std::uint32_t seed = first_seed + 1000 + static_cast<std::uint32_t>(draw);
-    const LoopResult loop = doorbench::run_residual_loop(
-        start, doorbench::testing::family_recording(truth, conditions, seed), first_step_only());
+    const doorbench::PreparedData recording =
+        doorbench::testing::family_recording(truth, conditions, seed);
+    const LoopResult loop = doorbench::run_residual_loop(start, recording, first_step_only());
     const bool named = !loop.steps.empty() && loop.steps.front().effect == effects::Kind::kStribeck;
     run.found += named ? 1 : 0;
+    std::string allowed;
+    if (!named) {
+      // Would the loop's rule add it, refitted from the true values? Then the examination
+      // missed what the data allow.
+      const doorbench::testing::BreakawayRefit refit =
+          doorbench::testing::refit_from_true_breakaway(recording, first_step_only());
+      if (refit.qualifies) run.missed_where_the_data_allow.push_back(draw);
+      allowed = doorbench::printf_text(
+          "\n  refitted from the true values: held-out %+.1f%%, amplitude %.3g +- %.3g N m%s: %s",
+          -100 * refit.held_out_fall(), refit.amplitude_N_m, refit.amplitude_u_N_m,
+          refit.bound_or_undetermined ? ", a parameter at a bound or undetermined" : "",
+          refit.qualifies ? "the data allow it" : "the rule would not add it either");
+    }
     const LoopResult clean = doorbench::run_residual_loop(
         start, doorbench::testing::family_recording(start, conditions, seed), first_step_only());
     run.false_additions += clean.steps.empty() ? 0 : 1;
-    const std::string line =
-        doorbench::printf_text("draw %d: %s\n  breakaway: %s\n  clean: %s\n", draw,
-                               conditions.describe().c_str(), outcome(loop).c_str(),
-                               outcome(clean).c_str());
+    const std::string line = doorbench::printf_text(
+        "draw %d: %s\n  breakaway: %s%s\n  clean: %s\n", draw, conditions.describe().c_str(),
+        outcome(loop).c_str(), allowed.c_str(), outcome(clean).c_str());
     run.table.append(line);
     std::fprintf(stderr, "%s", line.c_str());  // a minutes-long test: its progress
   }
@@ -107,22 +122,28 @@ FamilyRun run_family(const doorbench::testing::FamilyOptions& family, std::uint3
 }  // namespace
 
 // Issue 30's done-when asks for breakaway friction named first in at least 90 % of the
-// draws (18 of 20) and at most 10 % of clean recordings with an addition. Not met yet: on
-// these 20 draws the loop names it first in 10; no clean recording gets an addition since the
+// draws (18 of 20) and at most 10 % of clean recordings with an addition. Not met: on these
+// 20 draws the loop names it first in 10, and no clean recording gets an addition since the
 // refit's amplitude must lie 4 standard uncertainties from neutral (min_amplitude_z; before,
 // 4 of 20). Measured 2026-11-28 on main at 46fa2a0; the misses, draw by draw, are in
 // docs/residual-loop.md, "Breakaway friction on the recording family": all 6 impulse draws,
-// and 4 of the 14 PD and minimum-jerk ones. Until then this test holds the measured level, so
-// that a change that loses a detection or adds a false addition fails it, with one clean
-// recording of slack (a borderline verdict may move with another machine's vector width);
-// raise the bars to the target as the loop gets there.
+// and 4 of the 14 PD and minimum-jerk ones.
+//
+// Why, from the data (docs/residual-loop.md, "What the data allow";
+// bench/breakaway_oracle.cpp): on every draw the loop misses, the refit from the true values
+// would not be added by the loop's rule either (held-out fall, BIC, amplitude 4 u from zero,
+// no parameter at a bound), so the test also holds that: a miss where the data allow the
+// effect is the examination's fault. The counts are held at the measured level, so that a
+// change that loses a detection or adds a false addition fails, with one clean recording of
+// slack (a borderline verdict may move with another machine's vector width).
 constexpr int kTargetFound = (9 * kDraws + 9) / 10;  // 18
 constexpr int kMeasuredFound = 10;
 constexpr int kMeasuredFalseAdditions = 0;
 
 TEST_CASE("residual loop: breakaway friction on 20 recordings drawn from the recording "
-          "family's hands at 100 Hz to 1 kHz (issue 30: named first, and false additions on "
-          "the clean ones, at least at the measured level)",
+          "family's hands at 100 Hz to 1 kHz (issue 30: named first wherever a refit from the "
+          "true values would be added, at least at the measured level, and false additions on "
+          "the clean ones)",
           "[residual_loop][family][slow]") {
   const FamilyRun run = run_family(breakaway_test_family(), 2000);
   INFO(run.table);
@@ -130,6 +151,7 @@ TEST_CASE("residual loop: breakaway friction on 20 recordings drawn from the rec
                                             << " draws (target " << kTargetFound
                                             << "); clean recordings with an addition: "
                                             << run.false_additions);
+  CHECK(run.missed_where_the_data_allow.empty());
   CHECK(run.found >= kMeasuredFound);
   CHECK(run.false_additions <= kMeasuredFalseAdditions + 1);
 }

@@ -1,0 +1,97 @@
+#pragma once
+// What the data allow for breakaway friction, whatever the residual examination does
+// (issue 30; docs/residual-loop.md, "What the data allow"): the refit the loop would make if
+// its examination pointed at breakaway friction with the true values, judged by the loop's
+// acceptance rule. Used by bench/breakaway_oracle.cpp over many draws and by
+// tests/analysis/test_residual_loop_family.cpp on the draws the loop misses.
+//
+//   BreakawayRefit r = refit_from_true_breakaway(data, LoopOptions{});
+//   r.qualifies   // the loop's rule would add it
+//
+// The base fit is the loop's start fit (the sensory reference door, options.fit). The refit
+// starts twice, from the base fit with Stribeck friction at d1 + excess, width, and from the
+// true door (the reference with that friction); the one with the lower fitted sum of squares
+// is kept. The rule: held-out window RMSE down by more than min_held_out_improvement, BIC
+// down by more than min_bic_decrease, the amplitude d_s − d1 at least min_amplitude_z
+// standard uncertainties from zero, no free parameter at a bound or undetermined. Throws what
+// fit_model throws; thread-safe as fit_model is.
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "analysis/fit/fitting.h"
+#include "analysis/loop/residual_loop.h"
+#include "analysis/model/effects.h"
+#include "core/numbers.h"
+#include "tests/support/reference_doors.h"
+
+namespace doorbench::testing {
+
+struct BreakawayRefit {
+  FitSummary base, refit;  // the base fit's and the kept refit's
+  ModelFigures base_figures, refit_figures;
+  double amplitude_N_m = kNaN, amplitude_u_N_m = kNaN, width_rad_s = kNaN;
+  bool bound_or_undetermined = false;
+  bool qualifies = false;
+
+  double held_out_fall() const {
+    return (base_figures.held_out_rmse_rad_s - refit_figures.held_out_rmse_rad_s) /
+           base_figures.held_out_rmse_rad_s;
+  }
+  double amplitude_z() const { return std::abs(amplitude_N_m) / amplitude_u_N_m; }
+};
+
+namespace breakaway_detail {
+
+inline const FittedParameter& parameter(const FitSummary& summary, const std::string& name) {
+  for (const FittedParameter& p : summary.parameters) {
+    if (p.name == name) return p;
+  }
+  throw std::logic_error("breakaway refit: no parameter " + name);
+}
+
+inline DoorModel with_breakaway(const DoorModel& model, double d_s_N_m, double width_rad_s) {
+  EffectSetting setting{effects::Kind::kStribeck, {d_s_N_m, width_rad_s}, {}};
+  for (const effects::EffectParameter& p : effects::info(effects::Kind::kStribeck).parameters) {
+    setting.bounds.push_back(p.default_bounds);
+  }
+  return model.with_effect(std::move(setting));
+}
+
+}  // namespace breakaway_detail
+
+inline BreakawayRefit refit_from_true_breakaway(const PreparedData& data, const LoopOptions& loop,
+                                                double excess_N_m = 1.5,
+                                                double width_rad_s = 0.05) {
+  using breakaway_detail::parameter;
+  BreakawayRefit r;
+  const FitResult base = fit_model(sensory_reference(), data, loop.fit);
+  FitOptions refit = loop.fit;
+  refit.latch_start_from_data = false;  // the start is already a fit, as in the loop's refits
+  const double d1 = parameter(base.summary, "d1").value;
+  FitResult informed = fit_model(
+      breakaway_detail::with_breakaway(base.model, d1 + excess_N_m, width_rad_s), data, refit);
+  FitResult from_truth =
+      fit_model(sensory_reference_with_breakaway(excess_N_m, width_rad_s), data, refit);
+  r.base = base.summary;
+  r.refit = model_figures(informed.summary).sum_of_squares <=
+                    model_figures(from_truth.summary).sum_of_squares
+                ? std::move(informed.summary)
+                : std::move(from_truth.summary);
+  r.base_figures = model_figures(r.base);
+  r.refit_figures = model_figures(r.refit);
+  const FittedParameter& d_s = parameter(r.refit, "stribeck.d_s");
+  r.amplitude_N_m = d_s.value - parameter(r.refit, "d1").value;
+  r.amplitude_u_N_m = d_s.uncertainty;
+  r.width_rad_s = parameter(r.refit, "stribeck.w_s").value;
+  for (const FittedParameter& p : r.refit.parameters) {
+    if (p.free && (p.at_bound || !p.determined)) r.bound_or_undetermined = true;
+  }
+  r.qualifies = r.held_out_fall() > loop.min_held_out_improvement &&
+                r.refit_figures.bic - r.base_figures.bic < -loop.min_bic_decrease &&
+                r.amplitude_z() >= loop.min_amplitude_z && !r.bound_or_undetermined;
+  return r;
+}
+
+}  // namespace doorbench::testing
