@@ -22,6 +22,14 @@
 //                                    1 kHz, the same two sensor sets; conditions drawn from
 //                                    seed 5000 + DRAW, recordings from 6000 + DRAW)
 //   doorbench_breakaway_oracle --header           the CSV's header line
+//   doorbench_breakaway_oracle --known [--whole-family] DRAW [DRAW ...]
+//                                    instead, for the breakaway recording of each draw:
+//                                    d_s's standard uncertainty at the true door with the
+//                                    door's parameters free, with the door known (d_s and w_s
+//                                    fitted) and with w_s known too
+//                                    (breakaway_amplitude_uncertainty), one line "draw,hand,
+//                                    rate_hz,sensors,u_door_free_N_m,u_door_known_N_m,
+//                                    u_all_known_N_m"
 #include <cstdint>
 #include <cstdlib>
 #include <cstdio>
@@ -89,19 +97,33 @@ int main(int argc, char** argv) {
     return 0;
   }
   const LoopOptions loop;
-  const bool whole = std::strcmp(argv[1], "--whole-family") == 0;
+  const bool known = std::strcmp(argv[1], "--known") == 0;
+  const int first_arg = known ? 2 : 1;
+  const bool whole = argc > first_arg && std::strcmp(argv[first_arg], "--whole-family") == 0;
   testing::FamilyOptions family = testing::breakaway_test_family();
   if (whole) {
     family.hands = testing::FamilyOptions{}.hands;
     family.sample_rates_hz = testing::FamilyOptions{}.sample_rates_hz;
   }
   const std::uint32_t first_seed = whole ? kWholeFamilySeed : kFirstSeed;
-  for (int i = whole ? 2 : 1; i < argc; ++i) {
+  for (int i = first_arg + (whole ? 1 : 0); i < argc; ++i) {
     const int draw = std::stoi(argv[i]);
     const testing::RecordingConditions c =
         testing::draw_conditions(first_seed + static_cast<std::uint32_t>(draw), family);
     const std::uint32_t seed = first_seed + 1000 + static_cast<std::uint32_t>(draw);
     const DoorModel truth = testing::sensory_reference_with_breakaway(kExcess_N_m, kWidth_rad_s);
+    if (known) {
+      const PreparedData data = testing::family_recording(truth, c, seed);
+      std::printf("%d,%s,%g,%s", draw, c.hand.c_str(), c.sample_rate_hz, c.sensors.c_str());
+      for (testing::Known known : {testing::Known::kDoorFree, testing::Known::kDoorKnown,
+                                   testing::Known::kAllKnown}) {
+        std::printf(",%.6g", testing::breakaway_amplitude_uncertainty(data, loop, known,
+                                                                      kExcess_N_m, kWidth_rad_s));
+      }
+      std::printf("\n");
+      std::fflush(stdout);
+      continue;
+    }
     print_line(draw, c, "breakaway", judge(testing::family_recording(truth, c, seed), loop));
     print_line(draw, c, "clean",
                judge(testing::family_recording(testing::sensory_reference(), c, seed), loop));

@@ -6,6 +6,10 @@ many breakaway recordings the refit from the true values qualifies under the loo
 each acceptance statistic alone can separate the two.
 
     breakaway_oracle_table.py FILE.csv
+    breakaway_oracle_table.py --known KNOWN.csv   (the lines of doorbench_breakaway_oracle
+        --known, no header): by hand, sensor set and rate, the draws where 1.5 N·m / u
+        reaches the 2.93 a one-sided 5 % test needs for 90 % power, with the door's
+        parameters free, with the door known (d_s and w_s fitted) and with w_s known too
 """
 import csv
 import math
@@ -89,7 +93,27 @@ def separation(rows, statistic, label, refuse_bound=True):
     print(f"| {label} | {threshold:.3g} | {share(passed, len(cln))} |")
 
 
+def known_table(path):
+    groups = {}
+    with open(path, newline="") as f:
+        for draw, hand, rate, sensors, *us in csv.reader(f):
+            for key in ("all", hand, f"{hand}, {sensors}", f"{hand}, {int(float(rate))} Hz"):
+                groups.setdefault(key, []).append([float(u) for u in us])
+    print(f"| draws | 1.5 N·m / u ≥ {NEEDED_Z:.2f}: the door's parameters free | the door known "
+          f"(d_s and w_s fitted) | w_s known too | median u: door free, door known (N·m) |")
+    print("|---|---|---|---|---|")
+    for key in sorted(groups, key=lambda k: (k != "all", k)):
+        g = groups[key]
+        counts = [sum(1 for us in g if EXCESS_N_M / us[i] >= NEEDED_Z) for i in range(3)]
+        medians = [sorted(us[i] for us in g)[len(g) // 2] for i in range(2)]
+        print(f"| {key} | " + " | ".join(share(k, len(g)) for k in counts) +
+              f" | {medians[0]:.3g}, {medians[1]:.3g} |")
+
+
 def main():
+    if sys.argv[1] == "--known":
+        known_table(sys.argv[2])
+        return
     rows = rows_of(sys.argv[1])
     draws = len({r["draw"] for r in rows})
     print(f"{draws} draws\n")

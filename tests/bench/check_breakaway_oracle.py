@@ -3,8 +3,8 @@
 program's header, one draw where the data do tell the issue's breakaway friction apart (draw
 8 of the family test: a PD hand at 1 kHz with the inclinometer + gyroscope; the refit from
 the true values qualifies there, its amplitude within 4 u of the true 1.5 N·m, and on the
-clean recording it does not), and the table script on a hand-written CSV whose Wilson
-intervals and thresholds are worked out here by hand.
+clean recording it does not), and the table script on hand-written CSVs (the main one and
+--known's) whose Wilson intervals and thresholds are worked out here by hand.
 
 usage: check_breakaway_oracle.py ORACLE_EXECUTABLE TABLE_SCRIPT WORK_DIR
 """
@@ -79,10 +79,27 @@ def hand_written_table(script, work):
         print(table)
 
 
+def known_table(script, work):
+    # Draw 0 determines d_s in all three cases (1.5 / 0.1 = 15); draw 1 only with w_s known
+    # too (1.5 / 1 = 1.5 and 1.5 / 0.6 = 2.5 are below 2.93, 1.5 / 0.1 is not). Wilson for
+    # 2/2: the lower bound n / (n + z²) = 34.2 %.
+    path = os.path.join(work, "known.csv")
+    with open(path, "w") as f:
+        f.write("0,pd,1000,angle,0.1,0.05,0.01\n1,impulse,100,angle,1.0,0.6,0.1\n")
+    table = output(sys.executable, script, "--known", path)
+    check("| all | 1/2 (50 %, 9-91 %) | 1/2 (50 %, 9-91 %) | 2/2 (100 %, 34-100 %) |" in table,
+          "the --known counts")
+    check("| impulse | 0/1 (0 %, 0-79 %) | 0/1 (0 %, 0-79 %) | 1/1 (100 %, 21-100 %) | 1, 0.6 |"
+          in table, "the --known row of one hand, with its medians")
+    if problems:
+        print(table)
+
+
 def main():
     exe, script, work = sys.argv[1:4]
     os.makedirs(work, exist_ok=True)
     hand_written_table(script, work)
+    known_table(script, work)
     real_draw(exe)
     for p in problems:
         print("FAILED:", p)

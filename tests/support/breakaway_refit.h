@@ -94,4 +94,35 @@ inline BreakawayRefit refit_from_true_breakaway(const PreparedData& data, const 
   return r;
 }
 
+// What the data can say of the breakaway amplitude at the true door: d_s's standard
+// uncertainty (the fit's kind, window-robust by default) from a fit started at the true door
+// (the sensory reference with the breakaway friction), without cross-validation or the
+// equation-error start, with
+//   kDoorFree:  the loop's free set (options.fit's, else the default) and the effect's two
+//               parameters, one iteration (the uncertainty at the truth, not where a
+//               refit may wander);
+//   kDoorKnown: d_s and w_s only, every other parameter held at its true value;
+//   kAllKnown:  d_s alone.
+// A one-sided test at level α has power 1 − β only if excess / u ≥ z_{1−α} + z_{1−β} (2.93
+// for 5 % and 90 %); an estimator that knows less than the fit does knows d_s less well.
+enum class Known { kDoorFree, kDoorKnown, kAllKnown };
+
+inline double breakaway_amplitude_uncertainty(const PreparedData& data, const LoopOptions& loop,
+                                              Known known, double excess_N_m = 1.5,
+                                              double width_rad_s = 0.05) {
+  FitOptions options = loop.fit;
+  if (known == Known::kDoorFree) {
+    options.max_iterations = 1;
+  } else {
+    options.free_parameters = {"stribeck.d_s"};
+    if (known == Known::kDoorKnown) options.free_parameters.push_back("stribeck.w_s");
+  }
+  options.cross_validation_folds = 0;
+  options.equation_error_start = false;
+  options.latch_start_from_data = false;
+  const FitResult fit =
+      fit_model(sensory_reference_with_breakaway(excess_N_m, width_rad_s), data, options);
+  return breakaway_detail::parameter(fit.summary, "stribeck.d_s").uncertainty;
+}
+
 }  // namespace doorbench::testing
