@@ -21,6 +21,8 @@
 //                                    the done-when's family instead (every hand, 50 Hz to
 //                                    1 kHz, the same two sensor sets; conditions drawn from
 //                                    seed 5000 + DRAW, recordings from 6000 + DRAW)
+//   doorbench_breakaway_oracle --no-loop [--whole-family] DRAW ...
+//                                    the same without the loop (loop_first "not-run")
 //   doorbench_breakaway_oracle --header           the CSV's header line
 //   doorbench_breakaway_oracle --known [--whole-family] DRAW [DRAW ...]
 //                                    instead, for the breakaway recording of each draw:
@@ -56,12 +58,16 @@ struct Verdict {
   std::string loop_first = "none";  // the loop's first added effect
 };
 
-Verdict judge(const PreparedData& data, const LoopOptions& loop) {
+Verdict judge(const PreparedData& data, const LoopOptions& loop, bool run_loop) {
   Verdict v{testing::refit_from_true_breakaway(data, loop, kExcess_N_m, kWidth_rad_s), "none"};
   if (std::getenv("ORACLE_REPORTS") != nullptr) {
     std::fprintf(stderr, "base fit:\n%s\noracle refit:\n%s\n",
                  v.refit.base.full_report().c_str(),
                  v.refit.refit.full_report().c_str());
+  }
+  if (!run_loop) {
+    v.loop_first = "not-run";
+    return v;
   }
   LoopOptions first_step = loop;
   first_step.max_steps = 1;
@@ -98,7 +104,8 @@ int main(int argc, char** argv) {
   }
   const LoopOptions loop;
   const bool known = std::strcmp(argv[1], "--known") == 0;
-  const int first_arg = known ? 2 : 1;
+  const bool run_loop = std::strcmp(argv[1], "--no-loop") != 0;
+  const int first_arg = known || !run_loop ? 2 : 1;
   const bool whole = argc > first_arg && std::strcmp(argv[first_arg], "--whole-family") == 0;
   testing::FamilyOptions family = testing::breakaway_test_family();
   if (whole) {
@@ -124,9 +131,11 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
       continue;
     }
-    print_line(draw, c, "breakaway", judge(testing::family_recording(truth, c, seed), loop));
+    print_line(draw, c, "breakaway",
+               judge(testing::family_recording(truth, c, seed), loop, run_loop));
     print_line(draw, c, "clean",
-               judge(testing::family_recording(testing::sensory_reference(), c, seed), loop));
+               judge(testing::family_recording(testing::sensory_reference(), c, seed), loop,
+                     run_loop));
   }
   return 0;
 }

@@ -13,7 +13,8 @@
 // true door (the reference with that friction); the one with the lower fitted sum of squares
 // is kept. The rule: held-out window RMSE down by more than min_held_out_improvement, BIC
 // down by more than min_bic_decrease, the amplitude d_s − d1 at least min_amplitude_z
-// standard uncertainties from zero, no free parameter at a bound or undetermined. Throws what
+// standard uncertainties from zero, neither of the effect's parameters at a bound or
+// undetermined (the loop's refit_parameter_problems looks at the effect's only). Throws what
 // fit_model throws; thread-safe as fit_model is.
 #include <cmath>
 #include <stdexcept>
@@ -85,7 +86,8 @@ inline BreakawayRefit refit_from_true_breakaway(const PreparedData& data, const 
   r.amplitude_N_m = d_s.value - parameter(r.refit, "d1").value;
   r.amplitude_u_N_m = d_s.uncertainty;
   r.width_rad_s = parameter(r.refit, "stribeck.w_s").value;
-  for (const FittedParameter& p : r.refit.parameters) {
+  for (const char* name : {"stribeck.d_s", "stribeck.w_s"}) {  // the effect's, as the loop checks
+    const FittedParameter& p = parameter(r.refit, name);
     if (p.free && (p.at_bound || !p.determined)) r.bound_or_undetermined = true;
   }
   r.qualifies = r.held_out_fall() > loop.min_held_out_improvement &&
