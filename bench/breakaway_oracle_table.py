@@ -122,7 +122,8 @@ def expected_power(uncertainties):
     n = len(powers)
     mean = sum(powers) / n
     sd = math.sqrt(sum((p - mean) ** 2 for p in powers) / (n - 1)) if n > 1 else 0.0
-    return mean, max(0.0, mean - 1.96 * sd / math.sqrt(n)), min(1.0, mean + 1.96 * sd / math.sqrt(n))
+    half = 1.96 * sd / math.sqrt(n)
+    return mean, max(0.0, mean - half), min(1.0, mean + half)
 
 
 def main():
