@@ -7,14 +7,15 @@
 //   base:   the loop's start fit (the sensory reference door, the loop's fit options);
 //   oracle: the refit the loop would make if its examination pointed at breakaway friction
 //           with the true values: from the base fit with Stribeck friction at d1 + 1.5 N·m,
-//           0.05 rad/s, and from the true door; the lower fitted sum of squares is kept.
-// and the loop itself runs on it as the family test runs it (its first step, no structure
-// check), so that what it finds can be set beside what the data allow.
-// Each pair is judged by the loop's acceptance rule (LoopOptions' defaults): held-out window
+//           0.05 rad/s, and from the true door; the lower fitted sum of squares is kept
+//           (tests/support/breakaway_refit.h).
+// Each refit is judged by the loop's acceptance rule (LoopOptions' defaults): held-out window
 // RMSE down by more than min_held_out_improvement, BIC down, the amplitude d_s − d1 at least
-// min_amplitude_z standard uncertainties from zero, no parameter at a bound or undetermined.
-// The breakaway recordings that pass bound what any examination could find; the clean ones
-// that pass are what the same rule would add for nothing.
+// min_amplitude_z standard uncertainties from zero, neither of the effect's parameters at a
+// bound or undetermined. The breakaway recordings that pass are what an examination pointing
+// at the truth would find (not a strict bound: a refit from elsewhere may do better); the
+// clean ones that pass are what the same rule would add for nothing. Beside it the loop runs
+// as the family test runs it (its first step, no structure check).
 //
 //   doorbench_breakaway_oracle [--whole-family] DRAW [DRAW ...]
 //                                    one CSV line per draw and recording; --whole-family:
