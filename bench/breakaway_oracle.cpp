@@ -38,7 +38,6 @@
 #include <cstdio>
 #include <cstring>
 #include <string>
-#include <vector>
 
 #include "analysis/loop/residual_loop.h"
 #include "tests/support/breakaway_refit.h"
@@ -114,18 +113,18 @@ int main(int argc, char** argv) {
     family.sample_rates_hz = testing::FamilyOptions{}.sample_rates_hz;
   }
   const std::uint32_t first_seed = whole ? kWholeFamilySeed : kFirstSeed;
+  const DoorModel truth = testing::sensory_reference_with_breakaway(kExcess_N_m, kWidth_rad_s);
   for (int i = first_arg + (whole ? 1 : 0); i < argc; ++i) {
     const int draw = std::stoi(argv[i]);
     const testing::RecordingConditions c =
         testing::draw_conditions(first_seed + static_cast<std::uint32_t>(draw), family);
     const std::uint32_t seed = first_seed + 1000 + static_cast<std::uint32_t>(draw);
-    const DoorModel truth = testing::sensory_reference_with_breakaway(kExcess_N_m, kWidth_rad_s);
     if (known) {
       const PreparedData data = testing::family_recording(truth, c, seed);
       std::printf("%d,%s,%g,%s", draw, c.hand.c_str(), c.sample_rate_hz, c.sensors.c_str());
-      for (testing::Known known : {testing::Known::kDoorFree, testing::Known::kDoorKnown,
-                                   testing::Known::kAllKnown}) {
-        std::printf(",%.6g", testing::breakaway_amplitude_uncertainty(data, loop, known,
+      for (testing::Known what : {testing::Known::kDoorFree, testing::Known::kDoorKnown,
+                                  testing::Known::kAllKnown}) {
+        std::printf(",%.6g", testing::breakaway_amplitude_uncertainty(data, loop, what,
                                                                       kExcess_N_m, kWidth_rad_s));
       }
       std::printf("\n");

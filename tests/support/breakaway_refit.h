@@ -23,7 +23,6 @@
 
 #include "analysis/fit/fitting.h"
 #include "analysis/loop/residual_loop.h"
-#include "analysis/model/effects.h"
 #include "core/numbers.h"
 #include "tests/support/reference_doors.h"
 
@@ -52,14 +51,6 @@ inline const FittedParameter& parameter(const FitSummary& summary, const std::st
   throw std::logic_error("breakaway refit: no parameter " + name);
 }
 
-inline DoorModel with_breakaway(const DoorModel& model, double d_s_N_m, double width_rad_s) {
-  EffectSetting setting{effects::Kind::kStribeck, {d_s_N_m, width_rad_s}, {}};
-  for (const effects::EffectParameter& p : effects::info(effects::Kind::kStribeck).parameters) {
-    setting.bounds.push_back(p.default_bounds);
-  }
-  return model.with_effect(std::move(setting));
-}
-
 }  // namespace breakaway_detail
 
 inline BreakawayRefit refit_from_true_breakaway(const PreparedData& data, const LoopOptions& loop,
@@ -72,7 +63,7 @@ inline BreakawayRefit refit_from_true_breakaway(const PreparedData& data, const 
   refit.latch_start_from_data = false;  // the start is already a fit, as in the loop's refits
   const double d1 = parameter(base.summary, "d1").value;
   FitResult informed = fit_model(
-      breakaway_detail::with_breakaway(base.model, d1 + excess_N_m, width_rad_s), data, refit);
+      with_breakaway(base.model, d1 + excess_N_m, width_rad_s), data, refit);
   FitResult from_truth =
       fit_model(sensory_reference_with_breakaway(excess_N_m, width_rad_s), data, refit);
   r.base = base.summary;

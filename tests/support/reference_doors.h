@@ -17,15 +17,19 @@ inline double sensory_reference_d1() {
   return model.parameter_values()[*model.find_parameter("d1")];
 }
 
-// The sensory reference with breakaway (Stribeck) friction: d_s = d1 + excess_N_m, w_s =
-// speed_rad_s, within the catalogue's bounds.
-inline DoorModel sensory_reference_with_breakaway(double excess_N_m, double speed_rad_s) {
-  EffectSetting setting{effects::Kind::kStribeck, {sensory_reference_d1() + excess_N_m, speed_rad_s},
-                        {}};
+// `model` with breakaway (Stribeck) friction added: d_s_N_m, w_s = speed_rad_s, within the
+// catalogue's bounds.
+inline DoorModel with_breakaway(const DoorModel& model, double d_s_N_m, double speed_rad_s) {
+  EffectSetting setting{effects::Kind::kStribeck, {d_s_N_m, speed_rad_s}, {}};
   for (const effects::EffectParameter& parameter : effects::info(effects::Kind::kStribeck).parameters) {
     setting.bounds.push_back(parameter.default_bounds);
   }
-  return sensory_reference().with_effect(std::move(setting));
+  return model.with_effect(std::move(setting));
+}
+
+// The sensory reference with breakaway friction: d_s = d1 + excess_N_m, w_s = speed_rad_s.
+inline DoorModel sensory_reference_with_breakaway(double excess_N_m, double speed_rad_s) {
+  return with_breakaway(sensory_reference(), sensory_reference_d1() + excess_N_m, speed_rad_s);
 }
 
 }  // namespace doorbench::testing
