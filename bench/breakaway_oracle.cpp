@@ -115,7 +115,15 @@ int main(int argc, char** argv) {
   const std::uint32_t first_seed = whole ? kWholeFamilySeed : kFirstSeed;
   const DoorModel truth = testing::sensory_reference_with_breakaway(kExcess_N_m, kWidth_rad_s);
   for (int i = first_arg + (whole ? 1 : 0); i < argc; ++i) {
-    const int draw = std::stoi(argv[i]);
+    const std::string text = argv[i];
+    const bool digits = text.find_first_not_of("0123456789") == std::string::npos;
+    if (text.empty() || text.size() > 6 || !digits) {
+      std::fprintf(stderr,
+                   "doorbench_breakaway_oracle: DRAW must be a whole number from 0, got '%s'\n",
+                   argv[i]);
+      return 2;
+    }
+    const int draw = std::stoi(text);
     const testing::RecordingConditions c =
         testing::draw_conditions(first_seed + static_cast<std::uint32_t>(draw), family);
     const std::uint32_t seed = first_seed + 1000 + static_cast<std::uint32_t>(draw);

@@ -26,6 +26,9 @@ def output(*args):
 
 
 def real_draw(exe):
+    refused = run(exe, "--known", "x1", expect=2)
+    check(refused.stderr == "doorbench_breakaway_oracle: DRAW must be a whole number from 0, "
+          "got 'x1'\n", f"a draw that is not a number: {refused.stderr!r}")
     check(output(exe, "--header").strip() == HEADER, "the header line")
     rows = list(csv.DictReader(io.StringIO(HEADER + "\n" + output(exe, "8"))))
     check(len(rows) == 2, f"draw 8: {len(rows)} lines, expected 2")
