@@ -23,6 +23,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "core/numbers.h"
+
 namespace doorbench::haptic {
 
 using Vec3 = Eigen::Vector3d;
@@ -72,12 +74,30 @@ class HapticDevice {
   // Set-up calls (not real-time).
   virtual std::string name() const = 0;  // "hapticmaster://10.0.0.5:7654", "sim:hapticmaster"
   virtual DeviceLimits limits() const = 0;
-  // Connects, sets the inertia the device renders (kg; ignored by devices whose limits give
-  // max_inertia 0), zeroes the commanded force and enters the force-controlled state.
+  // The slow half of the start, made before the playback builds its loop and its session:
+  // connects, runs the device's own checks (homing, the workspace read back, the inertia set)
+  // and readies what start() needs, without entering the force-controlled state; limits() is
+  // then the device's own. start() does it by itself when it was not called. A device without
+  // such a half does nothing here.
+  virtual void prepare(double inertia) { (void)inertia; }
+  // Connects (unless prepared), sets the inertia the device renders (kg; ignored by devices
+  // whose limits give max_inertia 0), zeroes the commanded force and enters the
+  // force-controlled state. After a prepare() it is quick: the playback calls it just before
+  // its first tick.
   virtual void start(double inertia) = 0;
   // Zero force and leave the force-controlled state; safe to call more than once and after a
   // lost link. Never throws.
   virtual void stop() noexcept = 0;
+  // Why the device ended the run by itself, as one line that starts with name(): the link lost
+  // with its cause (the watchdog's figure, an error reply, a closed connection) and whether the
+  // device was left stopped; "" when it did not end the run. The tick sees only
+  // DeviceSample::link_ok; this is the text for the user and the session. Set-up thread, or
+  // any thread other than the tick's.
+  virtual std::string stop_reason() const { return ""; }
+  // When (monotonic_now_s(), core/clock.h) the render loop's first command after start() took
+  // effect on the device: a networked device's first exchange that carried it was answered, a
+  // simulated one took it. NaN until then, and on a simulated clock. Any thread.
+  virtual double first_command_arrival_s() const noexcept { return kNaN; }
 
   // Real-time calls (the tick): never block, allocate, lock or do I/O.
   virtual DeviceSample read() noexcept = 0;

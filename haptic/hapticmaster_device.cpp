@@ -1,16 +1,19 @@
 #include "haptic/hapticmaster_device.h"
 
+#include <pthread.h>
+#include <sched.h>
+
 #include <algorithm>
 #include <array>
 #include <cctype>
 #include <chrono>
 #include <cmath>
-#include <ctime>
 #include <optional>
 #include <stdexcept>
 #include <thread>
 #include <vector>
 
+#include "core/clock.h"
 #include "haptic/door_mapping.h"
 #include "haptic/hapticmaster_connection.h"
 #include "haptic/hapticmaster_limits.h"
@@ -20,12 +23,6 @@ namespace doorbench::haptic {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double monotonic_s() {
-  timespec ts{};
-  ::clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
 
 // "" if `replies` answer `commands` without error, else what went wrong: the first error
 // reply (named by its command) or a wrong count.
@@ -76,6 +73,9 @@ std::string HapticMasterOptions::validate() const {
     return "reply_timeout_s must be > 0";
   }
   if (!(io_rate_hz > 0) || !(io_rate_hz <= 10000)) return "io_rate_hz must be in (0, 10000]";
+  if (io_fifo_priority < 0 || io_fifo_priority > 99) {
+    return "io_fifo_priority must be in [0, 99] (0: best effort)";
+  }
   if (bias_object.empty() || !std::all_of(bias_object.begin(), bias_object.end(), [](char c) {
         return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
       })) {
@@ -86,6 +86,9 @@ std::string HapticMasterOptions::validate() const {
   }
   if (!(command_watchdog_s >= 0) || !std::isfinite(command_watchdog_s)) {
     return "command_watchdog_s must be >= 0 (0 = off)";
+  }
+  if (!(first_command_timeout_s > 0) || !std::isfinite(first_command_timeout_s)) {
+    return "first_command_timeout_s must be > 0";
   }
   if (!(homing_timeout_s > 0) || !std::isfinite(homing_timeout_s)) {
     return "homing_timeout_s must be > 0";
@@ -244,12 +247,12 @@ void HapticMasterDevice::ensure_calibrated() {
     if (options_.progress) options_.progress(line);
   };
   say(name() + ": position not calibrated: homing (set state init); keep clear of the arm");
-  const double began_s = monotonic_s();
+  const double began_s = monotonic_now_s();
   expect_ok("set state init");
   double next_report_s = began_s + 1.0;
   for (;;) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
-    const double now = monotonic_s();
+    const double now = monotonic_now_s();
     if (word_of(hm::parse_reply(expect_ok("get state"))) == "stop" && calibrated()) break;
     if (now - began_s > options_.homing_timeout_s) {
       throw DeviceError(name() + ": homing did not end within " +
@@ -261,7 +264,7 @@ void HapticMasterDevice::ensure_calibrated() {
       next_report_s += 1.0;
     }
   }
-  startup_.homing_s = monotonic_s() - began_s;
+  startup_.homing_s = monotonic_now_s() - began_s;
   say(name() + ": homing done in " +
       hm::format_device_number(std::round(startup_.homing_s * 10) / 10) + " s");
 }
@@ -341,14 +344,13 @@ void HapticMasterDevice::set_inertia_checked(double inertia) {
   }
 }
 
-void HapticMasterDevice::create_bias_and_enter_force() {
+void HapticMasterDevice::create_bias_and_elements() {
   const std::string bias = options_.bias_object;
   expect_ok("create biasforce " + bias);
   bias_created_ = true;
   expect_ok("set " + bias + " force " + hm::format_vector(Vec3::Zero()));
   expect_ok("set " + bias + " enable");
   if (arc_) create_device_elements();
-  expect_ok("set state force");
 }
 
 bool HapticMasterDevice::render_stiff_parts_on_device(const DoorMapping& mapping,
@@ -432,7 +434,7 @@ DeviceSample HapticMasterDevice::first_reading() {
     throw DeviceError(name() + ": first reading: " + e.what());
   }
   DeviceSample first;
-  first.time_s = monotonic_s();
+  first.time_s = monotonic_now_s();
   if (const std::string problem = take_readings(kReadings, replies, first); !problem.empty()) {
     throw DeviceError(name() + ": " + problem);
   }
@@ -441,7 +443,7 @@ DeviceSample HapticMasterDevice::first_reading() {
   return first;
 }
 
-void HapticMasterDevice::start(double inertia) {
+void HapticMasterDevice::prepare(double inertia) {
   if (io_thread_.joinable() || connection_) throw DeviceError(name() + ": already started");
   const DeviceLimits assumed = hapticmaster_limits();
   if (!(inertia >= assumed.min_inertia && inertia <= assumed.max_inertia)) {
@@ -466,24 +468,42 @@ void HapticMasterDevice::start(double inertia) {
   }
   startup_ = HapticMasterStartup{};
   startup_.workspace_source = "assumed (start failed before the workspace was read)";
-  DeviceSample first;
-  try {
+  guarded([&] {
     identify();
     check_emergency_signals();
     ensure_calibrated();
     clear_effects();
     read_workspace();
     set_inertia_checked(inertia);
-    create_bias_and_enter_force();
-    first = first_reading();
+    create_bias_and_elements();
+  });
+  prepared_inertia_ = inertia;
+}
+
+void HapticMasterDevice::guarded(const std::function<void()>& steps) {
+  try {
+    steps();
   } catch (...) {
     // Leave the device as stop() would: zero force and "stop", whatever step failed.
     send_shutdown();
     link_ok_.store(false);
     connection_.reset();
     connection_intact_ = false;
+    prepared_inertia_ = kNaN;
     throw;
   }
+}
+
+void HapticMasterDevice::start(double inertia) {
+  if (io_thread_.joinable()) throw DeviceError(name() + ": already started");
+  if (std::isnan(prepared_inertia_)) prepare(inertia);
+  DeviceSample first;
+  guarded([&] {
+    if (inertia != prepared_inertia_) set_inertia_checked(inertia);
+    expect_ok("set state force");
+    first = first_reading();
+  });
+  prepared_inertia_ = kNaN;
 
   staged_ = Command{Vec3::Zero(), inertia};
   commands_.back() = staged_;
@@ -492,11 +512,19 @@ void HapticMasterDevice::start(double inertia) {
   samples_.publish();
   last_read_ = first;
   round_trips_.store(0);
+  first_command_arrival_s_.store(kNaN, std::memory_order_release);
   round_trip_times_s_.clear();
   round_trip_next_ = 0;
   stop_requested_.store(false);
   link_ok_.store(true);
   io_thread_ = std::thread([this, inertia, first] { io_loop(inertia, first); });
+  io_thread_fifo_ = false;
+  if (options_.io_fifo_priority > 0) {
+    sched_param parameter{};
+    parameter.sched_priority = options_.io_fifo_priority;
+    io_thread_fifo_ =
+        pthread_setschedparam(io_thread_.native_handle(), SCHED_FIFO, &parameter) == 0;
+  }
 }
 
 void HapticMasterDevice::fail(const std::string& reason) {
@@ -559,6 +587,24 @@ void HapticMasterDevice::lose_link(const std::string& reason, bool connection_in
   samples_.publish();
 }
 
+std::string HapticMasterDevice::watchdog_verdict(bool armed, double started_s,
+                                                 double last_command_s) const {
+  const double now_s = monotonic_now_s();
+  const auto seconds = [](double s) {
+    return hm::format_device_number(std::round(s * 1000) / 1000);
+  };
+  if (!armed) {
+    if (now_s - started_s <= options_.first_command_timeout_s) return "";
+    return "watchdog: the render loop sent no first command within " + seconds(now_s - started_s) +
+           " s of the device's start (limit " +
+           hm::format_device_number(options_.first_command_timeout_s) + " s)";
+  }
+  const double silent_s = now_s - last_command_s;
+  if (options_.command_watchdog_s <= 0 || silent_s <= options_.command_watchdog_s) return "";
+  return "watchdog: the render loop sent no command for " + seconds(silent_s) + " s (limit " +
+         hm::format_device_number(options_.command_watchdog_s) + " s)";
+}
+
 void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
   const DeviceLimits limits = limits_;
   const std::string set_force = "set " + options_.bias_object + " force ";
@@ -566,10 +612,19 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
   const auto period = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(1.0 / options_.io_rate_hz));
   auto next = Clock::now();
-  double last_command_s = monotonic_s();
+  const double started_s = monotonic_now_s();
+  // The watchdog arms at the render loop's first command; until then the device holds the
+  // zero force start() left and only the first-command limit applies.
+  bool armed = false;
+  double last_command_s = started_s;
   double radial_theta = arc_ ? arc_->to_door(sample).theta_rad : 0.0;
-  while (!stop_requested_.load(std::memory_order_acquire)) {
-    if (commands_.update()) last_command_s = monotonic_s();
+  for (;;) {
+    if (commands_.update()) {
+      last_command_s = monotonic_now_s();
+      armed = armed || commands_.front().serial > 0;
+    }
+    // A brake asked before the stop is done first: stop() may follow the tick's brake() before
+    // this thread wakes, and the device's own brake must still come before the shutdown.
     if (brake_requested_.load(std::memory_order_acquire)) {
       // The safety layer tripped on motion (or stopped): zero force and the device's brake,
       // then no more exchanges; stop() removes the bias object later.
@@ -582,12 +637,10 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
       link_ok_.store(false);
       return;
     }
-    const double silent_s = monotonic_s() - last_command_s;
-    if (options_.command_watchdog_s > 0 && silent_s > options_.command_watchdog_s) {
-      lose_link("watchdog: the render loop sent no command for " +
-                    hm::format_device_number(std::round(silent_s * 1000) / 1000) + " s (limit " +
-                    hm::format_device_number(options_.command_watchdog_s) + " s)",
-                connection_intact_, sample);
+    if (stop_requested_.load(std::memory_order_acquire)) return;
+    if (const std::string silence = watchdog_verdict(armed, started_s, last_command_s);
+        !silence.empty()) {
+      lose_link(silence, connection_intact_, sample);
       return;
     }
     const Command command = commands_.front();
@@ -611,14 +664,17 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     std::string problem;
     bool intact = true;
     try {
-      const double sent_s = monotonic_s();
+      const double sent_s = monotonic_now_s();
       const std::vector<std::string> replies =
           connection_->round_trip(commands, options_.reply_timeout_s, options_.join_commands);
-      const double now_s = monotonic_s();
+      const double now_s = monotonic_now_s();
       DeviceSample reading = sample;
       problem = take_readings(commands, replies, reading);
       if (problem.empty()) {
         if (new_inertia) sent_inertia = command.inertia;
+        if (command.serial > 0 && std::isnan(first_command_arrival_s_.load())) {
+          first_command_arrival_s_.store(now_s, std::memory_order_release);
+        }
         sample = reading;
         sample.time_s = now_s;
         ++sample.sequence;
@@ -729,6 +785,7 @@ DeviceSample HapticMasterDevice::read() noexcept {
 
 void HapticMasterDevice::command_force(const Vec3& force) noexcept {
   staged_.force = force;
+  ++staged_.serial;
   commands_.back() = staged_;
   commands_.publish();
 }
@@ -736,6 +793,7 @@ void HapticMasterDevice::command_force(const Vec3& force) noexcept {
 void HapticMasterDevice::command_inertia(double inertia) noexcept {
   if (!std::isfinite(inertia)) return;
   staged_.inertia = std::clamp(inertia, limits_.min_inertia, limits_.max_inertia);
+  ++staged_.serial;
   commands_.back() = staged_;
   commands_.publish();
 }

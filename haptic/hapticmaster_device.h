@@ -36,6 +36,11 @@ struct HapticMasterOptions {
   double connect_timeout_s = 2.0;  // TCP connect
   double reply_timeout_s = 0.5;    // one round trip; longer = link lost
   double io_rate_hz = 1000.0;      // round trips per second (at most; the link may be slower)
+  // The I/O thread asks for SCHED_FIFO at this priority (1..99; 0: best effort), one below the
+  // tick's (RealTimeOptions::fifo_priority): it is half of the haptic loop, and on a busy
+  // machine a best-effort I/O thread delays every round trip. When not permitted it runs best
+  // effort (io_thread_fifo() says which).
+  int io_fifo_priority = 79;
   // The name of the bias force object the driver creates on the device.
   std::string bias_object = "doorbench_bias";
   // One round trip's commands as one ';'-joined message (true), or as one message each,
@@ -47,8 +52,15 @@ struct HapticMasterOptions {
   double emergency_timeout_s = 0.1;
   // The I/O thread's watchdog on the tick: no new command for this long and it zeroes the
   // force and stops the device itself. The safety layer's max_tick_stall_s (the same default
-  // and derivation, docs/haptic-safety.md). 0 turns it off (tests that command by hand).
+  // and derivation, docs/haptic-safety.md). 0 turns it off (tests that command by hand). It
+  // arms at the render loop's first command (the first command_force() or command_inertia()
+  // after start()): what lies between start() and the first tick (the session file, the
+  // recorder, the threads' start) may take longer on a busy machine, and the device holds
+  // zero force meanwhile.
   double command_watchdog_s = 0.1;
+  // The first command must come within this long of start(), or the I/O thread stops the
+  // device itself (a host that hangs before its first tick leaves nothing running).
+  double first_command_timeout_s = 5.0;
   // Homing ("set state init") when the device reports its position uncalibrated: how long to
   // wait for it to end, and who hears about its progress (one line every second or so).
   double homing_timeout_s = 60.0;
@@ -118,9 +130,16 @@ class HapticMasterDevice : public HapticDevice {
   std::string name() const override;  // "hapticmaster://host:port"
   // The assumed figures until start() has read the workspace from the device; then its box.
   DeviceLimits limits() const override;
-  // Throws DeviceError naming the step: a pushed emergency button or an open emergency relay
-  // ("... emergency button is pushed: release it ..."), homing that does not end, an inertia
-  // the device does not take, an error reply. On failure the device is left stopped.
+  // The checks and the set-up (prepare) and the force state (start), as HapticDevice says.
+  // prepare() connects, checks the state and both emergency signals, homes an uncalibrated
+  // device, removes other programs' effects, reads the workspace (limits() is the device's
+  // from then on), sets the inertia and reads it back, and creates the bias force object and
+  // the stiff parts' elements; start() sets state force, takes the first reading and starts
+  // the I/O thread (prepare() first when it was not called). Each throws DeviceError naming the
+  // step: a pushed emergency button or an open emergency relay ("... emergency button is
+  // pushed: release it ..."), homing that does not end, an inertia the device does not take,
+  // an error reply. On failure the device is left stopped.
+  void prepare(double inertia) override;
   void start(double inertia) override;
   void stop() noexcept override;
   const HapticMasterStartup& startup_report() const { return startup_; }
@@ -155,19 +174,30 @@ class HapticMasterDevice : public HapticDevice {
   void connect_only();
 
   // Why the link was lost (first reason, prefixed with name()), or "" while it is fine.
-  // Set-up thread only; not for the tick.
+  // Any thread but the tick's.
   std::string last_error() const;
+  std::string stop_reason() const override { return last_error(); }
+  double first_command_arrival_s() const noexcept override {
+    return first_command_arrival_s_.load(std::memory_order_acquire);
+  }
   // Round trips done by the I/O thread since start().
   std::uint64_t round_trips() const { return round_trips_.load(std::memory_order_relaxed); }
+  // Whether the I/O thread got SCHED_FIFO at start() (set-up thread).
+  bool io_thread_fifo() const { return io_thread_fifo_; }
 
  private:
   struct Command {
     Vec3 force = Vec3::Zero();
     double inertia = 0.0;
+    std::uint64_t serial = 0;  // 0: start()'s own zero force; the tick's commands count from 1
   };
 
   // Runs on the I/O thread; its arguments are what start() sent and published.
   void io_loop(double sent_inertia, DeviceSample sample);
+  // The watchdog's reason to stop the device now, or "": before the first command (`armed`
+  // false) the first-command limit from `started_s`, after it command_watchdog_s from
+  // `last_command_s` (monotonic_now_s() seconds). I/O thread.
+  std::string watchdog_verdict(bool armed, double started_s, double last_command_s) const;
   void fail(const std::string& reason);
   // The fail-safe: zero force and "set state stop" in one request, on the open connection if
   // `connection_intact`, else (or if that fails) on a fresh one. Returns "" or why it could
@@ -190,7 +220,9 @@ class HapticMasterDevice : public HapticDevice {
   void clear_effects();
   void read_workspace();
   void set_inertia_checked(double inertia);
-  void create_bias_and_enter_force();
+  void create_bias_and_elements();
+  // Runs set-up steps; on any exception leaves the device as stop() would and rethrows.
+  void guarded(const std::function<void()>& steps);
   void create_device_elements();
   // The commands that put the radial spring at the door's angle θ.
   std::vector<std::string> radial_spring_at(double theta_rad) const;
@@ -210,11 +242,14 @@ class HapticMasterDevice : public HapticDevice {
   const DoorMapping* arc_ = nullptr;  // set: stiff parts on the device
   double stop_theta_min_rad_ = 0.0, stop_theta_max_rad_ = 0.0;
   bool elements_created_ = false;
+  bool io_thread_fifo_ = false;
+  double prepared_inertia_ = kNaN;  // the inertia prepare() set, until start() consumes it
   HapticMasterStartup startup_;
   DeviceLimits limits_;
   std::vector<double> round_trip_times_s_;  // ring of the last kRoundTripLog (I/O thread)
   std::size_t round_trip_next_ = 0;
   std::atomic<std::uint64_t> round_trips_{0};
+  std::atomic<double> first_command_arrival_s_{kNaN};
 
   TripleBuffer<DeviceSample> samples_;  // I/O thread -> tick
   TripleBuffer<Command> commands_;      // tick -> I/O thread

@@ -1,17 +1,10 @@
 #include "haptic/parameter_mailbox.h"
 
 #include <algorithm>
-#include <ctime>
 
 #include "analysis/model/sensory_model.h"
 
 namespace doorbench::haptic {
-
-double monotonic_now_s() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
-}
 
 DoorModel playable_model(const DoorModel& model) {
   if (!model.has_effect(effects::Kind::kForceOffset)) return model;

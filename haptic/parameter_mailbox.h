@@ -21,6 +21,7 @@
 #include <vector>
 
 #include "analysis/model/door_model.h"
+#include "core/clock.h"
 #include "haptic/door_mapping.h"
 
 namespace doorbench::haptic {
@@ -77,8 +78,5 @@ class ParameterMailbox {
   int next_id_ = 1;
   double last_published_time_s_ = 0.0;
 };
-
-// CLOCK_MONOTONIC in seconds.
-double monotonic_now_s() noexcept;
 
 }  // namespace doorbench::haptic

@@ -7,6 +7,9 @@
 #include <stdexcept>
 #include <thread>
 
+#include "core/clock.h"
+#include "core/number_format.h"
+
 namespace doorbench::haptic {
 
 std::string PlaybackOptions::validate() const {
@@ -39,7 +42,16 @@ std::string PlaybackSummary::brief_report() const {
     }
     text << ")";
   }
+  if (!stop_cause.empty()) text << "\nstopped early: " << stop_cause;
   if (constraint_on_device) text << "\narc constraint, end stops and damper: on the device";
+  if (startup) {
+    const auto ms = [](double s) { return format_significant(s * 1e3, 3) + " ms"; };
+    text << "\nstart-up: the device's checks " << ms(startup->device_checks_s) << ", its start "
+         << ms(startup->device_start_s) << "; from then, the first tick after "
+         << ms(startup->first_tick_after_s) << " and its command on the device after "
+         << (std::isnan(startup->first_command_after_s) ? std::string("(never)")
+                                                        : ms(startup->first_command_after_s));
+  }
   if (timing) text << "\ntiming: " << timing->brief_report();
   if (!warning.empty()) text << "\nwarning: " << warning;
   return text.str();
@@ -52,28 +64,40 @@ Playback::Playback(HapticDevice& device, const DoorModel& model, const PlaybackO
   if (std::string problem = options_.validate(); !problem.empty()) {
     throw std::invalid_argument("playback: " + problem);
   }
-  const DeviceLimits limits = device_.limits();
-  mapping_ = std::make_unique<DoorMapping>(limits.kinematics, options_.arc,
+  mapping_ = std::make_unique<DoorMapping>(device_.limits().kinematics, options_.arc,
                                            model.geometry().handle_radius_m);
-  if (std::string problem =
-          mapping_->check_workspace(limits, -0.02, model.geometry().theta_max_rad + 0.02,
-                                    options_.loop.safety.workspace_margin_m);
-      !problem.empty()) {
-    throw std::invalid_argument("playback on " + device_.name() + ": " + problem);
-  }
   auto first = std::make_unique<PlaybackParameters>(current_model_, *mapping_,
                                                     "start: " + setup.model_source);
   const std::string description = first->description;
-  const double inertia = first->device_inertia;
+  device_inertia_ = first->device_inertia;
   if (options_.stiff_parts_on_device) {
     options_.loop.constraint_on_device = device_.render_stiff_parts_on_device(
         *mapping_, -0.02, model.geometry().theta_max_rad + 0.02);
   }
-  device_.start(inertia);
-  device_started_ = true;
+  // Everything slow comes before the device's start: its checks (after which limits() is its
+  // own), the loop with its record ring, the session file. start() then only enters the
+  // force-controlled state, just before the first tick (start_device()), so that a busy
+  // machine does not leave the device waiting for a loop that is not there yet.
+  const double checks_began_s = monotonic_now_s();
+  device_prepared_ = true;
+  device_.prepare(device_inertia_);
+  startup_.device_checks_s = monotonic_now_s() - checks_began_s;
+  if (std::string problem =
+          mapping_->check_workspace(device_.limits(), -0.02, model.geometry().theta_max_rad + 0.02,
+                                    options_.loop.safety.workspace_margin_m);
+      !problem.empty()) {
+    throw std::invalid_argument("playback on " + device_.name() + ": " + problem);
+  }
   loop_ = std::make_unique<RenderLoop>(device_, *mapping_, std::move(first), options_.loop);
   recorder_ = std::make_unique<TickRecorder>(session_path, metadata, *loop_, current_model_, setup);
   recorder_->note_parameter_set(loop_->mailbox().in_use(), description, current_model_);
+}
+
+void Playback::start_device() {
+  const double start_began_s = monotonic_now_s();
+  device_.start(device_inertia_);
+  device_started_at_s_ = monotonic_now_s();
+  startup_.device_start_s = device_started_at_s_ - start_began_s;
 }
 
 Playback::~Playback() {
@@ -82,7 +106,7 @@ Playback::~Playback() {
   } catch (...) {
     // the recorder reports its own failure on stderr
   }
-  if (device_started_) device_.stop();
+  if (device_prepared_) device_.stop();
 }
 
 std::string Playback::change_parameters(const DoorModel& model, const std::string& description) {
@@ -113,6 +137,7 @@ std::string Playback::change_parameters(const DoorModel& model, const std::strin
 PlaybackSummary Playback::run_simulated(const std::function<void(double)>& advance_device_to,
                                         const std::function<void(double)>& between_ticks) {
   if (finished_) throw std::logic_error("playback: already run");
+  start_device();
   const double period = loop_->period_s();
   const auto tick_count = static_cast<std::uint64_t>(std::llround(options_.duration_s / period));
   // After the duration, the stop ramp: at most a second more.
@@ -126,7 +151,7 @@ PlaybackSummary Playback::run_simulated(const std::function<void(double)>& advan
     if (loop_->records().size() > loop_->records().capacity() / 2) recorder_->drain();
     if (loop_->stopped()) break;
   }
-  return finish(std::nullopt, "");
+  return finish(std::nullopt, "", false);
 }
 
 PlaybackSummary Playback::run_real_time(
@@ -136,22 +161,50 @@ PlaybackSummary Playback::run_real_time(
   real_time.duration_s = options_.duration_s;
   RealTimeRunner runner(*loop_, real_time);
   recorder_->start();
+  start_device();
   runner.start();
+  bool stopped_by_caller = false;
   while (!runner.finished()) {
     std::this_thread::sleep_for(std::chrono::duration<double>(status_interval_s));
-    if (every_status && !every_status(loop_->status())) break;
+    if (every_status && !every_status(loop_->status())) {
+      stopped_by_caller = true;
+      break;
+    }
   }
   runner.stop();
-  return finish(runner.report(), runner.warning());
+  return finish(runner.report(), runner.warning(), stopped_by_caller);
 }
 
-PlaybackSummary Playback::finish(std::optional<TimingReport> timing, const std::string& warning) {
-  // The device first (zero force, its own stop state), then the file.
+std::string Playback::stop_cause() const {
+  if (!recorder_->first_trip().empty()) return recorder_->first_trip();
+  // No trip in the ticks: a fault the device met while stopping, if any.
+  return device_.stop_reason();
+}
+
+PlaybackSummary Playback::finish(std::optional<TimingReport> timing, const std::string& warning,
+                                 bool stopped_by_caller) {
+  // The device first (zero force, its own stop state), then the file, which gets the reason.
+  const double first_command_s = device_.first_command_arrival_s();
   device_.stop();
-  device_started_ = false;
+  device_prepared_ = false;
+  recorder_->stop();
+  recorder_->drain();
+  PlaybackSummary summary;
+  summary.stop_cause = stop_cause();
+  recorder_->add_event({.time_s = loop_->status().time_s,
+                        .kind = "stop",
+                        .channel = "",
+                        .detail = !summary.stop_cause.empty() ? summary.stop_cause
+                                  : stopped_by_caller
+                                      ? std::string("end: stopped by the operator")
+                                      : std::string("end: the run's duration was played")});
   recorder_->close();
   finished_ = true;
-  PlaybackSummary summary;
+  if (timing) {
+    summary.startup = startup_;
+    summary.startup->first_tick_after_s = timing->first_tick_s - device_started_at_s_;
+    summary.startup->first_command_after_s = first_command_s - device_started_at_s_;
+  }
   summary.session_path = recorder_->path();
   const RenderLoopCounters counters = loop_->counters();
   summary.ticks = counters.ticks;

@@ -36,6 +36,16 @@ struct PlaybackOptions {
   std::string validate() const;
 };
 
+// How long a real-time run took to begin.
+struct StartupTiming {
+  double device_checks_s = kNaN;  // HapticDevice::prepare(): connect, checks, homing
+  double device_start_s = kNaN;   // HapticDevice::start(): into the force-controlled state
+  // From the end of start() (the device in its force state, zero force) to the render loop's
+  // first tick, and to that tick's command taking effect on the device (NaN: it never did).
+  double first_tick_after_s = kNaN;
+  double first_command_after_s = kNaN;
+};
+
 struct PlaybackSummary {
   std::filesystem::path session_path;
   std::uint64_t ticks = 0;
@@ -45,7 +55,14 @@ struct PlaybackSummary {
   std::uint64_t clipped_ticks = 0, records_dropped = 0, parameter_changes = 0;
   SafetyState final_state = SafetyState::kStarting;
   std::vector<std::string> safety_events;  // names, in order, e.g. "start_ramp_done"
+  // Why the run ended before it was asked to: the first trip with its figure, a lost link with
+  // the device's own text ("link_lost: hapticmaster://...: watchdog: the render loop sent no
+  // command for 0.13 s (limit 0.1 s); the device was stopped (zero force, state stop)"), or a
+  // stop that did not reach the device. "" when it ended as asked (its duration played, or the
+  // caller stopped it). The session's "stop" event says the same.
+  std::string stop_cause;
   std::optional<TimingReport> timing;      // real time only
+  std::optional<StartupTiming> startup;    // real time only
   std::string warning;                     // e.g. no SCHED_FIFO
   bool constraint_on_device = false;       // the device held the arc with its own elements
   std::string brief_report() const;
@@ -53,9 +70,10 @@ struct PlaybackSummary {
 
 class Playback {
  public:
-  // Starts the device with the model's inertia, builds the loop and creates the session.
-  // Throws DeviceError (the device), std::invalid_argument (options, an unplayable model: the
-  // message says why) or SessionError (the file).
+  // Prepares the device with the model's inertia (its checks: HapticDevice::prepare), builds
+  // the loop and creates the session; the run_*() calls start the device just before the first
+  // tick. Throws DeviceError (the device), std::invalid_argument (options, an unplayable model,
+  // a door outside the device's workspace: the message says why) or SessionError (the file).
   Playback(HapticDevice& device, const DoorModel& model, const PlaybackOptions& options,
            const std::filesystem::path& session_path, const SessionMetadata& metadata,
            const PlaybackSetup& setup);
@@ -82,7 +100,12 @@ class Playback {
                                 double status_interval_s = 0.1);
 
  private:
-  PlaybackSummary finish(std::optional<TimingReport> timing, const std::string& warning);
+  PlaybackSummary finish(std::optional<TimingReport> timing, const std::string& warning,
+                         bool stopped_by_caller);
+  // Why the run ended (PlaybackSummary::stop_cause), after the device's stop().
+  std::string stop_cause() const;
+  // The device's start() (its force state), timed.
+  void start_device();
 
   HapticDevice& device_;
   PlaybackOptions options_;
@@ -90,7 +113,10 @@ class Playback {
   std::unique_ptr<RenderLoop> loop_;
   std::unique_ptr<TickRecorder> recorder_;
   DoorModel current_model_;
-  bool device_started_ = false;
+  bool device_prepared_ = false;       // prepare() was called: stop() is owed
+  double device_inertia_ = 0.0;        // what the first parameter set renders on the device
+  StartupTiming startup_;              // the checks' and the start's times
+  double device_started_at_s_ = kNaN;  // monotonic_now_s() when start() returned
   bool finished_ = false;
   // Tracked by the recorder's side from the records it drains.
   double max_force_ = 0.0, max_radial_ = 0.0, max_axial_ = 0.0;

@@ -105,6 +105,7 @@ void RealTimeRunner::start() {
   quit_.store(false);
   finished_.store(false);
   start_time_s_ = monotonic_now_s();
+  first_tick_s_.store(kNaN, std::memory_order_release);
   thread_ = std::thread([this] { run(); });
   if (options_.request_fifo) {
     sched_param parameter{};
@@ -150,6 +151,8 @@ void RealTimeRunner::run() noexcept {
     lateness_->add(static_cast<double>(tick_start_ns - deadline_ns) * 1e-3);
     if (previous_start_ns >= 0) {
       interval_->add(static_cast<double>(tick_start_ns - previous_start_ns) * 1e-3);
+    } else {
+      first_tick_s_.store(static_cast<double>(tick_start_ns) * 1e-9, std::memory_order_release);
     }
     previous_start_ns = tick_start_ns;
     const double loop_time_s = static_cast<double>(tick_start_ns) * 1e-9 - start_s;
@@ -187,6 +190,7 @@ TimingReport RealTimeRunner::report() const {
   report.interval = interval_->statistics();
   report.tick_cost = cost_->statistics();
   report.intervals_over_5ms = interval_->count_at_least(5000);
+  report.first_tick_s = first_tick_s_.load(std::memory_order_acquire);
   report.fifo = fifo_;
   return report;
 }

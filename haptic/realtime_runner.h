@@ -47,6 +47,7 @@ struct TimingReport {
   // Intervals between tick starts longer than 5 ms (what the safety layer's default
   // max_tick_interval_s calls a missed deadline).
   std::uint64_t intervals_over_5ms = 0;
+  double first_tick_s = kNaN;  // monotonic_now_s() at the first tick's start; NaN before it
   bool fifo = false;
   std::string brief_report() const;
 };
@@ -93,6 +94,7 @@ class RealTimeRunner {
   std::unique_ptr<Histogram> lateness_, interval_, cost_;
   std::atomic<std::uint64_t> ticks_{0}, skipped_{0};
   std::atomic<double> elapsed_s_{0.0};
+  std::atomic<double> first_tick_s_{kNaN};
 };
 
 }  // namespace doorbench::haptic

@@ -86,6 +86,10 @@ class RenderLoop {
   double period_s() const { return 1.0 / options_.rate_hz; }
   const DoorMapping& mapping() const { return mapping_; }
   DeviceLimits device_limits() const { return limits_; }
+  // For the recorder's descriptions of events (any thread: SafetyLayer::describe() and
+  // HapticDevice::stop_reason() are not the tick's calls).
+  const SafetyLayer& safety() const { return safety_; }
+  const HapticDevice& device() const { return device_; }
 
   // Control side: checks a new set against the device and the loop period and publishes it;
   // returns "" and the id through `id`, or the reason it was refused (nothing published).

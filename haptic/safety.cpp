@@ -158,6 +158,74 @@ std::string_view event_meaning(std::uint32_t single_event_bit) {
   }
 }
 
+std::string SafetyLayer::describe(std::uint32_t single_event_bit, const EventFacts& facts) const {
+  const bool rotary = limits_.kinematics == Kinematics::kRotary1;
+  const auto figure = [](double value) { return format_significant(value, 3); };
+  const DeviceSample& sample = facts.sample;
+  std::string text = std::string(event_name(single_event_bit)).append(": ");
+  switch (single_event_bit) {
+    case kEventVelocityTrip: {
+      const double speed = rotary ? std::abs(sample.velocity.x()) : safe_norm(sample.velocity);
+      const char* unit = rotary ? " rad/s" : " m/s";
+      return text.append("the device moved at ")
+          .append(figure(speed))
+          .append(unit)
+          .append(", above the trip speed of ")
+          .append(figure(velocity_trip_))
+          .append(unit)
+          .append(" (velocity_trip, or the device's max_velocity)");
+    }
+    case kEventWorkspaceTrip: {
+      const double margin = options_.workspace_margin_m;
+      const char* axes[3] = {"x", "y", "z"};
+      for (int axis = 0; axis < (rotary ? 1 : 3); ++axis) {
+        const double low = limits_.workspace_min[axis] + margin;
+        const double high = limits_.workspace_max[axis] - margin;
+        const double at = sample.position[axis];
+        if (at >= low && at <= high) continue;
+        const char* unit = rotary ? " rad" : " m";
+        const double bound = at < low ? low : high;
+        return text
+            .append(rotary ? "the device's angle" : std::string("the device's ") + axes[axis])
+            .append(" reached ")
+            .append(format_significant(at, 4))
+            .append(unit)
+            .append(", ")
+            .append(figure(std::abs(at - bound) * 1e3))
+            .append(rotary ? " mrad" : " mm")
+            .append(" beyond ")
+            .append(format_significant(bound, 4))
+            .append(unit)
+            .append(" (its workspace less workspace_margin_m ")
+            .append(figure(margin))
+            .append(" m)");
+      }
+      break;
+    }
+    case kEventDeadlineMiss:
+      if (!(facts.interval_s >= 0.0)) break;
+      return text.append(figure(facts.interval_s))
+          .append(" s between two ticks, above max_tick_stall_s ")
+          .append(figure(options_.max_tick_stall_s))
+          .append(" s: the tick stalled");
+    case kEventLateTick:
+      if (!(facts.interval_s >= 0.0)) break;
+      return text.append(figure(facts.interval_s * 1e3))
+          .append(" ms between two ticks, above max_tick_interval_s ")
+          .append(figure(options_.max_tick_interval_s * 1e3))
+          .append(" ms: the device held the last force meanwhile; counted, playback goes on");
+    case kEventDeviceStalled:
+      return text.append("the device's reading did not change for ")
+          .append(std::to_string(facts.stale_ticks))
+          .append(" ticks (max_stale_ticks ")
+          .append(std::to_string(options_.max_stale_ticks))
+          .append(")");
+    default:
+      break;
+  }
+  return text.append(event_meaning(single_event_bit));
+}
+
 SafetyLayer::SafetyLayer(const SafetyOptions& options, const DeviceLimits& limits)
     : options_(options), limits_(limits) {
   if (std::string problem = options_.validate(); !problem.empty()) {

@@ -72,10 +72,22 @@ enum SafetyEvent : std::uint32_t {
   kEventStopped = 1u << 11,         // the force has reached zero after a trip or stop
   kEventLateTick = 1u << 12,        // a gap above max_tick_interval_s: counted, not a trip
 };
+// The events that end a run: each begins the ramp down (a stop request does too, but it is
+// asked for, not a fault).
+inline constexpr std::uint32_t kTripEvents = kEventVelocityTrip | kEventWorkspaceTrip |
+                                             kEventDeadlineMiss | kEventDeviceStalled |
+                                             kEventLinkLost | kEventNonFiniteInput;
 // "velocity_trip", "deadline_miss", ... for a single bit; "" otherwise.
 std::string_view event_name(std::uint32_t single_event_bit);
 // A sentence for the session's event detail, e.g. what the limit is.
 std::string_view event_meaning(std::uint32_t single_event_bit);
+
+// What a tick's record shows of the moment an event began: enough to give a trip its figure.
+struct EventFacts {
+  double interval_s = 0.0;  // since the previous tick (NaN when there was none)
+  DeviceSample sample;      // the reading the tick acted on
+  int stale_ticks = 0;      // ticks in a row whose reading had the same sequence number
+};
 
 struct SafetyInput {
   double time_s = 0.0;                // this tick's time
@@ -102,6 +114,12 @@ class SafetyLayer {
   void request_stop() noexcept;
   SafetyState state() const noexcept { return state_; }
   double force_limit() const noexcept { return force_limit_; }
+  double velocity_trip() const noexcept { return velocity_trip_; }
+  // One line for the session and the user: event_name(bit), then the event's figure against
+  // its limit where it has one ("velocity_trip: the device moved at 1.23 m/s, above the trip
+  // speed of 1 m/s (velocity_trip, or the device's max_velocity)"), else event_meaning(bit).
+  // Not real-time (it builds text); any thread: it reads only what the constructor set.
+  std::string describe(std::uint32_t single_event_bit, const EventFacts& facts) const;
   double force_rate_limit() const noexcept { return force_rate_limit_; }
 
  private:

@@ -1,7 +1,5 @@
 #include "haptic/simulated_hapticmaster.h"
 
-#include <time.h>
-
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
@@ -9,17 +7,13 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/clock.h"
+
 namespace doorbench::haptic {
 namespace {
 
 bool positive(double value) {
   return value > 0.0 && std::isfinite(value);
-}
-
-double monotonic_s() noexcept {
-  timespec now{};
-  clock_gettime(CLOCK_MONOTONIC, &now);
-  return static_cast<double>(now.tv_sec) + 1e-9 * static_cast<double>(now.tv_nsec);
 }
 
 }  // namespace
@@ -77,7 +71,7 @@ SimulatedDevice::SimulatedDevice(const SimulatedDeviceOptions& options)
 }
 
 double SimulatedDevice::now_s() const noexcept {
-  return options_.clock == SimClock::kRealTime ? monotonic_s() : truth_.time_s;
+  return options_.clock == SimClock::kRealTime ? monotonic_now_s() : truth_.time_s;
 }
 
 double SimulatedDevice::time_s() const noexcept {
@@ -98,7 +92,7 @@ void SimulatedDevice::start(double inertia) {
   const std::uint64_t keep_sequence = sequence_;
   truth_ = SimulatedTruth{};
   sequence_ = keep_sequence;  // a restarted device keeps counting
-  start_time_s_ = options_.clock == SimClock::kRealTime ? monotonic_s() : options_.start_time_s;
+  start_time_s_ = options_.clock == SimClock::kRealTime ? monotonic_now_s() : options_.start_time_s;
   truth_.time_s = start_time_s_;
   truth_.inertia = limits.max_inertia > 0.0 ? inertia : 0.0;
   last_inertia_ = truth_.inertia;
@@ -107,11 +101,13 @@ void SimulatedDevice::start(double inertia) {
   stalled_ = false;
   stall_until_s_ = -1.0;
   link_lost_ = false;
+  first_command_s_.store(kNaN, std::memory_order_release);
   lose_link_at_s_ = 1e300;
   frozen_valid_ = false;
   brake_requested_ = false;
   measured_force_ = Vec3::Zero();
   reset_state();
+  clock_waiting_ = options_.clock == SimClock::kRealTime;
   started_ = true;
   ever_started_ = true;
 }
@@ -128,9 +124,18 @@ void SimulatedDevice::stall_between(double from_s, double until_s) noexcept {
   stall_until_s_ = until_s;
 }
 
+std::string SimulatedDevice::stop_reason() const {
+  return link_lost_.load(std::memory_order_relaxed)
+             ? name() + ": the link was lost (a simulated fault)"
+             : std::string();
+}
+
 void SimulatedDevice::push_command(const Vec3& force, double inertia) noexcept {
   if (!started_ || link_lost_) return;
   const double t = now_s();
+  if (options_.clock == SimClock::kRealTime && std::isnan(first_command_s_.load())) {
+    first_command_s_.store(t + options_.control_delay_s, std::memory_order_release);
+  }
   const bool in_stall = stalled_ || (t >= stall_from_s_ && t < stall_until_s_);
   if (in_stall) {
     ++truth_.dropped_commands;
@@ -192,8 +197,15 @@ void SimulatedDevice::advance_to(double time_s) noexcept {
 }
 
 DeviceSample SimulatedDevice::read() noexcept {
+  if (clock_waiting_) {
+    // The first read after start(): the simulated time, the hand's cycle and the pushes begin
+    // now (the virtual user begins when the door is rendered, however long the start took).
+    start_time_s_ = truth_.time_s = monotonic_now_s();
+    reset_state();
+    clock_waiting_ = false;
+  }
   if (options_.clock == SimClock::kRealTime) {
-    const double behind_s = monotonic_s() - truth_.time_s;
+    const double behind_s = monotonic_now_s() - truth_.time_s;
     if (ever_started_ && behind_s > dt_s_) {
       auto steps = static_cast<std::uint64_t>(behind_s / dt_s_);
       const auto cap = static_cast<std::uint64_t>(options_.max_steps_per_read);

@@ -9,12 +9,15 @@
 //    read() returns the state at the current simulated time and never moves it;
 //  - kRealTime: read() first advances the simulation to CLOCK_MONOTONIC now (computation
 //    only, at most max_steps_per_read servo steps per call; time beyond that is skipped and
-//    counted in the truth's skipped_steps).
+//    counted in the truth's skipped_steps). The simulated time begins at the first read()
+//    after start(), not at start(): the virtual user starts when the render loop does, as
+//    long as the start-up (the session file, the threads) took.
 // The device integrates its own dynamics at servo_rate_hz between the owner's ticks.
 //
 // Thread safety: one thread makes every call (the owner's tick thread in both modes, or the
 // set-up thread while no tick runs). read(), command_force(), command_inertia(),
 // advance_to() and truth() never allocate, lock or do I/O.
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <random>
@@ -112,6 +115,12 @@ class SimulatedDevice : public HapticDevice {
   // Brakes like the real device's "stop" state: from the next servo step the command is zero
   // and the end-effector stands still (velocity zero) until stop() and start().
   void brake() noexcept override { brake_requested_ = true; }
+  // "NAME: the link was lost (a simulated fault)" after lose_link() acted, else "".
+  std::string stop_reason() const override;
+  // Real-time clock: when the first command after start() acts (its control delay passed).
+  double first_command_arrival_s() const noexcept override {
+    return first_command_s_.load(std::memory_order_acquire);
+  }
 
   // Manual time: integrate up to `time_s` (no-op when it is not ahead). Also usable in
   // real-time mode to catch up explicitly; the work cap does not apply here.
@@ -183,11 +192,13 @@ class SimulatedDevice : public HapticDevice {
   double last_inertia_ = 0.0;
   bool stalled_ = false;
   double stall_from_s_ = 0.0, stall_until_s_ = -1.0;
-  bool link_lost_ = false;
+  std::atomic<bool> link_lost_{false};  // read by stop_reason() from other threads
+  std::atomic<double> first_command_s_{kNaN};
   double lose_link_at_s_ = 1e300;
   bool frozen_valid_ = false;
   DeviceSample frozen_;
   bool brake_requested_ = false;
+  bool clock_waiting_ = false;  // real time: the clock begins at the first read()
 };
 
 struct SimulatedHapticMasterOptions {

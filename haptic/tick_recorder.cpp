@@ -1,6 +1,7 @@
 #include "haptic/tick_recorder.h"
 
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <limits>
 #include <sstream>
@@ -151,6 +152,32 @@ void TickRecorder::flush_buffers() {
   times_.clear();
 }
 
+void TickRecorder::add_safety_events(const TickRecord& record, std::vector<SessionEvent>& events) {
+  const bool same_reading =
+      !std::isnan(previous_time_s_) && record.device_sequence == previous_sequence_;
+  stale_ticks_ = same_reading ? stale_ticks_ + 1 : 0;
+  EventFacts facts;
+  facts.interval_s = record.time_s - previous_time_s_;
+  facts.sample.position = record.position;
+  facts.sample.velocity = record.velocity;
+  facts.sample.sequence = record.device_sequence;
+  facts.stale_ticks = stale_ticks_;
+  previous_time_s_ = record.time_s;
+  previous_sequence_ = record.device_sequence;
+  for (std::uint32_t bit = 1; bit != 0 && bit <= record.events; bit <<= 1) {
+    if ((record.events & bit) == 0) continue;
+    std::string detail = loop_.safety().describe(bit, facts);
+    if (bit == kEventLinkLost) {
+      if (const std::string reason = loop_.device().stop_reason(); !reason.empty()) {
+        detail = std::string(event_name(bit)).append(": ").append(reason);
+      }
+    }
+    if ((bit & kTripEvents) != 0 && first_trip_.empty()) first_trip_ = detail;
+    events.push_back(
+        {.time_s = record.time_s, .kind = "safety", .channel = "", .detail = std::move(detail)});
+  }
+}
+
 std::size_t TickRecorder::drain() {
   if (closed_) return 0;
   std::size_t count = 0;
@@ -176,15 +203,7 @@ std::size_t TickRecorder::drain() {
           {.time_s = record->time_s, .kind = "parameters", .channel = "", .detail = detail});
       last_parameter_set_ = record->parameter_set;
     }
-    for (std::uint32_t bit = 1; bit != 0 && bit <= record->events; bit <<= 1) {
-      if (record->events & bit) {
-        events.push_back(
-            {.time_s = record->time_s,
-             .kind = "safety",
-             .channel = "",
-             .detail = std::string(event_name(bit)).append(": ").append(event_meaning(bit))});
-      }
-    }
+    add_safety_events(*record, events);
     ring.release();
     ++count;
     if (times_.size() >= kBufferTicks) flush_buffers();

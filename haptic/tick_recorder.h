@@ -59,10 +59,15 @@ class TickRecorder {
   void close();
 
   std::uint64_t ticks_written() const { return ticks_written_.load(std::memory_order_relaxed); }
+  // The first trip's session event (SafetyLayer::describe(); a lost link with the device's
+  // stop_reason()), or "" while none came. After close(), or from the thread that drains.
+  const std::string& first_trip() const { return first_trip_; }
   const std::filesystem::path& path() const { return path_; }
 
  private:
   void flush_buffers();
+  // The record's safety events, each described with its figure (SafetyLayer::describe()).
+  void add_safety_events(const TickRecord& record, std::vector<SessionEvent>& events);
 
   std::filesystem::path path_;
   RenderLoop& loop_;
@@ -76,6 +81,11 @@ class TickRecorder {
   std::vector<double> times_;
   int term_count_ = 0;
   int last_parameter_set_ = 0;
+  // The facts of the previous record, for the figures of the next one's events.
+  double previous_time_s_ = kNaN;
+  std::uint64_t previous_sequence_ = 0;
+  int stale_ticks_ = 0;
+  std::string first_trip_;
   std::mutex mutex_;  // guards pending_events_, sets_ and the writer between threads
   std::vector<SessionEvent> pending_events_;
   struct KeptSet {

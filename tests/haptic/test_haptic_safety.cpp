@@ -126,6 +126,55 @@ TEST_CASE("Every event bit has a name and a meaning", "[haptic][safety]") {
   CHECK(to_string(SafetyState::kRampingDown) == "ramping_down");
 }
 
+TEST_CASE("Each event is described with its figure against its limit, word for word",
+          "[haptic][safety]") {
+  DeviceLimits limits;  // a ±0.2 m box, 1 m/s
+  SafetyOptions options;
+  options.velocity_trip = 0.5;
+  const SafetyLayer layer(options, limits);
+  EventFacts facts;
+  facts.sample.velocity = Vec3(0.3, 0.4, 0.12);  // 0.514 m/s
+  facts.sample.position = Vec3(0.0, -0.1953, 0.0);
+  facts.interval_s = 0.1314;
+  facts.stale_ticks = 50;
+  CHECK(layer.describe(kEventVelocityTrip, facts) ==
+        "velocity_trip: the device moved at 0.514 m/s, above the trip speed of 0.5 m/s "
+        "(velocity_trip, or the device's max_velocity)");
+  CHECK(layer.describe(kEventWorkspaceTrip, facts) ==
+        "workspace_trip: the device's y reached -0.1953 m, 0.3 mm beyond -0.195 m (its "
+        "workspace less workspace_margin_m 0.005 m)");
+  CHECK(layer.describe(kEventDeadlineMiss, facts) ==
+        "deadline_miss: 0.131 s between two ticks, above max_tick_stall_s 0.1 s: the tick "
+        "stalled");
+  facts.interval_s = 0.0062;
+  CHECK(layer.describe(kEventLateTick, facts) ==
+        "late_tick: 6.2 ms between two ticks, above max_tick_interval_s 5 ms: the device held "
+        "the last force meanwhile; counted, playback goes on");
+  CHECK(layer.describe(kEventDeviceStalled, facts) ==
+        "device_stalled: the device's reading did not change for 50 ticks (max_stale_ticks 50)");
+  // Without a figure: the event's meaning.
+  CHECK(layer.describe(kEventLinkLost, facts) ==
+        "link_lost: trip: the device reported its link lost");
+  facts.interval_s = kNaN;  // the first tick has no interval
+  CHECK(layer.describe(kEventDeadlineMiss, facts) ==
+        "deadline_miss: " + std::string(event_meaning(kEventDeadlineMiss)));
+  // The rotary device's units.
+  DeviceLimits rotary;
+  rotary.kinematics = Kinematics::kRotary1;
+  rotary.max_velocity = 6.0;
+  rotary.workspace_min = Vec3(-0.3, 0, 0);
+  rotary.workspace_max = Vec3(1.9, 0, 0);
+  const SafetyLayer turning(SafetyOptions{}, rotary);
+  facts.sample.velocity = Vec3(-2.5, 0, 0);
+  facts.sample.position = Vec3(1.8999, 0, 0);
+  CHECK(turning.describe(kEventVelocityTrip, facts) ==
+        "velocity_trip: the device moved at 2.5 rad/s, above the trip speed of 1 rad/s "
+        "(velocity_trip, or the device's max_velocity)");
+  CHECK(turning.describe(kEventWorkspaceTrip, facts) ==
+        "workspace_trip: the device's angle reached 1.9 rad, 4.9 mrad beyond 1.895 rad (its "
+        "workspace less workspace_margin_m 0.005 m)");
+}
+
 TEST_CASE("The start-up ramp scales the force linearly from 0 to 1", "[haptic][safety]") {
   SafetyOptions options;
   options.startup_ramp_s = 0.5;

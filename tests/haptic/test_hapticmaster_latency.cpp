@@ -39,7 +39,6 @@ Held play_with_latency(double latency_ms, bool on_device, const std::string& pus
                                           perceptual::Control::kHeaviness, heaviness);
   PlaybackOptions options;
   options.duration_s = duration_s;
-  options.real_time.request_fifo = false;
   options.stiff_parts_on_device = on_device;
   // This test is about the rendering: a loaded machine's late ticks must not end it.
   options.loop.safety.max_tick_stall_s = 1.0;
@@ -126,7 +125,6 @@ TEST_CASE("hapticmaster fail-safe: a velocity trip in playback brakes the device
   const DoorModel model = reference_model(ModelKind::kSensory);
   PlaybackOptions options;
   options.duration_s = 5.0;
-  options.real_time.request_fifo = false;
   options.loop.safety.velocity_trip = 0.05;  // m/s
   options.loop.safety.max_tick_stall_s = 1.0;
   options.loop.safety.max_stale_ticks = 5000;

@@ -212,13 +212,19 @@ TEST_CASE("playback: ticks, parameter changes and events stream into a session a
   options.duration_s = 4.0;
   const std::filesystem::path path = dir.path / "played.h5";
   PlaybackSummary summary;
+  bool started_in_run = false;
   {
     Playback playback(device, model, options, path, metadata(),
                       PlaybackSetup{"test:rotary", "reference door", ""});
-    CHECK(device.started);
+    // The device starts with the run, just before its first tick, not when the playback is
+    // built (the session file and the loop come first).
+    CHECK_FALSE(device.started);
     bool changed = false;
     summary = playback.run_simulated(
-        [&](double t) { device.advance_to(t); },
+        [&](double t) {
+          started_in_run = started_in_run || device.started;
+          device.advance_to(t);
+        },
         [&](double t) {
           if (!changed && t >= 2.0) {
             const DoorModel lighter =
@@ -228,6 +234,7 @@ TEST_CASE("playback: ticks, parameter changes and events stream into a session a
           }
         });
   }
+  CHECK(started_in_run);
   CHECK(device.stopped);
   CHECK(summary.ticks >= 4000);
   CHECK(summary.parameter_changes == 1);

@@ -349,6 +349,13 @@ TEST_CASE("sim hapticmaster: the real-time clock follows CLOCK_MONOTONIC with a 
   options.device.clock = SimClock::kRealTime;
   SimulatedHapticMaster device(options);
   device.start(5.0);
+  // The clock begins at the first read, however long after start() it comes: the virtual
+  // user starts with the render loop.
+  sleep_s(0.2);
+  const DeviceSample first = device.read();
+  CHECK(device.truth().steps == 0);
+  CHECK(device.truth().skipped_steps == 0);
+  CHECK(first.time_s > monotonic_now_s() - 0.05);
   sleep_s(0.02);
   const DeviceSample sample = device.read();
   CHECK(sample.time_s <= monotonic_now_s());
@@ -359,6 +366,7 @@ TEST_CASE("sim hapticmaster: the real-time clock follows CLOCK_MONOTONIC with a 
   options.device.max_steps_per_read = 10;
   SimulatedHapticMaster capped(options);
   capped.start(5.0);
+  capped.read();
   sleep_s(0.02);
   capped.read();
   CHECK(capped.truth().steps == 10);
@@ -614,6 +622,9 @@ TEST_CASE("sim rotary: deterministic with a seed, and the real-time clock",
   options.device.clock = SimClock::kRealTime;
   SimulatedRotaryDevice device(options);
   device.start(0.95);
+  sleep_s(0.1);
+  device.read();  // the clock begins here
+  CHECK(device.truth().steps == 0);
   sleep_s(0.02);
   CHECK(device.read().time_s > monotonic_now_s() - 0.005);
   CHECK(device.truth().steps >= 40);

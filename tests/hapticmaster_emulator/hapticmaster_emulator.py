@@ -40,8 +40,9 @@ Test-only commands (not the device's): "emulator extforce [x,y,z]" sets the user
 Misbehaviour for tests (each happens once, on the connection that reaches it; later
 connections are served normally): --drop-after N closes the connection at the (N+1)-th
 command; --stall-after N stops answering it (the connection stays open); --garbage-after N
-answers it with a corrupt header; --fail COMMAND=TEXT answers the exact command COMMAND with
-"--- ERROR: TEXT" (every time). --latency-ms L [--jitter-ms J] delays each request by
+answers it with a corrupt header; --fail-after N=TEXT answers it with "--- ERROR: TEXT" (a
+device refusing a command mid-session); --fail COMMAND=TEXT answers the exact command COMMAND
+with "--- ERROR: TEXT" (every time). --latency-ms L [--jitter-ms J] delays each request by
 (L + U(0, J))/2 before it acts and its reply by as much again: a network's round trip.
 --number-format FORMAT replies every number (alone or in a vector) as printf's FORMAT
 would write it ("%g": six significant digits; default: full precision).
@@ -400,6 +401,10 @@ def serve(conn, device, args, faults, log_file):
                 device.event("fault garbage")
                 conn.sendall(b"\xff\xff\xff\xffgarbage")
                 continue
+            if fault == "fail":
+                device.event("fault fail")
+                replies.append("--- ERROR: " + args.fail_after_text)
+                continue
             with device.lock:
                 if log_file:
                     log_file.write(command + "\n")
@@ -433,7 +438,7 @@ class Faults:
         self.lock = threading.Lock()
         self.count = 0
         self.pending = {}
-        for name in ("drop", "stall", "garbage"):
+        for name in ("drop", "stall", "garbage", "fail"):
             after = getattr(args, name + "_after")
             if after is not None:
                 self.pending[name] = after
@@ -456,6 +461,7 @@ def main():
     parser.add_argument("--drop-after", type=int)
     parser.add_argument("--stall-after", type=int)
     parser.add_argument("--garbage-after", type=int)
+    parser.add_argument("--fail-after", metavar="N=TEXT")
     parser.add_argument("--fail", action="append", default=[], metavar="COMMAND=TEXT")
     parser.add_argument("--answer", action="append", default=[], metavar="COMMAND=TEXT")
     parser.add_argument("--events", help="append time-stamped events to this file")
@@ -475,6 +481,10 @@ def main():
         args.number_format % 1.0  # a bad format fails here, not at the first reply
         NUMBER_FORMAT = args.number_format
     args.fail = dict(item.partition("=")[::2] for item in args.fail)
+    args.fail_after_text = ""
+    if args.fail_after is not None:
+        count, _, args.fail_after_text = args.fail_after.partition("=")
+        args.fail_after = int(count)
     args.answer = dict(item.partition("=")[::2] for item in args.answer)
 
     device = Device(parse_vector(args.ext_force), args)
