@@ -17,6 +17,7 @@
 #include "app/commands.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
+#include "core/number_format.h"
 #include "haptic/ab_trials.h"
 
 namespace doorbench::app {
@@ -35,6 +36,7 @@ struct AbCommandOptions {
   std::string out_dir;
   std::string answers_path;
   std::vector<std::string> labels{"1", "2"};
+  bool real_time = false;
 };
 
 // "preference", "identify-real", "rating" (K = 7) or "rating:K".
@@ -58,10 +60,8 @@ void parse_question(const std::string& text, haptic::AbOptions& options) {
   }
 }
 
-// The presentation player for --device. The simulated device (sim) plays a virtual variant
-// as the virtual hand on the model (analysis' simulator) and the real door as a recording of
-// the rig when the rig is simulated. Device playback (hapticmaster://HOST) comes with the
-// render loop: this is where it plugs in.
+// The presentation player for --device: a virtual variant is rendered on the device by the
+// render loop (play_model), the real door recorded from the rig.
 haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& options) {
   const std::optional<ModelKind> kind = parse_model_kind(options.model);
   if (!kind) throw UsageError("--model must be sensory or physical, not " + options.model);
@@ -70,6 +70,12 @@ haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& opti
     throw UsageError("--device must be sim, sim:rotary or hapticmaster://HOST[:PORT], not " +
                      options.device);
   }
+  if (options.real_time && !simulated) {
+    throw UsageError(
+        "--real-time is for a simulated device (sim, sim:rotary); a HapticMaster "
+        "always plays in real time");
+  }
+  const bool simulated_time = simulated && !options.real_time;
   // Loaded once, before the first trial, so that a bad file stops the run at once.
   auto models = std::make_shared<std::map<std::string, DoorModel>>();
   models->emplace("B", doorbench::load_model(*kind, options.params_b, ""));
@@ -80,7 +86,7 @@ haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& opti
     rig = std::make_shared<RigDefinition>(load_rig(options.real_rig));
   }
   const std::string device = options.device;
-  return [models, rig, device, simulated](const haptic::PresentationRequest& request) {
+  return [models, rig, device, simulated_time](const haptic::PresentationRequest& request) {
     const std::string notes = "doorbench ab: trial " + std::to_string(request.trial) +
                               ", presentation " + std::to_string(request.position);
     if (request.variant == "real") {
@@ -94,10 +100,11 @@ haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& opti
       return;
     }
     // The virtual door rendered on the device. A simulated device (with its virtual user)
-    // runs in simulated time; a HapticMaster in real time, with the person at its handle.
+    // runs in simulated time unless --real-time; a HapticMaster in real time, with the person
+    // at its handle.
     PlayRequest play;
     play.device.uri = device;
-    play.device.simulated_time = simulated;
+    play.device.simulated_time = simulated_time;
     // The virtual user's open-close cycle: the presentation's, between 4 s (faster would be a
     // slam the velocity trip stops) and 10 s.
     play.device.hand.duration_s = std::clamp(request.duration_s, 4.0, 10.0);
@@ -110,11 +117,10 @@ haptic::PresentationPlayer make_presentation_player(const AbCommandOptions& opti
     play.notes = notes + ", variant " + request.variant + " (" + request.params_path + ")";
     play.show_status = false;
     const haptic::PlaybackSummary summary = play_model(models->at(request.variant), play);
-    if (summary.final_state == haptic::SafetyState::kStopped &&
-        summary.duration_s + 0.05 < request.duration_s) {
-      throw std::runtime_error("the safety layer stopped the presentation after " +
-                               std::to_string(summary.duration_s) +
-                               " s: " + summary.brief_report());
+    if (!summary.stop_cause.empty()) {
+      throw std::runtime_error("the presentation stopped after " +
+                               format_significant(summary.duration_s, 3) +
+                               " s: " + summary.stop_cause);
     }
   };
 }
@@ -196,6 +202,9 @@ void add_ab_command(CLI::App& app, Action& action) {
   ab->add_option("--labels", options->labels,
                  "The two words the presentations are called and answered by (default 1 2)")
       ->expected(2);
+  ab->add_flag("--real-time", options->real_time,
+               "Play a simulated device in real time, as a HapticMaster would be, instead of "
+               "simulated time");
   ab->add_option("--answers", options->answers_path,
                  "Answers one per line for a scripted run (default: read from stdin)");
   ab->callback([options, &action] { action = [options] { run_ab_command(*options); }; });

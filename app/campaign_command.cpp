@@ -21,6 +21,7 @@
 #include "app/commands.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
+#include "core/number_format.h"
 #include "haptic/tuning_keys.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
@@ -46,6 +47,7 @@ struct RunCommandOptions {
   std::string respondent = "person";
   std::string answers_path;
   std::optional<double> presentation_s;
+  bool real_time = false;
   bool redo = false;
 };
 
@@ -140,7 +142,6 @@ bool is_tuning_key(char key) {
 DoorModel play_tuning(PlayRequest play, const DoorModel& start, study::LineRespondent& person, int trial) {
   const std::string at_trial = "trial " + std::to_string(trial);
   auto tuning = std::make_shared<PresentationTuning>(start);
-  bool ended_by_person = false;
   std::string keys;
   std::size_t pressed = 0;
   if (person.interactive()) {
@@ -148,12 +149,9 @@ DoorModel play_tuning(PlayRequest play, const DoorModel& start, study::LineRespo
     std::cerr << at_trial << ": tune with the keys, Enter when done\n" << haptic::key_map_text();
     play.device.simulated_time = false;
     play.playback.duration_s = 600.0;
-    play.control = [terminal, tuning, &ended_by_person](haptic::Playback& playback) {
+    play.control = [terminal, tuning](haptic::Playback& playback) {
       while (const std::optional<char> key = terminal->poll(0.0)) {
-        if (*key == '\n' || *key == '\r') {
-          ended_by_person = true;
-          return false;
-        }
+        if (*key == '\n' || *key == '\r') return false;  // the person ends the tuning
         tuning->press(playback, *key);
       }
       return true;
@@ -177,10 +175,10 @@ DoorModel play_tuning(PlayRequest play, const DoorModel& start, study::LineRespo
     };
   }
   const haptic::PlaybackSummary summary = play_model(start, play);
-  if (!ended_by_person && summary.final_state == haptic::SafetyState::kStopped &&
-      summary.duration_s + 0.05 < play.playback.duration_s) {
-    throw std::runtime_error("the safety layer stopped the tuning after " + std::to_string(summary.duration_s) +
-                             " s: " + summary.brief_report());
+  if (!summary.stop_cause.empty()) {
+    throw std::runtime_error("the tuning stopped after " +
+                             format_significant(summary.duration_s, 3) +
+                             " s: " + summary.stop_cause);
   }
   if (pressed < keys.size()) {
     throw std::runtime_error(at_trial + ": the presentation ended after " + std::to_string(pressed) + " of the " +
@@ -199,13 +197,19 @@ study::Presenter make_presenter(const RunCommandOptions& options, const study::C
   if (!simulated && options.device.rfind("hapticmaster://", 0) != 0) {
     throw UsageError("--device must be sim or hapticmaster://HOST[:PORT], not " + options.device);
   }
+  if (options.real_time && !simulated) {
+    throw UsageError(
+        "--real-time is for a simulated device (sim, sim:rotary); a HapticMaster always plays in "
+        "real time");
+  }
+  const bool simulated_time = simulated && !options.real_time;
   const double duration_s = options.presentation_s.value_or(
-      simulated ? campaign.simulated_presentation_s : campaign.presentation_s);
+      simulated_time ? campaign.simulated_presentation_s : campaign.presentation_s);
   if (!(duration_s > 0.0 && duration_s <= 600.0)) throw UsageError("--presentation-s must be above 0 and at most 600");
   std::shared_ptr<RigDefinition> rig;
   if (!campaign.real_rig.empty()) rig = std::make_shared<RigDefinition>(load_rig(campaign.real_rig.string()));
   const std::string device = options.device;
-  return [device, simulated, duration_s, rig, person](const study::PresentationCall& call) {
+  return [device, simulated_time, duration_s, rig, person](const study::PresentationCall& call) {
     const std::string notes = "doorbench campaign: participant " + call.participant + ", trial " +
                               std::to_string(call.trial) + ", presentation " + std::to_string(call.position) +
                               ", stimulus " + call.stimulus->name;
@@ -220,7 +224,7 @@ study::Presenter make_presenter(const RunCommandOptions& options, const study::C
     }
     PlayRequest play;
     play.device.uri = device;
-    play.device.simulated_time = simulated;
+    play.device.simulated_time = simulated_time;
     play.device.hand.duration_s = std::clamp(duration_s, 4.0, 10.0);
     play.device.seed = static_cast<std::uint64_t>(1000 * call.trial + call.position);
     play.playback.duration_s = duration_s;
@@ -235,9 +239,10 @@ study::Presenter make_presenter(const RunCommandOptions& options, const study::C
       return;
     }
     const haptic::PlaybackSummary summary = play_model(*call.stimulus->model, play);
-    if (summary.final_state == haptic::SafetyState::kStopped && summary.duration_s + 0.05 < duration_s) {
-      throw std::runtime_error("the safety layer stopped the presentation after " + std::to_string(summary.duration_s) +
-                               " s: " + summary.brief_report());
+    if (!summary.stop_cause.empty()) {
+      throw std::runtime_error("the presentation stopped after " +
+                               format_significant(summary.duration_s, 3) +
+                               " s: " + summary.stop_cause);
     }
   };
 }
@@ -401,6 +406,9 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action) {
                   "or sim:SEED")
       ->capture_default_str();
   run->add_option("--answers", run_options->answers_path, "A person's answers, one a line (a tune trial's line: the keys pressed; default: stdin)");
+  run->add_flag("--real-time", run_options->real_time,
+                "Play a simulated device in real time, as a HapticMaster would be (presentations "
+                "of the campaign file's presentation_s), instead of simulated time");
   run->add_option("--presentation-s", run_options->presentation_s,
                   "Length of each presentation (default: the campaign file's)")
       ->check(CLI::Range(0.001, 600.0));

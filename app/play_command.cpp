@@ -11,6 +11,7 @@
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/play_run.h"
+#include "core/number_format.h"
 #include "haptic/tuning_keys.h"
 
 namespace doorbench::app {
@@ -146,6 +147,7 @@ void run_play(const PlayOptions& options) {
   request.playback.duration_s = options.duration_s;
   request.playback.loop.rate_hz = options.rate_hz;
   request.playback.real_time.request_fifo = !options.no_fifo;
+  if (options.no_fifo) request.device.hapticmaster.io_fifo_priority = 0;
   request.playback.loop.safety.max_force = options.max_force_N;
   request.playback.loop.safety.max_force_rate = options.max_force_rate_N_per_s;
   request.playback.loop.safety.max_tick_interval_s = 1e-3 * options.max_tick_interval_ms;
@@ -185,6 +187,12 @@ void run_play(const PlayOptions& options) {
   }
   const haptic::PlaybackSummary summary = play_model(model, request);
   std::cout << summary.brief_report() << "\n";
+  if (!summary.stop_cause.empty()) {
+    throw std::runtime_error("the playback stopped after " +
+                             format_significant(summary.duration_s, 3) + " s of " +
+                             format_number(options.duration_s) + " s (session " +
+                             request.session_path.string() + " kept): " + summary.stop_cause);
+  }
 }
 
 }  // namespace
@@ -207,7 +215,8 @@ void add_play_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   play->add_flag("--simulated-time", options->simulated_time,
                  "Run a simulated device in simulated time, as fast as possible");
-  play->add_flag("--no-fifo", options->no_fifo, "Do not ask for SCHED_FIFO");
+  play->add_flag("--no-fifo", options->no_fifo,
+                 "Do not ask for SCHED_FIFO (the tick's thread and a HapticMaster's I/O thread)");
   play->add_option("--hand-cycle-s", options->hand_cycle_s,
                    "Simulated devices: the virtual user's open-close cycle")
       ->check(CLI::Range(1.0, 600.0))

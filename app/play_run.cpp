@@ -3,55 +3,19 @@
 #include <signal.h>
 #include <unistd.h>
 
-#include <atomic>
 #include <cmath>
-#include <optional>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <system_error>
 
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/session_file.h"
 #include "app/session_recording.h"
+#include "app/stop_signals.h"
+#include "core/units.h"
 
 namespace doorbench::app {
-namespace {
-
-// Set by SIGINT/SIGTERM during a real-time playback; the control thread polls it and ends the
-// run through the safety layer's ramp-down and the device's stop (a lock-free atomic is
-// async-signal-safe). A second signal takes the default action.
-std::atomic<int> g_stop_signal{0};
-extern "C" void on_stop_signal(int signal_number) {
-  g_stop_signal.store(signal_number);
-  ::signal(signal_number, SIG_DFL);
-}
-
-// Installs the handlers for its lifetime and restores the old ones after.
-class StopSignals {
- public:
-  StopSignals() {
-    g_stop_signal.store(0);
-    struct sigaction action {};
-    action.sa_handler = on_stop_signal;
-    sigemptyset(&action.sa_mask);
-    ::sigaction(SIGINT, &action, &old_int_);
-    ::sigaction(SIGTERM, &action, &old_term_);
-  }
-  ~StopSignals() {
-    ::sigaction(SIGINT, &old_int_, nullptr);
-    ::sigaction(SIGTERM, &old_term_, nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-  int received() const { return g_stop_signal.load(); }
-
- private:
-  struct sigaction old_int_ {};
-  struct sigaction old_term_ {};
-};
-
-}  // namespace
-
 namespace {
 
 haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& request,
@@ -78,7 +42,8 @@ haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& req
                    "model: " + request.model_source +
                    (request.effects.empty() ? "" : ", effects: " + request.effects);
   // In real time, Ctrl-C and SIGTERM are caught from before the device starts: one during
-  // the start-up (homing may take a while) ends the run as soon as it begins.
+  // the start-up (homing may take a while) ends the run as soon as it begins; a second one
+  // ends doorbench at once (app/stop_signals.h).
   std::optional<StopSignals> signals;
   if (!request.device.simulated_time) signals.emplace();
   haptic::Playback playback(
@@ -114,8 +79,8 @@ haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& req
           std::fprintf(stderr,
                        "%s%6.1f s  %7.1f Hz  θ %6.1f°  ω %6.1f°/s  hand %6.1f N  command %6.1f "
                        "N  set %d  safety %s%s",
-                       tty ? "\r" : "", status.time_s, rate_hz, status.theta_rad * 180.0 / M_PI,
-                       status.omega_rad_s * 180.0 / M_PI, status.user_force_N,
+                       tty ? "\r" : "", status.time_s, rate_hz, status.theta_rad * kDegPerRad,
+                       status.omega_rad_s * kDegPerRad, status.user_force_N,
                        status.commanded_force_N, status.parameter_set,
                        std::string(haptic::to_string(playback.loop().safety_state())).c_str(),
                        tty ? "   " : "\n");

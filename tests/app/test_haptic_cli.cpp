@@ -72,10 +72,14 @@ TEST_CASE("play --watch-params: a parameter file saved during a real-time run is
   std::ofstream(dir / "heavier.json") << to_parameter_json(heavier);
   const auto watched = dir / "tuned.json";
   const auto session = dir / "live.h5";
-  // The file appears one second into a three-second run (as the viewer's "save" would). A
-  // loaded machine may delay a tick by tens of ms: that must not stop this run early.
-  const std::string writer =
-      "sleep 1; cp '" + (dir / "heavier.json").string() + "' '" + watched.string() + "'; sleep 4";
+  // The file appears about one second into a three-second run (as the viewer's "save" would):
+  // when the first status line (written after one second of ticks when stderr is a file) is
+  // there, so that a slow start on a loaded machine does not move it. A loaded machine may
+  // delay a tick by tens of ms: that must not stop this run early.
+  const std::string writer = "until grep -q 'safety' '" + (dir / "stderr.txt").string() +
+                             "' 2> /dev/null; do sleep 0.02; done; cp '" +
+                             (dir / "heavier.json").string() + "' '" + watched.string() +
+                             "'; sleep 4";
   const auto run = run_doorbench_shell(
       "play --device sim --duration-s 3 --max-tick-interval-ms 200 --watch-params '" +
           watched.string() + "' --out '" + session.string() + "'",

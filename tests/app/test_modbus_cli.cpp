@@ -20,10 +20,6 @@ namespace {
 
 using Run = doorbench::testing::DoorbenchRun;
 
-Run run_doorbench(const std::string& args, const TempDir& dir) {
-  return doorbench::testing::run_doorbench_shell(args, dir);
-}
-
 // rigs/modbus-bench.toml's channels, pointed at the test server: force (unit 1, float32
 // ABCD at 0), angle (unit 2, int16 at 8) and one register past the server's map.
 std::string rig_text(int port) {
@@ -56,9 +52,10 @@ TEST_CASE("doorbench devices --rig probes the rig's Modbus sensors", "[modbus][c
     TcpTransmitterServer server;
     port = server.port;
     dir.write("rig.toml", rig_text(port));
-    const Run run = run_doorbench("devices --dev-dir '" + (dir / "dev").string() + "' --rig '" +
-                                      (dir / "rig.toml").string() + "'",
-                                  dir);
+    const Run run =
+        doorbench::testing::run_doorbench_shell("devices --dev-dir '" + (dir / "dev").string() +
+                                                    "' --rig '" + (dir / "rig.toml").string() + "'",
+                                                dir);
     INFO(run.out << run.err);
     CHECK(run.status == 0);
     CHECK_THAT(run.out, Contains("modbus device gateway (tcp 127.0.0.1:" + std::to_string(port) +
@@ -78,14 +75,15 @@ TEST_CASE("doorbench devices --rig probes the rig's Modbus sensors", "[modbus][c
     CHECK_THAT(run.out, Contains(" ms\n"));
   }
   // The server is gone: the probe says so and goes on.
-  const Run refused = run_doorbench("devices --dev-dir '" + (dir / "dev").string() + "' --rig '" +
-                                        (dir / "rig.toml").string() + "'",
-                                    dir);
+  const Run refused =
+      doorbench::testing::run_doorbench_shell("devices --dev-dir '" + (dir / "dev").string() +
+                                                  "' --rig '" + (dir / "rig.toml").string() + "'",
+                                              dir);
   CHECK(refused.status == 0);
   CHECK_THAT(refused.out, Contains("modbus device gateway (tcp 127.0.0.1:" + std::to_string(port) +
                                    "): cannot connect: connection refused\n"));
   // A Modbus-only rig records for a set time or through its triggers.
-  const Run record = run_doorbench(
+  const Run record = doorbench::testing::run_doorbench_shell(
       "record --rig '" + (dir / "rig.toml").string() + "' --out '" + (dir / "s.h5").string() + "'",
       dir);
   CHECK(record.status == 2);
