@@ -11,6 +11,7 @@
 #include "app/campaign_report.h"
 #include "app/commands.h"
 #include "app/progress.h"
+#include "app/stop_signals.h"
 #include "study/campaign_plan.h"
 #include "study/statistics/analysis.h"
 #include "study/statistics/variant_files.h"
@@ -87,6 +88,10 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
       at = displays.emplace(what, count_progress_display(status, what, "resamples")).first;
     at->second(done, total);
   };
+  // SIGINT/SIGTERM: the section under way ends at its next resample; the sections before it
+  // are written, marked interrupted. A second signal ends doorbench at once.
+  const StopSignals signals;
+  analysis_options.stop_requested = [&signals] { return signals.received() != 0; };
   nlohmann::json analysis = study::analyze_trials(table, analysis_options, progress);
   status.finish();
   const study::VariantFiles variants = study::variant_parameter_files(table, analysis);
@@ -96,13 +101,30 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
   for (const study::VariantFile& variant : variants.files)
     write_text_file_atomically(folder / variant.file, variant.text);
   write_text_file_atomically(folder / "analysis.json", analysis.dump(2) + "\n");
-  const CampaignReportFiles report =
-      write_campaign_report(folder, analysis, !options.no_pdf, progress_out);
+  // An interrupted analysis is written without its PDF (the renderer takes seconds).
+  const bool pdf = !options.no_pdf && !analysis.contains("interrupted");
+  CampaignReportFiles report;
+  try {
+    report =
+        write_campaign_report(folder, analysis, pdf, progress_out, analysis_options.stop_requested);
+  } catch (const StopRequested&) {
+    throw Interrupted(signals.received(),
+                      "campaign analyze: " + signal_name(signals.received()) +
+                          " stopped the analysis during the PDF rendering: no report.pdf; "
+                          "analysis.json, report.html and the plots in " +
+                          folder.string() + "/ are complete");
+  }
   out << study::analysis_summary(analysis);
   out << "wrote " << (folder / "analysis.json").string() << ", " << report.html.string() << ", "
       << report.plots << " plot(s) and " << variants.files.size()
       << " variant parameter file(s)\n"
       << report.pdf_note << "\n";
+  if (analysis.contains("interrupted")) {
+    throw Interrupted(signals.received(),
+                      "campaign analyze: " + signal_name(signals.received()) +
+                          " stopped the analysis " + analysis["interrupted"].get<std::string>() +
+                          "; the results in " + folder.string() + "/ are marked interrupted");
+  }
 }
 
 void analyze_demo_campaign(const std::filesystem::path& dir,

@@ -4,13 +4,16 @@
 // by `campaign analyze` after it computes and by `campaign report ANALYSIS --out DIR` from an
 // existing analysis folder. `analyze_demo_campaign` is the demo's step.
 //
-// Errors: OutputError from the writers; render_pdf's problem is returned, not thrown.
+// Errors: OutputError from the writers; render_pdf's problem is returned, not thrown, and its
+// StopRequested passed on.
 // Thread safety: writes files; one call at a time per folder.
 #include <cstdint>
 #include <filesystem>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <string>
+
+#include "core/stop_request.h"
 
 namespace doorbench::app {
 
@@ -41,9 +44,10 @@ struct CampaignReportFiles {
 
 // Writes the plots, report.html and (when `pdf`) report.pdf into `out`, which must exist; the
 // output rule (check_output_folder) is the caller's. `progress` gets a line before the PDF.
+// Throws StopRequested when `stop` asked during the PDF's rendering (no PDF then).
 CampaignReportFiles write_campaign_report(const std::filesystem::path& out,
                                           const nlohmann::json& analysis, bool pdf,
-                                          std::ostream& progress);
+                                          std::ostream& progress, const StopHook& stop = {});
 
 // The demo's step after its simulated campaign: `campaign analyze` of dir/folder into
 // dir/analysis (no PDF, no bootstrap: two participants), a line per result on `out`, and the

@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "acquisition/session/output_file.h"
+#include "acquisition/session/pdf_output.h"
 #include "analysis/model/parameter_file.h"
 #include "app/campaign_report.h"
 #include "app/commands.h"
@@ -16,7 +17,7 @@ namespace doorbench::app {
 
 CampaignReportFiles write_campaign_report(const std::filesystem::path& out,
                                           const nlohmann::json& analysis, bool pdf,
-                                          std::ostream& progress) {
+                                          std::ostream& progress, const StopHook& stop) {
   CampaignReportFiles files;
   const std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
   for (const study::AnalysisPlot& plot : plots)
@@ -27,7 +28,7 @@ CampaignReportFiles write_campaign_report(const std::filesystem::path& out,
   files.pdf_note = "no PDF (not asked for)";
   if (pdf) {
     progress << "rendering " << (out / "report.pdf").string() << "\n" << std::flush;
-    const std::string problem = study::render_pdf(files.html, out / "report.pdf");
+    const std::string problem = render_pdf(files.html, out / "report.pdf", "", stop);
     files.pdf_note =
         problem.empty() ? "wrote " + (out / "report.pdf").string() : "no PDF: " + problem;
   }

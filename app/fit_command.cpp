@@ -19,6 +19,7 @@
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
 #include "app/progress.h"
+#include "app/stop_signals.h"
 #include "core/number_format.h"
 
 namespace doorbench::app {
@@ -115,6 +116,7 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
   };
   FitOptions trial_options = fit;
   trial_options.cross_validation_folds = 0;
+  trial_options.partial_on_stop = false;  // a trial is whole or not at all
   const FitSummary trial = fit_model(start, data, trial_options).summary;
   const std::size_t count = trial.free_names.size();
   if (trial.undetermined.empty()) {
@@ -143,7 +145,9 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
       joined(held));
   fit.free_parameters = trial.identifiable;
   FitResult result = fit_model(start, data, fit);
-  for (int round = 0; round < 2 && !result.summary.undetermined.empty(); ++round) {
+  for (int round = 0;
+       round < 2 && !result.summary.undetermined.empty() && result.summary.interrupted.empty();
+       ++round) {
     const std::vector<std::string> still = result.summary.undetermined;
     std::erase_if(fit.free_parameters, [&still](const std::string& name) {
       return std::find(still.begin(), still.end(), name) != still.end();
@@ -177,6 +181,10 @@ void write_start(const std::filesystem::path& dir, const FitInputs& inputs) {
 }
 
 void run_fit(const FitCommandOptions& options) {
+  // SIGINT/SIGTERM: the fit ends at its next solver iteration. A whole window fit is written,
+  // marked interrupted (without what the stop cut: held-out metrics, a restart); before that
+  // there is nothing to write. A second signal ends doorbench at once.
+  const StopSignals signals;
   // Before any reading: a parameter is free or held, not both (issue 33).
   for (const std::string& name : split_names(options.free)) {
     const std::vector<std::string> fixed = split_names(options.fixed);
@@ -191,6 +199,10 @@ void run_fit(const FitCommandOptions& options) {
   if (!free_auto) check_parameter_names(named, "--free", split_names(options.free));
   check_parameter_names(named, "--fixed", split_names(options.fixed));
   FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
+  if (signals.received() != 0) {
+    throw nothing_finished(signals.received(), "fit", "the fit", "the reading of its data",
+                           options.out_dir);
+  }
   const PreparedData& data = inputs.data;
   const DoorModel& start = inputs.start;
   if (options.init_only) {
@@ -216,9 +228,22 @@ void run_fit(const FitCommandOptions& options) {
                    ? " (with " + std::to_string(options.folds) + "-fold cross-validation)"
                    : ""));
   fit_options.progress = fit_progress_display(status);
-  const FitResult result = free_auto ? fit_free_auto(start, data, fit_options, status, inputs.report_lines)
-                                     : fit_model(start, data, fit_options);
+  fit_options.stop_requested = [&signals] { return signals.received() != 0; };
+  fit_options.partial_on_stop = true;
+  FitResult result{start, FitSummary{}};
+  try {
+    result = free_auto ? fit_free_auto(start, data, fit_options, status, inputs.report_lines)
+                       : fit_model(start, data, fit_options);
+  } catch (const StopRequested& stop) {
+    status.finish();
+    throw nothing_finished(signals.received(), "fit", "the fit", stop.where(), options.out_dir);
+  }
   status.finish();
+  const std::string interrupted =
+      result.summary.interrupted.empty()
+          ? ""
+          : signal_name(signals.received()) + " stopped the fit " + result.summary.interrupted;
+  if (!interrupted.empty()) inputs.report_lines.insert(inputs.report_lines.begin(), interrupted);
 
   const std::filesystem::path dir = options.out_dir;
   write_text_file_atomically(dir / "result.json", fit_result_json(result, data).dump(2) + "\n");
@@ -239,6 +264,10 @@ void run_fit(const FitCommandOptions& options) {
   write_text_file_atomically(dir / "report.md", report.str());
   std::cout << result.summary.brief_report() << "\nresult.json, report.md, fitted-params.json and "
             << "plots are in " << dir.string() << "/\n";
+  if (!interrupted.empty()) {
+    throw Interrupted(signals.received(), "fit: " + interrupted + "; the results in " +
+                                              dir.string() + "/ are marked interrupted");
+  }
 }
 
 }  // namespace

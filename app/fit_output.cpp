@@ -86,6 +86,8 @@ nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedDa
           {"windows", s.windows},
           {"residuals", s.residuals},
           {"free_parameters", s.free_parameters},
+          {"interrupted", s.interrupted.empty() ? nlohmann::ordered_json(nullptr)
+                                                : nlohmann::ordered_json(s.interrupted)},
           {"converged", s.converged},
           {"termination", s.termination},
           {"iterations", s.iterations},

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,7 +38,14 @@ std::string interrupted_line(const LoopResult& result, int signal_number) {
 }
 
 void run_loop(const LoopCommandOptions& options) {
+  // SIGINT/SIGTERM: the loop's fits end at their next solver iteration, and the steps finished
+  // so far are written, marked interrupted; a second signal ends doorbench at once.
+  const StopSignals signals;
   const FitInputs inputs = prepare_fit_run(options.input, options.out_dir);
+  if (signals.received() != 0) {
+    throw nothing_finished(signals.received(), "loop", "the loop", "the reading of its data",
+                           options.out_dir);
+  }
   LoopOptions loop_options;
   loop_options.fit.cross_validation_folds = options.folds;
   loop_options.fit.substeps_per_sample = substeps_for(inputs.data);
@@ -48,11 +56,16 @@ void run_loop(const LoopCommandOptions& options) {
   loop_options.progress = [&status](const std::string& line) { status.line(line); };
   loop_options.fit.progress = fit_progress_display(status);
   loop_options.step_progress = loop_progress_display(status);
-  // SIGINT/SIGTERM: the loop stops at its next stage boundary and the steps finished so far
-  // are written, marked interrupted; a second signal ends doorbench at once.
-  const StopSignals signals;
   loop_options.stop_requested = [&signals] { return signals.received() != 0; };
-  const LoopResult result = run_residual_loop(inputs.start, inputs.data, loop_options);
+  std::optional<LoopResult> ran;
+  try {
+    ran = run_residual_loop(inputs.start, inputs.data, loop_options);
+  } catch (const StopRequested& stop) {  // during the start model's fit: nothing finished
+    status.finish();
+    throw nothing_finished(signals.received(), "loop", "the loop",
+                           stop.where() + " of the start model", options.out_dir);
+  }
+  const LoopResult& result = *ran;
   status.finish();
   std::vector<std::string> report_lines = inputs.report_lines;
   const int signal_number = signals.received();

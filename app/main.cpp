@@ -18,6 +18,7 @@
 #include "acquisition/session/printable.h"
 #include "app/commands.h"
 #include "app/stop_signals.h"
+#include "core/stop_request.h"
 
 namespace {
 
@@ -195,6 +196,10 @@ int main(int argc, char** argv) {
     quiet_stderr.restore();
     std::cerr << "doorbench: " << doorbench::printable(error.what()) << "\n";
     return error.exit_status();
+  } catch (const doorbench::StopRequested& stop) {  // a verb that did not say what it kept
+    quiet_stderr.restore();
+    std::cerr << "doorbench: " << stop.what() << "\n";
+    return 1;
   } catch (const doorbench::OutputRefused& error) {  // an existing output, or an input
     quiet_stderr.restore();
     std::cerr << "doorbench: " << doorbench::printable(doorbench::shortened(error.what())) << "\n";

@@ -23,6 +23,7 @@
 #include "app/progress.h"
 #include "app/spec_campaign.h"
 #include "app/spec_run.h"
+#include "app/stop_signals.h"
 #include "core/number_format.h"
 
 namespace doorbench::app {
@@ -226,9 +227,97 @@ DoorModel load_asis(const SpecCommandOptions& options, const std::filesystem::pa
   return asis;
 }
 
+namespace {
+
+// The inverse design of the TO-BE recordings from `asis`, which is first corrected to its own
+// recording on the bench when one is given. Throws StopRequested when `stop` asks.
+InverseDesignResult design_stage(const SpecCommandOptions& options, DoorModel& asis,
+                                 const std::vector<PreparedData>& tobe,
+                                 const std::vector<CommandedTorque>& commanded,
+                                 const StopHook& stop, std::ostream& progress) {
+  InverseDesignOptions design_options;
+  if (options.fixed_given) design_options.fixed = split_names(options.fixed);
+  parse_costs(options.costs, design_options.weights);
+  design_options.regularization = options.regularization;
+  design_options.starts = options.starts;
+  if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
+  const auto design_began = std::chrono::steady_clock::now();
+  design_options.progress = [&progress, design_began](const std::string& step) {
+    const double seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - design_began).count();
+    progress << "  [" << static_cast<int>(seconds) << " s] " << step << "\n" << std::flush;
+  };
+  design_options.fit.stop_requested = stop;
+  if (!options.asis_recording.empty()) {
+    asis = asis_on_bench(asis, options.asis_recording, design_options, progress);
+  }
+  progress << "inverse design: fitting the physical model to " << tobe.size()
+           << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
+  return inverse_design(asis, tobe, design_options, commanded);
+}
+
+// The design's felt quantities, its check against the TO-BE recordings, its tolerances and,
+// from a campaign, the panel's tolerances. A stop request during the Monte Carlo leaves the
+// tolerances out (SpecEvaluation::interrupted).
+SpecEvaluation evaluate_design(const SpecCommandOptions& options, const DoorModel& asis,
+                               const InverseDesignResult& design,
+                               const std::vector<PreparedData>& tobe,
+                               const ToleranceSpec& tolerances,
+                               const std::optional<CampaignForSpec>& campaign,
+                               const std::string& tobe_source, double felt_share,
+                               const StopHook& stop, std::ostream& progress) {
+  SpecEvaluationOptions evaluation_options;
+  evaluation_options.run_tolerances = !options.no_tolerances;
+  evaluation_options.tolerances = tolerances;
+  evaluation_options.monte_carlo.samples = options.samples;
+  evaluation_options.monte_carlo.threads = options.threads;
+  evaluation_options.monte_carlo.seed = options.seed;
+  evaluation_options.monte_carlo.stop_requested = stop;
+  // The samples' status line, with the time left (app/progress.h).
+  StatusLine status(progress, stderr_is_terminal(), 5.0, stderr_terminal_columns());
+  evaluation_options.monte_carlo.progress =
+      count_progress_display(status, "tolerance Monte Carlo", "samples");
+  if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
+  progress << "felt quantities and the check; tolerance analysis of " << options.samples
+           << " samples on "
+           << (options.threads > 0 ? options.threads
+                                   : static_cast<int>(std::thread::hardware_concurrency()))
+           << " thread(s)\n";
+  SpecEvaluation evaluation = evaluate_spec(asis, design, tobe, evaluation_options);
+  status.finish();
+  evaluation.command = describe(options);
+  if (campaign && evaluation.tolerances) {
+    try {
+      evaluation.perceptual =
+          perceptual_spec(*campaign, tobe_source, felt_share, design.solutions.front().model,
+                          evaluation_options, *evaluation.tolerances, progress);
+    } catch (const StopRequested& stopped) {
+      evaluation.interrupted = "during " + stopped.where() +
+                               " of the panel's tolerances: no "
+                               "perceptual tolerance table";
+      evaluation.warnings.push_back("interrupted " + evaluation.interrupted);
+      return evaluation;
+    }
+    // The alternatives judged with the panel's JNDs where it measured them.
+    EquivalenceOptions equivalence = evaluation_options.equivalence;
+    equivalence.felt = evaluation_options.felt;
+    equivalence.jnds = evaluation.perceptual->jnds;
+    evaluation.equivalence = assess_equivalence(design, equivalence);
+    evaluation.equivalence_criterion = equivalence_criterion(equivalence);
+  }
+  return evaluation;
+}
+
+}  // namespace
+
 void run_spec(const SpecCommandOptions& options) {
   if (options.samples < 2) throw UsageError("--samples must be >= 2");
   if (options.threads < 0) throw UsageError("--threads must be >= 0");
+  // SIGINT/SIGTERM: the fits end at their next solver iteration, the Monte Carlo at its next
+  // sample. Before the design is whole there is nothing to write; after, the specification is
+  // written without what the stop cut, marked interrupted. A second signal ends doorbench.
+  const StopSignals signals;
+  const StopHook stop = [&signals] { return signals.received() != 0; };
   const bool from_campaign = !options.campaign_dir.empty();
   const double felt_share = checked_felt_share(options);
   // The output rule (docs/output-files.md): checked before any work; the folder is made
@@ -252,8 +341,7 @@ void run_spec(const SpecCommandOptions& options) {
   read_tobe_recordings(options, progress, tobe, commanded);
   std::string tobe_source;
   if (campaign) tobe_source = campaign_tobe(*campaign, asis, tobe, progress);
-  const std::string bench_warning =
-      bench_without_asis_recording(tobe, !commanded.empty(), options);
+  const std::string bench_warning = bench_without_asis_recording(tobe, !commanded.empty(), options);
   if (!bench_warning.empty()) progress << "warning: " << bench_warning << "\n";
   if (!commanded.empty()) {
     progress << "the TO-BE recordings are haptic playbacks: the design is fitted to the torque "
@@ -266,64 +354,42 @@ void run_spec(const SpecCommandOptions& options) {
                                       options.tolerances_path, asis);
   }
 
-  InverseDesignOptions design_options;
-  if (options.fixed_given) design_options.fixed = split_names(options.fixed);
-  parse_costs(options.costs, design_options.weights);
-  design_options.regularization = options.regularization;
-  design_options.starts = options.starts;
-  if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
-  const auto design_began = std::chrono::steady_clock::now();
-  design_options.progress = [&progress, design_began](const std::string& step) {
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - design_began).count();
-    progress << "  [" << static_cast<int>(seconds) << " s] " << step << "\n" << std::flush;
-  };
-  if (!options.asis_recording.empty()) {
-    asis = asis_on_bench(asis, options.asis_recording, design_options, progress);
+  if (signals.received() != 0) {
+    throw nothing_finished(signals.received(), "spec", "the specification",
+                           "the reading of its inputs", options.out_dir);
   }
-  progress << "inverse design: fitting the physical model to " << tobe.size()
-           << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
-  const InverseDesignResult design = inverse_design(asis, tobe, design_options, commanded);
+  std::optional<InverseDesignResult> designed;
+  try {
+    designed = design_stage(options, asis, tobe, commanded, stop, progress);
+  } catch (const StopRequested& stopped) {
+    throw nothing_finished(signals.received(), "spec", "the specification", stopped.where(),
+                           options.out_dir);
+  }
+  const InverseDesignResult& design = *designed;
   if (design.solutions.empty()) throw std::runtime_error("inverse design found no solution");
 
-  SpecEvaluationOptions evaluation_options;
-  evaluation_options.run_tolerances = !options.no_tolerances;
-  evaluation_options.tolerances = tolerances;
-  evaluation_options.monte_carlo.samples = options.samples;
-  evaluation_options.monte_carlo.threads = options.threads;
-  evaluation_options.monte_carlo.seed = options.seed;
-  // The samples' status line, with the time left (app/progress.h).
-  StatusLine status(progress, stderr_is_terminal(), 5.0, stderr_terminal_columns());
-  evaluation_options.monte_carlo.progress =
-      count_progress_display(status, "tolerance Monte Carlo", "samples");
-  if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
-  progress << "felt quantities and the check; tolerance analysis of " << options.samples
-           << " samples on "
-           << (options.threads > 0 ? options.threads
-                                   : static_cast<int>(std::thread::hardware_concurrency()))
-           << " thread(s)\n";
-  SpecEvaluation evaluation = evaluate_spec(asis, design, tobe, evaluation_options);
-  status.finish();
-  evaluation.command = describe(options);
+  SpecEvaluation evaluation = evaluate_design(options, asis, design, tobe, tolerances, campaign,
+                                              tobe_source, felt_share, stop, progress);
   evaluation.asis_source = asis_file.string();
-  if (campaign && evaluation.tolerances) {
-    evaluation.perceptual =
-        perceptual_spec(*campaign, tobe_source, felt_share, design.solutions.front().model,
-                        evaluation_options, *evaluation.tolerances, progress);
-    // The alternatives judged with the panel's JNDs where it measured them.
-    EquivalenceOptions equivalence = evaluation_options.equivalence;
-    equivalence.felt = evaluation_options.felt;
-    equivalence.jnds = evaluation.perceptual->jnds;
-    evaluation.equivalence = assess_equivalence(design, equivalence);
-    evaluation.equivalence_criterion = equivalence_criterion(equivalence);
-  }
   if (!bench_warning.empty()) evaluation.warnings.push_back(bench_warning);
 
   std::filesystem::create_directories(options.out_dir);
-  const SpecReportFiles files =
-      write_spec_report(options.out_dir, design, evaluation, options.no_pdf ? "none" : "");
   const std::filesystem::path params = std::filesystem::path(options.out_dir) / "tobe-params.json";
   write_text_file_atomically(params, to_parameter_json(design.solutions.front().model));
+  // An interrupted specification is written without its PDF (the renderer takes seconds).
+  const bool pdf = !options.no_pdf && evaluation.interrupted.empty();
+  progress << "writing the specification into " << options.out_dir << "/"
+           << (pdf ? " (spec.pdf: weasyprint renders spec.html, a few seconds)" : "") << "\n";
+  SpecReportFiles files;
+  try {
+    files = write_spec_report(options.out_dir, design, evaluation, pdf ? "" : "none", stop);
+  } catch (const StopRequested&) {
+    throw Interrupted(signals.received(),
+                      "spec: " + signal_name(signals.received()) +
+                          " stopped the specification during the PDF rendering: no spec.pdf; "
+                          "spec.json, spec.html and tobe-params.json in " +
+                          options.out_dir + "/ are complete");
+  }
 
   std::cout << design.brief_report() << "\n" << spec_summary(design, evaluation);
   if (evaluation.tolerances) {
@@ -335,6 +401,12 @@ void run_spec(const SpecCommandOptions& options) {
   std::cout << "wrote " << files.json.string() << ", " << files.html.string() << ", "
             << params.string() << "\n"
             << files.pdf_note << "\n";
+  if (!evaluation.interrupted.empty()) {
+    throw Interrupted(signals.received(), "spec: " + signal_name(signals.received()) +
+                                              " stopped the specification " +
+                                              evaluation.interrupted + "; the results in " +
+                                              options.out_dir + "/ are marked interrupted");
+  }
 }
 
 void add_spec_command(CLI::App& app, Action& action) {

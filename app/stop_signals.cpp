@@ -47,4 +47,13 @@ std::string signal_name(int signal_number) {
   return "signal " + std::to_string(signal_number);
 }
 
+Interrupted nothing_finished(int signal_number, const std::string& verb, const std::string& what,
+                             const std::string& where, const std::string& out_dir) {
+  return Interrupted(signal_number, verb + ": " + signal_name(signal_number) + " stopped " + what +
+                                        " during " + where +
+                                        ": nothing was finished; nothing "
+                                        "written to " +
+                                        out_dir + "/");
+}
+
 }  // namespace doorbench::app

@@ -1,9 +1,11 @@
 #pragma once
-// SIGINT and SIGTERM for the long verbs that stop cleanly (`loop`; docs/residual-loop.md,
-// "Interrupting the loop"): while a StopSignals lives, the first such signal only records its
-// number (a lock-free atomic store, async-signal-safe) and restores the default action, so a
-// second one ends doorbench at once; the verb polls received() at its stage boundaries,
-// writes what it has finished, marked interrupted, and throws Interrupted, which main()
+// SIGINT and SIGTERM for the long verbs that stop cleanly (`fit`, `loop`, `spec`, `campaign
+// analyze`, `play`; docs/residual-loop.md, "Interrupting the loop"): while a StopSignals
+// lives, the first such signal only records its number (a lock-free atomic store,
+// async-signal-safe) and restores the default action, so a second one ends doorbench at once;
+// the verb asks received() (directly, or as the StopHook its computation asks,
+// core/stop_request.h), writes what it has finished, marked interrupted, and throws
+// Interrupted, which main()
 // turns into exit status 128 + the signal's number (130 for SIGINT, 143 for SIGTERM), as a
 // shell reports a process the signal ended.
 //
@@ -40,5 +42,10 @@ class Interrupted : public std::runtime_error {
  private:
   int signal_number_;
 };
+
+// The Interrupted for a verb stopped before anything was finished: "VERB: SIGINT stopped WHAT
+// during WHERE: nothing was finished; nothing written to OUT/".
+Interrupted nothing_finished(int signal_number, const std::string& verb, const std::string& what,
+                             const std::string& where, const std::string& out_dir);
 
 }  // namespace doorbench::app

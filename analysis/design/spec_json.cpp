@@ -206,6 +206,7 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
   root["asis_source"] = e.asis_source;
   root["tobe_sources"] = e.tobe_sources;
   root["warnings"] = e.warnings;
+  root["interrupted"] = e.interrupted.empty() ? json(nullptr) : json(e.interrupted);
   root["feasible"] = design.feasible;
   root["infeasibility"] = design.infeasibility;
   // When infeasible: the binding parameters as the data ask for them (bounds widened).

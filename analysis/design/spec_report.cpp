@@ -8,11 +8,12 @@
 #include <stdexcept>
 
 #include "acquisition/session/output_file.h"
+#include "acquisition/session/pdf_output.h"
+#include "analysis/design/internal/spec_text.h"
 #include "analysis/report/svg_plot.h"
 #include "core/number_format.h"
-#include "core/units.h"
 #include "core/numbers.h"
-#include "analysis/design/internal/spec_text.h"
+#include "core/units.h"
 
 namespace doorbench {
 
@@ -318,7 +319,12 @@ SpecEvaluation evaluate_spec(const DoorModel& asis, const InverseDesignResult& d
     mc.felt = options.felt;
     const ToleranceSpec spec =
         options.tolerances.parameters.empty() ? default_tolerances(tobe_model) : options.tolerances;
-    e.tolerances = tolerance_analysis(tobe_model, spec, mc);
+    try {
+      e.tolerances = tolerance_analysis(tobe_model, spec, mc);
+    } catch (const StopRequested& stop) {
+      e.interrupted = "during " + stop.where() + ": no tolerance analysis";
+      e.warnings.push_back("interrupted " + e.interrupted);
+    }
   }
   for (const PreparedData& d : tobe) e.tobe_sources.push_back(d.source);
   return e;
@@ -566,8 +572,8 @@ std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& e
 
 SpecReportFiles write_spec_report(const std::filesystem::path& dir,
                                   const InverseDesignResult& design,
-                                  const SpecEvaluation& evaluation,
-                                  const std::string& pdf_renderer) {
+                                  const SpecEvaluation& evaluation, const std::string& pdf_renderer,
+                                  const StopHook& stop) {
   std::error_code ignored;
   std::filesystem::create_directories(dir, ignored);
   SpecReportFiles files;
@@ -580,33 +586,17 @@ SpecReportFiles write_spec_report(const std::filesystem::path& dir,
   write(files.json, spec_json(design, evaluation));
   write(files.html, spec_html(design, evaluation));
 
-  std::string renderer = pdf_renderer;
-  if (renderer == "none") {
+  if (pdf_renderer == "none") {
     files.pdf_note = "no PDF (not asked for)";
     return files;
   }
-  if (renderer.empty()) {
-    if (std::system("command -v weasyprint > /dev/null 2>&1") != 0) {
-      files.pdf_note = "no PDF: weasyprint is not installed (scripts/install-deps.sh installs it)";
-      return files;
-    }
-    renderer = "weasyprint";
-  }
   const std::filesystem::path pdf = dir / "spec.pdf";
-  const std::filesystem::path log = dir / "spec-pdf.log";
-  auto quote = [](const std::filesystem::path& path) {
-    std::string out = "'";
-    for (char c : path.string()) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
-  };
-  const std::string command =
-      renderer + " " + quote(files.html) + " " + quote(pdf) + " > " + quote(log) + " 2>&1";
-  if (std::system(command.c_str()) == 0 && std::filesystem::exists(pdf)) {
+  const std::string problem = render_pdf(files.html, pdf, pdf_renderer, stop);
+  if (problem.empty()) {
     files.pdf = pdf;
-    files.pdf_note = "PDF rendered by " + renderer;
-    std::filesystem::remove(log, ignored);
+    files.pdf_note = "PDF rendered by " + (pdf_renderer.empty() ? "weasyprint" : pdf_renderer);
   } else {
-    files.pdf_note = "no PDF: " + renderer + " failed (see " + log.string() + ")";
+    files.pdf_note = "no PDF: " + problem;
   }
   return files;
 }

@@ -42,6 +42,9 @@ struct SpecEvaluation {
   // order, and the criterion as one sentence.
   std::vector<SolutionEquivalence> equivalence;
   std::string equivalence_criterion;
+  // "" when every part ran; else when a stop request came and what it left out (e.g.
+  // "during the tolerance Monte Carlo: no tolerance analysis"), also one of `warnings`.
+  std::string interrupted;
 };
 
 struct SpecEvaluationOptions {
@@ -56,7 +59,8 @@ struct SpecEvaluationOptions {
 
 // Felt quantities before and after (and of each alternative), both checks and the tolerance
 // Monte Carlo of the first solution. Throws std::invalid_argument when `design` holds no
-// solution or `tobe` no strokes.
+// solution or `tobe` no strokes. A stop request (monte_carlo.stop_requested) during the
+// Monte Carlo leaves the tolerances out (SpecEvaluation::interrupted).
 SpecEvaluation evaluate_spec(const DoorModel& asis, const InverseDesignResult& design,
                              std::span<const PreparedData> tobe,
                              const SpecEvaluationOptions& options = {});
@@ -76,11 +80,12 @@ std::string spec_summary(const InverseDesignResult& design, const SpecEvaluation
 std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& evaluation);
 
 // Writes the folder (created when missing). `pdf_renderer`: the program turning HTML into PDF
-// ("" = look for weasyprint on PATH; "none" = no PDF). Throws std::runtime_error naming the
-// file it cannot write.
+// ("" = look for weasyprint on PATH; "none" = no PDF; acquisition/session/pdf_output.h).
+// Throws std::runtime_error naming the file it cannot write, and StopRequested when `stop`
+// asked while the PDF was rendered (spec.json and spec.html are then written, the PDF not).
 SpecReportFiles write_spec_report(const std::filesystem::path& dir,
                                   const InverseDesignResult& design,
                                   const SpecEvaluation& evaluation,
-                                  const std::string& pdf_renderer = "");
+                                  const std::string& pdf_renderer = "", const StopHook& stop = {});
 
 }  // namespace doorbench

@@ -220,7 +220,8 @@ void run_sample(const DoorModel& design, const std::vector<int>& index,
 }
 
 // Runs `sample(s)` for every s on a pool of threads (options.threads; 0: every core),
-// reporting progress serialized. Returns the number of threads used.
+// reporting progress serialized. Returns the number of threads used; throws StopRequested
+// when options.stop_requested ended the samples early.
 int run_pool(const MonteCarloOptions& options, const std::function<void(std::size_t)>& sample) {
   const auto samples = static_cast<std::size_t>(options.samples);
   unsigned threads = options.threads > 0 ? static_cast<unsigned>(options.threads)
@@ -232,8 +233,13 @@ int run_pool(const MonteCarloOptions& options, const std::function<void(std::siz
   int reported = 0;  // the largest count reported (under the mutex): reports only grow
   const int report_every = std::max(1, options.samples / 20);
   if (options.progress) options.progress(0, options.samples);
+  std::atomic<bool> stopped{false};
   auto worker = [&] {
     for (std::size_t s = next++; s < samples; s = next++) {
+      if (stopped.load(std::memory_order_relaxed) || stop_requested(options.stop_requested)) {
+        stopped.store(true, std::memory_order_relaxed);
+        return;
+      }
       sample(s);
       const int finished = ++done;
       if (options.progress && (finished % report_every == 0 || finished == options.samples)) {
@@ -250,6 +256,7 @@ int run_pool(const MonteCarloOptions& options, const std::function<void(std::siz
   for (unsigned t = 1; t < threads; ++t) pool.emplace_back(worker);
   worker();
   for (std::thread& thread : pool) thread.join();
+  if (stopped.load()) throw StopRequested("the tolerance Monte Carlo");
   return static_cast<int>(threads);
 }
 

@@ -15,6 +15,7 @@
 
 #include "analysis/design/felt_quantities.h"
 #include "analysis/model/door_model.h"
+#include "core/stop_request.h"
 
 namespace doorbench {
 
@@ -62,6 +63,9 @@ struct MonteCarloOptions {
   // (serialized) with samples done and the total: counts that only grow, the last with
   // done == total.
   std::function<void(int done, int total)> progress;
+  // Asked before each sample (core/stop_request.h): true ends the samples there and the
+  // analysis throws StopRequested. May be empty.
+  StopHook stop_requested;
 
   // Empty when usable, else a one-line message naming the option.
   std::string validate() const;

@@ -501,6 +501,25 @@ int WindowProblem::residual_count() const {
 
 namespace {
 
+// SolverSettings::stop_requested as a Ceres callback: ends the solve when the hook says so;
+// the solve then throws StopRequested (throw_if_stopped()).
+class StopCheck final : public ceres::IterationCallback {
+ public:
+  explicit StopCheck(const StopHook& hook) : hook_(hook) {}
+  ceres::CallbackReturnType operator()(const ceres::IterationSummary&) override {
+    if (!stop_requested(hook_)) return ceres::SOLVER_CONTINUE;
+    fired_ = true;
+    return ceres::SOLVER_ABORT;
+  }
+  void throw_if_stopped(const char* where) const {
+    if (fired_) throw StopRequested(where);
+  }
+
+ private:
+  const StopHook& hook_;
+  bool fired_ = false;
+};
+
 // SolverSettings::on_iteration as a Ceres callback.
 class IterationReport final : public ceres::IterationCallback {
  public:
@@ -536,11 +555,14 @@ WindowProblem::Outcome WindowProblem::solve(const SolverSettings& settings, int 
   PredictedStepCheck check(*this, uncertainty_tolerance, settings.robust_uncertainty);
   // The report first: Ceres calls no further callback after one that ends the solve.
   IterationReport report(settings.on_iteration);
+  StopCheck stop(settings.stop_requested);
+  solver.callbacks.push_back(&stop);
   if (settings.on_iteration) solver.callbacks.push_back(&report);
   solver.callbacks.push_back(&check);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, problem_.get(), &summary);
   trace_summary(summary);
+  stop.throw_if_stopped("the window fit");
   Outcome outcome;
   outcome.usable = summary.IsSolutionUsable();
   outcome.converged = converged(summary);
@@ -678,10 +700,13 @@ EquationErrorOutcome solve_equation_error(const DoorModel& model, const Prepared
   ceres::Problem& problem = equation_error.problem();
   ceres::Solver::Options solver = solver_options(options, options.max_iterations);
   RelativeStepCheck check(outcome.x, options.equation_error_step_tolerance);
+  StopCheck stop(options.stop_requested);
+  solver.callbacks.push_back(&stop);
   solver.callbacks.push_back(&check);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   trace_summary(summary);
+  stop.throw_if_stopped("the equation-error fit");
   outcome.usable = summary.IsSolutionUsable();
   outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;
   outcome.termination = summary.termination_type == ceres::USER_SUCCESS
@@ -712,9 +737,12 @@ TorqueMapOutcome solve_torque_map(const DoorModel& model, const PreparedData& da
   solver.function_tolerance = 1e-14;
   solver.parameter_tolerance = 1e-12;
   solver.gradient_tolerance = 1e-14;
+  StopCheck stop(options.stop_requested);
+  solver.callbacks.push_back(&stop);
   ceres::Solver::Summary summary;
   ceres::Solve(solver, &problem, &summary);
   trace_summary(summary);
+  stop.throw_if_stopped("the commanded-torque fit");
   outcome.usable = summary.IsSolutionUsable();
   outcome.converged = summary.termination_type == ceres::CONVERGENCE;
   outcome.iterations = static_cast<int>(summary.iterations.size()) - 1;

@@ -13,6 +13,7 @@
 #include "analysis/fit/fit_windows.h"
 #include "analysis/model/door_model.h"
 #include "analysis/preprocessing/strokes.h"
+#include "core/stop_request.h"
 
 namespace ceres {
 class CostFunction;
@@ -37,6 +38,9 @@ struct SolverSettings {
   // Called after each solver iteration with the iterations of this solve so far, on the
   // solve's calling thread; may be empty.
   std::function<void(int iterations)> on_iteration;
+  // Asked after each solver iteration (core/stop_request.h): true ends the solve there and it
+  // throws StopRequested. May be empty.
+  StopHook stop_requested;
 };
 
 // A prior on one free parameter in solver units: the residual (x_k − center_x) / sigma_x.

@@ -91,6 +91,7 @@ SolverSettings solver_settings(const FitOptions& options) {
   settings.equation_error_step_tolerance = options.equation_error_step_tolerance;
   settings.robust_uncertainty = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
   settings.threads = fit_thread_count(options);
+  settings.stop_requested = options.stop_requested;
   return settings;
 }
 
@@ -547,6 +548,7 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   summary.solve_time_s = seconds_since(solve_began);
   summary.times.windows_s = summary.solve_time_s - summary.times.equation_error_s;
 
+  throw_if_stop_requested(options.stop_requested, "the fit's statistics");
   const StageClock::time_point statistics_began = StageClock::now();
   const std::vector<double> fitted_values = map.values(problem.x().data());
   FitResult result{start.with_parameter_values(fitted_values), FitSummary{}};
@@ -561,9 +563,19 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   const StageClock::time_point held_out_began = StageClock::now();
   const int stroke_count = static_cast<int>(data.strokes.size());
   if (options.cross_validation_folds > 0 && stroke_count >= 2) {
-    summary.folds = std::min(options.cross_validation_folds, stroke_count);
-    summary.held_out = cross_validate(result.model, data, map, problem.x(), options, weights,
-                                      summary.folds, summary.notes, fold_models, summary.fold_fits);
+    try {
+      throw_if_stop_requested(options.stop_requested, "the cross-validation");
+      summary.folds = std::min(options.cross_validation_folds, stroke_count);
+      summary.held_out =
+          cross_validate(result.model, data, map, problem.x(), options, weights, summary.folds,
+                         summary.notes, fold_models, summary.fold_fits);
+    } catch (const StopRequested&) {
+      if (!options.partial_on_stop) throw;
+      summary.interrupted = "during the cross-validation: no held-out metrics";
+      summary.folds = 0;
+      summary.fold_fits.clear();
+      fold_models.clear();
+    }
   } else if (options.cross_validation_folds > 0) {
     summary.notes.push_back("one stroke only: no held-out metrics");
   }
@@ -576,12 +588,11 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   return result;
 }
 
-}  // namespace
-
-FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
-  const StageClock::time_point began = StageClock::now();
-  std::vector<DoorModel> fold_models;
-  FitResult result = fit_once(start, data, options, fold_models);
+// The restart stage: each fold's model and the start on all strokes; `result` becomes a
+// restart from the best when one fits every stroke clearly better (fit_model).
+void restart_if_better(FitResult& result, const DoorModel& start, const PreparedData& data,
+                       const FitOptions& options, const std::vector<DoorModel>& fold_models,
+                       StageClock::time_point began) {
   // Each cross-validation fold is refitted from the full fit on fewer strokes. When one of
   // them fits *all* the strokes clearly better than the full fit does, the full fit stopped
   // in a local minimum (an output-error cost is not convex: a window can settle on the
@@ -615,7 +626,7 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitO
     best_rmse = candidate_rmse[folds];
     best = &start;
   }
-  if (best == nullptr) return result;
+  if (best == nullptr) return;
   const bool from_start = best == &start;
   FitOptions restart = options;
   restart.latch_start_from_data = false;  // start exactly at the fold's (or given) values
@@ -628,7 +639,7 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitO
                      "it did not improve"
                    : "a cross-validation fold fitted all strokes better; a restart from it did "
                      "not improve");
-    return result;
+    return;
   }
   // Report the parameters' starts as the user gave them, and how the result was reached.
   for (std::size_t i = 0;
@@ -649,7 +660,24 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitO
                         "better (") +
           printf_text("%.4g", best_rmse) + " rad/s), and the fit was restarted from it");
   second.summary.total_time_s = seconds_since(began);
-  return second;
+  result = std::move(second);
+}
+
+}  // namespace
+
+FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
+  const StageClock::time_point began = StageClock::now();
+  std::vector<DoorModel> fold_models;
+  FitResult result = fit_once(start, data, options, fold_models);
+  if (!result.summary.interrupted.empty()) return result;
+  try {
+    restart_if_better(result, start, data, options, fold_models, began);
+  } catch (const StopRequested&) {
+    if (!options.partial_on_stop) throw;
+    result.summary.interrupted =
+        "during the restart from a better start: the fit was not restarted";
+  }
+  return result;
 }
 
 WindowOptions metric_window_options(const FitOptions& options, const DoorModel& model) {

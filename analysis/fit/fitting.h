@@ -24,6 +24,7 @@
 #include "analysis/fit/fit_windows.h"
 #include "analysis/model/door_model.h"
 #include "analysis/preprocessing/strokes.h"
+#include "core/stop_request.h"
 #include "core/units.h"
 
 namespace doorbench {
@@ -151,6 +152,15 @@ struct FitOptions {
   // The equation-error stage, the statistics and the whole-stroke objective do not report.
   // A restart from a fold (docs/fitting.md) reports its window fit again from 0.
   std::function<void(const FitProgress&)> progress;
+  // Asked after every solver iteration (of every solve: the equation-error stage, the window
+  // fit, each fold, each restart) and between stages (core/stop_request.h); when it returns
+  // true, fit_model throws StopRequested naming what was under way. May be empty (never stop).
+  StopHook stop_requested;
+  // What a stop after the window fit's statistics leaves: false, StopRequested as during the
+  // fit (what the residual loop and the inverse design need: a fit is whole or not at all);
+  // true, the fit as it stands, marked in FitSummary::interrupted (no held-out metrics when the
+  // cross-validation was cut, no restart when that was) — what `doorbench fit` writes.
+  bool partial_on_stop = false;
 
   // Empty when usable, else a one-line message naming the option.
   std::string validate() const;
@@ -265,6 +275,9 @@ struct FitSummary {
   std::vector<FoldFit> fold_fits;  // one per fold refitted
 
   std::vector<std::string> notes;  // anything the reader should know
+  // "" for a whole fit; else when a stop request came and what it cut
+  // (FitOptions::partial_on_stop), e.g. "during the cross-validation: no held-out metrics".
+  std::string interrupted;
 
   std::string brief_report() const;  // a few lines
   // With undetermined parameters, the proposal: "Identifiable free set (...): J c d1; held:

@@ -366,6 +366,8 @@ std::vector<std::optional<FitResult>> run_refits(
     try {
       outcomes[j] =
           refit(family_start, current, current_options, data, options, candidate, refit_fits[j]);
+    } catch (const StopRequested&) {
+      throw;  // every refit asks the same hook: parallel_for rethrows once all have ended
     } catch (const std::exception& error) {
       refit_errors[j] = error.what();
     } catch (...) {

@@ -211,10 +211,10 @@ FamilyCheck family_check(LoopRun& run, const ResidualExamination& examination) {
     return FamilyCheck::kKept;
   }
   if (run.stopping("before the structure check")) return FamilyCheck::kInterrupted;
-  run.family_checked = true;
   ResidualExamination other_examination;
   check = check_structure(std::move(check), run.current, run.data, run.options, run.result.fits,
                           run.say, other_examination);
+  run.family_checked = true;
   if (!check.other_better || !check.other_fit) {
     run.result.structure = std::move(check);
     return FamilyCheck::kKept;
@@ -335,11 +335,16 @@ bool loop_step(LoopRun& run) {
 }  // namespace
 
 LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
-                             const LoopOptions& options) {
+                             const LoopOptions& given) {
   const StageClock::time_point began = StageClock::now();
-  if (const std::string message = options.validate(); !message.empty()) {
+  if (const std::string message = given.validate(); !message.empty()) {
     throw std::invalid_argument(message);
   }
+  // Every fit of the loop (the start fit, the refits, the structure check's) derives its
+  // options from `fit`: they all end at their next solver iteration when the loop is asked
+  // to stop.
+  LoopOptions options = given;
+  if (!options.fit.stop_requested) options.fit.stop_requested = options.stop_requested;
   int usable_strokes = 0;
   for (const Stroke& stroke : data.strokes) usable_strokes += stroke.size() >= 2 ? 1 : 0;
   if (usable_strokes < 2) {
@@ -381,7 +386,15 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
               .reexamine = {},
               .next_examination = std::nullopt};
   run.current_options.progress = nullptr;  // the refits run several at once
-  while (loop_step(run)) {
+  try {
+    while (loop_step(run)) {
+    }
+  } catch (const StopRequested& stop) {
+    // A fit of the step under way ended early: the step is abandoned, the steps before kept.
+    result.interrupted = true;
+    result.stop_reason += (result.stop_reason.empty() ? "" : "; then ");
+    result.stop_reason += "interrupted during step " + std::to_string(result.steps.size() + 1) +
+                          ", in " + stop.where() + " (the step is abandoned)";
   }
   for (effects::Kind kind : run.reexamine) {
     result.structure.reexamined.push_back(std::string(effects::info(kind).name) +

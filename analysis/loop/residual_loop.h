@@ -145,10 +145,12 @@ struct LoopOptions {
   // each step's residual examination (before its refits) and before the structure check.
   // When it returns true the loop stops there: the steps accepted so far are kept, the
   // step under way is abandoned (a step whose refits have run is finished first), the
-  // structure check is not run and LoopResult::interrupted is set. Refits and fits under
-  // way are not cut short. May be empty (never stop). `doorbench loop` sets it from a
-  // SIGINT/SIGTERM flag (a lock-free atomic the signal handler sets).
-  std::function<bool()> stop_requested;
+  // structure check is not run and LoopResult::interrupted is set. The loop's fits ask it
+  // too (as fit.stop_requested, when that is empty) and end at their next solver iteration:
+  // the step under way is then abandoned the same way, and a stop during the start model's
+  // fit throws StopRequested (nothing was finished). May be empty (never stop). `doorbench
+  // loop` sets it from a SIGINT/SIGTERM flag (a lock-free atomic the signal handler sets).
+  StopHook stop_requested;
 
   // Empty when usable, else a one-line message naming the option.
   std::string validate() const;

@@ -154,8 +154,20 @@ nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& o
                        {"participants", participants.size()},
                        {"confidence", options.confidence}};
   nlohmann::json sections = nlohmann::json::array();
-  for (const AnalysisSection& section : analysis_sections(options, progress)) {
-    const nlohmann::json keys = section.make(table);
+  AnalysisOptions stoppable = options;
+  if (!stoppable.preference.stop_requested) {
+    stoppable.preference.stop_requested = options.stop_requested;
+  }
+  for (const AnalysisSection& section : analysis_sections(stoppable, progress)) {
+    nlohmann::json keys;
+    try {
+      throw_if_stop_requested(options.stop_requested, "the " + section.name + " section");
+      keys = section.make(table);
+    } catch (const StopRequested& stop) {
+      analysis["interrupted"] =
+          "during " + stop.where() + ": it and the sections after it were not computed";
+      break;
+    }
     sections.push_back({{"name", section.name}, {"found", !keys.is_null()}});
     if (keys.is_null()) continue;
     for (const auto& [key, value] : keys.items()) analysis[key] = value;
@@ -521,34 +533,6 @@ std::string analysis_summary(const nlohmann::json& a) {
               ": d' " + cell(r["dprime"]) + " [" + cell(r["ci_low"]) + ", " + cell(r["ci_high"]) +
               "]\n";
   return text;
-}
-
-std::string render_pdf(const std::filesystem::path& html_path,
-                       const std::filesystem::path& pdf_path, const std::string& renderer_in) {
-  std::string renderer = renderer_in;
-  if (renderer.empty()) {
-    if (std::system("command -v weasyprint > /dev/null 2>&1") != 0)
-      return "weasyprint is not installed (scripts/install-deps.sh installs it)";
-    renderer = "weasyprint";
-  }
-  const std::filesystem::path partial = partial_path_for(pdf_path);
-  std::filesystem::path log = pdf_path;
-  log += ".log";
-  auto quote = [](const std::filesystem::path& path) {
-    std::string out = "'";
-    for (char c : path.string()) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-    return out + "'";
-  };
-  const std::string command =
-      renderer + " " + quote(html_path) + " " + quote(partial) + " > " + quote(log) + " 2>&1";
-  std::error_code ignored;
-  if (std::system(command.c_str()) != 0 || !std::filesystem::exists(partial)) {
-    std::filesystem::remove(partial, ignored);
-    return renderer + " failed (see " + log.string() + ")";
-  }
-  commit_partial_file(partial, pdf_path);
-  std::filesystem::remove(log, ignored);
-  return "";
 }
 
 }  // namespace doorbench::study

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "core/stop_request.h"
 #include "study/statistics/preference_scale.h"
 #include "study/trials_table.h"
 
@@ -37,6 +38,10 @@ struct AnalysisOptions {
   PreferenceOptions preference;
   std::string real_variant = "real";  // the real door's name in identify-real trials
   double confidence = 0.95;
+  // Asked between sections and within the long ones (core/stop_request.h): when it returns
+  // true the section under way is abandoned and analysis.json's "interrupted" says which;
+  // the sections before it are kept. Also the preference bootstrap's when that has none.
+  StopHook stop_requested;
   std::string validate() const;  // empty when usable
 };
 
@@ -83,11 +88,5 @@ std::string analysis_html(const nlohmann::json& analysis, const std::vector<Anal
 
 // The summary printed by the verb: one line per section.
 std::string analysis_summary(const nlohmann::json& analysis);
-
-// Renders `html_path` to `pdf_path` with `renderer` (weasyprint) through pdf_path's temporary
-// file (acquisition/output_file.h). Returns "" when done, else why not (the renderer missing
-// or failing, with its log's path).
-std::string render_pdf(const std::filesystem::path& html_path,
-                       const std::filesystem::path& pdf_path, const std::string& renderer = "");
 
 }  // namespace doorbench::study

@@ -281,6 +281,9 @@ Replicates bootstrap(const PairData& data, const Layout& layout, const Preferenc
   const int people = int(data.participants.size());
   if (progress) progress(0, options.bootstrap_replicates);
   for (int b = 0; b < options.bootstrap_replicates; ++b) {
+    if (stop_requested(options.stop_requested)) {
+      throw StopRequested("the preference scale's bootstrap");
+    }
     std::vector<int> weights(std::size_t(people), 0);
     for (int k = 0; k < people; ++k) ++weights[std::size_t(draw_index(generator, people))];
     const auto solved = newton(layout, cells_of(data, weights));

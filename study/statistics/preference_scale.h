@@ -38,6 +38,7 @@
 #include <string>
 #include <vector>
 
+#include "core/stop_request.h"
 #include "study/trials_table.h"
 
 namespace doorbench::study {
@@ -74,6 +75,8 @@ struct PreferenceOptions {
   int min_bootstrap_participants = 6;
   std::uint64_t seed = 1;  // the bootstrap's and the favourite draws' generator
   double confidence = 0.95;
+  // Asked before each bootstrap resample (core/stop_request.h): true throws StopRequested.
+  StopHook stop_requested;
   std::string validate() const;  // empty when usable, else one line naming the option
 };
 

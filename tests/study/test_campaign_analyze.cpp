@@ -1,13 +1,18 @@
 // `doorbench campaign analyze` on hand-written trials tables (the seven columns, no
 // campaign folder), run as a process.
+#include <signal.h>
+
 #include <catch2/catch.hpp>
+#include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <thread>
 
 #include "analysis/model/parameter_file.h"
 #include "tests/study/simulated_panel.h"
+#include "tests/support/doorbench_process.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
@@ -221,4 +226,40 @@ TEST_CASE("campaign analyze writes the ratings, jnd and tuning sections and thei
   const std::string html = read_file(dir / "out" / "report.html");
   CHECK(html.find("<h2>ratings</h2>") != std::string::npos);
   CHECK(html.find("<h2>jnd</h2>") != std::string::npos);
+}
+
+TEST_CASE("campaign analyze stopped by SIGINT during the bootstrap ends within a second, marked",
+          "[study][signal]") {
+  TempDir dir("campaign_analyze_interrupt");
+  doorbench::testing::PairPanel panel;
+  panel.participants = 60;
+  panel.worths = {0.0, 0.3, -0.3, 1.5};
+  std::ofstream(dir / "trials.csv")
+      << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 9);
+  // Enough resamples to last many seconds: the signal comes in the middle of them.
+  doorbench::testing::DoorbenchProcess analyze(
+      {"campaign", "analyze", (dir / "trials.csv").string(), "--bootstrap", "200000", "--out",
+       (dir / "out").string()},
+      (dir / "stdout.txt").string());
+  REQUIRE(analyze.wait_for("preference bootstrap: 0 of 200000", 300));
+  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  const auto signalled = std::chrono::steady_clock::now();
+  analyze.send_signal(SIGINT);
+  const int status = analyze.wait_exit(60);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - signalled).count();
+  INFO(analyze.err());
+  CHECK(status == 130);
+  CHECK(seconds <= 1.0);
+  const auto analysis = nlohmann::json::parse(read_file(dir / "out" / "analysis.json"));
+  const std::string where =
+      "during the preference scale's bootstrap: it and the sections after it were not computed";
+  CHECK(analysis["interrupted"] == where);
+  CHECK_FALSE(analysis.contains("preference_scale"));
+  CHECK_FALSE(std::filesystem::exists(dir / "out" / "report.pdf"));
+  CHECK(std::filesystem::exists(dir / "out" / "report.html"));
+  CHECK_THAT(analyze.err(), Catch::EndsWith("doorbench: campaign analyze: SIGINT stopped the "
+                                            "analysis " +
+                                            where + "; the results in " + (dir / "out").string() +
+                                            "/ are marked interrupted\n"));
 }
