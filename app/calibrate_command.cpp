@@ -13,6 +13,7 @@
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/session/output_file.h"
 #include "app/commands.h"
+#include "app/number_options.h"
 #include "app/session_recording.h"
 #include "calibration/certificate.h"
 #include "calibration/geometry_calibration.h"
@@ -462,7 +463,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
       ->excludes(masses)
       ->excludes(forces);
   loadcell->add_option("--window-s", o->window_s, "Stable window averaged per point")
-      ->check(CLI::Range(0.01, 600.0));
+      ->check(number_range(0.01, 600.0));
   loadcell->callback([o, &action] { action = [o] { checked(*o, run_load_cell); }; });
 
   CLI::App* inclinometer = calibrate->add_subcommand(
@@ -473,7 +474,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   inclinometer->add_option("--angles-deg", o->angles_deg, "Reference angles, comma-separated")
       ->delimiter(',');
   inclinometer->add_option("--window-s", o->window_s, "Stable window averaged per point")
-      ->check(CLI::Range(0.01, 600.0));
+      ->check(number_range(0.01, 600.0));
   inclinometer->add_option("--inclinometer-range-deg", o->inclinometer_range_deg,
                            "With --from: the inclinometer's range when the session has no rig");
   inclinometer->callback([o, &action] { action = [o] { checked(*o, run_inclinometer); }; });

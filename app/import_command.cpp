@@ -27,6 +27,7 @@
 #include "app/commands.h"
 #include "app/csv_metadata_keys.h"
 #include "app/limit_watcher.h"
+#include "app/number_options.h"
 #include "app/session_recording.h"
 #include "calibration/range_warnings.h"
 #include "core/number_format.h"
@@ -218,7 +219,7 @@ void add_import_command(CLI::App& app, Action& action) {
                    "Put the recording on a uniform clock of this rate: slower, each sample the "
                    "mean over its interval; faster, linear interpolation (e.g. a 100 kHz "
                    "recording at 1000 Hz for fit; docs/csv-format.md)")
-      ->check(CLI::Range(1.0, 1e6));
+      ->check(number_range(1.0, 1e6));
   import_command->callback([import, &action] { action = [import] { run_import(*import); }; });
 }
 
