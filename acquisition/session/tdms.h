@@ -3,8 +3,8 @@
 // write them) from NI's published description of the format, "TDMS File Format Internal
 // Structure", without NI's libraries. User documentation: docs/tdms.md.
 //
-// Supported: TDMS 1.0 and 2.0 segments (lead-in "TDSm", version 4712 or 4713) in
-// little-endian byte order; metadata with new or appended object lists, raw data indexes
+// Supported: TDMS 1.0 and 2.0 segments (lead-in "TDSm", version 4712 or 4713); metadata
+// with new or appended object lists, raw data indexes
 // given, repeated ("same as the previous segment", 0x00000000) or absent (0xFFFFFFFF);
 // interleaved and non-interleaved raw data in whole chunks; channels of the integer types
 // (I8…I64, U8…U64), SGL and DBL (with or without unit); string channels are skipped; every
@@ -17,8 +17,10 @@
 // last NI_Scale, where a scale without a Scale_Type is the scaler of that scale id, and a
 // channel without scales is its one scaler's raw value. Each scaler's raw values are kept
 // (TdmsChannel::daqmx_raw).
-// Refused, each by name: big-endian segments (the ToC's flag is read before the version,
-// which a big-endian segment stores byte-swapped), DAQmx scalers of other types or reading
+// Segments of either byte order: the ToC flags are little-endian, and kTocBigEndian makes
+// everything after them big-endian (the lead-in's version and offsets, the metadata, the raw
+// data; a time stamp's seconds come before its fractions).
+// Refused, each by name: DAQmx scalers of other types or reading
 // past their buffer, a segment mixing DAQmx and other raw data, channels of other data
 // types, arrays of more than one dimension, raw data that is not a whole number of chunks,
 // other scale types (Table, Thermocouple, RTD, ...).
@@ -70,7 +72,8 @@ struct TdmsFile {
 };
 
 // Throws TdmsError (a layout that is not supported, a damaged file; "PATH: cannot open for
-// reading" when it cannot be read).
+// reading" when it cannot be read; a Git LFS pointer in place of the file named as such,
+// acquisition/session/lfs_pointer.h).
 TdmsFile read_tdms(const std::filesystem::path& path);
 TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& source);
 
