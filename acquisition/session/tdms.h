@@ -35,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/session/import_units.h"
 #include "acquisition/session/recording_csv.h"
 
 namespace doorbench {
@@ -95,21 +96,39 @@ std::string escape_tdms_map_name(const std::string& name);
 // The file's channels as --map names them, "Door/Force, Door/Angle" ("none" when empty).
 std::string tdms_channel_list(const TdmsFile& file);
 
+// How tdms_to_recording builds the recording beyond the map (doorbench import's options).
+struct TdmsImportOptions {
+  // import --keep-raw: also each mapped channel's DAQmx scalers as stored (daqmx_raw: ADC
+  // counts, digital lines), as extra columns TARGET_raw ("force_raw"; an extra target's stem,
+  // "incl_raw" for incl_V; the scaler id appended when a channel has several), each with a
+  // metadata line tdms_raw_NAME saying which scaler of which channel it is; a channel without
+  // DAQmx raw data adds no column.
+  bool keep_raw = false;
+  // import --rate-hz: > 0, the sample rate of channels without waveform timing (no
+  // wf_increment): sample i at wf_start_offset + i / rate_hz (wf_start_offset 0 when
+  // absent). A force channel whose wf_increment says another rate is refused; so is a time
+  // channel in the map. 0: the waveform's timing.
+  double rate_hz = 0.0;
+  // import --scale, --calibration: targets whose channels hold a raw signal (volts); their
+  // units are checked against the record (the channel's unit_string must be the record's
+  // input unit, when it states one) instead of the target's, the raw values are kept and the
+  // record goes to Recording::calibrations.
+  std::vector<ImportConversion> conversions;
+  // "" when usable, else the option at fault.
+  std::string validate() const;
+};
+
 // The mapped channels as a recording: force and angle or rate are required, and no channel
-// may be mapped twice; time from the
-// `time` channel when mapped, else wf_start_offset + i × wf_increment of the force channel
-// (every mapped channel must have as many values and the same wf_increment). Units are
-// checked where the channel states one (unit_string: N for force, rad for angle, rad/s for
-// rate). The file's handle_radius_m property (file or group) becomes the recording's;
-// mapped channels' properties, the file's and the force channel's wf_start_time (metadata
-// tdms_wf_start_time, ISO 8601 UTC) go into the metadata. Throws TdmsError "SOURCE: ..."
-// naming the target and channel and ending with the file's channels (tdms_channel_list).
-// keep_raw (import --keep-raw): also each mapped channel's DAQmx scalers as stored
-// (daqmx_raw: ADC counts, digital lines), as extra columns TARGET_raw ("force_raw"; an extra
-// target's stem, "incl_raw" for incl_V; the scaler id appended when a channel has several),
-// each with a metadata line tdms_raw_NAME saying which scaler of which channel it is; a
-// channel without DAQmx raw data adds no column.
+// may be mapped twice; time from the `time` channel when mapped, else wf_start_offset + i ×
+// wf_increment of the force channel (or i / options.rate_hz; every mapped channel must have
+// as many values and the same wf_increment). Units are checked where the channel states one
+// (unit_string: N for force, rad for angle, rad/s for rate; for a converted target, the
+// record's input unit). The file's handle_radius_m property (file or group) becomes the
+// recording's; mapped channels' properties, the file's and the force channel's
+// wf_start_time (metadata tdms_wf_start_time, ISO 8601 UTC) go into the metadata. Throws
+// TdmsError "SOURCE: ..." naming the target and channel and ending with the file's
+// channels (tdms_channel_list).
 Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
-                            const std::string& source, bool keep_raw = false);
+                            const std::string& source, const TdmsImportOptions& options = {});
 
 }  // namespace doorbench

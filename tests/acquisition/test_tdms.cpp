@@ -217,8 +217,9 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
                                      dir);
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + tdms +
-                       ": angle: channel Door/Incl is in 'deg', not rad (scale it in the file, or "
-                       "map it as an extra column whose name ends in its unit)" + channels);
+                       ": angle: channel Door/Incl is in 'deg', not rad (convert it: "
+                       "--calibration angle=RECORD or --scale angle=GAIN[,OFFSET]; or map it as "
+                       "an extra column whose name ends in its unit)" + channels);
 
   // Without --map: the channels to map.
   run = testing::run_doorbench_shell(
