@@ -15,6 +15,7 @@
 
 #include "analysis/model/parameter_file.h"
 #include "app/commands.h"
+#include "app/number_options.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
 #include "core/number_format.h"
@@ -186,7 +187,7 @@ void add_ab_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   ab->add_option("--device", options->device, "sim, or hapticmaster://HOST")->capture_default_str();
   ab->add_option("--trials", options->trials, "Number of trials N")
-      ->check(CLI::Range(1, 10000))
+      ->check(number_range(1, 10000))
       ->capture_default_str();
   ab->add_option("--question", options->question,
                  "preference (which felt better), identify-real (which was the real door) or "

@@ -13,6 +13,7 @@
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/session/output_file.h"
 #include "app/commands.h"
+#include "app/number_options.h"
 #include "app/session_recording.h"
 #include "calibration/certificate.h"
 #include "calibration/geometry_calibration.h"
@@ -23,6 +24,7 @@
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
+#include "core/time_text.h"
 #include "sensors/rig_channel.h"
 #include "simulated_bench/simulated_bench.h"
 
@@ -35,42 +37,7 @@ namespace cal = calibration;
 // (YYYY-MM-DDTHH:MM[:SS[.fraction]]Z) on the calendar, not before today (UTC); else why not
 // (issue 33: `--valid-until notadate` was stored as it was).
 std::string valid_until_problem(const std::string& text) {
-  const std::string form =
-      " is not an ISO 8601 date (YYYY-MM-DD, or YYYY-MM-DDTHH:MM:SSZ in UTC)";
-  const auto digits = [&](std::size_t at, std::size_t count) {
-    if (at + count > text.size()) return -1;
-    int value = 0;
-    for (std::size_t i = at; i < at + count; ++i) {
-      if (text[i] < '0' || text[i] > '9') return -1;
-      value = value * 10 + (text[i] - '0');
-    }
-    return value;
-  };
-  const int year = digits(0, 4), month = digits(5, 2), day = digits(8, 2);
-  if (year < 0 || month < 0 || day < 0 || text[4] != '-' || text[7] != '-') return text + form;
-  if (text.size() > 10) {  // THH:MM[:SS[.fraction]]Z
-    const int hour = digits(11, 2), minute = digits(14, 2);
-    std::size_t end = 16;
-    int second = 0;
-    if (text.size() > 17 && text[16] == ':') {
-      second = digits(17, 2);
-      end = 19;
-      if (text.size() > 20 && text[19] == '.') {
-        for (end = 20; end < text.size() && text[end] >= '0' && text[end] <= '9';) ++end;
-        if (end == 20) return text + form;
-      }
-    }
-    // hour and minute >= 0: the text reaches index 15, so [10] and [13] are in it.
-    if (hour < 0 || minute < 0 || text[10] != 'T' || text[13] != ':' || hour > 23 ||
-        minute > 59 || second < 0 || second > 59 || end + 1 != text.size() || text[end] != 'Z') {
-      return text + form;
-    }
-  }
-  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
-  const int days[] = {31, leap ? 29 : 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
-  if (month < 1 || month > 12 || day < 1 || day > days[month - 1]) {
-    return text + " is not a day of the calendar";
-  }
+  if (std::string problem = iso8601_utc_problem(text); !problem.empty()) return problem;
   const std::string today = utc_now_iso8601().substr(0, 10);
   if (text.compare(0, 10, today) < 0) {
     return text + " is before today (" + today + "): the record would have expired when made";
@@ -462,7 +429,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
       ->excludes(masses)
       ->excludes(forces);
   loadcell->add_option("--window-s", o->window_s, "Stable window averaged per point")
-      ->check(CLI::Range(0.01, 600.0));
+      ->check(number_range(0.01, 600.0));
   loadcell->callback([o, &action] { action = [o] { checked(*o, run_load_cell); }; });
 
   CLI::App* inclinometer = calibrate->add_subcommand(
@@ -473,7 +440,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   inclinometer->add_option("--angles-deg", o->angles_deg, "Reference angles, comma-separated")
       ->delimiter(',');
   inclinometer->add_option("--window-s", o->window_s, "Stable window averaged per point")
-      ->check(CLI::Range(0.01, 600.0));
+      ->check(number_range(0.01, 600.0));
   inclinometer->add_option("--inclinometer-range-deg", o->inclinometer_range_deg,
                            "With --from: the inclinometer's range when the session has no rig");
   inclinometer->callback([o, &action] { action = [o] { checked(*o, run_inclinometer); }; });

@@ -10,6 +10,7 @@
 #include "acquisition/session/output_file.h"
 #include "app/campaign_report.h"
 #include "app/commands.h"
+#include "app/number_options.h"
 #include "app/progress.h"
 #include "app/stop_signals.h"
 #include "study/campaign_plan.h"
@@ -161,7 +162,7 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
       ->add_option("--bootstrap", options->bootstrap,
                    "participant bootstrap resamples for the preference scale (0: none)")
       ->capture_default_str()
-      ->check(CLI::Range(0, 1000000));
+      ->check(number_range(0, 1000000));
   command->add_option("--seed", options->seed, "the bootstrap's seed")->capture_default_str();
   command->add_option("--reference", options->reference,
                       "the variant at worth 0 (default: a campaign folder's first variant, else the first in "

@@ -19,6 +19,7 @@
 
 #include "acquisition/session/output_file.h"
 #include "app/commands.h"
+#include "app/number_options.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
 #include "core/number_format.h"
@@ -390,7 +391,7 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action) {
   plan->add_option("--seed", plan_options->seed, "The plan's seed (default: the campaign file's)");
   plan->add_option("--simulate", plan_options->simulate,
                    "Run the plan with N simulated panels and print how often each question detects its effect")
-      ->check(CLI::Range(1, 100000));
+      ->check(number_range(1, 100000));
   plan->add_flag("--overwrite", plan_options->overwrite, "Write into a folder that is not empty");
   plan->callback([plan_options, &action] { action = [plan_options] { run_plan(*plan_options); }; });
 
@@ -411,7 +412,7 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action) {
                 "of the campaign file's presentation_s), instead of simulated time");
   run->add_option("--presentation-s", run_options->presentation_s,
                   "Length of each presentation (default: the campaign file's)")
-      ->check(CLI::Range(0.001, 600.0));
+      ->check(number_range(0.001, 600.0));
   run->add_flag("--redo", run_options->redo, "Run a finished participant again (earlier answers kept, marked)");
   run->callback([run_options, &action] { action = [run_options] { run_run(*run_options); }; });
 

@@ -18,6 +18,7 @@
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
+#include "app/number_options.h"
 #include "app/progress.h"
 #include "app/stop_signals.h"
 #include "core/number_format.h"
@@ -293,12 +294,12 @@ void add_fit_command(CLI::App& app, Action& action) {
       ->check(CLI::IsMember({"windows", "study-max"}))
       ->capture_default_str();
   fit->add_option("--folds", options->folds, "Cross-validation folds over strokes (0: none)")
-      ->check(CLI::Range(0, 1000))
+      ->check(number_range(0, 1000))
       ->capture_default_str();
   fit->add_option("--max-windows", options->max_windows,
                   "Most windows in the window fit: beyond, whole strokes spread evenly over the "
                   "recording are fitted (0: every window)")
-      ->check(CLI::Range(0, 100000000))
+      ->check(number_range(0, 100000000))
       ->capture_default_str();
   fit->add_flag("--init-only", options->init_only,
                 "Only write the start: start-params.json (a parameter file) and start.md "

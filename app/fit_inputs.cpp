@@ -18,6 +18,7 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "app/commands.h"
+#include "app/number_options.h"
 #include "core/number_format.h"
 
 namespace doorbench::app {
@@ -148,17 +149,17 @@ void add_fit_data_options(CLI::App& command, FitDataOptions& options,
       .add_option("--derivative-cutoff-hz", options.preprocessing.derivative_cutoff_hz,
                   "Low-pass before differentiating angle_rad (no gyroscope), Hz; 0: the rate's "
                   "rule min(30 Hz, sample rate / 4) (docs/preprocessing.md)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   command
       .add_option("--force-cutoff-hz", options.preprocessing.force_cutoff_hz,
                   "Zero-phase low-pass on the force, Hz; 0: none")
-      ->check(CLI::NonNegativeNumber)
+      ->check(non_negative_number())
       ->capture_default_str();
   command
       .add_option("--min-sample-rate-hz", options.preprocessing.min_sample_rate_hz,
                   "Refuse recordings sampled more slowly than this")
-      ->check(CLI::PositiveNumber)
+      ->check(positive_number())
       ->capture_default_str();
   command
       .add_option("--start", options.start,

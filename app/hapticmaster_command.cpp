@@ -10,6 +10,7 @@
 
 #include "acquisition/session/output_file.h"
 #include "app/commands.h"
+#include "app/number_options.h"
 #include "haptic/hapticmaster_check.h"
 
 namespace doorbench::app {
@@ -72,11 +73,11 @@ void add_hapticmaster_command(CLI::App& app, Action& action) {
       "the stiffness limit it implies, and (confirmed) whether a disconnect leaves force on");
   check->add_option("device", options->uri, "hapticmaster://HOST[:PORT]")->required();
   check->add_option("--exchanges", options->exchanges, "Round trips to time")
-      ->check(CLI::Range(100, 1000000))
+      ->check(number_range(100, 1000000))
       ->capture_default_str();
   check->add_option("--inertia-kg", options->inertia_kg,
                     "The inertia rendered during the check (heavy: the arm barely moves)")
-      ->check(CLI::Range(2.0, 100.0))
+      ->check(number_range(2.0, 100.0))
       ->capture_default_str();
   check->add_flag("--yes", options->yes,
                   "Run the disconnect test without asking (it pushes the arm with 2 N)");

@@ -18,8 +18,10 @@
 
 #include "acquisition/record/recorder.h"
 #include "acquisition/record/recovery.h"
+#include "acquisition/rig/calibration_store.h"
 #include "acquisition/rig/rig_file.h"
 #include "acquisition/session/output_file.h"
+#include "acquisition/session/import_units.h"
 #include "acquisition/session/printable.h"
 #include "acquisition/session/resample.h"
 #include "acquisition/session/session_csv.h"
@@ -27,9 +29,11 @@
 #include "app/commands.h"
 #include "app/csv_metadata_keys.h"
 #include "app/limit_watcher.h"
+#include "app/number_options.h"
 #include "app/session_recording.h"
 #include "calibration/range_warnings.h"
 #include "core/number_format.h"
+#include "core/time_text.h"
 #include "sensors/comedi_backend.h"
 #include "sensors/modbus_source.h"
 #include "simulated_bench/simulated_bench.h"
@@ -44,6 +48,11 @@ struct ImportOptions {
   std::string tdms_map;  // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h)
   bool keep_raw = false;  // TDMS files: the DAQmx scalers' raw values beside the scaled ones
   double resample_hz = 0.0;  // > 0: the recording on a uniform clock of this rate
+  double rate_hz = 0.0;      // TDMS files: > 0, the rate of channels without wf_increment
+  std::string start_time;    // the session's start (ISO 8601 UTC); "": the file's, else now
+  // Raw channels to physical units (acquisition/session/import_units.h).
+  std::vector<std::string> scales, calibrations;
+  std::string store_dir;  // --calibrations: the store --calibration's ids are in
 };
 
 // The metadata key --resample-hz adds: how the recording was resampled.
@@ -99,6 +108,7 @@ Recording resampled(const Recording& in, double rate_hz) {
   out.force_N = column(in.force_N, kForceColumn);
   if (in.angle_rad) out.angle_rad = column(*in.angle_rad, kAngleColumn);
   if (in.rate_rad_s) out.rate_rad_s = column(*in.rate_rad_s, kRateColumn);
+  out.calibrations = in.calibrations;
   out.extra_names = in.extra_names;
   for (std::size_t j = 0; j < in.extra_columns.size(); ++j) {
     out.extra_columns.push_back(column(in.extra_columns[j], in.extra_names[j]));
@@ -135,10 +145,27 @@ Recording read_import(const ImportOptions& options) {
                     ": this is a TDMS index file (.tdms_index); import the .tdms file itself (" +
                     data + ")");
   }
+  std::vector<ImportConversion> conversions;
+  try {
+    conversions = parse_import_conversions(
+        options.scales, options.calibrations,
+        calibration::CalibrationStore(calibration::calibration_store_directory(
+            options.store_dir, std::filesystem::current_path())));
+  } catch (const std::invalid_argument& error) {
+    throw UsageError(error.what());
+  }
   if (extension != ".tdms") {
     if (!options.tdms_map.empty()) throw UsageError("--map is for TDMS files (*.tdms)");
     if (options.keep_raw) throw UsageError("--keep-raw is for TDMS files (*.tdms)");
-    return read_recording_csv(options.csv_path, EmptyCells::kMissing);  // empty: lost samples
+    if (options.rate_hz > 0) {
+      throw UsageError("--rate-hz is for TDMS files (*.tdms): a CSV's time_s gives the time");
+    }
+    CsvTable table = read_csv_file(options.csv_path, EmptyCells::kMissing);  // empty: lost samples
+    std::map<std::string, calibration::CalibrationRecord> records =
+        take_raw_columns(table, conversions, options.csv_path);
+    Recording recording = recording_from_table(table, options.csv_path);
+    recording.calibrations = std::move(records);
+    return recording;
   }
   // The file first: a missing or malformed --map is answered with the channels to map.
   const TdmsFile file = read_tdms(options.csv_path);
@@ -155,7 +182,11 @@ Recording read_import(const ImportOptions& options) {
     throw UsageError(std::string(error.what()) + "; the file's channels: " +
                      tdms_channel_list(file));
   }
-  return tdms_to_recording(file, map, options.csv_path, options.keep_raw);
+  TdmsImportOptions tdms_options;
+  tdms_options.keep_raw = options.keep_raw;
+  tdms_options.rate_hz = options.rate_hz;
+  tdms_options.conversions = std::move(conversions);
+  return tdms_to_recording(file, map, options.csv_path, tdms_options);
 }
 
 void run_import(const ImportOptions& options) {
@@ -179,7 +210,9 @@ void run_import(const ImportOptions& options) {
       options.product_id.empty() ? from_csv(kCsvProductKey, "") : options.product_id;
   // A TDMS file's wf_start_time (its first sample's time) is the start when it has one.
   metadata.start_time_utc =
-      from_csv(kCsvStartKey, from_csv("tdms_wf_start_time", utc_now_iso8601()));
+      !options.start_time.empty()
+          ? options.start_time
+          : from_csv(kCsvStartKey, from_csv("tdms_wf_start_time", utc_now_iso8601()));
   metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
   metadata.notes = options.notes.empty() ? "imported from " + options.csv_path : options.notes;
   std::string how;  // the line resampled() added last
@@ -187,9 +220,17 @@ void run_import(const ImportOptions& options) {
     if (options.resample_hz > 0 && key == kResampledKey) how = value;
   }
   if (!how.empty()) metadata.notes += "; resampled " + how;
+  for (const auto& [column, record] : recording.calibrations) {
+    metadata.notes += "; " + column + " through " + record.id + " (" + record.input_unit +
+                      " to " + record.unit + ", " + record.method + ")";
+  }
   recording_to_session(recording, options.out_path, metadata);
   std::cerr << "wrote " << options.out_path << ": " << recording.size() << " samples"
             << (how.empty() ? "" : ", resampled " + how) << "\n";
+  for (const auto& [column, record] : recording.calibrations) {
+    std::cerr << "  " << column << ": raw " << printable(record.input_unit) << " kept, physical through "
+              << printable(record.id) << " (" << printable(record.method) << ")\n";
+  }
 }
 
 }  // namespace
@@ -218,7 +259,32 @@ void add_import_command(CLI::App& app, Action& action) {
                    "Put the recording on a uniform clock of this rate: slower, each sample the "
                    "mean over its interval; faster, linear interpolation (e.g. a 100 kHz "
                    "recording at 1000 Hz for fit; docs/csv-format.md)")
-      ->check(CLI::Range(1.0, 1e6));
+      ->check(number_range(1.0, 1e6));
+  import_command
+      ->add_option("--rate-hz", import->rate_hz,
+                   "TDMS files: the sample rate of channels without waveform timing (no "
+                   "wf_increment), Hz (docs/tdms.md)")
+      ->check(number_range(1e-6, 1e7));
+  import_command
+      ->add_option("--start-time", import->start_time,
+                   "The session's start, the time of the first sample, ISO 8601 UTC "
+                   "(2024-05-02T09:30:00Z); default: the file's (wf_start_time, "
+                   "start_time_utc), else now")
+      ->check(CLI::Validator(iso8601_utc_problem, "TIME"));
+  import_command->add_option(
+      "--scale", import->scales,
+      "A target's channel is a raw signal: physical = GAIN * raw + OFFSET, e.g. "
+      "force=98.1,-0.5 (raw values kept; the session names the scale); repeat per target")
+      ->allow_extra_args(false);
+  import_command->add_option(
+      "--calibration", import->calibrations,
+      "A target's channel is a raw signal that a calibration record makes physical: "
+      "TARGET=ID (in the store) or TARGET=FILE.json, e.g. force=load_cell-LC1-v2 (raw values "
+      "and the record kept); repeat per target")
+      ->allow_extra_args(false);
+  import_command->add_option("--calibrations", import->store_dir,
+                             "The calibration store of --calibration's ids (default: "
+                             "$DOORBENCH_CALIBRATIONS, else ./calibrations)");
   import_command->callback([import, &action] { action = [import] { run_import(*import); }; });
 }
 

@@ -11,6 +11,7 @@
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/loop_output.h"
+#include "app/number_options.h"
 #include "app/progress.h"
 #include "app/stop_signals.h"
 
@@ -101,10 +102,10 @@ void add_loop_command(CLI::App& app, Action& action) {
   add_fit_data_options(*loop, options->input,
                        "Effects the start model already has (a *.json file or names)");
   loop->add_option("--folds", options->folds, "Cross-validation folds over strokes (>= 3)")
-      ->check(CLI::Range(3, 1000))
+      ->check(number_range(3, 1000))
       ->capture_default_str();
   loop->add_option("--max-steps", options->max_steps, "Most effects to add")
-      ->check(CLI::Range(1, 8))
+      ->check(number_range(1, 8))
       ->capture_default_str();
   loop->add_option("--out", options->out_dir, "Folder for result.json, report.md and plots")
       ->required();

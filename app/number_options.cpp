@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <functional>
+#include <utility>
 
 namespace doorbench::app {
 
@@ -83,7 +85,8 @@ void check_recursively(CLI::App& app) {
         range = &named;
       }
     }
-    option->check(number_validator(kind, range));
+    // In front of the verb's own checks: a text that is no number is answered here.
+    option->transform(number_validator(kind, range));
   }
   for (CLI::App* sub : app.get_subcommands([](CLI::App*) { return true; })) {
     check_recursively(*sub);
@@ -129,5 +132,38 @@ std::string number_problem(const std::string& text, NumberKind kind) {
 }
 
 void check_numeric_options(CLI::App& app) { check_recursively(app); }
+
+namespace {
+
+// A check of a number against `within` (true: it passes), else "TEXT" + `otherwise`.
+CLI::Validator value_check(std::function<bool(double)> within, std::string otherwise,
+                           std::string description) {
+  return CLI::Validator(
+      [within = std::move(within), otherwise = std::move(otherwise)](std::string& text) {
+        if (std::string problem = number_problem(text, NumberKind::kFloat); !problem.empty()) {
+          return problem;
+        }
+        return within(std::strtod(text.c_str(), nullptr)) ? std::string() : text + otherwise;
+      },
+      std::move(description));
+}
+
+}  // namespace
+
+CLI::Validator number_range(double min, double max) {
+  return value_check([min, max](double value) { return value >= min && value <= max; },
+                     " is outside " + number_text(min) + " to " + number_text(max),
+                     number_text(min) + " to " + number_text(max));
+}
+
+CLI::Validator non_negative_number() {
+  return value_check([](double value) { return value >= 0; }, " is negative (0 or more)",
+                     "0 or more");
+}
+
+CLI::Validator positive_number() {
+  return value_check([](double value) { return value > 0; }, " is not positive (more than 0)",
+                     "more than 0");
+}
 
 }  // namespace doorbench::app

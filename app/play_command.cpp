@@ -10,6 +10,7 @@
 #include "analysis/model/parameter_file.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
+#include "app/number_options.h"
 #include "app/play_run.h"
 #include "core/number_format.h"
 #include "haptic/tuning_keys.h"
@@ -208,10 +209,10 @@ void add_play_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   play->add_option("--out", options->out, "The session to write (must not exist)")->required();
   play->add_option("--duration-s", options->duration_s, "How long to play")
-      ->check(CLI::Range(0.01, 86400.0))
+      ->check(number_range(0.01, 86400.0))
       ->capture_default_str();
   play->add_option("--rate-hz", options->rate_hz, "Render loop rate (100 to 4000 Hz)")
-      ->check(CLI::Range(100.0, 4000.0))
+      ->check(number_range(100.0, 4000.0))
       ->capture_default_str();
   play->add_flag("--simulated-time", options->simulated_time,
                  "Run a simulated device in simulated time, as fast as possible");
@@ -219,35 +220,35 @@ void add_play_command(CLI::App& app, Action& action) {
                  "Do not ask for SCHED_FIFO (the tick's thread and a HapticMaster's I/O thread)");
   play->add_option("--hand-cycle-s", options->hand_cycle_s,
                    "Simulated devices: the virtual user's open-close cycle")
-      ->check(CLI::Range(1.0, 600.0))
+      ->check(number_range(1.0, 600.0))
       ->capture_default_str();
   play->add_option("--pushes-hz", options->pushes_hz,
                    "Simulated devices: mean rate of the virtual user's pushes off the arc")
-      ->check(CLI::Range(0.0, 50.0))
+      ->check(number_range(0.0, 50.0))
       ->capture_default_str();
   play->add_option("--push-N", options->push_N, "Simulated devices: the pushes' amplitude")
-      ->check(CLI::Range(0.0, 200.0))
+      ->check(number_range(0.0, 200.0))
       ->capture_default_str();
   play->add_option("--seed", options->seed, "Simulated devices: noise and pushes")
       ->capture_default_str();
   play->add_option("--max-force-N", options->max_force_N,
                    "The safety layer's force limit (the device's own limit also applies; rotary "
                    "devices: N*m)")
-      ->check(CLI::Range(0.1, 1000.0))
+      ->check(number_range(0.1, 1000.0))
       ->capture_default_str();
   play->add_option("--max-force-rate", options->max_force_rate_N_per_s,
                    "The safety layer's force-rate limit, N/s (rotary: N*m/s)")
-      ->check(CLI::Range(1.0, 1e6))
+      ->check(number_range(1.0, 1e6))
       ->capture_default_str();
   play->add_option("--max-tick-interval-ms", options->max_tick_interval_ms,
                    "A longer gap between two ticks is a late tick: counted in the summary, the "
                    "device holds the last force meanwhile and playback goes on")
-      ->check(CLI::Range(0.5, 1000.0))
+      ->check(number_range(0.5, 1000.0))
       ->capture_default_str();
   play->add_option("--max-tick-stall-ms", options->max_tick_stall_ms,
                    "A longer gap between two ticks is a stall: the safety layer ramps the force "
                    "down and stops (the HapticMaster's I/O watchdog stops the device itself)")
-      ->check(CLI::Range(1.0, 1000.0))
+      ->check(number_range(1.0, 1000.0))
       ->capture_default_str();
   play->add_flag("--keys", options->keys,
                  "Live tuning from the keypad (stdin must be a terminal): + - heavier/lighter, "

@@ -25,6 +25,7 @@
 #include "acquisition/session/tdms.h"
 #include "app/commands.h"
 #include "app/limit_watcher.h"
+#include "app/number_options.h"
 #include "app/session_recording.h"
 #include "calibration/range_warnings.h"
 #include "sensors/comedi_backend.h"
@@ -117,12 +118,12 @@ void add_record_command(CLI::App& app, Action& action) {
       ->add_option("--duration-s", record->recording.duration_s,
                    "How long to record (from the trigger when the rig has a [recording] "
                    "table); default: the rig's hand cycles")
-      ->check(CLI::Range(0.001, 86400.0));
+      ->check(number_range(0.001, 86400.0));
   record_command
       ->add_option("--max-wait-s", record->recording.max_wait_s,
                    "With a rig trigger: how long to wait, armed, for the start condition")
       ->capture_default_str()
-      ->check(CLI::Range(0.0, 86400.0));
+      ->check(number_range(0.0, 86400.0));
   record_command->add_option("--out", record->out_path, "The new session file (HDF5)")->required();
   record_command->add_option("--operator", record->recording.operator_name, "Who records");
   record_command->add_option("--product", record->recording.product_id, "The door or product");
@@ -132,7 +133,7 @@ void add_record_command(CLI::App& app, Action& action) {
                    "How often the recording journal is synced to disk: at most about this much "
                    "is lost if the machine dies (docs/crash-safety.md)")
       ->capture_default_str()
-      ->check(CLI::Range(0.001, 10.0));
+      ->check(number_range(0.001, 10.0));
   record_command->callback([record, &action] { action = [record] { run_record(*record); }; });
 }
 

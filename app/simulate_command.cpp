@@ -11,6 +11,7 @@
 #include "analysis/simulation/virtual_hand.h"
 #include "app/commands.h"
 #include "app/hand_run.h"
+#include "app/number_options.h"
 
 namespace doorbench::app {
 
@@ -112,13 +113,13 @@ void add_simulate_command(CLI::App& app, Action& action) {
           ->check(CLI::IsMember({"open-close"}));
   force->excludes(hand);
   simulate->add_option("--target-deg", options->target_deg, "Virtual hand: opening target (deg)")
-      ->check(CLI::Range(0.1, 180.0))
+      ->check(number_range(0.1, 180.0))
       ->capture_default_str();
   simulate->add_option("--duration-s", options->duration_s, "Virtual hand: whole run (s)")
-      ->check(CLI::Range(0.5, 3600.0))
+      ->check(number_range(0.5, 3600.0))
       ->capture_default_str();
   simulate->add_option("--rate-hz", options->rate_hz, "Virtual hand: output sample rate (Hz)")
-      ->check(CLI::Range(1.0, 100000.0))
+      ->check(number_range(1.0, 100000.0))
       ->capture_default_str();
   simulate->add_option("--out", options->out_path, "Where to write the run (CSV)")->required();
   simulate->add_flag("--overwrite", options->overwrite, "Replace an existing --out file");

@@ -425,6 +425,26 @@ double first_motion_onset_s(const SessionData& session, const std::string& direc
 
 namespace {
 
+// The stretches where `session`'s channel `index` sat at its sensor's limit, on the
+// overlay's clock (shifted by -start_s), labelled with the session ("A session.h5: ...")
+// and `consequence`; all gyroscopes' when `index` is npos (the door's quantities: preprocessing
+// integrates the rate, so the angle and the rate are not known where it is clipped).
+void add_limit_shades(const SessionData& session, const std::string& who, double start_s,
+                      std::size_t index, const std::string& consequence, PlotView& plot) {
+  for (std::size_t i = 0; i < session.at_limit.size() && i < session.channels.size(); ++i) {
+    const bool wanted = index == std::string::npos
+                            ? session.channels[i].sensor_kind == "gyroscope"
+                            : i == index;
+    if (!wanted) continue;
+    for (Shade shade : session.at_limit[i]) {
+      shade.x0 -= start_s;
+      shade.x1 -= start_s;
+      shade.label = who + " " + session.path.filename().string() + ": " + shade.label + consequence;
+      plot.shades.push_back(std::move(shade));
+    }
+  }
+}
+
 // One overlay plot: A's and B's series shifted to their stroke starts, A as measured on top,
 // B opaque and wider beneath, so that both show where they coincide.
 PlotView overlay_plot(const Overlay& overlay, const SessionData& a, const Series& series_a,
@@ -470,6 +490,13 @@ Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::str
                                          "force (handle, + opening)" + aligned, "hand force"));
     overlay.plots.push_back(overlay_plot(overlay, a, *a.door_rate, b, *b.door_rate,
                                          "rate (bias removed)" + aligned, "door rate"));
+    // Where a gyroscope sat at its limit the door's angle and rate are not known: the prepared
+    // strokes leave those samples out (the curves break) and the stretch is shaded.
+    for (PlotView& plot : overlay.plots) {
+      const std::string consequence = ", the door's angle and rate not known there";
+      add_limit_shades(a, "A", overlay.a_start_s, std::string::npos, consequence, plot);
+      add_limit_shades(b, "B", overlay.b_start_s, std::string::npos, consequence, plot);
+    }
     if (raw_channels) overlay.shown += " and the raw channels";
   } else {
     const SessionData& unprepared = a.door_angle ? b : a;
@@ -486,6 +513,8 @@ Overlay overlay_plots(const SessionData& a, const SessionData& b, const std::str
         overlay.plots.push_back(
             overlay_plot(overlay, a, *a.channel_series[i], b, *b.channel_series[j],
                          "channel " + a.channels[i].name + aligned, a.channels[i].name));
+        add_limit_shades(a, "A", overlay.a_start_s, i, "", overlay.plots.back());
+        add_limit_shades(b, "B", overlay.b_start_s, j, "", overlay.plots.back());
       }
     }
   }

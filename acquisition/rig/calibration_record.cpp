@@ -1,6 +1,7 @@
 #include "acquisition/rig/calibration_record.h"
 
 #include <cmath>
+#include <ctime>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -18,6 +19,35 @@ double CalibrationRecord::apply(double input) const {
   for (auto it = coefficients.rbegin(); it != coefficients.rend(); ++it)
     value = value * input + *it;
   return value;
+}
+
+std::string CalibrationRecord::unit_problem(std::string_view input, std::string_view output) const {
+  if (unit != output) return "record " + id + " gives " + unit + ", not " + std::string(output);
+  if (!input.empty() && input_unit != input) {
+    return "record " + id + " takes " + input_unit + ", not " + std::string(input);
+  }
+  return "";
+}
+
+CalibrationRecord linear_record(std::string id, std::string input_unit, std::string unit,
+                                double gain, double offset, std::string method) {
+  if (!std::isfinite(gain) || !std::isfinite(offset) || gain == 0.0) {
+    throw std::invalid_argument("a linear record needs a finite gain other than 0 and a finite offset");
+  }
+  CalibrationRecord record;
+  record.id = std::move(id);
+  record.sensor_kind = "scale";
+  record.input_unit = std::move(input_unit);
+  record.unit = std::move(unit);
+  record.coefficients = {offset, gain};
+  record.method = std::move(method);
+  const std::time_t now = std::time(nullptr);
+  std::tm utc{};
+  gmtime_r(&now, &utc);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &utc);
+  record.date_utc = date;
+  return record;
 }
 
 std::string CalibrationRecord::validate() const {

@@ -70,10 +70,19 @@ struct CalibrationRecord {
   double apply(double input) const;
   // The quantity of that name, or nullptr.
   const CalibrationQuantity* quantity(std::string_view name) const;
+  // "" when the record takes `input` (its input_unit; an empty `input` is not checked) and
+  // gives `output` (its unit); else why not: "record ID gives rad, not N".
+  std::string unit_problem(std::string_view input, std::string_view output) const;
 
   // Empty when usable, else a one-line message naming the field.
   std::string validate() const;
 };
+
+// A linear record given by hand, physical = offset + gain · input (import --scale): method
+// `method`, dated now, sensor_kind "scale". Throws std::invalid_argument for a gain or offset
+// that is not finite, or a gain of 0.
+CalibrationRecord linear_record(std::string id, std::string input_unit, std::string unit,
+                                double gain, double offset, std::string method);
 
 // JSON text of a record and back; parsing errors name `source` and the field.
 std::string to_json(const CalibrationRecord& record);

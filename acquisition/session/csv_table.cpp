@@ -10,6 +10,7 @@
 #include <system_error>
 #include <unordered_set>
 
+#include "acquisition/session/lfs_pointer.h"
 #include "acquisition/session/printable.h"
 
 namespace doorbench {
@@ -115,8 +116,26 @@ bool is_comment(std::string_view line) {
   return !line.empty() && line.front() == '#';
 }
 
+// The first control character of `text` (bytes 0x00-0x1f but the tab, and 0x7f), if any.
+std::size_t control_character_at(std::string_view text) {
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const auto byte = static_cast<unsigned char>(text[i]);
+    if ((byte < 0x20 && byte != '\t') || byte == 0x7f) return i;
+  }
+  return std::string_view::npos;
+}
+
 void read_metadata_line(std::string_view line, int line_number, std::string_view source,
                         CsvTable& table) {
+  // Metadata is text: a NUL would cut it where it is stored (a session's attributes), other
+  // control characters would reach terminals. Refused where they are, not cut or dropped.
+  if (const std::size_t at = control_character_at(line); at != std::string_view::npos) {
+    throw CsvError(source, line_number,
+                   "control character " + printable(line.substr(at, 1)) + " at column " +
+                       std::to_string(at + 1) +
+                       " of a metadata line (metadata is kept as text: remove it from the "
+                       "file)");
+  }
   line = trim(line);
   const auto [key, value] = split_comment(line.substr(1));
   if (!key.empty()) {
@@ -140,6 +159,9 @@ std::string column_name_problem(std::string_view name) {
   }
   if (name.find(';') != std::string_view::npos || name.find('\t') != std::string_view::npos) {
     return "contains ';' or a tab (fields must be separated by commas)";
+  }
+  if (const std::size_t at = control_character_at(name); at != std::string_view::npos) {
+    return "contains the control character " + printable(name.substr(at, 1));
   }
   if (parse_csv_number(name)) return "is a number (is the header row missing?)";
   return {};
@@ -325,6 +347,9 @@ std::string format_csv_number(double value) {
 
 CsvTable parse_csv_table(std::string_view text, std::string_view source,
                          EmptyCells empty_cells) {
+  if (const std::string pointer = lfs_pointer_description(text); !pointer.empty()) {
+    throw CsvError(source, 0, pointer);
+  }
   CsvTable table;
   LineReader reader(text, source);
   std::string_view line;

@@ -1,5 +1,6 @@
 #include "acquisition/session/recording_csv.h"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <fstream>
@@ -53,6 +54,10 @@ void require_length(std::string_view name, std::size_t length, std::size_t expec
 }
 
 void check_recording_for_writing(const Recording& recording) {
+  if (!recording.calibrations.empty()) {
+    reject("the recording holds raw columns (" + recording.calibrations.begin()->first +
+           " through its record); a CSV holds physical values");
+  }
   const std::size_t size = recording.time_s.size();
   require(size > 0, "no samples (a recording needs at least one row)");
   require_length(kForceColumn, recording.force_N.size(), size);
@@ -104,6 +109,25 @@ void check_recording_for_writing(const Recording& recording) {
 bool has_unit_suffix(std::string_view name) {
   const auto underscore = name.rfind('_');
   return underscore != std::string_view::npos && underscore > 0 && underscore + 1 < name.size();
+}
+
+std::string unit_column_suffix(const std::string& unit) {
+  std::string suffix;
+  for (char c : unit) suffix += (c == '/' || c == '*' || c == ' ' || c == '^') ? '_' : c;
+  return suffix;
+}
+
+std::string unit_of_column(const std::string& column) {
+  for (const char* compound : {"_rad_s", "_deg_s", "_m_s", "_N_m"}) {
+    const std::string ending(compound);
+    if (column.size() > ending.size() &&
+        column.compare(column.size() - ending.size(), ending.size(), ending) == 0) {
+      std::string unit = ending.substr(1);
+      std::replace(unit.begin(), unit.end(), '_', unit == "N_m" ? '*' : '/');
+      return unit;
+    }
+  }
+  return column.substr(column.rfind('_') + 1);
 }
 
 Recording recording_from_table(const CsvTable& table, std::string_view source) {

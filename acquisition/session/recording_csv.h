@@ -7,12 +7,14 @@
 // source and line; nothing is guessed.
 #include <cstddef>
 #include <filesystem>
+#include <map>
 #include <optional>
 #include <ostream>
 #include <string>
 #include <string_view>
 #include <vector>
 
+#include "acquisition/rig/calibration_record.h"
 #include "acquisition/session/csv_table.h"
 
 namespace doorbench {
@@ -34,6 +36,11 @@ struct Recording {
   std::vector<std::vector<double>> extra_columns;
   // File line of each sample, 1-based; empty for a recording built in memory.
   std::vector<int> line_numbers;
+  // Columns that hold a sensor's raw signal (import --scale, --calibration), by column name:
+  // such a column's values are in its record's input_unit, and its physical values (in the
+  // unit its name ends with) are record.apply(value). A session made of the recording keeps
+  // the raw values and the record, as a recorded session does. Empty: every column is physical.
+  std::map<std::string, calibration::CalibrationRecord> calibrations;
 
   std::size_t size() const { return time_s.size(); }
 };
@@ -49,6 +56,11 @@ inline constexpr std::string_view kSampleRateKey = "sample_rate_hz";
 
 // True when `name` ends in a unit suffix: an underscore with text on both sides ("tau_Nm").
 bool has_unit_suffix(std::string_view name);
+// The unit a column's name ends with: the compound units "_rad_s", "_deg_s", "_m_s" (as
+// rad/s, deg/s, m/s) and "_N_m" (N*m) first, else the text after the last underscore.
+std::string unit_of_column(const std::string& column);
+// A unit as a column name's suffix: '/', '*', ' ' and '^' as '_' ("rad/s" gives "rad_s").
+std::string unit_column_suffix(const std::string& unit);
 
 // `source` names the text in messages (usually its path). With EmptyCells::kMissing an
 // empty cell of force_N, angle_rad, rate_rad_s or an extra column is a missing sample

@@ -15,31 +15,10 @@
 namespace doorbench {
 namespace {
 
-std::string unit_suffix(const std::string& unit) {
-  std::string suffix;
-  for (char c : unit) suffix += (c == '/' || c == '*' || c == ' ' || c == '^') ? '_' : c;
-  return suffix;
-}
-
-// The unit a column name ends with: "_rad_s" style compound units first, else the text
-// after the last underscore.
-std::string unit_of_column(const std::string& column) {
-  for (const char* compound : {"_rad_s", "_deg_s", "_m_s", "_N_m"}) {
-    const std::string ending(compound);
-    if (column.size() > ending.size() &&
-        column.compare(column.size() - ending.size(), ending.size(), ending) == 0) {
-      std::string unit = ending.substr(1);
-      std::replace(unit.begin(), unit.end(), '_', unit == "N_m" ? '*' : '/');
-      return unit;
-    }
-  }
-  return column.substr(column.rfind('_') + 1);
-}
-
 std::string column_name(const ChannelInfo& channel) {
   // Built with append: GCC 12 warns falsely (-Wrestrict) on "_" + std::string.
   std::string suffix("_");
-  suffix.append(unit_suffix(channel.unit));
+  suffix.append(unit_column_suffix(channel.unit));
   const std::string& name = channel.name;
   const bool has_suffix = name.size() > suffix.size() &&
                           name.compare(name.size() - suffix.size(), suffix.size(), suffix) == 0;
@@ -525,6 +504,17 @@ void write_recording_session(const Recording& recording, const std::filesystem::
     channel.range_max = std::numeric_limits<double>::max();
     channel.sample_rate_hz = rate_hz;
     channel.first_sample_time_s = recording.time_s.front();
+    // A raw column (import --scale, --calibration): the raw values, and the record that makes
+    // them physical, as a recorded channel keeps its counts and its record.
+    const auto calibrated = recording.calibrations.find(column);
+    if (calibrated != recording.calibrations.end()) {
+      const calibration::CalibrationRecord& record = calibrated->second;
+      channel.raw_unit = record.input_unit;
+      channel.unit = record.unit;
+      channel.calibration_id = record.id;
+      channel.sensor_serial = record.sensor_serial;
+      writer.add_calibration(record);
+    }
     const int index = writer.add_channel(channel);
     if (rate_hz > 0)
       writer.append_values(index, values);

@@ -1,6 +1,8 @@
 #include "acquisition/session/tdms.h"
 
 #include <algorithm>
+#include <array>
+#include <bit>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -11,6 +13,8 @@
 
 #include "acquisition/session/csv_table.h"
 #include "acquisition/session/internal/tdms_scaling.h"
+#include "acquisition/session/lfs_pointer.h"
+#include "acquisition/session/printable.h"
 
 namespace doorbench {
 
@@ -157,45 +161,55 @@ std::size_t daqmx_value_size(std::uint32_t type) {
   return type < 10 ? kSizes[type] : 0;
 }
 
+static_assert(std::endian::native == std::endian::little, "the reader assumes a little-endian host");
+
+// The value of type T stored at `at` in the segment's byte order (kTocBigEndian: all but the
+// ToC itself is big-endian).
 template <typename T>
-double read_as(const std::uint8_t* at) {
+T stored(const std::uint8_t* at, bool big_endian) {
+  std::array<std::uint8_t, sizeof(T)> bytes;
+  std::memcpy(bytes.data(), at, sizeof(T));
+  if (big_endian) std::reverse(bytes.begin(), bytes.end());
   T value;
-  std::memcpy(&value, at, sizeof(T));  // the host is little-endian
-  return static_cast<double>(value);
+  std::memcpy(&value, bytes.data(), sizeof(T));
+  return value;
 }
 
-// A scaler's value at `at`: the number of its type, or a digital line's bit (0 or 1).
-double daqmx_value(const DaqmxScaler& scaler, const std::uint8_t* at) {
-  if (scaler.digital) {
-    std::uint64_t word = 0;
-    std::memcpy(&word, at, daqmx_value_size(scaler.type));
-    return static_cast<double>((word >> (scaler.bit_offset % 8)) & 1u);
-  }
+template <typename T>
+double read_as(const std::uint8_t* at, bool big_endian) {
+  return static_cast<double>(stored<T>(at, big_endian));
+}
+
+// A scaler's value at `at`: the number of its type, or a digital line's bit (0 or 1; the
+// bit offset counts from the least significant bit of the first byte of the stride).
+double daqmx_value(const DaqmxScaler& scaler, const std::uint8_t* at, bool big_endian) {
+  if (scaler.digital) return static_cast<double>((at[0] >> (scaler.bit_offset % 8)) & 1u);
   switch (scaler.type) {
     case 0:
-      return read_as<std::uint8_t>(at);
+      return read_as<std::uint8_t>(at, big_endian);
     case 1:
-      return read_as<std::int8_t>(at);
+      return read_as<std::int8_t>(at, big_endian);
     case 2:
-      return read_as<std::uint16_t>(at);
+      return read_as<std::uint16_t>(at, big_endian);
     case 3:
-      return read_as<std::int16_t>(at);
+      return read_as<std::int16_t>(at, big_endian);
     case 4:
-      return read_as<std::uint32_t>(at);
+      return read_as<std::uint32_t>(at, big_endian);
     case 5:
-      return read_as<std::int32_t>(at);
+      return read_as<std::int32_t>(at, big_endian);
     case 6:
-      return read_as<std::uint64_t>(at);
+      return read_as<std::uint64_t>(at, big_endian);
     case 7:
-      return read_as<std::int64_t>(at);
+      return read_as<std::int64_t>(at, big_endian);
     case 8:
-      return read_as<float>(at);
+      return read_as<float>(at, big_endian);
     default:
-      return read_as<double>(at);
+      return read_as<double>(at, big_endian);
   }
 }
 
-// A little-endian reader over the file's bytes, errors naming the segment and byte.
+// A reader over the file's bytes in the current segment's byte order, errors naming the
+// segment and the byte where the field at fault starts.
 class Reader {
  public:
   Reader(const std::vector<std::uint8_t>& bytes, const std::string& source)
@@ -212,20 +226,21 @@ class Reader {
            std::to_string(bytes_.size() - std::min(position_, bytes_.size())) + " left)");
     }
   }
-  // A count read from the file, checked against the bytes left before it is believed
-  // (issue 33: 4294967295 properties claimed); each item takes at least `min_bytes`.
-  void need_items(std::uint64_t count, std::size_t min_bytes, const std::string& what) const {
+  // A count just read from the file (at count_at), checked against the bytes left before it
+  // is believed (4294967295 properties claimed); each item takes at least `min_bytes`.
+  void need_items(std::uint64_t count, std::size_t min_bytes, const std::string& what,
+                  std::size_t count_at) const {
     const std::size_t left = bytes_.size() - std::min(position_, bytes_.size());
     if (count > left / min_bytes) {
-      fail("claims " + std::to_string(count) + " " + what + ", but only " + std::to_string(left) +
-           " bytes are left (each takes at least " + std::to_string(min_bytes) + ")");
+      fail_at(count_at, "claims " + std::to_string(count) + " " + what + ", but only " +
+                            std::to_string(left) + " bytes are left (each takes at least " +
+                            std::to_string(min_bytes) + ")");
     }
   }
   template <typename T>
   T read() {
     need(sizeof(T));
-    T value;
-    std::memcpy(&value, bytes_.data() + position_, sizeof(T));  // the host is little-endian
+    const T value = stored<T>(bytes_.data() + position_, big_endian_);
     position_ += sizeof(T);
     return value;
   }
@@ -268,6 +283,8 @@ class Reader {
   std::size_t position() const { return position_; }
   void seek(std::size_t position) { position_ = position; }
   void set_segment(int segment) { segment_ = segment; }
+  void set_big_endian(bool big_endian) { big_endian_ = big_endian; }
+  bool big_endian() const { return big_endian_; }
   std::size_t size() const { return bytes_.size(); }
   const std::uint8_t* at(std::size_t position) const { return bytes_.data() + position; }
 
@@ -276,6 +293,7 @@ class Reader {
   const std::string& source_;
   std::size_t position_ = 0;
   int segment_ = 0;
+  bool big_endian_ = false;
 };
 
 // A time stamp (seconds since 1904-01-01 UTC and 2^-64 fractions) as ISO 8601 UTC.
@@ -299,8 +317,17 @@ TdmsProperty read_property_value(Reader& in, std::uint32_t type) {
     property.number = in.read<std::uint8_t>() != 0 ? 1.0 : 0.0;
     property.text = *property.number != 0 ? "true" : "false";
   } else if (type == kTimeStamp) {
-    const auto fractions = in.read<std::uint64_t>();
-    const auto seconds = in.read<std::int64_t>();
+    // Little-endian: the fractions, then the seconds; big-endian: the 128-bit number whole,
+    // the seconds first.
+    std::uint64_t fractions = 0;
+    std::int64_t seconds = 0;
+    if (in.big_endian()) {
+      seconds = in.read<std::int64_t>();
+      fractions = in.read<std::uint64_t>();
+    } else {
+      fractions = in.read<std::uint64_t>();
+      seconds = in.read<std::int64_t>();
+    }
     property.text = time_stamp_text(seconds, fractions);
   } else if (type == kComplexSingle) {
     const float re = in.read<float>(), im = in.read<float>();
@@ -312,24 +339,27 @@ TdmsProperty read_property_value(Reader& in, std::uint32_t type) {
     property.number = in.read_number(type);
     property.text = format_csv_number(*property.number);
   } else {
-    in.fail("properties of type " + type_name(type) + " are not supported");
+    in.fail_at(in.position() - 4, "properties of type " + type_name(type) + " are not supported");
   }
   return property;
 }
 
 // An object path "/'group'/'channel'" split and unescaped ('' is a quote).
-std::vector<std::string> split_path(const std::string& path, const Reader& in) {
+std::vector<std::string> split_path(const std::string& path, const Reader& in,
+                                    std::size_t path_at) {
   std::vector<std::string> parts;
   std::size_t i = 0;
   if (path == "/") return parts;
   while (i < path.size()) {
     if (path[i] != '/' || i + 1 >= path.size() || path[i + 1] != '\'') {
-      in.fail("object path '" + path + "' is not of the form /'group'/'channel'");
+      in.fail_at(path_at, "object path '" + path + "' is not of the form /'group'/'channel'");
     }
     i += 2;
     std::string name;
     while (true) {
-      if (i >= path.size()) in.fail("object path '" + path + "' has an unterminated name");
+      if (i >= path.size()) {
+        in.fail_at(path_at, "object path '" + path + "' has an unterminated name");
+      }
       if (path[i] == '\'') {
         if (i + 1 < path.size() && path[i + 1] == '\'') {
           name += '\'';
@@ -343,7 +373,9 @@ std::vector<std::string> split_path(const std::string& path, const Reader& in) {
     }
     parts.push_back(name);
   }
-  if (parts.size() > 2) in.fail("object path '" + path + "' is deeper than group and channel");
+  if (parts.size() > 2) {
+    in.fail_at(path_at, "object path '" + path + "' is deeper than group and channel");
+  }
   return parts;
 }
 
@@ -390,38 +422,49 @@ struct SegmentLayout {
   std::size_t end = 0;  // the next segment's start
 };
 
+// The lead-in at `start`: "TDSm" (bytes 0-3), the ToC flags (4-7, always little-endian),
+// then in the segment's byte order the version (8-11), the next segment's offset (12-19)
+// and the raw data's (20-27), both counted from the lead-in's end. Errors name the byte
+// where the field at fault starts.
 SegmentLayout read_lead_in(Reader& in, std::size_t start, std::size_t file_bytes) {
   in.seek(start);
-  in.need(kLeadInBytes);
-  if (std::memcmp(in.at(start), "TDSm", 4) != 0) {
-    if (std::memcmp(in.at(start), "TDSh", 4) == 0) {
+  const std::size_t tag_bytes = std::min<std::size_t>(4, file_bytes - start);
+  if (tag_bytes < 4 || std::memcmp(in.at(start), "TDSm", 4) != 0) {
+    if (tag_bytes == 4 && std::memcmp(in.at(start), "TDSh", 4) == 0) {
       in.fail("this is a TDMS index file (.tdms_index); import the .tdms file itself");
     }
-    in.fail("no TDMS segment here (the lead-in starts with 'TDSm')");
+    const std::string found(reinterpret_cast<const char*>(in.at(start)), tag_bytes);
+    in.fail("no TDMS segment here (a segment starts with 'TDSm'; these bytes are '" +
+            printable(found) + "')");
   }
+  in.need(kLeadInBytes);
+  in.set_big_endian(false);
   in.seek(start + 4);
   SegmentLayout layout;
   layout.toc = in.read<std::uint32_t>();
-  // The ToC first: a big-endian segment's version (and everything after) is byte-swapped.
-  if (layout.toc & kTocBigEndian) {
-    in.fail("big-endian segments (ToC flag kTocBigEndian) are not supported");
-  }
+  in.set_big_endian((layout.toc & kTocBigEndian) != 0);
   const auto version = in.read<std::uint32_t>();
   const auto next_offset = in.read<std::uint64_t>();
   const auto raw_offset = in.read<std::uint64_t>();
   if (version != 4712 && version != 4713) {
-    in.fail("TDMS version " + std::to_string(version) + " is not supported (4712 and 4713 are)");
+    in.fail_at(start + 8, "TDMS version " + std::to_string(version) +
+                              " is not supported (4712 and 4713 are)" +
+                              (in.big_endian() ? " (read big-endian: the ToC says so)" : ""));
   }
   layout.meta_start = start + kLeadInBytes;
   layout.end = next_offset == kIncompleteSegment
                    ? file_bytes
                    : layout.meta_start + static_cast<std::size_t>(next_offset);
-  if (layout.end > file_bytes || layout.end < layout.meta_start) {
-    in.fail("the next segment offset (" + std::to_string(next_offset) +
-            ") points past the end of the file (" + std::to_string(file_bytes) + " bytes)");
+  if (next_offset > file_bytes || layout.end > file_bytes || layout.end < layout.meta_start) {
+    in.fail_at(start + 12, "the next segment offset (" + std::to_string(next_offset) +
+                               ") points past the end of the file (" +
+                               std::to_string(file_bytes) + " bytes)");
   }
   layout.raw_start = layout.meta_start + static_cast<std::size_t>(raw_offset);
-  if (layout.raw_start > layout.end) in.fail("the raw data offset points past the segment's end");
+  if (raw_offset > file_bytes || layout.raw_start > layout.end) {
+    in.fail_at(start + 20, "the raw data offset (" + std::to_string(raw_offset) +
+                               ") points past the segment's end");
+  }
   return layout;
 }
 
@@ -449,10 +492,11 @@ class TdmsParser {
     if (layout.toc & kTocNewObjList) active_.clear();
     in_.seek(layout.meta_start);
     const auto count = in_.read<std::uint32_t>();
-    in_.need_items(count, 12, "objects");  // path length, raw index, property count
+    in_.need_items(count, 12, "objects", layout.meta_start);  // path length, raw index, properties
     for (std::uint32_t o = 0; o < count; ++o) {
+      const std::size_t path_at = in_.position();
       const std::string path = in_.read_string();
-      ObjectState& object = object_at(path);
+      ObjectState& object = object_at(path, path_at);
       read_raw_index(path, object);
       read_properties(object);
       if (std::find(active_.begin(), active_.end(), path) == active_.end()) {
@@ -462,11 +506,11 @@ class TdmsParser {
   }
 
   // The object at `path`, a channel (group/channel) added to the file when first met.
-  ObjectState& object_at(const std::string& path) {
+  ObjectState& object_at(const std::string& path, std::size_t path_at) {
     const bool known = objects_.count(path) > 0;
     ObjectState& object = objects_[path];
     if (!known) {
-      object.parts = split_path(path, in_);
+      object.parts = split_path(path, in_, path_at);
       if (object.parts.size() == 2) {
         object.is_channel = true;
         object.channel = file_.channels.size();
@@ -485,7 +529,7 @@ class TdmsParser {
     }
     if (index == kSameRawIndex) {
       if (!object.has_raw && object.type == kVoid) {
-        in_.fail("object " + path + " repeats a raw data index it never had");
+        in_.fail_at(index_at, "object " + path + " repeats a raw data index it never had");
       }
       object.has_raw = true;
       return;
@@ -580,8 +624,9 @@ class TdmsParser {
 
   // The object's properties: the file's, a group's or a channel's.
   void read_properties(const ObjectState& object) {
+    const std::size_t count_at = in_.position();
     const auto properties = in_.read<std::uint32_t>();
-    in_.need_items(properties, 9, "properties");  // name length, type, a value's byte
+    in_.need_items(properties, 9, "properties", count_at);  // name length, type, a value's byte
     for (std::uint32_t p = 0; p < properties; ++p) {
       const std::string name = in_.read_string();
       const auto type = in_.read<std::uint32_t>();
@@ -608,9 +653,9 @@ class TdmsParser {
       if (!object.daqmx || with_data.size() == 1) chunk += chunk_bytes(object);
     }
     const std::size_t raw_bytes = layout.end - layout.raw_start;
-    if (chunk == 0) in_.fail("raw data but no object with raw data in the segment");
+    if (chunk == 0) in_.fail_at(layout.raw_start, "raw data but no object with raw data in the segment");
     if (raw_bytes % chunk != 0) {
-      in_.fail("raw data of " + std::to_string(raw_bytes) + " bytes is not a whole number of " +
+      in_.fail_at(layout.raw_start, "raw data of " + std::to_string(raw_bytes) + " bytes is not a whole number of " +
                std::to_string(chunk) + "-byte chunks (partial chunks are not supported)");
     }
     const std::size_t chunks = raw_bytes / chunk;
@@ -660,7 +705,8 @@ class TdmsParser {
           if (scaler.buffer != b) continue;
           std::vector<double>& values = raw[scaler.scale_id];
           for (std::size_t i = 0; i < count; ++i) {
-            values.push_back(daqmx_value(scaler, in_.at(start + i * width + scaler.byte_offset)));
+            values.push_back(daqmx_value(scaler, in_.at(start + i * width + scaler.byte_offset),
+                                         in_.big_endian()));
           }
         }
       }
@@ -711,6 +757,9 @@ class TdmsParser {
 }  // namespace
 
 TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& source) {
+  const std::string pointer = lfs_pointer_description(
+      std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
+  if (!pointer.empty()) throw TdmsError(source + ": " + pointer);
   TdmsFile file = TdmsParser(bytes, source).parse();
   for (TdmsChannel& channel : file.channels) tdms_detail::apply_scaling(channel, source);
   return file;

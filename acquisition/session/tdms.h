@@ -3,8 +3,8 @@
 // write them) from NI's published description of the format, "TDMS File Format Internal
 // Structure", without NI's libraries. User documentation: docs/tdms.md.
 //
-// Supported: TDMS 1.0 and 2.0 segments (lead-in "TDSm", version 4712 or 4713) in
-// little-endian byte order; metadata with new or appended object lists, raw data indexes
+// Supported: TDMS 1.0 and 2.0 segments (lead-in "TDSm", version 4712 or 4713); metadata
+// with new or appended object lists, raw data indexes
 // given, repeated ("same as the previous segment", 0x00000000) or absent (0xFFFFFFFF);
 // interleaved and non-interleaved raw data in whole chunks; channels of the integer types
 // (I8…I64, U8…U64), SGL and DBL (with or without unit); string channels are skipped; every
@@ -17,8 +17,10 @@
 // last NI_Scale, where a scale without a Scale_Type is the scaler of that scale id, and a
 // channel without scales is its one scaler's raw value. Each scaler's raw values are kept
 // (TdmsChannel::daqmx_raw).
-// Refused, each by name: big-endian segments (the ToC's flag is read before the version,
-// which a big-endian segment stores byte-swapped), DAQmx scalers of other types or reading
+// Segments of either byte order: the ToC flags are little-endian, and kTocBigEndian makes
+// everything after them big-endian (the lead-in's version and offsets, the metadata, the raw
+// data; a time stamp's seconds come before its fractions).
+// Refused, each by name: DAQmx scalers of other types or reading
 // past their buffer, a segment mixing DAQmx and other raw data, channels of other data
 // types, arrays of more than one dimension, raw data that is not a whole number of chunks,
 // other scale types (Table, Thermocouple, RTD, ...).
@@ -33,6 +35,7 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/session/import_units.h"
 #include "acquisition/session/recording_csv.h"
 
 namespace doorbench {
@@ -70,7 +73,8 @@ struct TdmsFile {
 };
 
 // Throws TdmsError (a layout that is not supported, a damaged file; "PATH: cannot open for
-// reading" when it cannot be read).
+// reading" when it cannot be read; a Git LFS pointer in place of the file named as such,
+// acquisition/session/lfs_pointer.h).
 TdmsFile read_tdms(const std::filesystem::path& path);
 TdmsFile parse_tdms(const std::vector<std::uint8_t>& bytes, const std::string& source);
 
@@ -92,21 +96,39 @@ std::string escape_tdms_map_name(const std::string& name);
 // The file's channels as --map names them, "Door/Force, Door/Angle" ("none" when empty).
 std::string tdms_channel_list(const TdmsFile& file);
 
+// How tdms_to_recording builds the recording beyond the map (doorbench import's options).
+struct TdmsImportOptions {
+  // import --keep-raw: also each mapped channel's DAQmx scalers as stored (daqmx_raw: ADC
+  // counts, digital lines), as extra columns TARGET_raw ("force_raw"; an extra target's stem,
+  // "incl_raw" for incl_V; the scaler id appended when a channel has several), each with a
+  // metadata line tdms_raw_NAME saying which scaler of which channel it is; a channel without
+  // DAQmx raw data adds no column.
+  bool keep_raw = false;
+  // import --rate-hz: > 0, the sample rate of channels without waveform timing (no
+  // wf_increment): sample i at wf_start_offset + i / rate_hz (wf_start_offset 0 when
+  // absent). A force channel whose wf_increment says another rate is refused; so is a time
+  // channel in the map. 0: the waveform's timing.
+  double rate_hz = 0.0;
+  // import --scale, --calibration: targets whose channels hold a raw signal (volts); their
+  // units are checked against the record (the channel's unit_string must be the record's
+  // input unit, when it states one) instead of the target's, the raw values are kept and the
+  // record goes to Recording::calibrations.
+  std::vector<ImportConversion> conversions;
+  // "" when usable, else the option at fault.
+  std::string validate() const;
+};
+
 // The mapped channels as a recording: force and angle or rate are required, and no channel
-// may be mapped twice; time from the
-// `time` channel when mapped, else wf_start_offset + i × wf_increment of the force channel
-// (every mapped channel must have as many values and the same wf_increment). Units are
-// checked where the channel states one (unit_string: N for force, rad for angle, rad/s for
-// rate). The file's handle_radius_m property (file or group) becomes the recording's;
-// mapped channels' properties, the file's and the force channel's wf_start_time (metadata
-// tdms_wf_start_time, ISO 8601 UTC) go into the metadata. Throws TdmsError "SOURCE: ..."
-// naming the target and channel and ending with the file's channels (tdms_channel_list).
-// keep_raw (import --keep-raw): also each mapped channel's DAQmx scalers as stored
-// (daqmx_raw: ADC counts, digital lines), as extra columns TARGET_raw ("force_raw"; an extra
-// target's stem, "incl_raw" for incl_V; the scaler id appended when a channel has several),
-// each with a metadata line tdms_raw_NAME saying which scaler of which channel it is; a
-// channel without DAQmx raw data adds no column.
+// may be mapped twice; time from the `time` channel when mapped, else wf_start_offset + i ×
+// wf_increment of the force channel (or i / options.rate_hz; every mapped channel must have
+// as many values and the same wf_increment). Units are checked where the channel states one
+// (unit_string: N for force, rad for angle, rad/s for rate; for a converted target, the
+// record's input unit). The file's handle_radius_m property (file or group) becomes the
+// recording's; mapped channels' properties, the file's and the force channel's
+// wf_start_time (metadata tdms_wf_start_time, ISO 8601 UTC) go into the metadata. Throws
+// TdmsError "SOURCE: ..." naming the target and channel and ending with the file's
+// channels (tdms_channel_list).
 Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
-                            const std::string& source, bool keep_raw = false);
+                            const std::string& source, const TdmsImportOptions& options = {});
 
 }  // namespace doorbench

@@ -179,30 +179,61 @@ const TdmsChannel& mapped_channel(const TdmsFile& file, const TdmsMapItem& item,
 }
 
 // Without a time channel, the time from the force channel's waveform properties
-// (wf_start_offset + i · wf_increment).
-void waveform_time(const TdmsFile& file, const TdmsChannel& force, const std::string& source,
-                   Recording& recording) {
+// (wf_start_offset + i · wf_increment), or from rate_hz (> 0: --rate-hz) where the channel
+// has no wf_increment. Returns the interval between samples.
+double waveform_time(const TdmsFile& file, const TdmsChannel& force, const std::string& source,
+                     double rate_hz, Recording& recording) {
   const TdmsProperty* increment = property(force, "wf_increment");
-  if (!increment || !increment->number || !(*increment->number > 0)) {
+  const bool has_increment = increment && increment->number && *increment->number > 0;
+  if (!has_increment && !(rate_hz > 0)) {
     mapping_error(file, source,
                   "force: channel " + map_name(force) +
-                      " has no wf_increment > 0 to give the time (map a time channel: "
-                      "time=GROUP/CHANNEL)");
+                      " has no wf_increment > 0 to give the time (give its rate, --rate-hz R, "
+                      "or map a time channel, time=GROUP/CHANNEL)");
   }
+  if (has_increment && rate_hz > 0 &&
+      !(std::abs(*increment->number * rate_hz - 1.0) <= 1e-9)) {
+    mapping_error(file, source,
+                  "force: --rate-hz " + format_csv_number(rate_hz) + " contradicts channel " +
+                      map_name(force) + "'s wf_increment " +
+                      format_csv_number(*increment->number) + " s (" +
+                      format_csv_number(1.0 / *increment->number) + " Hz)");
+  }
+  const double interval_s = has_increment ? *increment->number : 1.0 / rate_hz;
   const TdmsProperty* offset = property(force, "wf_start_offset");
   const double first_s = offset && offset->number ? *offset->number : 0.0;
   recording.time_s.resize(force.values.size());
   for (std::size_t i = 0; i < force.values.size(); ++i) {
-    recording.time_s[i] = first_s + static_cast<double>(i) * *increment->number;
+    // i / rate, as a session's uniform clock computes it, for a rate given by --rate-hz.
+    recording.time_s[i] = has_increment ? first_s + static_cast<double>(i) * interval_s
+                                        : first_s + static_cast<double>(i) / rate_hz;
   }
+  if (!has_increment) {
+    recording.metadata.emplace_back("tdms_rate_hz",
+                                    format_csv_number(rate_hz) + " (--rate-hz: no wf_increment)");
+  }
+  return interval_s;
+}
+
+// The unit a target's channel must state (when it states one): the target's, or for a
+// converted target its record's input unit ("" for a --scale: any).
+std::string expected_unit(const TdmsMapItem& item, const ImportConversion* conversion) {
+  if (conversion) return conversion->record ? conversion->record->input_unit : "";
+  return item.target == "force"   ? "N"
+         : item.target == "angle" ? "rad"
+         : item.target == "rate"  ? "rad/s"
+         : item.target == "time"  ? "s"
+                                  : "";
 }
 
 // One mapped channel into its column (force, angle, rate, an extra; time is taken
-// before): as many values as the force channel, the same waveform increment (when the
-// time is the waveform's), the target's unit; its origin as metadata.
+// before): as many values as the force channel, the same waveform increment as the clock's
+// (interval_s > 0, when the time is the waveform's), the target's unit (or its record's
+// input unit); its origin as metadata, and its record when it is converted.
 void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item,
-                        const TdmsChannel& channel, const TdmsChannel& force, bool waveform_clock,
-                        const std::string& source, Recording& recording) {
+                        const TdmsChannel& channel, const TdmsChannel& force, double interval_s,
+                        const TdmsImportOptions& options, const std::string& source,
+                        Recording& recording) {
   const std::string name = map_name(channel);
   if (channel.values.size() != force.values.size()) {
     mapping_error(file, source,
@@ -210,28 +241,38 @@ void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item,
                       std::to_string(channel.values.size()) + " values, the force channel " +
                       std::to_string(force.values.size()));
   }
-  if (waveform_clock && item.target != "time") {
+  if (interval_s > 0 && item.target != "time") {
     const TdmsProperty* increment = property(channel, "wf_increment");
-    const TdmsProperty* force_increment = property(force, "wf_increment");
-    if (increment && increment->number && *increment->number != *force_increment->number) {
+    if (increment && increment->number && *increment->number != interval_s) {
       mapping_error(file, source,
                     item.target + ": channel " + name + " has wf_increment " +
                         format_csv_number(*increment->number) + ", the force channel " +
-                        format_csv_number(*force_increment->number));
+                        format_csv_number(interval_s));
     }
   }
-  const std::string expected = item.target == "force"   ? "N"
-                               : item.target == "angle" ? "rad"
-                               : item.target == "rate"  ? "rad/s"
-                               : item.target == "time"  ? "s"
-                                                        : "";
+  const ImportConversion* conversion = find_conversion(options.conversions, item.target);
+  const std::string expected = expected_unit(item, conversion);
   const TdmsProperty* unit = property(channel, "unit_string");
-  if (!expected.empty() && unit && !unit->text.empty() && unit->text != expected) {
+  const bool states_unit = unit && !unit->text.empty();
+  if (!expected.empty() && states_unit && unit->text != expected) {
     mapping_error(file, source,
                   item.target + ": channel " + name + " is in '" + unit->text + "', not " +
                       expected +
-                      " (scale it in the file, or map it as an extra column whose name ends "
-                      "in its unit)");
+                      (conversion ? " (" + conversion->given + ")"
+                                  : " (convert it: --calibration " + item.target +
+                                        "=RECORD or --scale " + item.target +
+                                        "=GAIN[,OFFSET]; or map it as an extra column whose "
+                                        "name ends in its unit)"));
+  }
+  if (conversion) {
+    calibration::CalibrationRecord record;
+    try {
+      record = conversion->record_for(states_unit ? unit->text : "");
+    } catch (const std::invalid_argument& error) {
+      mapping_error(file, source, item.target + ": channel " + name + " " + error.what());
+    }
+    recording.metadata.emplace_back("tdms_" + item.target + "_calibration", record.id);
+    recording.calibrations.emplace(import_target_column(item.target), std::move(record));
   }
   if (item.target == "force") {
     recording.force_N = channel.values;
@@ -328,8 +369,19 @@ void add_raw_columns(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
 
 }  // namespace
 
+std::string TdmsImportOptions::validate() const {
+  if (!std::isfinite(rate_hz) || rate_hz < 0) return "--rate-hz must be a finite rate >= 0";
+  for (const ImportConversion& conversion : conversions) {
+    if (conversion.target == "time") return conversion.given + ": time cannot be converted";
+  }
+  return "";
+}
+
 Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
-                            const std::string& source, bool keep_raw) {
+                            const std::string& source, const TdmsImportOptions& options) {
+  if (const std::string problem = options.validate(); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
   Recording recording;
   recording.source = source;
   const TdmsChannel& force = mapped_channel(file, check_map(file, map, source), source);
@@ -347,17 +399,22 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
     taken.emplace_back(channel, item.target);
   }
   const TdmsMapItem* time_item = map_item(map, "time");
+  double interval_s = 0.0;  // the waveform clock's interval (0: a time channel)
+  if (time_item && options.rate_hz > 0) {
+    mapping_error(file, source,
+                  "--rate-hz and time=" + time_item->text + " both give the time (give one)");
+  }
   if (time_item) {
     recording.time_s = mapped_channel(file, *time_item, source).values;
   } else {
-    waveform_time(file, force, source, recording);
+    interval_s = waveform_time(file, force, source, options.rate_hz, recording);
   }
   if (const TdmsProperty* start = property(force, "wf_start_time")) {
     recording.metadata.emplace_back("tdms_wf_start_time", start->text);
   }
   for (const TdmsMapItem& item : map) {
-    take_mapped_column(file, item, mapped_channel(file, item, source), force,
-                       time_item == nullptr, source, recording);
+    take_mapped_column(file, item, mapped_channel(file, item, source), force, interval_s,
+                       options, source, recording);
   }
   for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
     if (!(recording.time_s[i] > recording.time_s[i - 1])) {
@@ -368,7 +425,13 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
     recording.handle_radius_m = radius;
   }
   file_properties_as_metadata(file, recording);
-  if (keep_raw) add_raw_columns(file, map, source, recording);
+  for (const ImportConversion& conversion : options.conversions) {
+    if (!map_item(map, conversion.target)) {
+      mapping_error(file, source,
+                    conversion.given + ": --map has no " + conversion.target + " channel");
+    }
+  }
+  if (options.keep_raw) add_raw_columns(file, map, source, recording);
   return recording;
 }
 

@@ -290,6 +290,24 @@ TEST_CASE("table format errors name the source and line", "[csv][errors]") {
                         "run.csv:3: '#' line after the header (metadata must come before the "
                         "header row)");
   }
+  SECTION("control characters in metadata and names") {
+    // A NUL would cut the value where the session stores it ("Ann"): refused where it is.
+    const std::string nul =
+        std::string("# source: x\n# operator: Ann") + '\0' + "Bob\ntime_s,force_N,angle_rad\n0,1,2\n";
+    REQUIRE_THROWS_WITH(parse(nul),
+                        "run.csv:2: control character \\x00 at column 16 of a metadata line "
+                        "(metadata is kept as text: remove it from the file)");
+    REQUIRE_THROWS_WITH(parse("# note \x1b[2J\ntime_s,force_N,angle_rad\n0,1,2\n"),
+                        "run.csv:1: control character \\e at column 8 of a metadata line "
+                        "(metadata is kept as text: remove it from the file)");
+    REQUIRE_THROWS_WITH(parse("time_s,force\x01N,angle_rad\n0,1,2\n"),
+                        "run.csv:1: column 2 name 'force\\x01N' contains the control "
+                        "character \\x01");
+    // A tab is a blank, not a control character.
+    const Recording tabbed = parse("# operator:\tAnn\ntime_s,force_N,angle_rad\n0,1,2\n");
+    REQUIRE(tabbed.metadata.size() == 1);
+    CHECK(tabbed.metadata[0].second == "Ann");
+  }
   SECTION("stray carriage return") {
     REQUIRE_THROWS_WITH(
         parse("time_s,force_N,angle_rad\r0,1,2\r"),

@@ -49,12 +49,12 @@ TEST_CASE("TDMS: counts a file claims are checked against the bytes left", "[tdm
   CHECK(error_of(bytes) == "(no error)");
   put32(bytes, 41, 0xFFFFFFFFu);
   CHECK(error_of(bytes) ==
-        "mem.tdms: segment 1 (byte 45): claims 4294967295 properties, but only 0 bytes are left "
+        "mem.tdms: segment 1 (byte 41): claims 4294967295 properties, but only 0 bytes are left "
         "(each takes at least 9)");
   bytes = file_object_segment();
   put32(bytes, 28, 0xFFFFFFFFu);
   CHECK(error_of(bytes) ==
-        "mem.tdms: segment 1 (byte 32): claims 4294967295 objects, but only 13 bytes are left "
+        "mem.tdms: segment 1 (byte 28): claims 4294967295 objects, but only 13 bytes are left "
         "(each takes at least 12)");
 }
 

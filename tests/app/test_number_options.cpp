@@ -80,6 +80,23 @@ std::string parse_with(Cli& cli, const NumericOption& option, const std::string&
   return "";
 }
 
+// True when `said` ends in one of number_options.h's answers about `value`.
+bool in_doorbench_words(const std::string& said, const std::string& value) {
+  for (const std::string& answer :
+       {"'" + value + "' is not a number", value + " is not a finite number",
+        value + " is negative (0 or more)", value + " is not a whole number",
+        value + " is not positive (more than 0)"}) {
+    if (said.size() >= answer.size() &&
+        said.compare(said.size() - answer.size(), answer.size(), answer) == 0) {
+      return true;
+    }
+  }
+  for (const std::string& start : {": " + value + " is beyond ", ": " + value + " is outside "}) {
+    if (said.find(start) != std::string::npos) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
 TEST_CASE("CLI numbers: the check of one value", "[cli][numbers]") {
@@ -129,6 +146,8 @@ TEST_CASE("CLI numbers: every numeric option of every verb refuses what is not a
       ++refusals;
       CHECK_THAT(said, StartsWith(option.positional ? option.name : option.name + ": "));
       CHECK_THAT(said, Contains(value));
+      // In doorbench's words, never CLI11's ("Value abc not in range 0.000000 to 1797...").
+      CHECK(in_doorbench_words(said, value));
       if (value == "-1" && option.kind == NumberKind::kUint) {
         CHECK_THAT(said, Contains("-1 is negative (0 or more)"));
       }
@@ -177,6 +196,17 @@ TEST_CASE("CLI numbers: the usage error main() prints names the option", "[cli][
   CHECK(said({"spec", "--lambda", "1e308"}) ==
         "--lambda: 1e308 is beyond 1000000000, the largest value any option takes");
   CHECK(said({"simulate", "--rate-hz", "nan"}) == "--rate-hz: nan is not a finite number");
+  // Options with a range of their own answer in the same words: the text is checked first.
+  CHECK(said({"fit", "x.csv", "--out", "o", "--derivative-cutoff-hz", "abc"}) ==
+        "--derivative-cutoff-hz: 'abc' is not a number");
+  CHECK(said({"fit", "x.csv", "--out", "o", "--derivative-cutoff-hz", "-1"}) ==
+        "--derivative-cutoff-hz: -1 is negative (0 or more)");
+  CHECK(said({"fit", "x.csv", "--out", "o", "--min-sample-rate-hz", "0"}) ==
+        "--min-sample-rate-hz: 0 is not positive (more than 0)");
+  CHECK(said({"import", "x.csv", "--out", "o.h5", "--resample-hz", "0.5"}) ==
+        "--resample-hz: 0.5 is outside 1 to 1000000");
+  CHECK(said({"import", "x.csv", "--out", "o.h5", "--resample-hz", "1e308"}) ==
+        "--resample-hz: 1e308 is beyond 1000000000, the largest value any option takes");
 }
 
 TEST_CASE("CLI numbers: options that contradict each other or would be ignored are refused",

@@ -2,10 +2,15 @@
 // A TDMS writer for tests, from NI's published description of the format ("TDMS File Format
 // Internal Structure"): segments of a 28-byte lead-in ("TDSm", the ToC flags, the version,
 // the next segment's and the raw data's offsets), metadata (objects with their raw data
-// indexes and properties) and raw data, all little-endian. It writes exactly what a test
-// asks for, including layouts the reader refuses.
+// indexes and properties) and raw data, little-endian, or big-endian after the ToC (which
+// is always little-endian) when the ToC has kTocBigEndian. Every piece of bytes carries its
+// byte order (Bytes::big_endian); segment() refuses pieces of the other order. It writes
+// exactly what a test asks for, including layouts the reader refuses.
+#include <algorithm>
+#include <cstddef>
 #include <cstdint>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -23,12 +28,14 @@ inline constexpr std::uint32_t kI32 = 3, kU32 = 7, kSingle = 9, kDouble = 10, kE
 
 struct Bytes {
   std::vector<std::uint8_t> data;
+  bool big_endian = false;  // the order put() writes numbers in
   template <typename T>
   void put(T value) {
     // resize and copy (an insert of a local array trips GCC 12's -Wstringop-overflow)
     const std::size_t at = data.size();
     data.resize(at + sizeof(T));
     std::memcpy(data.data() + at, &value, sizeof(T));
+    if (big_endian) std::reverse(data.begin() + static_cast<std::ptrdiff_t>(at), data.end());
   }
   void text(const std::string& value) {
     put<std::uint32_t>(static_cast<std::uint32_t>(value.size()));
@@ -42,26 +49,34 @@ struct Property {
   std::uint32_t type;
   Bytes value;
 };
-inline Property text_property(const std::string& name, const std::string& value) {
-  Property p{name, kString, {}};
+inline Property text_property(const std::string& name, const std::string& value,
+                              bool big_endian = false) {
+  Property p{name, kString, {{}, big_endian}};
   p.value.text(value);
   return p;
 }
-inline Property double_property(const std::string& name, double value) {
-  Property p{name, kDouble, {}};
+inline Property double_property(const std::string& name, double value, bool big_endian = false) {
+  Property p{name, kDouble, {{}, big_endian}};
   p.value.put(value);
   return p;
 }
-inline Property i32_property(const std::string& name, std::int32_t value) {
-  Property p{name, kI32, {}};
+inline Property i32_property(const std::string& name, std::int32_t value,
+                             bool big_endian = false) {
+  Property p{name, kI32, {{}, big_endian}};
   p.value.put(value);
   return p;
 }
+// Little-endian: the fractions, then the seconds; big-endian: the seconds first.
 inline Property time_property(const std::string& name, std::int64_t seconds_since_1904,
-                              std::uint64_t fractions) {
-  Property p{name, kTimeStamp, {}};
-  p.value.put(fractions);
-  p.value.put(seconds_since_1904);
+                              std::uint64_t fractions, bool big_endian = false) {
+  Property p{name, kTimeStamp, {{}, big_endian}};
+  if (big_endian) {
+    p.value.put(seconds_since_1904);
+    p.value.put(fractions);
+  } else {
+    p.value.put(fractions);
+    p.value.put(seconds_since_1904);
+  }
   return p;
 }
 
@@ -93,12 +108,13 @@ struct DaqmxScalerSpec {
 inline Object daqmx_channel(const std::string& path, std::uint64_t count,
                             const std::vector<DaqmxScalerSpec>& scalers,
                             const std::vector<std::uint32_t>& widths, bool digital,
-                            std::vector<Property> properties = {}) {
+                            std::vector<Property> properties = {}, bool big_endian = false) {
   Object object;
   object.raw = Object::kRawIndex;
   object.path = path;
   object.raw_index = digital ? 0x00001369u : 0x00001269u;
   Bytes& tail = object.index_tail;
+  tail.big_endian = big_endian;
   tail.put<std::uint32_t>(0xFFFFFFFFu);
   tail.put<std::uint32_t>(1u);
   tail.put<std::uint64_t>(count);
@@ -120,10 +136,20 @@ inline Object daqmx_channel(const std::string& path, std::uint64_t count,
   return object;
 }
 
-// A whole segment: the lead-in, the metadata (when the ToC says so) and `raw`.
+// A whole segment: the lead-in, the metadata (when the ToC says so) and `raw`, in the byte
+// order the ToC gives. Throws std::logic_error for raw data, a property or an index tail
+// written in the other order.
 inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, const Bytes& raw,
                      std::uint32_t version = 4713) {
+  const bool big_endian = (toc & kTocBigEndian) != 0;
+  const auto check = [big_endian](const Bytes& piece, const std::string& what) {
+    if (!piece.data.empty() && piece.big_endian != big_endian) {
+      throw std::logic_error("tdms_writer: " + what + " is in the other byte order");
+    }
+  };
+  check(raw, "the raw data");
   Bytes meta;
+  meta.big_endian = big_endian;
   if (toc & kTocMetaData) {
     meta.put<std::uint32_t>(static_cast<std::uint32_t>(objects.size()));
     for (const Object& object : objects) {
@@ -136,6 +162,7 @@ inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, cons
           meta.put<std::uint32_t>(0u);
           break;
         case Object::kRawIndex:
+          check(object.index_tail, "the raw data index of " + object.path);
           meta.put<std::uint32_t>(object.raw_index);
           meta.append(object.index_tail);
           break;
@@ -149,6 +176,7 @@ inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, cons
       }
       meta.put<std::uint32_t>(static_cast<std::uint32_t>(object.properties.size()));
       for (const Property& property : object.properties) {
+        check(property.value, "property " + property.name);
         meta.text(property.name);
         meta.put<std::uint32_t>(property.type);
         meta.append(property.value);
@@ -157,7 +185,8 @@ inline Bytes segment(std::uint32_t toc, const std::vector<Object>& objects, cons
   }
   Bytes out;
   out.data = {'T', 'D', 'S', 'm'};
-  out.put<std::uint32_t>(toc);
+  out.put<std::uint32_t>(toc);  // always little-endian
+  out.big_endian = big_endian;
   out.put<std::uint32_t>(version);
   out.put<std::uint64_t>(meta.data.size() + raw.data.size());
   out.put<std::uint64_t>(meta.data.size());

@@ -1,0 +1,191 @@
+#include "acquisition/session/import_units.h"
+
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <stdexcept>
+
+#include "acquisition/session/recording_csv.h"
+
+namespace doorbench {
+
+namespace {
+
+// "TARGET=VALUE" split at its first '='; throws naming the option and the form.
+std::pair<std::string, std::string> split_item(const std::string& item, const std::string& option,
+                                               const std::string& form) {
+  const std::size_t equals = item.find('=');
+  if (equals == std::string::npos || equals == 0 || equals + 1 == item.size()) {
+    throw std::invalid_argument(option + " item '" + item + "' is not " + form);
+  }
+  std::string target = item.substr(0, equals);
+  if (target != "force" && target != "angle" && target != "rate" && !has_unit_suffix(target)) {
+    throw std::invalid_argument(option + " target '" + target +
+                                "' is not force, angle, rate or a column name with a unit suffix "
+                                "(e.g. inclinometer_angle_rad)");
+  }
+  return {std::move(target), item.substr(equals + 1)};
+}
+
+ImportConversion parse_scale(const std::string& item) {
+  const std::string form = "TARGET=GAIN[,OFFSET] (e.g. force=98.1,-0.5)";
+  auto [target, value] = split_item(item, "--scale", form);
+  const std::size_t comma = value.find(',');
+  const std::optional<double> gain = parse_csv_number(value.substr(0, comma));
+  const std::optional<double> offset =
+      comma == std::string::npos ? std::optional<double>(0.0)
+                                 : parse_csv_number(value.substr(comma + 1));
+  if (!gain || !offset) throw std::invalid_argument("--scale item '" + item + "' is not " + form);
+  if (*gain == 0.0) {
+    throw std::invalid_argument("--scale item '" + item + "': a gain of 0 makes every value " +
+                                value.substr(comma == std::string::npos ? value.size() : comma + 1));
+  }
+  ImportConversion conversion;
+  conversion.target = std::move(target);
+  conversion.given = "--scale " + item;
+  conversion.gain = *gain;
+  conversion.offset = *offset;
+  return conversion;
+}
+
+// A record named by --calibration: a file when one is there, else an id in the store.
+calibration::CalibrationRecord named_record(const std::string& name, const std::string& given,
+                                            const calibration::CalibrationStore& store) {
+  std::error_code error;
+  if (std::filesystem::is_regular_file(name, error)) {
+    std::ifstream in(name, std::ios::binary);
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (!in) throw std::runtime_error(given + ": " + name + ": cannot read the record's file");
+    return calibration::calibration_record_from_json(text.str(), name);
+  }
+  if (std::optional<calibration::CalibrationRecord> record = store.find(name)) return *record;
+  std::string known;
+  for (const calibration::CalibrationRecord& record : store.records()) {
+    known += (known.empty() ? "" : ", ") + record.id;
+  }
+  throw std::invalid_argument(given + ": no file " + name + " and no record " + name +
+                              " in the calibration store " + store.directory().string() + " (" +
+                              (known.empty() ? "it has none" : "its records: " + known) + ")");
+}
+
+ImportConversion parse_calibration(const std::string& item,
+                                   const calibration::CalibrationStore& store) {
+  auto [target, name] =
+      split_item(item, "--calibration", "TARGET=RECORD (a record's id in the store, or its file)");
+  ImportConversion conversion;
+  conversion.target = std::move(target);
+  conversion.given = "--calibration " + item;
+  conversion.record = named_record(name, conversion.given, store);
+  const std::string unit = import_target_unit(conversion.target);
+  if (const std::string problem = conversion.record->unit_problem("", unit); !problem.empty()) {
+    throw std::invalid_argument(conversion.given + ": " + problem + " (" + conversion.target +
+                                " is in " + unit + ")");
+  }
+  return conversion;
+}
+
+// The columns of a table, for messages: "time_s, force_V, angle_rad".
+std::string column_list(const CsvTable& table) {
+  std::string list;
+  for (const std::string& name : table.column_names) list += (list.empty() ? "" : ", ") + name;
+  return list;
+}
+
+}  // namespace
+
+calibration::CalibrationRecord ImportConversion::record_for(const std::string& input_unit) const {
+  if (record) {
+    if (!input_unit.empty() && record->input_unit != input_unit) {
+      throw std::invalid_argument("is in '" + input_unit + "', but record " + record->id +
+                                  " takes " + record->input_unit + " (" + given + ")");
+    }
+    return *record;
+  }
+  return calibration::linear_record("scale-" + target, input_unit.empty() ? "unstated" : input_unit,
+                                    import_target_unit(target), gain, offset,
+                                    "doorbench import " + given);
+}
+
+std::string import_target_unit(const std::string& target) {
+  if (target == "force") return "N";
+  if (target == "angle") return "rad";
+  if (target == "rate") return "rad/s";
+  return unit_of_column(target);
+}
+
+std::string import_target_column(const std::string& target) {
+  if (target == "force") return std::string(kForceColumn);
+  if (target == "angle") return std::string(kAngleColumn);
+  if (target == "rate") return std::string(kRateColumn);
+  return target;
+}
+
+std::vector<ImportConversion> parse_import_conversions(
+    const std::vector<std::string>& scales, const std::vector<std::string>& calibrations,
+    const calibration::CalibrationStore& store) {
+  std::vector<ImportConversion> conversions;
+  for (const std::string& item : scales) conversions.push_back(parse_scale(item));
+  for (const std::string& item : calibrations) {
+    conversions.push_back(parse_calibration(item, store));
+  }
+  for (std::size_t i = 0; i < conversions.size(); ++i) {
+    for (std::size_t j = 0; j < i; ++j) {
+      if (conversions[j].target == conversions[i].target) {
+        throw std::invalid_argument(conversions[i].given + ": " + conversions[i].target +
+                                    " is converted already (" + conversions[j].given + ")");
+      }
+    }
+  }
+  return conversions;
+}
+
+const ImportConversion* find_conversion(const std::vector<ImportConversion>& conversions,
+                                        const std::string& target) {
+  for (const ImportConversion& conversion : conversions) {
+    if (conversion.target == target) return &conversion;
+  }
+  return nullptr;
+}
+
+std::map<std::string, calibration::CalibrationRecord> take_raw_columns(
+    CsvTable& table, const std::vector<ImportConversion>& conversions, std::string_view source) {
+  std::map<std::string, calibration::CalibrationRecord> records;
+  for (const ImportConversion& conversion : conversions) {
+    const std::string column = import_target_column(conversion.target);
+    const std::string suffix = unit_column_suffix(import_target_unit(conversion.target));
+    const std::string stem = column.substr(0, column.size() - suffix.size() - 1);
+    std::vector<std::size_t> raw;  // the columns that can hold the target's raw signal
+    for (std::size_t c = 0; c < table.column_names.size(); ++c) {
+      const std::string& name = table.column_names[c];
+      const std::string unit =
+          conversion.record ? conversion.record->input_unit : unit_of_column(name);
+      if (has_unit_suffix(name) && name == stem + "_" + unit_column_suffix(unit)) raw.push_back(c);
+    }
+    if (raw.empty()) {
+      const std::string wanted =
+          conversion.record ? stem + "_" + unit_column_suffix(conversion.record->input_unit)
+                            : stem + "_UNIT";
+      throw CsvError(source, table.header_line,
+                     conversion.given + ": no column " + wanted + " (the raw " +
+                         conversion.target + "); the columns: " + column_list(table));
+    }
+    if (raw.size() > 1) {
+      throw CsvError(source, table.header_line,
+                     conversion.given + ": columns " + table.column_names[raw[0]] + " and " +
+                         table.column_names[raw[1]] + " could both be the raw " +
+                         conversion.target + " (keep one); the columns: " + column_list(table));
+    }
+    const std::string raw_name = table.column_names[raw.front()];
+    if (raw_name != column && table.find_column(column)) {
+      throw CsvError(source, table.header_line,
+                     conversion.given + ": the raw column " + raw_name + " would become " +
+                         column + ", which the file has already");
+    }
+    records.emplace(column, conversion.record_for(unit_of_column(raw_name)));
+    table.column_names[raw.front()] = column;
+  }
+  return records;
+}
+
+}  // namespace doorbench

@@ -1,0 +1,66 @@
+#pragma once
+// Raw channels to physical units on import (doorbench import --scale, --calibration;
+// docs/tdms.md and docs/csv-format.md): a target (force, angle, rate, or an extra column with
+// a unit suffix) whose channel holds a sensor's raw signal, volts from a bridge or an
+// inclinometer, becomes a session channel that keeps the raw values and names the record
+// that makes them physical, as a recorded session does (Recording::calibrations).
+//
+// Thread safety: free functions without shared state.
+#include <map>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "acquisition/rig/calibration_record.h"
+#include "acquisition/rig/calibration_store.h"
+#include "acquisition/session/csv_table.h"
+
+namespace doorbench {
+
+// One --scale TARGET=GAIN[,OFFSET] or --calibration TARGET=RECORD, its record read.
+struct ImportConversion {
+  std::string target;  // force, angle, rate, or an extra column name (incl_V)
+  std::string given;   // the item as given, for messages
+  // --calibration: the record (from the store, or its file). --scale: none, and
+  // physical = offset + gain · raw.
+  std::optional<calibration::CalibrationRecord> record;
+  double gain = 1.0, offset = 0.0;
+
+  // The record for a channel whose raw values are in `input_unit` ("" when the channel states
+  // none): --calibration's record, which must take that unit; --scale's linear record (id
+  // "scale-TARGET", sensor_kind "scale", input unit the channel's or "unstated"). Throws
+  // std::invalid_argument "TARGET: ..." naming the mismatch.
+  calibration::CalibrationRecord record_for(const std::string& input_unit) const;
+};
+
+// The physical unit of a target: N, rad, rad/s, or the unit an extra column's name ends
+// with ("V" for pot_V, "rad/s" for gyro_rad_s).
+std::string import_target_unit(const std::string& target);
+// The recording's column of a target: force_N, angle_rad, rate_rad_s, or the target itself.
+std::string import_target_column(const std::string& target);
+
+// The --scale and --calibration items ("force=2.5", "force=2.5,-0.1"; "force=ID", an id in
+// `store`, or "force=FILE", a record's JSON file). Throws std::invalid_argument naming the
+// item: malformed, a target that is not force, angle, rate or a name with a unit suffix, a
+// target converted twice, a record that does not give the target's unit, no such record;
+// std::runtime_error for a record file that cannot be read or parsed.
+std::vector<ImportConversion> parse_import_conversions(
+    const std::vector<std::string>& scales, const std::vector<std::string>& calibrations,
+    const calibration::CalibrationStore& store);
+
+// The conversion of `target`, or null.
+const ImportConversion* find_conversion(const std::vector<ImportConversion>& conversions,
+                                        const std::string& target);
+
+// A CSV's raw columns: for each conversion, the column holding the target's raw signal is
+// renamed in `table` to the target's column (force_V becomes force_N), so that the recording
+// reads it there; returns the records by that column, for Recording::calibrations. The raw
+// column is the target's column name with the unit the record takes (force_V for a record
+// from V, inclinometer_angle_V for the target inclinometer_angle_rad); for a --scale, the one
+// column of the target's stem with any unit suffix (force_V, or force_N itself). Throws
+// CsvError at the header's line when there is none, or for a --scale more than one.
+std::map<std::string, calibration::CalibrationRecord> take_raw_columns(
+    CsvTable& table, const std::vector<ImportConversion>& conversions, std::string_view source);
+
+}  // namespace doorbench

@@ -1,0 +1,302 @@
+// Raw channels to physical units on import (acquisition/session/import_units.h; docs/tdms.md
+// and docs/csv-format.md "Raw channels"): a DAQmx-layout file whose bridge is logged in
+// volts imports to newtons through a calibration record of the store, a record's file, or
+// --scale; the session keeps the volts as its raw values and names the record, and its
+// physical values are raw × gain + offset to 1e-12. The same for a CSV's force_V column.
+// The mistakes a user makes are answered word for word.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "acquisition/rig/calibration_record.h"
+#include "acquisition/rig/calibration_store.h"
+#include "acquisition/session/session_file.h"
+#include "acquisition/session/tdms.h"
+#include "tests/support/run_doorbench.h"
+#include "tests/support/tdms_writer.h"
+#include "tests/support/temp_dir.h"
+
+namespace doorbench {
+namespace {
+
+using namespace testing::tdms;
+
+constexpr int kVoltSamples = 64;
+constexpr double kGainNPerV = 98.0665 * 2.0 / 3.0;  // a 200 N cell at 3 V full scale
+constexpr double kOffsetN = -0.8125;
+
+std::int16_t bridge_counts(int k) {
+  return static_cast<std::int16_t>(std::lround(9000.0 * std::sin(0.09 * k) + 200.0));
+}
+std::int32_t encoder_counts(int k) {
+  return static_cast<std::int32_t>(std::lround(40000.0 * (1.0 - std::cos(0.05 * k))));
+}
+// The bridge's volts as DAQmx scales its counts (Linear, the unit Volts).
+double bridge_volts(int k) {
+  return 3.0517578125e-4 * bridge_counts(k) - 0.0015;
+}
+
+// DAQmx logging's layout (ToC 0xAE): one raw buffer of 8 bytes a sample, the bridge's I16 at
+// 0 and the encoder's I32 at 4; the bridge in Volts, the encoder in rad.
+std::vector<std::uint8_t> volts_file(const std::string& bridge_unit) {
+  const std::uint32_t toc =
+      kTocMetaData | kTocNewObjList | kTocRawData | kTocInterleavedData | kTocDAQmxRawData;
+  const std::vector<Property> bridge = {
+      text_property("unit_string", bridge_unit), double_property("wf_increment", 0.001),
+      text_property("NI_Scaling_Status", "unscaled"), i32_property("NI_Number_Of_Scales", 2),
+      text_property("NI_Scale[1]_Scale_Type", "Linear"),
+      double_property("NI_Scale[1]_Linear_Slope", 3.0517578125e-4),
+      double_property("NI_Scale[1]_Linear_Y_Intercept", -0.0015),
+      i32_property("NI_Scale[1]_Linear_Input_Source", 0)};
+  const std::vector<Property> encoder = {
+      text_property("unit_string", "rad"), double_property("wf_increment", 0.001),
+      text_property("NI_Scaling_Status", "unscaled"), i32_property("NI_Number_Of_Scales", 2),
+      text_property("NI_Scale[1]_Scale_Type", "Linear"),
+      double_property("NI_Scale[1]_Linear_Slope", 2.5e-5),
+      double_property("NI_Scale[1]_Linear_Y_Intercept", 0.0),
+      i32_property("NI_Scale[1]_Linear_Input_Source", 0)};
+  const std::vector<Object> objects = {
+      daqmx_channel("/'Dev1'/'Bridge'", kVoltSamples, {{3, 0, 0, 0}}, {8}, false, bridge),
+      daqmx_channel("/'Dev1'/'Encoder'", kVoltSamples, {{5, 0, 4, 0}}, {8}, false, encoder)};
+  Bytes raw;
+  for (int k = 0; k < kVoltSamples; ++k) {
+    raw.put(bridge_counts(k));
+    raw.put<std::uint16_t>(0);
+    raw.put(encoder_counts(k));
+  }
+  return segment(toc, objects, raw).data;
+}
+
+void write_bytes(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream(path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+calibration::CalibrationRecord load_cell_record() {
+  calibration::CalibrationRecord record;
+  record.id = "load_cell-LC445-0193-v2";
+  record.version = 2;
+  record.sensor_kind = "load_cell";
+  record.sensor_serial = "LC445-0193";
+  record.input_unit = "V";
+  record.unit = "N";
+  record.coefficients = {kOffsetN, kGainNPerV};
+  record.method = "multi-point";
+  return record;
+}
+
+// The session's force channel: its raw values are the file's volts, its record is `id`, and
+// its physical values are raw × gain + offset to 1e-12 relative.
+void check_force_in_newtons(const std::filesystem::path& session_path, const std::string& id,
+                            double gain, double offset) {
+  const SessionReader session(session_path);
+  const ChannelInfo& force = session.channel("force");
+  CHECK(force.calibration_id == id);
+  CHECK(force.raw_unit == "V");
+  CHECK(force.unit == "N");
+  bool named = false;
+  for (const calibration::CalibrationRecord& record : session.calibrations()) {
+    named = named || record.id == id;
+  }
+  CHECK(named);
+  const ChannelSlice slice = session.read("force");
+  const std::vector<double> newtons = session.physical("force", slice);
+  REQUIRE(slice.raw.size() == kVoltSamples);
+  for (int k = 0; k < kVoltSamples; ++k) {
+    INFO("sample " << k);
+    CHECK(slice.raw[k] == Approx(bridge_volts(k)).epsilon(1e-12).margin(1e-15));
+    const double expected = bridge_volts(k) * gain + offset;
+    CHECK(std::abs(newtons[k] - expected) <= 1e-12 * std::abs(expected));
+  }
+}
+
+// Runs doorbench in `dir`, so that names in its messages are as given.
+std::string units_dir_env(const testing::TempDir& dir) {
+  return "env -C '" + dir.path.string() + "'";
+}
+
+}  // namespace
+
+TEST_CASE("Import units: a DAQmx file in volts imports to newtons through a record",
+          "[tdms][daqmx][cli]") {
+  const testing::TempDir dir("import_units");
+  write_bytes(dir / "volts.tdms", volts_file("Volts"));
+  write_bytes(dir / "v.tdms", volts_file("V"));
+  const calibration::CalibrationStore store(dir / "calibrations");
+  store.add(load_cell_record());
+  const std::string map = " --map force=Dev1/Bridge,angle=Dev1/Encoder ";
+
+  // Without a conversion: refused, saying what would convert it.
+  testing::DoorbenchRun run =
+      testing::run_doorbench_shell("import v.tdms" + map + "--out plain.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: v.tdms: force: channel Dev1/Bridge is in 'V', not N (convert it: "
+        "--calibration force=RECORD or --scale force=GAIN[,OFFSET]; or map it as an extra "
+        "column whose name ends in its unit); the file's channels: Dev1/Bridge, Dev1/Encoder\n");
+
+  // A record of the store (./calibrations, the working directory's).
+  run = testing::run_doorbench_shell(
+      "import v.tdms" + map + "--calibration force=load_cell-LC445-0193-v2 --out store.h5", dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(run.err ==
+        "wrote store.h5: 64 samples\n"
+        "  force_N: raw V kept, physical through load_cell-LC445-0193-v2 (multi-point)\n");
+  check_force_in_newtons(dir / "store.h5", "load_cell-LC445-0193-v2", kGainNPerV, kOffsetN);
+
+  // The record's file.
+  run = testing::run_doorbench_shell(
+      "import v.tdms" + map +
+          "--calibration force=calibrations/load_cell-LC445-0193-v2.json --out file.h5", dir, units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  check_force_in_newtons(dir / "file.h5", "load_cell-LC445-0193-v2", kGainNPerV, kOffsetN);
+
+  // A scale given by hand.
+  run = testing::run_doorbench_shell("import v.tdms" + map + "--scale force=65.377,-0.8125 --out scale.h5", dir, units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  check_force_in_newtons(dir / "scale.h5", "scale-force", 65.377, -0.8125);
+  const SessionReader scaled(dir / "scale.h5");
+  const std::vector<calibration::CalibrationRecord> records = scaled.calibrations();
+  REQUIRE(records.size() == 1);
+  CHECK(records[0].method == "doorbench import --scale force=65.377,-0.8125");
+  CHECK(records[0].input_unit == "V");
+
+  // The record takes V; a channel in 'Volts' says so and is refused, not guessed.
+  run = testing::run_doorbench_shell(
+      "import volts.tdms" + map + "--calibration force=load_cell-LC445-0193-v2 --out x.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: volts.tdms: force: channel Dev1/Bridge is in 'Volts', not V (--calibration "
+        "force=load_cell-LC445-0193-v2); the file's channels: Dev1/Bridge, Dev1/Encoder\n");
+  // A record that gives another unit, and one that is not there.
+  run = testing::run_doorbench_shell(
+      "import v.tdms" + map + "--calibration angle=load_cell-LC445-0193-v2 --out x.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 2);
+  CHECK(run.err ==
+        "doorbench: --calibration angle=load_cell-LC445-0193-v2: record load_cell-LC445-0193-v2 "
+        "gives N, not rad (angle is in rad) (see doorbench import --help)\n");
+  run = testing::run_doorbench_shell(
+      "import v.tdms" + map + "--calibration force=nope --out x.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 2);
+  CHECK(run.err == "doorbench: --calibration force=nope: no file nope and no record nope in the "
+                   "calibration store " +
+                       (dir / "calibrations").string() +
+                       " (its records: load_cell-LC445-0193-v2) (see doorbench import --help)\n");
+  run = testing::run_doorbench_shell("import v.tdms" + map + "--scale force=abc --out x.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 2);
+  CHECK(run.err == "doorbench: --scale item 'force=abc' is not TARGET=GAIN[,OFFSET] (e.g. "
+                   "force=98.1,-0.5) (see doorbench import --help)\n");
+  CHECK(!std::filesystem::exists(dir / "x.h5"));
+}
+
+TEST_CASE("Import units: a CSV's raw column imports through a record or a scale", "[csv][cli]") {
+  const testing::TempDir dir("import_units_csv");
+  std::string csv = "# source: bench logger\ntime_s,force_V,angle_rad\n";
+  for (int k = 0; k < kVoltSamples; ++k) {
+    csv += format_csv_number(0.001 * k) + "," + format_csv_number(bridge_volts(k)) + "," +
+           format_csv_number(2.5e-5 * encoder_counts(k)) + "\n";
+  }
+  dir.write("run.csv", csv);
+  const calibration::CalibrationStore store(dir / "store");
+  store.add(load_cell_record());
+  testing::DoorbenchRun run = testing::run_doorbench_shell(
+      "import run.csv --calibrations store --calibration force=load_cell-LC445-0193-v2 --out r.h5", dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  check_force_in_newtons(dir / "r.h5", "load_cell-LC445-0193-v2", kGainNPerV, kOffsetN);
+  run = testing::run_doorbench_shell("import run.csv --scale force=65.377,-0.8125 --out s.h5", dir, units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  check_force_in_newtons(dir / "s.h5", "scale-force", 65.377, -0.8125);
+  // The column the record needs is not there.
+  dir.write("n.csv", "time_s,force_N,angle_rad\n0,1,0\n0.001,2,0\n");
+  run = testing::run_doorbench_shell(
+      "import n.csv --calibrations store --calibration force=load_cell-LC445-0193-v2 --out t.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err == "doorbench: n.csv:1: --calibration force=load_cell-LC445-0193-v2: no column "
+                   "force_V (the raw force); the columns: time_s, force_N, angle_rad\n");
+  // Without a conversion a CSV's force_V is not a force.
+  run = testing::run_doorbench_shell("import run.csv --out u.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err == "doorbench: run.csv:2: header lacks required column force_N\n");
+}
+
+TEST_CASE("Import: a TDMS file without timing imports with --rate-hz and --start-time",
+          "[tdms][cli]") {
+  const testing::TempDir dir("import_rate");
+  // As LabVIEW writes a channel without waveform timing: values, a unit, no wf_increment.
+  const auto lab_file = [](bool with_increment) {
+    std::vector<Object> objects;
+    for (const auto& [name, unit] : {std::pair{"Force", "N"}, std::pair{"Angle", "rad"}}) {
+      Object channel;
+      channel.raw = Object::kNew;
+      channel.path = std::string("/'Lab'/'") + name + "'";
+      channel.type = kDouble;
+      channel.count = 50;
+      channel.properties = {text_property("unit_string", unit)};
+      if (with_increment) channel.properties.push_back(double_property("wf_increment", 0.001));
+      objects.push_back(channel);
+    }
+    Bytes raw;
+    for (int k = 0; k < 50; ++k) raw.put(10.0 * std::sin(0.2 * k));
+    for (int k = 0; k < 50; ++k) raw.put(0.01 * k);
+    return segment(kTocMetaData | kTocNewObjList | kTocRawData, objects, raw).data;
+  };
+  write_bytes(dir / "lab.tdms", lab_file(false));
+  write_bytes(dir / "timed.tdms", lab_file(true));
+  const std::string map = " --map force=Lab/Force,angle=Lab/Angle ";
+  testing::DoorbenchRun run =
+      testing::run_doorbench_shell("import lab.tdms" + map + "--out a.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: lab.tdms: force: channel Lab/Force has no wf_increment > 0 to give the time "
+        "(give its rate, --rate-hz R, or map a time channel, time=GROUP/CHANNEL); the file's "
+        "channels: Lab/Force, Lab/Angle\n");
+  run = testing::run_doorbench_shell(
+      "import lab.tdms" + map + "--rate-hz 200 --start-time 2019-03-04T10:20:30Z --out a.h5", dir,
+      units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  const SessionReader session(dir / "a.h5");
+  CHECK(session.metadata().start_time_utc == "2019-03-04T10:20:30Z");
+  CHECK(session.channel("force").sample_rate_hz == 200.0);
+  const ChannelSlice slice = session.read("force");
+  REQUIRE(slice.time_s.size() == 50);
+  for (int k = 0; k < 50; ++k) CHECK(slice.time_s[k] == k / 200.0);
+  // A rate that contradicts the file's, a time given twice, a start that is no time.
+  run = testing::run_doorbench_shell("import timed.tdms" + map + "--rate-hz 500 --out b.h5", dir,
+                                     units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: timed.tdms: force: --rate-hz 500 contradicts channel Lab/Force's "
+        "wf_increment 0.001 s (1000 Hz); the file's channels: Lab/Force, Lab/Angle\n");
+  run = testing::run_doorbench_shell("import lab.tdms" + map + "--start-time 2019-02-30 --out b.h5",
+                                     dir, units_dir_env(dir));
+  CHECK(run.status == 2);
+  CHECK(run.err == "doorbench: --start-time: 2019-02-30 is not a day of the calendar (see "
+                   "doorbench import --help)\n");
+  dir.write("r.csv", "time_s,force_N,angle_rad\n0,1,0\n0.001,2,0\n");
+  run = testing::run_doorbench_shell("import r.csv --rate-hz 100 --out b.h5", dir,
+                                     units_dir_env(dir));
+  CHECK(run.status == 2);
+  CHECK(run.err == "doorbench: --rate-hz is for TDMS files (*.tdms): a CSV's time_s gives the "
+                   "time (see doorbench import --help)\n");
+  CHECK(!std::filesystem::exists(dir / "b.h5"));
+}
+
+TEST_CASE("Import: a control character in a CSV's metadata is refused where it is",
+          "[csv][cli]") {
+  const testing::TempDir dir("import_nul");
+  dir.write("nul.csv", std::string("# operator: Ann") + '\0' +
+                           "Bob\ntime_s,force_N,angle_rad\n0,1,0\n0.001,2,0\n");
+  const testing::DoorbenchRun run =
+      testing::run_doorbench_shell("import nul.csv --out n.h5", dir, units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err == "doorbench: nul.csv:1: control character \\x00 at column 16 of a metadata "
+                   "line (metadata is kept as text: remove it from the file)\n");
+  CHECK(!std::filesystem::exists(dir / "n.h5"));
+}
+
+}  // namespace doorbench
