@@ -276,4 +276,23 @@ Address parse_address(const std::string& address) {
   return result;
 }
 
+// "" if `replies` answer `commands` without error, else what went wrong: the first error
+// reply (named by its command) or a wrong count.
+std::string check_replies(const std::vector<std::string>& commands,
+                          const std::vector<std::string>& replies) {
+  for (std::size_t i = 0; i < replies.size(); ++i) {
+    const Reply reply = parse_reply(replies[i]);
+    if (reply.kind == Reply::Kind::kError) {
+      const std::string& command = i < commands.size() ? commands[i] : commands.back();
+      return "'" + command + "' failed: " + reply.text;
+    }
+  }
+  if (replies.size() != commands.size()) {
+    return std::to_string(commands.size()) + " command(s) '" + join_commands(commands) +
+           "' answered with " + std::to_string(replies.size()) + " repl" +
+           (replies.size() == 1 ? "y" : "ies");
+  }
+  return "";
+}
+
 }  // namespace doorbench::haptic::hm

@@ -91,6 +91,11 @@ struct Reply {
 // kError replies whose text says what is wrong, so a caller never reads garbage as data.
 Reply parse_reply(std::string_view text);
 
+// "" if `replies` answer `commands` without error, else what went wrong: the first error
+// reply (named by its command) or a wrong count.
+std::string check_replies(const std::vector<std::string>& commands,
+                          const std::vector<std::string>& replies);
+
 // Parses a vector reply; nullopt unless `text` is exactly "[x,y,z]" (spaces allowed).
 std::optional<Vec3> parse_vector(std::string_view text);
 // Parses a list of 1 to 16 numbers "[a,b,...]" (the workspace replies); nullopt otherwise.
