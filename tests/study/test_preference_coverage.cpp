@@ -63,6 +63,18 @@ void tally_pairs(std::map<std::string, Tally>& tallies, const std::string& prefi
     tallies[prefix + "worth " + panel.variants[v]].add(covers(w.ci_low, w.ci_high, panel.worths[v]),
                                                        first_50);
   }
+  // Any two worths' difference with the quasi-variances' SE, sqrt(q_i + q_j): what the
+  // comparison intervals stand for.
+  for (std::size_t i = 0; i < scale.worths.size(); ++i) {
+    for (std::size_t j = i + 1; j < scale.worths.size(); ++j) {
+      const double difference = scale.worths[i].worth.value - scale.worths[j].worth.value;
+      const double se = std::sqrt(scale.worths[i].quasi_variance + scale.worths[j].quasi_variance);
+      tallies[prefix + "any two worths' difference (quasi-variances)"].add(
+          covers(difference - 1.959964 * se, difference + 1.959964 * se,
+                 panel.worths[i] - panel.worths[j]),
+          first_50);
+    }
+  }
   tallies[prefix + "nu"].add(covers(scale.nu->ci_low, scale.nu->ci_high, panel.nu), first_50);
   tallies[prefix + "delta"].add(covers(scale.order->ci_low, scale.order->ci_high, panel.delta),
                                 first_50);
@@ -102,14 +114,14 @@ TEST_CASE("over 200 simulated campaigns every 95 % interval covers the truth 90-
     tallies["2-AC d' (profile likelihood, n = 40)"].add(covers(r.ci_low, r.ci_high, dprime_2ac),
                                                         first_50);
   }
-  std::cout << "| estimate | covered of 200 | coverage | first 50 campaigns |\n|---|---|---|---|\n";
+  std::cout << "| estimate | covered | coverage | first 50 campaigns |\n|---|---|---|---|\n";
   for (const auto& [name, tally] : tallies) {
-    std::printf("| %s | %d | %.1f %% | %d of %d |\n", name.c_str(), tally.covered,
-                100 * tally.share(), tally.covered_50, tally.total_50);
+    std::printf("| %s | %d of %d | %.1f %% | %d of %d |\n", name.c_str(), tally.covered,
+                tally.total, 100 * tally.share(), tally.covered_50, tally.total_50);
   }
   for (const auto& [name, tally] : unchecked) {
-    std::printf("| (%s) | %d | %.1f %% | %d of %d |\n", name.c_str(), tally.covered,
-                100 * tally.share(), tally.covered_50, tally.total_50);
+    std::printf("| (%s) | %d of %d | %.1f %% | %d of %d |\n", name.c_str(), tally.covered,
+                tally.total, 100 * tally.share(), tally.covered_50, tally.total_50);
   }
   std::cout.flush();
   for (const auto& [name, tally] : tallies) {
@@ -118,3 +130,4 @@ TEST_CASE("over 200 simulated campaigns every 95 % interval covers the truth 90-
     CHECK(tally.share() <= 0.99);
   }
 }
+
