@@ -12,6 +12,8 @@
 #include <ostream>
 #include <string>
 
+#include "study/statistics/discrimination.h"
+
 namespace doorbench::app {
 
 // `campaign analyze`'s options (app/campaign_analyze_command.cpp).
@@ -24,6 +26,7 @@ struct CampaignAnalyzeOptions {
   std::uint64_t seed = 1;
   std::string reference;
   std::string real_variant = "real";
+  double equivalence_dprime = study::kDefaultEquivalenceDprime;  // identify-real, 2-AC
 };
 
 // The verb: analysis.json, the variants' parameter files and the report into out_dir.

@@ -9,6 +9,7 @@
 #include <set>
 
 #include "acquisition/session/output_file.h"
+#include "core/number_format.h"
 #include "analysis/report/svg_plot.h"
 #include "study/statistics/discrimination.h"
 #include "study/statistics/ratings.h"
@@ -20,6 +21,8 @@ namespace doorbench::study {
 std::string AnalysisOptions::validate() const {
   if (const std::string problem = preference.validate(); !problem.empty()) return problem;
   if (!(confidence > 0.5 && confidence < 1)) return "confidence must be in (0.5, 1)";
+  if (!(equivalence_dprime > 0) || !std::isfinite(equivalence_dprime))
+    return "the equivalence margin must be a positive d'";
   if (real_variant.empty()) return "the real door's variant name must not be empty";
   return "";
 }
@@ -120,15 +123,17 @@ std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
                       {}});
   sections.push_back({"identify_real",
                       [options](const TrialsTable& table) {
-                        const auto result =
-                            identify_real(table, options.real_variant, options.confidence);
+                        const auto result = identify_real(table, options.real_variant,
+                                                          options.confidence,
+                                                          options.equivalence_dprime);
                         if (!result) return nlohmann::json(nullptr);
                         return nlohmann::json{{"identify_real", identify_real_json(*result)}};
                       },
                       {}});
   sections.push_back({"two_ac",
                       [options](const TrialsTable& table) {
-                        const auto pairs = two_ac_pairs(table, options.confidence);
+                        const auto pairs =
+                            two_ac_pairs(table, options.confidence, options.equivalence_dprime);
                         if (pairs.empty()) return nlohmann::json(nullptr);
                         return nlohmann::json{{"two_ac", two_ac_json(pairs)}};
                       },
@@ -484,13 +489,10 @@ std::string analysis_html(const nlohmann::json& a, const std::vector<AnalysisPlo
 }
 
 namespace {
-// A number for the terminal: "n/a" for null (not estimable), else 3 decimals, no "-0.000".
+// A number for the terminal: 2 decimals, "n/a" for null (not estimable), no "-0.00".
 std::string plain(const nlohmann::json& value) {
   if (!value.is_number()) return value.is_string() ? value.get<std::string>() : "n/a";
-  char text[32];
-  const double x = value.get<double>();
-  std::snprintf(text, sizeof text, "%.3f", std::abs(x) < 5e-4 ? 0.0 : x);
-  return text;
+  return format_fixed(value.get<double>(), 2);
 }
 }  // namespace
 
@@ -500,8 +502,10 @@ std::string analysis_summary(const nlohmann::json& a) {
   if (a.contains("preference_scale")) {
     text += "preference scale (worth [95% interval]):";
     for (const auto& w : a["preference_scale"])
-      text += " " + w["variant"].get<std::string>() + " " + cell(w["worth"]) + " [" +
-              cell(w["ci_low"]) + ", " + cell(w["ci_high"]) + "]";
+      text += " " + w["variant"].get<std::string>() + " " + cell(w["worth"]) +
+              (w.value("interval", "") == "reference"
+                   ? " (reference)"
+                   : " [" + cell(w["ci_low"]) + ", " + cell(w["ci_high"]) + "]");
     text += "\n";
     const nlohmann::json* favourite = nullptr;
     for (const auto& w : a["preference_scale"])
@@ -509,6 +513,7 @@ std::string analysis_summary(const nlohmann::json& a) {
     if (favourite != nullptr)
       text += "favourite: " + (*favourite)["variant"].get<std::string>() + " (probability " +
               cell((*favourite)["p_favourite"]) + ")\n";
+    for (const auto& note : a["preference_fit"]["notes"]) text += "note: " + cell(note) + "\n";
   }
   if (a.contains("ties"))
     text += "ties: nu " + cell(a["ties"]["nu"]) + " [" + cell(a["ties"]["ci_low"]) + ", " +
@@ -516,10 +521,12 @@ std::string analysis_summary(const nlohmann::json& a) {
   if (a.contains("identify_real"))
     text += "identify-real: " + cell(a["identify_real"]["verdict"]) + "\n";
   if (a.contains("two_ac"))
-    for (const auto& r : a["two_ac"])
+    for (const auto& r : a["two_ac"]) {
       text += "2-AC " + r["first"].get<std::string>() + " vs " + r["second"].get<std::string>() +
-              ": d' " + cell(r["dprime"]) + " [" + cell(r["ci_low"]) + ", " + cell(r["ci_high"]) +
-              "]\n";
+              ": " + cell(r["verdict"]);
+      const std::string note = r.value("note", "");
+      text += note.empty() ? "\n" : " (" + note + ")\n";
+    }
   return text;
 }
 

@@ -28,6 +28,7 @@
 #include <string>
 #include <vector>
 
+#include "study/statistics/discrimination.h"
 #include "study/statistics/preference_scale.h"
 #include "study/trials_table.h"
 
@@ -37,6 +38,8 @@ struct AnalysisOptions {
   PreferenceOptions preference;
   std::string real_variant = "real";  // the real door's name in identify-real trials
   double confidence = 0.95;
+  // identify-real's and 2-AC's equivalence margin on d' (--equivalence-dprime)
+  double equivalence_dprime = kDefaultEquivalenceDprime;
   std::string validate() const;  // empty when usable
 };
 
