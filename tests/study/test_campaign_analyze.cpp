@@ -229,8 +229,8 @@ TEST_CASE("campaign analyze writes the ratings, jnd and tuning sections and thei
   CHECK(std::filesystem::exists(dir / "out" / "jnd-J_d.svg"));
   CHECK(std::filesystem::exists(dir / "out" / "tuning.svg"));
   const std::string html = read_file(dir / "out" / "report.html");
-  CHECK(html.find("<h2>ratings</h2>") != std::string::npos);
-  CHECK(html.find("<h2>jnd</h2>") != std::string::npos);
+  CHECK(html.find("<h2>Ratings</h2>") != std::string::npos);
+  CHECK(html.find("<h2>Thresholds (jnd)</h2>") != std::string::npos);
 }
 
 // The notes say why the intervals are Wald's: no bootstrap asked for, or too few people.
