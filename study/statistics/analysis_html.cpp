@@ -331,20 +331,21 @@ std::string jnd_html(const json& a, const std::vector<AnalysisPlot>& plots) {
 }
 
 std::string tuning_html(const json& t, const std::vector<AnalysisPlot>& plots) {
-  std::string html =
-      "<h2>Tuned doors</h2>\n<p>Per parameter over the panel's tuned doors: the centre (geometric "
-      "mean on the log scale) with its 95 % interval, the spread, and the spread in perceptual "
-      "steps (ln differences over ln(1 + Weber fraction)).</p>\n";
+  std::string html = "<h2>Tuned doors</h2>\n<p>Per parameter over the panel's ";
+  html.append(std::to_string(t.value("doors", json::array()).size()))
+      .append(" tuned doors: the centre (geometric mean on the log scale) with its 95 % interval, "
+              "the spread, and the spread in perceptual steps (ln differences over ln(1 + Weber "
+              "fraction), the Weber fraction's source named).</p>\n");
   std::vector<std::vector<std::string>> rows;
   for (const json& p : t.value("parameters", json::array())) {
-    rows.push_back({html_escape(p.value("parameter", "")), html_cell(p["doors"]), html_cell(p["centre"]),
+    rows.push_back({html_escape(p.value("parameter", "")), html_cell(p["centre"]),
                     bracketed(html_cell(p["ci_low"]), html_cell(p["ci_high"])), html_cell(p["spread"]),
-                    percent_cell(p["weber_fraction"]), wrappable(html_cell(p["weber_source"])),
+                    percent_cell(p["weber_fraction"]), html_cell(p["weber_source"]),
                     html_fixed(p["spread_steps"]), html_fixed(p["ci_half_steps"])});
   }
-  html += html_table({"parameter", "doors", "centre", "95 % interval", "spread", "Weber %", "source",
-                 "spread, steps", "&plusmn; steps"},
-                rows);
+  html += html_table({"parameter", "centre", "95 % interval", "spread", "Weber %", "source",
+                      "spread, steps", "&plusmn; steps"},
+                     rows);
   if (t.contains("clusters")) {
     const json& c = t["clusters"];
     html += "<p class=\"small\">" +
