@@ -74,6 +74,7 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
   analysis_options.preference.seed = options.seed;
   analysis_options.preference.reference = options.reference;
   analysis_options.real_variant = options.real_variant;
+  analysis_options.equivalence_dprime = options.equivalence_dprime;
   if (const std::string problem = analysis_options.validate(); !problem.empty())
     throw UsageError(problem);
 
@@ -152,8 +153,9 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
   CLI::App* command = campaign.add_subcommand(
       "analyze",
       "The panel's statistics from trials.csv: preference scale (Bradley-Terry with ties and "
-      "order effect), real vs virtual (2-AFC d'), 2-AC d', ratings, thresholds, tuned doors "
-      "(analysis.json, report.html, report.pdf, plots, the variants' parameter files)");
+      "order effect, quasi-variances), real vs virtual (2-AFC d' with equivalence), 2-AC d', "
+      "ratings, thresholds, tuned doors (analysis.json, report.html, report.pdf, plots, the "
+      "variants' parameter files)");
   command->add_option("INPUT", options->input, "a campaign folder or a trials.csv")->required();
   command->add_option("--out", options->out_dir, "folder for the analysis")->required();
   command->add_flag("--overwrite", options->overwrite,
@@ -170,6 +172,12 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
   command
       ->add_option("--real-variant", options->real_variant,
                    "the real door's name in identify-real trials")
+      ->capture_default_str();
+  command
+      ->add_option("--equivalence-dprime", options->equivalence_dprime,
+                   "the equivalence margin on d' of identify-real and 2-AC: the doors are called "
+                   "indistinguishable only when the 95 % interval of d' lies within +-MARGIN "
+                   "(two one-sided tests; 1 is about the 2-AFC JND, docs/campaign.md)")
       ->capture_default_str();
   command->add_flag("--no-pdf", options->no_pdf, "do not render report.pdf");
   command->callback([options, &action] {

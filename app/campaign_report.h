@@ -14,6 +14,7 @@
 #include <string>
 
 #include "core/stop_request.h"
+#include "study/statistics/discrimination.h"
 
 namespace doorbench::app {
 
@@ -27,6 +28,7 @@ struct CampaignAnalyzeOptions {
   std::uint64_t seed = 1;
   std::string reference;
   std::string real_variant = "real";
+  double equivalence_dprime = study::kDefaultEquivalenceDprime;  // identify-real, 2-AC
 };
 
 // The verb: analysis.json, the variants' parameter files and the report into out_dir.

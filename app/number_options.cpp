@@ -34,6 +34,8 @@ constexpr NamedRange kRanges[] = {
     {"calibrate loadcell", "--masses-kg", 0, 10000},
     // Physical bounds (0.05 to 2 m) are checked by the verb, which --force-geometry lifts.
     {"calibrate geometry", "--radius-m", 0.001, 1000},
+    // d' 0.05 is Pc 51.4 % in 2-AFC, d' 5 is 99.98 %: margins outside say nothing.
+    {"campaign analyze", "--equivalence-dprime", 0.05, 5},
 };
 
 constexpr double kLargestValue = 1e9;

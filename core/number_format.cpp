@@ -32,4 +32,26 @@ std::string printf_text(const char* pattern, ...) {
   return text;
 }
 
+std::string format_fixed(double value, int decimals) {
+  if (std::isnan(value)) return "-";
+  if (std::isinf(value)) return value > 0 ? "inf" : "-inf";
+  std::string text = printf_text("%.*f", decimals, value);
+  // A negative value that rounds to zero reads as zero.
+  if (text.front() == '-' && text.find_first_not_of("-0.") == std::string::npos) text.erase(0, 1);
+  return text;
+}
+
+std::string format_p_value(double p) {
+  if (std::isnan(p)) return "-";
+  if (p < 0.001) return "< 0.001";
+  if (p >= 1.0) return "1";
+  if (p > 0.999) return "> 0.999";
+  return printf_text("%.3g", p);
+}
+
+std::string p_value_text(double p) {
+  const std::string value = format_p_value(p);
+  return value.front() == '<' || value.front() == '>' ? "p " + value : "p = " + value;
+}
+
 }  // namespace doorbench

@@ -6,6 +6,12 @@
 //   format_significant(x, n)    n significant digits as printf's %.<n>g ("10.9195"), "-" for
 //                               NaN (a value not computed), "inf"/"-inf": report tables
 //   printf_text(pattern, ...)   printf-style formatting into a std::string
+//   format_fixed(x, d)          d decimals as printf's %.<d>f, never "-0.00" ("0.00"), "-"
+//                               for NaN, "inf"/"-inf": a report column of estimates
+//   format_p_value(p)           a p-value as statisticians write it: "< 0.001" below 0.001,
+//                               else 3 significant digits ("0.0123", "0.148"), "> 0.999"
+//                               just below 1, "1" at 1, "-" for NaN
+//   p_value_text(p)             "p < 0.001" or "p = 0.148": a p-value in a sentence
 //
 // Pure functions: safe from any thread.
 #include <string>
@@ -15,5 +21,8 @@ namespace doorbench {
 std::string format_number(double value);
 std::string format_significant(double value, int digits);
 std::string printf_text(const char* pattern, ...) __attribute__((format(printf, 1, 2)));
+std::string format_fixed(double value, int decimals);
+std::string format_p_value(double p);
+std::string p_value_text(double p);
 
 }  // namespace doorbench

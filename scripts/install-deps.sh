@@ -32,6 +32,8 @@ packages=(
   r-cran-ordinal              # tests only: R's ordinal (clmm/clm), the ratings fit's independent check
   r-cran-bradleyterry2        # tests only: BTm, the preference scale's check (tests/study/preference_oracle.R);
                               # its namespaces all come through Depends: no recommends needed
+  r-cran-qvcalc               # tests only: qvcalc, the quasi-variances' check (tests/study/preference_oracle.R)
+  r-cran-mass                 # benchmark only: MASS's menarche data, the threshold table of docs/PERFORMANCE.md
 )
 
 missing=()

@@ -8,64 +8,19 @@
 #include <stdexcept>
 
 #include "acquisition/session/output_file.h"
+#include "analysis/report/internal/svg_axes.h"
 
 namespace doorbench {
 namespace {
 
+using svg_axes::escaped;
+using svg_axes::number_text;
+using svg_axes::padded;
+using svg_axes::Range;
+using svg_axes::tick_spacing;
+
 constexpr const char* kPalette[] = {"#1f77b4", "#d62728", "#2ca02c",
                                     "#ff7f0e", "#9467bd", "#8c564b"};
-
-struct Range {
-  double low = std::numeric_limits<double>::infinity();
-  double high = -std::numeric_limits<double>::infinity();
-  void include(double value) {
-    if (!std::isfinite(value)) return;
-    low = std::min(low, value);
-    high = std::max(high, value);
-  }
-};
-
-// A tick spacing of 1, 2 or 5 times a power of ten giving about `wanted` ticks.
-double tick_spacing(const Range& range, int wanted) {
-  const double raw = (range.high - range.low) / wanted;
-  const double power = std::pow(10.0, std::floor(std::log10(raw)));
-  for (double step : {1.0, 2.0, 5.0}) {
-    if (step * power >= raw) return step * power;
-  }
-  return 10.0 * power;
-}
-
-Range padded(Range range) {
-  if (range.high - range.low < 1e-12 * std::max(1.0, std::abs(range.high))) {
-    range.low -= 0.5;
-    range.high += 0.5;
-  }
-  const double margin = 0.03 * (range.high - range.low);
-  return {range.low - margin, range.high + margin};
-}
-
-std::string number_text(double value, double spacing) {
-  char text[32];
-  const int decimals = std::max(0, static_cast<int>(-std::floor(std::log10(spacing) + 1e-9)));
-  std::snprintf(text, sizeof text, "%.*f", decimals,
-                std::abs(value) < 1e-12 * spacing ? 0.0 : value);
-  return text;
-}
-
-std::string escaped(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '<')
-      out += "&lt;";
-    else if (c == '>')
-      out += "&gt;";
-    else if (c == '&')
-      out += "&amp;";
-    else
-      out += c;
-  }
-  return out;
-}
 
 // A series' points as SVG "x,y " pairs, reduced per pixel column to its first, smallest,
 // largest and last point in order (which draws the same as all of them).

@@ -29,6 +29,7 @@
 #include <vector>
 
 #include "core/stop_request.h"
+#include "study/statistics/discrimination.h"
 #include "study/statistics/preference_scale.h"
 #include "study/trials_table.h"
 
@@ -42,6 +43,8 @@ struct AnalysisOptions {
   // true the section under way is abandoned and analysis.json's "interrupted" says which;
   // the sections before it are kept. Also the preference bootstrap's when that has none.
   StopHook stop_requested;
+  // identify-real's and 2-AC's equivalence margin on d' (--equivalence-dprime)
+  double equivalence_dprime = kDefaultEquivalenceDprime;
   std::string validate() const;  // empty when usable
 };
 
@@ -76,14 +79,24 @@ nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& o
                               std::vector<AnalysisPlot>* section_plots = nullptr);
 
 // Every plot, drawn from analysis.json alone (what `campaign analyze` and `campaign report`
-// write): preference-scale.svg, identify-real.svg, two-ac.svg, ratings-ATTRIBUTE.svg (for each
-// converged ratings model), jnd-PARAMETER.svg (the panel's psychometric curve with the pooled
-// answers of jnd_levels) and tuning.svg (the tuned doors in perceptual steps). Throws
-// nlohmann::json::exception for a section without the fields these plots read.
+// write; study/statistics/analysis_plots.cpp): forest plots with the names on the axis,
+// preference-scale.svg (the worths best first, their 95 % intervals and quasi-variance
+// comparison intervals), identify-real.svg (the panel and up to 30 participants, the
+// equivalence margin shaded), two-ac.svg (one row per pair) and ratings-ATTRIBUTE.svg (for
+// each converged ratings model); jnd-PARAMETER.svg (the panel's psychometric curve with its
+// 95 % band, the pooled answers as points sized by their trials, from jnd_levels) and
+// tuning.svg (the tuned doors in perceptual steps). Throws nlohmann::json::exception for a
+// section without the fields these plots read.
 std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis);
 
-// report.html: every key of the analysis as a section (the known ones as tables with the
-// model's words; any other key as a generic table), the plots inline.
+// A plot's file: PREFIX + NAME with every character outside [A-Za-z0-9._-] as '_' + ".svg"
+// ("ratings-" and "heavy/light" give "ratings-heavy_light.svg").
+std::string plot_file_name(const std::string& prefix, const std::string& name);
+
+// report.html (study/statistics/analysis_html.cpp): every key of the analysis as a section
+// (the known ones as tables with the model's words, numbers to the digits a reader needs and
+// p-values as "< 0.001" or 3 significant digits, no number or name broken across lines; any
+// other key as a generic table), the plots inline.
 std::string analysis_html(const nlohmann::json& analysis, const std::vector<AnalysisPlot>& plots);
 
 // The summary printed by the verb: one line per section.

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 
 namespace doorbench::study::statistics {
@@ -55,22 +56,33 @@ Eigen::MatrixXd numeric_hessian(const Objective& f, const Eigen::VectorXd& x, do
   return hessian;
 }
 
-MinimizeResult minimize(const Objective& f, Eigen::VectorXd x0, const MinimizeOptions& options) {
+namespace {
+
+// The objective as the Newton loop sees it: the value at any point, the gradient and the
+// Hessian at the accepted points.
+struct NewtonModel {
+  std::function<double(const Eigen::VectorXd&)> value;
+  std::function<void(const Eigen::VectorXd&, Eigen::VectorXd&, Eigen::MatrixXd&)> derivatives;
+};
+
+MinimizeResult damped_newton(const NewtonModel& model, Eigen::VectorXd x0,
+                             const MinimizeOptions& options) {
   MinimizeResult result;
   result.x = std::move(x0);
-  result.value = f(result.x);
+  result.value = model.value(result.x);
   if (!std::isfinite(result.value)) {
     throw std::invalid_argument("minimize: the objective is not finite at the start");
   }
   double damping = 1e-3;
   const Eigen::Index n = result.x.size();
+  Eigen::VectorXd gradient;
+  Eigen::MatrixXd hessian;
   for (result.iterations = 0; result.iterations < options.max_iterations; ++result.iterations) {
-    const Eigen::VectorXd gradient = numeric_gradient(f, result.x);
+    model.derivatives(result.x, gradient, hessian);
     if (gradient.lpNorm<Eigen::Infinity>() < options.gradient_tolerance) {
       result.converged = true;
       return result;
     }
-    Eigen::MatrixXd hessian = numeric_hessian(f, result.x);
     // The damped system is made positive definite by raising the damping until Cholesky works
     // and the step lowers the objective.
     bool moved = false;
@@ -85,7 +97,7 @@ MinimizeResult minimize(const Objective& f, Eigen::VectorXd x0, const MinimizeOp
       }
       const Eigen::VectorXd step = llt.solve(-gradient);
       const Eigen::VectorXd candidate = result.x + step;
-      const double value = f(candidate);
+      const double value = model.value(candidate);
       if (std::isfinite(value) && value <= result.value) {
         const bool small = (step.array().abs() < options.step_tolerance).all();
         result.x = candidate;
@@ -107,6 +119,41 @@ MinimizeResult minimize(const Objective& f, Eigen::VectorXd x0, const MinimizeOp
     }
   }
   return result;
+}
+
+}  // namespace
+
+MinimizeResult minimize(const Objective& f, Eigen::VectorXd x0, const MinimizeOptions& options) {
+  const NewtonModel model{
+      f, [&f](const Eigen::VectorXd& x, Eigen::VectorXd& gradient, Eigen::MatrixXd& hessian) {
+        gradient = numeric_gradient(f, x);
+        hessian = numeric_hessian(f, x);
+      }};
+  return damped_newton(model, std::move(x0), options);
+}
+
+MinimizeResult minimize(const DerivativeObjective& f, Eigen::VectorXd x0,
+                        const MinimizeOptions& options) {
+  // The value at a candidate comes with its derivatives: kept for the step from it.
+  Eigen::VectorXd cached_at;
+  Derivatives cached;
+  bool have = false;
+  const auto at = [&](const Eigen::VectorXd& x) -> const Derivatives& {
+    if (!have || cached_at.size() != x.size() || cached_at != x) {
+      cached = f(x);
+      cached_at = x;
+      have = true;
+    }
+    return cached;
+  };
+  const NewtonModel model{
+      [&at](const Eigen::VectorXd& x) { return at(x).value; },
+      [&at](const Eigen::VectorXd& x, Eigen::VectorXd& gradient, Eigen::MatrixXd& hessian) {
+        const Derivatives& d = at(x);
+        gradient = d.gradient;
+        hessian = d.hessian;
+      }};
+  return damped_newton(model, std::move(x0), options);
 }
 
 }  // namespace doorbench::study::statistics

@@ -12,6 +12,7 @@
 #include <tuple>
 #include "core/numbers.h"
 #include "study/statistics/json_number.h"
+#include "study/statistics/quasi_variance.h"
 
 namespace doorbench::study {
 namespace {
@@ -350,6 +351,57 @@ std::vector<double> favourite_shares(const Layout& layout,
   return shares;
 }
 
+// The worths' covariance over every variant (the reference's row and column 0).
+Eigen::MatrixXd worth_covariance(const Layout& layout, const Eigen::MatrixXd& covariance) {
+  Eigen::MatrixXd out = Eigen::MatrixXd::Zero(layout.variants, layout.variants);
+  for (int v = 0; v < layout.variants; ++v)
+    for (int w = 0; w < layout.variants; ++w) {
+      const int k = layout.worth_index(v), l = layout.worth_index(w);
+      if (k >= 0 && l >= 0) out(v, w) = covariance(k, l);
+    }
+  return out;
+}
+
+// The variances of the worths' differences the intervals use: Wald's, or the larger of
+// Wald's and the bootstrap's (robust: half the central 68.27 % range, squared) per pair.
+Eigen::MatrixXd difference_variances(const Layout& layout, const Eigen::MatrixXd& covariance,
+                                     const std::vector<Eigen::VectorXd>& replicates) {
+  Eigen::MatrixXd v = statistics::pairwise_variances(worth_covariance(layout, covariance));
+  if (replicates.size() < 2) return v;
+  auto worth = [&](const Eigen::VectorXd& theta, int variant) {
+    const int k = layout.worth_index(variant);
+    return k < 0 ? 0.0 : theta(k);
+  };
+  for (int i = 0; i < layout.variants; ++i) {
+    for (int j = i + 1; j < layout.variants; ++j) {
+      std::vector<double> differences;
+      for (const Eigen::VectorXd& r : replicates) differences.push_back(worth(r, i) - worth(r, j));
+      const double se =
+          (quantile(differences, 0.841344746) - quantile(differences, 0.158655254)) / 2;
+      v(i, j) = v(j, i) = std::max(v(i, j), se * se);
+    }
+  }
+  return v;
+}
+
+void add_quasi_variances(const Layout& layout, const Eigen::MatrixXd& covariance,
+                         const std::vector<Eigen::VectorXd>& replicates, double z,
+                         PreferenceScale& scale) {
+  const auto qv = statistics::quasi_variances(difference_variances(layout, covariance, replicates));
+  scale.quasi_variance_error = qv ? qv->worst_relative_error : kNaN;
+  scale.quasi_variance_source =
+      replicates.size() >= 2 ? "larger of wald and bootstrap, per pair" : "wald";
+  for (int v = 0; v < layout.variants; ++v) {
+    VariantWorth& w = scale.worths[std::size_t(v)];
+    w.quasi_variance = qv ? qv->variances[std::size_t(v)] : kNaN;
+    const double half = z / std::sqrt(2.0) * std::sqrt(w.quasi_variance);
+    w.comparison_low = w.worth.value - half;
+    w.comparison_high = w.worth.value + half;
+  }
+  if (!qv && layout.variants >= 3)
+    scale.notes.push_back("no quasi-variances: their fit did not converge");
+}
+
 void count_answers(const PairData& data, PreferenceScale& scale) {
   for (const PairTrial& t : data.trials) {
     VariantWorth& first = scale.worths[std::size_t(t.first)];
@@ -415,6 +467,8 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
     scale.worths.push_back(worth);
   }
   count_answers(data, scale);
+  add_quasi_variances(layout, covariance, use_bootstrap ? replicates.thetas : std::vector<Eigen::VectorXd>{},
+                      z, scale);
   if (layout.order) scale.order = estimate(layout.order_index());
   if (layout.ties) {
     Estimate log_nu = estimate(layout.nu_index());
@@ -425,9 +479,17 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
   }
   if (!layout.order)
     scale.notes.push_back("no pair was presented in both orders: no order effect fitted");
-  if (!bootstrapped)
-    scale.notes.push_back("fewer than " + std::to_string(options.min_bootstrap_participants) +
-                          " participants: Wald intervals, which assume the participants agree");
+  if (options.bootstrap_replicates == 0)
+    scale.notes.push_back("Wald intervals: no participant bootstrap was asked for (--bootstrap 0), "
+                          "so the intervals assume the participants agree");
+  else if (!bootstrapped)
+    scale.notes.push_back("Wald intervals: " + std::to_string(scale.participants) +
+                          " participants, fewer than the " +
+                          std::to_string(options.min_bootstrap_participants) +
+                          " a participant bootstrap needs; they assume the participants agree");
+  if (layout.variants == 2)
+    scale.notes.push_back("no comparison intervals: with two variants the interval of the "
+                          "second against the reference is the comparison");
   if (replicates.failed > 0)
     scale.notes.push_back(std::to_string(replicates.failed) +
                           " bootstrap resamples had a variant that never won or never lost and "
@@ -449,6 +511,10 @@ nlohmann::json preference_scale_json(const PreferenceScale& scale) {
                       {"se_wald", w.worth.se_wald},
                       {"se_bootstrap", json_number(w.worth.se_bootstrap)},
                       {"interval", w.worth.interval},
+                      {"quasi_variance", json_number(w.quasi_variance)},
+                      {"quasi_se", json_number(std::sqrt(w.quasi_variance))},
+                      {"comparison_low", json_number(w.comparison_low)},
+                      {"comparison_high", json_number(w.comparison_high)},
                       {"p_favourite", w.p_favourite},
                       {"wins", w.wins},
                       {"losses", w.losses},
@@ -474,6 +540,8 @@ nlohmann::json preference_scale_json(const PreferenceScale& scale) {
                            {"bootstrap_replicates_used", scale.replicates_used},
                            {"bootstrap_replicates_failed", scale.replicates_failed},
                            {"favourite_from", scale.favourite_source},
+                           {"quasi_variance_worst_error", json_number(scale.quasi_variance_error)},
+                           {"quasi_variance_from", scale.quasi_variance_source},
                            {"notes", scale.notes}};
   return out;
 }

@@ -24,6 +24,16 @@
 // never loses). Each estimate says which SE was used ("wald" or "bootstrap"). The worths, δ
 // and log ν have symmetric intervals; ν's interval is exp of log ν's.
 //
+// Quasi-variances (Firth & de Menezes 2004; study/statistics/quasi_variance.h) of the worths,
+// with three or more variants: one q per variant, the reference included, such that the
+// variance of any difference of two worths is about q_i + q_j. They are fitted to the
+// variances of the differences the reported intervals use: the Wald covariance's, or with the
+// bootstrap the larger of the Wald variance and the bootstrap's (half the central 68.27 %
+// range of the replicates' difference, squared), pair by pair. Each variant's comparison
+// interval is worth ± z/√2 · sqrt(q): two variants whose comparison intervals do not overlap
+// differ at about the 1 − confidence level (exactly so for equal quasi-variances; with
+// unequal ones, non-overlap asks a little more).
+//
 // Errors: TrialsTableError (study/trials_table.h) naming the line of an answer that is not
 // 1, 2 or same (same only in preference-2ac). PreferenceScaleError when the data cannot give
 // a scale (fewer than two variants, a variant that never won or never lost: its worth is
@@ -92,6 +102,8 @@ struct Estimate {
 struct VariantWorth {
   std::string variant;
   Estimate worth;          // log scale
+  double quasi_variance = 0;  // NaN without quasi-variances (two variants, or no fit)
+  double comparison_low = 0, comparison_high = 0;  // worth ∓ z/√2 · sqrt(quasi_variance)
   double p_favourite = 0;  // share of replicates (or draws) in which it has the top worth
   int wins = 0, losses = 0, ties = 0;  // its answers, whatever position
 };
@@ -107,6 +119,8 @@ struct PreferenceScale {
   int replicates_used = 0;       // bootstrap replicates that converged (0: not bootstrapped)
   int replicates_failed = 0;     // where a variant never won or never lost
   std::string favourite_source;  // "bootstrap" or "normal draws from the Wald covariance"
+  double quasi_variance_error = 0;  // the largest relative error of sqrt(q_i + q_j); NaN: none
+  std::string quasi_variance_source;  // "wald" or "larger of wald and bootstrap, per pair"
   std::vector<std::string> notes;
 };
 
@@ -128,7 +142,8 @@ struct PointFit {
 };
 std::optional<PointFit> fit_point(const PairData& data, int reference, bool order, bool ties);
 
-// The JSON sections `preference_scale: [{variant, worth, ci_low, ci_high, ...}]`,
+// The JSON sections `preference_scale: [{variant, worth, ci_low, ci_high, quasi_variance,
+// quasi_se, comparison_low, comparison_high, ...}]`,
 // `ties: {nu, ci_low, ci_high}` and `order_effect: {delta, ci_low, ci_high}` (docs/campaign.md).
 nlohmann::json preference_scale_json(const PreferenceScale& scale);
 

@@ -13,59 +13,16 @@
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
 
-#include "analysis/report/svg_plot.h"
-#include "study/statistics/numeric_minimize.h"
-#include "study/statistics/logistic.h"
+#include "acquisition/session/output_file.h"
+#include "analysis/report/svg_charts.h"
+#include "study/statistics/psychometric_likelihood.h"
 
 namespace doorbench::study {
 namespace {
 
-// F(z) and 1 - F(z), each computed directly so that neither tail loses digits.
-std::pair<double, double> cdf_pair(PsychometricShape shape, double z) {
-  if (shape == PsychometricShape::kCumulativeNormal) {
-    return {0.5 * std::erfc(-z / std::numbers::sqrt2), 0.5 * std::erfc(z / std::numbers::sqrt2)};
-  }
-  const double e = std::exp(z);
-  return {-std::expm1(-e), std::exp(-e)};
-}
-
-// The lapse-free F's quantile in units of spread, relative to its median.
-double quantile_above_median(PsychometricShape shape, double p) {
-  if (shape == PsychometricShape::kCumulativeNormal) {
-    return boost::math::quantile(boost::math::normal(), p);
-  }
-  return std::log(-std::log1p(-p)) - std::log(std::log(2.0));
-}
-
-// Gumbel's median is at z = ln ln 2; the "pse" parameter is the median, so shift z by it.
-double z_of(PsychometricShape shape, double level, double pse, double spread) {
-  const double z = (level - pse) / spread;
-  return shape == PsychometricShape::kWeibull ? z + std::log(std::log(2.0)) : z;
-}
-
-
-// The free parameters: [pse unless fixed, ln spread, lapse logit unless max_lapse = 0].
-struct PsychometricLayout {
-  bool fit_pse = true;
-  bool fit_lapse = true;
-  double max_lapse = 0.1;
-  int size() const { return 1 + (fit_pse ? 1 : 0) + (fit_lapse ? 1 : 0); }
-};
-
-struct Values {
-  double pse = 0.0, log_spread = 0.0, lapse = 0.0;
-};
-
-Values unpack(const Eigen::VectorXd& x, const PsychometricLayout& layout) {
-  Values v;
-  int i = 0;
-  if (layout.fit_pse) v.pse = x[i++];
-  v.log_spread = x[i++];
-  if (layout.fit_lapse) v.lapse = layout.max_lapse * logistic(x[i]);
-  return v;
-}
-
-int spread_index(const PsychometricLayout& layout) { return layout.fit_pse ? 1 : 0; }
+using statistics::psychometric_cdf_pair;
+using statistics::psychometric_z;
+using statistics::quantile_above_median;
 
 }  // namespace
 
@@ -82,7 +39,7 @@ double psychometric_log_likelihood(std::span<const StrongerObservation> trials,
                                    double lapse) {
   double total = 0.0;
   for (const StrongerObservation& t : trials) {
-    const auto [f, not_f] = cdf_pair(shape, z_of(shape, t.level, pse, spread));
+    const auto [f, not_f] = psychometric_cdf_pair(shape, psychometric_z(shape, t.level, pse, spread));
     const double p = t.comparison_stronger ? lapse / 2.0 + (1.0 - lapse) * f
                                            : lapse / 2.0 + (1.0 - lapse) * not_f;
     total += std::log(p);
@@ -95,108 +52,19 @@ double weber_fraction(PsychometricShape shape, double spread, double criterion) 
 }
 
 double PsychometricFit::probability(double level) const {
-  const auto [f, not_f] = cdf_pair(shape, z_of(shape, level, pse, spread));
+  const auto [f, not_f] = psychometric_cdf_pair(shape, psychometric_z(shape, level, pse, spread));
   (void)not_f;
   return lapse / 2.0 + (1.0 - lapse) * f;
 }
 
-namespace {
-
-struct Problem {
-  std::span<const StrongerObservation> trials;
-  PsychometricShape shape;
-  PsychometricLayout layout;
-};
-
-double negative_log_likelihood(const Problem& problem, const Eigen::VectorXd& x) {
-  const Values v = unpack(x, problem.layout);
-  if (v.log_spread < -30.0 || v.log_spread > 30.0) return std::numeric_limits<double>::infinity();
-  const double value = psychometric_log_likelihood(problem.trials, problem.shape, v.pse,
-                                                   std::exp(v.log_spread), v.lapse);
-  return std::isfinite(value) ? -value : std::numeric_limits<double>::infinity();
+CurvePoint PsychometricFit::curve_point(double level, double confidence) const {
+  const statistics::PsychometricLayout layout{pse_fitted, max_lapse > 0.0, max_lapse};
+  const statistics::PsychometricValues values{pse, std::log(spread), lapse};
+  const double z = boost::math::quantile(boost::math::normal(), 0.5 + confidence / 2.0);
+  return statistics::psychometric_curve_point(shape, values, layout,
+                                              Eigen::Map<const Eigen::Matrix3d>(covariance.data()),
+                                              level, z);
 }
-
-// The best of a few starts.
-statistics::MinimizeResult fit_free(const Problem& problem, double level_range) {
-  statistics::MinimizeResult best;
-  best.value = std::numeric_limits<double>::infinity();
-  const statistics::Objective f = [&](const Eigen::VectorXd& x) {
-    return negative_log_likelihood(problem, x);
-  };
-  for (const double spread : {0.1 * level_range, 0.5 * level_range, 2.0 * level_range}) {
-    Eigen::VectorXd x0(problem.layout.size());
-    int i = 0;
-    if (problem.layout.fit_pse) x0[i++] = 0.0;
-    x0[i++] = std::log(spread);
-    if (problem.layout.fit_lapse) x0[i] = std::log(0.02 / (problem.layout.max_lapse - 0.02));
-    if (!std::isfinite(f(x0))) continue;
-    auto result = statistics::minimize(f, x0);
-    if (result.value < best.value) best = result;
-  }
-  if (!std::isfinite(best.value)) throw std::invalid_argument("no start value has a finite likelihood");
-  return best;
-}
-
-// Profile negative log-likelihood at a fixed ln spread, warm-started from `start`
-// (the other parameters), which it updates.
-double profile(const Problem& problem, double log_spread, Eigen::VectorXd& others) {
-  const int s = spread_index(problem.layout);
-  const auto full = [&](const Eigen::VectorXd& o) {
-    Eigen::VectorXd x(o.size() + 1);
-    for (int i = 0, j = 0; i < x.size(); ++i) x[i] = i == s ? log_spread : o[j++];
-    return x;
-  };
-  if (others.size() == 0) return negative_log_likelihood(problem, full(others));
-  const statistics::Objective f = [&](const Eigen::VectorXd& o) {
-    return negative_log_likelihood(problem, full(o));
-  };
-  if (!std::isfinite(f(others))) others.setZero();
-  auto result = statistics::minimize(f, others);
-  if (problem.layout.fit_lapse) {
-    // A lapse rate driven to 0 saturates its logistic, where Newton steps stall: also start
-    // from a lapse of 2 % and keep the better.
-    Eigen::VectorXd reset = result.x;
-    reset[reset.size() - 1] = std::log(0.02 / (problem.layout.max_lapse - 0.02));
-    if (std::isfinite(f(reset))) {
-      auto second = statistics::minimize(f, reset);
-      if (second.value < result.value) result = std::move(second);
-    }
-  }
-  others = result.x;
-  return result.value;
-}
-
-// Where the profile rises by `cut` above its minimum, going from the optimum in `direction`
-// (+1 / -1) in ln spread; +-infinity when it does not within 12 units.
-double profile_limit(const Problem& problem, const Eigen::VectorXd& optimum, double minimum,
-                     double cut, int direction) {
-  const int s = spread_index(problem.layout);
-  Eigen::VectorXd others(optimum.size() - 1);
-  for (int i = 0, j = 0; i < optimum.size(); ++i) {
-    if (i != s) others[j++] = optimum[i];
-  }
-  const double centre = optimum[s];
-  double inside = centre, outside = centre;
-  bool crossed = false;
-  Eigen::VectorXd warm = others;
-  for (double distance = 0.1; distance <= 12.0; distance *= 1.5) {
-    outside = centre + direction * distance;
-    if (profile(problem, outside, warm) - minimum > cut) {
-      crossed = true;
-      break;
-    }
-    inside = outside;
-  }
-  if (!crossed) return direction * std::numeric_limits<double>::infinity();
-  for (int iteration = 0; iteration < 40 && std::abs(outside - inside) > 1e-5; ++iteration) {
-    const double middle = 0.5 * (inside + outside);
-    Eigen::VectorXd start = others;
-    (profile(problem, middle, start) - minimum > cut ? outside : inside) = middle;
-  }
-  return 0.5 * (inside + outside);
-}
-
-}  // namespace
 
 PsychometricFit fit_psychometric(std::span<const StrongerObservation> trials,
                                  const ThresholdOptions& options) {
@@ -208,15 +76,19 @@ PsychometricFit fit_psychometric(std::span<const StrongerObservation> trials,
   if (trials.size() < 3 || levels.size() < 2) {
     throw std::invalid_argument("thresholds: fewer than 3 trials or 2 levels to fit");
   }
-  Problem problem{trials, options.shape, {}};
+  statistics::PsychometricProblem problem{statistics::count_levels(trials), options.shape, {}};
   // Levels all on one side of the reference (a staircase): the PSE is the reference.
   problem.layout.fit_pse = *levels.begin() < 0.0 && *levels.rbegin() > 0.0;
   problem.layout.fit_lapse = options.max_lapse > 0.0;
   problem.layout.max_lapse = options.max_lapse;
   const double range = std::max(*levels.rbegin() - *levels.begin(), std::abs(*levels.rbegin()));
-  const auto best = fit_free(problem, range);
-  const Values v = unpack(best.x, problem.layout);
+  const auto best = statistics::fit_psychometric_free(problem, range);
+  const statistics::PsychometricValues v = statistics::unpack(best.x, problem.layout);
   PsychometricFit fit;
+  fit.max_lapse = options.max_lapse;
+  fit.pse_fitted = problem.layout.fit_pse;
+  const Eigen::Matrix3d covariance = statistics::psychometric_covariance(problem, best.x);
+  std::copy(covariance.data(), covariance.data() + 9, fit.covariance.begin());
   fit.shape = options.shape;
   fit.pse = v.pse;
   fit.spread = std::exp(v.log_spread);
@@ -227,8 +99,8 @@ PsychometricFit fit_psychometric(std::span<const StrongerObservation> trials,
   fit.weber_fraction = weber_fraction(options.shape, fit.spread, options.criterion);
   const double cut =
       0.5 * boost::math::quantile(boost::math::chi_squared(1.0), options.confidence);
-  const double low = profile_limit(problem, best.x, best.value, cut, -1);
-  const double high = profile_limit(problem, best.x, best.value, cut, +1);
+  const double low = statistics::profile_limit(problem, best.x, best.value, cut, -1);
+  const double high = statistics::profile_limit(problem, best.x, best.value, cut, +1);
   fit.ci_low = std::isfinite(low) ? weber_fraction(options.shape, std::exp(low), options.criterion) : 0.0;
   fit.ci_high = std::isfinite(high) ? weber_fraction(options.shape, std::exp(high), options.criterion)
                                     : std::numeric_limits<double>::infinity();
@@ -313,19 +185,6 @@ std::optional<StaircaseThreshold> staircase_threshold(std::span<const StrongerOb
 
 namespace {
 
-std::vector<LevelCount> count_levels(std::span<const StrongerObservation> trials) {
-  std::map<double, LevelCount> by_level;
-  for (const auto& t : trials) {
-    LevelCount& c = by_level[t.level];
-    c.level = t.level;
-    ++c.trials;
-    c.stronger += t.comparison_stronger ? 1 : 0;
-  }
-  std::vector<LevelCount> out;
-  for (const auto& [level, count] : by_level) out.push_back(count);
-  return out;
-}
-
 bool fittable(std::span<const StrongerObservation> trials) {
   std::set<double> levels;
   for (const auto& t : trials) levels.insert(t.level);
@@ -357,7 +216,10 @@ ParameterThresholds fit_parameter(const std::string& parameter, const std::strin
                                 ": fewer than 3 trials or 2 levels to fit");
   }
   out.panel = fit_psychometric(trials, options);
-  out.counts = count_levels(trials);
+  out.counts = statistics::count_levels(trials);
+  const double low = out.counts.front().level, high = out.counts.back().level;
+  for (int i = 0; i <= 100; ++i)
+    out.curve.push_back(out.panel.curve_point(low + (high - low) * i / 100.0, options.confidence));
   using Id = std::string;
   for (auto& [participant, own] :
        group_by<Id>(trials, [](const StrongerObservation& t) { return t.participant; })) {
@@ -552,44 +414,47 @@ std::vector<StrongerObservation> stronger_observations(const TrialsTable& table)
 
 namespace {
 
-struct CurvePlot {
-  PlotOptions options;
-  std::vector<double> data_x, data_y, fit_x, fit_y;
-  std::vector<PlotSeries> series;
-};
-
-void fill_curve_plot(CurvePlot& plot, const ParameterThresholds& t) {
+DoseResponsePlot curve_plot(const ParameterThresholds& t) {
   if (t.counts.empty()) throw std::invalid_argument("psychometric plot: no data");
-  plot.options.title = "Which felt stronger: " + t.parameter + " around " + t.reference;
-  plot.options.x_label = "comparison / reference [1]";
-  plot.options.y_label = "P(comparison felt stronger) [1]";
+  DoseResponsePlot plot;
+  plot.title = "Which felt stronger: " + t.parameter + " around " + t.reference;
+  plot.x_label = "comparison / reference [1]";
+  plot.y_label = "P(comparison felt stronger) [1]";
   for (const LevelCount& c : t.counts) {
-    plot.data_x.push_back(std::exp(c.level));
-    plot.data_y.push_back(static_cast<double>(c.stronger) / c.trials);
+    plot.x.push_back(std::exp(c.level));
+    plot.y.push_back(static_cast<double>(c.stronger) / c.trials);
+    plot.weight.push_back(c.trials);
   }
+  plot.points_label = "the panel's answers (area: trials)";
+  plot.curve_label = "fit (JND " + percent(t.panel.weber_fraction) + ")";
+  if (!t.curve.empty()) {
+    for (const CurvePoint& c : t.curve) {
+      plot.curve_x.push_back(std::exp(c.level));
+      plot.curve_y.push_back(c.p);
+      plot.band_low.push_back(c.low);
+      plot.band_high.push_back(c.high);
+    }
+    plot.band_label = "95 % band of the fit";
+    return plot;
+  }
+  // Without the band (an analysis.json written before it): the curve alone.
   const double low = t.counts.front().level, high = t.counts.back().level;
-  for (int i = 0; i <= 200; ++i) {
-    const double level = low + (high - low) * i / 200.0;
-    plot.fit_x.push_back(std::exp(level));
-    plot.fit_y.push_back(t.panel.probability(level));
+  for (int i = 0; i <= 100; ++i) {
+    const double level = low + (high - low) * i / 100.0;
+    plot.curve_x.push_back(std::exp(level));
+    plot.curve_y.push_back(t.panel.probability(level));
   }
-  plot.series.push_back({"panel's answers", plot.data_x, plot.data_y, "", plot_style::Meaning::kMeasured});
-  plot.series.push_back({"fit (JND " + percent(t.panel.weber_fraction) + ")", plot.fit_x, plot.fit_y, "",
-                         plot_style::Meaning::kSimulated});
+  return plot;
 }
 
 }  // namespace
 
 std::string render_psychometric_plot(const ParameterThresholds& thresholds) {
-  CurvePlot plot;
-  fill_curve_plot(plot, thresholds);
-  return render_svg_plot(plot.options, plot.series);
+  return render_svg_dose_response(curve_plot(thresholds));
 }
 
 void write_psychometric_plot(const std::string& path, const ParameterThresholds& thresholds) {
-  CurvePlot plot;
-  fill_curve_plot(plot, thresholds);
-  write_svg_plot(path, plot.options, plot.series);
+  write_text_file_atomically(path, render_psychometric_plot(thresholds));
 }
 
 }  // namespace doorbench::study

@@ -26,6 +26,7 @@
 // Errors: std::invalid_argument for invalid options or too few trials, naming the group;
 // the trials adapter throws TrialsTableError naming the file, line and field.
 // Thread safety: pure functions without shared state.
+#include <array>
 #include <limits>
 #include <optional>
 #include <span>
@@ -63,6 +64,13 @@ struct ThresholdOptions {
   std::string validate() const;  // empty when usable, else the message naming the option
 };
 
+// The fitted curve at one level with its pointwise interval.
+struct CurvePoint {
+  double level = 0.0;  // ln ratio
+  double p = 0.0;      // P(stronger | level)
+  double low = 0.0, high = 0.0;
+};
+
 struct PsychometricFit {
   PsychometricShape shape = PsychometricShape::kCumulativeNormal;
   double pse = 0.0;     // ln ratio where F = 0.5
@@ -74,8 +82,16 @@ struct PsychometricFit {
   double ci_high = 0.0;         // +infinity when open above
   int trials = 0;
   bool converged = false;
+  double max_lapse = 0.1;  // the lapse's bound in the fit
+  bool pse_fitted = true;  // false: levels on one side, the PSE held at the reference
+  // The covariance of (pse, ln spread, lapse logit) from the observed information at the
+  // optimum; the rows of a parameter not fitted, or of a lapse at its bound, are 0.
+  std::array<double, 9> covariance{};
   // The proportion P(stronger | x) the fit predicts.
   double probability(double level) const;
+  // P(stronger | level) with its pointwise interval at `confidence`: the delta method on
+  // logit P with `covariance`, back-transformed (inside 0..1).
+  CurvePoint curve_point(double level, double confidence = 0.95) const;
 };
 
 struct StaircaseThreshold {
@@ -102,6 +118,7 @@ struct ParameterThresholds {
   std::vector<std::pair<std::string, PsychometricFit>> participants;
   std::vector<StaircaseThreshold> staircases;
   std::vector<LevelCount> counts;  // pooled, by level ascending
+  std::vector<CurvePoint> curve;   // the panel's curve and band, 101 levels across the data
 };
 
 struct ThresholdsResult {

@@ -11,6 +11,7 @@
 #include "analysis/design/spec_report.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/simulation/fit_synthetic.h"
+#include "tests/support/pgm_image.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
@@ -90,28 +91,6 @@ KnownReport known_report() {
   evaluation.command = "doorbench spec test";
   evaluation.asis_source = "reference door";
   return {asis, design, evaluation};
-}
-
-// A binary PGM (P5, 8 bit) as pdftoppm -gray writes it.
-struct GrayImage {
-  int width = 0, height = 0;
-  std::vector<unsigned char> pixels;  // row by row
-};
-
-GrayImage read_pgm(const std::filesystem::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::string magic;
-  int max_value = 0;
-  GrayImage image;
-  in >> magic >> image.width >> image.height >> max_value;
-  in.get();  // the one whitespace before the pixels
-  REQUIRE(magic == "P5");
-  REQUIRE(max_value == 255);
-  image.pixels.resize(static_cast<std::size_t>(image.width) * image.height);
-  in.read(reinterpret_cast<char*>(image.pixels.data()),
-          static_cast<std::streamsize>(image.pixels.size()));
-  REQUIRE(in.good());
-  return image;
 }
 
 }  // namespace
@@ -288,20 +267,14 @@ TEST_CASE("Spec report: spec.pdf fits A4 portrait, nothing at the right margin",
   for (const auto& entry : std::filesystem::directory_iterator(dir.path)) {
     if (entry.path().extension() != ".pgm") continue;
     ++pages;
-    const GrayImage page = read_pgm(entry.path());
+    const doorbench::testing::GrayImage page = doorbench::testing::read_pgm(entry.path());
     INFO(entry.path().filename().string() << ": " << page.width << " x " << page.height);
     // A4 portrait: 210 x 297 mm.
     CHECK(std::abs(page.width - 210.0 / 25.4 * kDpi) <= 2);
     CHECK(std::abs(page.height - 297.0 / 25.4 * kDpi) <= 2);
     // The right margin is 12 mm: its outer 10 mm must stay white on every row.
     const int margin_px = static_cast<int>(10.0 / 25.4 * kDpi);
-    int ink = 0;
-    for (int y = 0; y < page.height; ++y) {
-      for (int x = page.width - margin_px; x < page.width; ++x) {
-        ink += page.pixels[static_cast<std::size_t>(y) * page.width + x] < 200 ? 1 : 0;
-      }
-    }
-    CHECK(ink == 0);
+    CHECK(doorbench::testing::ink_in_right_margin(page, margin_px) == 0);
   }
   CHECK(pages >= 2);
 }

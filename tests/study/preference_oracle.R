@@ -1,7 +1,10 @@
 # Independent estimates of the preference scale for tests/study/test_preference_oracle.cpp:
 #   Rscript preference_oracle.R MODE TRIALS.csv
 # reads the trials table's preference rows and prints one line per parameter, "NAME VALUE",
-# the worths of every variant but the first (the reference, worth 0) named by the variant.
+# the worths of every variant but the first (the reference, worth 0) named by the variant,
+# and the quasi-variance of every variant's worth, reference included, as "qv_NAME VALUE"
+# (qvcalc, Firth & de Menezes 2004: of BTabilities for BTm, of the worths' covariance block
+# for glm).
 # MODE:
 #   btm        Bradley-Terry, BradleyTerry2::BTm(~ player)
 #   btm-order  Bradley-Terry with a first-position advantage, BTm(~ player + at.home), the
@@ -27,6 +30,11 @@ if (mode == "btm" || mode == "btm-order") {
   co <- coef(fit)
   for (v in lev[-1]) cat(v, sprintf("%.15g", co[paste0("player", v)]), "\n")
   if (mode == "btm-order") cat("delta", sprintf("%.15g", co["at.home"]), "\n")
+  if (length(lev) >= 3) {
+    suppressPackageStartupMessages(library(qvcalc))
+    qv <- qvcalc(BTabilities(fit))$qvframe
+    for (v in lev) cat(paste0("qv_", v), sprintf("%.15g", qv[v, "quasiVar"]), "\n")
+  }
 } else if (mode == "davidson") {
   # One row per trial and outcome (first, second, same); y = 1 for the answer given.
   n <- nrow(d)
@@ -60,6 +68,15 @@ if (mode == "btm" || mode == "btm-order") {
   for (v in lev[-1]) cat(v, sprintf("%.15g", co[paste0("w_", v)]), "\n")
   cat("delta", sprintf("%.15g", co["delta"]), "\n")
   cat("log_nu", sprintf("%.15g", co["log_nu"]), "\n")
+  if (k >= 3) {
+    # The worths' covariance, the reference's row and column 0, through qvcalc.
+    suppressPackageStartupMessages(library(qvcalc))
+    block <- vcov(fit)[paste0("x[first_row, ]w_", lev[-1]), paste0("x[first_row, ]w_", lev[-1])]
+    covmat <- matrix(0, k, k, dimnames = list(lev, lev))
+    covmat[-1, -1] <- block
+    qv <- qvcalc(covmat)$qvframe
+    for (v in lev) cat(paste0("qv_", v), sprintf("%.15g", qv[v, "quasiVar"]), "\n")
+  }
 } else {
   stop("unknown mode ", mode)
 }

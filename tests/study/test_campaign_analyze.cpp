@@ -78,14 +78,18 @@ TEST_CASE("campaign analyze reads a hand-written trials table and writes every o
   CHECK(panel["correct"] == 6);
   CHECK(panel["dprime"].get<double>() == Approx(std::sqrt(2.0) * 0.6744897501960817));
   CHECK(analysis["identify_real"]["verdict"].get<std::string>().rfind(
-            "the panel could not tell the virtual door from the real one: d' 0.95 [", 0) == 0);
+            "no evidence of a difference, but the data cannot exclude |d'| up to 2.62: d' 0.95 [",
+            0) == 0);
+  CHECK(analysis["identify_real"]["conclusion"] == "inconclusive");
+  CHECK(analysis["identify_real"]["equivalence_margin"] == 1.0);
   for (const char* file :
        {"report.html", "preference-scale.svg", "identify-real.svg", "two-ac.svg"})
     CHECK(std::filesystem::exists(dir / "out" / file));
   CHECK(read_file(dir / "out" / "report.html").find("Preference scale") != std::string::npos);
   if (std::system("command -v weasyprint > /dev/null 2>&1") == 0)
     CHECK(read_file(dir / "out" / "report.pdf").rfind("%PDF", 0) == 0);
-  CHECK(run.out.find("2-AC A vs B: d' ") != std::string::npos);
+  CHECK(run.out.find("2-AC A vs B: no evidence of a preference, but the data cannot exclude "
+                     "|d'| up to ") != std::string::npos);
 }
 
 TEST_CASE("campaign analyze takes a campaign folder and --quiet silences stderr", "[study]") {
@@ -137,6 +141,12 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
   CHECK(run.err ==
         "doorbench: --bootstrap: must be 0 (none) or at least 100 resamples, got 50 "
         "(see doorbench campaign analyze --help)\n");
+  run = run_doorbench_shell("campaign analyze '" + (dir / "good.csv").string() + "' --out '" + out +
+                                "' --equivalence-dprime 0",
+                            dir);
+  CHECK(run.status == 2);
+  CHECK(run.err == "doorbench: --equivalence-dprime: 0 is outside 0.05 to 5 (see doorbench campaign "
+                   "analyze --help)\n");
 
   std::filesystem::create_directories(dir / "campaign");
   write(dir / "campaign" / "trials.csv", hand_table());
@@ -224,8 +234,8 @@ TEST_CASE("campaign analyze writes the ratings, jnd and tuning sections and thei
   CHECK(std::filesystem::exists(dir / "out" / "jnd-J_d.svg"));
   CHECK(std::filesystem::exists(dir / "out" / "tuning.svg"));
   const std::string html = read_file(dir / "out" / "report.html");
-  CHECK(html.find("<h2>ratings</h2>") != std::string::npos);
-  CHECK(html.find("<h2>jnd</h2>") != std::string::npos);
+  CHECK(html.find("<h2>Ratings</h2>") != std::string::npos);
+  CHECK(html.find("<h2>Thresholds (jnd)</h2>") != std::string::npos);
 }
 
 TEST_CASE("campaign analyze stopped by SIGINT during the bootstrap ends within a second, marked",
@@ -263,3 +273,26 @@ TEST_CASE("campaign analyze stopped by SIGINT during the bootstrap ends within a
                                             where + "; the results in " + (dir / "out").string() +
                                             "/ are marked interrupted\n"));
 }
+
+// The notes say why the intervals are Wald's: no bootstrap asked for, or too few people.
+TEST_CASE("campaign analyze's notes say why the intervals are Wald intervals", "[study]") {
+  TempDir dir("campaign_analyze_notes");
+  doorbench::testing::PairPanel panel;
+  panel.participants = 8;
+  std::ofstream(dir / "trials.csv") << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 6);
+  auto run = run_doorbench_shell("campaign analyze '" + (dir / "trials.csv").string() +
+                                     "' --no-pdf --bootstrap 0 --out '" + (dir / "a").string() + "'",
+                                 dir);
+  REQUIRE(run.status == 0);
+  CHECK(run.out.find("note: Wald intervals: no participant bootstrap was asked for (--bootstrap "
+                     "0), so the intervals assume the participants agree\n") != std::string::npos);
+  panel.participants = 4;
+  std::ofstream(dir / "few.csv") << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 6);
+  run = run_doorbench_shell("campaign analyze '" + (dir / "few.csv").string() +
+                                "' --no-pdf --out '" + (dir / "b").string() + "'",
+                            dir);
+  REQUIRE(run.status == 0);
+  CHECK(run.out.find("note: Wald intervals: 4 participants, fewer than the 6 a participant "
+                     "bootstrap needs; they assume the participants agree\n") != std::string::npos);
+}
+

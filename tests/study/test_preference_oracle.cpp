@@ -2,8 +2,11 @@
 // against independent implementations"): BradleyTerry2's BTm for Bradley–Terry with and
 // without the first-position advantage, and R's glm on the Poisson log-linear form of
 // Davidson's tie model with the order effect (tests/study/preference_oracle.R). The data
-// sets are simulated with a known truth; the point estimates must agree to 1e-4 relative.
-// R and r-cran-bradleyterry2 come from scripts/install-deps.sh; without them this test fails.
+// sets are simulated with a known truth; the point estimates must agree to 1e-4 relative,
+// and the worths' quasi-variances (Firth & de Menezes 2004) with R's qvcalc (of BTabilities
+// for BTm, of the worths' covariance block for glm) to 1e-6 relative.
+// R, r-cran-bradleyterry2 and r-cran-qvcalc come from scripts/install-deps.sh; without them
+// this test fails.
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <fstream>
@@ -64,6 +67,13 @@ void compare_worths(const PreferenceScale& scale, const std::map<std::string, do
     REQUIRE(r.count(name) == 1);
     CHECK(scale.worths[v].worth.value == Approx(r.at(name)).epsilon(1e-4));
   }
+  // Every variant's quasi-variance, the reference's included.
+  for (const auto& w : scale.worths) {
+    INFO("quasi-variance of " << w.variant);
+    REQUIRE(r.count("qv_" + w.variant) == 1);
+    CHECK(w.quasi_variance == Approx(r.at("qv_" + w.variant)).epsilon(1e-6));
+  }
+  CHECK(scale.quasi_variance_error < 0.1);
 }
 
 std::filesystem::path write_table(const TempDir& dir, const std::string& name,
@@ -75,7 +85,9 @@ std::filesystem::path write_table(const TempDir& dir, const std::string& name,
 
 }  // namespace
 
-TEST_CASE("ties: Davidson worths, order effect and nu agree with R's glm to 1e-4", "[study]") {
+TEST_CASE("ties: Davidson worths, order effect and nu agree with R's glm to 1e-4, quasi-variances "
+          "with qvcalc to 1e-6",
+          "[study]") {
   TempDir dir("oracle_ties");
   PairPanel panel;
   panel.nu = 0.6;
@@ -92,7 +104,8 @@ TEST_CASE("ties: Davidson worths, order effect and nu agree with R's glm to 1e-4
   CHECK(std::log(scale.nu->value) == Approx(r.at("log_nu")).epsilon(1e-4));
 }
 
-TEST_CASE("order effect: worths and the first-position advantage agree with BTm to 1e-4",
+TEST_CASE("order effect: worths and the first-position advantage agree with BTm to 1e-4, "
+          "quasi-variances with qvcalc to 1e-6",
           "[study]") {
   TempDir dir("oracle_order");
   PairPanel panel;
@@ -107,7 +120,9 @@ TEST_CASE("order effect: worths and the first-position advantage agree with BTm 
   CHECK(scale.order->value == Approx(r.at("delta")).epsilon(1e-4));
 }
 
-TEST_CASE("20 participants who differ: worths agree with BTm to 1e-4", "[study]") {
+TEST_CASE("20 participants who differ: worths agree with BTm to 1e-4, quasi-variances with "
+          "qvcalc to 1e-6",
+          "[study]") {
   TempDir dir("oracle_panel");
   PairPanel panel;
   panel.variants = {"ref", "heavier", "easier", "smooth", "stiff"};

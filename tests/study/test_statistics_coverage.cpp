@@ -3,6 +3,7 @@
 // kind of interval must cover the truth in 90–99 % of its draws. Prints the table.
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <cstdio>
 #include <random>
 
@@ -72,6 +73,7 @@ TEST_CASE("coverage: Weber fractions' profile intervals cover the truth in 90-99
   const std::vector<double> factors{0.75, 0.85, 0.92, 0.97, 1.03, 1.08, 1.15, 1.3};
   CoverageTally panel{"Weber fraction, panel (pooled fit), 20 participants x 8 levels x 10"};
   CoverageTally each{"Weber fraction, one participant (80 trials)"};
+  CoverageTally band{"P(stronger) at each of the 8 levels, panel's curve band (delta method)"};
   std::mt19937_64 random(2029);
   for (int campaign = 0; campaign < kCampaigns; ++campaign) {
     for (const ObserverTruth* truth : {&inertia, &stiffness}) {
@@ -80,12 +82,19 @@ TEST_CASE("coverage: Weber fractions' profile intervals cover the truth in 90-99
       REQUIRE(result.parameters.size() == 1);
       const auto& p = result.parameters[0];
       panel.add(p.panel.ci_low <= truth->weber_fraction && truth->weber_fraction <= p.panel.ci_high);
+      for (const double factor : factors) {
+        const auto point = p.panel.curve_point(std::log(factor));
+        const double true_p = truth->probability(std::log(factor));
+        band.add(point.low <= true_p && true_p <= point.high);
+      }
       for (const auto& [participant, fit] : p.participants) {
         each.add(fit.ci_low <= truth->weber_fraction && truth->weber_fraction <= fit.ci_high);
       }
     }
   }
-  print({panel, each});
+  print({panel, each, band});
+  CHECK(band.share() >= 0.90);
+  CHECK(band.share() <= 0.99);
   CHECK(panel.share() >= 0.90);
   CHECK(panel.share() <= 0.99);
   CHECK(each.share() >= 0.90);

@@ -5,6 +5,8 @@
 #include <cmath>
 #include <random>
 
+#include "study/statistics/numeric_minimize.h"
+#include "study/statistics/psychometric_likelihood.h"
 #include "study/statistics/thresholds.h"
 #include "tests/study/threshold_simulation.h"
 
@@ -173,3 +175,67 @@ TEST_CASE("thresholds: jnd rows of a trials table become observations around the
                     "t.csv:2: block 'j' of participant 'P01': no variant is in every trial, so "
                     "none is the reference");
 }
+
+// The fit's Newton steps and covariance use the likelihood's analytic gradient and Hessian:
+// they must equal central differences of the likelihood itself, for both shapes, with and
+// without the PSE and the lapse fitted, at points away from the optimum.
+TEST_CASE("thresholds: the likelihood's analytic gradient and Hessian equal central differences",
+          "[study][thresholds]") {
+  namespace st = doorbench::study::statistics;
+  std::mt19937_64 random(7);
+  ObserverTruth truth;
+  truth.pse = 0.03;
+  const auto trials = doorbench::testing::simulate_constant_stimuli(truth, kFactors, 12, 1, random);
+  for (const PsychometricShape shape :
+       {PsychometricShape::kCumulativeNormal, PsychometricShape::kWeibull}) {
+    for (const bool fit_pse : {true, false}) {
+      for (const bool fit_lapse : {true, false}) {
+        INFO("shape " << int(shape) << ", pse " << fit_pse << ", lapse " << fit_lapse);
+        st::PsychometricProblem problem{st::count_levels(trials), shape, {fit_pse, fit_lapse, 0.1}};
+        Eigen::VectorXd x(problem.layout.size());
+        int i = 0;
+        if (fit_pse) x[i++] = -0.02;
+        x[i++] = std::log(0.12);
+        if (fit_lapse) x[i] = -0.7;
+        const auto analytic = st::psychometric_derivatives(problem, x);
+        const st::Objective value = [&](const Eigen::VectorXd& at) {
+          return st::psychometric_derivatives(problem, at).value;
+        };
+        // The value is the per-trial likelihood's, counted per level.
+        const auto v = st::unpack(x, problem.layout);
+        CHECK(analytic.value == Approx(-psychometric_log_likelihood(trials, shape, v.pse,
+                                                                    std::exp(v.log_spread), v.lapse))
+                                    .epsilon(1e-12));
+        const Eigen::VectorXd gradient = st::numeric_gradient(value, x);
+        const Eigen::MatrixXd hessian = st::numeric_hessian(value, x);
+        for (Eigen::Index r = 0; r < x.size(); ++r) {
+          CHECK(analytic.gradient[r] == Approx(gradient[r]).epsilon(1e-6).margin(1e-6));
+          for (Eigen::Index c = 0; c < x.size(); ++c)
+            CHECK(analytic.hessian(r, c) == Approx(hessian(r, c)).epsilon(1e-4).margin(1e-3));
+        }
+      }
+    }
+  }
+}
+
+// The curve's band: inside 0..1, around the curve, narrowest where the data are dense, and
+// wider with fewer trials.
+TEST_CASE("thresholds: the fitted curve's pointwise band surrounds the curve and narrows with data",
+          "[study][thresholds]") {
+  std::mt19937_64 random(11);
+  ObserverTruth truth;
+  const auto few = doorbench::testing::simulate_constant_stimuli(truth, kFactors, 10, 1, random);
+  const auto many = doorbench::testing::simulate_constant_stimuli(truth, kFactors, 160, 1, random);
+  const auto fit_few = fit_psychometric(few), fit_many = fit_psychometric(many);
+  for (const double level : {std::log(0.8), 0.0, std::log(1.1), std::log(1.3)}) {
+    INFO("level " << level);
+    const auto a = fit_few.curve_point(level), b = fit_many.curve_point(level);
+    CHECK(a.p == Approx(fit_few.probability(level)));
+    CHECK(0.0 < a.low);
+    CHECK(a.low < a.p);
+    CHECK(a.p < a.high);
+    CHECK(a.high < 1.0);
+    CHECK(b.high - b.low < a.high - a.low);
+  }
+}
+

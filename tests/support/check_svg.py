@@ -5,8 +5,9 @@
 Each SVG must parse as XML (xml.etree), carry no stray text between its elements, and have
 a complete legend: a legend entry is a <text> right of the data area (the largest <rect>
 with fill="none"); it must follow a <line> (its key) whose stroke is the colour of the
-<polyline> whose <title> is the entry's text, and every titled <polyline> must have its
-entry.
+series whose <title> is the entry's text, and every titled series must have its entry. A
+series is a <polyline> (a line, an interval, a marker), a <polygon> (a band) or a <g> of
+points, each with its <title> and stroke.
 
 Usage: check_svg.py PATH...
 Prints one line per problem, then "checked N SVG, M legend entries"; exit status 0 when no
@@ -57,10 +58,11 @@ def legend(name, root, problems):
     area = max(areas, key=lambda r: number(r, "width", 0) * number(r, "height", 0))
     right = number(area, "x", 0) + number(area, "width", 0)
     colours = {}
-    for line in root.iter(SVG + "polyline"):
-        title = line.find(SVG + "title")
-        if title is not None and title.text:
-            colours[title.text] = line.get("stroke")
+    for tag in ("polyline", "polygon", "g"):
+        for series in root.iter(SVG + tag):
+            title = series.find(SVG + "title")
+            if title is not None and title.text:
+                colours[title.text] = series.get("stroke")
     children = list(root)
     labels = []
     for index, element in enumerate(children):
@@ -72,8 +74,8 @@ def legend(name, root, problems):
         if key is None or key.tag != SVG + "line":
             problems.append(f"{name}: legend entry {label!r} has no <line> key before it")
         elif label not in colours:
-            problems.append(f"{name}: legend entry {label!r} names no series (no <polyline> "
-                            "with that <title>)")
+            problems.append(f"{name}: legend entry {label!r} names no series (no <polyline>, "
+                            "<polygon> or <g> with that <title>)")
         elif key.get("stroke") != colours[label]:
             problems.append(f"{name}: legend entry {label!r} has stroke {key.get('stroke')!r}, "
                             f"its series {colours[label]!r}")
