@@ -14,6 +14,7 @@
 #include "app/progress.h"
 #include "app/stop_signals.h"
 #include "study/campaign_plan.h"
+#include "study/question.h"
 #include "study/statistics/analysis.h"
 #include "study/statistics/variant_files.h"
 #include "study/trials_table.h"
@@ -52,7 +53,9 @@ std::string plan_reference(const std::string& input, const study::TrialsTable& t
     return "";  // not a readable campaign folder: its table alone decides
   }
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    if (!table.value(r, "question").starts_with("preference")) continue;
+    const std::optional<study::Question> question =
+        study::Question::parse(table.value(r, "question"));
+    if (!question || !question->is_preference()) continue;
     if (table.value(r, "first") == first || table.value(r, "second") == first) return first;
   }
   return "";

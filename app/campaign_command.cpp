@@ -1,8 +1,8 @@
 // doorbench campaign: a study across a panel (docs/campaign.md). `plan` turns a campaign file
 // into the folder with the whole plan (and with --simulate N, the power of the plan);
 // `run` runs or resumes one participant's schedule on a device, blinded; `merge` joins
-// folders of one plan. The campaign's logic is study/; this file is the command line and the
-// presenter that plays a presentation on the device (as `doorbench ab` does).
+// folders of one plan. The campaign's logic is study/, and its presentations are played by
+// study/presenter.h (as `doorbench ab`'s are); this file is the command line.
 //
 // Other campaign subcommands (issue 29's `campaign analyze`) attach to the CLI::App that
 // add_campaign_command returns (app/commands.h).
@@ -23,11 +23,11 @@
 #include "app/play_run.h"
 #include "app/session_recording.h"
 #include "core/number_format.h"
-#include "haptic/tuning_keys.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
 #include "study/campaign_summary.h"
 #include "study/power.h"
+#include "study/presenter.h"
 #include "study/random_stream.h"
 
 namespace doorbench::app {
@@ -83,169 +83,23 @@ void run_plan(const PlanCommandOptions& options) {
   }
 }
 
-// A person's tuning during a tune trial's first presentation (docs/campaign.md, "A person's
-// tune trial"): the keys of haptic/tuning_keys.h move the playing door. Each press is applied
-// with haptic::apply_key to the door being played and handed to the loop with
-// Playback::change_parameters (on this control thread: the new set is checked, recorded and
-// taken by the tick through the mailbox; the tick never waits, allocates or does I/O for it);
-// a press the model or the playback refuses leaves the door as it was. Every press is a
-// "tuning" event of the session. The operator sees the key and its outcome, never a value.
-class PresentationTuning {
- public:
-  explicit PresentationTuning(const DoorModel& start) : start_(start), current_(start) {}
-
-  void press(haptic::Playback& playback, char key) {
-    const double time_s = playback.loop().status().time_s;
-    std::string outcome, brief = "refused";
-    const haptic::KeyOutcome result =
-        key == haptic::kResetKey ? haptic::KeyOutcome{start_, "reset", "", "", 0.0, 0.0, "back to the start"}
-                                 : haptic::apply_key(current_, key);
-    if (result.model) {
-      const std::string problem =
-          playback.change_parameters(*result.model, std::string("key ").append(1, key).append(": ").append(result.action));
-      if (problem.empty()) {
-        current_ = *result.model;
-        outcome = "played (" + result.action + ")";
-        brief = "played";
-      } else {
-        outcome = "not played: " + problem;
-        brief = "not played (the playback refused it)";
-      }
-    } else {
-      outcome = "refused: " + result.message;
-    }
-    playback.recorder().add_event({.time_s = time_s,
-                                   .kind = "tuning",
-                                   .channel = "",
-                                   .detail = std::string("key ").append(1, key).append(": ").append(result.message)
-                                                 .append(" (").append(outcome).append(")")});
-    std::cerr << "key " << key << ": " << brief << "\n";
-  }
-  const DoorModel& current() const { return current_; }
-
- private:
-  DoorModel start_, current_;
-};
-
-bool is_tuning_key(char key) {
-  if (key == haptic::kResetKey) return true;
-  for (const haptic::TuningKey& tuning : haptic::tuning_keys()) {
-    if (tuning.key == key) return true;
-  }
-  return false;
-}
-
-// Plays `start` for a tune trial with the person's keys and returns the door they ended on.
-// From a terminal: real time (also on the simulated device), until Enter, at most 600 s. From
-// an answers file: the trial's line holds the keys (spaces ignored; empty: the start kept),
-// pressed one per control call (every 0.1 s of the presentation, simulated time on the
-// simulated device).
-DoorModel play_tuning(PlayRequest play, const DoorModel& start, study::LineRespondent& person, int trial) {
-  const std::string at_trial = "trial " + std::to_string(trial);
-  auto tuning = std::make_shared<PresentationTuning>(start);
-  std::string keys;
-  std::size_t pressed = 0;
-  if (person.interactive()) {
-    auto terminal = std::make_shared<haptic::TerminalKeys>(STDIN_FILENO, "stdin");
-    std::cerr << at_trial << ": tune with the keys, Enter when done\n" << haptic::key_map_text();
-    play.device.simulated_time = false;
-    play.playback.duration_s = 600.0;
-    play.control = [terminal, tuning](haptic::Playback& playback) {
-      while (const std::optional<char> key = terminal->poll(0.0)) {
-        if (*key == '\n' || *key == '\r') return false;  // the person ends the tuning
-        tuning->press(playback, *key);
-      }
-      return true;
-    };
-  } else {
-    const std::optional<std::string> line = person.next_line();
-    const std::string where = person.source() + ":" + std::to_string(person.line_number());
-    if (!line) throw std::runtime_error(person.source() + ": the answers ended at " + at_trial);
-    for (char key : *line) {
-      if (key == ' ' || key == '\t') continue;
-      if (!is_tuning_key(key)) {
-        throw std::runtime_error(where + ": " + at_trial + ": a tune trial's line holds the keys pressed (+ - U u C c S s N n r; "
-                                 "empty: the start kept), not '" + std::string(1, key) + "'");
-      }
-      keys.push_back(key);
-    }
-    std::cerr << at_trial << ": tuning with " << keys.size() << " keys from " << where << "\n";
-    play.control = [tuning, &keys, &pressed](haptic::Playback& playback) {
-      if (pressed < keys.size()) tuning->press(playback, keys[pressed++]);
-      return true;
-    };
-  }
-  const haptic::PlaybackSummary summary = play_model(start, play);
-  if (!summary.stop_cause.empty()) {
-    throw std::runtime_error("the tuning stopped after " +
-                             format_significant(summary.duration_s, 3) +
-                             " s: " + summary.stop_cause);
-  }
-  if (pressed < keys.size()) {
-    throw std::runtime_error(at_trial + ": the presentation ended after " + std::to_string(pressed) + " of the " +
-                             std::to_string(keys.size()) + " keys (one is pressed every 0.1 s); give a longer --presentation-s");
-  }
-  return tuning->current();
-}
-
-// Plays a presentation on the device and records it: a model rendered by the render loop
-// (simulated time on the simulated device), the real door recorded from the campaign's rig.
-// A tune trial's first presentation for a person (`person`, PresentationCall::tuned) is the
-// tuning itself (play_tuning).
-study::Presenter make_presenter(const RunCommandOptions& options, const study::Campaign& campaign,
-                                study::LineRespondent* person) {
-  const bool simulated = options.device.rfind("sim", 0) == 0;
-  if (!simulated && options.device.rfind("hapticmaster://", 0) != 0) {
-    throw UsageError("--device must be sim or hapticmaster://HOST[:PORT], not " + options.device);
-  }
-  if (options.real_time && !simulated) {
-    throw UsageError(
-        "--real-time is for a simulated device (sim, sim:rotary); a HapticMaster always plays in "
-        "real time");
-  }
-  const bool simulated_time = simulated && !options.real_time;
-  const double duration_s = options.presentation_s.value_or(
-      simulated_time ? campaign.simulated_presentation_s : campaign.presentation_s);
-  if (!(duration_s > 0.0 && duration_s <= 600.0)) throw UsageError("--presentation-s must be above 0 and at most 600");
-  std::shared_ptr<RigDefinition> rig;
-  if (!campaign.real_rig.empty()) rig = std::make_shared<RigDefinition>(load_rig(campaign.real_rig.string()));
-  const std::string device = options.device;
-  return [device, simulated_time, duration_s, rig, person](const study::PresentationCall& call) {
-    const std::string notes = "doorbench campaign: participant " + call.participant + ", trial " +
-                              std::to_string(call.trial) + ", presentation " + std::to_string(call.position) +
-                              ", stimulus " + call.stimulus->name;
-    if (!call.stimulus->model) {
-      SessionRecordingOptions recording;
-      recording.duration_s = duration_s;
-      recording.show_progress = false;
-      recording.operator_name = "doorbench campaign";
-      recording.notes = notes + " (the real door)";
-      record_rig_session(*rig, recording, call.session_path);
-      return;
-    }
-    PlayRequest play;
-    play.device.uri = device;
-    play.device.simulated_time = simulated_time;
-    play.device.hand.duration_s = std::clamp(duration_s, 4.0, 10.0);
-    play.device.seed = static_cast<std::uint64_t>(1000 * call.trial + call.position);
-    play.playback.duration_s = duration_s;
-    play.session_path = call.session_path;
-    play.model_source = "campaign stimulus";
-    play.operator_name = "doorbench campaign";
-    play.notes = notes;
-    play.show_status = false;
-    if (call.tuned) {
-      if (!person) throw std::logic_error("a tune trial at the device needs a person's respondent");
-      *call.tuned = play_tuning(play, *call.stimulus->model, *person, call.trial);
-      return;
-    }
-    const haptic::PlaybackSummary summary = play_model(*call.stimulus->model, play);
-    if (!summary.stop_cause.empty()) {
-      throw std::runtime_error("the presentation stopped after " +
-                               format_significant(summary.duration_s, 3) +
-                               " s: " + summary.stop_cause);
-    }
-  };
+// The presenter of `campaign run`: the device of --device, the campaign's rig for the real
+// door, presentations of --presentation-s or the campaign's length (simulated or real time).
+study::DevicePresenter make_presenter(const RunCommandOptions& options,
+                                      const study::Campaign& campaign) {
+  study::PresenterOptions presenting;
+  presenting.device = options.device;
+  presenting.real_time = options.real_time;
+  presenting.operator_name = "doorbench campaign";
+  presenting.presentation_s = options.presentation_s.value_or(
+      presenting.simulated_time() ? campaign.simulated_presentation_s : campaign.presentation_s);
+  if (const std::string problem = presenting.validate(); !problem.empty())
+    throw UsageError(problem);
+  std::shared_ptr<const RigDefinition> rig;
+  if (!campaign.real_rig.empty())
+    rig = std::make_shared<const RigDefinition>(load_rig(campaign.real_rig.string()));
+  return study::DevicePresenter(presenting, presentation_player(), real_door_recorder(rig),
+                                std::cerr);
 }
 
 std::unique_ptr<study::Respondent> make_respondent(const RunCommandOptions& options,
@@ -296,13 +150,13 @@ void run_run(const RunCommandOptions& options) {
   }
   const study::CampaignFolder folder = study::open_campaign_folder(options.dir);
   const std::unique_ptr<study::Respondent> respondent = make_respondent(options, folder);
-  const study::Presenter presenter =
-      make_presenter(options, folder.campaign, dynamic_cast<study::LineRespondent*>(respondent.get()));
+  const study::DevicePresenter presenter = make_presenter(options, folder.campaign);
   std::cerr << "doorbench campaign run: participant " << options.participant << " on " << options.device << "\n";
   study::RunOptions run;
   run.participant = options.participant;
   run.redo = options.redo;
-  const study::RunResult result = study::run_participant(folder, run, *respondent, presenter, std::cerr);
+  const study::RunResult result =
+      study::run_participant(folder, run, *respondent, presenter.as_presenter(), std::cerr);
   std::cout << "participant " << options.participant << ": " << result.answered_before + result.answered_now << " of "
             << result.planned << " trials answered (attempt " << result.attempt << ", " << result.answered_now
             << " in this run); answers in " << (std::filesystem::path(options.dir) / "trials.csv").string() << "\n";
@@ -360,12 +214,13 @@ void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
   RunCommandOptions options;
   options.dir = folder.string();
   options.respondent = "sim";
-  const study::Presenter presenter = make_presenter(options, opened.campaign, nullptr);
+  const study::DevicePresenter presenter = make_presenter(options, opened.campaign);
   std::ostringstream prompts;  // the operator's lines, not shown in the demo
   for (const std::string& participant : opened.campaign.participants) {
     options.participant = participant;
     const std::unique_ptr<study::Respondent> respondent = make_respondent(options, opened);
-    study::run_participant(opened, study::RunOptions{participant, false}, *respondent, presenter, prompts);
+    study::run_participant(opened, study::RunOptions{participant, false}, *respondent,
+                           presenter.as_presenter(), prompts);
   }
   out << "\na simulated campaign (" << opened.campaign.participants.size()
       << " simulated participants on the simulated HapticMaster, " << opened.plan.rows.size()

@@ -13,7 +13,7 @@
 #include "app/number_options.h"
 #include "app/play_run.h"
 #include "core/number_format.h"
-#include "haptic/tuning_keys.h"
+#include "study/tuning_keys.h"
 
 namespace doorbench::app {
 namespace {
@@ -38,20 +38,20 @@ struct PlayOptions {
   bool keys = false;
 };
 
-// Live tuning from the keypad (haptic/tuning_keys.h): every key press moves one perceptual
+// Live tuning from the keypad (study/tuning_keys.h): every key press moves one perceptual
 // control; an applied change is played from the next tick, and every press (refused ones
 // too) becomes a "tuning" event of the session.
 class KeypadTuning {
  public:
   explicit KeypadTuning(const DoorModel& start)
       : keys_(STDIN_FILENO, "stdin"), tuner_(start, "start") {
-    std::cerr << "tuning keys (the session records every press):\n" << haptic::key_map_text();
+    std::cerr << "tuning keys (the session records every press):\n" << study::key_map_text();
   }
 
   void poll(haptic::Playback& playback) {
     while (const std::optional<char> key = keys_.poll(0.0)) {
       const double time_s = playback.loop().status().time_s;
-      const haptic::TuningLogEntry& entry = tuner_.press(*key, time_s);
+      const study::TuningLogEntry& entry = tuner_.press(*key, time_s);
       std::string outcome = entry.message;
       if (entry.applied) {
         const std::string description =
@@ -69,8 +69,8 @@ class KeypadTuning {
   }
 
  private:
-  haptic::TerminalKeys keys_;
-  haptic::KeyTuner tuner_;
+  study::TerminalKeys keys_;
+  study::KeyTuner tuner_;
 };
 
 // Live tuning from another program (the viewer's tuning layout saves a parameter file): when

@@ -118,4 +118,34 @@ haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& re
   return summary;
 }
 
+study::PlayOnDevice presentation_player() {
+  return [](const DoorModel& model, const study::PlaySettings& settings) {
+    PlayRequest play;
+    play.device.uri = settings.device;
+    play.device.simulated_time = settings.simulated_time;
+    play.device.hand.duration_s = settings.hand_cycle_s;
+    play.device.seed = settings.seed;
+    play.playback.duration_s = settings.duration_s;
+    play.session_path = settings.session_path;
+    play.model_source = settings.model_source;
+    play.operator_name = settings.operator_name;
+    play.notes = settings.notes;
+    play.show_status = false;
+    play.control = settings.control;
+    return play_model(model, play);
+  };
+}
+
+study::RecordRealDoor real_door_recorder(std::shared_ptr<const RigDefinition> rig) {
+  if (!rig) return {};
+  return [rig](const study::RealDoorSettings& settings) {
+    SessionRecordingOptions recording;
+    recording.duration_s = settings.duration_s;
+    recording.show_progress = false;
+    recording.operator_name = settings.operator_name;
+    recording.notes = settings.notes;
+    record_rig_session(*rig, recording, settings.session_path);
+  };
+}
+
 }  // namespace doorbench::app

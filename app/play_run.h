@@ -4,12 +4,15 @@
 // demo.
 #include <filesystem>
 #include <functional>
+#include <memory>
 #include <optional>
 #include <string>
 
+#include "acquisition/rig/rig_file.h"
 #include "analysis/model/door_model.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"
+#include "study/presenter.h"
 
 namespace doorbench::app {
 
@@ -36,5 +39,10 @@ struct PlayRequest {
 // OutputRefused when it exists, std::runtime_error (device, session: naming the session's
 // path) or std::invalid_argument (options, model).
 haptic::PlaybackSummary play_model(const DoorModel& model, const PlayRequest& request);
+
+// The device and the bench of the people-testing verbs' presenter (study/presenter.h):
+// play_model with the presenter's settings (no status line), and the rig's recorder.
+study::PlayOnDevice presentation_player();
+study::RecordRealDoor real_door_recorder(std::shared_ptr<const RigDefinition> rig);
 
 }  // namespace doorbench::app

@@ -272,18 +272,15 @@ Block parse_block(const Table& table, const Campaign& campaign) {
     block.type = BlockType::kPair;
     table.allow_only({"name", "type", "question", "pairs", "repetitions"});
     const std::string question = table.string("question").value_or("preference");
-    if (question == "preference") {
-      block.question = PairQuestion::kPreference;
-    } else if (question == "preference-2ac") {
-      block.question = PairQuestion::kPreference2ac;
-    } else if (question == "identify-real") {
-      block.question = PairQuestion::kIdentifyReal;
+    const std::optional<Question> asked = Question::parse(question);
+    if (asked && (asked->is_preference() || asked->kind == QuestionKind::kIdentifyReal)) {
+      block.question = asked->kind;
     } else {
       table.fail("question", "must be preference, preference-2ac or identify-real, not '" + question + "'");
     }
     block.pairs = parse_pairs(table, campaign);
     block.repetitions = table.integer("repetitions", 1, 1000).value_or(1);
-    if (block.question == PairQuestion::kIdentifyReal) {
+    if (block.question == QuestionKind::kIdentifyReal) {
       for (const auto& [a, b] : block.pairs) {
         if ((campaign.find_variant(a)->kind == Variant::Kind::kReal) ==
             (campaign.find_variant(b)->kind == Variant::Kind::kReal)) {
@@ -367,15 +364,6 @@ std::string_view to_string(BlockType type) {
     case BlockType::kPair: return "pair";
     case BlockType::kRating: return "rating";
     case BlockType::kJnd: return "jnd";
-  }
-  return "?";
-}
-
-std::string_view to_string(PairQuestion question) {
-  switch (question) {
-    case PairQuestion::kPreference: return "preference";
-    case PairQuestion::kPreference2ac: return "preference-2ac";
-    case PairQuestion::kIdentifyReal: return "identify-real";
   }
   return "?";
 }

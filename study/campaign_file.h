@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "analysis/model/door_model.h"
+#include "study/question.h"
 
 namespace doorbench::study {
 
@@ -45,10 +46,8 @@ struct Variant {
 };
 
 enum class BlockType { kTune, kPair, kRating, kJnd };
-enum class PairQuestion { kPreference, kPreference2ac, kIdentifyReal };
 enum class JndMethod { kConstantStimuli, kStaircase, kQuestPlus };
-std::string_view to_string(BlockType type);       // tune | pair | rating | jnd
-std::string_view to_string(PairQuestion question);  // preference | preference-2ac | identify-real
+std::string_view to_string(BlockType type);  // tune | pair | rating | jnd
 
 struct Block {
   std::string name;
@@ -58,7 +57,7 @@ struct Block {
   // log-uniformly in [1/(1+start_spread), 1+start_spread]
   double start_spread = 0.2;
   // pair
-  PairQuestion question = PairQuestion::kPreference;
+  QuestionKind question = QuestionKind::kPreference;  // preference, preference-2ac or identify-real
   std::vector<std::pair<std::string, std::string>> pairs;  // unordered; each played both ways
   // pair, rating and jnd (constant stimuli): how often the whole set of trials is repeated
   int repetitions = 1;

@@ -10,10 +10,10 @@
 
 #include "acquisition/session/output_file.h"
 #include "analysis/model/perceptual_controls.h"
-#include "haptic/tuning_keys.h"
 #include "study/latin_square.h"
 #include "study/random_stream.h"
 #include "study/trials_table.h"
+#include "study/tuning_keys.h"
 
 namespace doorbench::study {
 namespace {
@@ -36,7 +36,7 @@ std::string level_text(double value, int decimals) {
 // The controls the tuning keys move, each once, in the key map's order.
 std::vector<perceptual::Control> tuned_controls() {
   std::vector<perceptual::Control> controls;
-  for (const haptic::TuningKey& key : haptic::tuning_keys()) {
+  for (const TuningKey& key : tuning_keys()) {
     bool seen = false;
     for (perceptual::Control c : controls) seen = seen || c == key.control;
     if (!seen) controls.push_back(key.control);

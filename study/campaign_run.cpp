@@ -18,8 +18,9 @@
 
 #include "acquisition/session/output_file.h"
 #include "analysis/model/parameter_file.h"
-#include "study/random_stream.h"
 #include "study/quest_plus.h"
+#include "study/question.h"
+#include "study/random_stream.h"
 #include "study/staircase.h"
 #include "study/trials_table.h"
 
@@ -134,18 +135,8 @@ void move_leftovers(const fs::path& folder, const fs::path& interrupted, const s
 }
 
 std::string neutral_question(std::string_view question) {
-  if (question == "preference") return "which felt better, 1 or 2? ";
-  if (question == "preference-2ac") return "which felt better, 1, 2 or same? ";
-  if (question == "identify-real") return "which was the real door, 1 or 2? ";
-  if (question.rfind("stronger:", 0) == 0) {
-    return "which felt stronger in " + std::string(question.substr(9)) + ", 1 or 2? ";
-  }
-  if (question.rfind("rating:", 0) == 0) {
-    const std::string rest(question.substr(7));
-    const std::size_t colon = rest.rfind(':');
-    return "rate 1 and 2 on " + rest.substr(0, colon) + ", each 1 to " + rest.substr(colon + 1) + ": ";
-  }
-  return std::string(question) + "? ";
+  const std::optional<Question> asked = Question::parse(question);
+  return asked ? asked->prompt() : std::string(question) + "? ";
 }
 
 struct Existing {
@@ -171,38 +162,10 @@ Existing existing_rows(const TrialsTable& table, const std::string& participant)
 
 // --- answers -----------------------------------------------------------------------------
 
-std::string normalized_answer(std::string_view question, std::string_view raw) {
-  std::string_view text = raw;
-  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.front()))) text.remove_prefix(1);
-  while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.remove_suffix(1);
-  if (question.rfind("rating:", 0) == 0) {
-    const int scale = std::stoi(std::string(question.substr(question.rfind(':') + 1)));
-    const std::string expected = "expected two ratings from 1 to " + std::to_string(scale) +
-                                 ", one per presentation (e.g. \"" + std::to_string(scale) + " 1\"), got " + quoted(text);
-    std::vector<int> ratings;
-    std::string word;
-    const std::string padded = std::string(text) + " ";
-    for (char c : padded) {
-      if (c == ' ' || c == ',' || c == '\t') {
-        if (word.empty()) continue;
-        if (word.size() > 3 || word.find_first_not_of("0123456789") != std::string::npos) throw std::invalid_argument(expected);
-        ratings.push_back(std::stoi(word));
-        word.clear();
-      } else {
-        word += c;
-      }
-    }
-    if (ratings.size() != 2 || ratings[0] < 1 || ratings[1] < 1 || ratings[0] > scale || ratings[1] > scale) {
-      throw std::invalid_argument(expected);
-    }
-    return std::to_string(ratings[0]) + " " + std::to_string(ratings[1]);
-  }
-  const bool two_ac = question == "preference-2ac";
-  if (text == "1" || text == "2" || (two_ac && text == "same")) return std::string(text);
-  if (two_ac) throw std::invalid_argument("expected 1, 2 or same (which felt better; same: no preference), got " + quoted(text));
-  if (question == "preference") throw std::invalid_argument("expected 1 or 2 (which felt better), got " + quoted(text));
-  if (question == "identify-real") throw std::invalid_argument("expected 1 or 2 (which was the real door), got " + quoted(text));
-  throw std::invalid_argument("expected 1 or 2 (which felt stronger), got " + quoted(text));
+std::string normalized_answer(std::string_view question, std::string_view text) {
+  const std::optional<Question> asked = Question::parse(question);
+  if (!asked) throw std::invalid_argument("unknown question " + quoted(question));
+  return parse_answer(*asked, text).normalized(*asked);
 }
 
 SimulatedRespondent::SimulatedRespondent(std::uint64_t seed, const DoorModel& base, int attempt,
@@ -263,6 +226,20 @@ std::string LineRespondent::answer(const PlanRow& row, const Stimulus&, const St
   }
 }
 
+std::optional<std::string> Respondent::scripted_tuning_keys(int trial, std::string&) {
+  throw std::logic_error("trial " + std::to_string(trial) +
+                         ": this respondent does not tune at the device");
+}
+
+std::optional<std::string> LineRespondent::scripted_tuning_keys(int trial, std::string& where) {
+  if (interactive_) return std::nullopt;
+  const std::optional<std::string> line = next_line();
+  where = source_ + ":" + std::to_string(line_);
+  if (!line)
+    throw std::runtime_error(source_ + ": the answers ended at trial " + std::to_string(trial));
+  return line;
+}
+
 DoorModel LineRespondent::tune(const PlanRow& row, const DoorModel&, std::ostream&) {
   // Only reached by a LineRespondent made without tunes_at_the_device (campaign run makes it
   // with): its lines cannot tune a door after the presentation.
@@ -281,6 +258,7 @@ Stimulus StimulusMaker::named(const std::string& name) {
   stimulus.name = name;
   if (const Variant* variant = campaign_->find_variant(name)) {
     if (variant->kind != Variant::Kind::kReal) stimulus.model = variant_model(*campaign_, *variant);
+    if (variant->kind == Variant::Kind::kFile) stimulus.source = variant->file.string();
   } else {
     stimulus.model = apply_steps(base_, parse_steps(name));
   }
@@ -393,7 +371,13 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
   auto present = [&](int position, const Stimulus& stimulus, std::optional<DoorModel>* tuned = nullptr) {
     prompts << "trial " << row.trial << " of " << planned << ": presentation " << position << std::endl;
     const std::string file = trial_file(row.trial, std::string("-") + std::to_string(position) + ".h5");
-    PresentationCall call{state.participant, row.trial, position, &stimulus, state.session_dir / file, tuned};
+    PresentationCall call{state.participant,
+                          row.trial,
+                          position,
+                          &stimulus,
+                          state.session_dir / file,
+                          tuned,
+                          tuned ? &respondent : nullptr};
     presenter(call);
     if (!sessions.empty()) sessions += ' ';
     sessions += (relative_dir / file).generic_string();
@@ -410,7 +394,7 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
     const DoorModel tuned = tuned_at_the_device ? *tuned_at_the_device : respondent.tune(row, *first.model, prompts);
     const std::string file = trial_file(row.trial, "-tuned.json");
     write_file_atomically(state.session_dir / file, [&](std::ostream& out) { out << to_parameter_json(tuned); });
-    second = Stimulus{"tuned", tuned, rendered_parameters(tuned)};
+    second = Stimulus{"tuned", tuned, rendered_parameters(tuned), "the tuned door"};
     present(2, second);
     answer = (relative_dir / file).generic_string();
   } else {
@@ -469,7 +453,7 @@ RunResult run_participant(const CampaignFolder& folder, const RunOptions& option
   state.session_dir = folder.dir / "sessions" / options.participant / (std::string("a") + std::to_string(state.attempt));
   check_existing(table, rows, plan, state);
   result.answered_before = static_cast<int>(rows.size());
-  if (auto* simulated = dynamic_cast<SimulatedRespondent*>(&respondent)) simulated->set_attempt(state.attempt);
+  respondent.set_attempt(state.attempt);
   StimulusMaker maker(folder.campaign);
   TrialsAppender appender(trials_path);
   if (result.answered_before > 0) {

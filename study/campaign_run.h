@@ -38,7 +38,10 @@ struct Stimulus {
   std::string name;  // a variant's name, "J*1.1", or a tune start's steps
   std::optional<DoorModel> model;
   std::string parameters;  // the rendered parameters, "J=1.045 k=0.12 ..." (empty: real door)
+  std::string source;      // where the model came from, for the session (a parameter file)
 };
+
+class Respondent;
 
 struct PresentationCall {
   std::string participant;
@@ -50,6 +53,8 @@ struct PresentationCall {
   // (Respondent::tunes_at_the_device): the presenter plays `stimulus` with the tuning keys
   // live and puts the door the keys ended on here.
   std::optional<DoorModel>* tuned = nullptr;
+  Respondent* respondent = nullptr;  // with `tuned`: who tunes (Respondent::scripted_tuning_keys)
+  double duration_s = 0.0;           // the presentation's length; 0: the presenter's own
 };
 // Plays one presentation and records it; throws (std::exception) on a device fault.
 using Presenter = std::function<void(const PresentationCall&)>;
@@ -68,6 +73,13 @@ class Respondent {
   // while the start plays); the Presenter is called with PresentationCall::tuned and tune()
   // is not called.
   virtual bool tunes_at_the_device() const { return false; }
+  // A tune trial at the device: the keys pressed, from a script (the trial's line; `where`
+  // is set to "SOURCE:LINE"), or nullopt when a person presses them live at the terminal.
+  // Throws std::runtime_error when the script has ended; the default refuses (a respondent
+  // that does not tune at the device).
+  virtual std::optional<std::string> scripted_tuning_keys(int trial, std::string& where);
+  // The attempt the run is in (column `attempt`), set before the first trial.
+  virtual void set_attempt(int attempt) { (void)attempt; }
 };
 
 // The simulated participant of study/participant_model.h, drawn from `seed`; each trial's
@@ -81,7 +93,7 @@ class SimulatedRespondent : public Respondent {
                      std::ostream& prompts) override;
   DoorModel tune(const PlanRow& row, const DoorModel& start, std::ostream& prompts) override;
   const SimulatedParticipant& participant() const { return participant_; }
-  void set_attempt(int attempt) { attempt_ = attempt; }
+  void set_attempt(int attempt) override { attempt_ = attempt; }
 
  private:
   std::mt19937_64 stream(const PlanRow& row) const;
@@ -103,6 +115,7 @@ class LineRespondent : public Respondent {
                      std::ostream& prompts) override;
   DoorModel tune(const PlanRow& row, const DoorModel& start, std::ostream& prompts) override;
   bool tunes_at_the_device() const override { return tunes_at_the_device_; }
+  std::optional<std::string> scripted_tuning_keys(int trial, std::string& where) override;
   // The next line of the source (counted for line_number()), for a presenter that reads a
   // tune trial's keys from it.
   std::optional<std::string> next_line();

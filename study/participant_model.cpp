@@ -5,8 +5,9 @@
 #include <stdexcept>
 
 #include "analysis/model/perceptual_controls.h"
-#include "haptic/tuning_keys.h"
+#include "study/question.h"
 #include "study/random_stream.h"
+#include "study/tuning_keys.h"
 
 namespace doorbench::study {
 
@@ -151,30 +152,30 @@ SimulatedParticipant draw_participant(std::uint64_t seed, const DoorModel& base,
   return p;
 }
 
-std::string answer_question(const SimulatedParticipant& p, std::string_view question,
-                            const DoorModel& first, const DoorModel& second, std::mt19937_64& random) {
-  if (question.rfind("stronger:", 0) == 0) return answer_stronger(p, question.substr(9), first, second, random);
-  if (question.rfind("rating:", 0) == 0) {
-    const std::string_view rest = question.substr(7);
-    const std::size_t colon = rest.rfind(':');
-    if (colon == std::string_view::npos) throw std::invalid_argument("bad question " + std::string(question));
-    const int scale = std::stoi(std::string(rest.substr(colon + 1)));
-    const int sensation = attribute_sensation(rest.substr(0, colon));
+std::string answer_question(const SimulatedParticipant& p, std::string_view question_text,
+                            const DoorModel& first, const DoorModel& second,
+                            std::mt19937_64& random) {
+  const std::optional<Question> question = Question::parse(question_text);
+  if (!question || question->kind == QuestionKind::kTune) {
+    throw std::invalid_argument("the simulated participant cannot answer '" +
+                                std::string(question_text) + "'");
+  }
+  if (question->kind == QuestionKind::kStronger)
+    return answer_stronger(p, question->subject, first, second, random);
+  if (question->kind == QuestionKind::kRating) {
+    const int sensation = attribute_sensation(question->subject);
     const auto a = perceive(p, first, random), b = perceive(p, second, random);
-    const int r1 = rating_of(p, sensation, scale, a, random);
-    const int r2 = rating_of(p, sensation, scale, b, random);
+    const int r1 = rating_of(p, sensation, question->scale, a, random);
+    const int r2 = rating_of(p, sensation, question->scale, b, random);
     return std::to_string(r1) + " " + std::to_string(r2);
   }
-  const bool two_ac = question == "preference-2ac";
-  if (question == "identify-real") return choice(uniform_below(random, 2) == 1);
-  if (question != "preference" && !two_ac) {
-    throw std::invalid_argument("the simulated participant cannot answer '" + std::string(question) + "'");
-  }
+  if (question->kind == QuestionKind::kIdentifyReal) return choice(uniform_below(random, 2) == 1);
   const double u1 = utility(p, perceive(p, first, random));
   const double u2 = utility(p, perceive(p, second, random));
   if (lapses(p, random)) return choice(uniform_below(random, 2) == 1);
   const double decision = u2 - u1 - p.bias;
-  if (two_ac && std::abs(u2 - u1) < p.options.same_band) return "same";
+  if (question->kind == QuestionKind::kPreference2ac && std::abs(u2 - u1) < p.options.same_band)
+    return "same";
   return choice(decision > 0.0);
 }
 
@@ -195,10 +196,10 @@ TuneOutcome tune_door(const SimulatedParticipant& p, const DoorModel& start, std
     if (worst < 0) break;
     const bool increase = percept[worst] < p.preferred_log[worst];
     char key = 0;
-    for (const haptic::TuningKey& k : haptic::tuning_keys()) {
+    for (const TuningKey& k : tuning_keys()) {
       if (k.control == *perceptual::find(kSensationNames[worst]) && k.increase == increase) key = k.key;
     }
-    const haptic::KeyOutcome result = haptic::apply_key(outcome.model, key);
+    const KeyOutcome result = apply_key(outcome.model, key);
     outcome.keys += key;
     if (result.model) {
       outcome.model = *result.model;

@@ -25,7 +25,7 @@
 //    snap; the first word is the scale's high end) is rated by its percept, mid-scale at the
 //    base door, rating_steps_per_jnd steps per JND; any other attribute (pleasant, ...) by
 //    the utility. Each rating gets Gaussian noise of rating_noise steps.
-//  - tune: presses the tuning keys (haptic/tuning_keys.h) one at a time, always on the
+//  - tune: presses the tuning keys (study/tuning_keys.h) one at a time, always on the
 //    sensation furthest from its preference in JNDs, until every one is within one JND or
 //    a key is refused twice or max_presses.
 //

@@ -7,12 +7,12 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "haptic/ab_trials.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
 #include "study/quest_plus.h"
 #include "study/random_stream.h"
 #include "study/staircase.h"
+#include "study/statistics/binomial.h"
 
 namespace doorbench::study {
 namespace {
@@ -127,7 +127,7 @@ std::vector<PowerLine> simulate_power(const Campaign& campaign, std::uint64_t se
       line.question = key.substr(bar1 + 1, bar2 - bar1 - 1);
       line.what = key.substr(bar2 + 1);
       ++line.panels;
-      if (haptic::binomial_two_sided_p(tally.a, tally.a + tally.b) < options.alpha) ++line.detected;
+      if (binomial_two_sided_p(tally.a, tally.a + tally.b) < options.alpha) ++line.detected;
     }
     for (const auto& [block, values] : thresholds) medians[block].push_back(percentile(values, 0.5));
   }

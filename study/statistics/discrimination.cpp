@@ -16,7 +16,8 @@
 
 #include "core/number_format.h"
 #include "core/numbers.h"
-#include "haptic/ab_trials.h"
+#include "study/question.h"
+#include "study/statistics/binomial.h"
 #include "study/statistics/json_number.h"
 
 namespace doorbench::study {
@@ -99,7 +100,7 @@ Forced2Result forced_choice_2afc(int correct, int n, double confidence, double m
   r.pc_high = correct == n ? 1.0 : boost::math::ibeta_inv(correct + 1, n - correct, 1 - alpha / 2);
   r.ci_low = kSqrt2 * normal_quantile(r.pc_low);
   r.ci_high = kSqrt2 * normal_quantile(r.pc_high);
-  r.p = haptic::binomial_two_sided_p(correct, n);
+  r.p = binomial_two_sided_p(correct, n);
   // The two one-sided tests at Pc of d' = ±margin: H0 d' ≥ margin rejected by few correct
   // answers, H0 d' ≤ −margin by many.
   const double pc_margin = phi_lower(margin / kSqrt2);
@@ -186,7 +187,7 @@ std::optional<IdentifyReal> identify_real(const TrialsTable& table, const std::s
   std::vector<std::string> order;
   std::map<std::string, std::pair<int, int>> counts;  // participant -> (correct, n)
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    if (table.value(r, "question") != "identify-real") continue;
+    if (!is_question(table.value(r, "question"), QuestionKind::kIdentifyReal)) continue;
     const std::string& answer = table.value(r, "answer");
     if (answer != "1" && answer != "2")
       throw TrialsTableError(
@@ -362,7 +363,7 @@ std::vector<TwoAcResult> two_ac_pairs(const TrialsTable& table, double confidenc
   };
   std::vector<Counts> pairs;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    if (table.value(r, "question") != "preference-2ac") continue;
+    if (!is_question(table.value(r, "question"), QuestionKind::kPreference2ac)) continue;
     const std::string& first = table.value(r, "first");
     const std::string& second = table.value(r, "second");
     const std::string& answer = table.value(r, "answer");

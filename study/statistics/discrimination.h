@@ -6,8 +6,8 @@
 // correct Pc = correct / n and d' = √2·Φ⁻¹(Pc) (Macmillan & Creelman, 2-AFC without bias);
 // the 95 % interval is the Clopper–Pearson interval of Pc carried through the same
 // (monotone) transform; p is the exact two-sided binomial test of Pc = 1/2
-// (haptic/ab_trials.h). Per participant and for the panel (all trials pooled, which assumes
-// the participants share one Pc; the per-participant rows show whether they do).
+// (study/statistics/binomial.h). Per participant and for the panel (all trials pooled, which
+// assumes the participants share one Pc; the per-participant rows show whether they do).
 //
 // Equivalence (two one-sided tests, Schuirmann 1987) against a margin M on d': the data say
 // the two are indistinguishable only when the whole reported interval lies inside (−M, M),

@@ -10,7 +10,9 @@
 #include <random>
 #include <set>
 #include <tuple>
+
 #include "core/numbers.h"
+#include "study/question.h"
 #include "study/statistics/json_number.h"
 #include "study/statistics/quasi_variance.h"
 
@@ -202,19 +204,21 @@ PairData pair_data(const TrialsTable& table) {
   };
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
     const std::string& question = table.value(r, "question");
-    if (question != "preference" && question != "preference-2ac") continue;
+    const std::optional<Question> asked = Question::parse(question);
+    if (!asked || !asked->is_preference()) continue;
+    const bool two_ac = asked->kind == QuestionKind::kPreference2ac;
     const std::string& answer = table.value(r, "answer");
     PairTrial trial;
     if (answer == "1") {
       trial.answer = 1;
     } else if (answer == "2") {
       trial.answer = 2;
-    } else if (answer == "same" && question == "preference-2ac") {
+    } else if (answer == "same" && two_ac) {
       trial.answer = 0;
     } else {
       throw TrialsTableError(table.source, table.line_numbers[r],
                              "answer '" + answer + "' to a " + question + " question (expected " +
-                                 (question == "preference" ? "1 or 2)" : "1, 2 or same)"));
+                                 (two_ac ? "1, 2 or same)" : "1 or 2)"));
     }
     const std::string& first = table.value(r, "first");
     const std::string& second = table.value(r, "second");

@@ -1,18 +1,18 @@
 #include "study/statistics/tuning.h"
 
 #include <algorithm>
+#include <boost/math/distributions/students_t.hpp>
 #include <cmath>
 #include <limits>
 #include <numbers>
 #include <set>
 #include <stdexcept>
 
-#include <boost/math/distributions/students_t.hpp>
-
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/physical_model.h"
 #include "analysis/model/sensory_model.h"
 #include "analysis/report/svg_plot.h"
+#include "study/question.h"
 
 namespace doorbench::study {
 
@@ -322,7 +322,7 @@ nlohmann::json TuningResult::to_json() const {
 std::vector<TunedDoor> tuned_doors(const TrialsTable& table, const std::filesystem::path& folder) {
   std::vector<TunedDoor> doors;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    if (table.value(r, "question") != "tune") continue;
+    if (!is_question(table.value(r, "question"), QuestionKind::kTune)) continue;
     const std::string& file = table.value(r, "answer");
     if (file.empty()) {
       throw TrialsTableError(table.source, table.line_numbers[r],

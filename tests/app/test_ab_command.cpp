@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "acquisition/session/session_file.h"
-#include "haptic/ab_trials.h"
+#include "study/ab_trials.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/run_on_terminal.h"
@@ -23,7 +23,7 @@ using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;
 using doorbench::testing::run_doorbench_shell;
 using doorbench::testing::TempDir;
-namespace haptic = doorbench::haptic;
+namespace study = doorbench::study;
 
 namespace {
 
@@ -47,10 +47,10 @@ TEST_CASE("doorbench ab: A vs B with scripted answers leaves sessions, answers a
           "[ab][cli]") {
   TempDir dir("ab_cli");
   const std::string heavier = write_heavier(dir);
-  haptic::AbOptions options;
+  study::AbOptions options;
   options.trials = 4;
   options.seed = 99;
-  const auto plan = haptic::make_plan(options);
+  const auto plan = study::make_plan(options);
   // B chosen in trials 1-3, A in trial 4: 3 of 4 B preferred, p = 0.625.
   std::string answers;
   for (const auto& trial : plan) {
@@ -99,12 +99,12 @@ TEST_CASE("doorbench ab: the real door (simulated rig) vs the model, answers on 
           "[ab][cli]") {
   TempDir dir("ab_cli_real");
   const auto out = dir.path / "out";
-  haptic::AbOptions options;
+  study::AbOptions options;
   options.trials = 2;
   options.seed = 5;
   options.a_is_real = true;
-  options.question = haptic::AbQuestion::kIdentifyReal;
-  const auto plan = haptic::make_plan(options);
+  options.question = study::QuestionKind::kIdentifyReal;
+  const auto plan = study::make_plan(options);
   // Right in both trials.
   std::string answers;
   for (const auto& trial : plan) answers += trial.variant[0] == "real" ? "L\\n" : "R\\n";

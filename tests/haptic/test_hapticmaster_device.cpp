@@ -16,6 +16,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/clock.h"
 #include "haptic/hapticmaster_device.h"
 #include "haptic/hapticmaster_protocol.h"
 #include "tests/support/allocation_counter.h"
@@ -64,16 +65,12 @@ std::vector<std::string> lines_of(const std::filesystem::path& file) {
   return lines;
 }
 
-double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
-
 // Polls read() (as a tick would, every 1 ms) until `done` or `timeout_s`.
 template <class Done>
 DeviceSample poll_until(HapticMasterDevice& device, Done done, double timeout_s = 5.0) {
-  const double end = now_s() + timeout_s;
+  const double end = doorbench::monotonic_now_s() + timeout_s;
   DeviceSample s = device.read();
-  while (!done(s) && now_s() < end) {
+  while (!done(s) && doorbench::monotonic_now_s() < end) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     s = device.read();
   }
@@ -257,10 +254,10 @@ TEST_CASE("hapticmaster device: samples flow and the position follows the comman
 
   // +x force on 4 kg: x grows, velocity +x; the user's +z force moves z too.
   device.command_force(Vec3(8.0, 0, 0));
-  const double t0 = now_s();
+  const double t0 = doorbench::monotonic_now_s();
   const std::uint64_t seq0 = s.sequence;
   s = poll_until(device, [](const DeviceSample& s) { return s.position.x() > 0.02; });
-  const double elapsed = now_s() - t0;
+  const double elapsed = doorbench::monotonic_now_s() - t0;
   CHECK(s.position.x() > 0.02);
   CHECK(s.velocity.x() > 0.0);
   CHECK(s.position.z() > 0.0);
@@ -328,18 +325,18 @@ TEST_CASE("hapticmaster device: a dropped connection clears link_ok at once", "[
   HapticMasterDevice device(emulator.address(), options);
   device.start(5.0);
   std::uint64_t last_seq = 0;
-  double last_change_s = now_s();
+  double last_change_s = doorbench::monotonic_now_s();
   DeviceSample s = device.read();
-  const double end = now_s() + 5.0;
-  while (s.link_ok && now_s() < end) {
+  const double end = doorbench::monotonic_now_s() + 5.0;
+  while (s.link_ok && doorbench::monotonic_now_s() < end) {
     std::this_thread::sleep_for(std::chrono::microseconds(200));
     s = device.read();
     if (s.sequence != last_seq) {
       last_seq = s.sequence;
-      last_change_s = now_s();
+      last_change_s = doorbench::monotonic_now_s();
     }
   }
-  const double detect_s = now_s() - last_change_s;
+  const double detect_s = doorbench::monotonic_now_s() - last_change_s;
   INFO("link_ok false " << detect_s << " s after the last sample");
   REQUIRE_FALSE(s.link_ok);
   CHECK(s.sequence == 25);
@@ -361,18 +358,18 @@ TEST_CASE("hapticmaster device: a silent device clears link_ok after the reply t
   HapticMasterDevice device(emulator.address(), options);
   device.start(5.0);
   DeviceSample s = poll_until(device, [](const DeviceSample& s) { return s.sequence >= 10; });
-  const double t0 = now_s();
+  const double t0 = doorbench::monotonic_now_s();
   s = poll_until(device, [](const DeviceSample& s) { return !s.link_ok; });
-  const double detect_s = now_s() - t0;
+  const double detect_s = doorbench::monotonic_now_s() - t0;
   INFO("link_ok false " << detect_s << " s after the last sample");
   REQUIRE_FALSE(s.link_ok);
   CHECK(s.sequence == 10);
   CHECK(detect_s > 0.15);
   CHECK(detect_s < 0.2 + 0.2);
   CHECK_THAT(device.last_error(), Catch::Contains("no reply within 0.2 s"));
-  const double stop_t0 = now_s();
+  const double stop_t0 = doorbench::monotonic_now_s();
   device.stop();  // the device was stopped on a fresh connection already: no waiting
-  CHECK(now_s() - stop_t0 < 0.1);
+  CHECK(doorbench::monotonic_now_s() - stop_t0 < 0.1);
 }
 
 TEST_CASE("hapticmaster device: garbage and error replies in the loop clear link_ok",

@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "core/clock.h"
 #include "haptic/hapticmaster_device.h"
 #include "haptic/hapticmaster_protocol.h"
 #include "tests/support/hapticmaster_emulator_process.h"
@@ -36,10 +37,6 @@ using Emulator = doorbench::testing::HapticMasterEmulator;
 // attempts (2 x emergency_timeout_s = 0.2 s) plus one I/O period; the tests allow 0.1 s more
 // for a loaded machine's scheduling of the Python emulator.
 constexpr double kImmediateBound_s = 0.2 + 0.001 + 0.1;
-
-double now_s() {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
-}
 
 struct Line {
   double time_s = 0.0;
@@ -72,10 +69,10 @@ constexpr const char* kStopped = "device state=stop bias=0.0";
 // Waits until the emulator's events show `prefix` (after `after_s`) or `timeout_s` passes.
 double wait_for(const std::filesystem::path& file, const std::string& prefix, double after_s = 0.0,
                 double timeout_s = 5.0) {
-  const double end = now_s() + timeout_s;
+  const double end = doorbench::monotonic_now_s() + timeout_s;
   for (;;) {
     const double at = first_at(events_of(file), prefix, after_s);
-    if (at >= 0.0 || now_s() > end) return at;
+    if (at >= 0.0 || doorbench::monotonic_now_s() > end) return at;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
 }
@@ -99,7 +96,7 @@ class Ticker {
     if (thread_.joinable()) {
       quit_.store(true);
       thread_.join();
-      halted_s_ = now_s();
+      halted_s_ = doorbench::monotonic_now_s();
     }
     return halted_s_;
   }
@@ -114,16 +111,16 @@ class Ticker {
 // Returns the last sample.
 DeviceSample run_until_lost(HapticMasterDevice& device) {
   Ticker ticker(device, Vec3(5.0, 0.0, 0.0));
-  const double end = now_s() + 5.0;
+  const double end = doorbench::monotonic_now_s() + 5.0;
   DeviceSample s = device.read();
-  while (s.link_ok && now_s() < end) {
+  while (s.link_ok && doorbench::monotonic_now_s() < end) {
     std::this_thread::sleep_for(std::chrono::milliseconds(1));
     s = device.read();
   }
   return s;
 }
 
-const std::size_t kStartCommands = 17;  // what start() sends (test_hapticmaster_device.cpp)
+const std::size_t kCommandsOfStart = 17;  // what start() sends (test_hapticmaster_device.cpp)
 
 }  // namespace
 
@@ -153,7 +150,7 @@ TEST_CASE("hapticmaster fail-safe: each failure in the loop ends at zero force i
     double bound_s;
   };
   // About 0.1 s of round trips with the force on, then the fault.
-  const std::string after = std::to_string(kStartCommands + 4 * 100);
+  const std::string after = std::to_string(kCommandsOfStart + 4 * 100);
   const std::vector<Case> cases = {
       {"corrupt reply", {"--garbage-after", after}, "fault garbage",
        "not the HapticMaster protocol", kImmediateBound_s},
@@ -265,7 +262,7 @@ TEST_CASE("hapticmaster fail-safe: the watchdog arms at the render loop's first 
     std::this_thread::sleep_for(std::chrono::milliseconds(500));
     CHECK(device.read().link_ok);
     CHECK(std::isnan(device.first_command_arrival_s()));
-    const double commanded_s = now_s();
+    const double commanded_s = doorbench::monotonic_now_s();
     {
       Ticker ticker(device, Vec3(5.0, 0.0, 0.0));
       REQUIRE(wait_for(events, "device state=force bias=5.0") >= 0.0);
@@ -282,7 +279,7 @@ TEST_CASE("hapticmaster fail-safe: the watchdog arms at the render loop's first 
     HapticMasterOptions options;
     options.first_command_timeout_s = 0.3;
     HapticMasterDevice device(emulator.address(), options);
-    const double started_s = now_s();
+    const double started_s = doorbench::monotonic_now_s();
     device.start(5.0);
     const double stopped = wait_for(events, kStopped, started_s);
     REQUIRE(stopped >= 0.0);
@@ -313,7 +310,7 @@ TEST_CASE("hapticmaster fail-safe: brake() zeroes the force and stops the device
   {
     Ticker ticker(device, Vec3(5.0, 0.0, 0.0));
     REQUIRE(wait_for(events, "device state=force bias=5.0") >= 0.0);
-    braked_s = now_s();
+    braked_s = doorbench::monotonic_now_s();
     device.brake();  // what the render loop does on a velocity or workspace trip
     const double stopped = wait_for(events, kStopped, braked_s);
     REQUIRE(stopped >= 0.0);
@@ -342,7 +339,7 @@ TEST_CASE("hapticmaster fail-safe: Ctrl-C and SIGTERM during doorbench play stop
       // Playing: the device is in state force (its force follows the door, near zero at rest).
       REQUIRE(wait_for(events, "device state=force", 0.0, 20.0) >= 0.0);
       std::this_thread::sleep_for(std::chrono::milliseconds(700));
-      const double signalled_s = now_s();
+      const double signalled_s = doorbench::monotonic_now_s();
       play.send_signal(signal_number);
       const int status = play.wait_exit(10.0);
       CHECK(status == 0);

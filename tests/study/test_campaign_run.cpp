@@ -18,12 +18,12 @@
 
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
-#include "haptic/tuning_keys.h"
 #include "study/campaign_file.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_summary.h"
 #include "study/quest_plus.h"
 #include "study/trials_table.h"
+#include "study/tuning_keys.h"
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
 #include "tests/support/run_on_terminal.h"
@@ -288,8 +288,10 @@ TEST_CASE("campaign run: answers that end, a wrong answer and a device fault sto
   dir.write("answers.txt", "9\n");
   const Result wrong = run(person, dir.path);
   CHECK(wrong.status == 1);
-  CHECK_THAT(wrong.err, Catch::Matchers::Contains(answers.string() + ":1: trial 4: expected 1, 2 or same (which felt "
-                                                  "better; same: no preference), got \"9\""));
+  CHECK_THAT(wrong.err,
+             Catch::Matchers::Contains(answers.string() +
+                                       ":1: trial 4: expected \"1\", \"2\" or \"same\" "
+                                       "(which felt better; same: no preference), got \"9\""));
   CHECK(count_rows_of(folder / "trials.csv", "P01") == 3);
   // The device is not there: trial 4 stops, the 3 answers stay; then the rest on the
   // simulated device, resumed at trial 4.
@@ -363,7 +365,7 @@ TEST_CASE("campaign run: a person tunes in a tune trial with the keys, scripted 
   const doorbench::DoorModel start = doorbench::study::apply_steps(
       doorbench::study::base_model(opened.campaign), doorbench::study::parse_steps(opened.plan.rows[0].first));
   doorbench::DoorModel expected = start;
-  for (char key : {'+', '+', 'u'}) expected = *doorbench::haptic::apply_key(expected, key).model;
+  for (char key : {'+', '+', 'u'}) expected = *doorbench::study::apply_key(expected, key).model;
   const doorbench::DoorModel tuned =
       doorbench::load_model(doorbench::ModelKind::kSensory, folder / "sessions" / "P01" / "a1" / "t001-tuned.json", "");
   REQUIRE(tuned.parameter_values().size() == expected.parameter_values().size());
@@ -414,7 +416,7 @@ TEST_CASE("campaign run: a person tunes on the terminal's keys until Enter, then
   const doorbench::study::CampaignFolder opened = doorbench::study::open_campaign_folder(folder);
   doorbench::DoorModel expected = doorbench::study::apply_steps(doorbench::study::base_model(opened.campaign),
                                                                 doorbench::study::parse_steps(opened.plan.rows[0].first));
-  for (char key : {'+', 'u'}) expected = *doorbench::haptic::apply_key(expected, key).model;
+  for (char key : {'+', 'u'}) expected = *doorbench::study::apply_key(expected, key).model;
   const doorbench::DoorModel tuned =
       doorbench::load_model(doorbench::ModelKind::kSensory, folder / "sessions" / "P01" / "a1" / "t001-tuned.json", "");
   for (std::size_t i = 0; i < tuned.parameter_values().size(); ++i) {

@@ -111,12 +111,18 @@ TEST_CASE("A 2-down-1-up staircase converges on the 70.7 % level", "[study][stai
 TEST_CASE("Answers are checked against their question, word for word", "[study][campaign]") {
   CHECK(normalized_answer("preference-2ac", " same ") == "same");
   CHECK(normalized_answer("rating:heavy-light:7", "7,1") == "7 1");
-  CHECK_THROWS_WITH(normalized_answer("preference-2ac", "3"),
-                    "expected 1, 2 or same (which felt better; same: no preference), got \"3\"");
-  CHECK_THROWS_WITH(normalized_answer("preference", "same"), "expected 1 or 2 (which felt better), got \"same\"");
-  CHECK_THROWS_WITH(normalized_answer("stronger:J", "x"), "expected 1 or 2 (which felt stronger), got \"x\"");
-  CHECK_THROWS_WITH(normalized_answer("rating:pleasant:5", "6 1"),
-                    "expected two ratings from 1 to 5, one per presentation (e.g. \"5 1\"), got \"6 1\"");
+  CHECK_THROWS_WITH(
+      normalized_answer("preference-2ac", "3"),
+      "expected \"1\", \"2\" or \"same\" (which felt better; same: no preference), got \"3\"");
+  CHECK_THROWS_WITH(normalized_answer("preference", "same"),
+                    "expected \"1\" or \"2\" (which felt better), got \"same\"");
+  CHECK_THROWS_WITH(normalized_answer("stronger:J", "x"),
+                    "expected \"1\" or \"2\" (which felt stronger), got \"x\"");
+  CHECK_THROWS_WITH(
+      normalized_answer("rating:pleasant:5", "6 1"),
+      "rating 6 is outside 1..5: expected two ratings from 1 to 5, one per presentation "
+      "(e.g. \"5 1\"), got \"6 1\"");
+  CHECK_THROWS_WITH(normalized_answer("colour", "1"), "unknown question \"colour\"");
 }
 
 TEST_CASE("The power's Wilson interval covers the true rate about 95 % of the time", "[study][power]") {

@@ -13,11 +13,11 @@ using doorbench::study::RatingObservation;
 using doorbench::study::RatingsOptions;
 
 namespace {
-const std::string kHeader = "participant,block,trial,question,first,second,answer\n";
+const std::string kRatingsHeader = "participant,block,trial,question,first,second,answer\n";
 }
 
 TEST_CASE("ratings: rating rows give one observation per presented variant", "[study][ratings]") {
-  const auto table = parse_trials_table(kHeader +
+  const auto table = parse_trials_table(kRatingsHeader +
                                             "P01,r,1,rating:heavy-light:7,A,B,3 6\n"
                                             "P01,p,2,preference,A,B,1\n"
                                             "P02,r,1,rating:smooth:jerky:5,B,A,5 1\n",
@@ -38,7 +38,7 @@ TEST_CASE("ratings: rating rows give one observation per presented variant", "[s
 
 TEST_CASE("ratings: malformed rating rows are refused with their line", "[study][ratings]") {
   const auto refused = [](const std::string& row) {
-    return rating_observations(parse_trials_table(kHeader + row, "t.csv"));
+    return rating_observations(parse_trials_table(kRatingsHeader + row, "t.csv"));
   };
   CHECK_THROWS_WITH(refused("P01,r,1,rating:heavy:7,A,B,3\n"),
                     "t.csv:2: answer '3' is not two ratings 1..7 (first variant's, second's)");

@@ -1,4 +1,4 @@
-// A/B comparisons (haptic/ab_trials.h): the plan's balance, reproducibility and blinding,
+// A/B comparisons (study/ab_trials.h): the plan's balance, reproducibility and blinding,
 // the exact binomial test against published values and an exact integer computation, the
 // answers' parsing with its messages, the summary's counts, and a whole run with a
 // recording player and scripted answers (real files on disk, real HDF5 sessions).
@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <fstream>
 #include <memory>
 #include <optional>
@@ -17,7 +18,8 @@
 
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
-#include "haptic/ab_trials.h"
+#include "study/ab_trials.h"
+#include "study/statistics/binomial.h"
 #include "tests/support/files.h"
 #include "tests/support/temp_dir.h"
 
@@ -28,15 +30,15 @@ using Catch::Matchers::Equals;
 using Catch::Matchers::StartsWith;
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;
-using doorbench::haptic::AbAnswer;
-using doorbench::haptic::AbOptions;
-using doorbench::haptic::AbQuestion;
-using doorbench::haptic::AbTrial;
-using doorbench::haptic::AbTrialOutcome;
-using doorbench::haptic::binomial_two_sided_p;
-using doorbench::haptic::make_plan;
-using doorbench::haptic::parse_answer;
-namespace haptic = doorbench::haptic;
+using doorbench::study::AbOptions;
+using doorbench::study::AbTrial;
+using doorbench::study::AbTrialOutcome;
+using doorbench::study::Answer;
+using doorbench::study::binomial_two_sided_p;
+using doorbench::study::make_plan;
+using doorbench::study::Question;
+using doorbench::study::QuestionKind;
+namespace study = doorbench::study;
 
 namespace {
 
@@ -76,14 +78,14 @@ TEST_CASE("A/B options: each wrong option named", "[ab]") {
   options.trials = 0;
   CHECK_THAT(options.validate(), StartsWith("trials must be 1 to 10000, got 0"));
   options = {};
-  options.question = AbQuestion::kRating;
+  options.question = QuestionKind::kRating;
   options.rating_scale = 1;
   CHECK_THAT(options.validate(), Equals("rating scale K must be 2 to 100, got 1"));
   options = {};
   options.presentation_s = 0;
   CHECK_THAT(options.validate(), StartsWith("presentation time must be above 0"));
   options = {};
-  options.question = AbQuestion::kIdentifyReal;
+  options.question = QuestionKind::kIdentifyReal;
   CHECK_THAT(options.validate(), StartsWith("question identify-real needs the real door"));
   options.a_is_real = true;
   CHECK(options.validate().empty());
@@ -214,32 +216,33 @@ TEST_CASE("Binomial test: large n stays finite and agrees with the normal limit"
 }
 
 TEST_CASE("A/B answers: parsed, and wrong ones refused saying what was expected", "[ab]") {
-  CHECK(parse_answer(AbQuestion::kPreference, 7, " 1 \r\n").choice == 1);
-  CHECK(parse_answer(AbQuestion::kPreference, 7, "2").choice == 2);
-  CHECK(parse_answer(AbQuestion::kIdentifyReal, 7, "2").choice == 2);
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kPreference, 7, "3"),
+  CHECK(parse_answer(Question{QuestionKind::kPreference, "", 7}, " 1 \r\n").choice == 1);
+  CHECK(parse_answer(Question{QuestionKind::kPreference, "", 7}, "2").choice == 2);
+  CHECK(parse_answer(Question{QuestionKind::kIdentifyReal, "", 7}, "2").choice == 2);
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kPreference, "", 7}, "3"),
                     Equals("expected \"1\" or \"2\" (which felt better), got \"3\""));
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kIdentifyReal, 7, "A"),
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kIdentifyReal, "", 7}, "A"),
                     Equals("expected \"1\" or \"2\" (which was the real door), got \"A\""));
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kPreference, 7, "  "),
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kPreference, "", 7}, "  "),
                     Equals("no answer: expected \"1\" or \"2\" (which felt better)"));
-  CHECK(parse_answer(AbQuestion::kPreference, 7, "Y", {"X", "Y"}).choice == 2);
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kPreference, 7, "1", {"X", "Y"}),
+  CHECK(parse_answer(Question{QuestionKind::kPreference, "", 7}, "Y", {"X", "Y"}).choice == 2);
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kPreference, "", 7}, "1", {"X", "Y"}),
                     Equals("expected \"X\" or \"Y\" (which felt better), got \"1\""));
 
-  const AbAnswer rating = parse_answer(AbQuestion::kRating, 7, "5 3");
+  const Answer rating = parse_answer(Question{QuestionKind::kRating, "", 7}, "5 3");
   CHECK(rating.rating == std::array<int, 2>{5, 3});
-  CHECK(parse_answer(AbQuestion::kRating, 5, "1,5").rating == std::array<int, 2>{1, 5});
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kRating, 7, "5"),
+  CHECK(parse_answer(Question{QuestionKind::kRating, "", 5}, "1,5").rating ==
+        std::array<int, 2>{1, 5});
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kRating, "", 7}, "5"),
                     Equals("expected two ratings from 1 to 7, one per presentation (e.g. \"7 "
                            "1\"), got \"5\""));
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kRating, 7, "5 8"),
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kRating, "", 7}, "5 8"),
                     StartsWith("rating 8 is outside 1..7: expected two ratings"));
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kRating, 7, "5 0"),
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kRating, "", 7}, "5 0"),
                     StartsWith("rating 0 is outside 1..7"));
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kRating, 7, "five 3"),
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kRating, "", 7}, "five 3"),
                     StartsWith("\"five\" is not a whole number: expected two ratings"));
-  CHECK_THROWS_WITH(parse_answer(AbQuestion::kRating, 7, "2.5 3"),
+  CHECK_THROWS_WITH(parse_answer(Question{QuestionKind::kRating, "", 7}, "2.5 3"),
                     StartsWith("\"2.5\" is not a whole number"));
 }
 
@@ -247,7 +250,7 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
   AbOptions options;
   options.trials = 4;
   auto trial = [](int number, const std::string& first, const std::string& second,
-                  std::optional<AbAnswer> answer) {
+                  std::optional<Answer> answer) {
     AbTrialOutcome outcome;
     outcome.plan.trial = number;
     outcome.plan.variant = {first, second};
@@ -255,7 +258,7 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
     return outcome;
   };
   auto choice = [](int c) {
-    AbAnswer a;
+    Answer a;
     a.choice = c;
     a.text = std::to_string(c);
     return a;
@@ -265,7 +268,7 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
     const std::vector<AbTrialOutcome> outcomes{
         trial(1, "B", "A", choice(1)), trial(2, "A", "B", choice(1)), trial(3, "A", "B", choice(2)),
         trial(4, "B", "A", std::nullopt)};
-    const auto summary = haptic::summarize(options, outcomes);
+    const auto summary = study::summarize(options, outcomes);
     CHECK(summary.trials_answered == 3);
     CHECK(summary.a_preferred == 1);
     CHECK(summary.b_preferred == 2);
@@ -284,13 +287,13 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
     CHECK_THAT(json, Contains("\"answer\": \"2\",\n      \"chosen\": \"B\""));
   }
   SECTION("an answer that parse_answer would refuse") {
-    AbAnswer none;
+    Answer none;
     none.text = "?";
-    CHECK_THROWS_WITH(haptic::summarize(options, {trial(1, "A", "B", none)}),
+    CHECK_THROWS_WITH(study::summarize(options, {trial(1, "A", "B", none)}),
                       Equals("A/B summary: trial 1: the answer \"?\" is not one of preference"));
   }
   SECTION("identify-real") {
-    options.question = AbQuestion::kIdentifyReal;
+    options.question = QuestionKind::kIdentifyReal;
     options.a_is_real = true;
     std::vector<AbTrialOutcome> outcomes;
     for (int i = 1; i <= 10; ++i) {
@@ -298,17 +301,17 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
       outcomes.push_back(trial(i, i % 2 ? "real" : "B", i % 2 ? "B" : "real", choice(1)));
     }
     options.trials = 10;
-    const auto summary = haptic::summarize(options, outcomes);
+    const auto summary = study::summarize(options, outcomes);
     CHECK(summary.real_identified == 5);
     CHECK(summary.real_missed == 5);
     CHECK(summary.p_value == 1.0);
     CHECK_THAT(summary.brief_report(), Contains("real door identified: 5 right, 5 wrong"));
   }
   SECTION("rating") {
-    options.question = AbQuestion::kRating;
+    options.question = QuestionKind::kRating;
     options.trials = 3;
     auto rated = [](int r1, int r2) {
-      AbAnswer a;
+      Answer a;
       a.rating = {r1, r2};
       a.text = std::to_string(r1) + " " + std::to_string(r2);
       return a;
@@ -316,7 +319,7 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
     const std::vector<AbTrialOutcome> outcomes{trial(1, "A", "B", rated(2, 6)),
                                                trial(2, "B", "A", rated(7, 3)),
                                                trial(3, "B", "A", rated(4, 4))};
-    const auto summary = haptic::summarize(options, outcomes);
+    const auto summary = study::summarize(options, outcomes);
     CHECK_THAT(summary.mean_rating_a, WithinRel(3.0, 1e-12));         // 2, 3, 4
     CHECK_THAT(summary.mean_rating_b, WithinRel(17.0 / 3.0, 1e-12));  // 6, 7, 4
     CHECK(summary.b_rated_higher == 2);
@@ -332,9 +335,9 @@ TEST_CASE("A/B summary: counts through the key, and the test on them", "[ab]") {
 
 namespace {
 
-haptic::AnswerSource scripted(std::vector<std::string> lines, bool interactive = false) {
+study::AnswerSource scripted(std::vector<std::string> lines, bool interactive = false) {
   auto remaining = std::make_shared<std::vector<std::string>>(std::move(lines));
-  haptic::AnswerSource source;
+  study::AnswerSource source;
   source.name = "script";
   source.interactive = interactive;
   source.next_line = [remaining]() -> std::optional<std::string> {
@@ -350,17 +353,25 @@ haptic::AnswerSource scripted(std::vector<std::string> lines, bool interactive =
 
 TEST_CASE("A/B run: presentations in plan order, answers and summary on disk", "[ab]") {
   doorbench::testing::TempDir dir("ab_run");
-  haptic::AbRunInputs inputs;
+  study::AbRunInputs inputs;
   inputs.options.trials = 6;
   inputs.options.seed = 7;
   inputs.options.presentation_s = 3;
   inputs.params_a = "a.json";
   inputs.params_b = "b.json";
   inputs.out_dir = dir.path / "out";
-  std::vector<haptic::PresentationRequest> played;
-  const haptic::PresentationPlayer player = [&](const haptic::PresentationRequest& request) {
-    played.push_back(request);
-    std::ofstream(request.session_path) << "stand-in";
+  // What the presenter was asked to play.
+  struct Played {
+    int trial, position;
+    std::string variant, params_path;
+    double duration_s;
+    std::filesystem::path session_path;
+  };
+  std::vector<Played> played;
+  const study::Presenter player = [&](const study::PresentationCall& call) {
+    played.push_back({call.trial, call.position, call.stimulus->name, call.stimulus->source,
+                      call.duration_s, call.session_path});
+    std::ofstream(call.session_path) << "stand-in";
   };
   const auto plan = make_plan(inputs.options);
   // Always the B variant: every answer names its position.
@@ -369,7 +380,7 @@ TEST_CASE("A/B run: presentations in plan order, answers and summary on disk", "
   std::ostringstream prompts;
 
   SECTION("all answered") {
-    const auto summary = haptic::run_ab(inputs, player, scripted(answers), prompts);
+    const auto summary = study::run_ab(inputs, player, scripted(answers), prompts);
     REQUIRE(played.size() == 12);
     for (std::size_t i = 0; i < played.size(); ++i) {
       const AbTrial& t = plan[i / 2];
@@ -396,38 +407,38 @@ TEST_CASE("A/B run: presentations in plan order, answers and summary on disk", "
     CHECK_THAT(json, Contains("\"first\": \"" + plan[0].variant[0] + "\""));
     CHECK(read_file(inputs.out_dir / "ab-summary.txt") == summary.brief_report());
     // Results are never overwritten.
-    CHECK_THROWS_WITH(haptic::run_ab(inputs, player, scripted(answers), prompts),
+    CHECK_THROWS_WITH(study::run_ab(inputs, player, scripted(answers), prompts),
                       Contains("answers.csv: already there; A/B results are never overwritten"));
   }
   SECTION("a wrong scripted answer stops the run naming the line; results so far kept") {
     answers[2] = "maybe";
-    CHECK_THROWS_WITH(haptic::run_ab(inputs, player, scripted(answers), prompts),
+    CHECK_THROWS_WITH(study::run_ab(inputs, player, scripted(answers), prompts),
                       Equals("script:3: trial 3: expected \"1\" or \"2\" (which felt better), "
                              "got \"maybe\""));
     CHECK_THAT(read_file(inputs.out_dir / "ab-summary.txt"), Contains("2 of 6 trials answered"));
   }
   SECTION("interactive: a wrong answer is asked again") {
     answers.insert(answers.begin() + 1, "3");
-    const auto summary = haptic::run_ab(inputs, player, scripted(answers, true), prompts);
+    const auto summary = study::run_ab(inputs, player, scripted(answers, true), prompts);
     CHECK(summary.trials_answered == 6);
     CHECK(summary.b_preferred == 6);
     CHECK_THAT(prompts.str(), Contains("got \"3\"; again please"));
   }
   SECTION("the player fails: the trial and presentation named, results so far kept") {
-    const haptic::PresentationPlayer failing = [&](const haptic::PresentationRequest& request) {
+    const study::Presenter failing = [&](const study::PresentationCall& request) {
       if (request.trial == 2 && request.position == 2) {
         throw std::runtime_error("device link lost");
       }
       player(request);
     };
-    CHECK_THROWS_WITH(haptic::run_ab(inputs, failing, scripted(answers), prompts),
+    CHECK_THROWS_WITH(study::run_ab(inputs, failing, scripted(answers), prompts),
                       StartsWith("trial 2, presentation 2: device link lost (results so far in "));
     CHECK_THAT(read_file(inputs.out_dir / "ab-summary.txt"), Contains("1 of 6 trials answered"));
     CHECK(played.size() == 3);
   }
   SECTION("the answers end early") {
     answers.resize(4);
-    CHECK_THROWS_WITH(haptic::run_ab(inputs, player, scripted(answers), prompts),
+    CHECK_THROWS_WITH(study::run_ab(inputs, player, scripted(answers), prompts),
                       StartsWith("script: the answers ended after 4 of 6 trials"));
     CHECK_THAT(read_file(inputs.out_dir / "ab-summary.json"), Contains("\"trials_answered\": 4"));
   }

@@ -19,20 +19,15 @@
 
 #include "acquisition/session/session_file.h"
 #include "analysis/model/door_model.h"
+#include "study/campaign_run.h"
+#include "study/question.h"
 
-namespace doorbench::haptic {
-
-enum class AbQuestion {
-  kPreference,    // which of the two felt better: "1" or "2"
-  kIdentifyReal,  // which of the two was the real door: "1" or "2"
-  kRating,        // each of the two rated on 1..K: "R1 R2"
-};
-std::string_view to_string(AbQuestion question);  // preference | identify-real | rating
+namespace doorbench::study {
 
 struct AbOptions {
   int trials = 10;
-  AbQuestion question = AbQuestion::kPreference;
-  int rating_scale = 7;  // K: ratings 1..K (rating only)
+  QuestionKind question = QuestionKind::kPreference;  // preference, identify-real or rating
+  int rating_scale = 7;                               // K: ratings 1..K (rating only)
   std::uint64_t seed = 1;
   double presentation_s = 10.0;  // how long each presentation plays
   bool a_is_real = false;        // A is the real door on the bench (identify-real needs it)
@@ -41,6 +36,13 @@ struct AbOptions {
 
   // Empty when usable, else one line naming the option.
   std::string validate() const;
+  // Sets the question from its --question text: "preference", "identify-real", "rating"
+  // (K = 7) or "rating:K". Returns "" or what is wrong ("--question must be preference,
+  // identify-real, rating or rating:K, not X", "--question rating:K needs a whole number K,
+  // got X"); the options stay as they were then.
+  std::string ask(std::string_view text);
+  // The question each trial asks (rating: on 1..rating_scale, no attribute).
+  Question asked() const { return Question{question, "", rating_scale}; }
   // "real" when A is the real door, else "A"; B is always "B".
   std::string variant_a() const { return a_is_real ? "real" : "A"; }
 };
@@ -58,34 +60,15 @@ struct AbTrial {
 // done here, not by a library distribution). Throws std::invalid_argument on bad options.
 std::vector<AbTrial> make_plan(const AbOptions& options);
 
-struct AbAnswer {
-  int choice = 0;               // 1 or 2 (preference, identify-real)
-  std::array<int, 2> rating{};  // ratings of presentations 1 and 2 (rating)
-  std::string text;             // as given, trimmed
-};
-
-// Parses one answer line. Throws std::invalid_argument with a message that says what was
-// expected and quotes the text, e.g. `expected "1" or "2" (which felt better), got "3"`.
-// `labels` are the words the participant answers with ("1" and "2" unless changed).
-AbAnswer parse_answer(AbQuestion question, int rating_scale, std::string_view text,
-                      const std::array<std::string, 2>& labels = {"1", "2"});
-
-// The exact two-sided binomial test against chance 0.5: the probability, under chance, of
-// an outcome at least as far from n/2 as k: twice the nearer tail, from Boost.Math's
-// binomial distribution (the regularised incomplete beta function, to double precision;
-// a far tail underflows to 0, tested to n = 10^7). k > n or negative throws
-// std::invalid_argument. Thread-safe.
-double binomial_two_sided_p(long k, long n);
-
 struct AbTrialOutcome {
   AbTrial plan;
-  std::optional<AbAnswer> answer;  // nullopt: not answered (the run stopped)
+  std::optional<Answer> answer;  // nullopt: not answered (the run stopped)
   std::array<std::string, 2> session_files;
   std::string answered_utc;
 };
 
 struct AbSummary {
-  AbQuestion question = AbQuestion::kPreference;
+  QuestionKind question = QuestionKind::kPreference;
   std::string variant_a = "A", variant_b = "B";
   int trials_planned = 0;
   int trials_answered = 0;
@@ -110,16 +93,6 @@ AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>&
 
 // --- Running a comparison ----------------------------------------------------------------
 
-struct PresentationRequest {
-  int trial = 0;
-  int position = 1;                    // 1 or 2
-  std::string variant;                 // "A", "B" or "real"
-  std::string params_path;             // the variant's parameter file (the rig file for "real")
-  std::filesystem::path session_path;  // where to record the presentation (must not exist)
-  double duration_s = 0.0;
-};
-using PresentationPlayer = std::function<void(const PresentationRequest&)>;
-
 // Where answers come from: the next line, or nullopt at the end of the input.
 struct AnswerSource {
   std::function<std::optional<std::string>()> next_line;
@@ -131,17 +104,19 @@ struct AbRunInputs {
   AbOptions options;
   std::string params_a;  // the rig file when A is the real door
   std::string params_b;
+  // The variants' models (A's is empty when A is the real door), played by the presenter.
+  std::optional<DoorModel> model_a, model_b;
   std::filesystem::path out_dir;
 };
 
-// Runs the plan: for each trial both presentations through `player` (sessions
+// Runs the plan: for each trial both presentations through `presenter` (sessions
 // trial-NN-1.h5 and trial-NN-2.h5 in out_dir), then the answer, appended to answers.csv at
 // once (blind: trial, answer, sessions, time). At the end, or when the answers run out,
 // ab-summary.json and ab-summary.txt (with the key). Prompts go to `prompts`. Throws
 // std::runtime_error naming the file and line for a wrong scripted answer, the trial and
 // presentation when the player throws (in both cases the results so far are written
 // first), and for an output folder that already holds results.
-AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
-                 const AnswerSource& answers, std::ostream& prompts);
+AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const AnswerSource& answers,
+                 std::ostream& prompts);
 
-}  // namespace doorbench::haptic
+}  // namespace doorbench::study

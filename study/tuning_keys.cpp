@@ -1,4 +1,4 @@
-#include "haptic/tuning_keys.h"
+#include "study/tuning_keys.h"
 
 #include <poll.h>
 #include <termios.h>
@@ -15,7 +15,7 @@
 #include "analysis/model/parameter_file.h"
 #include "core/number_format.h"
 
-namespace doorbench::haptic {
+namespace doorbench::study {
 namespace {
 
 using perceptual::Control;
@@ -90,14 +90,14 @@ std::string key_map_text() {
   return text.append("  r  reset to the starting parameter set\n");
 }
 
-std::string TuningOptions::validate() const {
+std::string KeyOptions::validate() const {
   if (!std::isfinite(step_factor) || step_factor <= 1.0 || step_factor > 2.0) {
     return "step factor must be above 1 and at most 2, got " + format_number(step_factor);
   }
   return "";
 }
 
-KeyOutcome apply_key(const DoorModel& model, char key, const TuningOptions& options) {
+KeyOutcome apply_key(const DoorModel& model, char key, const KeyOptions& options) {
   if (const std::string problem = options.validate(); !problem.empty()) {
     throw std::invalid_argument("tuning options: " + problem);
   }
@@ -218,7 +218,7 @@ void TuningLog::write_to_session(SessionWriter& writer) const {
   writer.write_group_attribute("tuning", "log_csv", to_csv());
 }
 
-KeyTuner::KeyTuner(DoorModel start, std::string base_id, const TuningOptions& options)
+KeyTuner::KeyTuner(DoorModel start, std::string base_id, const KeyOptions& options)
     : start_(start),
       current_(std::move(start)),
       base_id_(std::move(base_id)),
@@ -313,4 +313,4 @@ std::optional<char> TerminalKeys::poll(double timeout_s) {
   throw std::runtime_error(name_ + ": cannot read a key: " + std::strerror(errno));
 }
 
-}  // namespace doorbench::haptic
+}  // namespace doorbench::study

@@ -23,7 +23,7 @@
 #include "analysis/model/door_model.h"
 #include "analysis/model/perceptual_controls.h"
 
-namespace doorbench::haptic {
+namespace doorbench::study {
 
 struct TuningKey {
   char key;
@@ -38,7 +38,7 @@ inline constexpr char kResetKey = 'r';
 // The key map as text, one key a line (for a help screen).
 std::string key_map_text();
 
-struct TuningOptions {
+struct KeyOptions {
   double step_factor = 1.1;      // one key press multiplies or divides its control by this
   std::string validate() const;  // empty when usable, else one line naming the option
 };
@@ -54,7 +54,7 @@ struct KeyOutcome {
 
 // One key press on `model` (a sensory model). Reset is not handled here (it needs the
 // starting model: see KeyTuner). Unknown keys are refused with a message listing the keys.
-KeyOutcome apply_key(const DoorModel& model, char key, const TuningOptions& options = {});
+KeyOutcome apply_key(const DoorModel& model, char key, const KeyOptions& options = {});
 
 struct TuningLogEntry {
   double time_s = 0.0;  // on the session's clock (the caller's)
@@ -85,7 +85,7 @@ class TuningLog {
 // (a reset goes back to `base_id`).
 class KeyTuner {
  public:
-  KeyTuner(DoorModel start, std::string base_id, const TuningOptions& options = {});
+  KeyTuner(DoorModel start, std::string base_id, const KeyOptions& options = {});
   // Applies the key at `time_s` and logs it (refusals too).
   const TuningLogEntry& press(char key, double time_s);
   const DoorModel& model() const { return current_; }
@@ -99,7 +99,7 @@ class KeyTuner {
  private:
   DoorModel start_, current_;
   std::string base_id_, current_id_;
-  TuningOptions options_;
+  KeyOptions options_;
   int changes_ = 0;
   TuningLog log_;
 };
@@ -126,4 +126,4 @@ class TerminalKeys {
   std::vector<unsigned char> saved_;  // the terminal's settings before (a struct termios)
 };
 
-}  // namespace doorbench::haptic
+}  // namespace doorbench::study

@@ -1,4 +1,4 @@
-// Live tuning keys (haptic/tuning_keys.h): each key moves its perceptual control by one
+// Live tuning keys (study/tuning_keys.h): each key moves its perceptual control by one
 // documented step and leaves the others alone; steps out of the parameter set's bounds or
 // the model's constraints are refused naming the control and the limit; the tuner's ids,
 // reset and log, and the log written into a real session file.
@@ -15,7 +15,7 @@
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
-#include "haptic/tuning_keys.h"
+#include "study/tuning_keys.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
@@ -25,7 +25,7 @@ using Catch::Matchers::WithinRel;
 using doorbench::DoorModel;
 using doorbench::ModelKind;
 using doorbench::perceptual::Control;
-namespace haptic = doorbench::haptic;
+namespace study = doorbench::study;
 namespace perceptual = doorbench::perceptual;
 
 namespace {
@@ -45,13 +45,13 @@ TEST_CASE("Tuning keys: each key moves its control by the step, the others stay"
       {'S', {Control::kSmoothness, 1.1}},    {'s', {Control::kSmoothness, 1 / 1.1}},
       {'N', {Control::kSnap, 1.1}},          {'n', {Control::kSnap, 1 / 1.1}},
   };
-  CHECK(haptic::tuning_keys().size() == documented.size());
-  for (const haptic::TuningKey& key : haptic::tuning_keys()) {
+  CHECK(study::tuning_keys().size() == documented.size());
+  for (const study::TuningKey& key : study::tuning_keys()) {
     INFO("key " << key.key);
     REQUIRE(documented.count(key.key) == 1);
     const auto [control, factor] = documented.at(key.key);
     CHECK(key.control == control);
-    const haptic::KeyOutcome outcome = haptic::apply_key(reference(), key.key);
+    const study::KeyOutcome outcome = study::apply_key(reference(), key.key);
     REQUIRE(outcome.model);
     CHECK_THAT(perceptual::read(*outcome.model, control),
                WithinRel(perceptual::read(reference(), control) * factor, 1e-12));
@@ -64,29 +64,29 @@ TEST_CASE("Tuning keys: each key moves its control by the step, the others stay"
     CHECK(outcome.control == perceptual::controls()[static_cast<int>(control)].name);
     CHECK_THAT(outcome.message, StartsWith(std::string(key.action) + ": " + outcome.control));
   }
-  const haptic::KeyOutcome heavier = haptic::apply_key(reference(), '+');
+  const study::KeyOutcome heavier = study::apply_key(reference(), '+');
   CHECK(heavier.message == "heavier: heaviness 0.95 -> 1.045 kg*m^2");
   // Another step factor.
-  haptic::TuningOptions options;
+  study::KeyOptions options;
   options.step_factor = 1.5;
-  CHECK_THAT(haptic::apply_key(reference(), '-', options).new_value, WithinRel(0.95 / 1.5, 1e-12));
+  CHECK_THAT(study::apply_key(reference(), '-', options).new_value, WithinRel(0.95 / 1.5, 1e-12));
   options.step_factor = 1.0;
   CHECK_THAT(options.validate(), Equals("step factor must be above 1 and at most 2, got 1"));
-  CHECK_THROWS_WITH(haptic::apply_key(reference(), '+', options),
+  CHECK_THROWS_WITH(study::apply_key(reference(), '+', options),
                     StartsWith("tuning options: step factor"));
-  CHECK_THAT(haptic::key_map_text(), Contains("  +  heavier: heaviness x step\n"));
-  CHECK_THAT(haptic::key_map_text(), Contains("  r  reset"));
+  CHECK_THAT(study::key_map_text(), Contains("  +  heavier: heaviness x step\n"));
+  CHECK_THAT(study::key_map_text(), Contains("  r  reset"));
 }
 
 TEST_CASE("Tuning keys: out of bounds refused naming the control and the limit", "[ab][tuning]") {
   // J = 0.95 with bounds [0.1, 5]: 0.95 * 1.1^17 = 4.80 is allowed, the 18th step is not.
   DoorModel door = reference();
   for (int press = 1; press <= 17; ++press) {
-    haptic::KeyOutcome outcome = haptic::apply_key(door, '+');
+    study::KeyOutcome outcome = study::apply_key(door, '+');
     REQUIRE(outcome.model);
     door = *outcome.model;
   }
-  const haptic::KeyOutcome refused = haptic::apply_key(door, '+');
+  const study::KeyOutcome refused = study::apply_key(door, '+');
   CHECK_FALSE(refused.model);
   CHECK_THAT(refused.message,
              Equals("heavier refused: heaviness 5.282 kg*m^2 is out of bounds: J would be "
@@ -94,9 +94,9 @@ TEST_CASE("Tuning keys: out of bounds refused naming the control and the limit",
 
   // d1 = 2.6 N*m with upper bound 20: smoothness (d1 / r_h) is limited to 20 / 0.58 N.
   door = reference();
-  haptic::KeyOutcome outcome;
+  study::KeyOutcome outcome;
   int presses = 0;
-  while ((outcome = haptic::apply_key(door, 'S')).model) {
+  while ((outcome = study::apply_key(door, 'S')).model) {
     door = *outcome.model;
     ++presses;
   }
@@ -109,31 +109,31 @@ TEST_CASE("Tuning keys: out of bounds refused naming the control and the limit",
   // A constraint of the model rather than a bound: the latch effort cannot fall below the
   // soft spring's share (k theta1 / r_h = 1.926 N); perceptual::set's reason is passed on.
   door = reference();
-  while ((outcome = haptic::apply_key(door, 'u')).model) door = *outcome.model;
+  while ((outcome = study::apply_key(door, 'u')).model) door = *outcome.model;
   CHECK_THAT(outcome.message, StartsWith("easier to unlatch refused: latch_effort "));
   CHECK_THAT(outcome.message, Contains("is below what the soft spring alone gives"));
 
   // Snap at 0 cannot be stepped by a factor.
   const DoorModel no_snap = perceptual::set(reference(), Control::kSnap, 0.0);
-  CHECK_THAT(haptic::apply_key(no_snap, 'N').message,
+  CHECK_THAT(study::apply_key(no_snap, 'N').message,
              Equals("more snap refused: snap is 0 N*m*s, and a step multiplies it, so it cannot "
                     "move from 0"));
-  CHECK_THAT(haptic::apply_key(reference(), 'x').message,
+  CHECK_THAT(study::apply_key(reference(), 'x').message,
              Equals("key 'x' does nothing (keys: + - U u C c S s N n r)"));
-  CHECK_THAT(haptic::apply_key(doorbench::reference_model(ModelKind::kPhysical), '+').message,
+  CHECK_THAT(study::apply_key(doorbench::reference_model(ModelKind::kPhysical), '+').message,
              Equals("heavier refused: the perceptual controls act on the sensory model only"));
 }
 
 TEST_CASE("Tuning: the tuner's parameter set ids, reset and log", "[ab][tuning]") {
-  haptic::KeyTuner tuner(reference(), "ref");
+  study::KeyTuner tuner(reference(), "ref");
   CHECK(tuner.parameter_set_id() == "ref");
   CHECK(tuner.press('+', 1.5).parameter_set_id == "ref-1");
   CHECK(tuner.press('s', 2.0).parameter_set_id == "ref-2");
-  const haptic::TuningLogEntry& unknown = tuner.press('?', 2.5);
+  const study::TuningLogEntry& unknown = tuner.press('?', 2.5);
   CHECK_FALSE(unknown.applied);
   CHECK(unknown.parameter_set_id == "ref-2");
   CHECK_THAT(perceptual::read(tuner.model(), Control::kHeaviness), WithinRel(1.045, 1e-12));
-  const haptic::TuningLogEntry& reset = tuner.press('r', 3.0);
+  const study::TuningLogEntry& reset = tuner.press('r', 3.0);
   CHECK(reset.applied);
   CHECK(reset.parameter_set_id == "ref");
   CHECK(reset.message == "reset: back to parameter set ref");
@@ -152,13 +152,13 @@ TEST_CASE("Tuning: the tuner's parameter set ids, reset and log", "[ab][tuning]"
   CHECK_THAT(csv, Contains("\n2.5,?,unknown,,0,0,,0,ref-2,key '?' does nothing"));
   CHECK_THAT(csv, Contains("\n3,r,reset,,0,0,,1,ref,reset: back to parameter set ref\n"));
 
-  CHECK_THROWS_WITH(haptic::KeyTuner(doorbench::reference_model(ModelKind::kPhysical), "p"),
+  CHECK_THROWS_WITH(study::KeyTuner(doorbench::reference_model(ModelKind::kPhysical), "p"),
                     Equals("tuning: the perceptual controls act on the sensory model only"));
 }
 
 TEST_CASE("Tuning: the log written into a session", "[ab][tuning]") {
   doorbench::testing::TempDir dir("tuning_log");
-  haptic::KeyTuner tuner(reference(), "ref");
+  study::KeyTuner tuner(reference(), "ref");
   tuner.press('+', 0.25);
   tuner.press('x', 0.5);
   const auto path = dir.path / "tuned.h5";
@@ -199,7 +199,7 @@ TEST_CASE("Tuning: keys read one by one from a real pseudo-terminal, its mode re
   REQUIRE(::tcgetattr(slave, &before) == 0);
   REQUIRE((before.c_lflag & ICANON) != 0);
   {
-    haptic::TerminalKeys keys(slave, "keypad");
+    study::TerminalKeys keys(slave, "keypad");
     termios during{};
     REQUIRE(::tcgetattr(slave, &during) == 0);
     CHECK((during.c_lflag & ICANON) == 0);
@@ -211,7 +211,7 @@ TEST_CASE("Tuning: keys read one by one from a real pseudo-terminal, its mode re
     CHECK(keys.poll(1.0) == 'u');
     CHECK_FALSE(keys.poll(0.05));
     // Through a tuner: the keys as the keypad sends them.
-    haptic::KeyTuner tuner(reference(), "ref");
+    study::KeyTuner tuner(reference(), "ref");
     REQUIRE(::write(master, "UUr-", 4) == 4);
     for (int i = 0; i < 4; ++i) {
       const std::optional<char> key = keys.poll(1.0);
@@ -230,7 +230,7 @@ TEST_CASE("Tuning: keys read one by one from a real pseudo-terminal, its mode re
 
   int pipe_fds[2];
   REQUIRE(::pipe(pipe_fds) == 0);
-  CHECK_THROWS_WITH(haptic::TerminalKeys(pipe_fds[0]),
+  CHECK_THROWS_WITH(study::TerminalKeys(pipe_fds[0]),
                     StartsWith("stdin is not a terminal: live tuning keys need one"));
   ::close(pipe_fds[0]);
   ::close(pipe_fds[1]);

@@ -1,13 +1,13 @@
-#include "haptic/ab_trials.h"
+#include "study/ab_trials.h"
 
 #include <algorithm>
-#include <boost/math/distributions/binomial.hpp>
 #include <chrono>
 #include <cmath>
 #include <ctime>
 #include <fstream>
 #include <iomanip>
 #include <limits>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <ostream>
 #include <random>
@@ -15,22 +15,13 @@
 #include <stdexcept>
 
 #include "acquisition/session/session_csv.h"
-#include "analysis/simulation/simulator.h"
-#include "analysis/simulation/trajectory_io.h"
-#include "analysis/simulation/virtual_hand.h"
 #include "core/number_format.h"
+#include "study/statistics/binomial.h"
 
-namespace doorbench::haptic {
+namespace doorbench::study {
 namespace {
 
 constexpr int kMaxTrials = 10000;
-
-std::string_view trim(std::string_view text) {
-  const auto first = text.find_first_not_of(" \t\r\n");
-  if (first == std::string_view::npos) return {};
-  const auto last = text.find_last_not_of(" \t\r\n");
-  return text.substr(first, last - first + 1);
-}
 
 std::string in_quotes(std::string_view text) {
   return std::string("\"").append(text).append("\"");
@@ -45,7 +36,7 @@ std::uint64_t draw_below(std::mt19937_64& random, std::uint64_t bound) {
   }
 }
 
-std::string utc_now() {
+std::string answered_now_utc() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
   std::tm parts{};
   gmtime_r(&now, &parts);
@@ -60,22 +51,6 @@ std::string two_digits(int trial) {
   return text;
 }
 
-std::string answer_expectation(AbQuestion question, int rating_scale,
-                               const std::array<std::string, 2>& labels) {
-  switch (question) {
-    case AbQuestion::kPreference:
-      return "expected " + in_quotes(labels[0]) + " or " + in_quotes(labels[1]) +
-             " (which felt better)";
-    case AbQuestion::kIdentifyReal:
-      return "expected " + in_quotes(labels[0]) + " or " + in_quotes(labels[1]) +
-             " (which was the real door)";
-    case AbQuestion::kRating:
-      return "expected two ratings from 1 to " + std::to_string(rating_scale) +
-             ", one per presentation (e.g. \"" + std::to_string(rating_scale) + " 1\")";
-  }
-  return "";
-}
-
 int position_of(const AbTrial& trial, const std::string& variant) {
   return trial.variant[0] == variant ? 0 : 1;
 }
@@ -88,30 +63,23 @@ std::string format_p(double p) {
 
 }  // namespace
 
-std::string_view to_string(AbQuestion question) {
-  switch (question) {
-    case AbQuestion::kPreference:
-      return "preference";
-    case AbQuestion::kIdentifyReal:
-      return "identify-real";
-    case AbQuestion::kRating:
-      return "rating";
-  }
-  return "?";
-}
-
 std::string AbOptions::validate() const {
   if (trials < 1 || trials > kMaxTrials) {
     return "trials must be 1 to " + std::to_string(kMaxTrials) + ", got " + std::to_string(trials);
   }
-  if (question == AbQuestion::kRating && (rating_scale < 2 || rating_scale > 100)) {
+  if (question != QuestionKind::kPreference && question != QuestionKind::kIdentifyReal &&
+      question != QuestionKind::kRating) {
+    return "an A/B run asks preference, identify-real or rating, not " +
+           std::string(to_string(question));
+  }
+  if (question == QuestionKind::kRating && (rating_scale < 2 || rating_scale > 100)) {
     return "rating scale K must be 2 to 100, got " + std::to_string(rating_scale);
   }
   if (!std::isfinite(presentation_s) || presentation_s <= 0 || presentation_s > 3600) {
     return "presentation time must be above 0 and at most 3600 s, got " +
            format_number(presentation_s) + " s";
   }
-  if (question == AbQuestion::kIdentifyReal && !a_is_real) {
+  if (question == QuestionKind::kIdentifyReal && !a_is_real) {
     return "question identify-real needs the real door as one variant (A is not the real door)";
   }
   if (labels[0].empty() || labels[1].empty() || labels[0] == labels[1]) {
@@ -123,6 +91,26 @@ std::string AbOptions::validate() const {
       return "blinding label " + in_quotes(label) + " must not hold spaces or commas";
     }
   }
+  return "";
+}
+
+std::string AbOptions::ask(std::string_view text) {
+  const std::string given(text);
+  if (text == "preference" || text == "identify-real" || text == "rating") {
+    question = text == "preference"      ? QuestionKind::kPreference
+               : text == "identify-real" ? QuestionKind::kIdentifyReal
+                                         : QuestionKind::kRating;
+    return "";
+  }
+  if (!text.starts_with("rating:")) {
+    return "--question must be preference, identify-real, rating or rating:K, not " + given;
+  }
+  const std::string_view scale = text.substr(7);
+  const bool digits = !scale.empty() && scale.size() <= 3 &&
+                      scale.find_first_not_of("0123456789") == std::string_view::npos;
+  if (!digits) return "--question rating:K needs a whole number K, got " + given;
+  question = QuestionKind::kRating;
+  rating_scale = std::stoi(std::string(scale));
   return "";
 }
 
@@ -154,67 +142,6 @@ std::vector<AbTrial> make_plan(const AbOptions& options) {
   return plan;
 }
 
-AbAnswer parse_answer(AbQuestion question, int rating_scale, std::string_view text,
-                      const std::array<std::string, 2>& labels) {
-  const std::string_view answer = trim(text);
-  const std::string expected = answer_expectation(question, rating_scale, labels);
-  if (answer.empty()) throw std::invalid_argument("no answer: " + expected);
-  AbAnswer result;
-  result.text = std::string(answer);
-  if (question != AbQuestion::kRating) {
-    if (answer == labels[0]) {
-      result.choice = 1;
-    } else if (answer == labels[1]) {
-      result.choice = 2;
-    } else {
-      throw std::invalid_argument(expected + ", got " + in_quotes(answer));
-    }
-    return result;
-  }
-  std::vector<std::string> words;
-  std::string word;
-  for (char c : answer) {
-    if (c == ' ' || c == '\t' || c == ',') {
-      if (!word.empty()) words.push_back(word);
-      word.clear();
-    } else {
-      word += c;
-    }
-  }
-  if (!word.empty()) words.push_back(word);
-  if (words.size() != 2) throw std::invalid_argument(expected + ", got " + in_quotes(answer));
-  for (int i = 0; i < 2; ++i) {
-    const std::string& w = words[i];
-    const bool digits = !w.empty() && w.size() <= 3 && std::all_of(w.begin(), w.end(), [](char c) {
-      return c >= '0' && c <= '9';
-    });
-    if (!digits) {
-      throw std::invalid_argument(in_quotes(w) + " is not a whole number: " + expected + ", got " +
-                                  in_quotes(answer));
-    }
-    const int value = std::stoi(w);
-    if (value < 1 || value > rating_scale) {
-      throw std::invalid_argument("rating " + w + " is outside 1.." + std::to_string(rating_scale) +
-                                  ": " + expected + ", got " + in_quotes(answer));
-    }
-    result.rating[i] = value;
-  }
-  return result;
-}
-
-double binomial_two_sided_p(long k, long n) {
-  if (n < 0 || k < 0 || k > n) {
-    throw std::invalid_argument("binomial test: need 0 <= k <= n, got k = " + std::to_string(k) +
-                                ", n = " + std::to_string(n));
-  }
-  const long m = std::min(k, n - k);
-  // At the centre every outcome is at least as far from n/2: p = 1.
-  if (2 * m == n || n == 0) return 1.0;
-  // The distribution is symmetric: p = 2 P(X <= m), m the nearer tail's end.
-  const boost::math::binomial_distribution<double> chance(static_cast<double>(n), 0.5);
-  return std::min(2.0 * boost::math::cdf(chance, static_cast<double>(m)), 1.0);
-}
-
 AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>& trials) {
   AbSummary summary;
   summary.question = options.question;
@@ -226,32 +153,32 @@ AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>&
   for (const AbTrialOutcome& outcome : trials) {
     if (!outcome.answer) continue;
     ++summary.trials_answered;
-    const AbAnswer& answer = *outcome.answer;
+    const Answer& answer = *outcome.answer;
     // Answers made by hand rather than by parse_answer: refuse what it would have refused.
     const bool choice_ok = answer.choice == 1 || answer.choice == 2;
     const bool ratings_ok = std::all_of(answer.rating.begin(), answer.rating.end(),
                                         [&](int r) { return r >= 1 && r <= options.rating_scale; });
-    if (options.question == AbQuestion::kRating ? !ratings_ok : !choice_ok) {
+    if (options.question == QuestionKind::kRating ? !ratings_ok : !choice_ok) {
       throw std::invalid_argument("A/B summary: trial " + std::to_string(outcome.plan.trial) +
                                   ": the answer " + in_quotes(answer.text) + " is not one of " +
                                   std::string(to_string(options.question)));
     }
     switch (options.question) {
-      case AbQuestion::kPreference:
+      case QuestionKind::kPreference:
         if (outcome.plan.variant[answer.choice - 1] == "B") {
           ++summary.b_preferred;
         } else {
           ++summary.a_preferred;
         }
         break;
-      case AbQuestion::kIdentifyReal:
+      case QuestionKind::kIdentifyReal:
         if (outcome.plan.variant[answer.choice - 1] == "real") {
           ++summary.real_identified;
         } else {
           ++summary.real_missed;
         }
         break;
-      case AbQuestion::kRating: {
+      case QuestionKind::kRating: {
         const int a = answer.rating[position_of(outcome.plan, summary.variant_a)];
         const int b = answer.rating[position_of(outcome.plan, "B")];
         sum_a += a;
@@ -265,20 +192,22 @@ AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>&
         }
         break;
       }
+      default:  // not an A/B question: AbOptions::validate() refuses it
+        break;
     }
   }
   switch (options.question) {
-    case AbQuestion::kPreference:
+    case QuestionKind::kPreference:
       summary.successes = summary.b_preferred;
       summary.test_trials = summary.trials_answered;
       summary.test_meaning = "B preferred over " + summary.variant_a;
       break;
-    case AbQuestion::kIdentifyReal:
+    case QuestionKind::kIdentifyReal:
       summary.successes = summary.real_identified;
       summary.test_trials = summary.trials_answered;
       summary.test_meaning = "the real door identified";
       break;
-    case AbQuestion::kRating:
+    case QuestionKind::kRating:
       summary.successes = summary.b_rated_higher;
       summary.test_trials = summary.a_rated_higher + summary.b_rated_higher;
       summary.test_meaning = "B rated higher than " + summary.variant_a + " (ties left out)";
@@ -286,6 +215,8 @@ AbSummary summarize(const AbOptions& options, const std::vector<AbTrialOutcome>&
         summary.mean_rating_a = sum_a / summary.trials_answered;
         summary.mean_rating_b = sum_b / summary.trials_answered;
       }
+      break;
+    default:  // not an A/B question: AbOptions::validate() refuses it
       break;
   }
   summary.p_value = binomial_two_sided_p(summary.successes, summary.test_trials);
@@ -297,17 +228,19 @@ std::string AbSummary::brief_report() const {
   text << "A/B " << to_string(question) << ": " << variant_a << " vs " << variant_b << ", "
        << trials_answered << " of " << trials_planned << " trials answered (seed " << seed << ")\n";
   switch (question) {
-    case AbQuestion::kPreference:
+    case QuestionKind::kPreference:
       text << "  preferred: " << variant_a << " " << a_preferred << ", B " << b_preferred << "\n";
       break;
-    case AbQuestion::kIdentifyReal:
+    case QuestionKind::kIdentifyReal:
       text << "  real door identified: " << real_identified << " right, " << real_missed
            << " wrong\n";
       break;
-    case AbQuestion::kRating:
+    case QuestionKind::kRating:
       text << "  mean rating: " << variant_a << " " << format_p(mean_rating_a) << ", B "
            << format_p(mean_rating_b) << "; rated higher: " << variant_a << " " << a_rated_higher
            << ", B " << b_rated_higher << ", ties " << rating_ties << "\n";
+      break;
+    default:  // not an A/B question: AbOptions::validate() refuses it
       break;
   }
   text << "  exact binomial test (two-sided, chance 0.5): " << successes << " of " << test_trials
@@ -331,18 +264,20 @@ std::string AbSummary::to_json() const {
   json["trials_planned"] = trials_planned;
   json["trials_answered"] = trials_answered;
   switch (question) {
-    case AbQuestion::kPreference:
+    case QuestionKind::kPreference:
       json["counts"] = {{"a_preferred", a_preferred}, {"b_preferred", b_preferred}};
       break;
-    case AbQuestion::kIdentifyReal:
+    case QuestionKind::kIdentifyReal:
       json["counts"] = {{"real_identified", real_identified}, {"real_missed", real_missed}};
       break;
-    case AbQuestion::kRating:
+    case QuestionKind::kRating:
       json["counts"] = {{"mean_rating_a", mean_rating_a},
                         {"mean_rating_b", mean_rating_b},
                         {"a_rated_higher", a_rated_higher},
                         {"b_rated_higher", b_rated_higher},
                         {"ties", rating_ties}};
+      break;
+    default:  // not an A/B question: AbOptions::validate() refuses it
       break;
   }
   json["binomial_test"] = {
@@ -356,7 +291,7 @@ std::string AbSummary::to_json() const {
     row["second"] = t.plan.variant[1];
     row["answer"] = t.answer ? nlohmann::ordered_json(t.answer->text) : nlohmann::ordered_json();
     // The answer through the key: the variant chosen, or each variant's rating.
-    if (t.answer && question == AbQuestion::kRating) {
+    if (t.answer && question == QuestionKind::kRating) {
       row["rating"] = {{t.plan.variant[0], t.answer->rating[0]},
                        {t.plan.variant[1], t.answer->rating[1]}};
     } else if (t.answer && (t.answer->choice == 1 || t.answer->choice == 2)) {
@@ -370,8 +305,8 @@ std::string AbSummary::to_json() const {
   return json.dump(2) + "\n";
 }
 
-AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
-                 const AnswerSource& answers, std::ostream& prompts) {
+AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const AnswerSource& answers,
+                 std::ostream& prompts) {
   const AbOptions& options = inputs.options;
   const std::vector<AbTrial> plan = make_plan(options);
   namespace fs = std::filesystem;
@@ -393,6 +328,9 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
   if (!csv) throw std::runtime_error(answers_path.string() + ": cannot create");
   csv << "trial,answer,first_session,second_session,answered_utc\n" << std::flush;
 
+  const std::map<std::string, Stimulus> stimuli = {
+      {options.variant_a(), Stimulus{options.variant_a(), inputs.model_a, "", inputs.params_a}},
+      {"B", Stimulus{"B", inputs.model_b, "", inputs.params_b}}};
   std::vector<AbTrialOutcome> outcomes;
   auto finish = [&] {
     AbSummary summary = summarize(options, outcomes);
@@ -406,14 +344,7 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
     return summary;
   };
 
-  const std::string& l1 = options.labels[0];
-  const std::string& l2 = options.labels[1];
-  const std::string prompt =
-      options.question == AbQuestion::kPreference ? "which felt better, " + l1 + " or " + l2 + "? "
-      : options.question == AbQuestion::kIdentifyReal
-          ? "which was the real door, " + l1 + " or " + l2 + "? "
-          : "rate " + l1 + " and " + l2 + ", each 1 to " + std::to_string(options.rating_scale) +
-                " (e.g. \"" + std::to_string(options.rating_scale) + " 1\"): ";
+  const std::string prompt = options.asked().prompt(options.labels);
   int line = 0;
   for (const AbTrial& trial : plan) {
     AbTrialOutcome outcome;
@@ -422,17 +353,16 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
       const std::string file =
           "trial-" + two_digits(trial.trial) + "-" + std::to_string(position) + ".h5";
       outcome.session_files[position - 1] = file;
-      PresentationRequest request;
-      request.trial = trial.trial;
-      request.position = position;
-      request.variant = trial.variant[position - 1];
-      request.params_path = request.variant == "B" ? inputs.params_b : inputs.params_a;
-      request.session_path = inputs.out_dir / file;
-      request.duration_s = options.presentation_s;
+      PresentationCall call;
+      call.trial = trial.trial;
+      call.position = position;
+      call.stimulus = &stimuli.at(trial.variant[position - 1]);
+      call.session_path = inputs.out_dir / file;
+      call.duration_s = options.presentation_s;
       prompts << "trial " << trial.trial << " of " << options.trials << ": presentation "
               << options.labels[position - 1] << std::endl;
       try {
-        player(request);
+        presenter(call);
       } catch (const std::exception& failure) {
         // The device or the recording failed: keep what was answered, say where it stopped.
         outcomes.push_back(outcome);
@@ -458,8 +388,7 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
                                  inputs.out_dir.string() + ")");
       }
       try {
-        outcome.answer =
-            parse_answer(options.question, options.rating_scale, *text, options.labels);
+        outcome.answer = parse_answer(options.asked(), *text, options.labels);
         break;
       } catch (const std::invalid_argument& wrong) {
         if (!answers.interactive) {
@@ -471,7 +400,7 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
         prompts << wrong.what() << "; again please\n";
       }
     }
-    outcome.answered_utc = utc_now();
+    outcome.answered_utc = answered_now_utc();
     std::string answer_field = outcome.answer->text;
     if (answer_field.find_first_of(",\"") != std::string::npos) {
       answer_field = std::to_string(outcome.answer->rating[0]) + " " +
@@ -486,4 +415,4 @@ AbSummary run_ab(const AbRunInputs& inputs, const PresentationPlayer& player,
   return finish();
 }
 
-}  // namespace doorbench::haptic
+}  // namespace doorbench::study
