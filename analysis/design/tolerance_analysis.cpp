@@ -14,7 +14,9 @@
 
 #include "core/number_format.h"
 #include "core/numbers.h"
-
+#include "core/percentile.h"
+#include "core/seeded_random.h"
+#include "core/units.h"
 
 namespace doorbench {
 
@@ -39,22 +41,6 @@ constexpr DefaultTolerance kPhysicalDefaults[] = {
     {"alpha_c", 0.01745, false},  {"mu_l", 20.0, true},   {"k_seal", 15.0, true},
     {"theta_seal", 0.002, false},
 };
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-double percentile(const std::vector<double>& sorted, double fraction) {
-  if (sorted.empty()) return kNaN;
-  const double position = fraction * static_cast<double>(sorted.size() - 1);
-  const auto below = static_cast<std::size_t>(std::floor(position));
-  const std::size_t above = std::min(sorted.size() - 1, below + 1);
-  const double weight = position - static_cast<double>(below);
-  return sorted[below] * (1.0 - weight) + sorted[above] * weight;
-}
 
 }  // namespace
 
@@ -191,7 +177,7 @@ std::vector<int> toleranced_parameters(const DoorModel& design, const ToleranceS
 void run_sample(const DoorModel& design, const std::vector<int>& index,
                 const MonteCarloOptions& options, std::size_t s, ToleranceResult& result,
                 std::string& failure) {
-  std::mt19937_64 random(splitmix64(options.seed * 0x100000001b3ULL + s));
+  std::mt19937_64 random(mix64(options.seed * 0x100000001b3ULL + s));
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   std::vector<double> values(design.parameter_values().begin(), design.parameter_values().end());
@@ -289,8 +275,8 @@ QuantitySpread quantity_spread(std::size_t q, ToleranceResult& result) {
   spread.sd = std::sqrt(square / (n - 1));
   std::vector<double> sorted = values;
   std::sort(sorted.begin(), sorted.end());
-  spread.p5 = percentile(sorted, 0.05);
-  spread.p95 = percentile(sorted, 0.95);
+  spread.p5 = percentile_of_sorted(sorted, 0.05);
+  spread.p95 = percentile_of_sorted(sorted, 0.95);
   spread.min = sorted.front();
   spread.max = sorted.back();
   for (std::size_t p = 0; p < result.tolerances.size(); ++p) {

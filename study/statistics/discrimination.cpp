@@ -14,10 +14,10 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "core/json_number.h"
 #include "core/number_format.h"
 #include "core/numbers.h"
 #include "haptic/ab_trials.h"
-#include "study/statistics/json_number.h"
 
 namespace doorbench::study {
 namespace {
