@@ -25,6 +25,7 @@
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
 #include "core/time_text.h"
+#include "core/units.h"
 #include "sensors/rig_channel.h"
 #include "simulated_bench/simulated_bench.h"
 
@@ -243,7 +244,7 @@ void run_inclinometer_from(const CalibrateOptions& o) {
     } else {
       for (const cal::CalibrationRecord& r : session.calibrations()) {
         if (r.id == info.calibration_id && r.coefficients.size() >= 2 && r.coefficients[1] != 0) {
-          options.output_V_per_deg = std::abs(1.0 / (r.coefficients[1] * 180.0 / std::numbers::pi));
+          options.output_V_per_deg = std::abs(1.0 / (r.coefficients[1] * kDegPerRad));
         }
       }
     }

@@ -62,7 +62,7 @@ TEST_CASE("viewer: angles in deg, the session's rad converted at display", "[vie
 
   std::vector<double> rates = {1.0, -0.5, std::nan("")};
   CHECK(viewer::to_display_units("rad/s", rates) == "deg/s");
-  CHECK(rates[0] == Approx(180.0 / std::numbers::pi));
+  CHECK(rates[0] == Approx(doorbench::kDegPerRad));
   CHECK(rates[1] == Approx(-90.0 / std::numbers::pi));
   CHECK(std::isnan(rates[2]));
   std::vector<double> forces = {2.0};
