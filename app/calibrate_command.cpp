@@ -36,7 +36,7 @@ namespace cal = calibration;
 
 // --valid-until: "" when `text` is an ISO 8601 date (YYYY-MM-DD) or UTC time
 // (YYYY-MM-DDTHH:MM[:SS[.fraction]]Z) on the calendar, not before today (UTC); else why not
-// (issue 33: `--valid-until notadate` was stored as it was).
+// (`--valid-until notadate` is refused, not stored as it is).
 std::string valid_until_problem(const std::string& text) {
   if (std::string problem = iso8601_utc_problem(text); !problem.empty()) return problem;
   const std::string today = utc_now_iso8601().substr(0, 10);
@@ -422,7 +422,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   CLI::Option* forces =
       loadcell->add_option("--forces-N", o->forces_N, "Reference forces instead of masses")
           ->delimiter(',');
-  // A tare loads nothing: masses or forces given with it would be ignored (issue 33).
+  // A tare loads nothing: masses or forces given with it would be ignored, so they are refused.
   loadcell
       ->add_flag("--tare", o->tare,
                  "Tare: a new version whose offset makes the unloaded cell read 0 (live, or "

@@ -4,7 +4,7 @@
 // folders of one plan. The campaign's logic is study/; this file is the command line and the
 // presenter that plays a presentation on the device (as `doorbench ab` does).
 //
-// Other campaign subcommands (issue 29's `campaign analyze`) attach to the CLI::App that
+// Other campaign subcommands (`campaign analyze`) attach to the CLI::App that
 // add_campaign_command returns (app/commands.h).
 #include <unistd.h>
 

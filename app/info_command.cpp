@@ -156,7 +156,7 @@ void print_playback_clock(const SessionReader& session) {
   std::fflush(stdout);
 }
 
-// The session checked as a whole (issue 33): channels on one clock of unequal length, a
+// The session checked as a whole: channels on one clock of unequal length, a
 // calibration record a channel names but the session lacks, explicit times that do not
 // increase. Each is named on a "problem:" line; returns how many make the session unusable
 // as it is (export and fit refuse it).

@@ -43,7 +43,7 @@ constexpr NamedRange kRanges[] = {
 constexpr double kLargestValue = 1e9;
 
 std::string shown(const std::string& text) {
-  // Long values are cut, with their size (issue 33: a 10 MB value echoed on one line).
+  // Long values are cut, with their size: a 10 MB value is not echoed on one line.
   if (text.size() <= 80) return text;
   return text.substr(0, 60) + "... (" + std::to_string(text.size()) + " characters)";
 }

@@ -1,5 +1,5 @@
 #pragma once
-// Where a channel sits at the end of its sensor's range (issue 21): the one definition that
+// Where a channel sits at the end of its sensor's range: the one definition that
 // `doorbench record` warns about, live and in its summary (app/limit_watcher.h), and that the
 // viewer shades in its channels layout. The limits come from the rig: an inclinometer's
 // range_deg (default 10 deg) and a gyroscope's range_dps (default 100 deg/s), less 1 % (a

@@ -169,8 +169,8 @@ bool on_one_clock(const std::vector<const ChannelInfo*>& exported,
   return true;
 }
 
-// Channels on one uniform clock of which some end before the others (a channel cut short,
-// issue 33): the rows go on to the longest channel's end, on the first channel's clock
+// Channels on one uniform clock of which some end before the others (a channel cut
+// short): the rows go on to the longest channel's end, on the first channel's clock
 // continued, and a shorter channel's cells past its end are missing (NaN: empty cells in a
 // CSV; preprocessing leaves out a stroke with missing samples and says so). Fills `columns`,
 // recording.time_s and the `cut_short` metadata ("force from 1.001 s (1000 of 2000 rows)");

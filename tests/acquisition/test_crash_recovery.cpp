@@ -395,7 +395,7 @@ TEST_CASE("Journal: CRC-32 is zlib's", "[journal]") {
 }
 
 TEST_CASE("Journal: one written before the CRC came from zlib reads back", "[journal]") {
-  // Written by the recorder of issue 18 and killed mid-frame (the fuzzer's seed).
+  // Written by a recorder whose CRC was not zlib's, killed mid-frame (the fuzzer's seed).
   JournalReader reader(DOORBENCH_SOURCE_DIR "/fuzz/corpus/journal/killed-16k.journal");
   CHECK(reader.header().session_name == "s.h5");  // its CRC checked
   JournalFrame frame;

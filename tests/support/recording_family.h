@@ -1,6 +1,6 @@
 #pragma once
-// A family of recording conditions for the residual loop's tests and benchmarks (issue 30;
-// docs/residual-loop.md, "The recording family"): not one generator but conditions drawn per
+// A family of recording conditions for the residual loop's tests and benchmarks
+// (docs/residual-loop.md, "The recording family"): not one generator but conditions drawn per
 // recording, so that no test tunes to one recording.
 //
 //   RecordingConditions c = draw_conditions(seed);          // or draw_conditions(seed, options)

@@ -1,4 +1,4 @@
-// The viewer's units and sensor limits (issue 21, items 3 and 4): angles and rates are shown
+// The viewer's units and sensor limits: angles and rates are shown
 // in degrees as the reports show them (the session keeps rad; plot_style::display_unit says
 // which units), and the channels layout shades the stretches where a channel sits at its
 // sensor's limit (sensors/channel_limits.h, the definition `doorbench record` warns with). A
