@@ -180,7 +180,7 @@ void run_load_cell(const CalibrateOptions& o) {
   }
   RigDefinition rig = load_rig(o.rig_path);
   const RigChannel& channel = cal::find_rig_channel(rig, "load_cell", o.channel);
-  const sensors::LoadCellParameters p = cal::load_cell_parameters(channel);
+  const LoadCellParameters p = cal::load_cell_parameters(channel);
   const cal::CalibrationStore store = store_of(o, rig.base_dir);
   std::unique_ptr<cal::StaticSignalSource> source = cal::live_source(rig, channel);
   const double per_V = 1.0 / p.volts_per_newton();
@@ -263,7 +263,7 @@ void run_inclinometer(const CalibrateOptions& o) {
   }
   RigDefinition rig = load_rig(o.rig_path);
   const RigChannel& channel = cal::find_rig_channel(rig, "inclinometer", o.channel);
-  const sensors::InclinometerParameters p = cal::inclinometer_parameters(channel);
+  const InclinometerParameters p = cal::inclinometer_parameters(channel);
   const cal::CalibrationStore store = store_of(o, rig.base_dir);
   std::unique_ptr<cal::StaticSignalSource> source = cal::live_source(rig, channel);
   const cal::GuidedOptions guided =

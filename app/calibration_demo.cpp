@@ -199,8 +199,8 @@ cal::InclinometerCalibration calibrate_demo_inclinometer(const cal::CalibrationS
 
 // 3. A recording of 19 s on the simulated bench: three openings and closings.
 void record_demo_recording(const RigDefinition& rig, const fs::path& session_path) {
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, 19.0);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  simulated_bench::SimulatedBench bench(rig, model, 19.0);
   SessionMetadata metadata;
   metadata.rig_name = rig.name;
   metadata.rig_definition = rig.text;

@@ -68,7 +68,7 @@ std::vector<std::string> range_warnings(const SessionReader& session,
       continue;
     }
     if (c.sensor_kind == "gyroscope" && rc) {
-      const sensors::GyroscopeParameters p = gyroscope_parameters(*rc);
+      const GyroscopeParameters p = gyroscope_parameters(*rc);
       const ChannelSignal s = read_channel_signal(session, c.name);
       const double limit_V =
           std::max(0.0, p.range_dps - options.saturation_margin_dps) * p.output_V_per_dps;

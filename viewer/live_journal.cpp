@@ -133,7 +133,7 @@ bool LiveJournal::open() {
     }
     const std::string& id = header.channels[c].calibration_id;
     if (id.empty()) continue;
-    for (const calibration::CalibrationRecord& record : header.calibrations) {
+    for (const CalibrationRecord& record : header.calibrations) {
       if (record.id == id) calib_[c] = &record;
     }
     if (!calib_[c]) {

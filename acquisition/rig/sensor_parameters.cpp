@@ -9,7 +9,7 @@
 #include "core/number_format.h"
 #include "core/units.h"
 
-namespace doorbench::sensors {
+namespace doorbench {
 namespace {
 
 // What a field's value must satisfy (besides being finite, which every field must be).
@@ -228,4 +228,4 @@ std::string sample_rate_violation(std::string_view sensor, double sample_rate_hz
   return violation_message(sensor, "sample_rate_hz", sample_rate_hz, broken);
 }
 
-}  // namespace doorbench::sensors
+}  // namespace doorbench

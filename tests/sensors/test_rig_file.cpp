@@ -140,9 +140,9 @@ void check_shipped_rig(const RigDefinition& rig) {
   }
   // Every parameter of each sensor model is written out, in the struct's order, with the
   // reference bench's figures (reference-door.json "bench").
-  CHECK(names_of(rig.channels[0]) == field_names<doorbench::sensors::LoadCellParameters>());
-  CHECK(names_of(rig.channels[1]) == field_names<doorbench::sensors::InclinometerParameters>());
-  CHECK(names_of(rig.channels[2]) == field_names<doorbench::sensors::GyroscopeParameters>());
+  CHECK(names_of(rig.channels[0]) == field_names<doorbench::LoadCellParameters>());
+  CHECK(names_of(rig.channels[1]) == field_names<doorbench::InclinometerParameters>());
+  CHECK(names_of(rig.channels[2]) == field_names<doorbench::GyroscopeParameters>());
   CHECK(parameter(rig.channels[0], "full_scale_N") == 445.0);
   CHECK(parameter(rig.channels[0], "noise_rms_N") == 0.2);
   CHECK(parameter(rig.channels[1], "range_deg") == 10.0);
@@ -551,14 +551,14 @@ TEST_CASE("Rig file: parameter values are numbers", "[rig_file]") {
 }
 
 TEST_CASE("Rig file: parameters must pass the sensor model's validation", "[rig_file]") {
-  doorbench::sensors::LoadCellParameters load_cell;
+  doorbench::LoadCellParameters load_cell;
   load_cell.noise_rms_N = -1.0;
   const std::string message = load_cell.validate();
   REQUIRE_FALSE(message.empty());
   CHECK(error_of(with_parameters("full_scale_N = 445\nnoise_rms_N = -1.0")) ==
         "rig.toml:15: channels[0].parameters.noise_rms_N: " + message);
 
-  doorbench::sensors::GyroscopeParameters gyroscope;
+  doorbench::GyroscopeParameters gyroscope;
   gyroscope.range_dps = 0.0;
   const std::string gyroscope_message = gyroscope.validate();
   REQUIRE_FALSE(gyroscope_message.empty());

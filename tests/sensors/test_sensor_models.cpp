@@ -24,13 +24,9 @@ using doorbench::InclinometerParameters;
 using doorbench::kRadPerDeg;
 using doorbench::LoadCellParameters;
 using doorbench::sensors::Daq;
-using doorbench::sensors::DaqParameters;
 using doorbench::sensors::Gyroscope;
-using doorbench::sensors::GyroscopeParameters;
 using doorbench::sensors::Inclinometer;
-using doorbench::sensors::InclinometerParameters;
 using doorbench::sensors::LoadCell;
-using doorbench::sensors::LoadCellParameters;
 
 namespace {
 
