@@ -14,6 +14,7 @@
 
 namespace doorbench::simulated_bench {
 
+using sensors::counts_channel_info;
 using sensors::Daq;
 using sensors::Gyroscope;
 using sensors::Inclinometer;
