@@ -20,4 +20,13 @@ double percentile_of_sorted(std::span<const double> sorted, double fraction) {
   return sorted[below] + (position - static_cast<double>(below)) * (sorted[above] - sorted[below]);
 }
 
+double median(std::vector<double> values) {
+  if (values.empty()) return kNaN;
+  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
+  std::nth_element(values.begin(), middle, values.end());
+  if (values.size() % 2 == 1) return *middle;
+  // The lower middle value is the largest of the half before `middle`.
+  return 0.5 * (*std::max_element(values.begin(), middle) + *middle);
+}
+
 }  // namespace doorbench

@@ -66,6 +66,16 @@ TEST_CASE(
   CHECK(doorbench::percentile({1.0, 2.0}, 1.5) == 2.0);
 }
 
+TEST_CASE("median: the middle value, or the mean of the two middle ones; NaN when empty",
+          "[core]") {
+  CHECK(doorbench::median({3.0, 1.0, 2.0}) == 2.0);
+  CHECK(doorbench::median({4.0, 1.0, 3.0, 2.0}) == 2.5);
+  CHECK(doorbench::median({5.0}) == 5.0);
+  CHECK(std::isnan(doorbench::median({})));
+  const std::vector<double> values = {0.3, 9.1, -2.0, 4.4, 4.4, 7.0};
+  CHECK(doorbench::median(values) == Approx(doorbench::percentile(values, 0.5)));
+}
+
 TEST_CASE("format_percent: a fraction as a percentage, '-' where there is no number", "[core]") {
   CHECK(doorbench::format_percent(0.123, 1) == "12.3%");
   CHECK(doorbench::format_percent(0.5, 2) == "50.00%");
