@@ -128,7 +128,7 @@ FamilyRun run_family(const doorbench::testing::FamilyOptions& family, std::uint3
 // draw, are in docs/residual-loop.md, "Breakaway friction on the recording family".
 //
 // Why, from the data (docs/residual-loop.md, "What the data allow";
-// bench/breakaway_oracle.cpp): on every draw the loop misses, the refit from the true values
+// studies/breakaway_oracle.cpp): on every draw the loop misses, the refit from the true values
 // would not be added by the loop's rule either (held-out fall, BIC, amplitude 4 u from zero,
 // no parameter at a bound), so the test also holds that: a miss where the data allow the
 // effect is the examination's fault. The counts are held at the measured level, so that a

@@ -536,7 +536,7 @@ inline RecordingConditions draw_conditions(std::uint32_t seed, const FamilyOptio
   return c;
 }
 
-// The family of tests/analysis/test_residual_loop_family.cpp and bench/breakaway_oracle.cpp:
+// The family of tests/analysis/test_residual_loop_family.cpp and studies/breakaway_oracle.cpp:
 // the hands that take the door through low speeds (PD, minimum-jerk, impulses) at 100 Hz to
 // 1 kHz, with the bench's inclinometer + gyroscope or an angle alone.
 inline FamilyOptions breakaway_test_family() {

@@ -1,4 +1,4 @@
-#include "bench/loop_datasheet_table.h"
+#include "studies/loop_datasheet_table.h"
 
 #include <algorithm>
 #include <cmath>
