@@ -87,11 +87,11 @@ void checked(const CalibrateOptions& o, void (*procedure)(const CalibrateOptions
   procedure(o);
 }
 
-cal::CalibrationStore store_of(const CalibrateOptions& o, const std::filesystem::path& base) {
-  return cal::CalibrationStore(cal::calibration_store_directory(o.store_dir, base));
+CalibrationStore store_of(const CalibrateOptions& o, const std::filesystem::path& base) {
+  return CalibrationStore(calibration_store_directory(o.store_dir, base));
 }
 
-cal::RecordHeader header_for(const CalibrateOptions& o, const cal::CalibrationStore& store,
+cal::RecordHeader header_for(const CalibrateOptions& o, const CalibrationStore& store,
                              const std::string& kind, const std::string& serial,
                              const std::string& supersedes) {
   cal::RecordHeader header;
@@ -108,8 +108,8 @@ cal::RecordHeader header_for(const CalibrateOptions& o, const cal::CalibrationSt
 }
 
 // Stores the record (unless --dry-run), writes the certificate, applies it to the session.
-void finish(const CalibrateOptions& o, const cal::CalibrationStore& store,
-            const cal::CalibrationRecord& record, const std::string& session_channel) {
+void finish(const CalibrateOptions& o, const CalibrationStore& store,
+            const CalibrationRecord& record, const std::string& session_channel) {
   std::cout << to_json(record) << "\n";
   if (!o.dry_run) {
     const auto file = store.add(record);
@@ -167,10 +167,10 @@ void run_load_cell(const CalibrateOptions& o) {
                                   ": fewer than 100 unloaded samples before the "
                                   "first stroke; the tare needs the cell at rest, unloaded");
     }
-    const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
+    const CalibrationStore store = store_of(o, std::filesystem::current_path());
     const cal::RecordHeader header =
         header_for(o, store, "load_cell", signal.info.sensor_serial, signal.record->id);
-    const cal::CalibrationRecord tared =
+    const CalibrationRecord tared =
         cal::tare_load_cell(*signal.record, cal::mean_of(unloaded), cal::std_of(unloaded),
                             static_cast<int>(unloaded.size()), header);
     std::cerr << "tare: the unloaded cell read " << tared.quantity("tare_reading_before_N")->value
@@ -181,12 +181,12 @@ void run_load_cell(const CalibrateOptions& o) {
   RigDefinition rig = load_rig(o.rig_path);
   const RigChannel& channel = cal::find_rig_channel(rig, "load_cell", o.channel);
   const LoadCellParameters p = cal::load_cell_parameters(channel);
-  const cal::CalibrationStore store = store_of(o, rig.base_dir);
+  const CalibrationStore store = store_of(o, rig.base_dir);
   std::unique_ptr<cal::StaticSignalSource> source = cal::live_source(rig, channel);
   const double per_V = 1.0 / p.volts_per_newton();
   const cal::GuidedOptions guided = guided_options(o.window_s, per_V, "N", 1.0, 0.3);
   if (o.tare) {
-    std::optional<cal::CalibrationRecord> current = store.latest("load_cell", channel.serial);
+    std::optional<CalibrationRecord> current = store.latest("load_cell", channel.serial);
     if (!current) current = sensors::nominal_calibration(channel);
     const std::vector<cal::GuidedPoint> zero = cal::load_cell_force_points({});
     const auto points =
@@ -215,7 +215,7 @@ void run_load_cell(const CalibrateOptions& o) {
 
 // From a recording of the reference angles held in order (docs/calibration.md).
 void run_inclinometer_from(const CalibrateOptions& o) {
-  const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
+  const CalibrationStore store = store_of(o, std::filesystem::current_path());
   std::string channel;
   cal::InclinometerCalibration result;
   {
@@ -242,7 +242,7 @@ void run_inclinometer_from(const CalibrateOptions& o) {
     if (rc) {
       options.output_V_per_deg = cal::inclinometer_parameters(*rc).output_V_per_deg;
     } else {
-      for (const cal::CalibrationRecord& r : session.calibrations()) {
+      for (const CalibrationRecord& r : session.calibrations()) {
         if (r.id == info.calibration_id && r.coefficients.size() >= 2 && r.coefficients[1] != 0) {
           options.output_V_per_deg = std::abs(1.0 / (r.coefficients[1] * kDegPerRad));
         }
@@ -264,7 +264,7 @@ void run_inclinometer(const CalibrateOptions& o) {
   RigDefinition rig = load_rig(o.rig_path);
   const RigChannel& channel = cal::find_rig_channel(rig, "inclinometer", o.channel);
   const InclinometerParameters p = cal::inclinometer_parameters(channel);
-  const cal::CalibrationStore store = store_of(o, rig.base_dir);
+  const CalibrationStore store = store_of(o, rig.base_dir);
   std::unique_ptr<cal::StaticSignalSource> source = cal::live_source(rig, channel);
   const cal::GuidedOptions guided =
       guided_options(o.window_s, 1.0 / p.output_V_per_deg, "°", 0.05, 0.02);
@@ -310,7 +310,7 @@ template <typename Result, typename Procedure>
 void run_from_recording(CalibrateOptions o, const std::string& sensor_kind,
                         const Procedure& calibrate) {
   const std::string path = recording_for(o);
-  const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
+  const CalibrationStore store = store_of(o, std::filesystem::current_path());
   std::string channel;
   Result result;
   {
@@ -372,7 +372,7 @@ void run_geometry(const CalibrateOptions& o) {
     bench = rig.name;
     base = rig.base_dir;
   }
-  const cal::CalibrationStore store = store_of(o, base);
+  const CalibrationStore store = store_of(o, base);
   const cal::GeometryCalibration result = cal::calibrate_geometry(
       inputs, cal::GeometryCalibrationOptions{}, header_for(o, store, "geometry", bench, ""));
   std::cerr << result.brief_report();
