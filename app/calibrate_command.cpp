@@ -25,6 +25,7 @@
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
 #include "core/time_text.h"
+#include "core/units.h"
 #include "sensors/rig_channel.h"
 #include "simulated_bench/simulated_bench.h"
 
@@ -35,7 +36,7 @@ namespace cal = calibration;
 
 // --valid-until: "" when `text` is an ISO 8601 date (YYYY-MM-DD) or UTC time
 // (YYYY-MM-DDTHH:MM[:SS[.fraction]]Z) on the calendar, not before today (UTC); else why not
-// (issue 33: `--valid-until notadate` was stored as it was).
+// (`--valid-until notadate` is refused, not stored as it is).
 std::string valid_until_problem(const std::string& text) {
   if (std::string problem = iso8601_utc_problem(text); !problem.empty()) return problem;
   const std::string today = utc_now_iso8601().substr(0, 10);
@@ -86,11 +87,11 @@ void checked(const CalibrateOptions& o, void (*procedure)(const CalibrateOptions
   procedure(o);
 }
 
-cal::CalibrationStore store_of(const CalibrateOptions& o, const std::filesystem::path& base) {
-  return cal::CalibrationStore(cal::calibration_store_directory(o.store_dir, base));
+CalibrationStore store_of(const CalibrateOptions& o, const std::filesystem::path& base) {
+  return CalibrationStore(calibration_store_directory(o.store_dir, base));
 }
 
-cal::RecordHeader header_for(const CalibrateOptions& o, const cal::CalibrationStore& store,
+cal::RecordHeader header_for(const CalibrateOptions& o, const CalibrationStore& store,
                              const std::string& kind, const std::string& serial,
                              const std::string& supersedes) {
   cal::RecordHeader header;
@@ -107,8 +108,8 @@ cal::RecordHeader header_for(const CalibrateOptions& o, const cal::CalibrationSt
 }
 
 // Stores the record (unless --dry-run), writes the certificate, applies it to the session.
-void finish(const CalibrateOptions& o, const cal::CalibrationStore& store,
-            const cal::CalibrationRecord& record, const std::string& session_channel) {
+void finish(const CalibrateOptions& o, const CalibrationStore& store,
+            const CalibrationRecord& record, const std::string& session_channel) {
   std::cout << to_json(record) << "\n";
   if (!o.dry_run) {
     const auto file = store.add(record);
@@ -166,10 +167,10 @@ void run_load_cell(const CalibrateOptions& o) {
                                   ": fewer than 100 unloaded samples before the "
                                   "first stroke; the tare needs the cell at rest, unloaded");
     }
-    const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
+    const CalibrationStore store = store_of(o, std::filesystem::current_path());
     const cal::RecordHeader header =
         header_for(o, store, "load_cell", signal.info.sensor_serial, signal.record->id);
-    const cal::CalibrationRecord tared =
+    const CalibrationRecord tared =
         cal::tare_load_cell(*signal.record, cal::mean_of(unloaded), cal::std_of(unloaded),
                             static_cast<int>(unloaded.size()), header);
     std::cerr << "tare: the unloaded cell read " << tared.quantity("tare_reading_before_N")->value
@@ -179,13 +180,13 @@ void run_load_cell(const CalibrateOptions& o) {
   }
   RigDefinition rig = load_rig(o.rig_path);
   const RigChannel& channel = cal::find_rig_channel(rig, "load_cell", o.channel);
-  const sensors::LoadCellParameters p = cal::load_cell_parameters(channel);
-  const cal::CalibrationStore store = store_of(o, rig.base_dir);
+  const LoadCellParameters p = cal::load_cell_parameters(channel);
+  const CalibrationStore store = store_of(o, rig.base_dir);
   std::unique_ptr<cal::StaticSignalSource> source = cal::live_source(rig, channel);
   const double per_V = 1.0 / p.volts_per_newton();
   const cal::GuidedOptions guided = guided_options(o.window_s, per_V, "N", 1.0, 0.3);
   if (o.tare) {
-    std::optional<cal::CalibrationRecord> current = store.latest("load_cell", channel.serial);
+    std::optional<CalibrationRecord> current = store.latest("load_cell", channel.serial);
     if (!current) current = sensors::nominal_calibration(channel);
     const std::vector<cal::GuidedPoint> zero = cal::load_cell_force_points({});
     const auto points =
@@ -214,7 +215,7 @@ void run_load_cell(const CalibrateOptions& o) {
 
 // From a recording of the reference angles held in order (docs/calibration.md).
 void run_inclinometer_from(const CalibrateOptions& o) {
-  const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
+  const CalibrationStore store = store_of(o, std::filesystem::current_path());
   std::string channel;
   cal::InclinometerCalibration result;
   {
@@ -241,9 +242,9 @@ void run_inclinometer_from(const CalibrateOptions& o) {
     if (rc) {
       options.output_V_per_deg = cal::inclinometer_parameters(*rc).output_V_per_deg;
     } else {
-      for (const cal::CalibrationRecord& r : session.calibrations()) {
+      for (const CalibrationRecord& r : session.calibrations()) {
         if (r.id == info.calibration_id && r.coefficients.size() >= 2 && r.coefficients[1] != 0) {
-          options.output_V_per_deg = std::abs(1.0 / (r.coefficients[1] * 180.0 / std::numbers::pi));
+          options.output_V_per_deg = std::abs(1.0 / (r.coefficients[1] * kDegPerRad));
         }
       }
     }
@@ -262,8 +263,8 @@ void run_inclinometer(const CalibrateOptions& o) {
   }
   RigDefinition rig = load_rig(o.rig_path);
   const RigChannel& channel = cal::find_rig_channel(rig, "inclinometer", o.channel);
-  const sensors::InclinometerParameters p = cal::inclinometer_parameters(channel);
-  const cal::CalibrationStore store = store_of(o, rig.base_dir);
+  const InclinometerParameters p = cal::inclinometer_parameters(channel);
+  const CalibrationStore store = store_of(o, rig.base_dir);
   std::unique_ptr<cal::StaticSignalSource> source = cal::live_source(rig, channel);
   const cal::GuidedOptions guided =
       guided_options(o.window_s, 1.0 / p.output_V_per_deg, "°", 0.05, 0.02);
@@ -309,7 +310,7 @@ template <typename Result, typename Procedure>
 void run_from_recording(CalibrateOptions o, const std::string& sensor_kind,
                         const Procedure& calibrate) {
   const std::string path = recording_for(o);
-  const cal::CalibrationStore store = store_of(o, std::filesystem::current_path());
+  const CalibrationStore store = store_of(o, std::filesystem::current_path());
   std::string channel;
   Result result;
   {
@@ -371,7 +372,7 @@ void run_geometry(const CalibrateOptions& o) {
     bench = rig.name;
     base = rig.base_dir;
   }
-  const cal::CalibrationStore store = store_of(o, base);
+  const CalibrationStore store = store_of(o, base);
   const cal::GeometryCalibration result = cal::calibrate_geometry(
       inputs, cal::GeometryCalibrationOptions{}, header_for(o, store, "geometry", bench, ""));
   std::cerr << result.brief_report();
@@ -421,7 +422,7 @@ void add_calibrate_command(CLI::App& app, Action& action) {
   CLI::Option* forces =
       loadcell->add_option("--forces-N", o->forces_N, "Reference forces instead of masses")
           ->delimiter(',');
-  // A tare loads nothing: masses or forces given with it would be ignored (issue 33).
+  // A tare loads nothing: masses or forces given with it would be ignored, so they are refused.
   loadcell
       ->add_flag("--tare", o->tare,
                  "Tare: a new version whose offset makes the unloaded cell read 0 (live, or "

@@ -27,12 +27,12 @@ struct CalibrationCommandOptions {
   bool overwrite = false;  // certificate: replace an existing --out file
 };
 
-cal::CalibrationStore store_of(const CalibrationCommandOptions& o) {
-  return cal::CalibrationStore(
-      cal::calibration_store_directory(o.store_dir, std::filesystem::current_path()));
+CalibrationStore store_of(const CalibrationCommandOptions& o) {
+  return CalibrationStore(
+      calibration_store_directory(o.store_dir, std::filesystem::current_path()));
 }
 
-std::string formula(const cal::CalibrationRecord& r) {
+std::string formula(const CalibrationRecord& r) {
   std::string text = r.unit + " = ";
   for (std::size_t k = 0; k < r.coefficients.size(); ++k) {
     text += (k ? " + " : "") + cal::shortest(r.coefficients[k]) +
@@ -43,7 +43,7 @@ std::string formula(const cal::CalibrationRecord& r) {
   return text;
 }
 
-void show_record(const cal::CalibrationRecord& r) {
+void show_record(const CalibrationRecord& r) {
   std::cout << r.id << " (version " << r.version
             << (r.supersedes.empty() ? "" : ", supersedes " + r.supersedes) << ")\n"
             << "  sensor      " << r.sensor_kind << " " << r.sensor_serial << "\n"
@@ -58,7 +58,7 @@ void show_record(const cal::CalibrationRecord& r) {
     std::cout << "  delay       " << cal::fixed(r.delay_s * 1e3, 3) << " ms ± "
               << cal::fixed(r.delay_standard_uncertainty_s * 1e3, 3) << " ms (corrected on read)\n";
   }
-  for (const cal::CalibrationQuantity& q : r.quantities) {
+  for (const CalibrationQuantity& q : r.quantities) {
     std::printf("  %-28s %14.6g", q.name.c_str(), q.value);
     if (q.standard_uncertainty > 0) std::printf(" ± %-12.3g", q.standard_uncertainty);
     std::printf(" %s\n", q.unit.c_str());
@@ -76,11 +76,11 @@ bool is_session(const std::string& what) {
 
 void run_show(const CalibrationCommandOptions& o) {
   if (o.what.empty()) {
-    const cal::CalibrationStore store = store_of(o);
+    const CalibrationStore store = store_of(o);
     const auto records = store.records();
     std::cout << "calibration store " << store.directory().string() << ": " << records.size()
               << " records\n";
-    for (const cal::CalibrationRecord& r : records) {
+    for (const CalibrationRecord& r : records) {
       std::printf("  %-40s %-13s %-18s v%-3d %-21s %s\n", r.id.c_str(), r.sensor_kind.c_str(),
                   r.sensor_serial.c_str(), r.version, r.date_utc.c_str(),
                   r.method.substr(0, 60).c_str());
@@ -107,11 +107,11 @@ void run_show(const CalibrationCommandOptions& o) {
   for (const SessionEvent& e : session.events()) {
     if (e.kind == "calibration") std::cout << "  event: " << e.channel << ": " << e.detail << "\n";
   }
-  for (const cal::CalibrationRecord& r : session.calibrations()) show_record(r);
+  for (const CalibrationRecord& r : session.calibrations()) show_record(r);
 }
 
 void run_apply(const CalibrationCommandOptions& o) {
-  const cal::CalibrationRecord record = store_of(o).get(o.record_id);
+  const CalibrationRecord record = store_of(o).get(o.record_id);
   std::string channel = o.channel;
   // A geometry record belongs to the load cell's mounting (its serial names the bench).
   const bool geometry = record.sensor_kind == "geometry";

@@ -46,7 +46,7 @@ struct Scratch {
   }
 };
 
-cal::RecordHeader header(const cal::CalibrationStore& store, const std::string& kind,
+cal::RecordHeader header(const CalibrationStore& store, const std::string& kind,
                          const std::string& serial, const std::string& supersedes) {
   cal::RecordHeader h;
   h.sensor_serial = serial;
@@ -116,13 +116,13 @@ Errors errors_of(const fs::path& session_path) {
 
 // 1. Load cell: the guided procedure, a simulated operator pressing Enter; the record
 // added to the store and what it found printed against the truth.
-cal::LoadCellCalibration calibrate_demo_load_cell(const cal::CalibrationStore& store,
+cal::LoadCellCalibration calibrate_demo_load_cell(const CalibrationStore& store,
                                                   const RigDefinition& rig, const RigChannel& lc,
                                                   std::ostream& out) {
   const auto lcp = cal::load_cell_parameters(lc);
   const double true_gain_N_per_V = 1.0 / lcp.volts_per_newton();
   const double true_offset_N = -lcp.zero_offset_N;
-  const cal::CalibrationRecord stale = store.get(lc.calibration);
+  const CalibrationRecord stale = store.get(lc.calibration);
   std::vector<double> masses{5, 10, 20, 30, 40};
   const auto plan = cal::load_cell_mass_points(masses);
   cal::SimulatedStaticSource lc_source(rig, lc, 11);
@@ -165,7 +165,7 @@ cal::LoadCellCalibration calibrate_demo_load_cell(const cal::CalibrationStore& s
 
 // 2. Inclinometer: reference angles on a (simulated) tilt table; the record added to the
 // store and printed against the truth.
-cal::InclinometerCalibration calibrate_demo_inclinometer(const cal::CalibrationStore& store,
+cal::InclinometerCalibration calibrate_demo_inclinometer(const CalibrationStore& store,
                                                          const RigDefinition& rig,
                                                          const RigChannel& inc, std::ostream& out) {
   const auto incp = cal::inclinometer_parameters(inc);
@@ -199,8 +199,8 @@ cal::InclinometerCalibration calibrate_demo_inclinometer(const cal::CalibrationS
 
 // 3. A recording of 19 s on the simulated bench: three openings and closings.
 void record_demo_recording(const RigDefinition& rig, const fs::path& session_path) {
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, 19.0);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  simulated_bench::SimulatedBench bench(rig, model, 19.0);
   SessionMetadata metadata;
   metadata.rig_name = rig.name;
   metadata.rig_definition = rig.text;
@@ -217,9 +217,8 @@ struct FromRecording {
 
 // The inclinometer's delay, then the gyroscope, each from the recording, added to the
 // store and applied to the session.
-FromRecording calibrate_from_recording(const cal::CalibrationStore& store,
-                                       const fs::path& session_path, const RigChannel& inc,
-                                       const RigChannel& gyr,
+FromRecording calibrate_from_recording(const CalibrationStore& store, const fs::path& session_path,
+                                       const RigChannel& inc, const RigChannel& gyr,
                                        const std::string& inclinometer_record_id) {
   FromRecording found;
   {
@@ -286,9 +285,9 @@ void print_recording_results(const FromRecording& found, const RigDefinition& ri
 // truth before and after.
 void run_calibration_demo(std::ostream& out) {
   const Scratch scratch;
-  const cal::CalibrationStore store(scratch.path / "calibrations");
-  store.add(cal::calibration_record_from_json(cal::uncalibrated_rig_load_cell_record_json(),
-                                              "built-in load-cell record"));
+  const CalibrationStore store(scratch.path / "calibrations");
+  store.add(calibration_record_from_json(cal::uncalibrated_rig_load_cell_record_json(),
+                                         "built-in load-cell record"));
   RigDefinition rig =
       parse_rig(cal::uncalibrated_rig_text(), "built-in rig simulated-uncalibrated", scratch.path);
   rig.calibration_store = store.directory();

@@ -4,7 +4,7 @@
 // folders of one plan. The campaign's logic is study/, and its presentations are played by
 // study/presenter.h (as `doorbench ab`'s are); this file is the command line.
 //
-// Other campaign subcommands (issue 29's `campaign analyze`) attach to the CLI::App that
+// Other campaign subcommands (`campaign analyze`) attach to the CLI::App that
 // add_campaign_command returns (app/commands.h).
 #include <unistd.h>
 

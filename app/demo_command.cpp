@@ -98,7 +98,7 @@ void write_plots(const std::filesystem::path& dir, const std::vector<ModelRun>& 
 
 // The rig's gyroscope range (°/s): its channel's range_dps, or the sensor model's default.
 double gyro_range_dps(const RigDefinition& rig) {
-  double range_dps = sensors::GyroscopeParameters{}.range_dps;
+  double range_dps = GyroscopeParameters{}.range_dps;
   for (const RigChannel& channel : rig.channels) {
     if (channel.sensor != "gyroscope") continue;
     for (const auto& [name, value] : channel.parameters) {

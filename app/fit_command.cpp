@@ -45,8 +45,8 @@ struct FitCommandOptions {
   static constexpr int kDefaultMaxWindows = 5000;
 };
 
-// The window fit's size, said before it starts (issue 33: a fit of a 5-million-row CSV was
-// at iteration 28 of 100 after 120 s): its windows, as the fit cuts them. With more than
+// The window fit's size, said before it starts, since every iteration's time grows with it
+// (docs/fitting.md, "The fit's size"): its windows, as the fit cuts them. With more than
 // max_windows (> 0), whole pairs of consecutive strokes are kept evenly over the recording
 // (the first pair, the last and others evenly between), about as many as keep the windows at
 // most max_windows (from the share of them, then fewer until they do), at least one pair;
@@ -186,7 +186,7 @@ void run_fit(const FitCommandOptions& options) {
   // marked interrupted (without what the stop cut: held-out metrics, a restart); before that
   // there is nothing to write. A second signal ends doorbench at once.
   const StopSignals signals;
-  // Before any reading: a parameter is free or held, not both (issue 33).
+  // Before any reading: a parameter is free or held, not both.
   for (const std::string& name : split_names(options.free)) {
     const std::vector<std::string> fixed = split_names(options.fixed);
     if (std::find(fixed.begin(), fixed.end(), name) != fixed.end()) {

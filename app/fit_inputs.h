@@ -27,8 +27,8 @@ PreparedData load_prepared_data(const std::string& path,
 // PreparedData::handle_radius_origin: "" when the data states no radius.
 std::string handle_radius_origin(const PreparedData& data);
 
-// A handle radius where a door handle can be: 0.05 to 2 m from the hinge (issue 33: a
-// CSV's 1e9 m was fitted). check_handle_radius throws UsageError naming the radius and
+// A handle radius where a door handle can be: 0.05 to 2 m from the hinge (a CSV's 1e9 m
+// is refused, not fitted). check_handle_radius throws UsageError naming the radius and
 // where it came from when the data's is outside (unless `force_geometry`).
 inline constexpr double kHandleRadiusMinM = 0.05;
 inline constexpr double kHandleRadiusMaxM = 2.0;

@@ -7,6 +7,7 @@
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/residual_whiteness.h"
 #include "analysis/report/svg_plot.h"
+#include "core/json_number.h"
 #include "core/units.h"
 
 namespace doorbench::app {
@@ -16,9 +17,7 @@ namespace {
 }  // namespace
 
 nlohmann::ordered_json error_stats_json(const ErrorStats& stats) {
-  auto number = [](double value) {
-    return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
-  };
+  constexpr nlohmann::ordered_json (*number)(double) = &json_number<nlohmann::ordered_json>;
   return {{"samples", stats.count},
           {"rmse_rad_s", number(stats.rmse())},
           {"max_abs_error_rad_s", number(stats.max_abs_error)},
@@ -39,8 +38,7 @@ nlohmann::ordered_json metrics_json(const FitMetrics& metrics) {
   const double study = metrics.study_objective_rad_s();
   return {{"windows", error_stats_json(metrics.window)},
           {"whole_stroke_replay", error_stats_json(metrics.replay)},
-          {"study_objective_max_abs_rate_error_rad_s",
-           std::isfinite(study) ? nlohmann::ordered_json(study) : nlohmann::ordered_json(nullptr)},
+          {"study_objective_max_abs_rate_error_rad_s", json_number<nlohmann::ordered_json>(study)},
           {"failed_replays", metrics.failed_replays},
           {"strokes", strokes}};
 }
@@ -49,9 +47,7 @@ nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedDa
   const FitSummary& s = result.summary;
   nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
   for (const FittedParameter& p : s.parameters) {
-    auto number = [](double value) {
-      return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
-    };
+    constexpr nlohmann::ordered_json (*number)(double) = &json_number<nlohmann::ordered_json>;
     parameters.push_back({{"name", p.name},
                           {"unit", p.unit},
                           {"free", p.free},

@@ -147,10 +147,10 @@ Recording read_import(const ImportOptions& options) {
   }
   std::vector<ImportConversion> conversions;
   try {
-    conversions = parse_import_conversions(
-        options.scales, options.calibrations,
-        calibration::CalibrationStore(calibration::calibration_store_directory(
-            options.store_dir, std::filesystem::current_path())));
+    conversions =
+        parse_import_conversions(options.scales, options.calibrations,
+                                 CalibrationStore(calibration_store_directory(
+                                     options.store_dir, std::filesystem::current_path())));
   } catch (const std::invalid_argument& error) {
     throw UsageError(error.what());
   }
@@ -161,7 +161,7 @@ Recording read_import(const ImportOptions& options) {
       throw UsageError("--rate-hz is for TDMS files (*.tdms): a CSV's time_s gives the time");
     }
     CsvTable table = read_csv_file(options.csv_path, EmptyCells::kMissing);  // empty: lost samples
-    std::map<std::string, calibration::CalibrationRecord> records =
+    std::map<std::string, CalibrationRecord> records =
         take_raw_columns(table, conversions, options.csv_path);
     Recording recording = recording_from_table(table, options.csv_path);
     recording.calibrations = std::move(records);

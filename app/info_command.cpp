@@ -48,10 +48,10 @@ void print_geometry(const SessionReader& session) {
     if (c.geometry_calibration_id.empty()) continue;
     any = true;
     std::cout << "geometry: " << c.name << " uses " << printable(c.geometry_calibration_id);
-    for (const calibration::CalibrationRecord& r : session.calibrations()) {
+    for (const CalibrationRecord& r : session.calibrations()) {
       if (r.id != c.geometry_calibration_id) continue;
       for (const char* name : {"handle_radius_m", "mounting_angle_deg"}) {
-        if (const calibration::CalibrationQuantity* q = r.quantity(name)) {
+        if (const CalibrationQuantity* q = r.quantity(name)) {
           std::cout << ", " << name << " " << q->value << " ± " << q->standard_uncertainty;
         }
       }
@@ -156,14 +156,14 @@ void print_playback_clock(const SessionReader& session) {
   std::fflush(stdout);
 }
 
-// The session checked as a whole (issue 33): channels on one clock of unequal length, a
+// The session checked as a whole: channels on one clock of unequal length, a
 // calibration record a channel names but the session lacks, explicit times that do not
 // increase. Each is named on a "problem:" line; returns how many make the session unusable
 // as it is (export and fit refuse it).
 int print_session_problems(const SessionReader& session) {
   int unusable = 0;
   std::set<std::string> records;
-  for (const calibration::CalibrationRecord& r : session.calibrations()) records.insert(r.id);
+  for (const CalibrationRecord& r : session.calibrations()) records.insert(r.id);
   // Channels on a sample clock end together; the one that ends last, and when.
   double last_end_s = -INFINITY;
   std::string last_name;
@@ -275,7 +275,7 @@ void run_info(const std::string& session_path) {
   if (events.size() > 12) std::printf("  ... %zu more\n", events.size() - 12);
   std::fflush(stdout);
   std::cout << "calibrations:\n";
-  for (const calibration::CalibrationRecord& r : session.calibrations()) {
+  for (const CalibrationRecord& r : session.calibrations()) {
     std::cout << "  " << printable(r.id) << "  " << printable(r.sensor_kind) << " "
               << printable(r.sensor_serial) << "  " << printable(r.unit) << " = ";
     for (std::size_t k = 0; k < r.coefficients.size(); ++k) {

@@ -1,5 +1,5 @@
 #pragma once
-// Live sensor-limit warnings for `doorbench record` (issue 21): which channel sits at the
+// Live sensor-limit warnings for `doorbench record`: which channel sits at the
 // end of its sensor's range, since when and for how long, from the recorder's status
 // callback (RecordOptions::progress: each channel's largest |value| since the previous
 // call, ChannelStatus::largest_abs, and its latest value), for

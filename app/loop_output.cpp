@@ -10,13 +10,12 @@
 #include "analysis/model/parameter_file.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
+#include "core/json_number.h"
 
 namespace doorbench::app {
 namespace {
 
-nlohmann::ordered_json finite_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::ordered_json(value) : nlohmann::ordered_json(nullptr);
-}
+constexpr nlohmann::ordered_json (*finite_or_null)(double) = &json_number<nlohmann::ordered_json>;
 
 nlohmann::ordered_json figures_json(const ModelFigures& f) {
   return {{"fitted_rmse_rad_s", finite_or_null(f.fitted_rmse_rad_s)},

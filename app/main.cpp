@@ -103,7 +103,7 @@ bool help_command_line(const CLI::App& app, int argc, char** argv, std::vector<s
 // --quiet: stderr's progress, stage and warning lines are dropped while the verb runs;
 // its error (printed by main after the verb returns) and stdout are kept.
 // Lines written with stdio (fprintf(stderr, ...): record's live status) go too: file
-// descriptor 2 points at /dev/null meanwhile (issue 33: -q left record's status lines).
+// descriptor 2 points at /dev/null meanwhile, so -q silences record's status lines too.
 class QuietStderr {
  public:
   explicit QuietStderr(bool quiet) : saved_(quiet ? std::cerr.rdbuf(&null_) : nullptr) {

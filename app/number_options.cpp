@@ -7,6 +7,8 @@
 #include <functional>
 #include <utility>
 
+#include "core/number_format.h"
+
 namespace doorbench::app {
 
 namespace {
@@ -41,15 +43,9 @@ constexpr NamedRange kRanges[] = {
 constexpr double kLargestValue = 1e9;
 
 std::string shown(const std::string& text) {
-  // Long values are cut, with their size (issue 33: a 10 MB value echoed on one line).
+  // Long values are cut, with their size: a 10 MB value is not echoed on one line.
   if (text.size() <= 80) return text;
   return text.substr(0, 60) + "... (" + std::to_string(text.size()) + " characters)";
-}
-
-std::string number_text(double value) {
-  char text[40];
-  std::snprintf(text, sizeof text, "%.10g", value);
-  return text;
 }
 
 // The verb's path: "spec", "calibrate geometry".
@@ -68,8 +64,8 @@ CLI::Validator number_validator(NumberKind kind, const NamedRange* range) {
         if (!problem.empty() || range == nullptr) return problem;
         const double value = std::strtod(text.c_str(), nullptr);
         if (value < range->min || value > range->max) {
-          return text + " is outside " + number_text(range->min) + " to " +
-                 number_text(range->max);
+          return text + " is outside " + format_readable(range->min) + " to " +
+                 format_readable(range->max);
         }
         return "";
       },
@@ -127,7 +123,7 @@ std::string number_problem(const std::string& text, NumberKind kind) {
     return shown(text) + " is beyond the whole numbers this option takes";
   }
   if (kind == NumberKind::kFloat && std::fabs(value) > kLargestValue) {
-    return shown(text) + " is beyond " + number_text(kLargestValue) +
+    return shown(text) + " is beyond " + format_readable(kLargestValue) +
            ", the largest value any option takes";
   }
   return "";
@@ -154,8 +150,8 @@ CLI::Validator value_check(std::function<bool(double)> within, std::string other
 
 CLI::Validator number_range(double min, double max) {
   return value_check([min, max](double value) { return value >= min && value <= max; },
-                     " is outside " + number_text(min) + " to " + number_text(max),
-                     number_text(min) + " to " + number_text(max));
+                     " is outside " + format_readable(min) + " to " + format_readable(max),
+                     format_readable(min) + " to " + format_readable(max));
 }
 
 CLI::Validator non_negative_number() {

@@ -1,5 +1,5 @@
 #pragma once
-// Every number given on the command line is checked where it enters (issue 33): one
+// Every number given on the command line is checked where it enters: one
 // validator, attached by check_numeric_options() to every numeric option of every verb
 // (and of their sub-verbs) after they are registered, so that a new option is covered by
 // itself. An option is numeric when CLI11 gives its type as FLOAT, INT or UINT (a vector of

@@ -253,11 +253,11 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
                                ", which doorbench cannot record yet (only simulated)");
     }
   }
-  const DoorModel model = sensors::simulated_door_model(rig);
-  std::unique_ptr<sensors::StrokeForce> hand = sensors::simulated_hand(rig, model);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  std::unique_ptr<simulated_bench::StrokeForce> hand = simulated_bench::simulated_hand(rig, model);
   const double duration_s =
       options.duration_s > 0 ? options.duration_s : hand->natural_duration_s();
-  sensors::SimulatedBench bench(rig, model, std::move(hand), duration_s);
+  simulated_bench::SimulatedBench bench(rig, model, std::move(hand), duration_s);
 
   RecordOptions record;
   record.duration_s = duration_s;

@@ -12,6 +12,7 @@
 #include "app/commands.h"
 #include "app/hand_run.h"
 #include "app/number_options.h"
+#include "core/units.h"
 
 namespace doorbench::app {
 
@@ -83,7 +84,7 @@ void run_simulate(const SimulateOptions& options) {
                        " samples; at most 10000000");
     }
     VirtualHandOptions hand;
-    hand.target_angle_rad = options.target_deg * std::numbers::pi / 180.0;
+    hand.target_angle_rad = options.target_deg * kRadPerDeg;
     hand.duration_s = options.duration_s;
     run = simulate_hand(model, hand, options.rate_hz);
   }

@@ -460,7 +460,7 @@ void add_spec_command(CLI::App& app, Action& action) {
                     "fit the recorded motion even when the sessions carry the torque a haptic "
                     "playback commanded");
   command->add_flag("--no-pdf", options->no_pdf, "do not render spec.pdf");
-  // Either would be ignored with --no-tolerances (issue 33).
+  // Either would be ignored with --no-tolerances, so either with it is refused.
   CLI::Option* samples = command->get_option("--samples");
   command->add_flag("--no-tolerances", options->no_tolerances, "skip the tolerance analysis")
       ->excludes(tolerances)

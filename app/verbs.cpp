@@ -1,5 +1,5 @@
 // Every verb of the doorbench command, registered in the order `doorbench --help` lists
-// them, then each numeric option's check (issue 33).
+// them, then each numeric option's check (app/number_options.h).
 #include "app/commands.h"
 #include "app/number_options.h"
 

@@ -1,7 +1,7 @@
-// The inverse design of `doorbench spec` on one 19 s bench recording (issue 20's door: the
-// reference door with the spring preload F0 −12 % and the hinge friction T_h +25 %,
-// recorded through the simulated bench's sensors as `doorbench record` records it), against
-// the reference door's file. Target: under 20 s wall on 2 cores (docs/PERFORMANCE.md).
+// The inverse design of `doorbench spec` on one 19 s bench recording (the prototype door of
+// docs/inverse-design.md: the reference door with the spring preload F0 −12 % and the hinge
+// friction T_h +25 %, recorded through the simulated bench's sensors as `doorbench record` records
+// it), against the reference door's file. Target: under 20 s wall on 2 cores (docs/PERFORMANCE.md).
 //   build/bench/doorbench_inverse_design_bench [--benchmark_filter=Sparse]
 #include <benchmark/benchmark.h>
 
@@ -53,8 +53,8 @@ void BM_InverseDesignSparse(benchmark::State& state) {
 }
 BENCHMARK(BM_InverseDesignSparse)->Unit(benchmark::kSecond)->UseRealTime()->Iterations(3);
 
-// Before issue 20: the smallest change from 3 starts in two passes, then 10 fewest-changes
-// refits (what `doorbench spec` did; the playback path still does it).
+// The smallest change from 3 starts in two passes, then 10 fewest-changes refits (the
+// playback path's inverse design), for comparison with `doorbench spec`'s.
 void BM_InverseDesignSmallestChangeAndFewest(benchmark::State& state) {
   doorbench::InverseDesignOptions options;
   options.sparse_search = false;

@@ -109,9 +109,7 @@ class SyntheticSource final : public doorbench::AcquisitionBackend {
  public:
   std::string description() const override { return "synthetic 8 x 50 kS/s"; }
   std::vector<doorbench::ChannelInfo> channels() const override { return bench_header().channels; }
-  std::vector<doorbench::calibration::CalibrationRecord> calibrations() const override {
-    return {};
-  }
+  std::vector<doorbench::CalibrationRecord> calibrations() const override { return {}; }
   double scan_rate_hz() const override { return kRateHz; }
   void start() override { next_ = 0; }
   std::size_t read(doorbench::ScanBlock& block) override {

@@ -2,10 +2,10 @@
 //   residual_loop_demo: the demo's recording (docs/residual-loop.md, "On a bench recording"):
 //     the sensory reference door with an undeclared gravity imbalance g1 = 3 N·m recorded on
 //     the simulated bench for 19 s (seed 1, 6 strokes), through the session file and
-//     preprocessing; the loop adds the imbalance and stops. Target (issue 23): < 5 s.
+//     preprocessing; the loop adds the imbalance and stops. Target: < 5 s.
 //   residual_loop_tremor_12_strokes/<effect>: 12 strokes of the tremor hand
-//     (tests/support/tremor_recording.h, seed 1); 0 clean, 1 breakaway friction (d_s − d1 = 1.5 N·m,
-//     w_s = 0.05 rad/s), 2 gravity imbalance g1 = 3 N·m. Target (issue 23): < 10 s on 2 cores.
+//     (tests/support/tremor_recording.h, seed 1); 0 clean, 1 breakaway friction (d_s − d1 = 1.5
+//     N·m, w_s = 0.05 rad/s), 2 gravity imbalance g1 = 3 N·m. Target: < 10 s on 2 cores.
 // Counters: fit_model calls, effects added, strokes, and process_cpu_s: the CPU time of the
 // whole process (every thread: the refits', the folds' and Ceres' own), user + system.
 // Each iteration is a whole loop (seconds to a minute): run with --benchmark_min_time=0.

@@ -1,7 +1,7 @@
 #pragma once
 // The data and start of the sensory fit benchmark (bench_fitting.cpp), shared with
 // export_fit_strokes.cpp so that the SciPy and genetic-algorithm comparisons in
-// bench/compare/ fit exactly the strokes and start that the C++ benchmark times.
+// studies/compare/ fit exactly the strokes and start that the C++ benchmark times.
 #include <vector>
 
 #include "analysis/model/door_model.h"

@@ -20,6 +20,7 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
 #include "bench/haptic_fixed_device.h"
+#include "core/percentile.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"
 
@@ -45,14 +46,6 @@ int run_ticks(long count) {
   }
   std::printf("%ld ticks; last command %.6g N\n", count, device.last_command().norm());
   return 0;
-}
-
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const std::size_t index =
-      std::min(values.size() - 1, static_cast<std::size_t>(q * static_cast<double>(values.size())));
-  return values[index];
 }
 
 int run_realtime(double seconds, double rate_hz) {

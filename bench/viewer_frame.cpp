@@ -1,7 +1,7 @@
 // CPU time per frame of the viewer's overlay view (measured against simulated, residual
 // below) with 10 million samples per series: decimation plus building ImGui's vertices,
 // in a headless ImGui context (no window, no GPU: the GPU's share is excluded by design).
-// Target: under 8 ms per frame (issue 7). Results: docs/PERFORMANCE.md.
+// Target: under 8 ms per frame. Results: docs/PERFORMANCE.md.
 #include <benchmark/benchmark.h>
 #include <imgui.h>
 

@@ -7,41 +7,19 @@
 
 #include "acquisition/session/output_file.h"
 #include "calibration/procedure.h"
+#include "core/html_escape.h"
 #include "core/number_format.h"
 
 namespace doorbench::calibration {
 
 namespace {
 
-std::string escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
-
 std::string number(double value) {
   return value == 0 ? "0" : format_significant(value, 6);
 }
 
 std::string row(const std::string& name, const std::string& value) {
-  return "<tr><th>" + escape(name) + "</th><td>" + escape(value) + "</td></tr>\n";
+  return "<tr><th>" + html_escape(name) + "</th><td>" + html_escape(value) + "</td></tr>\n";
 }
 
 // Residual against reference, loading and unloading apart, with a zero line.
@@ -93,11 +71,11 @@ std::string residual_plot(const CalibrationRecord& r) {
            "\" text-anchor=\"end\">" + number(y) + "</text>\n";
   }
   svg += "<text x=\"" + number((left + width - right) / 2) + "\" y=\"" + number(height - 8) +
-         "\" text-anchor=\"middle\">reference (" + escape(r.unit) +
+         "\" text-anchor=\"middle\">reference (" + html_escape(r.unit) +
          "); filled: loading or no direction, open: unloading; dotted: ±2u</text>\n";
   svg += "<text x=\"14\" y=\"" + number(top + (height - top - bottom) / 2) +
          "\" transform=\"rotate(-90 14 " + number(top + (height - top - bottom) / 2) +
-         ")\" text-anchor=\"middle\">residual (" + escape(r.unit) + ")</text>\n";
+         ")\" text-anchor=\"middle\">residual (" + html_escape(r.unit) + ")</text>\n";
   return svg + "</svg>\n";
 }
 
@@ -107,13 +85,13 @@ std::string certificate_html(const CalibrationRecord& r) {
   std::string html =
       "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">\n<title>Calibration "
       "certificate " +
-      escape(r.id) +
+      html_escape(r.id) +
       "</title>\n<style>body{font-family:sans-serif;max-width:60em;margin:2em auto}"
       "table{border-collapse:collapse;margin:0.5em 0 1.5em}th,td{border:1px solid #bbb;"
       "padding:0.25em 0.6em;text-align:left}td.n{text-align:right;font-family:monospace}"
       "</style></head><body>\n";
-  html += "<h1>Calibration certificate</h1>\n<p>doorbench calibration record <b>" + escape(r.id) +
-          "</b></p>\n<table>\n";
+  html += "<h1>Calibration certificate</h1>\n<p>doorbench calibration record <b>" +
+          html_escape(r.id) + "</b></p>\n<table>\n";
   html += row("sensor", r.sensor_kind + " " + r.sensor_serial);
   html += row("version", std::to_string(r.version) +
                              (r.supersedes.empty() ? "" : " (supersedes " + r.supersedes + ")"));
@@ -128,14 +106,14 @@ std::string certificate_html(const CalibrationRecord& r) {
   html += row("method", r.method);
   html += row("references", r.references);
   if (!r.notes.empty()) html += row("notes", r.notes);
-  html += "</table>\n<h2>Result</h2>\n<p>" + escape(r.unit) + " = ";
+  html += "</table>\n<h2>Result</h2>\n<p>" + html_escape(r.unit) + " = ";
   for (std::size_t k = 0; k < r.coefficients.size(); ++k) {
     html += (k ? " + " : "") + number(r.coefficients[k]) +
             (k == 0   ? ""
              : k == 1 ? " · x"
                       : " · x<sup>" + std::to_string(k) + "</sup>");
   }
-  html += " &nbsp; (x: the signal in " + escape(r.input_unit) + ")";
+  html += " &nbsp; (x: the signal in " + html_escape(r.input_unit) + ")";
   if (r.delay_s != 0) {
     html += "; the channel lags by " + number(r.delay_s * 1e3) + " ms ± " +
             number(r.delay_standard_uncertainty_s * 1e3) + " ms, corrected on read";
@@ -146,22 +124,22 @@ std::string certificate_html(const CalibrationRecord& r) {
         "<table>\n<tr><th>quantity</th><th>value</th><th>standard "
         "uncertainty</th><th>unit</th></tr>\n";
     for (const CalibrationQuantity& q : r.quantities) {
-      html += "<tr><td>" + escape(q.name) + "</td><td class=\"n\">" + number(q.value) +
+      html += "<tr><td>" + html_escape(q.name) + "</td><td class=\"n\">" + number(q.value) +
               "</td><td class=\"n\">" +
               (q.standard_uncertainty > 0 ? number(q.standard_uncertainty) : "") + "</td><td>" +
-              escape(q.unit) + "</td></tr>\n";
+              html_escape(q.unit) + "</td></tr>\n";
     }
     html += "</table>\n";
   }
   if (!r.points.empty()) {
-    html += "<h2>Reference points</h2>\n<table>\n<tr><th>#</th><th>reference (" + escape(r.unit) +
-            ")</th><th>branch</th><th>signal (" + escape(r.input_unit) + ")</th><th>sd (" +
-            escape(r.input_unit) + ")</th><th>samples</th><th>residual (" + escape(r.unit) +
-            ")</th></tr>\n";
+    html += "<h2>Reference points</h2>\n<table>\n<tr><th>#</th><th>reference (" +
+            html_escape(r.unit) + ")</th><th>branch</th><th>signal (" + html_escape(r.input_unit) +
+            ")</th><th>sd (" + html_escape(r.input_unit) + ")</th><th>samples</th><th>residual (" +
+            html_escape(r.unit) + ")</th></tr>\n";
     for (std::size_t i = 0; i < r.points.size(); ++i) {
       const CalibrationPoint& p = r.points[i];
       html += "<tr><td>" + std::to_string(i + 1) + "</td><td class=\"n\">" + number(p.reference) +
-              "</td><td>" + escape(p.branch) + "</td><td class=\"n\">" + number(p.signal) +
+              "</td><td>" + html_escape(p.branch) + "</td><td class=\"n\">" + number(p.signal) +
               "</td><td class=\"n\">" + number(p.signal_std) + "</td><td class=\"n\">" +
               std::to_string(p.samples) + "</td><td class=\"n\">" + number(p.residual) +
               "</td></tr>\n";
@@ -169,7 +147,7 @@ std::string certificate_html(const CalibrationRecord& r) {
     html += "</table>\n<h2>Residuals</h2>\n" + residual_plot(r);
   }
   html += "<h2>Uncertainty</h2>\n<p>Standard uncertainty of a calibrated value: <b>" +
-          number(r.standard_uncertainty) + " " + escape(r.unit) +
+          number(r.standard_uncertainty) + " " + html_escape(r.unit) +
           "</b> (coverage factor k = 1). The expanded uncertainty U = 2u covers about 95 %: "
           "uncertainties estimated from few points are scaled by t<sub>95</sub>(ν)/1.96 "
           "(docs/calibration.md). It does not include the noise of a single sample.</p>\n";

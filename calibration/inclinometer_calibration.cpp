@@ -9,6 +9,7 @@
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
 #include "core/units.h"
+#include "sensors/channel_limits.h"
 
 namespace doorbench::calibration {
 
@@ -161,7 +162,16 @@ std::vector<GuidedPoint> inclinometer_angle_points(std::span<const double> angle
 
 std::vector<RangeExcursion> inclinometer_range_excursions(const SessionReader& session,
                                                           const std::string& channel,
-                                                          double range_deg, double margin_deg) {
+                                                          double range_deg) {
+  // The range the limit is a fraction of: the one given, else the rig's (without either,
+  // inclinometer_in_range says the range is unknown).
+  double full_range_deg = range_deg;
+  if (!(full_range_deg > 0)) {
+    const std::optional<RigDefinition> rig = session_rig(session);
+    const RigChannel* rc = rig ? rig->find_channel(channel) : nullptr;
+    if (rc) full_range_deg = inclinometer_parameters(*rc).range_deg;
+  }
+  const double margin_deg = (1.0 - sensors::kAtLimitFraction) * full_range_deg;
   const ChannelSignal s = read_channel_signal(session, channel);
   const std::vector<bool> in_range =
       inclinometer_in_range(session, channel, s.signal, range_deg, margin_deg);

@@ -92,14 +92,14 @@ InclinometerRecordingPoints inclinometer_points_from_recording(
     const SessionReader& session, const std::string& channel, std::span<const double> angles_deg,
     const InclinometerRecordingOptions& options = {});
 
-// Where a recording's inclinometer is outside its range (saturated): the intervals.
+// Where a recording's inclinometer is at its sensor's limit (saturated; the rule of
+// sensors/channel_limits.h, 99 % of range_deg, the rig's unless given): the intervals.
 struct RangeExcursion {
   double start_s = 0.0, end_s = 0.0;
 };
 std::vector<RangeExcursion> inclinometer_range_excursions(const SessionReader& session,
                                                           const std::string& channel,
-                                                          double range_deg = 0.0,
-                                                          double margin_deg = 0.05);
+                                                          double range_deg = 0.0);
 // One line, or "" when the recording stays in range: "inclinometer angle left its ±10°
 // range 6 times for 12.3 s in all (first at 0.98 s); those samples are not angles".
 std::string inclinometer_range_warning(const SessionReader& session, const std::string& channel,

@@ -8,6 +8,7 @@
 #include "calibration/session_signals.h"
 #include "calibration/static_source.h"
 #include "core/units.h"
+#include "sensors/channel_limits.h"
 
 namespace doorbench::calibration {
 
@@ -42,10 +43,6 @@ std::string record_range(const CalibrationRecord& r) {
 }  // namespace
 
 std::string RangeWarningOptions::validate() const {
-  if (!(saturation_margin_dps >= 0)) {
-    return "range warnings saturation_margin_dps = " + shortest(saturation_margin_dps) +
-           " must be >= 0";
-  }
   if (!(record_tolerance_fraction >= 0)) {
     return "range warnings record_tolerance_fraction = " + shortest(record_tolerance_fraction) +
            " must be >= 0";
@@ -68,10 +65,9 @@ std::vector<std::string> range_warnings(const SessionReader& session,
       continue;
     }
     if (c.sensor_kind == "gyroscope" && rc) {
-      const sensors::GyroscopeParameters p = gyroscope_parameters(*rc);
+      const GyroscopeParameters p = gyroscope_parameters(*rc);
       const ChannelSignal s = read_channel_signal(session, c.name);
-      const double limit_V =
-          std::max(0.0, p.range_dps - options.saturation_margin_dps) * p.output_V_per_dps;
+      const double limit_V = sensors::gyroscope_limit_V(p);
       std::vector<bool> out(s.signal.size());
       for (std::size_t i = 0; i < out.size(); ++i) out[i] = std::abs(s.signal[i]) >= limit_V;
       const std::string text = excursions(s.time_s, out, "±" + shortest(p.range_dps) + " °/s");

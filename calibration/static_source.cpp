@@ -21,7 +21,7 @@ Parameters parameters_of(const RigChannel& channel) {
 }
 
 sensors::Daq daq_of(const RigDefinition& rig, const RigChannel& channel) {
-  sensors::DaqParameters parameters;
+  DaqParameters parameters;
   parameters.range_min_V = channel.range_min_V;
   parameters.range_max_V = channel.range_max_V;
   parameters.resolution_bits = rig.daq_resolution_bits;
@@ -47,14 +47,14 @@ Sensor make_sensor(const RigDefinition& rig, const RigChannel& channel, std::uin
 
 }  // namespace
 
-sensors::LoadCellParameters load_cell_parameters(const RigChannel& channel) {
-  return parameters_of<sensors::LoadCellParameters>(channel);
+LoadCellParameters load_cell_parameters(const RigChannel& channel) {
+  return parameters_of<LoadCellParameters>(channel);
 }
-sensors::InclinometerParameters inclinometer_parameters(const RigChannel& channel) {
-  return parameters_of<sensors::InclinometerParameters>(channel);
+InclinometerParameters inclinometer_parameters(const RigChannel& channel) {
+  return parameters_of<InclinometerParameters>(channel);
 }
-sensors::GyroscopeParameters gyroscope_parameters(const RigChannel& channel) {
-  return parameters_of<sensors::GyroscopeParameters>(channel);
+GyroscopeParameters gyroscope_parameters(const RigChannel& channel) {
+  return parameters_of<GyroscopeParameters>(channel);
 }
 
 SimulatedStaticSource::SimulatedStaticSource(const RigDefinition& rig, const RigChannel& channel,

@@ -55,9 +55,9 @@ std::unique_ptr<StaticSignalSource> live_source(const RigDefinition& rig,
                                                 const RigChannel& channel);
 
 // The channel's sensor-model parameters from the rig (defaults for those not given).
-sensors::LoadCellParameters load_cell_parameters(const RigChannel& channel);
-sensors::InclinometerParameters inclinometer_parameters(const RigChannel& channel);
-sensors::GyroscopeParameters gyroscope_parameters(const RigChannel& channel);
+LoadCellParameters load_cell_parameters(const RigChannel& channel);
+InclinometerParameters inclinometer_parameters(const RigChannel& channel);
+GyroscopeParameters gyroscope_parameters(const RigChannel& channel);
 
 // The rig's channel of that sensor kind named `name`, or its only one when `name` is
 // empty. Throws CalibrationError naming the candidates.

@@ -336,7 +336,7 @@ std::vector<bool> inclinometer_in_range(const SessionReader& session, const std:
                              " is unknown (the session has no rig with that channel); give it "
                              "with --inclinometer-range-deg");
     }
-    const sensors::InclinometerParameters p = inclinometer_parameters(*rc);
+    const InclinometerParameters p = inclinometer_parameters(*rc);
     range_deg = p.range_deg;
     volts_per_deg = p.output_V_per_deg;
   }

@@ -54,4 +54,18 @@ std::string p_value_text(double p) {
   return value.front() == '<' || value.front() == '>' ? "p " + value : "p = " + value;
 }
 
+std::string format_readable(double value) {
+  return printf_text("%.10g", value);
+}
+
+std::string format_percent(double fraction, int decimals) {
+  if (!std::isfinite(fraction)) return "-";
+  return printf_text("%.*f%%", decimals, 100.0 * fraction);
+}
+
+std::string format_signed_percent(double fraction, int decimals) {
+  if (!std::isfinite(fraction)) return "-";
+  return printf_text("%+.*f%%", decimals, 100.0 * fraction);
+}
+
 }  // namespace doorbench

@@ -12,6 +12,13 @@
 //                               else 3 significant digits ("0.0123", "0.148"), "> 0.999"
 //                               just below 1, "1" at 1, "-" for NaN
 //   p_value_text(p)             "p < 0.001" or "p = 0.148": a p-value in a sentence
+//   format_percent(f, d)        a fraction as a percentage with d decimals (0.123, 1 ->
+//                               "12.3%"), "-" for NaN or an infinity
+//   format_signed_percent(f, d) the same with its sign always written ("+12.3%", "-0.5%")
+//   format_readable(x)          a value or a limit in a message as people write it: 10
+//                               significant digits, no exponent below 1e10 ("1000000000",
+//                               "0.05", "1.21" where format_number says 1.2100000000000002),
+//                               "nan", "inf"/"-inf"
 //
 // Pure functions: safe from any thread.
 #include <string>
@@ -24,5 +31,8 @@ std::string printf_text(const char* pattern, ...) __attribute__((format(printf, 
 std::string format_fixed(double value, int decimals);
 std::string format_p_value(double p);
 std::string p_value_text(double p);
+std::string format_readable(double value);
+std::string format_percent(double fraction, int decimals);
+std::string format_signed_percent(double fraction, int decimals);
 
 }  // namespace doorbench

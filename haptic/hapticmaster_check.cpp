@@ -7,6 +7,7 @@
 #include <sstream>
 #include <thread>
 
+#include "core/percentile.h"
 #include "haptic/hapticmaster_protocol.h"
 
 namespace doorbench::haptic {
@@ -17,13 +18,6 @@ std::string ms(double value_ms) {
   out.precision(value_ms < 10 ? 3 : 4);
   out << value_ms << " ms";
   return out.str();
-}
-
-double percentile(std::vector<double> values, double p) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const auto index = static_cast<std::size_t>(std::ceil(p * static_cast<double>(values.size())));
-  return values[std::min(values.size() - 1, index == 0 ? 0 : index - 1)];
 }
 
 // The round trips: the driver's own loop at zero force, the tick's part played by this thread

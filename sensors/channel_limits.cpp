@@ -11,8 +11,6 @@ namespace doorbench::sensors {
 
 namespace {
 
-constexpr double kLimitFraction = 0.99;  // of the range: at the limit
-
 std::string range_text(double range, const char* unit) {
   char text[64];
   std::snprintf(text, sizeof text, "±%g %s", range, unit);
@@ -20,6 +18,14 @@ std::string range_text(double range, const char* unit) {
 }
 
 }  // namespace
+
+double inclinometer_limit_V(const InclinometerParameters& parameters) {
+  return kAtLimitFraction * parameters.range_deg * parameters.output_V_per_deg;
+}
+
+double gyroscope_limit_V(const GyroscopeParameters& parameters) {
+  return kAtLimitFraction * parameters.range_dps * parameters.output_V_per_dps;
+}
 
 std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig) {
   std::vector<ChannelLimit> limits;
@@ -29,14 +35,14 @@ std::vector<ChannelLimit> rig_channel_limits(const RigDefinition& rig) {
       for (const auto& [name, value] : channel.parameters) p.set(name, value);
       limits.push_back({.channel = channel.name,
                         .sensor = channel.sensor,
-                        .limit = kLimitFraction * p.range_deg * kRadPerDeg,
+                        .limit = kAtLimitFraction * p.range_deg * kRadPerDeg,
                         .range = range_text(p.range_deg, "deg")});
     } else if (channel.sensor == "gyroscope") {
       GyroscopeParameters p;
       for (const auto& [name, value] : channel.parameters) p.set(name, value);
       limits.push_back({.channel = channel.name,
                         .sensor = channel.sensor,
-                        .limit = kLimitFraction * p.range_dps * kRadPerDeg,
+                        .limit = kAtLimitFraction * p.range_dps * kRadPerDeg,
                         .range = range_text(p.range_dps, "deg/s")});
     }
   }

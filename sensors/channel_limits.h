@@ -1,11 +1,12 @@
 #pragma once
-// Where a channel sits at the end of its sensor's range (issue 21): the one definition that
-// `doorbench record` warns about, live and in its summary (app/limit_watcher.h), and that the
-// viewer shades in its channels layout. The limits come from the rig: an inclinometer's
-// range_deg (default 10 deg) and a gyroscope's range_dps (default 100 deg/s), less 1 % (a
-// saturated reading, bias and noise included, lands within it); a sample is at the limit when
-// |physical value| >= limit. (`doorbench info` checks its own margins afterwards:
-// calibration/range_warnings.h.)
+// Where a channel sits at the end of its sensor's range: the one definition that
+// `doorbench record` warns about, live and in its summary (app/limit_watcher.h), that the
+// viewer shades in its channels layout, and that `doorbench info` and `calibration show`
+// report afterwards (calibration/range_warnings.h). The limits come from the rig: an
+// inclinometer's range_deg (default 10 deg) and a gyroscope's range_dps (default 100 deg/s),
+// less 1 % (kAtLimitFraction: a saturated reading, bias and noise included, lands within it);
+// a sample is at the limit when |physical value| >= limit, or, read before calibration, when
+// |signal| >= the same limit on the sensor's output (inclinometer_limit_V, gyroscope_limit_V).
 //
 // Pure functions: safe from any thread.
 #include <cstddef>
@@ -13,9 +14,18 @@
 #include <vector>
 
 #include "acquisition/rig/rig_file.h"
+#include "acquisition/rig/sensor_parameters.h"
 #include "acquisition/session/session_file.h"
 
 namespace doorbench::sensors {
+
+// The fraction of a sensor's range at and beyond which a reading is at its limit.
+inline constexpr double kAtLimitFraction = 0.99;
+
+// The limit on the sensor's output signal (V): kAtLimitFraction of the range times the
+// output's nominal volts per unit.
+double inclinometer_limit_V(const InclinometerParameters& parameters);
+double gyroscope_limit_V(const GyroscopeParameters& parameters);
 
 struct ChannelLimit {
   std::string channel;  // the rig's channel name (as recorded)

@@ -451,7 +451,7 @@ void ComediBackend::describe_session_channels(const RigDefinition& rig) {
   for (std::size_t i = 0; i < rig.channels.size(); ++i) {
     const RigChannel& rc = rig.channels[i];
     const ComediSetup::Channel& c = setup_.channels[i];
-    const calibration::CalibrationRecord record = rig_channel_calibration(rig, rc);
+    const CalibrationRecord record = rig_channel_calibration(rig, rc);
     calibrations_.push_back(record);
     channels_.push_back(counts_channel_info(
         rc, record,

@@ -95,9 +95,7 @@ class ComediBackend final : public AcquisitionBackend {
 
   std::string description() const override;
   std::vector<ChannelInfo> channels() const override { return channels_; }
-  std::vector<calibration::CalibrationRecord> calibrations() const override {
-    return calibrations_;
-  }
+  std::vector<CalibrationRecord> calibrations() const override { return calibrations_; }
   double scan_rate_hz() const override { return setup_.achieved_scan_rate_hz; }
   void start() override;  // comedi_command, then the internal trigger for a software start
   std::size_t read(ScanBlock& block) override;
@@ -142,7 +140,7 @@ class ComediBackend final : public AcquisitionBackend {
   std::vector<unsigned> chanlist_;
   comedi_cmd command_{};
   std::vector<ChannelInfo> channels_;
-  std::vector<calibration::CalibrationRecord> calibrations_;
+  std::vector<CalibrationRecord> calibrations_;
 
   std::vector<unsigned char> staging_;
   std::size_t staged_bytes_ = 0;

@@ -47,7 +47,7 @@ class ModbusSource : public PolledSource {
 
   std::string description() const override;
   std::vector<ChannelInfo> channels() const override;
-  std::vector<calibration::CalibrationRecord> calibrations() const override { return {}; }
+  std::vector<CalibrationRecord> calibrations() const override { return {}; }
   void start() override;
   std::size_t take_samples(std::span<PolledSample> out) override;
   std::size_t take_events(std::span<PolledEvent> out) override;

@@ -12,8 +12,8 @@ namespace doorbench::sensors {
 namespace {
 }  // namespace
 
-calibration::CalibrationRecord nominal_calibration(const RigChannel& channel) {
-  calibration::CalibrationRecord record;
+CalibrationRecord nominal_calibration(const RigChannel& channel) {
+  CalibrationRecord record;
   record.id = "nominal-" + (channel.serial.empty() ? channel.name : channel.serial);
   record.sensor_kind = channel.sensor;
   record.sensor_serial = channel.serial;
@@ -40,21 +40,18 @@ calibration::CalibrationRecord nominal_calibration(const RigChannel& channel) {
   return record;
 }
 
-calibration::CalibrationRecord rig_channel_calibration(const RigDefinition& rig,
-                                                       const RigChannel& channel) {
+CalibrationRecord rig_channel_calibration(const RigDefinition& rig, const RigChannel& channel) {
   if (channel.calibration == "nominal") return nominal_calibration(channel);
   try {
-    return calibration::resolve_channel_record(
-        calibration::CalibrationStore(
-            calibration::calibration_store_directory(rig.calibration_store, rig.base_dir)),
+    return resolve_channel_record(
+        CalibrationStore(calibration_store_directory(rig.calibration_store, rig.base_dir)),
         channel.calibration, channel.name, channel.sensor, channel.serial, channel.unit);
   } catch (const std::runtime_error& error) {
     throw std::invalid_argument(rig.source + ": " + error.what());
   }
 }
 
-ChannelInfo counts_channel_info(const RigChannel& channel,
-                                const calibration::CalibrationRecord& record,
+ChannelInfo counts_channel_info(const RigChannel& channel, const CalibrationRecord& record,
                                 const CountsChannelClock& clock) {
   ChannelInfo info;
   info.name = channel.name;

@@ -28,13 +28,12 @@ Parameters parameters_of(const RigChannel& channel) {
 }
 
 // The datasheet calibration of a channel's sensor model (volts → its unit).
-calibration::CalibrationRecord nominal_calibration(const RigChannel& channel);
+CalibrationRecord nominal_calibration(const RigChannel& channel);
 
 // The record the channel's `calibration` key names: nominal_calibration() for "nominal",
 // else the record resolved in the rig's calibration store. Errors (std::invalid_argument)
 // start with the rig file's name.
-calibration::CalibrationRecord rig_channel_calibration(const RigDefinition& rig,
-                                                       const RigChannel& channel);
+CalibrationRecord rig_channel_calibration(const RigDefinition& rig, const RigChannel& channel);
 
 // Where a DAQ channel's counts sit: signal (V) = raw_offset_V + raw_scale_V · counts, valid
 // within range_min_V … range_max_V, sampled at sample_rate_hz from first_sample_time_s.
@@ -48,8 +47,7 @@ struct CountsChannelClock {
 };
 
 // The session's ChannelInfo of a rig channel recorded as DAQ counts with `record`.
-ChannelInfo counts_channel_info(const RigChannel& channel,
-                                const calibration::CalibrationRecord& record,
+ChannelInfo counts_channel_info(const RigChannel& channel, const CalibrationRecord& record,
                                 const CountsChannelClock& clock);
 
 }  // namespace doorbench::sensors

@@ -2,7 +2,7 @@
 // Sensor models: each maps the physical truth to the raw signal a real sensor and DAQ
 // would give, with its documented imperfections. Parameters (constant) are apart from
 // state (filter memory, hysteresis, bias drift, the seeded noise generator), as in the
-// door models. Calibration (issue 5) maps back; the nominal scale factors
+// door models. Calibration (calibration/) maps back; the nominal scale factors
 // (LoadCellParameters::volts_per_newton(), InclinometerParameters::volts_per_rad(),
 // GyroscopeParameters::volts_per_rad_s()) give the datasheet's ideal inverse, used by the
 // simulated bench's nominal calibration records. See docs/sensor-models.md.

@@ -12,7 +12,15 @@
 #include "core/units.h"
 #include "sensors/rig_channel.h"
 
-namespace doorbench::sensors {
+namespace doorbench::simulated_bench {
+
+using sensors::counts_channel_info;
+using sensors::Daq;
+using sensors::Gyroscope;
+using sensors::Inclinometer;
+using sensors::LoadCell;
+using sensors::parameters_of;
+using sensors::rig_channel_calibration;
 
 namespace {
 
@@ -158,7 +166,7 @@ SimulatedBench::SimulatedBench(const RigDefinition& rig, const DoorModel& model,
     } else {
       throw std::invalid_argument("channel " + rc.name + ": no sensor model for " + rc.sensor);
     }
-    const calibration::CalibrationRecord record = rig_channel_calibration(rig, rc);
+    const CalibrationRecord record = rig_channel_calibration(rig, rc);
     calibrations_.push_back(record);
     channels_.push_back(counts_channel_info(
         rc, record,
@@ -269,4 +277,4 @@ void SimulatedBench::write_extras(SessionWriter& writer, double session_origin_s
   writer.write_group_dataset(group, "force_N", truth_force_N_);
 }
 
-}  // namespace doorbench::sensors
+}  // namespace doorbench::simulated_bench

@@ -25,7 +25,7 @@
 #include "analysis/simulation/virtual_hand.h"
 #include "sensors/sensor_models.h"
 
-namespace doorbench::sensors {
+namespace doorbench::simulated_bench {
 
 // A force at the handle that also knows its strokes, so the bench can mark them and
 // mount the compression-only load cell the right way round.
@@ -109,9 +109,7 @@ class SimulatedBench final : public AcquisitionBackend {
 
   std::string description() const override;
   std::vector<ChannelInfo> channels() const override { return channels_; }
-  std::vector<calibration::CalibrationRecord> calibrations() const override {
-    return calibrations_;
-  }
+  std::vector<CalibrationRecord> calibrations() const override { return calibrations_; }
   double scan_rate_hz() const override { return scan_rate_hz_; }
   void start() override;
   std::size_t read(ScanBlock& block) override;
@@ -119,10 +117,10 @@ class SimulatedBench final : public AcquisitionBackend {
   void write_extras(SessionWriter& writer, double session_origin_s) override;
 
  private:
-  using Sensor = std::variant<LoadCell, Inclinometer, Gyroscope>;
+  using Sensor = std::variant<sensors::LoadCell, sensors::Inclinometer, sensors::Gyroscope>;
   struct Channel {
     Sensor sensor;
-    Daq daq;
+    sensors::Daq daq;
   };
 
   std::string rig_name_;
@@ -132,7 +130,7 @@ class SimulatedBench final : public AcquisitionBackend {
   double scan_rate_hz_;
   double convert_interval_s_;
   std::vector<ChannelInfo> channels_;
-  std::vector<calibration::CalibrationRecord> calibrations_;
+  std::vector<CalibrationRecord> calibrations_;
   std::vector<Channel> sensors_;
   std::unique_ptr<StrokeForce> hand_;
   DoorStepper stepper_;
@@ -144,4 +142,4 @@ class SimulatedBench final : public AcquisitionBackend {
   std::vector<double> truth_time_s_, truth_theta_rad_, truth_omega_rad_s_, truth_force_N_;
 };
 
-}  // namespace doorbench::sensors
+}  // namespace doorbench::simulated_bench

@@ -16,6 +16,7 @@
 
 #include "acquisition/session/session_csv.h"
 #include "core/number_format.h"
+#include "core/seeded_random.h"
 #include "study/statistics/binomial.h"
 
 namespace doorbench::study {
@@ -25,15 +26,6 @@ constexpr int kMaxTrials = 10000;
 
 std::string in_quotes(std::string_view text) {
   return std::string("\"").append(text).append("\"");
-}
-
-// A uniform draw from 0..bound−1 without the modulo bias (rejects the low 2^64 mod bound).
-std::uint64_t draw_below(std::mt19937_64& random, std::uint64_t bound) {
-  const std::uint64_t threshold = (0 - bound) % bound;
-  for (;;) {
-    const std::uint64_t x = random();
-    if (x >= threshold) return x % bound;
-  }
 }
 
 std::string answered_now_utc() {
@@ -125,9 +117,9 @@ std::vector<AbTrial> make_plan(const AbOptions& options) {
   a_first.reserve(n);
   for (int i = 0; i < n / 2; ++i) a_first.push_back(true);
   for (int i = 0; i < n / 2; ++i) a_first.push_back(false);
-  if (n % 2 == 1) a_first.push_back(draw_below(random, 2) == 0);
+  if (n % 2 == 1) a_first.push_back(uniform_below(random, 2) == 0);
   for (int i = n - 1; i > 0; --i) {
-    const auto j = static_cast<int>(draw_below(random, static_cast<std::uint64_t>(i) + 1));
+    const auto j = static_cast<int>(uniform_below(random, static_cast<std::uint64_t>(i) + 1));
     const bool swap = a_first[i];
     a_first[i] = a_first[j];
     a_first[j] = swap;

@@ -11,16 +11,10 @@
 
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
+#include "core/number_format.h"
 
 namespace doorbench::study {
 namespace {
-
-std::string number_text(double value) {
-  std::string text = std::to_string(value);
-  while (!text.empty() && text.back() == '0') text.pop_back();
-  if (!text.empty() && text.back() == '.') text.pop_back();
-  return text;
-}
 
 int line_of(const toml::node& node) {
   return node.source().begin.line > 0 ? static_cast<int>(node.source().begin.line) : 1;
@@ -73,8 +67,8 @@ class Table {
       fail(key, "must be a number");
     }
     if (!(value >= low && value <= high)) {
-      fail(key, "must be from " + number_text(low) + " to " + number_text(high) + ", got " +
-                    number_text(value));
+      fail(key, "must be from " + format_readable(low) + " to " + format_readable(high) + ", got " +
+                    format_readable(value));
     }
     return value;
   }
@@ -501,7 +495,7 @@ std::vector<Step> parse_steps(std::string_view text) {
 std::string steps_text(const std::vector<Step>& steps) {
   std::string text;
   for (const Step& step : steps) {
-    text += (text.empty() ? "" : ",") + step.target + "*" + number_text(step.factor);
+    text += (text.empty() ? "" : ",") + step.target + "*" + format_readable(step.factor);
   }
   return text;
 }
@@ -513,7 +507,7 @@ DoorModel base_model(const Campaign& campaign) {
 DoorModel apply_steps(const DoorModel& model, const std::vector<Step>& steps) {
   DoorModel result = model;
   for (const Step& step : steps) {
-    const std::string what = "step " + step.target + "*" + number_text(step.factor);
+    const std::string what = "step " + step.target + "*" + format_readable(step.factor);
     if (const std::optional<perceptual::Control> control = perceptual::find(step.target)) {
       if (result.kind() != ModelKind::kSensory) {
         throw std::invalid_argument(what + ": the perceptual controls act on the sensory model");
@@ -528,9 +522,10 @@ DoorModel apply_steps(const DoorModel& model, const std::vector<Step>& steps) {
         const double value = result.parameter_values()[i];
         const Bounds bounds = result.parameter_bounds()[i];
         if (value < bounds.lower || value > bounds.upper) {
-          throw std::invalid_argument(what + ": " + result.parameter_name(i) + " would be " + number_text(value) +
-                                      ", outside its bounds " + number_text(bounds.lower) + ".." +
-                                      number_text(bounds.upper));
+          throw std::invalid_argument(what + ": " + result.parameter_name(i) + " would be " +
+                                      format_readable(value) + ", outside its bounds " +
+                                      format_readable(bounds.lower) + ".." +
+                                      format_readable(bounds.upper));
         }
       }
       continue;
@@ -547,8 +542,10 @@ DoorModel apply_steps(const DoorModel& model, const std::vector<Step>& steps) {
     values[*index] *= step.factor;
     const Bounds bounds = result.parameter_bounds()[*index];
     if (values[*index] < bounds.lower || values[*index] > bounds.upper) {
-      throw std::invalid_argument(what + ": " + step.target + " would be " + number_text(values[*index]) +
-                                  ", outside its bounds " + number_text(bounds.lower) + ".." + number_text(bounds.upper));
+      throw std::invalid_argument(what + ": " + step.target + " would be " +
+                                  format_readable(values[*index]) + ", outside its bounds " +
+                                  format_readable(bounds.lower) + ".." +
+                                  format_readable(bounds.upper));
     }
     try {
       result = result.with_parameter_values(values);

@@ -1,6 +1,6 @@
 #pragma once
 // One line per block of what a campaign's trials.csv holds (the demo's summary; the
-// panel's statistics are issue 29's `campaign analyze`): counts only, no tests.
+// panel's statistics are `campaign analyze`'s): counts only, no tests.
 //   tune: how many tuned doors
 //   pair: answers, how often each variant was chosen, "same"
 //   rating: each variant's mean rating per attribute

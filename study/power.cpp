@@ -7,6 +7,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "core/percentile.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
 #include "study/quest_plus.h"
@@ -20,15 +21,6 @@ namespace {
 struct Tally {
   long a = 0, b = 0;  // successes of each side
 };
-
-double percentile(std::vector<double> values, double q) {
-  if (values.empty()) return std::nan("");
-  std::sort(values.begin(), values.end());
-  const double at = q * static_cast<double>(values.size() - 1);
-  const auto low = static_cast<std::size_t>(std::floor(at));
-  const std::size_t high = std::min(low + 1, values.size() - 1);
-  return values[low] + (at - static_cast<double>(low)) * (values[high] - values[low]);
-}
 
 std::string pair_key(const std::string& x, const std::string& y) { return x < y ? x + " vs " + y : y + " vs " + x; }
 

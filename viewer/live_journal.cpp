@@ -99,8 +99,8 @@ bool LiveJournal::open() {
   // The size before the reader looks: the writer only appends, so the reader saw at least
   // this many bytes. A size taken after the reader failed would not do: the writer may
   // have written the whole header in between, and an empty file read a moment earlier
-  // would then be taken for one that is not a journal (issue 31: `view --live` started
-  // with `record` failed so, 1 run in 25 on a loaded machine).
+  // would then be taken for one that is not a journal (docs/viewer.md, "Live: following a
+  // running recording").
   std::error_code size_error;
   const std::uintmax_t size_before = fs::file_size(journal_, size_error);
   try {
@@ -133,7 +133,7 @@ bool LiveJournal::open() {
     }
     const std::string& id = header.channels[c].calibration_id;
     if (id.empty()) continue;
-    for (const calibration::CalibrationRecord& record : header.calibrations) {
+    for (const CalibrationRecord& record : header.calibrations) {
       if (record.id == id) calib_[c] = &record;
     }
     if (!calib_[c]) {

@@ -43,7 +43,7 @@ struct SessionData {
   // detail "opening" or "closing", no channel) at motion_onset_s / motion_end_s.
   std::vector<SessionEvent> events;
   bool strokes_found_on_read = false;
-  std::vector<calibration::CalibrationRecord> calibrations;
+  std::vector<CalibrationRecord> calibrations;
   // Per channel (same order): physical values over session time, in the unit shown
   // (to_display_units: an angle in deg, a rate in deg/s).
   std::vector<std::shared_ptr<Series>> channel_series;

@@ -28,7 +28,7 @@ class AcquisitionBackend {
   virtual std::string description() const = 0;
   // As they go into the session (sample times from the backend's own clock).
   virtual std::vector<ChannelInfo> channels() const = 0;
-  virtual std::vector<calibration::CalibrationRecord> calibrations() const = 0;
+  virtual std::vector<CalibrationRecord> calibrations() const = 0;
   virtual double scan_rate_hz() const = 0;
   virtual void start() = 0;
   // Fills block.counts[·][0 … n) with the next n ≤ block.capacity() scans and appends

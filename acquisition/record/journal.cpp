@@ -100,8 +100,8 @@ std::string header_json(const JournalHeader& header) {
   }
   // Each record as its own JSON text, which is authoritative (as in the session).
   json["calibrations"] = nlohmann::json::array();
-  for (const calibration::CalibrationRecord& r : header.calibrations) {
-    json["calibrations"].push_back(calibration::to_json(r));
+  for (const CalibrationRecord& r : header.calibrations) {
+    json["calibrations"].push_back(to_json(r));
   }
   return json.dump();
 }
@@ -143,8 +143,7 @@ JournalHeader parse_header(const std::string& text, const std::string& source) {
     header.channels.push_back(info);
   }
   for (const nlohmann::json& r : json.at("calibrations")) {
-    header.calibrations.push_back(
-        calibration::calibration_record_from_json(r.get<std::string>(), source));
+    header.calibrations.push_back(calibration_record_from_json(r.get<std::string>(), source));
   }
   // Within the rig file's limits (docs/rig-format.md): a damaged header must not make
   // recovery's clock arithmetic or gap filling unbounded.

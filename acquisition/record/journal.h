@@ -60,7 +60,7 @@ struct JournalHeader {
   // channels with explicit times (sample_rate_hz 0: in timed frames), each followed by its
   // latency channel "<name>_latency" (sensor_kind "poll_latency").
   std::vector<ChannelInfo> channels;
-  std::vector<calibration::CalibrationRecord> calibrations;
+  std::vector<CalibrationRecord> calibrations;
   double scan_rate_hz = 0.0;
   std::string session_name;  // the session file's name (no folder) when recording began
   double flush_interval_s = 0.0;

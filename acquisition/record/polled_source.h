@@ -62,7 +62,7 @@ class PolledSource {
   virtual std::string description() const = 0;
   // Explicit-time channels as they go into the session (sample_rate_hz 0, RawType::kValues).
   virtual std::vector<ChannelInfo> channels() const = 0;
-  virtual std::vector<calibration::CalibrationRecord> calibrations() const = 0;
+  virtual std::vector<CalibrationRecord> calibrations() const = 0;
   // Starts polling on the source's own thread(s); returns once they run. Throws (naming
   // the device) when the source cannot start at all; faults after the start are events.
   virtual void start() = 0;

@@ -65,7 +65,7 @@ void plan_polled_source(PolledSource& source, std::size_t polled_batch, Recordin
     batch.raw.resize(polled_batch);
     state.batches.push_back(std::move(batch));
   }
-  for (calibration::CalibrationRecord& record : source.calibrations()) {
+  for (CalibrationRecord& record : source.calibrations()) {
     plan.calibrations.push_back(std::move(record));
   }
   if (!plan.description.empty()) plan.description += "; ";

@@ -188,7 +188,7 @@ class FrameWriter {
       writer.add_channel(channel);
       names_.insert(channel.name);
     }
-    for (const calibration::CalibrationRecord& record : header.calibrations) {
+    for (const CalibrationRecord& record : header.calibrations) {
       writer.add_calibration(record);
     }
     for (std::size_t c = 0; c < header.channels.size(); ++c) {

@@ -14,15 +14,14 @@ namespace doorbench::record_detail {
 namespace {
 
 LiveConversion live_conversion(const ChannelInfo& channel,
-                               const std::vector<calibration::CalibrationRecord>& records,
-                               std::string& unit) {
+                               const std::vector<CalibrationRecord>& records, std::string& unit) {
   LiveConversion conversion{channel.raw_offset, channel.raw_scale, nullptr};
   unit = channel.unit;
   if (channel.calibration_id.empty()) {
     if (unit.empty()) unit = channel.raw_type == RawType::kCounts ? "V" : channel.raw_unit;
     return conversion;
   }
-  for (const calibration::CalibrationRecord& record : records) {
+  for (const CalibrationRecord& record : records) {
     if (record.id == channel.calibration_id) conversion.record = &record;
   }
   if (conversion.record == nullptr)

@@ -34,8 +34,7 @@ TriggerStage::TriggerStage(const TriggerOptions& options,
                            std::span<const ChannelInfo> scan_channels, double scan_rate_hz,
                            std::size_t max_block_scans,
                            std::span<const ChannelInfo> polled_channels,
-                           std::span<const calibration::CalibrationRecord> calibrations,
-                           RecordingSink& sink)
+                           std::span<const CalibrationRecord> calibrations, RecordingSink& sink)
     : options_(options),
       sink_(sink),
       scan_channels_(scan_channels.begin(), scan_channels.end()),

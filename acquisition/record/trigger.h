@@ -107,8 +107,7 @@ TriggerOptions trigger_options_from_rig(const RigDefinition& rig);
 class PhysicalConverter {
  public:
   // Throws std::invalid_argument when the channel's calibration_id is not in `records`.
-  PhysicalConverter(const ChannelInfo& channel,
-                    std::span<const calibration::CalibrationRecord> records);
+  PhysicalConverter(const ChannelInfo& channel, std::span<const CalibrationRecord> records);
   double operator()(double raw) const {
     const double signal = offset_ + scale_ * raw;
     double value = 0.0;
@@ -174,7 +173,7 @@ class TriggerStage {
   TriggerStage(const TriggerOptions& options, std::span<const ChannelInfo> scan_channels,
                double scan_rate_hz, std::size_t max_block_scans,
                std::span<const ChannelInfo> polled_channels,
-               std::span<const calibration::CalibrationRecord> calibrations, RecordingSink& sink);
+               std::span<const CalibrationRecord> calibrations, RecordingSink& sink);
   TriggerStage(const TriggerStage&) = delete;
   TriggerStage& operator=(const TriggerStage&) = delete;
 

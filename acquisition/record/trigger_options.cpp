@@ -157,10 +157,10 @@ TriggerOptions trigger_options_from_rig(const RigDefinition& rig) {
 // Conversion and detection
 
 PhysicalConverter::PhysicalConverter(const ChannelInfo& channel,
-                                     std::span<const calibration::CalibrationRecord> records)
+                                     std::span<const CalibrationRecord> records)
     : offset_(channel.raw_offset), scale_(channel.raw_scale) {
   if (channel.calibration_id.empty()) return;
-  for (const calibration::CalibrationRecord& record : records) {
+  for (const CalibrationRecord& record : records) {
     if (record.id == channel.calibration_id) {
       coefficients_ = record.coefficients;
       return;

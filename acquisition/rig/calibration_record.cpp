@@ -5,7 +5,7 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
-namespace doorbench::calibration {
+namespace doorbench {
 
 const CalibrationQuantity* CalibrationRecord::quantity(std::string_view name) const {
   for (const CalibrationQuantity& q : quantities) {
@@ -236,4 +236,4 @@ CalibrationRecord calibration_record_from_json(std::string_view json_text,
   return r;
 }
 
-}  // namespace doorbench::calibration
+}  // namespace doorbench

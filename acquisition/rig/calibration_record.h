@@ -18,7 +18,7 @@
 #include <string_view>
 #include <vector>
 
-namespace doorbench::calibration {
+namespace doorbench {
 
 // One reference point of a multi-point calibration.
 struct CalibrationPoint {
@@ -88,4 +88,4 @@ CalibrationRecord linear_record(std::string id, std::string input_unit, std::str
 std::string to_json(const CalibrationRecord& record);
 CalibrationRecord calibration_record_from_json(std::string_view json_text, std::string_view source);
 
-}  // namespace doorbench::calibration
+}  // namespace doorbench

@@ -8,7 +8,7 @@
 #include <system_error>
 #include <tuple>
 
-namespace doorbench::calibration {
+namespace doorbench {
 
 namespace fs = std::filesystem;
 
@@ -164,4 +164,4 @@ CalibrationRecord resolve_channel_record(const CalibrationStore& store, std::str
   return record;
 }
 
-}  // namespace doorbench::calibration
+}  // namespace doorbench

@@ -1,6 +1,6 @@
 #pragma once
 // The calibration store: a directory with one JSON file per record, `<id>.json`, in the
-// text of calibration::to_json. Records are added, never changed: adding an id again with
+// text of to_json(CalibrationRecord). Records are added, never changed: adding an id again with
 // different contents is an error, so a session's copy and the store's always agree.
 // docs/calibration.md describes the layout and where the store is.
 //
@@ -15,7 +15,7 @@
 
 #include "acquisition/rig/calibration_record.h"
 
-namespace doorbench::calibration {
+namespace doorbench {
 
 inline constexpr const char* kCalibrationStoreVariable = "DOORBENCH_CALIBRATIONS";
 
@@ -60,4 +60,4 @@ CalibrationRecord resolve_channel_record(const CalibrationStore& store, std::str
                                          std::string_view channel, std::string_view sensor_kind,
                                          std::string_view sensor_serial, std::string_view unit);
 
-}  // namespace doorbench::calibration
+}  // namespace doorbench

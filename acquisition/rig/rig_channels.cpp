@@ -30,14 +30,13 @@ std::string_view unit_of(std::string_view sensor) {
 }
 
 // The field of `fields` that `message` names first, as a whole word ("" if none).
-std::string_view field_named_in(std::string_view message,
-                                std::span<const sensors::ParameterField> fields) {
+std::string_view field_named_in(std::string_view message, std::span<const ParameterField> fields) {
   auto word_char = [](char c) {
     return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_';
   };
   std::string_view best;
   std::size_t best_position = std::string_view::npos;
-  for (const sensors::ParameterField& field : fields) {
+  for (const ParameterField& field : fields) {
     for (std::size_t at = message.find(field.name); at != std::string_view::npos;
          at = message.find(field.name, at + 1)) {
       const std::size_t end = at + field.name.size();
@@ -60,7 +59,7 @@ template <class Parameters>
 void read_parameters(const Section& channel, std::string_view sensor, RigChannel& out) {
   Parameters parameters;
   std::vector<std::string_view> valid;
-  for (const sensors::ParameterField& field : Parameters::fields()) valid.push_back(field.name);
+  for (const ParameterField& field : Parameters::fields()) valid.push_back(field.name);
 
   const std::optional<Section> table = channel.table("parameters");
   if (table) {
@@ -313,11 +312,11 @@ ParsedChannels read_channels(const Section& root, const RigDefinition& rig, cons
     }
 
     if (channel.sensor == "load_cell") {
-      read_parameters<sensors::LoadCellParameters>(table, channel.sensor, channel);
+      read_parameters<LoadCellParameters>(table, channel.sensor, channel);
     } else if (channel.sensor == "inclinometer") {
-      read_parameters<sensors::InclinometerParameters>(table, channel.sensor, channel);
+      read_parameters<InclinometerParameters>(table, channel.sensor, channel);
     } else {
-      read_parameters<sensors::GyroscopeParameters>(table, channel.sensor, channel);
+      read_parameters<GyroscopeParameters>(table, channel.sensor, channel);
     }
 
     parsed.backend_lines.push_back(table.line_of_key("backend"));
@@ -346,7 +345,7 @@ void check_scan_fits(const Section& root, const RigDefinition& rig, const Failer
                     format_number(period_s) + " s");
   }
 
-  sensors::DaqParameters daq;
+  DaqParameters daq;
   daq.range_min_V = rig.daq_range_min_V;
   daq.range_max_V = rig.daq_range_max_V;
   daq.resolution_bits = rig.daq_resolution_bits;
@@ -354,7 +353,7 @@ void check_scan_fits(const Section& root, const RigDefinition& rig, const Failer
   daq.convert_interval_s = rig.convert_interval_s;
   const std::string message = daq.validate();
   if (message.empty()) return;
-  const std::string_view field = field_named_in(message, sensors::DaqParameters::fields());
+  const std::string_view field = field_named_in(message, DaqParameters::fields());
   const std::optional<Section> daq_table = root.table("daq");
   if ((field == "sample_rate_hz" || field == "convert_interval_s") && clock) {
     clock->fail(field, message);

@@ -51,8 +51,8 @@ void read_clock(const Section& root, RigDefinition& rig) {
   clock->allow_only({"sample_rate_hz", "convert_interval_s"});
   rig.sample_rate_hz = clock->number("sample_rate_hz").value_or(rig.sample_rate_hz);
   if (!(rig.sample_rate_hz >= kMinSampleRateHz && rig.sample_rate_hz <= kMaxSampleRateHz)) {
-    clock->fail("sample_rate_hz", "must be from " + whole_number_text(kMinSampleRateHz) + " to " +
-                                      whole_number_text(kMaxSampleRateHz) + " Hz (got " +
+    clock->fail("sample_rate_hz", "must be from " + format_readable(kMinSampleRateHz) + " to " +
+                                      format_readable(kMaxSampleRateHz) + " Hz (got " +
                                       format_number(rig.sample_rate_hz) + ")");
   }
   rig.convert_interval_s = clock->number("convert_interval_s").value_or(rig.convert_interval_s);
@@ -174,9 +174,9 @@ void read_simulation(const Section& root, RigDefinition& rig, const ParsedChanne
     if (!(total_s <= kMaxRecordingS)) {
       hand->fail(hand->find("cycle_duration_s") ? "cycle_duration_s" : "cycles",
                  "cycles * cycle_duration_s = " + std::to_string(simulation.hand_cycles) + " * " +
-                     format_number(simulation.hand_cycle_duration_s) + " s = " +
-                     format_number(total_s) + " s must be <= " + whole_number_text(kMaxRecordingS) +
-                     " s (a day)");
+                     format_number(simulation.hand_cycle_duration_s) +
+                     " s = " + format_number(total_s) +
+                     " s must be <= " + format_readable(kMaxRecordingS) + " s (a day)");
     }
   }
   rig.simulation = std::move(simulation);

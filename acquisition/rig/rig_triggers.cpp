@@ -39,7 +39,7 @@ void read_level(const Section& table, const RigDefinition& rig, RigTrigger& trig
   }
   trigger.hold_s = table.number("hold_s").value_or(0.0);
   if (!(trigger.hold_s >= 0 && trigger.hold_s <= kMaxHoldS)) {
-    table.fail("hold_s", "must be from 0 to " + whole_number_text(kMaxHoldS) + " s (got " +
+    table.fail("hold_s", "must be from 0 to " + format_readable(kMaxHoldS) + " s (got " +
                              format_number(trigger.hold_s) + ")");
   }
   trigger.absolute = table.boolean("absolute").value_or(false);
@@ -156,8 +156,8 @@ void read_recording(const Section& root, RigDefinition& rig) {
   }
   if (const auto duration = table->number("duration_s")) {
     if (!(*duration > 0 && *duration <= kMaxRecordingS)) {
-      table->fail("duration_s", "must be > 0 and <= " + whole_number_text(kMaxRecordingS) + " s (got " +
-                                    format_number(*duration) + ")");
+      table->fail("duration_s", "must be > 0 and <= " + format_readable(kMaxRecordingS) +
+                                    " s (got " + format_number(*duration) + ")");
     }
     recording.duration_s = *duration;
   }
@@ -178,8 +178,8 @@ void read_recording(const Section& root, RigDefinition& rig) {
   }
   recording.min_stroke_s = table->number("min_stroke_s").value_or(recording.min_stroke_s);
   if (!(recording.min_stroke_s >= 0 && recording.min_stroke_s <= kMaxRecordingS)) {
-    table->fail("min_stroke_s", "must be from 0 to " + whole_number_text(kMaxRecordingS) + " s (got " +
-                                    format_number(recording.min_stroke_s) + ")");
+    table->fail("min_stroke_s", "must be from 0 to " + format_readable(kMaxRecordingS) +
+                                    " s (got " + format_number(recording.min_stroke_s) + ")");
   }
 }
 

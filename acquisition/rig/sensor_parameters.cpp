@@ -6,18 +6,11 @@
 #include <cstddef>
 #include <numbers>
 
+#include "core/number_format.h"
 #include "core/units.h"
 
-namespace doorbench::sensors {
+namespace doorbench {
 namespace {
-
-
-// The shortest text that reads back as the same double.
-std::string number_text(double value) {
-  char buffer[32];
-  const auto result = std::to_chars(buffer, buffer + sizeof buffer, value);
-  return std::string(buffer, result.ptr);
-}
 
 // What a field's value must satisfy (besides being finite, which every field must be).
 enum class Rule { kAny, kPositive, kNonNegative, kFlag, kBits, kAboveMinusOne };
@@ -77,7 +70,7 @@ std::string violation_message(std::string_view sensor, std::string_view field, d
   message += ' ';
   message += field;
   message += " = ";
-  message += number_text(value);
+  message += format_number(value);
   message += " must be ";
   message += rule_text;
   return message;
@@ -224,7 +217,7 @@ std::string DaqParameters::validate() const {
   std::string message = check_fields("daq", kDaqFields, *this);
   if (message.empty() && !(range_min_V < range_max_V)) {
     message = violation_message("daq", "range_min_V", range_min_V,
-                                "< range_max_V = " + number_text(range_max_V));
+                                "< range_max_V = " + format_number(range_max_V));
   }
   return message;
 }
@@ -235,4 +228,4 @@ std::string sample_rate_violation(std::string_view sensor, double sample_rate_hz
   return violation_message(sensor, "sample_rate_hz", sample_rate_hz, broken);
 }
 
-}  // namespace doorbench::sensors
+}  // namespace doorbench

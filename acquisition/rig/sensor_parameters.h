@@ -17,7 +17,7 @@
 #include <string>
 #include <string_view>
 
-namespace doorbench::sensors {
+namespace doorbench {
 
 // A named numeric parameter, for rig files: each *Parameters struct lists its fields so
 // that a rig file can set them by name (unknown names are rejected by the caller).
@@ -95,4 +95,4 @@ struct DaqParameters {
 // (or `... must be finite`).
 std::string sample_rate_violation(std::string_view sensor, double sample_rate_hz);
 
-}  // namespace doorbench::sensors
+}  // namespace doorbench

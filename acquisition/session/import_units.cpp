@@ -49,19 +49,19 @@ ImportConversion parse_scale(const std::string& item) {
 }
 
 // A record named by --calibration: a file when one is there, else an id in the store.
-calibration::CalibrationRecord named_record(const std::string& name, const std::string& given,
-                                            const calibration::CalibrationStore& store) {
+CalibrationRecord named_record(const std::string& name, const std::string& given,
+                               const CalibrationStore& store) {
   std::error_code error;
   if (std::filesystem::is_regular_file(name, error)) {
     std::ifstream in(name, std::ios::binary);
     std::ostringstream text;
     text << in.rdbuf();
     if (!in) throw std::runtime_error(given + ": " + name + ": cannot read the record's file");
-    return calibration::calibration_record_from_json(text.str(), name);
+    return calibration_record_from_json(text.str(), name);
   }
-  if (std::optional<calibration::CalibrationRecord> record = store.find(name)) return *record;
+  if (std::optional<CalibrationRecord> record = store.find(name)) return *record;
   std::string known;
-  for (const calibration::CalibrationRecord& record : store.records()) {
+  for (const CalibrationRecord& record : store.records()) {
     known += (known.empty() ? "" : ", ") + record.id;
   }
   throw std::invalid_argument(given + ": no file " + name + " and no record " + name +
@@ -69,8 +69,7 @@ calibration::CalibrationRecord named_record(const std::string& name, const std::
                               (known.empty() ? "it has none" : "its records: " + known) + ")");
 }
 
-ImportConversion parse_calibration(const std::string& item,
-                                   const calibration::CalibrationStore& store) {
+ImportConversion parse_calibration(const std::string& item, const CalibrationStore& store) {
   auto [target, name] =
       split_item(item, "--calibration", "TARGET=RECORD (a record's id in the store, or its file)");
   ImportConversion conversion;
@@ -94,7 +93,7 @@ std::string column_list(const CsvTable& table) {
 
 }  // namespace
 
-calibration::CalibrationRecord ImportConversion::record_for(const std::string& input_unit) const {
+CalibrationRecord ImportConversion::record_for(const std::string& input_unit) const {
   if (record) {
     if (!input_unit.empty() && record->input_unit != input_unit) {
       throw std::invalid_argument("is in '" + input_unit + "', but record " + record->id +
@@ -102,9 +101,8 @@ calibration::CalibrationRecord ImportConversion::record_for(const std::string& i
     }
     return *record;
   }
-  return calibration::linear_record("scale-" + target, input_unit.empty() ? "unstated" : input_unit,
-                                    import_target_unit(target), gain, offset,
-                                    "doorbench import " + given);
+  return linear_record("scale-" + target, input_unit.empty() ? "unstated" : input_unit,
+                       import_target_unit(target), gain, offset, "doorbench import " + given);
 }
 
 std::string import_target_unit(const std::string& target) {
@@ -121,9 +119,9 @@ std::string import_target_column(const std::string& target) {
   return target;
 }
 
-std::vector<ImportConversion> parse_import_conversions(
-    const std::vector<std::string>& scales, const std::vector<std::string>& calibrations,
-    const calibration::CalibrationStore& store) {
+std::vector<ImportConversion> parse_import_conversions(const std::vector<std::string>& scales,
+                                                       const std::vector<std::string>& calibrations,
+                                                       const CalibrationStore& store) {
   std::vector<ImportConversion> conversions;
   for (const std::string& item : scales) conversions.push_back(parse_scale(item));
   for (const std::string& item : calibrations) {
@@ -148,9 +146,9 @@ const ImportConversion* find_conversion(const std::vector<ImportConversion>& con
   return nullptr;
 }
 
-std::map<std::string, calibration::CalibrationRecord> take_raw_columns(
+std::map<std::string, CalibrationRecord> take_raw_columns(
     CsvTable& table, const std::vector<ImportConversion>& conversions, std::string_view source) {
-  std::map<std::string, calibration::CalibrationRecord> records;
+  std::map<std::string, CalibrationRecord> records;
   for (const ImportConversion& conversion : conversions) {
     const std::string column = import_target_column(conversion.target);
     const std::string suffix = unit_column_suffix(import_target_unit(conversion.target));

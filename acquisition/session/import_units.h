@@ -24,14 +24,14 @@ struct ImportConversion {
   std::string given;   // the item as given, for messages
   // --calibration: the record (from the store, or its file). --scale: none, and
   // physical = offset + gain · raw.
-  std::optional<calibration::CalibrationRecord> record;
+  std::optional<CalibrationRecord> record;
   double gain = 1.0, offset = 0.0;
 
   // The record for a channel whose raw values are in `input_unit` ("" when the channel states
   // none): --calibration's record, which must take that unit; --scale's linear record (id
   // "scale-TARGET", sensor_kind "scale", input unit the channel's or "unstated"). Throws
   // std::invalid_argument "TARGET: ..." naming the mismatch.
-  calibration::CalibrationRecord record_for(const std::string& input_unit) const;
+  CalibrationRecord record_for(const std::string& input_unit) const;
 };
 
 // The physical unit of a target: N, rad, rad/s, or the unit an extra column's name ends
@@ -45,9 +45,9 @@ std::string import_target_column(const std::string& target);
 // item: malformed, a target that is not force, angle, rate or a name with a unit suffix, a
 // target converted twice, a record that does not give the target's unit, no such record;
 // std::runtime_error for a record file that cannot be read or parsed.
-std::vector<ImportConversion> parse_import_conversions(
-    const std::vector<std::string>& scales, const std::vector<std::string>& calibrations,
-    const calibration::CalibrationStore& store);
+std::vector<ImportConversion> parse_import_conversions(const std::vector<std::string>& scales,
+                                                       const std::vector<std::string>& calibrations,
+                                                       const CalibrationStore& store);
 
 // The conversion of `target`, or null.
 const ImportConversion* find_conversion(const std::vector<ImportConversion>& conversions,
@@ -60,7 +60,7 @@ const ImportConversion* find_conversion(const std::vector<ImportConversion>& con
 // from V, inclinometer_angle_V for the target inclinometer_angle_rad); for a --scale, the one
 // column of the target's stem with any unit suffix (force_V, or force_N itself). Throws
 // CsvError at the header's line when there is none, or for a --scale more than one.
-std::map<std::string, calibration::CalibrationRecord> take_raw_columns(
+std::map<std::string, CalibrationRecord> take_raw_columns(
     CsvTable& table, const std::vector<ImportConversion>& conversions, std::string_view source);
 
 }  // namespace doorbench

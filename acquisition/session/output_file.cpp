@@ -123,7 +123,7 @@ void check_output_folder(const fs::path& folder, const std::vector<fs::path>& in
     throw OutputRefused(where + "exists and is not empty (give --overwrite to write into it)");
   }
   // A file in it that is an input under another name (a link to it): --overwrite would
-  // replace that name (issue 33).
+  // replace that name.
   for (const fs::directory_entry& entry : fs::directory_iterator(folder, error)) {
     for (const fs::path& input : inputs) {
       if (same_file(entry.path(), input)) {

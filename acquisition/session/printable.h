@@ -36,7 +36,7 @@ inline std::string printable(std::string_view text) {
   return out;
 }
 
-// A message with its long values cut (issue 33: a 10 MB value echoed on one line): a quoted
+// A message with its long values cut, so that a 10 MB value is not echoed on one line: a quoted
 // value ('...' or "...") longer than 80 characters keeps its first 60 and its size ("'xxx...
 // (10000000 characters)'"); a run without spaces longer than 1000 characters (a value not
 // quoted; paths are shorter) the same. Everything else is left as it is.

@@ -40,7 +40,7 @@ struct Recording {
   // such a column's values are in its record's input_unit, and its physical values (in the
   // unit its name ends with) are record.apply(value). A session made of the recording keeps
   // the raw values and the record, as a recorded session does. Empty: every column is physical.
-  std::map<std::string, calibration::CalibrationRecord> calibrations;
+  std::map<std::string, CalibrationRecord> calibrations;
 
   std::size_t size() const { return time_s.size(); }
 };

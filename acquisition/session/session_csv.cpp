@@ -39,7 +39,7 @@ std::vector<double> correct_delay(const SessionReader& session, const ChannelInf
                                   const std::vector<double>& time_s, std::vector<double> values) {
   if (channel.calibration_id.empty() || values.size() < 2) return values;
   double delay_s = 0.0;
-  for (const calibration::CalibrationRecord& record : session.calibrations()) {
+  for (const CalibrationRecord& record : session.calibrations()) {
     if (record.id == channel.calibration_id) delay_s = record.delay_s;
   }
   if (delay_s == 0.0) return values;
@@ -53,10 +53,10 @@ std::vector<double> correct_delay(const SessionReader& session, const ChannelInf
 // The force channel's geometry record (handle radius, the cell's mounting angle), if the
 // session applies one: the cell, turned by α from the handle's tangent, reads F · cos α, and
 // the record's polynomial ({0, 1/cos α}) gives back the tangential force F.
-std::optional<calibration::CalibrationRecord> geometry_record(const SessionReader& session,
-                                                              const ChannelInfo& channel) {
+std::optional<CalibrationRecord> geometry_record(const SessionReader& session,
+                                                 const ChannelInfo& channel) {
   if (channel.geometry_calibration_id.empty()) return std::nullopt;
-  for (calibration::CalibrationRecord& record : session.calibrations()) {
+  for (CalibrationRecord& record : session.calibrations()) {
     if (record.id == channel.geometry_calibration_id) {
       if (record.sensor_kind != "geometry" || record.input_unit != channel.unit ||
           record.unit != channel.unit) {
@@ -169,8 +169,8 @@ bool on_one_clock(const std::vector<const ChannelInfo*>& exported,
   return true;
 }
 
-// Channels on one uniform clock of which some end before the others (a channel cut short,
-// issue 33): the rows go on to the longest channel's end, on the first channel's clock
+// Channels on one uniform clock of which some end before the others (a channel cut
+// short): the rows go on to the longest channel's end, on the first channel's clock
 // continued, and a shorter channel's cells past its end are missing (NaN: empty cells in a
 // CSV; preprocessing leaves out a stroke with missing samples and says so). Fills `columns`,
 // recording.time_s and the `cut_short` metadata ("force from 1.001 s (1000 of 2000 rows)");
@@ -364,8 +364,7 @@ namespace {
 // The handle's radius: the geometry record's (the bench's as calibrated) before the
 // truth's, the import's or the haptic group's attribute.
 void take_handle_radius(const SessionReader& session,
-                        const std::optional<calibration::CalibrationRecord>& geometry,
-                        Recording& recording) {
+                        const std::optional<CalibrationRecord>& geometry, Recording& recording) {
   for (const std::string group : {"truth", "import", "haptic"}) {
     try {
       const std::string radius = session.read_group_attribute(group, "handle_radius_m");
@@ -377,7 +376,7 @@ void take_handle_radius(const SessionReader& session,
   }
   if (geometry) {
     recording.metadata.emplace_back(std::string(kGeometryCalibrationKey), geometry->id);
-    if (const calibration::CalibrationQuantity* radius = geometry->quantity("handle_radius_m")) {
+    if (const CalibrationQuantity* radius = geometry->quantity("handle_radius_m")) {
       recording.handle_radius_m = radius->value;
     }
   }
@@ -415,8 +414,7 @@ Recording session_to_recording(const SessionReader& session) {
   // Strokes from events; the load cell's mounting from each stroke's detail.
   const StrokeColumns strokes = stroke_columns_from_events(session.events(), recording.time_s);
   recording.force_N = column(*exported.force);
-  const std::optional<calibration::CalibrationRecord> geometry =
-      geometry_record(session, *exported.force);
+  const std::optional<CalibrationRecord> geometry = geometry_record(session, *exported.force);
   if (geometry) {
     for (double& value : recording.force_N) value = geometry->apply(value);
   }
@@ -508,7 +506,7 @@ void write_recording_session(const Recording& recording, const std::filesystem::
     // them physical, as a recorded channel keeps its counts and its record.
     const auto calibrated = recording.calibrations.find(column);
     if (calibrated != recording.calibrations.end()) {
-      const calibration::CalibrationRecord& record = calibrated->second;
+      const CalibrationRecord& record = calibrated->second;
       channel.raw_unit = record.input_unit;
       channel.unit = record.unit;
       channel.calibration_id = record.id;

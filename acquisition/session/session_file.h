@@ -106,7 +106,7 @@ class SessionWriter {
   // with the same id is not. A channel's record must be added before that channel's first
   // sample (or, for a channel without samples, before close()); when both give a unit,
   // the channel's unit must be the record's.
-  void add_calibration(const calibration::CalibrationRecord& record);
+  void add_calibration(const CalibrationRecord& record);
 
   // Buffered; memory stays bounded (one chunk per channel). The call must match the
   // channel: append_counts for counts, append_values for values on a uniform clock,
@@ -183,7 +183,7 @@ class SessionReader {
   double start_time_s() const;  // earliest sample time of any channel; 0 without samples
   double end_time_s() const;    // latest sample time of any channel; 0 without samples
   std::vector<SessionEvent> events() const;  // in the order they were added
-  std::vector<calibration::CalibrationRecord> calibrations() const;
+  std::vector<CalibrationRecord> calibrations() const;
 
   // At most this many samples are read by one call (2^28: 2 GiB of values and 2 GiB of
   // times); a longer range is a SessionError naming the dataset, not an allocation failure.
@@ -220,7 +220,6 @@ class SessionReader {
 // earlier record again. The record must give the channel's unit. Returns the id the
 // channel used before. Throws SessionError.
 std::string apply_calibration(const std::filesystem::path& path, const std::string& channel,
-                              const calibration::CalibrationRecord& record,
-                              const std::string& note = "");
+                              const CalibrationRecord& record, const std::string& note = "");
 
 }  // namespace doorbench

@@ -14,7 +14,7 @@
 namespace doorbench {
 
 namespace fs = std::filesystem;
-using calibration::CalibrationRecord;
+using doorbench::CalibrationRecord;
 using namespace session_hdf5;
 // ---------------------------------------------------------------------------------------
 // Reader
@@ -222,7 +222,7 @@ struct SessionReader::Impl {
       const std::string json = read_text_attribute(g.get(), "record", where);
       CalibrationRecord record;
       try {
-        record = calibration::calibration_record_from_json(json, where);
+        record = calibration_record_from_json(json, where);
       } catch (const std::runtime_error& error) {
         throw Failure(error.what());
       }
@@ -505,7 +505,7 @@ std::string apply_calibration(const fs::path& path, const std::string& channel,
                          in_quotes(record.unit));
     }
     for (const CalibrationRecord& known : reader.calibrations()) {
-      if (known.id == record.id && calibration::to_json(known) != calibration::to_json(record)) {
+      if (known.id == record.id && to_json(known) != to_json(record)) {
         throw SessionError(prefix + "the session already holds a different calibration record " +
                            record.id + " (records are never changed: make a new version)");
       }
@@ -517,7 +517,7 @@ std::string apply_calibration(const fs::path& path, const std::string& channel,
                                 "cannot open for writing");
     const Handle calibrations = open_group(file.get(), "calibrations");
     if (!has_link(calibrations.get(), record.id)) {
-      write_record_group(calibrations.get(), record, calibration::to_json(record));
+      write_record_group(calibrations.get(), record, to_json(record));
     }
     const Handle group = open_group(file.get(), "/channels/" + channel);
     if (has_attribute(group.get(), attribute)) {

@@ -13,7 +13,7 @@
 namespace doorbench {
 
 namespace fs = std::filesystem;
-using calibration::CalibrationRecord;
+using doorbench::CalibrationRecord;
 using namespace session_hdf5;
 // ---------------------------------------------------------------------------------------
 // Options
@@ -185,7 +185,7 @@ struct SessionWriter::Impl {
     }
     if (!info.calibration_id.empty()) {
       if (const std::string* json = calibration_json(info.calibration_id)) {
-        check_units(info, calibration::calibration_record_from_json(*json, "session"));
+        check_units(info, calibration_record_from_json(*json, "session"));
       }
     }
 
@@ -226,7 +226,7 @@ struct SessionWriter::Impl {
     if (!valid_link_name(record.id)) {
       misuse("calibration record id " + in_quotes(record.id) + " cannot name an HDF5 group (no /)");
     }
-    std::string json = calibration::to_json(record);
+    std::string json = to_json(record);
     if (const std::string* known = calibration_json(record.id)) {
       if (*known == json) return;  // the same record again
       misuse("calibration record " + record.id + " is added twice with different contents");

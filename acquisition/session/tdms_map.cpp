@@ -265,7 +265,7 @@ void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item,
                                         "name ends in its unit)"));
   }
   if (conversion) {
-    calibration::CalibrationRecord record;
+    CalibrationRecord record;
     try {
       record = conversion->record_for(states_unit ? unit->text : "");
     } catch (const std::invalid_argument& error) {

@@ -1,7 +1,6 @@
 #pragma once
 // Which of the inverse design's solutions are equivalent to the chosen design, and which
-// measurement would tell each from it (issue 31; docs/design-spec.md, "Equivalent
-// solutions").
+// measurement would tell each from it (docs/design-spec.md, "Equivalent solutions").
 //
 // The inverse design keeps several parameter sets that fit the TO-BE recordings about
 // equally well (inverse_design.h). An alternative is *equivalent* to the design (the first

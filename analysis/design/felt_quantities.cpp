@@ -7,23 +7,17 @@
 
 #include "analysis/preprocessing/preprocessing.h"
 #include "core/number_format.h"
-#include "core/units.h"
 #include "core/numbers.h"
+#include "core/percentile.h"
+#include "core/units.h"
 
 namespace doorbench {
 
 namespace {
 
-
-double median(std::vector<double> values) {
+double finite_median(std::vector<double> values) {
   std::erase_if(values, [](double v) { return !std::isfinite(v); });
-  if (values.empty()) return kNaN;
-  const auto middle = values.begin() + static_cast<std::ptrdiff_t>(values.size() / 2);
-  std::nth_element(values.begin(), middle, values.end());
-  if (values.size() % 2 == 1) return *middle;
-  const double upper = *middle;
-  const double lower = *std::max_element(values.begin(), middle);
-  return 0.5 * (lower + upper);
+  return median(std::move(values));
 }
 
 bool positive_finite(double value) {
@@ -112,7 +106,7 @@ double combine(const ForceAngleCurve& curve, double from_rad, double to_rad, dou
     values.push_back(0.5 * (curve.opening_force_N[b] - sign * curve.closing_force_N[b]));
   }
   if (values.empty()) return kNaN;
-  if (use_median) return median(std::move(values));
+  if (use_median) return finite_median(std::move(values));
   double sum = 0.0;
   for (double v : values) sum += v;
   return sum / static_cast<double>(values.size());
@@ -188,7 +182,7 @@ FeltQuantities felt_from_strokes(std::span<const PreparedData> data, double thet
         for (std::size_t k = i >= half ? i - half : 0; k <= std::min(n - 1, i + half); ++k) {
           window.push_back(opening ? stroke.force_N[k] : -stroke.force_N[k]);
         }
-        const double value = median(window);
+        const double value = finite_median(window);
         if (value > peak) {
           peak = value;
           peak_angle = theta;
@@ -203,9 +197,9 @@ FeltQuantities felt_from_strokes(std::span<const PreparedData> data, double thet
       }
     }
   }
-  felt.peak_unlatch_force_N = median(unlatch_peaks);
-  felt.unlatch_angle_rad = median(unlatch_angles);
-  felt.peak_latch_force_N = median(latch_peaks);
+  felt.peak_unlatch_force_N = finite_median(unlatch_peaks);
+  felt.unlatch_angle_rad = finite_median(unlatch_angles);
+  felt.peak_latch_force_N = finite_median(latch_peaks);
 
   const ForceAngleCurve curve = force_angle_curve(data, theta_max_rad, options);
   const double open_end = theta_max_rad - options.open_end_margin_rad;

@@ -1,5 +1,5 @@
 #pragma once
-// The inverse design fit (issue 9, docs/inverse-design.md): which physical door produces
+// The inverse design fit (docs/inverse-design.md): which physical door produces
 // the TO-BE feel, recorded by haptic playback, with the smallest change to the AS-IS door.
 //
 //   doorbench::InverseDesignOptions options;      // default costs of change, λ, fixed set

@@ -1,13 +1,13 @@
 // spec.json (spec_report.h): the design, the felt quantities, the checks, the tolerance
 // spreads, the perceptual tolerances and the alternatives as one JSON document;
 // docs/design-spec.md describes each field.
-#include "analysis/design/spec_report.h"
-
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
 #include "analysis/design/internal/spec_text.h"
+#include "analysis/design/spec_report.h"
+#include "core/json_number.h"
 
 namespace doorbench {
 
@@ -31,9 +31,7 @@ namespace {
 using json = nlohmann::ordered_json;
 
 // NaN and infinities become null (JSON has no NaN).
-json number(double value) {
-  return std::isfinite(value) ? json(value) : json(nullptr);
-}
+constexpr json (*number)(double) = &json_number<json>;
 
 json felt_json(const FeltQuantities& felt) {
   json out = json::object();

@@ -11,6 +11,7 @@
 #include "acquisition/session/pdf_output.h"
 #include "analysis/design/internal/spec_text.h"
 #include "analysis/report/svg_plot.h"
+#include "core/html_escape.h"
 #include "core/number_format.h"
 #include "core/numbers.h"
 #include "core/units.h"
@@ -20,29 +21,6 @@ namespace doorbench {
 using design_detail::felt_criterion_text;
 
 namespace {
-
-std::string escape(std::string_view text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '&':
-        out += "&amp;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 std::string cell(double value, const char* format = "%.4g") {
   return std::isfinite(value) ? printf_text(format, value) : std::string("&ndash;");
@@ -77,7 +55,8 @@ std::string inline_svg(const PlotOptions& options, std::span<const PlotSeries> s
     }
     return "<figure>" + svg + "</figure>\n";
   } catch (const std::invalid_argument& error) {
-    return "<p>(" + escape(options.title) + ": no plot, " + escape(error.what()) + ")</p>\n";
+    return "<p>(" + html_escape(options.title) + ": no plot, " + html_escape(error.what()) +
+           ")</p>\n";
   }
 }
 
@@ -101,13 +80,13 @@ std::string felt_table(const SpecEvaluation& e, const FeltOptions& felt) {
   std::string html =
       "<p class=\"small\">Read along the TO-BE recordings' own motion (each model's hand force "
       "by inverse dynamics on the recorded angle and rate): " +
-      escape(felt_definition(felt)) +
+      html_escape(felt_definition(felt)) +
       ".</p>\n<table><tr><th>quantity</th><th>AS-IS model</th><th>design</th>"
       "<th>TO-BE recorded</th><th>design &minus; recorded</th></tr>\n";
   for (const FeltQuantityInfo& info : kFeltQuantities) {
     const double recorded = e.check_after.recorded.*info.member;
     const double after = e.check_after.model.*info.member;
-    html += "<tr><td>" + escape(felt_label(info)) + "</td><td>" +
+    html += "<tr><td>" + html_escape(felt_label(info)) + "</td><td>" +
             cell(e.check_before.model.*info.member, "%.2f") + "</td><td>" + cell(after, "%.2f") +
             "</td><td>" + cell(recorded, "%.2f") + "</td><td>" + cell(after - recorded, "%+.2f") +
             "</td></tr>\n";
@@ -124,7 +103,7 @@ std::string felt_table(const SpecEvaluation& e, const FeltOptions& felt) {
 std::string standard_run_table(const SpecEvaluation& e, const FeltOptions& felt) {
   std::string html =
       "<p class=\"small\">The same quantities in the standard run (" +
-      escape(standard_run_conditions(felt)) +
+      html_escape(standard_run_conditions(felt)) +
       "), as the tolerance analysis reads them. Its speeds differ from the recordings', so its "
       "figures compare with each other, not with the table above.</p>\n"
       "<table><tr><th>quantity, standard run</th><th>AS-IS door</th><th>design</th>"
@@ -132,7 +111,7 @@ std::string standard_run_table(const SpecEvaluation& e, const FeltOptions& felt)
   for (const FeltQuantityInfo& info : kFeltQuantities) {
     const double before = e.felt_before.*info.member;
     const double after = e.felt_after.*info.member;
-    html += "<tr><td>" + escape(felt_label(info)) + "</td><td>" + cell(before, "%.2f") +
+    html += "<tr><td>" + html_escape(felt_label(info)) + "</td><td>" + cell(before, "%.2f") +
             "</td><td>" + cell(after, "%.2f") + "</td><td>" + cell(after - before, "%+.2f") +
             "</td></tr>\n";
   }
@@ -171,7 +150,7 @@ std::string tolerance_section(const ToleranceResult& t, const FeltOptions& felt)
       "<p>%d samples of the design within the tolerances below (%d failed), %d threads, "
       "%.1f s; each sample's felt quantities from the standard run (",
       t.samples, t.failed, t.threads, t.elapsed_s);
-  html += escape(standard_run_conditions(felt)) + ").</p>\n";
+  html += html_escape(standard_run_conditions(felt)) + ").</p>\n";
   html +=
       "<table><tr><th>quantity</th><th>nominal</th><th>mean</th><th>sd</th><th>p5</th>"
       "<th>p95</th><th>most important tolerance</th></tr>\n";
@@ -182,12 +161,12 @@ std::string tolerance_section(const ToleranceResult& t, const FeltOptions& felt)
       if (t.tolerances[p].name == t.most_important[q]) share = t.explained[q][p];
     }
     html +=
-        "<tr><td>" + escape(felt_label(kFeltQuantities[q])) + "</td><td>" +
+        "<tr><td>" + html_escape(felt_label(kFeltQuantities[q])) + "</td><td>" +
         cell(s.nominal, "%.2f") + "</td><td>" + cell(s.mean, "%.2f") + "</td><td>" +
         cell(s.sd, "%.2f") + "</td><td>" + cell(s.p5, "%.2f") + "</td><td>" + cell(s.p95, "%.2f") +
         "</td><td>" +
         (t.most_important[q].empty() ? std::string("&ndash;")
-                                     : escape(t.most_important[q]) +
+                                     : html_escape(t.most_important[q]) +
                                            printf_text(" (%.0f %% of the variance)", 100 * share)) +
         "</td></tr>\n";
   }
@@ -199,7 +178,7 @@ std::string tolerance_section(const ToleranceResult& t, const FeltOptions& felt)
   for (std::size_t p = 0; p < t.tolerances.size(); ++p) {
     const ParameterTolerance& tol = t.tolerances[p];
     html +=
-        "<tr><td>" + escape(tol.name) + "</td><td>" +
+        "<tr><td>" + html_escape(tol.name) + "</td><td>" +
         (tol.percent ? printf_text("%g %%", tol.plus_minus) : printf_text("%g", tol.plus_minus)) +
         "</td><td>" + std::string(to_string(tol.distribution)) + "</td><td>" +
         cell(t.nominal_values[p], "%.5g") + "</td></tr>\n";
@@ -208,7 +187,7 @@ std::string tolerance_section(const ToleranceResult& t, const FeltOptions& felt)
 }
 
 std::string share_cell(const PerceptualRow& row) {
-  if (!std::isfinite(row.share)) return "&ndash; (" + escape(row.note) + ")";
+  if (!std::isfinite(row.share)) return "&ndash; (" + html_escape(row.note) + ")";
   return printf_text("%.1f %% [%.1f, %.1f] (%d of %d)", 100 * row.share, 100 * row.ci_low,
                      100 * row.ci_high, row.felt_different, row.doors);
 }
@@ -225,8 +204,9 @@ std::string panel_tables(const PerceptualSpec& p) {
         "<h3>The panel's preference scale</h3><table><tr><th>variant</th>"
         "<th>worth (log scale)</th><th>95 % interval</th></tr>\n";
     for (const PanelPreference& v : p.preference) {
-      html += "<tr><td>" + escape(v.variant) + "</td><td>" + cell(v.worth, "%.3g") + "</td><td>" +
-              cell(v.ci_low, "%.3g") + " to " + cell(v.ci_high, "%.3g") + "</td></tr>\n";
+      html += "<tr><td>" + html_escape(v.variant) + "</td><td>" + cell(v.worth, "%.3g") +
+              "</td><td>" + cell(v.ci_low, "%.3g") + " to " + cell(v.ci_high, "%.3g") +
+              "</td></tr>\n";
     }
     html += "</table>\n";
   }
@@ -236,11 +216,11 @@ std::string panel_tables(const PerceptualSpec& p) {
         "<th>method</th><th>JND (Weber fraction)</th><th>95 % interval</th><th>criterion</th>"
         "</tr>\n";
     for (const PanelThreshold& t : p.thresholds) {
-      html += "<tr><td>" + escape(t.parameter) + "</td><td>" + escape(t.reference) + "</td><td>" +
-              escape(t.method) + "</td><td>" + cell(100 * t.weber_fraction, "%.1f %%") +
-              "</td><td>" + cell(100 * t.ci_low, "%.1f") + " to " +
-              (std::isfinite(t.ci_high) ? cell(100 * t.ci_high, "%.1f %%") : "open") + "</td><td>" +
-              escape(t.criterion) + "</td></tr>\n";
+      html += "<tr><td>" + html_escape(t.parameter) + "</td><td>" + html_escape(t.reference) +
+              "</td><td>" + html_escape(t.method) + "</td><td>" +
+              cell(100 * t.weber_fraction, "%.1f %%") + "</td><td>" + cell(100 * t.ci_low, "%.1f") +
+              " to " + (std::isfinite(t.ci_high) ? cell(100 * t.ci_high, "%.1f %%") : "open") +
+              "</td><td>" + html_escape(t.criterion) + "</td></tr>\n";
     }
     html += "</table>\n";
   }
@@ -249,36 +229,36 @@ std::string panel_tables(const PerceptualSpec& p) {
 
 // The perceptual tolerance table beside the engineering one, and the proposal.
 std::string perceptual_section(const PerceptualSpec& p) {
-  std::string html = "<p>From the panel: " + escape(p.campaign) +
-                     ". TO-BE feel: " + escape(p.tobe_source) + ".</p>\n";
+  std::string html = "<p>From the panel: " + html_escape(p.campaign) +
+                     ". TO-BE feel: " + html_escape(p.tobe_source) + ".</p>\n";
   if (!p.notes.empty()) {
     html += "<ul class=\"small\">\n";
-    for (const std::string& note : p.notes) html += "<li>" + escape(note) + "</li>\n";
+    for (const std::string& note : p.notes) html += "<li>" + html_escape(note) + "</li>\n";
     html += "</ul>\n";
   }
   html += panel_tables(p);
   html += "<h3>Doors a panel member would feel as different</h3><p class=\"small\">" +
-          escape(felt_criterion_text()) + ".</p>\n";
+          html_escape(felt_criterion_text()) + ".</p>\n";
   html +=
       "<table><tr><th>quantity</th><th>nominal</th><th>JND</th><th>JND from</th>"
       "<th>felt as different, tolerances as given</th><th>at the proposed tolerances</th></tr>\n";
   for (std::size_t q = 0; q < p.rows.size(); ++q) {
     const PerceptualRow& row = p.rows[q];
     html +=
-        "<tr><td>" + escape(felt_label(kFeltQuantities[q])) + "</td><td>" +
+        "<tr><td>" + html_escape(felt_label(kFeltQuantities[q])) + "</td><td>" +
         cell(row.nominal, "%.2f") + "</td><td>" + cell(100 * row.jnd.weber_fraction, "%.1f %%") +
-        "</td><td>" + escape(row.jnd.source) + "</td><td>" + share_cell(row) + "</td><td>" +
+        "</td><td>" + html_escape(row.jnd.source) + "</td><td>" + share_cell(row) + "</td><td>" +
         (q < p.proposal.rows.size() ? share_cell(p.proposal.rows[q]) : "&ndash;") + "</td></tr>\n";
   }
   html += "</table>\n<p>Proposed (level " + cell(100 * p.proposal.felt_share, "%.3g %%") +
-          "): " + escape(p.proposal.summary) + ".</p>\n";
+          "): " + html_escape(p.proposal.summary) + ".</p>\n";
   html +=
       "<table><tr><th>parameter</th><th>&plusmn; as given</th><th>&plusmn; proposed</th>"
       "<th>distribution</th></tr>\n";
   for (const ParameterTolerance& t : p.proposal.tolerances) {
     ParameterTolerance given = t;
     given.plus_minus = t.plus_minus / p.proposal.factor;
-    html += "<tr><td>" + escape(t.name) + "</td><td>" + tolerance_text(given) + "</td><td>" +
+    html += "<tr><td>" + html_escape(t.name) + "</td><td>" + tolerance_text(given) + "</td><td>" +
             tolerance_text(t) + "</td><td>" + std::string(to_string(t.distribution)) +
             "</td></tr>\n";
   }
@@ -372,19 +352,19 @@ std::string what_to_change(const InverseDesignResult& design, const SpecEvaluati
 std::string sources_section(const InverseDesignResult& design, const SpecEvaluation& e) {
   const DesignSolution& best = design.solutions.front();
   std::string html =
-      "<p class=\"small\">AS-IS: " + escape(e.asis_source) + "<br>TO-BE recordings: ";
+      "<p class=\"small\">AS-IS: " + html_escape(e.asis_source) + "<br>TO-BE recordings: ";
   for (std::size_t i = 0; i < e.tobe_sources.size(); ++i) {
-    html += (i ? ", " : "") + escape(e.tobe_sources[i]);
+    html += (i ? ", " : "") + html_escape(e.tobe_sources[i]);
   }
-  html += "<br>made by: <code>" + escape(e.command) + "</code></p>\n";
+  html += "<br>made by: <code>" + html_escape(e.command) + "</code></p>\n";
   for (const std::string& warning : e.warnings) {
-    html += "<p class=\"bad\">Warning: " + escape(warning) + "</p>\n";
+    html += "<p class=\"bad\">Warning: " + html_escape(warning) + "</p>\n";
   }
   if (!design.feasible) {
     html +=
         "<p class=\"bad\">Not reachable within the bounds; the design below is the nearest "
         "feasible one. " +
-        escape(design.infeasibility) + "</p>\n";
+        html_escape(design.infeasibility) + "</p>\n";
   }
   html += printf_text(
       "<p class=\"small\">Fit of the TO-BE recordings by the design: window RMS error of the rate "
@@ -406,15 +386,15 @@ std::string parameter_section(const DesignSolution& best) {
       "<th>change</th><th>&plusmn;</th><th>unit</th><th></th></tr>\n";
   for (const DesignParameter& p : best.parameters) {
     html +=
-        std::string(p.changed ? "<tr class=\"changed\">" : "<tr>") + "<td>" + escape(p.name) +
+        std::string(p.changed ? "<tr class=\"changed\">" : "<tr>") + "<td>" + html_escape(p.name) +
         "</td><td>" + cell(p.as_is, "%.5g") + "</td><td>" + cell(p.to_be, "%.5g") + "</td><td>" +
         (p.changed
              ? cell(p.change, "%+.4g") + (std::isfinite(p.relative_change)
                                               ? printf_text(" (%+.1f %%)", 100 * p.relative_change)
                                               : std::string())
              : std::string()) +
-        "</td><td>" + cell(p.uncertainty, "%.2g") + "</td><td>" + escape(p.unit) + "</td><td>" +
-        (p.free ? (p.at_bound ? "at bound" : "") : "fixed") + "</td></tr>\n";
+        "</td><td>" + cell(p.uncertainty, "%.2g") + "</td><td>" + html_escape(p.unit) +
+        "</td><td>" + (p.free ? (p.at_bound ? "at bound" : "") : "fixed") + "</td></tr>\n";
   }
   return html + "</table>\n";
 }
@@ -433,15 +413,15 @@ std::string sparse_section(const InverseDesignResult& design) {
       const bool equivalent =
           std::find(step.equivalent.begin(), step.equivalent.end(), name) != step.equivalent.end();
       if (name != step.added && equivalent) {
-        same += (same.empty() ? "" : ", ") + escape(name) + printf_text(" (%.6g)", cost);
+        same += (same.empty() ? "" : ", ") + html_escape(name) + printf_text(" (%.6g)", cost);
       }
     }
     html += printf_text("<tr><td>%zu</td><td>", s) +
-            (s == 0 ? std::string("(AS-IS)") : escape(step.added)) + "</td><td>" +
+            (s == 0 ? std::string("(AS-IS)") : html_escape(step.added)) + "</td><td>" +
             cell(step.data_cost, "%.6g") + "</td><td>" + cell(step.reduced_data_cost, "%.3g") +
             "</td><td>" + same + "</td></tr>\n";
   }
-  return html + "</table>\n<p class=\"small\">" + escape(design.sparse_stop) + ".</p>\n";
+  return html + "</table>\n<p class=\"small\">" + html_escape(design.sparse_stop) + ".</p>\n";
 }
 
 std::string curve_plot(const SpecEvaluation& e) {
@@ -478,7 +458,7 @@ std::string alternatives_section(const InverseDesignResult& design, const SpecEv
     const DesignSolution& alt = design.solutions[s];
     std::string changes;
     if (!alt.swapped.empty()) {
-      changes = "<em>sparse design, " + escape(alt.swapped) + "</em>: ";
+      changes = "<em>sparse design, " + html_escape(alt.swapped) + "</em>: ";
     } else if (!alt.held_at_as_is.empty()) {
       changes = "<em>fewest changes</em>: ";
     } else if (alt.start_index >= 0) {
@@ -490,11 +470,11 @@ std::string alternatives_section(const InverseDesignResult& design, const SpecEv
             changes + "</td><td class=\"l\">" +
             (s - 1 < e.equivalence.size()
                  ? (e.equivalence[s - 1].equivalent ? "<b>equivalent</b>: " : "") +
-                       escape(e.equivalence[s - 1].verdict)
+                       html_escape(e.equivalence[s - 1].verdict)
                  : std::string()) +
             "</td></tr>\n";
   }
-  return html + "</table>\n<p class=\"small\">Equivalent: " + escape(e.equivalence_criterion) +
+  return html + "</table>\n<p class=\"small\">Equivalent: " + html_escape(e.equivalence_criterion) +
          ".</p>\n";
 }
 
@@ -564,7 +544,7 @@ std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& e
   }
   if (!design.notes.empty()) {
     html += "<h2>Notes</h2><ul class=\"small\">\n";
-    for (const std::string& note : design.notes) html += "<li>" + escape(note) + "</li>\n";
+    for (const std::string& note : design.notes) html += "<li>" + html_escape(note) + "</li>\n";
     html += "</ul>\n";
   }
   return html + "</body></html>\n";

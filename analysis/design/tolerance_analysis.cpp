@@ -14,7 +14,9 @@
 
 #include "core/number_format.h"
 #include "core/numbers.h"
-
+#include "core/percentile.h"
+#include "core/seeded_random.h"
+#include "core/units.h"
 
 namespace doorbench {
 
@@ -30,31 +32,29 @@ struct DefaultTolerance {
 // Typical sheet-metal, spring and moulding tolerances (docs/design-spec.md says why each).
 // Smoothing lengths and the end stops are modelling devices, not made parts: no tolerance.
 constexpr DefaultTolerance kPhysicalDefaults[] = {
-    {"m_d", 2.0, true},           {"l_c", 0.002, false},  {"J_d", 3.0, true},
-    {"k_s", 5.0, true},           {"L0", 0.0005, false},  {"F0", 5.0, true},
-    {"A_x", 0.0003, false},       {"A_y", 0.0003, false}, {"B_u", 0.0003, false},
-    {"B_v", 0.0003, false},       {"T_h", 20.0, true},    {"b_h", 20.0, true},
-    {"mu_g", 20.0, true},         {"r_l", 0.0005, false}, {"k_l", 10.0, true},
-    {"F_l0", 10.0, true},         {"h", 0.0001, false},   {"alpha_o", 0.01745, false},
-    {"alpha_c", 0.01745, false},  {"mu_l", 20.0, true},   {"k_seal", 15.0, true},
+    {"m_d", 2.0, true},
+    {"l_c", 0.002, false},
+    {"J_d", 3.0, true},
+    {"k_s", 5.0, true},
+    {"L0", 0.0005, false},
+    {"F0", 5.0, true},
+    {"A_x", 0.0003, false},
+    {"A_y", 0.0003, false},
+    {"B_u", 0.0003, false},
+    {"B_v", 0.0003, false},
+    {"T_h", 20.0, true},
+    {"b_h", 20.0, true},
+    {"mu_g", 20.0, true},
+    {"r_l", 0.0005, false},
+    {"k_l", 10.0, true},
+    {"F_l0", 10.0, true},
+    {"h", 0.0001, false},
+    {"alpha_o", kRadPerDeg, false},
+    {"alpha_c", kRadPerDeg, false},
+    {"mu_l", 20.0, true},
+    {"k_seal", 15.0, true},
     {"theta_seal", 0.002, false},
 };
-
-std::uint64_t splitmix64(std::uint64_t x) {
-  x += 0x9e3779b97f4a7c15ULL;
-  x = (x ^ (x >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  x = (x ^ (x >> 27)) * 0x94d049bb133111ebULL;
-  return x ^ (x >> 31);
-}
-
-double percentile(const std::vector<double>& sorted, double fraction) {
-  if (sorted.empty()) return kNaN;
-  const double position = fraction * static_cast<double>(sorted.size() - 1);
-  const auto below = static_cast<std::size_t>(std::floor(position));
-  const std::size_t above = std::min(sorted.size() - 1, below + 1);
-  const double weight = position - static_cast<double>(below);
-  return sorted[below] * (1.0 - weight) + sorted[above] * weight;
-}
 
 }  // namespace
 
@@ -191,7 +191,7 @@ std::vector<int> toleranced_parameters(const DoorModel& design, const ToleranceS
 void run_sample(const DoorModel& design, const std::vector<int>& index,
                 const MonteCarloOptions& options, std::size_t s, ToleranceResult& result,
                 std::string& failure) {
-  std::mt19937_64 random(splitmix64(options.seed * 0x100000001b3ULL + s));
+  std::mt19937_64 random(mix64(options.seed * 0x100000001b3ULL + s));
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   std::vector<double> values(design.parameter_values().begin(), design.parameter_values().end());
@@ -289,8 +289,8 @@ QuantitySpread quantity_spread(std::size_t q, ToleranceResult& result) {
   spread.sd = std::sqrt(square / (n - 1));
   std::vector<double> sorted = values;
   std::sort(sorted.begin(), sorted.end());
-  spread.p5 = percentile(sorted, 0.05);
-  spread.p95 = percentile(sorted, 0.95);
+  spread.p5 = percentile_of_sorted(sorted, 0.05);
+  spread.p95 = percentile_of_sorted(sorted, 0.95);
   spread.min = sorted.front();
   spread.max = sorted.back();
   for (std::size_t p = 0; p < result.tolerances.size(); ++p) {

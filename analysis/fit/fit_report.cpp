@@ -23,11 +23,6 @@ std::string short_number(double value) {
   return printf_text("%.3g", value);
 }
 
-std::string percent(double value) {
-  if (!std::isfinite(value)) return "-";
-  return printf_text("%.2f%%", value);
-}
-
 std::string objective_name(const FitOptions& options) {
   if (options.objective == FitOptions::Objective::kWholeStrokeMax) {
     return "whole strokes replayed, L" + std::to_string(2 * options.max_objective_power) +
@@ -46,8 +41,9 @@ void metric_rows(std::string& out, const FitMetrics& fitted, const FitMetrics* h
                        held_out ? short_number(held_value).c_str() : "-", unit);
   };
   auto percent_row = [&](const char* name, double fitted_value, double held_value) {
-    out += printf_text("  %-36s %-12s %-12s\n", name, percent(fitted_value).c_str(),
-                       held_out ? percent(held_value).c_str() : "-");
+    out +=
+        printf_text("  %-36s %-12s %-12s\n", name, format_percent(fitted_value / 100.0, 2).c_str(),
+                    held_out ? format_percent(held_value / 100.0, 2).c_str() : "-");
   };
   const double nan = std::nan("");
   row("windows: RMSE of omega", fitted.window.rmse(), held_out ? held_out->window.rmse() : nan,
@@ -74,8 +70,8 @@ std::string FitSummary::brief_report() const {
       converged ? "converged" : "NOT converged", iterations, total_time_s);
   out += "Window RMSE of omega " + short_number(fitted.window.rmse()) + " rad/s fitted";
   if (held_out) out += ", " + short_number(held_out->window.rmse()) + " held out";
-  out += "; FIT% " + percent(fitted.window.fit_percent());
-  if (held_out) out += " / " + percent(held_out->window.fit_percent());
+  out += "; FIT% " + format_percent(fitted.window.fit_percent() / 100.0, 2);
+  if (held_out) out += " / " + format_percent(held_out->window.fit_percent() / 100.0, 2);
   out += ".\n";
   out += "Study objective (whole strokes replayed): max |omega error| " +
          short_number(fitted.study_objective_rad_s()) + " rad/s (stroke " +
@@ -188,7 +184,7 @@ void parameter_section(std::string& out, const FitSummary& summary) {
     out += printf_text(
         "  %-16s %-13s %-11s %-8s %-11s %-11s %-6s %-13s %-13s %-21s %s\n", p.name.c_str(),
         number(p.value).c_str(), short_number(p.uncertainty).c_str(),
-        p.free ? percent(100.0 * relative).c_str() : "-",
+        p.free ? format_percent(relative, 2).c_str() : "-",
         short_number(p.robust_uncertainty).c_str(), short_number(p.classical_uncertainty).c_str(),
         p.free ? printf_text("%.1f", p.effective_windows).c_str() : "-", number(p.start).c_str(),
         p.free ? number(p.equation_error).c_str() : "-", bounds.c_str(), status.c_str());
@@ -255,7 +251,7 @@ void metrics_section(std::string& out, const FitSummary& summary) {
                        direction_name(s.direction).c_str(), s.window.count, s.windows,
                        short_number(s.window.rmse()).c_str(),
                        short_number(s.window.max_abs_error).c_str(),
-                       percent(s.window.fit_percent()).c_str(), replay.c_str(),
+                       format_percent(s.window.fit_percent() / 100.0, 2).c_str(), replay.c_str(),
                        h ? short_number(h->window.rmse()).c_str() : "-", held_replay.c_str());
   }
 }

@@ -8,6 +8,7 @@
 #include "analysis/fit/fit_windows.h"
 #include "analysis/model/sensory_model.h"
 #include "core/numbers.h"
+#include "core/percentile.h"
 
 namespace doorbench {
 
@@ -123,12 +124,6 @@ Knot best_knot(const Ramp& ramp, double lo, double hi, bool hinge_above) {
     scan(std::max(lo, best.at - step), std::min(hi, best.at + step));
   }
   return best;
-}
-
-double median(std::vector<double> values) {
-  const std::size_t n = values.size();
-  std::sort(values.begin(), values.end());
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 struct Context {

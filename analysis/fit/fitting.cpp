@@ -600,8 +600,8 @@ void restart_if_better(FitResult& result, const DoorModel& start, const Prepared
   //
   // The start model as given is tried the same way: start values read off the data (the
   // latch's, on a recording that never enters it) or the equation-error stage can lead the
-  // fit to a minimum far worse than where it was started (issue 30: a 200 Hz recording
-  // without a latch ended at a window RMSE of 0.151 rad/s, its start model near 0.01).
+  // fit to a minimum far worse than where it was started (docs/fitting.md, "Solving and
+  // stopping", has the recordings where it did).
   const double fitted_rmse = result.summary.fitted.window.rmse();
   // Each fold's model and the start on all strokes, at once (independent and deterministic),
   // then in order.

@@ -12,16 +12,6 @@ std::string number(double value) {
   return format_significant(value, 4);
 }
 
-std::string percent(double fraction) {
-  if (!std::isfinite(fraction)) return "-";
-  return printf_text("%.1f%%", 100.0 * fraction);
-}
-
-std::string signed_percent(double fraction) {
-  if (!std::isfinite(fraction)) return "-";
-  return printf_text("%+.1f%%", 100.0 * fraction);
-}
-
 std::string describe_figures(const ModelFigures& figures) {
   return "window RMSE of omega " + number(figures.fitted_rmse_rad_s) + " rad/s fitted, " +
          number(figures.held_out_rmse_rad_s) + " held out";

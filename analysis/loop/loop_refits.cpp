@@ -197,7 +197,7 @@ void judge(CandidateEvidence& candidate, const ModelFigures& before, const Model
   candidate.qualifies = held_out_ok && bic_ok && problems.empty();
   const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) + " -> " +
                                     number(after.held_out_rmse_rad_s) + " rad/s (" +
-                                    signed_percent(-candidate.held_out_improvement) + ")";
+                                    format_signed_percent(-candidate.held_out_improvement, 1) + ")";
   const std::string bic_text = "BIC " + printf_text("%+.4g", candidate.bic_change);
   if (candidate.qualifies) {
     candidate.verdict = "qualifies: " + held_out_text + ", " + bic_text;
@@ -205,7 +205,7 @@ void judge(CandidateEvidence& candidate, const ModelFigures& before, const Model
     candidate.verdict = "rejected: " + problems + "; " + held_out_text + ", " + bic_text;
   } else if (!held_out_ok) {
     candidate.verdict = "rejected: " + held_out_text + ", needs a fall of more than " +
-                        percent(options.min_held_out_improvement);
+                        format_percent(options.min_held_out_improvement, 1);
   } else {
     candidate.verdict = "rejected: " + bic_text + " (must fall by more than " +
                         number(options.min_bic_decrease) + "), " + held_out_text;
@@ -259,7 +259,7 @@ std::string ranking_line(int step_number, const ResidualExamination& examination
   for (std::size_t k = 0; k < examination.candidates.size() && k < 4; ++k) {
     if (k > 0) ranking += ", ";
     ranking += examination.candidates[k].name + " (" +
-               percent(examination.candidates[k].explained_fraction) +
+               format_percent(examination.candidates[k].explained_fraction, 1) +
                printf_text(", z %.3g)", examination.candidates[k].score_z);
   }
   return ranking;
@@ -297,9 +297,9 @@ std::vector<std::size_t> select_refits(ResidualExamination& examination, const L
     } else if (screen_ok) {
       promoted.push_back(k);
     } else if (!share_ok) {
-      candidate.verdict = "not refitted: explains " + percent(candidate.explained_fraction) +
-                          " of the residual (needs " + percent(options.min_explained_fraction) +
-                          ")";
+      candidate.verdict =
+          "not refitted: explains " + format_percent(candidate.explained_fraction, 1) +
+          " of the residual (needs " + format_percent(options.min_explained_fraction, 1) + ")";
       if (candidate.screened) {
         candidate.verdict +=
             printf_text(", second look %.1f%%, z %.2g", 100.0 * candidate.screen_explained_fraction,

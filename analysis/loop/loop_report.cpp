@@ -34,8 +34,8 @@ void candidate_table(std::string& out, const std::vector<CandidateEvidence>& can
   for (const CandidateEvidence& candidate : candidates) {
     out += printf_text(
         "    %-4d %-19s %-9s %-6.3g %-13s %-10s %s\n", candidate.rank, candidate.name.c_str(),
-        percent(candidate.explained_fraction).c_str(), candidate.score_z,
-        candidate.after ? signed_percent(-candidate.held_out_improvement).c_str() : "-",
+        format_percent(candidate.explained_fraction, 1).c_str(), candidate.score_z,
+        candidate.after ? format_signed_percent(-candidate.held_out_improvement, 1).c_str() : "-",
         candidate.after ? printf_text("%+.4g", candidate.bic_change).c_str() : "-",
         candidate.verdict.c_str());
     if (!candidate.scan.empty()) out += printf_text("         scan: %s\n", candidate.scan.c_str());
@@ -127,7 +127,7 @@ std::string LoopResult::brief_report() const {
     if (structure.switched) out.append("[").append(to_string(step.model_kind)).append("] ");
     out += printf_text(
         "Step %d: %s (explains %s of the residual, z %.3g%s, rank %d of %zu):", step.number,
-        step.effect_name.c_str(), percent(step.explained_fraction).c_str(), step.score_z,
+        step.effect_name.c_str(), format_percent(step.explained_fraction, 1).c_str(), step.score_z,
         step.second_look ? " on the second look" : "", step.rank, step.candidates.size());
     for (const FittedParameter& parameter : step.parameters) {
       if (!parameter.free) continue;
@@ -135,7 +135,7 @@ std::string LoopResult::brief_report() const {
       out += parameter_text(parameter);
       out += ';';
     }
-    out += " held-out RMSE " + signed_percent(-step.held_out_improvement) + ", BIC " +
+    out += " held-out RMSE " + format_signed_percent(-step.held_out_improvement, 1) + ", BIC " +
            printf_text("%+.4g", step.bic_change) + ".\n";
   }
   out += "Stopped: " + stop_reason + ".\n";
@@ -164,8 +164,8 @@ std::string LoopResult::full_report() const {
       "  refit at most %d per step if it explains >= %s and z >= %.3g; accept if the "
       "held-out RMSE falls > %s, BIC falls > %.3g and the amplitude is >= %.3g u from "
       "neutral\n",
-      options.refit_candidates, percent(options.min_explained_fraction).c_str(),
-      options.min_score_z, percent(options.min_held_out_improvement).c_str(),
+      options.refit_candidates, format_percent(options.min_explained_fraction, 1).c_str(),
+      options.min_score_z, format_percent(options.min_held_out_improvement, 1).c_str(),
       options.min_bic_decrease, options.min_amplitude_z);
   out += "\nStart model: " + std::string(to_string(start_fit.model.kind())) + ", " +
          describe_figures(model_figures(start_fit.summary)) + ", BIC " +

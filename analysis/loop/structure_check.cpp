@@ -49,11 +49,11 @@ bool structure_check_due(const LoopOptions& options, const ModelFigures& figures
     check.reason = "off (structure_check)";
   } else if (check.best_explained_fraction >= enough) {
     check.reason = "not run: the best candidate explains " +
-                   percent(check.best_explained_fraction) + " of the residual (at least " +
-                   percent(enough) + ")";
+                   format_percent(check.best_explained_fraction, 1) +
+                   " of the residual (at least " + format_percent(enough, 1) + ")";
   } else if (best_refit >= enough) {
-    check.reason = "not run: the best refit lowers the held-out RMSE by " + percent(best_refit) +
-                   " (at least " + percent(enough) + ")";
+    check.reason = "not run: the best refit lowers the held-out RMSE by " +
+                   format_percent(best_refit, 1) + " (at least " + format_percent(enough, 1) + ")";
   } else if (ratio <= options.structure_noise_ratio) {
     check.reason = "not run: the held-out RMSE " + number(figures.held_out_rmse_rad_s) +
                    " rad/s is " + printf_text("%.2g", ratio) + " times the noise floor " +
@@ -61,11 +61,11 @@ bool structure_check_due(const LoopOptions& options, const ModelFigures& figures
                    printf_text("%.3g", options.structure_noise_ratio) + ")";
   } else {
     check.reason = "no effect closes the gap: the best candidate explains " +
-                   percent(check.best_explained_fraction) + " of the residual, the best refit " +
-                   "lowers the held-out RMSE by " + percent(best_refit) +
-                   ", and the held-out RMSE " + number(figures.held_out_rmse_rad_s) + " rad/s is " +
-                   printf_text("%.3g", ratio) + " times the noise floor " +
-                   number(last.noise_floor_rad_s) + " rad/s";
+                   format_percent(check.best_explained_fraction, 1) +
+                   " of the residual, the best refit " + "lowers the held-out RMSE by " +
+                   format_percent(best_refit, 1) + ", and the held-out RMSE " +
+                   number(figures.held_out_rmse_rad_s) + " rad/s is " + printf_text("%.3g", ratio) +
+                   " times the noise floor " + number(last.noise_floor_rad_s) + " rad/s";
     return true;
   }
   return false;
@@ -115,7 +115,7 @@ StructureCheck check_structure(StructureCheck check, const FitResult& current,
                   " model is the better structure: held-out RMSE " +
                   number(check.current.held_out_rmse_rad_s) + " rad/s (" + current_name +
                   ") against " + number(check.other.held_out_rmse_rad_s) + " (" + other_name +
-                  ", " + signed_percent(-check.held_out_improvement) + "), BIC " +
+                  ", " + format_signed_percent(-check.held_out_improvement, 1) + "), BIC " +
                   printf_text("%+.4g", check.bic_change);
   say("structure check: " + check.verdict);
   return check;

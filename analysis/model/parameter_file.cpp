@@ -19,7 +19,7 @@ using json = nlohmann::ordered_json;
   throw ParameterFileError(std::string(source) + ": " + message);
 }
 
-// A key given twice in one object (issue 33: J given twice, the last one silently won):
+// A key given twice in one object (J given twice, where the last one would silently win):
 // refused with both lines. Runs on text that parsed, so the scan only follows strings,
 // nesting and the ':' after a key. Keys are compared as written (escapes decoded).
 void refuse_duplicate_keys(std::string_view text, std::string_view source) {

@@ -214,7 +214,7 @@ void measure_intervals(const PreprocessingOptions& options, Input& in) {
       std::max(in.max_interval_s - in.median_interval_s, in.median_interval_s - in.min_interval_s) >
       kJitterFraction * in.median_interval_s;
   if (in.rate_hz < options.min_sample_rate_hz) {
-    // Enough digits that the two rates differ (issue 33: "at 20 Hz, below the 20 Hz").
+    // Enough digits that the two rates differ (never "at 20 Hz, below the 20 Hz").
     int digits = 3;
     while (digits < 12 && text(in.rate_hz, digits) == text(options.min_sample_rate_hz, digits)) {
       ++digits;

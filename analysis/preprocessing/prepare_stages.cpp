@@ -18,19 +18,6 @@ std::string seconds(double value) {
   return buffer;
 }
 
-double median(std::vector<double> values) {
-  const std::size_t middle = values.size() / 2;
-  std::nth_element(values.begin(), values.begin() + static_cast<std::ptrdiff_t>(middle),
-                   values.end());
-  double result = values[middle];
-  if (values.size() % 2 == 0) {
-    result =
-        0.5 * (result + *std::max_element(values.begin(),
-                                          values.begin() + static_cast<std::ptrdiff_t>(middle)));
-  }
-  return result;
-}
-
 std::size_t first_at_or_after(const std::vector<double>& time_s, double t) {
   return static_cast<std::size_t>(std::lower_bound(time_s.begin(), time_s.end(), t) -
                                   time_s.begin());

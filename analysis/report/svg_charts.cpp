@@ -6,12 +6,12 @@
 #include <stdexcept>
 
 #include "analysis/report/internal/svg_axes.h"
+#include "core/html_escape.h"
 #include "core/number_format.h"
 
 namespace doorbench {
 namespace {
 
-using svg_axes::escaped;
 using svg_axes::Range;
 
 constexpr const char* kIntervalColour = "#1f77d6";
@@ -28,9 +28,9 @@ std::string svg_open(int width, int height, const std::string& title) {
       "font-family=\"sans-serif\" font-size=\"12\">\n"
       "<rect width=\"100%%\" height=\"100%%\" fill=\"white\"/>\n",
       width, height);
-  svg += printf_text("<text x=\"%d\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">",
-                     width / 2) +
-         escaped(title) + "</text>\n";
+  svg +=
+      printf_text("<text x=\"%d\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">", width / 2) +
+      html_escape(title) + "</text>\n";
   return svg;
 }
 
@@ -38,10 +38,12 @@ std::string svg_open(int width, int height, const std::string& title) {
 // width) and its text.
 std::string legend_entry(double x, double y, const std::string& colour, double width,
                          double opacity, const std::string& label) {
-  return printf_text("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
-                     "stroke-width=\"%.1f\" stroke-opacity=\"%.2f\"/>",
-                     x, y, x + 24, y, colour.c_str(), width, opacity) +
-         printf_text("<text x=\"%.1f\" y=\"%.1f\">", x + 30, y + 4) + escaped(label) + "</text>\n";
+  return printf_text(
+             "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"%s\" "
+             "stroke-width=\"%.1f\" stroke-opacity=\"%.2f\"/>",
+             x, y, x + 24, y, colour.c_str(), width, opacity) +
+         printf_text("<text x=\"%.1f\" y=\"%.1f\">", x + 30, y + 4) + html_escape(label) +
+         "</text>\n";
 }
 
 double legend_width(const std::vector<std::string>& labels) {
@@ -64,7 +66,7 @@ std::string x_axis(const Range& range, double left, double top, double width, do
   }
   svg += printf_text("<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">", left + width / 2,
                      svg_height - 12) +
-         escaped(label) + "</text>\n";
+         html_escape(label) + "</text>\n";
   return svg;
 }
 
@@ -111,7 +113,7 @@ std::string forest_note(const ForestGeometry& g, const ForestRow& row, double y)
   }
   return printf_text("<text x=\"%.1f\" y=\"%.1f\" font-size=\"11\" fill=\"#444\"%s>", x, y + 4,
                      anchor) +
-         escaped(row.note) + "</text>\n";
+         html_escape(row.note) + "</text>\n";
 }
 
 // One row: its label, interval (with caps, or an arrow at an open end), inner interval,
@@ -124,7 +126,7 @@ std::string forest_row(const ForestOptions& options, const ForestGeometry& g, st
     svg += printf_text("<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f4f4f4\"/>\n",
                        g.left, y - g.row_height / 2, g.width, g.row_height);
   svg += printf_text("<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">", g.left - 8, y + 4) +
-         escaped(row.label) + "</text>\n";
+         html_escape(row.label) + "</text>\n";
   const bool has_interval = !std::isnan(row.low) && !std::isnan(row.high);
   if (has_interval) {
     const double x1 = g.px(row.low), x2 = g.px(row.high);
@@ -133,7 +135,7 @@ std::string forest_row(const ForestOptions& options, const ForestGeometry& g, st
     if (std::isfinite(row.high)) points += printf_text("%.1f,%.1f %.1f,%.1f", x2, y - 5, x2, y + 5);
     svg += "<polyline fill=\"none\" stroke=\"" + std::string(kIntervalColour) +
            "\" stroke-width=\"1.6\" points=\"" + points + "\"><title>" +
-           escaped(options.interval_label) + "</title></polyline>\n";
+           html_escape(options.interval_label) + "</title></polyline>\n";
     for (const double end : {row.low, row.high}) {
       if (std::isfinite(end)) continue;
       const double tip = end > 0 ? g.left + g.width : g.left, back = end > 0 ? -8.0 : 8.0;
@@ -142,18 +144,19 @@ std::string forest_row(const ForestOptions& options, const ForestGeometry& g, st
     }
   }
   if (std::isfinite(row.inner_low) && std::isfinite(row.inner_high)) {
-    svg += printf_text("<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"6.0\" "
-                       "stroke-opacity=\"0.55\" points=\"%.1f,%.1f %.1f,%.1f\"><title>",
-                       kInnerColour, g.px(row.inner_low), y, g.px(row.inner_high), y) +
-           escaped(options.inner_label) + "</title></polyline>\n";
+    svg += printf_text(
+               "<polyline fill=\"none\" stroke=\"%s\" stroke-width=\"6.0\" "
+               "stroke-opacity=\"0.55\" points=\"%.1f,%.1f %.1f,%.1f\"><title>",
+               kInnerColour, g.px(row.inner_low), y, g.px(row.inner_high), y) +
+           html_escape(options.inner_label) + "</title></polyline>\n";
   }
   if (std::isfinite(row.estimate)) {
     const double x = g.px(row.estimate);
-    svg += printf_text("<polyline fill=\"%s\" stroke=\"%s\" points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f "
-                       "%.1f,%.1f %.1f,%.1f\"><title>",
-                       kEstimateColour, kEstimateColour, x - 5, y, x, y - 5, x + 5, y, x, y + 5,
-                       x - 5, y) +
-           escaped(options.estimate_label) + "</title></polyline>\n";
+    svg += printf_text(
+               "<polyline fill=\"%s\" stroke=\"%s\" points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f "
+               "%.1f,%.1f %.1f,%.1f\"><title>",
+               kEstimateColour, kEstimateColour, x - 5, y, x, y - 5, x + 5, y, x, y + 5, x - 5, y) +
+           html_escape(options.estimate_label) + "</title></polyline>\n";
   }
   if (!row.note.empty()) svg += forest_note(g, row, y);
   return svg;
@@ -182,11 +185,12 @@ std::string render_svg_forest(const ForestOptions& options, std::span<const Fore
   std::string svg = svg_open(width, height, options.title);
   if (has_band) {
     const double x1 = g.px(options.band_low), x2 = g.px(options.band_high);
-    svg += printf_text("<polyline fill=\"%s\" fill-opacity=\"0.15\" stroke=\"%s\" "
-                       "stroke-opacity=\"0\" points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f %.1f,%.1f\"><title>",
-                       kBandColour, kBandColour, x1, g.top, x2, g.top, x2, g.top + g.height, x1,
-                       g.top + g.height) +
-           escaped(options.band_label) + "</title></polyline>\n";
+    svg += printf_text(
+               "<polyline fill=\"%s\" fill-opacity=\"0.15\" stroke=\"%s\" "
+               "stroke-opacity=\"0\" points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f %.1f,%.1f\"><title>",
+               kBandColour, kBandColour, x1, g.top, x2, g.top, x2, g.top + g.height, x1,
+               g.top + g.height) +
+           html_escape(options.band_label) + "</title></polyline>\n";
   }
   svg += x_axis(g.range, g.left, g.top, g.width, g.height, height, options.x_label);
   for (std::size_t r = 0; r < rows.size(); ++r) svg += forest_row(options, g, r, rows[r]);
@@ -215,8 +219,9 @@ namespace {
 std::string dose_points(const DoseResponsePlot& plot, const auto& px, const auto& py) {
   double heaviest = 0;
   for (double w : plot.weight) heaviest = std::max(heaviest, w);
-  std::string svg = "<g fill=\"" + std::string(kPointColour) + "\" fill-opacity=\"0.55\" stroke=\"" +
-                    kPointColour + "\"><title>" + escaped(plot.points_label) + "</title>";
+  std::string svg = "<g fill=\"" + std::string(kPointColour) +
+                    "\" fill-opacity=\"0.55\" stroke=\"" + kPointColour + "\"><title>" +
+                    html_escape(plot.points_label) + "</title>";
   for (std::size_t i = 0; i < plot.x.size(); ++i) {
     if (!std::isfinite(plot.x[i]) || !std::isfinite(plot.y[i])) continue;
     // Area proportional to the weight: the heaviest point 9 px in radius.
@@ -261,7 +266,7 @@ std::string render_svg_dose_response(const DoseResponsePlot& plot) {
   }
   svg += printf_text("<text transform=\"translate(16 %.1f) rotate(-90)\" text-anchor=\"middle\">",
                      top + height / 2) +
-         escaped(plot.y_label) + "</text>\n";
+         html_escape(plot.y_label) + "</text>\n";
   if (!plot.band_low.empty()) {
     std::string points;
     for (std::size_t i = 0; i < plot.curve_x.size(); ++i)
@@ -270,14 +275,14 @@ std::string render_svg_dose_response(const DoseResponsePlot& plot) {
       points += printf_text("%.1f,%.1f ", px(plot.curve_x[i]), py(plot.band_low[i]));
     svg += "<polygon fill=\"" + std::string(kCurveColour) + "\" fill-opacity=\"0.18\" stroke=\"" +
            kCurveColour + "\" stroke-opacity=\"0\" points=\"" + points + "\"><title>" +
-           escaped(plot.band_label) + "</title></polygon>\n";
+           html_escape(plot.band_label) + "</title></polygon>\n";
   }
   std::string curve;
   for (std::size_t i = 0; i < plot.curve_x.size(); ++i)
     curve += printf_text("%.1f,%.1f ", px(plot.curve_x[i]), py(plot.curve_y[i]));
   svg += "<polyline fill=\"none\" stroke=\"" + std::string(kCurveColour) +
-         "\" stroke-width=\"1.8\" points=\"" + curve + "\"><title>" + escaped(plot.curve_label) +
-         "</title></polyline>\n";
+         "\" stroke-width=\"1.8\" points=\"" + curve + "\"><title>" +
+         html_escape(plot.curve_label) + "</title></polyline>\n";
   svg += dose_points(plot, px, py);
   svg += printf_text("<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
                      "stroke=\"#444\"/>\n",

@@ -9,11 +9,11 @@
 
 #include "acquisition/session/output_file.h"
 #include "analysis/report/internal/svg_axes.h"
+#include "core/html_escape.h"
 
 namespace doorbench {
 namespace {
 
-using svg_axes::escaped;
 using svg_axes::number_text;
 using svg_axes::padded;
 using svg_axes::Range;
@@ -117,7 +117,7 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
                 options.width_px, options.height_px);
   svg += buffer;
   svg += "<text x=\"" + std::to_string(options.width_px / 2) +
-         "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" + escaped(options.title) +
+         "\" y=\"22\" text-anchor=\"middle\" font-size=\"15\">" + html_escape(options.title) +
          "</text>\n";
 
   // Grid and ticks.
@@ -144,11 +144,11 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
   svg += buffer;
   svg += "<text x=\"" + std::to_string(static_cast<int>(left + plot_w / 2)) + "\" y=\"" +
          std::to_string(options.height_px - 12) + "\" text-anchor=\"middle\">" +
-         escaped(options.x_label) + "</text>\n";
+         html_escape(options.x_label) + "</text>\n";
   std::snprintf(buffer, sizeof buffer,
                 "<text transform=\"translate(16 %.1f) rotate(-90)\" text-anchor=\"middle\">",
                 top + plot_h / 2);
-  svg += buffer + escaped(options.y_label) + "</text>\n";
+  svg += buffer + html_escape(options.y_label) + "</text>\n";
 
   // Series in stacking order (plot_style: measured on top), each reduced per pixel column:
   // first, smallest, largest and last point in order.
@@ -169,7 +169,8 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
     const PlotSeries& s = series[index];
     svg += "<polyline fill=\"none\"" + stroke_attributes(s, colour_of(index), 1.0) + " points=\"";
     svg += reduced_points(s, px, py);
-    svg += s.label.empty() ? "\"/>\n" : "\"><title>" + escaped(s.label) + "</title></polyline>\n";
+    svg +=
+        s.label.empty() ? "\"/>\n" : "\"><title>" + html_escape(s.label) + "</title></polyline>\n";
   }
   // The legend, right of the data area, in the order the series were given.
   int legend_entries = 0;
@@ -182,7 +183,7 @@ std::string render_svg_plot(const PlotOptions& options, std::span<const PlotSeri
     svg += buffer;
     svg += stroke_attributes(series[index], colour_of(index), 2.0) + "/>";
     std::snprintf(buffer, sizeof buffer, "<text x=\"%.1f\" y=\"%.1f\">", legend_x + 30, row_y + 4);
-    svg += buffer + escaped(series[index].label) + "</text>\n";
+    svg += buffer + html_escape(series[index].label) + "</text>\n";
   }
   svg += "</svg>\n";
   return svg;

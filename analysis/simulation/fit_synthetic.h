@@ -18,6 +18,7 @@
 #include "analysis/model/door_model.h"
 #include "analysis/preprocessing/strokes.h"
 #include "analysis/simulation/simulator.h"
+#include "core/units.h"
 
 namespace doorbench {
 
@@ -31,8 +32,8 @@ struct SyntheticStrokeOptions {
   double sample_rate_hz = 1000.0;
   // Standard deviations of the Gaussian noise added; the bench's figures by default.
   double force_noise_N = 0.2;
-  double angle_noise_rad = 0.01 * 3.14159265358979323846 / 180.0;
-  double rate_noise_rad_s = 0.05 * 3.14159265358979323846 / 180.0;
+  double angle_noise_rad = 0.01 * kRadPerDeg;
+  double rate_noise_rad_s = 0.05 * kRadPerDeg;
   std::uint32_t seed = 1;
 };
 

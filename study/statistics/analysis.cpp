@@ -57,8 +57,8 @@ nlohmann::json jnd_levels_json(const ThresholdsResult& thresholds) {
   return rows;
 }
 
-// The ratings, thresholds (jnd) and tuning sections (issue 29's other half,
-// study/statistics/ratings.h, thresholds.h, tuning.h). The thresholds are kept for tuning's
+// The ratings, thresholds (jnd) and tuning sections (study/statistics/ratings.h,
+// thresholds.h, tuning.h). The thresholds are kept for tuning's
 // perceptual steps and for the psychometric plots.
 void add_ratings_thresholds_tuning(std::vector<AnalysisSection>& sections) {
   sections.push_back({"ratings",

@@ -6,6 +6,7 @@
 #include <regex>
 #include <set>
 
+#include "core/html_escape.h"
 #include "core/number_format.h"
 #include "study/statistics/analysis.h"
 
@@ -13,23 +14,6 @@ namespace doorbench::study {
 namespace {
 
 using json = nlohmann::json;
-
-std::string html_escape(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '<')
-      out += "&lt;";
-    else if (c == '>')
-      out += "&gt;";
-    else if (c == '&')
-      out += "&amp;";
-    else if (c == '"')
-      out += "&quot;";
-    else
-      out += c;
-  }
-  return out;
-}
 
 // "[low, high]" of two cells, built piece by piece (GCC 12 warns falsely, -Wrestrict, on
 // "literal" + std::string).

@@ -14,11 +14,11 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "core/json_number.h"
 #include "core/number_format.h"
 #include "core/numbers.h"
 #include "study/question.h"
 #include "study/statistics/binomial.h"
-#include "study/statistics/json_number.h"
 
 namespace doorbench::study {
 namespace {

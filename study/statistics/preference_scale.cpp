@@ -11,9 +11,11 @@
 #include <set>
 #include <tuple>
 
+#include "core/json_number.h"
 #include "core/numbers.h"
+#include "core/percentile.h"
+#include "core/seeded_random.h"
 #include "study/question.h"
-#include "study/statistics/json_number.h"
 #include "study/statistics/quasi_variance.h"
 
 namespace doorbench::study {
@@ -125,32 +127,6 @@ std::optional<std::pair<Eigen::VectorXd, int>> newton(const Layout& layout,
     if ((scale * step).cwiseAbs().maxCoeff() < 1e-11) return std::pair{theta, iteration};
   }
   return std::nullopt;
-}
-
-double quantile(std::vector<double> values, double q) {
-  std::sort(values.begin(), values.end());
-  const double at = q * double(values.size() - 1);
-  const auto below = std::size_t(std::floor(at));
-  const auto above = std::min(below + 1, values.size() - 1);
-  return values[below] + (at - double(below)) * (values[above] - values[below]);
-}
-
-// A uniform index in [0, n) from the generator, without a library distribution (whose
-// output the standard does not fix).
-int draw_index(std::mt19937_64& generator, int n) {
-  const std::uint64_t range = std::uint64_t(n);
-  const std::uint64_t limit =
-      std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % range;
-  std::uint64_t value = generator();
-  while (value >= limit) value = generator();
-  return int(value % range);
-}
-
-// A standard normal draw by Box–Muller from the generator's uniform bits.
-double draw_normal(std::mt19937_64& generator) {
-  const double u1 = (double(generator() >> 11) + 0.5) * 0x1.0p-53;
-  const double u2 = (double(generator() >> 11) + 0.5) * 0x1.0p-53;
-  return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
 }
 
 int reference_index(const PairData& data, const PreferenceOptions& options) {
@@ -290,7 +266,8 @@ Replicates bootstrap(const PairData& data, const Layout& layout, const Preferenc
       throw StopRequested("the preference scale's bootstrap");
     }
     std::vector<int> weights(std::size_t(people), 0);
-    for (int k = 0; k < people; ++k) ++weights[std::size_t(draw_index(generator, people))];
+    for (int k = 0; k < people; ++k)
+      ++weights[std::size_t(uniform_below(generator, std::uint64_t(people)))];
     const auto solved = newton(layout, cells_of(data, weights));
     if (solved) {
       out.thetas.push_back(solved->first);
@@ -312,7 +289,7 @@ std::vector<Eigen::VectorXd> normal_draws(const Eigen::VectorXd& theta,
   std::vector<Eigen::VectorXd> draws;
   for (int d = 0; d < count; ++d) {
     Eigen::VectorXd z(theta.size());
-    for (Eigen::Index k = 0; k < z.size(); ++k) z(k) = draw_normal(generator);
+    for (Eigen::Index k = 0; k < z.size(); ++k) z(k) = standard_normal(generator);
     draws.push_back(theta + root * z);
   }
   return draws;
@@ -327,7 +304,8 @@ Estimate estimate_of(double value, double se_wald, const std::vector<double>& re
   double se = se_wald;
   e.interval = "wald";
   if (bootstrapped && replicates.size() >= 2) {
-    e.se_bootstrap = (quantile(replicates, 0.841344746) - quantile(replicates, 0.158655254)) / 2;
+    e.se_bootstrap =
+        (percentile(replicates, 0.841344746) - percentile(replicates, 0.158655254)) / 2;
     if (e.se_bootstrap > se) {
       se = e.se_bootstrap;
       e.interval = "bootstrap";
@@ -381,7 +359,7 @@ Eigen::MatrixXd difference_variances(const Layout& layout, const Eigen::MatrixXd
       std::vector<double> differences;
       for (const Eigen::VectorXd& r : replicates) differences.push_back(worth(r, i) - worth(r, j));
       const double se =
-          (quantile(differences, 0.841344746) - quantile(differences, 0.158655254)) / 2;
+          (percentile(differences, 0.841344746) - percentile(differences, 0.158655254)) / 2;
       v(i, j) = v(j, i) = std::max(v(i, j), se * se);
     }
   }

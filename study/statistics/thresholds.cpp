@@ -1,20 +1,21 @@
 #include "study/statistics/thresholds.h"
 
 #include <algorithm>
-#include <charconv>
-#include <cmath>
-#include <cstdio>
-#include <numbers>
-#include <map>
-#include <set>
-#include <stdexcept>
-
 #include <boost/math/distributions/chi_squared.hpp>
 #include <boost/math/distributions/normal.hpp>
 #include <boost/math/distributions/students_t.hpp>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numbers>
+#include <set>
+#include <stdexcept>
 
 #include "acquisition/session/output_file.h"
 #include "analysis/report/svg_charts.h"
+#include "core/json_number.h"
+#include "core/number_format.h"
 #include "study/statistics/psychometric_likelihood.h"
 
 namespace doorbench::study {
@@ -259,16 +260,6 @@ ThresholdsResult fit_thresholds(std::span<const StrongerObservation> trials,
 
 namespace {
 
-nlohmann::json number_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
-
-std::string percent(double p) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.1f%%", 100.0 * p);
-  return text;
-}
-
 nlohmann::json fit_row(const ParameterThresholds& p, const std::string& participant,
                        const PsychometricFit& fit, double criterion, const std::string& method) {
   return {{"parameter", p.parameter},
@@ -276,11 +267,12 @@ nlohmann::json fit_row(const ParameterThresholds& p, const std::string& particip
           {"participant", participant},
           {"method", method},
           {"weber_fraction", fit.weber_fraction},
-          {"ci_low", number_or_null(fit.ci_low)},
-          {"ci_high", number_or_null(fit.ci_high)},
-          {"criterion", percent(criterion) + " of the lapse-free " +
-                            (fit.shape == PsychometricShape::kWeibull ? "Weibull" : "cumulative normal") +
-                            " above its PSE"},
+          {"ci_low", json_number(fit.ci_low)},
+          {"ci_high", json_number(fit.ci_high)},
+          {"criterion",
+           format_percent(criterion, 1) + " of the lapse-free " +
+               (fit.shape == PsychometricShape::kWeibull ? "Weibull" : "cumulative normal") +
+               " above its PSE"},
           {"interval", "profile likelihood"},
           {"pse", fit.pse},
           {"spread", fit.spread},
@@ -306,7 +298,7 @@ nlohmann::json ThresholdsResult::to_json() const {
                       {"weber_fraction", s.weber_fraction},
                       {"ci_low", s.ci_low},
                       {"ci_high", s.ci_high},
-                      {"criterion", percent(s.target) + " correct (1-up-" +
+                      {"criterion", format_percent(s.target, 1) + " correct (1-up-" +
                                         std::to_string(s.down_rule) + "-down, Levitt 1971)"},
                       {"interval", "t over the reversals"},
                       {"reversals", s.reversals_used},
@@ -426,7 +418,7 @@ DoseResponsePlot curve_plot(const ParameterThresholds& t) {
     plot.weight.push_back(c.trials);
   }
   plot.points_label = "the panel's answers (area: trials)";
-  plot.curve_label = "fit (JND " + percent(t.panel.weber_fraction) + ")";
+  plot.curve_label = "fit (JND " + format_percent(t.panel.weber_fraction, 1) + ")";
   if (!t.curve.empty()) {
     for (const CurvePoint& c : t.curve) {
       plot.curve_x.push_back(std::exp(c.level));

@@ -12,6 +12,7 @@
 #include "analysis/model/physical_model.h"
 #include "analysis/model/sensory_model.h"
 #include "analysis/report/svg_plot.h"
+#include "core/json_number.h"
 #include "study/question.h"
 
 namespace doorbench::study {
@@ -263,18 +264,6 @@ TuningResult analyze_tuning(std::span<const TunedDoor> doors, const TuningOption
   return result;
 }
 
-namespace {
-
-nlohmann::json optional_number(const std::optional<double>& value) {
-  return value && std::isfinite(*value) ? nlohmann::json(*value) : nlohmann::json(nullptr);
-}
-
-nlohmann::json finite_or_null(double value) {
-  return std::isfinite(value) ? nlohmann::json(value) : nlohmann::json(nullptr);
-}
-
-}  // namespace
-
 nlohmann::json TuningResult::to_json() const {
   nlohmann::json out;
   out["doors"] = nlohmann::json::array();
@@ -290,14 +279,14 @@ nlohmann::json TuningResult::to_json() const {
                                  {"doors", d.doors},
                                  {"centre", d.centre},
                                  {"spread", d.spread},
-                                 {"ci_low", finite_or_null(d.ci_low)},
-                                 {"ci_high", finite_or_null(d.ci_high)},
+                                 {"ci_low", json_number(d.ci_low)},
+                                 {"ci_high", json_number(d.ci_high)},
                                  {"min", d.min},
                                  {"max", d.max},
-                                 {"weber_fraction", optional_number(d.weber_fraction)},
+                                 {"weber_fraction", json_number(d.weber_fraction)},
                                  {"weber_source", d.weber_source},
-                                 {"spread_steps", optional_number(d.spread_steps)},
-                                 {"ci_half_steps", optional_number(d.ci_half_steps)}});
+                                 {"spread_steps", json_number(d.spread_steps)},
+                                 {"ci_half_steps", json_number(d.ci_half_steps)}});
   }
   nlohmann::json groups = nlohmann::json::array();
   for (std::size_t g = 0; g < clusters.centres.size(); ++g) {

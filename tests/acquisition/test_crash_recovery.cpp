@@ -72,8 +72,8 @@ std::string test_rig_text(bool realtime) {
 // sleeps, so the unpaced bench gives the same samples.
 std::vector<std::vector<std::int32_t>> reference_counts(double duration_s) {
   const RigDefinition rig = parse_rig(test_rig_text(false), "test rig", fs::current_path());
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, duration_s);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  simulated_bench::SimulatedBench bench(rig, model, duration_s);
   const auto scans = static_cast<std::size_t>(std::llround(duration_s * rig.sample_rate_hz));
   std::vector<std::vector<std::int32_t>> counts(rig.channels.size());
   ScanBlock block(rig.channels.size(), 100);
@@ -395,7 +395,7 @@ TEST_CASE("Journal: CRC-32 is zlib's", "[journal]") {
 }
 
 TEST_CASE("Journal: one written before the CRC came from zlib reads back", "[journal]") {
-  // Written by the recorder of issue 18 and killed mid-frame (the fuzzer's seed).
+  // Written by a recorder whose CRC was not zlib's, killed mid-frame (the fuzzer's seed).
   JournalReader reader(DOORBENCH_SOURCE_DIR "/fuzz/corpus/journal/killed-16k.journal");
   CHECK(reader.header().session_name == "s.h5");  // its CRC checked
   JournalFrame frame;
@@ -659,8 +659,8 @@ void run_mixed_kill_test(int kills) {
     if (pid == 0) {
       int code = 0;
       try {
-        const DoorModel model = sensors::simulated_door_model(rig);
-        sensors::SimulatedBench bench(rig, model, kMixedS);
+        const DoorModel model = simulated_bench::simulated_door_model(rig);
+        simulated_bench::SimulatedBench bench(rig, model, kMixedS);
         testing::FakePolledOptions fake;
         fake.names = {"pa", "pb"};
         fake.counter = true;

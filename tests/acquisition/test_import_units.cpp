@@ -74,8 +74,8 @@ void write_bytes(const std::filesystem::path& path, const std::vector<std::uint8
       .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
 }
 
-calibration::CalibrationRecord load_cell_record() {
-  calibration::CalibrationRecord record;
+doorbench::CalibrationRecord load_cell_record() {
+  doorbench::CalibrationRecord record;
   record.id = "load_cell-LC445-0193-v2";
   record.version = 2;
   record.sensor_kind = "load_cell";
@@ -97,7 +97,7 @@ void check_force_in_newtons(const std::filesystem::path& session_path, const std
   CHECK(force.raw_unit == "V");
   CHECK(force.unit == "N");
   bool named = false;
-  for (const calibration::CalibrationRecord& record : session.calibrations()) {
+  for (const doorbench::CalibrationRecord& record : session.calibrations()) {
     named = named || record.id == id;
   }
   CHECK(named);
@@ -124,7 +124,7 @@ TEST_CASE("Import units: a DAQmx file in volts imports to newtons through a reco
   const testing::TempDir dir("import_units");
   write_bytes(dir / "volts.tdms", volts_file("Volts"));
   write_bytes(dir / "v.tdms", volts_file("V"));
-  const calibration::CalibrationStore store(dir / "calibrations");
+  const doorbench::CalibrationStore store(dir / "calibrations");
   store.add(load_cell_record());
   const std::string map = " --map force=Dev1/Bridge,angle=Dev1/Encoder ";
 
@@ -159,7 +159,7 @@ TEST_CASE("Import units: a DAQmx file in volts imports to newtons through a reco
   REQUIRE(run.status == 0);
   check_force_in_newtons(dir / "scale.h5", "scale-force", 65.377, -0.8125);
   const SessionReader scaled(dir / "scale.h5");
-  const std::vector<calibration::CalibrationRecord> records = scaled.calibrations();
+  const std::vector<doorbench::CalibrationRecord> records = scaled.calibrations();
   REQUIRE(records.size() == 1);
   CHECK(records[0].method == "doorbench import --scale force=65.377,-0.8125");
   CHECK(records[0].input_unit == "V");
@@ -200,7 +200,7 @@ TEST_CASE("Import units: a CSV's raw column imports through a record or a scale"
            format_csv_number(2.5e-5 * encoder_counts(k)) + "\n";
   }
   dir.write("run.csv", csv);
-  const calibration::CalibrationStore store(dir / "store");
+  const doorbench::CalibrationStore store(dir / "store");
   store.add(load_cell_record());
   testing::DoorbenchRun run = testing::run_doorbench_shell(
       "import run.csv --calibrations store --calibration force=load_cell-LC445-0193-v2 --out r.h5", dir, units_dir_env(dir));

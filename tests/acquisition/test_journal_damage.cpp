@@ -1,4 +1,4 @@
-// Recovery keeps what it cannot read (issue 33): a journal damaged in its header, its
+// Recovery keeps what it cannot read: a journal damaged in its header, its
 // frames or its tail, in a dozen ways at seeded places, is recovered with every scan of
 // every frame the damage did not touch; the journal is never deleted or rewritten (it is
 // renamed "*.journal.recovered"), and what was lost is marked as gaps and counted.

@@ -56,7 +56,7 @@ class CountingBackend final : public AcquisitionBackend {
     }
     return infos;
   }
-  std::vector<calibration::CalibrationRecord> calibrations() const override { return {}; }
+  std::vector<doorbench::CalibrationRecord> calibrations() const override { return {}; }
   double scan_rate_hz() const override { return rate_hz_; }
   void start() override {
     started_ = std::chrono::steady_clock::now();
@@ -237,8 +237,8 @@ TEST_CASE("Recorder: the simulated bench's read path allocates nothing after its
           "[recorder][allocation]") {
   const RigDefinition rig =
       parse_rig(simulated_dishwasher_rig_text(), "built-in", std::filesystem::current_path());
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, 20.0);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  simulated_bench::SimulatedBench bench(rig, model, 20.0);
   RecorderRings rings(3, 10, 8, 64);
   RealtimeReader reader(bench, rings, 3, 10, 20'000, RingFullPolicy::kDropAndRecordFault);
   reader.start();

@@ -30,6 +30,7 @@ using doorbench::testing::read_file;
 extern char** environ;
 
 using Catch::Matchers::Contains;
+using doorbench::CalibrationRecord;
 using doorbench::ChannelInfo;
 using doorbench::ChannelSlice;
 using doorbench::RawType;
@@ -39,7 +40,6 @@ using doorbench::SessionMetadata;
 using doorbench::SessionReader;
 using doorbench::SessionWriter;
 using doorbench::SessionWriterOptions;
-using doorbench::calibration::CalibrationRecord;
 namespace fs = std::filesystem;
 
 namespace {
@@ -339,8 +339,7 @@ TEST_CASE("session metadata, channels, events, calibrations and groups come back
 
   const std::vector<CalibrationRecord> records = reader.calibrations();
   REQUIRE(records.size() == 1);
-  CHECK(doorbench::calibration::to_json(records[0]) ==
-        doorbench::calibration::to_json(load_cell_record()));
+  CHECK(doorbench::to_json(records[0]) == doorbench::to_json(load_cell_record()));
 
   CHECK(reader.group_datasets("truth") == std::vector<std::string>{"time_s"});
   CHECK(bit_identical(std::vector<double>{0.0, 0.001, 0.002, -1e300},

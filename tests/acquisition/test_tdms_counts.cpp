@@ -1,6 +1,6 @@
 // The TDMS reader checks the counts a file claims against the bytes left before believing
-// them, and calls a 0-byte file empty (issue 33: 4294967295 properties claimed gave "type
-// unknown type 0x14"; a 0-byte file "no channel a/b (the file has none)").
+// them (4294967295 properties claimed are refused as such, not read as "type unknown type
+// 0x14"), and calls a 0-byte file empty rather than "no channel a/b (the file has none)".
 #include <catch2/catch.hpp>
 #include <cstring>
 #include <fstream>

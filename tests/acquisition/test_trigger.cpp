@@ -16,6 +16,7 @@
 #include "tests/support/allocation_counter.h"
 #include "tests/support/trigger_test_rig.h"
 
+using doorbench::CalibrationRecord;
 using doorbench::ChannelInfo;
 using doorbench::LevelCondition;
 using doorbench::LevelDetector;
@@ -24,7 +25,6 @@ using doorbench::RecordingSink;
 using doorbench::SessionEvent;
 using doorbench::TriggerOptions;
 using doorbench::TriggerStage;
-using doorbench::calibration::CalibrationRecord;
 
 namespace {
 

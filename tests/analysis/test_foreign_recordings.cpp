@@ -1,4 +1,4 @@
-// Recordings from elsewhere (issue 19): any reasonable sample rate with jittered time stamps
+// Recordings from elsewhere: any reasonable sample rate with jittered time stamps
 // (preprocessing's rate rules), and the recording's own geometry winning over a parameter
 // file's (fit and loop). docs/preprocessing.md ("Any sample rate"), docs/csv-format.md.
 #include <algorithm>
@@ -94,7 +94,7 @@ TEST_CASE("Foreign recordings: the smoothing derivative on jittered times",
   }
   INFO("largest error " << largest << " (amplitude 6.28; measured 0.046)");
   CHECK(largest < 0.06);
-  // The same samples filtered as if they were uniform (the filter before issue 19), then
+  // The same samples filtered as if they were uniform (a filter that ignores the times), then
   // differentiated on their times, are far worse: the grid matters.
   const std::vector<double> as_uniform = zero_phase_lowpass(value, 12.5, 50.0);
   double uniform_largest = 0.0;
@@ -174,7 +174,7 @@ TEST_CASE("Foreign recordings: rates below the supported one are refused by name
           "--min-sample-rate-hz to accept a slower recording, at the cost of the fastest "
           "motion)");
   }
-  // Issue 33: a rate just under the limit is not "20 Hz, below the 20 Hz".
+  // A rate just under the limit is not "20 Hz, below the 20 Hz".
   Recording nearly = recording;
   for (std::size_t i = 0; i < nearly.time_s.size(); ++i) nearly.time_s[i] = 0.0500001 * double(i);
   try {
@@ -230,8 +230,8 @@ TEST_CASE("Foreign recordings: fit takes a 50 Hz jittered CSV and its handle rad
     CHECK_THAT(report, Contains("start values from the data: J, d1, d2 from ") &&
                            Contains("Data: sample rate 50") &&
                            Contains("handle radius 0.8 m, from the CSV's metadata"));
-    // Issue 30 saw a nested refit end above its parent on a real 50 Hz recording with the
-    // handle at 0.8 m: none of this loop's refits may.
+    // A 50 Hz recording with the handle at 0.8 m is where a nested refit can end above its
+    // parent: none of this loop's refits may.
     testing::check_nested_refits_json(
         nlohmann::json::parse(read_text_file(dir / "loop" / "result.json")));
   }

@@ -1,4 +1,4 @@
-// Input sanity (issue 18, defect 4): a physically impossible sample is never used and never
+// Input sanity: a physically impossible sample is never used and never
 // silent, and a fit never starts from non-finite residuals. On a 3-cycle recording of the
 // simulated bench (the sensory reference door), exported as a recording.
 #include <catch2/catch.hpp>

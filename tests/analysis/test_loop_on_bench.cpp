@@ -49,7 +49,7 @@ TEST_CASE("residual loop: names an undeclared gravity imbalance in a bench recor
   CHECK(std::abs(g1.value - g1_N_m) <= 3.0 * g1.uncertainty);
 }
 
-// Issue 6's fourth test: the physical reference door (gravity against a balancing spring,
+// The physical reference door (gravity against a balancing spring,
 // a cam latch, a seal, load-dependent friction) recorded on the bench and fitted with the
 // sensory model, which has no gravity. The first effect the loop adds must be the
 // imbalance between gravity and the spring, g1 sin θ, and g1 must lie within the range of

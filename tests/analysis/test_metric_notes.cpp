@@ -1,5 +1,5 @@
-// The report line that explains a FIT% near 100 beside a large max |omega error| (issue 21,
-// item 8): its numbers are the metrics' own, and FIT% follows from the two it names.
+// The report line that explains a FIT% near 100 beside a large max |omega error|: its
+// numbers are the metrics' own, and FIT% follows from the two it names.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <string>
@@ -40,7 +40,7 @@ TEST_CASE("the FIT%/max-error note names the average and the one worst sample", 
   CHECK(fit_and_max_error_note(metrics).empty());
 }
 
-// FIT% below 0, or held out far below fitted: a warning that says what it means (issue 31).
+// FIT% below 0, or held out far below fitted: a warning that says what it means.
 TEST_CASE("a negative or far lower held-out FIT% is warned about in words", "[fit][report]") {
   // omega one period of a sine (mean 0); the model's omega `scale` times it too small, so
   // FIT% = 100 (1 - scale).

@@ -283,7 +283,7 @@ TEST_CASE("Parameter file: written files list the sensory parameters in the spec
 
 TEST_CASE("Parameter file: a key or a section given twice is refused with both lines",
           "[parameter_file]") {
-  // Issue 33: J given twice (4.0, then 0.95), and a section given twice; the last won.
+  // J given twice (4.0, then 0.95), and a section given twice: refused, not the last kept.
   CHECK_THROWS_WITH(parse_parameter_file("{\n"
                                          "  \"handle_radius_m\": 0.7,\n"
                                          "  \"sensory\": {\n"

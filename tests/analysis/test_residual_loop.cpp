@@ -351,7 +351,7 @@ TEST_CASE("residual loop: options are validated with a message naming the option
                     Contains("2 strokes"));
 }
 
-// Issue 30: an effect with a free parameter at a bound or undetermined is never added; the
+// An effect with a free parameter at a bound or undetermined is never added; the
 // refit's verdict names each such parameter, and says whether the bound is a physical limit
 // (the catalogue's minimum, where an amplitude's effect vanishes) or the end of the search
 // range. The issue's case: an end stop whose θ_e sat at the range's −0.1 rad, undetermined.
@@ -394,7 +394,7 @@ TEST_CASE("residual loop: a refit's parameters at a bound or undetermined are na
   CHECK(doorbench::refit_parameter_problems(effects::Kind::kEndStop, held).empty());
 }
 
-// Issue 30: an effect whose refitted amplitude is not told apart from its neutral value by
+// An effect whose refitted amplitude is not told apart from its neutral value by
 // min_amplitude_z of its standard uncertainties is not added (a false addition on a clean
 // 50 Hz robot recording of the datasheet, draw 36: b = 1.626 +- 1.611, held-out -28 %). The
 // reason is given word for word; Stribeck's amplitude is measured from the refit's d1.

@@ -1,10 +1,10 @@
 // The residual loop on recordings drawn from the recording family
-// (tests/support/recording_family.h; issue 30): breakaway friction of the issue's size,
-// d_s − d1 = 1.5 N·m with w_s = 0.05 rad/s, on 20 draws, and the clean recordings of the
-// same draws (the issue's target: named first in 90 %, an addition to at most 10 % of the
-// clean ones; the test holds the level measured now, below). The family is the hands that
+// (tests/support/recording_family.h): breakaway friction of d_s − d1 = 1.5 N·m with
+// w_s = 0.05 rad/s, on 20 draws, and the clean recordings of the same draws (the target:
+// named first in 90 %, an addition to at most 10 % of the clean ones; the test holds the
+// level measured, below). The family is the hands that
 // take the door through low speeds (PD, minimum-jerk, impulses) at 100 Hz to 1 kHz, with
-// the bench's inclinometer + gyroscope or an angle alone; the issue's whole family (the
+// the bench's inclinometer + gyroscope or an angle alone; the whole family (the
 // robot and 50 Hz too) does worse (docs/residual-loop.md, "Breakaway friction on the
 // recording family"). Each loop stops after its first step (max_steps 1) and skips the
 // structure check: the first step is what is asked, and it keeps the test's cost down.
@@ -121,16 +121,14 @@ FamilyRun run_family(const doorbench::testing::FamilyOptions& family, std::uint3
 
 }  // namespace
 
-// Issue 30's done-when asks for breakaway friction named first in at least 90 % of the
-// draws (18 of 20) and at most 10 % of clean recordings with an addition. Not met: on these
-// 20 draws the loop names it first in 10, and no clean recording gets an addition since the
-// refit's amplitude must lie 4 standard uncertainties from neutral (min_amplitude_z; before,
-// 4 of 20). Measured 2026-11-28 on main at 46fa2a0; the misses, draw by draw, are in
-// docs/residual-loop.md, "Breakaway friction on the recording family": all 6 impulse draws,
-// and 4 of the 14 PD and minimum-jerk ones.
+// The target is breakaway friction named first in at least 90 % of the draws (18 of 20) and
+// at most 10 % of clean recordings with an addition. The loop names it first in 10, and no
+// clean recording gets an addition, since the refit's amplitude must lie 4 standard
+// uncertainties from neutral (min_amplitude_z); the measurement and the misses, draw by
+// draw, are in docs/residual-loop.md, "Breakaway friction on the recording family".
 //
 // Why, from the data (docs/residual-loop.md, "What the data allow";
-// bench/breakaway_oracle.cpp): on every draw the loop misses, the refit from the true values
+// studies/breakaway_oracle.cpp): on every draw the loop misses, the refit from the true values
 // would not be added by the loop's rule either (held-out fall, BIC, amplitude 4 u from zero,
 // no parameter at a bound), so the test also holds that: a miss where the data allow the
 // effect is the examination's fault. The counts are held at the measured level, so that a
@@ -140,11 +138,12 @@ constexpr int kTargetFound = (9 * kDraws + 9) / 10;  // 18
 constexpr int kMeasuredFound = 10;
 constexpr int kMeasuredFalseAdditions = 0;
 
-TEST_CASE("residual loop: breakaway friction on 20 recordings drawn from the recording "
-          "family's hands at 100 Hz to 1 kHz (issue 30: named first wherever a refit from the "
-          "true values would be added, at least at the measured level, and false additions on "
-          "the clean ones)",
-          "[residual_loop][family][slow]") {
+TEST_CASE(
+    "residual loop: breakaway friction on 20 recordings drawn from the recording "
+    "family's hands at 100 Hz to 1 kHz (named first wherever a refit from the "
+    "true values would be added, at least at the measured level, and false additions on "
+    "the clean ones)",
+    "[residual_loop][family][slow]") {
   const FamilyRun run = run_family(breakaway_test_family(), 2000);
   INFO(run.table);
   WARN("breakaway friction named first in " << run.found << " of " << kDraws

@@ -2,7 +2,7 @@
 // from the other loop tests': the tremor hand (tests/support/tremor_recording.h: 12 strokes, a
 // softer grip that lets the push build up against the friction, 8–12 Hz tremor, rest kept
 // before each stroke, the bench's noise). Breakaway friction, d_s − d1 = 1.5 N·m above the
-// Coulomb level with w_s = 0.05 rad/s (issue 23), must be named first with its parameters
+// Coulomb level with w_s = 0.05 rad/s, must be named first with its parameters
 // within 3 standard uncertainties on three seeds, and nothing added on the clean recordings
 // of the same seeds. Every other catalogue effect is named first on seed 1 (the soft close,
 // the end stop and the inertia error on seeds 2 and 3 too), and a physical door fitted with
@@ -124,12 +124,12 @@ void check_ends_physical_without_spurious_effects(const LoopResult& loop) {
 
 }  // namespace
 
-// Issue 23, the structure check, and issue 30, family before stacking: the physical reference
+// The structure check, family before stacking: the physical reference
 // door recorded by the tremor hand and fitted with the sensory model. No catalogue effect
 // closes the gap the missing weight and spring leave (the best refit, a force offset, lowers
 // the held-out RMSE by 13 %), so the loop must fit the physical model before it adds
 // anything, name it the better structure, go on with it and end on it with no effect added
-// (before issue 30 it added the force offset, and on other doors an end stop at its bound);
+// (rather than the force offset, or on other doors an end stop at its bound);
 // every refit on the way keeps the nested-refit inequality.
 TEST_CASE(
     "residual loop: the structure check names the physical model on a physical door "
@@ -195,10 +195,11 @@ TEST_CASE("residual loop: after a switch to the physical family an effect added 
   check_ends_physical_without_spurious_effects(loop);
 }
 
-// Nested refits never lose (issue 30), where they lost: the sensory model stacking effects on
-// a physical door with the structure check off. Before, step 2 refitted a soft close from the
-// start model to a fitted sum of squares far above its parent's (BIC +1.05e5, held-out
-// -7.5 %) and rejected it for that; every refit must now end at or below its parent, and no
+// Nested refits never lose, on the case where a refit from the start model can: the sensory
+// model stacking effects on a physical door with the structure check off, where step 2's
+// soft close refitted from the start model alone ends far above its parent
+// (docs/residual-loop.md, "Nested refits never lose"); every refit must end at or below its
+// parent, and no
 // step may add an effect with a free parameter at a bound or undetermined.
 TEST_CASE("residual loop: on a physical door fitted with the sensory model no refit ends above "
           "its parent",

@@ -1,4 +1,4 @@
-// Residual whiteness (issue 21, item 9): the autocorrelation of a white residual stays in the
+// Residual whiteness: the autocorrelation of a white residual stays in the
 // 99 % band, an AR(1) residual's does not, and a residual that follows the force three
 // samples later shows at cross-correlation lag +3; strokes are never bridged.
 #include <catch2/catch.hpp>

@@ -117,7 +117,7 @@ TEST_CASE("Geometry applied on read: the right torque only after the geometry re
     INFO("torque ratio before " << ratio);
     // 0.55/0.58 · cos 8° = 0.939: 6 % too low.
     CHECK_THAT(ratio, Catch::WithinAbs(
-                          kDoorFileRadiusM / 0.58 * std::cos(8 * std::numbers::pi / 180), 0.003));
+                          kDoorFileRadiusM / 0.58 * std::cos(8 * doorbench::kRadPerDeg), 0.003));
   }
 
   CHECK(apply_calibration(path, "force", geometry.record).empty());

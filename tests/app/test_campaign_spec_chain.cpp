@@ -288,7 +288,7 @@ TEST_CASE("spec --campaign's TO-BE door is the favourite's file or else the tune
   }
 }
 
-// Done when (issue 29): `spec --campaign` on the demo's simulated campaign writes the
+// `spec --campaign` on the demo's simulated campaign writes the
 // perceptual tolerance table, and its numbers agree with a direct Monte Carlo.
 TEST_CASE(
     "the demo's campaign through analyze and spec --campaign: the perceptual table "

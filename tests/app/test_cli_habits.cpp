@@ -1,4 +1,4 @@
-// Command-line habits (issue 21, item 8): -V as --version, `doorbench help VERB` as
+// Command-line habits: -V as --version, `doorbench help VERB` as
 // `doorbench VERB --help`, --quiet before or after the verb, and usage errors that point at
 // the verb's own help.
 #include <catch2/catch.hpp>
@@ -50,14 +50,14 @@ TEST_CASE("CLI habits: -V, help VERB, --quiet, errors naming the verb's help", "
     r = run_doorbench_shell("--no-such-option", dir);
     CHECK(r.status == 2);
     CHECK(r.err.find("(see doorbench --help)\n") != std::string::npos);
-    // A mistyped verb asking for help is still a mistake (issue 33: exit 0, general help).
+    // A mistyped verb asking for help is still a mistake (exit 2, not 0 with the general help).
     r = run_doorbench_shell("NOSUCHVERB --help", dir);
     CHECK(r.status == 2);
     CHECK(r.out.empty());
     CHECK(r.err.rfind("doorbench: unknown verb 'NOSUCHVERB' (expected model, simulate, ", 0) == 0);
     CHECK(r.err.find(") (see doorbench --help)\n") != std::string::npos);
   }
-  SECTION("--quiet silences record's live status, written with stdio (issue 33)") {
+  SECTION("--quiet silences record's live status, written with stdio") {
     const std::string out = (dir / "q.h5").string();
     const auto loud = run_doorbench_shell("record --duration-s 0.3 --out '" + out + "'", dir);
     REQUIRE(loud.status == 0);

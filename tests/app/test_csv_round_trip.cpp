@@ -1,4 +1,4 @@
-// Export then import (issue 21, item 7): the imported session keeps the channels' names and
+// Export then import: the imported session keeps the channels' names and
 // the session's rig, operator, product and start time, so that `info` says the same of both;
 // and `info`'s channel table lines up whatever the names' lengths.
 #include <algorithm>

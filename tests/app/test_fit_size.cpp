@@ -1,5 +1,5 @@
-// The fit's size said before it starts, and --max-windows (issue 33: a fit of a
-// 5-million-row CSV was at iteration 28 of 100 after 120 s): the count on stderr and in
+// The fit's size said before it starts, and --max-windows (docs/fitting.md, "The fit's
+// size"): the count on stderr and in
 // report.md is the window fit's own (result.json's "windows"), and beyond --max-windows whole
 // pairs of strokes spread over the recording are fitted, said word for word.
 #include <catch2/catch.hpp>

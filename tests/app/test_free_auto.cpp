@@ -1,4 +1,4 @@
-// Identifiable parameters (issue 30, item 7): a fit that leaves parameters undetermined
+// Identifiable parameters: a fit that leaves parameters undetermined
 // proposes the free set the data determine, and `doorbench fit --free auto` fits that set,
 // holding the rest at their start values and saying so. The recording: a robot turns the
 // door at constant speed through its free range, pushing exactly the door's own torque, so

@@ -1,6 +1,6 @@
-// Gaps are first-class (issue 18, defect 1): scans a recording lost (a ring overflow kept on
+// Gaps are first-class: scans a recording lost (a ring overflow kept on
 // the clock as kGapFillCount) are missing in every reader, never a number; and they cost
-// windows, not strokes (issue 30): the fit leaves out the windows that span a gap and fits
+// windows, not strokes: the fit leaves out the windows that span a gap and fits
 // the rest of the stroke, and every segment left out is named with its reason. A recovered
 // session with a 10 ms gap in its third stroke is made the way `recover` makes one: a
 // journal of the simulated bench's scans with one block left out, recovered. Its twin

@@ -54,7 +54,7 @@ TEST_CASE("play: bad devices and options are refused by name", "[haptic][cli]") 
   TempDir dir("play_cli_errors");
   const auto bogus = run_doorbench_shell(
       "play --device telepathy --duration-s 1 --out '" + (dir / "x.h5").string() + "'", dir);
-  CHECK(bogus.status == 2);  // a usage error (issue 33; tests/app/test_unknown_names.cpp)
+  CHECK(bogus.status == 2);  // a usage error (tests/app/test_unknown_names.cpp)
   CHECK_THAT(bogus.err, Catch::Contains("--device 'telepathy': not a device (use sim, "
                                         "sim:hapticmaster, sim:rotary or "
                                         "hapticmaster://HOST[:PORT])"));

@@ -1,5 +1,5 @@
-// import --resample-hz (issue 33: a recording at a rate the preprocessing cannot use should
-// have a way there): the recording on a uniform clock of the given rate, slower by the mean
+// import --resample-hz (the way for a recording at a rate the preprocessing cannot use):
+// the recording on a uniform clock of the given rate, slower by the mean
 // of the samples nearest each new time, faster by linear interpolation, a gap left missing;
 // checked through export, word for word.
 #include <catch2/catch.hpp>

@@ -1,4 +1,4 @@
-// Upper bounds on work (issue 18, defect 5): a stiff door stops the simulator with the
+// Upper bounds on work: a stiff door stops the simulator with the
 // parameter that made it stiff instead of crawling for minutes; the CLI and session
 // reader refuse sizes that would exhaust memory with a message, not std::bad_alloc. (The
 // rig file's bounds are tested in test_rig_file.cpp.)
@@ -46,7 +46,7 @@ doorbench::Trajectory hand_run(const doorbench::DoorModel& door) {
 
 TEST_CASE("Limits: a stiff door stops the simulator, naming the term and the parameter",
           "[limits][simulator]") {
-  // Issue 18: 477 million steps and 344 s for 60 s of door.
+  // Without the bound: 477 million steps and 344 s for 60 s of door (docs/simulator.md).
   const doorbench::DoorModel door = stiff_door();
   try {
     hand_run(door);

@@ -1,5 +1,5 @@
-// `doorbench loop` stopped by SIGINT or SIGTERM after its first step (issue 33, "Long verbs
-// stop cleanly"): result.json and report.md are written with the finished steps, marked
+// `doorbench loop` stopped by SIGINT or SIGTERM after its first step ("Long verbs stop
+// cleanly"): result.json and report.md are written with the finished steps, marked
 // interrupted, and the exit status is 128 + the signal's number (app/stop_signals.h).
 //
 // The signal is sent when the loop's stderr says its first step was added (the stage line

@@ -1,7 +1,7 @@
 // `doorbench loop`'s result.json lists every refit of every step, kept or rejected, with its
 // figures against its parent (fitted and held-out RMSE, BIC, the fitted sum of squares), the
-// effect's parameters with their uncertainties and flags, and the verdict (issue 30,
-// docs/residual-loop.md "What result.json holds"); the nested-refit inequality holds on every
+// effect's parameters with their uncertainties and flags, and the verdict
+// (docs/residual-loop.md "What result.json holds"); the nested-refit inequality holds on every
 // refit it lists.
 #include <catch2/catch.hpp>
 #include <nlohmann/json.hpp>

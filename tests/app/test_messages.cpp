@@ -1,6 +1,5 @@
-// Messages name their file, and text from files reaches the terminal escaped (issue 18,
-// defects 6 and 7). Sessions with broken times or names are made with h5py (Debian's
-// python3-h5py), as a file from elsewhere would be.
+// Messages name their file, and text from files reaches the terminal escaped. Sessions with broken
+// times or names are made with h5py (Debian's python3-h5py), as a file from elsewhere would be.
 #include <catch2/catch.hpp>
 #include <cstdlib>
 #include <fstream>

@@ -1,4 +1,4 @@
-// Every number checked where it enters (issue 33): every numeric option of every verb,
+// Every number checked where it enters: every numeric option of every verb,
 // taken from the verbs' own option lists (the command line built as main() builds it, by
 // add_all_verbs), refuses nan, inf, -inf, 1e308 and a non-number with a usage error naming
 // the option; an unsigned one refuses -1. Values that pass the parse (-1 and 0 where an

@@ -1,7 +1,7 @@
-// One output rule for every verb (issue 18, defects 2, 3 and 8; acquisition/session/output_file.h,
-// docs/output-files.md): an existing output is refused unless --overwrite, an output is
-// never an input, every file is written whole or not at all, a failure names the path and
-// the system's error, and fit/loop check their input before creating --out.
+// One output rule for every verb (acquisition/session/output_file.h, docs/output-files.md): an
+// existing output is refused unless --overwrite, an output is never an input, every file is written
+// whole or not at all, a failure names the path and the system's error, and fit/loop check their
+// input before creating --out.
 //
 // A full disk is a real one where the machine permits it: a 64 KiB tmpfs mounted in a
 // private mount namespace of the command (`unshare -m`, so it vanishes with it); and always
@@ -188,7 +188,7 @@ TEST_CASE("Outputs: fit and loop check their input before creating --out", "[out
   CHECK(holds.status == 2);
   CHECK(holds.err == "doorbench: " + dir.path.string() + ": holds an input of this command (" +
                          bad.string() + ") (doorbench never writes onto its input)\n");
-  // A link in the folder to the input (issue 33: --overwrite replaced the link).
+  // A link in the folder to the input: --overwrite must not replace the link.
   const fs::path linked = dir / "linked";
   fs::create_directories(linked);
   fs::create_symlink(bad, linked / "result.json");

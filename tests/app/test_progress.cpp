@@ -1,4 +1,4 @@
-// Progress with the time left on the long verbs (issue 21, item 8; app/progress.h): the
+// Progress with the time left on the long verbs (app/progress.h): the
 // estimate's arithmetic and words, the status line on a terminal and off it, and fit on a
 // pseudo-terminal, into a file and with --quiet.
 #include <catch2/catch.hpp>

@@ -1,4 +1,4 @@
-// Live limit warnings in `doorbench record` (issue 21, item 4): on the built-in rig the
+// Live limit warnings in `doorbench record`: on the built-in rig the
 // physical reference door falls open faster than the gyroscope's ±100 °/s, so its "rate"
 // channel sits at its limit during the openings. Recorded with stderr on a pseudo-terminal
 // (the live status display), the status line and the summary must name the channel and the

@@ -12,6 +12,7 @@
 #include <string>
 
 #include "acquisition/session/session_file.h"
+#include "core/units.h"
 #include "tests/support/modbus_test_server.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/sine_phase.h"
@@ -110,7 +111,7 @@ TEST_CASE(
   const ChannelSlice angle = session.read("mb_angle");
   const std::vector<double> angle_rad = session.physical("mb_angle", angle);
   REQUIRE(!angle_rad.empty());
-  CHECK(angle_rad[0] * 180 / std::numbers::pi ==
+  CHECK(angle_rad[0] * doorbench::kDegPerRad ==
         Approx(doorbench::testing::server_angle_deg(absolute_s(origin, angle.time_s[0])))
             .margin(0.05));
 }

@@ -1,4 +1,4 @@
-// A session is checked as a whole when `info` reads it (issue 33): a channel cut short, a
+// A session is checked as a whole when `info` reads it: a channel cut short, a
 // calibration record that is missing and times that go backwards are each named on a
 // "problem:" line, and a session that cannot be used as it is ends with exit status 1.
 // The damage is done with h5py (Debian's python3-h5py), as a file from elsewhere would be.
@@ -84,8 +84,8 @@ TEST_CASE("Session checks: info names a channel cut short and a missing calibrat
                            ": cannot be used as it is (1 problem above)\n");
 }
 
-// A channel cut short (issue 33: `export` wrote the common rows and said nothing, `fit` fitted
-// them without a word): export goes on to the longest channel's end with the short
+// A channel cut short (never the common rows alone without a word, by `export` or `fit`):
+// export goes on to the longest channel's end with the short
 // channel's cells empty and says so; fit and loop warn that only the time every channel
 // covers is fitted, on stderr and in report.md.
 TEST_CASE("Session checks: export leaves a channel cut short empty, fit says what it fits",

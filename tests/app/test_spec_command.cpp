@@ -91,10 +91,10 @@ TEST_CASE("CLI: spec from simulated TO-BE recordings", "[cli][spec]") {
              Contains("nope/fitted-params.json: no such file") || Contains("nope: no such file"));
 }
 
-// Issue 20's recipe: a prototype (the reference door with the spring preload F0 -12 % and
-// the hinge friction T_h +25 %) recorded with `doorbench record` on a simulated rig whose
-// door is its file, the AS-IS door recorded on the same bench; `doorbench spec` names
-// exactly F0 and T_h (the bench's own damping stays in the AS-IS door).
+// The inverse design's recipe (docs/inverse-design.md): a prototype (the reference door with the
+// spring preload F0 -12 % and the hinge friction T_h +25 %) recorded with `doorbench record` on a
+// simulated rig whose door is its file, the AS-IS door recorded on the same bench; `doorbench spec`
+// names exactly F0 and T_h (the bench's own damping stays in the AS-IS door).
 TEST_CASE("CLI: spec of a bench-recorded prototype against the AS-IS door on the same bench",
           "[cli][spec][slow]") {
   TempDir dir("spec_bench");
@@ -154,7 +154,7 @@ TEST_CASE("CLI: spec of a bench-recorded prototype against the AS-IS door on the
 }
 
 // A TO-BE recording of a real door through a bench's sensors, without --asis-recording: the
-// spec warns, naming the risk and the option, on stderr and in spec.json (issue 31).
+// spec warns, naming the risk and the option, on stderr and in spec.json.
 TEST_CASE("CLI: spec warns when a bench recording is specified without --asis-recording",
           "[cli][spec]") {
   TempDir dir("spec_bench_warning");

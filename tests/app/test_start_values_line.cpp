@@ -1,4 +1,4 @@
-// The start values' line and the tables agree (issue 31): on the physical reference door
+// The start values' line and the tables agree: on the physical reference door
 // fitted with the sensory model, no opening stroke unlatches from closed, so only the
 // closing side of the latch is read; the start from the data scales theta0 and theta1 to it
 // as the fit does, and the line says so instead of "the latch read off the data was not

@@ -1,7 +1,6 @@
-// Unknown names are usage errors (issue 33: `play --device bogus`, an unknown name in
-// `fit --free`, `spec --fixed` and `--costs` ended with exit status 1, fit's after the data
-// was read): exit 2, the message naming the option, the name and the valid choices, before
-// any input is read or any output made.
+// Unknown names are usage errors (`play --device bogus`, an unknown name in `fit --free`,
+// `spec --fixed` and `--costs`, fit's before the data is read): exit 2, the message naming the
+// option, the name and the valid choices, before any input is read or any output made.
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <string>

@@ -1,5 +1,5 @@
-// calibrate --valid-until is checked where it enters (issue 33: `--valid-until notadate` was
-// stored as it was): an ISO 8601 date or UTC time on the calendar, not before today; else
+// calibrate --valid-until is checked where it enters (`--valid-until notadate` is refused,
+// not stored): an ISO 8601 date or UTC time on the calendar, not before today; else
 // exit 2 naming the option, word for word. A good one passes on to the verb (here: a
 // --from session that does not exist, exit 1).
 #include <catch2/catch.hpp>

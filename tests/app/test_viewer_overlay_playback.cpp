@@ -1,4 +1,4 @@
-// The A/B overlay of the real door and its haptic playback (issue 21, item 1): a bench
+// The A/B overlay of the real door and its haptic playback: a bench
 // session (the simulated bench, stroke events recorded) and a playback session (the
 // simulated HapticMaster's render loop, no stroke events) are overlaid by the real
 // `doorbench view --screenshot` under Xvfb; both rate curves must be in the picture and

@@ -1,6 +1,6 @@
-// The residual-whiteness line of the fit's and the loop's text reports (issue 21, item 9;
-// ResidualWhiteness::report_line): report.md states it under the full report. Their SVG
-// plots are checked as XML with their legends on the way (issue 31).
+// The residual-whiteness line of the fit's and the loop's text reports
+// (ResidualWhiteness::report_line): report.md states it under the full report. Their SVG
+// plots are checked as XML with their legends on the way.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>

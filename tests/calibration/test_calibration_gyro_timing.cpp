@@ -65,14 +65,14 @@ SensorTruth write_sensor_session(const std::filesystem::path& path, const DoorTr
   sensors::Inclinometer inclinometer(inclinometer_parameters(inc), 1000.0, seed * 1000003u + 1);
   inclinometer.settle(0.0);
   sensors::Gyroscope gyroscope(gyroscope_parameters(gyr), 1000.0, seed * 1000003u + 2);
-  const sensors::Daq daq{sensors::DaqParameters{}};
+  const sensors::Daq daq{doorbench::DaqParameters{}};
   SessionMetadata metadata;
   metadata.rig_name = rig.name;
   metadata.rig_definition = rig.text;
   SessionWriter writer(path, metadata);
   std::vector<int> index;
   for (const RigChannel* c : {&inc, &gyr}) {
-    const calibration::CalibrationRecord record = sensors::nominal_calibration(*c);
+    const doorbench::CalibrationRecord record = sensors::nominal_calibration(*c);
     writer.add_calibration(record);
     ChannelInfo info;
     info.name = c->name;

@@ -57,13 +57,13 @@ void write_hold_recording(const std::filesystem::path& path, const std::vector<d
   const RigDefinition rig =
       parse_rig(simulated_dishwasher_rig_text(), "built-in", std::filesystem::current_path());
   const RigChannel& channel = *rig.find_channel("angle");
-  sensors::InclinometerParameters p = inclinometer_parameters(channel);
+  doorbench::InclinometerParameters p = inclinometer_parameters(channel);
   p.offset_deg = truth.offset_deg;
   p.output_V_per_deg = truth.output_V_per_deg;
   p.noise_rms_deg = truth.noise_deg;
   sensors::Inclinometer sensor(p, 1000.0, seed);
   sensor.settle(holds_deg.front() / kDegPerRad);
-  const sensors::Daq daq{sensors::DaqParameters{}};
+  const sensors::Daq daq{doorbench::DaqParameters{}};
   SessionMetadata metadata;
   metadata.rig_name = rig.name;
   metadata.rig_definition = rig.text;

@@ -114,9 +114,9 @@ TEST_CASE("Rig channels name records of the store, and sessions carry them in fu
   const std::string nominal = "calibration = \"nominal\"";
   text.replace(text.find(nominal), nominal.size(), "calibration = \"latest\"");
   RigDefinition rig = parse_rig(text, "rig.toml", dir.path);
-  const DoorModel model = sensors::simulated_door_model(rig);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
   // No record yet in dir/calibrations (the default store beside the rig).
-  CHECK_THROWS_WITH(sensors::SimulatedBench(rig, model, 1.0),
+  CHECK_THROWS_WITH(simulated_bench::SimulatedBench(rig, model, 1.0),
                     Catch::StartsWith("rig.toml: channel force: calibration \"latest\": ") &&
                         Catch::EndsWith("holds no record for load_cell SIM-LC445-0001 "
                                         "(calibrate it first)"));
@@ -126,7 +126,7 @@ TEST_CASE("Rig channels name records of the store, and sessions carry them in fu
   r.method = "multi-point";
   rig.calibration_store = dir / "elsewhere";
   CalibrationStore(rig.calibration_store).add(r);
-  sensors::SimulatedBench bench(rig, model, 1.0);
+  simulated_bench::SimulatedBench bench(rig, model, 1.0);
   SessionMetadata metadata;
   metadata.rig_name = rig.name;
   RecordOptions options;

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "acquisition/rig/rig_file.h"
+#include "core/units.h"
 #include "sensors/channel_limits.h"
 
 using namespace doorbench;
@@ -19,10 +20,10 @@ TEST_CASE("channel limits: the inclinometer's and the gyroscope's range less 1 %
   REQUIRE(limits.size() == 2);  // the load cell has none
   CHECK(limits[0].channel == "angle");
   CHECK(limits[0].sensor == "inclinometer");
-  CHECK(limits[0].limit == Approx(0.99 * 10.0 * std::numbers::pi / 180.0));
+  CHECK(limits[0].limit == Approx(0.99 * 10.0 * doorbench::kRadPerDeg));
   CHECK(limits[0].range == "±10 deg");
   CHECK(limits[1].channel == "rate");
-  CHECK(limits[1].limit == Approx(0.99 * 100.0 * std::numbers::pi / 180.0));
+  CHECK(limits[1].limit == Approx(0.99 * 100.0 * doorbench::kRadPerDeg));
   CHECK(limits[1].range == "±100 deg/s");
 
   SessionMetadata metadata;

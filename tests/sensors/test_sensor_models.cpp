@@ -15,18 +15,18 @@
 #include "core/units.h"
 #include "sensors/sensor_models.h"
 
-using doorbench::kRadPerDeg;
 using Catch::Matchers::Equals;
 using Catch::Matchers::WithinAbs;
 using Catch::Matchers::WithinRel;
+using doorbench::DaqParameters;
+using doorbench::GyroscopeParameters;
+using doorbench::InclinometerParameters;
+using doorbench::kRadPerDeg;
+using doorbench::LoadCellParameters;
 using doorbench::sensors::Daq;
-using doorbench::sensors::DaqParameters;
 using doorbench::sensors::Gyroscope;
-using doorbench::sensors::GyroscopeParameters;
 using doorbench::sensors::Inclinometer;
-using doorbench::sensors::InclinometerParameters;
 using doorbench::sensors::LoadCell;
-using doorbench::sensors::LoadCellParameters;
 
 namespace {
 
@@ -282,8 +282,10 @@ TEST_CASE("gyroscope: scale-factor error", "[sensors]") {
 }
 
 TEST_CASE("nominal scale factors per radian", "[sensors]") {
-  CHECK_THAT(InclinometerParameters{}.volts_per_rad(), WithinRel(0.4 * 180.0 / kPi, 1e-15));
-  CHECK_THAT(GyroscopeParameters{}.volts_per_rad_s(), WithinRel(0.025 * 180.0 / kPi, 1e-15));
+  CHECK_THAT(InclinometerParameters{}.volts_per_rad(),
+             WithinRel(0.4 * doorbench::kDegPerRad, 1e-15));
+  CHECK_THAT(GyroscopeParameters{}.volts_per_rad_s(),
+             WithinRel(0.025 * doorbench::kDegPerRad, 1e-15));
 }
 
 // --- DAQ ------------------------------------------------------------------------------

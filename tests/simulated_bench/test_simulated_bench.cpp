@@ -201,10 +201,10 @@ TEST_CASE("Simulated bench: a scripted force drives the door, its strokes mount 
 
   const RigDefinition rig = parse_rig(scripted_rig_text(), "scripted.toml", dir);
   REQUIRE(rig.simulation->force == "force.csv");
-  const DoorModel model = sensors::simulated_door_model(rig);
-  const auto script = sensors::simulated_hand(rig, model);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  const auto script = simulated_bench::simulated_hand(rig, model);
   CHECK(script->natural_duration_s() == 4.0);
-  sensors::SimulatedBench bench(rig, model, 4.0);
+  simulated_bench::SimulatedBench bench(rig, model, 4.0);
   RecordOptions options;
   options.duration_s = 4.0;
   const auto path = dir / "scripted.h5";
@@ -230,8 +230,8 @@ TEST_CASE("Simulated bench: a scripted force drives the door, its strokes mount 
 TEST_CASE("Simulated bench: reading scans allocates nothing once started",
           "[simulated_bench][allocation]") {
   const RigDefinition rig = built_in_rig();
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, 18.0);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  simulated_bench::SimulatedBench bench(rig, model, 18.0);
   ScanBlock block(bench.channels().size(), 100);
   bench.start();
   block.events.clear();
@@ -249,8 +249,8 @@ TEST_CASE("Simulated bench: reading scans allocates nothing once started",
 TEST_CASE("Simulated bench: realtime = true paces the scans in real time", "[simulated_bench]") {
   RigDefinition rig = built_in_rig();
   rig.simulation->realtime = true;
-  const DoorModel model = sensors::simulated_door_model(rig);
-  sensors::SimulatedBench bench(rig, model, 0.3);
+  const DoorModel model = simulated_bench::simulated_door_model(rig);
+  simulated_bench::SimulatedBench bench(rig, model, 0.3);
   ScanBlock block(bench.channels().size(), 100);
   const auto started = std::chrono::steady_clock::now();
   bench.start();

@@ -12,16 +12,15 @@
 #include <string>
 #include <vector>
 
+#include "core/seeded_random.h"
+
 namespace doorbench::testing {
 
 class PanelRandom {
  public:
   explicit PanelRandom(std::uint64_t seed) : generator_(seed) {}
-  double uniform() { return (double(generator_() >> 11) + 0.5) * 0x1.0p-53; }
-  double normal() {
-    const double u1 = uniform(), u2 = uniform();
-    return std::sqrt(-2 * std::log(u1)) * std::cos(2 * M_PI * u2);
-  }
+  double uniform() { return uniform_open01(generator_); }
+  double normal() { return standard_normal(generator_); }
 
  private:
   std::mt19937_64 generator_;

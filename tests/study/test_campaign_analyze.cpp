@@ -181,8 +181,8 @@ TEST_CASE("campaign analyze shows the bootstrap's progress on stderr, and -q dro
   CHECK(run.out.find("favourite: D (probability ") != std::string::npos);
 }
 
-// The other half of issue 29 (ratings, thresholds, tuning; study/statistics/ratings.h,
-// thresholds.h, tuning.h) through the verb: their sections, plots and the tune rows' files
+// Ratings, thresholds and tuning (study/statistics/ratings.h, thresholds.h, tuning.h)
+// through the verb: their sections, plots and the tune rows' files
 // read beside the table.
 TEST_CASE("campaign analyze writes the ratings, jnd and tuning sections and their plots",
           "[study]") {

@@ -14,6 +14,7 @@
 
 using namespace doorbench::study;
 using doorbench::DoorModel;
+using doorbench::uniform_open01;
 
 namespace {
 DoorModel with_steps(const DoorModel& base, const std::string& steps) {

@@ -1,4 +1,4 @@
-// Coverage of the 95 % intervals on simulated campaigns with a known truth (issue 29; the
+// Coverage of the 95 % intervals on simulated campaigns with a known truth (the
 // table in docs/campaign.md, "Coverage of the intervals", is this test's output, printed
 // with -s). Each campaign: a pair block (4 variants, every ordered pair twice per
 // participant) from the Bradley–Terry/Davidson model with ties, an order effect and

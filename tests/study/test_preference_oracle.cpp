@@ -1,8 +1,7 @@
-// The preference scale against independent implementations in R (issue 29: "checked
-// against independent implementations"): BradleyTerry2's BTm for Bradley–Terry with and
-// without the first-position advantage, and R's glm on the Poisson log-linear form of
-// Davidson's tie model with the order effect (tests/study/preference_oracle.R). The data
-// sets are simulated with a known truth; the point estimates must agree to 1e-4 relative,
+// The preference scale against independent implementations in R: BradleyTerry2's BTm for
+// Bradley–Terry with and without the first-position advantage, and R's glm on the Poisson
+// log-linear form of Davidson's tie model with the order effect (tests/study/preference_oracle.R).
+// The data sets are simulated with a known truth; the point estimates must agree to 1e-4 relative,
 // and the worths' quasi-variances (Firth & de Menezes 2004) with R's qvcalc (of BTabilities
 // for BTm, of the worths' covariance block for glm) to 1e-6 relative.
 // R, r-cran-bradleyterry2 and r-cran-qvcalc come from scripts/install-deps.sh; without them

@@ -1,8 +1,8 @@
 #pragma once
 // What the data allow for breakaway friction, whatever the residual examination does
-// (issue 30; docs/residual-loop.md, "What the data allow"): the refit the loop would make if
+// (docs/residual-loop.md, "What the data allow"): the refit the loop would make if
 // its examination pointed at breakaway friction with the true values, judged by the loop's
-// acceptance rule. Used by bench/breakaway_oracle.cpp over many draws and by
+// acceptance rule. Used by studies/breakaway_oracle.cpp over many draws and by
 // tests/analysis/test_residual_loop_family.cpp on the draws the loop misses.
 //
 //   BreakawayRefit r = refit_from_true_breakaway(data, LoopOptions{});

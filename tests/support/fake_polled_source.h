@@ -63,7 +63,7 @@ class FakePolledSource : public PolledSource {
     }
     return channels;
   }
-  std::vector<calibration::CalibrationRecord> calibrations() const override { return {}; }
+  std::vector<doorbench::CalibrationRecord> calibrations() const override { return {}; }
 
   void start() override {
     running_.store(true);

@@ -1,9 +1,9 @@
 #pragma once
-// A recording "from elsewhere" for tests of issue 19: a door model opened and closed by the
-// virtual hand, sampled at jittered times around a low rate, the angle quantised as an
-// encoder's, the force with an offset (a load cell not tared) and white noise, no rate and
-// no stroke column, and the handle radius stated in the metadata. The samples are the
-// simulator's at the jittered times themselves (no resampling).
+// A recording "from elsewhere" for the tests of any sample rate and geometry: a door model opened
+// and closed by the virtual hand, sampled at jittered times around a low rate, the angle quantised
+// as an encoder's, the force with an offset (a load cell not tared) and white noise, no rate and no
+// stroke column, and the handle radius stated in the metadata. The samples are the simulator's at
+// the jittered times themselves (no resampling).
 #include <cmath>
 #include <random>
 #include <string>

@@ -1,5 +1,5 @@
 #pragma once
-// The nested-refit inequality (issue 30; docs/residual-loop.md, "Nested refits never lose"):
+// The nested-refit inequality (docs/residual-loop.md, "Nested refits never lose"):
 // every refit of the residual loop extends its parent by one effect and starts, among others,
 // at the parent's optimum with the effect at its neutral value, so its fitted (weighted) sum
 // of squares is never above the parent's. It is compared with its parent on the same windows

@@ -1,6 +1,6 @@
 #pragma once
-// A family of recording conditions for the residual loop's tests and benchmarks (issue 30;
-// docs/residual-loop.md, "The recording family"): not one generator but conditions drawn per
+// A family of recording conditions for the residual loop's tests and benchmarks
+// (docs/residual-loop.md, "The recording family"): not one generator but conditions drawn per
 // recording, so that no test tunes to one recording.
 //
 //   RecordingConditions c = draw_conditions(seed);          // or draw_conditions(seed, options)
@@ -536,7 +536,7 @@ inline RecordingConditions draw_conditions(std::uint32_t seed, const FamilyOptio
   return c;
 }
 
-// The family of tests/analysis/test_residual_loop_family.cpp and bench/breakaway_oracle.cpp:
+// The family of tests/analysis/test_residual_loop_family.cpp and studies/breakaway_oracle.cpp:
 // the hands that take the door through low speeds (PD, minimum-jerk, impulses) at 100 Hz to
 // 1 kHz, with the bench's inclinometer + gyroscope or an angle alone.
 inline FamilyOptions breakaway_test_family() {

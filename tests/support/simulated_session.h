@@ -21,7 +21,7 @@ namespace doorbench::testing {
 // Records `door` on `rig`'s simulated bench into `path`; the number of scans recorded.
 inline std::size_t record_door_on_rig(const RigDefinition& rig, const DoorModel& door,
                                       const std::filesystem::path& path, double duration_s) {
-  sensors::SimulatedBench bench(rig, door, duration_s);
+  simulated_bench::SimulatedBench bench(rig, door, duration_s);
   SessionMetadata metadata;
   metadata.rig_name = rig.name;
   metadata.rig_definition = rig.text;
@@ -39,7 +39,7 @@ inline std::size_t record_built_in_session(const std::filesystem::path& path, do
   rig.simulation->seed = seed;
   rig.simulation->model = model_kind;
   rig.simulation->effects = effects_file.string();  // absolute, or empty: none
-  return record_door_on_rig(rig, sensors::simulated_door_model(rig), path, duration_s);
+  return record_door_on_rig(rig, simulated_bench::simulated_door_model(rig), path, duration_s);
 }
 
 }  // namespace doorbench::testing

@@ -32,6 +32,7 @@
 #include "analysis/simulation/fit_synthetic.h"
 #include "analysis/simulation/simulator.h"
 #include "analysis/simulation/virtual_hand.h"
+#include "core/units.h"
 
 namespace doorbench::testing {
 
@@ -48,8 +49,8 @@ struct TremorRecordingOptions {
   // preprocessing keeps a margin of rest around the strokes it finds.
   double rest_before_s = 0.3;
   double force_noise_N = 0.2;          // the bench's noise
-  double angle_noise_rad = 0.01 * 3.14159265358979323846 / 180.0;
-  double rate_noise_rad_s = 0.05 * 3.14159265358979323846 / 180.0;
+  double angle_noise_rad = 0.01 * kRadPerDeg;
+  double rate_noise_rad_s = 0.05 * kRadPerDeg;
   std::uint32_t seed = 1;
 };
 

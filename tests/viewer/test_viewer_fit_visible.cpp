@@ -1,4 +1,4 @@
-// Measured stays visible under a perfect fit (issue 21, item 2): in the viewer's fit layout a
+// Measured stays visible under a perfect fit: in the viewer's fit layout a
 // model's curve equal to the measured one must not hide it. The screenshot is taken in a
 // child run of this test binary under Xvfb (a hidden test case, so that the fit comparison
 // can be made exactly equal to the measurement), then its pixels are read here.

@@ -1,4 +1,4 @@
-// A layout without its data (issue 21, item 5): `view --layout NAME` fails with exit status 1
+// A layout without its data: `view --layout NAME` fails with exit status 1
 // and says what is missing, with or without --screenshot (no PNG written); with its data,
 // --layout without --screenshot opens the window on that layout's tab (checked on a headless
 // ImGui frame: the tab's plots are the ones drawn).

@@ -73,7 +73,7 @@ JournalHeader live_header() {
   latency.raw_unit = "s";
   latency.unit = "s";
   header.channels = {force, angle, polled, latency};
-  calibration::CalibrationRecord record;
+  doorbench::CalibrationRecord record;
   record.id = "lc-1";
   record.sensor_kind = "load_cell";
   record.unit = "N";

@@ -1,4 +1,4 @@
-// The viewer's units and sensor limits (issue 21, items 3 and 4): angles and rates are shown
+// The viewer's units and sensor limits: angles and rates are shown
 // in degrees as the reports show them (the session keeps rad; plot_style::display_unit says
 // which units), and the channels layout shades the stretches where a channel sits at its
 // sensor's limit (sensors/channel_limits.h, the definition `doorbench record` warns with). A
@@ -62,7 +62,7 @@ TEST_CASE("viewer: angles in deg, the session's rad converted at display", "[vie
 
   std::vector<double> rates = {1.0, -0.5, std::nan("")};
   CHECK(viewer::to_display_units("rad/s", rates) == "deg/s");
-  CHECK(rates[0] == Approx(180.0 / std::numbers::pi));
+  CHECK(rates[0] == Approx(doorbench::kDegPerRad));
   CHECK(rates[1] == Approx(-90.0 / std::numbers::pi));
   CHECK(std::isnan(rates[2]));
   std::vector<double> forces = {2.0};

@@ -20,7 +20,7 @@ namespace doorbench::record_detail {
 struct LiveConversion {
   double offset = 0.0;
   double scale = 1.0;
-  const calibration::CalibrationRecord* record = nullptr;
+  const CalibrationRecord* record = nullptr;
   double operator()(double raw) const {
     const double signal = offset + scale * raw;
     if (record == nullptr) return signal;
@@ -56,7 +56,7 @@ struct PolledState {
 struct RecordingPlan {
   AcquisitionBackend* backend = nullptr;
   std::vector<ChannelInfo> channels;
-  std::vector<calibration::CalibrationRecord> calibrations;
+  std::vector<CalibrationRecord> calibrations;
   std::string description;
   double rate_hz = 0.0;
   std::size_t scan_channels = 0;

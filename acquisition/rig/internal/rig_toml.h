@@ -24,11 +24,6 @@ namespace doorbench::rig_detail {
 // recording would exhaust memory or disk, or run for longer than anyone records a door.
 inline constexpr double kMaxRecordingS = 86400.0;     // a day, as `record --duration-s`
 
-// A bound as written in the docs: 200000, not 2e+05.
-inline std::string whole_number_text(double value) {
-  return std::to_string(static_cast<long long>(value));
-}
-
 // `text` in double quotes, for the messages.
 std::string in_quotes(std::string_view text);
 

@@ -20,8 +20,7 @@
 
 namespace doorbench::session_hdf5 {
 
-using calibration::CalibrationRecord;
-
+using doorbench::CalibrationRecord;
 
 inline constexpr const char* kFormatName = "doorbench-session";
 inline constexpr hsize_t kEventChunk = 1024;                    // events per chunk and per write

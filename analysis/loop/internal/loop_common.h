@@ -20,11 +20,6 @@ inline int refit_threads(bool parallel, std::size_t count) {
 // Four significant digits: the loop's tables and its reasons.
 std::string number(double value);
 
-// A fraction as a percentage with one decimal ("12.3%"; "-" when not finite), and with its
-// sign ("+12.3%").
-std::string percent(double fraction);
-std::string signed_percent(double fraction);
-
 // "window RMSE of omega A rad/s fitted, B held out".
 std::string describe_figures(const ModelFigures& figures);
 

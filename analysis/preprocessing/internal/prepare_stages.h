@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "analysis/preprocessing/preprocessing.h"
+#include "core/percentile.h"
 
 namespace doorbench::preprocessing_detail {
 
@@ -30,9 +31,6 @@ enum Fault : std::uint8_t {
   kLost = 32,        // every measured column missing: a scan lost in recording (a gap)
   kImpossible = 64,  // a value beyond the physical limits (PreprocessingOptions::max_abs_*)
 };
-
-// The median (of the two middle values, their mean). `values` not empty.
-double median(std::vector<double> values);
 
 struct Range {
   std::size_t first = 0, last = 0;  // inclusive sample indices

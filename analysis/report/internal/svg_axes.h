@@ -50,20 +50,4 @@ inline std::string number_text(double value, double spacing) {
   return text;
 }
 
-// Text for an SVG element: <, > and & escaped.
-inline std::string escaped(const std::string& text) {
-  std::string out;
-  for (char c : text) {
-    if (c == '<')
-      out += "&lt;";
-    else if (c == '>')
-      out += "&gt;";
-    else if (c == '&')
-      out += "&amp;";
-    else
-      out += c;
-  }
-  return out;
-}
-
 }  // namespace doorbench::svg_axes

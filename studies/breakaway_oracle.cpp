@@ -1,9 +1,9 @@
 // Not a timing: how far the recording family's data can tell breakaway friction apart from
-// nothing, whatever the examination does (issue 30; docs/residual-loop.md, "What the data
-// allow"). For each draw of the family test's conditions (tests/support/recording_family.h,
-// breakaway_test_family(); the draws of tests/analysis/test_residual_loop_family.cpp), the
-// recording with the issue's breakaway friction (d_s − d1 = 1.5 N·m, w_s = 0.05 rad/s) and
-// the clean one of the same conditions and seed are each fitted twice:
+// nothing, whatever the examination does (docs/residual-loop.md, "What the data allow"). For each
+// draw of the family test's conditions (tests/support/recording_family.h, breakaway_test_family();
+// the draws of tests/analysis/test_residual_loop_family.cpp), the recording with the issue's
+// breakaway friction (d_s − d1 = 1.5 N·m, w_s = 0.05 rad/s) and the clean one of the same
+// conditions and seed are each fitted twice:
 //   base:   the loop's start fit (the sensory reference door, the loop's fit options);
 //   oracle: the refit the loop would make if its examination pointed at breakaway friction
 //           with the true values: from the base fit with Stribeck friction at d1 + 1.5 N·m,

@@ -1,6 +1,6 @@
 // Writes the sensory fit benchmark's data (bench/fit_benchmark_data.h: the 12 strokes, the
 // truth, the 30%-off start, the bounds) to files, so that the SciPy and genetic-algorithm
-// fits in bench/compare/ work on exactly what bench_fitting.cpp times. Not a timing.
+// fits in studies/compare/ work on exactly what bench_fitting.cpp times. Not a timing.
 //
 //   doorbench_export_fit_strokes DIR [--no-fit]
 //
@@ -10,7 +10,7 @@
 // DIR/cpp_replay.csv   each whole stroke replayed at the TRUE parameters from its first
 //                      measured state under the measured force, by the fit's RK4 (2 steps
 //                      per sample) and by the adaptive simulator: the reference for the
-//                      Python model check (bench/compare/check_model.py)
+//                      Python model check (studies/compare/check_model.py)
 // DIR/cpp_fit.json     fit_model's result from the start (no held-out folds, as the
 //                      benchmark's first run), unless --no-fit
 #include <algorithm>

@@ -40,7 +40,7 @@
 #include "acquisition/session/output_file.h"
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
-#include "bench/loop_datasheet_table.h"
+#include "studies/loop_datasheet_table.h"
 #include "core/number_format.h"
 #include "core/parallel.h"
 

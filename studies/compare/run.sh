@@ -1,9 +1,9 @@
 #!/usr/bin/env bash
 # The sensory fit benchmark side by side: doorbench's C++ fit (bench_fitting.cpp), a SciPy
-# least-squares fit and a genetic algorithm (bench/compare/README.md). Installs nothing:
+# least-squares fit and a genetic algorithm (studies/compare/README.md). Installs nothing:
 # it needs Debian's python3-numpy and python3-scipy and stops if they are missing.
 #
-#   bash bench/compare/run.sh            # results and the table in build/compare/
+#   bash studies/compare/run.sh            # results and the table in build/compare/
 #
 # Environment: BUILD (build directory, default build), OUT (default $BUILD/compare),
 # REPEATS (C++ benchmark repetitions, default 5), SCIPY_WHOLE_MAX_NFEV (default 6),
@@ -34,7 +34,7 @@ fi
 mkdir -p "$OUT"
 
 echo "== exporting the benchmark's strokes, truth and start; the C++ fit once"
-"$BUILD/bench/doorbench_export_fit_strokes" "$OUT"
+"$BUILD/studies/doorbench_export_fit_strokes" "$OUT"
 
 echo "== the numpy model against the C++ one (true parameters, whole strokes)"
 "$PY" "$here/check_model.py" "$OUT" --out "$OUT/check_model.json"

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """The tables of docs/residual-loop.md, "What the data allow", from the CSV lines of
-doorbench_breakaway_oracle (bench/breakaway_oracle.cpp): by hand, rate and sensor set, how
+doorbench_breakaway_oracle (studies/breakaway_oracle.cpp): by hand, rate and sensor set, how
 many breakaway recordings the loop names and the refit from the true values qualifies under
 the loop's rule (with the Wilson 95 % interval), how many clean ones either would add, and
 how far each acceptance statistic alone can separate the two.

@@ -1,4 +1,4 @@
-#include "bench/loop_datasheet_table.h"
+#include "studies/loop_datasheet_table.h"
 
 #include <algorithm>
 #include <cmath>
@@ -9,6 +9,7 @@
 
 #include "analysis/design/perceptual_tolerance.h"
 #include "core/number_format.h"
+#include "core/percentile.h"
 
 namespace doorbench::datasheet {
 namespace {
@@ -99,13 +100,6 @@ RunRecord record_from(const std::vector<std::string>& f) {
   r.cpu_s = real();
   r.wall_s = real();
   return r;
-}
-
-double median(std::vector<double> values) {
-  if (values.empty()) return std::nan("");
-  std::sort(values.begin(), values.end());
-  const std::size_t n = values.size();
-  return n % 2 == 1 ? values[n / 2] : 0.5 * (values[n / 2 - 1] + values[n / 2]);
 }
 
 // The runs of one table row: an effect at one size (or the clean recordings).

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The breakaway oracle (bench/breakaway_oracle.cpp) and its table script cannot rot: the
+"""The breakaway oracle (studies/breakaway_oracle.cpp) and its table script cannot rot: the
 program's header, one draw where the data do tell the issue's breakaway friction apart (draw
 8 of the family test: a PD hand at 1 kHz with the inclinometer + gyroscope; the refit from
 the true values qualifies there, its amplitude within 4 u of the true 1.5 N·m, and on the

@@ -1,4 +1,4 @@
-"""What the bench programs' check scripts share (tests/bench/check_*.py): problems are
+"""What the bench programs' check scripts share (tests/studies/check_*.py): problems are
 collected, not raised, so that one run lists them all; `run` records a wrong exit status as
 a problem and returns the finished process."""
 import subprocess

@@ -20,7 +20,7 @@
 //     issue's case (a PD hand, 0.3 N of 1-8 Hz tremor, openings to 60-77 deg, latch, 1 kHz).
 //     --hand H, --rate HZ, --sensors S override the drawn conditions; --replay: the data
 //     simulated again under the sampled force (RecordingConditions::replay_sampled_force);
-//     --datasheet-seed: the recording of the datasheet's draw SEED (bench/loop_datasheet.cpp).
+//     --datasheet-seed: the recording of the datasheet's draw SEED (studies/loop_datasheet.cpp).
 #include <algorithm>
 #include <chrono>
 #include <cmath>

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The loop datasheet program (bench/loop_datasheet.cpp) cannot rot: run it on one drawn
+"""The loop datasheet program (studies/loop_datasheet.cpp) cannot rot: run it on one drawn
 recording of one effect and one clean one, check the CSV and the table, check that a second
 call resumes (runs nothing, keeps the CSV), and tabulate a hand-written CSV whose counts give
 Wilson intervals computed here by hand, and whose parameters give a known bias and coverage.

@@ -1,0 +1,137 @@
+// The contracts of core's shared helpers: JSON numbers, HTML escaping, percentiles, percents
+// and seeded draws.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <random>
+#include <vector>
+
+#include "core/html_escape.h"
+#include "core/json_number.h"
+#include "core/number_format.h"
+#include "core/percentile.h"
+#include "core/seeded_random.h"
+
+namespace {
+constexpr double kInf = std::numeric_limits<double>::infinity();
+}
+
+TEST_CASE("json_number: a finite value is itself, NaN and infinities are null", "[core]") {
+  CHECK(doorbench::json_number(0.25).dump() == "0.25");
+  CHECK(doorbench::json_number(-3.0).dump() == "-3.0");
+  CHECK(doorbench::json_number(std::nan("")).is_null());
+  CHECK(doorbench::json_number(kInf).is_null());
+  CHECK(doorbench::json_number(-kInf).is_null());
+  CHECK(doorbench::json_number(std::optional<double>{}).is_null());
+  CHECK(doorbench::json_number(std::optional<double>{1.5}).dump() == "1.5");
+  const nlohmann::ordered_json ordered = {
+      {"b", doorbench::json_number<nlohmann::ordered_json>(std::nan(""))},
+      {"a", doorbench::json_number<nlohmann::ordered_json>(2.0)}};
+  CHECK(ordered.dump() == R"({"b":null,"a":2.0})");
+}
+
+TEST_CASE("html_escape: & < > \" and ' are escaped, everything else is kept", "[core]") {
+  CHECK(doorbench::html_escape("a & b") == "a &amp; b");
+  CHECK(doorbench::html_escape("<tag>") == "&lt;tag&gt;");
+  CHECK(doorbench::html_escape(R"(say "hi")") == "say &quot;hi&quot;");
+  CHECK(doorbench::html_escape("d' > 0") == "d&#39; &gt; 0");
+  CHECK(doorbench::html_escape("&amp;") == "&amp;amp;");
+  CHECK(doorbench::html_escape("θ₁ = 5 °") == "θ₁ = 5 °");
+  CHECK(doorbench::html_escape("").empty());
+}
+
+TEST_CASE("percentile: linear interpolation between order statistics, as R's type 7", "[core]") {
+  const std::vector<double> values = {4.0, 1.0, 3.0, 2.0};
+  CHECK(doorbench::percentile(values, 0.0) == 1.0);
+  CHECK(doorbench::percentile(values, 1.0) == 4.0);
+  CHECK(doorbench::percentile(values, 0.5) == Approx(2.5));
+  // R: quantile(c(1, 2, 3, 4), 0.1) is 1.3.
+  CHECK(doorbench::percentile(values, 0.1) == Approx(1.3));
+  CHECK(doorbench::percentile({7.0}, 0.9) == 7.0);
+  const std::vector<double> sorted = {1.0, 2.0, 3.0, 4.0};
+  CHECK(doorbench::percentile_of_sorted(sorted, 0.75) == Approx(3.25));
+}
+
+TEST_CASE(
+    "percentile: an empty sample or a NaN fraction gives NaN, a fraction outside [0, 1] "
+    "is clamped",
+    "[core]") {
+  CHECK(std::isnan(doorbench::percentile({}, 0.5)));
+  CHECK(std::isnan(doorbench::percentile_of_sorted({}, 0.0)));
+  CHECK(std::isnan(doorbench::percentile({1.0, 2.0}, std::nan(""))));
+  CHECK(doorbench::percentile({1.0, 2.0}, -0.5) == 1.0);
+  CHECK(doorbench::percentile({1.0, 2.0}, 1.5) == 2.0);
+}
+
+TEST_CASE("median: the middle value, or the mean of the two middle ones; NaN when empty",
+          "[core]") {
+  CHECK(doorbench::median({3.0, 1.0, 2.0}) == 2.0);
+  CHECK(doorbench::median({4.0, 1.0, 3.0, 2.0}) == 2.5);
+  CHECK(doorbench::median({5.0}) == 5.0);
+  CHECK(std::isnan(doorbench::median({})));
+  const std::vector<double> values = {0.3, 9.1, -2.0, 4.4, 4.4, 7.0};
+  CHECK(doorbench::median(values) == Approx(doorbench::percentile(values, 0.5)));
+}
+
+TEST_CASE("format_percent: a fraction as a percentage, '-' where there is no number", "[core]") {
+  CHECK(doorbench::format_percent(0.123, 1) == "12.3%");
+  CHECK(doorbench::format_percent(0.5, 2) == "50.00%");
+  CHECK(doorbench::format_percent(std::nan(""), 1) == "-");
+  CHECK(doorbench::format_percent(kInf, 1) == "-");
+  CHECK(doorbench::format_signed_percent(0.123, 1) == "+12.3%");
+  CHECK(doorbench::format_signed_percent(-0.005, 1) == "-0.5%");
+  CHECK(doorbench::format_signed_percent(std::nan(""), 1) == "-");
+}
+
+TEST_CASE(
+    "format_readable writes a value or a limit as people write it, format_number "
+    "exactly",
+    "[core]") {
+  CHECK(doorbench::format_readable(1e9) == "1000000000");
+  CHECK(doorbench::format_readable(0.05) == "0.05");
+  CHECK(doorbench::format_readable(200000) == "200000");
+  CHECK(doorbench::format_readable(1.1 * 1.1) == "1.21");
+  CHECK(doorbench::format_number(1.1 * 1.1) == "1.2100000000000002");
+  CHECK(doorbench::format_number(1e9) == "1e+09");
+}
+
+TEST_CASE("seeded draws: the same seed gives the same numbers, in range", "[core]") {
+  std::mt19937_64 a(42), b(42);
+  for (int i = 0; i < 1000; ++i) {
+    const std::uint64_t k = doorbench::uniform_below(a, 7);
+    CHECK(k < 7);
+    CHECK(k == doorbench::uniform_below(b, 7));
+    const double u = doorbench::uniform_open01(a);
+    CHECK(u > 0.0);
+    CHECK(u < 1.0);
+    CHECK(u == doorbench::uniform_open01(b));
+  }
+  // The first output of std::mt19937_64 seeded with 5489 is fixed by the standard, so the
+  // first uniform_below of a bound far below 2^64 is that output modulo the bound.
+  std::mt19937_64 standard(5489);
+  CHECK(doorbench::uniform_below(standard, 1000) == 14514284786278117030ULL % 1000);
+  CHECK(doorbench::mix64(0) == 0xE220A8397B1DCDAFULL);
+}
+
+TEST_CASE("seeded draws: standard_normal has mean 0 and variance 1, shuffle keeps the items",
+          "[core]") {
+  std::mt19937_64 random(7);
+  double sum = 0.0, sum_squares = 0.0;
+  const int n = 100000;
+  for (int i = 0; i < n; ++i) {
+    const double z = doorbench::standard_normal(random);
+    sum += z;
+    sum_squares += z * z;
+  }
+  // Four standard errors either side: the seed is fixed, so this never flickers.
+  CHECK(std::abs(sum / n) < 4.0 / std::sqrt(n));
+  CHECK(std::abs(sum_squares / n - 1.0) < 4.0 * std::sqrt(2.0 / n));
+  std::vector<int> items = {1, 2, 3, 4, 5, 6, 7, 8};
+  doorbench::shuffle_in_place(items, random);
+  std::vector<int> sorted = items;
+  std::sort(sorted.begin(), sorted.end());
+  CHECK(sorted == std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8});
+}
