@@ -186,16 +186,11 @@ std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options
 
 void check_handle_radius(const PreparedData& data, bool force_geometry) {
   if (force_geometry || data.handle_radius_m <= 0) return;  // 0: not stated
-  if (data.handle_radius_m < kHandleRadiusMinM || data.handle_radius_m > kHandleRadiusMaxM) {
-    char radius[40];
-    std::snprintf(radius, sizeof radius, "%.6g", data.handle_radius_m);
-    const std::string origin = handle_radius_origin(data).empty()
-                                   ? "the geometry calibration record " +
-                                         data.geometry_calibration_id
-                                   : handle_radius_origin(data);
-    throw UsageError(std::string("handle radius ") + radius + " m (from " + origin +
-                     ") is outside 0.05 to 2 m, where a door handle is; give --force-geometry "
-                     "to use it anyway");
+  const std::string origin = handle_radius_origin(data).empty()
+                                 ? "the geometry calibration record " + data.geometry_calibration_id
+                                 : handle_radius_origin(data);
+  if (std::string problem = handle_radius_problem(data.handle_radius_m, origin); !problem.empty()) {
+    throw UsageError("handle radius " + problem + "; give --force-geometry to use it anyway");
   }
 }
 

@@ -27,11 +27,9 @@ PreparedData load_prepared_data(const std::string& path,
 // PreparedData::handle_radius_origin: "" when the data states no radius.
 std::string handle_radius_origin(const PreparedData& data);
 
-// A handle radius where a door handle can be: 0.05 to 2 m from the hinge (issue 33: a
-// CSV's 1e9 m was fitted). check_handle_radius throws UsageError naming the radius and
-// where it came from when the data's is outside (unless `force_geometry`).
-inline constexpr double kHandleRadiusMinM = 0.05;
-inline constexpr double kHandleRadiusMaxM = 2.0;
+// check_handle_radius throws UsageError naming the data's handle radius and where it came
+// from when it is not where a door handle can be (handle_radius_problem,
+// acquisition/session/recording_csv.h), unless `force_geometry`.
 void check_handle_radius(const PreparedData& data, bool force_geometry);
 
 // "a,b,,c" -> {"a", "b", "c"}: the parameter lists of --free and --fixed (empty items dropped).
