@@ -7,22 +7,11 @@
 
 #include "analysis/model/door_model.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "analysis/preprocessing/recording_file.h"
 #include "analysis/preprocessing/strokes.h"
 #include "app/commands.h"
 
 namespace doorbench::app {
-
-// Whether `path` is an HDF5 file (a session), by its signature. Throws std::runtime_error
-// when it cannot be opened.
-bool is_hdf5_file(const std::string& path);
-
-// A session (HDF5: by its signature) or a recording in the CSV exchange format, prepared
-// into strokes (analysis/preprocessing/preprocessing.h); empty cells of the CSV are missing samples. A
-// file named *.h5 or *.hdf5 that is not HDF5 is refused ("PATH: not an HDF5 file ...").
-// A handle radius the recording states gets its origin named for the file's kind
-// (PreparedData::handle_radius_origin).
-PreparedData load_prepared_data(const std::string& path,
-                                const PreprocessingOptions& preprocessing = {});
 
 // PreparedData::handle_radius_origin: "" when the data states no radius.
 std::string handle_radius_origin(const PreparedData& data);
