@@ -12,6 +12,7 @@
 
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/session/output_file.h"
+#include "acquisition/session/recording_csv.h"
 #include "app/commands.h"
 #include "app/number_options.h"
 #include "app/session_recording.h"
@@ -34,16 +35,9 @@ namespace {
 
 namespace cal = calibration;
 
-// --valid-until: "" when `text` is an ISO 8601 date (YYYY-MM-DD) or UTC time
-// (YYYY-MM-DDTHH:MM[:SS[.fraction]]Z) on the calendar, not before today (UTC); else why not
-// (`--valid-until notadate` is refused, not stored as it is).
+// --valid-until: the calibration record's rule for a new record's expiry.
 std::string valid_until_problem(const std::string& text) {
-  if (std::string problem = iso8601_utc_problem(text); !problem.empty()) return problem;
-  const std::string today = utc_now_iso8601().substr(0, 10);
-  if (text.compare(0, 10, today) < 0) {
-    return text + " is before today (" + today + "): the record would have expired when made";
-  }
-  return "";
+  return doorbench::new_valid_until_problem(text, utc_now_iso8601());
 }
 
 struct CalibrateOptions {
@@ -351,12 +345,9 @@ void run_geometry(const CalibrateOptions& o) {
     throw UsageError("--check-reference-N and --check-reading-N need as many values each");
   }
   for (const double radius : o.radius_m) {
-    if (!o.force_geometry && (radius < 0.05 || radius > 2.0)) {
-      char text[40];
-      std::snprintf(text, sizeof text, "%.6g", radius);
-      throw UsageError(std::string("--radius-m: ") + text +
-                       " m is outside 0.05 to 2 m, where a door handle is; give "
-                       "--force-geometry to use it anyway");
+    if (std::string problem = handle_radius_problem(radius);
+        !o.force_geometry && !problem.empty()) {
+      throw UsageError("--radius-m: " + problem + "; give --force-geometry to use it anyway");
     }
   }
   cal::GeometryInputs inputs;

@@ -13,6 +13,7 @@
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/recording_csv.h"
 #include "acquisition/session/session_csv.h"
+#include "analysis/design/specify.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
@@ -27,7 +28,6 @@
 #include "app/loop_output.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
-#include "app/spec_run.h"
 #include "core/units.h"
 #include "sensors/sensor_models.h"
 
@@ -308,15 +308,16 @@ void specify_tuned_variant(const std::filesystem::path& dir) {
                "the variant is heavier). The playback recorded the torque it commanded, so the "
                "design is fitted to that torque (the device's rendering is not in it) and the "
                "inertia to the recorded motion\n";
-  SpecCommandOptions spec;
-  spec.tobe_paths = {session_path.string()};
-  spec.asis_path = (dir / "physical-params.json").string();
-  spec.out_dir = (dir / "spec").string();
-  spec.fixed = "m_d,l_c,k_stop,c_stop,e,w_f";
-  spec.fixed_given = true;
-  spec.show_progress = false;
+  SpecOptions spec;
+  spec.tobe_paths = {session_path};
+  spec.asis_path = dir / "physical-params.json";
+  spec.out_dir = dir / "spec";
+  spec.fixed = std::vector<std::string>{"m_d", "l_c", "k_stop", "c_stop", "e", "w_f"};
   spec.overwrite = true;  // the demo owns its folder
-  run_spec(spec);
+  spec.command = "doorbench spec " + session_path.string() + " --asis " + spec.asis_path.string() +
+                 " --out " + spec.out_dir.string() +
+                 " --fixed m_d,l_c,k_stop,c_stop,e,w_f --samples 1000 --seed 1";
+  std::cout << specify(spec).brief_report();
   const DoorModel specified =
       load_model(ModelKind::kPhysical, dir / "spec" / "tobe-params.json", "");
   std::cout << "  played vs specified (the changed parameters; the inertia comes from the motion, "

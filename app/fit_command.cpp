@@ -11,6 +11,7 @@
 
 #include "acquisition/session/output_file.h"
 #include "analysis/fit/fit_metrics.h"
+#include "analysis/fit/fit_result_file.h"
 #include "analysis/fit/fit_windows.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
@@ -247,7 +248,7 @@ void run_fit(const FitCommandOptions& options) {
   if (!interrupted.empty()) inputs.report_lines.insert(inputs.report_lines.begin(), interrupted);
 
   const std::filesystem::path dir = options.out_dir;
-  write_text_file_atomically(dir / "result.json", fit_result_json(result, data).dump(2) + "\n");
+  write_text_file_atomically(dir / "result.json", fit_result_json(result, data));
   write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model));
   if (!result.model.effects().empty()) {
     write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model));

@@ -17,48 +17,12 @@
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "analysis/preprocessing/recording_file.h"
 #include "app/commands.h"
 #include "app/number_options.h"
 #include "core/number_format.h"
 
 namespace doorbench::app {
-
-bool is_hdf5_file(const std::string& path) {
-  // Every HDF5 file starts with this signature (at offset 0 for files HDF5 itself made).
-  static constexpr char kSignature[8] = {'\x89', 'H', 'D', 'F', '\r', '\n', '\x1a', '\n'};
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw std::runtime_error(path + ": cannot open for reading");
-  char head[8] = {};
-  in.read(head, sizeof head);
-  return in.gcount() == 8 && std::equal(head, head + 8, kSignature);
-}
-
-// The start of the warning for a session's channel cut short, which report.md repeats.
-constexpr std::string_view kCutShortWarning = "a channel ends before the others: ";
-
-PreparedData load_prepared_data(const std::string& path,
-                                const PreprocessingOptions& preprocessing) {
-  const bool session = is_hdf5_file(path);
-  if (!session && (path.ends_with(".h5") || path.ends_with(".hdf5"))) {
-    throw std::runtime_error(path + ": not an HDF5 file (a session starts with the HDF5 "
-                                    "signature; a CSV recording is read only under another name)");
-  }
-  // Empty cells of a CSV are lost samples. A session is prepare_session's reading, kept
-  // here to name a channel cut short (its cells are missing from its end).
-  const Recording recording = session ? session_to_recording(SessionReader(path))
-                                      : read_recording_csv(path, EmptyCells::kMissing);
-  PreparedData data = prepare(recording, preprocessing);
-  for (const auto& [key, value] : recording.metadata) {
-    if (key != kCutShortKey) continue;
-    data.warnings.push_back(std::string(kCutShortWarning) + value +
-                            "; only the time where every channel has samples is fitted");
-  }
-  if (data.handle_radius_m > 0 && data.geometry_calibration_id.empty()) {
-    data.handle_radius_origin = session ? "the session's handle_radius_m attribute"
-                                        : "the CSV's metadata (# handle_radius_m)";
-  }
-  return data;
-}
 
 std::string handle_radius_origin(const PreparedData& data) {
   return data.handle_radius_origin;
@@ -107,20 +71,8 @@ std::vector<EffectSetting> effects_from_argument(const std::string& argument) {
 
 void check_parameter_names(const DoorModel& model, const std::string& option,
                            const std::vector<std::string>& names) {
-  for (const std::string& name : names) {
-    if (model.find_parameter(name)) continue;
-    std::string list;
-    for (int i = 0; i < model.parameter_count(); ++i) {
-      list += (i > 0 ? ", " : "") + model.parameter_name(i);
-    }
-    throw UsageError(std::string(option)
-                         .append(": the ")
-                         .append(to_string(model.kind()))
-                         .append(" model has no parameter '")
-                         .append(name)
-                         .append("' (its parameters: ")
-                         .append(list)
-                         .append(")"));
+  if (std::string problem = unknown_parameter_problem(model, option, names); !problem.empty()) {
+    throw UsageError(problem);
   }
 }
 
@@ -186,16 +138,11 @@ std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options
 
 void check_handle_radius(const PreparedData& data, bool force_geometry) {
   if (force_geometry || data.handle_radius_m <= 0) return;  // 0: not stated
-  if (data.handle_radius_m < kHandleRadiusMinM || data.handle_radius_m > kHandleRadiusMaxM) {
-    char radius[40];
-    std::snprintf(radius, sizeof radius, "%.6g", data.handle_radius_m);
-    const std::string origin = handle_radius_origin(data).empty()
-                                   ? "the geometry calibration record " +
-                                         data.geometry_calibration_id
-                                   : handle_radius_origin(data);
-    throw UsageError(std::string("handle radius ") + radius + " m (from " + origin +
-                     ") is outside 0.05 to 2 m, where a door handle is; give --force-geometry "
-                     "to use it anyway");
+  const std::string origin = handle_radius_origin(data).empty()
+                                 ? "the geometry calibration record " + data.geometry_calibration_id
+                                 : handle_radius_origin(data);
+  if (std::string problem = handle_radius_problem(data.handle_radius_m, origin); !problem.empty()) {
+    throw UsageError("handle radius " + problem + "; give --force-geometry to use it anyway");
   }
 }
 

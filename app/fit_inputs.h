@@ -7,31 +7,18 @@
 
 #include "analysis/model/door_model.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "analysis/preprocessing/recording_file.h"
 #include "analysis/preprocessing/strokes.h"
 #include "app/commands.h"
 
 namespace doorbench::app {
 
-// Whether `path` is an HDF5 file (a session), by its signature. Throws std::runtime_error
-// when it cannot be opened.
-bool is_hdf5_file(const std::string& path);
-
-// A session (HDF5: by its signature) or a recording in the CSV exchange format, prepared
-// into strokes (analysis/preprocessing/preprocessing.h); empty cells of the CSV are missing samples. A
-// file named *.h5 or *.hdf5 that is not HDF5 is refused ("PATH: not an HDF5 file ...").
-// A handle radius the recording states gets its origin named for the file's kind
-// (PreparedData::handle_radius_origin).
-PreparedData load_prepared_data(const std::string& path,
-                                const PreprocessingOptions& preprocessing = {});
-
 // PreparedData::handle_radius_origin: "" when the data states no radius.
 std::string handle_radius_origin(const PreparedData& data);
 
-// A handle radius where a door handle can be: 0.05 to 2 m from the hinge (a CSV's 1e9 m
-// is refused, not fitted). check_handle_radius throws UsageError naming the radius and
-// where it came from when the data's is outside (unless `force_geometry`).
-inline constexpr double kHandleRadiusMinM = 0.05;
-inline constexpr double kHandleRadiusMaxM = 2.0;
+// check_handle_radius throws UsageError naming the data's handle radius and where it came
+// from when it is not where a door handle can be (handle_radius_problem,
+// acquisition/session/recording_csv.h), unless `force_geometry`.
 void check_handle_radius(const PreparedData& data, bool force_geometry);
 
 // "a,b,,c" -> {"a", "b", "c"}: the parameter lists of --free and --fixed (empty items dropped).

@@ -1,7 +1,7 @@
 #pragma once
-// What `doorbench fit` and `doorbench loop` write: result.json pieces and the plots.
+// What `doorbench fit` and `doorbench loop` draw: the plots (result.json is written by
+// analysis/fit/fit_result_file.h and analysis/loop/loop_result_file.h).
 #include <filesystem>
-#include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
 
@@ -10,11 +10,6 @@
 
 namespace doorbench::app {
 
-nlohmann::ordered_json error_stats_json(const ErrorStats& stats);
-nlohmann::ordered_json metrics_json(const FitMetrics& metrics);
-// Parameters with standard uncertainty, correlations, undetermined parameters, metrics on
-// fitted and held-out strokes, the solver's figures and the excluded segments.
-nlohmann::ordered_json fit_result_json(const FitResult& result, const PreparedData& data);
 struct FitPlots {
   std::vector<std::string> files;  // the plots' file names, in `dir`
   // For the text report: ResidualWhiteness::report_line(), or "residual whiteness: not

@@ -11,7 +11,6 @@
 #include <filesystem>
 #include <iostream>
 #include <map>
-#include <set>
 #include <memory>
 #include <string>
 #include <thread>
@@ -156,60 +155,13 @@ void print_playback_clock(const SessionReader& session) {
   std::fflush(stdout);
 }
 
-// The session checked as a whole: channels on one clock of unequal length, a
-// calibration record a channel names but the session lacks, explicit times that do not
-// increase. Each is named on a "problem:" line; returns how many make the session unusable
-// as it is (export and fit refuse it).
+// SessionReader::problems(), each on a "problem:" line; returns how many make the session
+// unusable as it is.
 int print_session_problems(const SessionReader& session) {
   int unusable = 0;
-  std::set<std::string> records;
-  for (const CalibrationRecord& r : session.calibrations()) records.insert(r.id);
-  // Channels on a sample clock end together; the one that ends last, and when.
-  double last_end_s = -INFINITY;
-  std::string last_name;
-  const auto end_of = [&](const ChannelInfo& c) {
-    return c.first_sample_time_s + static_cast<double>(session.sample_count(c.name)) / c.sample_rate_hz;
-  };
-  for (const ChannelInfo& c : session.channels()) {
-    for (const std::string* id : {&c.calibration_id, &c.geometry_calibration_id}) {
-      if (id->empty() || records.count(*id) > 0) continue;
-      std::cout << "problem: channel " << printable(c.name) << " uses calibration record "
-                << printable(*id) << ", which is not in the session: its values cannot be "
-                << "calibrated (export and fit refuse the session)\n";
-      ++unusable;
-    }
-    if (c.sample_rate_hz > 0 && end_of(c) > last_end_s) {
-      last_end_s = end_of(c);
-      last_name = c.name;
-    }
-    if (c.sample_rate_hz > 0) continue;
-    ChannelSlice slice;
-    try {
-      slice = session.read(c.name);
-    } catch (const SessionError& error) {  // times that are not finite or go backwards
-      std::cout << "problem: " << printable(error.what()) << "\n";
-      ++unusable;
-      continue;
-    }
-    for (std::size_t i = 1; i < slice.time_s.size(); ++i) {
-      if (slice.time_s[i] > slice.time_s[i - 1]) continue;
-      std::cout << "problem: channel " << printable(c.name) << ": the time of sample " << i
-                << " (" << slice.time_s[i] << " s) is not after sample " << i - 1 << " ("
-                << slice.time_s[i - 1] << " s): its times go backwards\n";
-      ++unusable;
-      break;
-    }
-  }
-  for (const ChannelInfo& c : session.channels()) {
-    // More than one sample period short of the last: not a rounding of the clock.
-    if (c.sample_rate_hz <= 0 || end_of(c) >= last_end_s - 1.0 / c.sample_rate_hz) continue;
-    char ends[80];
-    std::snprintf(ends, sizeof ends, "%.6g s, %.6g s before", end_of(c), last_end_s - end_of(c));
-    std::cout << "problem: channel " << printable(c.name) << " has "
-              << session.sample_count(c.name) << " samples and ends at " << ends << " "
-              << printable(last_name)
-              << " (export leaves its cells empty from there; fit uses only the time where "
-                 "every channel has samples)\n";
+  for (const SessionProblem& problem : session.problems()) {
+    std::cout << "problem: " << problem.message << "\n";
+    if (problem.unusable) ++unusable;
   }
   return unusable;
 }

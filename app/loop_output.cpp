@@ -7,131 +7,13 @@
 #include <sstream>
 
 #include "acquisition/session/output_file.h"
+#include "analysis/loop/loop_result_file.h"
 #include "analysis/model/parameter_file.h"
 #include "app/fit_inputs.h"
 #include "app/fit_output.h"
 #include "core/json_number.h"
 
 namespace doorbench::app {
-namespace {
-
-constexpr nlohmann::ordered_json (*finite_or_null)(double) = &json_number<nlohmann::ordered_json>;
-
-nlohmann::ordered_json figures_json(const ModelFigures& f) {
-  return {{"fitted_rmse_rad_s", finite_or_null(f.fitted_rmse_rad_s)},
-          {"fitted_fit_percent", finite_or_null(f.fitted_fit_percent)},
-          {"held_out_rmse_rad_s", finite_or_null(f.held_out_rmse_rad_s)},
-          {"held_out_fit_percent", finite_or_null(f.held_out_fit_percent)},
-          {"bic", finite_or_null(f.bic)},
-          {"sum_of_squares", finite_or_null(f.sum_of_squares)},
-          {"residuals", f.residuals},
-          {"parameters", f.parameters},
-          {"free_parameters", f.free_parameters},
-          {"fitted_samples", f.fitted_samples},
-          {"held_out_samples", f.held_out_samples}};
-}
-
-nlohmann::ordered_json loop_parameters_json(const std::vector<FittedParameter>& list) {
-  nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
-  for (const FittedParameter& p : list) {
-    parameters.push_back({{"name", p.name},
-                          {"unit", p.unit},
-                          {"value", p.value},
-                          {"standard_uncertainty", finite_or_null(p.uncertainty)},
-                          {"free", p.free},
-                          {"at_bound", p.at_bound},
-                          {"determined", p.determined}});
-  }
-  return parameters;
-}
-
-// One candidate of an examination: its evidence and, when refitted, the refit's figures
-// against its parent's, the effect's parameters and the verdict (kept or rejected, and why).
-nlohmann::ordered_json candidate_json(const CandidateEvidence& c) {
-  nlohmann::ordered_json out = {{"rank", c.rank},
-                                {"effect", c.name},
-                                {"explained_fraction", c.explained_fraction},
-                                {"score_z", c.score_z},
-                                {"independent_share", c.independent_share},
-                                {"scan", c.scan}};
-  if (c.screened) {
-    out["second_look"] = {{"explained_fraction", c.screen_explained_fraction},
-                          {"score_z", c.screen_score_z},
-                          {"promoted", c.promoted}};
-  }
-  out["refitted"] = c.refitted;
-  if (c.refitted) {
-    out["reexamined_after_family_switch"] = c.reexamined;
-    out["refit_start"] = c.refit_start;
-    out["parent_stands"] = c.parent_stands;
-    out["before"] = figures_json(c.before);
-    if (c.after) {
-      out["after"] = figures_json(*c.after);
-      out["held_out_improvement"] = finite_or_null(c.held_out_improvement);
-      out["bic_change"] = finite_or_null(c.bic_change);
-      out["parameters"] = loop_parameters_json(c.parameters);
-    }
-  }
-  out["qualifies"] = c.qualifies;
-  out["verdict"] = c.verdict;
-  return out;
-}
-
-nlohmann::ordered_json candidates_json(const std::vector<CandidateEvidence>& candidates) {
-  nlohmann::ordered_json list = nlohmann::ordered_json::array();
-  for (const CandidateEvidence& c : candidates) list.push_back(candidate_json(c));
-  return list;
-}
-
-nlohmann::ordered_json loop_json(const LoopResult& result, const PreparedData& data) {
-  nlohmann::ordered_json steps = nlohmann::ordered_json::array();
-  for (const LoopStep& step : result.steps) {
-    steps.push_back({{"step", step.number},
-                     {"model", std::string(to_string(step.model_kind))},
-                     {"effect", step.effect_name},
-                     {"evidence",
-                      {{"explained_fraction", step.explained_fraction},
-                       {"score_z", step.score_z},
-                       {"second_look", step.second_look},
-                       {"rank", step.rank}}},
-                     {"parameters", loop_parameters_json(step.parameters)},
-                     {"before", figures_json(step.before)},
-                     {"after", figures_json(step.after)},
-                     {"held_out_improvement", step.held_out_improvement},
-                     {"bic_change", step.bic_change},
-                     {"candidates", candidates_json(step.candidates)}});
-  }
-  const StructureCheck& check = result.structure;
-  nlohmann::ordered_json structure = {
-      {"ran", check.ran}, {"reason", check.reason}, {"noise_floor_rad_s", check.noise_floor_rad_s}};
-  if (check.ran && check.other_fit) {
-    structure["current_model"] = std::string(to_string(check.current_kind));
-    structure["other_model"] = std::string(to_string(check.other_kind));
-    structure["current"] = figures_json(check.current);
-    structure["other"] = figures_json(check.other);
-    structure["other_free_parameters"] = check.other_free;
-    structure["other_undetermined_parameters"] = check.other_undetermined;
-    structure["other_is_better"] = check.other_better;
-    structure["verdict"] = check.verdict;
-    structure["after_steps"] = check.after_steps;
-    structure["switched"] = check.switched;
-    structure["reexamined"] = check.reexamined;
-    structure["abandoned_step_candidates"] = candidates_json(check.candidates);
-    structure["remaining"] = candidates_json(check.remaining);
-  }
-  return {{"source", data.source},
-          {"interrupted", result.interrupted},
-          {"stop_reason", result.stop_reason},
-          {"final_model", std::string(to_string(result.model().kind()))},
-          {"steps", steps},
-          {"last_candidates", candidates_json(result.last_candidates)},
-          {"structure_check", structure},
-          {"start_fit", fit_result_json(result.start_fit, data)},
-          {"final_fit", fit_result_json(result.final_fit, data)}};
-}
-
-}  // namespace
-
 namespace {
 
 // The structure check's row of the steps table (labelled `label`).
@@ -193,7 +75,7 @@ std::string write_loop_outputs(const std::filesystem::path& dir, const LoopResul
                                const PreparedData& data, const std::string& model_name,
                                const FitOptions& fit_options,
                                const std::vector<std::string>& report_lines) {
-  write_text_file_atomically(dir / "result.json", loop_json(result, data).dump(2) + "\n");
+  write_text_file_atomically(dir / "result.json", loop_result_json(result, data));
   write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model()));
   write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model()));
   const FitPlots plots = write_fit_plots(dir, result.model(), data, fit_options);

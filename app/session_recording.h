@@ -25,13 +25,13 @@ struct SessionRecordingOptions {
 
 // The rig file, or the built-in simulated-dishwasher rig when `rig_path` is empty.
 RigDefinition load_rig(const std::string& rig_path);
-// `polled`: sources recorded beside the bench (a rig's Modbus sensors), may be empty.
+// The rig's DAQ channels on the simulated bench, whatever its daq.backend says.
 RecordSummary record_simulated_session(const RigDefinition& rig,
                                        const SessionRecordingOptions& options,
-                                       const std::filesystem::path& out_path,
-                                       const std::vector<PolledSource*>& polled = {});
+                                       const std::filesystem::path& out_path);
 // Any rig: the simulated bench, a comedi card, Modbus sensors, or a DAQ with Modbus sensors
-// beside it, on one session clock.
+// beside it, on one session clock (sensors::RigRecording, which chooses the backends), with
+// the live status on stderr. Throws UsageError for a rig that needs --duration-s.
 RecordSummary record_rig_session(const RigDefinition& rig, const SessionRecordingOptions& options,
                                  const std::filesystem::path& out_path);
 std::string utc_now_iso8601();

@@ -1,39 +1,21 @@
 // doorbench spec: the design specification from TO-BE recordings and the AS-IS door —
-// inverse design, felt quantities before/after, the check, tolerances, spec.json/html/pdf.
-#include <chrono>
-#include <cstdio>
-#include <filesystem>
-#include <fstream>
+// inverse design, felt quantities before/after, the check, tolerances, spec.json/html/pdf
+// (analysis/design/specify.h does it; this file parses and prints).
 #include <iostream>
 #include <map>
 #include <optional>
-#include <thread>
 
-#include "acquisition/session/output_file.h"
-#include "analysis/design/equivalent_solutions.h"
-#include "analysis/design/inverse_design.h"
-#include "analysis/design/perceptual_tolerance.h"
-#include "analysis/design/spec_report.h"
-#include "analysis/design/tolerance_analysis.h"
-#include "analysis/fit/commanded_torque.h"
-#include "analysis/model/parameter_file.h"
-#include "analysis/simulation/fit_synthetic.h"
+#include "analysis/design/specify.h"
 #include "app/commands.h"
 #include "app/fit_inputs.h"
 #include "app/progress.h"
 #include "app/spec_campaign.h"
 #include "app/spec_run.h"
 #include "app/stop_signals.h"
-#include "core/number_format.h"
+#include "study/statistics/analysis_for_spec.h"
 
 namespace doorbench::app {
 namespace {
-
-// Where progress goes when it is not wanted.
-std::ostream& null_stream() {
-  static std::ostream sink(nullptr);
-  return sink;
-}
 
 // "F0=1,k_s=5" into `weights` (each entry replacing the default). Throws UsageError naming
 // the entry that is not NAME=COST with a number.
@@ -55,50 +37,6 @@ void parse_costs(const std::string& list, std::map<std::string, double>& weights
   }
 }
 
-// The AS-IS door as the bench sees it: `asis` corrected to its own recording by the sparse
-// search (docs/inverse-design.md, "The AS-IS door as the bench sees it").
-DoorModel asis_on_bench(const DoorModel& asis, const std::string& recording,
-                        const InverseDesignOptions& design_options, std::ostream& progress) {
-  progress << "AS-IS recording: " << recording << "\n";
-  InverseDesignOptions options = design_options;
-  options.smallest_change_alongside = false;
-  const InverseDesignResult bench = inverse_design(asis, {load_prepared_data(recording)}, options);
-  const DesignSolution& door = bench.solutions.front();
-  std::string changes;
-  for (const DesignParameter& p : door.parameters) {
-    if (p.changed) {
-      changes += " " + p.name + " " + format_number(p.as_is) + " -> " + format_number(p.to_be);
-    }
-  }
-  progress << "the AS-IS door as this bench sees it:"
-           << (changes.empty() ? " as its file" : changes) << "\n";
-  return door.model;
-}
-
-// The warning for TO-BE recordings of a real door measured through a bench's sensors (the
-// angle integrated from its gyroscope) without --asis-recording: the AS-IS parameter file
-// is then compared with what the bench measured, and the bench's own deviations can come
-// out as design changes (docs/inverse-design.md, "The AS-IS door as the bench sees it").
-// "" when the recordings are haptic playbacks, not from a bench, or --asis-recording is
-// given.
-std::string bench_without_asis_recording(const std::vector<PreparedData>& tobe,
-                                         bool playbacks, const SpecCommandOptions& options) {
-  if (playbacks || !options.asis_recording.empty()) return "";
-  std::string paths, how;
-  for (std::size_t i = 0; i < tobe.size(); ++i) {
-    if (tobe[i].angle_source.rfind("rate_rad_s integrated", 0) != 0) continue;
-    paths += (paths.empty() ? "" : ", ") + options.tobe_paths[i];
-    if (how.empty()) how = tobe[i].angle_source;
-  }
-  if (paths.empty()) return "";
-  return "the TO-BE recording " + paths + " was measured through a bench's sensors (angle: " +
-         how +
-         ") and --asis-recording is not given: the AS-IS parameter file is compared with what "
-         "the bench measured, so the bench's own deviations (sensor offsets and scales, the "
-         "load cell's mounting, its friction) can be specified as design changes; record the "
-         "AS-IS door on the same bench and give it as --asis-recording";
-}
-
 std::string describe(const SpecCommandOptions& o) {
   std::string text = "doorbench spec";
   for (const std::string& path : o.tobe_paths) text += " " + path;
@@ -113,299 +51,77 @@ std::string describe(const SpecCommandOptions& o) {
   return text;
 }
 
-// The options of the TO-BE source and the campaign checked; --felt-share's value (5 %
-// when not given). Throws UsageError.
-double checked_felt_share(const SpecCommandOptions& options) {
-  const bool from_campaign = !options.campaign_dir.empty();
-  if (options.tobe_paths.empty() && !from_campaign) {
-    throw UsageError("spec: give TO-BE recordings or --campaign FOLDER");
-  }
-  if (!options.felt_share.empty() && !from_campaign) {
+// The command line's options as the library's; UsageError for what it refuses
+// (--felt-share without --campaign, SpecOptions::validate(), a share or cost that is not one).
+SpecOptions spec_options(const SpecCommandOptions& o) {
+  if (!o.felt_share.empty() && o.campaign_dir.empty()) {
     throw UsageError("--felt-share needs --campaign");
   }
-  if (from_campaign && options.no_tolerances) {
-    throw UsageError("--campaign needs the tolerance analysis: drop --no-tolerances");
-  }
-  return options.felt_share.empty() ? 0.05 : parse_felt_share(options.felt_share);
-}
-
-// The TO-BE feel with a campaign: without TO-BE recordings, the panel's door (the favourite
-// variant or the tuned doors' centre) opened and closed by the virtual hand, as synthetic
-// strokes with the bench's noise (fit_synthetic.h) appended to `tobe`. Returns what the
-// report says of it.
-std::string campaign_tobe(const CampaignForSpec& campaign, const DoorModel& asis,
-                          std::vector<PreparedData>& tobe, std::ostream& progress) {
-  for (const std::string& note : campaign.notes) progress << "campaign: " << note << "\n";
-  if (!tobe.empty()) {
-    return "the TO-BE recordings given; the campaign gives the JNDs and the panel's results";
-  }
-  std::string source;
-  const DoorModel door = campaign_tobe_model(campaign, asis, source);
-  progress << "TO-BE feel from the panel: " << source << "\n";
-  PreparedData strokes = synthetic_strokes(door, {});
-  strokes.source = "the panel's door (simulated strokes): " + campaign.analysis_path.string();
-  tobe.push_back(std::move(strokes));
-  return source;
-}
-
-// The panel's side of the specification: the shares felt as different at the tolerances
-// the Monte Carlo used, and the proposal keeping them under the level.
-PerceptualSpec perceptual_spec(const CampaignForSpec& campaign, const std::string& tobe_source,
-                               double felt_share, const DoorModel& design,
-                               const SpecEvaluationOptions& evaluation_options,
-                               const ToleranceResult& given, std::ostream& progress) {
-  PerceptualSpec p;
-  p.campaign = campaign.analysis_path.string();
-  p.tobe_source = tobe_source;
-  p.notes = campaign.notes;
-  p.preference = campaign.preference;
-  p.thresholds = campaign.thresholds;
-  p.jnds = campaign.jnds;
-  p.rows = perceptual_shares(given, p.jnds);
-  PerceptualToleranceOptions options;
-  options.felt_share = felt_share;
-  options.progress = [&progress](double factor, double worst) {
-    progress << "  tolerances x " << format_significant(factor, 3) << ": largest share felt as "
-             << "different " << format_significant(100 * worst, 3) << "%\n"
-             << std::flush;
-  };
-  MonteCarloOptions monte_carlo = evaluation_options.monte_carlo;
-  monte_carlo.felt = evaluation_options.felt;
-  monte_carlo.progress = nullptr;
-  progress << "perceptual tolerances: the common factor on every tolerance keeping each share "
-              "felt as different under "
-           << format_significant(100 * felt_share, 3) << "% (a Monte Carlo of "
-           << monte_carlo.samples << " samples per factor tried)\n";
-  const ToleranceSpec spec{given.tolerances};
-  p.proposal = propose_perceptual_tolerances(design, spec, monte_carlo, p.jnds, options, &given);
-  progress << "  " << p.proposal.summary << "\n";
-  return p;
+  SpecOptions options;
+  options.tobe_paths.assign(o.tobe_paths.begin(), o.tobe_paths.end());
+  options.asis_path = o.asis_path;
+  options.asis_recording = o.asis_recording;
+  options.out_dir = o.out_dir;
+  options.overwrite = o.overwrite;
+  if (o.fixed_given) options.fixed = split_names(o.fixed);
+  options.tolerances_path = o.tolerances_path;
+  options.samples = o.samples;
+  options.threads = o.threads;
+  options.seed = o.seed;
+  options.regularization = o.regularization;
+  options.starts = o.starts;
+  options.motion_only = o.motion_only;
+  options.pdf = !o.no_pdf;
+  options.tolerances = !o.no_tolerances;
+  options.campaign_dir = o.campaign_dir;
+  options.read_campaign = study::read_campaign_for_spec;
+  options.command = describe(o);
+  if (std::string problem = options.validate(); !problem.empty()) throw UsageError(problem);
+  if (!o.felt_share.empty()) options.felt_share = parse_felt_share(o.felt_share);
+  parse_costs(o.costs, options.costs);
+  return options;
 }
 
 }  // namespace
 
-// The TO-BE recordings, prepared, and the torque each commanded when every one of them is a
-// haptic playback (else `commanded` stays empty: the design is fitted to the motion).
-void read_tobe_recordings(const SpecCommandOptions& options, std::ostream& progress,
-                          std::vector<PreparedData>& tobe,
-                          std::vector<CommandedTorque>& commanded) {
-  bool all_commanded = true;
-  for (const std::string& path : options.tobe_paths) {
-    progress << "preparing " << path << "\n";
-    tobe.push_back(load_prepared_data(path));
-    std::optional<CommandedTorque> torque;
-    if (!options.motion_only && is_hdf5_file(path)) torque = read_commanded_torque(path);
-    if (torque) {
-      commanded.push_back(std::move(*torque));
-    } else {
-      all_commanded = false;
-    }
-  }
-  if (!all_commanded) commanded.clear();
-}
-
-// ASIS: a parameter file, or a `doorbench fit` folder holding fitted-params.json.
-std::filesystem::path asis_parameter_file(const SpecCommandOptions& options) {
-  std::filesystem::path asis_file = options.asis_path;
-  if (std::filesystem::is_directory(asis_file)) asis_file /= "fitted-params.json";
-  if (!std::filesystem::exists(asis_file)) {
-    throw std::runtime_error(asis_file.string() +
-                             ": no such file (--asis takes a physical "
-                             "parameter file or a doorbench fit folder)");
-  }
-  return asis_file;
-}
-
-// The AS-IS door, and the parameter names of --fixed and --costs checked against it before
-// the TO-BE recordings are read: exit 2 with the valid ones.
-DoorModel load_asis(const SpecCommandOptions& options, const std::filesystem::path& asis_file) {
-  DoorModel asis = load_model(ModelKind::kPhysical, asis_file, "");
-  check_parameter_names(asis, "--fixed", split_names(options.fixed));
-  std::map<std::string, double> costs;
-  parse_costs(options.costs, costs);
-  for (const auto& [name, cost] : costs) check_parameter_names(asis, "--costs", {name});
-  return asis;
-}
-
-namespace {
-
-// The inverse design of the TO-BE recordings from `asis`, which is first corrected to its own
-// recording on the bench when one is given. Throws StopRequested when `stop` asks.
-InverseDesignResult design_stage(const SpecCommandOptions& options, DoorModel& asis,
-                                 const std::vector<PreparedData>& tobe,
-                                 const std::vector<CommandedTorque>& commanded,
-                                 const StopHook& stop, std::ostream& progress) {
-  InverseDesignOptions design_options;
-  if (options.fixed_given) design_options.fixed = split_names(options.fixed);
-  parse_costs(options.costs, design_options.weights);
-  design_options.regularization = options.regularization;
-  design_options.starts = options.starts;
-  if (std::string error = design_options.validate(); !error.empty()) throw UsageError(error);
-  const auto design_began = std::chrono::steady_clock::now();
-  design_options.progress = [&progress, design_began](const std::string& step) {
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - design_began).count();
-    progress << "  [" << static_cast<int>(seconds) << " s] " << step << "\n" << std::flush;
-  };
-  design_options.fit.stop_requested = stop;
-  if (!options.asis_recording.empty()) {
-    asis = asis_on_bench(asis, options.asis_recording, design_options, progress);
-  }
-  progress << "inverse design: fitting the physical model to " << tobe.size()
-           << " TO-BE recording(s), " << design_options.starts << " start(s)\n";
-  return inverse_design(asis, tobe, design_options, commanded);
-}
-
-// The design's felt quantities, its check against the TO-BE recordings, its tolerances and,
-// from a campaign, the panel's tolerances. A stop request during the Monte Carlo leaves the
-// tolerances out (SpecEvaluation::interrupted).
-SpecEvaluation evaluate_design(const SpecCommandOptions& options, const DoorModel& asis,
-                               const InverseDesignResult& design,
-                               const std::vector<PreparedData>& tobe,
-                               const ToleranceSpec& tolerances,
-                               const std::optional<CampaignForSpec>& campaign,
-                               const std::string& tobe_source, double felt_share,
-                               const StopHook& stop, std::ostream& progress) {
-  SpecEvaluationOptions evaluation_options;
-  evaluation_options.run_tolerances = !options.no_tolerances;
-  evaluation_options.tolerances = tolerances;
-  evaluation_options.monte_carlo.samples = options.samples;
-  evaluation_options.monte_carlo.threads = options.threads;
-  evaluation_options.monte_carlo.seed = options.seed;
-  evaluation_options.monte_carlo.stop_requested = stop;
-  // The samples' status line, with the time left (app/progress.h).
-  StatusLine status(progress, stderr_is_terminal(), 5.0, stderr_terminal_columns());
-  evaluation_options.monte_carlo.progress =
-      count_progress_display(status, "tolerance Monte Carlo", "samples");
-  if (std::string error = evaluation_options.validate(); !error.empty()) throw UsageError(error);
-  progress << "felt quantities and the check; tolerance analysis of " << options.samples
-           << " samples on "
-           << (options.threads > 0 ? options.threads
-                                   : static_cast<int>(std::thread::hardware_concurrency()))
-           << " thread(s)\n";
-  SpecEvaluation evaluation = evaluate_spec(asis, design, tobe, evaluation_options);
-  status.finish();
-  evaluation.command = describe(options);
-  if (campaign && evaluation.tolerances) {
-    try {
-      evaluation.perceptual =
-          perceptual_spec(*campaign, tobe_source, felt_share, design.solutions.front().model,
-                          evaluation_options, *evaluation.tolerances, progress);
-    } catch (const StopRequested& stopped) {
-      evaluation.interrupted = "during " + stopped.where() +
-                               " of the panel's tolerances: no "
-                               "perceptual tolerance table";
-      evaluation.warnings.push_back("interrupted " + evaluation.interrupted);
-      return evaluation;
-    }
-    // The alternatives judged with the panel's JNDs where it measured them.
-    EquivalenceOptions equivalence = evaluation_options.equivalence;
-    equivalence.felt = evaluation_options.felt;
-    equivalence.jnds = evaluation.perceptual->jnds;
-    evaluation.equivalence = assess_equivalence(design, equivalence);
-    evaluation.equivalence_criterion = equivalence_criterion(equivalence);
-  }
-  return evaluation;
-}
-
-}  // namespace
-
-void run_spec(const SpecCommandOptions& options) {
-  if (options.samples < 2) throw UsageError("--samples must be >= 2");
-  if (options.threads < 0) throw UsageError("--threads must be >= 0");
+void run_spec(const SpecCommandOptions& command) {
+  SpecOptions options = spec_options(command);
   // SIGINT/SIGTERM: the fits end at their next solver iteration, the Monte Carlo at its next
   // sample. Before the design is whole there is nothing to write; after, the specification is
   // written without what the stop cut, marked interrupted. A second signal ends doorbench.
   const StopSignals signals;
-  const StopHook stop = [&signals] { return signals.received() != 0; };
-  const bool from_campaign = !options.campaign_dir.empty();
-  const double felt_share = checked_felt_share(options);
-  // The output rule (docs/output-files.md): checked before any work; the folder is made
-  // once the inputs are read and the design is done.
-  std::vector<std::filesystem::path> inputs(options.tobe_paths.begin(), options.tobe_paths.end());
-  inputs.emplace_back(options.asis_path);
-  if (!options.asis_recording.empty()) inputs.emplace_back(options.asis_recording);
-  if (!options.tolerances_path.empty()) inputs.emplace_back(options.tolerances_path);
-  if (from_campaign)
-    inputs.push_back(std::filesystem::path(options.campaign_dir) / "analysis.json");
-  check_output_folder(options.out_dir, inputs, options.overwrite);
-  const auto campaign =
-      from_campaign ? std::optional(read_campaign_for_spec(options.campaign_dir)) : std::nullopt;
-  const std::filesystem::path asis_file = asis_parameter_file(options);
-  DoorModel asis = load_asis(options, asis_file);
-  std::ostream& progress = options.show_progress ? std::cerr : null_stream();
-  progress << "AS-IS door: " << asis_file.string() << "\n";
-
-  std::vector<PreparedData> tobe;
-  std::vector<CommandedTorque> commanded;
-  read_tobe_recordings(options, progress, tobe, commanded);
-  std::string tobe_source;
-  if (campaign) tobe_source = campaign_tobe(*campaign, asis, tobe, progress);
-  const std::string bench_warning = bench_without_asis_recording(tobe, !commanded.empty(), options);
-  if (!bench_warning.empty()) progress << "warning: " << bench_warning << "\n";
-  if (!commanded.empty()) {
-    progress << "the TO-BE recordings are haptic playbacks: the design is fitted to the torque "
-                "they commanded, the inertia to their motion (--motion-only: the motion alone)\n";
+  options.stop_requested = [&signals] { return signals.received() != 0; };
+  std::optional<StatusLine> status;
+  if (command.show_progress) {
+    status.emplace(std::cerr, stderr_is_terminal(), 5.0, stderr_terminal_columns());
+    options.progress = [&status](const std::string& line) { status->line(line); };
+    // The samples' status line, with the time left (app/progress.h).
+    options.monte_carlo_progress =
+        count_progress_display(*status, "tolerance Monte Carlo", "samples");
   }
-  // Tolerances are read before the long fit, so that a bad file fails at once.
-  ToleranceSpec tolerances;
-  if (!options.tolerances_path.empty()) {
-    tolerances = parse_tolerance_file(read_text_file(options.tolerances_path),
-                                      options.tolerances_path, asis);
-  }
-
-  if (signals.received() != 0) {
-    throw nothing_finished(signals.received(), "spec", "the specification",
-                           "the reading of its inputs", options.out_dir);
-  }
-  std::optional<InverseDesignResult> designed;
+  SpecSummary summary;
   try {
-    designed = design_stage(options, asis, tobe, commanded, stop, progress);
+    summary = specify(options);
+  } catch (const SpecOptionsError& error) {
+    throw UsageError(error.what());
   } catch (const StopRequested& stopped) {
     throw nothing_finished(signals.received(), "spec", "the specification", stopped.where(),
-                           options.out_dir);
+                           command.out_dir);
   }
-  const InverseDesignResult& design = *designed;
-  if (design.solutions.empty()) throw std::runtime_error("inverse design found no solution");
-
-  SpecEvaluation evaluation = evaluate_design(options, asis, design, tobe, tolerances, campaign,
-                                              tobe_source, felt_share, stop, progress);
-  evaluation.asis_source = asis_file.string();
-  if (!bench_warning.empty()) evaluation.warnings.push_back(bench_warning);
-
-  std::filesystem::create_directories(options.out_dir);
-  const std::filesystem::path params = std::filesystem::path(options.out_dir) / "tobe-params.json";
-  write_text_file_atomically(params, to_parameter_json(design.solutions.front().model));
-  // An interrupted specification is written without its PDF (the renderer takes seconds).
-  const bool pdf = !options.no_pdf && evaluation.interrupted.empty();
-  progress << "writing the specification into " << options.out_dir << "/"
-           << (pdf ? " (spec.pdf: weasyprint renders spec.html, a few seconds)" : "") << "\n";
-  SpecReportFiles files;
-  try {
-    files = write_spec_report(options.out_dir, design, evaluation, pdf ? "" : "none", stop);
-  } catch (const StopRequested&) {
+  if (status) status->finish();
+  if (summary.pdf_interrupted) {
     throw Interrupted(signals.received(),
                       "spec: " + signal_name(signals.received()) +
                           " stopped the specification during the PDF rendering: no spec.pdf; "
                           "spec.json, spec.html and tobe-params.json in " +
-                          options.out_dir + "/ are complete");
+                          command.out_dir + "/ are complete");
   }
-
-  std::cout << design.brief_report() << "\n" << spec_summary(design, evaluation);
-  if (evaluation.tolerances) {
-    std::cout << "tolerances:\n" << evaluation.tolerances->brief_report();
-  }
-  if (evaluation.perceptual) {
-    std::cout << "tolerances judged by the panel:\n" << evaluation.perceptual->brief_report();
-  }
-  std::cout << "wrote " << files.json.string() << ", " << files.html.string() << ", "
-            << params.string() << "\n"
-            << files.pdf_note << "\n";
-  if (!evaluation.interrupted.empty()) {
+  std::cout << summary.brief_report();
+  if (!summary.evaluation.interrupted.empty()) {
     throw Interrupted(signals.received(), "spec: " + signal_name(signals.received()) +
                                               " stopped the specification " +
-                                              evaluation.interrupted + "; the results in " +
-                                              options.out_dir + "/ are marked interrupted");
+                                              summary.evaluation.interrupted + "; the results in " +
+                                              command.out_dir + "/ are marked interrupted");
   }
 }
 

@@ -1,7 +1,7 @@
 #pragma once
-// What `doorbench spec` does, for the command and the demo: TO-BE recordings and the AS-IS door
-// in, the specification (inverse design, felt quantities, check, tolerances) out as
-// spec.json, spec.html (spec.pdf) and tobe-params.json, and a summary on stdout.
+// `doorbench spec`'s options as typed, and the verb's run: they are parsed into SpecOptions
+// and the specification is made by specify() (analysis/design/specify.h), which the demo
+// calls too; the summary goes to stdout.
 #include <string>
 #include <vector>
 
@@ -42,7 +42,8 @@ struct SpecCommandOptions {
   bool overwrite = false;
 };
 
-// Throws UsageError for bad options, std::runtime_error for files and failures.
+// Throws UsageError for bad options (also those specify() refuses), Interrupted when a signal
+// stopped it, std::runtime_error for files and failures.
 void run_spec(const SpecCommandOptions& options);
 
 }  // namespace doorbench::app

@@ -5,8 +5,8 @@
 #include <optional>
 #include <stdexcept>
 
+#include "analysis/fit/fit_result_file.h"
 #include "app/commands.h"
-#include "viewer/fit_result.h"
 #include "viewer/viewer_app.h"
 #include "viewer/window.h"
 
@@ -102,7 +102,7 @@ void run_view(const ViewOptions& options) {
       throw UsageError(
           "--fit gives the model: no --params, --effects, --compare or --loop with it");
     }
-    viewer::FitResultFolder fit = viewer::read_fit_result(options.fit_dir);
+    FitResultFolder fit = read_fit_result(options.fit_dir);
     description = fit.description();
     model = std::move(fit.model);
   } else if (compare) {

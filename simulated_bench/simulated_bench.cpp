@@ -4,6 +4,7 @@
 #include <cmath>
 #include <map>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <thread>
 
@@ -275,6 +276,23 @@ void SimulatedBench::write_extras(SessionWriter& writer, double session_origin_s
   writer.write_group_dataset(group, "theta_rad", truth_theta_rad_);
   writer.write_group_dataset(group, "omega_rad_s", truth_omega_rad_s_);
   writer.write_group_dataset(group, "force_N", truth_force_N_);
+}
+
+sensors::SimulatedScans simulated_scans(const RigDefinition& rig, double duration_s) {
+  // The bench keeps a reference to its door model: both live in one block, the backend
+  // pointing into it.
+  struct Bench {
+    DoorModel model;
+    std::optional<SimulatedBench> bench;
+  };
+  auto bench = std::make_shared<Bench>(Bench{simulated_door_model(rig), std::nullopt});
+  std::unique_ptr<StrokeForce> hand = simulated_hand(rig, bench->model);
+  sensors::SimulatedScans scans;
+  scans.duration_s = duration_s > 0 ? duration_s : hand->natural_duration_s();
+  bench->bench.emplace(rig, bench->model, std::move(hand), scans.duration_s);
+  scans.backend = std::shared_ptr<AcquisitionBackend>(bench, &*bench->bench);
+  scans.paced = rig.simulation && rig.simulation->realtime;
+  return scans;
 }
 
 }  // namespace doorbench::simulated_bench

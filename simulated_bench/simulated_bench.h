@@ -23,6 +23,7 @@
 #include "analysis/model/door_model.h"
 #include "analysis/simulation/simulator.h"
 #include "analysis/simulation/virtual_hand.h"
+#include "sensors/rig_recording.h"
 #include "sensors/sensor_models.h"
 
 namespace doorbench::simulated_bench {
@@ -141,5 +142,10 @@ class SimulatedBench final : public AcquisitionBackend {
   std::chrono::steady_clock::time_point started_;
   std::vector<double> truth_time_s_, truth_theta_rad_, truth_omega_rad_s_, truth_force_N_;
 };
+
+// The simulated bench for a recording of `rig` (sensors/rig_recording.h): its door model and
+// hand, playing `duration_s` (0: the hand's cycles), paced when the rig's [simulation]
+// table asks for real time. Every channel of the rig must use the simulated backend.
+sensors::SimulatedScans simulated_scans(const RigDefinition& rig, double duration_s);
 
 }  // namespace doorbench::simulated_bench

@@ -7,73 +7,35 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
-#include "viewer/json_field.h"
+
+#include "analysis/loop/loop_result_file.h"
+#include "core/number_format.h"
 
 namespace doorbench::viewer {
 
-namespace {
-
-
-double number(const nlohmann::json& object, const char* name, const std::string& where) {
-  const nlohmann::json& value = json_field(object, name, where);
-  if (value.is_null()) return std::numeric_limits<double>::quiet_NaN();
-  if (!value.is_number()) {
-    throw std::runtime_error(
-        std::string(where).append(": '").append(name).append("' is not a number"));
-  }
-  return value.get<double>();
-}
-
-}  // namespace
-
 LoopSteps read_loop_steps(const std::filesystem::path& dir_or_file) {
-  const std::filesystem::path path =
-      std::filesystem::is_directory(dir_or_file) ? dir_or_file / "result.json" : dir_or_file;
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open");
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& error) {
-    throw std::runtime_error(path.string() + ": not JSON (" + error.what() + ")");
-  }
+  const LoopResultFile file = read_loop_result(dir_or_file);
   LoopSteps result;
-  result.path = path;
-  const std::string file = path.string();
-  if (json.contains("source") && json["source"].is_string()) result.source = json["source"];
-  const nlohmann::json& steps = json_field(json, "steps", file);
-  if (!steps.is_array()) throw std::runtime_error(file + ": 'steps' is not an array");
-  for (std::size_t i = 0; i < steps.size(); ++i) {
-    const std::string where =
-        std::string(file).append(": steps[").append(std::to_string(i)).append("]");
-    const nlohmann::json& s = steps[i];
+  result.path = file.path;
+  result.source = file.source;
+  for (const LoopResultStep& read : file.steps) {
     LoopStep step;
-    step.number = int(number(s, "step", where));
-    step.effect = json_field(s, "effect", where).get<std::string>();
-    const nlohmann::json& before = json_field(s, "before", where);
-    const nlohmann::json& after = json_field(s, "after", where);
-    step.fitted_before_rad_s = number(before, "fitted_rmse_rad_s", where + ".before");
-    step.held_out_before_rad_s = number(before, "held_out_rmse_rad_s", where + ".before");
-    step.fitted_after_rad_s = number(after, "fitted_rmse_rad_s", where + ".after");
-    step.held_out_after_rad_s = number(after, "held_out_rmse_rad_s", where + ".after");
-    step.held_out_improvement = number(s, "held_out_improvement", where);
-    step.bic_change = number(s, "bic_change", where);
-    if (s.contains("parameters") && s["parameters"].is_array()) {
-      char text[200];
-      for (const auto& p : s["parameters"]) {
-        const double value = p.value("value", std::numeric_limits<double>::quiet_NaN());
-        const auto& u = p.contains("standard_uncertainty") ? p["standard_uncertainty"] : nullptr;
-        const std::string name = p.value("name", "?"), unit = p.value("unit", "");
-        if (u.is_number()) {
-          std::snprintf(text, sizeof text, "%s%s = %.4g ± %.2g %s",
-                        step.parameters.empty() ? "" : ", ", name.c_str(), value, u.get<double>(),
-                        unit.c_str());
-        } else {
-          std::snprintf(text, sizeof text, "%s%s = %.4g %s", step.parameters.empty() ? "" : ", ",
-                        name.c_str(), value, unit.c_str());
-        }
-        step.parameters += text;
-      }
+    step.number = read.number;
+    step.effect = read.effect;
+    step.fitted_before_rad_s = read.fitted_before_rad_s;
+    step.fitted_after_rad_s = read.fitted_after_rad_s;
+    step.held_out_before_rad_s = read.held_out_before_rad_s;
+    step.held_out_after_rad_s = read.held_out_after_rad_s;
+    step.held_out_improvement = read.held_out_improvement;
+    step.bic_change = read.bic_change;
+    for (const LoopResultStep::Parameter& p : read.parameters) {
+      const std::string separator = step.parameters.empty() ? "" : ", ";
+      step.parameters +=
+          std::isnan(p.standard_uncertainty)
+              ? printf_text("%s%s = %.4g %s", separator.c_str(), p.name.c_str(), p.value,
+                            p.unit.c_str())
+              : printf_text("%s%s = %.4g ± %.2g %s", separator.c_str(), p.name.c_str(), p.value,
+                            p.standard_uncertainty, p.unit.c_str());
     }
     result.steps.push_back(std::move(step));
   }

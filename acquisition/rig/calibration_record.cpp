@@ -5,6 +5,8 @@
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
+#include "core/time_text.h"
+
 namespace doorbench {
 
 const CalibrationQuantity* CalibrationRecord::quantity(std::string_view name) const {
@@ -69,10 +71,25 @@ std::string CalibrationRecord::validate() const {
   if (std::isnan(valid_min) || std::isnan(valid_max) || !(valid_min < valid_max)) {
     return "calibration record " + id + ": valid_min must be below valid_max";
   }
+  if (!valid_until_utc.empty()) {
+    if (std::string problem = iso8601_utc_problem(valid_until_utc); !problem.empty()) {
+      return "calibration record " + id + ": valid_until_utc: " + problem;
+    }
+  }
   for (const CalibrationPoint& p : points) {
     if (!std::isfinite(p.reference) || !std::isfinite(p.signal)) {
       return "calibration record " + id + ": a point's reference or signal is not finite";
     }
+  }
+  return "";
+}
+
+std::string new_valid_until_problem(const std::string& valid_until, const std::string& now_utc) {
+  if (std::string problem = iso8601_utc_problem(valid_until); !problem.empty()) return problem;
+  const std::string today = now_utc.substr(0, 10);
+  if (valid_until.compare(0, 10, today) < 0) {
+    return valid_until + " is before today (" + today +
+           "): the record would have expired when made";
   }
   return "";
 }

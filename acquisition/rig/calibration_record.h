@@ -51,7 +51,7 @@ struct CalibrationRecord {
   std::string method;                 // "nominal (datasheet)", "multi-point", ...
   std::string date_utc;               // ISO 8601
   std::string operator_name;
-  std::string valid_until_utc;  // empty: no expiry
+  std::string valid_until_utc;  // empty: no expiry; else ISO 8601 (validate() checks it)
   std::string notes;
 
   // --- added with the calibration procedures (all optional in JSON) ---
@@ -74,9 +74,17 @@ struct CalibrationRecord {
   // gives `output` (its unit); else why not: "record ID gives rad, not N".
   std::string unit_problem(std::string_view input, std::string_view output) const;
 
-  // Empty when usable, else a one-line message naming the field.
+  // Empty when usable, else a one-line message naming the field: "calibration record ID:
+  // valid_until_utc: TEXT is not an ISO 8601 date (...)" for an expiry that is neither ""
+  // nor an ISO 8601 date or UTC time on the calendar.
   std::string validate() const;
 };
+
+// The expiry of a record being made at `now_utc` (ISO 8601): "" when `valid_until` is an
+// ISO 8601 date (YYYY-MM-DD) or UTC time (YYYY-MM-DDTHH:MM[:SS[.fraction]]Z) on the
+// calendar and not before now_utc's day; else why not ("TEXT is before today (DAY): the
+// record would have expired when made").
+std::string new_valid_until_problem(const std::string& valid_until, const std::string& now_utc);
 
 // A linear record given by hand, physical = offset + gain · input (import --scale): method
 // `method`, dated now, sensor_kind "scale". Throws std::invalid_argument for a gain or offset
@@ -84,7 +92,8 @@ struct CalibrationRecord {
 CalibrationRecord linear_record(std::string id, std::string input_unit, std::string unit,
                                 double gain, double offset, std::string method);
 
-// JSON text of a record and back; parsing errors name `source` and the field.
+// JSON text of a record and back; parsing errors name `source` and the field, and a record
+// that validate() refuses is refused with `source` before its message.
 std::string to_json(const CalibrationRecord& record);
 CalibrationRecord calibration_record_from_json(std::string_view json_text, std::string_view source);
 

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "acquisition/session/output_file.h"
+#include "core/number_format.h"
 
 namespace doorbench {
 namespace {
@@ -105,6 +106,13 @@ void check_recording_for_writing(const Recording& recording) {
 }
 
 }  // namespace
+
+std::string handle_radius_problem(double radius_m, const std::string& origin) {
+  if (radius_m >= kHandleRadiusMinM && radius_m <= kHandleRadiusMaxM) return "";
+  return printf_text("%.6g m", radius_m) + (origin.empty() ? "" : " (from " + origin + ")") +
+         " is outside " + format_number(kHandleRadiusMinM) + " to " +
+         format_number(kHandleRadiusMaxM) + " m, where a door handle is";
+}
 
 bool has_unit_suffix(std::string_view name) {
   const auto underscore = name.rfind('_');

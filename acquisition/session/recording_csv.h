@@ -26,7 +26,7 @@ struct Recording {
   // Metadata lines in file order, notes with an empty key (see CsvTable::metadata), except
   // handle_radius_m and sample_rate_hz, which live in the typed fields below.
   CsvMetadata metadata;
-  std::optional<double> handle_radius_m;  // metadata; positive when present
+  std::optional<double> handle_radius_m;  // metadata; positive when present (see below)
   std::optional<double> sample_rate_hz;   // metadata; positive when present
   std::vector<double> time_s, force_N;
   std::optional<std::vector<double>> angle_rad, rate_rad_s;  // at least one present
@@ -53,6 +53,16 @@ inline constexpr std::string_view kRateColumn = "rate_rad_s";
 inline constexpr std::string_view kStrokeColumn = "stroke";
 inline constexpr std::string_view kHandleRadiusKey = "handle_radius_m";
 inline constexpr std::string_view kSampleRateKey = "sample_rate_hz";
+
+// Where a door handle can be: kHandleRadiusMinM to kHandleRadiusMaxM from the hinge axis.
+// A recording's, a geometry calibration's or a door file's radius outside is most likely a
+// unit or typing error; the verbs refuse it unless told to use it anyway.
+inline constexpr double kHandleRadiusMinM = 0.05;
+inline constexpr double kHandleRadiusMaxM = 2.0;
+// "" when `radius_m` is where a door handle can be; else "R m (from ORIGIN) is outside 0.05
+// to 2 m, where a door handle is" (R as printf's %.6g; without "(from ORIGIN)" when `origin`
+// is empty).
+std::string handle_radius_problem(double radius_m, const std::string& origin = "");
 
 // True when `name` ends in a unit suffix: an underscore with text on both sides ("tau_Nm").
 bool has_unit_suffix(std::string_view name);

@@ -164,6 +164,13 @@ struct LostRun {
 // The runs of lost samples in a slice of `channel`, in order.
 std::vector<LostRun> lost_runs(const ChannelInfo& channel, const ChannelSlice& slice);
 
+// A problem of a session as a whole, named on one line (SessionReader::problems()).
+struct SessionProblem {
+  std::string message;  // names the channel (printable) and what is wrong
+  // The session cannot be used as it is: export and fit refuse it. Otherwise a warning.
+  bool unusable = false;
+};
+
 class SessionReader {
  public:
   // Opens read-only and loads metadata, channel infos, events and calibration records
@@ -184,6 +191,14 @@ class SessionReader {
   double end_time_s() const;    // latest sample time of any channel; 0 without samples
   std::vector<SessionEvent> events() const;  // in the order they were added
   std::vector<CalibrationRecord> calibrations() const;
+
+  // The session checked as a whole, in channel order: a calibration record a channel names
+  // but the session lacks (unusable); explicit times that are not finite or do not
+  // increase (unusable; reads every time of such a channel); a channel on a sample clock
+  // that ends more than one sample period before the last one to end (a warning: export
+  // leaves its cells empty from there, fit uses only the time where every channel has
+  // samples). Empty when none. Throws SessionError only when the file cannot be read.
+  std::vector<SessionProblem> problems() const;
 
   // At most this many samples are read by one call (2^28: 2 GiB of values and 2 GiB of
   // times); a longer range is a SessionError naming the dataset, not an allocation failure.

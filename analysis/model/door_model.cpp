@@ -217,4 +217,18 @@ TorqueDerivatives DoorModel::torque_derivatives(double theta_rad, double omega_r
   return {torque.a, torque.v[0], torque.v[1]};
 }
 
+std::string unknown_parameter_problem(const DoorModel& model, const std::string& what,
+                                      const std::vector<std::string>& names) {
+  for (const std::string& name : names) {
+    if (model.find_parameter(name)) continue;
+    std::string list;
+    for (int i = 0; i < model.parameter_count(); ++i) {
+      list += (i > 0 ? ", " : "") + model.parameter_name(i);
+    }
+    return what + ": the " + std::string(to_string(model.kind())) + " model has no parameter '" +
+           name + "' (its parameters: " + list + ")";
+  }
+  return "";
+}
+
 }  // namespace doorbench

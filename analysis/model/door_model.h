@@ -156,4 +156,10 @@ T DoorModel::inertia(const T* parameters) const {
   return inertia_error_offset_ < 0 ? base : base + parameters[inertia_error_offset_];
 }
 
+// "" when each of `names` is a parameter of `model`; else, for the first that is not, "WHAT:
+// the KIND model has no parameter 'NAME' (its parameters: J, k, ...)" (`what` names where the
+// names came from, e.g. "--free").
+std::string unknown_parameter_problem(const DoorModel& model, const std::string& what,
+                                      const std::vector<std::string>& names);
+
 }  // namespace doorbench

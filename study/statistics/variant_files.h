@@ -4,7 +4,7 @@
 // second_parameters columns `campaign run` writes, "J=1.14 k=40 ..."), as
 // OUT/variants/NAME.json, and names it in the variant's preference_scale row ("file", relative
 // to analysis.json's folder). `spec --campaign` takes the favourite's file as the TO-BE feel
-// (app/spec_campaign.h).
+// (analysis/design/panel_spec.h).
 //
 // No variant gets a file when the table has no parameter columns (a table written by hand:
 // one note says so); a variant gets none when none of its rows carries its parameters, when the

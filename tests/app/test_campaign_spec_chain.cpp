@@ -15,7 +15,7 @@
 #include "analysis/design/felt_quantities.h"
 #include "analysis/model/parameter_file.h"
 #include "app/commands.h"
-#include "app/spec_campaign.h"
+#include "study/statistics/analysis_for_spec.h"
 #include "study/trials_table.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
@@ -215,8 +215,8 @@ TEST_CASE("spec --campaign's TO-BE door is the favourite's file or else the tune
   const std::string favourite = favourite_of(analysis);
   const DoorModel asis = doorbench::reference_model(doorbench::ModelKind::kPhysical);
   std::string source;
-  const DoorModel chosen = doorbench::app::campaign_tobe_model(
-      doorbench::app::read_campaign_for_spec(dir / "analysis"), asis, source);
+  const DoorModel chosen = doorbench::campaign_tobe_model(
+      doorbench::study::read_campaign_for_spec(dir / "analysis"), asis, source);
   CHECK(source == "the panel's favourite variant " + favourite +
                       " (largest worth on the preference scale), its parameter file " +
                       (dir / "analysis" / "variants" / (favourite + ".json")).string() +
@@ -268,8 +268,8 @@ TEST_CASE("spec --campaign's TO-BE door is the favourite's file or else the tune
   CHECK(by_hand.at("preference_fit").at("notes").back() ==
         "no variant parameter files: the trials table has no first_parameters or "
         "second_parameters column");
-  const DoorModel tuned = doorbench::app::campaign_tobe_model(
-      doorbench::app::read_campaign_for_spec(dir / "by-hand"), asis, source);
+  const DoorModel tuned = doorbench::campaign_tobe_model(
+      doorbench::study::read_campaign_for_spec(dir / "by-hand"), asis, source);
   CHECK(source ==
         "the centre of the panel's 2 tuned doors (tuning section; 17 sensory parameters "
         "on the reference sensory door), because the favourite variant " +

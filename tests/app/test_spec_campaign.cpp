@@ -10,13 +10,14 @@
 #include "app/spec_campaign.h"
 #include "app/spec_run.h"
 #include "core/number_format.h"
+#include "study/statistics/analysis_for_spec.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
-using doorbench::app::CampaignForSpec;
+using doorbench::CampaignForSpec;
 using doorbench::app::parse_felt_share;
-using doorbench::app::read_campaign_for_spec;
+using doorbench::study::read_campaign_for_spec;
 using doorbench::testing::run_doorbench_shell;
 using doorbench::testing::TempDir;
 
@@ -152,7 +153,7 @@ TEST_CASE("spec --campaign: the TO-BE door from the favourite variant or the tun
   dir.write("out/analysis.json", analysis(kPreference));
   std::string source;
   const doorbench::DoorModel favourite =
-      doorbench::app::campaign_tobe_model(read_campaign_for_spec(dir / "out"), asis, source);
+      doorbench::campaign_tobe_model(read_campaign_for_spec(dir / "out"), asis, source);
   CHECK(favourite.parameter_values()[doorbench::physical::kFl0] ==
         values[doorbench::physical::kFl0]);
   CHECK_THAT(source, Contains("the panel's favourite variant B (largest worth"));
@@ -161,7 +162,7 @@ TEST_CASE("spec --campaign: the TO-BE door from the favourite variant or the tun
                 {"parameter": "F0", "centre": 230.0}, {"parameter": "physical.k_l", "centre": 900},
                 {"parameter": "J_d", "centre": null}]})"));
   const doorbench::DoorModel tuned =
-      doorbench::app::campaign_tobe_model(read_campaign_for_spec(dir / "out"), asis, source);
+      doorbench::campaign_tobe_model(read_campaign_for_spec(dir / "out"), asis, source);
   CHECK(tuned.parameter_values()[*tuned.find_parameter("F0")] == 230.0);
   CHECK(tuned.parameter_values()[*tuned.find_parameter("k_l")] == 900.0);
   CHECK(tuned.parameter_values()[*tuned.find_parameter("T_h")] ==
@@ -174,7 +175,7 @@ TEST_CASE("spec --campaign: the TO-BE door from the favourite variant or the tun
                                               "ci_low": null, "ci_high": null}])"));
   const std::string file = (dir / "out" / "analysis.json").string();
   CHECK_THROWS_WITH(
-      doorbench::app::campaign_tobe_model(read_campaign_for_spec(dir / "out"), asis, source),
+      doorbench::campaign_tobe_model(read_campaign_for_spec(dir / "out"), asis, source),
       file +
           ": no TO-BE feel: the favourite variant A names no parameter file and no tuning "
           "section gives a door's parameters (give TO-BE recordings instead)");

@@ -107,6 +107,50 @@ TEST_CASE("Calibration store: add, find, latest, versions, and records never cha
   CHECK(calibration_store_directory("/x", "/rig") == "/x");
 }
 
+TEST_CASE("Calibration record: an expiry that is not an ISO 8601 date is refused on read",
+          "[calibration][record]") {
+  testing::TempDir dir("calibration_expiry");
+  const auto file = dir.write("store/x.json", R"({"id":"x","unit":"N","coefficients":[0,1],)"
+                                              R"("valid_until_utc":"notadate"})");
+  const CalibrationStore store(dir / "store");
+  const std::string refusal =
+      file.string() +
+      ": calibration record x: valid_until_utc: notadate is not an ISO 8601 date (YYYY-MM-DD, "
+      "or YYYY-MM-DDTHH:MM:SSZ in UTC)";
+  CHECK_THROWS_WITH(store.records(), refusal);
+  CHECK_THROWS_WITH(store.get("x"), refusal);
+  CHECK_THROWS_WITH(calibration_record_from_json(R"({"id":"y","unit":"N","coefficients":[0,1],)"
+                                                 R"("valid_until_utc":"2099-02-29"})",
+                                                 "y.json"),
+                    "y.json: calibration record y: valid_until_utc: 2099-02-29 is not a day of "
+                    "the calendar");
+  CalibrationRecord r = full_record();
+  r.valid_until_utc = "2099-12-31";
+  CHECK(r.validate().empty());
+  r.valid_until_utc = "";  // no expiry
+  CHECK(r.validate().empty());
+  r.valid_until_utc = "31.12.2099";
+  CHECK(r.validate() ==
+        "calibration record load_cell-LC-7-v2: valid_until_utc: 31.12.2099 is "
+        "not an ISO 8601 date (YYYY-MM-DD, or YYYY-MM-DDTHH:MM:SSZ in UTC)");
+  CHECK_THROWS_WITH(CalibrationStore(dir / "other").add(r),
+                    Catch::Contains("valid_until_utc: 31.12.2099 is not an ISO 8601 date"));
+}
+
+TEST_CASE("Calibration record: a new record's expiry is on the calendar and not before today",
+          "[calibration][record]") {
+  const std::string now = "2026-11-29T00:30:15Z";
+  CHECK(new_valid_until_problem("2026-11-29", now).empty());
+  CHECK(new_valid_until_problem("2026-11-29T00:00Z", now).empty());
+  CHECK(new_valid_until_problem("2027-01-01T12:00:00Z", now).empty());
+  CHECK(new_valid_until_problem("2026-11-28T23:59:59Z", now) ==
+        "2026-11-28T23:59:59Z is before today (2026-11-29): the record would have expired when "
+        "made");
+  CHECK(new_valid_until_problem("2026-13-01", now) == "2026-13-01 is not a day of the calendar");
+  CHECK(new_valid_until_problem("tomorrow", now) ==
+        "tomorrow is not an ISO 8601 date (YYYY-MM-DD, or YYYY-MM-DDTHH:MM:SSZ in UTC)");
+}
+
 TEST_CASE("Rig channels name records of the store, and sessions carry them in full",
           "[calibration][store]") {
   testing::TempDir dir("calibration_rig_store");

@@ -10,10 +10,10 @@
 #include <sstream>
 #include <string>
 
+#include "analysis/fit/fit_result_file.h"
 #include "analysis/model/parameter_file.h"
 #include "tests/support/simulated_session.h"
 #include "tests/support/temp_dir.h"
-#include "viewer/fit_result.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
@@ -51,7 +51,7 @@ TEST_CASE("view --fit takes a doorbench fit folder as the fit result", "[viewer]
   INFO("fit stderr: " << fit_err);
   REQUIRE(fit_code == 0);
 
-  const doorbench::viewer::FitResultFolder fit = doorbench::viewer::read_fit_result(out);
+  const doorbench::FitResultFolder fit = doorbench::read_fit_result(out);
   REQUIRE(fit.model_kind == doorbench::ModelKind::kSensory);
   REQUIRE_THAT(fit.source, Contains("bench.h5"));
   REQUIRE(fit.strokes > 0);
@@ -103,32 +103,30 @@ TEST_CASE("view --fit takes a doorbench fit folder as the fit result", "[viewer]
 
 TEST_CASE("read_fit_result names the file and field it cannot use", "[viewer]") {
   doorbench::testing::TempDir dir("viewer_fit_result_errors");
-  REQUIRE_THROWS_WITH(doorbench::viewer::read_fit_result(dir.path / "nowhere"),
-                      Contains("not a folder"));
-  REQUIRE_THROWS_WITH(doorbench::viewer::read_fit_result(dir.path),
-                      Contains("result.json: cannot open"));
+  REQUIRE_THROWS_WITH(doorbench::read_fit_result(dir.path / "nowhere"), Contains("not a folder"));
+  REQUIRE_THROWS_WITH(doorbench::read_fit_result(dir.path), Contains("result.json: cannot open"));
   std::ofstream(dir.path / "result.json") << "{\"steps\": []}";
-  REQUIRE_THROWS_WITH(doorbench::viewer::read_fit_result(dir.path),
+  REQUIRE_THROWS_WITH(doorbench::read_fit_result(dir.path),
                       Contains("a `doorbench loop` result; open it with --loop"));
   std::ofstream(dir.path / "result.json") << "{\"model\": \"wooden\"}";
-  REQUIRE_THROWS_WITH(doorbench::viewer::read_fit_result(dir.path),
+  REQUIRE_THROWS_WITH(doorbench::read_fit_result(dir.path),
                       Contains("'model' is not sensory or physical"));
   std::ofstream(dir.path / "result.json") << "{\"model\": \"sensory\"}";
-  REQUIRE_THROWS_WITH(doorbench::viewer::read_fit_result(dir.path),
+  REQUIRE_THROWS_WITH(doorbench::read_fit_result(dir.path),
                       Contains("fitted-params.json: missing"));
   std::ofstream(dir.path / "fitted-params.json")
       << doorbench::to_parameter_json(doorbench::reference_model(doorbench::ModelKind::kSensory));
-  REQUIRE_THROWS_WITH(doorbench::viewer::read_fit_result(dir.path),
+  REQUIRE_THROWS_WITH(doorbench::read_fit_result(dir.path),
                       Contains("result.json: no field 'source'"));
   std::ofstream(dir.path / "result.json")
       << R"({"model": "sensory", "source": "s.h5", "converged": true, "termination": "x",
              "strokes": 4, "fitted": {"windows": {"rmse_rad_s": 0.5}}})";
-  REQUIRE_THROWS_WITH(doorbench::viewer::read_fit_result(dir.path),
+  REQUIRE_THROWS_WITH(doorbench::read_fit_result(dir.path),
                       Contains("result.json: no field 'held_out'"));
   std::ofstream(dir.path / "result.json")
       << R"({"model": "sensory", "source": "s.h5", "converged": true, "termination": "x",
              "strokes": 4, "fitted": {"windows": {"rmse_rad_s": 0.5}}, "held_out": null})";
-  const auto fit = doorbench::viewer::read_fit_result(dir.path);
+  const auto fit = doorbench::read_fit_result(dir.path);
   REQUIRE(fit.fitted_window_rmse_rad_s == 0.5);
   REQUIRE(fit.strokes == 4);
   REQUIRE_THAT(fit.description(), Contains("4 strokes, window RMSE 0.5 rad/s fitted)"));

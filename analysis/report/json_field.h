@@ -1,12 +1,12 @@
 #pragma once
-// The named field of a JSON object, for the viewer's readers of fit and loop results.
+// The named field of a JSON object, for the readers of fit and loop results
+// (analysis/fit/fit_result_file.h, analysis/loop/loop_result_file.h).
 // Errors: std::runtime_error "WHERE: no field 'NAME'" when the object lacks it.
+#include <nlohmann/json.hpp>
 #include <stdexcept>
 #include <string>
 
-#include <nlohmann/json.hpp>
-
-namespace doorbench::viewer {
+namespace doorbench {
 
 inline const nlohmann::json& json_field(const nlohmann::json& object, const char* name,
                                         const std::string& where) {
@@ -16,4 +16,4 @@ inline const nlohmann::json& json_field(const nlohmann::json& object, const char
   return object.at(name);
 }
 
-}  // namespace doorbench::viewer
+}  // namespace doorbench
