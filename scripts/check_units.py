@@ -27,7 +27,7 @@ DEGREE = re.compile(
     r"\s*/\s*180(?:\.0*)?)|#\s*define\s+\w+\s+\(?[^\n]*(?:180(?:\.0*)?\s*/\s*" + PI + r"|" +
     PI + r"\s*/\s*180)|\b(?:constexpr|const)\b[^;=]*\bkDeg\s*=)")
 FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis", "simulated_bench",
-           "viewer", "haptic", "study", "app", "bench", "fuzz", "tests"]
+           "viewer", "haptic", "station", "study", "app", "bench", "fuzz", "tests"]
 
 
 def main():
