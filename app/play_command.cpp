@@ -40,6 +40,7 @@ struct PlayOptions {
   bool station = false;
   std::string station_display;
   std::string scene;
+  bool no_sound = false;
 };
 
 // Live tuning from the keypad (haptic/tuning_keys.h): every key press moves one perceptual
@@ -193,8 +194,8 @@ void run_play(const PlayOptions& options) {
   std::shared_ptr<station::StationSession> station;
   if (options.station) {
     // The scene is read now: a bad scene file stops the run before the device moves.
-    station = std::make_shared<station::StationSession>(
-        station::StationRequest{options.scene, {.display = options.station_display}});
+    station = std::make_shared<station::StationSession>(station::StationRequest{
+        options.scene, {.display = options.station_display}, !options.no_sound});
     request.on_start = [station](haptic::Playback& playback) {
       station->open(playback.loop().snapshot());
     };
@@ -278,6 +279,7 @@ void add_play_command(CLI::App& app, Action& action) {
   play->add_option("--station-display", options->station_display,
                    "The display the participant faces: its name or index (default: the primary)")
       ->needs(station);
+  play->add_flag("--no-sound", options->no_sound, "The station without its sounds")->needs(station);
   play->add_option("--scene", options->scene,
                    "The station's scene file (TOML; default: the built-in dishwasher)")
       ->needs(station);

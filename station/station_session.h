@@ -1,8 +1,10 @@
 #pragma once
 // What `doorbench play --station` opens beside a playback (docs/station.md): the scene
-// (read first, so that a bad scene stops the run before the device moves), then, once the
-// playback's render loop exists, the station's window on its own thread reading the loop's
-// DoorSnapshotChannel. close() ends it before the playback (and its snapshot) goes.
+// and its sound files (read first, so that a bad scene stops the run before the device
+// moves), then, once the playback's render loop exists, the station's window and its sound,
+// each on its own thread reading the loop's DoorSnapshotChannel. A station without an audio
+// output plays on silent and says so in its report. close() ends both before the playback
+// (and its snapshot) goes.
 //
 // Thread safety: one control thread.
 #include <filesystem>
@@ -11,6 +13,7 @@
 #include <string>
 
 #include "haptic/door_snapshot.h"
+#include "station/door_sound.h"
 #include "station/scene.h"
 #include "station/station.h"
 
@@ -19,6 +22,7 @@ namespace doorbench::station {
 struct StationRequest {
   std::filesystem::path scene_file;  // empty: the built-in dishwasher
   StationWindowOptions window;
+  bool sound = true;
 };
 
 class StationSession {
@@ -33,7 +37,7 @@ class StationSession {
   void open(const haptic::DoorSnapshotChannel& snapshot);
   // Ends the window's thread; keeps its report.
   void close();
-  // One line for the summary: frames, frame interval, stereo, any note.
+  // Two lines for the summary: frames, frame interval, stereo, any note; the sounds played.
   std::string brief_report() const;
   Station* station() { return station_.get(); }
 
@@ -42,6 +46,8 @@ class StationSession {
   Scene scene_;
   std::unique_ptr<Station> station_;
   std::optional<StationReport> report_;
+  std::unique_ptr<DoorSound> sound_;
+  SoundReport sound_report_;
 };
 
 }  // namespace doorbench::station

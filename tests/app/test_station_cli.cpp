@@ -1,5 +1,6 @@
 // `doorbench play --station` as a participant's lab runs it: under Xvfb the station's window
-// opens beside a real-time play, draws frames and says so in the summary; a bad scene file,
+// opens beside a real-time play, draws frames, plays the latch's clicks into OpenAL Soft's
+// wave-file output and says so in the summary; a bad scene file,
 // a display that is not there or a station option without --station stop it with a message
 // naming the cause, before the device moves.
 #include <catch2/catch.hpp>
@@ -27,18 +28,31 @@ std::string last_line(const std::string& err) {
 
 }  // namespace
 
-TEST_CASE("play --station draws the door beside a real-time play under Xvfb", "[station][xvfb]") {
+TEST_CASE("play --station draws the door and sounds it beside a real-time play under Xvfb",
+          "[station][xvfb]") {
   testing::TempDir dir("station_cli");
   const auto session = dir.path / "played.h5";
+  // OpenAL Soft's wave-file output stands in for a sound card.
+  const auto wav = dir.path / "output.wav";
+  std::ofstream(dir.path / "alsoft.conf")
+      << "[general]\ndrivers = wave\n\n[wave]\nfile = " << wav.string() << "\n";
   const testing::DoorbenchRun run = testing::run_doorbench_shell(
-      "play --device sim --station --duration-s 1.5 --no-fifo --out '" + session.string() + "'",
-      dir, kUnderXvfb);
+      "play --device sim --hand-cycle-s 3 --station --duration-s 3.5 --out '" + session.string() +
+          "'",
+      dir,
+      kUnderXvfb + " env ALSOFT_CONF='" + (dir.path / "alsoft.conf").string() +
+          "' ALSOFT_DRIVERS=wave");
   INFO("stderr: " << run.err);
   REQUIRE(run.status == 0);
   std::smatch match;
   REQUIRE(std::regex_search(run.out, match, std::regex("station: ([0-9]+) frames")));
   CHECK(std::stoi(match[1]) >= 10);
   CHECK(std::filesystem::exists(session));
+  // The virtual user opened and closed the door: the latch clicked on the way.
+  REQUIRE(std::regex_search(run.out, match,
+                            std::regex("sound: Wave File Writer, ([0-9]+) latch clicks")));
+  CHECK(std::stoi(match[1]) >= 2);
+  CHECK(std::filesystem::file_size(wav) > 48000);
 }
 
 TEST_CASE("play --station: a scene file, a display or an option that cannot be used is named",
@@ -69,4 +83,12 @@ TEST_CASE("play --station: a scene file, a display or an option that cannot be u
   run = testing::run_doorbench_shell(play + "--scene scene.toml", dir);
   CHECK(run.status == 2);
   CHECK_THAT(run.err, Catch::Matchers::StartsWith("doorbench: --scene requires --station"));
+  std::ofstream(dir.path / "noise.wav") << "not a sound";
+  std::ofstream(dir.path / "sounds.toml") << "[sound]\nlatch_wav = \"noise.wav\"\n";
+  run = testing::run_doorbench_shell(
+      play + "--station --scene '" + (dir.path / "sounds.toml").string() + "'", dir, kUnderXvfb);
+  CHECK(run.status == 1);
+  CHECK_THAT(last_line(run.err),
+             Catch::Matchers::StartsWith("doorbench: " + (dir.path / "noise.wav").string() +
+                                         ": cannot read the sound: "));
 }
