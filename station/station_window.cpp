@@ -205,7 +205,9 @@ void draw_panel(const QuestionPanel& panel, double width, double height) {
   const std::vector<PanelRect> rects = panel.choice_rects(width, height);
   for (std::size_t i = 0; i < rects.size(); ++i) {
     ImGui::SetCursorScreenPos(ImVec2(float(rects[i].x), float(rects[i].y)));
-    const std::string label = std::to_string(i + 1) + ": " + q.choices[i];
+    // The key that picks it, unless the choice is that number already (a scale's points).
+    const std::string number = std::to_string(i + 1);
+    const std::string label = q.choices[i] == number ? number : number + ": " + q.choices[i];
     ImGui::Button(label.c_str(), ImVec2(float(rects[i].width), float(rects[i].height)));
   }
   if (!rects.empty()) {
