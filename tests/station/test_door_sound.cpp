@@ -10,6 +10,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <sstream>
 #include <thread>
 
 #include "core/clock.h"
@@ -230,7 +231,11 @@ TEST_CASE("station sound: the latch click starts within 30 ms of the tick that c
   const Recording recording = read_wav(wav);
   REQUIRE(recording.rate_hz == 48000);
   const std::vector<double> onsets = onsets_s(recording, 0.05, 0.1);
-  INFO("onsets found: " << onsets.size());
+  std::ostringstream found;
+  for (const double t : onsets) found << " " << t;
+  std::ostringstream ticks;
+  for (const double t : events_s) ticks << " " << t;
+  INFO("onsets found at" << found.str() << " s; ticks at" << ticks.str() << " s");
   REQUIRE(onsets.size() == events_s.size());
   for (std::size_t i = 0; i < onsets.size(); ++i) {
     INFO("click " << i << ": tick at " << events_s[i] << " s, sound at " << onsets[i] << " s");

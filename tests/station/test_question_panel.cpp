@@ -46,7 +46,7 @@ std::optional<station::Answer> answer_of(station::Station& live) {
 
 }  // namespace
 
-TEST_CASE("question panel: keys, keypad and clicks answer; nothing else does", "[station]") {
+TEST_CASE("question panel: keys, keypad and clicks answer, nothing else does", "[station]") {
   station::QuestionPanel panel;
   CHECK_FALSE(panel.handle(key(GLFW_KEY_1), 800, 600));  // nothing asked
   panel.ask(preference());

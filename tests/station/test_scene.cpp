@@ -102,7 +102,7 @@ eye_separation_m = 0.06
   CHECK(scene.stereo.eye_separation_m == 0.06);
 }
 
-TEST_CASE("station scene: OBJ and STL meshes; without a door node the whole mesh is the door",
+TEST_CASE("station scene: OBJ and STL meshes, and without a door node the whole mesh is the door",
           "[station]") {
   testing::TempDir dir("station_scene_formats");
   write_text(dir.path / "panel.obj", R"(o door
