@@ -13,6 +13,7 @@
 #include "app/number_options.h"
 #include "app/play_run.h"
 #include "core/number_format.h"
+#include "station/station_session.h"
 #include "study/tuning_keys.h"
 
 namespace doorbench::app {
@@ -36,6 +37,10 @@ struct PlayOptions {
   double max_tick_interval_ms = 5.0;
   double max_tick_stall_ms = 100.0;
   bool keys = false;
+  bool station = false;
+  std::string station_display;
+  std::string scene;
+  bool no_sound = false;
 };
 
 // Live tuning from the keypad (study/tuning_keys.h): every key press moves one perceptual
@@ -186,8 +191,19 @@ void run_play(const PlayOptions& options) {
       return true;
     };
   }
+  std::shared_ptr<station::StationSession> station;
+  if (options.station) {
+    // The scene is read now: a bad scene file stops the run before the device moves.
+    station = std::make_shared<station::StationSession>(station::StationRequest{
+        options.scene, {.display = options.station_display}, !options.no_sound});
+    request.on_start = [station](haptic::Playback& playback) {
+      station->open(playback.loop().snapshot());
+    };
+    request.on_end = [station] { station->close(); };
+  }
   const haptic::PlaybackSummary summary = play_model(model, request);
   std::cout << summary.brief_report() << "\n";
+  if (station) std::cout << station->brief_report() << "\n";
   if (!summary.stop_cause.empty()) {
     throw std::runtime_error("the playback stopped after " +
                              format_significant(summary.duration_s, 3) + " s of " +
@@ -256,6 +272,17 @@ void add_play_command(CLI::App& app, Action& action) {
   play->add_option("--watch-params", options->watch_params,
                    "A parameter file to watch: whenever it changes (the viewer's tuning layout "
                    "saves it), its values are played from the next tick");
+  CLI::Option* station = play->add_flag(
+      "--station", options->station,
+      "Open the participant's station: the door drawn full screen at the played angle, with "
+      "its sounds (docs/station.md)");
+  play->add_option("--station-display", options->station_display,
+                   "The display the participant faces: its name or index (default: the primary)")
+      ->needs(station);
+  play->add_flag("--no-sound", options->no_sound, "The station without its sounds")->needs(station);
+  play->add_option("--scene", options->scene,
+                   "The station's scene file (TOML; default: the built-in dishwasher)")
+      ->needs(station);
   play->callback([options, &action] { action = [options] { run_play(*options); }; });
 }
 

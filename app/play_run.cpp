@@ -49,6 +49,14 @@ haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& req
   haptic::Playback playback(
       *opened.device, model, options, session_path, metadata,
       haptic::PlaybackSetup{opened.device->name(), request.model_source, request.effects});
+  // on_end before the playback is destroyed, whatever the way out.
+  struct EndCall {
+    const std::function<void()>& call;
+    ~EndCall() {
+      if (call) call();
+    }
+  } end_call{request.on_end};
+  if (request.on_start) request.on_start(playback);
   if (request.device.simulated_time) {
     haptic::SimulatedDevice* device = opened.simulated;
     int ticks = 0;

@@ -32,6 +32,10 @@ struct PlayRequest {
   // Live tuning: called about every 0.1 s (real time) on the control thread; it may call
   // playback.change_parameters(). Returning false ends the run early.
   std::function<bool(haptic::Playback&)> control;
+  // Called once the playback exists, before its first tick (the station opens on its
+  // snapshot), and `on_end` once the run is over, before the playback goes, on every path.
+  std::function<void(haptic::Playback&)> on_start;
+  std::function<void()> on_end;
 };
 
 // The session is written through a temporary file beside it and renamed into place when

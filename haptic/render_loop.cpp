@@ -39,7 +39,8 @@ RenderLoop::RenderLoop(HapticDevice& device, const DoorMapping& mapping,
       limits_(device.limits()),
       safety_(options.safety, limits_),
       passivity_(options.passivity),
-      records_(options.record_ring_ticks, prototype_record()) {
+      records_(options.record_ring_ticks, prototype_record()),
+      snapshot_(initial ? DoorEventAngles::for_model(initial->model) : DoorEventAngles{}) {
   if (std::string problem = options_.validate(); !problem.empty()) {
     throw std::invalid_argument("render loop: " + problem);
   }
@@ -143,6 +144,7 @@ void RenderLoop::tick(double time_s) noexcept {
   status_user_force_.store(door.user_force_N, std::memory_order_relaxed);
   status_command_.store(output.force.norm(), std::memory_order_relaxed);
   status_set_.store(parameters_->id, std::memory_order_relaxed);
+  snapshot_.publish(time_s, door.theta_rad, door.omega_rad_s);
 
   TickRecord* record = records_.producer_slot();
   if (!record) {

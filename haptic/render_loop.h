@@ -9,7 +9,8 @@
 // counters) changes tick by tick; tick() is the step function over both. tick() never
 // allocates, locks, logs or does I/O (tests/haptic/test_render_loop.cpp counts allocations): its
 // output goes through a preallocated single-producer ring (SpscRing) to whoever records it,
-// and new parameter sets come in through the ParameterMailbox at tick boundaries.
+// and new parameter sets come in through the ParameterMailbox at tick boundaries; the door's
+// angle and its events go out through a seqlock (DoorSnapshotChannel) to whoever shows them.
 //
 // Who renders the inertia: an admittance device (the HapticMaster, the simulated one)
 // renders the door's inertia as its own mass, J / (r_h · r_arc) (DoorMapping); the host sends
@@ -29,6 +30,7 @@
 #include "analysis/model/door_model.h"
 #include "haptic/device.h"
 #include "haptic/door_mapping.h"
+#include "haptic/door_snapshot.h"
 #include "haptic/parameter_mailbox.h"
 #include "haptic/safety.h"
 
@@ -117,6 +119,10 @@ class RenderLoop {
     int parameter_set;
   };
   Status status() const noexcept;
+  // The newest tick's door state and its event counters, consistent across fields (any
+  // thread; the station draws and sounds the door from it). The event angles come from the
+  // first parameter set's model.
+  const DoorSnapshotChannel& snapshot() const noexcept { return snapshot_; }
 
  private:
   HapticDevice& device_;
@@ -142,6 +148,7 @@ class RenderLoop {
   std::atomic<double> status_time_s_{0.0}, status_theta_{0.0}, status_omega_{0.0},
       status_user_force_{0.0}, status_command_{0.0};
   std::atomic<int> status_set_{0};
+  DoorSnapshotChannel snapshot_;
 };
 
 }  // namespace doorbench::haptic

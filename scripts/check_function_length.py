@@ -6,7 +6,8 @@ its limit (800 lines), that docs/architecture.md does not name.
                                      [FOLDER ...]
 
 Checks every .h/.hpp/.cpp/.cc file under each folder whose code ships (core/, acquisition/,
-sensors/, calibration/, analysis/, simulated_bench/, viewer/, haptic/, study/, app/), under
+sensors/, calibration/, analysis/, simulated_bench/, viewer/, haptic/, station/, study/,
+app/), under
 the tools' folders (bench/, studies/, fuzz/) -- those of them that exist under --root, by
 default the repository; tests/ is not checked -- and under each FOLDER given (which must exist). A
 function's length is the number of lines from the line of its name to the line of its
@@ -39,7 +40,7 @@ import sys
 
 # Every folder of code but tests/: what ships, then the tools (benchmarks, fuzzers).
 DEFAULT_FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis",
-                   "simulated_bench", "viewer", "haptic", "study", "app", "bench", "studies", "fuzz"]
+                   "simulated_bench", "viewer", "haptic", "station", "study", "app", "bench", "studies", "fuzz"]
 SOURCE_SUFFIXES = (".h", ".hpp", ".cpp", ".cc", ".cxx")
 EXCEPTIONS_HEADING = "## Functions longer than 120 lines"
 FILE_EXCEPTIONS_HEADING = "## Files longer than 800 lines"

@@ -33,7 +33,7 @@ import sys
 
 # The folders whose code ships, in the layers' order (CMakeLists.txt at the top).
 LIBRARY_FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis", "simulated_bench",
-                   "viewer", "haptic", "study", "app"]
+                   "viewer", "haptic", "station", "study", "app"]
 INCLUDE = re.compile(r'^\s*#\s*include\s+"([A-Za-z0-9_]+)/[^"]+"')
 INCLUDE_PATH = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 # Folders every layer's tests may use to make their data: the simulated bench records

@@ -20,6 +20,9 @@ packages=(
   libimgui-dev libstb-dev     # the viewer: Dear ImGui (+ its backends' sources), PNG writing
   libglfw3-dev libgl-dev      # the viewer's window and OpenGL
   xvfb libgl1-mesa-dri libglx-mesa0 xauth  # headless screenshots: Xvfb + Mesa software GL
+  libassimp-dev               # the station's meshes: glTF 2.0, OBJ, STL exported from CAD (station/)
+  libopenal-dev               # the station's sound: OpenAL Soft (the study's OpenAL)
+  libsndfile1-dev             # the station's sound samples from WAV files
   libmodbus-dev               # Modbus sensors (sensors/modbus_source.h)
   python3-pymodbus python3-serial python3-serial-asyncio  # the Modbus test server (tests/modbus)
   socat                       # RTU tests over a pseudo-terminal pair

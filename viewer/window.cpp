@@ -86,8 +86,27 @@ class GlSession {
   GLFWwindow* window_ = nullptr;
 };
 
-// Reads the rectangle (x, y, w, h; framebuffer pixels, y downwards) of the back buffer and
-// writes it as an RGB PNG.
+// A plot's PNG button: its widget's rectangle of the frame just rendered.
+void fulfil_png_request(Viewer& viewer, int fb_width, int fb_height) {
+  const auto request = viewer.take_png_request();
+  if (!request) return;
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const double sx = display.x > 0 ? fb_width / double(display.x) : 1.0;
+  const double sy = display.y > 0 ? fb_height / double(display.y) : 1.0;
+  const int x = std::clamp(int(std::lround(request->rect.x * sx)), 0, fb_width - 1);
+  const int y = std::clamp(int(std::lround(request->rect.y * sy)), 0, fb_height - 1);
+  const int w = std::clamp(int(std::lround(request->rect.width * sx)), 1, fb_width - x);
+  const int h = std::clamp(int(std::lround(request->rect.height * sy)), 1, fb_height - y);
+  try {
+    write_framebuffer_png(fb_height, x, y, w, h, request->path);
+    viewer.set_status("wrote " + request->path.string());
+  } catch (const std::exception& error) {
+    viewer.set_status(error.what());
+  }
+}
+
+}  // namespace
+
 void write_framebuffer_png(int fb_height, int x, int y, int w, int h,
                            const std::filesystem::path& png) {
   std::vector<unsigned char> pixels(std::size_t(w) * std::size_t(h) * 3);
@@ -110,27 +129,6 @@ void write_framebuffer_png(int fb_height, int x, int y, int w, int h,
     throw std::runtime_error(png.string() + ": cannot write the PNG");
   }
 }
-
-// A plot's PNG button: its widget's rectangle of the frame just rendered.
-void fulfil_png_request(Viewer& viewer, int fb_width, int fb_height) {
-  const auto request = viewer.take_png_request();
-  if (!request) return;
-  const ImVec2 display = ImGui::GetIO().DisplaySize;
-  const double sx = display.x > 0 ? fb_width / double(display.x) : 1.0;
-  const double sy = display.y > 0 ? fb_height / double(display.y) : 1.0;
-  const int x = std::clamp(int(std::lround(request->rect.x * sx)), 0, fb_width - 1);
-  const int y = std::clamp(int(std::lround(request->rect.y * sy)), 0, fb_height - 1);
-  const int w = std::clamp(int(std::lround(request->rect.width * sx)), 1, fb_width - x);
-  const int h = std::clamp(int(std::lround(request->rect.height * sy)), 1, fb_height - y);
-  try {
-    write_framebuffer_png(fb_height, x, y, w, h, request->path);
-    viewer.set_status("wrote " + request->path.string());
-  } catch (const std::exception& error) {
-    viewer.set_status(error.what());
-  }
-}
-
-}  // namespace
 
 std::string WindowOptions::validate() const {
   if (width_px < 200 || width_px > 16384) return "width_px must be 200..16384";

@@ -25,4 +25,10 @@ void run_window(Viewer& viewer, const WindowOptions& options);
 void screenshot(Viewer& viewer, const std::string& layout, const std::filesystem::path& png,
                 const WindowOptions& options);
 
+// Reads the rectangle (x, y, w, h; framebuffer pixels, y downwards) of the current context's
+// back buffer and writes it as an RGB PNG (the viewer's and the station's screenshots).
+// Throws std::runtime_error naming the file when it cannot be written.
+void write_framebuffer_png(int fb_height, int x, int y, int w, int h,
+                           const std::filesystem::path& png);
+
 }  // namespace doorbench::viewer

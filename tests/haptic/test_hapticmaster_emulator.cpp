@@ -80,7 +80,7 @@ class RawClient {
 
 using Emulator = doorbench::testing::HapticMasterEmulator;
 
-void sleep_s(double s) {
+void emulator_sleep_s(double s) {
   std::this_thread::sleep_for(std::chrono::duration<double>(s));
 }
 
@@ -173,13 +173,13 @@ TEST_CASE("hapticmaster emulator: the admittance model moves plausibly", "[hapti
   Emulator emulator({"--ext-force", "[0,0,0]"});
   RawClient client(emulator.port);
   client.send({"set inertia 2", "emulator extforce [10,0,0]"});
-  sleep_s(0.2);
+  emulator_sleep_s(0.2);
   // Not in state "force": nothing moves.
   CHECK(client.vector("get measpos").norm() == 0.0);
 
   // A damper only: terminal velocity F/c = 10/50 = 0.2 m/s after a few m/c = 0.04 s.
   client.send({"create damper d", "set d dampcoef [50,50,50]", "set d enable", "set state force"});
-  sleep_s(0.5);
+  emulator_sleep_s(0.5);
   const Vec3 v = client.vector("get modelvel");
   CHECK(v.x() == Approx(0.2).margin(0.005));
   CHECK(v.y() == 0.0);
@@ -189,13 +189,13 @@ TEST_CASE("hapticmaster emulator: the admittance model moves plausibly", "[hapti
   // c = 2 sqrt(k m) = 40) and no user force: the end-effector settles there.
   client.send({"emulator extforce [0,0,0]", "remove d", "create spring s", "set s pos [0.05,0,0]",
                "set s stiffness 200", "set s dampfactor 1", "set s enable"});
-  sleep_s(1.5);
+  emulator_sleep_s(1.5);
   const Vec3 p = client.vector("get measpos");
   CHECK(p.x() == Approx(0.05).margin(0.003));
   CHECK(std::abs(client.vector("get modelvel").x()) < 0.01);
 
   // A bias force of 10 N against the spring: the equilibrium moves by F/k = 0.05 m.
   client.send({"create biasforce b", "set b force [10,0,0]", "set b enable"});
-  sleep_s(1.5);
+  emulator_sleep_s(1.5);
   CHECK(client.vector("get measpos").x() == Approx(0.10).margin(0.003));
 }

@@ -90,13 +90,15 @@ inline std::vector<std::string> window_frame_plots(viewer::Viewer& view) {
   return titles;
 }
 
-inline Screenshot load_screenshot(const std::filesystem::path& png) {
+// `with_info`: read PNG.json too (the viewer's screenshots have one, the station's not).
+inline Screenshot load_screenshot(const std::filesystem::path& png, bool with_info = true) {
   Screenshot shot;
   int n = 0;
   unsigned char* pixels = stbi_load(png.string().c_str(), &shot.width, &shot.height, &n, 3);
   if (pixels == nullptr) throw std::runtime_error(png.string() + ": not a PNG");
   shot.rgb.assign(pixels, pixels + std::size_t(shot.width) * std::size_t(shot.height) * 3);
   stbi_image_free(pixels);
+  if (!with_info) return shot;
   std::ifstream info(png.string() + ".json");
   shot.info = nlohmann::json::parse(info);
   return shot;
@@ -106,7 +108,10 @@ inline Screenshot load_screenshot(const std::filesystem::path& png) {
 inline int run_under_xvfb(const std::string& command, const std::filesystem::path& dir,
                           std::string& err) {
   const std::filesystem::path err_path = dir / "xvfb-stderr.txt";
-  const std::string line = "xvfb-run -a -s '-screen 0 1600x1200x24' " + command +
+  // -noreset: a command that opens and closes several windows (one X connection after
+  // another) would otherwise meet the server resetting after the last client left, and fail
+  // to open the display now and then.
+  const std::string line = "xvfb-run -a -s '-screen 0 1600x1200x24 -noreset' " + command +
                            " >/dev/null 2>'" + err_path.string() + "'";
   const int status = std::system(line.c_str());
   std::ifstream in(err_path);
