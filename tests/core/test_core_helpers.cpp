@@ -66,7 +66,7 @@ TEST_CASE(
   CHECK(doorbench::percentile({1.0, 2.0}, 1.5) == 2.0);
 }
 
-TEST_CASE("median: the middle value, or the mean of the two middle ones; NaN when empty",
+TEST_CASE("median: the middle value, or the mean of the two middle ones, NaN when empty",
           "[core]") {
   CHECK(doorbench::median({3.0, 1.0, 2.0}) == 2.0);
   CHECK(doorbench::median({4.0, 1.0, 3.0, 2.0}) == 2.5);

@@ -86,6 +86,6 @@ TEST_CASE("ratings and jnd and tuning sections come from one hand-written trials
   study::write_psychometric_plot(svg_path, thresholds.parameters[0]);
   const std::string svg = doorbench::testing::read_file(svg_path);
   CHECK(svg.find("J_d around J_d*1.00") != std::string::npos);
-  CHECK(svg.find("panel's answers") != std::string::npos);
+  CHECK(svg.find("panel&#39;s answers") != std::string::npos);  // XML-escaped: core/html_escape.h
   CHECK(svg.find("comparison / reference") != std::string::npos);
 }
