@@ -128,14 +128,7 @@ FitResultFolder read_fit_result(const std::filesystem::path& dir) {
     throw std::runtime_error(dir.string() + ": not a folder (expected a `doorbench fit` --out)");
   }
   const std::filesystem::path result_path = dir / "result.json";
-  std::ifstream in(result_path);
-  if (!in) throw std::runtime_error(result_path.string() + ": cannot open");
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& error) {
-    throw std::runtime_error(result_path.string() + ": not JSON (" + error.what() + ")");
-  }
+  nlohmann::json json = read_json_file(result_path);
   const std::string file = result_path.string();
   if (json.is_object() && json.contains("steps")) {
     throw std::runtime_error(file + ": a `doorbench loop` result; open it with --loop");

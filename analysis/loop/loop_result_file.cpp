@@ -148,14 +148,7 @@ std::string loop_result_json(const LoopResult& result, const PreparedData& data)
 LoopResultFile read_loop_result(const std::filesystem::path& dir_or_file) {
   const std::filesystem::path path =
       std::filesystem::is_directory(dir_or_file) ? dir_or_file / "result.json" : dir_or_file;
-  std::ifstream in(path);
-  if (!in) throw std::runtime_error(path.string() + ": cannot open");
-  nlohmann::json json;
-  try {
-    json = nlohmann::json::parse(in);
-  } catch (const nlohmann::json::exception& error) {
-    throw std::runtime_error(path.string() + ": not JSON (" + error.what() + ")");
-  }
+  nlohmann::json json = read_json_file(path);
   LoopResultFile result;
   result.path = path;
   const std::string file = path.string();
