@@ -41,8 +41,7 @@ std::filesystem::path trials_path(const std::string& input) {
 // first in the table).
 std::string plan_reference(const std::string& input, const study::TrialsTable& table) {
   const std::filesystem::path folder(input);
-  if (!std::filesystem::is_directory(folder) ||
-      !std::filesystem::exists(folder / "campaign.toml"))
+  if (!std::filesystem::is_directory(folder) || !std::filesystem::exists(folder / "campaign.toml"))
     return "";
   std::string first;
   try {
@@ -121,8 +120,7 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
   }
   out << study::analysis_summary(analysis);
   out << "wrote " << (folder / "analysis.json").string() << ", " << report.html.string() << ", "
-      << report.plots << " plot(s) and " << variants.files.size()
-      << " variant parameter file(s)\n"
+      << report.plots << " plot(s) and " << variants.files.size() << " variant parameter file(s)\n"
       << report.pdf_note << "\n";
   if (analysis.contains("interrupted")) {
     throw Interrupted(signals.received(),
@@ -169,9 +167,10 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
       ->capture_default_str()
       ->check(number_range(0, 1000000));
   command->add_option("--seed", options->seed, "the bootstrap's seed")->capture_default_str();
-  command->add_option("--reference", options->reference,
-                      "the variant at worth 0 (default: a campaign folder's first variant, else the first in "
-                      "the table)");
+  command->add_option(
+      "--reference", options->reference,
+      "the variant at worth 0 (default: a campaign folder's first variant, else the first in "
+      "the table)");
   command
       ->add_option("--real-variant", options->real_variant,
                    "the real door's name in identify-real trials")
@@ -184,7 +183,9 @@ void add_campaign_analyze(CLI::App& campaign, Action& action) {
       ->capture_default_str();
   command->add_flag("--no-pdf", options->no_pdf, "do not render report.pdf");
   command->callback([options, &action] {
-    action = [options] { run_campaign_analyze(*options, std::cerr, stderr_is_terminal(), std::cout); };
+    action = [options] {
+      run_campaign_analyze(*options, std::cerr, stderr_is_terminal(), std::cout);
+    };
   });
 }
 

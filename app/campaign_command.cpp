@@ -66,16 +66,18 @@ void run_plan(const PlanCommandOptions& options) {
   if (!options.out_dir.empty()) {
     const study::Plan plan = study::make_plan(campaign, seed);
     study::write_campaign_folder(options.out_dir, campaign, plan, options.overwrite);
-    std::cout << "campaign " << campaign.name << ": " << campaign.participants.size() << " participants, "
-              << campaign.blocks.size() << " blocks, " << plan.rows.size() << " trials (seed " << seed << ") in "
-              << options.out_dir << " (plan.csv, campaign.toml, plan-id.txt)\n";
+    std::cout << "campaign " << campaign.name << ": " << campaign.participants.size()
+              << " participants, " << campaign.blocks.size() << " blocks, " << plan.rows.size()
+              << " trials (seed " << seed << ") in " << options.out_dir
+              << " (plan.csv, campaign.toml, plan-id.txt)\n";
     const std::string note = study::balance_note(campaign);
     if (!note.empty()) std::cout << note << "\n";
   }
   if (options.simulate > 0) {
     study::PowerOptions power;
     power.panels = options.simulate;
-    std::cout << "power: " << options.simulate << " simulated panels of " << campaign.participants.size()
+    std::cout << "power: " << options.simulate << " simulated panels of "
+              << campaign.participants.size()
               << " participants (docs/campaign.md; exact binomial / sign tests, alpha 0.05)\n";
     for (const study::PowerLine& line : study::simulate_power(campaign, seed, power)) {
       std::cout << "  " << line.text() << "\n";
@@ -117,7 +119,8 @@ std::unique_ptr<study::Respondent> make_respondent(const RunCommandOptions& opti
       return line;
     };
     const bool interactive = !file && ::isatty(STDIN_FILENO) == 1;
-    return std::make_unique<study::LineRespondent>(next, file ? options.answers_path : "stdin", interactive,
+    return std::make_unique<study::LineRespondent>(next, file ? options.answers_path : "stdin",
+                                                   interactive,
                                                    /*tunes_at_the_device=*/true);
   }
   if (!options.answers_path.empty()) throw UsageError("--answers is for --respondent person");
@@ -125,7 +128,8 @@ std::unique_ptr<study::Respondent> make_respondent(const RunCommandOptions& opti
   if (options.respondent == "sim") {
     // The participant's own: from the plan's seed and the participant's place in the campaign.
     const auto& ids = folder.campaign.participants;
-    const auto at = static_cast<std::uint64_t>(std::find(ids.begin(), ids.end(), options.participant) - ids.begin());
+    const auto at = static_cast<std::uint64_t>(
+        std::find(ids.begin(), ids.end(), options.participant) - ids.begin());
     seed = study::substream_seed(folder.identity.seed, at, 0, study::Purpose::kParticipantModel);
   } else if (options.respondent.rfind("sim:", 0) == 0 && options.respondent.size() > 4 &&
              options.respondent.find_first_not_of("0123456789", 4) == std::string::npos &&
@@ -141,25 +145,31 @@ void run_run(const RunCommandOptions& options) {
   // The spelling `--participant sim:SEED`: a participant is one of the plan's ids (its
   // schedule); who answers is --respondent (docs/campaign.md, "Running a participant").
   if (options.participant == "sim" || options.participant.rfind("sim:", 0) == 0) {
-    throw UsageError("--participant names a participant of the plan (such as P01), not " + options.participant +
-                     "; a simulated participant answers that participant's trials with --participant P01 --respondent " +
+    throw UsageError("--participant names a participant of the plan (such as P01), not " +
+                     options.participant +
+                     "; a simulated participant answers that participant's trials with "
+                     "--participant P01 --respondent " +
                      (options.participant == "sim" ? std::string("sim") : options.participant));
   }
-  if (const std::string problem = study::participant_id_problem(options.participant); !problem.empty()) {
+  if (const std::string problem = study::participant_id_problem(options.participant);
+      !problem.empty()) {
     throw UsageError(problem);
   }
   const study::CampaignFolder folder = study::open_campaign_folder(options.dir);
   const std::unique_ptr<study::Respondent> respondent = make_respondent(options, folder);
   const study::DevicePresenter presenter = make_presenter(options, folder.campaign);
-  std::cerr << "doorbench campaign run: participant " << options.participant << " on " << options.device << "\n";
+  std::cerr << "doorbench campaign run: participant " << options.participant << " on "
+            << options.device << "\n";
   study::RunOptions run;
   run.participant = options.participant;
   run.redo = options.redo;
   const study::RunResult result =
       study::run_participant(folder, run, *respondent, presenter.as_presenter(), std::cerr);
-  std::cout << "participant " << options.participant << ": " << result.answered_before + result.answered_now << " of "
-            << result.planned << " trials answered (attempt " << result.attempt << ", " << result.answered_now
-            << " in this run); answers in " << (std::filesystem::path(options.dir) / "trials.csv").string() << "\n";
+  std::cout << "participant " << options.participant << ": "
+            << result.answered_before + result.answered_now << " of " << result.planned
+            << " trials answered (attempt " << result.attempt << ", " << result.answered_now
+            << " in this run); answers in "
+            << (std::filesystem::path(options.dir) / "trials.csv").string() << "\n";
 }
 
 // The demo's campaign: campaigns/example.toml's variants and blocks, made short (2
@@ -235,51 +245,67 @@ void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
 CLI::App* add_campaign_command(CLI::App& app, Action& action) {
   CLI::App* campaign = app.add_subcommand(
       "campaign",
-      "A study across a panel: plan a campaign file into a folder (counterbalanced, seeded), run or resume a "
+      "A study across a panel: plan a campaign file into a folder (counterbalanced, seeded), run "
+      "or resume a "
       "participant blinded on the device, merge folders of one plan (docs/campaign.md).");
   campaign->require_subcommand(1);
 
   auto plan_options = std::make_shared<PlanCommandOptions>();
-  CLI::App* plan = campaign->add_subcommand("plan", "Write the whole plan of a campaign file into a folder");
+  CLI::App* plan =
+      campaign->add_subcommand("plan", "Write the whole plan of a campaign file into a folder");
   plan->add_option("campaign", plan_options->campaign_path, "The campaign file (TOML)")->required();
   plan->add_option("--out", plan_options->out_dir, "The campaign folder (created; must be empty)");
   plan->add_option("--seed", plan_options->seed, "The plan's seed (default: the campaign file's)");
   plan->add_option("--simulate", plan_options->simulate,
-                   "Run the plan with N simulated panels and print how often each question detects its effect")
+                   "Run the plan with N simulated panels and print how often each question detects "
+                   "its effect")
       ->check(number_range(1, 100000));
   plan->add_flag("--overwrite", plan_options->overwrite, "Write into a folder that is not empty");
   plan->callback([plan_options, &action] { action = [plan_options] { run_plan(*plan_options); }; });
 
   auto run_options = std::make_shared<RunCommandOptions>();
-  CLI::App* run = campaign->add_subcommand("run", "Run or resume one participant's trials, blinded");
+  CLI::App* run =
+      campaign->add_subcommand("run", "Run or resume one participant's trials, blinded");
   run->add_option("dir", run_options->dir, "The campaign folder (from campaign plan)")->required();
-  run->add_option("--participant", run_options->participant, "The participant's pseudonymous id, as in the plan")
+  run->add_option("--participant", run_options->participant,
+                  "The participant's pseudonymous id, as in the plan")
       ->required();
-  run->add_option("--device", run_options->device, "sim (simulated time) or hapticmaster://HOST[:PORT]")
+  run->add_option("--device", run_options->device,
+                  "sim (simulated time) or hapticmaster://HOST[:PORT]")
       ->capture_default_str();
   run->add_option("--respondent", run_options->respondent,
-                  "person (answers from stdin or --answers; a tune trial tuned with the keys), sim (a simulated participant seeded from the plan) "
+                  "person (answers from stdin or --answers; a tune trial tuned with the keys), sim "
+                  "(a simulated participant seeded from the plan) "
                   "or sim:SEED")
       ->capture_default_str();
-  run->add_option("--answers", run_options->answers_path, "A person's answers, one a line (a tune trial's line: the keys pressed; default: stdin)");
+  run->add_option(
+      "--answers", run_options->answers_path,
+      "A person's answers, one a line (a tune trial's line: the keys pressed; default: stdin)");
   run->add_flag("--real-time", run_options->real_time,
                 "Play a simulated device in real time, as a HapticMaster would be (presentations "
                 "of the campaign file's presentation_s), instead of simulated time");
   run->add_option("--presentation-s", run_options->presentation_s,
                   "Length of each presentation (default: the campaign file's)")
       ->check(number_range(0.001, 600.0));
-  run->add_flag("--redo", run_options->redo, "Run a finished participant again (earlier answers kept, marked)");
+  run->add_flag("--redo", run_options->redo,
+                "Run a finished participant again (earlier answers kept, marked)");
   run->callback([run_options, &action] { action = [run_options] { run_run(*run_options); }; });
 
   auto merge_options = std::make_shared<MergeCommandOptions>();
-  CLI::App* merge = campaign->add_subcommand("merge", "Join campaign folders of the same plan into one");
-  merge->add_option("dirs", merge_options->dirs, "Two or more campaign folders")->required()->expected(2, -1);
-  merge->add_option("--out", merge_options->out_dir, "The merged folder (created; must be empty)")->required();
+  CLI::App* merge =
+      campaign->add_subcommand("merge", "Join campaign folders of the same plan into one");
+  merge->add_option("dirs", merge_options->dirs, "Two or more campaign folders")
+      ->required()
+      ->expected(2, -1);
+  merge->add_option("--out", merge_options->out_dir, "The merged folder (created; must be empty)")
+      ->required();
   merge->callback([merge_options, &action] {
     action = [merge_options] {
-      std::vector<std::filesystem::path> dirs(merge_options->dirs.begin(), merge_options->dirs.end());
+      std::vector<std::filesystem::path> dirs(merge_options->dirs.begin(),
+                                              merge_options->dirs.end());
       study::merge_campaign_folders(dirs, merge_options->out_dir);
-      std::cout << "merged " << dirs.size() << " campaign folders into " << merge_options->out_dir << "\n";
+      std::cout << "merged " << dirs.size() << " campaign folders into " << merge_options->out_dir
+                << "\n";
     };
   });
   return campaign;

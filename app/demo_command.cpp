@@ -38,7 +38,6 @@ struct DemoOptions {
   std::string out_dir = "doorbench-demo";
 };
 
-
 // The samples of one stroke (1 opening, 2 closing) below an angle, as degrees and newtons.
 struct Curve {
   std::vector<double> angle_deg, force_N;

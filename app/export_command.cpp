@@ -66,7 +66,8 @@ void run_export(const ExportOptions& options) {
   std::cerr << "wrote " << csv_path << ": " << recording.size() << " rows";
   // A channel cut short (session_to_recording): the rows go on, its cells empty.
   for (const auto& [key, value] : recording.metadata) {
-    if (key == kCutShortKey) std::cerr << "; cells left empty where a channel ends early: " << value;
+    if (key == kCutShortKey)
+      std::cerr << "; cells left empty where a channel ends early: " << value;
   }
   std::cerr << "\n";
 }
@@ -83,10 +84,10 @@ void add_export_command(CLI::App& app, Action& action) {
       ->required();
   export_command->add_option("--csv", export_options->csv_path, "The CSV file to write")
       ->required();
-  export_command->add_flag("--overwrite", export_options->overwrite, "Replace an existing CSV file");
-  export_command->callback([export_options, &action] {
-    action = [export_options] { run_export(*export_options); };
-  });
+  export_command->add_flag("--overwrite", export_options->overwrite,
+                           "Replace an existing CSV file");
+  export_command->callback(
+      [export_options, &action] { action = [export_options] { run_export(*export_options); }; });
 }
 
 }  // namespace doorbench::app

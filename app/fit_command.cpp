@@ -61,17 +61,17 @@ std::string fit_size(PreparedData& data, const DoorModel& start, const FitOption
   };
   const std::size_t all = count_windows(data);
   const std::size_t strokes = data.strokes.size();
-  const std::string window_text =
-      "windows of " + format_number(fit.window_s) + " s";
+  const std::string window_text = "windows of " + format_number(fit.window_s) + " s";
   if (max_windows <= 0 || all <= static_cast<std::size_t>(max_windows) || strokes <= 2) {
     // Windows that span a recording gap are not in the count; say how many (listed above).
     const std::size_t across = split_windows_and_gaps(data, windows).across_gaps.size();
     return "the window fit: " + std::to_string(all) + " " + window_text + " on " +
            std::to_string(strokes) + " strokes" +
-           (across == 0 ? std::string()
-                        : std::string(" (").append(std::to_string(across))
-                              .append(across == 1
-                                          ? " window spans a recording gap and is left out)"
+           (across == 0
+                ? std::string()
+                : std::string(" (")
+                      .append(std::to_string(across))
+                      .append(across == 1 ? " window spans a recording gap and is left out)"
                                           : " windows span a recording gap and are left out)"));
   }
   // The most pairs of consecutive strokes (an opening and its closing, so that both
@@ -89,8 +89,8 @@ std::string fit_size(PreparedData& data, const DoorModel& start, const FitOption
     if (keep == 1 || count_windows(data) <= static_cast<std::size_t>(max_windows)) break;
   }
   const std::size_t kept_strokes = data.strokes.size();
-  return "the window fit: " + std::to_string(count_windows(data)) + " " + window_text +
-         " on " + std::to_string(kept_strokes) + " of the " + std::to_string(strokes) +
+  return "the window fit: " + std::to_string(count_windows(data)) + " " + window_text + " on " +
+         std::to_string(kept_strokes) + " of the " + std::to_string(strokes) +
          " strokes, spread evenly over the recording (all " + std::to_string(all) +
          " windows would exceed --max-windows " + std::to_string(max_windows) +
          (count_windows(data) > static_cast<std::size_t>(max_windows)
@@ -143,8 +143,8 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
       " of its " + std::to_string(count) + " parameters undetermined (" +
       joined(trial.undetermined) + "); fitting the " + std::to_string(trial.identifiable.size()) +
       " the data determine with the others held (from the Jacobian's singular vectors at its "
-      "optimum): " + joined(trial.identifiable) + "; held at their start values: " +
-      joined(held));
+      "optimum): " +
+      joined(trial.identifiable) + "; held at their start values: " + joined(held));
   fit.free_parameters = trial.identifiable;
   FitResult result = fit_model(start, data, fit);
   for (int round = 0;

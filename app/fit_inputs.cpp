@@ -132,7 +132,8 @@ void add_fit_data_options(CLI::App& command, FitDataOptions& options,
 std::vector<std::filesystem::path> fit_input_paths(const FitDataOptions& options) {
   std::vector<std::filesystem::path> inputs{options.data_path};
   if (!options.model.params_path.empty()) inputs.emplace_back(options.model.params_path);
-  if (options.model.effects_path.ends_with(".json")) inputs.emplace_back(options.model.effects_path);
+  if (options.model.effects_path.ends_with(".json"))
+    inputs.emplace_back(options.model.effects_path);
   return inputs;
 }
 

@@ -11,10 +11,7 @@
 #include "core/units.h"
 
 namespace doorbench::app {
-namespace {
-
-
-}  // namespace
+namespace {}  // namespace
 
 // Measured against simulated (window by window) rate and angle, the force–angle loops, and
 // the rate residual against angle and speed, and the residual's whiteness (when the data

@@ -28,8 +28,7 @@ struct CheckOptions {
 void run_check(const CheckOptions& options) {
   constexpr std::string_view kScheme = "hapticmaster://";
   if (options.uri.rfind(kScheme, 0) != 0 || options.uri.size() == kScheme.size()) {
-    throw UsageError("hapticmaster check: '" + options.uri +
-                     "' is not hapticmaster://HOST[:PORT]");
+    throw UsageError("hapticmaster check: '" + options.uri + "' is not hapticmaster://HOST[:PORT]");
   }
   // The output rule (acquisition/session/output_file.h): refused before the device is touched.
   if (!options.json_path.empty()) check_output_file(options.json_path, {}, options.overwrite);
@@ -56,7 +55,8 @@ void run_check(const CheckOptions& options) {
   const haptic::HapticMasterCheckReport report =
       haptic::run_hapticmaster_check(options.uri.substr(kScheme.size()), check);
   std::cout << report.text();
-  if (!options.json_path.empty()) write_text_file_atomically(options.json_path, report.json() + "\n");
+  if (!options.json_path.empty())
+    write_text_file_atomically(options.json_path, report.json() + "\n");
   if (!report.passed()) throw std::runtime_error("hapticmaster check: a check failed");
 }
 
@@ -75,8 +75,9 @@ void add_hapticmaster_command(CLI::App& app, Action& action) {
   check->add_option("--exchanges", options->exchanges, "Round trips to time")
       ->check(number_range(100, 1000000))
       ->capture_default_str();
-  check->add_option("--inertia-kg", options->inertia_kg,
-                    "The inertia rendered during the check (heavy: the arm barely moves)")
+  check
+      ->add_option("--inertia-kg", options->inertia_kg,
+                   "The inertia rendered during the check (heavy: the arm barely moves)")
       ->check(number_range(2.0, 100.0))
       ->capture_default_str();
   check->add_flag("--yes", options->yes,

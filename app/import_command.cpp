@@ -20,8 +20,8 @@
 #include "acquisition/record/recovery.h"
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/rig/rig_file.h"
-#include "acquisition/session/output_file.h"
 #include "acquisition/session/import_units.h"
+#include "acquisition/session/output_file.h"
 #include "acquisition/session/printable.h"
 #include "acquisition/session/resample.h"
 #include "acquisition/session/session_csv.h"
@@ -45,8 +45,8 @@ struct ImportOptions {
   std::string csv_path;
   std::string out_path;
   std::string operator_name, product_id, notes;
-  std::string tdms_map;  // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h)
-  bool keep_raw = false;  // TDMS files: the DAQmx scalers' raw values beside the scaled ones
+  std::string tdms_map;      // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h)
+  bool keep_raw = false;     // TDMS files: the DAQmx scalers' raw values beside the scaled ones
   double resample_hz = 0.0;  // > 0: the recording on a uniform clock of this rate
   double rate_hz = 0.0;      // TDMS files: > 0, the rate of channels without wf_increment
   std::string start_time;    // the session's start (ISO 8601 UTC); "": the file's, else now
@@ -61,13 +61,13 @@ constexpr std::string_view kResampledKey = "import_resampled";
 // One column at the times `at` (--resample-hz at rate_hz). Slower than the recording
 // (rate_hz below 1 / its median interval): each new sample is the mean of the recorded ones
 // nearest to its time, those within half a new interval, [t − 0.5/rate_hz, t + 0.5/rate_hz) (a
-// boxcar against aliasing), missing (NaN) when none is there or one of them is missing. Otherwise linear
-// interpolation between the two samples around it, missing across a gap of more than
+// boxcar against aliasing), missing (NaN) when none is there or one of them is missing. Otherwise
+// linear interpolation between the two samples around it, missing across a gap of more than
 // kGapIntervals median intervals (acquisition/session/resample.h).
 std::vector<double> resample_column(const std::vector<double>& time_s,
                                     const std::vector<double>& values,
-                                    const std::vector<double>& at, double rate_hz,
-                                    double median_s, const std::string& what) {
+                                    const std::vector<double>& at, double rate_hz, double median_s,
+                                    const std::string& what) {
   if (rate_hz * median_s >= 1.0) {
     return resample_linear(time_s, values, at, kGapIntervals * median_s, what);
   }
@@ -179,8 +179,8 @@ Recording read_import(const ImportOptions& options) {
   try {
     map = parse_tdms_map(options.tdms_map);
   } catch (const std::invalid_argument& error) {
-    throw UsageError(std::string(error.what()) + "; the file's channels: " +
-                     tdms_channel_list(file));
+    throw UsageError(std::string(error.what()) +
+                     "; the file's channels: " + tdms_channel_list(file));
   }
   TdmsImportOptions tdms_options;
   tdms_options.keep_raw = options.keep_raw;
@@ -221,15 +221,16 @@ void run_import(const ImportOptions& options) {
   }
   if (!how.empty()) metadata.notes += "; resampled " + how;
   for (const auto& [column, record] : recording.calibrations) {
-    metadata.notes += "; " + column + " through " + record.id + " (" + record.input_unit +
-                      " to " + record.unit + ", " + record.method + ")";
+    metadata.notes += "; " + column + " through " + record.id + " (" + record.input_unit + " to " +
+                      record.unit + ", " + record.method + ")";
   }
   recording_to_session(recording, options.out_path, metadata);
   std::cerr << "wrote " << options.out_path << ": " << recording.size() << " samples"
             << (how.empty() ? "" : ", resampled " + how) << "\n";
   for (const auto& [column, record] : recording.calibrations) {
-    std::cerr << "  " << column << ": raw " << printable(record.input_unit) << " kept, physical through "
-              << printable(record.id) << " (" << printable(record.method) << ")\n";
+    std::cerr << "  " << column << ": raw " << printable(record.input_unit)
+              << " kept, physical through " << printable(record.id) << " ("
+              << printable(record.method) << ")\n";
   }
 }
 
@@ -271,16 +272,18 @@ void add_import_command(CLI::App& app, Action& action) {
                    "(2024-05-02T09:30:00Z); default: the file's (wf_start_time, "
                    "start_time_utc), else now")
       ->check(CLI::Validator(iso8601_utc_problem, "TIME"));
-  import_command->add_option(
-      "--scale", import->scales,
-      "A target's channel is a raw signal: physical = GAIN * raw + OFFSET, e.g. "
-      "force=98.1,-0.5 (raw values kept; the session names the scale); repeat per target")
+  import_command
+      ->add_option(
+          "--scale", import->scales,
+          "A target's channel is a raw signal: physical = GAIN * raw + OFFSET, e.g. "
+          "force=98.1,-0.5 (raw values kept; the session names the scale); repeat per target")
       ->allow_extra_args(false);
-  import_command->add_option(
-      "--calibration", import->calibrations,
-      "A target's channel is a raw signal that a calibration record makes physical: "
-      "TARGET=ID (in the store) or TARGET=FILE.json, e.g. force=load_cell-LC1-v2 (raw values "
-      "and the record kept); repeat per target")
+  import_command
+      ->add_option(
+          "--calibration", import->calibrations,
+          "A target's channel is a raw signal that a calibration record makes physical: "
+          "TARGET=ID (in the store) or TARGET=FILE.json, e.g. force=load_cell-LC1-v2 (raw values "
+          "and the record kept); repeat per target")
       ->allow_extra_args(false);
   import_command->add_option("--calibrations", import->store_dir,
                              "The calibration store of --calibration's ids (default: "

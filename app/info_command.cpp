@@ -68,7 +68,8 @@ void print_geometry(const SessionReader& session) {
 void print_range_warnings(const SessionReader& session) {
   try {
     const std::vector<std::string> warnings = calibration::range_warnings(session);
-    for (const std::string& warning : warnings) std::cout << "warning: " << printable(warning) << "\n";
+    for (const std::string& warning : warnings)
+      std::cout << "warning: " << printable(warning) << "\n";
   } catch (const std::exception& error) {
     std::cout << "warning: ranges not checked: " << error.what() << "\n";
   }

@@ -6,7 +6,6 @@
 
 #include "core/number_format.h"
 
-
 namespace doorbench::app {
 
 namespace {
@@ -46,7 +45,8 @@ void LimitWatcher::update(const RecordStatus& status) {
 void LimitWatcher::measure(const SessionReader& session) {
   for (Watched& w : watched_) {
     bool recorded = false;
-    for (const ChannelInfo& channel : session.channels()) recorded |= channel.name == w.limit.channel;
+    for (const ChannelInfo& channel : session.channels())
+      recorded |= channel.name == w.limit.channel;
     if (!recorded) continue;
     const ChannelSlice slice = session.read(w.limit.channel);
     const std::vector<double> values = session.physical(w.limit.channel, slice);

@@ -73,9 +73,9 @@ void run_loop(const LoopCommandOptions& options) {
   if (result.interrupted) {
     report_lines.insert(report_lines.begin(), interrupted_line(result, signal_number));
   }
-  const std::string table = write_loop_outputs(options.out_dir, result, inputs.data,
-                                               options.input.model.model, loop_options.fit,
-                                               report_lines);
+  const std::string table =
+      write_loop_outputs(options.out_dir, result, inputs.data, options.input.model.model,
+                         loop_options.fit, report_lines);
   std::cout << result.brief_report() << "\n"
             << table << "\nresult.json, report.md, the fitted "
             << "parameter and effects files and plots are in " << options.out_dir << "/\n";

@@ -57,12 +57,12 @@ std::string steps_table(const LoopResult& result) {
                     p.name.c_str(), p.value, p.uncertainty, p.unit.c_str());
       parameters += text;
     }
-    std::snprintf(row, sizeof row, "| %d | %s%s | %s | %.4g → %.4g | %.4g → %.4g |\n", step.number,
-                  step.effect_name.c_str(),
-                  check.switched ? (" (" + std::string(to_string(step.model_kind)) + ")").c_str()
-                                 : "",
-                  parameters.c_str(), step.before.fitted_rmse_rad_s, step.after.fitted_rmse_rad_s,
-                  step.before.held_out_rmse_rad_s, step.after.held_out_rmse_rad_s);
+    std::snprintf(
+        row, sizeof row, "| %d | %s%s | %s | %.4g → %.4g | %.4g → %.4g |\n", step.number,
+        step.effect_name.c_str(),
+        check.switched ? (" (" + std::string(to_string(step.model_kind)) + ")").c_str() : "",
+        parameters.c_str(), step.before.fitted_rmse_rad_s, step.after.fitted_rmse_rad_s,
+        step.before.held_out_rmse_rad_s, step.after.held_out_rmse_rad_s);
     table += row;
   }
   if (check_row && !(check.switched && check.after_steps < static_cast<int>(result.steps.size()))) {

@@ -189,8 +189,7 @@ int main(int argc, char** argv) {
   } catch (const doorbench::app::UsageError& error) {
     quiet_stderr.restore();
     std::cerr << "doorbench: " << doorbench::printable(doorbench::shortened(error.what()))
-              << help_hint(app, argc, argv)
-              << "\n";
+              << help_hint(app, argc, argv) << "\n";
     return 2;
   } catch (const doorbench::app::Interrupted& error) {  // its marked result is written
     quiet_stderr.restore();

@@ -24,7 +24,7 @@ constexpr NamedRange kRanges[] = {
     {"spec", "--samples", 2, 1e6},  // the Monte Carlo's samples (tolerance_analysis: >= 2)
     {"spec", "--threads", 0, 1024},
     {"spec", "--lambda", 0, 1e9},
-    {"spec", "--starts", 1, 32},  // InverseDesignOptions::validate()
+    {"spec", "--starts", 1, 32},             // InverseDesignOptions::validate()
     {"ab", "--presentation-s", 0.01, 3600},  // AbOptions::validate(): > 0, at most an hour
     {"view", "--width", 200, 16384},         // WindowOptions::validate()
     {"view", "--height", 150, 16384},
@@ -108,7 +108,8 @@ std::string number_problem(const std::string& text, NumberKind kind) {
   char* end = nullptr;
   errno = 0;
   const double value = std::strtod(begin, &end);
-  const bool whole = end != begin && *end == '\0' && !std::isspace(static_cast<unsigned char>(text[0]));
+  const bool whole =
+      end != begin && *end == '\0' && !std::isspace(static_cast<unsigned char>(text[0]));
   if (!whole) return "'" + shown(text) + "' is not a number";
   if (!std::isfinite(value)) return shown(text) + " is not a finite number";
   if (kind == NumberKind::kUint && text.find('-') != std::string::npos) {
@@ -129,7 +130,9 @@ std::string number_problem(const std::string& text, NumberKind kind) {
   return "";
 }
 
-void check_numeric_options(CLI::App& app) { check_recursively(app); }
+void check_numeric_options(CLI::App& app) {
+  check_recursively(app);
+}
 
 namespace {
 

@@ -159,9 +159,7 @@ void run_play(const PlayOptions& options) {
   request.playback.loop.safety.max_tick_interval_s = 1e-3 * options.max_tick_interval_ms;
   request.playback.loop.safety.max_tick_stall_s = 1e-3 * options.max_tick_stall_ms;
   request.device.hapticmaster.command_watchdog_s = 1e-3 * options.max_tick_stall_ms;
-  request.device.hapticmaster.progress = [](const std::string& line) {
-    std::cerr << line << "\n";
-  };
+  request.device.hapticmaster.progress = [](const std::string& line) { std::cerr << line << "\n"; };
   request.session_path = options.out;
   request.model_source =
       options.model.params_path.empty() ? "reference door" : options.model.params_path;

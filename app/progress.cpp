@@ -13,7 +13,6 @@
 
 #include "core/number_format.h"
 
-
 namespace doorbench::app {
 
 std::string format_duration(double seconds) {
@@ -209,8 +208,8 @@ std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status)
 }
 
 std::function<void(int done, int total)> count_progress_display(StatusLine& status,
-                                                                 std::string what,
-                                                                 std::string unit) {
+                                                                std::string what,
+                                                                std::string unit) {
   auto clock = std::make_shared<StageClock>(status);
   return [clock, what = std::move(what), unit = std::move(unit)](int done, int total) {
     clock->report(done == 0, [&](double elapsed_s) {

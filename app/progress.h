@@ -110,8 +110,7 @@ std::function<void(const FitProgress&)> fit_progress_display(StatusLine& status)
 // timed from the last report with done == 0 (which begins a stage). `status` must outlive it.
 // For MonteCarloOptions::progress (spec's "tolerance Monte Carlo", "samples").
 std::function<void(int done, int total)> count_progress_display(StatusLine& status,
-                                                                 std::string what,
-                                                                 std::string unit);
+                                                                std::string what, std::string unit);
 
 // LoopOptions::step_progress drawing loop_progress_text on `status`, the steps timed from the
 // first report. `status` must outlive the loop.

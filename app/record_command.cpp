@@ -64,7 +64,6 @@ void recover_unfinished_sessions(const std::filesystem::path& folder) {
   }
 }
 
-
 void run_record(const RecordCommandOptions& options) {
   const RigDefinition rig = load_rig(options.rig_path);
   const std::filesystem::path out(options.out_path);

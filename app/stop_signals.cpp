@@ -39,7 +39,9 @@ StopSignals::~StopSignals() {
   g_installed.store(false);
 }
 
-int StopSignals::received() const { return g_received.load(); }
+int StopSignals::received() const {
+  return g_received.load();
+}
 
 std::string signal_name(int signal_number) {
   if (signal_number == SIGINT) return "SIGINT";

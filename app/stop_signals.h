@@ -19,7 +19,7 @@ namespace doorbench::app {
 
 class StopSignals {
  public:
-  StopSignals();  // installs the handlers; throws std::logic_error if one is already installed
+  StopSignals();   // installs the handlers; throws std::logic_error if one is already installed
   ~StopSignals();  // restores the handlers it replaced
   StopSignals(const StopSignals&) = delete;
   StopSignals& operator=(const StopSignals&) = delete;

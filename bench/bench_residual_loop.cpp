@@ -10,7 +10,6 @@
 // whole process (every thread: the refits', the folds' and Ceres' own), user + system.
 // Each iteration is a whole loop (seconds to a minute): run with --benchmark_min_time=0.
 #include <benchmark/benchmark.h>
-
 #include <sys/resource.h>
 
 #include <filesystem>
@@ -32,7 +31,8 @@ const PreparedData& demo_recording() {
         std::filesystem::temp_directory_path() / "doorbench_bench_residual_loop";
     std::filesystem::create_directories(dir);
     const auto effects_path = dir / "undeclared.json";
-    std::ofstream(effects_path) << R"({"gravity_imbalance": {"g1": 3.0}})" << "\n";
+    std::ofstream(effects_path) << R"({"gravity_imbalance": {"g1": 3.0}})"
+                                << "\n";
     const auto session_path = dir / "demo.h5";
     std::filesystem::remove(session_path);
     testing::record_built_in_session(session_path, 19.0, 1, "sensory", effects_path);

@@ -29,7 +29,6 @@ constexpr std::size_t kTotalBytes = 64u << 20;
 constexpr std::size_t kBlocksPerChannel = kTotalBytes / (kChannels * kBlock * sizeof(std::int32_t));
 constexpr double kBytes = double(kBlocksPerChannel) * kChannels * kBlock * sizeof(std::int32_t);
 
-
 void session_vs_fwrite(benchmark::State& state) {
   const fs::path folder =
       fs::temp_directory_path() / ("doorbench_bench_session_" + std::to_string(::getpid()));

@@ -11,8 +11,8 @@
 namespace doorbench::calibration {
 
 std::string certificate_html(const CalibrationRecord& record);
-// Writes the certificate whole or not at all (acquisition/session/output_file.h); throws OutputError
-// "PATH: cannot write: SYSTEM ERROR". The commands refuse an existing file first.
+// Writes the certificate whole or not at all (acquisition/session/output_file.h); throws
+// OutputError "PATH: cannot write: SYSTEM ERROR". The commands refuse an existing file first.
 void write_certificate(const std::filesystem::path& path, const CalibrationRecord& record);
 
 }  // namespace doorbench::calibration

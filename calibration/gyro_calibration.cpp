@@ -13,8 +13,7 @@
 
 namespace doorbench::calibration {
 
-namespace {
-}
+namespace {}
 
 std::string StillnessOptions::validate() const {
   auto positive = [](double v) { return v > 0 && std::isfinite(v); };
@@ -247,9 +246,9 @@ InclinometerOnGyro read_inclinometer_on_gyro(const SessionReader& session,
   InclinometerOnGyro in;
   if (inclinometer_name.empty()) return in;
   in.signal = read_channel_signal(session, inclinometer_name);
-  in.in_range = inclinometer_in_range(session, inclinometer_name, in.signal.signal,
-                                      options.inclinometer_range_deg,
-                                      options.inclinometer_margin_deg);
+  in.in_range =
+      inclinometer_in_range(session, inclinometer_name, in.signal.signal,
+                            options.inclinometer_range_deg, options.inclinometer_margin_deg);
   std::vector<double> masked(in.signal.physical.size());
   for (std::size_t j = 0; j < masked.size(); ++j) {
     masked[j] = in.in_range[j] ? in.signal.physical[j] * kDegPerRad : NAN;
@@ -339,8 +338,8 @@ void estimate_bias(const std::string& where, bool has_inclinometer,
 // The scale's gain against the inclinometer (1 when not estimated, with a warning saying
 // why), the rate taken through the current record with the bias removed (rad/s).
 double estimate_scale(const ChannelSignal& gyro, const std::vector<bool>& valid,
-                      const InclinometerOnGyro& inclinometer, bool has_inclinometer,
-                      bool wanted, GyroCalibration& r) {
+                      const InclinometerOnGyro& inclinometer, bool has_inclinometer, bool wanted,
+                      GyroCalibration& r) {
   const double bias_rad_s = r.bias_dps / kDegPerRad;
   double gain = 1.0;
   if (wanted && has_inclinometer) {
@@ -367,9 +366,9 @@ double estimate_scale(const ChannelSignal& gyro, const std::vector<bool>& valid,
 // The new record: gain · (previous − bias), with its uncertainty, method, references,
 // validity, quantities, notes and header.
 void write_gyro_record(const SessionReader& session, const GyroInput& in,
-                       const std::string& inclinometer_name,
-                       const InclinometerOnGyro& inclinometer, double range_dps, double gain,
-                       const RecordHeader& header, GyroCalibration& r) {
+                       const std::string& inclinometer_name, const InclinometerOnGyro& inclinometer,
+                       double range_dps, double gain, const RecordHeader& header,
+                       GyroCalibration& r) {
   const ChannelSignal& gyro = in.signal;
   const double bias_rad_s = r.bias_dps / kDegPerRad;
   CalibrationRecord& record = r.record;
@@ -454,8 +453,8 @@ GyroCalibration calibrate_gyroscope(const SessionReader& session, const std::str
                                        options.stillness, &r.noise_dps);
   choose_bias_periods(in.signal, valid, has_inclinometer, options.stillness, r.still_periods);
   estimate_bias(where, has_inclinometer, options.stillness, r);
-  const double gain = estimate_scale(in.signal, valid, inclinometer, has_inclinometer,
-                                     options.estimate_scale, r);
+  const double gain =
+      estimate_scale(in.signal, valid, inclinometer, has_inclinometer, options.estimate_scale, r);
   write_gyro_record(session, in, inclinometer_name, inclinometer, range_dps, gain, header, r);
   return r;
 }

@@ -13,8 +13,7 @@
 
 namespace doorbench::calibration {
 
-namespace {
-}
+namespace {}
 
 std::string InclinometerCalibrationOptions::validate() const {
   if (!(range_deg > 0))

@@ -14,7 +14,6 @@ namespace doorbench::calibration {
 
 namespace {
 
-
 // "left its ±100 °/s range 3 times for 1.234 s in all (first at 0.980 s)", or "" when no
 // sample is out.
 std::string excursions(const std::vector<double>& time_s, const std::vector<bool>& out,

@@ -12,8 +12,7 @@
 
 namespace doorbench::calibration {
 
-namespace {
-}
+namespace {}
 
 std::string AlignmentOptions::validate() const {
   if (!(max_delay_s > 0))
@@ -303,8 +302,8 @@ Alignment align_inclinometer_with_gyro(const std::vector<double>& inclinometer_t
   const double dof = static_cast<double>(fit.count) - static_cast<double>(parameters);
   result.residual_std_rad = std::sqrt(std::max(fit.sse, 0.0) / dof);
   // Least-squares standard deviations (white residuals)…
-  const double rate_ss = rate_sum_of_squares(segments, inclinometer_time_s, gyro_time_s,
-                                             gyro_rad_s, result.delay_s);
+  const double rate_ss =
+      rate_sum_of_squares(segments, inclinometer_time_s, gyro_time_s, gyro_rad_s, result.delay_s);
   const double delay_ls = result.residual_std_rad / (std::abs(fit.gain) * std::sqrt(rate_ss));
   const double gain_ls = result.residual_std_rad / std::sqrt(fit.sxx);
   // …and the jackknife over segments, which also sees how the lag differs between

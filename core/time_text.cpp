@@ -3,8 +3,7 @@
 namespace doorbench {
 
 std::string iso8601_utc_problem(const std::string& text) {
-  const std::string form =
-      " is not an ISO 8601 date (YYYY-MM-DD, or YYYY-MM-DDTHH:MM:SSZ in UTC)";
+  const std::string form = " is not an ISO 8601 date (YYYY-MM-DD, or YYYY-MM-DDTHH:MM:SSZ in UTC)";
   const auto digits = [&](std::size_t at, std::size_t count) {
     if (at + count > text.size()) return -1;
     int value = 0;
@@ -29,8 +28,8 @@ std::string iso8601_utc_problem(const std::string& text) {
       }
     }
     // hour and minute >= 0: the text reaches index 15, so [10] and [13] are in it.
-    if (hour < 0 || minute < 0 || text[10] != 'T' || text[13] != ':' || hour > 23 ||
-        minute > 59 || second < 0 || second > 59 || end + 1 != text.size() || text[end] != 'Z') {
+    if (hour < 0 || minute < 0 || text[10] != 'T' || text[13] != ':' || hour > 23 || minute > 59 ||
+        second < 0 || second > 59 || end + 1 != text.size() || text[end] != 'Z') {
       return text + form;
     }
   }

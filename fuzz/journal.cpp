@@ -5,18 +5,19 @@
 // layout in docs/session-format.md), so that mutations reach the header's JSON and the
 // frames' contents instead of stopping at a checksum. Each is written to a file of the
 // process's own, read frame by frame, then recovered.
+#include "acquisition/record/journal.h"
+
 #include <unistd.h>
 
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
-#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <system_error>
+#include <vector>
 
-#include "acquisition/record/journal.h"
 #include "acquisition/record/recovery.h"
 
 namespace {

@@ -129,7 +129,8 @@ Vec3 DoorMapping::to_device(double door_torque_Nm, const DeviceSample& sample) c
   return door_torque_Nm / handle_radius_m_ * tangent_at(point.theta_rad) + constraint_force(sample);
 }
 
-Vec3 DoorMapping::torque_to_device(double door_torque_Nm, const DeviceSample& sample) const noexcept {
+Vec3 DoorMapping::torque_to_device(double door_torque_Nm,
+                                   const DeviceSample& sample) const noexcept {
   if (kinematics_ == Kinematics::kRotary1) return Vec3(door_torque_Nm, 0.0, 0.0);
   return door_torque_Nm / handle_radius_m_ * tangent_at(to_door(sample).theta_rad);
 }

@@ -54,8 +54,7 @@ std::string HapticMasterCheckOptions::validate() const {
   return driver.validate();
 }
 
-double stiffness_limit_for_delay(double inertia_kg, double delay_s,
-                                 double damping_ratio) noexcept {
+double stiffness_limit_for_delay(double inertia_kg, double delay_s, double damping_ratio) noexcept {
   if (!(delay_s > 0.0)) return 0.0;
   return 4.0 * damping_ratio * damping_ratio * inertia_kg / (delay_s * delay_s);
 }
@@ -71,9 +70,9 @@ std::string HapticMasterCheckReport::text() const {
   std::size_t width = 0;
   for (const HapticMasterCheckItem& item : items) width = std::max(width, item.name.size());
   for (const HapticMasterCheckItem& item : items) {
-    out << "  " << item.name << std::string(width - item.name.size(), ' ') << "  "
-        << item.status << std::string(8 - std::min<std::size_t>(7, item.status.size()), ' ')
-        << item.detail << "\n";
+    out << "  " << item.name << std::string(width - item.name.size(), ' ') << "  " << item.status
+        << std::string(8 - std::min<std::size_t>(7, item.status.size()), ' ') << item.detail
+        << "\n";
   }
   out << (passed() ? "result: passed" : "result: FAILED") << "\n";
   return out.str();
@@ -101,9 +100,12 @@ std::string HapticMasterCheckReport::json() const {
   j["workspace_box_m"] = {
       {"min", {limits.workspace_min.x(), limits.workspace_min.y(), limits.workspace_min.z()}},
       {"max", {limits.workspace_max.x(), limits.workspace_max.y(), limits.workspace_max.z()}}};
-  j["round_trip"] = {{"count", round_trips},     {"p50_ms", rtt_p50_ms},
-                     {"p99_ms", rtt_p99_ms},     {"max_ms", rtt_max_ms},
-                     {"mean_ms", rtt_mean_ms},   {"loop_period_ms", loop_period_ms},
+  j["round_trip"] = {{"count", round_trips},
+                     {"p50_ms", rtt_p50_ms},
+                     {"p99_ms", rtt_p99_ms},
+                     {"max_ms", rtt_max_ms},
+                     {"mean_ms", rtt_mean_ms},
+                     {"loop_period_ms", loop_period_ms},
                      {"effective_delay_ms", effective_delay_ms}};
   j["stiffness_limit_N_per_m"] = stiffness_limit_N_per_m;
   j["disconnect"] = {{"tested", disconnect_tested},
@@ -182,8 +184,8 @@ void summarise_round_trips(const std::vector<double>& rtt_s, bool complete,
   std::ostringstream limit;
   limit.precision(3);
   limit << report.stiffness_limit_N_per_m << " N/m at " << options.inertia_kg << " kg with "
-        << report.effective_delay_ms
-        << " ms delay (half a period + p99 round trip, damping ratio " << options.damping_ratio
+        << report.effective_delay_ms << " ms delay (half a period + p99 round trip, damping ratio "
+        << options.damping_ratio
         << "); a door's stiffest slope played from the host must stay below it";
   add(report, "host-loop stiffness limit", "pass", limit.str());
 }

@@ -26,11 +26,11 @@
 namespace doorbench::haptic {
 
 struct HapticMasterCheckOptions {
-  int exchanges = 3000;          // round trips timed
-  double inertia_kg = 10.0;      // rendered during the check (heavy: the arm barely moves)
-  double test_force_N = 2.0;     // the disconnect test's bias force
+  int exchanges = 3000;       // round trips timed
+  double inertia_kg = 10.0;   // rendered during the check (heavy: the arm barely moves)
+  double test_force_N = 2.0;  // the disconnect test's bias force
   double damping_ratio = kMaxRequiredDampingRatio;  // for the stiffness limit
-  HapticMasterOptions driver;    // timeouts, rate, progress lines
+  HapticMasterOptions driver;                       // timeouts, rate, progress lines
   // Asked before the disconnect test with a sentence saying what will happen; true = go on.
   // Unset: the test is skipped.
   std::function<bool(const std::string&)> confirm;
@@ -49,8 +49,8 @@ struct HapticMasterCheckReport {
   DeviceLimits limits;  // as read from the device
   int round_trips = 0;
   double rtt_p50_ms = 0.0, rtt_p99_ms = 0.0, rtt_max_ms = 0.0, rtt_mean_ms = 0.0;
-  double loop_period_ms = 0.0;         // the driver's I/O period
-  double effective_delay_ms = 0.0;     // half a period (hold) + the p99 round trip
+  double loop_period_ms = 0.0;           // the driver's I/O period
+  double effective_delay_ms = 0.0;       // half a period (hold) + the p99 round trip
   double stiffness_limit_N_per_m = 0.0;  // at inertia_kg, for the host-side loop
   bool disconnect_tested = false;
   double force_after_disconnect_N = 0.0;  // what the device still applied, if tested

@@ -73,11 +73,11 @@ Connection::Connection(const std::string& host, int port, double timeout_s) {
   ::setsockopt(fd_, IPPROTO_TCP, TCP_NODELAY, &one, sizeof one);
 }
 Connection::~Connection() {
-::close(fd_);
+  ::close(fd_);
 }
 
 std::vector<std::string> Connection::round_trip(const std::vector<std::string>& commands,
-                                           double timeout_s, bool joined) {
+                                                double timeout_s, bool joined) {
   const auto deadline = after(timeout_s);
   const std::string bytes = request(commands, joined);
   std::size_t sent = 0;

@@ -41,7 +41,6 @@ const std::vector<std::string> kReadings = {"get measpos", "get modelvel", "get 
 
 }  // namespace
 
-
 std::string HapticMasterOptions::validate() const {
   if (!(connect_timeout_s > 0) || !std::isfinite(connect_timeout_s)) {
     return "connect_timeout_s must be > 0";
@@ -274,8 +273,8 @@ std::string HapticMasterDevice::emergency_stop(bool connection_intact) noexcept 
   connection_intact_ = false;
   try {
     hm::Connection fresh(host_, port_, options_.emergency_timeout_s);
-    if (stopped_by(fresh.round_trip(commands, options_.emergency_timeout_s,
-                                    options_.join_commands))) {
+    if (stopped_by(
+            fresh.round_trip(commands, options_.emergency_timeout_s, options_.join_commands))) {
       device_stopped_.store(true);
       return "";
     }
@@ -290,10 +289,9 @@ std::string HapticMasterDevice::emergency_stop(bool connection_intact) noexcept 
 void HapticMasterDevice::lose_link(const std::string& reason, bool connection_intact,
                                    DeviceSample sample) noexcept {
   const std::string unreached = emergency_stop(connection_intact);
-  fail(reason + (unreached.empty()
-                     ? "; the device was stopped (zero force, state stop)"
-                     : "; the emergency stop did not reach the device (" + unreached +
-                           "): it may still apply its last force"));
+  fail(reason + (unreached.empty() ? "; the device was stopped (zero force, state stop)"
+                                   : "; the emergency stop did not reach the device (" + unreached +
+                                         "): it may still apply its last force"));
   sample.link_ok = false;
   samples_.back() = sample;
   samples_.publish();
@@ -365,8 +363,8 @@ void HapticMasterDevice::io_loop(double sent_inertia, DeviceSample sample) {
     const bool new_inertia = command.inertia != sent_inertia;
     if (new_inertia) commands.push_back("set inertia " + hm::format_device_number(command.inertia));
     if (arc_) {  // the radial spring follows the door (a milliradian moves it)
-      const double theta = std::clamp(arc_->to_door(sample).theta_rad,
-                                      stop_theta_min_rad_ - 0.05, stop_theta_max_rad_ + 0.05);
+      const double theta = std::clamp(arc_->to_door(sample).theta_rad, stop_theta_min_rad_ - 0.05,
+                                      stop_theta_max_rad_ + 0.05);
       if (std::abs(theta - radial_theta) > 1e-3) {
         for (std::string& move : radial_spring_at(theta)) commands.push_back(std::move(move));
         radial_theta = theta;

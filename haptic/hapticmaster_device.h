@@ -71,19 +71,19 @@ struct HapticMasterOptions {
   double end_stop_stiffness_N_per_m = 10000;  // the walls at the ends of the door's range
   double end_stop_damping_ratio = 0.7;        // their dampfactor (fraction of critical)
   double element_max_force_N = 60.0;          // each element's maxforce
-  std::string validate() const;  // "" or one line naming the option
+  std::string validate() const;               // "" or one line naming the option
 };
 
 // What start() found and did, for the bring-up check and the session's notes.
 struct HapticMasterStartup {
-  std::string initial_state;       // the reply to "get state", without quotes
-  bool emergency_button = false;        // "get emergencybuttonpushed": true = pushed
-  bool emergency_relay_closed = true;   // "get emergencyrelay": false = not started
+  std::string initial_state;               // the reply to "get state", without quotes
+  bool emergency_button = false;           // "get emergencybuttonpushed": true = pushed
+  bool emergency_relay_closed = true;      // "get emergencyrelay": false = not started
   bool emergency_signals_reported = true;  // false: the device answered them with errors
-  bool was_calibrated = true;      // "get position_calibrated" before homing
-  double homing_s = 0.0;           // how long homing took (0 when not needed)
-  std::string workspace_source;    // "device" (read back) or why the assumed box is used
-  double base_axis_offset_m = 0.0;  // the base axis behind the origin (workspace_r's middle)
+  bool was_calibrated = true;              // "get position_calibrated" before homing
+  double homing_s = 0.0;                   // how long homing took (0 when not needed)
+  std::string workspace_source;            // "device" (read back) or why the assumed box is used
+  double base_axis_offset_m = 0.0;         // the base axis behind the origin (workspace_r's middle)
   Vec3 workspace_r_phi_z_min = Vec3::Zero();  // as read: r (m), φ (rad), z (m)
   Vec3 workspace_r_phi_z_max = Vec3::Zero();
   double inertia_read_back_kg = 0.0;  // "get inertia" after "set inertia"

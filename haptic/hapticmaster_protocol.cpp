@@ -171,8 +171,8 @@ bool agrees_at_reply_precision(double sent, std::string_view reply) {
   const std::optional<double> value = parse_number(reply);
   const std::optional<double> step = last_digit_step(reply);
   if (!value || !step || !std::isfinite(sent)) return false;
-  const double rounding = 8.0 * std::numeric_limits<double>::epsilon() *
-                          std::max(std::abs(sent), std::abs(*value));
+  const double rounding =
+      8.0 * std::numeric_limits<double>::epsilon() * std::max(std::abs(sent), std::abs(*value));
   return std::abs(*value - sent) <= 0.5 * *step + 0.5e-6 + rounding;
 }
 

@@ -61,10 +61,10 @@ struct PlaybackSummary {
   // stop that did not reach the device. "" when it ended as asked (its duration played, or the
   // caller stopped it). The session's "stop" event says the same.
   std::string stop_cause;
-  std::optional<TimingReport> timing;      // real time only
-  std::optional<StartupTiming> startup;    // real time only
-  std::string warning;                     // e.g. no SCHED_FIFO
-  bool constraint_on_device = false;       // the device held the arc with its own elements
+  std::optional<TimingReport> timing;    // real time only
+  std::optional<StartupTiming> startup;  // real time only
+  std::string warning;                   // e.g. no SCHED_FIFO
+  bool constraint_on_device = false;     // the device held the arc with its own elements
   std::string brief_report() const;
 };
 

@@ -44,7 +44,7 @@ struct RenderLoopOptions {
   // The device holds the end-effector on the arc with its own elements
   // (HapticDevice::render_stiff_parts_on_device): the tick sends only the door's torque.
   bool constraint_on_device = false;
-  std::string validate() const;           // empty when usable, else one line naming the option
+  std::string validate() const;  // empty when usable, else one line naming the option
 };
 
 // Everything one tick did, for the session.

@@ -94,7 +94,7 @@ ChannelInfo value_channel(const std::string& name, const std::string& kind,
   info.raw_type = RawType::kValues;
   info.raw_unit = unit;
   info.unit = unit;
-  info.sample_rate_hz = 0.0;  // explicit times: the ticks' own
+  info.sample_rate_hz = 0.0;                                  // explicit times: the ticks' own
   info.range_min = -std::numeric_limits<double>::infinity();  // unknown (session-format.md)
   info.range_max = std::numeric_limits<double>::infinity();
   return info;

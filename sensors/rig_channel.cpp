@@ -9,8 +9,7 @@
 
 namespace doorbench::sensors {
 
-namespace {
-}  // namespace
+namespace {}  // namespace
 
 CalibrationRecord nominal_calibration(const RigChannel& channel) {
   CalibrationRecord record;

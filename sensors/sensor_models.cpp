@@ -10,7 +10,6 @@
 namespace doorbench::sensors {
 namespace {
 
-
 void throw_if_invalid(const std::string& message) {
   if (!message.empty()) throw std::invalid_argument(message);
 }
@@ -42,8 +41,8 @@ double LoadCell::sample_V(double force_N) {
   }
   double reading = play_output_N_;
 
-  reading += 4.0 * p.nonlinearity_fraction_fs * reading *
-             (1.0 - std::abs(reading) / p.full_scale_N);
+  reading +=
+      4.0 * p.nonlinearity_fraction_fs * reading * (1.0 - std::abs(reading) / p.full_scale_N);
   reading += p.zero_offset_N;
   reading += p.noise_rms_N * unit_normal_(random_);
 
@@ -71,13 +70,17 @@ double Inclinometer::sample_V(double angle_rad) {
   return reading * p.output_V_per_deg;
 }
 
-void Inclinometer::settle(double angle_rad) { filtered_deg_ = angle_rad * kDegPerRad; }
+void Inclinometer::settle(double angle_rad) {
+  filtered_deg_ = angle_rad * kDegPerRad;
+}
 
 // --- gyroscope ------------------------------------------------------------------------
 
 Gyroscope::Gyroscope(const GyroscopeParameters& parameters, double sample_rate_hz,
                      std::uint64_t seed)
-    : parameters_(parameters), sample_interval_s_(0.0), random_(seed),
+    : parameters_(parameters),
+      sample_interval_s_(0.0),
+      random_(seed),
       bias_dps_(parameters.bias_dps) {
   throw_if_invalid(parameters_.validate());
   check_sample_rate("gyroscope", sample_rate_hz);
@@ -87,10 +90,10 @@ Gyroscope::Gyroscope(const GyroscopeParameters& parameters, double sample_rate_h
 double Gyroscope::sample_V(double rate_rad_s) {
   const GyroscopeParameters& p = parameters_;
   const double rate_dps = rate_rad_s * kDegPerRad;
-  double reading = rate_dps * (1.0 + p.scale_factor_error) + bias_dps_ +
-                   p.noise_rms_dps * unit_normal_(random_);
-  bias_dps_ += p.bias_random_walk_dps_per_sqrt_s * std::sqrt(sample_interval_s_) *
-               unit_normal_(random_);
+  double reading =
+      rate_dps * (1.0 + p.scale_factor_error) + bias_dps_ + p.noise_rms_dps * unit_normal_(random_);
+  bias_dps_ +=
+      p.bias_random_walk_dps_per_sqrt_s * std::sqrt(sample_interval_s_) * unit_normal_(random_);
   reading = std::clamp(reading, -p.range_dps, p.range_dps);
   return reading * p.output_V_per_dps;
 }
@@ -112,8 +115,8 @@ double Daq::volts_per_count() const {
 
 std::int32_t Daq::to_counts(double volts) const {
   const std::int32_t top = max_count();
-  const double position = (volts - parameters_.range_min_V) /
-                          (parameters_.range_max_V - parameters_.range_min_V) * top;
+  const double position =
+      (volts - parameters_.range_min_V) / (parameters_.range_max_V - parameters_.range_min_V) * top;
   if (!(position > 0)) return 0;  // below the range, or NaN
   if (position >= top) return top;
   return static_cast<std::int32_t>(std::round(position));

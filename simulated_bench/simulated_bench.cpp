@@ -25,7 +25,6 @@ using sensors::rig_channel_calibration;
 
 namespace {
 
-
 VirtualHandOptions hand_options(const RigSimulation& simulation) {
   VirtualHandOptions options;
   options.target_angle_rad = simulation.hand_target_deg * kRadPerDeg;

@@ -34,8 +34,8 @@
 //                                    rate_hz,sensors,u_door_free_N_m,u_door_known_N_m,
 //                                    u_all_known_N_m"
 #include <cstdint>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <string>
 
@@ -61,8 +61,7 @@ struct Verdict {
 Verdict judge(const PreparedData& data, const LoopOptions& loop, bool run_loop) {
   Verdict v{testing::refit_from_true_breakaway(data, loop, kExcess_N_m, kWidth_rad_s), "none"};
   if (std::getenv("ORACLE_REPORTS") != nullptr) {
-    std::fprintf(stderr, "base fit:\n%s\noracle refit:\n%s\n",
-                 v.refit.base.full_report().c_str(),
+    std::fprintf(stderr, "base fit:\n%s\noracle refit:\n%s\n", v.refit.base.full_report().c_str(),
                  v.refit.refit.full_report().c_str());
   }
   if (!run_loop) {
@@ -97,9 +96,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   if (std::strcmp(argv[1], "--header") == 0) {
-    std::printf("draw,hand,rate_hz,sensors,recording,base_held_out_rad_s,oracle_held_out_rad_s,"
-                "held_out_fall,bic_change,amplitude_N_m,amplitude_u_N_m,amplitude_z,w_s_rad_s,"
-                "bound_or_undetermined,qualifies,loop_first\n");
+    std::printf(
+        "draw,hand,rate_hz,sensors,recording,base_held_out_rad_s,oracle_held_out_rad_s,"
+        "held_out_fall,bic_change,amplitude_N_m,amplitude_u_N_m,amplitude_z,w_s_rad_s,"
+        "bound_or_undetermined,qualifies,loop_first\n");
     return 0;
   }
   const LoopOptions loop;
@@ -130,10 +130,10 @@ int main(int argc, char** argv) {
     if (known) {
       const PreparedData data = testing::family_recording(truth, c, seed);
       std::printf("%d,%s,%g,%s", draw, c.hand.c_str(), c.sample_rate_hz, c.sensors.c_str());
-      for (testing::Known what : {testing::Known::kDoorFree, testing::Known::kDoorKnown,
-                                  testing::Known::kAllKnown}) {
-        std::printf(",%.6g", testing::breakaway_amplitude_uncertainty(data, loop, what,
-                                                                      kExcess_N_m, kWidth_rad_s));
+      for (testing::Known what :
+           {testing::Known::kDoorFree, testing::Known::kDoorKnown, testing::Known::kAllKnown}) {
+        std::printf(",%.6g", testing::breakaway_amplitude_uncertainty(data, loop, what, kExcess_N_m,
+                                                                      kWidth_rad_s));
       }
       std::printf("\n");
       std::fflush(stdout);
@@ -141,9 +141,9 @@ int main(int argc, char** argv) {
     }
     print_line(draw, c, "breakaway",
                judge(testing::family_recording(truth, c, seed), loop, run_loop));
-    print_line(draw, c, "clean",
-               judge(testing::family_recording(testing::sensory_reference(), c, seed), loop,
-                     run_loop));
+    print_line(
+        draw, c, "clean",
+        judge(testing::family_recording(testing::sensory_reference(), c, seed), loop, run_loop));
   }
   return 0;
 }

@@ -40,10 +40,9 @@
 #include "acquisition/session/output_file.h"
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
-#include "studies/loop_datasheet_table.h"
 #include "core/number_format.h"
 #include "core/parallel.h"
-
+#include "studies/loop_datasheet_table.h"
 #include "tests/support/recording_family.h"
 
 using namespace doorbench;
@@ -52,8 +51,8 @@ using datasheet::RunRecord;
 namespace {
 
 using testing::draw_conditions;
-using testing::FamilyOptions;
 using testing::family_recording;
+using testing::FamilyOptions;
 using testing::RecordingConditions;
 
 // An effect's ladder of sizes: its amplitude (d_s − d1 for stribeck), from small to the size
@@ -83,10 +82,14 @@ const std::vector<EffectLadder>& ladders() {
 // The truth's effect values at amplitude `size`.
 std::vector<double> effect_values(effects::Kind kind, double size, double d1) {
   switch (kind) {
-    case effects::Kind::kStribeck: return {d1 + size, 0.05};
-    case effects::Kind::kSoftClose: return {size, 0.15, 50.0};
-    case effects::Kind::kEndStop: return {size, 1.2, 3000.0};
-    default: return {size};
+    case effects::Kind::kStribeck:
+      return {d1 + size, 0.05};
+    case effects::Kind::kSoftClose:
+      return {size, 0.15, 50.0};
+    case effects::Kind::kEndStop:
+      return {size, 1.2, 3000.0};
+    default:
+      return {size};
   }
 }
 
@@ -151,16 +154,24 @@ Settings parse_arguments(int argc, char** argv) {
     }
     if (i + 1 >= argc) throw std::invalid_argument(flag + " needs a value");
     const std::string value = argv[++i];
-    if (flag == "--csv") s.csv = value;
-    else if (flag == "--effects") s.effects = split(value, ',');
+    if (flag == "--csv")
+      s.csv = value;
+    else if (flag == "--effects")
+      s.effects = split(value, ',');
     else if (flag == "--sizes") {
       for (const std::string& v : split(value, ',')) s.sizes.push_back(std::stod(v));
-    } else if (flag == "--draws") s.draws = positive(flag, value);
-    else if (flag == "--clean-draws") s.clean_draws = positive(flag, value);
-    else if (flag == "--strokes") s.strokes = positive(flag, value);
-    else if (flag == "--jobs") s.jobs = positive(flag, value);
-    else if (flag == "--first-seed") s.first_seed = std::stoul(value);
-    else throw std::invalid_argument("unknown option " + flag);
+    } else if (flag == "--draws")
+      s.draws = positive(flag, value);
+    else if (flag == "--clean-draws")
+      s.clean_draws = positive(flag, value);
+    else if (flag == "--strokes")
+      s.strokes = positive(flag, value);
+    else if (flag == "--jobs")
+      s.jobs = positive(flag, value);
+    else if (flag == "--first-seed")
+      s.first_seed = std::stoul(value);
+    else
+      throw std::invalid_argument("unknown option " + flag);
   }
   if (s.csv.empty()) throw std::invalid_argument("--csv FILE is required");
   if (s.effects.empty()) {
@@ -170,8 +181,8 @@ Settings parse_arguments(int argc, char** argv) {
   for (const std::string& e : s.effects) {
     if (e != "clean" && !effects::find(e)) throw std::invalid_argument("unknown effect " + e);
   }
-  const auto catalogue_effects =
-      std::count_if(s.effects.begin(), s.effects.end(), [](const std::string& e) { return e != "clean"; });
+  const auto catalogue_effects = std::count_if(s.effects.begin(), s.effects.end(),
+                                               [](const std::string& e) { return e != "clean"; });
   if (!s.sizes.empty() && catalogue_effects != 1) {
     throw std::invalid_argument("--sizes needs exactly one catalogue effect in --effects");
   }
@@ -312,7 +323,8 @@ RunRecord run_one(const Job& job, const Settings& s, const DoorModel& reference,
     record_evidence(loop.steps.empty() ? loop.last_candidates : loop.steps.front().candidates, r);
     if (!loop.steps.empty()) {
       const bool right = loop.steps.front().effect_name == job.effect;
-      r.parameters = recovered_parameters(loop.steps.front(), right ? truth : std::vector<double>{});
+      r.parameters =
+          recovered_parameters(loop.steps.front(), right ? truth : std::vector<double>{});
     }
   } catch (const std::exception& e) {
     r.status = std::string("error: ").append(e.what());
@@ -343,8 +355,8 @@ void run_pending(const Settings& s, std::vector<RunRecord>& records) {
     records.push_back(r);
     write_text_file_atomically(s.csv, datasheet::run_csv(records));
     std::fprintf(stderr, "[%d/%zu] %s %g draw %d (%s): %s, first added %s; %.1f s CPU\n",
-                 ++finished, pending.size(), r.effect.c_str(), r.size, r.draw,
-                 r.conditions.c_str(), r.status.c_str(), r.first_added.c_str(), r.cpu_s);
+                 ++finished, pending.size(), r.effect.c_str(), r.size, r.draw, r.conditions.c_str(),
+                 r.status.c_str(), r.first_added.c_str(), r.cpu_s);
   });
 }
 
@@ -356,9 +368,9 @@ std::string missing_rows(const Settings& s, const std::vector<RunRecord>& record
     bool done = false;
     for (const RunRecord& r : records) done = done || same_run(job, r);
     if (done) continue;
-    const std::string name = job.effect == "clean"
-                                 ? std::string("clean")
-                                 : job.effect + " " + format_significant(job.size, 4) + " " + job.unit;
+    const std::string name =
+        job.effect == "clean" ? std::string("clean")
+                              : job.effect + " " + format_significant(job.size, 4) + " " + job.unit;
     if (rows.empty() || rows.back().first != name) rows.emplace_back(name, 0);
     ++rows.back().second;
   }

@@ -26,7 +26,9 @@ std::string quoted(const std::string& field) {
   return out + "\"";
 }
 
-std::string number(double value) { return printf_text("%.9g", value); }
+std::string number(double value) {
+  return printf_text("%.9g", value);
+}
 
 // The fields of one CSV line (quoted fields unquoted); false when a quote is left open.
 bool split_line(const std::string& line, std::vector<std::string>& fields) {
@@ -55,13 +57,33 @@ bool split_line(const std::string& line, std::vector<std::string>& fields) {
 }
 
 std::vector<std::string> record_fields(const RunRecord& r) {
-  return {r.effect, std::to_string(r.size_rank), number(r.size), r.size_unit,
-          std::to_string(r.draw), std::to_string(r.seed), r.hand, number(r.sample_rate_hz),
-          r.sensors, std::to_string(r.strokes), r.conditions, r.loop_options, r.status,
-          r.first_added, number(r.start_held_out_rad_s), number(r.final_held_out_rad_s),
-          std::to_string(r.true_rank), number(r.true_share), number(r.true_z),
-          number(r.true_screen_share), number(r.true_screen_z), r.true_verdict, r.best_name,
-          number(r.best_share), number(r.best_z), r.parameters, number(r.cpu_s),
+  return {r.effect,
+          std::to_string(r.size_rank),
+          number(r.size),
+          r.size_unit,
+          std::to_string(r.draw),
+          std::to_string(r.seed),
+          r.hand,
+          number(r.sample_rate_hz),
+          r.sensors,
+          std::to_string(r.strokes),
+          r.conditions,
+          r.loop_options,
+          r.status,
+          r.first_added,
+          number(r.start_held_out_rad_s),
+          number(r.final_held_out_rad_s),
+          std::to_string(r.true_rank),
+          number(r.true_share),
+          number(r.true_z),
+          number(r.true_screen_share),
+          number(r.true_screen_z),
+          r.true_verdict,
+          r.best_name,
+          number(r.best_share),
+          number(r.best_z),
+          r.parameters,
+          number(r.cpu_s),
           number(r.wall_s)};
 }
 
@@ -126,7 +148,8 @@ std::vector<Row> rows_of(const std::vector<RunRecord>& records) {
   // Effects in order of first appearance, each effect's sizes small to large.
   std::vector<std::string> order;
   for (const Row& row : rows) {
-    if (std::find(order.begin(), order.end(), row.effect) == order.end()) order.push_back(row.effect);
+    if (std::find(order.begin(), order.end(), row.effect) == order.end())
+      order.push_back(row.effect);
   }
   std::stable_sort(rows.begin(), rows.end(), [&](const Row& a, const Row& b) {
     const auto ia = std::find(order.begin(), order.end(), a.effect) - order.begin();
@@ -136,7 +159,9 @@ std::vector<Row> rows_of(const std::vector<RunRecord>& records) {
   return rows;
 }
 
-bool ok(const RunRecord& r) { return r.status == "ok"; }
+bool ok(const RunRecord& r) {
+  return r.status == "ok";
+}
 
 // "d_s +0.012 (+0.3 %), w_s ...": the mean deviation from the truth over the runs that
 // found the effect first; and "d_s 18/19, ...": how many of their ±1.96 u intervals hold it.
@@ -184,18 +209,25 @@ void recovery_cells(const Row& row, std::string& bias, std::string& coverage) {
 // refitted instead).
 std::string miss_reasons(const Row& row) {
   std::map<std::string, int> counts;
-  const std::vector<std::string> order = {"share < 1 %", "z < 4", "ranked below the refits",
-                                          "refit rejected", "qualified, another won", "other"};
+  const std::vector<std::string> order = {
+      "share < 1 %", "z < 4", "ranked below the refits", "refit rejected", "qualified, another won",
+      "other"};
   for (const RunRecord* r : row.runs) {
     if (!ok(*r) || r->first_added == r->effect) continue;
     const std::string& v = r->true_verdict;
     const auto starts = [&](const char* prefix) { return v.rfind(prefix, 0) == 0; };
-    if (starts("not refitted: explains")) ++counts["share < 1 %"];
-    else if (starts("not refitted: score z")) ++counts["z < 4"];
-    else if (starts("not refitted: ranked below")) ++counts["ranked below the refits"];
-    else if (starts("rejected")) ++counts["refit rejected"];
-    else if (starts("qualifies")) ++counts["qualified, another won"];
-    else ++counts["other"];
+    if (starts("not refitted: explains"))
+      ++counts["share < 1 %"];
+    else if (starts("not refitted: score z"))
+      ++counts["z < 4"];
+    else if (starts("not refitted: ranked below"))
+      ++counts["ranked below the refits"];
+    else if (starts("rejected"))
+      ++counts["refit rejected"];
+    else if (starts("qualifies"))
+      ++counts["qualified, another won"];
+    else
+      ++counts["other"];
   }
   std::string out;
   for (const std::string& key : order) {
@@ -243,17 +275,20 @@ std::string detection_table(const std::vector<Row>& rows) {
     for (const RunRecord* r : t.done) {
       z.push_back(r->true_z);
       second_looks += r->true_screen_z != 0.0;
-      if (r->first_added == r->effect) ++first;
-      else if (r->first_added == "none") ++none;
-      else ++other;
+      if (r->first_added == r->effect)
+        ++first;
+      else if (r->first_added == "none")
+        ++none;
+      else
+        ++other;
     }
     std::string bias, coverage;
     recovery_cells(row, bias, coverage);
     out += "| " + row.effect + " | " + format_significant(row.size, 4) + " " + row.size_unit +
            " | " + std::to_string(n) + " | " + share_with_interval(first, n) + " | " +
            std::to_string(other) + " | " + std::to_string(none) + " | " + std::to_string(failed) +
-           " | " + miss_reasons(row) + " | " + printf_text("%.1f (%d)", median(z), second_looks) + " | " + bias +
-           " | " + coverage + " | " + printf_text("%.1f", median(t.cpu)) + " |\n";
+           " | " + miss_reasons(row) + " | " + printf_text("%.1f (%d)", median(z), second_looks) +
+           " | " + bias + " | " + coverage + " | " + printf_text("%.1f", median(t.cpu)) + " |\n";
   }
   return out;
 }
@@ -326,7 +361,9 @@ std::string clean_table(const std::vector<Row>& rows) {
 }
 
 // The rate band of a sample rate, for the breakdown: "50–100 Hz" or "200–1000 Hz".
-std::string rate_band(double rate_hz) { return rate_hz <= 100.0 ? "≤ 100 Hz" : "≥ 200 Hz"; }
+std::string rate_band(double rate_hz) {
+  return rate_hz <= 100.0 ? "≤ 100 Hz" : "≥ 200 Hz";
+}
 
 // Found first (clean: nothing added) by hand, sensor set and rate band: k/n per column.
 std::string breakdown_table(const std::vector<Row>& rows) {
@@ -362,13 +399,16 @@ std::string breakdown_table(const std::vector<Row>& rows) {
   out += "\n" + rule + "\n";
   for (const Row& row : rows) {
     out += "| " + row.effect + " (" + (row.effect == "clean" ? "nothing added" : "found first") +
-           ") | " + (row.effect == "clean" ? "—" : format_significant(row.size, 4) + " " + row.size_unit) + " |";
+           ") | " +
+           (row.effect == "clean" ? "—" : format_significant(row.size, 4) + " " + row.size_unit) +
+           " |";
     for (std::size_t c = 0; c < columns.size(); ++c) {
       int n = 0, k = 0;
       for (const RunRecord* r : row.runs) {
         if (!ok(*r)) continue;
-        const std::string& key =
-            c < hands ? r->hand : c < hands + sensors.size() ? r->sensors : rate_band(r->sample_rate_hz);
+        const std::string& key = c < hands                    ? r->hand
+                                 : c < hands + sensors.size() ? r->sensors
+                                                              : rate_band(r->sample_rate_hz);
         if (key != columns[c]) continue;
         ++n;
         k += row.effect == "clean" ? r->first_added == "none" : r->first_added == row.effect;

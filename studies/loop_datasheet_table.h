@@ -24,16 +24,16 @@ struct RunRecord {
   int size_rank = 0;   // the size's place in the effect's ladder, from 1; 0 for clean
   double size = 0.0;   // the effect's amplitude in `size_unit` (d_s - d1 for stribeck); 0 clean
   std::string size_unit;
-  int draw = 0;             // from 1; draw d uses the same recording conditions in every row
-  unsigned long seed = 0;   // the draw's seed (conditions and recording)
-  std::string hand;         // the recording conditions, as drawn
+  int draw = 0;            // from 1; draw d uses the same recording conditions in every row
+  unsigned long seed = 0;  // the draw's seed (conditions and recording)
+  std::string hand;        // the recording conditions, as drawn
   double sample_rate_hz = 0.0;
   std::string sensors;
-  int strokes = 0;          // strokes in the prepared recording
-  std::string conditions;   // RecordingConditions::describe()
-  std::string loop_options;  // what differs from LoopOptions' defaults
-  std::string status;        // "ok", or "error: " and the exception's message
-  std::string first_added;   // the loop's first added effect, or "none"
+  int strokes = 0;                    // strokes in the prepared recording
+  std::string conditions;             // RecordingConditions::describe()
+  std::string loop_options;           // what differs from LoopOptions' defaults
+  std::string status;                 // "ok", or "error: " and the exception's message
+  std::string first_added;            // the loop's first added effect, or "none"
   double start_held_out_rad_s = 0.0;  // the start fit's held-out window RMSE
   double final_held_out_rad_s = 0.0;  // after the step (= start when nothing was added)
   // The true effect in the first examination (empty/0 for clean): its rank, linear share

@@ -117,7 +117,8 @@ PreparedData demo_recording(unsigned seed) {
       std::filesystem::temp_directory_path() / ("loop_study_" + std::to_string(seed));
   std::filesystem::create_directories(dir);
   const auto effects_path = dir / "undeclared.json";
-  std::ofstream(effects_path) << R"({"gravity_imbalance": {"g1": 3.0}})" << "\n";
+  std::ofstream(effects_path) << R"({"gravity_imbalance": {"g1": 3.0}})"
+                              << "\n";
   const auto session_path = dir / "demo.h5";
   std::filesystem::remove(session_path);
   testing::record_built_in_session(session_path, 19.0, seed, "sensory", effects_path);
@@ -168,9 +169,8 @@ bool make_recording(const std::string& which, const DoorModel& sensory,
       {"offset", effects::Kind::kForceOffset, {3.0}},
       {"direction", effects::Kind::kDirectionFriction, {1.5}},
   };
-  const auto tremor_case =
-      std::find_if(std::begin(tremor_cases), std::end(tremor_cases),
-                   [&](const TremorCase& c) { return which == c.name; });
+  const auto tremor_case = std::find_if(std::begin(tremor_cases), std::end(tremor_cases),
+                                        [&](const TremorCase& c) { return which == c.name; });
   if (tremor_case != std::end(tremor_cases)) {
     data = testing::tremor_recording(with_effect(sensory, tremor_case->kind, tremor_case->values),
                                      recording);
@@ -181,7 +181,8 @@ bool make_recording(const std::string& which, const DoorModel& sensory,
     data = testing::tremor_recording(
         with_effect(sensory, effects::Kind::kStribeck, {d1 + size, 0.05}), recording);
   } else if (which == "plain-end-stop") {
-    // tests/analysis/test_residual_loop.cpp's end-stop recording: the plain virtual hand, 6 strokes.
+    // tests/analysis/test_residual_loop.cpp's end-stop recording: the plain virtual hand, 6
+    // strokes.
     SyntheticStrokeOptions plain;
     plain.runs = {{0.6, 3.0}, {1.0, 4.0}, {1.3, 4.0}};
     plain.seed = 3;
@@ -229,7 +230,8 @@ LoopOptions loop_options(const std::string& which, int argc, char** argv) {
   }
   const auto began = std::chrono::steady_clock::now();
   options.progress = [began](const std::string& line) {
-    const double t = std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
+    const double t =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - began).count();
     std::printf("[%7.2f s] %s\n", t, line.c_str());
     std::fflush(stdout);
   };
@@ -252,10 +254,11 @@ void print_examination(const DoorModel& sensory, const PreparedData& data,
   const FitResult fit = fit_model(sensory, data, options.fit);
   std::printf("%s", fit.summary.full_report().c_str());
   const ResidualExamination exam = examine_residual(fit.model, data, options);
-  std::printf("examination %.2f s (second look %.2f s); noise floor %.4g rad/s (white %.3g, "
-              "walk %.3g per sample)\n",
-              exam.time_s, exam.screen_time_s, exam.noise_floor_rad_s, exam.white_noise_rad_s,
-              exam.walk_per_sample_rad_s);
+  std::printf(
+      "examination %.2f s (second look %.2f s); noise floor %.4g rad/s (white %.3g, "
+      "walk %.3g per sample)\n",
+      exam.time_s, exam.screen_time_s, exam.noise_floor_rad_s, exam.white_noise_rad_s,
+      exam.walk_per_sample_rad_s);
   for (const SpeedBand& band : exam.speed_bands) {
     std::printf("  |omega| from %g: %zu samples, residual RMS %.4g rad/s\n", band.low_rad_s,
                 band.samples, band.rms_rad_s);
@@ -283,7 +286,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   const std::string which = argv[1];
-  const unsigned seed = argc > 2 && argv[2][0] != '-' ? static_cast<unsigned>(std::stoul(argv[2])) : 1;
+  const unsigned seed =
+      argc > 2 && argv[2][0] != '-' ? static_cast<unsigned>(std::stoul(argv[2])) : 1;
   const bool exam_only = has_flag(argc, argv, "--exam");
   const testing::TremorRecordingOptions recording = recording_options(argc, argv, seed);
 

@@ -43,7 +43,8 @@ class Table {
       if (std::find(keys.begin(), keys.end(), key.str()) == keys.end()) {
         std::string valid;
         for (std::string_view k : keys) valid += (valid.empty() ? "" : ", ") + std::string(k);
-        const int line = key.source().begin.line > 0 ? static_cast<int>(key.source().begin.line) : line_;
+        const int line =
+            key.source().begin.line > 0 ? static_cast<int>(key.source().begin.line) : line_;
         throw CampaignError(*source_ + ":" + std::to_string(line) + ": " + path_ + "." +
                             std::string(key.str()) + ": unknown key; valid keys: " + valid);
       }
@@ -78,8 +79,8 @@ class Table {
     if (!node->is_integer()) fail(key, "must be a whole number");
     const std::int64_t value = node->as_integer()->get();
     if (value < low || value > high) {
-      fail(key, "must be from " + std::to_string(low) + " to " + std::to_string(high) +
-                    ", got " + std::to_string(value));
+      fail(key, "must be from " + std::to_string(low) + " to " + std::to_string(high) + ", got " +
+                    std::to_string(value));
     }
     return static_cast<int>(value);
   }
@@ -92,8 +93,7 @@ class Table {
     }
     if (!node->is_table()) fail(key, "must be a table");
     return Table(*source_, *node->as_table(),
-                 path_.empty() ? std::string(key) : path_ + "." + std::string(key),
-                 line_of(*node));
+                 path_.empty() ? std::string(key) : path_ + "." + std::string(key), line_of(*node));
   }
   std::optional<std::vector<std::string>> strings(std::string_view key) const {
     const toml::node* node = get(key);
@@ -116,8 +116,8 @@ class Table {
 
 bool is_name(std::string_view name) {
   return !name.empty() && name.size() <= 40 && std::all_of(name.begin(), name.end(), [](char c) {
-    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
-           c == '_' || c == '-';
+    return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
+           c == '-';
   });
 }
 
@@ -163,7 +163,8 @@ std::vector<std::pair<std::string, std::string>> parse_pairs(const Table& block,
     }
     return pairs;
   }
-  const char* shape = "must be \"all\" or an array of pairs of variant names, e.g. [[\"a\", \"b\"]]";
+  const char* shape =
+      "must be \"all\" or an array of pairs of variant names, e.g. [[\"a\", \"b\"]]";
   if (!node->is_array()) block.fail("pairs", shape);
   for (const toml::node& item : *node->as_array()) {
     const toml::array* pair = item.as_array();
@@ -184,7 +185,10 @@ std::vector<std::pair<std::string, std::string>> parse_pairs(const Table& block,
 // method = "quest+" (study/quest_plus.h).
 void parse_quest_plus(const Table& table, Block& block) {
   for (const char* key : {"levels", "repetitions", "down", "start_level", "step_factor"}) {
-    if (table.get(key)) table.fail(key, "is not an option of quest+ (trials, min_level, max_level, stimuli, thresholds, lapse)");
+    if (table.get(key))
+      table.fail(
+          key,
+          "is not an option of quest+ (trials, min_level, max_level, stimuli, thresholds, lapse)");
   }
   block.method = JndMethod::kQuestPlus;
   block.min_level = table.number("min_level", 1.0001, 10.0).value_or(1.01);
@@ -203,7 +207,8 @@ void parse_jnd(const Table& table, Block& block, const Campaign& campaign) {
                     "start_level", "step_factor", "min_level", "max_level", "trials", "stimuli",
                     "thresholds", "lapse"});
   block.parameter = table.string("parameter").value_or("");
-  if (block.parameter.empty()) table.fail("parameter", "missing: the parameter whose JND is measured");
+  if (block.parameter.empty())
+    table.fail("parameter", "missing: the parameter whose JND is measured");
   try {
     apply_steps(base_model(campaign), {Step{block.parameter, 1.05}});
   } catch (const std::invalid_argument& wrong) {
@@ -219,7 +224,9 @@ void parse_jnd(const Table& table, Block& block, const Campaign& campaign) {
     block.method = JndMethod::kConstantStimuli;
     const toml::node* levels = table.get("levels");
     if (!levels || !levels->is_array() || levels->as_array()->empty()) {
-      table.fail("levels", "constant stimuli need levels: an array of factors above 1, e.g. [1.05, 1.1, 1.2]");
+      table.fail(
+          "levels",
+          "constant stimuli need levels: an array of factors above 1, e.g. [1.05, 1.1, 1.2]");
     }
     for (const toml::node& item : *levels->as_array()) {
       const std::optional<double> value = item.value<double>();
@@ -260,7 +267,9 @@ Block parse_block(const Table& table, const Campaign& campaign) {
     table.allow_only({"name", "type", "start_spread"});
     block.start_spread = table.number("start_spread", 0.0, 1.0).value_or(0.2);
     if (campaign.model != ModelKind::kSensory) {
-      table.fail("type", "tune moves the perceptual controls of the sensory model (campaign.model = \"sensory\")");
+      table.fail(
+          "type",
+          "tune moves the perceptual controls of the sensory model (campaign.model = \"sensory\")");
     }
   } else if (type == "pair") {
     block.type = BlockType::kPair;
@@ -270,7 +279,8 @@ Block parse_block(const Table& table, const Campaign& campaign) {
     if (asked && (asked->is_preference() || asked->kind == QuestionKind::kIdentifyReal)) {
       block.question = asked->kind;
     } else {
-      table.fail("question", "must be preference, preference-2ac or identify-real, not '" + question + "'");
+      table.fail("question",
+                 "must be preference, preference-2ac or identify-real, not '" + question + "'");
     }
     block.pairs = parse_pairs(table, campaign);
     block.repetitions = table.integer("repetitions", 1, 1000).value_or(1);
@@ -278,7 +288,8 @@ Block parse_block(const Table& table, const Campaign& campaign) {
       for (const auto& [a, b] : block.pairs) {
         if ((campaign.find_variant(a)->kind == Variant::Kind::kReal) ==
             (campaign.find_variant(b)->kind == Variant::Kind::kReal)) {
-          table.fail("pairs", "identify-real needs the real door in every pair ('" + a + "', '" + b + "')");
+          table.fail("pairs",
+                     "identify-real needs the real door in every pair ('" + a + "', '" + b + "')");
         }
       }
     }
@@ -286,9 +297,11 @@ Block parse_block(const Table& table, const Campaign& campaign) {
     block.type = BlockType::kRating;
     table.allow_only({"name", "type", "attributes", "scale", "repetitions", "pairs"});
     block.attributes = table.strings("attributes").value_or(std::vector<std::string>{});
-    if (block.attributes.empty()) table.fail("attributes", "missing: the attributes rated, e.g. [\"heavy-light\"]");
+    if (block.attributes.empty())
+      table.fail("attributes", "missing: the attributes rated, e.g. [\"heavy-light\"]");
     for (const std::string& attribute : block.attributes) {
-      if (!is_name(attribute)) table.fail("attributes", "'" + attribute + "' is not letters, digits, '-' and '_'");
+      if (!is_name(attribute))
+        table.fail("attributes", "'" + attribute + "' is not letters, digits, '-' and '_'");
     }
     block.scale = table.integer("scale", 2, 100).value_or(7);
     block.repetitions = table.integer("repetitions", 1, 1000).value_or(1);
@@ -328,21 +341,25 @@ void parse_participants(const Table& table, Campaign& campaign) {
 }
 
 void parse_head(const Table& head, Campaign& campaign, const std::filesystem::path& folder) {
-  head.allow_only({"name", "seed", "model", "base", "real_rig", "presentation_s",
-                   "simulated_presentation_s"});
+  head.allow_only(
+      {"name", "seed", "model", "base", "real_rig", "presentation_s", "simulated_presentation_s"});
   campaign.name = head.string("name").value_or("campaign");
   if (const toml::node* seed = head.get("seed")) {
-    if (!seed->is_integer() || seed->as_integer()->get() < 0) head.fail("seed", "must be a whole number >= 0");
+    if (!seed->is_integer() || seed->as_integer()->get() < 0)
+      head.fail("seed", "must be a whole number >= 0");
     campaign.seed = static_cast<std::uint64_t>(seed->as_integer()->get());
   }
   const std::string model = head.string("model").value_or("sensory");
   const std::optional<ModelKind> kind = parse_model_kind(model);
   if (!kind) head.fail("model", "must be sensory or physical, not '" + model + "'");
   campaign.model = *kind;
-  if (const auto base = head.string("base"); base && !base->empty()) campaign.base_file = folder / *base;
-  if (const auto rig = head.string("real_rig"); rig && !rig->empty()) campaign.real_rig = folder / *rig;
+  if (const auto base = head.string("base"); base && !base->empty())
+    campaign.base_file = folder / *base;
+  if (const auto rig = head.string("real_rig"); rig && !rig->empty())
+    campaign.real_rig = folder / *rig;
   campaign.presentation_s = head.number("presentation_s", 0.1, 600.0).value_or(8.0);
-  campaign.simulated_presentation_s = head.number("simulated_presentation_s", 0.1, 600.0).value_or(1.0);
+  campaign.simulated_presentation_s =
+      head.number("simulated_presentation_s", 0.1, 600.0).value_or(1.0);
   try {
     (void)base_model(campaign);
   } catch (const std::exception& wrong) {
@@ -354,10 +371,14 @@ void parse_head(const Table& head, Campaign& campaign, const std::filesystem::pa
 
 std::string_view to_string(BlockType type) {
   switch (type) {
-    case BlockType::kTune: return "tune";
-    case BlockType::kPair: return "pair";
-    case BlockType::kRating: return "rating";
-    case BlockType::kJnd: return "jnd";
+    case BlockType::kTune:
+      return "tune";
+    case BlockType::kPair:
+      return "pair";
+    case BlockType::kRating:
+      return "rating";
+    case BlockType::kJnd:
+      return "jnd";
   }
   return "?";
 }
@@ -387,8 +408,11 @@ Campaign parse_campaign(std::string_view text, std::string_view source,
   const Table variants = *top.child("variants", true);
   std::vector<std::pair<int, std::string>> order;
   for (auto&& [key, node] : variants.table()) {
-    if (!node.is_string()) variants.fail(key.str(), "must be a string: base, real, file:PATH or steps such as \"J*1.2\"");
-    Variant variant = parse_variant(variants, std::string(key.str()), node.as_string()->get(), folder);
+    if (!node.is_string())
+      variants.fail(key.str(),
+                    "must be a string: base, real, file:PATH or steps such as \"J*1.2\"");
+    Variant variant =
+        parse_variant(variants, std::string(key.str()), node.as_string()->get(), folder);
     if (variant.kind == Variant::Kind::kReal && campaign.real_rig.empty()) {
       variants.fail(key.str(), "the real door needs campaign.real_rig (the bench's rig file)");
     }
@@ -406,7 +430,8 @@ Campaign parse_campaign(std::string_view text, std::string_view source,
   std::stable_sort(campaign.variants.begin(), campaign.variants.end(),
                    [&](const Variant& a, const Variant& b) {
                      auto line = [&](const Variant& v) {
-                       for (const auto& [l, n] : order) if (n == v.name) return l;
+                       for (const auto& [l, n] : order)
+                         if (n == v.name) return l;
                        return 0;
                      };
                      return line(a) < line(b);
@@ -420,9 +445,11 @@ Campaign parse_campaign(std::string_view text, std::string_view source,
   std::set<std::string> names;
   int index = 0;
   for (const toml::node& node : *blocks->as_array()) {
-    const Table table(campaign.source, *node.as_table(), "blocks[" + std::to_string(++index) + "]", line_of(node));
+    const Table table(campaign.source, *node.as_table(), "blocks[" + std::to_string(++index) + "]",
+                      line_of(node));
     Block block = parse_block(table, campaign);
-    if (!names.insert(block.name).second) table.fail("name", "block '" + block.name + "' is named twice");
+    if (!names.insert(block.name).second)
+      table.fail("name", "block '" + block.name + "' is named twice");
     campaign.blocks.push_back(std::move(block));
   }
   return campaign;
@@ -439,10 +466,12 @@ std::string participant_id_problem(std::string_view id) {
   const std::string quoted = std::string("'").append(id).append("'");
   if (id.empty()) return "a participant id must not be empty";
   if (id.find('@') != std::string_view::npos) {
-    return "participant id " + quoted + " looks like an e-mail address; use a pseudonymous id such as P07";
+    return "participant id " + quoted +
+           " looks like an e-mail address; use a pseudonymous id such as P07";
   }
   if (id.find_first_of(" \t") != std::string_view::npos) {
-    return "participant id " + quoted + " looks like a name (it holds a space); use a pseudonymous id such as P07";
+    return "participant id " + quoted +
+           " looks like a name (it holds a space); use a pseudonymous id such as P07";
   }
   if (id.size() > 32) return "participant id " + quoted + " is longer than 32 characters";
   for (char c : id) {
@@ -452,13 +481,16 @@ std::string participant_id_problem(std::string_view id) {
   }
   for (std::size_t i = 0; i + 2 < id.size(); ++i) {
     const bool capital = id[i] >= 'A' && id[i] <= 'Z';
-    const bool lower_after = id[i + 1] >= 'a' && id[i + 1] <= 'z' && id[i + 2] >= 'a' && id[i + 2] <= 'z';
+    const bool lower_after =
+        id[i + 1] >= 'a' && id[i + 1] <= 'z' && id[i + 2] >= 'a' && id[i + 2] <= 'z';
     if (capital && lower_after) {
-      return "participant id " + quoted + " looks like a name (a capitalised word); use a pseudonymous id such as P07";
+      return "participant id " + quoted +
+             " looks like a name (a capitalised word); use a pseudonymous id such as P07";
     }
   }
   if (id.find_first_of("0123456789") == std::string_view::npos) {
-    return "participant id " + quoted + " has no digit (a word alone may be a name); use a pseudonymous id such as P07";
+    return "participant id " + quoted +
+           " has no digit (a word alone may be a name); use a pseudonymous id such as P07";
   }
   return "";
 }
@@ -472,7 +504,9 @@ std::vector<Step> parse_steps(std::string_view text) {
     while (!item.empty() && item.front() == ' ') item.remove_prefix(1);
     while (!item.empty() && item.back() == ' ') item.remove_suffix(1);
     const std::size_t star = item.find('*');
-    const std::string expected = "expected steps such as \"J*1.2\" or \"heaviness*1.2,latch_effort*0.7\", got \"" + std::string(text) + "\"";
+    const std::string expected =
+        "expected steps such as \"J*1.2\" or \"heaviness*1.2,latch_effort*0.7\", got \"" +
+        std::string(text) + "\"";
     if (star == std::string_view::npos || star == 0) throw std::invalid_argument(expected);
     Step step;
     step.target = std::string(item.substr(0, star));
@@ -513,7 +547,8 @@ DoorModel apply_steps(const DoorModel& model, const std::vector<Step>& steps) {
         throw std::invalid_argument(what + ": the perceptual controls act on the sensory model");
       }
       try {
-        result = perceptual::set(result, *control, perceptual::read(result, *control) * step.factor);
+        result =
+            perceptual::set(result, *control, perceptual::read(result, *control) * step.factor);
       } catch (const std::invalid_argument& wrong) {
         throw std::invalid_argument(what + ": " + wrong.what());
       }
@@ -533,9 +568,12 @@ DoorModel apply_steps(const DoorModel& model, const std::vector<Step>& steps) {
     const std::optional<int> index = result.find_parameter(step.target);
     if (!index) {
       std::string names;
-      for (const perceptual::ControlInfo& info : perceptual::controls()) names += std::string(info.name) + ", ";
-      for (int i = 0; i < result.base_parameter_count(); ++i) names += (i ? ", " : "") + result.parameter_name(i);
-      throw std::invalid_argument(what + ": '" + step.target + "' is neither a perceptual control nor a parameter of the " +
+      for (const perceptual::ControlInfo& info : perceptual::controls())
+        names += std::string(info.name) + ", ";
+      for (int i = 0; i < result.base_parameter_count(); ++i)
+        names += (i ? ", " : "") + result.parameter_name(i);
+      throw std::invalid_argument(what + ": '" + step.target +
+                                  "' is neither a perceptual control nor a parameter of the " +
                                   std::string(to_string(result.kind())) + " model (" + names + ")");
     }
     std::vector<double> values(result.parameter_values().begin(), result.parameter_values().end());
@@ -558,12 +596,17 @@ DoorModel apply_steps(const DoorModel& model, const std::vector<Step>& steps) {
 
 DoorModel variant_model(const Campaign& campaign, const Variant& variant) {
   switch (variant.kind) {
-    case Variant::Kind::kBase: return base_model(campaign);
-    case Variant::Kind::kFile: return load_model(campaign.model, variant.file, "");
-    case Variant::Kind::kSteps: return apply_steps(base_model(campaign), variant.steps);
-    case Variant::Kind::kReal: break;
+    case Variant::Kind::kBase:
+      return base_model(campaign);
+    case Variant::Kind::kFile:
+      return load_model(campaign.model, variant.file, "");
+    case Variant::Kind::kSteps:
+      return apply_steps(base_model(campaign), variant.steps);
+    case Variant::Kind::kReal:
+      break;
   }
-  throw std::invalid_argument("variant '" + variant.name + "' is the real door on the bench, not a model");
+  throw std::invalid_argument("variant '" + variant.name +
+                              "' is the real door on the bench, not a model");
 }
 
 }  // namespace doorbench::study

@@ -84,8 +84,8 @@ struct Campaign {
   std::string name;
   std::uint64_t seed = 1;
   ModelKind model = ModelKind::kSensory;
-  std::filesystem::path base_file;  // empty: the reference door
-  std::filesystem::path real_rig;   // empty: no real door
+  std::filesystem::path base_file;        // empty: the reference door
+  std::filesystem::path real_rig;         // empty: no real door
   double presentation_s = 8.0;            // a presentation for a person (real time)
   double simulated_presentation_s = 1.0;  // on the simulated device in simulated time
   std::vector<Variant> variants;

@@ -52,7 +52,8 @@ std::string tune_start(const Campaign& campaign, const Block& block, std::mt1993
     for (perceptual::Control control : tuned_controls()) {
       const double factor = std::exp((2.0 * uniform_open01(random) - 1.0) * span);
       for (const perceptual::ControlInfo& info : perceptual::controls()) {
-        if (info.control == control) steps.push_back({std::string(info.name), std::stod(level_text(factor, 3))});
+        if (info.control == control)
+          steps.push_back({std::string(info.name), std::stod(level_text(factor, 3))});
       }
     }
     try {
@@ -62,7 +63,8 @@ std::string tune_start(const Campaign& campaign, const Block& block, std::mt1993
       // A start outside the bounds or the constraints: draw again.
     }
   }
-  throw std::invalid_argument("block " + block.name + ": no tuning start within the bounds after 100 draws (start_spread " +
+  throw std::invalid_argument("block " + block.name +
+                              ": no tuning start within the bounds after 100 draws (start_spread " +
                               level_text(block.start_spread, 3) + ")");
 }
 
@@ -78,7 +80,8 @@ std::vector<std::string> pass_questions(const Block& block, int participant) {
     }
     const int count = static_cast<int>(block.attributes.size());
     for (int a = 0; a < count; ++a) {
-      questions.push_back("rating:" + block.attributes[(a + participant) % count] + ":" + std::to_string(block.scale));
+      questions.push_back("rating:" + block.attributes[(a + participant) % count] + ":" +
+                          std::to_string(block.scale));
     }
   }
   return questions;
@@ -91,8 +94,10 @@ std::vector<std::string> pass_questions(const Block& block, int participant) {
 // j + k + (p div R) is even, else (b, a). So each pair is played both ways in consecutive
 // passes, and participants p and p + R see the same pair order with every presentation
 // order swapped.
-std::vector<Pending> paired_trials(const Block& block, int participant, const std::vector<int>& labels) {
-  const std::vector<std::vector<int>> design = williams_design(static_cast<int>(block.pairs.size()));
+std::vector<Pending> paired_trials(const Block& block, int participant,
+                                   const std::vector<int>& labels) {
+  const std::vector<std::vector<int>> design =
+      williams_design(static_cast<int>(block.pairs.size()));
   const std::vector<int>& row = design[participant % design.size()];
   const int swap = participant / static_cast<int>(design.size()) % 2;
   const std::vector<std::string> questions = pass_questions(block, participant);
@@ -137,7 +142,8 @@ std::vector<Pending> block_trials(const Campaign& campaign, const Block& block, 
       std::vector<std::string> comparisons;
       if (block.method == JndMethod::kConstantStimuli) {
         for (int r = 0; r < block.repetitions; ++r) {
-          for (double level : block.levels) comparisons.push_back(jnd_stimulus_name(block.parameter, level));
+          for (double level : block.levels)
+            comparisons.push_back(jnd_stimulus_name(block.parameter, level));
         }
       } else {
         comparisons.assign(block.trials, block.parameter + "*?");
@@ -151,7 +157,8 @@ std::vector<Pending> block_trials(const Campaign& campaign, const Block& block, 
         trials.push_back(first[i] ? Pending{question, comparisons[i], standard}
                                   : Pending{question, standard, comparisons[i]});
       }
-      if (block.method != JndMethod::kConstantStimuli) return trials;  // adaptive: slots stay in order
+      if (block.method != JndMethod::kConstantStimuli)
+        return trials;  // adaptive: slots stay in order
       break;
     }
   }
@@ -176,9 +183,11 @@ std::string jnd_stimulus_name(const std::string& parameter, double level) {
 Plan make_plan(const Campaign& campaign, std::uint64_t seed) {
   Plan plan;
   plan.seed = seed;
-  const std::vector<std::vector<int>> orders = williams_design(static_cast<int>(campaign.blocks.size()));
+  const std::vector<std::vector<int>> orders =
+      williams_design(static_cast<int>(campaign.blocks.size()));
   std::vector<std::vector<int>> labels;
-  for (std::size_t b = 0; b < campaign.blocks.size(); ++b) labels.push_back(pair_labels(campaign.blocks[b], seed, b));
+  for (std::size_t b = 0; b < campaign.blocks.size(); ++b)
+    labels.push_back(pair_labels(campaign.blocks[b], seed, b));
   for (std::size_t p = 0; p < campaign.participants.size(); ++p) {
     const std::vector<int>& order = orders[p % orders.size()];
     int trial = 0;
@@ -186,7 +195,8 @@ Plan make_plan(const Campaign& campaign, std::uint64_t seed) {
       const Block& block = campaign.blocks[b];
       std::mt19937_64 random(substream_seed(seed, p, b, Purpose::kTrialOrder));
       int block_trial = 0;
-      for (Pending& pending : block_trials(campaign, block, static_cast<int>(p), labels[b], random)) {
+      for (Pending& pending :
+           block_trials(campaign, block, static_cast<int>(p), labels[b], random)) {
         PlanRow row;
         row.participant = campaign.participants[p];
         row.block = block.name;
@@ -208,11 +218,14 @@ BalancedCount balanced_participant_count(const Campaign& campaign) {
     count.participants = std::lcm(count.participants, rows);
     count.parts.push_back(std::move(part.append(" ").append(std::to_string(rows))));
   };
-  add(static_cast<long long>(williams_design(static_cast<int>(campaign.blocks.size())).size()), "block order");
+  add(static_cast<long long>(williams_design(static_cast<int>(campaign.blocks.size())).size()),
+      "block order");
   for (const Block& block : campaign.blocks) {
     if (block.type != BlockType::kPair && block.type != BlockType::kRating) continue;
-    long long rows = 2 * static_cast<long long>(williams_design(static_cast<int>(block.pairs.size())).size());
-    if (block.type == BlockType::kRating) rows = std::lcm(rows, static_cast<long long>(block.attributes.size()));
+    long long rows =
+        2 * static_cast<long long>(williams_design(static_cast<int>(block.pairs.size())).size());
+    if (block.type == BlockType::kRating)
+      rows = std::lcm(rows, static_cast<long long>(block.attributes.size()));
     add(rows, std::string("block '").append(block.name).append("'"));
   }
   return count;
@@ -224,13 +237,20 @@ std::string balance_note(const Campaign& campaign) {
   if (n % count.participants == 0) return "";
   std::string parts;
   for (const std::string& part : count.parts) parts.append(parts.empty() ? "" : ", ").append(part);
-  return std::string("note: ").append(std::to_string(n)).append(" participants; the counterbalancing is exact for a multiple of ")
-      .append(std::to_string(count.participants)).append(" (").append(parts)
-      .append("); participant i takes row i mod rows of each design (docs/campaign.md, Counterbalancing)");
+  return std::string("note: ")
+      .append(std::to_string(n))
+      .append(" participants; the counterbalancing is exact for a multiple of ")
+      .append(std::to_string(count.participants))
+      .append(" (")
+      .append(parts)
+      .append(
+          "); participant i takes row i mod rows of each design (docs/campaign.md, "
+          "Counterbalancing)");
 }
 
 std::string plan_csv(const Plan& plan) {
-  std::string text = csv_row({"participant", "block", "trial", "question", "first", "second", "block_trial"});
+  std::string text =
+      csv_row({"participant", "block", "trial", "question", "first", "second", "block_trial"});
   for (const PlanRow& row : plan.rows) {
     text += csv_row({row.participant, row.block, std::to_string(row.trial), row.question, row.first,
                      row.second, std::to_string(row.block_trial)});
@@ -239,7 +259,7 @@ std::string plan_csv(const Plan& plan) {
 }
 
 Plan read_plan_csv(const std::filesystem::path& path, std::uint64_t seed) {
-  static constexpr std::string_view kColumns[] = {"participant", "block",  "trial", "question",
+  static constexpr std::string_view kColumns[] = {"participant", "block",  "trial",      "question",
                                                   "first",       "second", "block_trial"};
   const TrialsTable table = read_trials_table(path, kColumns);
   Plan plan;
@@ -255,7 +275,8 @@ Plan read_plan_csv(const std::filesystem::path& path, std::uint64_t seed) {
       row.trial = std::stoi(table.value(r, "trial"));
       row.block_trial = std::stoi(table.value(r, "block_trial"));
     } catch (const std::exception&) {
-      throw TrialsTableError(path.string(), table.line_numbers[r], "trial and block_trial must be whole numbers");
+      throw TrialsTableError(path.string(), table.line_numbers[r],
+                             "trial and block_trial must be whole numbers");
     }
     plan.rows.push_back(std::move(row));
   }
@@ -274,8 +295,9 @@ std::string fnv1a64_hex(std::string_view text) {
 }
 
 std::string PlanIdentity::text() const {
-  return "campaign = " + campaign + "\nseed = " + std::to_string(seed) + "\nplan_fnv1a64 = " + plan_hash +
-         "\ncampaign_fnv1a64 = " + campaign_hash + "\ncampaign_folder = " + campaign_folder.string() + "\n";
+  return "campaign = " + campaign + "\nseed = " + std::to_string(seed) +
+         "\nplan_fnv1a64 = " + plan_hash + "\ncampaign_fnv1a64 = " + campaign_hash +
+         "\ncampaign_folder = " + campaign_folder.string() + "\n";
 }
 
 void write_campaign_folder(const std::filesystem::path& dir, const Campaign& campaign,
@@ -288,7 +310,8 @@ void write_campaign_folder(const std::filesystem::path& dir, const Campaign& cam
   identity.seed = plan.seed;
   identity.plan_hash = fnv1a64_hex(csv);
   identity.campaign_hash = fnv1a64_hex(campaign.text);
-  identity.campaign_folder = std::filesystem::absolute(std::filesystem::path(campaign.source)).parent_path();
+  identity.campaign_folder =
+      std::filesystem::absolute(std::filesystem::path(campaign.source)).parent_path();
   const auto write = [&](const char* name, const std::string& text) {
     write_file_atomically(dir / name, [&](std::ostream& out) { out << text; });
   };
@@ -300,27 +323,40 @@ void write_campaign_folder(const std::filesystem::path& dir, const Campaign& cam
 PlanIdentity read_plan_identity(const std::filesystem::path& dir) {
   const std::filesystem::path path = dir / "plan-id.txt";
   std::ifstream in(path);
-  if (!in) throw CampaignError(path.string() + ": cannot open for reading (is " + dir.string() + " a campaign folder made by `doorbench campaign plan`?)");
+  if (!in)
+    throw CampaignError(path.string() + ": cannot open for reading (is " + dir.string() +
+                        " a campaign folder made by `doorbench campaign plan`?)");
   PlanIdentity identity;
   std::string line;
   int number = 0;
   while (std::getline(in, line)) {
     ++number;
     const std::size_t eq = line.find(" = ");
-    if (eq == std::string::npos) throw CampaignError(path.string() + ":" + std::to_string(number) + ": expected KEY = VALUE");
+    if (eq == std::string::npos)
+      throw CampaignError(path.string() + ":" + std::to_string(number) + ": expected KEY = VALUE");
     const std::string key = line.substr(0, eq), value = line.substr(eq + 3);
-    if (key == "campaign") identity.campaign = value;
-    else if (key == "seed") identity.seed = std::stoull(value);
-    else if (key == "plan_fnv1a64") identity.plan_hash = value;
-    else if (key == "campaign_fnv1a64") identity.campaign_hash = value;
-    else if (key == "campaign_folder") identity.campaign_folder = value;
-    else throw CampaignError(path.string() + ":" + std::to_string(number) + ": " + key + ": unknown key");
+    if (key == "campaign")
+      identity.campaign = value;
+    else if (key == "seed")
+      identity.seed = std::stoull(value);
+    else if (key == "plan_fnv1a64")
+      identity.plan_hash = value;
+    else if (key == "campaign_fnv1a64")
+      identity.campaign_hash = value;
+    else if (key == "campaign_folder")
+      identity.campaign_folder = value;
+    else
+      throw CampaignError(path.string() + ":" + std::to_string(number) + ": " + key +
+                          ": unknown key");
   }
   std::ifstream plan_in(dir / "plan.csv", std::ios::binary);
-  const std::string csv((std::istreambuf_iterator<char>(plan_in)), std::istreambuf_iterator<char>());
+  const std::string csv((std::istreambuf_iterator<char>(plan_in)),
+                        std::istreambuf_iterator<char>());
   if (fnv1a64_hex(csv) != identity.plan_hash) {
-    throw CampaignError((dir / "plan.csv").string() + ": does not match plan-id.txt (plan_fnv1a64 " + identity.plan_hash +
-                        ", the file's " + fnv1a64_hex(csv) + "): the plan was changed after it was made");
+    throw CampaignError((dir / "plan.csv").string() +
+                        ": does not match plan-id.txt (plan_fnv1a64 " + identity.plan_hash +
+                        ", the file's " + fnv1a64_hex(csv) +
+                        "): the plan was changed after it was made");
   }
   return identity;
 }
@@ -331,7 +367,8 @@ CampaignFolder open_campaign_folder(const std::filesystem::path& dir) {
   folder.identity = read_plan_identity(dir);
   std::ifstream in(dir / "campaign.toml", std::ios::binary);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  folder.campaign = parse_campaign(text, (dir / "campaign.toml").string(), folder.identity.campaign_folder);
+  folder.campaign =
+      parse_campaign(text, (dir / "campaign.toml").string(), folder.identity.campaign_folder);
   folder.plan = read_plan_csv(dir / "plan.csv", folder.identity.seed);
   return folder;
 }

@@ -37,7 +37,7 @@ namespace doorbench::study {
 struct PlanRow {
   std::string participant;
   std::string block;
-  int trial = 0;        // 1-based, the participant's running order over all blocks
+  int trial = 0;         // 1-based, the participant's running order over all blocks
   std::string question;  // preference | preference-2ac | identify-real | stronger:PARAM |
                          // rating:ATTRIBUTE:K | tune
   std::string first, second;

@@ -28,7 +28,9 @@ namespace doorbench::study {
 namespace fs = std::filesystem;
 namespace {
 
-std::string quoted(std::string_view text) { return std::string("\"").append(text).append("\""); }
+std::string quoted(std::string_view text) {
+  return std::string("\"").append(text).append("\"");
+}
 
 std::string utc_now() {
   const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
@@ -98,8 +100,9 @@ class ParticipantLock {
     if (fd_ < 0) system_error(path, "cannot open");
     if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
       ::close(fd_);
-      throw std::runtime_error("participant " + participant + " is being run by another doorbench (" +
-                               path.string() + " is locked)");
+      throw std::runtime_error("participant " + participant +
+                               " is being run by another doorbench (" + path.string() +
+                               " is locked)");
     }
   }
   ~ParticipantLock() { ::close(fd_); }
@@ -122,14 +125,16 @@ std::size_t cut_torn_tail(const fs::path& path) {
 
 // Moves what an interrupted run left for `trial` (sessions, partial files, a tuned file) into
 // sessions/P/interrupted/, under a name not yet taken.
-void move_leftovers(const fs::path& folder, const fs::path& interrupted, const std::string& prefix) {
+void move_leftovers(const fs::path& folder, const fs::path& interrupted,
+                    const std::string& prefix) {
   if (!fs::exists(folder)) return;
   for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
     const std::string name = entry.path().filename().string();
     if (!entry.is_regular_file() || name.rfind(prefix, 0) != 0) continue;
     fs::create_directories(interrupted);
     fs::path target = interrupted / name;
-    for (int n = 2; fs::exists(target); ++n) target = interrupted / (name + "." + std::to_string(n));
+    for (int n = 2; fs::exists(target); ++n)
+      target = interrupted / (name + "." + std::to_string(n));
     fs::rename(entry.path(), target);
   }
 }
@@ -140,8 +145,8 @@ std::string neutral_question(std::string_view question) {
 }
 
 struct Existing {
-  int attempt = 0;                  // the latest attempt with rows (0: none)
-  std::vector<std::size_t> rows;    // indices of that attempt's rows, in file order
+  int attempt = 0;                // the latest attempt with rows (0: none)
+  std::vector<std::size_t> rows;  // indices of that attempt's rows, in file order
 };
 
 Existing existing_rows(const TrialsTable& table, const std::string& participant) {
@@ -212,14 +217,16 @@ std::string LineRespondent::answer(const PlanRow& row, const Stimulus&, const St
     const std::optional<std::string> text = next_line();
     if (!text) {
       prompts << "\n";
-      throw std::runtime_error(source_ + ": the answers ended at trial " + std::to_string(row.trial));
+      throw std::runtime_error(source_ + ": the answers ended at trial " +
+                               std::to_string(row.trial));
     }
     if (!interactive_) prompts << *text << "\n";
     try {
       return normalized_answer(row.question, *text);
     } catch (const std::invalid_argument& wrong) {
       if (!interactive_) {
-        throw std::runtime_error(source_ + ":" + std::to_string(line_) + ": trial " + std::to_string(row.trial) + ": " + wrong.what());
+        throw std::runtime_error(source_ + ":" + std::to_string(line_) + ": trial " +
+                                 std::to_string(row.trial) + ": " + wrong.what());
       }
       prompts << wrong.what() << "; again please\n";
     }
@@ -243,14 +250,16 @@ std::optional<std::string> LineRespondent::scripted_tuning_keys(int trial, std::
 DoorModel LineRespondent::tune(const PlanRow& row, const DoorModel&, std::ostream&) {
   // Only reached by a LineRespondent made without tunes_at_the_device (campaign run makes it
   // with): its lines cannot tune a door after the presentation.
-  throw std::runtime_error("trial " + std::to_string(row.trial) +
-                           ": this respondent answers lines and cannot tune after a presentation (a person tunes "
-                           "during it, with the keys: docs/campaign.md, A person's tune trial)");
+  throw std::runtime_error(
+      "trial " + std::to_string(row.trial) +
+      ": this respondent answers lines and cannot tune after a presentation (a person tunes "
+      "during it, with the keys: docs/campaign.md, A person's tune trial)");
 }
 
 // --- stimuli -----------------------------------------------------------------------------
 
-StimulusMaker::StimulusMaker(const Campaign& campaign) : campaign_(&campaign), base_(base_model(campaign)) {}
+StimulusMaker::StimulusMaker(const Campaign& campaign)
+    : campaign_(&campaign), base_(base_model(campaign)) {}
 
 Stimulus StimulusMaker::named(const std::string& name) {
   if (const auto found = cache_.find(name); found != cache_.end()) return found->second;
@@ -274,12 +283,13 @@ const Block& block_of(const Campaign& campaign, const PlanRow& row) {
   throw std::invalid_argument("the plan's block '" + row.block + "' is not in the campaign file");
 }
 
-std::pair<Stimulus, Stimulus> StimulusMaker::make(const PlanRow& row, const std::vector<bool>& correct) {
+std::pair<Stimulus, Stimulus> StimulusMaker::make(const PlanRow& row,
+                                                  const std::vector<bool>& correct) {
   std::string first = row.first, second = row.second;
   const Block& block = block_of(*campaign_, row);
   if (block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli) {
     const double adaptive = block.method == JndMethod::kStaircase ? staircase_level(block, correct)
-                                                                   : quest_level(block, correct);
+                                                                  : quest_level(block, correct);
     const std::string level = jnd_stimulus_name(block.parameter, adaptive);
     if (first == block.parameter + "*?") first = level;
     if (second == block.parameter + "*?") second = level;
@@ -306,8 +316,8 @@ double StimulusMaker::quest_level(const Block& block, const std::vector<bool>& a
   return track.quest.grid().levels[track.next];
 }
 
-bool names_comparison(const std::string& first, const std::string& second, const std::string& answer,
-                      const std::string& parameter) {
+bool names_comparison(const std::string& first, const std::string& second,
+                      const std::string& answer, const std::string& parameter) {
   const std::string standard = jnd_stimulus_name(parameter, 1.0);
   const int comparison = first == standard ? 2 : 1;
   (void)second;
@@ -315,9 +325,18 @@ bool names_comparison(const std::string& first, const std::string& second, const
 }
 
 const std::vector<std::string>& trials_columns() {
-  static const std::vector<std::string> columns{
-      "participant", "block",        "trial",    "question",         "first",           "second", "answer",
-      "attempt",     "answered_utc", "sessions", "first_parameters", "second_parameters"};
+  static const std::vector<std::string> columns{"participant",
+                                                "block",
+                                                "trial",
+                                                "question",
+                                                "first",
+                                                "second",
+                                                "answer",
+                                                "attempt",
+                                                "answered_utc",
+                                                "sessions",
+                                                "first_parameters",
+                                                "second_parameters"};
   return columns;
 }
 
@@ -329,7 +348,7 @@ struct RunState {
   const CampaignFolder* folder;
   std::string participant;
   int attempt = 1;
-  fs::path session_dir;  // sessions/P/aN
+  fs::path session_dir;                                // sessions/P/aN
   std::map<std::string, std::vector<bool>> staircase;  // block -> answers named the comparison
 };
 
@@ -340,37 +359,50 @@ void check_existing(const TrialsTable& table, const std::vector<std::size_t>& ro
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const std::size_t r = rows[i];
     const int line = table.line_numbers[r];
-    if (i >= plan.size()) throw TrialsTableError(table.source, line, "more rows for " + state.participant + " than the plan has trials");
+    if (i >= plan.size())
+      throw TrialsTableError(table.source, line,
+                             "more rows for " + state.participant + " than the plan has trials");
     const PlanRow& planned = plan[i];
     const Block& block = block_of(state.folder->campaign, planned);
-    const bool staircase = block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli;  // or quest+
-    const bool same = table.value(r, "trial") == std::to_string(planned.trial) && table.value(r, "block") == planned.block &&
+    const bool staircase =
+        block.type == BlockType::kJnd && block.method != JndMethod::kConstantStimuli;  // or quest+
+    const bool same = table.value(r, "trial") == std::to_string(planned.trial) &&
+                      table.value(r, "block") == planned.block &&
                       table.value(r, "question") == planned.question &&
-                      (staircase || (table.value(r, "first") == planned.first && table.value(r, "second") == planned.second));
+                      (staircase || (table.value(r, "first") == planned.first &&
+                                     table.value(r, "second") == planned.second));
     if (!same) {
-      throw TrialsTableError(table.source, line, "participant " + state.participant + ", trial " + table.value(r, "trial") +
-                                                     " does not match the plan's trial " + std::to_string(planned.trial) +
-                                                     " (is this trials.csv from another plan?)");
+      throw TrialsTableError(table.source, line,
+                             "participant " + state.participant + ", trial " +
+                                 table.value(r, "trial") + " does not match the plan's trial " +
+                                 std::to_string(planned.trial) +
+                                 " (is this trials.csv from another plan?)");
     }
     if (block.type == BlockType::kJnd) {
       state.staircase[block.name].push_back(
-          names_comparison(table.value(r, "first"), table.value(r, "second"), table.value(r, "answer"), block.parameter));
+          names_comparison(table.value(r, "first"), table.value(r, "second"),
+                           table.value(r, "answer"), block.parameter));
     }
   }
 }
 
 std::string run_one_trial(RunState& state, const PlanRow& row, int planned, StimulusMaker& maker,
-                          Respondent& respondent, const Presenter& presenter, std::ostream& prompts) {
+                          Respondent& respondent, const Presenter& presenter,
+                          std::ostream& prompts) {
   const Block& block = block_of(state.folder->campaign, row);
   auto [first, second] = maker.make(row, state.staircase[block.name]);
   move_leftovers(state.session_dir, state.session_dir.parent_path() / "interrupted",
                  trial_file(row.trial, "-"));
   fs::create_directories(state.session_dir);
-  const fs::path relative_dir = fs::path("sessions") / state.participant / (std::string("a") + std::to_string(state.attempt));
+  const fs::path relative_dir =
+      fs::path("sessions") / state.participant / (std::string("a") + std::to_string(state.attempt));
   std::string sessions, answer;
-  auto present = [&](int position, const Stimulus& stimulus, std::optional<DoorModel>* tuned = nullptr) {
-    prompts << "trial " << row.trial << " of " << planned << ": presentation " << position << std::endl;
-    const std::string file = trial_file(row.trial, std::string("-") + std::to_string(position) + ".h5");
+  auto present = [&](int position, const Stimulus& stimulus,
+                     std::optional<DoorModel>* tuned = nullptr) {
+    prompts << "trial " << row.trial << " of " << planned << ": presentation " << position
+            << std::endl;
+    const std::string file =
+        trial_file(row.trial, std::string("-") + std::to_string(position) + ".h5");
     PresentationCall call{state.participant,
                           row.trial,
                           position,
@@ -386,14 +418,19 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
     std::optional<DoorModel> tuned_at_the_device;
     if (respondent.tunes_at_the_device()) {
       present(1, first, &tuned_at_the_device);
-      if (!tuned_at_the_device) throw std::logic_error("the presenter gave no tuned door for trial " + std::to_string(row.trial));
+      if (!tuned_at_the_device)
+        throw std::logic_error("the presenter gave no tuned door for trial " +
+                               std::to_string(row.trial));
     } else {
       present(1, first);
-      prompts << "trial " << row.trial << " of " << planned << ": tuning with the keys" << std::endl;
+      prompts << "trial " << row.trial << " of " << planned << ": tuning with the keys"
+              << std::endl;
     }
-    const DoorModel tuned = tuned_at_the_device ? *tuned_at_the_device : respondent.tune(row, *first.model, prompts);
+    const DoorModel tuned =
+        tuned_at_the_device ? *tuned_at_the_device : respondent.tune(row, *first.model, prompts);
     const std::string file = trial_file(row.trial, "-tuned.json");
-    write_file_atomically(state.session_dir / file, [&](std::ostream& out) { out << to_parameter_json(tuned); });
+    write_file_atomically(state.session_dir / file,
+                          [&](std::ostream& out) { out << to_parameter_json(tuned); });
     second = Stimulus{"tuned", tuned, rendered_parameters(tuned), "the tuned door"};
     present(2, second);
     answer = (relative_dir / file).generic_string();
@@ -403,29 +440,35 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
     answer = respondent.answer(row, first, second, prompts);
   }
   if (block.type == BlockType::kJnd) {
-    state.staircase[block.name].push_back(names_comparison(first.name, second.name, answer, block.parameter));
+    state.staircase[block.name].push_back(
+        names_comparison(first.name, second.name, answer, block.parameter));
   }
   return csv_row({state.participant, row.block, std::to_string(row.trial), row.question, first.name,
-                  block.type == BlockType::kTune ? "" : second.name, answer, std::to_string(state.attempt), utc_now(),
-                  sessions, first.parameters, second.parameters});
+                  block.type == BlockType::kTune ? "" : second.name, answer,
+                  std::to_string(state.attempt), utc_now(), sessions, first.parameters,
+                  second.parameters});
 }
 
 }  // namespace
 
-RunResult run_participant(const CampaignFolder& folder, const RunOptions& options, Respondent& respondent,
-                          const Presenter& presenter, std::ostream& prompts) {
+RunResult run_participant(const CampaignFolder& folder, const RunOptions& options,
+                          Respondent& respondent, const Presenter& presenter,
+                          std::ostream& prompts) {
   const std::vector<PlanRow> plan = folder.plan.of(options.participant);
   if (plan.empty()) {
     std::string ids;
-    for (const std::string& id : folder.campaign.participants) ids += (ids.empty() ? "" : ", ") + id;
-    throw std::runtime_error("participant " + options.participant + " is not in the plan (its participants: " + ids + ")");
+    for (const std::string& id : folder.campaign.participants)
+      ids += (ids.empty() ? "" : ", ") + id;
+    throw std::runtime_error("participant " + options.participant +
+                             " is not in the plan (its participants: " + ids + ")");
   }
   ParticipantLock lock(folder.dir, options.participant);
   const fs::path trials_path = folder.dir / "trials.csv";
   if (!fs::exists(trials_path)) {
     TrialsAppender(trials_path).append(csv_row(trials_columns()));
   } else if (const std::size_t cut = cut_torn_tail(trials_path); cut > 0) {
-    prompts << trials_path.string() << ": cut off a torn last line (" << cut << " bytes) left by an interrupted write\n";
+    prompts << trials_path.string() << ": cut off a torn last line (" << cut
+            << " bytes) left by an interrupted write\n";
   }
   const TrialsTable table = read_trials_table(trials_path);
   const Existing existing = existing_rows(table, options.participant);
@@ -438,34 +481,39 @@ RunResult run_participant(const CampaignFolder& folder, const RunOptions& option
   std::vector<std::size_t> rows = existing.rows;
   if (rows.size() == plan.size()) {
     if (!options.redo) {
-      throw std::runtime_error("participant " + options.participant + " has answered all " + std::to_string(plan.size()) +
-                               " trials (attempt " + std::to_string(existing.attempt) +
-                               "); give --redo to run them again (the earlier answers are kept, marked by attempt)");
+      throw std::runtime_error(
+          "participant " + options.participant + " has answered all " +
+          std::to_string(plan.size()) + " trials (attempt " + std::to_string(existing.attempt) +
+          "); give --redo to run them again (the earlier answers are kept, marked by attempt)");
     }
     ++result.attempt;
     rows.clear();
   } else if (options.redo) {
-    throw std::runtime_error("--redo is for a participant who has finished; " + options.participant + " has answered " +
-                             std::to_string(rows.size()) + " of " + std::to_string(plan.size()) +
+    throw std::runtime_error("--redo is for a participant who has finished; " +
+                             options.participant + " has answered " + std::to_string(rows.size()) +
+                             " of " + std::to_string(plan.size()) +
                              " trials: run without --redo to resume");
   }
   state.attempt = result.attempt;
-  state.session_dir = folder.dir / "sessions" / options.participant / (std::string("a") + std::to_string(state.attempt));
+  state.session_dir = folder.dir / "sessions" / options.participant /
+                      (std::string("a") + std::to_string(state.attempt));
   check_existing(table, rows, plan, state);
   result.answered_before = static_cast<int>(rows.size());
   respondent.set_attempt(state.attempt);
   StimulusMaker maker(folder.campaign);
   TrialsAppender appender(trials_path);
   if (result.answered_before > 0) {
-    prompts << "resuming at trial " << result.answered_before + 1 << " of " << result.planned << "\n";
+    prompts << "resuming at trial " << result.answered_before + 1 << " of " << result.planned
+            << "\n";
   }
   for (std::size_t t = rows.size(); t < plan.size(); ++t) {
     std::string row;
     try {
       row = run_one_trial(state, plan[t], result.planned, maker, respondent, presenter, prompts);
     } catch (const std::exception& failure) {
-      throw std::runtime_error("trial " + std::to_string(plan[t].trial) + " of " + std::to_string(result.planned) +
-                               " stopped: " + failure.what() + " (the " + std::to_string(t) + " answers before it are in " +
+      throw std::runtime_error("trial " + std::to_string(plan[t].trial) + " of " +
+                               std::to_string(result.planned) + " stopped: " + failure.what() +
+                               " (the " + std::to_string(t) + " answers before it are in " +
                                trials_path.string() + "; run the same command again to resume)");
     }
     appender.append(row);
@@ -489,7 +537,8 @@ void link_or_copy_tree(const fs::path& from, const fs::path& to) {
     }
     if (!entry.is_regular_file()) continue;
     fs::create_directories(target.parent_path());
-    if (fs::exists(target)) throw std::runtime_error(target.string() + ": exists (two folders hold the same file)");
+    if (fs::exists(target))
+      throw std::runtime_error(target.string() + ": exists (two folders hold the same file)");
     std::error_code linked;
     fs::create_hard_link(entry.path(), target, linked);
     if (linked) fs::copy_file(entry.path(), target);
@@ -503,10 +552,12 @@ void merge_campaign_folders(const std::vector<fs::path>& dirs, const fs::path& o
   std::vector<PlanIdentity> identities;
   for (const fs::path& dir : dirs) identities.push_back(read_plan_identity(dir));
   for (std::size_t i = 1; i < dirs.size(); ++i) {
-    if (identities[i].plan_hash != identities[0].plan_hash || identities[i].seed != identities[0].seed) {
-      throw std::runtime_error(dirs[i].string() + " and " + dirs[0].string() + " are not of the same plan (plan " +
-                               identities[i].plan_hash + " seed " + std::to_string(identities[i].seed) + " vs plan " +
-                               identities[0].plan_hash + " seed " + std::to_string(identities[0].seed) + ")");
+    if (identities[i].plan_hash != identities[0].plan_hash ||
+        identities[i].seed != identities[0].seed) {
+      throw std::runtime_error(
+          dirs[i].string() + " and " + dirs[0].string() + " are not of the same plan (plan " +
+          identities[i].plan_hash + " seed " + std::to_string(identities[i].seed) + " vs plan " +
+          identities[0].plan_hash + " seed " + std::to_string(identities[0].seed) + ")");
     }
   }
   check_output_folder(out, dirs, false);
@@ -519,8 +570,9 @@ void merge_campaign_folders(const std::vector<fs::path>& dirs, const fs::path& o
       const std::string& participant = table.value(r, "participant");
       const auto [it, fresh] = owner.emplace(participant, dir);
       if (!fresh && it->second != dir) {
-        throw std::runtime_error("participant " + participant + " has rows in both " + it->second.string() + " and " +
-                                 dir.string() + "; merge joins folders of different participants");
+        throw std::runtime_error("participant " + participant + " has rows in both " +
+                                 it->second.string() + " and " + dir.string() +
+                                 "; merge joins folders of different participants");
       }
       std::vector<std::string> fields;
       for (const std::string& column : trials_columns()) fields.push_back(table.value(r, column));
@@ -528,7 +580,8 @@ void merge_campaign_folders(const std::vector<fs::path>& dirs, const fs::path& o
     }
   }
   fs::create_directories(out);
-  for (const char* name : {"campaign.toml", "plan.csv", "plan-id.txt"}) fs::copy_file(dirs[0] / name, out / name);
+  for (const char* name : {"campaign.toml", "plan.csv", "plan-id.txt"})
+    fs::copy_file(dirs[0] / name, out / name);
   for (const fs::path& dir : dirs) link_or_copy_tree(dir / "sessions", out / "sessions");
   write_file_atomically(out / "trials.csv", [&](std::ostream& stream) { stream << merged; });
 }

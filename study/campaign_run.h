@@ -142,7 +142,8 @@ class StimulusMaker {
   explicit StimulusMaker(const Campaign& campaign);
   // `staircase_correct`: the answers so far in this row's block (a staircase or QUEST+ slot's
   // level, study/staircase.h, study/quest_plus.h).
-  std::pair<Stimulus, Stimulus> make(const PlanRow& row, const std::vector<bool>& staircase_correct);
+  std::pair<Stimulus, Stimulus> make(const PlanRow& row,
+                                     const std::vector<bool>& staircase_correct);
   Stimulus named(const std::string& name);
   const Campaign& campaign() const { return *campaign_; }
   const DoorModel& base() const { return base_; }
@@ -189,7 +190,8 @@ const std::vector<std::string>& trials_columns();
 // ended, a trials.csv that does not match the plan, a finished participant without redo, a
 // participant not in the plan) after every answer so far is safely in trials.csv.
 RunResult run_participant(const CampaignFolder& folder, const RunOptions& options,
-                          Respondent& respondent, const Presenter& presenter, std::ostream& prompts);
+                          Respondent& respondent, const Presenter& presenter,
+                          std::ostream& prompts);
 
 // Joins campaign folders of one plan into `out` (which must not exist or be empty):
 // campaign.toml, plan.csv and plan-id.txt once, trials.csv with every folder's rows, the

@@ -21,23 +21,25 @@ std::string format(const char* pattern, double value) {
 
 // "; median threshold J*1.12 over 3 participants; QUEST+ posterior mean Weber fraction
 // [95 % credible interval]: P01 0.12 [0.08, 0.18], ..." (study/quest_plus.h).
-std::string quest_plus_summary(const Block& block, const std::map<std::string, std::vector<bool>>& tracks) {
+std::string quest_plus_summary(const Block& block,
+                               const std::map<std::string, std::vector<bool>>& tracks) {
   std::vector<double> means;
   std::string each;
   for (const auto& [participant, track] : tracks) {
     const QuestPlusEstimate estimate = quest_plus_estimate(block, track);
     means.push_back(estimate.weber_fraction);
     each += std::string(each.empty() ? " " : ", ").append(participant).append(" ") +
-            format("%.3f", estimate.weber_fraction) + " [" + format("%.3f", estimate.ci_low) + ", " +
-            format("%.3f", estimate.ci_high) + "]";
+            format("%.3f", estimate.weber_fraction) + " [" + format("%.3f", estimate.ci_low) +
+            ", " + format("%.3f", estimate.ci_high) + "]";
   }
   if (means.empty()) return "; no answers for a threshold";
   std::sort(means.begin(), means.end());
-  const double median = means.size() % 2 ? means[means.size() / 2]
-                                         : 0.5 * (means[means.size() / 2 - 1] + means[means.size() / 2]);
+  const double median = means.size() % 2
+                            ? means[means.size() / 2]
+                            : 0.5 * (means[means.size() / 2 - 1] + means[means.size() / 2]);
   return "; median threshold " + jnd_stimulus_name(block.parameter, 1.0 + median) + " over " +
-         std::to_string(means.size()) + " participants; QUEST+ posterior mean Weber fraction [95 % credible interval]:" +
-         each;
+         std::to_string(means.size()) +
+         " participants; QUEST+ posterior mean Weber fraction [95 % credible interval]:" + each;
 }
 
 // The rows of each participant's latest attempt.
@@ -49,12 +51,14 @@ std::vector<std::size_t> latest_rows(const TrialsTable& trials) {
   }
   std::vector<std::size_t> rows;
   for (std::size_t r = 0; r < trials.rows.size(); ++r) {
-    if (std::stoi(trials.value(r, "attempt")) == latest[trials.value(r, "participant")]) rows.push_back(r);
+    if (std::stoi(trials.value(r, "attempt")) == latest[trials.value(r, "participant")])
+      rows.push_back(r);
   }
   return rows;
 }
 
-std::string summary_of(const Block& block, const TrialsTable& trials, const std::vector<std::size_t>& rows) {
+std::string summary_of(const Block& block, const TrialsTable& trials,
+                       const std::vector<std::size_t>& rows) {
   std::string line = block.name + " (" + std::string(to_string(block.type)) + "): ";
   std::map<std::string, double> sum;
   std::map<std::string, int> count;
@@ -88,7 +92,8 @@ std::string summary_of(const Block& block, const TrialsTable& trials, const std:
     }
   }
   line += std::to_string(answers) + " answers";
-  if (block.type == BlockType::kTune) return line + " (one tuned door each, in sessions/P/aN/tNNN-tuned.json)";
+  if (block.type == BlockType::kTune)
+    return line + " (one tuned door each, in sessions/P/aN/tNNN-tuned.json)";
   if (block.type == BlockType::kPair) {
     line += "; chosen:";
     for (const auto& [name, n] : count) line += " " + name + " " + std::to_string(n);
@@ -102,7 +107,8 @@ std::string summary_of(const Block& block, const TrialsTable& trials, const std:
   }
   if (block.method == JndMethod::kConstantStimuli) {
     line += "; comparison named stronger:";
-    for (const auto& [level, n] : count) line += " " + level + " " + format("%.0f %%", 100.0 * sum[level] / n) + ",";
+    for (const auto& [level, n] : count)
+      line += " " + level + " " + format("%.0f %%", 100.0 * sum[level] / n) + ",";
     if (line.back() == ',') line.pop_back();
     return line;
   }
@@ -114,8 +120,10 @@ std::string summary_of(const Block& block, const TrialsTable& trials, const std:
   }
   if (thresholds.empty()) return line + "; too few reversals for a threshold";
   std::sort(thresholds.begin(), thresholds.end());
-  const double median = thresholds.size() % 2 ? thresholds[thresholds.size() / 2]
-                                              : 0.5 * (thresholds[thresholds.size() / 2 - 1] + thresholds[thresholds.size() / 2]);
+  const double median =
+      thresholds.size() % 2
+          ? thresholds[thresholds.size() / 2]
+          : 0.5 * (thresholds[thresholds.size() / 2 - 1] + thresholds[thresholds.size() / 2]);
   return line + "; median threshold " + jnd_stimulus_name(block.parameter, median) + " over " +
          std::to_string(thresholds.size()) + " participants";
 }

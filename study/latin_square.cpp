@@ -6,7 +6,8 @@
 namespace doorbench::study {
 
 std::vector<std::vector<int>> williams_design(int n) {
-  if (n < 1) throw std::invalid_argument("williams_design: n must be at least 1, got " + std::to_string(n));
+  if (n < 1)
+    throw std::invalid_argument("williams_design: n must be at least 1, got " + std::to_string(n));
   // The first row's offsets: 0, 1, −1, 2, −2, ... (mod n).
   std::vector<int> offsets;
   offsets.push_back(0);

@@ -18,14 +18,17 @@ namespace {
 
 constexpr double kQuartile = 0.6744897501960817;  // Φ⁻¹(0.75)
 
-double sigma_of(double weber) { return std::log1p(weber) / (std::sqrt(2.0) * kQuartile); }
+double sigma_of(double weber) {
+  return std::log1p(weber) / (std::sqrt(2.0) * kQuartile);
+}
 
 // The sensation a jnd parameter is felt by; -1: by its own value.
 int sensation_of(std::string_view name) {
   static const std::array<std::array<std::string_view, 2>, kSensations> parameters = {
       {{"J", "J_d"}, {"k_inf", "k_inf"}, {"k_lock", "k_lock"}, {"d1", "T_h"}, {"c", "c"}}};
   for (int s = 0; s < kSensations; ++s) {
-    if (name == kSensationNames[s] || name == parameters[s][0] || name == parameters[s][1]) return s;
+    if (name == kSensationNames[s] || name == parameters[s][0] || name == parameters[s][1])
+      return s;
   }
   return -1;
 }
@@ -33,7 +36,9 @@ int sensation_of(std::string_view name) {
 // The rating attribute's sensation; -1: the utility (pleasantness).
 int attribute_sensation(std::string_view attribute) {
   const std::string_view first = attribute.substr(0, attribute.find('-'));
-  const auto has = [&](std::string_view word) { return first.find(word) != std::string_view::npos; };
+  const auto has = [&](std::string_view word) {
+    return first.find(word) != std::string_view::npos;
+  };
   if (has("heav") || has("light")) return 0;
   if (has("unlatch") || has("latch")) return 1;
   if (has("clos")) return 2;
@@ -45,7 +50,8 @@ int attribute_sensation(std::string_view attribute) {
 std::array<double, kSensations> perceive(const SimulatedParticipant& p, const DoorModel& model,
                                          std::mt19937_64& random) {
   std::array<double, kSensations> percept = sensations(model);
-  for (int s = 0; s < kSensations; ++s) percept[s] += sigma_of(p.weber[s]) * standard_normal(random);
+  for (int s = 0; s < kSensations; ++s)
+    percept[s] += sigma_of(p.weber[s]) * standard_normal(random);
   return percept;
 }
 
@@ -62,10 +68,13 @@ bool lapses(const SimulatedParticipant& p, std::mt19937_64& random) {
   return uniform_open01(random) < p.lapse;
 }
 
-std::string choice(bool second) { return second ? "2" : "1"; }
+std::string choice(bool second) {
+  return second ? "2" : "1";
+}
 
 std::string answer_stronger(const SimulatedParticipant& p, std::string_view parameter,
-                            const DoorModel& first, const DoorModel& second, std::mt19937_64& random) {
+                            const DoorModel& first, const DoorModel& second,
+                            std::mt19937_64& random) {
   const int s = sensation_of(parameter);
   double a = 0.0, b = 0.0, sigma = 0.0;
   if (s >= 0) {
@@ -74,7 +83,9 @@ std::string answer_stronger(const SimulatedParticipant& p, std::string_view para
     sigma = sigma_of(p.weber[s]);
   } else {
     const std::optional<int> index = first.find_parameter(parameter);
-    if (!index) throw std::invalid_argument("stronger:" + std::string(parameter) + ": not a parameter of the model");
+    if (!index)
+      throw std::invalid_argument("stronger:" + std::string(parameter) +
+                                  ": not a parameter of the model");
     a = std::log(std::abs(first.parameter_values()[*index]));
     b = std::log(std::abs(second.parameter_values()[*index]));
     sigma = sigma_of(p.options.other_weber);
@@ -111,11 +122,14 @@ std::string ParticipantModelOptions::validate() const {
   for (double f : population_preference) {
     if (!(f > 0.0 && std::isfinite(f))) return "population_preference factors must be above 0";
   }
-  if (!(preference_spread_jnd >= 0.0 && preference_spread_jnd < 100.0)) return "preference_spread_jnd must be 0 to 100";
+  if (!(preference_spread_jnd >= 0.0 && preference_spread_jnd < 100.0))
+    return "preference_spread_jnd must be 0 to 100";
   if (!(lapse_rate >= 0.0 && lapse_rate <= 0.5)) return "lapse_rate must be 0 to 0.5";
-  if (!(position_bias_sd >= 0.0 && position_bias_sd < 10.0)) return "position_bias_sd must be 0 to 10";
+  if (!(position_bias_sd >= 0.0 && position_bias_sd < 10.0))
+    return "position_bias_sd must be 0 to 10";
   if (!(same_band >= 0.0)) return "same_band must be 0 or more";
-  if (!(rating_steps_per_jnd > 0.0) || !(rating_noise >= 0.0)) return "rating_steps_per_jnd must be above 0, rating_noise 0 or more";
+  if (!(rating_steps_per_jnd > 0.0) || !(rating_noise >= 0.0))
+    return "rating_steps_per_jnd must be above 0, rating_noise 0 or more";
   if (max_presses < 0 || max_presses > 10000) return "max_presses must be 0 to 10000";
   return "";
 }
@@ -135,17 +149,20 @@ SimulatedParticipant draw_participant(std::uint64_t seed, const DoorModel& base,
     throw std::invalid_argument("participant model: " + problem);
   }
   if (base.kind() != ModelKind::kSensory) {
-    throw std::invalid_argument("a simulated participant perceives the sensory model's controls (the campaign's model is " +
-                                std::string(to_string(base.kind())) + ")");
+    throw std::invalid_argument(
+        "a simulated participant perceives the sensory model's controls (the campaign's model is " +
+        std::string(to_string(base.kind())) + ")");
   }
   std::mt19937_64 random(substream_seed(seed, 0, 0, Purpose::kParticipantModel));
   SimulatedParticipant p;
   p.options = options;
   p.base_log = sensations(base);
   for (int s = 0; s < kSensations; ++s) {
-    p.weber[s] = options.typical_weber[s] * std::exp(options.weber_spread * standard_normal(random));
-    p.preferred_log[s] = p.base_log[s] + std::log(options.population_preference[s]) +
-                         options.preference_spread_jnd * std::log1p(p.weber[s]) * standard_normal(random);
+    p.weber[s] =
+        options.typical_weber[s] * std::exp(options.weber_spread * standard_normal(random));
+    p.preferred_log[s] =
+        p.base_log[s] + std::log(options.population_preference[s]) +
+        options.preference_spread_jnd * std::log1p(p.weber[s]) * standard_normal(random);
   }
   p.lapse = 2.0 * options.lapse_rate * uniform_open01(random);
   p.bias = options.position_bias_sd * standard_normal(random);
@@ -179,7 +196,8 @@ std::string answer_question(const SimulatedParticipant& p, std::string_view ques
   return choice(decision > 0.0);
 }
 
-TuneOutcome tune_door(const SimulatedParticipant& p, const DoorModel& start, std::mt19937_64& random) {
+TuneOutcome tune_door(const SimulatedParticipant& p, const DoorModel& start,
+                      std::mt19937_64& random) {
   TuneOutcome outcome{start, ""};
   std::array<int, kSensations> refused{};
   for (int press = 0; press < p.options.max_presses; ++press) {
@@ -197,7 +215,8 @@ TuneOutcome tune_door(const SimulatedParticipant& p, const DoorModel& start, std
     const bool increase = percept[worst] < p.preferred_log[worst];
     char key = 0;
     for (const TuningKey& k : tuning_keys()) {
-      if (k.control == *perceptual::find(kSensationNames[worst]) && k.increase == increase) key = k.key;
+      if (k.control == *perceptual::find(kSensationNames[worst]) && k.increase == increase)
+        key = k.key;
     }
     const KeyOutcome result = apply_key(outcome.model, key);
     outcome.keys += key;

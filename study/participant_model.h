@@ -63,8 +63,8 @@ struct ParticipantModelOptions {
   double position_bias_sd = 0.2;       // in the decision's σ
   double same_band = 1.5;              // 2-AC: utilities closer than this are "same"
   double rating_steps_per_jnd = 0.5;
-  double rating_noise = 0.5;  // scale steps
-  int max_presses = 60;       // tune
+  double rating_noise = 0.5;     // scale steps
+  int max_presses = 60;          // tune
   std::string validate() const;  // "" or one line naming the option
 };
 

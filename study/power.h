@@ -24,8 +24,8 @@
 namespace doorbench::study {
 
 struct PowerLine {
-  std::string block, question, what;  // what: "heavier vs reference", "level J*1.1"
-  int panels = 0, detected = 0;       // detection counts (tests)
+  std::string block, question, what;         // what: "heavier vs reference", "level J*1.1"
+  int panels = 0, detected = 0;              // detection counts (tests)
   double rate = 0.0, low = 0.0, high = 0.0;  // detected / panels and its Wilson interval
   bool is_threshold = false;                 // a staircase's summary instead of a test
   double threshold_median = 0.0, threshold_p05 = 0.0, threshold_p95 = 0.0;

@@ -34,7 +34,8 @@ QuestPlusGrid quest_plus_grid(const Block& block) {
   const double low = block.min_level - 1.0, high = block.max_level - 1.0;
   for (double delta : quest_log_spaced(low, high, block.quest_levels)) {
     const double level = std::round((1.0 + delta) * 1e4) / 1e4;  // as jnd_stimulus_name writes it
-    if (level > 1.0 && (grid.levels.empty() || level > grid.levels.back())) grid.levels.push_back(level);
+    if (level > 1.0 && (grid.levels.empty() || level > grid.levels.back()))
+      grid.levels.push_back(level);
   }
   grid.thresholds = quest_log_spaced(low, high, block.quest_thresholds);
   grid.slopes.assign(kQuestPlusSlopes.begin(), kQuestPlusSlopes.end());
@@ -46,10 +47,12 @@ QuestPlus::QuestPlus(QuestPlusGrid grid) : grid_(std::move(grid)) {
   if (grid_.levels.empty() || grid_.thresholds.empty() || grid_.slopes.empty()) {
     throw std::invalid_argument("QUEST+: an empty grid");
   }
-  if (!(grid_.lapse >= 0.0 && grid_.lapse < 1.0)) throw std::invalid_argument("QUEST+: lapse must be in [0, 1)");
+  if (!(grid_.lapse >= 0.0 && grid_.lapse < 1.0))
+    throw std::invalid_argument("QUEST+: lapse must be in [0, 1)");
   const auto positive = [](double v) { return v > 0.0 && std::isfinite(v); };
   for (double level : grid_.levels) {
-    if (!(level > 1.0 && std::isfinite(level))) throw std::invalid_argument("QUEST+: a level not above 1");
+    if (!(level > 1.0 && std::isfinite(level)))
+      throw std::invalid_argument("QUEST+: a level not above 1");
   }
   if (!std::all_of(grid_.thresholds.begin(), grid_.thresholds.end(), positive) ||
       !std::all_of(grid_.slopes.begin(), grid_.slopes.end(), positive)) {
@@ -99,7 +102,8 @@ std::vector<double> QuestPlus::expected_entropies() const {
 
 std::size_t QuestPlus::next_level() const {
   const std::vector<double> entropies = expected_entropies();
-  return static_cast<std::size_t>(std::min_element(entropies.begin(), entropies.end()) - entropies.begin());
+  return static_cast<std::size_t>(std::min_element(entropies.begin(), entropies.end()) -
+                                  entropies.begin());
 }
 
 void QuestPlus::update(std::size_t level, bool stronger) {
@@ -111,13 +115,15 @@ void QuestPlus::update(std::size_t level, bool stronger) {
     posterior_[i] *= stronger ? p : 1.0 - p;
     total += posterior_[i];
   }
-  if (!(total > 0.0)) throw std::invalid_argument("QUEST+: an answer the model gives probability 0");
+  if (!(total > 0.0))
+    throw std::invalid_argument("QUEST+: an answer the model gives probability 0");
   for (double& p : posterior_) p /= total;
   ++trials_;
 }
 
 QuestPlusEstimate QuestPlus::estimate(double mass) const {
-  if (!(mass > 0.0 && mass < 1.0)) throw std::invalid_argument("QUEST+: the credible mass must be in (0, 1)");
+  if (!(mass > 0.0 && mass < 1.0))
+    throw std::invalid_argument("QUEST+: the credible mass must be in (0, 1)");
   const std::size_t nt = grid_.thresholds.size(), ns = grid_.slopes.size();
   std::vector<double> marginal(nt, 0.0), log_w(nt);
   double mean = 0.0;

@@ -49,7 +49,7 @@ struct QuestPlusGrid {
 QuestPlusGrid quest_plus_grid(const Block& block);
 
 struct QuestPlusEstimate {
-  double weber_fraction = 0.0;  // exp(posterior mean of ln w)
+  double weber_fraction = 0.0;         // exp(posterior mean of ln w)
   double ci_low = 0.0, ci_high = 0.0;  // 95 % credible interval of w
   int trials = 0;
 };

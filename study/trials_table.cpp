@@ -147,8 +147,8 @@ TrialsTable parse_trials_table(std::string_view text, std::string_view source,
   for (std::string_view required : required_columns) {
     if (!table.find_column(required)) {
       throw TrialsTableError(source, header->line,
-                             "no column '" + std::string(required) + "' (the header has: " +
-                                 joined(table.column_names) + ")");
+                             "no column '" + std::string(required) +
+                                 "' (the header has: " + joined(table.column_names) + ")");
     }
   }
   while (std::optional<Record> record = reader.next()) {

@@ -27,9 +27,8 @@
 namespace doorbench::study {
 
 // The columns a trials table must have, in this order at the start of a written table.
-inline constexpr std::string_view kTrialsColumns[] = {"participant", "block",  "trial",
-                                                      "question",    "first",  "second",
-                                                      "answer"};
+inline constexpr std::string_view kTrialsColumns[] = {"participant", "block",  "trial", "question",
+                                                      "first",       "second", "answer"};
 
 class TrialsTableError : public std::runtime_error {
  public:
@@ -41,7 +40,7 @@ class TrialsTableError : public std::runtime_error {
 };
 
 struct TrialsTable {
-  std::vector<std::string> column_names;      // as in the header, every column
+  std::vector<std::string> column_names;       // as in the header, every column
   std::vector<std::vector<std::string>> rows;  // rows[r][c], one per data row
   std::vector<int> line_numbers;               // file line where each row starts, 1-based
   std::string source;                          // the file's path, for messages

@@ -116,8 +116,8 @@ class LiveJournal {
   std::unique_ptr<JournalReader> reader_;
   std::uint64_t inode_ = 0;  // of the journal opened, to notice a removal or replacement
   std::vector<SampleRing> rings_;
-  std::vector<int> latency_channel_;                          // per channel, -1 none
-  std::vector<const CalibrationRecord*> calib_;               // per channel, null none
+  std::vector<int> latency_channel_;             // per channel, -1 none
+  std::vector<const CalibrationRecord*> calib_;  // per channel, null none
   std::vector<std::string> calibration_problems_;
   std::deque<SessionEvent> events_;
   std::uint64_t next_scan_ = 0;

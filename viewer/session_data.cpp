@@ -8,13 +8,12 @@
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/preprocessing/preprocessing.h"
-#include "sensors/channel_limits.h"
 #include "core/numbers.h"
+#include "sensors/channel_limits.h"
 
 namespace doorbench::viewer {
 
 namespace {
-
 
 // A channel's series; `limit` (or null): its stretches at the limit as shades in `at_limit`.
 std::shared_ptr<Series> channel_series(const SessionReader& reader, const ChannelInfo& info,
@@ -432,9 +431,8 @@ namespace {
 void add_limit_shades(const SessionData& session, const std::string& who, double start_s,
                       std::size_t index, const std::string& consequence, PlotView& plot) {
   for (std::size_t i = 0; i < session.at_limit.size() && i < session.channels.size(); ++i) {
-    const bool wanted = index == std::string::npos
-                            ? session.channels[i].sensor_kind == "gyroscope"
-                            : i == index;
+    const bool wanted =
+        index == std::string::npos ? session.channels[i].sensor_kind == "gyroscope" : i == index;
     if (!wanted) continue;
     for (Shade shade : session.at_limit[i]) {
       shade.x0 -= start_s;

@@ -11,9 +11,9 @@
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
+#include "core/numbers.h"
 #include "core/parallel.h"
 #include "viewer/session_data.h"
-#include "core/numbers.h"
 
 namespace doorbench::viewer {
 

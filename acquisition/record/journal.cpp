@@ -1,10 +1,10 @@
 #include "acquisition/record/journal.h"
 
 #include <fcntl.h>
+#include <string.h>  // memmem
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <unistd.h>
-#include <string.h>  // memmem
 #include <zlib.h>
 
 #include <algorithm>
@@ -152,7 +152,8 @@ JournalHeader parse_header(const std::string& text, const std::string& source) {
         (header.scan_rate_hz >= 1.0 && header.scan_rate_hz <= 200000.0))) {
     char rate[32];
     std::snprintf(rate, sizeof rate, "%g", header.scan_rate_hz);
-    throw std::invalid_argument(std::string("scan_rate_hz ") + rate + " is not 0 (no DAQ) or from 1 to 200000 Hz");
+    throw std::invalid_argument(std::string("scan_rate_hz ") + rate +
+                                " is not 0 (no DAQ) or from 1 to 200000 Hz");
   }
   return header;
 }
@@ -437,8 +438,8 @@ bool differs_in_one_byte(std::uint32_t a, std::uint32_t b) {
 
 std::string JournalReader::read_bytes(std::uint64_t at, std::uint64_t count) const {
   std::string bytes(count, '\0');
-  if (count > 0 && ::pread(fd_, bytes.data(), count, static_cast<off_t>(at)) !=
-                       static_cast<ssize_t>(count)) {
+  if (count > 0 &&
+      ::pread(fd_, bytes.data(), count, static_cast<off_t>(at)) != static_cast<ssize_t>(count)) {
     throw JournalError(path_.string() + ": cannot read " + std::to_string(count) +
                        " bytes at byte " + std::to_string(at) + ": " + errno_text(errno));
   }
@@ -478,7 +479,8 @@ std::uint64_t JournalReader::find_frame(std::uint64_t from) const {
   std::vector<std::uint8_t> chunk, payload;
   for (std::uint64_t at = from; at + kFrameHeaderBytes <= file_bytes_; at += kChunk) {
     // 3 bytes more, so that a marker across two chunks is found.
-    const auto size = static_cast<std::size_t>(std::min<std::uint64_t>(kChunk + 3, file_bytes_ - at));
+    const auto size =
+        static_cast<std::size_t>(std::min<std::uint64_t>(kChunk + 3, file_bytes_ - at));
     chunk.resize(size);
     if (::pread(fd_, chunk.data(), size, static_cast<off_t>(at)) != static_cast<ssize_t>(size)) {
       return file_bytes_;
@@ -488,7 +490,8 @@ std::uint64_t JournalReader::find_frame(std::uint64_t from) const {
     while (begin < end) {
       const void* found = ::memmem(begin, static_cast<std::size_t>(end - begin), "DBFR", 4);
       if (found == nullptr) break;
-      const auto index = static_cast<std::size_t>(static_cast<const std::uint8_t*>(found) - chunk.data());
+      const auto index =
+          static_cast<std::size_t>(static_cast<const std::uint8_t*>(found) - chunk.data());
       if (index >= kChunk) break;  // the next chunk starts there
       if (frame_checks_out(at + index, payload)) return at + index;
       begin = static_cast<const std::uint8_t*>(found) + 1;
@@ -521,14 +524,15 @@ std::string JournalReader::locate_header_json(std::uint32_t json_bytes, std::uin
   const std::uint64_t first_frame = find_frame(kHeadBytes);
   if (first_frame >= file_bytes_ && !length_plausible) {
     throw JournalHeaderIncomplete(
-        path_.string() + ": the journal's header is incomplete (the recording died while creating it)");
+        path_.string() +
+        ": the journal's header is incomplete (the recording died while creating it)");
   }
   const std::string before_frames =
       read_bytes(kHeadBytes, std::min<std::uint64_t>(first_frame - kHeadBytes, kMaxHeaderBytes));
   const auto length_repaired = [&](std::size_t size) {
     note_repair("its length field (bytes 12-15) said " + std::to_string(json_bytes) +
-                " bytes, but the header's text is " + std::to_string(size) + " bytes long (ending at byte " +
-                std::to_string(kHeadBytes + size) + ")");
+                " bytes, but the header's text is " + std::to_string(size) +
+                " bytes long (ending at byte " + std::to_string(kHeadBytes + size) + ")");
   };
   // The text ends at the first frame, or (a damaged first frame) at a closing brace: one
   // pass, the CRC continued from brace to brace.
@@ -536,20 +540,22 @@ std::string JournalReader::locate_header_json(std::uint32_t json_bytes, std::uin
   std::size_t done = 0;
   for (std::size_t size = 1; size <= before_frames.size(); ++size) {
     if (before_frames[size - 1] != '}' && size != before_frames.size()) continue;
-    running = crc32({reinterpret_cast<const std::uint8_t*>(before_frames.data()) + done, size - done},
-                    running);
+    running = crc32(
+        {reinterpret_cast<const std::uint8_t*>(before_frames.data()) + done, size - done}, running);
     done = size;
     if (running != json_crc) continue;
     if (size != json_bytes) length_repaired(size);
     return before_frames.substr(0, size);
   }
   // One flipped bit (the checksum locates it), or a damaged checksum field.
-  for (const std::string* candidate : std::array<const std::string*, 2>{&by_length, &before_frames}) {
+  for (const std::string* candidate :
+       std::array<const std::string*, 2>{&by_length, &before_frames}) {
     if (candidate->empty()) continue;
     std::string text = *candidate;
     const auto [at, bit] = single_flipped_bit(text, json_crc);
     if (at >= 0) {
-      text[static_cast<std::size_t>(at)] = static_cast<char>(text[static_cast<std::size_t>(at)] ^ (1 << bit));
+      text[static_cast<std::size_t>(at)] =
+          static_cast<char>(text[static_cast<std::size_t>(at)] ^ (1 << bit));
       if (text.size() != json_bytes) length_repaired(text.size());
       note_repair("bit " + std::to_string(bit) + " of byte " + std::to_string(kHeadBytes + at) +
                   " was flipped (found by the header's checksum) and is set right");
@@ -579,23 +585,29 @@ std::string JournalReader::locate_header_json(std::uint32_t json_bytes, std::uin
 }
 
 void JournalReader::read_header() {
-  const auto damaged = [&](const std::string& why) { return JournalError(path_.string() + ": " + why); };
+  const auto damaged = [&](const std::string& why) {
+    return JournalError(path_.string() + ": " + why);
+  };
   std::array<std::uint8_t, kHeadBytes> head{};
   const ssize_t got = ::pread(fd_, head.data(), head.size(), 0);
   if (got < 0) throw damaged(errno_text(errno));
   const auto have = static_cast<std::size_t>(got);
-  const bool magic_ok = have >= kMagic.size() && std::memcmp(head.data(), kMagic.data(), kMagic.size()) == 0;
+  const bool magic_ok =
+      have >= kMagic.size() && std::memcmp(head.data(), kMagic.data(), kMagic.size()) == 0;
   if (have < head.size()) {
     if (std::memcmp(head.data(), kMagic.data(), std::min(have, kMagic.size())) == 0) {
       throw JournalHeaderIncomplete(
-          damaged("the journal's header is incomplete (the recording died while creating it)").what());
+          damaged("the journal's header is incomplete (the recording died while creating it)")
+              .what());
     }
     throw damaged("not a doorbench journal");
   }
   if (!magic_ok) {
     // A damaged magic, or not a journal at all: the JSON text that follows says.
-    const std::string start = read_bytes(kHeadBytes, std::min<std::uint64_t>(file_bytes_ - kHeadBytes, 4096));
-    if (start.empty() || start[0] != '{' || start.find("\"doorbench-journal\"") == std::string::npos) {
+    const std::string start =
+        read_bytes(kHeadBytes, std::min<std::uint64_t>(file_bytes_ - kHeadBytes, 4096));
+    if (start.empty() || start[0] != '{' ||
+        start.find("\"doorbench-journal\"") == std::string::npos) {
       throw damaged("not a doorbench journal");
     }
     note_repair("its magic (bytes 0-7) is damaged; the text after it is a journal's header");
@@ -612,10 +624,12 @@ void JournalReader::read_header() {
   try {
     json = locate_header_json(json_bytes, json_crc);
   } catch (const JournalHeaderIncomplete&) {
-    if (version > static_cast<std::uint32_t>(kJournalFormatVersion) && version < 256) throw newer(version);
+    if (version > static_cast<std::uint32_t>(kJournalFormatVersion) && version < 256)
+      throw newer(version);
     throw;
   } catch (const JournalError&) {
-    if (version > static_cast<std::uint32_t>(kJournalFormatVersion) && version < 256) throw newer(version);
+    if (version > static_cast<std::uint32_t>(kJournalFormatVersion) && version < 256)
+      throw newer(version);
     throw;
   }
   std::uint64_t own_version = version;

@@ -1,10 +1,10 @@
 // The plan of a recording (internal/recording_plan.h).
+#include "acquisition/record/internal/recording_plan.h"
+
 #include <algorithm>
 #include <cmath>
 #include <set>
 #include <stdexcept>
-
-#include "acquisition/record/internal/recording_plan.h"
 
 namespace doorbench::record_detail {
 

@@ -2,6 +2,7 @@
 
 #include <fcntl.h>
 #include <hdf5.h>
+#include <stdio.h>  // renameat2
 #include <sys/file.h>
 #include <unistd.h>
 
@@ -11,7 +12,6 @@
 #include <cstdio>
 #include <cstring>
 #include <limits>
-#include <stdio.h>  // renameat2
 #include <set>
 
 namespace doorbench {
@@ -459,8 +459,8 @@ ConvertResult check_already_complete(const std::filesystem::path& journal,
                               : existing.sample_count(existing.channels().front().name);
   if (!ended || has != scans) {
     throw JournalError(journal.string() + ": " + session.string() +
-                       " already exists and does not hold this journal's " +
-                       std::to_string(scans) + " scans (it has " + std::to_string(has) +
+                       " already exists and does not hold this journal's " + std::to_string(scans) +
+                       " scans (it has " + std::to_string(has) +
                        "); move one of them away, or recover with another output path");
   }
   ConvertResult result;
@@ -520,10 +520,9 @@ ConvertResult recover_session(const std::filesystem::path& file, const RecoverOp
     throw JournalError(journal.string() +
                        ": the recording died while creating this journal, before its first "
                        "scan; there is nothing to recover" +
-                       (kept.empty() ? "; it is left as it is (it could not be renamed: " +
-                                           problem + ")"
-                                     : "; it is kept as " + kept.string() +
-                                           " (remove it when you like)"));
+                       (kept.empty()
+                            ? "; it is left as it is (it could not be renamed: " + problem + ")"
+                            : "; it is kept as " + kept.string() + " (remove it when you like)"));
   }
   std::filesystem::path session = options.out;
   if (session.empty()) {

@@ -1,12 +1,13 @@
 // A recording's writer side (internal/session_recording.h): the live status, the trigger
 // stage, the polled sources' threads, the reading and sync threads, and the loop that
 // drains the sources into the journal until the recording is over, then writes its ending.
+#include "acquisition/record/internal/session_recording.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
 
-#include "acquisition/record/internal/session_recording.h"
 #include "acquisition/record/recovery.h"
 
 namespace doorbench::record_detail {

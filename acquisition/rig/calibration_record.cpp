@@ -34,7 +34,8 @@ std::string CalibrationRecord::unit_problem(std::string_view input, std::string_
 CalibrationRecord linear_record(std::string id, std::string input_unit, std::string unit,
                                 double gain, double offset, std::string method) {
   if (!std::isfinite(gain) || !std::isfinite(offset) || gain == 0.0) {
-    throw std::invalid_argument("a linear record needs a finite gain other than 0 and a finite offset");
+    throw std::invalid_argument(
+        "a linear record needs a finite gain other than 0 and a finite offset");
   }
   CalibrationRecord record;
   record.id = std::move(id);

@@ -219,7 +219,8 @@ std::string trimmed(std::string_view text) {
 int first_definition_line(std::string_view text, int second_line, std::string_view description) {
   const auto close = description.rfind('\'');
   const auto open = close == std::string_view::npos ? close : description.rfind('\'', close - 1);
-  if (open == std::string_view::npos || description.find("cannot redefine existing") == std::string_view::npos) {
+  if (open == std::string_view::npos ||
+      description.find("cannot redefine existing") == std::string_view::npos) {
     return 0;
   }
   const std::string name(description.substr(open + 1, close - open - 1));
@@ -321,4 +322,3 @@ RigDefinition read_rig_file(const std::filesystem::path& path) {
 }
 
 }  // namespace doorbench
-

@@ -1,7 +1,7 @@
 // The rig file's text helpers (internal/rig_toml.h).
-#include <algorithm>
-
 #include "acquisition/rig/internal/rig_toml.h"
+
+#include <algorithm>
 
 namespace doorbench::rig_detail {
 

@@ -345,8 +345,7 @@ std::string format_csv_number(double value) {
   return std::string(buffer, end);
 }
 
-CsvTable parse_csv_table(std::string_view text, std::string_view source,
-                         EmptyCells empty_cells) {
+CsvTable parse_csv_table(std::string_view text, std::string_view source, EmptyCells empty_cells) {
   if (const std::string pointer = lfs_pointer_description(text); !pointer.empty()) {
     throw CsvError(source, 0, pointer);
   }

@@ -32,13 +32,14 @@ ImportConversion parse_scale(const std::string& item) {
   auto [target, value] = split_item(item, "--scale", form);
   const std::size_t comma = value.find(',');
   const std::optional<double> gain = parse_csv_number(value.substr(0, comma));
-  const std::optional<double> offset =
-      comma == std::string::npos ? std::optional<double>(0.0)
-                                 : parse_csv_number(value.substr(comma + 1));
+  const std::optional<double> offset = comma == std::string::npos
+                                           ? std::optional<double>(0.0)
+                                           : parse_csv_number(value.substr(comma + 1));
   if (!gain || !offset) throw std::invalid_argument("--scale item '" + item + "' is not " + form);
   if (*gain == 0.0) {
-    throw std::invalid_argument("--scale item '" + item + "': a gain of 0 makes every value " +
-                                value.substr(comma == std::string::npos ? value.size() : comma + 1));
+    throw std::invalid_argument(
+        "--scale item '" + item + "': a gain of 0 makes every value " +
+        value.substr(comma == std::string::npos ? value.size() : comma + 1));
   }
   ImportConversion conversion;
   conversion.target = std::move(target);
@@ -165,8 +166,8 @@ std::map<std::string, CalibrationRecord> take_raw_columns(
           conversion.record ? stem + "_" + unit_column_suffix(conversion.record->input_unit)
                             : stem + "_UNIT";
       throw CsvError(source, table.header_line,
-                     conversion.given + ": no column " + wanted + " (the raw " +
-                         conversion.target + "); the columns: " + column_list(table));
+                     conversion.given + ": no column " + wanted + " (the raw " + conversion.target +
+                         "); the columns: " + column_list(table));
     }
     if (raw.size() > 1) {
       throw CsvError(source, table.header_line,
@@ -177,8 +178,8 @@ std::map<std::string, CalibrationRecord> take_raw_columns(
     const std::string raw_name = table.column_names[raw.front()];
     if (raw_name != column && table.find_column(column)) {
       throw CsvError(source, table.header_line,
-                     conversion.given + ": the raw column " + raw_name + " would become " +
-                         column + ", which the file has already");
+                     conversion.given + ": the raw column " + raw_name + " would become " + column +
+                         ", which the file has already");
     }
     records.emplace(column, conversion.record_for(unit_of_column(raw_name)));
     table.column_names[raw.front()] = column;

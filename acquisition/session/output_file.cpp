@@ -14,7 +14,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-std::string system_error(int error) { return std::strerror(error); }
+std::string system_error(int error) {
+  return std::strerror(error);
+}
 
 // The same file: device and inode (so hard links, symbolic links and other spellings of
 // one path are caught). False when either does not exist.
@@ -74,11 +76,13 @@ void sync_folder(const fs::path& path) {
 
 }  // namespace
 
-void check_output_file(const fs::path& output, const std::vector<fs::path>& inputs, bool overwrite) {
+void check_output_file(const fs::path& output, const std::vector<fs::path>& inputs,
+                       bool overwrite) {
   const std::string where = output.string() + ": ";
   for (const fs::path& input : inputs) {
     if (same_file(output, input)) {
-      throw OutputRefused(where + "is an input of this command (doorbench never writes onto its input)");
+      throw OutputRefused(where +
+                          "is an input of this command (doorbench never writes onto its input)");
     }
   }
   std::error_code error;
@@ -106,17 +110,19 @@ void check_output_session(const fs::path& output, const std::vector<fs::path>& i
   }
 }
 
-void check_output_folder(const fs::path& folder, const std::vector<fs::path>& inputs, bool overwrite) {
+void check_output_folder(const fs::path& folder, const std::vector<fs::path>& inputs,
+                         bool overwrite) {
   const std::string where = folder.string() + ": ";
   std::error_code error;
   if (!fs::exists(folder, error)) return;
-  if (!fs::is_directory(folder, error)) throw OutputRefused(where + "exists and is not a directory");
+  if (!fs::is_directory(folder, error))
+    throw OutputRefused(where + "exists and is not a directory");
   for (const fs::path& input : inputs) {
     // The input itself, or a file in the folder (its parent is the folder).
     const fs::path parent = input.parent_path().empty() ? fs::path(".") : input.parent_path();
     if (same_file(folder, input) || same_file(folder, parent)) {
       throw OutputRefused(where + "holds an input of this command (" + input.string() +
-                        ") (doorbench never writes onto its input)");
+                          ") (doorbench never writes onto its input)");
     }
   }
   if (!overwrite && !fs::is_empty(folder, error)) {

@@ -35,8 +35,8 @@ class OutputRefused : public OutputError {
   using OutputError::OutputError;
 };
 
-// Throws OutputRefused for `output` when it is one of `inputs` (the same file, however named), or when it
-// exists and `overwrite` is false. Messages:
+// Throws OutputRefused for `output` when it is one of `inputs` (the same file, however named), or
+// when it exists and `overwrite` is false. Messages:
 //   "OUT: is an input of this command (doorbench never writes onto its input)"
 //   "OUT: exists (give --overwrite to replace it)"
 //   "OUT: is a directory, not a file"
@@ -48,8 +48,8 @@ void check_output_file(const std::filesystem::path& output,
 void check_output_session(const std::filesystem::path& output,
                           const std::vector<std::filesystem::path>& inputs);
 
-// Throws OutputRefused for a folder of outputs that exists and is not empty when `overwrite` is false, that is
-// not a folder, or that is (or holds) one of `inputs`. Does not create it. Messages:
+// Throws OutputRefused for a folder of outputs that exists and is not empty when `overwrite` is
+// false, that is not a folder, or that is (or holds) one of `inputs`. Does not create it. Messages:
 //   "DIR: exists and is not empty (give --overwrite to write into it)"
 //   "DIR: exists and is not a directory"
 //   "DIR: holds an input of this command (IN) (doorbench never writes onto its input)"

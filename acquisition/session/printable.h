@@ -23,10 +23,18 @@ inline std::string printable(std::string_view text) {
     }
     out += '\\';
     switch (c) {
-      case '\n': out += 'n'; break;
-      case '\r': out += 'r'; break;
-      case '\t': out += 't'; break;
-      case '\x1b': out += 'e'; break;
+      case '\n':
+        out += 'n';
+        break;
+      case '\r':
+        out += 'r';
+        break;
+      case '\t':
+        out += 't';
+        break;
+      case '\x1b':
+        out += 'e';
+        break;
       default:
         out += 'x';
         out += kHex[byte >> 4];
@@ -56,7 +64,8 @@ inline std::string shortened(std::string_view text) {
     };
     if ((c == '\'' || c == '"') && !(i > 0 && word_char(i - 1))) {
       std::size_t close = text.find(c, i + 1);
-      while (close != std::string_view::npos && word_char(close + 1)) close = text.find(c, close + 1);
+      while (close != std::string_view::npos && word_char(close + 1))
+        close = text.find(c, close + 1);
       if (close != std::string_view::npos && close - i - 1 > 80) {
         out += c + cut(text.substr(i + 1, close - i - 1)) + c;
         i = close + 1;

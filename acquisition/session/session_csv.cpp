@@ -177,8 +177,8 @@ bool on_one_clock(const std::vector<const ChannelInfo*>& exported,
 // false, touching nothing, unless every channel has the same uniform rate and start (within
 // half a sample) and the counts differ.
 bool on_one_clock_cut_short(const std::vector<const ChannelInfo*>& exported,
-                            std::vector<OwnClock>& own,
-                            std::vector<std::vector<double>>& columns, Recording& recording) {
+                            std::vector<OwnClock>& own, std::vector<std::vector<double>>& columns,
+                            Recording& recording) {
   const double rate_hz = exported[0]->sample_rate_hz;
   std::size_t longest = 0;
   bool counts_differ = false;

@@ -275,7 +275,6 @@ const char* to_string(RawType type) {
   return type == RawType::kCounts ? "counts" : "values";
 }
 
-
 void write_record_group(hid_t calibrations, const CalibrationRecord& record,
                         const std::string& json) {
   const Handle group = make_group(calibrations, record.id);

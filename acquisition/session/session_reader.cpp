@@ -259,9 +259,9 @@ struct SessionReader::Impl {
         if (!std::isfinite(all_times[i]) || (i > 0 && !(all_times[i] > all_times[i - 1]))) {
           throw Failure("/channels/" + name + "/time_s: sample " + std::to_string(i) + " (" +
                         format_time(all_times[i]) + " s) is " +
-                        (std::isfinite(all_times[i]) ? "not after the one before (" +
-                                                           format_time(all_times[i - 1]) + " s)"
-                                                     : "not finite") +
+                        (std::isfinite(all_times[i])
+                             ? "not after the one before (" + format_time(all_times[i - 1]) + " s)"
+                             : "not finite") +
                         "; times must be finite and increasing");
         }
       }

@@ -581,5 +581,4 @@ void SessionWriter::close() {
   impl_->guarded([&] { impl_->finish(); });
 }
 
-
 }  // namespace doorbench

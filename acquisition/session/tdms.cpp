@@ -147,12 +147,12 @@ std::size_t numeric_size(std::uint32_t type) {
 
 // One scaler of a DAQmx raw data index: where its values are in the raw buffers.
 struct DaqmxScaler {
-  std::uint32_t type = 0;          // DAQmx's own codes: 0 U8, 1 I8, 2 U16, ... 9 DBL
-  std::uint32_t buffer = 0;        // the raw buffer (one per device) it reads from
-  std::uint32_t byte_offset = 0;   // within the buffer's stride (digital: bit_offset / 8)
-  std::uint32_t bit_offset = 0;    // digital line scalers: the line's bit in the stride
+  std::uint32_t type = 0;         // DAQmx's own codes: 0 U8, 1 I8, 2 U16, ... 9 DBL
+  std::uint32_t buffer = 0;       // the raw buffer (one per device) it reads from
+  std::uint32_t byte_offset = 0;  // within the buffer's stride (digital: bit_offset / 8)
+  std::uint32_t bit_offset = 0;   // digital line scalers: the line's bit in the stride
   bool digital = false;
-  std::uint32_t scale_id = 0;      // the NI_Scale[scale_id] it stands for
+  std::uint32_t scale_id = 0;  // the NI_Scale[scale_id] it stands for
 };
 
 // Bytes per value of DAQmx's scaler data types (its own codes); 0 for the others.
@@ -161,7 +161,8 @@ std::size_t daqmx_value_size(std::uint32_t type) {
   return type < 10 ? kSizes[type] : 0;
 }
 
-static_assert(std::endian::native == std::endian::little, "the reader assumes a little-endian host");
+static_assert(std::endian::native == std::endian::little,
+              "the reader assumes a little-endian host");
 
 // The value of type T stored at `at` in the segment's byte order (kTocBigEndian: all but the
 // ToC itself is big-endian).
@@ -382,9 +383,9 @@ std::vector<std::string> split_path(const std::string& path, const Reader& in,
 struct ObjectState {
   std::vector<std::string> parts;
   bool has_raw = false;
-  bool daqmx = false;                  // DAQmx raw data: scalers and raw buffer widths
+  bool daqmx = false;  // DAQmx raw data: scalers and raw buffer widths
   std::vector<DaqmxScaler> scalers;
-  std::vector<std::uint32_t> widths;   // bytes per sample of each raw buffer
+  std::vector<std::uint32_t> widths;  // bytes per sample of each raw buffer
   std::uint32_t type = kVoid;
   std::uint64_t count = 0;         // values per chunk
   std::uint64_t string_bytes = 0;  // string channels: bytes per chunk
@@ -401,7 +402,6 @@ std::size_t chunk_bytes(const ObjectState& object) {
   }
   return static_cast<std::size_t>(object.count) * numeric_size(object.type);
 }
-
 
 }  // namespace
 
@@ -457,8 +457,8 @@ SegmentLayout read_lead_in(Reader& in, std::size_t start, std::size_t file_bytes
                    : layout.meta_start + static_cast<std::size_t>(next_offset);
   if (next_offset > file_bytes || layout.end > file_bytes || layout.end < layout.meta_start) {
     in.fail_at(start + 12, "the next segment offset (" + std::to_string(next_offset) +
-                               ") points past the end of the file (" +
-                               std::to_string(file_bytes) + " bytes)");
+                               ") points past the end of the file (" + std::to_string(file_bytes) +
+                               " bytes)");
   }
   layout.raw_start = layout.meta_start + static_cast<std::size_t>(raw_offset);
   if (raw_offset > file_bytes || layout.raw_start > layout.end) {
@@ -653,10 +653,12 @@ class TdmsParser {
       if (!object.daqmx || with_data.size() == 1) chunk += chunk_bytes(object);
     }
     const std::size_t raw_bytes = layout.end - layout.raw_start;
-    if (chunk == 0) in_.fail_at(layout.raw_start, "raw data but no object with raw data in the segment");
+    if (chunk == 0)
+      in_.fail_at(layout.raw_start, "raw data but no object with raw data in the segment");
     if (raw_bytes % chunk != 0) {
-      in_.fail_at(layout.raw_start, "raw data of " + std::to_string(raw_bytes) + " bytes is not a whole number of " +
-               std::to_string(chunk) + "-byte chunks (partial chunks are not supported)");
+      in_.fail_at(layout.raw_start, "raw data of " + std::to_string(raw_bytes) +
+                                        " bytes is not a whole number of " + std::to_string(chunk) +
+                                        "-byte chunks (partial chunks are not supported)");
     }
     const std::size_t chunks = raw_bytes / chunk;
     in_.seek(layout.raw_start);

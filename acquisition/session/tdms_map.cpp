@@ -1,7 +1,5 @@
 // Mapping a TDMS file's channels to a recording (acquisition/session/tdms.h): the --map
 // syntax with its escapes, the channel list for messages, and tdms_to_recording.
-#include "acquisition/session/tdms.h"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -13,6 +11,7 @@
 #include <set>
 
 #include "acquisition/session/csv_table.h"
+#include "acquisition/session/tdms.h"
 
 namespace doorbench {
 
@@ -141,7 +140,8 @@ const TdmsMapItem& check_map(const TdmsFile& file, const std::vector<TdmsMapItem
                              const std::string& source) {
   const TdmsMapItem* force_item = map_item(map, "force");
   const bool has_motion = map_item(map, "angle") != nullptr || map_item(map, "rate") != nullptr;
-  if (!force_item) mapping_error(file, source, "--map gives no force channel (force=GROUP/CHANNEL)");
+  if (!force_item)
+    mapping_error(file, source, "--map gives no force channel (force=GROUP/CHANNEL)");
   if (!has_motion) {
     mapping_error(file, source,
                   "--map gives neither angle nor rate (angle=GROUP/CHANNEL or "
@@ -191,13 +191,11 @@ double waveform_time(const TdmsFile& file, const TdmsChannel& force, const std::
                       " has no wf_increment > 0 to give the time (give its rate, --rate-hz R, "
                       "or map a time channel, time=GROUP/CHANNEL)");
   }
-  if (has_increment && rate_hz > 0 &&
-      !(std::abs(*increment->number * rate_hz - 1.0) <= 1e-9)) {
+  if (has_increment && rate_hz > 0 && !(std::abs(*increment->number * rate_hz - 1.0) <= 1e-9)) {
     mapping_error(file, source,
                   "force: --rate-hz " + format_csv_number(rate_hz) + " contradicts channel " +
-                      map_name(force) + "'s wf_increment " +
-                      format_csv_number(*increment->number) + " s (" +
-                      format_csv_number(1.0 / *increment->number) + " Hz)");
+                      map_name(force) + "'s wf_increment " + format_csv_number(*increment->number) +
+                      " s (" + format_csv_number(1.0 / *increment->number) + " Hz)");
   }
   const double interval_s = has_increment ? *increment->number : 1.0 / rate_hz;
   const TdmsProperty* offset = property(force, "wf_start_offset");
@@ -230,8 +228,8 @@ std::string expected_unit(const TdmsMapItem& item, const ImportConversion* conve
 // before): as many values as the force channel, the same waveform increment as the clock's
 // (interval_s > 0, when the time is the waveform's), the target's unit (or its record's
 // input unit); its origin as metadata, and its record when it is converted.
-void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item,
-                        const TdmsChannel& channel, const TdmsChannel& force, double interval_s,
+void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item, const TdmsChannel& channel,
+                        const TdmsChannel& force, double interval_s,
                         const TdmsImportOptions& options, const std::string& source,
                         Recording& recording) {
   const std::string name = map_name(channel);
@@ -332,10 +330,8 @@ void add_raw_columns(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
     if (item.target == "time") continue;
     const TdmsChannel& channel = mapped_channel(file, item, source);
     if (channel.daqmx_raw.empty()) continue;
-    const bool physical =
-        item.target == "force" || item.target == "angle" || item.target == "rate";
-    const std::string stem =
-        physical ? item.target : item.target.substr(0, item.target.rfind('_'));
+    const bool physical = item.target == "force" || item.target == "angle" || item.target == "rate";
+    const std::string stem = physical ? item.target : item.target.substr(0, item.target.rfind('_'));
     for (const auto& [id, values] : channel.daqmx_raw) {
       const std::string name =
           stem + "_raw" + (channel.daqmx_raw.size() > 1 ? std::to_string(id) : std::string());
@@ -353,16 +349,15 @@ void add_raw_columns(const TdmsFile& file, const std::vector<TdmsMapItem>& map,
       }
       recording.extra_names.push_back(name);
       recording.extra_columns.push_back(values);
-      recording.metadata.emplace_back("tdms_raw_" + name,
-                                      std::string("DAQmx scaler ")
-                                          .append(std::to_string(id))
-                                          .append(" of ")
-                                          .append(map_name(channel))
-                                          .append(" as stored (")
-                                          .append(item.target)
-                                          .append(" is it through ")
-                                          .append(channel.scaling)
-                                          .append(")"));
+      recording.metadata.emplace_back("tdms_raw_" + name, std::string("DAQmx scaler ")
+                                                              .append(std::to_string(id))
+                                                              .append(" of ")
+                                                              .append(map_name(channel))
+                                                              .append(" as stored (")
+                                                              .append(item.target)
+                                                              .append(" is it through ")
+                                                              .append(channel.scaling)
+                                                              .append(")"));
     }
   }
 }
@@ -392,8 +387,8 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
     for (const auto& [earlier, target] : taken) {
       if (earlier == channel) {
         mapping_error(file, source,
-                      item.target + ": channel " + map_name(*channel) + " is mapped as " +
-                          target + " already (one channel per target)");
+                      item.target + ": channel " + map_name(*channel) + " is mapped as " + target +
+                          " already (one channel per target)");
       }
     }
     taken.emplace_back(channel, item.target);
@@ -413,8 +408,8 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
     recording.metadata.emplace_back("tdms_wf_start_time", start->text);
   }
   for (const TdmsMapItem& item : map) {
-    take_mapped_column(file, item, mapped_channel(file, item, source), force, interval_s,
-                       options, source, recording);
+    take_mapped_column(file, item, mapped_channel(file, item, source), force, interval_s, options,
+                       source, recording);
   }
   for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
     if (!(recording.time_s[i] > recording.time_s[i - 1])) {

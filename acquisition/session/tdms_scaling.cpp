@@ -31,8 +31,9 @@ double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, cons
                    int depth, const std::string& where) {
   if (scale < 0) {
     if (in.daqmx) {
-      throw TdmsError(where + ": a scale reads the raw data, which a DAQmx channel has only "
-                              "through its scalers");
+      throw TdmsError(where +
+                      ": a scale reads the raw data, which a DAQmx channel has only "
+                      "through its scalers");
     }
     return in.raw;
   }
@@ -41,7 +42,8 @@ double scale_value(const std::map<std::string, TdmsProperty>& p, int scale, cons
   const auto type = p.find(prefix + "Scale_Type");
   if (type == p.end()) {
     if (in.daqmx) {
-      if (const auto it = in.daqmx->find(static_cast<std::uint32_t>(scale)); it != in.daqmx->end()) {
+      if (const auto it = in.daqmx->find(static_cast<std::uint32_t>(scale));
+          it != in.daqmx->end()) {
         return it->second[in.sample];
       }
     }
@@ -128,8 +130,7 @@ void apply_scaling(TdmsChannel& channel, const std::string& source) {
     in.sample = i;
     channel.values[i] = scale_value(channel.properties, last, in, 0, where);
   }
-  const auto type =
-      channel.properties.find("NI_Scale[" + std::to_string(last) + "]_Scale_Type");
+  const auto type = channel.properties.find("NI_Scale[" + std::to_string(last) + "]_Scale_Type");
   channel.scaling = "NI_Scale[" + std::to_string(last) + "] (" +
                     (type != channel.properties.end() ? type->second.text : "DAQmx scaler") + ")";
 }

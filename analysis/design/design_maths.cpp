@@ -1,10 +1,11 @@
 // The maths of the inverse design (internal/design_maths.h).
+#include "analysis/design/internal/design_maths.h"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
 
-#include "analysis/design/internal/design_maths.h"
 #include "core/number_format.h"
 #include "core/numbers.h"
 

@@ -92,4 +92,3 @@ std::string InverseDesignResult::full_report() const {
 }
 
 }  // namespace doorbench
-

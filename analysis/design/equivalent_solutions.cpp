@@ -6,13 +6,12 @@
 #include <stdexcept>
 
 #include "core/number_format.h"
-#include "core/units.h"
 #include "core/numbers.h"
+#include "core/units.h"
 
 namespace doorbench {
 
 namespace {
-
 
 double weber_fraction(const EquivalenceOptions& options, std::string_view quantity) {
   for (const FeltJnd& jnd : options.jnds) {

@@ -49,8 +49,8 @@ std::string felt_definition(const FeltOptions& o) {
       "largest angle); holding force = mean of opening and closing at %.0f +- %.0f deg "
       "(> 0: falls shut)",
       o.latch_zone_rad * kDegPerRad, o.moving_rate_rad_s, o.latch_zone_rad * kDegPerRad,
-      o.near_closed_end_rad * kDegPerRad, o.open_end_margin_rad * kDegPerRad, o.balance_angle_rad * kDegPerRad,
-      o.balance_half_width_rad * kDegPerRad);
+      o.near_closed_end_rad * kDegPerRad, o.open_end_margin_rad * kDegPerRad,
+      o.balance_angle_rad * kDegPerRad, o.balance_half_width_rad * kDegPerRad);
 }
 
 std::string standard_run_conditions(const FeltOptions& o) {
@@ -334,8 +334,8 @@ std::string FeltQuantities::brief_report() const {
   text += printf_text("  friction near closed        %7.2f N\n", friction_near_closed_N);
   text += printf_text("  friction further open       %7.2f N\n", friction_open_N);
   text += printf_text("  friction in free movement   %7.2f N\n", free_movement_friction_N);
-  text += printf_text("  holding force at %4.1f deg   %7.2f N (%s)\n", balance_angle_rad * kDegPerRad,
-                      balance_force_N,
+  text += printf_text("  holding force at %4.1f deg   %7.2f N (%s)\n",
+                      balance_angle_rad * kDegPerRad, balance_force_N,
                       !std::isfinite(balance_force_N) ? "unknown"
                       : balance_force_N > 0           ? "falls shut when let go"
                                                       : "falls open when let go");

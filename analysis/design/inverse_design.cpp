@@ -38,7 +38,6 @@ double change_scale(double as_is, const Bounds& bounds) {
   return std::abs(as_is) > 0 ? std::abs(as_is) : 1.0;
 }
 
-
 int find_or_throw(const DoorModel& model, const std::string& name, const char* option) {
   const std::optional<int> index = model.find_parameter(name);
   if (!index) {
@@ -326,7 +325,6 @@ std::vector<DesignSolution> DesignRun::run_starts(const DoorModel& origin, int p
   }
   return found;
 }
-
 
 // Adds to result.solutions the designs of found_ the data cannot tell from `reference`,
 // distinct from each other and from those kept, smallest change first; notes each start.

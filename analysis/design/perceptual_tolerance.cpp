@@ -12,7 +12,6 @@ namespace doorbench {
 
 namespace {
 
-
 const FeltQuantityInfo* find_quantity(std::string_view name) {
   for (const FeltQuantityInfo& info : kFeltQuantities) {
     if (info.name == name) return &info;
@@ -32,10 +31,17 @@ const std::vector<FeltJndKind>& felt_jnd_kinds() {
   static const std::vector<FeltJndKind> kinds = {
       {"peak_unlatch_force_N", "stiffness", 0.15, {"k_l", "F_l0", "latch_effort", "k_inf"}},
       {"peak_latch_force_N", "stiffness", 0.15, {"k_l", "F_l0", "closing_effort", "k_lock"}},
-      {"friction_near_closed_N", "friction", 0.20,
+      {"friction_near_closed_N",
+       "friction",
+       0.20,
        {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
-      {"friction_open_N", "friction", 0.20, {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
-      {"free_movement_friction_N", "friction", 0.20,
+      {"friction_open_N",
+       "friction",
+       0.20,
+       {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
+      {"free_movement_friction_N",
+       "friction",
+       0.20,
        {"T_h", "mu_g", "mu_l", "b_h", "d1", "d2", "smoothness"}},
       {"balance_force_N", "stiffness", 0.15, {"k_s", "F0", "k"}},
   };
@@ -245,10 +251,10 @@ std::string PerceptualSpec::brief_report() const {
   for (std::size_t q = 0; q < rows.size(); ++q) {
     const PerceptualRow& row = rows[q];
     const std::string label = felt_label(kFeltQuantities[q]);
-    text += printf_text("  %-34s %5.1f%%  %-*s %s -> %s\n", label.c_str(),
-                        100 * row.jnd.weber_fraction, width, row.jnd.source.c_str(),
-                        share(row).c_str(),
-                        q < proposal.rows.size() ? share(proposal.rows[q]).c_str() : "-");
+    text +=
+        printf_text("  %-34s %5.1f%%  %-*s %s -> %s\n", label.c_str(), 100 * row.jnd.weber_fraction,
+                    width, row.jnd.source.c_str(), share(row).c_str(),
+                    q < proposal.rows.size() ? share(proposal.rows[q]).c_str() : "-");
   }
   return text + "  " + proposal.summary + "\n";
 }

@@ -21,7 +21,6 @@ std::string felt_criterion_text() {
          "Carlo doors, with its Wilson 95 % interval";
 }
 
-
 }  // namespace design_detail
 
 using design_detail::felt_criterion_text;

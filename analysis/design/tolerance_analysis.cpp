@@ -22,7 +22,6 @@ namespace doorbench {
 
 namespace {
 
-
 struct DefaultTolerance {
   std::string_view name;
   double plus_minus;

@@ -14,7 +14,6 @@ namespace doorbench {
 
 namespace {
 
-
 bool is_inertia(const std::string& name) {
   return name == "J_d" || name == "J";
 }
@@ -118,9 +117,9 @@ CommandedTorqueFit fit_commanded_torque(const DoorModel& start,
         {static_cast<int>(k), prior.center / map.scale[k], prior.sigma / map.scale[k]});
   }
 
-  const TorqueMapOutcome outcome = solve_torque_map(
-      start, strokes, map, solver_settings(options), map.scaled(map.base_values), prior_residuals,
-      torque_scale_Nm);
+  const TorqueMapOutcome outcome =
+      solve_torque_map(start, strokes, map, solver_settings(options), map.scaled(map.base_values),
+                       prior_residuals, torque_scale_Nm);
   if (!outcome.usable) {
     throw std::runtime_error("commanded-torque fit: the solver failed (" + outcome.termination +
                              ")");

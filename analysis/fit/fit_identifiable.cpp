@@ -65,8 +65,8 @@ std::vector<int> identifiable_subset(const ReducedSystem& system, const Eigen::V
     bool any = false;
     for (std::size_t k = 0; k < kept.size(); ++k) {
       const auto i = static_cast<Eigen::Index>(k);
-      undetermined[k] = inverse.undetermined[k] ||
-                        !(sigma(i) <= relative_limit * std::abs(x(kept[k])));
+      undetermined[k] =
+          inverse.undetermined[k] || !(sigma(i) <= relative_limit * std::abs(x(kept[k])));
       any = any || undetermined[k];
     }
     if (!any) break;

@@ -133,8 +133,8 @@ void replay_stroke(const DoorModel& model, const Stroke& stroke, StrokeFitMetric
       const auto end = static_cast<std::ptrdiff_t>(starts[p + 1]);
       if (end - first < 2) continue;
       const std::vector<double> time_s(stroke.time_s.begin() + first, stroke.time_s.begin() + end);
-      const RecordedForce force(
-          time_s, std::vector<double>(stroke.force_N.begin() + first, stroke.force_N.begin() + end));
+      const RecordedForce force(time_s, std::vector<double>(stroke.force_N.begin() + first,
+                                                            stroke.force_N.begin() + end));
       DoorState initial;
       initial.time_s = time_s.front();
       initial.theta_rad = stroke.theta_rad[first];

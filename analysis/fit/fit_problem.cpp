@@ -1,7 +1,5 @@
 #include "analysis/fit/fit_problem.h"
 
-#include "core/parallel.h"
-
 #include <ceres/ceres.h>
 
 #include <Eigen/Dense>
@@ -20,11 +18,11 @@
 
 #include "analysis/fit/internal/fit_equation_error.h"
 #include "core/numbers.h"
+#include "core/parallel.h"
 
 namespace doorbench {
 
 namespace {
-
 
 // DOORBENCH_FIT_TRACE=1 prints Ceres' progress and summaries to stderr.
 bool tracing() {
@@ -640,8 +638,8 @@ bool WindowProblem::reduce(bool cached_only, ReducedSystem& out) const {
 
 namespace {
 
-// The equation-error problem (analysis/fit/internal/fit_equation_error.h) over every sample of `data`, in
-// chunks of 200 samples, on the free parameters `x` (bounds from the model). `x` and the
+// The equation-error problem (analysis/fit/internal/fit_equation_error.h) over every sample of
+// `data`, in chunks of 200 samples, on the free parameters `x` (bounds from the model). `x` and the
 // arguments must outlive it; it does not move (the cost functions point into it).
 class EquationErrorProblem {
  public:

@@ -225,5 +225,4 @@ double compare_with_ceres_covariance(WindowProblem& problem, const Eigen::Matrix
 // width when the start is (nearly) zero (analysis/fit/fitting.cpp).
 double parameter_scale(double start, const Bounds& bounds);
 
-
 }  // namespace doorbench

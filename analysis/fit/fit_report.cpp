@@ -92,8 +92,9 @@ std::string FitSummary::identifiable_line() const {
     return "Identifiable free set: none (with any of the free parameters held, the others are "
            "still undetermined).";
   }
-  std::string out = "Identifiable free set (determined with the others held, from the "
-                    "Jacobian's singular vectors at the optimum):";
+  std::string out =
+      "Identifiable free set (determined with the others held, from the "
+      "Jacobian's singular vectors at the optimum):";
   for (const std::string& name : identifiable) out += " " + name;
   std::string held;
   for (const std::string& name : free_names) {
@@ -142,9 +143,9 @@ void solver_section(std::string& out, const FitSummary& summary) {
         printf_text("Start      equation error: %d iterations; %s\n",
                     summary.equation_error_iterations, summary.equation_error_termination.c_str());
   }
-  out += printf_text(
-      "Solver     Levenberg-Marquardt (Ceres), %d iterations, %.3f s (total %.3f s)\n",
-      summary.iterations, summary.solve_time_s, summary.total_time_s);
+  out +=
+      printf_text("Solver     Levenberg-Marquardt (Ceres), %d iterations, %.3f s (total %.3f s)\n",
+                  summary.iterations, summary.solve_time_s, summary.total_time_s);
   out += "           " + summary.termination + "\n";
   out += "           cost 1/2 sum r^2: " + short_number(summary.initial_cost) + " -> " +
          short_number(summary.final_cost) +
@@ -206,9 +207,8 @@ void parameter_section(std::string& out, const FitSummary& summary) {
 // The latch read off the data, when it was.
 void latch_section(std::string& out, const FitSummary& summary) {
   if (summary.latch_start.opening_strokes + summary.latch_start.closing_strokes > 0) {
-    out +=
-        printf_text("\nLatch start read off the data (%d opening, %d closing strokes):\n",
-                    summary.latch_start.opening_strokes, summary.latch_start.closing_strokes);
+    out += printf_text("\nLatch start read off the data (%d opening, %d closing strokes):\n",
+                       summary.latch_start.opening_strokes, summary.latch_start.closing_strokes);
     auto reading = [&](const char* name, const std::optional<double>& value, const char* unit) {
       if (value) out += printf_text("  %-8s %-12s %s\n", name, number(*value).c_str(), unit);
     };
@@ -223,10 +223,10 @@ void latch_section(std::string& out, const FitSummary& summary) {
 
 // The metrics, fitted and held out, in total and per stroke.
 void metrics_section(std::string& out, const FitSummary& summary) {
-  out += printf_text(
-      "\nMetrics                                %-12s %-12s\n", "fitted",
-      summary.held_out ? ("held out (" + std::to_string(summary.folds) + " folds)").c_str()
-                       : "held out");
+  out += printf_text("\nMetrics                                %-12s %-12s\n", "fitted",
+                     summary.held_out
+                         ? ("held out (" + std::to_string(summary.folds) + " folds)").c_str()
+                         : "held out");
   metric_rows(out, summary.fitted, summary.held_out ? &*summary.held_out : nullptr);
   out += fit_percent_warnings(summary.fitted, summary.held_out ? &*summary.held_out : nullptr);
 

@@ -1,12 +1,13 @@
 // The set-up of a fit (internal/fit_setup.h), and default_free_parameters() and
 // parameter_scale(), which it and the callers of fit_model() share.
+#include "analysis/fit/internal/fit_setup.h"
+
 #include <algorithm>
 #include <cmath>
 #include <optional>
 #include <stdexcept>
 
 #include "analysis/fit/fit_start.h"
-#include "analysis/fit/internal/fit_setup.h"
 #include "analysis/model/sensory_model.h"
 #include "core/number_format.h"
 

@@ -35,7 +35,8 @@ struct LatchReadOff {
 };
 
 // dω/dt at every sample of a stroke: the central difference over ±half_width_s (one-sided
-// at the ends and at the recording's gaps, which no difference spans: stroke_gaps). Used by the read-off and by the equation-error start.
+// at the ends and at the recording's gaps, which no difference spans: stroke_gaps). Used by the
+// read-off and by the equation-error start.
 std::vector<double> rate_derivative(const Stroke& stroke, double half_width_s = 0.005);
 
 // `start` supplies J, β and θ_max (only a sensory model is read); `rate_noise_rad_s`

@@ -16,8 +16,8 @@
 #include "analysis/model/sensory_model.h"
 #include "core/clock.h"
 #include "core/number_format.h"
-#include "core/parallel.h"
 #include "core/numbers.h"
+#include "core/parallel.h"
 
 namespace doorbench {
 
@@ -134,9 +134,8 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
     coarse_kind.windows.substeps_per_sample = 1;
     WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
     coarse.z() = problem.z();
-    const WindowProblem::Outcome outcome =
-        coarse.solve(settings, max_iterations,
-                     options.coarse_tolerance_factor * options.uncertainty_tolerance);
+    const WindowProblem::Outcome outcome = coarse.solve(
+        settings, max_iterations, options.coarse_tolerance_factor * options.uncertainty_tolerance);
     used = outcome.iterations;
     initial_cost = outcome.initial_cost;
     if (outcome.usable) {
@@ -476,8 +475,8 @@ void statistics_stage(WindowProblem& problem, const DoorModel& start, const Para
   }
   if (!summary.undetermined.empty()) {
     const Eigen::Map<const Eigen::VectorXd> x(problem.x().data(), p);
-    for (int k : identifiable_subset(system, x, use_robust,
-                                     options.undetermined_relative_uncertainty)) {
+    for (int k :
+         identifiable_subset(system, x, use_robust, options.undetermined_relative_uncertainty)) {
       summary.identifiable.push_back(summary.free_names[k]);
     }
   }

@@ -84,8 +84,8 @@ struct FitOptions {
   // Sensory model: replace the start's free θ0…θ3, k_inf and k_lock with values read off
   // the force–angle curves near closed (analysis/fit/fit_start.h).
   bool latch_start_from_data = true;
-  // Fit the equation of motion sample by sample first (analysis/fit/internal/fit_equation_error.h) and
-  // start the windows from its result.
+  // Fit the equation of motion sample by sample first (analysis/fit/internal/fit_equation_error.h)
+  // and start the windows from its result.
   bool equation_error_start = true;
   // Priors on free parameters (those on fixed parameters are ignored). They act in the
   // window fit and its statistics, not in the equation-error stage (only a start). None:
@@ -283,7 +283,7 @@ struct FitSummary {
   // With undetermined parameters, the proposal: "Identifiable free set (...): J c d1; held:
   // k s (doorbench fit --free auto fits this set)."; "" when all are determined.
   std::string identifiable_line() const;
-  std::string full_report() const;   // parameters, correlations, metrics per stroke, solver
+  std::string full_report() const;  // parameters, correlations, metrics per stroke, solver
 };
 
 struct FitResult {

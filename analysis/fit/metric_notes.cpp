@@ -5,7 +5,6 @@
 
 #include "core/number_format.h"
 
-
 namespace doorbench {
 
 namespace {

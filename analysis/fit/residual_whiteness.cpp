@@ -6,7 +6,6 @@
 
 #include "core/number_format.h"
 
-
 namespace doorbench {
 
 namespace {

@@ -45,8 +45,8 @@ struct LagDifferences {
     double mean = 0.0;
     for (double d : differences) mean += d;
     mean /= static_cast<double>(differences.size());
-    const double correction = static_cast<double>(differences.size()) /
-                              static_cast<double>(differences.size() - 1);
+    const double correction =
+        static_cast<double>(differences.size()) / static_cast<double>(differences.size() - 1);
     for (double d : differences) squares.push_back((d - mean) * (d - mean) * correction);
     differences.clear();
   }

@@ -191,8 +191,8 @@ void judge(CandidateEvidence& candidate, const ModelFigures& before, const Model
   const bool bic_ok = candidate.bic_change < -options.min_bic_decrease;
   std::string problems = refit_parameter_problems(candidate.kind, candidate.parameters);
   if (problems.empty()) {
-    problems = weak_amplitude_problem(candidate.parameters, amplitude_neutral,
-                                      options.min_amplitude_z);
+    problems =
+        weak_amplitude_problem(candidate.parameters, amplitude_neutral, options.min_amplitude_z);
   }
   candidate.qualifies = held_out_ok && bic_ok && problems.empty();
   const std::string held_out_text = "held-out RMSE " + number(before.held_out_rmse_rad_s) + " -> " +
@@ -244,12 +244,13 @@ void judge_parent_stands(CandidateEvidence& candidate, const DoorModel& parent,
   candidate.held_out_improvement = 0.0;
   candidate.bic_change = after.bic - before.bic;
   candidate.qualifies = false;
-  candidate.verdict = "rejected: no refit ended at or below the parent's fitted sum of squares "
-                      "(the lowest " + number(best_sum_of_squares) + " against " +
-                      number(before.sum_of_squares) + "): the parent's fit stands with " +
-                      candidate.name +
-                      " at its neutral value, held-out RMSE unchanged, BIC " +
-                      printf_text("%+.4g", candidate.bic_change);
+  candidate.verdict =
+      "rejected: no refit ended at or below the parent's fitted sum of squares "
+      "(the lowest " +
+      number(best_sum_of_squares) + " against " + number(before.sum_of_squares) +
+      "): the parent's fit stands with " + candidate.name +
+      " at its neutral value, held-out RMSE unchanged, BIC " +
+      printf_text("%+.4g", candidate.bic_change);
 }
 
 }  // namespace
@@ -461,8 +462,8 @@ std::string refit_parameter_problems(effects::Kind kind,
   return problems;
 }
 
-std::string weak_amplitude_problem(const std::vector<FittedParameter>& parameters,
-                                   double neutral, double min_z) {
+std::string weak_amplitude_problem(const std::vector<FittedParameter>& parameters, double neutral,
+                                   double min_z) {
   if (parameters.empty() || min_z <= 0) return "";
   const FittedParameter& amplitude = parameters.front();
   if (!amplitude.free || !amplitude.determined || !(amplitude.uncertainty > 0)) return "";

@@ -1,11 +1,10 @@
 // The residual loop's reports: LoopResult::brief_report() and full_report() with their
 // tables (figures before and after, candidates, speed bands, the structure check).
-#include "analysis/loop/residual_loop.h"
-
 #include <cmath>
 #include <string>
 
 #include "analysis/loop/internal/loop_common.h"
+#include "analysis/loop/residual_loop.h"
 #include "core/number_format.h"
 
 namespace doorbench {
@@ -71,7 +70,8 @@ void structure_section(std::string& out, const StructureCheck& check) {
   out += "\nStructure check: " + check.reason + "\n";
   if (!check.ran) return;
   out += "  " + check.verdict + "\n";
-  out += printf_text("  checked after %d step%s", check.after_steps, check.after_steps == 1 ? "" : "s");
+  out += printf_text("  checked after %d step%s", check.after_steps,
+                     check.after_steps == 1 ? "" : "s");
   if (check.switched) {
     out += "; the loop went on with the " + std::string(to_string(check.other_kind)) +
            " model (the step under way abandoned)\n";
@@ -116,8 +116,7 @@ std::string LoopResult::brief_report() const {
   std::string out;
   out += printf_text("Residual loop%s: %zu effect%s added%s; %d fits, %.2f s.\n",
                      interrupted ? " (interrupted: the steps finished before it)" : "",
-                     steps.size(),
-                     steps.size() == 1 ? "" : "s",
+                     steps.size(), steps.size() == 1 ? "" : "s",
                      steps.empty() ? "" : (" (" + effect_list(steps) + ")").c_str(), fits,
                      total_time_s);
   out += "Window RMSE of omega, held out: " + number(first.held_out_rmse_rad_s) + " -> " +

@@ -2,8 +2,6 @@
 // the candidates' regressors scored against the rate residual with the free parameters
 // projected out, and the second look at the weak ones. The linearization it scores is
 // linearization.cpp.
-#include "analysis/loop/internal/examination.h"
-
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
@@ -14,6 +12,7 @@
 
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/fit_windows.h"
+#include "analysis/loop/internal/examination.h"
 #include "analysis/loop/internal/linearization.h"
 #include "analysis/loop/internal/loop_common.h"
 #include "analysis/loop/residual_loop.h"
@@ -99,8 +98,8 @@ Refined refine_parameters(const DoorModel& start, const PreparedData& data,
         inverse[k] = 1.0 / (values[k] + damping * largest);
       }
     }
-    const Eigen::VectorXd step = scale.cwiseProduct(
-        eigen.eigenvectors() * inverse.asDiagonal() * eigen.eigenvectors().transpose() * b);
+    const Eigen::VectorXd step = scale.cwiseProduct(eigen.eigenvectors() * inverse.asDiagonal() *
+                                                    eigen.eigenvectors().transpose() * b);
     if (!step.allFinite() || largest <= 0) break;
     std::vector<double> trial_values(refined.model.parameter_values().begin(),
                                      refined.model.parameter_values().end());
@@ -278,9 +277,9 @@ std::vector<SecondLook> second_look_candidates(const DoorModel& model, const Loo
     for (std::size_t k = 0; k < info.parameters.size(); ++k) {
       const std::string name =
           std::string(info.name) + "." + std::string(info.parameters[k].info.name);
-      const bool fixed = std::find(options.fixed_effect_parameters.begin(),
-                                   options.fixed_effect_parameters.end(),
-                                   name) != options.fixed_effect_parameters.end();
+      const bool fixed =
+          std::find(options.fixed_effect_parameters.begin(), options.fixed_effect_parameters.end(),
+                    name) != options.fixed_effect_parameters.end();
       const std::optional<int> index = with->find_parameter(name);
       if (!index) continue;
       if (k == 0) {
@@ -320,24 +319,24 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
   const std::size_t tasks = 2 * chosen.size() + 1;
   std::vector<std::optional<Refined>> refined(tasks);
   std::vector<std::exception_ptr> errors(tasks);
-  parallel_for(static_cast<int>(tasks), refit_threads(options.parallel_refits, tasks),
-               [&](std::size_t t) {
-    try {
-      if (t == 0) {
-        refined[t] = refine_parameters(model, data, windows, free, options.screen_steps);
-        return;
-      }
-      const SecondLook& look = chosen[(t - 1) / 2];
-      const std::optional<DoorModel>& start = t % 2 == 1 ? std::optional<DoorModel>(look.with)
-                                                         : look.with_far;
-      if (start) {
-        refined[t] =
-            refine_parameters(*start, data, windows, look.parameters, options.screen_steps);
-      }
-    } catch (...) {
-      errors[t] = std::current_exception();
-    }
-  });
+  parallel_for(
+      static_cast<int>(tasks), refit_threads(options.parallel_refits, tasks), [&](std::size_t t) {
+        try {
+          if (t == 0) {
+            refined[t] = refine_parameters(model, data, windows, free, options.screen_steps);
+            return;
+          }
+          const SecondLook& look = chosen[(t - 1) / 2];
+          const std::optional<DoorModel>& start =
+              t % 2 == 1 ? std::optional<DoorModel>(look.with) : look.with_far;
+          if (start) {
+            refined[t] =
+                refine_parameters(*start, data, windows, look.parameters, options.screen_steps);
+          }
+        } catch (...) {
+          errors[t] = std::current_exception();
+        }
+      });
   for (const std::exception_ptr& error : errors) {
     if (error) std::rethrow_exception(error);
   }
@@ -347,9 +346,8 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
     // The better of the two starts' refinements (the lower sum of squares).
     const std::optional<Refined>& near = refined[2 * j + 1];
     const std::optional<Refined>& far = refined[2 * j + 2];
-    const Refined& with = far && far->linear.rate_sum_of_squares < near->linear.rate_sum_of_squares
-                              ? *far
-                              : *near;
+    const Refined& with =
+        far && far->linear.rate_sum_of_squares < near->linear.rate_sum_of_squares ? *far : *near;
     const effects::EffectInfo& info = effects::info(candidate.kind);
     const ColumnScore score = last_column_score(with.linear);
     const double offset =
@@ -364,8 +362,8 @@ void screen_weak_candidates(const DoorModel& model, const PreparedData& data,
         score.spread > 0 && fall > 0 ? std::abs(value) * score.pxx / std::sqrt(score.spread) : 0.0;
     candidate.screen_values.clear();
     for (const effects::EffectParameter& parameter : info.parameters) {
-      const std::optional<int> index = with.model.find_parameter(
-          std::string(info.name) + "." + std::string(parameter.info.name));
+      const std::optional<int> index = with.model.find_parameter(std::string(info.name) + "." +
+                                                                 std::string(parameter.info.name));
       candidate.screen_values.push_back(with.model.parameter_values()[*index]);
     }
   }
@@ -393,7 +391,6 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
   examination.rate_sum_of_squares = linear.rate_sum_of_squares;
   estimate_noise_floor(linear, examination);
   examination.speed_bands = linear.speed_bands();
-
 
   // Project the free parameters' columns out (the fit re-estimates them with the effect):
   // with X those columns, x a regressor and P = I − X (XᵀX)⁺ Xᵀ,
@@ -467,8 +464,8 @@ ResidualExamination examine(const DoorModel& model, const PreparedData& data,
     if (best_amplitude != 0.0 && best_score > 0) {
       const Regressor& regressor = regressors[best];
       const double far = best_amplitude * (1.0 + 3.0 / best_score);  // â + 3 SE(â), away from 0
-      far_starts.emplace_back(kind, regressor.amplitude_offset +
-                                        std::clamp(far, regressor.lower, regressor.upper));
+      far_starts.emplace_back(
+          kind, regressor.amplitude_offset + std::clamp(far, regressor.lower, regressor.upper));
     }
     candidate.scan = regressors[best].scan;
     examination.candidates.push_back(std::move(candidate));

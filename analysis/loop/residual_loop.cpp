@@ -18,15 +18,14 @@
 #include "analysis/model/parameter_file.h"
 #include "core/clock.h"
 #include "core/number_format.h"
-#include "core/parallel.h"
 #include "core/numbers.h"
+#include "core/parallel.h"
 
 namespace doorbench {
 
 using namespace loop_detail;
 
 namespace {
-
 
 bool finite_in(double value, double lower, double upper) {
   return std::isfinite(value) && value >= lower && value <= upper;
@@ -176,10 +175,10 @@ struct LoopRun {
   const LoopOptions& options;
   const Say& say;
   LoopResult& result;
-  FitResult current;          // the current model's fit
-  FitOptions current_options;  // the options it was fitted with
-  DoorModel family_start;     // the start model of the current family
-  int steps_in_family = 0;    // effects added in the current family
+  FitResult current;            // the current model's fit
+  FitOptions current_options;   // the options it was fitted with
+  DoorModel family_start;       // the start model of the current family
+  int steps_in_family = 0;      // effects added in the current family
   bool family_checked = false;  // the structure check ran (it runs once)
   // Effects added before a family switch, not yet judged in the new family.
   std::vector<effects::Kind> reexamine;
@@ -271,8 +270,8 @@ void settle_reexamined(LoopRun& run, const std::vector<CandidateEvidence>& candi
 void accept_step(LoopRun& run, ResidualExamination& examination, int chosen,
                  std::optional<FitResult>& refit, int step_number) {
   const effects::Kind accepted = examination.candidates[chosen].kind;
-  LoopStep step = make_step(step_number, examination, chosen, *refit,
-                            model_figures(run.current.summary));
+  LoopStep step =
+      make_step(step_number, examination, chosen, *refit, model_figures(run.current.summary));
   std::string added = "step " + std::to_string(step_number) + ": added " + step.effect_name + ":";
   for (const FittedParameter& parameter : step.parameters) {
     added += ' ';
@@ -295,7 +294,8 @@ bool loop_step(LoopRun& run) {
     result.stop_reason = "reached max_steps (" + std::to_string(options.max_steps) + ")";
     // The structure check's evidence: the final model's residual (no refits).
     if (run.family_checked || !options.structure_check) return false;
-    const ResidualExamination last = examine(run.current.model, run.data, options, run.current_options);
+    const ResidualExamination last =
+        examine(run.current.model, run.data, options, run.current_options);
     return family_check(run, last) == FamilyCheck::kSwitched;
   }
   if (run.stopping("before " + step_text)) return false;
@@ -399,7 +399,8 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   for (effects::Kind kind : run.reexamine) {
     result.structure.reexamined.push_back(std::string(effects::info(kind).name) +
                                           ": not judged in the new family before the loop "
-                                          "stopped (" + result.stop_reason + ")");
+                                          "stopped (" +
+                                          result.stop_reason + ")");
   }
   say("stopped: " + result.stop_reason);
   if (result.interrupted && !run.family_checked) {

@@ -262,13 +262,13 @@ struct ResidualExamination {
   double walk_per_sample_rad_s = 0.0;  // √q
   double noise_floor_rad_s = 0.0;
   std::vector<CandidateEvidence> candidates;  // best first
-  std::vector<SpeedBand> speed_bands;  // the residual by measured speed
-  double time_s = 0.0;                 // wall clock, the second look included
-  double screen_time_s = 0.0;          // the second look's share of it
+  std::vector<SpeedBand> speed_bands;         // the residual by measured speed
+  double time_s = 0.0;                        // wall clock, the second look included
+  double screen_time_s = 0.0;                 // the second look's share of it
 };
 
 struct LoopStep {
-  int number = 0;  // 1, 2, ...
+  int number = 0;                              // 1, 2, ...
   ModelKind model_kind = ModelKind::kSensory;  // the family the effect was added to
   effects::Kind effect = effects::Kind::kViscousDamping;
   std::string effect_name;
@@ -334,7 +334,7 @@ struct LoopResult {
   bool interrupted = false;
   int fits = 0;  // calls of fit_model
   double total_time_s = 0.0;
-  LoopOptions options;  // as given
+  LoopOptions options;       // as given
   StructureCheck structure;  // the loop's last step when it ran
 
   const DoorModel& model() const { return final_fit.model; }
@@ -357,8 +357,8 @@ std::string refit_parameter_problems(effects::Kind kind,
 // e.g. "viscous_damping.b = 1.626 +- 1.611 N*m*s/rad is 1.01 standard uncertainties from
 // its neutral value 0 (needs 4)". Empty for a held, undetermined or missing amplitude (the
 // first two are refit_parameter_problems' to name) and for min_z 0.
-std::string weak_amplitude_problem(const std::vector<FittedParameter>& parameters,
-                                   double neutral, double min_z);
+std::string weak_amplitude_problem(const std::vector<FittedParameter>& parameters, double neutral,
+                                   double min_z);
 
 // Step 2 alone: how much of the rate residual of `model` on `data` (windows as in
 // options.fit) each candidate effect of options.candidates would explain, best first.

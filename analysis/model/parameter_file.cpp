@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cctype>
-#include <map>
 #include <fstream>
+#include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
 
@@ -91,8 +91,10 @@ json parse_json(std::string_view text, std::string_view source) {
       const std::string token = what.substr(open + 1, close - open - 1);
       const auto at = text.find(token);
       if (at != std::string_view::npos) {
-        const auto line = 1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
-        fail(source, "line " + std::to_string(line) + ": " + what + " (beyond the range of a double)");
+        const auto line =
+            1 + std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n');
+        fail(source,
+             "line " + std::to_string(line) + ": " + what + " (beyond the range of a double)");
       }
     }
     fail(source, what);

@@ -458,10 +458,11 @@ std::vector<Anchor> find_anchors(const Input& in, const Stillness& still,
       if (valid) anchors.push_back(make_anchor(period, region));
     }
     if (anchors.empty()) {
-      throw PreprocessingError(
-          in.source + ": no still period with the inclinometer (" + in.inclinometer_name +
-          ") inside +-" + text(limit / kRadPerDeg) + " deg to anchor the integrated gyroscope to (" +
-          std::to_string(still.periods.size()) + " still periods found; " + still.rule + ")");
+      throw PreprocessingError(in.source + ": no still period with the inclinometer (" +
+                               in.inclinometer_name + ") inside +-" + text(limit / kRadPerDeg) +
+                               " deg to anchor the integrated gyroscope to (" +
+                               std::to_string(still.periods.size()) + " still periods found; " +
+                               still.rule + ")");
     }
   } else if (in.mode == Mode::kAngleAndRate) {
     for (const Range& period : still.periods) anchors.push_back(make_anchor(period, period));

@@ -1,8 +1,8 @@
 // What the stages of prepare() share (internal/prepare_stages.h).
+#include "analysis/preprocessing/internal/prepare_stages.h"
+
 #include <algorithm>
 #include <cstdio>
-
-#include "analysis/preprocessing/internal/prepare_stages.h"
 
 namespace doorbench::preprocessing_detail {
 

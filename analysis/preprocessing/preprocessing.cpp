@@ -12,10 +12,9 @@
 
 #include "acquisition/session/session_csv.h"
 #include "acquisition/session/session_file.h"
+#include "analysis/preprocessing/internal/prepare_stages.h"
 #include "core/number_format.h"
 #include "core/units.h"
-#include "analysis/preprocessing/internal/prepare_stages.h"
-
 
 namespace doorbench {
 
@@ -82,7 +81,6 @@ std::string PreprocessingOptions::validate() const {
   }
   return "";
 }
-
 
 namespace {
 

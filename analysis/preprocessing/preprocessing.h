@@ -1,7 +1,7 @@
 #pragma once
 // Preprocessing (door-models.md §5): a recording (CSV exchange format, or a session through
-// session_to_recording) becomes PreparedData (analysis/preprocessing/strokes.h): opening and closing
-// strokes with the full-range angle, the rate with its bias removed and the handle force,
+// session_to_recording) becomes PreparedData (analysis/preprocessing/strokes.h): opening and
+// closing strokes with the full-range angle, the rate with its bias removed and the handle force,
 // plus the segments left out and the noise levels. The method, every constant and the
 // measured accuracy are in docs/preprocessing.md.
 //
@@ -40,7 +40,6 @@ class PreprocessingError : public std::runtime_error {
  public:
   using std::runtime_error::runtime_error;
 };
-
 
 // Every option has a usable default (the reference bench, door-models.md §5); angles in
 // rad, rates in rad/s, times in s.

@@ -19,7 +19,8 @@ std::string describe_faults(std::uint8_t kinds, double gyro_limit_rad_s) {
   std::string out;
   auto add = [&out](const std::string& what) { out += (out.empty() ? "" : ", ") + what; };
   if (kinds & kSaturated) {
-    add("gyroscope saturated (|rate_rad_s| >= " + text(gyro_limit_rad_s / kRadPerDeg, 4) + " deg/s)");
+    add("gyroscope saturated (|rate_rad_s| >= " + text(gyro_limit_rad_s / kRadPerDeg, 4) +
+        " deg/s)");
   }
   if (kinds & kRateNonFinite) add("non-finite rate_rad_s");
   if (kinds & kAngleNonFinite) add("non-finite angle_rad");
@@ -93,7 +94,8 @@ std::vector<Candidate> segment_strokes(const std::vector<double>& time_s,
                           "movement too short for a stroke (" + text(duration_s) + " s, " +
                               text(angle / kRadPerDeg) +
                               " deg; a stroke needs >= " + text(options.min_stroke_duration_s) +
-                              " s and >= " + text(options.min_stroke_angle_rad / kRadPerDeg) + " deg)"});
+                              " s and >= " + text(options.min_stroke_angle_rad / kRadPerDeg) +
+                              " deg)"});
     } else {
       kept.push_back(run);
     }
@@ -295,22 +297,23 @@ std::optional<Range> StrokeCutter::keep_good_part(const Range& r, const std::str
 // Each gap inside the part kept, listed: its samples are missing, and the fit leaves out the
 // windows that span it (analysis/fit/fit_windows.h); the rest of the stroke is fitted.
 void StrokeCutter::list_gaps(const Range& part, const std::string& name) {
-  const std::string fitted = "; the fit leaves out the windows that span it and fits the rest "
-                             "of the stroke";
+  const std::string fitted =
+      "; the fit leaves out the windows that span it and fits the rest "
+      "of the stroke";
   for (std::size_t i = part.first + 1; i <= part.last; ++i) {
     if (lost(i)) {
       std::size_t last = i;
       while (lost(last + 1)) ++last;
       excluded_.push_back({t_[i], t_[last],
                            name + ": recording gap: " + std::to_string(last - i + 1) +
-                               " samples lost from " + seconds(t_[i]) + " to " +
-                               seconds(t_[last]) + fitted,
+                               " samples lost from " + seconds(t_[i]) + " to " + seconds(t_[last]) +
+                               fitted,
                            true});
       i = last;
     } else if (in_.fault[i] & kGapBefore) {
       excluded_.push_back({t_[i - 1], t_[i],
-                           name + ": gap in time_s: no sample from " + seconds(t_[i - 1]) +
-                               " to " + seconds(t_[i]) + fitted,
+                           name + ": gap in time_s: no sample from " + seconds(t_[i - 1]) + " to " +
+                               seconds(t_[i]) + fitted,
                            true});
     }
   }
@@ -328,7 +331,8 @@ std::string StrokeCutter::reason_to_leave_out(const Range& r, const std::string&
                                                 : "still period where theta = 0");
   }
   if (!long_enough(r)) {
-    return name + ": too short (" + text(t_[r.last] - t_[r.first]) + " s, " + text(net / kRadPerDeg) +
+    return name + ": too short (" + text(t_[r.last] - t_[r.first]) + " s, " +
+           text(net / kRadPerDeg) +
            " deg; a stroke needs >= " + text(options_.min_stroke_duration_s) +
            " s and >= " + text(options_.min_stroke_angle_rad / kRadPerDeg) + " deg)";
   }

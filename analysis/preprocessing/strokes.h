@@ -10,7 +10,7 @@ namespace doorbench {
 enum class StrokeDirection { kOpening, kClosing };
 
 struct Stroke {
-  int id = 0;                 // the recording's stroke id (or a running number)
+  int id = 0;  // the recording's stroke id (or a running number)
   StrokeDirection direction = StrokeDirection::kOpening;
   std::vector<double> time_s;       // strictly increasing, on the recording's clock
   std::vector<double> force_N;      // F_u at the handle, positive = opening

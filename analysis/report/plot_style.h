@@ -49,7 +49,6 @@ struct ShadeStyle {
 };
 inline constexpr ShadeStyle kAtLimitShade{230, 40, 40, 0.3};
 
-
 // "angle [deg]"; just the quantity when the unit is empty.
 std::string axis_label(std::string_view quantity, std::string_view unit);
 

@@ -57,11 +57,14 @@ std::string x_axis(const Range& range, double left, double top, double width, do
                    int svg_height, const std::string& label) {
   std::string svg;
   const double step = svg_axes::tick_spacing(range, 6);
-  const auto px = [&](double x) { return left + (x - range.low) / (range.high - range.low) * width; };
+  const auto px = [&](double x) {
+    return left + (x - range.low) / (range.high - range.low) * width;
+  };
   for (double x = std::ceil(range.low / step) * step; x <= range.high; x += step) {
-    svg += printf_text("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
-                       "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">",
-                       px(x), top, px(x), top + height, px(x), top + height + 16) +
+    svg += printf_text(
+               "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
+               "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"middle\">",
+               px(x), top, px(x), top + height, px(x), top + height + 16) +
            svg_axes::number_text(x, step) + "</text>\n";
   }
   svg += printf_text("<text x=\"%.1f\" y=\"%d\" text-anchor=\"middle\">", left + width / 2,
@@ -74,8 +77,8 @@ struct ForestGeometry {
   Range range;
   double left = 0, top = 40, width = 0, row_height = 24, height = 0;
   double px(double x) const {
-    return left + (std::clamp(x, range.low, range.high) - range.low) / (range.high - range.low) *
-                      width;
+    return left +
+           (std::clamp(x, range.low, range.high) - range.low) / (range.high - range.low) * width;
   }
   double row_y(std::size_t row) const { return top + row_height * (double(row) + 0.5); }
 };
@@ -86,7 +89,8 @@ Range forest_range(const ForestOptions& options, std::span<const ForestRow> rows
     for (double value : {row.estimate, row.low, row.high, row.inner_low, row.inner_high})
       range.include(value);
   }
-  if (range.empty()) throw std::invalid_argument("forest plot '" + options.title + "': nothing finite to draw");
+  if (range.empty())
+    throw std::invalid_argument("forest plot '" + options.title + "': nothing finite to draw");
   range.include(options.reference_line);
   range.include(options.band_low);
   range.include(options.band_high);
@@ -102,7 +106,7 @@ std::string forest_note(const ForestGeometry& g, const ForestRow& row, double y)
     first = std::min(first, g.px(value) - 6);
     last = std::max(last, g.px(value) + 6);
   }
-  if (first > last) first = last = g.left;  // no marks
+  if (first > last) first = last = g.left;               // no marks
   const double text_px = 6.0 * double(row.note.size());  // 11 px text, generously
   const char* right_anchor = " text-anchor=\"end\"";
   double x = last + 6;
@@ -123,15 +127,17 @@ std::string forest_row(const ForestOptions& options, const ForestGeometry& g, st
   const double y = g.row_y(index);
   std::string svg;
   if (index % 2 == 1)
-    svg += printf_text("<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f4f4f4\"/>\n",
-                       g.left, y - g.row_height / 2, g.width, g.row_height);
+    svg += printf_text(
+        "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"#f4f4f4\"/>\n", g.left,
+        y - g.row_height / 2, g.width, g.row_height);
   svg += printf_text("<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">", g.left - 8, y + 4) +
          html_escape(row.label) + "</text>\n";
   const bool has_interval = !std::isnan(row.low) && !std::isnan(row.high);
   if (has_interval) {
     const double x1 = g.px(row.low), x2 = g.px(row.high);
     std::string points = printf_text("%.1f,%.1f %.1f,%.1f ", x1, y, x2, y);
-    if (std::isfinite(row.low)) points = printf_text("%.1f,%.1f %.1f,%.1f ", x1, y - 5, x1, y + 5) + points;
+    if (std::isfinite(row.low))
+      points = printf_text("%.1f,%.1f %.1f,%.1f ", x1, y - 5, x1, y + 5) + points;
     if (std::isfinite(row.high)) points += printf_text("%.1f,%.1f %.1f,%.1f", x2, y - 5, x2, y + 5);
     svg += "<polyline fill=\"none\" stroke=\"" + std::string(kIntervalColour) +
            "\" stroke-width=\"1.6\" points=\"" + points + "\"><title>" +
@@ -139,8 +145,9 @@ std::string forest_row(const ForestOptions& options, const ForestGeometry& g, st
     for (const double end : {row.low, row.high}) {
       if (std::isfinite(end)) continue;
       const double tip = end > 0 ? g.left + g.width : g.left, back = end > 0 ? -8.0 : 8.0;
-      svg += printf_text("<polyline fill=\"%s\" stroke=\"%s\" points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f\"/>\n",
-                         kIntervalColour, kIntervalColour, tip + back, y - 4, tip, y, tip + back, y + 4);
+      svg += printf_text(
+          "<polyline fill=\"%s\" stroke=\"%s\" points=\"%.1f,%.1f %.1f,%.1f %.1f,%.1f\"/>\n",
+          kIntervalColour, kIntervalColour, tip + back, y - 4, tip, y, tip + back, y + 4);
     }
   }
   if (std::isfinite(row.inner_low) && std::isfinite(row.inner_high)) {
@@ -196,13 +203,15 @@ std::string render_svg_forest(const ForestOptions& options, std::span<const Fore
   for (std::size_t r = 0; r < rows.size(); ++r) svg += forest_row(options, g, r, rows[r]);
   if (std::isfinite(options.reference_line)) {
     const double x = g.px(options.reference_line);
-    svg += printf_text("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#666\" "
-                       "stroke-dasharray=\"4 3\"/>\n",
-                       x, g.top, x, g.top + g.height);
+    svg += printf_text(
+        "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#666\" "
+        "stroke-dasharray=\"4 3\"/>\n",
+        x, g.top, x, g.top + g.height);
   }
-  svg += printf_text("<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
-                     "stroke=\"#444\"/>\n",
-                     g.left, g.top, g.width, g.height);
+  svg += printf_text(
+      "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
+      "stroke=\"#444\"/>\n",
+      g.left, g.top, g.width, g.height);
   const double legend_x = g.left + g.width + 16;
   double legend_y = g.top + 8;
   svg += legend_entry(legend_x, legend_y, kIntervalColour, 1.6, 1.0, options.interval_label);
@@ -225,7 +234,8 @@ std::string dose_points(const DoseResponsePlot& plot, const auto& px, const auto
   for (std::size_t i = 0; i < plot.x.size(); ++i) {
     if (!std::isfinite(plot.x[i]) || !std::isfinite(plot.y[i])) continue;
     // Area proportional to the weight: the heaviest point 9 px in radius.
-    const double radius = heaviest > 0 ? 9.0 * std::sqrt(std::max(0.0, plot.weight[i]) / heaviest) : 4.0;
+    const double radius =
+        heaviest > 0 ? 9.0 * std::sqrt(std::max(0.0, plot.weight[i]) / heaviest) : 4.0;
     svg += printf_text("<circle cx=\"%.1f\" cy=\"%.1f\" r=\"%.1f\"/>", px(plot.x[i]), py(plot.y[i]),
                        std::max(radius, 1.5));
   }
@@ -239,11 +249,13 @@ std::string render_svg_dose_response(const DoseResponsePlot& plot) {
       plot.curve_x.size() != plot.curve_y.size() ||
       (!plot.band_low.empty() && (plot.band_low.size() != plot.curve_x.size() ||
                                   plot.band_high.size() != plot.curve_x.size())))
-    throw std::invalid_argument("dose-response plot '" + plot.title + "': series of different lengths");
+    throw std::invalid_argument("dose-response plot '" + plot.title +
+                                "': series of different lengths");
   Range x_range;
   for (double x : plot.x) x_range.include(x);
   for (double x : plot.curve_x) x_range.include(x);
-  if (x_range.empty()) throw std::invalid_argument("dose-response plot '" + plot.title + "': no finite point");
+  if (x_range.empty())
+    throw std::invalid_argument("dose-response plot '" + plot.title + "': no finite point");
   x_range = svg_axes::padded(x_range);
   const Range y_range{plot.y_min - 0.02 * (plot.y_max - plot.y_min),
                       plot.y_max + 0.02 * (plot.y_max - plot.y_min)};
@@ -252,16 +264,21 @@ std::string render_svg_dose_response(const DoseResponsePlot& plot) {
   const double legend_w = legend_width(legend);
   const double left = 70, top = 40;
   const double width = plot.width_px - left - 20 - legend_w, height = plot.height_px - top - 55.0;
-  const auto px = [&](double x) { return left + (x - x_range.low) / (x_range.high - x_range.low) * width; };
-  const auto py = [&](double y) { return top + (y_range.high - y) / (y_range.high - y_range.low) * height; };
+  const auto px = [&](double x) {
+    return left + (x - x_range.low) / (x_range.high - x_range.low) * width;
+  };
+  const auto py = [&](double y) {
+    return top + (y_range.high - y) / (y_range.high - y_range.low) * height;
+  };
 
   std::string svg = svg_open(plot.width_px, plot.height_px, plot.title);
   svg += x_axis(x_range, left, top, width, height, plot.height_px, plot.x_label);
   const double y_step = svg_axes::tick_spacing(y_range, 5);
   for (double y = std::ceil(y_range.low / y_step) * y_step; y <= y_range.high; y += y_step) {
-    svg += printf_text("<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
-                       "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">",
-                       left, py(y), left + width, py(y), left - 6, py(y) + 4) +
+    svg += printf_text(
+               "<line x1=\"%.1f\" y1=\"%.1f\" x2=\"%.1f\" y2=\"%.1f\" stroke=\"#ddd\"/>"
+               "<text x=\"%.1f\" y=\"%.1f\" text-anchor=\"end\">",
+               left, py(y), left + width, py(y), left - 6, py(y) + 4) +
            svg_axes::number_text(y, y_step) + "</text>\n";
   }
   svg += printf_text("<text transform=\"translate(16 %.1f) rotate(-90)\" text-anchor=\"middle\">",
@@ -284,9 +301,10 @@ std::string render_svg_dose_response(const DoseResponsePlot& plot) {
          "\" stroke-width=\"1.8\" points=\"" + curve + "\"><title>" +
          html_escape(plot.curve_label) + "</title></polyline>\n";
   svg += dose_points(plot, px, py);
-  svg += printf_text("<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
-                     "stroke=\"#444\"/>\n",
-                     left, top, width, height);
+  svg += printf_text(
+      "<rect x=\"%.1f\" y=\"%.1f\" width=\"%.1f\" height=\"%.1f\" fill=\"none\" "
+      "stroke=\"#444\"/>\n",
+      left, top, width, height);
   const double legend_x = left + width + 16;
   svg += legend_entry(legend_x, top + 8, kPointColour, 6.0, 0.55, plot.points_label);
   svg += legend_entry(legend_x, top + 26, kCurveColour, 1.8, 1.0, plot.curve_label);

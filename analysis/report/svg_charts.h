@@ -37,7 +37,7 @@ struct ForestOptions {
   std::string interval_label = "95 % interval";
   std::string inner_label;  // the inner interval's legend entry (when some row has one)
   std::string estimate_label = "estimate";
-  double reference_line = 0.0;  // NaN: none
+  double reference_line = 0.0;                                 // NaN: none
   double band_low = std::numeric_limits<double>::quiet_NaN();  // NaN: no band
   double band_high = std::numeric_limits<double>::quiet_NaN();
   std::string band_label;

@@ -61,8 +61,7 @@ std::string reduced_points(const PlotSeries& s, const ToPxX& px, const ToPxY& py
 
 // ' stroke="COLOUR" stroke-width=...' of a series' line, its width times width_factor. Its
 // own buffer: render_svg_plot's `buffer` holds the element's start while this is called.
-std::string stroke_attributes(const PlotSeries& s, const std::string& colour,
-                              double width_factor) {
+std::string stroke_attributes(const PlotSeries& s, const std::string& colour, double width_factor) {
   const plot_style::LineStyle style = plot_style::line_style(s.meaning);
   char attributes[128];
   std::snprintf(attributes, sizeof attributes, "stroke-width=\"%.1f\" stroke-opacity=\"%.2f\"%s",

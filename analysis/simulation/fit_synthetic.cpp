@@ -18,7 +18,8 @@ PreparedData synthetic_strokes(const DoorModel& model, const SyntheticStrokeOpti
   data.source = "synthetic";
   data.handle_radius_m = model.geometry().handle_radius_m;
   data.sample_rate_hz = options.sample_rate_hz;
-  data.rate_noise_rad_s = options.rate_noise_rad_s > 0 ? options.rate_noise_rad_s : 0.05 * kRadPerDeg;
+  data.rate_noise_rad_s =
+      options.rate_noise_rad_s > 0 ? options.rate_noise_rad_s : 0.05 * kRadPerDeg;
   data.angle_noise_rad = options.angle_noise_rad > 0 ? options.angle_noise_rad : 0.01 * kRadPerDeg;
 
   std::mt19937 random(options.seed);

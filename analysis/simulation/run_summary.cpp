@@ -63,8 +63,9 @@ std::string format_summary(const RunSummary& s) {
       "  friction in free movement  %6.1f N   (median, at the handle)\n"
       "  largest speed              %6.1f deg/s, largest angle %.1f deg, final %.2f deg\n",
       s.peak_unlatch_force_N, s.largest_opening_hand_force_N, s.peak_latch_force_N,
-      s.largest_closing_hand_force_N, s.free_movement_friction_N, s.largest_speed_rad_s * kDegPerRad,
-      s.largest_angle_rad * kDegPerRad, s.final_angle_rad * kDegPerRad);
+      s.largest_closing_hand_force_N, s.free_movement_friction_N,
+      s.largest_speed_rad_s * kDegPerRad, s.largest_angle_rad * kDegPerRad,
+      s.final_angle_rad * kDegPerRad);
   return text;
 }
 

@@ -150,11 +150,11 @@ std::string stiffness_diagnosis(const DoorModel& model, double theta_rad, double
   }
   std::string text;
   if (!rate.empty()) {
-    const auto stiffest = static_cast<int>(std::max_element(rate.begin(), rate.end()) - rate.begin());
+    const auto stiffest =
+        static_cast<int>(std::max_element(rate.begin(), rate.end()) - rate.begin());
     const double rate_t = rate[static_cast<std::size_t>(stiffest)];
     text = "the stiffest term is " + model.term_name(stiffest) + " (time constant " +
-           (rate_t > 0 && std::isfinite(rate_t) ? brief(1.0 / rate_t) + " s" : "unknown") +
-           ")";
+           (rate_t > 0 && std::isfinite(rate_t) ? brief(1.0 / rate_t) + " s" : "unknown") + ")";
   }
   std::string outside;
   const auto values = model.parameter_values();
@@ -177,12 +177,11 @@ void DoorStepper::advance(DoorState& state, double end_time_s, const UserForce& 
   }
   while (state.time_s < end_time_s) {
     if (!fixed) {
-      const double budget =
-          options_.max_steps_per_s * std::max(1.0, state.time_s - first_time_s_);
+      const double budget = options_.max_steps_per_s * std::max(1.0, state.time_s - first_time_s_);
       if (static_cast<double>(stats_.accepted_steps + stats_.rejected_steps) > budget) {
         throw std::runtime_error(
-            "simulation stopped at t = " + brief(state.time_s) + " s, theta = " +
-            brief(state.theta_rad) + " rad after " +
+            "simulation stopped at t = " + brief(state.time_s) +
+            " s, theta = " + brief(state.theta_rad) + " rad after " +
             std::to_string(stats_.accepted_steps + stats_.rejected_steps) +
             " steps (more than max_steps_per_s = " + brief(options_.max_steps_per_s) +
             " per second of door): the equation is too stiff; " +

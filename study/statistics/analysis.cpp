@@ -1,16 +1,16 @@
 #include "study/statistics/analysis.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <algorithm>
 #include <cstdlib>
 #include <memory>
 #include <optional>
 #include <set>
 
 #include "acquisition/session/output_file.h"
-#include "core/number_format.h"
 #include "analysis/report/svg_plot.h"
+#include "core/number_format.h"
 #include "study/statistics/discrimination.h"
 #include "study/statistics/ratings.h"
 #include "study/statistics/thresholds.h"
@@ -47,12 +47,12 @@ nlohmann::json jnd_levels_json(const ThresholdsResult& thresholds) {
                        {"p", c.p},
                        {"p_low", c.low},
                        {"p_high", c.high}});
-    rows.push_back({{"parameter", p.parameter},
-                    {"reference", p.reference},
-                    {"shape", p.panel.shape == PsychometricShape::kWeibull ? "weibull"
-                                                                           : "cumulative normal"},
-                    {"counts", counts},
-                    {"curve", curve}});
+    rows.push_back(
+        {{"parameter", p.parameter},
+         {"reference", p.reference},
+         {"shape", p.panel.shape == PsychometricShape::kWeibull ? "weibull" : "cumulative normal"},
+         {"counts", counts},
+         {"curve", curve}});
   }
   return rows;
 }
@@ -131,9 +131,9 @@ std::vector<AnalysisSection> analysis_sections(const AnalysisOptions& options,
                       {}});
   sections.push_back({"identify_real",
                       [options](const TrialsTable& table) {
-                        const auto result = identify_real(table, options.real_variant,
-                                                          options.confidence,
-                                                          options.equivalence_dprime);
+                        const auto result =
+                            identify_real(table, options.real_variant, options.confidence,
+                                          options.equivalence_dprime);
                         if (!result) return nlohmann::json(nullptr);
                         return nlohmann::json{{"identify_real", identify_real_json(*result)}};
                       },

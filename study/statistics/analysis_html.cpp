@@ -80,7 +80,7 @@ std::string wrappable(const std::string& text) {
 // One table: headers (HTML allowed) and rows of cells (HTML). A cell marked wrappable is
 // written with class "text" (the mark dropped); every other cell stays on one line.
 std::string html_table(const std::vector<std::string>& headers,
-                  const std::vector<std::vector<std::string>>& rows) {
+                       const std::vector<std::vector<std::string>>& rows) {
   std::string html = "<table><tr>";
   for (const std::string& h : headers) html += "<th>" + h + "</th>";
   html += "</tr>\n";
@@ -157,23 +157,23 @@ std::string preference_html(const json& a, const std::vector<AnalysisPlot>& plot
   std::vector<std::vector<std::string>> rows;
   for (const json& w : worths) {
     const bool reference = w.value("interval", "") == "reference";
-    rows.push_back({html_escape(w["variant"].get<std::string>()) + (reference ? " (ref.)" : ""),
-                    html_fixed(w["worth"]),
-                    reference ? "&ndash;" : html_interval(w["ci_low"], w["ci_high"]),
-                    html_interval(w.value("comparison_low", json()), w.value("comparison_high", json())),
-                    html_fixed(w.value("quasi_se", json()), 3), html_fixed(w["p_favourite"]),
-                    html_cell(w["wins"]), html_cell(w["losses"]), html_cell(w["ties"]),
-                    reference ? "&ndash;" : html_cell(w["interval"])});
+    rows.push_back(
+        {html_escape(w["variant"].get<std::string>()) + (reference ? " (ref.)" : ""),
+         html_fixed(w["worth"]), reference ? "&ndash;" : html_interval(w["ci_low"], w["ci_high"]),
+         html_interval(w.value("comparison_low", json()), w.value("comparison_high", json())),
+         html_fixed(w.value("quasi_se", json()), 3), html_fixed(w["p_favourite"]),
+         html_cell(w["wins"]), html_cell(w["losses"]), html_cell(w["ties"]),
+         reference ? "&ndash;" : html_cell(w["interval"])});
   }
   html += html_table({"variant", "worth", "95 % interval", "comparison interval", "quasi-SE",
-                 "P(fav.)", "wins", "losses", "ties", "SE"},
-                rows);
+                      "P(fav.)", "wins", "losses", "ties", "SE"},
+                     rows);
   if (a.contains("ties"))
     html += "<p>Davidson's tie parameter &nu; = " + html_fixed(a["ties"]["nu"]) + " " +
             html_interval(a["ties"]["ci_low"], a["ties"]["ci_high"]) + ".</p>\n";
   if (a.contains("order_effect"))
-    html += "<p>First-position advantage &delta; = " + html_fixed(a["order_effect"]["delta"]) + " " +
-            html_interval(a["order_effect"]["ci_low"], a["order_effect"]["ci_high"]) +
+    html += "<p>First-position advantage &delta; = " + html_fixed(a["order_effect"]["delta"]) +
+            " " + html_interval(a["order_effect"]["ci_low"], a["order_effect"]["ci_high"]) +
             " (log odds; 0: the order does not matter).</p>\n";
   for (const auto& note : a["preference_fit"]["notes"])
     html += "<p class=\"small\">" + sentence(note) + "</p>\n";
@@ -181,20 +181,26 @@ std::string preference_html(const json& a, const std::vector<AnalysisPlot>& plot
 }
 
 std::vector<std::string> forced_choice_row(const std::string& who, const json& r) {
-  return {who,         html_cell(r["n"]),  html_cell(r["correct"]), html_fixed(r["pc"]), html_fixed(r["dprime"]),
-          html_interval(r["ci_low"], r["ci_high"]), p_cell(r["p"])};
+  return {who,
+          html_cell(r["n"]),
+          html_cell(r["correct"]),
+          html_fixed(r["pc"]),
+          html_fixed(r["dprime"]),
+          html_interval(r["ci_low"], r["ci_high"]),
+          p_cell(r["p"])};
 }
 
 std::string identify_html(const json& ir, const std::vector<AnalysisPlot>& plots) {
   std::string html =
       "<h2>Real vs virtual (identify-real)</h2>\n<p><b>" + sentence(ir["verdict"]) + "</b></p>\n";
-  html += "<p class=\"small\">d' = &radic;2&middot;&Phi;<sup>&minus;1</sup>(Pc) (2-AFC); 95 % "
-          "interval from the Clopper&ndash;Pearson interval of Pc; p: the exact binomial test "
-          "of chance. Equivalence: the two one-sided tests against &plusmn;" +
-          html_fixed(ir.value("equivalence_margin", json()), 2) +
-          " (--equivalence-dprime): " + p_sentence("p<sub>TOST</sub>", ir["panel"].value("p_equivalence", json())) +
-          "; the verdict says the doors are indistinguishable only when the whole 95 % interval "
-          "lies inside the margin.</p>\n";
+  html +=
+      "<p class=\"small\">d' = &radic;2&middot;&Phi;<sup>&minus;1</sup>(Pc) (2-AFC); 95 % "
+      "interval from the Clopper&ndash;Pearson interval of Pc; p: the exact binomial test "
+      "of chance. Equivalence: the two one-sided tests against &plusmn;" +
+      html_fixed(ir.value("equivalence_margin", json()), 2) + " (--equivalence-dprime): " +
+      p_sentence("p<sub>TOST</sub>", ir["panel"].value("p_equivalence", json())) +
+      "; the verdict says the doors are indistinguishable only when the whole 95 % interval "
+      "lies inside the margin.</p>\n";
   std::vector<std::vector<std::string>> rows{forced_choice_row("<b>panel</b>", ir["panel"])};
   for (const auto& p : ir["participants"])
     rows.push_back(forced_choice_row(html_escape(p["participant"].get<std::string>()), p));
@@ -220,8 +226,10 @@ std::string two_ac_html(const json& a, const std::vector<AnalysisPlot>& plots) {
                     html_cell(r["prefer_second"]), html_fixed(r["tau"]), html_fixed(r["dprime"]),
                     html_interval(r["ci_low"], r["ci_high"]), p_cell(r["p"]),
                     p_cell(r.value("p_equivalence", json()))});
-    verdicts.append("<li><b>").append(pair).append("</b>: ").append(sentence(r.value("verdict", json(""))));
-    if (!r.value("note", "").empty()) verdicts.append(" (").append(html_cell(r["note"])).append(")");
+    verdicts.append("<li><b>").append(pair).append("</b>: ").append(
+        sentence(r.value("verdict", json(""))));
+    if (!r.value("note", "").empty())
+      verdicts.append(" (").append(html_cell(r["note"])).append(")");
     verdicts.append("</li>\n");
   }
   html += html_table({"pair (A vs B)", "prefer A", "same", "prefer B", "&tau;", "d'",
@@ -240,10 +248,12 @@ std::string ratings_html(const json& a, const std::vector<AnalysisPlot>& plots) 
   for (const json& model : a.value("ratings_models", json::array())) {
     const std::string attribute = model.value("attribute", "");
     html += "<h3>" + html_escape(attribute) + "</h3>\n<p class=\"small\">" +
-            html_cell(model.value("model", json(""))) + ", " + html_cell(model.value("observations", json(0))) +
-            " ratings by " + html_cell(model.value("participants", json(0))) +
-            " participants; participant SD " + html_fixed(model.value("participant_sd", json())) +
-            (model.value("converged", false) ? "" : "; <b>the fit did not converge</b>") + ".</p>\n";
+            html_cell(model.value("model", json(""))) + ", " +
+            html_cell(model.value("observations", json(0))) + " ratings by " +
+            html_cell(model.value("participants", json(0))) + " participants; participant SD " +
+            html_fixed(model.value("participant_sd", json())) +
+            (model.value("converged", false) ? "" : "; <b>the fit did not converge</b>") +
+            ".</p>\n";
     std::vector<std::vector<std::string>> rows;
     for (const json& r : a["ratings"]) {
       if (r.value("attribute", "") != attribute) continue;
@@ -297,18 +307,18 @@ std::string jnd_html(const json& a, const std::vector<AnalysisPlot>& plots) {
     for (const json& r : a["jnd"]) {
       if (r.value("parameter", "") + "|" + r.value("reference", "") != key) continue;
       const std::string who = html_escape(r.value("participant", ""));
-      rows.push_back({who == "panel" ? "<b>panel</b>" : who, jnd_method(r),
-                      percent_cell(r["weber_fraction"]),
-                      r["ci_low"].is_number()
-                          ? bracketed(percent_cell(r["ci_low"]),
-                                      r["ci_high"].is_number() ? percent_cell(r["ci_high"]) : "&infin;")
-                          : "&ndash;",
-                      html_fixed(r.value("pse", json()), 3), html_fixed(r.value("spread", json()), 3),
-                      html_fixed(r.value("lapse", json()), 3), html_cell(r.value("trials", json()))});
+      rows.push_back(
+          {who == "panel" ? "<b>panel</b>" : who, jnd_method(r), percent_cell(r["weber_fraction"]),
+           r["ci_low"].is_number()
+               ? bracketed(percent_cell(r["ci_low"]),
+                           r["ci_high"].is_number() ? percent_cell(r["ci_high"]) : "&infin;")
+               : "&ndash;",
+           html_fixed(r.value("pse", json()), 3), html_fixed(r.value("spread", json()), 3),
+           html_fixed(r.value("lapse", json()), 3), html_cell(r.value("trials", json()))});
     }
-    html += html_table({"participant", "method", "JND %", "95 % interval %", "PSE", "spread", "lapse",
-                   "trials"},
-                  rows);
+    html += html_table(
+        {"participant", "method", "JND %", "95 % interval %", "PSE", "spread", "lapse", "trials"},
+        rows);
     html += html_figure(plots, plot_file_name("jnd-", first.value("parameter", "")));
   }
   return html;
@@ -317,15 +327,17 @@ std::string jnd_html(const json& a, const std::vector<AnalysisPlot>& plots) {
 std::string tuning_html(const json& t, const std::vector<AnalysisPlot>& plots) {
   std::string html = "<h2>Tuned doors</h2>\n<p>Per parameter over the panel's ";
   html.append(std::to_string(t.value("doors", json::array()).size()))
-      .append(" tuned doors: the centre (geometric mean on the log scale) with its 95 % interval, "
-              "the spread, and the spread in perceptual steps (ln differences over ln(1 + Weber "
-              "fraction), the Weber fraction's source named).</p>\n");
+      .append(
+          " tuned doors: the centre (geometric mean on the log scale) with its 95 % interval, "
+          "the spread, and the spread in perceptual steps (ln differences over ln(1 + Weber "
+          "fraction), the Weber fraction's source named).</p>\n");
   std::vector<std::vector<std::string>> rows;
   for (const json& p : t.value("parameters", json::array())) {
     rows.push_back({html_escape(p.value("parameter", "")), html_cell(p["centre"]),
-                    bracketed(html_cell(p["ci_low"]), html_cell(p["ci_high"])), html_cell(p["spread"]),
-                    percent_cell(p["weber_fraction"]), html_cell(p["weber_source"]),
-                    html_fixed(p["spread_steps"]), html_fixed(p["ci_half_steps"])});
+                    bracketed(html_cell(p["ci_low"]), html_cell(p["ci_high"])),
+                    html_cell(p["spread"]), percent_cell(p["weber_fraction"]),
+                    html_cell(p["weber_source"]), html_fixed(p["spread_steps"]),
+                    html_fixed(p["ci_half_steps"])});
   }
   html += html_table({"parameter", "centre", "95 % interval", "spread", "Weber %", "source",
                       "spread, steps", "&plusmn; steps"},
@@ -361,10 +373,10 @@ std::string analysis_html(const json& a, const std::vector<AnalysisPlot>& plots)
   const int people = input.value("participants", 0);
   html += "<p>" + html_cell(input["trials_table"]) + ": " + html_cell(input["rows"]) + " trials, " +
           std::to_string(people) + (people == 1 ? " participant" : " participants") +
-          "; intervals at " +
-          html_escape(format_fixed(100 * value_of(input["confidence"]), 0)) + " %.</p>\n";
-  std::set<std::string> shown{"input", "sections", "preference_fit", "ties", "order_effect",
-                              "jnd_levels", "ratings_models"};
+          "; intervals at " + html_escape(format_fixed(100 * value_of(input["confidence"]), 0)) +
+          " %.</p>\n";
+  std::set<std::string> shown{"input",        "sections",   "preference_fit", "ties",
+                              "order_effect", "jnd_levels", "ratings_models"};
   const auto known = [&](const char* key, auto&& render) {
     if (!a.contains(key)) return;
     html += render();
@@ -378,7 +390,8 @@ std::string analysis_html(const json& a, const std::vector<AnalysisPlot>& plots)
   known("tuning", [&] { return tuning_html(a["tuning"], plots); });
   for (const auto& [key, value] : a.items()) {  // keys without words here
     if (shown.count(key)) continue;
-    html += "<h2>" + html_escape(key) + "</h2>\n" + generic_html(value) + figures_starting(plots, key);
+    html +=
+        "<h2>" + html_escape(key) + "</h2>\n" + generic_html(value) + figures_starting(plots, key);
   }
   return html + "</body></html>\n";
 }

@@ -27,8 +27,9 @@ double number_or_nan(const nlohmann::json& value) {
 void add_forest(std::vector<AnalysisPlot>& plots, const std::string& file,
                 const ForestOptions& options, const std::vector<ForestRow>& rows) {
   bool drawable = false;
-  for (const ForestRow& row : rows) drawable = drawable || std::isfinite(row.estimate) ||
-                                               std::isfinite(row.low) || std::isfinite(row.high);
+  for (const ForestRow& row : rows)
+    drawable = drawable || std::isfinite(row.estimate) || std::isfinite(row.low) ||
+               std::isfinite(row.high);
   if (drawable) plots.push_back({file, options.title, render_svg_forest(options, rows)});
 }
 
@@ -37,9 +38,10 @@ void add_forest(std::vector<AnalysisPlot>& plots, const std::string& file,
 void add_preference_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
   std::vector<nlohmann::json> worths(analysis["preference_scale"].begin(),
                                      analysis["preference_scale"].end());
-  std::stable_sort(worths.begin(), worths.end(), [](const nlohmann::json& a, const nlohmann::json& b) {
-    return number_or_nan(a["worth"]) > number_or_nan(b["worth"]);
-  });
+  std::stable_sort(worths.begin(), worths.end(),
+                   [](const nlohmann::json& a, const nlohmann::json& b) {
+                     return number_or_nan(a["worth"]) > number_or_nan(b["worth"]);
+                   });
   std::vector<ForestRow> rows;
   bool compared = false;
   for (const nlohmann::json& w : worths) {
@@ -108,7 +110,8 @@ void add_identify_plot(const nlohmann::json& ir, std::vector<AnalysisPlot>& plot
 void add_two_ac_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
   std::vector<ForestRow> rows;
   for (const nlohmann::json& r : analysis["two_ac"]) {
-    ForestRow row = dprime_row(r["first"].get<std::string>() + " vs " + r["second"].get<std::string>(), r);
+    ForestRow row =
+        dprime_row(r["first"].get<std::string>() + " vs " + r["second"].get<std::string>(), r);
     row.note = r.value("note", "");
     rows.push_back(row);
   }
@@ -174,8 +177,8 @@ void add_psychometric_plots(const nlohmann::json& analysis, std::vector<Analysis
       found = true;
     }
     if (!found || t.counts.empty()) continue;
-    plots.push_back({plot_file_name("jnd-", t.parameter),
-                     "Psychometric function: " + t.parameter, render_psychometric_plot(t)});
+    plots.push_back({plot_file_name("jnd-", t.parameter), "Psychometric function: " + t.parameter,
+                     render_psychometric_plot(t)});
   }
 }
 
@@ -188,7 +191,8 @@ void add_tuning_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& 
     ParameterDistribution d;
     d.parameter = row.at("parameter").get<std::string>();
     d.centre = number_or_nan(row.at("centre"));
-    if (row.at("weber_fraction").is_number()) d.weber_fraction = row["weber_fraction"].get<double>();
+    if (row.at("weber_fraction").is_number())
+      d.weber_fraction = row["weber_fraction"].get<double>();
     if (row.at("spread_steps").is_number()) d.spread_steps = row["spread_steps"].get<double>();
     t.parameters.push_back(d);
   }

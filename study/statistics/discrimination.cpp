@@ -45,7 +45,9 @@ double z_for(double confidence) {
 }
 
 // A d' in a verdict: 2 decimals.
-std::string dprime_text(double value) { return format_fixed(value, 2); }
+std::string dprime_text(double value) {
+  return format_fixed(value, 2);
+}
 
 // "95 %" for a confidence of 0.95.
 std::string confidence_text(double confidence) {
@@ -105,10 +107,10 @@ Forced2Result forced_choice_2afc(int correct, int n, double confidence, double m
   // answers, H0 d' ≤ −margin by many.
   const double pc_margin = phi_lower(margin / kSqrt2);
   const double p_below = boost::math::cdf(boost::math::binomial(n, pc_margin), correct);
-  const double p_above =
-      correct == 0 ? 1.0
-                   : boost::math::cdf(boost::math::complement(
-                         boost::math::binomial(n, 1.0 - pc_margin), correct - 1));
+  const double p_above = correct == 0
+                             ? 1.0
+                             : boost::math::cdf(boost::math::complement(
+                                   boost::math::binomial(n, 1.0 - pc_margin), correct - 1));
   r.p_equivalence = std::max(p_below, p_above);
   return r;
 }
@@ -132,7 +134,8 @@ namespace {
 // What the data say from the test of no difference (p) and the interval against the margin.
 Conclusion conclude(double p, double low, double high, double margin, double confidence) {
   const bool within = low > -margin && high < margin;
-  if (p < 1 - confidence) return within ? Conclusion::kDifferentWithinMargin : Conclusion::kDifferent;
+  if (p < 1 - confidence)
+    return within ? Conclusion::kDifferentWithinMargin : Conclusion::kDifferent;
   return within ? Conclusion::kEquivalent : Conclusion::kInconclusive;
 }
 
@@ -162,16 +165,18 @@ IdentifyReal identify_verdict(IdentifyReal result, double confidence) {
                        " confidence: " + numbers + " (" + equivalence_p + ", two one-sided tests)";
       break;
     case Conclusion::kDifferentWithinMargin:
-      result.verdict = "a difference smaller than the margin: the panel told the doors apart "
-                       "above chance (" + p_value_text(panel.p) + "), but |d'| is below " +
-                       margin + " with " + level + " confidence: " + numbers;
+      result.verdict =
+          "a difference smaller than the margin: the panel told the doors apart "
+          "above chance (" +
+          p_value_text(panel.p) + "), but |d'| is below " + margin + " with " + level +
+          " confidence: " + numbers;
       break;
     case Conclusion::kDifferent:
-      result.verdict = std::string(panel.pc > 0.5
-                                       ? "the panel could tell the virtual door from the real one: "
-                                       : "the panel took the virtual door for the real one more "
-                                         "often than chance: ") +
-                       numbers + " (" + p_value_text(panel.p) + ")";
+      result.verdict =
+          std::string(panel.pc > 0.5 ? "the panel could tell the virtual door from the real one: "
+                                     : "the panel took the virtual door for the real one more "
+                                       "often than chance: ") +
+          numbers + " (" + p_value_text(panel.p) + ")";
       break;
     case Conclusion::kInconclusive:
       result.verdict = "no evidence of a difference, but the data cannot exclude " +
@@ -274,18 +279,18 @@ void two_ac_profile(TwoAcResult& r, double confidence) {
 
 // The pair's verdict in words, naming the variants.
 void two_ac_verdict(TwoAcResult& r, double confidence) {
-  const std::string numbers =
-      dprime_with_interval(r.dprime, r.ci_low, r.ci_high) + ", " + std::to_string(r.prefer_first) +
-      " prefer " + r.first + ", " + std::to_string(r.no_preference) + " same, " +
-      std::to_string(r.prefer_second) + " prefer " + r.second;
+  const std::string numbers = dprime_with_interval(r.dprime, r.ci_low, r.ci_high) + ", " +
+                              std::to_string(r.prefer_first) + " prefer " + r.first + ", " +
+                              std::to_string(r.no_preference) + " same, " +
+                              std::to_string(r.prefer_second) + " prefer " + r.second;
   const std::string level = confidence_text(confidence), margin = dprime_text(r.margin);
   const std::string preferred =
       r.dprime > 0 ? r.second + " preferred to " + r.first : r.first + " preferred to " + r.second;
   r.conclusion = conclude(r.p, r.ci_low, r.ci_high, r.margin, confidence);
   switch (r.conclusion) {
     case Conclusion::kEquivalent:
-      r.verdict = "indistinguishable: |d'| below " + margin + " with " + level + " confidence: " +
-                  numbers + " (equivalence " + p_value_text(r.p_equivalence) +
+      r.verdict = "indistinguishable: |d'| below " + margin + " with " + level +
+                  " confidence: " + numbers + " (equivalence " + p_value_text(r.p_equivalence) +
                   ", two one-sided tests)";
       break;
     case Conclusion::kDifferentWithinMargin:

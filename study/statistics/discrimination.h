@@ -99,9 +99,9 @@ struct TwoAcResult {
 };
 
 // From counts (prefer A, none, prefer B); the verdict names A and B as `first`, `second`.
-TwoAcResult two_ac(int prefer_first, int no_preference, int prefer_second,
-                   double confidence = 0.95, double margin = kDefaultEquivalenceDprime,
-                   const std::string& first = "A", const std::string& second = "B");
+TwoAcResult two_ac(int prefer_first, int no_preference, int prefer_second, double confidence = 0.95,
+                   double margin = kDefaultEquivalenceDprime, const std::string& first = "A",
+                   const std::string& second = "B");
 
 // Every pair of the preference-2ac trials, in order of the pair's first appearance.
 std::vector<TwoAcResult> two_ac_pairs(const TrialsTable& table, double confidence = 0.95,

@@ -1,10 +1,9 @@
 #include "study/statistics/gauss_hermite.h"
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <numbers>
 #include <stdexcept>
-
-#include <Eigen/Eigenvalues>
 
 namespace doorbench::study::statistics {
 

@@ -8,7 +8,9 @@
 namespace doorbench::study::statistics {
 namespace {
 
-double step_for(double x, double step) { return step * std::max(1.0, std::abs(x)); }
+double step_for(double x, double step) {
+  return step * std::max(1.0, std::abs(x));
+}
 
 }  // namespace
 

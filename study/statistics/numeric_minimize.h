@@ -6,9 +6,8 @@
 // NaN where it is undefined, which rejects the step.
 // Internal to study/statistics (not part of any verb's interface).
 // Thread safety: free functions without shared state; `f` is called from the caller's thread.
-#include <functional>
-
 #include <Eigen/Dense>
+#include <functional>
 
 namespace doorbench::study::statistics {
 
@@ -42,7 +41,8 @@ Eigen::MatrixXd numeric_hessian(const Objective& f, const Eigen::VectorXd& x, do
 
 // Minimises f from x0, its derivatives by central differences. Throws std::invalid_argument
 // when f(x0) is not finite.
-MinimizeResult minimize(const Objective& f, Eigen::VectorXd x0, const MinimizeOptions& options = {});
+MinimizeResult minimize(const Objective& f, Eigen::VectorXd x0,
+                        const MinimizeOptions& options = {});
 
 // The same on the derivatives f supplies (two evaluations per accepted step at most: the
 // candidate's value comes with its derivatives for the next step).

@@ -21,7 +21,6 @@
 namespace doorbench::study {
 namespace {
 
-
 // Answers of one ordered pair (first, second), summed over trials.
 struct Cell {
   int first = 0, second = 0;
@@ -449,8 +448,8 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
     scale.worths.push_back(worth);
   }
   count_answers(data, scale);
-  add_quasi_variances(layout, covariance, use_bootstrap ? replicates.thetas : std::vector<Eigen::VectorXd>{},
-                      z, scale);
+  add_quasi_variances(layout, covariance,
+                      use_bootstrap ? replicates.thetas : std::vector<Eigen::VectorXd>{}, z, scale);
   if (layout.order) scale.order = estimate(layout.order_index());
   if (layout.ties) {
     Estimate log_nu = estimate(layout.nu_index());
@@ -462,16 +461,18 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
   if (!layout.order)
     scale.notes.push_back("no pair was presented in both orders: no order effect fitted");
   if (options.bootstrap_replicates == 0)
-    scale.notes.push_back("Wald intervals: no participant bootstrap was asked for (--bootstrap 0), "
-                          "so the intervals assume the participants agree");
+    scale.notes.push_back(
+        "Wald intervals: no participant bootstrap was asked for (--bootstrap 0), "
+        "so the intervals assume the participants agree");
   else if (!bootstrapped)
     scale.notes.push_back("Wald intervals: " + std::to_string(scale.participants) +
                           " participants, fewer than the " +
                           std::to_string(options.min_bootstrap_participants) +
                           " a participant bootstrap needs; they assume the participants agree");
   if (layout.variants == 2)
-    scale.notes.push_back("no comparison intervals: with two variants the interval of the "
-                          "second against the reference is the comparison");
+    scale.notes.push_back(
+        "no comparison intervals: with two variants the interval of the "
+        "second against the reference is the comparison");
   if (replicates.failed > 0)
     scale.notes.push_back(std::to_string(replicates.failed) +
                           " bootstrap resamples had a variant that never won or never lost and "
@@ -479,8 +480,7 @@ PreferenceScale fit_preference_scale(const PairData& data, const PreferenceOptio
   return scale;
 }
 
-namespace {
-}  // namespace
+namespace {}  // namespace
 
 nlohmann::json preference_scale_json(const PreferenceScale& scale) {
   nlohmann::json out = nlohmann::json::object();

@@ -101,7 +101,7 @@ struct Estimate {
 
 struct VariantWorth {
   std::string variant;
-  Estimate worth;          // log scale
+  Estimate worth;             // log scale
   double quasi_variance = 0;  // NaN without quasi-variances (two variants, or no fit)
   double comparison_low = 0, comparison_high = 0;  // worth ∓ z/√2 · sqrt(quasi_variance)
   double p_favourite = 0;  // share of replicates (or draws) in which it has the top worth
@@ -116,10 +116,10 @@ struct PreferenceScale {
   int iterations = 0;
   int trials = 0;
   int participants = 0;
-  int replicates_used = 0;       // bootstrap replicates that converged (0: not bootstrapped)
-  int replicates_failed = 0;     // where a variant never won or never lost
-  std::string favourite_source;  // "bootstrap" or "normal draws from the Wald covariance"
-  double quasi_variance_error = 0;  // the largest relative error of sqrt(q_i + q_j); NaN: none
+  int replicates_used = 0;            // bootstrap replicates that converged (0: not bootstrapped)
+  int replicates_failed = 0;          // where a variant never won or never lost
+  std::string favourite_source;       // "bootstrap" or "normal draws from the Wald covariance"
+  double quasi_variance_error = 0;    // the largest relative error of sqrt(q_i + q_j); NaN: none
   std::string quasi_variance_source;  // "wald" or "larger of wald and bootstrap, per pair"
   std::vector<std::string> notes;
 };

@@ -18,7 +18,9 @@ namespace {
 constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 // The Gumbel's z shift: its median is at z = ln ln 2.
-double gumbel_shift() { return std::log(std::log(2.0)); }
+double gumbel_shift() {
+  return std::log(std::log(2.0));
+}
 
 // F's density f(z) and its derivative f'(z).
 std::pair<double, double> density_and_slope(PsychometricShape shape, double z) {
@@ -50,8 +52,7 @@ LevelProbability level_probability(PsychometricShape shape, const PsychometricVa
   const double lapse = v.lapse;
   // dλ/dv and d²λ/dv² for λ = L·logistic(v).
   const double d_lapse = layout.fit_lapse ? lapse * (1.0 - lapse / layout.max_lapse) : 0.0;
-  const double dd_lapse =
-      layout.fit_lapse ? d_lapse * (1.0 - 2.0 * lapse / layout.max_lapse) : 0.0;
+  const double dd_lapse = layout.fit_lapse ? d_lapse * (1.0 - 2.0 * lapse / layout.max_lapse) : 0.0;
   LevelProbability out;
   out.p = lapse / 2.0 + (1.0 - lapse) * f_cdf;
   out.q = lapse / 2.0 + (1.0 - lapse) * not_f;
@@ -178,7 +179,8 @@ MinimizeResult fit_psychometric_free(const PsychometricProblem& problem, double 
     auto result = minimize(f, x0);
     if (result.value < best.value) best = result;
   }
-  if (!std::isfinite(best.value)) throw std::invalid_argument("no start value has a finite likelihood");
+  if (!std::isfinite(best.value))
+    throw std::invalid_argument("no start value has a finite likelihood");
   return best;
 }
 
@@ -243,9 +245,10 @@ double profile_limit(const PsychometricProblem& problem, const Eigen::VectorXd& 
   // starts from the nearest.
   std::vector<std::pair<double, Eigen::VectorXd>> seen{{centre, others}};
   const auto rise = [&](double log_spread) {
-    const auto nearest = std::min_element(seen.begin(), seen.end(), [&](const auto& a, const auto& b) {
-      return std::abs(a.first - log_spread) < std::abs(b.first - log_spread);
-    });
+    const auto nearest =
+        std::min_element(seen.begin(), seen.end(), [&](const auto& a, const auto& b) {
+          return std::abs(a.first - log_spread) < std::abs(b.first - log_spread);
+        });
     Eigen::VectorXd warm = nearest->second;
     const double value = profile_at(problem, log_spread, warm) - minimum - cut;
     seen.emplace_back(log_spread, std::move(warm));

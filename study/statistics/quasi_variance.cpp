@@ -54,7 +54,8 @@ std::optional<QuasiVariances> quasi_variances(const Eigen::MatrixXd& pair_varian
     const Eigen::VectorXd sums = system.design * q;
     const Eigen::VectorXd residual = system.log_variance.array() - sums.array().log();
     // The residuals' Jacobian in q: −1 / (q_i + q_j) at i and j.
-    const Eigen::MatrixXd jacobian = -(sums.array().inverse().matrix().asDiagonal() * system.design);
+    const Eigen::MatrixXd jacobian =
+        -(sums.array().inverse().matrix().asDiagonal() * system.design);
     const Eigen::VectorXd step = jacobian.colPivHouseholderQr().solve(-residual);
     const double size = step.cwiseAbs().maxCoeff() / std::max(1e-300, q.cwiseAbs().maxCoeff());
     // Gauss–Newton converges linearly when the residuals are not 0: a relative step of
@@ -83,8 +84,8 @@ std::optional<QuasiVariances> quasi_variances(const Eigen::MatrixXd& pair_varian
   out.variances.assign(q.data(), q.data() + k);
   const Eigen::VectorXd sums = system.design * q;
   for (Eigen::Index row = 0; row < pairs; ++row)
-    out.worst_relative_error = std::max(out.worst_relative_error,
-                                        std::abs(std::sqrt(sums[row] / variance[row]) - 1.0));
+    out.worst_relative_error =
+        std::max(out.worst_relative_error, std::abs(std::sqrt(sums[row] / variance[row]) - 1.0));
   return out;
 }
 

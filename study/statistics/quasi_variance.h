@@ -19,8 +19,8 @@
 namespace doorbench::study::statistics {
 
 struct QuasiVariances {
-  std::vector<double> variances;       // q_k, one per level
-  double worst_relative_error = 0.0;   // the largest |relative error| over the pairs
+  std::vector<double> variances;      // q_k, one per level
+  double worst_relative_error = 0.0;  // the largest |relative error| over the pairs
 };
 
 // The variance of every difference of two levels, v_ij = C_ii + C_jj − 2 C_ij, from a

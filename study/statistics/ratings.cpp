@@ -1,28 +1,26 @@
 #include "study/statistics/ratings.h"
 
 #include <algorithm>
+#include <boost/math/distributions/normal.hpp>
 #include <charconv>
 #include <cmath>
 #include <limits>
 #include <map>
-#include <optional>
 #include <numbers>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <stdexcept>
 
-#include <boost/math/distributions/normal.hpp>
-
 #include "study/statistics/gauss_hermite.h"
-#include "study/statistics/numeric_minimize.h"
 #include "study/statistics/logistic.h"
+#include "study/statistics/numeric_minimize.h"
 
 namespace doorbench::study {
 namespace {
 
 using statistics::minimize;
 using statistics::numeric_hessian;
-
 
 // log P(Y = y | eta) and its first two derivatives in eta, for thresholds `theta`
 // (C - 1 of them for C categories; y in 0..C-1).
@@ -127,8 +125,9 @@ double participant_log_likelihood(const std::vector<Observation>& rows, const Pa
   double sum = 0.0;
   for (std::size_t k = 0; k < rule.nodes.size(); ++k) {
     const double x = rule.nodes[k];
-    sum += rule.weights[k] * std::exp(x * x + conditional(u + std::numbers::sqrt2 * scale * x,
-                                                          nullptr, nullptr) - value);
+    sum += rule.weights[k] *
+           std::exp(x * x + conditional(u + std::numbers::sqrt2 * scale * x, nullptr, nullptr) -
+                    value);
   }
   return value + std::log(std::numbers::sqrt2 * scale * sum);
 }
@@ -141,7 +140,8 @@ double negative_log_likelihood(const Eigen::VectorXd& x, const Data& data, bool 
     if (random_effect) {
       total += participant_log_likelihood(rows, p, rule);
     } else {
-      for (const Observation& o : rows) total += log_prob(o.category, p.beta[o.variant], p.theta).value;
+      for (const Observation& o : rows)
+        total += log_prob(o.category, p.beta[o.variant], p.theta).value;
     }
   }
   return std::isfinite(total) ? -total : std::numeric_limits<double>::infinity();
@@ -216,8 +216,8 @@ AttributeRatings fit_attribute_ratings(std::span<const RatingObservation> observ
                                   std::to_string(o.categories) + " categories) mixed in");
     }
     if (o.rating < 1 || o.rating > o.categories) {
-      throw std::invalid_argument(where + "rating " + std::to_string(o.rating) +
-                                  " outside 1.." + std::to_string(o.categories));
+      throw std::invalid_argument(where + "rating " + std::to_string(o.rating) + " outside 1.." +
+                                  std::to_string(o.categories));
     }
     if (std::find(variants.begin(), variants.end(), o.variant) == variants.end()) {
       if (!options.variant_order.empty()) {
@@ -257,7 +257,8 @@ AttributeRatings fit_attribute_ratings(std::span<const RatingObservation> observ
     start << fixed.x, std::log(0.5);
     Fit mixed = fit_model(data, true, rule, start);
     // sigma at its boundary 0: the mixed model gains nothing, keep the fixed-effect one.
-    if (mixed.log_likelihood > fixed.log_likelihood + 1e-6 && std::exp(mixed.x[mixed.x.size() - 1]) > 1e-3) {
+    if (mixed.log_likelihood > fixed.log_likelihood + 1e-6 &&
+        std::exp(mixed.x[mixed.x.size() - 1]) > 1e-3) {
       chosen = mixed;
       random_effect = true;
     }
@@ -282,7 +283,8 @@ AttributeRatings fit_attribute_ratings(std::span<const RatingObservation> observ
     if (v > 0) {
       effect.estimate = p.beta[v];
       const double variance = covariance(cuts + v - 1, cuts + v - 1);
-      effect.std_error = variance > 0.0 ? std::sqrt(variance) : std::numeric_limits<double>::quiet_NaN();
+      effect.std_error =
+          variance > 0.0 ? std::sqrt(variance) : std::numeric_limits<double>::quiet_NaN();
       effect.ci_low = effect.estimate - z * effect.std_error;
       effect.ci_high = effect.estimate + z * effect.std_error;
     }
@@ -315,8 +317,12 @@ nlohmann::json RatingsResult::to_json() const {
   for (const AttributeRatings& a : attributes) {
     for (std::size_t v = 0; v < a.effects.size(); ++v) {
       const VariantEffect& e = a.effects[v];
-      rows.push_back({{"attribute", a.attribute}, {"variant", e.variant}, {"estimate", e.estimate},
-                      {"ci_low", e.ci_low}, {"ci_high", e.ci_high}, {"std_error", e.std_error},
+      rows.push_back({{"attribute", a.attribute},
+                      {"variant", e.variant},
+                      {"estimate", e.estimate},
+                      {"ci_low", e.ci_low},
+                      {"ci_high", e.ci_high},
+                      {"std_error", e.std_error},
                       {"reference", v == 0}});
     }
   }
@@ -361,10 +367,12 @@ std::vector<RatingObservation> rating_observations(const TrialsTable& table) {
     const int line = table.line_numbers[r];
     const std::size_t colon = question.rfind(':');
     const std::string attribute = question.substr(7, colon - 7);
-    const auto k = colon > 7 ? parse_int(std::string_view(question).substr(colon + 1)) : std::nullopt;
+    const auto k =
+        colon > 7 ? parse_int(std::string_view(question).substr(colon + 1)) : std::nullopt;
     if (attribute.empty() || !k || *k < 2 || *k > 100) {
-      throw TrialsTableError(table.source, line,
-                             "question '" + question + "' is not rating:ATTRIBUTE:K with K in 2..100");
+      throw TrialsTableError(
+          table.source, line,
+          "question '" + question + "' is not rating:ATTRIBUTE:K with K in 2..100");
     }
     const std::string& answer = table.value(r, "answer");
     std::istringstream words(answer);

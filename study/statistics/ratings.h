@@ -19,11 +19,10 @@
 // Errors: std::invalid_argument naming the attribute; the trials adapter throws
 // TrialsTableError naming the file, line and field.
 // Thread safety: pure functions without shared state.
+#include <nlohmann/json.hpp>
 #include <span>
 #include <string>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "study/trials_table.h"
 
@@ -61,13 +60,13 @@ struct VariantEffect {
 
 struct AttributeRatings {
   std::string attribute;
-  int categories = 0;                 // K of the scale as asked
-  std::vector<int> used_categories;   // the ratings that occur, ascending
-  std::vector<VariantEffect> effects;  // one per variant, the reference first
-  std::vector<double> thresholds;     // theta between consecutive used categories
-  double participant_sd = 0.0;        // sigma; 0 when the fixed-effect model was kept
+  int categories = 0;                     // K of the scale as asked
+  std::vector<int> used_categories;       // the ratings that occur, ascending
+  std::vector<VariantEffect> effects;     // one per variant, the reference first
+  std::vector<double> thresholds;         // theta between consecutive used categories
+  double participant_sd = 0.0;            // sigma; 0 when the fixed-effect model was kept
   double participant_sd_std_error = 0.0;  // of sigma (0 when sigma is 0)
-  bool random_effect = false;         // whether the mixed model was kept
+  bool random_effect = false;             // whether the mixed model was kept
   int quadrature_nodes = 0;
   double log_likelihood = 0.0;
   int observations = 0;

@@ -40,7 +40,8 @@ double psychometric_log_likelihood(std::span<const StrongerObservation> trials,
                                    double lapse) {
   double total = 0.0;
   for (const StrongerObservation& t : trials) {
-    const auto [f, not_f] = psychometric_cdf_pair(shape, psychometric_z(shape, t.level, pse, spread));
+    const auto [f, not_f] =
+        psychometric_cdf_pair(shape, psychometric_z(shape, t.level, pse, spread));
     const double p = t.comparison_stronger ? lapse / 2.0 + (1.0 - lapse) * f
                                            : lapse / 2.0 + (1.0 - lapse) * not_f;
     total += std::log(p);
@@ -62,9 +63,8 @@ CurvePoint PsychometricFit::curve_point(double level, double confidence) const {
   const statistics::PsychometricLayout layout{pse_fitted, max_lapse > 0.0, max_lapse};
   const statistics::PsychometricValues values{pse, std::log(spread), lapse};
   const double z = boost::math::quantile(boost::math::normal(), 0.5 + confidence / 2.0);
-  return statistics::psychometric_curve_point(shape, values, layout,
-                                              Eigen::Map<const Eigen::Matrix3d>(covariance.data()),
-                                              level, z);
+  return statistics::psychometric_curve_point(
+      shape, values, layout, Eigen::Map<const Eigen::Matrix3d>(covariance.data()), level, z);
 }
 
 PsychometricFit fit_psychometric(std::span<const StrongerObservation> trials,
@@ -98,13 +98,14 @@ PsychometricFit fit_psychometric(std::span<const StrongerObservation> trials,
   fit.trials = static_cast<int>(trials.size());
   fit.converged = best.converged;
   fit.weber_fraction = weber_fraction(options.shape, fit.spread, options.criterion);
-  const double cut =
-      0.5 * boost::math::quantile(boost::math::chi_squared(1.0), options.confidence);
+  const double cut = 0.5 * boost::math::quantile(boost::math::chi_squared(1.0), options.confidence);
   const double low = statistics::profile_limit(problem, best.x, best.value, cut, -1);
   const double high = statistics::profile_limit(problem, best.x, best.value, cut, +1);
-  fit.ci_low = std::isfinite(low) ? weber_fraction(options.shape, std::exp(low), options.criterion) : 0.0;
-  fit.ci_high = std::isfinite(high) ? weber_fraction(options.shape, std::exp(high), options.criterion)
-                                    : std::numeric_limits<double>::infinity();
+  fit.ci_low =
+      std::isfinite(low) ? weber_fraction(options.shape, std::exp(low), options.criterion) : 0.0;
+  fit.ci_high = std::isfinite(high)
+                    ? weber_fraction(options.shape, std::exp(high), options.criterion)
+                    : std::numeric_limits<double>::infinity();
   return fit;
 }
 
@@ -113,7 +114,7 @@ namespace {
 // The staircase's moves: whether they follow an up-down rule, its N, and the reversal levels.
 struct StaircaseMoves {
   bool consistent = true;
-  int down_rule = 0;  // 0 when no step down was seen
+  int down_rule = 0;                    // 0 when no step down was seen
   std::vector<double> reversal_levels;  // |ln ratio| where the direction turned
 };
 
@@ -130,7 +131,8 @@ StaircaseMoves read_moves(std::span<const StrongerObservation> trials) {
       if ((direction < 0 && !correct_before) || (direction > 0 && correct_before)) {
         moves.consistent = false;
       }
-      if (direction < 0) moves.down_rule = moves.down_rule == 0 ? run : std::min(moves.down_rule, run);
+      if (direction < 0)
+        moves.down_rule = moves.down_rule == 0 ? run : std::min(moves.down_rule, run);
       if (direction != 0) {
         if (previous_direction != 0 && direction != previous_direction) {
           moves.reversal_levels.push_back(before);
@@ -149,7 +151,8 @@ StaircaseMoves read_moves(std::span<const StrongerObservation> trials) {
 }  // namespace
 
 std::optional<StaircaseThreshold> staircase_threshold(std::span<const StrongerObservation> trials,
-                                                      const ThresholdOptions& options, bool forced) {
+                                                      const ThresholdOptions& options,
+                                                      bool forced) {
   if (trials.empty()) return std::nullopt;
   bool one_side = true;
   for (const auto& t : trials) {
@@ -173,8 +176,8 @@ std::optional<StaircaseThreshold> staircase_threshold(std::span<const StrongerOb
   }
   const double mean = sum / k;
   const double sd = std::sqrt(std::max(0.0, (squares - k * mean * mean) / (k - 1)));
-  const double t = boost::math::quantile(boost::math::students_t(k - 1.0),
-                                         0.5 + options.confidence / 2.0);
+  const double t =
+      boost::math::quantile(boost::math::students_t(k - 1.0), 0.5 + options.confidence / 2.0);
   out.weber_fraction = std::expm1(mean);
   out.ci_low = std::expm1(mean - t * sd / std::sqrt(k));
   out.ci_high = std::expm1(mean + t * sd / std::sqrt(k));
@@ -199,7 +202,8 @@ std::vector<std::pair<Key, std::vector<StrongerObservation>>> group_by(
   std::vector<std::pair<Key, std::vector<StrongerObservation>>> groups;
   for (const auto& t : trials) {
     const Key key = key_of(t);
-    auto it = std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == key; });
+    auto it =
+        std::find_if(groups.begin(), groups.end(), [&](const auto& g) { return g.first == key; });
     if (it == groups.end()) it = groups.insert(groups.end(), {key, {}});
     it->second.push_back(t);
   }
@@ -227,11 +231,13 @@ ParameterThresholds fit_parameter(const std::string& parameter, const std::strin
     if (options.per_participant && fittable(own)) {
       out.participants.emplace_back(participant, fit_psychometric(own, options));
     }
-    for (auto& [block, run] : group_by<Id>(own, [](const StrongerObservation& t) { return t.block; })) {
+    for (auto& [block, run] :
+         group_by<Id>(own, [](const StrongerObservation& t) { return t.block; })) {
       std::stable_sort(run.begin(), run.end(),
                        [](const auto& a, const auto& b) { return a.trial < b.trial; });
-      const bool forced = std::find(options.staircase_blocks.begin(), options.staircase_blocks.end(),
-                                    block) != options.staircase_blocks.end();
+      const bool forced =
+          std::find(options.staircase_blocks.begin(), options.staircase_blocks.end(), block) !=
+          options.staircase_blocks.end();
       if (auto staircase = staircase_threshold(run, options, forced)) {
         out.staircases.push_back(std::move(*staircase));
       }
@@ -359,17 +365,19 @@ std::vector<StrongerObservation> stronger_observations(const TrialsTable& table)
     if (!question.starts_with("stronger:")) continue;
     const std::string parameter = question.substr(9);
     const int line = table.line_numbers[r];
-    if (parameter.empty()) throw TrialsTableError(table.source, line, "question 'stronger:' names no parameter");
+    if (parameter.empty())
+      throw TrialsTableError(table.source, line, "question 'stronger:' names no parameter");
     const std::string& answer = table.value(r, "answer");
     if (answer != "1" && answer != "2") {
-      throw TrialsTableError(table.source, line, "answer '" + answer + "' is not 1 or 2 (which felt stronger)");
+      throw TrialsTableError(table.source, line,
+                             "answer '" + answer + "' is not 1 or 2 (which felt stronger)");
     }
     int trial = static_cast<int>(r);
     const std::string& trial_text = table.value(r, "trial");
     std::from_chars(trial_text.data(), trial_text.data() + trial_text.size(), trial);
     rows.push_back({r, table.value(r, "participant"), table.value(r, "block"), parameter,
-                    parse_label(table, r, "first", parameter), parse_label(table, r, "second", parameter),
-                    answer == "2", trial});
+                    parse_label(table, r, "first", parameter),
+                    parse_label(table, r, "second", parameter), answer == "2", trial});
   }
   // The reference of each participant's block: the label in every trial.
   std::map<std::pair<std::string, std::string>, std::vector<const StrongerRow*>> blocks;
@@ -378,10 +386,12 @@ std::vector<StrongerObservation> stronger_observations(const TrialsTable& table)
   for (const auto& [key, members] : blocks) {
     std::optional<Label> best;
     for (const Label* candidate : {&members.front()->first, &members.front()->second}) {
-      const bool everywhere = std::all_of(members.begin(), members.end(), [&](const StrongerRow* m) {
-        return m->first.text == candidate->text || m->second.text == candidate->text;
-      });
-      if (everywhere && (!best || std::abs(std::log(candidate->factor)) < std::abs(std::log(best->factor)))) {
+      const bool everywhere =
+          std::all_of(members.begin(), members.end(), [&](const StrongerRow* m) {
+            return m->first.text == candidate->text || m->second.text == candidate->text;
+          });
+      if (everywhere &&
+          (!best || std::abs(std::log(candidate->factor)) < std::abs(std::log(best->factor)))) {
         best = *candidate;
       }
     }

@@ -28,13 +28,12 @@
 // Thread safety: pure functions without shared state.
 #include <array>
 #include <limits>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "study/trials_table.h"
 
@@ -44,10 +43,10 @@ namespace doorbench::study {
 struct StrongerObservation {
   std::string participant;
   std::string block;
-  int trial = 0;                  // order within the participant's block
-  std::string parameter;          // e.g. "J_d"
-  std::string reference;          // the reference's label, e.g. "J_d*1.00"
-  double level = 0.0;             // ln(comparison factor / reference factor)
+  int trial = 0;          // order within the participant's block
+  std::string parameter;  // e.g. "J_d"
+  std::string reference;  // the reference's label, e.g. "J_d*1.00"
+  double level = 0.0;     // ln(comparison factor / reference factor)
   bool comparison_stronger = false;
 };
 
@@ -58,9 +57,9 @@ struct ThresholdOptions {
   double max_lapse = 0.1;   // the lapse rate's upper bound, [0, 0.5)
   double criterion = 0.75;  // where on the lapse-free F the JND is read, (0.5, 1)
   double confidence = 0.95;
-  int staircase_reversals = 6;  // k: the last k reversals are averaged (>= 2)
+  int staircase_reversals = 6;                // k: the last k reversals are averaged (>= 2)
   std::vector<std::string> staircase_blocks;  // blocks taken as staircases whatever their moves
-  bool per_participant = true;  // also fit each participant alone
+  bool per_participant = true;                // also fit each participant alone
   std::string validate() const;  // empty when usable, else the message naming the option
 };
 
@@ -96,13 +95,13 @@ struct PsychometricFit {
 
 struct StaircaseThreshold {
   std::string participant, block;
-  int down_rule = 2;         // N of 1-up-N-down (the fewest "stronger" answers before a step down)
-  double target = 0.0;       // 0.5^(1/N), the P(correct) the staircase tracks
-  int reversals_used = 0;    // of reversals_total
+  int down_rule = 2;       // N of 1-up-N-down (the fewest "stronger" answers before a step down)
+  double target = 0.0;     // 0.5^(1/N), the P(correct) the staircase tracks
+  int reversals_used = 0;  // of reversals_total
   int reversals_total = 0;
-  double weber_fraction = 0.0;  // exp(mean of the last k reversal levels) - 1
+  double weber_fraction = 0.0;         // exp(mean of the last k reversal levels) - 1
   double ci_low = 0.0, ci_high = 0.0;  // t interval over those reversals
-  PsychometricFit fit;       // the staircase's trials fitted alone
+  PsychometricFit fit;                 // the staircase's trials fitted alone
 };
 
 // One level's data, for plots.

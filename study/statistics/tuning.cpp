@@ -29,7 +29,8 @@ std::string TuningOptions::validate() const {
 
 std::optional<std::pair<double, std::string>> typical_weber_fraction(const std::string& parameter) {
   static const std::set<std::string> inertia{"J", "J_d", "m_d"};
-  static const std::set<std::string> stiffness{"k", "k_inf", "k_lock", "k_stop", "k_s", "k_l", "k_seal"};
+  static const std::set<std::string> stiffness{"k",   "k_inf", "k_lock", "k_stop",
+                                               "k_s", "k_l",   "k_seal"};
   static const std::set<std::string> viscosity{"c", "c_stop", "b_h"};
   static const std::set<std::string> friction{"d1", "d2", "T_h", "mu_g", "mu_l"};
   if (inertia.contains(parameter)) return std::pair{0.10, std::string("typical: inertia 10%")};
@@ -70,12 +71,14 @@ ParameterDistribution describe(const std::string& name, const std::vector<double
   const double t = x.size() > 1 ? boost::math::quantile(boost::math::students_t(n - 1.0),
                                                         0.5 + options.confidence / 2.0)
                                 : std::numeric_limits<double>::infinity();
-  const double half = x.size() > 1 ? t * d.spread / std::sqrt(n) : std::numeric_limits<double>::infinity();
+  const double half =
+      x.size() > 1 ? t * d.spread / std::sqrt(n) : std::numeric_limits<double>::infinity();
   const auto back = [&](double v) { return d.log_scale ? std::exp(v) : v; };
   d.centre = back(mean);
   d.ci_low = back(mean - half);
   d.ci_high = back(mean + half);
-  if (const auto measured = options.measured_weber.find(name); measured != options.measured_weber.end()) {
+  if (const auto measured = options.measured_weber.find(name);
+      measured != options.measured_weber.end()) {
     d.weber_fraction = measured->second;
     d.weber_source = "measured (jnd)";
   } else if (const auto typical = typical_weber_fraction(name)) {
@@ -157,7 +160,8 @@ double bic(double within, const std::vector<int>& sizes, std::size_t dimensions)
 }
 
 // The distance between the two groups' centres.
-double centre_distance(const std::vector<std::vector<double>>& points, const std::vector<int>& group) {
+double centre_distance(const std::vector<std::vector<double>>& points,
+                       const std::vector<int>& group) {
   const std::size_t p = points.front().size();
   std::vector<double> sum[2] = {std::vector<double>(p, 0.0), std::vector<double>(p, 0.0)};
   int count[2] = {0, 0};
@@ -191,7 +195,8 @@ TuningClusters cluster(const std::vector<TunedDoor>& doors,
   for (const TunedDoor& door : doors) {
     std::vector<double> point;
     for (const std::size_t j : columns) {
-      point.push_back(std::log(door.parameters[j].second) / std::log1p(*distributions[j].weber_fraction));
+      point.push_back(std::log(door.parameters[j].second) /
+                      std::log1p(*distributions[j].weber_fraction));
     }
     points.push_back(point);
   }
@@ -201,7 +206,8 @@ TuningClusters cluster(const std::vector<TunedDoor>& doors,
   }
   double total = 0.0;
   for (const auto& point : points) {
-    for (std::size_t j = 0; j < columns.size(); ++j) total += (point[j] - mean[j]) * (point[j] - mean[j]);
+    for (std::size_t j = 0; j < columns.size(); ++j)
+      total += (point[j] - mean[j]) * (point[j] - mean[j]);
   }
   const Partition partition = two_means(points);
   std::vector<int> sizes{0, 0};
@@ -209,7 +215,8 @@ TuningClusters cluster(const std::vector<TunedDoor>& doors,
   out.bic_one = bic(total, {static_cast<int>(points.size())}, columns.size());
   out.bic_two = bic(partition.within, sizes, columns.size());
   out.separation = centre_distance(points, partition.group);
-  out.split = out.bic_two < out.bic_one && std::min(sizes[0], sizes[1]) >= options.min_cluster_size &&
+  out.split = out.bic_two < out.bic_one &&
+              std::min(sizes[0], sizes[1]) >= options.min_cluster_size &&
               out.separation >= options.min_separation_steps;
   if (!out.split) return out;
   out.group = partition.group;
@@ -243,10 +250,12 @@ TuningResult analyze_tuning(std::span<const TunedDoor> doors, const TuningOption
   const auto& first = doors.front().parameters;
   for (const TunedDoor& door : doors) {
     bool same = door.parameters.size() == first.size();
-    for (std::size_t j = 0; same && j < first.size(); ++j) same = door.parameters[j].first == first[j].first;
+    for (std::size_t j = 0; same && j < first.size(); ++j)
+      same = door.parameters[j].first == first[j].first;
     if (!same) {
       throw std::invalid_argument("tuning: the door of " + door.participant +
-                                  " names other parameters than that of " + doors.front().participant);
+                                  " names other parameters than that of " +
+                                  doors.front().participant);
     }
     for (const auto& [name, value] : door.parameters) {
       if (!std::isfinite(value)) {
@@ -270,7 +279,8 @@ nlohmann::json TuningResult::to_json() const {
   for (const TunedDoor& door : doors) {
     nlohmann::json values = nlohmann::json::object();
     for (const auto& [name, value] : door.parameters) values[name] = value;
-    out["doors"].push_back({{"participant", door.participant}, {"file", door.file}, {"parameters", values}});
+    out["doors"].push_back(
+        {{"participant", door.participant}, {"file", door.file}, {"parameters", values}});
   }
   out["parameters"] = nlohmann::json::array();
   for (const ParameterDistribution& d : parameters) {
@@ -297,8 +307,9 @@ nlohmann::json TuningResult::to_json() const {
     groups.push_back({{"participants", members}, {"centre", clusters.centres[g]}});
   }
   out["clusters"] = {{"split", clusters.split},
-                     {"rule", "2-means in perceptual steps; split when BIC(2 groups) < BIC(1), "
-                              "each group has enough doors and the centres are far enough apart"},
+                     {"rule",
+                      "2-means in perceptual steps; split when BIC(2 groups) < BIC(1), "
+                      "each group has enough doors and the centres are far enough apart"},
                      {"separation", clusters.separation},
                      {"bic_one", clusters.bic_one},
                      {"bic_two", clusters.bic_two},
@@ -322,7 +333,8 @@ std::vector<TunedDoor> tuned_doors(const TrialsTable& table, const std::filesyst
     TunedDoor door{table.value(r, "participant"), file, {}};
     if (parsed.sensory) {
       for (std::size_t j = 0; j < parsed.sensory->values.size(); ++j) {
-        door.parameters.emplace_back(std::string(sensory::kParameterInfo[j].name), parsed.sensory->values[j]);
+        door.parameters.emplace_back(std::string(sensory::kParameterInfo[j].name),
+                                     parsed.sensory->values[j]);
       }
     }
     if (parsed.physical) {
@@ -333,8 +345,9 @@ std::vector<TunedDoor> tuned_doors(const TrialsTable& table, const std::filesyst
         door.parameters.emplace_back(taken ? "physical." + name : name, parsed.physical->values[j]);
       }
     }
-    const auto same = std::find_if(doors.begin(), doors.end(),
-                                   [&](const TunedDoor& d) { return d.participant == door.participant; });
+    const auto same = std::find_if(doors.begin(), doors.end(), [&](const TunedDoor& d) {
+      return d.participant == door.participant;
+    });
     if (same != doors.end()) {
       *same = std::move(door);  // the last tuning counts
     } else {
@@ -359,9 +372,11 @@ TuningPlotData tuning_plot_data(const TuningResult& tuning) {
   for (std::size_t j = 0; j < tuning.parameters.size(); ++j) {
     if (!tuning.parameters[j].spread_steps) continue;
     columns.push_back(j);
-    names += (names.empty() ? "" : ", ") + std::to_string(columns.size()) + " = " + tuning.parameters[j].parameter;
+    names += (names.empty() ? "" : ", ") + std::to_string(columns.size()) + " = " +
+             tuning.parameters[j].parameter;
   }
-  if (columns.empty()) throw std::invalid_argument("tuning plot: no parameter has perceptual steps");
+  if (columns.empty())
+    throw std::invalid_argument("tuning plot: no parameter has perceptual steps");
   data.options.title = "Tuned doors, perceptual steps from the panel's centre";
   data.options.x_label = "parameter (" + names + ")";
   data.options.y_label = "steps from the panel's geometric mean [JND]";
@@ -370,7 +385,8 @@ TuningPlotData tuning_plot_data(const TuningResult& tuning) {
     for (std::size_t c = 0; c < columns.size(); ++c) {
       const ParameterDistribution& d = tuning.parameters[columns[c]];
       x.push_back(static_cast<double>(c + 1));
-      y.push_back(std::log(door.parameters[columns[c]].second / d.centre) / std::log1p(*d.weber_fraction));
+      y.push_back(std::log(door.parameters[columns[c]].second / d.centre) /
+                  std::log1p(*d.weber_fraction));
     }
     data.x.push_back(std::move(x));
     data.y.push_back(std::move(y));
@@ -378,8 +394,9 @@ TuningPlotData tuning_plot_data(const TuningResult& tuning) {
   static const char* kGroupColours[] = {"#1f77b4", "#d62728"};
   for (std::size_t i = 0; i < tuning.doors.size(); ++i) {
     const int group = tuning.clusters.split ? tuning.clusters.group[i] : 0;
-    data.series.push_back({tuning.doors[i].participant + (tuning.clusters.split ? group == 0 ? " (A)" : " (B)" : ""),
-                           data.x[i], data.y[i], kGroupColours[group], plot_style::Meaning::kTuned});
+    data.series.push_back(
+        {tuning.doors[i].participant + (tuning.clusters.split ? group == 0 ? " (A)" : " (B)" : ""),
+         data.x[i], data.y[i], kGroupColours[group], plot_style::Meaning::kTuned});
   }
   return data;
 }

@@ -24,13 +24,12 @@
 // parameter file. Thread safety: pure functions without shared state (the adapter reads files).
 #include <filesystem>
 #include <map>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <span>
 #include <string>
 #include <utility>
 #include <vector>
-
-#include <nlohmann/json.hpp>
 
 #include "study/statistics/thresholds.h"
 #include "study/trials_table.h"
@@ -48,28 +47,28 @@ struct TuningOptions {
   std::map<std::string, double> measured_weber;  // parameter -> the panel's measured Weber fraction
   int min_cluster_size = 2;
   double min_separation_steps = 2.0;  // the groups' centres this far apart at least
-  std::string validate() const;  // empty when usable, else the message naming the option
+  std::string validate() const;       // empty when usable, else the message naming the option
 };
 
 struct ParameterDistribution {
   std::string parameter;
   bool log_scale = true;  // false: some value is not positive
   int doors = 0;
-  double centre = 0.0;    // geometric mean (log scale) or mean (linear)
-  double spread = 0.0;    // SD of ln value (log scale) or of the value (linear)
+  double centre = 0.0;                 // geometric mean (log scale) or mean (linear)
+  double spread = 0.0;                 // SD of ln value (log scale) or of the value (linear)
   double ci_low = 0.0, ci_high = 0.0;  // t interval of the centre
   double min = 0.0, max = 0.0;
   std::optional<double> weber_fraction;
-  std::string weber_source;  // "measured (jnd)", "typical: inertia 10%", ..., or "none"
-  std::optional<double> spread_steps;      // spread / ln(1 + w)
-  std::optional<double> ci_half_steps;     // half the interval's width on ln, in steps
+  std::string weber_source;             // "measured (jnd)", "typical: inertia 10%", ..., or "none"
+  std::optional<double> spread_steps;   // spread / ln(1 + w)
+  std::optional<double> ci_half_steps;  // half the interval's width on ln, in steps
 };
 
 struct TuningClusters {
   bool split = false;
   double bic_one = 0.0, bic_two = 0.0;
-  std::vector<std::string> dimensions;  // the parameters clustered on
-  std::vector<int> group;               // per door, 0 or 1 (all 0 when not split)
+  std::vector<std::string> dimensions;                 // the parameters clustered on
+  std::vector<int> group;                              // per door, 0 or 1 (all 0 when not split)
   std::vector<std::map<std::string, double>> centres;  // per group, geometric means
   std::map<std::string, double> separation_steps;      // per dimension, group 1 - group 0
   double separation = 0.0;  // between the 2-means centres, Euclidean in steps (also when not split)

@@ -292,8 +292,8 @@ TEST_CASE("table format errors name the source and line", "[csv][errors]") {
   }
   SECTION("control characters in metadata and names") {
     // A NUL would cut the value where the session stores it ("Ann"): refused where it is.
-    const std::string nul =
-        std::string("# source: x\n# operator: Ann") + '\0' + "Bob\ntime_s,force_N,angle_rad\n0,1,2\n";
+    const std::string nul = std::string("# source: x\n# operator: Ann") + '\0' +
+                            "Bob\ntime_s,force_N,angle_rad\n0,1,2\n";
     REQUIRE_THROWS_WITH(parse(nul),
                         "run.csv:2: control character \\x00 at column 16 of a metadata line "
                         "(metadata is kept as text: remove it from the file)");

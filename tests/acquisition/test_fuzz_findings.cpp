@@ -75,9 +75,9 @@ TEST_CASE("Fuzz findings: a header naming a missing calibration record is damage
       journal_of(dir.path, header_of(1000.0, "nominal-SIM-LC445-0001", "N"), {0, 10});
   const std::string message = recovery_error(journal);
   INFO(message);
-  CHECK(message.rfind(journal.string() +
-                          ": the journal's header does not describe a valid session: ",
-                      0) == 0);
+  CHECK(message.rfind(
+            journal.string() + ": the journal's header does not describe a valid session: ", 0) ==
+        0);
   CHECK(message.find("calibration record nominal-SIM-LC445-0001") != std::string::npos);
   CHECK(fs::exists(journal));  // kept: nothing was recovered
   CHECK(!fs::exists(dir / "s.h5"));

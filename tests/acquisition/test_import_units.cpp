@@ -44,19 +44,22 @@ std::vector<std::uint8_t> volts_file(const std::string& bridge_unit) {
   const std::uint32_t toc =
       kTocMetaData | kTocNewObjList | kTocRawData | kTocInterleavedData | kTocDAQmxRawData;
   const std::vector<Property> bridge = {
-      text_property("unit_string", bridge_unit), double_property("wf_increment", 0.001),
-      text_property("NI_Scaling_Status", "unscaled"), i32_property("NI_Number_Of_Scales", 2),
+      text_property("unit_string", bridge_unit),
+      double_property("wf_increment", 0.001),
+      text_property("NI_Scaling_Status", "unscaled"),
+      i32_property("NI_Number_Of_Scales", 2),
       text_property("NI_Scale[1]_Scale_Type", "Linear"),
       double_property("NI_Scale[1]_Linear_Slope", 3.0517578125e-4),
       double_property("NI_Scale[1]_Linear_Y_Intercept", -0.0015),
       i32_property("NI_Scale[1]_Linear_Input_Source", 0)};
-  const std::vector<Property> encoder = {
-      text_property("unit_string", "rad"), double_property("wf_increment", 0.001),
-      text_property("NI_Scaling_Status", "unscaled"), i32_property("NI_Number_Of_Scales", 2),
-      text_property("NI_Scale[1]_Scale_Type", "Linear"),
-      double_property("NI_Scale[1]_Linear_Slope", 2.5e-5),
-      double_property("NI_Scale[1]_Linear_Y_Intercept", 0.0),
-      i32_property("NI_Scale[1]_Linear_Input_Source", 0)};
+  const std::vector<Property> encoder = {text_property("unit_string", "rad"),
+                                         double_property("wf_increment", 0.001),
+                                         text_property("NI_Scaling_Status", "unscaled"),
+                                         i32_property("NI_Number_Of_Scales", 2),
+                                         text_property("NI_Scale[1]_Scale_Type", "Linear"),
+                                         double_property("NI_Scale[1]_Linear_Slope", 2.5e-5),
+                                         double_property("NI_Scale[1]_Linear_Y_Intercept", 0.0),
+                                         i32_property("NI_Scale[1]_Linear_Input_Source", 0)};
   const std::vector<Object> objects = {
       daqmx_channel("/'Dev1'/'Bridge'", kVoltSamples, {{3, 0, 0, 0}}, {8}, false, bridge),
       daqmx_channel("/'Dev1'/'Encoder'", kVoltSamples, {{5, 0, 4, 0}}, {8}, false, encoder)};
@@ -71,7 +74,8 @@ std::vector<std::uint8_t> volts_file(const std::string& bridge_unit) {
 
 void write_bytes(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes) {
   std::ofstream(path, std::ios::binary)
-      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
 }
 
 doorbench::CalibrationRecord load_cell_record() {
@@ -129,8 +133,8 @@ TEST_CASE("Import units: a DAQmx file in volts imports to newtons through a reco
   const std::string map = " --map force=Dev1/Bridge,angle=Dev1/Encoder ";
 
   // Without a conversion: refused, saying what would convert it.
-  testing::DoorbenchRun run =
-      testing::run_doorbench_shell("import v.tdms" + map + "--out plain.h5", dir, units_dir_env(dir));
+  testing::DoorbenchRun run = testing::run_doorbench_shell("import v.tdms" + map + "--out plain.h5",
+                                                           dir, units_dir_env(dir));
   CHECK(run.status == 1);
   CHECK(run.err ==
         "doorbench: v.tdms: force: channel Dev1/Bridge is in 'V', not N (convert it: "
@@ -139,7 +143,8 @@ TEST_CASE("Import units: a DAQmx file in volts imports to newtons through a reco
 
   // A record of the store (./calibrations, the working directory's).
   run = testing::run_doorbench_shell(
-      "import v.tdms" + map + "--calibration force=load_cell-LC445-0193-v2 --out store.h5", dir, units_dir_env(dir));
+      "import v.tdms" + map + "--calibration force=load_cell-LC445-0193-v2 --out store.h5", dir,
+      units_dir_env(dir));
   INFO(run.err);
   REQUIRE(run.status == 0);
   CHECK(run.err ==
@@ -150,12 +155,15 @@ TEST_CASE("Import units: a DAQmx file in volts imports to newtons through a reco
   // The record's file.
   run = testing::run_doorbench_shell(
       "import v.tdms" + map +
-          "--calibration force=calibrations/load_cell-LC445-0193-v2.json --out file.h5", dir, units_dir_env(dir));
+          "--calibration force=calibrations/load_cell-LC445-0193-v2.json --out file.h5",
+      dir, units_dir_env(dir));
   REQUIRE(run.status == 0);
   check_force_in_newtons(dir / "file.h5", "load_cell-LC445-0193-v2", kGainNPerV, kOffsetN);
 
   // A scale given by hand.
-  run = testing::run_doorbench_shell("import v.tdms" + map + "--scale force=65.377,-0.8125 --out scale.h5", dir, units_dir_env(dir));
+  run = testing::run_doorbench_shell(
+      "import v.tdms" + map + "--scale force=65.377,-0.8125 --out scale.h5", dir,
+      units_dir_env(dir));
   REQUIRE(run.status == 0);
   check_force_in_newtons(dir / "scale.h5", "scale-force", 65.377, -0.8125);
   const SessionReader scaled(dir / "scale.h5");
@@ -166,29 +174,34 @@ TEST_CASE("Import units: a DAQmx file in volts imports to newtons through a reco
 
   // The record takes V; a channel in 'Volts' says so and is refused, not guessed.
   run = testing::run_doorbench_shell(
-      "import volts.tdms" + map + "--calibration force=load_cell-LC445-0193-v2 --out x.h5", dir, units_dir_env(dir));
+      "import volts.tdms" + map + "--calibration force=load_cell-LC445-0193-v2 --out x.h5", dir,
+      units_dir_env(dir));
   CHECK(run.status == 1);
   CHECK(run.err ==
         "doorbench: volts.tdms: force: channel Dev1/Bridge is in 'Volts', not V (--calibration "
         "force=load_cell-LC445-0193-v2); the file's channels: Dev1/Bridge, Dev1/Encoder\n");
   // A record that gives another unit, and one that is not there.
   run = testing::run_doorbench_shell(
-      "import v.tdms" + map + "--calibration angle=load_cell-LC445-0193-v2 --out x.h5", dir, units_dir_env(dir));
+      "import v.tdms" + map + "--calibration angle=load_cell-LC445-0193-v2 --out x.h5", dir,
+      units_dir_env(dir));
   CHECK(run.status == 2);
   CHECK(run.err ==
         "doorbench: --calibration angle=load_cell-LC445-0193-v2: record load_cell-LC445-0193-v2 "
         "gives N, not rad (angle is in rad) (see doorbench import --help)\n");
-  run = testing::run_doorbench_shell(
-      "import v.tdms" + map + "--calibration force=nope --out x.h5", dir, units_dir_env(dir));
+  run = testing::run_doorbench_shell("import v.tdms" + map + "--calibration force=nope --out x.h5",
+                                     dir, units_dir_env(dir));
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: --calibration force=nope: no file nope and no record nope in the "
-                   "calibration store " +
-                       (dir / "calibrations").string() +
-                       " (its records: load_cell-LC445-0193-v2) (see doorbench import --help)\n");
-  run = testing::run_doorbench_shell("import v.tdms" + map + "--scale force=abc --out x.h5", dir, units_dir_env(dir));
+  CHECK(run.err ==
+        "doorbench: --calibration force=nope: no file nope and no record nope in the "
+        "calibration store " +
+            (dir / "calibrations").string() +
+            " (its records: load_cell-LC445-0193-v2) (see doorbench import --help)\n");
+  run = testing::run_doorbench_shell("import v.tdms" + map + "--scale force=abc --out x.h5", dir,
+                                     units_dir_env(dir));
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: --scale item 'force=abc' is not TARGET=GAIN[,OFFSET] (e.g. "
-                   "force=98.1,-0.5) (see doorbench import --help)\n");
+  CHECK(run.err ==
+        "doorbench: --scale item 'force=abc' is not TARGET=GAIN[,OFFSET] (e.g. "
+        "force=98.1,-0.5) (see doorbench import --help)\n");
   CHECK(!std::filesystem::exists(dir / "x.h5"));
 }
 
@@ -203,20 +216,24 @@ TEST_CASE("Import units: a CSV's raw column imports through a record or a scale"
   const doorbench::CalibrationStore store(dir / "store");
   store.add(load_cell_record());
   testing::DoorbenchRun run = testing::run_doorbench_shell(
-      "import run.csv --calibrations store --calibration force=load_cell-LC445-0193-v2 --out r.h5", dir, units_dir_env(dir));
+      "import run.csv --calibrations store --calibration force=load_cell-LC445-0193-v2 --out r.h5",
+      dir, units_dir_env(dir));
   INFO(run.err);
   REQUIRE(run.status == 0);
   check_force_in_newtons(dir / "r.h5", "load_cell-LC445-0193-v2", kGainNPerV, kOffsetN);
-  run = testing::run_doorbench_shell("import run.csv --scale force=65.377,-0.8125 --out s.h5", dir, units_dir_env(dir));
+  run = testing::run_doorbench_shell("import run.csv --scale force=65.377,-0.8125 --out s.h5", dir,
+                                     units_dir_env(dir));
   REQUIRE(run.status == 0);
   check_force_in_newtons(dir / "s.h5", "scale-force", 65.377, -0.8125);
   // The column the record needs is not there.
   dir.write("n.csv", "time_s,force_N,angle_rad\n0,1,0\n0.001,2,0\n");
   run = testing::run_doorbench_shell(
-      "import n.csv --calibrations store --calibration force=load_cell-LC445-0193-v2 --out t.h5", dir, units_dir_env(dir));
+      "import n.csv --calibrations store --calibration force=load_cell-LC445-0193-v2 --out t.h5",
+      dir, units_dir_env(dir));
   CHECK(run.status == 1);
-  CHECK(run.err == "doorbench: n.csv:1: --calibration force=load_cell-LC445-0193-v2: no column "
-                   "force_V (the raw force); the columns: time_s, force_N, angle_rad\n");
+  CHECK(run.err ==
+        "doorbench: n.csv:1: --calibration force=load_cell-LC445-0193-v2: no column "
+        "force_V (the raw force); the columns: time_s, force_N, angle_rad\n");
   // Without a conversion a CSV's force_V is not a force.
   run = testing::run_doorbench_shell("import run.csv --out u.h5", dir, units_dir_env(dir));
   CHECK(run.status == 1);
@@ -275,27 +292,29 @@ TEST_CASE("Import: a TDMS file without timing imports with --rate-hz and --start
   run = testing::run_doorbench_shell("import lab.tdms" + map + "--start-time 2019-02-30 --out b.h5",
                                      dir, units_dir_env(dir));
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: --start-time: 2019-02-30 is not a day of the calendar (see "
-                   "doorbench import --help)\n");
+  CHECK(run.err ==
+        "doorbench: --start-time: 2019-02-30 is not a day of the calendar (see "
+        "doorbench import --help)\n");
   dir.write("r.csv", "time_s,force_N,angle_rad\n0,1,0\n0.001,2,0\n");
   run = testing::run_doorbench_shell("import r.csv --rate-hz 100 --out b.h5", dir,
                                      units_dir_env(dir));
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: --rate-hz is for TDMS files (*.tdms): a CSV's time_s gives the "
-                   "time (see doorbench import --help)\n");
+  CHECK(run.err ==
+        "doorbench: --rate-hz is for TDMS files (*.tdms): a CSV's time_s gives the "
+        "time (see doorbench import --help)\n");
   CHECK(!std::filesystem::exists(dir / "b.h5"));
 }
 
-TEST_CASE("Import: a control character in a CSV's metadata is refused where it is",
-          "[csv][cli]") {
+TEST_CASE("Import: a control character in a CSV's metadata is refused where it is", "[csv][cli]") {
   const testing::TempDir dir("import_nul");
   dir.write("nul.csv", std::string("# operator: Ann") + '\0' +
                            "Bob\ntime_s,force_N,angle_rad\n0,1,0\n0.001,2,0\n");
   const testing::DoorbenchRun run =
       testing::run_doorbench_shell("import nul.csv --out n.h5", dir, units_dir_env(dir));
   CHECK(run.status == 1);
-  CHECK(run.err == "doorbench: nul.csv:1: control character \\x00 at column 16 of a metadata "
-                   "line (metadata is kept as text: remove it from the file)\n");
+  CHECK(run.err ==
+        "doorbench: nul.csv:1: control character \\x00 at column 16 of a metadata "
+        "line (metadata is kept as text: remove it from the file)\n");
   CHECK(!std::filesystem::exists(dir / "n.h5"));
 }
 

@@ -96,10 +96,10 @@ std::vector<Frame> frames_of(const fs::path& dir, const std::string& bytes) {
 struct Damaged {
   std::string bytes;
   std::size_t from = 0, to = 0;
-  bool header = false;          // the header was damaged
-  bool refused = false;         // recovery must refuse (several bytes of the header's text)
-  bool nothing = false;         // nothing to recover (the header cut)
-  bool counted = false;         // the damage must be counted in the report
+  bool header = false;   // the header was damaged
+  bool refused = false;  // recovery must refuse (several bytes of the header's text)
+  bool nothing = false;  // nothing to recover (the header cut)
+  bool counted = false;  // the damage must be counted in the report
 };
 
 using Damage = std::function<Damaged(const std::string&, const std::vector<Frame>&, std::mt19937&)>;
@@ -127,7 +127,9 @@ const Frame& middle_frame(const std::vector<Frame>& frames, std::mt19937& random
   return frames[pick(random, 1, frames.size() - 3)];
 }
 
-std::size_t json_end(const std::vector<Frame>& frames) { return frames.front().offset; }
+std::size_t json_end(const std::vector<Frame>& frames) {
+  return frames.front().offset;
+}
 
 using Damages = std::vector<std::pair<std::string, Damage>>;
 
@@ -318,9 +320,9 @@ TEST_CASE("Recovery: a journal damaged in its header, frames or tail keeps every
           FAIL("recovered a journal whose header's text is damaged in several bytes");
         } catch (const JournalError& error) {
           const std::string message = error.what();
-          CHECK_THAT(message, StartsWith(journal.string() +
-                                         ": the journal's header is damaged (bytes 20-" +
-                                         std::to_string(json_end(frames)) + ""));
+          CHECK_THAT(message,
+                     StartsWith(journal.string() + ": the journal's header is damaged (bytes 20-" +
+                                std::to_string(json_end(frames)) + ""));
           CHECK_THAT(message, Contains("checksum mismatch, more than one flipped bit); the frames "
                                        "from byte " +
                                        std::to_string(json_end(frames)) + " on check out"));
@@ -336,8 +338,8 @@ TEST_CASE("Recovery: a journal damaged in its header, frames or tail keeps every
       CHECK(result.kept_journal == kept);
       CHECK(read_file(kept) == d.bytes);
       CHECK(find_unfinished_sessions(folder).empty());
-      CHECK_THAT(result.brief_report(),
-                 Contains("; the journal is kept as " + kept.string() + " (remove it when you like)"));
+      CHECK_THAT(result.brief_report(), Contains("; the journal is kept as " + kept.string() +
+                                                 " (remove it when you like)"));
       // Every intact block's scans, sample for sample.
       const SessionReader session(folder / "s.h5");
       const ChannelSlice a = session.read("a"), b = session.read("b");
@@ -379,7 +381,8 @@ TEST_CASE("Recovery: a journal damaged in its header, frames or tail keeps every
       if (lost > 0) {
         const std::vector<SessionEvent> events = session.events();
         CHECK(std::any_of(events.begin(), events.end(), [](const SessionEvent& e) {
-          return e.kind == "gap" && e.detail.find("lost (damaged journal: bytes ") != std::string::npos;
+          return e.kind == "gap" &&
+                 e.detail.find("lost (damaged journal: bytes ") != std::string::npos;
         }));
         CHECK_THAT(events.back().detail, Contains(" scans lost there (marked as gaps)"));
       }
@@ -401,10 +404,11 @@ TEST_CASE("Recovery: the header's length field damaged, as the issue found it",
   std::ofstream(journal, std::ios::binary) << bytes;
   const ConvertResult result = recover_session(journal);
   CHECK(result.scans == kBlocks * kBlock);
-  CHECK(result.header_repair == "its length field (bytes 12-15) said 2147483647 bytes, but the "
-                                "header's text is " +
-                                    std::to_string(json) + " bytes long (ending at byte " +
-                                    std::to_string(kHeadBytes + json) + ")");
+  CHECK(result.header_repair ==
+        "its length field (bytes 12-15) said 2147483647 bytes, but the "
+        "header's text is " +
+            std::to_string(json) + " bytes long (ending at byte " +
+            std::to_string(kHeadBytes + json) + ")");
   CHECK(read_file(dir / "s.h5.journal.recovered") == bytes);
   const std::vector<SessionEvent> events = SessionReader(dir / "s.h5").events();
   CHECK(events.back().detail ==
@@ -426,7 +430,8 @@ TEST_CASE("Recovery: no code path deletes a journal", "[journal][recovery]") {
       std::ifstream in(entry.path());
       std::string line;
       for (int number = 1; std::getline(in, line); ++number) {
-        if (!std::regex_search(line, removal) || line.find("journal") == std::string::npos) continue;
+        if (!std::regex_search(line, removal) || line.find("journal") == std::string::npos)
+          continue;
         INFO(entry.path().string() << ":" << number << ": " << line);
         const fs::path& file = entry.path();
         CHECK(file.parent_path().filename() == "record");

@@ -108,10 +108,8 @@ TEST_CASE("Session CSV: stroke columns from stroke events, in any order", "[sess
   const std::vector<double> time_s = {0.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7};
   // Out of order; 0.1 + 0.2 is 0.30000000000000004 and still applies at sample 0.3.
   const std::vector<SessionEvent> events = {
-      {0.5, "stroke_start", "", "closing"},
-      {0.1 + 0.2, "stroke_end", "", ""},
-      {0.1, "stroke_start", "", "stroke 7"},
-      {0.6, "stroke_end", "", ""},
+      {0.5, "stroke_start", "", "closing"},  {0.1 + 0.2, "stroke_end", "", ""},
+      {0.1, "stroke_start", "", "stroke 7"}, {0.6, "stroke_end", "", ""},
       {0.65, "mark", "", "stroke 2"},  // not a stroke event
       {0.7, "stroke_start", "", "opening"},
   };

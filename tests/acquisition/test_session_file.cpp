@@ -458,7 +458,8 @@ TEST_CASE("session physical values go through the calibration record", "[session
   const std::vector<double> newtons = reader.physical("force", force);
   REQUIRE(newtons.size() == force.raw.size());
   for (std::size_t i = 0; i < newtons.size(); ++i) {
-    if (force.raw[i] == doorbench::kGapFillCount) {  // the mark of a lost scan: missing, never a number
+    if (force.raw[i] ==
+        doorbench::kGapFillCount) {  // the mark of a lost scan: missing, never a number
       CHECK(std::isnan(newtons[i]));
       continue;
     }

@@ -201,8 +201,9 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
                                          (dir / "t.h5").string() + "'",
                                      dir);
   CHECK(run.status == 1);
-  const std::string channels = "; the file's channels: Door/Force, Door/Angle, Door/Incl, "
-                               "Door/Note\n";
+  const std::string channels =
+      "; the file's channels: Door/Force, Door/Angle, Door/Incl, "
+      "Door/Note\n";
   CHECK(run.err == "doorbench: " + tdms + ": angle: no channel Door/Nope" + channels);
   run = testing::run_doorbench_shell(
       "import '" + tdms + "' --map force --out '" + (dir / "t.h5").string() + "'", dir);
@@ -219,7 +220,8 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
   CHECK(run.err == "doorbench: " + tdms +
                        ": angle: channel Door/Incl is in 'deg', not rad (convert it: "
                        "--calibration angle=RECORD or --scale angle=GAIN[,OFFSET]; or map it as "
-                       "an extra column whose name ends in its unit)" + channels);
+                       "an extra column whose name ends in its unit)" +
+                       channels);
 
   // Without --map: the channels to map.
   run = testing::run_doorbench_shell(
@@ -237,15 +239,16 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + tdms +
                        ": angle: channel Door/Force is mapped as force already (one channel per "
-                       "target)" + channels);
+                       "target)" +
+                       channels);
   CHECK_FALSE(std::filesystem::exists(dir / "t.h5"));
   // The index file beside a .tdms.
   std::ofstream(dir / "door.tdms_index") << "TDSh";
   const std::string index = (dir / "door.tdms_index").string();
-  run = testing::run_doorbench_shell(
-      "import '" + index + "' --map force=Door/Force,angle=Door/Angle --out '" +
-          (dir / "t.h5").string() + "'",
-      dir);
+  run = testing::run_doorbench_shell("import '" + index +
+                                         "' --map force=Door/Force,angle=Door/Angle --out '" +
+                                         (dir / "t.h5").string() + "'",
+                                     dir);
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + index +
                        ": this is a TDMS index file (.tdms_index); import the .tdms file itself (" +
@@ -258,9 +261,10 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
 }
 
 // A SignalExpress-style group named with a date ('/' in it) and a channel with a comma.
-TEST_CASE("TDMS: --map takes names with '/' and ',' (escaped, or '/' unescaped when only one "
-          "split names a channel)",
-          "[tdms][cli]") {
+TEST_CASE(
+    "TDMS: --map takes names with '/' and ',' (escaped, or '/' unescaped when only one "
+    "split names a channel)",
+    "[tdms][cli]") {
   const testing::TempDir dir("tdms_names");
   const std::string group = "07/09/2012 06:58:23 PM - Digital Input - All Data";
   Object force = channel("Force", kDouble, 4, {double_property("wf_increment", 0.5)});

@@ -72,11 +72,12 @@ std::vector<std::uint8_t> ordered_file(bool big) {
   group.path = "/'Door'";
   group.properties = {i32_property("run", -7, big)};
   const std::vector<Object> first = {
-      file_object, group,
-      order_channel("Force", kDouble, 20,
-                    {text_property("unit_string", "N", big),
-                     double_property("wf_increment", 0.001, big),
-                     time_property("wf_start_time", 3786912000, 1ull << 62, big)}),
+      file_object,
+      group,
+      order_channel(
+          "Force", kDouble, 20,
+          {text_property("unit_string", "N", big), double_property("wf_increment", 0.001, big),
+           time_property("wf_start_time", 3786912000, 1ull << 62, big)}),
       order_channel("Angle", kI32, 20,
                     {text_property("unit_string", "rad", big),
                      text_property("NI_Scaling_Status", "unscaled", big),
@@ -86,8 +87,8 @@ std::vector<std::uint8_t> ordered_file(bool big) {
                      double_property("NI_Scale[0]_Linear_Y_Intercept", 0.25, big)}),
       order_channel("Incl", kSingle, 20, {text_property("unit_string", "deg", big)}),
       order_channel("Pot", kI16, 20, {})};
-  Bytes file = segment(order | kTocMetaData | kTocNewObjList | kTocRawData, first,
-                       order_raw(0, 20, big));
+  Bytes file =
+      segment(order | kTocMetaData | kTocNewObjList | kTocRawData, first, order_raw(0, 20, big));
   Object force_same;
   force_same.raw = Object::kSame;
   force_same.path = "/'Door'/'Force'";
@@ -103,7 +104,8 @@ std::vector<std::uint8_t> ordered_daqmx_file(bool big) {
   const std::uint32_t toc = (big ? kTocBigEndian : 0) | kTocMetaData | kTocNewObjList |
                             kTocRawData | kTocInterleavedData | kTocDAQmxRawData;
   const std::vector<Property> scales = {
-      text_property("unit_string", "V", big), double_property("wf_increment", 0.0005, big),
+      text_property("unit_string", "V", big),
+      double_property("wf_increment", 0.0005, big),
       text_property("NI_Scaling_Status", "unscaled", big),
       i32_property("NI_Number_Of_Scales", 2, big),
       text_property("NI_Scale[1]_Scale_Type", "Linear", big),
@@ -201,7 +203,8 @@ TEST_CASE("TDMS byte order: doorbench import makes the same session of both", "[
                static_cast<std::streamsize>(bytes.size()));
     const testing::DoorbenchRun run = testing::run_doorbench_shell(
         "import " + name + ".tdms --map force=Door/Force,angle=Door/Angle,incl_deg=Door/Incl " +
-            "--out " + name + ".h5", dir, order_dir_env(dir));
+            "--out " + name + ".h5",
+        dir, order_dir_env(dir));
     INFO(run.err);
     REQUIRE(run.status == 0);
     recordings.push_back(session_to_recording(SessionReader(dir / (name + ".h5"))));
@@ -213,8 +216,7 @@ TEST_CASE("TDMS byte order: doorbench import makes the same session of both", "[
   CHECK(*recordings[1].angle_rad == *recordings[0].angle_rad);
   CHECK(recordings[1].extra_columns == recordings[0].extra_columns);
   CHECK(recordings[1].handle_radius_m == 0.61);
-  CHECK(SessionReader(dir / "big.h5").metadata().start_time_utc ==
-        "2024-01-01T00:00:00.250000Z");
+  CHECK(SessionReader(dir / "big.h5").metadata().start_time_utc == "2024-01-01T00:00:00.250000Z");
 }
 
 TEST_CASE("TDMS: messages name the byte where the field at fault starts", "[tdms]") {
@@ -245,7 +247,8 @@ TEST_CASE("TDMS: messages name the byte where the field at fault starts", "[tdms
   file_object.properties = {{"p", 0x4F, Bytes{}}};  // fixed point
   CHECK(error_of(segment(kTocMetaData | kTocNewObjList, {file_object}, Bytes{}).data) ==
         "mem.tdms: segment 1 (byte 50): properties of type fixed point are not supported");
-  std::vector<std::uint8_t> path = segment(kTocMetaData | kTocNewObjList, {file_object}, Bytes{}).data;
+  std::vector<std::uint8_t> path =
+      segment(kTocMetaData | kTocNewObjList, {file_object}, Bytes{}).data;
   path[36] = 'x';  // the path "/" at byte 36 (its length at 32)
   CHECK(error_of(path) ==
         "mem.tdms: segment 1 (byte 32): object path 'x' is not of the form /'group'/'channel'");
@@ -275,7 +278,8 @@ TEST_CASE("TDMS: a Git LFS pointer in place of the file is named as such", "[tdm
   CHECK(tdms.err ==
         "doorbench: run.tdms: this is a Git LFS pointer to a file of 57171 bytes (oid "
         "sha256:4d7a2146...), not the file itself: fetch it (git lfs pull) and import that\n");
-  const testing::DoorbenchRun csv = testing::run_doorbench_shell("import run.csv --out s.h5", dir, order_dir_env(dir));
+  const testing::DoorbenchRun csv =
+      testing::run_doorbench_shell("import run.csv --out s.h5", dir, order_dir_env(dir));
   CHECK(csv.status == 1);
   CHECK(csv.err ==
         "doorbench: run.csv: this is a Git LFS pointer to a file of 57171 bytes (oid "

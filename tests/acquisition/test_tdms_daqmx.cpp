@@ -50,16 +50,20 @@ double angle_rad(int k) {
 }
 
 std::vector<Property> force_scales() {
-  return {text_property("unit_string", "N"), double_property("wf_increment", 0.001),
-          text_property("NI_Scaling_Status", "unscaled"), i32_property("NI_Number_Of_Scales", 2),
+  return {text_property("unit_string", "N"),
+          double_property("wf_increment", 0.001),
+          text_property("NI_Scaling_Status", "unscaled"),
+          i32_property("NI_Number_Of_Scales", 2),
           double_property("NI_Scale[1]_Linear_Slope", 0.0123456789),
           double_property("NI_Scale[1]_Linear_Y_Intercept", -1.5),
           text_property("NI_Scale[1]_Scale_Type", "Linear"),
           i32_property("NI_Scale[1]_Linear_Input_Source", 0)};
 }
 std::vector<Property> angle_scales() {
-  return {text_property("unit_string", "rad"), double_property("wf_increment", 0.001),
-          text_property("NI_Scaling_Status", "unscaled"), i32_property("NI_Number_Of_Scales", 3),
+  return {text_property("unit_string", "rad"),
+          double_property("wf_increment", 0.001),
+          text_property("NI_Scaling_Status", "unscaled"),
+          i32_property("NI_Number_Of_Scales", 3),
           text_property("NI_Scale[1]_Scale_Type", "Linear"),
           double_property("NI_Scale[1]_Linear_Slope", 2.5e-5),
           double_property("NI_Scale[1]_Linear_Y_Intercept", 0.01),
@@ -87,10 +91,10 @@ std::vector<std::uint8_t> daqmx_file(bool with_digital) {
       daqmx_channel("/'Dev1'/'Incl'", kChunk, {{8, 1, 0, 0}}, widths, false,
                     {text_property("unit_string", "V")})};
   if (with_digital) {
-    objects.push_back(daqmx_channel("/'Dev1'/'port0 line0'", kChunk, {{0, 1, 32, 0}}, widths,
-                                    true));
-    objects.push_back(daqmx_channel("/'Dev1'/'port0 line1'", kChunk, {{0, 1, 33, 0}}, widths,
-                                    true));
+    objects.push_back(
+        daqmx_channel("/'Dev1'/'port0 line0'", kChunk, {{0, 1, 32, 0}}, widths, true));
+    objects.push_back(
+        daqmx_channel("/'Dev1'/'port0 line1'", kChunk, {{0, 1, 33, 0}}, widths, true));
   }
   auto chunk = [&](int from) {
     Bytes raw;
@@ -161,7 +165,8 @@ TEST_CASE("TDMS DAQmx: digital lines read as 0/1 and the file imports", "[tdms][
   const testing::DoorbenchRun run = testing::run_doorbench_shell(
       "import '" + tdms +
           "' --map 'force=Dev1/Force,angle=Dev1/Angle,incl_V=Dev1/Incl,latch_bool=Dev1/port0 "
-          "line0' --out '" + (dir / "s.h5").string() + "'",
+          "line0' --out '" +
+          (dir / "s.h5").string() + "'",
       dir);
   INFO(run.err);
   REQUIRE(run.status == 0);
@@ -191,10 +196,10 @@ TEST_CASE("TDMS DAQmx: what is not read is refused by name", "[tdms][daqmx]") {
   std::vector<Property> thermocouple = {text_property("NI_Scaling_Status", "unscaled"),
                                         i32_property("NI_Number_Of_Scales", 2),
                                         text_property("NI_Scale[1]_Scale_Type", "Thermocouple")};
-  CHECK(error_of({daqmx_channel("/'Dev1'/'T'", 4, {{5, 0, 0, 0}}, {4}, false, thermocouple)},
-                 raw) ==
-        "mem.tdms: channel Dev1/T: NI_Scale[1]_Scale_Type 'Thermocouple' is not supported "
-        "(Linear and Polynomial are)");
+  CHECK(
+      error_of({daqmx_channel("/'Dev1'/'T'", 4, {{5, 0, 0, 0}}, {4}, false, thermocouple)}, raw) ==
+      "mem.tdms: channel Dev1/T: NI_Scale[1]_Scale_Type 'Thermocouple' is not supported "
+      "(Linear and Polynomial are)");
   // Byte 47: the raw data index, after the lead-in, the object count and the path.
   CHECK(error_of({daqmx_channel("/'Dev1'/'T'", 4, {{5, 0, 2, 0}}, {4}, false)}, raw) ==
         "mem.tdms: segment 1 (byte 47): object /'Dev1'/'T': DAQmx scaler 0 reads past its raw "
@@ -238,10 +243,10 @@ TEST_CASE("TDMS DAQmx: import --keep-raw keeps the raw counts beside the scaled 
     CHECK(recording.extra_columns[3][k] == static_cast<double>(incl_volts(k)));
   }
   // Only for TDMS files.
-  const testing::DoorbenchRun csv = testing::run_doorbench_shell(
-      "import '" + (dir / "r.csv").string() + "' --keep-raw --out '" + (dir / "c.h5").string() +
-          "'",
-      dir);
+  const testing::DoorbenchRun csv =
+      testing::run_doorbench_shell("import '" + (dir / "r.csv").string() + "' --keep-raw --out '" +
+                                       (dir / "c.h5").string() + "'",
+                                   dir);
   CHECK(csv.status == 2);
   CHECK(csv.err ==
         "doorbench: --keep-raw is for TDMS files (*.tdms) (see doorbench import --help)\n");

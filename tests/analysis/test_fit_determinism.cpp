@@ -11,9 +11,9 @@
 
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
-#include "core/parallel.h"
 #include "analysis/model/sensory_model.h"
 #include "analysis/simulation/fit_synthetic.h"
+#include "core/parallel.h"
 
 namespace {
 

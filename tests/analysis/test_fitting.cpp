@@ -159,7 +159,8 @@ TEST_CASE("windows cover every sample once, restart after impacts, leave out tho
     auto same = [](const Spans& a, const Spans& b) {
       if (a.size() != b.size()) return false;
       for (std::size_t k = 0; k < a.size(); ++k) {
-        if (std::abs(a[k].first - b[k].first) > 1e-9 || std::abs(a[k].second - b[k].second) > 1e-9) {
+        if (std::abs(a[k].first - b[k].first) > 1e-9 ||
+            std::abs(a[k].second - b[k].second) > 1e-9) {
           return false;
         }
       }
@@ -195,7 +196,7 @@ TEST_CASE("windows cover every sample once, restart after impacts, leave out tho
     CHECK(after.front().first == Approx(0.205).margin(1e-9));
     for (std::size_t k = 0; k + 1 < after.size(); ++k) {
       CHECK(after[k].second - after[k].first == Approx(0.2).margin(0.0011));  // on the clock
-      CHECK(after[k + 1].first == after[k].second);  // shared boundaries
+      CHECK(after[k + 1].first == after[k].second);                           // shared boundaries
     }
     CHECK(after.back().second == Approx(0.85).margin(1e-9));
     // Whole strokes (the study's objective) restart after a gap, as after an impact.

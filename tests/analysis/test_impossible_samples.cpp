@@ -124,7 +124,8 @@ TEST_CASE("Impossible samples: a fit never starts from non-finite residuals",
     CHECK(message.rfind("fit: the start model's simulation is not finite in stroke 3 (opening), "
                         "the window from ",
                         0) == 0);
-    CHECK(contains(message, " (largest |force| there 1e+200 N); check that window's data and "
-                            "the start parameters"));
+    CHECK(contains(message,
+                   " (largest |force| there 1e+200 N); check that window's data and "
+                   "the start parameters"));
   }
 }

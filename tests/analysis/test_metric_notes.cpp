@@ -52,9 +52,9 @@ TEST_CASE("a negative or far lower held-out FIT% is warned about in words", "[fi
     }
     return metrics;
   };
-  const FitMetrics good = metrics_with(0.05);   // FIT% 95
-  const FitMetrics fair = metrics_with(0.6);    // FIT% 40
-  const FitMetrics bad = metrics_with(1.25);    // FIT% -25
+  const FitMetrics good = metrics_with(0.05);  // FIT% 95
+  const FitMetrics fair = metrics_with(0.6);   // FIT% 40
+  const FitMetrics bad = metrics_with(1.25);   // FIT% -25
   REQUIRE(good.window.fit_percent() == Approx(95.0));
   REQUIRE(bad.window.fit_percent() == Approx(-25.0));
   CHECK(fit_percent_warnings(good, nullptr).empty());

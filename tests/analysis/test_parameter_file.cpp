@@ -303,9 +303,10 @@ TEST_CASE("Parameter file: a key or a section given twice is refused with both l
                     std::string("door.json: line 4: sensory is given twice (lines 2 and 4); a "
                                 "file says each thing once"));
   // Written differently, the same key (an escape), and in an effects file.
-  CHECK_THROWS_WITH(parse_parameter_file("{\"physical\": {\"k\": 1,\n\"\\u006b\": 2}}", "door.json"),
-                    std::string("door.json: line 2: physical.k is given twice (lines 1 and 2); a "
-                                "file says each thing once"));
+  CHECK_THROWS_WITH(
+      parse_parameter_file("{\"physical\": {\"k\": 1,\n\"\\u006b\": 2}}", "door.json"),
+      std::string("door.json: line 2: physical.k is given twice (lines 1 and 2); a "
+                  "file says each thing once"));
   CHECK_THROWS_WITH(doorbench::parse_effects_file("{\"viscous_damping\": {},\n\n"
                                                   "\"viscous_damping\": {}}",
                                                   "effects.json"),

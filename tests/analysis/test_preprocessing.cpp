@@ -221,8 +221,8 @@ TEST_CASE("Preprocessing: the fused angle, the rate and the bias match the bench
   // anchors at the closed door, and only its mean change is removed.
   const Errors e = errors_against_truth(s, data.strokes);
   INFO("fused theta: RMS " << e.theta_rms / kRadPerDeg << " deg, max " << e.theta_max / kRadPerDeg
-                           << " deg; omega RMS " << e.omega_rms / kRadPerDeg << " deg/s over " << e.n
-                           << " samples");
+                           << " deg; omega RMS " << e.omega_rms / kRadPerDeg << " deg/s over "
+                           << e.n << " samples");
   CHECK(e.n > 13000);
   CHECK(e.theta_rms < 0.05 * kRadPerDeg);
   CHECK(e.theta_max < 0.12 * kRadPerDeg);
@@ -235,7 +235,8 @@ TEST_CASE("Preprocessing: the fused angle, the rate and the bias match the bench
     bias_truth += (*s.recording.rate_rad_s)[i] - s.truth_omega[i];
   }
   bias_truth /= static_cast<double>(s.recording.size());
-  INFO("bias: estimated " << data.gyro_bias_rad_s / kRadPerDeg << " deg/s, truth " << bias_truth / kRadPerDeg);
+  INFO("bias: estimated " << data.gyro_bias_rad_s / kRadPerDeg << " deg/s, truth "
+                          << bias_truth / kRadPerDeg);
   CHECK(std::abs(data.gyro_bias_rad_s / kRadPerDeg - 0.2) < 0.03);
   CHECK(std::abs(data.gyro_bias_rad_s - bias_truth) < 0.003 * kRadPerDeg);
 
@@ -297,7 +298,8 @@ TEST_CASE("Preprocessing: saturated and faulty segments are excluded and listed"
     // 40 ms in the middle of the second opening (stroke 3) at the gyroscope's +100 °/s,
     // where the door really turns at about 60 °/s.
     const std::size_t first = index_at(recording, 7.8);
-    for (std::size_t i = first; i < first + 40; ++i) (*recording.rate_rad_s)[i] = 100.0 * kRadPerDeg;
+    for (std::size_t i = first; i < first + 40; ++i)
+      (*recording.rate_rad_s)[i] = 100.0 * kRadPerDeg;
     const PreparedData data = prepare(recording);
     // The part before the saturation is kept (its angle is known from the anchor before
     // it); the rest is listed.
@@ -378,7 +380,8 @@ TEST_CASE("Preprocessing: rate only integrates from theta = 0 at the first still
   // Without an absolute angle the bias's wandering between still periods adds up: measured
   // 0.14° RMS, 0.28° at most over 18 s (the hand holds the door open between strokes).
   const Errors e = errors_against_truth(s, data.strokes);
-  INFO("rate only: theta RMS " << e.theta_rms / kRadPerDeg << " deg, max " << e.theta_max / kRadPerDeg);
+  INFO("rate only: theta RMS " << e.theta_rms / kRadPerDeg << " deg, max "
+                               << e.theta_max / kRadPerDeg);
   CHECK(e.theta_rms < 0.2 * kRadPerDeg);
   CHECK(e.omega_rms < 0.08 * kRadPerDeg);
 }

@@ -1,9 +1,8 @@
 // The recording family (tests/support/recording_family.h): drawn conditions give well-formed
 // recordings (strokes, rates, directions, a rate that agrees with the angle), the draws
 // cover the family's variety, and a recording is deterministic for its conditions and seed.
-#include <catch2/catch.hpp>
-
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <set>
 #include <stdexcept>
@@ -89,9 +88,9 @@ TEST_CASE("recording family: 30 drawn recordings are well-formed and cover the f
     hands.insert(c.hand);
     sensors.insert(c.sensors);
     rates.insert(c.sample_rate_hz);
-    tremors.insert(c.tremor_force_N > 0 ? std::to_string(c.tremor_low_hz) + "-" +
-                                              std::to_string(c.tremor_high_hz)
-                                        : "none");
+    tremors.insert(c.tremor_force_N > 0
+                       ? std::to_string(c.tremor_low_hz) + "-" + std::to_string(c.tremor_high_hz)
+                       : "none");
     if (c.hand != "impulse") latches.insert(c.latch);
     if (c.hand != "impulse") pauses.insert(c.pause_s > 0);
     jittered.insert(data.jittered);
@@ -105,9 +104,10 @@ TEST_CASE("recording family: 30 drawn recordings are well-formed and cover the f
   CHECK(jittered.size() == 2);
 }
 
-TEST_CASE("recording family: a recording is deterministic for its conditions and seed, and "
-          "unknown conditions are refused",
-          "[recording_family]") {
+TEST_CASE(
+    "recording family: a recording is deterministic for its conditions and seed, and "
+    "unknown conditions are refused",
+    "[recording_family]") {
   const doorbench::DoorModel truth = doorbench::reference_model(doorbench::ModelKind::kSensory);
   doorbench::testing::FamilyOptions options;
   options.strokes = 5;

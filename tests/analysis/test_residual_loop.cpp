@@ -4,7 +4,6 @@
 // bench's noise, seeded. The loop must add nothing to clean data and name the missing effect
 // first, recovering its parameters.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -134,7 +133,8 @@ LoopResult expect_first_step(const DoorModel& truth, effects::Kind expected,
   CHECK(loop.full_report().find(name + ".") != std::string::npos);
   CHECK_FALSE(progress.empty());
   bool named = false;
-  for (const std::string& line : progress) named = named || line.find("added " + name) != std::string::npos;
+  for (const std::string& line : progress)
+    named = named || line.find("added " + name) != std::string::npos;
   CHECK(named);
   return loop;
 }
@@ -168,7 +168,8 @@ TEST_CASE("residual loop: on clean data a forced refit is rejected by the held-o
   options.min_score_z = 0.0;
   options.min_explained_fraction = 0.0;
   options.candidates = {effects::Kind::kGravityImbalance};
-  const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), clean_recording(), options);
+  const LoopResult loop =
+      doorbench::run_residual_loop(sensory_reference(), clean_recording(), options);
   INFO(loop.full_report());
   CHECK(doorbench::testing::check_nested_refits(loop) == 1);
   CHECK(loop.steps.empty());
@@ -200,7 +201,8 @@ TEST_CASE("residual loop: the examination finds nothing significant at the truth
     CHECK(candidate.explained_fraction < 0.1);
     // The second look, where taken, finds nothing significant either.
     if (candidate.screened) CHECK(candidate.screen_score_z < defaults.min_score_z);
-    if (k > 0) CHECK(candidate.explained_fraction <= examination.candidates[k - 1].explained_fraction);
+    if (k > 0)
+      CHECK(candidate.explained_fraction <= examination.candidates[k - 1].explained_fraction);
     CHECK(candidate.start_values.size() == effects::info(candidate.kind).parameters.size());
   }
 }
@@ -228,40 +230,40 @@ TEST_CASE("residual loop: the examination skips effects the model has and projec
 
 TEST_CASE("residual loop: finds a gravity imbalance first", "[residual_loop]") {
   const double g1 = 3.0;
-  const LoopResult loop = expect_first_step(
-      with_effect(sensory_reference(), effects::Kind::kGravityImbalance, {g1}),
-      effects::Kind::kGravityImbalance);
+  const LoopResult loop =
+      expect_first_step(with_effect(sensory_reference(), effects::Kind::kGravityImbalance, {g1}),
+                        effects::Kind::kGravityImbalance);
   check_recovered(parameter(loop.steps.front(), "gravity_imbalance.g1"), g1);
 }
 
 TEST_CASE("residual loop: finds viscous damping first", "[residual_loop]") {
   const double b = 0.5;
-  const LoopResult loop = expect_first_step(
-      with_effect(sensory_reference(), effects::Kind::kViscousDamping, {b}),
-      effects::Kind::kViscousDamping);
+  const LoopResult loop =
+      expect_first_step(with_effect(sensory_reference(), effects::Kind::kViscousDamping, {b}),
+                        effects::Kind::kViscousDamping);
   check_recovered(parameter(loop.steps.front(), "viscous_damping.b"), b);
 }
 
 TEST_CASE("residual loop: finds a force-sensor offset first", "[residual_loop]") {
   const double offset = 3.0;
-  const LoopResult loop = expect_first_step(
-      with_effect(sensory_reference(), effects::Kind::kForceOffset, {offset}),
-      effects::Kind::kForceOffset);
+  const LoopResult loop =
+      expect_first_step(with_effect(sensory_reference(), effects::Kind::kForceOffset, {offset}),
+                        effects::Kind::kForceOffset);
   check_recovered(parameter(loop.steps.front(), "force_offset.F_off"), offset);
 }
 
 TEST_CASE("residual loop: finds Stribeck friction first", "[residual_loop][slow]") {
-  const LoopResult loop = expect_first_step(
-      with_effect(sensory_reference(), effects::Kind::kStribeck, {5.0, 0.1}),
-      effects::Kind::kStribeck);
+  const LoopResult loop =
+      expect_first_step(with_effect(sensory_reference(), effects::Kind::kStribeck, {5.0, 0.1}),
+                        effects::Kind::kStribeck);
   check_recovered(parameter(loop.steps.front(), "stribeck.d_s"), 5.0);
   check_recovered(parameter(loop.steps.front(), "stribeck.w_s"), 0.1);
 }
 
 TEST_CASE("residual loop: finds direction-dependent friction first", "[residual_loop][slow]") {
-  const LoopResult loop = expect_first_step(
-      with_effect(sensory_reference(), effects::Kind::kDirectionFriction, {1.5}),
-      effects::Kind::kDirectionFriction);
+  const LoopResult loop =
+      expect_first_step(with_effect(sensory_reference(), effects::Kind::kDirectionFriction, {1.5}),
+                        effects::Kind::kDirectionFriction);
   check_recovered(parameter(loop.steps.front(), "direction_friction.d_dir"), 1.5);
 }
 
@@ -286,9 +288,9 @@ TEST_CASE("residual loop: finds an end stop first", "[residual_loop][slow]") {
 TEST_CASE("residual loop: finds an inertia error first when J is held", "[residual_loop][slow]") {
   LoopOptions options;
   options.fit.fixed_parameters = {"J"};  // otherwise the inertia error is J itself
-  const LoopResult loop = expect_first_step(
-      with_effect(sensory_reference(), effects::Kind::kInertiaError, {0.2}),
-      effects::Kind::kInertiaError, options);
+  const LoopResult loop =
+      expect_first_step(with_effect(sensory_reference(), effects::Kind::kInertiaError, {0.2}),
+                        effects::Kind::kInertiaError, options);
   check_recovered(parameter(loop.steps.front(), "inertia_error.delta_J"), 0.2);
 }
 
@@ -355,9 +357,10 @@ TEST_CASE("residual loop: options are validated with a message naming the option
 // refit's verdict names each such parameter, and says whether the bound is a physical limit
 // (the catalogue's minimum, where an amplitude's effect vanishes) or the end of the search
 // range. The issue's case: an end stop whose θ_e sat at the range's −0.1 rad, undetermined.
-TEST_CASE("residual loop: a refit's parameters at a bound or undetermined are named as the "
-          "reason for its rejection",
-          "[residual_loop]") {
+TEST_CASE(
+    "residual loop: a refit's parameters at a bound or undetermined are named as the "
+    "reason for its rejection",
+    "[residual_loop]") {
   auto parameter = [](const std::string& name, const std::string& unit, double value,
                       doorbench::Bounds bounds, bool at_bound, bool determined) {
     doorbench::FittedParameter p;
@@ -398,9 +401,10 @@ TEST_CASE("residual loop: a refit's parameters at a bound or undetermined are na
 // min_amplitude_z of its standard uncertainties is not added (a false addition on a clean
 // 50 Hz robot recording of the datasheet, draw 36: b = 1.626 +- 1.611, held-out -28 %). The
 // reason is given word for word; Stribeck's amplitude is measured from the refit's d1.
-TEST_CASE("residual loop: a refit's amplitude within min_amplitude_z standard uncertainties "
-          "of neutral is named as the reason for its rejection",
-          "[residual_loop]") {
+TEST_CASE(
+    "residual loop: a refit's amplitude within min_amplitude_z standard uncertainties "
+    "of neutral is named as the reason for its rejection",
+    "[residual_loop]") {
   auto amplitude = [](const std::string& name, const std::string& unit, double value, double u) {
     doorbench::FittedParameter p;
     p.name = name;
@@ -421,7 +425,8 @@ TEST_CASE("residual loop: a refit's amplitude within min_amplitude_z standard un
   // Stribeck: d_s 6.84 +- 1.29 against the refit's d1 2.6 is 3.29 u above it; a negative
   // gravity imbalance counts by its distance from 0.
   const std::vector<doorbench::FittedParameter> stribeck = {
-      amplitude("stribeck.d_s", "N*m", 6.84, 1.29), amplitude("stribeck.w_s", "rad/s", 0.006, 0.001)};
+      amplitude("stribeck.d_s", "N*m", 6.84, 1.29),
+      amplitude("stribeck.w_s", "rad/s", 0.006, 0.001)};
   CHECK(doorbench::weak_amplitude_problem(stribeck, 2.6, 4.0) ==
         "stribeck.d_s = 6.84 +- 1.29 N*m is 3.29 standard uncertainties from its neutral value "
         "2.6 (needs 4)");
@@ -430,9 +435,8 @@ TEST_CASE("residual loop: a refit's amplitude within min_amplitude_z standard un
       amplitude("gravity_imbalance.g1", "N*m", -0.9, 0.2)};
   CHECK(doorbench::weak_amplitude_problem(gravity, 0.0, 4.0).empty());
   // Undetermined or held amplitudes are refit_parameter_problems' to name, not this one's.
-  CHECK(doorbench::weak_amplitude_problem({amplitude("viscous_damping.b", "N*m*s/rad", 0.1,
-                                                     std::nan(""))},
-                                          0.0, 4.0)
+  CHECK(doorbench::weak_amplitude_problem(
+            {amplitude("viscous_damping.b", "N*m*s/rad", 0.1, std::nan(""))}, 0.0, 4.0)
             .empty());
   std::vector<doorbench::FittedParameter> held = damping;
   held[0].free = false;

@@ -9,7 +9,6 @@
 // recording family"). Each loop stops after its first step (max_steps 1) and skips the
 // structure check: the first step is what is asked, and it keeps the test's cost down.
 #include <catch2/catch.hpp>
-
 #include <cstdint>
 #include <cstdio>
 #include <string>
@@ -69,7 +68,6 @@ std::string outcome(const LoopResult& loop) {
                                 step.score_z, step.second_look ? ", second look" : "",
                                 step.before.held_out_rmse_rad_s, step.after.held_out_rmse_rad_s);
 }
-
 
 // Runs `kDraws` loops with breakaway friction and as many on the clean door, conditions
 // drawn from `family`; counts the draws where breakaway friction is named first and those
@@ -146,10 +144,9 @@ TEST_CASE(
     "[residual_loop][family][slow]") {
   const FamilyRun run = run_family(breakaway_test_family(), 2000);
   INFO(run.table);
-  WARN("breakaway friction named first in " << run.found << " of " << kDraws
-                                            << " draws (target " << kTargetFound
-                                            << "); clean recordings with an addition: "
-                                            << run.false_additions);
+  WARN("breakaway friction named first in "
+       << run.found << " of " << kDraws << " draws (target " << kTargetFound
+       << "); clean recordings with an addition: " << run.false_additions);
   CHECK(run.missed_where_the_data_allow.empty());
   CHECK(run.found >= kMeasuredFound);
   CHECK(run.false_additions <= kMeasuredFalseAdditions + 1);

@@ -8,7 +8,6 @@
 // the end stop and the inertia error on seeds 2 and 3 too), and a physical door fitted with
 // the sensory model ends with the structure check naming the physical model.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -33,7 +32,9 @@ constexpr double kBreakawaySpeed_rad_s = 0.05;
 
 using doorbench::testing::sensory_reference;
 
-double reference_d1() { return doorbench::testing::sensory_reference_d1(); }
+double reference_d1() {
+  return doorbench::testing::sensory_reference_d1();
+}
 
 doorbench::PreparedData tremor_data(const DoorModel& truth, std::uint32_t seed) {
   doorbench::testing::TremorRecordingOptions options;
@@ -59,9 +60,10 @@ void check_within_3u(const doorbench::FittedParameter* p, double truth) {
 
 }  // namespace
 
-TEST_CASE("residual loop: names breakaway friction first on tremor-hand recordings, and "
-          "adds nothing to the clean recordings of the same seeds",
-          "[residual_loop][tremor]") {
+TEST_CASE(
+    "residual loop: names breakaway friction first on tremor-hand recordings, and "
+    "adds nothing to the clean recordings of the same seeds",
+    "[residual_loop][tremor]") {
   const std::uint32_t seed = GENERATE(1u, 2u, 3u);
   INFO("seed " << seed);
 
@@ -167,9 +169,10 @@ TEST_CASE(
 // and the check waits for a candidate explaining less than 10 % of the residual): the loop
 // adds it to the sensory model, finds no candidate left, switches to the physical model,
 // refits the offset there whatever its evidence, and drops it.
-TEST_CASE("residual loop: after a switch to the physical family an effect added before is "
-          "re-examined and dropped",
-          "[residual_loop][tremor][slow]") {
+TEST_CASE(
+    "residual loop: after a switch to the physical family an effect added before is "
+    "re-examined and dropped",
+    "[residual_loop][tremor][slow]") {
   const doorbench::PreparedData data =
       tremor_data(doorbench::reference_model(ModelKind::kPhysical), 1);
   doorbench::LoopOptions options;
@@ -201,9 +204,10 @@ TEST_CASE("residual loop: after a switch to the physical family an effect added 
 // (docs/residual-loop.md, "Nested refits never lose"); every refit must end at or below its
 // parent, and no
 // step may add an effect with a free parameter at a bound or undetermined.
-TEST_CASE("residual loop: on a physical door fitted with the sensory model no refit ends above "
-          "its parent",
-          "[residual_loop][tremor][slow]") {
+TEST_CASE(
+    "residual loop: on a physical door fitted with the sensory model no refit ends above "
+    "its parent",
+    "[residual_loop][tremor][slow]") {
   const doorbench::PreparedData data =
       tremor_data(doorbench::reference_model(ModelKind::kPhysical), 1);
   doorbench::LoopOptions options;
@@ -272,7 +276,8 @@ LoopResult check_catalogue_case(const CatalogueCase& c, std::uint32_t seed) {
   CHECK(step.after.held_out_rmse_rad_s < step.before.held_out_rmse_rad_s);
   CHECK(step.after.bic < step.before.bic);
   for (std::size_t k = 0; k < info.parameters.size(); ++k) {
-    const std::string name = std::string(info.name) + "." + std::string(info.parameters[k].info.name);
+    const std::string name =
+        std::string(info.name) + "." + std::string(info.parameters[k].info.name);
     const doorbench::FittedParameter* p = find(step, name);
     REQUIRE(p != nullptr);
     if (k == 0 || p->free) check_within_3u(p, c.values[k]);  // the amplitude is always free
@@ -293,14 +298,13 @@ LoopResult check_catalogue_case(const CatalogueCase& c, std::uint32_t seed) {
 // after the effect is near the noise floor.
 TEST_CASE("residual loop: names each catalogue effect first on a tremor-hand recording",
           "[residual_loop][tremor][slow]") {
-  const CatalogueCase c =
-      GENERATE(CatalogueCase{effects::Kind::kViscousDamping, {0.5}},
-               CatalogueCase{effects::Kind::kGravityImbalance, {3.0}},
-               CatalogueCase{effects::Kind::kForceOffset, {3.0}},
-               CatalogueCase{effects::Kind::kDirectionFriction, {1.5}},
-               CatalogueCase{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
-               CatalogueCase{effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
-               CatalogueCase{effects::Kind::kInertiaError, {0.2}, true});
+  const CatalogueCase c = GENERATE(CatalogueCase{effects::Kind::kViscousDamping, {0.5}},
+                                   CatalogueCase{effects::Kind::kGravityImbalance, {3.0}},
+                                   CatalogueCase{effects::Kind::kForceOffset, {3.0}},
+                                   CatalogueCase{effects::Kind::kDirectionFriction, {1.5}},
+                                   CatalogueCase{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
+                                   CatalogueCase{effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
+                                   CatalogueCase{effects::Kind::kInertiaError, {0.2}, true});
   const LoopResult loop = check_catalogue_case(c, 1);
   INFO(loop.brief_report());
   CHECK_FALSE(loop.structure.ran);
@@ -311,9 +315,10 @@ TEST_CASE("residual loop: names each catalogue effect first on a tremor-hand rec
 // five steps from a start fit that bent the latch to mimic the damper, ends short of a
 // least-squares point. Its z takes the standard error from the residual the linearised step
 // leaves; from the refined point's own residual it was 1.6 and the damper was not refitted.
-TEST_CASE("residual loop: the second look sees the tremor hand's soft close that the linear "
-          "score undersells",
-          "[residual_loop][tremor]") {
+TEST_CASE(
+    "residual loop: the second look sees the tremor hand's soft close that the linear "
+    "score undersells",
+    "[residual_loop][tremor]") {
   doorbench::EffectSetting setting{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}, {}};
   for (const effects::EffectParameter& parameter : effects::info(setting.kind).parameters) {
     setting.bounds.push_back(parameter.default_bounds);
@@ -338,13 +343,13 @@ TEST_CASE("residual loop: the second look sees the tremor hand's soft close that
 // each closing, the end stop in the last run's two strokes) and the inertia error, on two more
 // seeds. On seed 2 the end stop's loop ends at 5.5 times the estimated noise floor and the
 // structure check runs; it keeps the sensory model.
-TEST_CASE("residual loop: names a soft close, an end stop and an inertia error first on two "
-          "more tremor-hand seeds",
-          "[residual_loop][tremor][slow]") {
+TEST_CASE(
+    "residual loop: names a soft close, an end stop and an inertia error first on two "
+    "more tremor-hand seeds",
+    "[residual_loop][tremor][slow]") {
   const std::uint32_t seed = GENERATE(2u, 3u);
-  const CatalogueCase c =
-      GENERATE(CatalogueCase{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
-               CatalogueCase{effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
-               CatalogueCase{effects::Kind::kInertiaError, {0.2}, true});
+  const CatalogueCase c = GENERATE(CatalogueCase{effects::Kind::kSoftClose, {5.0, 0.15, 50.0}},
+                                   CatalogueCase{effects::Kind::kEndStop, {200.0, 1.2, 3000.0}},
+                                   CatalogueCase{effects::Kind::kInertiaError, {0.2}, true});
   check_catalogue_case(c, seed);
 }

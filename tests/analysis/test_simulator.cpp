@@ -1,6 +1,7 @@
-// The simulator (analysis/simulation/simulator.h), the virtual hand (analysis/simulation/virtual_hand.h) and the
-// run summary (analysis/simulation/run_summary.h): energy balance, order of convergence, accuracy
-// through the latch, replay of a recorded force, exact solutions and every message.
+// The simulator (analysis/simulation/simulator.h), the virtual hand
+// (analysis/simulation/virtual_hand.h) and the run summary (analysis/simulation/run_summary.h):
+// energy balance, order of convergence, accuracy through the latch, replay of a recorded force,
+// exact solutions and every message.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>

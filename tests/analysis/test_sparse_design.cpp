@@ -3,8 +3,8 @@
 // file, not the model's own torque. The first design must change exactly the parts that
 // were changed, to within 5 % of the truth, and nothing else by more than 2 % of its bound
 // width.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <iostream>
 #include <string>

@@ -71,8 +71,7 @@ TEST_CASE("Tolerance Monte Carlo is the same for any thread count", "[tolerance]
   CHECK(doorbench::tolerance_analysis(door, spec, other).draws[0] != one.draws[0]);
 }
 
-TEST_CASE("Tolerance Monte Carlo: progress counts only grow and end at the total",
-          "[tolerance]") {
+TEST_CASE("Tolerance Monte Carlo: progress counts only grow and end at the total", "[tolerance]") {
   const DoorModel door = doorbench::reference_model(ModelKind::kPhysical);
   MonteCarloOptions options = quick(40, 3);
   std::vector<int> counts;  // the callback is serialized: no lock needed here

@@ -35,9 +35,10 @@ std::string size_line(const std::string& err) {
 
 }  // namespace
 
-TEST_CASE("fit says its windows before it starts, and --max-windows fits strokes spread over "
-          "the recording",
-          "[cli][fit]") {
+TEST_CASE(
+    "fit says its windows before it starts, and --max-windows fits strokes spread over "
+    "the recording",
+    "[cli][fit]") {
   const TempDir dir("fit_size");
   const auto session = dir / "s.h5";
   REQUIRE(doorbench::testing::record_built_in_session(session, 40.0, 3, "sensory") == 40000);

@@ -4,8 +4,8 @@
 // door at constant speed through its free range, pushing exactly the door's own torque, so
 // the door never accelerates and its inertia acts only through the force sensor's noise;
 // the latch is never reached.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -44,8 +44,8 @@ Recording constant_speed_recording() {
     const double omega = opening ? kSpeed_rad_s : -kSpeed_rad_s;
     for (int i = 0; i < samples; ++i) {
       const double t = (stroke * samples + i) / kRate_hz;
-      const double theta = opening ? kLow + kSpeed_rad_s * i / kRate_hz
-                                   : kHigh - kSpeed_rad_s * i / kRate_hz;
+      const double theta =
+          opening ? kLow + kSpeed_rad_s * i / kRate_hz : kHigh - kSpeed_rad_s * i / kRate_hz;
       const double torque = door.evaluate(door.parameter_values().data(), theta, omega, terms);
       recording.time_s.push_back(t);
       recording.force_N.push_back(-torque / radius_m);

@@ -106,7 +106,9 @@ bool contains(const std::string& text, const std::string& part) {
   return text.find(part) != std::string::npos;
 }
 
-std::size_t gap_index() { return static_cast<std::size_t>(std::llround(kGapStart_s * 1000.0)); }
+std::size_t gap_index() {
+  return static_cast<std::size_t>(std::llround(kGapStart_s * 1000.0));
+}
 
 }  // namespace
 
@@ -180,9 +182,10 @@ TEST_CASE("Gaps: doorbench info lists the gap, export writes empty cells", "[gap
   const testing::DoorbenchRun info = testing::run_doorbench_shell("info " + s.gapped.string(), dir);
   INFO(info.out << info.err);
   REQUIRE(info.status == 0);
-  CHECK(contains(info.out, "gaps: 1 (10 samples lost; they read as missing)\n"
-                           "       7.500 s to      7.509 s        10 samples  "
-                           "force, angle, rate\n"));
+  CHECK(contains(info.out,
+                 "gaps: 1 (10 samples lost; they read as missing)\n"
+                 "       7.500 s to      7.509 s        10 samples  "
+                 "force, angle, rate\n"));
   const testing::DoorbenchRun whole = testing::run_doorbench_shell("info " + s.whole.string(), dir);
   CHECK(contains(whole.out, "gaps: 0\n"));
 
@@ -266,8 +269,7 @@ std::vector<WindowOptions> both_window_kinds() {
 
 }  // namespace
 
-TEST_CASE("Gaps: a 10 ms gap in a stroke costs only the windows that span it",
-          "[gaps][fitting]") {
+TEST_CASE("Gaps: a 10 ms gap in a stroke costs only the windows that span it", "[gaps][fitting]") {
   const GapSessions& s = gap_sessions();
   const PreparedData gapped = prepare_session(s.gapped);
   const PreparedData whole = prepare_session(s.whole);
@@ -351,8 +353,8 @@ TEST_CASE("Gaps: the same gap as a jump of the clock (rows missing from a CSV)",
   erase(*recording.rate_rad_s);
   for (std::vector<double>& column : recording.extra_columns) erase(column);
   if (recording.angle_rad) erase(*recording.angle_rad);
-  if (recording.stroke) recording.stroke->erase(recording.stroke->begin() + first,
-                                                recording.stroke->begin() + end);
+  if (recording.stroke)
+    recording.stroke->erase(recording.stroke->begin() + first, recording.stroke->begin() + end);
   const PreparedData jumped = prepare(recording);
   const PreparedData lost = prepare_session(s.gapped);
   REQUIRE(jumped.strokes.size() == 6);
@@ -387,8 +389,9 @@ TEST_CASE("Gaps: doorbench fit names every segment it leaves out, with its reaso
       "the recording gap from 7.499 s to 7.510 s and is not fitted";
   CHECK(contains(run.err, "  6 strokes, 2 segments excluded\n"));
   CHECK(contains(run.err, "\n  " + window_line + "\n  " + gap_line + "\n"));
-  CHECK(contains(run.err, " windows of 0.2 s on 6 strokes (1 window spans a recording gap and "
-                          "is left out)\n"));
+  CHECK(contains(run.err,
+                 " windows of 0.2 s on 6 strokes (1 window spans a recording gap and "
+                 "is left out)\n"));
   const std::string report = testing::read_file(out / "report.md");
   CHECK(contains(report, "excluded (2):\n- " + window_line + "\n- " + gap_line + ".\n\n"));
   const nlohmann::json result = nlohmann::json::parse(testing::read_file(out / "result.json"));

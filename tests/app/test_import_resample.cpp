@@ -35,16 +35,16 @@ TEST_CASE("import --resample-hz: the mean over each new interval, or linear inte
   std::string csv = "# handle_radius_m: 0.5\ntime_s,force_N,rate_rad_s,stroke\n";
   for (int i = 0; i < 20; ++i) {
     if (i > 5 && i < 12) continue;
-    csv += std::to_string(i / 1000.0) + "," + std::to_string(i) + "," +
-           std::to_string(i / 4.0) + "," + (i >= 10 ? "1" : "0") + "\n";
+    csv += std::to_string(i / 1000.0) + "," + std::to_string(i) + "," + std::to_string(i / 4.0) +
+           "," + (i >= 10 ? "1" : "0") + "\n";
   }
   const auto source = dir.write("run.csv", csv);
   const auto import_and_export = [&](const std::string& rate) {
     const auto session = dir / ("run-" + rate + ".h5");
-    const DoorbenchRun imported = run_doorbench_shell(
-        "import '" + source.string() + "' --resample-hz " + rate + " --out '" +
-            session.string() + "'",
-        dir);
+    const DoorbenchRun imported =
+        run_doorbench_shell("import '" + source.string() + "' --resample-hz " + rate + " --out '" +
+                                session.string() + "'",
+                            dir);
     REQUIRE(imported.status == 0);
     const auto exported = dir / ("run-" + rate + ".csv");
     REQUIRE(run_doorbench_shell(
@@ -61,11 +61,11 @@ TEST_CASE("import --resample-hz: the mean over each new interval, or linear inte
                         "Hz, each sample the mean over its interval\n");
   CHECK(slow ==
         "time_s,force_N,rate_rad_s,stroke\n"
-        "0,0.5,0.125,0\n"          // 0, 1 ms
-        "0.004,3.5,0.875,0\n"      // 2 to 5 ms
-        "0.008,,,0\n"              // none: missing, the stroke of 5 ms
-        "0.012,12.5,3.125,1\n"     // 12, 13 ms
-        "0.016,15.5,3.875,1\n");   // 14 to 17 ms
+        "0,0.5,0.125,0\n"         // 0, 1 ms
+        "0.004,3.5,0.875,0\n"     // 2 to 5 ms
+        "0.008,,,0\n"             // none: missing, the stroke of 5 ms
+        "0.012,12.5,3.125,1\n"    // 12, 13 ms
+        "0.016,15.5,3.875,1\n");  // 14 to 17 ms
 
   // 2 kHz: linear interpolation, missing across the gap (more than 3 median intervals).
   const auto [fast_err, fast] = import_and_export("2000");

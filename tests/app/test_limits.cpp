@@ -20,7 +20,8 @@ using doorbench::testing::run_doorbench_shell;
 using doorbench::testing::TempDir;
 
 bool ends_with(const std::string& text, const std::string& tail) {
-  return text.size() >= tail.size() && text.compare(text.size() - tail.size(), tail.size(), tail) == 0;
+  return text.size() >= tail.size() &&
+         text.compare(text.size() - tail.size(), tail.size(), tail) == 0;
 }
 
 // The sensory reference door with d1 (dry friction, bounds 0 to 20 N·m) at 1e6 N·m.
@@ -36,7 +37,8 @@ doorbench::DoorModel stiff_door() {
 
 // The door opened and closed by the virtual hand (10 s), sampled at 1 kHz.
 doorbench::Trajectory hand_run(const doorbench::DoorModel& door) {
-  const doorbench::VirtualHand hand(doorbench::VirtualHandOptions{}, door.geometry().handle_radius_m);
+  const doorbench::VirtualHand hand(doorbench::VirtualHandOptions{},
+                                    door.geometry().handle_radius_m);
   std::vector<double> times;
   for (int i = 0; i <= 10000; ++i) times.push_back(0.001 * i);
   return doorbench::simulate(door, hand, doorbench::DoorState{}, times);

@@ -26,9 +26,10 @@ using doorbench::testing::TempDir;
 
 }  // namespace
 
-TEST_CASE("loop: SIGINT or SIGTERM after the first step leaves a readable result marked "
-          "interrupted",
-          "[cli][loop][signal]") {
+TEST_CASE(
+    "loop: SIGINT or SIGTERM after the first step leaves a readable result marked "
+    "interrupted",
+    "[cli][loop][signal]") {
   const TempDir dir("loop_interrupt");
   // The reference door with two effects its start model lacks: the loop adds the gravity
   // imbalance at step 1, the viscous damping at step 2, then runs the structure check.

@@ -13,17 +13,18 @@
 #include "tests/support/run_doorbench.h"
 #include "tests/support/temp_dir.h"
 
-TEST_CASE("loop: result.json lists every refit, kept or rejected, with its figures, "
-          "parameters and verdict",
-          "[cli][loop]") {
+TEST_CASE(
+    "loop: result.json lists every refit, kept or rejected, with its figures, "
+    "parameters and verdict",
+    "[cli][loop]") {
   const doorbench::testing::TempDir dir("loop_result");
   // The reference door with a gravity imbalance and viscous damping the start model lacks
   // (the recording of tests/app/test_loop_interrupt.cpp): the loop adds both, and step 1
   // refits and rejects a soft close whose damping the data does not determine.
   const std::string csv = doorbench::testing::simulate_loop_recording(dir);
   const auto out = dir / "out";
-  const doorbench::testing::DoorbenchRun run =
-      doorbench::testing::run_doorbench_shell("loop '" + csv + "' --out '" + out.string() + "'", dir);
+  const doorbench::testing::DoorbenchRun run = doorbench::testing::run_doorbench_shell(
+      "loop '" + csv + "' --out '" + out.string() + "'", dir);
   INFO(run.err);
   REQUIRE(run.status == 0);
   const nlohmann::json result =
@@ -49,7 +50,8 @@ TEST_CASE("loop: result.json lists every refit, kept or rejected, with its figur
       }
       // A refit: its figures before and after, and the effect's parameters.
       REQUIRE(candidate.contains("after"));
-      for (const char* field : {"fitted_rmse_rad_s", "held_out_rmse_rad_s", "bic", "sum_of_squares"}) {
+      for (const char* field :
+           {"fitted_rmse_rad_s", "held_out_rmse_rad_s", "bic", "sum_of_squares"}) {
         CHECK(candidate.at("after").at(field).is_number());
         CHECK(candidate.at("before").at(field).is_number());
       }

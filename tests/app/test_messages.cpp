@@ -65,10 +65,10 @@ TEST_CASE("Messages: a parameter file's number beyond a double names file and li
   text.replace(at, before.size(), "\"value\": 1e999,");
   const int line = 1 + static_cast<int>(std::count(text.begin(), text.begin() + at, '\n'));
   const auto params = dir.write("p.json", text);
-  const DoorbenchRun run = run_doorbench_shell(
-      "simulate --model sensory --params " + params.string() +
-          " --hand open-close --duration-s 1 --out " + (dir / "r.csv").string(),
-      dir);
+  const DoorbenchRun run =
+      run_doorbench_shell("simulate --model sensory --params " + params.string() +
+                              " --hand open-close --duration-s 1 --out " + (dir / "r.csv").string(),
+                          dir);
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + params.string() + ": line " + std::to_string(line) +
                        ": number overflow parsing '1e999' (beyond the range of a double)\n");
@@ -80,19 +80,21 @@ TEST_CASE("Messages: fit on a .h5 file that is not HDF5 says so", "[messages][cl
   const DoorbenchRun run =
       run_doorbench_shell("fit " + fake.string() + " --out " + (dir / "out").string(), dir);
   CHECK(run.status == 1);
-  CHECK(last_line(run.err) == "doorbench: " + fake.string() +
-                       ": not an HDF5 file (a session starts with the HDF5 signature; a CSV "
-                       "recording is read only under another name)\n");
+  CHECK(last_line(run.err) ==
+        "doorbench: " + fake.string() +
+            ": not an HDF5 file (a session starts with the HDF5 signature; a CSV "
+            "recording is read only under another name)\n");
 }
 
 TEST_CASE("Messages: a session's broken explicit times name the dataset and sample",
           "[messages][cli][session]") {
   const TempDir dir("messages_times");
   const auto session = imported_session(dir);
-  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
-       "t = f['channels/force/time_s']\n"
-       "t[5] = float('nan')\n"
-       "f.close()",
+  h5py("f = h5py.File('" + session.string() +
+           "', 'r+')\n"
+           "t = f['channels/force/time_s']\n"
+           "t[5] = float('nan')\n"
+           "f.close()",
        dir);
   const DoorbenchRun run =
       run_doorbench_shell("export " + session.string() + " --csv " + (dir / "x.csv").string(), dir);
@@ -100,10 +102,11 @@ TEST_CASE("Messages: a session's broken explicit times name the dataset and samp
   CHECK(run.err == "doorbench: " + session.string() +
                        ": /channels/force/time_s: sample 5 (nan s) is not finite; times must be "
                        "finite and increasing\n");
-  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
-       "t = f['channels/force/time_s']\n"
-       "t[5] = 0.02\n"
-       "f.close()",
+  h5py("f = h5py.File('" + session.string() +
+           "', 'r+')\n"
+           "t = f['channels/force/time_s']\n"
+           "t[5] = 0.02\n"
+           "f.close()",
        dir);
   const DoorbenchRun decreasing =
       run_doorbench_shell("export " + session.string() + " --csv " + (dir / "x.csv").string(), dir);
@@ -113,8 +116,7 @@ TEST_CASE("Messages: a session's broken explicit times name the dataset and samp
                               "before (0.0401 s); times must be finite and increasing\n");
 }
 
-TEST_CASE("Messages: control characters from files reach the terminal escaped",
-          "[messages][cli]") {
+TEST_CASE("Messages: control characters from files reach the terminal escaped", "[messages][cli]") {
   const TempDir dir("messages_control");
   SECTION("a CSV cell") {
     const auto csv = dir.write("esc.csv", "time_s,force_N,rate_rad_s\n0,1,0\n0.1,\x1b[2J,0\n");
@@ -122,8 +124,8 @@ TEST_CASE("Messages: control characters from files reach the terminal escaped",
         run_doorbench_shell("fit " + csv.string() + " --out " + (dir / "out").string(), dir);
     CHECK(run.status == 1);
     CHECK(run.err.find('\x1b') == std::string::npos);
-    CHECK(last_line(run.err) == "doorbench: " + csv.string() +
-                                    ":3: column force_N: '\\e[2J' is not a number\n");
+    CHECK(last_line(run.err) ==
+          "doorbench: " + csv.string() + ":3: column force_N: '\\e[2J' is not a number\n");
   }
   SECTION("a session's notes and a channel name") {
     const auto session = imported_session(dir, "\\033]0;owned\\007");
@@ -132,9 +134,10 @@ TEST_CASE("Messages: control characters from files reach the terminal escaped",
     REQUIRE(info.status == 0);
     CHECK(info.out.find('\x1b') == std::string::npos);
     CHECK(info.out.find("  notes      \\e]0;owned\\x07\n") != std::string::npos);
-    h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
-         "f.move('channels/rate', 'channels/r\\x1b[2J')\n"
-         "f.close()",
+    h5py("f = h5py.File('" + session.string() +
+             "', 'r+')\n"
+             "f.move('channels/rate', 'channels/r\\x1b[2J')\n"
+             "f.close()",
          dir);
     const DoorbenchRun renamed = run_doorbench_shell("info " + session.string(), dir);
     CHECK(renamed.status == 1);
@@ -168,10 +171,11 @@ TEST_CASE("Messages: a 10 MB value in a file reaches stderr cut", "[messages][cl
   const TempDir dir("long_value");
   const std::string value(10000000, '7');
   const auto csv = dir.write("long.csv", "# sample_rate_hz: x" + value + "\ntime_s,force_N\n0,1\n");
-  const DoorbenchRun run =
-      run_doorbench_shell("import '" + csv.string() + "' --out '" + (dir / "s.h5").string() + "'", dir);
+  const DoorbenchRun run = run_doorbench_shell(
+      "import '" + csv.string() + "' --out '" + (dir / "s.h5").string() + "'", dir);
   CHECK(run.status != 0);
   INFO(run.err.substr(0, 400));
   CHECK(run.err.size() < 400);
-  CHECK(run.err.find("x" + std::string(59, '7') + "... (10000001 characters)") != std::string::npos);
+  CHECK(run.err.find("x" + std::string(59, '7') + "... (10000001 characters)") !=
+        std::string::npos);
 }

@@ -112,7 +112,8 @@ TEST_CASE("CLI numbers: the check of one value", "[cli][numbers]") {
   CHECK(number_problem("-1", NumberKind::kUint) == "-1 is negative (0 or more)");
   CHECK(number_problem("-1", NumberKind::kInt).empty());
   CHECK(number_problem(std::string(100, '7'), NumberKind::kInt) ==
-        std::string(60, '7') + "... (100 characters) is beyond the whole numbers this option takes");
+        std::string(60, '7') +
+            "... (100 characters) is beyond the whole numbers this option takes");
 }
 
 TEST_CASE("CLI numbers: every numeric option of every verb refuses what is not a usable number",
@@ -123,9 +124,9 @@ TEST_CASE("CLI numbers: every numeric option of every verb refuses what is not a
   std::set<std::string> labels;
   for (const NumericOption& option : options) labels.insert(option.label());
   // The list is the verbs' own: these are among them (the issue's cases).
-  for (const char* known : {"record --duration-s", "calibrate loadcell --window-s", "simulate --rate-hz",
-                            "spec --samples", "spec --lambda", "spec --seed", "play --max-tick-interval-ms",
-                            "calibrate geometry --radius-m"}) {
+  for (const char* known : {"record --duration-s", "calibrate loadcell --window-s",
+                            "simulate --rate-hz", "spec --samples", "spec --lambda", "spec --seed",
+                            "play --max-tick-interval-ms", "calibrate geometry --radius-m"}) {
     INFO(known);
     CHECK(labels.count(known) == 1);
   }
@@ -167,11 +168,10 @@ TEST_CASE("CLI numbers: every numeric option of every verb refuses what is not a
       "calibrate inclinometer --inclinometer-range-deg 0",
       "calibrate timing --inclinometer-range-deg 0", "fit --derivative-cutoff-hz 0",
       "fit --folds 0", "fit --force-cutoff-hz 0", "fit --max-windows 0",
-      "loop --derivative-cutoff-hz 0",
-      "loop --force-cutoff-hz 0", "play --push-N 0", "play --pushes-hz 0", "play --seed 0",
-      "record --max-wait-s 0", "spec --lambda 0", "spec --seed 0", "spec --threads 0",
-      "ab --seed 0", "campaign analyze --bootstrap 0", "campaign analyze --seed 0",
-      "campaign plan --seed 0"};
+      "loop --derivative-cutoff-hz 0", "loop --force-cutoff-hz 0", "play --push-N 0",
+      "play --pushes-hz 0", "play --seed 0", "record --max-wait-s 0", "spec --lambda 0",
+      "spec --seed 0", "spec --threads 0", "ab --seed 0", "campaign analyze --bootstrap 0",
+      "campaign analyze --seed 0", "campaign plan --seed 0"};
   std::string listed;
   for (const std::string& a : accepted) listed += "\"" + a + "\",\n";
   INFO("accepted:\n" << listed);
@@ -192,7 +192,8 @@ TEST_CASE("CLI numbers: the usage error main() prints names the option", "[cli][
   };
   CHECK(said({"record", "--duration-s", "nan"}) == "--duration-s: nan is not a finite number");
   CHECK(said({"spec", "--seed", "-1"}) == "--seed: -1 is negative (0 or more)");
-  CHECK(said({"spec", "--samples", "2000000000"}) == "--samples: 2000000000 is outside 2 to 1000000");
+  CHECK(said({"spec", "--samples", "2000000000"}) ==
+        "--samples: 2000000000 is outside 2 to 1000000");
   CHECK(said({"spec", "--lambda", "1e308"}) ==
         "--lambda: 1e308 is beyond 1000000000, the largest value any option takes");
   CHECK(said({"simulate", "--rate-hz", "nan"}) == "--rate-hz: nan is not a finite number");
@@ -228,8 +229,8 @@ TEST_CASE("CLI numbers: options that contradict each other or would be ignored a
         "--masses-kg excludes --tare");
   CHECK(said({"calibrate", "loadcell", "--forces-N", "10", "--tare"}) ==
         "--forces-N excludes --tare");
-  CHECK(said({"spec", file, "--asis", file, "--out", "x", "--no-tolerances", "--tolerances", file}) ==
-        "--tolerances excludes --no-tolerances");
+  CHECK(said({"spec", file, "--asis", file, "--out", "x", "--no-tolerances", "--tolerances",
+              file}) == "--tolerances excludes --no-tolerances");
   CHECK(said({"spec", file, "--asis", file, "--out", "x", "--samples", "20", "--no-tolerances"}) ==
         "--samples excludes --no-tolerances");
   // A parameter free and held: refused before anything is read.
@@ -253,8 +254,9 @@ TEST_CASE("CLI numbers: a handle radius outside 0.05 to 2 m is refused unless --
   run = doorbench::testing::run_doorbench_shell(
       "calibrate geometry --radius-m 1e308 --angle-deg 0 --force-geometry", dir);
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: --radius-m: 1e308 is beyond 1000000000, the largest value any "
-                   "option takes (see doorbench calibrate geometry --help)\n");
+  CHECK(run.err ==
+        "doorbench: --radius-m: 1e308 is beyond 1000000000, the largest value any "
+        "option takes (see doorbench calibrate geometry --help)\n");
   // A CSV stating 1e9 m.
   const std::string csv = doorbench::testing::simulate_open_close_csv(dir, "run.csv", 6.0, 200.0);
   REQUIRE(!csv.empty());
@@ -266,9 +268,9 @@ TEST_CASE("CLI numbers: a handle radius outside 0.05 to 2 m is refused unless --
   run = doorbench::testing::run_doorbench_shell(
       "fit '" + far + "' --out '" + (dir / "fit").string() + "'", dir);
   CHECK(run.status == 2);
-  CHECK(run.err ==
-        "preparing " + far + "\ndoorbench: handle radius 1e+09 m (from the CSV's metadata (# "
-        "handle_radius_m)) is outside 0.05 to 2 m, where a door handle is; give "
-        "--force-geometry to use it anyway (see doorbench fit --help)\n");
+  CHECK(run.err == "preparing " + far +
+                       "\ndoorbench: handle radius 1e+09 m (from the CSV's metadata (# "
+                       "handle_radius_m)) is outside 0.05 to 2 m, where a door handle is; give "
+                       "--force-geometry to use it anyway (see doorbench fit --help)\n");
   CHECK(!std::filesystem::exists(dir / "fit"));
 }

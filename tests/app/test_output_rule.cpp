@@ -45,7 +45,8 @@ std::string files_in(const fs::path& folder) {
 }
 
 // Runs a shell script (`doorbench` stands for the executable); stdout and stderr captured.
-DoorbenchRun run_script(const std::string& text, const TempDir& dir, const std::string& shell = "sh") {
+DoorbenchRun run_script(const std::string& text, const TempDir& dir,
+                        const std::string& shell = "sh") {
   const fs::path script = dir / "script.sh";
   std::ofstream(script) << "doorbench() { '" DOORBENCH_EXECUTABLE "' \"$@\"; }\n" << text << "\n";
   const fs::path out = dir / "script.out";
@@ -70,9 +71,9 @@ bool run_on_full_tmpfs(const fs::path& mount_point, const std::string& setup,
   const std::string mount = "mount -t tmpfs -o size=64k tmpfs '" + mount_point.string() + "'";
   const std::string probe = "unshare -m sh -c \"" + mount + "\" 2>/dev/null";
   if (std::system(probe.c_str()) != 0) return false;
-  run = run_script(mount + "\n" + setup + "\ndoorbench " + args + "\nstatus=$?\n" + after +
-                       "\nexit $status",
-                   dir, "unshare -m sh");
+  run = run_script(
+      mount + "\n" + setup + "\ndoorbench " + args + "\nstatus=$?\n" + after + "\nexit $status",
+      dir, "unshare -m sh");
   return true;
 }
 
@@ -130,7 +131,8 @@ TEST_CASE("Outputs: simulate, model torque and import follow the same rule", "[o
       "simulate --model sensory --hand open-close --duration-s 1 --out " + run.string();
   const DoorbenchRun refused = run_doorbench_shell(simulate, dir);
   CHECK(refused.status == 2);
-  CHECK(refused.err == "doorbench: " + run.string() + ": exists (give --overwrite to replace it)\n");
+  CHECK(refused.err ==
+        "doorbench: " + run.string() + ": exists (give --overwrite to replace it)\n");
   CHECK(read_file(run) == "old\n");
   const DoorbenchRun replaced = run_doorbench_shell(simulate + " --overwrite", dir);
   INFO(replaced.err);
@@ -158,8 +160,9 @@ TEST_CASE("Outputs: simulate, model torque and import follow the same rule", "[o
   const DoorbenchRun onto_csv =
       run_doorbench_shell("import " + run.string() + " --out " + run.string(), dir);
   CHECK(onto_csv.status == 2);
-  CHECK(onto_csv.err == "doorbench: " + run.string() +
-                            ": is an input of this command (doorbench never writes onto its input)\n");
+  CHECK(onto_csv.err ==
+        "doorbench: " + run.string() +
+            ": is an input of this command (doorbench never writes onto its input)\n");
 }
 
 TEST_CASE("Outputs: fit and loop check their input before creating --out", "[outputs][cli]") {
@@ -180,11 +183,11 @@ TEST_CASE("Outputs: fit and loop check their input before creating --out", "[out
   const DoorbenchRun refused =
       run_doorbench_shell("fit " + bad.string() + " --out " + used.string(), dir);
   CHECK(refused.status == 2);
-  CHECK(refused.err ==
-        "doorbench: " + used.string() + ": exists and is not empty (give --overwrite to write into it)\n");
+  CHECK(refused.err == "doorbench: " + used.string() +
+                           ": exists and is not empty (give --overwrite to write into it)\n");
   CHECK(read_file(used / "result.json") == "{}\n");
-  const DoorbenchRun holds =
-      run_doorbench_shell("fit " + bad.string() + " --out " + dir.path.string() + " --overwrite", dir);
+  const DoorbenchRun holds = run_doorbench_shell(
+      "fit " + bad.string() + " --out " + dir.path.string() + " --overwrite", dir);
   CHECK(holds.status == 2);
   CHECK(holds.err == "doorbench: " + dir.path.string() + ": holds an input of this command (" +
                          bad.string() + ") (doorbench never writes onto its input)\n");
@@ -192,8 +195,8 @@ TEST_CASE("Outputs: fit and loop check their input before creating --out", "[out
   const fs::path linked = dir / "linked";
   fs::create_directories(linked);
   fs::create_symlink(bad, linked / "result.json");
-  const DoorbenchRun link =
-      run_doorbench_shell("fit " + bad.string() + " --out " + linked.string() + " --overwrite", dir);
+  const DoorbenchRun link = run_doorbench_shell(
+      "fit " + bad.string() + " --out " + linked.string() + " --overwrite", dir);
   CHECK(link.status == 2);
   CHECK(link.err == "doorbench: " + (linked / "result.json").string() +
                         ": is an input of this command (" + bad.string() +
@@ -210,12 +213,10 @@ TEST_CASE("Outputs: spec refuses a folder that is not empty before any work", "[
   const fs::path tobe = dir.write("tobe.csv", "not a recording\n");
   const fs::path asis = dir.write("asis.json", "not a door\n");
   const DoorbenchRun run = run_doorbench_shell(
-      "spec " + tobe.string() + " --asis " + asis.string() +
-          " --out " + out.string(),
-      dir);
+      "spec " + tobe.string() + " --asis " + asis.string() + " --out " + out.string(), dir);
   CHECK(run.status == 2);
-  CHECK(run.err ==
-        "doorbench: " + out.string() + ": exists and is not empty (give --overwrite to write into it)\n");
+  CHECK(run.err == "doorbench: " + out.string() +
+                       ": exists and is not empty (give --overwrite to write into it)\n");
   CHECK(read_file(out / "spec.json") == "{}\n");
 }
 
@@ -230,15 +231,15 @@ TEST_CASE("Outputs: calibration certificates follow the rule", "[outputs][cli]")
   CHECK(existing.err ==
         "doorbench: " + certificate.string() + ": exists (give --overwrite to replace it)\n");
   CHECK(read_file(certificate) == "old\n");
-  const DoorbenchRun onto = run_doorbench_shell("calibrate gyro --from " + session.string() +
-                                                    " --certificate " + session.string() +
-                                                    " --overwrite",
-                                                dir);
+  const DoorbenchRun onto =
+      run_doorbench_shell("calibrate gyro --from " + session.string() + " --certificate " +
+                              session.string() + " --overwrite",
+                          dir);
   CHECK(onto.status == 2);
   CHECK(onto.err == "doorbench: " + session.string() +
                         ": is an input of this command (doorbench never writes onto its input)\n");
-  const DoorbenchRun store = run_doorbench_shell(
-      "calibration certificate some-id --out " + certificate.string(), dir);
+  const DoorbenchRun store =
+      run_doorbench_shell("calibration certificate some-id --out " + certificate.string(), dir);
   CHECK(store.status == 2);
   CHECK(store.err ==
         "doorbench: " + certificate.string() + ": exists (give --overwrite to replace it)\n");
@@ -272,10 +273,9 @@ TEST_CASE("Outputs: a full disk leaves the old file or nothing, and the message 
     const fs::path csv = mount_point / "s.csv";
     DoorbenchRun run;
     if (!run_on_full_tmpfs(mount_point, "echo old > '" + csv.string() + "'",
-                           "export " + session.string() + " --csv " + csv.string() +
-                               " --overwrite",
-                           "ls -A '" + mount_point.string() + "'; cat '" + csv.string() + "'",
-                           dir, run)) {
+                           "export " + session.string() + " --csv " + csv.string() + " --overwrite",
+                           "ls -A '" + mount_point.string() + "'; cat '" + csv.string() + "'", dir,
+                           run)) {
       WARN("mounting a tmpfs is not permitted here: the file size limit above stands in");
       return;
     }
@@ -308,8 +308,7 @@ TEST_CASE("Outputs: a full disk leaves the old file or nothing, and the message 
   }
 }
 
-TEST_CASE("Outputs: write_file_atomically keeps the old file when the writer fails",
-          "[outputs]") {
+TEST_CASE("Outputs: write_file_atomically keeps the old file when the writer fails", "[outputs]") {
   const TempDir dir("output_atomic");
   const fs::path file = dir / "a.txt";
   doorbench::write_text_file_atomically(file, "first\n");

@@ -52,13 +52,14 @@ TEST_CASE("Session checks: info names a channel cut short and a missing calibrat
 
   // The force channel cut to half its length (1000 of 2000 samples at 1 kHz); the rate
   // channel, sampled 20 us after the force in each scan, ends last.
-  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
-       "raw = f['channels/force/raw'][:1000]\n"
-       "attrs = dict(f['channels/force/raw'].attrs)\n"
-       "del f['channels/force/raw']\n"
-       "d = f['channels/force'].create_dataset('raw', data=raw)\n"
-       "for k, v in attrs.items(): d.attrs[k] = v\n"
-       "f.close()",
+  h5py("f = h5py.File('" + session.string() +
+           "', 'r+')\n"
+           "raw = f['channels/force/raw'][:1000]\n"
+           "attrs = dict(f['channels/force/raw'].attrs)\n"
+           "del f['channels/force/raw']\n"
+           "d = f['channels/force'].create_dataset('raw', data=raw)\n"
+           "for k, v in attrs.items(): d.attrs[k] = v\n"
+           "f.close()",
        dir);
   const DoorbenchRun cut = run_doorbench_shell("info '" + session.string() + "'", dir);
   CHECK(cut.status == 0);  // usable: export leaves cells empty, fit uses the common time
@@ -68,9 +69,10 @@ TEST_CASE("Session checks: info names a channel cut short and a missing calibrat
         "samples)\n");
 
   // And the force's calibration record removed.
-  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
-       "del f['calibrations/' + f['channels/force'].attrs['calibration_id']]\n"
-       "f.close()",
+  h5py("f = h5py.File('" + session.string() +
+           "', 'r+')\n"
+           "del f['calibrations/' + f['channels/force'].attrs['calibration_id']]\n"
+           "f.close()",
        dir);
   const DoorbenchRun missing = run_doorbench_shell("info '" + session.string() + "'", dir);
   CHECK(missing.status == 1);
@@ -80,8 +82,8 @@ TEST_CASE("Session checks: info names a channel cut short and a missing calibrat
         "problem: channel force has 1000 samples and ends at 1 s, 1.00002 s before rate (export "
         "leaves its cells empty from there; fit uses only the time where every channel has "
         "samples)\n");
-  CHECK(missing.err == "doorbench: " + session.string() +
-                           ": cannot be used as it is (1 problem above)\n");
+  CHECK(missing.err ==
+        "doorbench: " + session.string() + ": cannot be used as it is (1 problem above)\n");
 }
 
 // A channel cut short (never the common rows alone without a word, by `export` or `fit`):
@@ -93,13 +95,14 @@ TEST_CASE("Session checks: export leaves a channel cut short empty, fit says wha
   const TempDir dir("session_cut_short");
   const auto session = dir / "s.h5";
   REQUIRE(doorbench::testing::record_built_in_session(session, 6.0, 3, "sensory") == 6000);
-  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
-       "raw = f['channels/force/raw'][:3000]\n"
-       "attrs = dict(f['channels/force/raw'].attrs)\n"
-       "del f['channels/force/raw']\n"
-       "d = f['channels/force'].create_dataset('raw', data=raw)\n"
-       "for k, v in attrs.items(): d.attrs[k] = v\n"
-       "f.close()",
+  h5py("f = h5py.File('" + session.string() +
+           "', 'r+')\n"
+           "raw = f['channels/force/raw'][:3000]\n"
+           "attrs = dict(f['channels/force/raw'].attrs)\n"
+           "del f['channels/force/raw']\n"
+           "d = f['channels/force'].create_dataset('raw', data=raw)\n"
+           "for k, v in attrs.items(): d.attrs[k] = v\n"
+           "f.close()",
        dir);
 
   const auto csv = dir / "s.csv";
@@ -125,7 +128,7 @@ TEST_CASE("Session checks: export leaves a channel cut short empty, fit says wha
     return row.substr(first + 1, row.find(',', first + 1) - first - 1);
   };
   CHECK_FALSE(force_cell(rows[3000]).empty());  // the force's last sample, at 2.999 s
-  CHECK(rows[3001].rfind("3,,", 0) == 0);        // 3 s: the force's cell empty, the rest kept
+  CHECK(rows[3001].rfind("3,,", 0) == 0);       // 3 s: the force's cell empty, the rest kept
   CHECK(force_cell(rows[6000]).empty());
   CHECK_FALSE(rows[6000].ends_with(","));
 
@@ -145,15 +148,17 @@ TEST_CASE("Session checks: export leaves a channel cut short empty, fit says wha
 
 // The calibration record a channel names, missing: info names it (above), export and fit
 // refuse the session with the same words (exit 1), before writing anything.
-TEST_CASE("Session checks: export and fit refuse a session whose calibration record is "
-          "missing, word for word",
-          "[session][cli]") {
+TEST_CASE(
+    "Session checks: export and fit refuse a session whose calibration record is "
+    "missing, word for word",
+    "[session][cli]") {
   const TempDir dir("session_missing_record");
   const auto session = dir / "s.h5";
   REQUIRE(doorbench::testing::record_built_in_session(session, 2.0, 3, "sensory") == 2000);
-  h5py("f = h5py.File('" + session.string() + "', 'r+')\n"
-       "del f['calibrations/' + f['channels/force'].attrs['calibration_id']]\n"
-       "f.close()",
+  h5py("f = h5py.File('" + session.string() +
+           "', 'r+')\n"
+           "del f['calibrations/' + f['channels/force'].attrs['calibration_id']]\n"
+           "f.close()",
        dir);
   const std::string refusal = "doorbench: " + session.string() +
                               ": channel force uses calibration record nominal-SIM-LC445-0001, "

@@ -170,10 +170,10 @@ TEST_CASE("CLI: spec warns when a bench recording is specified without --asis-re
       "compared with what the bench measured, so the bench's own deviations (sensor offsets "
       "and scales, the load cell's mounting, its friction) can be specified as design changes; "
       "record the AS-IS door on the same bench and give it as --asis-recording";
-  const auto run = run_doorbench_shell("spec '" + tobe + "' --asis '" + asis_file.string() +
-                                           "' --out '" + (dir / "spec").string() +
-                                           "' --samples 2 --starts 1 --no-pdf",
-                                       dir);
+  const auto run =
+      run_doorbench_shell("spec '" + tobe + "' --asis '" + asis_file.string() + "' --out '" +
+                              (dir / "spec").string() + "' --samples 2 --starts 1 --no-pdf",
+                          dir);
   INFO("stderr: " << run.err);
   REQUIRE(run.status == 0);
   CHECK_THAT(run.err, Contains("\nwarning: " + warning + "\n"));

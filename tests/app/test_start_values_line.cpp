@@ -37,9 +37,8 @@ TEST_CASE("the start values' line and the tables say the same of the latch", "[c
   using doorbench::testing::run_doorbench_shell;
   const doorbench::testing::TempDir dir("start_line");
   const std::string run = (dir / "run.csv").string();
-  REQUIRE(run_doorbench_shell("simulate --model physical --hand open-close --duration-s 6 --out '" +
-                                  run + "'",
-                              dir)
+  REQUIRE(run_doorbench_shell(
+              "simulate --model physical --hand open-close --duration-s 6 --out '" + run + "'", dir)
               .status == 0);
   const auto init = run_doorbench_shell(
       "fit '" + run + "' --model sensory --init-only --out '" + (dir / "init").string() + "'", dir);
@@ -68,11 +67,10 @@ TEST_CASE("the start values' line and the tables say the same of the latch", "[c
   }
   // The fit from the reference door's parameter file scales the same angles itself: its
   // report's status column says "start scaled to the latch read off", once.
-  const auto fit = run_doorbench_shell("fit '" + run + "' --model sensory --params '" +
-                                           DOORBENCH_SOURCE_DIR +
-                                           "/analysis/data/reference-door.json' --folds 0 --out '" +
-                                           (dir / "fit").string() + "'",
-                                       dir);
+  const auto fit = run_doorbench_shell(
+      "fit '" + run + "' --model sensory --params '" + DOORBENCH_SOURCE_DIR +
+          "/analysis/data/reference-door.json' --folds 0 --out '" + (dir / "fit").string() + "'",
+      dir);
   INFO(fit.err);
   REQUIRE(fit.status == 0);
   const std::string report = read_text(dir / "fit" / "report.md");

@@ -32,43 +32,53 @@ TEST_CASE("Unknown names: fit --free and --fixed name the model's parameters, ex
   const DoorbenchRun free =
       run_doorbench_shell("fit " + data + " --free J,bogus --out '" + out.string() + "'", dir);
   CHECK(free.status == 2);
-  CHECK(free.err == "doorbench: --free: the sensory model has no parameter 'bogus' (its "
-                    "parameters: " + kSensoryParameters + ") (see doorbench fit --help)\n");
+  CHECK(free.err ==
+        "doorbench: --free: the sensory model has no parameter 'bogus' (its "
+        "parameters: " +
+            kSensoryParameters + ") (see doorbench fit --help)\n");
   // With an effect, its parameters are names too.
   const DoorbenchRun fixed = run_doorbench_shell(
       "fit " + data + " --effects stribeck --fixed stribeck.d_s,stribeck.bogus --out '" +
           out.string() + "'",
       dir);
   CHECK(fixed.status == 2);
-  CHECK(fixed.err == "doorbench: --fixed: the sensory model has no parameter 'stribeck.bogus' "
-                     "(its parameters: " + kSensoryParameters +
-                         ", stribeck.d_s, stribeck.w_s) (see doorbench fit --help)\n");
+  CHECK(fixed.err ==
+        "doorbench: --fixed: the sensory model has no parameter 'stribeck.bogus' "
+        "(its parameters: " +
+            kSensoryParameters + ", stribeck.d_s, stribeck.w_s) (see doorbench fit --help)\n");
   const DoorbenchRun loop = run_doorbench_shell(
       "fit " + data + " --model physical --free J --out '" + out.string() + "'", dir);
   CHECK(loop.status == 2);
-  CHECK(loop.err == "doorbench: --free: the physical model has no parameter 'J' (its "
-                    "parameters: " + kPhysicalParameters + ") (see doorbench fit --help)\n");
+  CHECK(loop.err ==
+        "doorbench: --free: the physical model has no parameter 'J' (its "
+        "parameters: " +
+            kPhysicalParameters + ") (see doorbench fit --help)\n");
   CHECK_FALSE(std::filesystem::exists(out));
 }
 
-TEST_CASE("Unknown names: spec --fixed and --costs name the physical model's parameters, "
-          "exit 2",
-          "[cli][usage]") {
+TEST_CASE(
+    "Unknown names: spec --fixed and --costs name the physical model's parameters, "
+    "exit 2",
+    "[cli][usage]") {
   const TempDir dir("unknown_spec_names");
   const auto out = dir / "out";
   const std::string asis = std::string(DOORBENCH_SOURCE_DIR) + "/analysis/data/reference-door.json";
   // The TO-BE recording is not one: the names are checked before it is read.
   const std::string tobe = dir.write("tobe.csv", "not a recording\n").string();
-  const std::string common = "spec '" + tobe + "' --asis '" + asis +
-                             "' --out '" + out.string() + "'";
+  const std::string common =
+      "spec '" + tobe + "' --asis '" + asis + "' --out '" + out.string() + "'";
   const DoorbenchRun fixed = run_doorbench_shell(common + " --fixed F0,bogus", dir);
   CHECK(fixed.status == 2);
-  CHECK(fixed.err == "doorbench: --fixed: the physical model has no parameter 'bogus' (its "
-                     "parameters: " + kPhysicalParameters + ") (see doorbench spec --help)\n");
+  CHECK(fixed.err ==
+        "doorbench: --fixed: the physical model has no parameter 'bogus' (its "
+        "parameters: " +
+            kPhysicalParameters + ") (see doorbench spec --help)\n");
   const DoorbenchRun costs = run_doorbench_shell(common + " --costs F0=1,k_x=5", dir);
   CHECK(costs.status == 2);
-  CHECK(costs.err == "doorbench: --costs: the physical model has no parameter 'k_x' (its "
-                     "parameters: " + kPhysicalParameters + ") (see doorbench spec --help)\n");
+  CHECK(costs.err ==
+        "doorbench: --costs: the physical model has no parameter 'k_x' (its "
+        "parameters: " +
+            kPhysicalParameters + ") (see doorbench spec --help)\n");
   CHECK_FALSE(std::filesystem::exists(out));
 }
 
@@ -78,12 +88,14 @@ TEST_CASE("Unknown names: play --device names the devices there are, exit 2", "[
   const DoorbenchRun bogus =
       run_doorbench_shell("play --device bogus --out '" + out.string() + "'", dir);
   CHECK(bogus.status == 2);
-  CHECK(bogus.err == "doorbench: --device 'bogus': not a device (use sim, sim:hapticmaster, "
-                     "sim:rotary or hapticmaster://HOST[:PORT]) (see doorbench play --help)\n");
+  CHECK(bogus.err ==
+        "doorbench: --device 'bogus': not a device (use sim, sim:hapticmaster, "
+        "sim:rotary or hapticmaster://HOST[:PORT]) (see doorbench play --help)\n");
   const DoorbenchRun no_host =
       run_doorbench_shell("play --device hapticmaster:// --out '" + out.string() + "'", dir);
   CHECK(no_host.status == 2);
-  CHECK(no_host.err == "doorbench: --device 'hapticmaster://': no host "
-                       "(hapticmaster://HOST[:PORT]) (see doorbench play --help)\n");
+  CHECK(no_host.err ==
+        "doorbench: --device 'hapticmaster://': no host "
+        "(hapticmaster://HOST[:PORT]) (see doorbench play --help)\n");
   CHECK_FALSE(std::filesystem::exists(out));
 }

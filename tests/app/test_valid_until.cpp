@@ -17,16 +17,15 @@ TEST_CASE("calibrate --valid-until: a date on the calendar, not before today, or
   const TempDir dir("valid_until");
   const std::string missing = (dir / "missing.h5").string();
   const auto run = [&](const std::string& date) {
-    return run_doorbench_shell("calibrate gyro --dry-run --from '" + missing +
-                                   "' --valid-until '" + date + "'",
-                               dir);
+    return run_doorbench_shell(
+        "calibrate gyro --dry-run --from '" + missing + "' --valid-until '" + date + "'", dir);
   };
   const std::string form =
       " is not an ISO 8601 date (YYYY-MM-DD, or YYYY-MM-DDTHH:MM:SSZ in UTC) (see doorbench "
       "calibrate gyro --help)\n";
-  for (const std::string bad : {"notadate", "2099-1-01", "2099-12-31T24:00:00Z",
-                                "2099-12-31T23:59:59", "2099-12-31T23:59:59.Z", "2099-12-31T",
-                                "2099-12-31 23:59:59Z", "20991231"}) {
+  for (const std::string bad :
+       {"notadate", "2099-1-01", "2099-12-31T24:00:00Z", "2099-12-31T23:59:59",
+        "2099-12-31T23:59:59.Z", "2099-12-31T", "2099-12-31 23:59:59Z", "20991231"}) {
     const DoorbenchRun refused = run(bad);
     INFO(bad);
     CHECK(refused.status == 2);
@@ -34,8 +33,9 @@ TEST_CASE("calibrate --valid-until: a date on the calendar, not before today, or
   }
   const DoorbenchRun not_a_day = run("2099-02-29");  // 2099 is no leap year
   CHECK(not_a_day.status == 2);
-  CHECK(not_a_day.err == "doorbench: --valid-until: 2099-02-29 is not a day of the calendar "
-                         "(see doorbench calibrate gyro --help)\n");
+  CHECK(not_a_day.err ==
+        "doorbench: --valid-until: 2099-02-29 is not a day of the calendar "
+        "(see doorbench calibrate gyro --help)\n");
   const DoorbenchRun past = run("2020-01-01");
   CHECK(past.status == 2);
   CHECK_THAT(past.err, Catch::StartsWith("doorbench: --valid-until: 2020-01-01 is before today ("));

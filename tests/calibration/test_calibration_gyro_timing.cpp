@@ -21,7 +21,6 @@ using namespace doorbench::calibration;
 
 namespace {
 
-
 // The door's truth of one recorded session, sampled again by fresh sensor models for each
 // seed: the door is simulated once, only the sensors (and their noise) change.
 struct DoorTruth {

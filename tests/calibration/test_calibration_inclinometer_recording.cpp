@@ -28,7 +28,6 @@ using namespace doorbench::calibration;
 
 namespace {
 
-
 struct Truth {
   double offset_deg = 0.4;
   double output_V_per_deg = 0.404;  // 1 % above the datasheet's 0.4 V/°

@@ -19,7 +19,6 @@ using namespace doorbench::calibration;
 
 namespace {
 
-
 // The built-in rig with some of a channel's parameters changed.
 RigDefinition rig_with(const std::string& channel,
                        const std::vector<std::pair<std::string, double>>& changes) {

@@ -175,8 +175,7 @@ TEST_CASE("hapticmaster device: the exact command sequence at start, in the loop
   }
   const std::vector<std::string> lines = lines_of(log);
   REQUIRE(lines.size() >= kStartCommands + 4 * 4 + 3);
-  CHECK(std::vector<std::string>(lines.begin(), lines.begin() + kStartCommands) ==
-        kStartSequence);
+  CHECK(std::vector<std::string>(lines.begin(), lines.begin() + kStartCommands) == kStartSequence);
   // Every round trip: the force, then the three readings.
   const std::size_t loop_end = lines.size() - 3;
   CHECK((loop_end - kStartCommands) % 4 == 0);
@@ -215,8 +214,9 @@ TEST_CASE("hapticmaster device: start-up passes when the device replies with few
   Emulator wrong({"--answer", "get inertia=10.9194"});
   HapticMasterDevice device(wrong.address(), by_hand());
   CHECK_THROWS_WITH(device.start(10.91954),
-                    wrong.name() + ": 'set inertia 10.91954' was accepted but the device "
-                                   "reports 10.9194 kg");
+                    wrong.name() +
+                        ": 'set inertia 10.91954' was accepted but the device "
+                        "reports 10.9194 kg");
 }
 
 TEST_CASE("hapticmaster device: an error reply at start is a DeviceError with its text",

@@ -91,8 +91,7 @@ TEST_CASE("hapticmaster emulator: joined and separate commands, each answered in
   Emulator emulator;
   RawClient client(emulator.port);
   const auto joined = client.send({"get state", "set inertia 4", "get inertia", "get measpos"});
-  CHECK(joined ==
-        std::vector<std::string>{"\"off\"", "\"Inertia set\"", "4.0", "[0.0,0.0,0.0]"});
+  CHECK(joined == std::vector<std::string>{"\"off\"", "\"Inertia set\"", "4.0", "[0.0,0.0,0.0]"});
   const auto separate = client.send({"set state force", "get state"}, false);
   CHECK(separate == std::vector<std::string>{"\"state set to 'force'\"", "\"force\""});
   // The exact bytes on the wire for `commands` joined in one request.
@@ -139,9 +138,9 @@ TEST_CASE("hapticmaster emulator: unknown commands and bad arguments are error r
   CHECK(client.one("set b force") == "--- ERROR: 'set b force' needs a value");
   CHECK(client.one("remove nothing") == "--- ERROR: No effect with name 'nothing'");
   // An error in the middle of a joined message does not stop the rest.
-  CHECK(client.send({"get b force", "bogus", "get b enabled"}) ==
-        std::vector<std::string>{"[0.0,0.0,0.0]", "--- ERROR: Unknown command 'bogus'",
-                                 "\"false\""});
+  CHECK(
+      client.send({"get b force", "bogus", "get b enabled"}) ==
+      std::vector<std::string>{"[0.0,0.0,0.0]", "--- ERROR: Unknown command 'bogus'", "\"false\""});
 }
 
 TEST_CASE("hapticmaster emulator: effect objects keep their properties", "[hapticmaster]") {

@@ -128,8 +128,7 @@ TEST_CASE("hapticmaster fail-safe: an error reply at start stops the device on t
           "[hapticmaster][failsafe]") {
   TempDir dir("hm_failsafe_error");
   const auto events = dir / "events.log";
-  Emulator emulator({"--events", events.string(), "--fail",
-                     "get measforce=Force sensor overload"});
+  Emulator emulator({"--events", events.string(), "--fail", "get measforce=Force sensor overload"});
   // The error comes in the first reading: start() fails and leaves the device stopped.
   {
     HapticMasterDevice device(emulator.address());
@@ -152,12 +151,21 @@ TEST_CASE("hapticmaster fail-safe: each failure in the loop ends at zero force i
   // About 0.1 s of round trips with the force on, then the fault.
   const std::string after = std::to_string(kCommandsOfStart + 4 * 100);
   const std::vector<Case> cases = {
-      {"corrupt reply", {"--garbage-after", after}, "fault garbage",
-       "not the HapticMaster protocol", kImmediateBound_s},
-      {"dropped connection", {"--drop-after", after}, "fault drop",
-       "connection closed by the device", kImmediateBound_s},
+      {"corrupt reply",
+       {"--garbage-after", after},
+       "fault garbage",
+       "not the HapticMaster protocol",
+       kImmediateBound_s},
+      {"dropped connection",
+       {"--drop-after", after},
+       "fault drop",
+       "connection closed by the device",
+       kImmediateBound_s},
       // A connection that stops answering: seen after reply_timeout_s (0.2 s here).
-      {"stalled device", {"--stall-after", after}, "fault stall", "no reply within 0.2 s",
+      {"stalled device",
+       {"--stall-after", after},
+       "fault stall",
+       "no reply within 0.2 s",
        0.2 + kImmediateBound_s},
   };
   for (const Case& c : cases) {
@@ -224,9 +232,10 @@ TEST_CASE("hapticmaster fail-safe: an error reply in the loop stops the device a
   device.stop();
 }
 
-TEST_CASE("hapticmaster fail-safe: the I/O thread's watchdog stops the device when the tick "
-          "stalls",
-          "[hapticmaster][failsafe]") {
+TEST_CASE(
+    "hapticmaster fail-safe: the I/O thread's watchdog stops the device when the tick "
+    "stalls",
+    "[hapticmaster][failsafe]") {
   TempDir dir("hm_failsafe_watchdog");
   const auto events = dir / "events.log";
   Emulator emulator({"--events", events.string()});
@@ -386,9 +395,9 @@ TEST_CASE("hapticmaster start-up: homing, emergency signals, other programs' eff
     const auto log = dir / "commands.log";
     Emulator emulator({"--emergency-button", "--log", log.string()});
     HapticMasterDevice device(emulator.address());
-    CHECK_THROWS_WITH(device.start(5.0),
-                      emulator.name() +
-                          ": the emergency button is pushed: release it, then start again");
+    CHECK_THROWS_WITH(
+        device.start(5.0),
+        emulator.name() + ": the emergency button is pushed: release it, then start again");
     std::ifstream in(log);
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     CHECK(text.find("create biasforce") == std::string::npos);
@@ -461,16 +470,16 @@ TEST_CASE("hapticmaster start-up: homing, emergency signals, other programs' eff
   SECTION("an inertia the device does not keep is an error") {
     Emulator emulator({"--answer", "get inertia=3.0"});
     HapticMasterDevice device(emulator.address());
-    CHECK_THROWS_WITH(device.start(5.0),
-                      emulator.name() +
-                          ": 'set inertia 5' was accepted but the device reports 3.0 kg");
+    CHECK_THROWS_WITH(
+        device.start(5.0),
+        emulator.name() + ": 'set inertia 5' was accepted but the device reports 3.0 kg");
   }
   SECTION("workspace replies of another shape are refused by name") {
     Emulator emulator({"--answer", "get workspace_r=[0.28,0.64]"});
     HapticMasterDevice device(emulator.address());
-    CHECK_THROWS_WITH(device.start(5.0),
-                      emulator.name() +
-                          ": 'get workspace_r' answered '[0.28,0.64]', not [low,axis,high]");
+    CHECK_THROWS_WITH(
+        device.start(5.0),
+        emulator.name() + ": 'get workspace_r' answered '[0.28,0.64]', not [low,axis,high]");
   }
 }
 

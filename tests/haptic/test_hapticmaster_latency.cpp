@@ -82,9 +82,10 @@ std::string describe(const Held& h) {
   return out.str();
 }
 
-TEST_CASE("hapticmaster latency: device-side stiff parts hold the arc at 3 and 20 ms round "
-          "trips, the host-side constraint rings at 20 ms",
-          "[hapticmaster][latency]") {
+TEST_CASE(
+    "hapticmaster latency: device-side stiff parts hold the arc at 3 and 20 ms round "
+    "trips, the host-side constraint rings at 20 ms",
+    "[hapticmaster][latency]") {
   // The user pushes 10 N along the hinge axis and 5 N outward from it, steadily: the springs'
   // 8000 N/m give 1.25 mm and 0.63 mm when the arc is held (docs/hapticmaster.md).
   const std::string push = "[0,10,5]";
@@ -107,15 +108,15 @@ TEST_CASE("hapticmaster latency: device-side stiff parts hold the arc at 3 and 2
   const Held host_20 = play_with_latency(20.0, false, push, 3.0);
   INFO("20 ms, host-side: " << describe(host_20));
   const auto& events = host_20.summary.safety_events;
-  const bool tripped =
-      std::find(events.begin(), events.end(), "velocity_trip") != events.end() ||
-      std::find(events.begin(), events.end(), "workspace_trip") != events.end();
+  const bool tripped = std::find(events.begin(), events.end(), "velocity_trip") != events.end() ||
+                       std::find(events.begin(), events.end(), "workspace_trip") != events.end();
   CHECK((host_20.axial_swing_m > 10e-3 || host_20.radial_swing_m > 10e-3 || tripped));
 }
 
-TEST_CASE("hapticmaster fail-safe: a velocity trip in playback brakes the device before the "
-          "shutdown",
-          "[hapticmaster][failsafe]") {
+TEST_CASE(
+    "hapticmaster fail-safe: a velocity trip in playback brakes the device before the "
+    "shutdown",
+    "[hapticmaster][failsafe]") {
   testing::TempDir dir("hm_velocity_trip");
   const auto events = dir.path / "events.log";
   // The user pushes the door open along the arc's tangent at the closed end (+x) hard enough

@@ -3,8 +3,8 @@
 // numbers read back compared at the precision their replies carry.
 #include <algorithm>
 #include <catch2/catch.hpp>
-#include <cstdio>
 #include <clocale>
+#include <cstdio>
 #include <locale>
 #include <stdexcept>
 #include <string>

@@ -1,8 +1,8 @@
 // The render loop's tick, its parameter hand-off and its recording, on a small rotary test
 // device in simulated time (tests/support/haptic_test_device.h).
 #include <catch2/catch.hpp>
-#include <limits>
 #include <cmath>
+#include <limits>
 
 #include "acquisition/session/session_csv.h"
 #include "analysis/model/parameter_file.h"

@@ -185,8 +185,8 @@ TEST_CASE("modbus source: float32 in four orders, int16, int32 and uint16 over T
                  float_resolution);
   }
   const auto angle_rad = [&](double t) { return server_angle_deg(t) * kRadPerDeg; };
-  check_values(of_channel(got, 4), 0.01 * kRadPerDeg, 0.0, angle_rad, kAngleMaxSlope_deg_per_s * kRadPerDeg,
-               0.006 * kRadPerDeg);
+  check_values(of_channel(got, 4), 0.01 * kRadPerDeg, 0.0, angle_rad,
+               kAngleMaxSlope_deg_per_s * kRadPerDeg, 0.006 * kRadPerDeg);
   check_values(of_channel(got, 5), 0.001, 0.0, server_force_N, kForceMaxSlope_N_per_s, 0.0006);
   check_values(of_channel(got, 6), 0.01 * kRadPerDeg, -100 * kRadPerDeg, angle_rad,
                kAngleMaxSlope_deg_per_s * kRadPerDeg, 0.006 * kRadPerDeg);
@@ -509,6 +509,7 @@ TEST_CASE(
     const double t = seconds(samples[i].midpoint_ns());
     CHECK(slice.time_s[i] == Approx(t - seconds(origin_ns)).margin(1e-9));
     CHECK(std::abs(physical[i] - server_angle_deg(t) * kRadPerDeg) <=
-          kAngleMaxSlope_deg_per_s * kRadPerDeg * seconds(samples[i].latency_ns()) / 2 + 0.006 * kRadPerDeg);
+          kAngleMaxSlope_deg_per_s * kRadPerDeg * seconds(samples[i].latency_ns()) / 2 +
+              0.006 * kRadPerDeg);
   }
 }

@@ -25,8 +25,8 @@
 
 using Catch::Matchers::Contains;
 using namespace doorbench;
-using doorbench::testing::FakePolledOptions;
 using doorbench::testing::comedi_emulator;
+using doorbench::testing::FakePolledOptions;
 using doorbench::testing::FakePolledSource;
 using doorbench::testing::session_origin_ns;
 using doorbench::testing::sine_phase;
@@ -227,7 +227,8 @@ TEST_CASE("Timing: one signal of CLOCK_MONOTONIC on a DAQ channel and a polled c
   const auto device = dir.write("comedi0", "signal.0 = monotonic_sine 2.0 5.0 0.0\n");
   sensors::ComediOptions comedi;
   comedi.duration_s = 2.0;
-  sensors::ComediBackend backend(comedi_rig(device.string(), 1, rate_hz), comedi_emulator(), comedi);
+  sensors::ComediBackend backend(comedi_rig(device.string(), 1, rate_hz), comedi_emulator(),
+                                 comedi);
   FakePolledOptions fake;
   fake.names = {"polled"};
   fake.period_s = 0.003;

@@ -118,7 +118,8 @@ TEST_CASE("RigRecording: the simulated rig recorded through the library", "[reco
       doorbench::parse_rig(doorbench::simulated_dishwasher_rig_text(), "built-in rig", dir.path);
   RigRecordingOptions options;
   options.duration_s = 0.5;
-  doorbench::sensors::RigRecording recording(rig, options, doorbench::simulated_bench::simulated_scans);
+  doorbench::sensors::RigRecording recording(rig, options,
+                                             doorbench::simulated_bench::simulated_scans);
   CHECK(recording.display_duration_s() == 0.5);
   CHECK(recording.setup_report().empty());
   doorbench::SessionMetadata metadata;

@@ -79,7 +79,8 @@ TEST_CASE("Simulated bench: signals through the nominal calibration match the tr
     // The door falls open by its weight faster than the gyroscope's ±100 °/s: leave out
     // the clipped samples.
     for (std::size_t i = 0; i < rate.size(); ++i) {
-      if (std::abs(truth_omega[i]) < 95 * kRadPerDeg) error.push_back((rate[i] - truth_omega[i]) / kRadPerDeg);
+      if (std::abs(truth_omega[i]) < 95 * kRadPerDeg)
+        error.push_back((rate[i] - truth_omega[i]) / kRadPerDeg);
     }
     const Stats s = stats(error);
     INFO("rate error: mean " << s.mean << " deg/s, std " << s.stddev << " deg/s");

@@ -13,7 +13,7 @@ namespace doorbench::testing {
 struct RatingTruth {
   std::string attribute = "heavy";
   std::vector<double> thresholds{-2.0, -0.7, 0.5, 1.8};  // K - 1 of them: K = 5
-  std::vector<double> effects{0.0, 0.8, -0.5, 1.5};       // per variant, the first at 0
+  std::vector<double> effects{0.0, 0.8, -0.5, 1.5};      // per variant, the first at 0
   double participant_sd = 1.0;
   int participants = 12;
   int repetitions = 2;  // ratings of each variant per participant

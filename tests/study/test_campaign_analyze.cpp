@@ -145,8 +145,9 @@ TEST_CASE("campaign analyze's errors name the file and line, or the option", "[s
                                 "' --equivalence-dprime 0",
                             dir);
   CHECK(run.status == 2);
-  CHECK(run.err == "doorbench: --equivalence-dprime: 0 is outside 0.05 to 5 (see doorbench campaign "
-                   "analyze --help)\n");
+  CHECK(run.err ==
+        "doorbench: --equivalence-dprime: 0 is outside 0.05 to 5 (see doorbench campaign "
+        "analyze --help)\n");
 
   std::filesystem::create_directories(dir / "campaign");
   write(dir / "campaign" / "trials.csv", hand_table());
@@ -279,10 +280,12 @@ TEST_CASE("campaign analyze's notes say why the intervals are Wald intervals", "
   TempDir dir("campaign_analyze_notes");
   doorbench::testing::PairPanel panel;
   panel.participants = 8;
-  std::ofstream(dir / "trials.csv") << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 6);
-  auto run = run_doorbench_shell("campaign analyze '" + (dir / "trials.csv").string() +
-                                     "' --no-pdf --bootstrap 0 --out '" + (dir / "a").string() + "'",
-                                 dir);
+  std::ofstream(dir / "trials.csv")
+      << kTrialsHeader << doorbench::testing::simulate_pairs(panel, 6);
+  auto run =
+      run_doorbench_shell("campaign analyze '" + (dir / "trials.csv").string() +
+                              "' --no-pdf --bootstrap 0 --out '" + (dir / "a").string() + "'",
+                          dir);
   REQUIRE(run.status == 0);
   CHECK(run.out.find("note: Wald intervals: no participant bootstrap was asked for (--bootstrap "
                      "0), so the intervals assume the participants agree\n") != std::string::npos);
@@ -295,4 +298,3 @@ TEST_CASE("campaign analyze's notes say why the intervals are Wald intervals", "
   CHECK(run.out.find("note: Wald intervals: 4 participants, fewer than the 6 a participant "
                      "bootstrap needs; they assume the participants agree\n") != std::string::npos);
 }
-

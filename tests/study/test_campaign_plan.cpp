@@ -1,6 +1,6 @@
 // The campaign file, the plan and its counterbalancing (docs/campaign.md).
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <map>
 #include <set>
 #include <tuple>
@@ -22,16 +22,23 @@ std::string campaign_text(const std::string& participants = "count = 20",
   return "[campaign]\nname = \"t\"\nseed = 7\n"
          "[variants]\nreference = \"base\"\nheavier = \"heaviness*1.2\"\n"
          "easier_unlatch = \"latch_effort*0.7\"\nlighter = \"J*0.85,smoothness*0.8\"\n"
-         "[participants]\n" + participants + "\n"
+         "[participants]\n" +
+         participants +
+         "\n"
          "[[blocks]]\nname = \"tune\"\ntype = \"tune\"\n"
          "[[blocks]]\nname = \"pair\"\ntype = \"pair\"\nquestion = \"preference-2ac\"\n"
-         "[[blocks]]\nname = \"rating\"\ntype = \"rating\"\nattributes = [\"heavy-light\"]\nscale = 5\n"
-         "[[blocks]]\nname = \"jnd-J\"\ntype = \"jnd\"\nparameter = \"J\"\nlevels = [1.1, 1.3]\nrepetitions = 2\n"
-         "[[blocks]]\nname = \"jnd-latch\"\ntype = \"jnd\"\nparameter = \"latch_effort\"\nmethod = \"staircase\"\ntrials = 6\n" +
+         "[[blocks]]\nname = \"rating\"\ntype = \"rating\"\nattributes = [\"heavy-light\"]\nscale "
+         "= 5\n"
+         "[[blocks]]\nname = \"jnd-J\"\ntype = \"jnd\"\nparameter = \"J\"\nlevels = [1.1, "
+         "1.3]\nrepetitions = 2\n"
+         "[[blocks]]\nname = \"jnd-latch\"\ntype = \"jnd\"\nparameter = \"latch_effort\"\nmethod = "
+         "\"staircase\"\ntrials = 6\n" +
          extra;
 }
 
-Campaign parsed(const std::string& text) { return parse_campaign(text, "c.toml", "."); }
+Campaign parsed(const std::string& text) {
+  return parse_campaign(text, "c.toml", ".");
+}
 
 // A campaign of `variants` variants (v1 = the base, v2... steps of J) and `participants`
 // participants with a pair block and a rating block over `pairs`; `rating` holds the rating
@@ -40,11 +47,22 @@ std::string paired_campaign(int variants, int participants, const std::string& p
                             const std::string& rating = "attributes = [\"heavy-light\"]\n") {
   std::string text = "[campaign]\nname = \"t\"\nseed = 11\n[variants]\nv1 = \"base\"\n";
   for (int v = 2; v <= variants; ++v) {
-    text.append("v").append(std::to_string(v)).append(" = \"J*1.").append(std::to_string(v)).append("\"\n");
+    text.append("v")
+        .append(std::to_string(v))
+        .append(" = \"J*1.")
+        .append(std::to_string(v))
+        .append("\"\n");
   }
-  return text.append("[participants]\ncount = ").append(std::to_string(participants)).append("\n")
-      .append("[[blocks]]\nname = \"pair\"\ntype = \"pair\"\npairs = ").append(pairs).append("\n")
-      .append("[[blocks]]\nname = \"rating\"\ntype = \"rating\"\npairs = ").append(pairs).append("\n").append(rating);
+  return text.append("[participants]\ncount = ")
+      .append(std::to_string(participants))
+      .append("\n")
+      .append("[[blocks]]\nname = \"pair\"\ntype = \"pair\"\npairs = ")
+      .append(pairs)
+      .append("\n")
+      .append("[[blocks]]\nname = \"rating\"\ntype = \"rating\"\npairs = ")
+      .append(pairs)
+      .append("\n")
+      .append(rating);
 }
 
 // A plan.csv written by `campaign plan` into a folder and read back.
@@ -70,7 +88,8 @@ BlockCounts count_block(const Plan& plan, const std::string& block) {
   std::string previous, previous_participant;
   for (const PlanRow& row : plan.rows) {
     if (row.block != block) continue;
-    const std::string pair = std::min(row.first, row.second) + "|" + std::max(row.first, row.second);
+    const std::string pair =
+        std::min(row.first, row.second) + "|" + std::max(row.first, row.second);
     counts.pairs.insert(pair);
     counts.variants.insert(row.first);
     counts.variants.insert(row.second);
@@ -87,7 +106,8 @@ BlockCounts count_block(const Plan& plan, const std::string& block) {
 
 // The spread (largest − smallest count) over all cells of `keys` × `positions`.
 template <typename Key, typename Map, typename MakeKey>
-int spread(const std::set<Key>& keys, const std::set<int>& positions, const Map& map, MakeKey make_key) {
+int spread(const std::set<Key>& keys, const std::set<int>& positions, const Map& map,
+           MakeKey make_key) {
   int lo = 1 << 30, hi = 0;
   for (const Key& key : keys) {
     for (int position : positions) {
@@ -128,8 +148,9 @@ TEST_CASE("Williams designs: each condition in each position equally often, carr
   }
 }
 
-TEST_CASE("A plan's block order is balanced across participants and the same seed gives the same plan",
-          "[study][campaign]") {
+TEST_CASE(
+    "A plan's block order is balanced across participants and the same seed gives the same plan",
+    "[study][campaign]") {
   const Campaign campaign = parsed(campaign_text());
   const Plan plan = make_plan(campaign, 7);
   // 5 blocks: the design has 10 rows, 20 participants take each twice.
@@ -168,11 +189,14 @@ TEST_CASE("A plan's block order is balanced across participants and the same see
   CHECK(plan_csv(make_plan(campaign, 8)) != plan_csv(plan));
   // The same on any machine: pinned (mt19937_64 and our own draws; a change here changes
   // every plan made before).
-  CHECK(fnv1a64_hex(plan_csv(plan)) == "1e2d209105b12fa8");  // since pair and rating blocks follow Williams designs
+  CHECK(fnv1a64_hex(plan_csv(plan)) ==
+        "1e2d209105b12fa8");  // since pair and rating blocks follow Williams designs
 }
 
-TEST_CASE("Pair and rating blocks: each pair and each variant in each position equally often, carry-over balanced",
-          "[study][campaign]") {
+TEST_CASE(
+    "Pair and rating blocks: each pair and each variant in each position equally often, carry-over "
+    "balanced",
+    "[study][campaign]") {
   // 3 variants: 3 pairs (odd: the square and its mirror, 6 rows); 4: 6 pairs (6 rows);
   // 5: 10 pairs (10 rows). A full set is 2 x rows participants; take two full sets.
   for (const auto& [variants, rows] : {std::pair{3, 6}, std::pair{4, 6}, std::pair{5, 10}}) {
@@ -186,18 +210,21 @@ TEST_CASE("Pair and rating blocks: each pair and each variant in each position e
       CAPTURE(block);
       const BlockCounts counts = count_block(plan, block);
       REQUIRE(static_cast<int>(counts.pairs.size()) == pairs);
-      REQUIRE(static_cast<int>(counts.positions.size()) == (block == std::string("pair") ? 2 * pairs : pairs));
+      REQUIRE(static_cast<int>(counts.positions.size()) ==
+              (block == std::string("pair") ? 2 * pairs : pairs));
       const int participants = 4 * rows;
       // Each pair at each trial position: participants / pairs times.
       for (const std::string& pair : counts.pairs) {
-        for (int position : counts.positions) CHECK(counts.pair_at.at({pair, position}) * pairs == participants);
+        for (int position : counts.positions)
+          CHECK(counts.pair_at.at({pair, position}) * pairs == participants);
       }
       // Each variant in each place of each trial: it is in (variants − 1) of the pairs and
       // in each place of them half of the time.
       for (const std::string& variant : counts.variants) {
         for (int position : counts.positions) {
           for (int place : {1, 2}) {
-            CHECK(2 * pairs * counts.variant_at.at({variant, position, place}) == participants * (variants - 1));
+            CHECK(2 * pairs * counts.variant_at.at({variant, position, place}) ==
+                  participants * (variants - 1));
           }
         }
       }
@@ -224,18 +251,22 @@ TEST_CASE("Pair and rating blocks: each pair and each variant in each position e
   }
 }
 
-TEST_CASE("Named pairs, repetitions and attributes keep the balance over a full set", "[study][campaign]") {
+TEST_CASE("Named pairs, repetitions and attributes keep the balance over a full set",
+          "[study][campaign]") {
   // 5 named pairs (odd: 10 rows, 20 participants a full set), 2 repetitions; the rating
   // block's 2 attributes in cyclic order.
-  const std::string pairs = "[[\"v1\", \"v2\"], [\"v1\", \"v3\"], [\"v2\", \"v3\"], [\"v3\", \"v4\"], [\"v1\", \"v4\"]]";
-  std::string text = paired_campaign(4, 20, pairs, "attributes = [\"heavy-light\", \"pleasant\"]\nrepetitions = 2\n");
+  const std::string pairs =
+      "[[\"v1\", \"v2\"], [\"v1\", \"v3\"], [\"v2\", \"v3\"], [\"v3\", \"v4\"], [\"v1\", \"v4\"]]";
+  std::string text = paired_campaign(
+      4, 20, pairs, "attributes = [\"heavy-light\", \"pleasant\"]\nrepetitions = 2\n");
   text.insert(text.find("[[blocks]]\nname = \"rating\""), "repetitions = 2\n");
   REQUIRE(balanced_participant_count(parsed(text)).participants == 20);
   const Plan plan = plan_from_folder(text, "named");
   for (const std::string block : {"pair", "rating"}) {
     CAPTURE(block);
     const BlockCounts counts = count_block(plan, block);
-    REQUIRE(counts.positions.size() == 20);  // 5 pairs x 2 orders (pair) or x 2 attributes (rating), x 2
+    REQUIRE(counts.positions.size() ==
+            20);  // 5 pairs x 2 orders (pair) or x 2 attributes (rating), x 2
     for (const std::string& pair : counts.pairs) {
       for (int position : counts.positions) CHECK(counts.pair_at.at({pair, position}) == 4);
     }
@@ -244,7 +275,8 @@ TEST_CASE("Named pairs, repetitions and attributes keep the balance over a full 
       if (key.first != key.second) seen.insert(n);
     }
     CHECK(seen.size() == 1);
-    CHECK(counts.pair_after_pair.size() == 25);  // every ordered pair of pairs, and each after itself
+    CHECK(counts.pair_after_pair.size() ==
+          25);  // every ordered pair of pairs, and each after itself
   }
   // Each attribute first for half of the participants, each rated on every pair twice.
   int heavy_first = 0;
@@ -264,19 +296,24 @@ TEST_CASE("Named pairs, repetitions and attributes keep the balance over a full 
   CHECK(heavy_first == 10);
 }
 
-TEST_CASE("A participant count that is not a multiple of the design is noted and stays nearly balanced",
-          "[study][campaign]") {
+TEST_CASE(
+    "A participant count that is not a multiple of the design is noted and stays nearly balanced",
+    "[study][campaign]") {
   // 4 variants: 6 pairs, 6 rows, full set 12 (2 blocks: block order 2). 15 participants:
   // rows 0..2 are taken three times, rows 3..5 twice, so a pair's count at a position is 3 or 2.
   const std::string text = paired_campaign(4, 15);
   CHECK(balance_note(parsed(text)) ==
-        "note: 15 participants; the counterbalancing is exact for a multiple of 12 (block order 2, block 'pair' 12, "
-        "block 'rating' 12); participant i takes row i mod rows of each design (docs/campaign.md, Counterbalancing)");
+        "note: 15 participants; the counterbalancing is exact for a multiple of 12 (block order 2, "
+        "block 'pair' 12, "
+        "block 'rating' 12); participant i takes row i mod rows of each design (docs/campaign.md, "
+        "Counterbalancing)");
   const Plan plan = plan_from_folder(text, "partial");
   for (const std::string block : {"pair", "rating"}) {
     const BlockCounts counts = count_block(plan, block);
     CHECK(spread(counts.pairs, counts.positions, counts.pair_at,
-                 [](const std::string& pair, int position) { return std::pair{pair, position}; }) == 1);
+                 [](const std::string& pair, int position) {
+                   return std::pair{pair, position};
+                 }) == 1);
   }
 }
 
@@ -290,11 +327,13 @@ TEST_CASE("A plan folder keeps the campaign, the plan and its identity, read bac
   CHECK(folder.identity.seed == 3);
   CHECK(plan_csv(folder.plan) == plan_csv(make_plan(campaign, 3)));
   CHECK(doorbench::testing::read_file(dir / "out" / "campaign.toml") == campaign.text);
-  CHECK_THROWS_WITH(write_campaign_folder(dir / "out", campaign, make_plan(campaign, 3), false),
-                    (dir / "out").string() + ": exists and is not empty (give --overwrite to write into it)");
+  CHECK_THROWS_WITH(
+      write_campaign_folder(dir / "out", campaign, make_plan(campaign, 3), false),
+      (dir / "out").string() + ": exists and is not empty (give --overwrite to write into it)");
   dir.write("out/plan.csv", "participant,block,trial,question,first,second,block_trial\n");
   CHECK_THROWS_WITH(open_campaign_folder(dir / "out"),
-                    Catch::Matchers::StartsWith((dir / "out" / "plan.csv").string() + ": does not match plan-id.txt"));
+                    Catch::Matchers::StartsWith((dir / "out" / "plan.csv").string() +
+                                                ": does not match plan-id.txt"));
 }
 
 TEST_CASE("A participant id that looks like a name or an e-mail is refused", "[study][campaign]") {
@@ -302,37 +341,56 @@ TEST_CASE("A participant id that looks like a name or an e-mail is refused", "[s
   CHECK(participant_id_problem("sub-07") == "");
   CHECK(participant_id_problem("s_12") == "");
   CHECK(participant_id_problem("anna.berg@example.org") ==
-        "participant id 'anna.berg@example.org' looks like an e-mail address; use a pseudonymous id such as P07");
+        "participant id 'anna.berg@example.org' looks like an e-mail address; use a pseudonymous "
+        "id such as P07");
   CHECK(participant_id_problem("Anna Berg") ==
-        "participant id 'Anna Berg' looks like a name (it holds a space); use a pseudonymous id such as P07");
+        "participant id 'Anna Berg' looks like a name (it holds a space); use a pseudonymous id "
+        "such as P07");
   CHECK(participant_id_problem("AnnaBerg1") ==
-        "participant id 'AnnaBerg1' looks like a name (a capitalised word); use a pseudonymous id such as P07");
+        "participant id 'AnnaBerg1' looks like a name (a capitalised word); use a pseudonymous id "
+        "such as P07");
   CHECK(participant_id_problem("anna") ==
-        "participant id 'anna' has no digit (a word alone may be a name); use a pseudonymous id such as P07");
-  CHECK(participant_id_problem("p.07") == "participant id 'p.07' may hold only letters, digits, '-' and '_'");
+        "participant id 'anna' has no digit (a word alone may be a name); use a pseudonymous id "
+        "such as P07");
+  CHECK(participant_id_problem("p.07") ==
+        "participant id 'p.07' may hold only letters, digits, '-' and '_'");
   CHECK_THROWS_WITH(parsed(campaign_text("ids = [\"P01\", \"Anna Berg\"]")),
-                    "c.toml:10: participants.ids: participant id 'Anna Berg' looks like a name (it holds a space); "
+                    "c.toml:10: participants.ids: participant id 'Anna Berg' looks like a name (it "
+                    "holds a space); "
                     "use a pseudonymous id such as P07");
 }
 
 TEST_CASE("A campaign file's errors name the file, the line and the field", "[study][campaign]") {
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"x\"\ntype = \"pair\"\nquestion = \"best\"\n")),
-                    "c.toml:38: blocks[6].question: must be preference, preference-2ac or identify-real, not 'best'");
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"x\"\ntype = \"jnd\"\nparameter = \"J_d\"\nlevels = [1.1]\n")),
-                    Catch::Matchers::StartsWith("c.toml:38: blocks[6].parameter: step J_d*1.05: 'J_d' is neither a "
-                                                "perceptual control nor a parameter of the sensory model"));
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"pair\"\ntype = \"tune\"\n")),
-                    "c.toml:36: blocks[6].name: block 'pair' is named twice");
+  CHECK_THROWS_WITH(
+      parsed(campaign_text("count = 2",
+                           "[[blocks]]\nname = \"x\"\ntype = \"pair\"\nquestion = \"best\"\n")),
+      "c.toml:38: blocks[6].question: must be preference, preference-2ac or identify-real, not "
+      "'best'");
+  CHECK_THROWS_WITH(
+      parsed(campaign_text(
+          "count = 2",
+          "[[blocks]]\nname = \"x\"\ntype = \"jnd\"\nparameter = \"J_d\"\nlevels = [1.1]\n")),
+      Catch::Matchers::StartsWith(
+          "c.toml:38: blocks[6].parameter: step J_d*1.05: 'J_d' is neither a "
+          "perceptual control nor a parameter of the sensory model"));
+  CHECK_THROWS_WITH(
+      parsed(campaign_text("count = 2", "[[blocks]]\nname = \"pair\"\ntype = \"tune\"\n")),
+      "c.toml:36: blocks[6].name: block 'pair' is named twice");
   std::string text = campaign_text("count = 2");
   text.replace(text.find("heaviness*1.2"), 13, "heaviness*x");
   CHECK_THROWS_WITH(parsed(text),
-                    "c.toml:6: variants.heavier: expected steps such as \"J*1.2\" or \"heaviness*1.2,latch_effort*0.7\", "
+                    "c.toml:6: variants.heavier: expected steps such as \"J*1.2\" or "
+                    "\"heaviness*1.2,latch_effort*0.7\", "
                     "got \"heaviness*x\"");
   text = campaign_text("count = 2");
   text.replace(text.find("heaviness*1.2"), 13, "heaviness*9");
-  CHECK_THROWS_WITH(parsed(text), "c.toml:6: variants.heavier: step heaviness*9: J would be 8.55, outside its bounds 0.1..5");
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"y\"\ntype = \"rating\"\ncolour = 1\n")),
-                    Catch::Matchers::StartsWith("c.toml:38: blocks[6].colour: unknown key; valid keys: "));
+  CHECK_THROWS_WITH(
+      parsed(text),
+      "c.toml:6: variants.heavier: step heaviness*9: J would be 8.55, outside its bounds 0.1..5");
+  CHECK_THROWS_WITH(
+      parsed(
+          campaign_text("count = 2", "[[blocks]]\nname = \"y\"\ntype = \"rating\"\ncolour = 1\n")),
+      Catch::Matchers::StartsWith("c.toml:38: blocks[6].colour: unknown key; valid keys: "));
   CHECK_THROWS_WITH(parsed("[campaign]\nseed = \n"), Catch::Matchers::StartsWith("c.toml:2: "));
 }
 
@@ -345,8 +403,10 @@ TEST_CASE("Steps from the base move exactly what they name", "[study][campaign]"
   CHECK(steps_text(parse_steps("J*1.2, latch_effort*0.7")) == "J*1.2,latch_effort*0.7");
 }
 
-TEST_CASE("A quest+ jnd block: its defaults, its errors word for word, its slots in the plan", "[study][campaign][quest]") {
-  const std::string quest = "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\n";
+TEST_CASE("A quest+ jnd block: its defaults, its errors word for word, its slots in the plan",
+          "[study][campaign][quest]") {
+  const std::string quest =
+      "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\n";
   const Campaign campaign = parsed(campaign_text("count = 2", quest));
   const Block& block = campaign.blocks.back();
   CHECK(block.method == JndMethod::kQuestPlus);
@@ -369,13 +429,20 @@ TEST_CASE("A quest+ jnd block: its defaults, its errors word for word, its slots
                     "c.toml:40: blocks[6].lapse: must be from 0 to 0.2, got 0.5");
   CHECK_THROWS_WITH(parsed(campaign_text("count = 2", quest + "stimuli = 1\n")),
                     "c.toml:40: blocks[6].stimuli: must be from 2 to 200, got 1");
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", quest + "min_level = 1.5\nmax_level = 1.4\n")),
-                    "c.toml:41: blocks[6].max_level: must be at least 1 % above min_level");
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", quest + "step_factor = 1.5\n")),
-                    "c.toml:40: blocks[6].step_factor: is not an option of quest+ (trials, min_level, max_level, "
-                    "stimuli, thresholds, lapse)");
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest\"\n")),
-                    "c.toml:39: blocks[6].method: must be constant, staircase or quest+, not 'quest'");
-  CHECK_THROWS_WITH(parsed(campaign_text("count = 2", "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"staircase\"\nlapse = 0.02\n")),
+  CHECK_THROWS_WITH(
+      parsed(campaign_text("count = 2", quest + "min_level = 1.5\nmax_level = 1.4\n")),
+      "c.toml:41: blocks[6].max_level: must be at least 1 % above min_level");
+  CHECK_THROWS_WITH(
+      parsed(campaign_text("count = 2", quest + "step_factor = 1.5\n")),
+      "c.toml:40: blocks[6].step_factor: is not an option of quest+ (trials, min_level, max_level, "
+      "stimuli, thresholds, lapse)");
+  CHECK_THROWS_WITH(
+      parsed(campaign_text(
+          "count = 2",
+          "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest\"\n")),
+      "c.toml:39: blocks[6].method: must be constant, staircase or quest+, not 'quest'");
+  CHECK_THROWS_WITH(parsed(campaign_text("count = 2",
+                                         "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = "
+                                         "\"J\"\nmethod = \"staircase\"\nlapse = 0.02\n")),
                     "c.toml:40: blocks[6].lapse: is an option of method = \"quest+\" only");
 }

@@ -4,8 +4,8 @@
 // (pdftoppm). Every table row's numbers and names must come out on one line, each cell
 // whole (no number or name broken across lines), and nothing may run into the page's right
 // margin. Needs weasyprint and poppler-utils (scripts/install-deps.sh); warns without them.
-#include <catch2/catch.hpp>
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
@@ -28,10 +28,12 @@ using doorbench::testing::TempDir;
 
 namespace {
 
-const std::vector<std::string> kVariants{"reference",      "heavier-door",  "softer_latch",
-                                         "Barcelona",      "snappier-close", "smooth_friction"};
+const std::vector<std::string> kVariants{"reference", "heavier-door",   "softer_latch",
+                                         "Barcelona", "snappier-close", "smooth_friction"};
 
-std::string participant_id(int p) { return std::string("P").append(std::to_string(1000 + p)); }
+std::string participant_id(int p) {
+  return std::string("P").append(std::to_string(1000 + p));
+}
 
 // Identify-real (the real door against Barcelona, 4 trials each, Pc 0.55), ratings of
 // heaviness (3 pairs), a jnd block of J_d (6 levels twice) for every participant; six tuned
@@ -48,7 +50,8 @@ void append_other_blocks(std::string& text, const TempDir& dir, PanelRandom& ran
                         real_first == correct ? "1" : "2"});
     }
     for (int r = 0; r < 3; ++r) {
-      const int a = 2 + int(4 * random.uniform()), b = std::clamp(a + int(4 * random.uniform()) - 1, 1, 7);
+      const int a = 2 + int(4 * random.uniform()),
+                b = std::clamp(a + int(4 * random.uniform()) - 1, 1, 7);
       append_row(text, {id, "rating", std::to_string(r + 1), "rating:heavy:7", kVariants[0],
                         kVariants[std::size_t(r + 1)],
                         std::to_string(a).append(" ").append(std::to_string(b))});
@@ -60,9 +63,10 @@ void append_other_blocks(std::string& text, const TempDir& dir, PanelRandom& ran
         const double factor = std::stod(std::string(level).substr(4));
         const double p_stronger = 0.5 * std::erfc(-std::log(factor) / 0.12 / std::sqrt(2.0));
         const bool stronger = random.uniform() < p_stronger, comparison_first = ++trial % 2 == 1;
-        append_row(text, {id, "jnd", std::to_string(trial), "stronger:J_d",
-                          comparison_first ? level : "J_d*1.00", comparison_first ? "J_d*1.00" : level,
-                          stronger == comparison_first ? "1" : "2"});
+        append_row(text,
+                   {id, "jnd", std::to_string(trial), "stronger:J_d",
+                    comparison_first ? level : "J_d*1.00", comparison_first ? "J_d*1.00" : level,
+                    stronger == comparison_first ? "1" : "2"});
       }
     }
     if (p < 6) {
@@ -76,9 +80,9 @@ void append_other_blocks(std::string& text, const TempDir& dir, PanelRandom& ran
 std::string decode(std::string text) {
   text = std::regex_replace(text, std::regex("<[^>]*>"), "");
   const std::pair<const char*, const char*> entities[] = {
-      {"&ndash;", "\u2013"}, {"&minus;", "\u2212"}, {"&infin;", "\u221e"}, {"&plusmn;", "\u00b1"},
-      {"&nbsp;", " "},       {"&lt;", "<"},         {"&gt;", ">"},         {"&quot;", "\""},
-      {"&amp;", "&"}};
+      {"&ndash;", "\u2013"},  {"&minus;", "\u2212"}, {"&infin;", "\u221e"},
+      {"&plusmn;", "\u00b1"}, {"&nbsp;", " "},       {"&lt;", "<"},
+      {"&gt;", ">"},          {"&quot;", "\""},      {"&amp;", "&"}};
   for (const auto& [entity, character] : entities)
     text = std::regex_replace(text, std::regex(entity), character);
   return std::regex_replace(text, std::regex("\\s+"), " ");
@@ -88,7 +92,8 @@ std::string decode(std::string text) {
 std::vector<std::vector<std::string>> unbreakable_rows(const std::string& html) {
   std::vector<std::vector<std::string>> rows;
   const std::regex row("<tr>(.*?)</tr>"), cell("<td( class=\"text\")?>(.*?)</td>");
-  for (auto r = std::sregex_iterator(html.begin(), html.end(), row); r != std::sregex_iterator(); ++r) {
+  for (auto r = std::sregex_iterator(html.begin(), html.end(), row); r != std::sregex_iterator();
+       ++r) {
     const std::string inside = (*r)[1];
     std::vector<std::string> cells;
     for (auto c = std::sregex_iterator(inside.begin(), inside.end(), cell);
@@ -122,9 +127,10 @@ bool on_one_line(const std::vector<std::string>& lines, const std::vector<std::s
 
 }  // namespace
 
-TEST_CASE("report.pdf of 6 variants and 300 participants: no number or name broken, nothing "
-          "off the page",
-          "[study][campaign][pdf]") {
+TEST_CASE(
+    "report.pdf of 6 variants and 300 participants: no number or name broken, nothing "
+    "off the page",
+    "[study][campaign][pdf]") {
   if (std::system("command -v weasyprint > /dev/null 2>&1") != 0 ||
       std::system("command -v pdftotext > /dev/null 2>&1") != 0 ||
       std::system("command -v pdftoppm > /dev/null 2>&1") != 0) {
@@ -167,9 +173,9 @@ TEST_CASE("report.pdf of 6 variants and 300 participants: no number or name brok
   CHECK(html.find("fewer than") == std::string::npos);  // 300 participants: bootstrapped
 
   // Every row's unbreakable cells on one line of the PDF's text, whole.
-  REQUIRE(std::system(("pdftotext -layout '" + pdf.string() + "' '" + (dir / "report.txt").string() +
-                       "'")
-                          .c_str()) == 0);
+  REQUIRE(std::system(
+              ("pdftotext -layout '" + pdf.string() + "' '" + (dir / "report.txt").string() + "'")
+                  .c_str()) == 0);
   std::vector<std::string> lines;
   std::istringstream report_text(read_file(dir / "report.txt"));
   for (std::string line; std::getline(report_text, line);)

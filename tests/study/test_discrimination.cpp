@@ -47,8 +47,9 @@ TEST_CASE("2-AC: swapping the variants flips d' and keeps tau", "[study]") {
 // Nobody preferred A: d' is +infinity, the interval open above, its lower end where the
 // profile falls from the likelihood's supremum (checked against R in
 // test_equivalence_r_oracle.cpp); every answer "same": no d' at all.
-TEST_CASE("2-AC: a pair nobody preferred one way has an infinite d', a one-sided interval and says so",
-          "[study]") {
+TEST_CASE(
+    "2-AC: a pair nobody preferred one way has an infinite d', a one-sided interval and says so",
+    "[study]") {
   const auto r = two_ac(0, 3, 9);
   CHECK(std::isinf(r.dprime));
   CHECK(r.dprime > 0);
@@ -56,8 +57,9 @@ TEST_CASE("2-AC: a pair nobody preferred one way has an infinite d', a one-sided
   CHECK(r.ci_low == Approx(0.921711904513188).epsilon(1e-6));
   CHECK(r.p == Approx(0.000412070679784436).epsilon(1e-5));
   CHECK(r.note == "nobody preferred A: d' is infinite and its interval open above");
-  CHECK(r.verdict == "B preferred to A: d' inf [0.92, inf], 0 prefer A, 3 same, 9 prefer B "
-                     "(p < 0.001)");
+  CHECK(r.verdict ==
+        "B preferred to A: d' inf [0.92, inf], 0 prefer A, 3 same, 9 prefer B "
+        "(p < 0.001)");
   const auto other = two_ac(7, 0, 0, 0.95, 1.0, "ref", "heavier");
   CHECK(other.ci_high == Approx(-0.999024927846106).epsilon(1e-6));
   CHECK(other.note == "nobody preferred heavier: d' is infinite and its interval open below");

@@ -65,13 +65,12 @@ void check_end(double doorbench, double r, double tolerance) {
 TEST_CASE("identify-real's interval, tests and verdict agree with a hand computation in R",
           "[study]") {
   TempDir dir("equivalence_2afc");
-  const std::pair<int, int> counts[] = {{7, 10},    {160, 300}, {60, 80},  {5300, 10000},
-                                        {20, 80},   {9, 16},    {12, 12},  {0, 12},
-                                        {530, 1000}};
+  const std::pair<int, int> counts[] = {{7, 10}, {160, 300}, {60, 80}, {5300, 10000}, {20, 80},
+                                        {9, 16}, {12, 12},   {0, 12},  {530, 1000}};
   for (const auto& [correct, n] : counts) {
     INFO(correct << " of " << n);
-    const auto r = r_equivalence("2afc " + std::to_string(correct) + " " + std::to_string(n) + " 1",
-                                 dir);
+    const auto r =
+        r_equivalence("2afc " + std::to_string(correct) + " " + std::to_string(n) + " 1", dir);
     doorbench::study::IdentifyReal result;
     result.panel = doorbench::study::forced_choice_2afc(correct, n, 0.95, 1.0);
     result = doorbench::study::identify_verdict(result, 0.95);
@@ -85,8 +84,8 @@ TEST_CASE("identify-real's interval, tests and verdict agree with a hand computa
 
 TEST_CASE("2-AC's interval, tests and verdict agree with a hand computation in R", "[study]") {
   TempDir dir("equivalence_2ac");
-  const char* counts[] = {"2 2 6", "60 300 80", "5 5 30", "0 3 9", "7 0 0",
-                          "12 5 7", "20 3 1",   "30 40 28", "0 2 2"};
+  const char* counts[] = {"2 2 6",  "60 300 80", "5 5 30",   "0 3 9", "7 0 0",
+                          "12 5 7", "20 3 1",    "30 40 28", "0 2 2"};
   for (const char* text : counts) {
     INFO(text);
     const auto r = r_equivalence(std::string("2ac ") + text + " 1", dir);

@@ -22,7 +22,8 @@ DoorModel with_steps(const DoorModel& base, const std::string& steps) {
 }
 }  // namespace
 
-TEST_CASE("A simulated participant tells its Weber fraction apart 75 % of the time", "[study][participant]") {
+TEST_CASE("A simulated participant tells its Weber fraction apart 75 % of the time",
+          "[study][participant]") {
   const DoorModel base = doorbench::reference_model(doorbench::ModelKind::kSensory);
   ParticipantModelOptions options;
   options.weber_spread = 0.0;
@@ -46,7 +47,8 @@ TEST_CASE("A simulated participant tells its Weber fraction apart 75 % of the ti
   // Four JNDs: nearly always right.
   const DoorModel much = with_steps(base, "latch_effort*1.8");
   right = 0;
-  for (int i = 0; i < 2000; ++i) right += answer_question(p, "stronger:k_inf", base, much, random) == "2";
+  for (int i = 0; i < 2000; ++i)
+    right += answer_question(p, "stronger:k_inf", base, much, random) == "2";
   CHECK(right > 1980);
 }
 
@@ -62,17 +64,19 @@ TEST_CASE("A simulated participant prefers the door nearer its preference and tu
   int base_chosen = 0, same = 0, same_far = 0;
   for (int i = 0; i < 500; ++i) {
     base_chosen += answer_question(p, "preference", base, far, random) == "1";
-    same += answer_question(p, "preference-2ac", base, with_steps(base, "heaviness*1.01"), random) == "same";
+    same += answer_question(p, "preference-2ac", base, with_steps(base, "heaviness*1.01"),
+                            random) == "same";
     same_far += answer_question(p, "preference-2ac", base, far, random) == "same";
   }
   CHECK(base_chosen > 475);
-  CHECK(same > 150);  // a difference far below a JND: often "same"
+  CHECK(same > 150);           // a difference far below a JND: often "same"
   CHECK(same_far * 3 < same);  // far apart: "same" much less often
   // Tuning from a start 30 % off brings every sensation within about one JND of the base.
   const TuneOutcome tuned = tune_door(p, with_steps(base, "heaviness*1.3,smoothness*0.75"), random);
   CHECK(!tuned.keys.empty());
   const auto felt = sensations(tuned.model), wanted = sensations(base);
-  for (int s = 0; s < kSensations; ++s) CHECK(std::abs(felt[s] - wanted[s]) < 2.0 * std::log1p(p.weber[s]));
+  for (int s = 0; s < kSensations; ++s)
+    CHECK(std::abs(felt[s] - wanted[s]) < 2.0 * std::log1p(p.weber[s]));
 }
 
 TEST_CASE("A 2-down-1-up staircase converges on the 70.7 % level", "[study][staircase]") {
@@ -126,7 +130,8 @@ TEST_CASE("Answers are checked against their question, word for word", "[study][
   CHECK_THROWS_WITH(normalized_answer("colour", "1"), "unknown question \"colour\"");
 }
 
-TEST_CASE("The power's Wilson interval covers the true rate about 95 % of the time", "[study][power]") {
+TEST_CASE("The power's Wilson interval covers the true rate about 95 % of the time",
+          "[study][power]") {
   std::mt19937_64 random(2);
   for (double truth : {0.1, 0.5, 0.8}) {
     for (int n : {30, 100}) {
@@ -145,13 +150,17 @@ TEST_CASE("The power's Wilson interval covers the true rate about 95 % of the ti
   }
 }
 
-TEST_CASE("Power: a large effect is detected more often than a small one, and more participants help",
-          "[study][power]") {
+TEST_CASE(
+    "Power: a large effect is detected more often than a small one, and more participants help",
+    "[study][power]") {
   const std::string text =
-      "[campaign]\nseed = 4\n[variants]\nreference = \"base\"\nslightly = \"heaviness*1.03\"\nmuch = \"heaviness*1.6\"\n"
+      "[campaign]\nseed = 4\n[variants]\nreference = \"base\"\nslightly = \"heaviness*1.03\"\nmuch "
+      "= \"heaviness*1.6\"\n"
       "[participants]\ncount = 12\n"
-      "[[blocks]]\nname = \"pair\"\ntype = \"pair\"\npairs = [[\"reference\", \"slightly\"], [\"reference\", \"much\"]]\n"
-      "[[blocks]]\nname = \"jnd\"\ntype = \"jnd\"\nparameter = \"J\"\nlevels = [1.02, 1.3]\nrepetitions = 2\n";
+      "[[blocks]]\nname = \"pair\"\ntype = \"pair\"\npairs = [[\"reference\", \"slightly\"], "
+      "[\"reference\", \"much\"]]\n"
+      "[[blocks]]\nname = \"jnd\"\ntype = \"jnd\"\nparameter = \"J\"\nlevels = [1.02, "
+      "1.3]\nrepetitions = 2\n";
   const Campaign campaign = parse_campaign(text, "c.toml", ".");
   PowerOptions options;
   options.panels = 60;

@@ -159,11 +159,11 @@ TEST_CASE("equivalence at the margin is declared at most 2.5 % of the time", "[s
       (dprime > 0 ? two_ac_at_margin : two_ac_at_zero) += equivalent ? 1 : 0;
     }
   }
-  std::printf("| verdict \"indistinguishable\" of %d panels | at d' = 1 (the margin) | at d' = 0 |\n"
-              "|---|---|---|\n| identify-real, 20 x 10 trials | %d | %d |\n"
-              "| 2-AC, 200 answers, tau 0.5 | %d | %d |\n",
-              kPanels, identify_at_margin, identify_at_zero, two_ac_at_margin, two_ac_at_zero);
+  std::printf(
+      "| verdict \"indistinguishable\" of %d panels | at d' = 1 (the margin) | at d' = 0 |\n"
+      "|---|---|---|\n| identify-real, 20 x 10 trials | %d | %d |\n"
+      "| 2-AC, 200 answers, tau 0.5 | %d | %d |\n",
+      kPanels, identify_at_margin, identify_at_zero, two_ac_at_margin, two_ac_at_zero);
   CHECK(identify_at_margin <= 0.04 * kPanels);
   CHECK(two_ac_at_margin <= 0.04 * kPanels);
 }
-

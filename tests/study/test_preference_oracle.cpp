@@ -84,9 +84,10 @@ std::filesystem::path write_table(const TempDir& dir, const std::string& name,
 
 }  // namespace
 
-TEST_CASE("ties: Davidson worths, order effect and nu agree with R's glm to 1e-4, quasi-variances "
-          "with qvcalc to 1e-6",
-          "[study]") {
+TEST_CASE(
+    "ties: Davidson worths, order effect and nu agree with R's glm to 1e-4, quasi-variances "
+    "with qvcalc to 1e-6",
+    "[study]") {
   TempDir dir("oracle_ties");
   PairPanel panel;
   panel.nu = 0.6;
@@ -103,9 +104,10 @@ TEST_CASE("ties: Davidson worths, order effect and nu agree with R's glm to 1e-4
   CHECK(std::log(scale.nu->value) == Approx(r.at("log_nu")).epsilon(1e-4));
 }
 
-TEST_CASE("order effect: worths and the first-position advantage agree with BTm to 1e-4, "
-          "quasi-variances with qvcalc to 1e-6",
-          "[study]") {
+TEST_CASE(
+    "order effect: worths and the first-position advantage agree with BTm to 1e-4, "
+    "quasi-variances with qvcalc to 1e-6",
+    "[study]") {
   TempDir dir("oracle_order");
   PairPanel panel;
   panel.delta = 0.5;
@@ -119,9 +121,10 @@ TEST_CASE("order effect: worths and the first-position advantage agree with BTm 
   CHECK(scale.order->value == Approx(r.at("delta")).epsilon(1e-4));
 }
 
-TEST_CASE("20 participants who differ: worths agree with BTm to 1e-4, quasi-variances with "
-          "qvcalc to 1e-6",
-          "[study]") {
+TEST_CASE(
+    "20 participants who differ: worths agree with BTm to 1e-4, quasi-variances with "
+    "qvcalc to 1e-6",
+    "[study]") {
   TempDir dir("oracle_panel");
   PairPanel panel;
   panel.variants = {"ref", "heavier", "easier", "smooth", "stiff"};

@@ -57,12 +57,14 @@ TEST_CASE("QUEST+ presents the level of least expected entropy, computed by hand
   CHECK(quest.posterior()[0] == Approx(0.07851 / (0.07851 + 0.275)).epsilon(1e-3));
   CHECK(quest.posterior()[1] == Approx(0.275 / (0.07851 + 0.275)).epsilon(1e-3));
   // Posterior mean of ln w: 0.2221 ln 0.1 + 0.7779 ln 0.3 → w = 0.2351.
-  CHECK(quest.estimate().weber_fraction == Approx(std::exp(0.2221 * std::log(0.1) + 0.7779 * std::log(0.3))).epsilon(1e-3));
+  CHECK(quest.estimate().weber_fraction ==
+        Approx(std::exp(0.2221 * std::log(0.1) + 0.7779 * std::log(0.3))).epsilon(1e-3));
   CHECK(quest.estimate().trials == 1);
 }
 
-TEST_CASE("QUEST+'s replay is a pure function of the answers, and its levels lie on the block's grid",
-          "[study][quest]") {
+TEST_CASE(
+    "QUEST+'s replay is a pure function of the answers, and its levels lie on the block's grid",
+    "[study][quest]") {
   Block block;
   block.type = BlockType::kJnd;
   block.method = JndMethod::kQuestPlus;
@@ -108,7 +110,8 @@ TEST_CASE("QUEST+ converges on simulated observers and its 95 % credible interva
   double sum_error = 0.0;
   for (int run = 0; run < runs; ++run) {
     doorbench::testing::ObserverTruth truth;
-    truth.weber_fraction = std::exp(std::log(0.05) + uniform(random) * (std::log(0.4) - std::log(0.05)));
+    truth.weber_fraction =
+        std::exp(std::log(0.05) + uniform(random) * (std::log(0.4) - std::log(0.05)));
     truth.lapse = 0.06 * uniform(random);
     QuestPlus quest(grid);
     for (int t = 0; t < trials; ++t) {
@@ -130,38 +133,44 @@ TEST_CASE("QUEST+ converges on simulated observers and its 95 % credible interva
   CHECK(std::abs(sum_error / runs) < 0.15);  // -0.084 with this seed: little bias
 }
 
-TEST_CASE("The run's kept QUEST+ track gives the replay's levels, also when the answers start again",
-          "[study][quest]") {
+TEST_CASE(
+    "The run's kept QUEST+ track gives the replay's levels, also when the answers start again",
+    "[study][quest]") {
   const Campaign campaign = parse_campaign(
       "[campaign]\nname = \"q\"\n[variants]\nreference = \"base\"\n[participants]\ncount = 2\n"
-      "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\ntrials = 12\n",
+      "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\ntrials = "
+      "12\n",
       "q.toml", ".");
   const Block& block = campaign.blocks.back();
   StimulusMaker maker(campaign);
   PlanRow row{"P01", "q", 1, "stronger:J", "J*?", "J*1", 1};
   // Two participants' answers one after the other (as the power simulation asks).
-  const std::vector<std::vector<bool>> tracks{{true, true, false, true, true, false, true, false, true, true},
-                                              {false, false, true, false}};
+  const std::vector<std::vector<bool>> tracks{
+      {true, true, false, true, true, false, true, false, true, true}, {false, false, true, false}};
   for (const std::vector<bool>& answers : tracks) {
     std::vector<bool> so_far;
     for (std::size_t i = 0; i <= answers.size(); ++i) {
       INFO("after " << i << " answers");
-      CHECK(maker.make(row, so_far).first.name == jnd_stimulus_name("J", quest_plus_level(block, so_far)));
+      CHECK(maker.make(row, so_far).first.name ==
+            jnd_stimulus_name("J", quest_plus_level(block, so_far)));
       if (i < answers.size()) so_far.push_back(answers[i]);
     }
   }
   // Answers as many as the kept ones but not extending them: replayed.
   const std::vector<bool> branch{false, false, true, true, true};
-  CHECK(maker.make(row, branch).first.name == jnd_stimulus_name("J", quest_plus_level(block, branch)));
+  CHECK(maker.make(row, branch).first.name ==
+        jnd_stimulus_name("J", quest_plus_level(block, branch)));
 }
 
-TEST_CASE("Power: a quest+ block's line is the panels' median QUEST+ threshold, near the simulated JND",
-          "[study][quest][power]") {
+TEST_CASE(
+    "Power: a quest+ block's line is the panels' median QUEST+ threshold, near the simulated JND",
+    "[study][quest][power]") {
   // The simulated participants' heaviness (J) Weber fractions are log-normal around 10 %
   // (study/participant_model.h), so the panels' median threshold lies near the level 1.10.
   const Campaign campaign = parse_campaign(
       "[campaign]\nname = \"q\"\n[variants]\nreference = \"base\"\n[participants]\ncount = 12\n"
-      "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\ntrials = 40\n",
+      "[[blocks]]\nname = \"q\"\ntype = \"jnd\"\nparameter = \"J\"\nmethod = \"quest+\"\ntrials = "
+      "40\n",
       "q.toml", ".");
   PowerOptions options;
   options.panels = 20;

@@ -44,8 +44,9 @@ TEST_CASE("ratings: malformed rating rows are refused with their line", "[study]
                     "t.csv:2: answer '3' is not two ratings 1..7 (first variant's, second's)");
   CHECK_THROWS_WITH(refused("P01,r,1,rating:heavy:7,A,B,3 8\n"),
                     "t.csv:2: answer '3 8' is not two ratings 1..7 (first variant's, second's)");
-  CHECK_THROWS_WITH(refused("P01,r,1,rating:heavy:x,A,B,3 4\n"),
-                    "t.csv:2: question 'rating:heavy:x' is not rating:ATTRIBUTE:K with K in 2..100");
+  CHECK_THROWS_WITH(
+      refused("P01,r,1,rating:heavy:x,A,B,3 4\n"),
+      "t.csv:2: question 'rating:heavy:x' is not rating:ATTRIBUTE:K with K in 2..100");
   CHECK_THROWS_WITH(refused("P01,r,1,rating:7,A,B,3 4\n"),
                     "t.csv:2: question 'rating:7' is not rating:ATTRIBUTE:K with K in 2..100");
 }
@@ -90,6 +91,7 @@ TEST_CASE("ratings: inputs that cannot be fitted are refused by name", "[study][
                     "ratings: quadrature_nodes must be 1..50 (1: Laplace), not 0");
   options = {};
   options.variant_order = {"A"};
-  CHECK_THROWS_WITH(fit_attribute_ratings(std::vector<RatingObservation>{{"P1", "heavy", 5, "B", 3}}, options),
-                    "ratings of 'heavy': variant 'B' is not in variant_order");
+  CHECK_THROWS_WITH(
+      fit_attribute_ratings(std::vector<RatingObservation>{{"P1", "heavy", 5, "B", 3}}, options),
+      "ratings of 'heavy': variant 'B' is not in variant_order");
 }

@@ -2,7 +2,6 @@
 // the Laplace approximation and with adaptive Gauss–Hermite quadrature, clm when the
 // participants' spread is estimated at 0), on simulated data sets written to CSV.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <cstdlib>
 #include <fstream>
@@ -28,8 +27,8 @@ struct REstimate {
 };
 
 // Runs tests/study/r/clmm_fit.R on the observations; name -> (value, se).
-std::map<std::string, REstimate> r_fit(const std::vector<RatingObservation>& observations,
-                                       int nagq, const TempDir& dir) {
+std::map<std::string, REstimate> r_fit(const std::vector<RatingObservation>& observations, int nagq,
+                                       const TempDir& dir) {
   std::string csv = "participant,variant,rating\n";
   for (const auto& o : observations) {
     csv += o.participant + "," + o.variant + "," + std::to_string(o.rating) + "\n";
@@ -76,8 +75,8 @@ void compare_with_r(const std::vector<RatingObservation>& observations, int nagq
   INFO(label << ", nAGQ " << nagq);
   REQUIRE(ours.converged);
   for (std::size_t k = 0; k < ours.thresholds.size(); ++k) {
-    const std::string name = std::to_string(ours.used_categories[k]) + "|" +
-                             std::to_string(ours.used_categories[k + 1]);
+    const std::string name =
+        std::to_string(ours.used_categories[k]) + "|" + std::to_string(ours.used_categories[k + 1]);
     REQUIRE(r.contains(name));
     check_close(ours.thresholds[k], r.at(name).value, 1e-4, "threshold " + name);
   }

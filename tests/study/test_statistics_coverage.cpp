@@ -2,7 +2,6 @@
 // known truth (docs/campaign.md, "Coverage of the intervals: ratings and thresholds"): each
 // kind of interval must cover the truth in 90–99 % of its draws. Prints the table.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <random>
@@ -81,7 +80,8 @@ TEST_CASE("coverage: Weber fractions' profile intervals cover the truth in 90-99
       const auto result = fit_thresholds(trials);
       REQUIRE(result.parameters.size() == 1);
       const auto& p = result.parameters[0];
-      panel.add(p.panel.ci_low <= truth->weber_fraction && truth->weber_fraction <= p.panel.ci_high);
+      panel.add(p.panel.ci_low <= truth->weber_fraction &&
+                truth->weber_fraction <= p.panel.ci_high);
       for (const double factor : factors) {
         const auto point = p.panel.curve_point(std::log(factor));
         const double true_p = truth->probability(std::log(factor));

@@ -1,11 +1,9 @@
 // The three sections `campaign analyze` writes for ratings, thresholds and tuning, from one
 // trials.csv written by hand (as 29's analyze verb calls them), and the psychometric plot.
 #include <catch2/catch.hpp>
-
 #include <cmath>
-#include <random>
-
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "analysis/model/parameter_file.h"
 #include "study/statistics/ratings.h"
@@ -29,8 +27,10 @@ TEST_CASE("ratings and jnd and tuning sections come from one hand-written trials
     // Ratings: B is rated about two points heavier than A.
     for (int r = 0; r < 3; ++r) {
       const int a = 2 + (p + r) % 3, b = std::min(7, a + 2 - (r == 2 ? 1 : 0));
-      csv += id + ",rating," + std::to_string(r + 1) + ",rating:heavy:7," + (r % 2 ? "B,A," : "A,B,") +
-             (r % 2 ? std::to_string(b) + " " + std::to_string(a) : std::to_string(a) + " " + std::to_string(b)) +
+      csv += id + ",rating," + std::to_string(r + 1) + ",rating:heavy:7," +
+             (r % 2 ? "B,A," : "A,B,") +
+             (r % 2 ? std::to_string(b) + " " + std::to_string(a)
+                    : std::to_string(a) + " " + std::to_string(b)) +
              ",1.5\n";
     }
     // A jnd block by constant stimuli around J_d*1.00, the comparison first in odd trials.
@@ -43,7 +43,8 @@ TEST_CASE("ratings and jnd and tuning sections come from one hand-written trials
         std::snprintf(label, sizeof label, "J_d*%.2f", factor);
         const bool comparison_first = ++trial % 2 == 1;
         csv += id + ",jnd," + std::to_string(trial) + ",stronger:J_d," +
-               (comparison_first ? std::string(label) + ",J_d*1.00," : std::string("J_d*1.00,") + label + ",") +
+               (comparison_first ? std::string(label) + ",J_d*1.00,"
+                                 : std::string("J_d*1.00,") + label + ",") +
                (stronger == comparison_first ? "1" : "2") + ",2.0\n";
       }
     }
@@ -68,7 +69,7 @@ TEST_CASE("ratings and jnd and tuning sections come from one hand-written trials
   REQUIRE(analysis["ratings"].size() == 2);
   CHECK(analysis["ratings"][1]["variant"] == "B");
   CHECK(analysis["ratings"][1]["ci_low"].get<double>() > 0.0);  // B rated heavier, clearly
-  REQUIRE(analysis["jnd"].size() == 7);  // the panel and six participants
+  REQUIRE(analysis["jnd"].size() == 7);                         // the panel and six participants
   const auto& panel = analysis["jnd"][0];
   CHECK(panel["participant"] == "panel");
   CHECK(panel["reference"] == "J_d*1.00");

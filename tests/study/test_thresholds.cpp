@@ -1,7 +1,6 @@
 // Thresholds from jnd blocks: the psychometric fit against a brute-force likelihood grid,
 // staircases read from their reversals, and the trials adapter's reading and errors.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <random>
 
@@ -15,8 +14,8 @@ using doorbench::study::parse_trials_table;
 using doorbench::study::psychometric_log_likelihood;
 using doorbench::study::PsychometricShape;
 using doorbench::study::staircase_threshold;
-using doorbench::study::StrongerObservation;
 using doorbench::study::stronger_observations;
+using doorbench::study::StrongerObservation;
 using doorbench::study::ThresholdOptions;
 using doorbench::study::weber_fraction;
 using doorbench::testing::ObserverTruth;
@@ -58,15 +57,18 @@ TEST_CASE("thresholds: the fitted JND and its interval agree with a brute-force 
   CHECK(fit.log_likelihood - best < 0.05);
   const double grid_step = (log_high - log_low) / (spread_steps - 1);
   CHECK(std::abs(std::log(fit.spread) - std::log(best_spread)) < 3 * grid_step);
-  CHECK(fit.weber_fraction == Approx(weber_fraction(PsychometricShape::kCumulativeNormal,
-                                                    best_spread, 0.75)).epsilon(0.05));
+  CHECK(fit.weber_fraction ==
+        Approx(weber_fraction(PsychometricShape::kCumulativeNormal, best_spread, 0.75))
+            .epsilon(0.05));
   // The interval's ends: where the grid's profile falls 1.92 below the grid's maximum.
   double grid_low = INFINITY, grid_high = -INFINITY;
   for (int s = 0; s < spread_steps; ++s) {
     if (best - profile[s] <= 1.920729) {
       const double spread = std::exp(log_low + grid_step * s);
-      grid_low = std::min(grid_low, weber_fraction(PsychometricShape::kCumulativeNormal, spread, 0.75));
-      grid_high = std::max(grid_high, weber_fraction(PsychometricShape::kCumulativeNormal, spread, 0.75));
+      grid_low =
+          std::min(grid_low, weber_fraction(PsychometricShape::kCumulativeNormal, spread, 0.75));
+      grid_high =
+          std::max(grid_high, weber_fraction(PsychometricShape::kCumulativeNormal, spread, 0.75));
     }
   }
   INFO("fit " << fit.weber_fraction << " [" << fit.ci_low << ", " << fit.ci_high << "], grid ["
@@ -109,7 +111,8 @@ TEST_CASE("thresholds: a staircase's reversals give its threshold and its rule",
   const std::vector<int> answers{1, 1, 1, 1, 0, 1, 1, 1, 1, 0, 1, 1, 1};
   std::vector<StrongerObservation> trials;
   for (std::size_t t = 0; t < levels.size(); ++t) {
-    trials.push_back({"P1", "stair", static_cast<int>(t), "J_d", "J_d", levels[t] + 0.05, answers[t] == 1});
+    trials.push_back(
+        {"P1", "stair", static_cast<int>(t), "J_d", "J_d", levels[t] + 0.05, answers[t] == 1});
   }
   ThresholdOptions options;
   options.staircase_reversals = 3;
@@ -203,8 +206,8 @@ TEST_CASE("thresholds: the likelihood's analytic gradient and Hessian equal cent
         };
         // The value is the per-trial likelihood's, counted per level.
         const auto v = st::unpack(x, problem.layout);
-        CHECK(analytic.value == Approx(-psychometric_log_likelihood(trials, shape, v.pse,
-                                                                    std::exp(v.log_spread), v.lapse))
+        CHECK(analytic.value == Approx(-psychometric_log_likelihood(
+                                           trials, shape, v.pse, std::exp(v.log_spread), v.lapse))
                                     .epsilon(1e-12));
         const Eigen::VectorXd gradient = st::numeric_gradient(value, x);
         const Eigen::MatrixXd hessian = st::numeric_hessian(value, x);
@@ -238,4 +241,3 @@ TEST_CASE("thresholds: the fitted curve's pointwise band surrounds the curve and
     CHECK(b.high - b.low < a.high - a.low);
   }
 }
-

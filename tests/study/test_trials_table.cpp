@@ -43,5 +43,6 @@ TEST_CASE("a trials table that breaks the format is refused with its line", "[st
                     "t.csv:2: a quoted field is not closed");
   CHECK_THROWS_WITH(parse_trials_table(header + "\nP1,pa\"ir,1,preference,A,B,1\n", "t.csv"),
                     "t.csv:2: a double quote inside an unquoted field (quote the whole field)");
-  CHECK_THROWS_WITH(parse_trials_table("", "t.csv"), "t.csv: no header row (the file holds no text)");
+  CHECK_THROWS_WITH(parse_trials_table("", "t.csv"),
+                    "t.csv: no header row (the file holds no text)");
 }

@@ -2,11 +2,9 @@
 // panel splits (and not when it does not), the doors read from the trials table's files,
 // and the plot.
 #include <catch2/catch.hpp>
-
 #include <cmath>
-#include <random>
-
 #include <nlohmann/json.hpp>
+#include <random>
 
 #include "analysis/model/parameter_file.h"
 #include "study/statistics/tuning.h"
@@ -25,8 +23,10 @@ std::vector<TunedDoor> panel(int doors, double j, double k, double sd_log, std::
   std::normal_distribution<double> normal(0.0, sd_log);
   std::vector<TunedDoor> out;
   for (int i = 0; i < doors; ++i) {
-    out.push_back({prefix + std::to_string(i + 1), "",
-                   {{"J", j * std::exp(normal(random))}, {"k_l", k * std::exp(normal(random))},
+    out.push_back({prefix + std::to_string(i + 1),
+                   "",
+                   {{"J", j * std::exp(normal(random))},
+                    {"k_l", k * std::exp(normal(random))},
                     {"theta0", 0.1 + 0.01 * normal(random)}}});
   }
   return out;
@@ -82,7 +82,8 @@ TEST_CASE("tuning: a panel of two groups splits, one group does not", "[study][t
   const auto result = analyze_tuning(doors);
   REQUIRE(result.clusters.split);
   CHECK(result.clusters.dimensions == std::vector<std::string>{"J", "k_l"});
-  for (int i = 0; i < 20; ++i) CHECK(result.clusters.group[i] == result.clusters.group[i < 10 ? 0 : 10]);
+  for (int i = 0; i < 20; ++i)
+    CHECK(result.clusters.group[i] == result.clusters.group[i < 10 ? 0 : 10]);
   const double expected = std::log(0.13 / 0.08) / std::log(1.1);
   CHECK(result.clusters.separation == Approx(expected).epsilon(0.15));
   CHECK(std::abs(result.clusters.separation_steps.at("J")) == Approx(expected).epsilon(0.15));
@@ -104,8 +105,9 @@ TEST_CASE("tuning: the doors of a trials table are read from their parameter fil
   dir.write("tuned/P02.json", door.dump());
   const std::string header = "participant,block,trial,question,first,second,answer\n";
   const auto table = doorbench::study::parse_trials_table(
-      header + "P01,tune,1,tune,,,tuned/P01.json\nP02,tune,1,tune,,,tuned/P02-first.json\n"
-               "P02,tune,2,tune,,,tuned/P02.json\nP02,r,3,rating:heavy:5,A,B,1 2\n",
+      header +
+          "P01,tune,1,tune,,,tuned/P01.json\nP02,tune,1,tune,,,tuned/P02-first.json\n"
+          "P02,tune,2,tune,,,tuned/P02.json\nP02,r,3,rating:heavy:5,A,B,1 2\n",
       "trials.csv");
   const auto doors = doorbench::study::tuned_doors(table, dir.path);
   REQUIRE(doors.size() == 2);
@@ -116,9 +118,11 @@ TEST_CASE("tuning: the doors of a trials table are read from their parameter fil
   const auto physical = std::find_if(doors[0].parameters.begin(), doors[0].parameters.end(),
                                      [](const auto& p) { return p.first == "J_d"; });
   CHECK(physical != doors[0].parameters.end());
-  CHECK_THROWS_WITH(doorbench::study::tuned_doors(
-                        doorbench::study::parse_trials_table(header + "P01,t,1,tune,,,\n", "t.csv"), dir.path),
-                    "t.csv:2: answer is empty (a tune row names its tuned parameter file)");
-  CHECK_THROWS_WITH(analyze_tuning(std::vector<TunedDoor>{{"P1", "", {{"J", 1.0}}}, {"P2", "", {{"k", 1.0}}}}),
-                    "tuning: the door of P2 names other parameters than that of P1");
+  CHECK_THROWS_WITH(
+      doorbench::study::tuned_doors(
+          doorbench::study::parse_trials_table(header + "P01,t,1,tune,,,\n", "t.csv"), dir.path),
+      "t.csv:2: answer is empty (a tune row names its tuned parameter file)");
+  CHECK_THROWS_WITH(
+      analyze_tuning(std::vector<TunedDoor>{{"P1", "", {{"J", 1.0}}}, {"P2", "", {{"k", 1.0}}}}),
+      "tuning: the door of P2 names other parameters than that of P1");
 }

@@ -43,9 +43,11 @@ inline std::vector<study::StrongerObservation> simulate_constant_stimuli(
 
 // A 1-up-N-down staircase on ln ratio above the reference: starts at `start`, steps by
 // `step` (ln units) down after N "stronger" answers in a row, up after one "not stronger".
-inline std::vector<study::StrongerObservation> simulate_staircase(
-    const ObserverTruth& truth, int down_rule, double start, double step, int trials,
-    const std::string& participant, std::mt19937_64& random) {
+inline std::vector<study::StrongerObservation> simulate_staircase(const ObserverTruth& truth,
+                                                                  int down_rule, double start,
+                                                                  double step, int trials,
+                                                                  const std::string& participant,
+                                                                  std::mt19937_64& random) {
   std::uniform_real_distribution<double> uniform(0.0, 1.0);
   std::vector<study::StrongerObservation> out;
   double level = start;

@@ -46,7 +46,6 @@ long long allocations() {
 }
 }  // namespace doorbench::testing
 
-
 // The replaceable allocation functions ([new.delete]): plain, array, nothrow, aligned.
 void* operator new(std::size_t size) {
   return or_throw(counted_malloc(size));

@@ -62,8 +62,8 @@ inline BreakawayRefit refit_from_true_breakaway(const PreparedData& data, const 
   FitOptions refit = loop.fit;
   refit.latch_start_from_data = false;  // the start is already a fit, as in the loop's refits
   const double d1 = parameter(base.summary, "d1").value;
-  FitResult informed = fit_model(
-      with_breakaway(base.model, d1 + excess_N_m, width_rad_s), data, refit);
+  FitResult informed =
+      fit_model(with_breakaway(base.model, d1 + excess_N_m, width_rad_s), data, refit);
   FitResult from_truth =
       fit_model(sensory_reference_with_breakaway(excess_N_m, width_rad_s), data, refit);
   r.base = base.summary;

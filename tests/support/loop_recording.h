@@ -14,7 +14,8 @@ namespace doorbench::testing {
 
 inline std::string simulate_loop_recording(const TempDir& dir) {
   const std::string effects =
-      dir.write("effects.json", R"({"gravity_imbalance": {"g1": 3.0}, "viscous_damping": {"b": 0.5}})")
+      dir.write("effects.json",
+                R"({"gravity_imbalance": {"g1": 3.0}, "viscous_damping": {"b": 0.5}})")
           .string();
   const std::string csv = (dir / "run.csv").string();
   REQUIRE(run_doorbench_shell("simulate --model sensory --effects '" + effects +

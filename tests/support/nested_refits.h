@@ -11,7 +11,6 @@
 // does the same on `doorbench loop`'s result.json. Both return how many refits they checked,
 // so a caller can ask that there were some. Catch CHECKs: call from a test case.
 #include <catch2/catch.hpp>
-
 #include <cmath>
 #include <string>
 
@@ -25,8 +24,8 @@ inline int check_nested_refit(const CandidateEvidence& candidate) {
   const ModelFigures& before = candidate.before;
   const ModelFigures& after = *candidate.after;
   INFO(candidate.name << ": " << candidate.verdict << " [refit from " << candidate.refit_start
-                      << "]; fitted sum of squares " << after.sum_of_squares << " against the parent's "
-                      << before.sum_of_squares);
+                      << "]; fitted sum of squares " << after.sum_of_squares
+                      << " against the parent's " << before.sum_of_squares);
   CHECK(after.residuals == before.residuals);
   CHECK(after.fitted_samples == before.fitted_samples);
   CHECK(after.held_out_samples == before.held_out_samples);

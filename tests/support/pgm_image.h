@@ -2,7 +2,6 @@
 // A binary PGM (P5, 8 bit), as `pdftoppm -gray` writes it: the page tests read rendered PDF
 // pages through it (tests/analysis/test_spec_report.cpp, tests/study/test_campaign_report_pdf.cpp).
 #include <catch2/catch.hpp>
-
 #include <filesystem>
 #include <fstream>
 #include <string>

@@ -84,14 +84,14 @@ struct RecordingConditions {
   // Tremor: three sinusoids in [low, high] Hz of tremor_force_N together (0: none).
   double tremor_low_hz = 8.0, tremor_high_hz = 12.0;
   double tremor_force_N = 0.0;
-  double pause_s = 0.0;  // a pause halfway through each opening (0: none)
-  bool latch = true;     // closings pushed through the latch
+  double pause_s = 0.0;               // a pause halfway through each opening (0: none)
+  bool latch = true;                  // closings pushed through the latch
   double latch_overshoot_rad = 0.05;  // how far past closed the closing aims (latch)
   double stop_short_rad = 0.15;       // where the closing stops (no latch)
   // Sensors and noise (standard deviations per sample).
   double force_noise_N = 0.2;
-  double angle_noise_rad = 0.01 * kRadPerDeg;  // inclinometer, angle
-  double rate_noise_rad_s = 0.05 * kRadPerDeg; // gyroscope, state
+  double angle_noise_rad = 0.01 * kRadPerDeg;   // inclinometer, angle
+  double rate_noise_rad_s = 0.05 * kRadPerDeg;  // gyroscope, state
   double gyro_bias_rad_s = 0.0;
   double gyro_range_rad_s = 100.0 * kRadPerDeg;
   double inclinometer_range_rad = 10.0 * kRadPerDeg;
@@ -109,8 +109,8 @@ struct RecordingConditions {
   std::string describe() const {
     std::string text = hand;
     if (hand != "impulse") {
-      text.append(printf_text(" %.0f N/m %.0f N s/m", grip_stiffness_N_per_m,
-                              grip_damping_N_s_per_m));
+      text.append(
+          printf_text(" %.0f N/m %.0f N s/m", grip_stiffness_N_per_m, grip_damping_N_s_per_m));
     }
     text.append(printf_text(", %d strokes, %g Hz", strokes, sample_rate_hz));
     if (jitter_fraction > 0) text.append(printf_text(" jitter ±%.0f %%", 100.0 * jitter_fraction));
@@ -120,15 +120,15 @@ struct RecordingConditions {
       text.append(printf_text(" (bias %.2f deg/s)", gyro_bias_rad_s * kDegPerRad));
     }
     if (tremor_force_N > 0) {
-      text.append(printf_text(", tremor %.2f N %g-%g Hz", tremor_force_N, tremor_low_hz,
-                              tremor_high_hz));
+      text.append(
+          printf_text(", tremor %.2f N %g-%g Hz", tremor_force_N, tremor_low_hz, tremor_high_hz));
     } else {
       text.append(", no tremor");
     }
     if (hand == "impulse") {
       text.append(printf_text(", starts %.2f-%.2f rad, coasting %.2f-%.2f rad/s",
-                              impulse_start_min_rad, impulse_start_max_rad,
-                              impulse_speed_min_rad_s, impulse_speed_max_rad_s));
+                              impulse_start_min_rad, impulse_start_max_rad, impulse_speed_min_rad_s,
+                              impulse_speed_max_rad_s));
     } else {
       text.append(printf_text(", openings %.2f-%.2f rad", open_min_rad, open_max_rad));
       text.append(hand == "robot" ? printf_text(" at %.2f rad/s", robot_speed_rad_s)
@@ -165,10 +165,10 @@ struct FamilyOptions {
 namespace family_detail {
 
 constexpr double kPi = 3.14159265358979323846;
-constexpr double kRest_s = 0.6;        // at closed, between runs
-constexpr double kLead_s = 0.25;       // rest kept in a stroke before it moves
-constexpr double kHold_s = 0.3;        // the hand holds after a closing
-constexpr double kRelease_s = 0.2;     // and lets go over this
+constexpr double kRest_s = 0.6;     // at closed, between runs
+constexpr double kLead_s = 0.25;    // rest kept in a stroke before it moves
+constexpr double kHold_s = 0.3;     // the hand holds after a closing
+constexpr double kRelease_s = 0.2;  // and lets go over this
 constexpr double kMaxHandForce_N = 250.0;
 
 // A reference move from `from` to `to` starting at `start` lasting `duration`: minimum-jerk,
@@ -326,9 +326,8 @@ struct Builder {
   Move move_to(double start, double to) const {
     Move move{start, 1.0, state.theta_rad, to, conditions.hand == "robot"};
     const double distance = std::abs(to - state.theta_rad);
-    move.duration = conditions.hand == "robot"
-                        ? distance / conditions.robot_speed_rad_s + 0.1
-                        : 1.875 * distance / conditions.peak_speed_rad_s;
+    move.duration = conditions.hand == "robot" ? distance / conditions.robot_speed_rad_s + 0.1
+                                               : 1.875 * distance / conditions.peak_speed_rad_s;
     move.duration = std::max(move.duration, 0.3);
     return move;
   }
@@ -394,7 +393,8 @@ inline void impulse_run(Builder& b, double start_rad, int id) {
   setting.moves.push_back(b.move_to(b.now() + 0.2, start_rad));
   setting.release_start = setting.moves.back().end() + kHold_s;
   b.run(setting, setting.release_start + kRelease_s + 0.4 - kLead_s, 0);
-  std::uniform_real_distribution<double> speed(c.impulse_speed_min_rad_s, c.impulse_speed_max_rad_s),
+  std::uniform_real_distribution<double> speed(c.impulse_speed_min_rad_s,
+                                               c.impulse_speed_max_rad_s),
       duration(0.06, 0.15);
   const double r_h = b.truth.geometry().handle_radius_m;
   for (int direction : {1, -1}) {
@@ -404,8 +404,7 @@ inline void impulse_run(Builder& b, double start_rad, int id) {
     // A half-sine of peak P gives r_h P T 2/π of angular impulse; add the friction to beat.
     const double friction_Nm = std::abs(b.truth.torque_Nm(b.state.theta_rad, 0.05 * direction));
     const double impulse_Nms = b.truth.inertia_kg_m2() * speed(b.random);
-    push.push_N = direction *
-                  (impulse_Nms * kPi / (2.0 * push.push_duration) + friction_Nm) / r_h;
+    push.push_N = direction * (impulse_Nms * kPi / (2.0 * push.push_duration) + friction_Nm) / r_h;
     b.run(push, push.push_start + push.push_duration + 1.6, id + (direction < 0 ? 1 : 0));
   }
   b.return_to_closed(tremor);
@@ -434,8 +433,9 @@ inline Recording sensor_recording(const Builder& b, const Trajectory& door, std:
       const double dt = i > 0 ? door.time_s[i] - door.time_s[i - 1] : 0.0;
       lagged += (1.0 - std::exp(-2.0 * kPi * c.inclinometer_bandwidth_hz * dt)) *
                 (door.theta_rad[i] - lagged);
-      rate[i] = std::clamp(door.omega_rad_s[i] + c.gyro_bias_rad_s + c.rate_noise_rad_s * normal(random),
-                           -c.gyro_range_rad_s, c.gyro_range_rad_s);
+      rate[i] =
+          std::clamp(door.omega_rad_s[i] + c.gyro_bias_rad_s + c.rate_noise_rad_s * normal(random),
+                     -c.gyro_range_rad_s, c.gyro_range_rad_s);
       inclinometer[i] = std::clamp(lagged + c.angle_noise_rad * normal(random),
                                    -c.inclinometer_range_rad, c.inclinometer_range_rad);
     }
@@ -446,9 +446,8 @@ inline Recording sensor_recording(const Builder& b, const Trajectory& door, std:
     std::vector<double> angle(n);
     const double count_rad = 2.0 * kPi / c.encoder_counts;
     for (std::size_t i = 0; i < n; ++i) {
-      angle[i] = c.sensors == "encoder"
-                     ? count_rad * std::round(door.theta_rad[i] / count_rad)
-                     : door.theta_rad[i] + c.angle_noise_rad * normal(random);
+      angle[i] = c.sensors == "encoder" ? count_rad * std::round(door.theta_rad[i] / count_rad)
+                                        : door.theta_rad[i] + c.angle_noise_rad * normal(random);
     }
     recording.angle_rad = std::move(angle);
   }
@@ -562,7 +561,8 @@ inline PreparedData family_recording(const DoorModel& truth, const RecordingCond
   if (c.strokes < 2 || !(c.sample_rate_hz >= 20.0) || !(c.jitter_fraction >= 0.0) ||
       c.jitter_fraction > 0.5) {
     throw std::invalid_argument(
-        "recording family: needs strokes >= 2, sample_rate_hz >= 20 and jitter_fraction in [0, 0.5]");
+        "recording family: needs strokes >= 2, sample_rate_hz >= 20 and jitter_fraction in [0, "
+        "0.5]");
   }
   std::mt19937 random(seed);
   family_detail::Builder b(truth, c, random);

@@ -9,7 +9,9 @@
 
 namespace doorbench::testing {
 
-inline DoorModel sensory_reference() { return reference_model(ModelKind::kSensory); }
+inline DoorModel sensory_reference() {
+  return reference_model(ModelKind::kSensory);
+}
 
 // The sensory reference's friction coefficient d1, N·m.
 inline double sensory_reference_d1() {
@@ -21,7 +23,8 @@ inline double sensory_reference_d1() {
 // catalogue's bounds.
 inline DoorModel with_breakaway(const DoorModel& model, double d_s_N_m, double speed_rad_s) {
   EffectSetting setting{effects::Kind::kStribeck, {d_s_N_m, speed_rad_s}, {}};
-  for (const effects::EffectParameter& parameter : effects::info(effects::Kind::kStribeck).parameters) {
+  for (const effects::EffectParameter& parameter :
+       effects::info(effects::Kind::kStribeck).parameters) {
     setting.bounds.push_back(parameter.default_bounds);
   }
   return model.with_effect(std::move(setting));

@@ -5,13 +5,13 @@
 // place). `typed` is written to
 // the terminal after `delay_ms`; the terminal's echo is drained until doorbench exits (so that it
 // never blocks on it). stdout and stderr go to files in `dir`.
-#include <cerrno>
 #include <fcntl.h>
 #include <poll.h>
 #include <pty.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
 #include <fstream>
 #include <sstream>

@@ -27,7 +27,8 @@ inline SvgCheck check_svgs(const std::vector<std::filesystem::path>& paths) {
   FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
   if (pipe == nullptr) return check;
   char chunk[4096];
-  for (std::size_t n; (n = std::fread(chunk, 1, sizeof chunk, pipe)) > 0;) check.output.append(chunk, n);
+  for (std::size_t n; (n = std::fread(chunk, 1, sizeof chunk, pipe)) > 0;)
+    check.output.append(chunk, n);
   const int status = ::pclose(pipe);
   check.status = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
   const std::size_t last = check.output.rfind("checked ");

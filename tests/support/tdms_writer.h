@@ -60,8 +60,7 @@ inline Property double_property(const std::string& name, double value, bool big_
   p.value.put(value);
   return p;
 }
-inline Property i32_property(const std::string& name, std::int32_t value,
-                             bool big_endian = false) {
+inline Property i32_property(const std::string& name, std::int32_t value, bool big_endian = false) {
   Property p{name, kI32, {{}, big_endian}};
   p.value.put(value);
   return p;

@@ -48,7 +48,7 @@ struct TremorRecordingOptions {
   // Rest kept before each stroke (the door held still, shaken by the tremor), as
   // preprocessing keeps a margin of rest around the strokes it finds.
   double rest_before_s = 0.3;
-  double force_noise_N = 0.2;          // the bench's noise
+  double force_noise_N = 0.2;  // the bench's noise
   double angle_noise_rad = 0.01 * kRadPerDeg;
   double rate_noise_rad_s = 0.05 * kRadPerDeg;
   std::uint32_t seed = 1;
@@ -85,7 +85,9 @@ class TremorHand final : public UserForce {
   static constexpr double kPi = 3.14159265358979323846;
   struct Component {
     double frequency_hz = 0.0, phase_rad = 0.0, amplitude = 0.0;
-    double value(double t) const { return amplitude * std::sin(2.0 * kPi * frequency_hz * t + phase_rad); }
+    double value(double t) const {
+      return amplitude * std::sin(2.0 * kPi * frequency_hz * t + phase_rad);
+    }
   };
   VirtualHand hand_;
   double stiffness_N_per_m_;
@@ -93,7 +95,8 @@ class TremorHand final : public UserForce {
   Component drift_;
 };
 
-inline PreparedData tremor_recording(const DoorModel& model, const TremorRecordingOptions& options) {
+inline PreparedData tremor_recording(const DoorModel& model,
+                                     const TremorRecordingOptions& options) {
   PreparedData data;
   data.source = "tremor hand, seed " + std::to_string(options.seed);
   data.handle_radius_m = model.geometry().handle_radius_m;
@@ -126,10 +129,10 @@ inline PreparedData tremor_recording(const DoorModel& model, const TremorRecordi
         return hand.hand().stroke_at(times[i]) == marker ||
                hand.hand().stroke_at(times[i] + lead_s) == marker;
       };
-      data.strokes.push_back(noisy_stroke(
-          run, times, 2 * r + marker,
-          marker == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing, in_stroke, noise,
-          random, normal));
+      data.strokes.push_back(
+          noisy_stroke(run, times, 2 * r + marker,
+                       marker == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing,
+                       in_stroke, noise, random, normal));
     }
   }
   return data;

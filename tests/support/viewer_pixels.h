@@ -3,12 +3,12 @@
 // --screenshot` under Xvfb (xvfb-run, Mesa's software OpenGL), load the PNG (stb_image,
 // libstb) and its companion PNG.json (where each plot's data area is, its ranges and series
 // colours).
-#include <catch2/catch.hpp>
 #include <imgui.h>
 #include <stb_image.h>
 #include <sys/wait.h>
 
 #include <algorithm>
+#include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>

@@ -47,9 +47,10 @@ std::size_t gyroscope_index(const viewer::SessionData& session) {
 
 }  // namespace
 
-TEST_CASE("overlay: where a gyroscope sat at its limit the door's quantities are shaded and "
-          "left out, and the angle after it is the truth's",
-          "[viewer]") {
+TEST_CASE(
+    "overlay: where a gyroscope sat at its limit the door's quantities are shaded and "
+    "left out, and the angle after it is the truth's",
+    "[viewer]") {
   const OverlayPair pair;
   const viewer::SessionData a = viewer::load_session(pair.a);
   const viewer::SessionData b = viewer::load_session(pair.b);
@@ -109,11 +110,11 @@ TEST_CASE("view --screenshot: the overlay shades where A's gyroscope sat at its 
   const OverlayPair pair;
   const fs::path png = pair.dir.path / "overlay.png";
   std::string err;
-  const int status = testing::run_under_xvfb(
-      std::string("'" DOORBENCH_EXECUTABLE "' view ") + "--screenshot '" + png.string() +
-          "' --layout overlay --width 1200 --height 900 '" + pair.a.string() + "' '" +
-          pair.b.string() + "'",
-      pair.dir.path, err);
+  const int status =
+      testing::run_under_xvfb(std::string("'" DOORBENCH_EXECUTABLE "' view ") + "--screenshot '" +
+                                  png.string() + "' --layout overlay --width 1200 --height 900 '" +
+                                  pair.a.string() + "' '" + pair.b.string() + "'",
+                              pair.dir.path, err);
   INFO("stderr: " << err);
   REQUIRE(status == 0);
   const testing::Screenshot shot = testing::load_screenshot(png);

@@ -22,7 +22,7 @@ namespace doorbench::rig_detail {
 
 // Upper bounds on what a rig can ask for (docs/rig-format.md, "Limits"): beyond them a
 // recording would exhaust memory or disk, or run for longer than anyone records a door.
-inline constexpr double kMaxRecordingS = 86400.0;     // a day, as `record --duration-s`
+inline constexpr double kMaxRecordingS = 86400.0;  // a day, as `record --duration-s`
 
 // `text` in double quotes, for the messages.
 std::string in_quotes(std::string_view text);

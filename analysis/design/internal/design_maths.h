@@ -57,8 +57,7 @@ std::optional<ReducedSystem> reduced_system(const DoorModel& model, const Prepar
 // covariance: a pseudo-inverse would hide exactly the directions the data cannot see.
 std::vector<Eigen::VectorXd> weak_directions(const DoorModel& model, const PreparedData& data,
                                              const FitOptions& fit, double rate_noise_rad_s,
-                                             double angle_noise_rad, const Setup& setup,
-                                             int count);
+                                             double angle_noise_rad, const Setup& setup, int count);
 
 // Per free position of `setup`: the Gauss–Newton predicted decrease of the data's Σ r² at
 // `model` when that parameter is freed beside `chosen` (free positions), from one Jacobian;

@@ -30,8 +30,7 @@ struct StartValues {
 };
 
 StartValues start_values(const DoorModel& start, const PreparedData& data,
-                         const FitOptions& options, const FitWeights& weights,
-                         FitSummary& summary);
+                         const FitOptions& options, const FitWeights& weights, FitSummary& summary);
 
 // The start model with `values`; throws "fit: the start breaks a constraint: ..." when it
 // breaks one.

@@ -23,8 +23,7 @@ std::string ranking_line(int step_number, const ResidualExamination& examination
 // The fit options of a refit with `kind` added to a model fitted with `current`: the
 // effect's parameters free (appended when the free set is an explicit list) except those in
 // options.fixed_effect_parameters; the latch not read off the data again.
-FitOptions refit_options(const FitOptions& current, const LoopOptions& options,
-                         effects::Kind kind);
+FitOptions refit_options(const FitOptions& current, const LoopOptions& options, effects::Kind kind);
 
 // Who is refitted: the candidates whose linear share and z pass, in rank order, then those
 // the second look promotes, while refit slots are left; and every candidate whose kind is in
