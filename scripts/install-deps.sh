@@ -28,6 +28,7 @@ packages=(
   socat                       # RTU tests over a pseudo-terminal pair
   weasyprint                  # doorbench spec renders spec.html to spec.pdf
   poppler-utils               # pdftoppm: the spec report test renders spec.pdf to pixels to check the page width
+  clang-format-14             # scripts/check_format.sh: every C++ source formatted as .clang-format says
   clang libclang-rt-14-dev    # libFuzzer and the sanitizers for the parsers' fuzz targets (fuzz/)
   libboost-math-dev           # Boost.Math: Student-t quantile (calibration), exact binomial test (A/B)
   zlib1g-dev                  # zlib's crc32() for the recording journal's checksums
