@@ -7,8 +7,8 @@
 
 #include "analysis/design/inverse_design.h"
 #include "analysis/model/parameter_file.h"
-#include "tests/support/bench_recorded_door.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/bench_recorded_door.h"
+#include "fixtures/temp_dir.h"
 
 namespace {
 

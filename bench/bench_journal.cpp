@@ -11,7 +11,6 @@
 //   Counters: realtime_x, convert_share (fraction of the time after the last scan).
 // Files go to the temp folder (the same disk as the build here) and are deleted.
 #include <benchmark/benchmark.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdint>
@@ -21,6 +20,7 @@
 
 #include "acquisition/record/journal.h"
 #include "acquisition/record/recorder.h"
+#include "fixtures/temp_dir.h"
 
 namespace {
 
@@ -30,14 +30,6 @@ using Clock = std::chrono::steady_clock;
 constexpr std::size_t kChannels = 8;
 constexpr double kRateHz = 50000.0;
 constexpr std::size_t kBlockScans = 500;  // 10 ms
-
-fs::path scratch_folder(const std::string& what) {
-  const fs::path folder =
-      fs::temp_directory_path() /
-      std::string("doorbench_bench_").append(what).append("_").append(std::to_string(::getpid()));
-  fs::create_directories(folder);
-  return folder;
-}
 
 doorbench::JournalHeader bench_header() {
   doorbench::JournalHeader header;
@@ -58,7 +50,8 @@ std::vector<std::int32_t> block_counts() {
 }
 
 void journal_append(benchmark::State& state) {
-  const fs::path folder = scratch_folder("journal");
+  const doorbench::testing::TempDir scratch("bench_journal");
+  const fs::path& folder = scratch.path;
   const std::vector<std::int32_t> counts = block_counts();
   std::uint64_t blocks = 0;
   {
@@ -72,13 +65,13 @@ void journal_append(benchmark::State& state) {
   state.counters["MB_s"] = benchmark::Counter(bytes / 1e6, benchmark::Counter::kIsRate);
   state.counters["realtime_x"] =
       benchmark::Counter(double(blocks) * kBlockScans / kRateHz, benchmark::Counter::kIsRate);
-  fs::remove_all(folder);
 }
 // 20000 blocks: 200 s of data, a 320 MB file.
 BENCHMARK(journal_append)->Unit(benchmark::kMicrosecond)->Iterations(20000)->UseRealTime();
 
 void journal_flush(benchmark::State& state) {
-  const fs::path folder = scratch_folder("journal_flush");
+  const doorbench::testing::TempDir scratch("bench_journal_flush");
+  const fs::path& folder = scratch.path;
   const std::vector<std::int32_t> counts = block_counts();
   const auto blocks_per_flush = static_cast<std::size_t>(state.range(0) / 10);
   std::uint64_t blocks = 0;
@@ -100,7 +93,6 @@ void journal_flush(benchmark::State& state) {
   state.counters["sync_ms"] = 1000.0 * sync_s / double(syncs);
   state.counters["realtime_x"] =
       benchmark::Counter(double(blocks) * kBlockScans / kRateHz, benchmark::Counter::kIsRate);
-  fs::remove_all(folder);
 }
 BENCHMARK(journal_flush)->Arg(10)->Arg(50)->Arg(100)->Unit(benchmark::kMillisecond)->UseRealTime();
 
@@ -132,7 +124,8 @@ class SyntheticSource final : public doorbench::AcquisitionBackend {
 };
 
 void record_8x50k(benchmark::State& state) {
-  const fs::path folder = scratch_folder("record");
+  const doorbench::testing::TempDir scratch("bench_record");
+  const fs::path& folder = scratch.path;
   constexpr double kSeconds = 2.0;
   double total_s = 0.0, convert_s = 0.0;
   int run = 0;
@@ -150,7 +143,6 @@ void record_8x50k(benchmark::State& state) {
   }
   state.counters["realtime_x"] = kSeconds * run / total_s;
   state.counters["convert_share"] = convert_s / total_s;
-  fs::remove_all(folder);
 }
 BENCHMARK(record_8x50k)->Unit(benchmark::kMillisecond)->Iterations(3)->UseRealTime();
 

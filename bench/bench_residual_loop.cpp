@@ -4,7 +4,7 @@
 //     the simulated bench for 19 s (seed 1, 6 strokes), through the session file and
 //     preprocessing; the loop adds the imbalance and stops. Target: < 5 s.
 //   residual_loop_tremor_12_strokes/<effect>: 12 strokes of the tremor hand
-//     (tests/support/tremor_recording.h, seed 1); 0 clean, 1 breakaway friction (d_s − d1 = 1.5
+//     (fixtures/tremor_recording.h, seed 1); 0 clean, 1 breakaway friction (d_s − d1 = 1.5
 //     N·m, w_s = 0.05 rad/s), 2 gravity imbalance g1 = 3 N·m. Target: < 10 s on 2 cores.
 // Counters: fit_model calls, effects added, strokes, and process_cpu_s: the CPU time of the
 // whole process (every thread: the refits', the folds' and Ceres' own), user + system.
@@ -18,8 +18,8 @@
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/tremor_recording.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/tremor_recording.h"
 
 namespace {
 

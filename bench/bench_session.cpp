@@ -5,7 +5,6 @@
 // writer; the reported time is the session's (manual time). Counters: session_MB_s,
 // fwrite_MB_s and ratio (session / fwrite throughput). The argument is chunk_samples.
 #include <benchmark/benchmark.h>
-#include <unistd.h>
 
 #include <chrono>
 #include <cstdint>
@@ -16,6 +15,7 @@
 
 #include "acquisition/session/session_file.h"
 #include "core/clock.h"
+#include "fixtures/temp_dir.h"
 
 namespace {
 
@@ -30,9 +30,8 @@ constexpr std::size_t kBlocksPerChannel = kTotalBytes / (kChannels * kBlock * si
 constexpr double kBytes = double(kBlocksPerChannel) * kChannels * kBlock * sizeof(std::int32_t);
 
 void session_vs_fwrite(benchmark::State& state) {
-  const fs::path folder =
-      fs::temp_directory_path() / ("doorbench_bench_session_" + std::to_string(::getpid()));
-  fs::create_directories(folder);
+  const doorbench::testing::TempDir scratch("bench_session");
+  const fs::path& folder = scratch.path;
   const fs::path plain = folder / "plain.bin";
   const fs::path session = folder / "session.h5";
 
@@ -82,7 +81,6 @@ void session_vs_fwrite(benchmark::State& state) {
     state.SetIterationTime(elapsed);
     fs::remove(session);
   }
-  fs::remove_all(folder);
   const double n = static_cast<double>(state.iterations());
   state.counters["session_MB_s"] = kBytes * n / session_s / 1e6;
   state.counters["fwrite_MB_s"] = kBytes * n / fwrite_s / 1e6;

@@ -21,6 +21,7 @@
 
 #include "acquisition/record/recorder.h"
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/comedi_backend.h"
 
 namespace {
@@ -47,9 +48,8 @@ int main(int argc, char** argv) {
   const long buffer_bytes = argc > 5 ? std::atol(argv[5]) : 1 << 20;
 
   namespace fs = std::filesystem;
-  const fs::path dir =
-      fs::temp_directory_path() / ("doorbench_comedi_throughput_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const doorbench::testing::TempDir scratch("comedi_throughput");
+  const fs::path& dir = scratch.path;
   // A PCIe-6251-like board: 1 MS/s aggregate, 20 MHz timebase; counters on every channel.
   {
     std::ofstream device(dir / "comedi0");
@@ -120,7 +120,6 @@ int main(int argc, char** argv) {
       channels, rate_hz, backend.scan_rate_hz(), seconds, summary.scans, expected_scans, checked,
       expected_samples, wrong, backend.overran() ? "YES" : "no", backend.end_reason().c_str(),
       wall_s, cpu_s, 100.0 * cpu_s / wall_s, file_bytes / 1e6);
-  fs::remove_all(dir);
   const bool ok = !backend.overran() && wrong == 0 && checked == expected_samples &&
                   summary.scans == expected_scans;
   return ok ? 0 : 1;

@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/modbus_test_server.h"
 #include "sensors/modbus_source.h"
-#include "tests/support/modbus_test_server.h"
 
 namespace {
 

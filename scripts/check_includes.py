@@ -19,11 +19,15 @@ only A, B (F/CMakeLists.txt DOORBENCH_STAGES)`).
 Internal headers: a header under a stage's `internal/` folder (F/S/internal/...) belongs to
 that stage alone; any file outside F/S that includes it is reported.
 
-Tests: a file under tests/F (F a library folder), and the tests/support headers it includes,
-may include only F, what F links, tests/ and the test fixtures (TEST_FIXTURES: the simulated
-bench, the stand-in for the hardware every layer's tests record from); the test executable
+Tests: a file under tests/F (F a library folder), and the tests/support and fixtures/ headers
+it includes, may include only F, what F links, tests/, fixtures/ and the simulated bench (the
+stand-in for the hardware every layer's tests record from); the test executable
 of F (doorbench_add_tests in tests/CMakeLists.txt) may link only F's library, what F links
 and the fixtures. A test that needs a higher layer belongs with that layer's tests.
+
+Programs and fixtures: bench/, studies/ and fixtures/ (the synthetic doors, recordings and
+protocol peers that tests, benchmarks and studies share) may include any library folder and
+fixtures/, but nothing of tests/.
 
 Exit status 1 when anything is reported.
 """
@@ -40,6 +44,8 @@ INCLUDE_PATH = re.compile(r'^\s*#\s*include\s+"([^"]+)"')
 # sessions as the real bench would (through the sensor models), so a test of the recorder or
 # the preprocessing can run without hardware. Nothing else above a test's layer is allowed.
 TEST_FIXTURES = {"simulated_bench"}
+# Folders outside the layers whose files may include any library and fixtures/, never tests/.
+PROGRAM_FOLDERS = ["bench", "studies", "fixtures"]
 STAGES = re.compile(r"set\s*\(\s*DOORBENCH_STAGES\s+([^)]*)\)")
 
 
@@ -165,7 +171,7 @@ def test_folder_includes(source_dir, path, seen=None):
         top = included.split("/")[0]
         yield number, top, included
         support = os.path.join(source_dir, included)
-        if included.startswith("tests/support/") and os.path.exists(support) \
+        if included.startswith(("tests/support/", "fixtures/")) and os.path.exists(support) \
                 and support not in seen:
             seen.add(support)
             for _, deeper, deeper_path in test_folder_includes(source_dir, support, seen):
@@ -185,15 +191,29 @@ def check_tests(source_dir, allowed, top_folders):
                 problems.append(f"tests/CMakeLists.txt: the tests of {folder} link {library}, "
                                 f"a layer {folder} may not use (move the test to {other}'s tests)")
     for folder in allowed:
-        may = allowed[folder] | {folder, "tests"} | TEST_FIXTURES
+        may = allowed[folder] | {folder, "tests", "fixtures"} | TEST_FIXTURES
         for path in source_files(os.path.join(source_dir, "tests", folder)):
             relative = os.path.relpath(path, source_dir)
             for number, top, included in test_folder_includes(source_dir, path):
                 if top in top_folders and top not in may:
-                    uses = ", ".join(sorted(may - {"tests"} - TEST_FIXTURES))
+                    uses = ", ".join(sorted(may - {"tests", "fixtures"} - TEST_FIXTURES))
                     problems.append(f'{relative}:{number}: includes "{included}" but the tests '
                                     f"of {folder} may use only {uses} and the simulated bench (a test that needs a "
                                     "higher layer belongs with that layer's tests)")
+    return problems
+
+
+def check_programs(source_dir):
+    """Problems of bench/, studies/ and fixtures/ files that include a header of tests/."""
+    problems = []
+    for folder in PROGRAM_FOLDERS:
+        for path in source_files(os.path.join(source_dir, folder)):
+            relative = os.path.relpath(path, source_dir)
+            for number, included in included_paths(path):
+                if included.split("/")[0] == "tests":
+                    problems.append(f'{relative}:{number}: includes "{included}" but {folder}/ '
+                                    "may not use tests/ (what programs and tests share belongs "
+                                    "in fixtures/)")
     return problems
 
 
@@ -227,6 +247,7 @@ def main():
                                     f"{folder} may use only {may} "
                                     f"({folder}/CMakeLists.txt)")
     problems += check_tests(source_dir, allowed, top_folders)
+    problems += check_programs(source_dir)
     for problem in problems:
         print(problem)
     if problems:

@@ -40,7 +40,8 @@ INLINE = re.compile(
     r"\s*\*\s*" + ONE_EIGHTY + r"\b|/\s*" + ONE_EIGHTY + r"\s*\*\s*" + PI +
     r"|\b57\.29\d*|\b0\.01745\d*")
 FOLDERS = ["core", "acquisition", "sensors", "calibration", "analysis", "simulated_bench",
-           "viewer", "haptic", "station", "study", "app", "bench", "studies", "fuzz", "tests"]
+           "viewer", "haptic", "station", "study", "app", "bench", "studies", "fuzz", "fixtures",
+           "tests"]
 
 
 def main():

@@ -1,6 +1,6 @@
 // Not a timing: how far the recording family's data can tell breakaway friction apart from
 // nothing, whatever the examination does (docs/residual-loop.md, "What the data allow"). For each
-// draw of the family test's conditions (tests/support/recording_family.h, breakaway_test_family();
+// draw of the family test's conditions (fixtures/recording_family.h, breakaway_test_family();
 // the draws of tests/analysis/test_residual_loop_family.cpp), the recording with the issue's
 // breakaway friction (d_s − d1 = 1.5 N·m, w_s = 0.05 rad/s) and the clean one of the same
 // conditions and seed are each fitted twice:
@@ -8,7 +8,7 @@
 //   oracle: the refit the loop would make if its examination pointed at breakaway friction
 //           with the true values: from the base fit with Stribeck friction at d1 + 1.5 N·m,
 //           0.05 rad/s, and from the true door; the lower fitted sum of squares is kept
-//           (tests/support/breakaway_refit.h).
+//           (fixtures/breakaway_refit.h).
 // Each refit is judged by the loop's acceptance rule (LoopOptions' defaults): held-out window
 // RMSE down by more than min_held_out_improvement, BIC down, the amplitude d_s − d1 at least
 // min_amplitude_z standard uncertainties from zero, neither of the effect's parameters at a
@@ -40,9 +40,9 @@
 #include <string>
 
 #include "analysis/loop/residual_loop.h"
-#include "tests/support/breakaway_refit.h"
-#include "tests/support/recording_family.h"
-#include "tests/support/reference_doors.h"
+#include "fixtures/breakaway_refit.h"
+#include "fixtures/recording_family.h"
+#include "fixtures/reference_doors.h"
 
 using namespace doorbench;
 

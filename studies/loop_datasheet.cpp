@@ -1,6 +1,6 @@
 // Not a timing: the residual loop's datasheet (docs/residual-loop.md, "The datasheet"). For
 // each catalogue effect at each size of its ladder, the loop runs on recordings drawn from
-// the recording family (tests/support/recording_family.h), the truth being the sensory
+// the recording family (fixtures/recording_family.h), the truth being the sensory
 // reference door with the effect added; and on clean recordings (the reference door alone)
 // for the false additions. Every run is one line of a CSV (resumed: runs already in it are
 // skipped); the markdown tables are made from the whole CSV.
@@ -42,8 +42,8 @@
 #include "analysis/model/parameter_file.h"
 #include "core/number_format.h"
 #include "core/parallel.h"
+#include "fixtures/recording_family.h"
 #include "studies/loop_datasheet_table.h"
-#include "tests/support/recording_family.h"
 
 using namespace doorbench;
 using datasheet::RunRecord;

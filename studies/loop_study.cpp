@@ -1,5 +1,5 @@
 // Not a timing: runs the residual loop on one recording made by the tremor hand
-// (tests/support/tremor_recording.h) or on the demo's bench recording, and prints the progress
+// (fixtures/tremor_recording.h) or on the demo's bench recording, and prints the progress
 // lines (each fit with its time), the examination's ranking and the full report, for
 // docs/residual-loop.md and docs/PERFORMANCE.md.
 //
@@ -15,7 +15,7 @@
 //     at the final model
 //   --strokes: each stroke's angle range and its speed through a few angles, then stop
 //   family-clean | family-stribeck: a recording of the recording family
-//     (tests/support/recording_family.h), conditions drawn from SEED, breakaway friction of
+//     (fixtures/recording_family.h), conditions drawn from SEED, breakaway friction of
 //     the issue-30 size (d_s - d1 = 1.5 N m, w_s = 0.05 rad/s) or none; issue-stribeck: the
 //     issue's case (a PD hand, 0.3 N of 1-8 Hz tremor, openings to 60-77 deg, latch, 1 kHz).
 //     --hand H, --rate HZ, --sensors S override the drawn conditions; --replay: the data
@@ -37,9 +37,9 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "analysis/simulation/fit_synthetic.h"
-#include "tests/support/recording_family.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/tremor_recording.h"
+#include "fixtures/recording_family.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/tremor_recording.h"
 
 using namespace doorbench;
 

@@ -34,10 +34,10 @@
 #include "acquisition/record/recorder.h"
 #include "acquisition/record/recovery.h"
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/temp_dir.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/fake_polled_source.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

@@ -19,7 +19,7 @@
 #include "acquisition/record/journal.h"
 #include "acquisition/record/recovery.h"
 #include "acquisition/session/recording_csv.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 
 namespace {
 

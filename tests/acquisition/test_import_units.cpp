@@ -14,9 +14,9 @@
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/session/session_file.h"
 #include "acquisition/session/tdms.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/tdms_writer.h"
-#include "tests/support/temp_dir.h"
 
 namespace doorbench {
 namespace {

@@ -16,8 +16,8 @@
 
 #include "acquisition/record/journal.h"
 #include "acquisition/record/recovery.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;

@@ -17,9 +17,9 @@
 #include "acquisition/record/recorder.h"
 #include "acquisition/record/recovery.h"
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/temp_dir.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/allocation_counter.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;

@@ -8,7 +8,7 @@
 
 #include "acquisition/session/resample.h"
 #include "acquisition/session/session_csv.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using namespace doorbench;

@@ -3,7 +3,7 @@
 #include <filesystem>
 
 #include "acquisition/session/session_csv.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 
 namespace {
 

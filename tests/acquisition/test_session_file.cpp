@@ -22,8 +22,8 @@
 
 #include "acquisition/rig/calibration_record.h"
 #include "acquisition/session/session_file.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

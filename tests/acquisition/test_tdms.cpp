@@ -12,10 +12,10 @@
 #include "acquisition/session/session_csv.h"
 #include "acquisition/session/session_file.h"
 #include "acquisition/session/tdms.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/tdms_error.h"
 #include "tests/support/tdms_writer.h"
-#include "tests/support/temp_dir.h"
 
 namespace doorbench {
 namespace {

@@ -8,9 +8,9 @@
 #include <vector>
 
 #include "acquisition/session/tdms.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/tdms_error.h"
 #include "tests/support/tdms_writer.h"
-#include "tests/support/temp_dir.h"
 
 namespace doorbench {
 namespace {

@@ -18,10 +18,10 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/sensory_model.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/foreign_recording.h"
 #include "tests/support/nested_refits.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace doorbench {
 namespace {

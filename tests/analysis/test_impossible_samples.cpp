@@ -9,8 +9,8 @@
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 
 namespace {
 

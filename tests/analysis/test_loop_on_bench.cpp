@@ -12,9 +12,9 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/physical_model.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/nested_refits.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::LoopResult;
 using doorbench::ModelKind;

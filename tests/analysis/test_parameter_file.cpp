@@ -12,7 +12,7 @@
 
 #include "analysis/model/door_model.h"
 #include "analysis/model/parameter_file.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;

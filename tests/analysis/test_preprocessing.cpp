@@ -19,8 +19,8 @@
 #include "analysis/simulation/trajectory_io.h"
 #include "analysis/simulation/virtual_hand.h"
 #include "core/units.h"
+#include "fixtures/simulated_session.h"
 #include "simulated_bench/simulated_bench.h"
-#include "tests/support/simulated_session.h"
 
 namespace {
 
@@ -47,7 +47,7 @@ std::filesystem::path fresh_path(const std::string& name) {
 
 // Three openings and closings of the reference door on the built-in simulated bench (18 s
 // of the virtual hand, then rest), recorded through the real session writer. The sensory
-// door stays inside every sensor's range (tests/support/simulated_session.h).
+// door stays inside every sensor's range (fixtures/simulated_session.h).
 std::filesystem::path record(const std::string& name, double duration_s, std::uint64_t seed,
                              const std::string& model_kind = "sensory") {
   const auto path = fresh_path(name);

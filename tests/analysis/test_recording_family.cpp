@@ -1,4 +1,4 @@
-// The recording family (tests/support/recording_family.h): drawn conditions give well-formed
+// The recording family (fixtures/recording_family.h): drawn conditions give well-formed
 // recordings (strokes, rates, directions, a rate that agrees with the angle), the draws
 // cover the family's variety, and a recording is deterministic for its conditions and seed.
 #include <algorithm>
@@ -10,7 +10,7 @@
 #include <utility>
 
 #include "analysis/model/parameter_file.h"
-#include "tests/support/recording_family.h"
+#include "fixtures/recording_family.h"
 
 namespace {
 

@@ -12,8 +12,8 @@
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/simulation/fit_synthetic.h"
+#include "fixtures/reference_doors.h"
 #include "tests/support/nested_refits.h"
-#include "tests/support/reference_doors.h"
 
 namespace {
 

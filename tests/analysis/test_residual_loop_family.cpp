@@ -1,5 +1,5 @@
 // The residual loop on recordings drawn from the recording family
-// (tests/support/recording_family.h): breakaway friction of d_s − d1 = 1.5 N·m with
+// (fixtures/recording_family.h): breakaway friction of d_s − d1 = 1.5 N·m with
 // w_s = 0.05 rad/s, on 20 draws, and the clean recordings of the same draws (the target:
 // named first in 90 %, an addition to at most 10 % of the clean ones; the test holds the
 // level measured, below). The family is the hands that
@@ -17,9 +17,9 @@
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
 #include "core/number_format.h"
-#include "tests/support/breakaway_refit.h"
-#include "tests/support/recording_family.h"
-#include "tests/support/reference_doors.h"
+#include "fixtures/breakaway_refit.h"
+#include "fixtures/recording_family.h"
+#include "fixtures/reference_doors.h"
 
 namespace {
 

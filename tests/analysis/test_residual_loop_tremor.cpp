@@ -1,5 +1,5 @@
 // The residual loop (docs/residual-loop.md) on recordings made by a different generator
-// from the other loop tests': the tremor hand (tests/support/tremor_recording.h: 12 strokes, a
+// from the other loop tests': the tremor hand (fixtures/tremor_recording.h: 12 strokes, a
 // softer grip that lets the push build up against the friction, 8–12 Hz tremor, rest kept
 // before each stroke, the bench's noise). Breakaway friction, d_s − d1 = 1.5 N·m above the
 // Coulomb level with w_s = 0.05 rad/s, must be named first with its parameters
@@ -16,9 +16,9 @@
 #include "analysis/fit/fitting.h"
 #include "analysis/loop/residual_loop.h"
 #include "analysis/model/parameter_file.h"
+#include "fixtures/reference_doors.h"
+#include "fixtures/tremor_recording.h"
 #include "tests/support/nested_refits.h"
-#include "tests/support/reference_doors.h"
-#include "tests/support/tremor_recording.h"
 
 namespace {
 

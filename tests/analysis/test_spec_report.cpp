@@ -11,8 +11,8 @@
 #include "analysis/design/spec_report.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/simulation/fit_synthetic.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/pgm_image.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using doorbench::DesignParameter;

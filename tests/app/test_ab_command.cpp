@@ -11,11 +11,11 @@
 #include <vector>
 
 #include "acquisition/session/session_file.h"
+#include "fixtures/temp_dir.h"
 #include "study/ab_trials.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/run_on_terminal.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

@@ -17,9 +17,9 @@
 #include "analysis/preprocessing/preprocessing.h"
 #include "calibration/geometry_calibration.h"
 #include "core/units.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

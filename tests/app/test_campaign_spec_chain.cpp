@@ -15,10 +15,10 @@
 #include "analysis/design/felt_quantities.h"
 #include "analysis/model/parameter_file.h"
 #include "app/commands.h"
+#include "fixtures/temp_dir.h"
 #include "study/statistics/analysis_for_spec.h"
 #include "study/trials_table.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;

@@ -4,8 +4,8 @@
 #include <catch2/catch.hpp>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::run_doorbench_shell;
 using doorbench::testing::TempDir;

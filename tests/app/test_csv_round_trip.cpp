@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "acquisition/session/session_file.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 

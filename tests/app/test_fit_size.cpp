@@ -9,9 +9,9 @@
 #include <sstream>
 #include <string>
 
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

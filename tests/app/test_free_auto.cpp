@@ -16,9 +16,9 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "core/units.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

@@ -24,10 +24,10 @@
 #include "analysis/fit/fitting.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 #include "viewer/session_data.h"
 
 namespace {

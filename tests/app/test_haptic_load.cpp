@@ -16,11 +16,11 @@
 
 #include "acquisition/session/session_file.h"
 #include "core/number_format.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/busy_processes.h"
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using doorbench::SessionEvent;

@@ -6,8 +6,8 @@
 #include <fstream>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

@@ -9,9 +9,9 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/simulation/simulator.h"
 #include "analysis/simulation/virtual_hand.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

@@ -20,10 +20,10 @@
 #include "acquisition/session/pdf_output.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/physical_model.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/doorbench_process.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

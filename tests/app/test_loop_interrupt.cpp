@@ -12,11 +12,11 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/doorbench_process.h"
 #include "tests/support/files.h"
 #include "tests/support/loop_recording.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

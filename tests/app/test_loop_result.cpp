@@ -7,11 +7,11 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
 #include "tests/support/loop_recording.h"
 #include "tests/support/nested_refits.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 TEST_CASE(
     "loop: result.json lists every refit, kept or rejected, with its figures, "

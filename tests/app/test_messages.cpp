@@ -7,9 +7,9 @@
 #include <string>
 
 #include "acquisition/session/printable.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

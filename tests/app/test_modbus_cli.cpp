@@ -8,9 +8,9 @@
 #include <sstream>
 #include <string>
 
-#include "tests/support/modbus_test_server.h"
+#include "fixtures/modbus_test_server.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using doorbench::testing::TcpTransmitterServer;

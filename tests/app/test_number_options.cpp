@@ -12,9 +12,9 @@
 
 #include "app/commands.h"
 #include "app/number_options.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::StartsWith;

@@ -15,10 +15,10 @@
 #include <string>
 
 #include "acquisition/session/output_file.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

@@ -9,9 +9,9 @@
 #include <string>
 
 #include "app/progress.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/run_on_terminal.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

@@ -10,8 +10,8 @@
 
 #include "acquisition/session/session_file.h"
 #include "app/limit_watcher.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_on_terminal.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 
@@ -116,7 +116,7 @@ TEST_CASE("record on a rig that clips: the live status line and the summary name
   const double total_s = std::stod(m[1]), first_s = std::stod(m[3]);
   // The summary counts the recorded samples (LimitWatcher::measure), not status calls: the
   // door saturates the gyroscope only while it swings, and first about 1.2 s in
-  // (tests/support/simulated_session.h).
+  // (fixtures/simulated_session.h).
   CHECK(total_s > 0.05);
   CHECK(total_s < 3.0);
   CHECK(first_s > 0.5);

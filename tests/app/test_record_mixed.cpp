@@ -13,10 +13,10 @@
 
 #include "acquisition/session/session_file.h"
 #include "core/units.h"
-#include "tests/support/modbus_test_server.h"
+#include "fixtures/modbus_test_server.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/sine_phase.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using namespace doorbench;

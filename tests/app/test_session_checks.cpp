@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

@@ -10,9 +10,9 @@
 #include "app/spec_campaign.h"
 #include "app/spec_run.h"
 #include "core/number_format.h"
+#include "fixtures/temp_dir.h"
 #include "study/statistics/analysis_for_spec.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using doorbench::CampaignForSpec;

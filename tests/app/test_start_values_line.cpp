@@ -10,8 +10,8 @@
 #include <sstream>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

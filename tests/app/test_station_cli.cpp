@@ -8,8 +8,8 @@
 #include <regex>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 

@@ -5,8 +5,8 @@
 #include <catch2/catch.hpp>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::DoorbenchRun;
 using doorbench::testing::run_doorbench_shell;

@@ -14,10 +14,10 @@
 #include <utility>
 
 #include "analysis/model/parameter_file.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
 

@@ -11,10 +11,10 @@
 
 #include "analysis/model/parameter_file.h"
 #include "app/fit_output.h"
+#include "fixtures/temp_dir.h"
+#include "fixtures/tremor_recording.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/svg_check.h"
-#include "tests/support/temp_dir.h"
-#include "tests/support/tremor_recording.h"
 
 namespace {
 

@@ -12,9 +12,9 @@
 #include "calibration/static_source.h"
 #include "calibration/timing_calibration.h"
 #include "core/units.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/rig_channel.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 using namespace doorbench::calibration;

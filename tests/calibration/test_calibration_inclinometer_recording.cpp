@@ -16,10 +16,10 @@
 #include "calibration/inclinometer_calibration.h"
 #include "calibration/static_source.h"
 #include "core/units.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/rig_channel.h"
 #include "simulated_bench/simulated_bench.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

@@ -11,11 +11,11 @@
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/session/session_csv.h"
 #include "calibration/certificate.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/rig_channel.h"
 #include "tests/support/files.h"
-#include "tests/support/simulated_session.h"
 #include "tests/support/svg_check.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

@@ -2,8 +2,9 @@
 """A test of scripts/check_includes.py: it passes on this repository, and each deliberate
 fault makes it fail naming the file, the line and what is allowed: an upward include
 (acquisition including an analysis header), a sibling's, a later stage's (the fit including
-the loop), another stage's internal header, and a test that climbs (an analysis test
-including haptic, directly or through a tests/support header).
+the loop), another stage's internal header, a test that climbs (an analysis test
+including haptic, directly or through a tests/support or fixtures/ header), and a benchmark
+that includes a header of tests/.
 
 usage: test_check_includes.py SOURCE_DIR
 """
@@ -33,7 +34,7 @@ expect("include only what their folder links" in clean.stdout, "the pass says so
 
 with tempfile.TemporaryDirectory() as tree:
     folders = ["core", "acquisition", "sensors", "calibration", "analysis", "simulated_bench",
-               "viewer", "haptic", "study", "app", "tests", "bench"]
+               "viewer", "haptic", "study", "app", "tests", "bench", "studies", "fixtures"]
     for folder in folders:
         origin = os.path.join(source_dir, folder)
         if os.path.isdir(origin):
@@ -78,6 +79,11 @@ with tempfile.TemporaryDirectory() as tree:
     support = os.path.join(tree, "tests", "support", "climbing_fixture.h")
     open(support, "w", encoding="utf-8").write('#pragma once\n#include "viewer/window.h"\n')
     insert("tests/analysis/test_switches.cpp", '#include "tests/support/climbing_fixture.h"')
+    shared = os.path.join(tree, "fixtures", "climbing_door.h")
+    open(shared, "w", encoding="utf-8").write('#pragma once\n#include "haptic/device.h"\n')
+    insert("tests/analysis/test_simulator.cpp", '#include "fixtures/climbing_door.h"')
+    # What benchmarks and tests share lives in fixtures/, not tests/.
+    insert("bench/bench_inverse_design.cpp", '#include "tests/support/files.h"')
     staged = run(tree)
     for text in [
             'analysis/fit/fit_metrics.cpp:2: includes "analysis/loop/..." but stage fit of '
@@ -90,7 +96,12 @@ with tempfile.TemporaryDirectory() as tree:
             'tests/analysis/test_switches.cpp:2: includes "tests/support/climbing_fixture.h -> '
             'viewer/window.h" but the tests of analysis may use only acquisition, analysis, core '
             'and the simulated bench',
-            "check_includes: 6 include(s) against the layers"]:
+            'tests/analysis/test_simulator.cpp:2: includes "fixtures/climbing_door.h -> '
+            'haptic/device.h" but the tests of analysis may use only acquisition, analysis, '
+            'core and the simulated bench',
+            'bench/bench_inverse_design.cpp:2: includes "tests/support/files.h" but bench/ may '
+            'not use tests/ (what programs and tests share belongs in fixtures/)',
+            "check_includes: 8 include(s) against the layers"]:
         expect(text in staged.stdout, f"the check reports: {text}", staged)
 
 print("test_check_includes: passed")

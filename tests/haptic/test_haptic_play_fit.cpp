@@ -9,9 +9,9 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
 #include "analysis/preprocessing/preprocessing.h"
+#include "fixtures/temp_dir.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 using namespace doorbench::haptic;

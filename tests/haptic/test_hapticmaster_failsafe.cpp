@@ -19,11 +19,11 @@
 #include <vector>
 
 #include "core/clock.h"
+#include "fixtures/temp_dir.h"
 #include "haptic/hapticmaster_device.h"
 #include "haptic/hapticmaster_protocol.h"
 #include "tests/support/hapticmaster_emulator_process.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench::haptic;
 using doorbench::testing::TempDir;

@@ -11,10 +11,10 @@
 
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
+#include "fixtures/temp_dir.h"
 #include "haptic/hapticmaster_device.h"
 #include "haptic/playback.h"
 #include "tests/support/hapticmaster_emulator_process.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 using namespace doorbench::haptic;

@@ -8,10 +8,10 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
 #include "analysis/model/sensory_model.h"
+#include "fixtures/temp_dir.h"
 #include "haptic/playback.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/haptic_test_device.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 using namespace doorbench::haptic;

@@ -14,12 +14,12 @@
 
 #include "acquisition/record/recorder.h"
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/comedi_backend.h"
 #include "sensors/comedi_devices.h"
 #include "tests/support/allocation_counter.h"
 #include "tests/support/comedi_emulator.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using doorbench::ChannelInfo;

@@ -11,10 +11,10 @@
 #include <sstream>
 
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/comedi_api.h"
 #include "sensors/comedi_backend.h"
 #include "sensors/comedi_devices.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using doorbench::sensors::ComediApi;

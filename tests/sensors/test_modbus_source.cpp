@@ -18,10 +18,10 @@
 #include "acquisition/rig/rig_file.h"
 #include "acquisition/session/session_file.h"
 #include "core/units.h"
+#include "fixtures/modbus_test_server.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/modbus_source.h"
 #include "tests/support/allocation_counter.h"
-#include "tests/support/modbus_test_server.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::kRadPerDeg;
 using doorbench::PolledEvent;

@@ -16,12 +16,12 @@
 #include "acquisition/record/recorder.h"
 #include "acquisition/record/recovery.h"
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/comedi_backend.h"
 #include "tests/support/comedi_emulator.h"
 #include "tests/support/fake_polled_source.h"
 #include "tests/support/session_origin.h"
 #include "tests/support/sine_phase.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using namespace doorbench;

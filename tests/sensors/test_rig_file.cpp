@@ -12,9 +12,9 @@
 #include <vector>
 
 #include "acquisition/rig/rig_file.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/sensor_models.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/trigger_test_rig.h"
 
 using doorbench::testing::read_file;

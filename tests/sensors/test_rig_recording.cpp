@@ -10,9 +10,9 @@
 #include <thread>
 
 #include "acquisition/session/session_file.h"
+#include "fixtures/temp_dir.h"
 #include "sensors/rig_recording.h"
 #include "simulated_bench/simulated_bench.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::RigDefinition;
 using doorbench::sensors::ManualKeys;

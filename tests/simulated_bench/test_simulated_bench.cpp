@@ -12,9 +12,9 @@
 #include "acquisition/rig/rig_file.h"
 #include "acquisition/session/session_csv.h"
 #include "core/units.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "simulated_bench/simulated_bench.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 
 namespace {
 

@@ -14,10 +14,10 @@
 #include <thread>
 
 #include "core/clock.h"
+#include "fixtures/temp_dir.h"
 #include "haptic/door_snapshot.h"
 #include "station/door_sound.h"
 #include "tests/support/busy_processes.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 namespace fs = std::filesystem;

@@ -10,10 +10,10 @@
 #include <fstream>
 #include <thread>
 
+#include "fixtures/temp_dir.h"
 #include "haptic/door_snapshot.h"
 #include "station/question_panel.h"
 #include "station/station.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 
 using namespace doorbench;

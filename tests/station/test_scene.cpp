@@ -4,9 +4,9 @@
 #include <cmath>
 #include <fstream>
 
+#include "fixtures/temp_dir.h"
 #include "station/scene.h"
 #include "tests/support/gltf_box.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench;
 using namespace doorbench::station;

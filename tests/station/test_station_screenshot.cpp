@@ -8,10 +8,10 @@
 #include <cstdlib>
 #include <fstream>
 
+#include "fixtures/temp_dir.h"
 #include "station/scene.h"
 #include "station/station_window.h"
 #include "tests/support/gltf_box.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 
 using namespace doorbench;

@@ -18,10 +18,10 @@
 
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "study/ab_trials.h"
 #include "study/statistics/binomial.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 

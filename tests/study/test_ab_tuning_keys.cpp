@@ -15,8 +15,8 @@
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
 #include "analysis/model/perceptual_controls.h"
+#include "fixtures/temp_dir.h"
 #include "study/tuning_keys.h"
-#include "tests/support/temp_dir.h"
 
 using Catch::Matchers::Contains;
 using Catch::Matchers::Equals;

@@ -11,11 +11,11 @@
 #include <thread>
 
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "tests/study/simulated_panel.h"
 #include "tests/support/doorbench_process.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::append_row;
 using doorbench::testing::kTrialsHeader;

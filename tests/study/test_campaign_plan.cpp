@@ -5,11 +5,11 @@
 #include <set>
 #include <tuple>
 
+#include "fixtures/temp_dir.h"
 #include "study/campaign_file.h"
 #include "study/campaign_plan.h"
 #include "study/latin_square.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using namespace doorbench::study;
 using doorbench::testing::TempDir;

@@ -8,13 +8,13 @@
 #include <nlohmann/json.hpp>
 
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "study/statistics/analysis.h"
 #include "study/trials_table.h"
 #include "tests/study/simulated_panel.h"
 #include "tests/support/files.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/svg_check.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::append_row;
 using doorbench::testing::kTrialsHeader;

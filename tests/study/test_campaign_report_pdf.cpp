@@ -15,11 +15,11 @@
 #include <vector>
 
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "tests/study/simulated_panel.h"
 #include "tests/support/files.h"
 #include "tests/support/pgm_image.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::append_row;
 using doorbench::testing::PanelRandom;

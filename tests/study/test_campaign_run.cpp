@@ -18,6 +18,7 @@
 
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "study/campaign_file.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_summary.h"
@@ -27,7 +28,6 @@
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
 #include "tests/support/run_on_terminal.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::testing::read_file;
 using doorbench::testing::TempDir;

@@ -10,9 +10,9 @@
 #include <sstream>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "study/statistics/discrimination.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::study::Conclusion;
 using doorbench::testing::read_file;

@@ -12,10 +12,10 @@
 #include <map>
 #include <sstream>
 
+#include "fixtures/temp_dir.h"
 #include "study/statistics/preference_scale.h"
 #include "tests/study/simulated_panel.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::study::fit_preference_scale;
 using doorbench::study::pair_data;

@@ -8,9 +8,9 @@
 #include <map>
 #include <sstream>
 
+#include "fixtures/temp_dir.h"
 #include "study/statistics/ratings.h"
 #include "tests/study/rating_simulation.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::study::AttributeRatings;
 using doorbench::study::fit_attribute_ratings;

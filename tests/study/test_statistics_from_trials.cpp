@@ -6,11 +6,11 @@
 #include <random>
 
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "study/statistics/ratings.h"
 #include "study/statistics/thresholds.h"
 #include "study/statistics/tuning.h"
 #include "tests/support/files.h"
-#include "tests/support/temp_dir.h"
 
 namespace study = doorbench::study;
 

@@ -7,8 +7,8 @@
 #include <random>
 
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "study/statistics/tuning.h"
-#include "tests/support/temp_dir.h"
 
 using doorbench::study::analyze_tuning;
 using doorbench::study::render_tuning_plot;

@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "tests/support/modbus_test_server.h"  // ChildProcess
+#include "fixtures/modbus_test_server.h"  // ChildProcess
 
 namespace doorbench::testing {
 

@@ -7,8 +7,8 @@
 #include <catch2/catch.hpp>
 #include <string>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace doorbench::testing {
 

@@ -10,7 +10,7 @@
 #include <sstream>
 #include <string>
 
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 
 namespace doorbench::testing {
 

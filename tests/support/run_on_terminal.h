@@ -19,8 +19,8 @@
 #include <thread>
 #include <vector>
 
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/temp_dir.h"
 
 namespace doorbench::testing {
 

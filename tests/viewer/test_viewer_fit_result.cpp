@@ -12,8 +12,8 @@
 
 #include "analysis/fit/fit_result_file.h"
 #include "analysis/model/parameter_file.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;

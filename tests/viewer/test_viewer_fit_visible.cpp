@@ -9,7 +9,7 @@
 #include <numbers>
 
 #include "acquisition/session/session_file.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
 #include "viewer/viewer_app.h"

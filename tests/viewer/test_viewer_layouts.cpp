@@ -7,9 +7,9 @@
 
 #include "acquisition/session/printable.h"
 #include "acquisition/session/session_file.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
 #include "viewer/viewer_app.h"

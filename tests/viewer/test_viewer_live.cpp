@@ -21,7 +21,7 @@
 #include <thread>
 
 #include "acquisition/record/journal.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/live_journal.h"
 

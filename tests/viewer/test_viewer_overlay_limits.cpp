@@ -15,8 +15,8 @@
 
 #include "acquisition/session/session_file.h"
 #include "core/units.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
 

@@ -6,7 +6,7 @@
 #include <limits>
 #include <random>
 
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 #include "viewer/loop_steps.h"
 #include "viewer/plot_series.h"
 #include "viewer/plot_view.h"

@@ -18,7 +18,7 @@
 
 #include "acquisition/session/session_file.h"
 #include "analysis/model/parameter_file.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
 

@@ -9,8 +9,8 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "analysis/report/plot_style.h"
-#include "tests/support/simulated_session.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "viewer/tuning.h"
 
 using Catch::Matchers::Contains;

@@ -15,7 +15,7 @@
 #include "acquisition/rig/rig_file.h"
 #include "acquisition/session/session_file.h"
 #include "core/units.h"
-#include "tests/support/temp_dir.h"
+#include "fixtures/temp_dir.h"
 #include "tests/support/viewer_pixels.h"
 #include "viewer/session_data.h"
 
