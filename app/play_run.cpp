@@ -13,6 +13,7 @@
 #include "acquisition/session/session_file.h"
 #include "app/session_recording.h"
 #include "app/stop_signals.h"
+#include "core/time_text.h"
 #include "core/units.h"
 
 namespace doorbench::app {

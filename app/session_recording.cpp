@@ -28,19 +28,11 @@
 #include "app/commands.h"
 #include "app/limit_watcher.h"
 #include "calibration/range_warnings.h"
+#include "core/time_text.h"
 #include "sensors/rig_recording.h"
 #include "simulated_bench/simulated_bench.h"
 
 namespace doorbench::app {
-
-std::string utc_now_iso8601() {
-  const std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char text[32];
-  std::strftime(text, sizeof text, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  return text;
-}
 
 RigDefinition load_rig(const std::string& rig_path) {
   if (rig_path.empty()) {

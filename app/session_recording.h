@@ -34,6 +34,5 @@ RecordSummary record_simulated_session(const RigDefinition& rig,
 // the live status on stderr. Throws UsageError for a rig that needs --duration-s.
 RecordSummary record_rig_session(const RigDefinition& rig, const SessionRecordingOptions& options,
                                  const std::filesystem::path& out_path);
-std::string utc_now_iso8601();
 
 }  // namespace doorbench::app

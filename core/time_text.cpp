@@ -1,5 +1,9 @@
 #include "core/time_text.h"
 
+#include <cstdio>
+#include <ctime>
+#include <stdexcept>
+
 namespace doorbench {
 
 std::string iso8601_utc_problem(const std::string& text) {
@@ -39,6 +43,30 @@ std::string iso8601_utc_problem(const std::string& text) {
     return text + " is not a day of the calendar";
   }
   return "";
+}
+
+std::string utc_now_iso8601() {
+  return iso8601_utc_text(static_cast<std::int64_t>(std::time(nullptr)));
+}
+
+std::string iso8601_utc_text(std::int64_t unix_s, std::int64_t fraction, int fraction_digits) {
+  std::int64_t units = 1;
+  for (int i = 0; i < fraction_digits; ++i) units *= 10;
+  if (fraction_digits < 0 || fraction_digits > 9 || fraction < 0 || fraction >= units) {
+    throw std::invalid_argument("iso8601_utc_text: fraction " + std::to_string(fraction) +
+                                " is not from 0 to 10^" + std::to_string(fraction_digits) +
+                                " - 1 with 0 to 9 digits");
+  }
+  const auto time = static_cast<std::time_t>(unix_s);
+  std::tm utc{};
+  gmtime_r(&time, &utc);
+  char date[32];
+  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%S", &utc);
+  if (fraction_digits == 0) return std::string(date) + "Z";
+  char text[48];
+  std::snprintf(text, sizeof text, "%s.%0*lldZ", date, fraction_digits,
+                static_cast<long long>(fraction));
+  return text;
 }
 
 }  // namespace doorbench

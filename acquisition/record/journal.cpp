@@ -17,6 +17,8 @@
 #include <ctime>
 #include <nlohmann/json.hpp>
 
+#include "core/time_text.h"
+
 namespace doorbench {
 
 static_assert(std::endian::native == std::endian::little,
@@ -167,14 +169,7 @@ std::string utc_iso8601_ns(std::int64_t realtime_ns) {
     nanoseconds += 1000000000;
     --seconds;
   }
-  const auto time = static_cast<std::time_t>(seconds);
-  std::tm utc{};
-  gmtime_r(&time, &utc);
-  char date[32];
-  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%S", &utc);
-  char text[48];
-  std::snprintf(text, sizeof text, "%s.%09lldZ", date, static_cast<long long>(nanoseconds));
-  return text;
+  return iso8601_utc_text(seconds, nanoseconds, 9);
 }
 
 std::size_t scan_channel_count(const JournalHeader& header) {

@@ -44,12 +44,7 @@ CalibrationRecord linear_record(std::string id, std::string input_unit, std::str
   record.unit = std::move(unit);
   record.coefficients = {offset, gain};
   record.method = std::move(method);
-  const std::time_t now = std::time(nullptr);
-  std::tm utc{};
-  gmtime_r(&now, &utc);
-  char date[32];
-  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%SZ", &utc);
-  record.date_utc = date;
+  record.date_utc = utc_now_iso8601();
   return record;
 }
 

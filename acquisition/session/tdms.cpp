@@ -15,6 +15,7 @@
 #include "acquisition/session/internal/tdms_scaling.h"
 #include "acquisition/session/lfs_pointer.h"
 #include "acquisition/session/printable.h"
+#include "core/time_text.h"
 
 namespace doorbench {
 
@@ -300,14 +301,14 @@ class Reader {
 // A time stamp (seconds since 1904-01-01 UTC and 2^-64 fractions) as ISO 8601 UTC.
 std::string time_stamp_text(std::int64_t seconds, std::uint64_t fractions) {
   constexpr std::int64_t kEpoch1904To1970_s = 2082844800;
-  const std::time_t unix_s = static_cast<std::time_t>(seconds - kEpoch1904To1970_s);
-  std::tm utc{};
-  gmtime_r(&unix_s, &utc);
-  char date[32];
-  std::strftime(date, sizeof date, "%Y-%m-%dT%H:%M:%S", &utc);
-  char fraction[16];
-  std::snprintf(fraction, sizeof fraction, "%.6f", std::ldexp(static_cast<double>(fractions), -64));
-  return std::string(date) + (fraction + 1) + "Z";
+  // 2^-64 s fractions to the nearest microsecond; a fraction that rounds to 1 s carries.
+  std::int64_t unix_s = seconds - kEpoch1904To1970_s;
+  std::int64_t microseconds = std::llround(std::ldexp(static_cast<double>(fractions), -64) * 1e6);
+  if (microseconds == 1000000) {
+    microseconds = 0;
+    ++unix_s;
+  }
+  return iso8601_utc_text(unix_s, microseconds, 6);
 }
 
 TdmsProperty read_property_value(Reader& in, std::uint32_t type) {

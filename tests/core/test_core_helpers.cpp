@@ -14,6 +14,7 @@
 #include "core/number_format.h"
 #include "core/percentile.h"
 #include "core/seeded_random.h"
+#include "core/time_text.h"
 
 namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
@@ -134,4 +135,21 @@ TEST_CASE("seeded draws: standard_normal has mean 0 and variance 1, shuffle keep
   std::vector<int> sorted = items;
   std::sort(sorted.begin(), sorted.end());
   CHECK(sorted == std::vector<int>{1, 2, 3, 4, 5, 6, 7, 8});
+}
+
+TEST_CASE("iso8601_utc_text: seconds since 1970 in UTC, with the fraction's leading zeros",
+          "[core]") {
+  using doorbench::iso8601_utc_text;
+  CHECK(iso8601_utc_text(0) == "1970-01-01T00:00:00Z");
+  CHECK(iso8601_utc_text(1700000000) == "2023-11-14T22:13:20Z");
+  CHECK(iso8601_utc_text(1700000000, 123456789, 9) == "2023-11-14T22:13:20.123456789Z");
+  CHECK(iso8601_utc_text(1700000000, 5, 6) == "2023-11-14T22:13:20.000005Z");
+  CHECK_THROWS_WITH(iso8601_utc_text(0, 1000000, 6),
+                    "iso8601_utc_text: fraction 1000000 is not from 0 to 10^6 - 1 with 0 to 9 "
+                    "digits");
+  CHECK_THROWS_WITH(iso8601_utc_text(0, -1, 3),
+                    "iso8601_utc_text: fraction -1 is not from 0 to 10^3 - 1 with 0 to 9 digits");
+  // The present moment is a valid UTC time as the command line takes it.
+  CHECK(doorbench::iso8601_utc_problem(doorbench::utc_now_iso8601()).empty());
+  CHECK(doorbench::utc_now_iso8601().size() == 20);
 }
