@@ -17,6 +17,7 @@
 #include "acquisition/session/session_csv.h"
 #include "core/number_format.h"
 #include "core/seeded_random.h"
+#include "core/time_text.h"
 #include "study/statistics/binomial.h"
 
 namespace doorbench::study {
@@ -26,15 +27,6 @@ constexpr int kMaxTrials = 10000;
 
 std::string in_quotes(std::string_view text) {
   return std::string("\"").append(text).append("\"");
-}
-
-std::string answered_now_utc() {
-  const std::time_t now = std::chrono::system_clock::to_time_t(std::chrono::system_clock::now());
-  std::tm parts{};
-  gmtime_r(&now, &parts);
-  std::ostringstream text;
-  text << std::put_time(&parts, "%Y-%m-%dT%H:%M:%SZ");
-  return text.str();
 }
 
 std::string two_digits(int trial) {
@@ -64,8 +56,10 @@ std::string AbOptions::validate() const {
     return "an A/B run asks preference, identify-real or rating, not " +
            std::string(to_string(question));
   }
-  if (question == QuestionKind::kRating && (rating_scale < 2 || rating_scale > 100)) {
-    return "rating scale K must be 2 to 100, got " + std::to_string(rating_scale);
+  if (question == QuestionKind::kRating &&
+      (rating_scale < 2 || rating_scale > Question::kMaxRatingScale)) {
+    return "rating scale K must be 2 to " + std::to_string(Question::kMaxRatingScale) + ", got " +
+           std::to_string(rating_scale);
   }
   if (!std::isfinite(presentation_s) || presentation_s <= 0 || presentation_s > 3600) {
     return "presentation time must be above 0 and at most 3600 s, got " +
@@ -392,7 +386,7 @@ AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const An
         prompts << wrong.what() << "; again please\n";
       }
     }
-    outcome.answered_utc = answered_now_utc();
+    outcome.answered_utc = utc_now_iso8601();
     std::string answer_field = outcome.answer->text;
     if (answer_field.find_first_of(",\"") != std::string::npos) {
       answer_field = std::to_string(outcome.answer->rating[0]) + " " +

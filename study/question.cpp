@@ -111,7 +111,7 @@ std::optional<Question> Question::parse(std::string_view text) {
     const std::size_t colon = rest.rfind(':');
     if (colon == std::string_view::npos || colon == 0) return std::nullopt;
     const std::optional<int> scale = small_whole_number(rest.substr(colon + 1));
-    if (!scale || *scale < 2) return std::nullopt;
+    if (!scale || *scale < 2 || *scale > kMaxRatingScale) return std::nullopt;
     return Question{QuestionKind::kRating, std::string(rest.substr(0, colon)), *scale};
   }
   return std::nullopt;
@@ -120,6 +120,16 @@ std::optional<Question> Question::parse(std::string_view text) {
 bool is_question(std::string_view text, QuestionKind kind) {
   const std::optional<Question> question = Question::parse(text);
   return question && question->kind == kind;
+}
+
+std::optional<QuestionKind> spelled_kind(std::string_view text) {
+  for (QuestionKind kind : {QuestionKind::kPreference, QuestionKind::kPreference2ac,
+                            QuestionKind::kIdentifyReal, QuestionKind::kTune}) {
+    if (text == to_string(kind)) return kind;
+  }
+  if (text.starts_with("stronger:")) return QuestionKind::kStronger;
+  if (text == "rating" || text.starts_with("rating:")) return QuestionKind::kRating;
+  return std::nullopt;
 }
 
 bool Question::is_choice() const {

@@ -26,13 +26,17 @@ std::string_view to_string(QuestionKind kind);
 using AnswerLabels = std::array<std::string, 2>;
 
 struct Question {
+  // A rating scale has 2 to kMaxRatingScale steps.
+  static constexpr int kMaxRatingScale = 100;
+
   QuestionKind kind = QuestionKind::kPreference;
   std::string subject;  // stronger: the parameter; rating: the attribute (empty in `ab`)
   int scale = 7;        // rating: answers from 1 to scale
 
   // As trials.csv spells it (the table above); a rating without an attribute is "rating".
   std::string text() const;
-  // nullopt when `text` is none of the table's spellings.
+  // nullopt when `text` is none of the table's spellings (a rating's K outside
+  // 2..kMaxRatingScale included).
   static std::optional<Question> parse(std::string_view text);
 
   // A choice between the two presentations (preference, preference-2ac, identify-real,
@@ -49,6 +53,12 @@ struct Question {
 
 // Whether `text` (as trials.csv spells a question) asks a question of `kind`.
 bool is_question(std::string_view text, QuestionKind kind);
+
+// The kind `text` is spelled as by its name alone ("stronger:..." is kStronger, "rating" and
+// "rating:..." are kRating), whether or not the rest is valid; nullopt for no kind's name. A
+// reader of one kind's rows tells a malformed row of that kind (an error) from another
+// kind's row (skipped) with it, and then parses the row with Question::parse.
+std::optional<QuestionKind> spelled_kind(std::string_view text);
 
 struct Answer {
   int choice = 0;               // 1 or 2 for a choice; 0: "same" (preference-2ac)

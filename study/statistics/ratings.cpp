@@ -12,6 +12,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "study/question.h"
 #include "study/statistics/gauss_hermite.h"
 #include "study/statistics/logistic.h"
 #include "study/statistics/numeric_minimize.h"
@@ -363,30 +364,29 @@ std::vector<RatingObservation> rating_observations(const TrialsTable& table) {
   std::vector<RatingObservation> out;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
     const std::string& question = table.value(r, "question");
-    if (!question.starts_with("rating:")) continue;
+    if (spelled_kind(question) != QuestionKind::kRating) continue;
     const int line = table.line_numbers[r];
-    const std::size_t colon = question.rfind(':');
-    const std::string attribute = question.substr(7, colon - 7);
-    const auto k =
-        colon > 7 ? parse_int(std::string_view(question).substr(colon + 1)) : std::nullopt;
-    if (attribute.empty() || !k || *k < 2 || *k > 100) {
-      throw TrialsTableError(
-          table.source, line,
-          "question '" + question + "' is not rating:ATTRIBUTE:K with K in 2..100");
+    const std::optional<Question> asked = Question::parse(question);
+    if (!asked || asked->subject.empty()) {
+      throw TrialsTableError(table.source, line,
+                             "question '" + question + "' is not rating:ATTRIBUTE:K with K in 2.." +
+                                 std::to_string(Question::kMaxRatingScale));
     }
+    const std::string& attribute = asked->subject;
+    const int k = asked->scale;
     const std::string& answer = table.value(r, "answer");
     std::istringstream words(answer);
     std::string w1, w2, extra;
     words >> w1 >> w2 >> extra;
     const auto r1 = parse_int(w1), r2 = parse_int(w2);
-    if (!r1 || !r2 || !extra.empty() || *r1 < 1 || *r1 > *k || *r2 < 1 || *r2 > *k) {
+    if (!r1 || !r2 || !extra.empty() || *r1 < 1 || *r1 > k || *r2 < 1 || *r2 > k) {
       throw TrialsTableError(table.source, line,
-                             "answer '" + answer + "' is not two ratings 1.." + std::to_string(*k) +
+                             "answer '" + answer + "' is not two ratings 1.." + std::to_string(k) +
                                  " (first variant's, second's)");
     }
     const std::string& participant = table.value(r, "participant");
-    out.push_back({participant, attribute, *k, table.value(r, "first"), *r1});
-    out.push_back({participant, attribute, *k, table.value(r, "second"), *r2});
+    out.push_back({participant, attribute, k, table.value(r, "first"), *r1});
+    out.push_back({participant, attribute, k, table.value(r, "second"), *r2});
   }
   return out;
 }

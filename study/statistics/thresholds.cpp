@@ -16,6 +16,7 @@
 #include "analysis/report/svg_charts.h"
 #include "core/json_number.h"
 #include "core/number_format.h"
+#include "study/question.h"
 #include "study/statistics/psychometric_likelihood.h"
 
 namespace doorbench::study {
@@ -362,11 +363,12 @@ std::vector<StrongerObservation> stronger_observations(const TrialsTable& table)
   std::vector<StrongerRow> rows;
   for (std::size_t r = 0; r < table.rows.size(); ++r) {
     const std::string& question = table.value(r, "question");
-    if (!question.starts_with("stronger:")) continue;
-    const std::string parameter = question.substr(9);
+    if (spelled_kind(question) != QuestionKind::kStronger) continue;
     const int line = table.line_numbers[r];
-    if (parameter.empty())
+    const std::optional<Question> asked = Question::parse(question);
+    if (!asked)
       throw TrialsTableError(table.source, line, "question 'stronger:' names no parameter");
+    const std::string& parameter = asked->subject;
     const std::string& answer = table.value(r, "answer");
     if (answer != "1" && answer != "2") {
       throw TrialsTableError(table.source, line,
