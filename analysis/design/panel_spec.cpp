@@ -10,6 +10,20 @@
 
 namespace doorbench {
 
+void choose_favourite(CampaignForSpec& c) {
+  c.favourite.clear();
+  c.favourite_file.clear();
+  const PanelPreference* best = nullptr;
+  for (const PanelPreference& v : c.preference) {
+    if (best == nullptr || v.worth > best->worth) best = &v;
+  }
+  if (best == nullptr) return;
+  c.favourite = best->variant;
+  if (const auto file = c.variant_files.find(best->variant); file != c.variant_files.end()) {
+    c.favourite_file = file->second;
+  }
+}
+
 void assign_felt_jnds(CampaignForSpec& c) {
   c.jnds.clear();
   std::vector<bool> used(c.thresholds.size(), false);

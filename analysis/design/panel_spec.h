@@ -19,8 +19,9 @@
 namespace doorbench {
 
 struct CampaignForSpec {
-  std::filesystem::path analysis_path;         // FOLDER/analysis.json
-  std::vector<PanelPreference> preference;     // as in the file
+  std::filesystem::path analysis_path;                         // FOLDER/analysis.json
+  std::vector<PanelPreference> preference;                     // as in the file
+  std::map<std::string, std::filesystem::path> variant_files;  // preference rows' files, by variant
   std::vector<PanelThreshold> thresholds;      // the panel's rows (participant "panel")
   std::vector<FeltJnd> jnds;                   // one per felt quantity, measured or typical
   std::vector<std::string> notes;              // what was assumed, for the report and stderr
@@ -35,6 +36,11 @@ struct CampaignForSpec {
 // JND. A threshold that stands for no quantity gets a note ("the panel's JND of J_d stands
 // for no felt quantity of the specification: not used").
 void assign_felt_jnds(CampaignForSpec& campaign);
+
+// Sets campaign.favourite and favourite_file: the variant of `campaign.preference` with the
+// largest worth (the first of equals) and its file in variant_files (empty when it has
+// none), or none ("") without a preference scale.
+void choose_favourite(CampaignForSpec& campaign);
 
 // The TO-BE door the panel chose: the favourite variant's parameter file (its physical
 // section, else its sensory one) when the campaign names it, else the AS-IS door with the

@@ -2,7 +2,6 @@
 #include "study/statistics/analysis_for_spec.h"
 
 #include <cmath>
-#include <limits>
 #include <nlohmann/json.hpp>
 #include <stdexcept>
 
@@ -54,7 +53,6 @@ void read_preference(const SpecFieldReader& r, const json& root, CampaignForSpec
     return;
   }
   const json& rows = r.array(root, "preference_scale");
-  double best = -std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const std::string path = indexed("preference_scale", i);
     if (!rows[i].is_object()) r.fail(path, "an object expected");
@@ -63,14 +61,8 @@ void read_preference(const SpecFieldReader& r, const json& root, CampaignForSpec
     v.worth = r.number(rows[i], path, "worth", false);
     v.ci_low = r.number(rows[i], path, "ci_low", true);
     v.ci_high = r.number(rows[i], path, "ci_high", true);
-    if (v.worth > best) {
-      best = v.worth;
-      c.favourite = v.variant;
-      c.favourite_file.clear();
-      if (rows[i].contains("file")) {
-        const std::string file = r.text(rows[i], path, "file");
-        c.favourite_file = c.analysis_path.parent_path() / file;
-      }
+    if (rows[i].contains("file")) {
+      c.variant_files[v.variant] = c.analysis_path.parent_path() / r.text(rows[i], path, "file");
     }
     c.preference.push_back(std::move(v));
   }
@@ -150,6 +142,7 @@ CampaignForSpec read_campaign_for_spec(const std::filesystem::path& folder) {
   read_preference(reader, root, c);
   read_thresholds(reader, root, c);
   read_tuning(reader, root, c);
+  choose_favourite(c);
   assign_felt_jnds(c);
   return c;
 }

@@ -1,8 +1,8 @@
 #pragma once
 // `doorbench spec --campaign OUT`: a `campaign analyze` folder's analysis.json (written by
 // analysis.h) read back into what the specification takes (analysis/design/panel_spec.h):
-// the preference scale and its favourite (the variant of largest worth, with its parameter
-// file when the row names one), the panel's thresholds (participant "panel") and the felt
+// the preference scale with each row's parameter file and the favourite chosen from it
+// (choose_favourite), the panel's thresholds (participant "panel") and the felt
 // quantities' JNDs chosen from them (assign_felt_jnds), and the tuned doors' centre.
 //
 // Errors: std::runtime_error naming analysis.json and the field (e.g.

@@ -6,6 +6,7 @@
 #include <random>
 #include <vector>
 
+#include "analysis/design/panel_spec.h"
 #include "analysis/design/perceptual_tolerance.h"
 #include "analysis/model/parameter_file.h"
 
@@ -248,4 +249,26 @@ TEST_CASE("the proposal keeps every share under the level and no larger factor t
     }
   }
   CHECK(bracketed);
+}
+
+TEST_CASE("choose_favourite: the variant of largest worth with its file, the first of equals",
+          "[design]") {
+  doorbench::CampaignForSpec campaign;
+  doorbench::choose_favourite(campaign);
+  CHECK(campaign.favourite.empty());
+  CHECK(campaign.favourite_file.empty());
+
+  campaign.preference = {
+      {"A", 0.0, -0.2, 0.2}, {"B", 0.7, 0.4, 1.0}, {"C", 0.7, 0.3, 1.1}, {"D", -0.4, -0.8, 0.0}};
+  campaign.variant_files = {
+      {"A", "variants/A.json"}, {"B", "variants/B.json"}, {"C", "variants/C.json"}};
+  doorbench::choose_favourite(campaign);
+  CHECK(campaign.favourite == "B");
+  CHECK(campaign.favourite_file == "variants/B.json");
+
+  campaign.preference[1].worth = 0.5;
+  campaign.variant_files.erase("C");
+  doorbench::choose_favourite(campaign);
+  CHECK(campaign.favourite == "C");
+  CHECK(campaign.favourite_file.empty());
 }
