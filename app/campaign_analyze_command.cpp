@@ -36,30 +36,6 @@ std::filesystem::path trials_path(const std::string& input) {
   return path;
 }
 
-// The variant at worth 0 when --reference is not given: a campaign folder's first variant
-// (its campaign.toml's order, as the plan) when the table compares it in pairs; else "" (the
-// first in the table).
-std::string plan_reference(const std::string& input, const study::TrialsTable& table) {
-  const std::filesystem::path folder(input);
-  if (!std::filesystem::is_directory(folder) || !std::filesystem::exists(folder / "campaign.toml"))
-    return "";
-  std::string first;
-  try {
-    const study::CampaignFolder opened = study::open_campaign_folder(folder);
-    if (opened.campaign.variants.empty()) return "";
-    first = opened.campaign.variants.front().name;
-  } catch (const std::exception&) {
-    return "";  // not a readable campaign folder: its table alone decides
-  }
-  for (std::size_t r = 0; r < table.rows.size(); ++r) {
-    const std::optional<study::Question> question =
-        study::Question::parse(table.value(r, "question"));
-    if (!question || !question->is_preference()) continue;
-    if (table.value(r, "first") == first || table.value(r, "second") == first) return first;
-  }
-  return "";
-}
-
 }  // namespace
 
 void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& progress_out,
@@ -82,7 +58,7 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
 
   const study::TrialsTable table = study::read_trials_table(table_path);
   if (options.reference.empty())
-    analysis_options.preference.reference = plan_reference(options.input, table);
+    analysis_options.preference.reference = study::plan_reference_variant(options.input, table);
   progress_out << "analysing " << table_path.string() << ": " << table.rows.size() << " trials\n";
   StatusLine status(progress_out, terminal, 5.0, terminal ? stderr_terminal_columns() : 0);
   std::map<std::string, std::function<void(int, int)>> displays;

@@ -373,4 +373,23 @@ CampaignFolder open_campaign_folder(const std::filesystem::path& dir) {
   return folder;
 }
 
+std::string plan_reference_variant(const std::filesystem::path& folder, const TrialsTable& table) {
+  if (!std::filesystem::is_directory(folder) || !std::filesystem::exists(folder / "campaign.toml"))
+    return "";
+  std::string first;
+  try {
+    const CampaignFolder opened = open_campaign_folder(folder);
+    if (opened.campaign.variants.empty()) return "";
+    first = opened.campaign.variants.front().name;
+  } catch (const std::exception&) {
+    return "";  // not a readable campaign folder: its table alone decides
+  }
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    const std::optional<Question> question = Question::parse(table.value(r, "question"));
+    if (!question || !question->is_preference()) continue;
+    if (table.value(r, "first") == first || table.value(r, "second") == first) return first;
+  }
+  return "";
+}
+
 }  // namespace doorbench::study

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "study/campaign_file.h"
+#include "study/trials_table.h"
 
 namespace doorbench::study {
 
@@ -104,5 +105,11 @@ struct CampaignFolder {
   Plan plan;
 };
 CampaignFolder open_campaign_folder(const std::filesystem::path& dir);
+
+// The variant a preference scale puts at worth 0 when the analyst names none: the first
+// variant of `input`'s campaign.toml (the plan's order) when `input` is a readable campaign
+// folder and `table` compares that variant in a preference question; else "" (the first
+// variant in the table). Never throws for an unreadable folder (its table alone decides).
+std::string plan_reference_variant(const std::filesystem::path& input, const TrialsTable& table);
 
 }  // namespace doorbench::study
