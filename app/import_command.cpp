@@ -55,84 +55,6 @@ struct ImportOptions {
   std::string store_dir;  // --calibrations: the store --calibration's ids are in
 };
 
-// The metadata key --resample-hz adds: how the recording was resampled.
-constexpr std::string_view kResampledKey = "import_resampled";
-
-// One column at the times `at` (--resample-hz at rate_hz). Slower than the recording
-// (rate_hz below 1 / its median interval): each new sample is the mean of the recorded ones
-// nearest to its time, those within half a new interval, [t − 0.5/rate_hz, t + 0.5/rate_hz) (a
-// boxcar against aliasing), missing (NaN) when none is there or one of them is missing. Otherwise
-// linear interpolation between the two samples around it, missing across a gap of more than
-// kGapIntervals median intervals (acquisition/session/resample.h).
-std::vector<double> resample_column(const std::vector<double>& time_s,
-                                    const std::vector<double>& values,
-                                    const std::vector<double>& at, double rate_hz, double median_s,
-                                    const std::string& what) {
-  if (rate_hz * median_s >= 1.0) {
-    return resample_linear(time_s, values, at, kGapIntervals * median_s, what);
-  }
-  // Each recorded sample to the new time nearest to it, k = ⌊(t − at[0])·rate_hz + ½⌋ (a part
-  // in 10⁹ of slack, so that 0.014 s is halfway between 0.012 and 0.016 at 250 Hz, and a tie
-  // goes to the later time).
-  std::vector<double> sum(at.size(), 0.0);
-  std::vector<std::size_t> count(at.size(), 0);
-  for (std::size_t i = 0; i < time_s.size(); ++i) {
-    const double k = std::floor((time_s[i] - at.front()) * rate_hz + 0.5 + 1e-9);
-    if (!(k >= 0) || k >= static_cast<double>(at.size())) continue;
-    sum[static_cast<std::size_t>(k)] += values[i];  // a missing sample makes the mean missing
-    ++count[static_cast<std::size_t>(k)];
-  }
-  std::vector<double> out(at.size(), std::numeric_limits<double>::quiet_NaN());
-  for (std::size_t k = 0; k < at.size(); ++k) {
-    if (count[k] > 0) out[k] = sum[k] / static_cast<double>(count[k]);
-  }
-  return out;
-}
-
-// The recording on a uniform clock of rate_hz from its first time to its last (import
-// --resample-hz; docs/csv-format.md, "Resampling on import"); the stroke of each new sample
-// is that of the latest recorded sample at or before its time. Says how in the metadata.
-Recording resampled(const Recording& in, double rate_hz) {
-  if (in.size() < 2) throw std::runtime_error(in.source + ": too few samples to resample");
-  const double median_s = median_interval_s(in.time_s);
-  Recording out;
-  out.source = in.source;
-  out.metadata = in.metadata;
-  out.handle_radius_m = in.handle_radius_m;
-  out.sample_rate_hz = rate_hz;
-  out.time_s = uniform_axis(in.time_s.front(), in.time_s.back(), rate_hz);
-  const auto column = [&](const std::vector<double>& values, std::string_view name) {
-    return resample_column(in.time_s, values, out.time_s, rate_hz, median_s,
-                           in.source + ": column " + std::string(name));
-  };
-  out.force_N = column(in.force_N, kForceColumn);
-  if (in.angle_rad) out.angle_rad = column(*in.angle_rad, kAngleColumn);
-  if (in.rate_rad_s) out.rate_rad_s = column(*in.rate_rad_s, kRateColumn);
-  out.calibrations = in.calibrations;
-  out.extra_names = in.extra_names;
-  for (std::size_t j = 0; j < in.extra_columns.size(); ++j) {
-    out.extra_columns.push_back(column(in.extra_columns[j], in.extra_names[j]));
-  }
-  if (in.stroke) {
-    out.stroke.emplace(out.size(), 0);
-    std::size_t i = 0;
-    for (std::size_t k = 0; k < out.size(); ++k) {
-      while (i + 1 < in.size() && in.time_s[i + 1] <= out.time_s[k]) ++i;
-      (*out.stroke)[k] = (*in.stroke)[i];
-    }
-  }
-  const bool slower = rate_hz * median_s < 1.0;
-  out.metadata.emplace_back(
-      std::string(kResampledKey),
-      std::string("from ")
-          .append(format_significant(1.0 / median_s, 6))
-          .append(" Hz (1 / the median interval) to ")
-          .append(format_number(rate_hz))
-          .append(" Hz, ")
-          .append(slower ? "each sample the mean over its interval" : "linear interpolation"));
-  return out;
-}
-
 // A TDMS file (by its .tdms extension, any case) through --map, else the CSV exchange format.
 Recording read_import(const ImportOptions& options) {
   std::string extension = std::filesystem::path(options.csv_path).extension().string();
@@ -192,7 +114,7 @@ Recording read_import(const ImportOptions& options) {
 void run_import(const ImportOptions& options) {
   check_output_session(options.out_path, {options.csv_path});
   const Recording recording = options.resample_hz > 0
-                                  ? resampled(read_import(options), options.resample_hz)
+                                  ? resample_recording(read_import(options), options.resample_hz)
                                   : read_import(options);
   // The recording's own rig, operator, product and start (an exported session's) unless
   // given; else "imported" and now.
@@ -215,9 +137,9 @@ void run_import(const ImportOptions& options) {
           : from_csv(kCsvStartKey, from_csv("tdms_wf_start_time", utc_now_iso8601()));
   metadata.software_version = std::string("doorbench ") + DOORBENCH_VERSION;
   metadata.notes = options.notes.empty() ? "imported from " + options.csv_path : options.notes;
-  std::string how;  // the line resampled() added last
+  std::string how;  // the line resample_recording() added last
   for (const auto& [key, value] : recording.metadata) {
-    if (options.resample_hz > 0 && key == kResampledKey) how = value;
+    if (options.resample_hz > 0 && key == kResampledMetadataKey) how = value;
   }
   if (!how.empty()) metadata.notes += "; resampled " + how;
   for (const auto& [column, record] : recording.calibrations) {

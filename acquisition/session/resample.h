@@ -6,9 +6,12 @@
 // samples are never changed; this is done on read (session_to_recording).
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace doorbench {
+
+struct Recording;
 
 // The median of the intervals between consecutive times; NaN with fewer than two times.
 double median_interval_s(std::span<const double> time_s);
@@ -27,5 +30,19 @@ std::vector<double> resample_linear(std::span<const double> time_s, std::span<co
 
 // start_s, start_s + 1/rate_hz, … up to end_s (inclusive, to a part in 1e9 of a period).
 std::vector<double> uniform_axis(double start_s, double end_s, double rate_hz);
+
+// The metadata key resample_recording adds: how the recording was resampled.
+inline constexpr std::string_view kResampledMetadataKey = "import_resampled";
+
+// The recording on a uniform clock of rate_hz from its first time to its last (import
+// --resample-hz; docs/csv-format.md, "Resampling on import"). Each column: slower than the
+// recording (rate_hz below 1 / its median interval), each new sample is the mean of the
+// recorded ones within half a new interval of its time, [t - 0.5/rate_hz, t + 0.5/rate_hz)
+// (a boxcar against aliasing), missing (NaN) when none is there or one of them is missing;
+// otherwise linear interpolation, missing across a gap of more than kGapIntervals median
+// intervals. The stroke of each new sample is that of the latest recorded sample at or
+// before its time. Says how in the metadata (kResampledMetadataKey). Throws
+// std::runtime_error naming the source for fewer than two samples.
+Recording resample_recording(const Recording& in, double rate_hz);
 
 }  // namespace doorbench
