@@ -170,8 +170,11 @@ TEST_CASE("Recorder sources: polled sources alone, time 0 at their start", "[rec
   const ChannelSlice slice = session.read("count");
   REQUIRE(slice.raw.size() > 150);
   CHECK(slice.raw.size() == summary.polled_samples);
+  // The first sample is taken as the recording starts; on a busy machine the polling thread
+  // may wake some milliseconds late (10.8 ms seen under ctest -j2 beside two builds), while a
+  // wrong origin (the epoch, the machine's boot) is off by far more.
   CHECK(slice.time_s.front() >= 0.0);
-  CHECK(slice.time_s.front() < 0.01);
+  CHECK(slice.time_s.front() < 0.1);
   for (std::size_t i = 0; i < slice.raw.size(); ++i) REQUIRE(slice.raw[i] == double(i));
   CHECK(!session.read_group_attribute("clock", "origin_utc").empty());
 }
