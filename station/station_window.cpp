@@ -101,6 +101,10 @@ struct StationWindow::Impl {
     auto* self = static_cast<Impl*>(glfwGetWindowUserPointer(window));
     self->pending.push_back({InputEvent::Kind::kKey, key, 0.0, 0.0});
   }
+  static void on_character(GLFWwindow* window, unsigned int codepoint) {
+    auto* self = static_cast<Impl*>(glfwGetWindowUserPointer(window));
+    self->pending.push_back({InputEvent::Kind::kCharacter, int(codepoint), 0.0, 0.0});
+  }
   static void on_button(GLFWwindow* window, int button, int action, int) {
     if (button != GLFW_MOUSE_BUTTON_LEFT || action != GLFW_PRESS) return;
     auto* self = static_cast<Impl*>(glfwGetWindowUserPointer(window));
@@ -159,6 +163,7 @@ StationWindow::StationWindow(const Scene& scene, const StationWindowOptions& opt
   glfwSetWindowUserPointer(impl_->window, impl_.get());
   glfwSetKeyCallback(impl_->window, Impl::on_key);
   glfwSetMouseButtonCallback(impl_->window, Impl::on_button);
+  glfwSetCharCallback(impl_->window, Impl::on_character);
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;
@@ -221,9 +226,23 @@ void draw_panel(const QuestionPanel& panel, double width, double height) {
   ImGui::End();
 }
 
+// The caption across the top of the window: its title, then its lines.
+void draw_caption(const Caption& caption, double width, double height) {
+  ImGui::SetNextWindowPos(ImVec2(float(0.05 * width), float(0.03 * height)));
+  ImGui::SetNextWindowSize(ImVec2(float(0.9 * width), 0.0f));
+  ImGui::Begin("caption", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing |
+                   ImGuiWindowFlags_AlwaysAutoResize);
+  ImGui::SetWindowFontScale(float(std::max(1.0, height / 400.0)));
+  ImGui::TextUnformatted(caption.title.c_str());
+  for (const std::string& line : caption.lines) ImGui::TextUnformatted(line.c_str());
+  ImGui::End();
+}
+
 }  // namespace
 
-void StationWindow::draw(double theta_rad, const QuestionPanel& panel) {
+void StationWindow::draw(double theta_rad, const QuestionPanel& panel, const Caption& caption) {
   int w = 0, h = 0;
   glfwGetFramebufferSize(impl_->window, &w, &h);
   w = std::max(w, 2);
@@ -253,6 +272,7 @@ void StationWindow::draw(double theta_rad, const QuestionPanel& panel) {
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   const ImVec2 size = ImGui::GetIO().DisplaySize;
+  if (!caption.empty()) draw_caption(caption, size.x, size.y);
   if (panel.asking()) draw_panel(panel, size.x, size.y);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());

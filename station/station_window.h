@@ -36,11 +36,12 @@ class StationWindow {
   StationWindow(const StationWindow&) = delete;
   StationWindow& operator=(const StationWindow&) = delete;
 
-  // One frame of the door at theta_rad (with `panel` over it when it asks) into the back
-  // buffer; swap() shows it.
-  void draw(double theta_rad, const QuestionPanel& panel);
+  // One frame of the door at theta_rad (with `caption` at the top, and `panel` over it when
+  // it asks) into the back buffer; swap() shows it.
+  void draw(double theta_rad, const QuestionPanel& panel, const Caption& caption = {});
   void swap();
-  // Pending window events; the keys and clicks among them are appended to `events`.
+  // Pending window events; the keys, clicks and typed characters among them are appended
+  // to `events`.
   void poll(std::vector<InputEvent>& events);
   bool close_requested() const;
   // The back buffer as an RGB PNG (after draw(), before swap()).
