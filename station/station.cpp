@@ -2,6 +2,8 @@
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -136,7 +138,10 @@ StationReport Station::report() const {
 void Station::frame_pacing(double& next_frame_s) const {
   // With a display that waits for its refresh, swap() already paces the frames; without (a
   // virtual display), sleep to the display's rate instead of drawing as fast as the CPU can.
-  const double period_s = 1.0 / refresh_hz_;
+  const double rate_hz = options_.max_frame_rate_hz > 0.0
+                             ? std::min(refresh_hz_, options_.max_frame_rate_hz)
+                             : refresh_hz_;
+  const double period_s = 1.0 / rate_hz;
   const double now_s = monotonic_now_s();
   if (next_frame_s > now_s) {
     std::this_thread::sleep_for(std::chrono::duration<double>(next_frame_s - now_s));
@@ -161,6 +166,9 @@ void append_typed(const InputEvent& event, std::string& typed) {
 }  // namespace
 
 void Station::run() noexcept {
+  // Before the window, so that the threads OpenGL starts for it inherit this thread's nice
+  // value (raising it is always permitted).
+  if (options_.nice > 0) ::setpriority(PRIO_PROCESS, ::gettid(), options_.nice);
   std::optional<StationWindow> window;
   try {
     window.emplace(scene_, options_);

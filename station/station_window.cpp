@@ -81,6 +81,10 @@ GLFWmonitor* choose_display(const std::string& display) {
 std::string StationWindowOptions::validate() const {
   if (width_px < 64 || width_px > 16384) return "width_px must be 64..16384";
   if (height_px < 64 || height_px > 16384) return "height_px must be 64..16384";
+  if (!(max_frame_rate_hz == 0.0 || (max_frame_rate_hz >= 1.0 && max_frame_rate_hz <= 1000.0))) {
+    return "the frame rate must be 1 to 1000 Hz (0: the display's)";
+  }
+  if (nice < 0 || nice > 19) return "the nice value must be 0 to 19";
   return "";
 }
 
@@ -299,7 +303,7 @@ void StationWindow::write_png(const std::filesystem::path& png) const {
 
 StereoMode station_screenshot(const Scene& scene, double theta_rad,
                               const std::filesystem::path& png, StationWindowOptions options,
-                              const Question* question) {
+                              const Question* question, const Caption& caption) {
   options.fullscreen = false;
   options.visible = false;
   StationWindow window(scene, options);
@@ -307,7 +311,7 @@ StereoMode station_screenshot(const Scene& scene, double theta_rad,
   if (question != nullptr) panel.ask(*question);
   // ImGui places a window from the previous frame's sizes: two frames settle it.
   for (int i = 0; i < 3; ++i) {
-    window.draw(theta_rad, panel);
+    window.draw(theta_rad, panel, caption);
     if (i < 2) window.swap();
   }
   window.write_png(png);

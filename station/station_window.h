@@ -20,6 +20,12 @@ struct StationWindowOptions {
   bool fullscreen = true;  // false: a window of width_px x height_px
   bool visible = true;     // false: a hidden window (screenshots)
   int width_px = 1280, height_px = 800;
+  // The live station's frames at most this often (0: the display's rate).
+  double max_frame_rate_hz = 0.0;
+  // The live station's drawing thread runs at this nice value (0 to 19), and so do the
+  // threads its OpenGL starts (Mesa's llvmpipe renders on threads of its own, which inherit
+  // it), so that drawing yields the cores to the playback's non-real-time threads.
+  int nice = 10;
   std::string validate() const;  // "" or one line naming the option
 };
 
@@ -66,6 +72,6 @@ class StationWindow {
 // returns the stereo mode drawn (the scene's, or mono where quad-buffer is not offered).
 StereoMode station_screenshot(const Scene& scene, double theta_rad,
                               const std::filesystem::path& png, StationWindowOptions options,
-                              const Question* question = nullptr);
+                              const Question* question = nullptr, const Caption& caption = {});
 
 }  // namespace doorbench::station
