@@ -4,6 +4,8 @@
 #include <stdexcept>
 #include <thread>
 
+#include "study/tuning_keys.h"
+
 namespace doorbench::study {
 namespace {
 
@@ -82,6 +84,15 @@ std::vector<ScreenQuestion> screen_questions(const Question& question, const Ans
       break;
   }
   throw std::invalid_argument("a tune trial is tuned with the keys, not asked");
+}
+
+ScreenPresentation tuning_screen() {
+  ScreenPresentation shown{"Tune the door with the keys, then press Enter", {}};
+  for (const TuningKey& key : tuning_keys()) {
+    shown.key_help.push_back(std::string(1, key.key) + "   " + std::string(key.action));
+  }
+  shown.key_help.push_back(std::string(1, kResetKey) + "   back to the start");
+  return shown;
 }
 
 std::string screen_problem(const std::vector<PlanRow>& rows) {

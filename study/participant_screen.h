@@ -54,6 +54,10 @@ struct ScreenPresentation {
   std::vector<std::string> key_help;  // a tuning's keys and what each does: "+  heavier"
 };
 
+// What a tune trial's first presentation shows: "Tune the door with the keys, then press
+// Enter" and each tuning key with what it does ("+   heavier", ..., "r   back to the start").
+ScreenPresentation tuning_screen();
+
 class ParticipantScreen {
  public:
   virtual ~ParticipantScreen() = default;

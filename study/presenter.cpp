@@ -106,16 +106,6 @@ class ScreenShowing {
   bool begun_ = false;
 };
 
-// What the screen shows during a tuning: what each key does.
-ScreenPresentation tuning_shown() {
-  ScreenPresentation shown{"Tune the door with the keys, then press Enter", {}};
-  for (const TuningKey& key : tuning_keys()) {
-    shown.key_help.push_back(std::string(1, key.key) + "   " + std::string(key.action));
-  }
-  shown.key_help.push_back(std::string(1, kResetKey) + "   back to the start");
-  return shown;
-}
-
 // The keys of a scripted tune trial's line (spaces ignored); throws naming `where` for any
 // other character.
 std::string keys_of(const std::string& line, const std::string& where, int trial) {
@@ -233,7 +223,7 @@ DoorModel DevicePresenter::tune_at_the_device(PlaySettings play, const DoorModel
   std::string keys;
   std::size_t pressed = 0;
   ScreenShowing showing(participant_screen_);
-  showing.follow(play, tuning_shown());
+  showing.follow(play, tuning_screen());
   if (!line && participant_screen_ != nullptr) {
     ParticipantScreen* screen = participant_screen_;
     screen->take_typed();  // what was typed before the tuning is not a tuning key
