@@ -28,7 +28,7 @@ void add_station_options(CLI::App& verb, StationCommandOptions& options) {
       ->check(CLI::Range(1.0, 1000.0))
       ->needs(station);
   verb.add_option("--station-nice", options.nice,
-                  "The nice value the station draws at (0 to 19), below the playback's threads")
+                  "The nice value the station draws at (0 to 19; above 0 it yields to other work)")
       ->check(CLI::Range(0, 19))
       ->capture_default_str()
       ->needs(station);

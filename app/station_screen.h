@@ -21,7 +21,7 @@ struct StationCommandOptions {
   std::string scene;    // --scene
   bool no_sound = false;
   double fps = 0.0;  // --station-fps (0: the display's rate)
-  int nice = 10;     // --station-nice
+  int nice = 0;      // --station-nice
   station::StationRequest request() const;
 };
 

@@ -24,8 +24,10 @@ struct StationWindowOptions {
   double max_frame_rate_hz = 0.0;
   // The live station's drawing thread runs at this nice value (0 to 19), and so do the
   // threads its OpenGL starts (Mesa's llvmpipe renders on threads of its own, which inherit
-  // it), so that drawing yields the cores to the playback's non-real-time threads.
-  int nice = 10;
+  // it): above 0, drawing yields the cores to the playback's non-real-time threads, and to
+  // any other busy process (docs/PERFORMANCE.md: under load it then draws a few frames a
+  // second).
+  int nice = 0;
   std::string validate() const;  // "" or one line naming the option
 };
 
