@@ -2,6 +2,8 @@
 
 #include <stdexcept>
 
+#include "app/number_options.h"
+
 namespace doorbench::app {
 
 station::StationRequest StationCommandOptions::request() const {
@@ -25,11 +27,11 @@ void add_station_options(CLI::App& verb, StationCommandOptions& options) {
       ->needs(station);
   verb.add_option("--station-fps", options.fps,
                   "Draw the station at most this often (Hz; default: the display's rate)")
-      ->check(CLI::Range(1.0, 1000.0))
+      ->check(number_range(1.0, 1000.0))
       ->needs(station);
   verb.add_option("--station-nice", options.nice,
                   "The nice value the station draws at (0 to 19; above 0 it yields to other work)")
-      ->check(CLI::Range(0, 19))
+      ->check(number_range(0, 19))
       ->capture_default_str()
       ->needs(station);
 }
