@@ -17,6 +17,7 @@
 #include "app/number_options.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
+#include "app/station_screen.h"
 #include "core/number_format.h"
 #include "study/ab_trials.h"
 #include "study/presenter.h"
@@ -38,6 +39,7 @@ struct AbCommandOptions {
   std::string answers_path;
   std::vector<std::string> labels{"1", "2"};
   bool real_time = false;
+  StationCommandOptions station;
 };
 
 void run_ab_command(const AbCommandOptions& options) {
@@ -77,8 +79,8 @@ void run_ab_command(const AbCommandOptions& options) {
   } else {
     rig = std::make_shared<const RigDefinition>(load_rig(options.real_rig));
   }
-  const study::DevicePresenter presenter(presenting, presentation_player(), real_door_recorder(rig),
-                                         std::cerr);
+  study::DevicePresenter presenter(presenting, presentation_player(), real_door_recorder(rig),
+                                   std::cerr);
 
   study::AnswerSource answers;
   std::shared_ptr<std::ifstream> file;
@@ -96,11 +98,30 @@ void run_ab_command(const AbCommandOptions& options) {
     if (!std::getline(in, line)) return std::nullopt;
     return line;
   };
+  std::unique_ptr<StationScreen> station;
+  if (options.station.station) {
+    try {
+      study::screen_questions(inputs.options.asked(), inputs.options.labels);
+    } catch (const std::invalid_argument& problem) {
+      throw UsageError("--station: " + std::string(problem.what()));
+    }
+    // Opened now: a bad scene or display stops the run before the device moves.
+    station = std::make_unique<StationScreen>(options.station.request());
+    presenter.show_on(station.get());
+    answers.screen = station.get();
+    // Without --answers the participant answers on the station; with it, each line is
+    // pressed there.
+    if (options.answers_path.empty()) {
+      answers.next_line = nullptr;
+      answers.name = "the station";
+    }
+  }
   std::cerr << "doorbench ab: " << inputs.options.trials << " trials, "
             << study::to_string(inputs.options.question) << ", presentations of "
             << inputs.options.presentation_s << " s on " << options.device << "\n";
   const study::AbSummary summary =
       study::run_ab(inputs, presenter.as_presenter(), answers, std::cerr);
+  if (station) std::cout << station->close() << "\n";
   std::cout << summary.brief_report() << "results in " << options.out_dir
             << " (answers.csv, ab-summary.json, ab-summary.txt, one session per presentation)\n";
 }
@@ -143,7 +164,9 @@ void add_ab_command(CLI::App& app, Action& action) {
                "Play a simulated device in real time, as a HapticMaster would be, instead of "
                "simulated time");
   ab->add_option("--answers", options->answers_path,
-                 "Answers one per line for a scripted run (default: read from stdin)");
+                 "Answers one per line for a scripted run (default: read from stdin; with "
+                 "--station: given on the station, and a file's answers are pressed there)");
+  add_station_options(*ab, options->station);
   ab->callback([options, &action] { action = [options] { run_ab_command(*options); }; });
 }
 

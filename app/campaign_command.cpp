@@ -22,10 +22,12 @@
 #include "app/number_options.h"
 #include "app/play_run.h"
 #include "app/session_recording.h"
+#include "app/station_screen.h"
 #include "core/number_format.h"
 #include "study/campaign_plan.h"
 #include "study/campaign_run.h"
 #include "study/campaign_summary.h"
+#include "study/participant_screen.h"
 #include "study/power.h"
 #include "study/presenter.h"
 #include "study/random_stream.h"
@@ -50,6 +52,7 @@ struct RunCommandOptions {
   std::optional<double> presentation_s;
   bool real_time = false;
   bool redo = false;
+  StationCommandOptions station;
 };
 
 struct MergeCommandOptions {
@@ -156,15 +159,34 @@ void run_run(const RunCommandOptions& options) {
     throw UsageError(problem);
   }
   const study::CampaignFolder folder = study::open_campaign_folder(options.dir);
-  const std::unique_ptr<study::Respondent> respondent = make_respondent(options, folder);
-  const study::DevicePresenter presenter = make_presenter(options, folder.campaign);
+  // With --station a person answers on it (no respondent behind it); an answers file or a
+  // simulated participant answers through it.
+  const bool person_at_station =
+      options.station.station && options.respondent == "person" && options.answers_path.empty();
+  const std::unique_ptr<study::Respondent> respondent =
+      person_at_station ? nullptr : make_respondent(options, folder);
+  study::DevicePresenter presenter = make_presenter(options, folder.campaign);
+  std::unique_ptr<StationScreen> station;
+  std::optional<study::ScreenRespondent> on_station;
+  if (options.station.station) {
+    if (const std::string problem = study::screen_problem(folder.plan.of(options.participant));
+        !problem.empty()) {
+      throw UsageError("--station: " + problem);
+    }
+    // Opened now: a bad scene or display stops the run before the device moves.
+    station = std::make_unique<StationScreen>(options.station.request());
+    presenter.show_on(station.get());
+    on_station.emplace(*station, respondent.get());
+  }
   std::cerr << "doorbench campaign run: participant " << options.participant << " on "
-            << options.device << "\n";
+            << options.device << (station ? ", answers on the station" : "") << "\n";
   study::RunOptions run;
   run.participant = options.participant;
   run.redo = options.redo;
-  const study::RunResult result =
-      study::run_participant(folder, run, *respondent, presenter.as_presenter(), std::cerr);
+  const study::RunResult result = study::run_participant(
+      folder, run, on_station ? static_cast<study::Respondent&>(*on_station) : *respondent,
+      presenter.as_presenter(), std::cerr);
+  if (station) std::cout << station->close() << "\n";
   std::cout << "participant " << options.participant << ": "
             << result.answered_before + result.answered_now << " of " << result.planned
             << " trials answered (attempt " << result.attempt << ", " << result.answered_now
@@ -289,6 +311,7 @@ CLI::App* add_campaign_command(CLI::App& app, Action& action) {
       ->check(number_range(0.001, 600.0));
   run->add_flag("--redo", run_options->redo,
                 "Run a finished participant again (earlier answers kept, marked)");
+  add_station_options(*run, run_options->station);
   run->callback([run_options, &action] { action = [run_options] { run_run(*run_options); }; });
 
   auto merge_options = std::make_shared<MergeCommandOptions>();

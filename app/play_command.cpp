@@ -12,8 +12,8 @@
 #include "app/fit_inputs.h"
 #include "app/number_options.h"
 #include "app/play_run.h"
+#include "app/station_screen.h"
 #include "core/number_format.h"
-#include "station/station_session.h"
 #include "study/tuning_keys.h"
 
 namespace doorbench::app {
@@ -37,10 +37,7 @@ struct PlayOptions {
   double max_tick_interval_ms = 5.0;
   double max_tick_stall_ms = 100.0;
   bool keys = false;
-  bool station = false;
-  std::string station_display;
-  std::string scene;
-  bool no_sound = false;
+  StationCommandOptions station;
 };
 
 // Live tuning from the keypad (study/tuning_keys.h): every key press moves one perceptual
@@ -190,10 +187,9 @@ void run_play(const PlayOptions& options) {
     };
   }
   std::shared_ptr<station::StationSession> station;
-  if (options.station) {
+  if (options.station.station) {
     // The scene is read now: a bad scene file stops the run before the device moves.
-    station = std::make_shared<station::StationSession>(station::StationRequest{
-        options.scene, {.display = options.station_display}, !options.no_sound});
+    station = std::make_shared<station::StationSession>(options.station.request());
     request.on_start = [station](haptic::Playback& playback) {
       station->open(playback.loop().snapshot());
     };
@@ -270,17 +266,7 @@ void add_play_command(CLI::App& app, Action& action) {
   play->add_option("--watch-params", options->watch_params,
                    "A parameter file to watch: whenever it changes (the viewer's tuning layout "
                    "saves it), its values are played from the next tick");
-  CLI::Option* station = play->add_flag(
-      "--station", options->station,
-      "Open the participant's station: the door drawn full screen at the played angle, with "
-      "its sounds (docs/station.md)");
-  play->add_option("--station-display", options->station_display,
-                   "The display the participant faces: its name or index (default: the primary)")
-      ->needs(station);
-  play->add_flag("--no-sound", options->no_sound, "The station without its sounds")->needs(station);
-  play->add_option("--scene", options->scene,
-                   "The station's scene file (TOML; default: the built-in dishwasher)")
-      ->needs(station);
+  add_station_options(*play, options->station);
   play->callback([options, &action] { action = [options] { run_play(*options); }; });
 }
 

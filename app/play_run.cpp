@@ -141,6 +141,12 @@ study::PlayOnDevice presentation_player() {
     play.notes = settings.notes;
     play.show_status = false;
     play.control = settings.control;
+    if (settings.on_start) {
+      play.on_start = [&settings](haptic::Playback& playback) {
+        settings.on_start(playback.loop().snapshot());
+      };
+    }
+    play.on_end = settings.on_end;
     return play_model(model, play);
   };
 }

@@ -51,7 +51,7 @@ std::optional<Answer> QuestionPanel::handle(const InputEvent& event, double widt
     if (event.key >= GLFW_KEY_KP_1 && event.key <= GLFW_KEY_KP_9) {
       choice = event.key - GLFW_KEY_KP_1;
     }
-  } else {
+  } else if (event.kind == InputEvent::Kind::kClick) {
     const std::vector<PanelRect> rects = choice_rects(width_px, height_px);
     for (std::size_t i = 0; i < rects.size(); ++i) {
       if (rects[i].contains(event.x_px, event.y_px)) choice = int(i);

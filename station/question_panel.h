@@ -5,7 +5,8 @@
 // the window's callbacks or scripted by a test, so the same path is exercised either way.
 //
 // Keys: 1..9 on the main row or the keypad pick the choice of that number (the first is 1);
-// a click or touch on a choice's button picks it. Nothing else answers.
+// a click or touch on a choice's button picks it. Nothing else answers (characters typed,
+// kCharacter, are text for a tuning, not answers).
 //
 // Not thread-safe: the station's thread owns it (Station::ask and Station::take_answer are
 // the other threads' way in).
@@ -24,10 +25,18 @@ struct Question {
 };
 
 struct InputEvent {
-  enum class Kind { kKey, kClick };
+  enum class Kind { kKey, kClick, kCharacter };
   Kind kind = Kind::kKey;
-  int key = 0;                    // GLFW_KEY_* (kKey)
+  int key = 0;                    // GLFW_KEY_* (kKey); the Unicode code point (kCharacter)
   double x_px = 0.0, y_px = 0.0;  // window coordinates, y downwards (kClick)
+};
+
+// What the station shows over the door outside a question: a title ("Presentation 1") and
+// lines under it (a tune trial's keys and what each does).
+struct Caption {
+  std::string title;
+  std::vector<std::string> lines;
+  bool empty() const { return title.empty() && lines.empty(); }
 };
 
 struct Answer {

@@ -1,5 +1,10 @@
 #include "station/station.h"
 
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+#include <sys/resource.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -20,12 +25,18 @@ std::string StationReport::brief_report() const {
   text += ", " + std::string(to_string(stereo));
   if (!note.empty()) text += " (" + note + ")";
   if (!error.empty()) text += "; stopped: " + error;
+  if (closed) text += "; its window was closed";
   return text;
 }
 
 Station::Station(const Scene& scene, const haptic::DoorSnapshotChannel& snapshot,
                  StationWindowOptions options)
-    : scene_(scene), snapshot_(snapshot), options_(std::move(options)) {
+    : Station(scene, std::move(options)) {
+  snapshot_ = &snapshot;
+}
+
+Station::Station(const Scene& scene, StationWindowOptions options)
+    : scene_(scene), options_(std::move(options)) {
   if (std::string problem = options_.validate(); !problem.empty()) {
     throw std::invalid_argument("station: " + problem);
   }
@@ -53,12 +64,57 @@ void Station::stop() {
   if (thread_.joinable()) thread_.join();
 }
 
+void Station::follow(const haptic::DoorSnapshotChannel* snapshot) {
+  std::lock_guard lock(mutex_);
+  snapshot_ = snapshot;
+}
+
+void Station::show(const Caption& caption) {
+  std::lock_guard lock(mutex_);
+  caption_ = caption;
+}
+
+void Station::pick(std::size_t choice, bool by_click) {
+  std::lock_guard lock(mutex_);
+  if (choice >= last_asked_.choices.size()) {
+    throw std::invalid_argument("station: no choice " + std::to_string(choice + 1) +
+                                " in the question asked");
+  }
+  if (!by_click) {
+    injected_.push_back({InputEvent::Kind::kKey, GLFW_KEY_1 + int(choice), 0.0, 0.0});
+    return;
+  }
+  QuestionPanel panel;
+  panel.ask(last_asked_);
+  const PanelRect button = panel.choice_rects(width_px_, height_px_).at(choice);
+  injected_.push_back(
+      {InputEvent::Kind::kClick, 0, button.x + 0.5 * button.width, button.y + 0.5 * button.height});
+}
+
+std::string Station::take_typed() {
+  std::lock_guard lock(mutex_);
+  std::string typed = std::move(typed_);
+  typed_.clear();
+  return typed;
+}
+
+std::pair<double, double> Station::window_size() const {
+  std::lock_guard lock(mutex_);
+  return {width_px_, height_px_};
+}
+
+bool Station::running() const {
+  std::lock_guard lock(mutex_);
+  return running_;
+}
+
 void Station::ask(const Question& question) {
   if (std::string problem = question.validate(); !problem.empty()) {
     throw std::invalid_argument("station question: " + problem);
   }
   std::lock_guard lock(mutex_);
   asked_ = question;
+  last_asked_ = question;
   answer_.reset();
 }
 
@@ -82,7 +138,10 @@ StationReport Station::report() const {
 void Station::frame_pacing(double& next_frame_s) const {
   // With a display that waits for its refresh, swap() already paces the frames; without (a
   // virtual display), sleep to the display's rate instead of drawing as fast as the CPU can.
-  const double period_s = 1.0 / refresh_hz_;
+  const double rate_hz = options_.max_frame_rate_hz > 0.0
+                             ? std::min(refresh_hz_, options_.max_frame_rate_hz)
+                             : refresh_hz_;
+  const double period_s = 1.0 / rate_hz;
   const double now_s = monotonic_now_s();
   if (next_frame_s > now_s) {
     std::this_thread::sleep_for(std::chrono::duration<double>(next_frame_s - now_s));
@@ -90,7 +149,26 @@ void Station::frame_pacing(double& next_frame_s) const {
   next_frame_s = std::max(next_frame_s + period_s, monotonic_now_s());
 }
 
+namespace {
+
+// A typed character as text ('\n' for either Enter key); nothing for other input or a
+// character beyond ASCII (the tuning keys are ASCII).
+void append_typed(const InputEvent& event, std::string& typed) {
+  if (event.kind == InputEvent::Kind::kCharacter && event.key > 0 && event.key < 128) {
+    typed.push_back(static_cast<char>(event.key));
+  }
+  if (event.kind == InputEvent::Kind::kKey &&
+      (event.key == GLFW_KEY_ENTER || event.key == GLFW_KEY_KP_ENTER)) {
+    typed.push_back('\n');
+  }
+}
+
+}  // namespace
+
 void Station::run() noexcept {
+  // Before the window, so that the threads OpenGL starts for it inherit this thread's nice
+  // value (raising it is always permitted).
+  if (options_.nice > 0) ::setpriority(PRIO_PROCESS, ::gettid(), options_.nice);
   std::optional<StationWindow> window;
   try {
     window.emplace(scene_, options_);
@@ -106,27 +184,44 @@ void Station::run() noexcept {
     refresh_hz_ = window->refresh_hz();
     report_.stereo = window->stereo();
     report_.note = window->note();
+    width_px_ = window->width_px();
+    height_px_ = window->height_px();
+    running_ = true;
     open_done_ = true;
   }
   opened_.notify_all();
   QuestionPanel panel;
+  Caption caption;
   std::vector<InputEvent> events;
   double next_frame_s = monotonic_now_s(), last_frame_s = kNaN, interval_sum_ms = 0.0;
   try {
-    while (!quit_.load(std::memory_order_acquire) && !window->close_requested()) {
+    while (!quit_.load(std::memory_order_acquire)) {
+      if (window->close_requested()) {
+        std::lock_guard lock(mutex_);
+        report_.closed = true;
+        break;
+      }
       const double frame_s = monotonic_now_s();
       events.clear();
       window->poll(events);
+      double theta_rad = 0.0;
       {
         std::lock_guard lock(mutex_);
         events.insert(events.end(), injected_.begin(), injected_.end());
         injected_.clear();
         if (asked_) panel.ask(std::move(*asked_));
         asked_.reset();
+        caption = caption_;
+        width_px_ = window->width_px();
+        height_px_ = window->height_px();
         for (const InputEvent& event : events) {
-          const double w = window->width_px(), h = window->height_px();
-          if (std::optional<Answer> answer = panel.handle(event, w, h)) answer_ = *answer;
+          append_typed(event, typed_);
+          if (std::optional<Answer> answer = panel.handle(event, width_px_, height_px_)) {
+            answer_ = *answer;
+          }
         }
+        // Read under the lock: once follow() has returned, the channel it replaced is not read.
+        if (snapshot_ != nullptr) theta_rad = snapshot_->read().theta_rad;
         if (!std::isnan(last_frame_s)) {
           const double interval_ms = 1e3 * (frame_s - last_frame_s);
           interval_sum_ms += interval_ms;
@@ -136,7 +231,7 @@ void Station::run() noexcept {
         ++report_.frames;
       }
       last_frame_s = frame_s;
-      window->draw(snapshot_.read().theta_rad, panel);
+      window->draw(theta_rad, panel, caption);
       window->swap();
       frame_pacing(next_frame_s);
     }
@@ -144,6 +239,8 @@ void Station::run() noexcept {
     std::lock_guard lock(mutex_);
     report_.error = error.what();
   }
+  std::lock_guard lock(mutex_);
+  running_ = false;
 }
 
 }  // namespace doorbench::station

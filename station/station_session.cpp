@@ -20,11 +20,22 @@ StationSession::~StationSession() {
 }
 
 void StationSession::open(const haptic::DoorSnapshotChannel& snapshot) {
+  start();
+  follow(snapshot);
+}
+
+void StationSession::start() {
   close();
   report_.reset();
-  station_ = std::make_unique<Station>(scene_, snapshot, request_.window);
-  station_->start();
   sound_report_ = {};
+  clicks_before_ = knocks_before_ = 0;
+  station_ = std::make_unique<Station>(scene_, request_.window);
+  station_->start();
+}
+
+void StationSession::follow(const haptic::DoorSnapshotChannel& snapshot) {
+  unfollow();
+  if (station_) station_->follow(&snapshot);
   if (!request_.sound) {
     sound_report_.error = "--no-sound";
     return;
@@ -39,12 +50,20 @@ void StationSession::open(const haptic::DoorSnapshotChannel& snapshot) {
   }
 }
 
+void StationSession::unfollow() {
+  if (station_) station_->follow(nullptr);
+  if (!sound_) return;
+  sound_->stop();
+  sound_report_ = sound_->report();
+  sound_.reset();
+  clicks_before_ += sound_report_.clicks;
+  knocks_before_ += sound_report_.knocks;
+  sound_report_.clicks = clicks_before_;
+  sound_report_.knocks = knocks_before_;
+}
+
 void StationSession::close() {
-  if (sound_) {
-    sound_->stop();
-    sound_report_ = sound_->report();
-    sound_.reset();
-  }
+  unfollow();
   if (!station_) return;
   station_->stop();
   report_ = station_->report();
@@ -55,8 +74,12 @@ std::string StationSession::brief_report() const {
   const std::string sight = station_  ? station_->report().brief_report()
                             : report_ ? report_->brief_report()
                                       : std::string("station: not opened");
-  const std::string sound = sound_ ? sound_->report().brief_report() : sound_report_.brief_report();
-  return sight + "\n" + sound;
+  SoundReport sound = sound_ ? sound_->report() : sound_report_;
+  if (sound_) {
+    sound.clicks += clicks_before_;
+    sound.knocks += knocks_before_;
+  }
+  return sight + "\n" + sound.brief_report();
 }
 
 }  // namespace doorbench::station

@@ -81,6 +81,10 @@ GLFWmonitor* choose_display(const std::string& display) {
 std::string StationWindowOptions::validate() const {
   if (width_px < 64 || width_px > 16384) return "width_px must be 64..16384";
   if (height_px < 64 || height_px > 16384) return "height_px must be 64..16384";
+  if (!(max_frame_rate_hz == 0.0 || (max_frame_rate_hz >= 1.0 && max_frame_rate_hz <= 1000.0))) {
+    return "the frame rate must be 1 to 1000 Hz (0: the display's)";
+  }
+  if (nice < 0 || nice > 19) return "the nice value must be 0 to 19";
   return "";
 }
 
@@ -100,6 +104,10 @@ struct StationWindow::Impl {
     if (action != GLFW_PRESS) return;
     auto* self = static_cast<Impl*>(glfwGetWindowUserPointer(window));
     self->pending.push_back({InputEvent::Kind::kKey, key, 0.0, 0.0});
+  }
+  static void on_character(GLFWwindow* window, unsigned int codepoint) {
+    auto* self = static_cast<Impl*>(glfwGetWindowUserPointer(window));
+    self->pending.push_back({InputEvent::Kind::kCharacter, int(codepoint), 0.0, 0.0});
   }
   static void on_button(GLFWwindow* window, int button, int action, int) {
     if (button != GLFW_MOUSE_BUTTON_LEFT || action != GLFW_PRESS) return;
@@ -159,6 +167,7 @@ StationWindow::StationWindow(const Scene& scene, const StationWindowOptions& opt
   glfwSetWindowUserPointer(impl_->window, impl_.get());
   glfwSetKeyCallback(impl_->window, Impl::on_key);
   glfwSetMouseButtonCallback(impl_->window, Impl::on_button);
+  glfwSetCharCallback(impl_->window, Impl::on_character);
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   ImGui::GetIO().IniFilename = nullptr;
@@ -221,9 +230,23 @@ void draw_panel(const QuestionPanel& panel, double width, double height) {
   ImGui::End();
 }
 
+// The caption across the top of the window: its title, then its lines.
+void draw_caption(const Caption& caption, double width, double height) {
+  ImGui::SetNextWindowPos(ImVec2(float(0.05 * width), float(0.03 * height)));
+  ImGui::SetNextWindowSize(ImVec2(float(0.9 * width), 0.0f));
+  ImGui::Begin("caption", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove |
+                   ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoFocusOnAppearing |
+                   ImGuiWindowFlags_AlwaysAutoResize);
+  ImGui::SetWindowFontScale(float(std::max(1.0, height / 400.0)));
+  ImGui::TextUnformatted(caption.title.c_str());
+  for (const std::string& line : caption.lines) ImGui::TextUnformatted(line.c_str());
+  ImGui::End();
+}
+
 }  // namespace
 
-void StationWindow::draw(double theta_rad, const QuestionPanel& panel) {
+void StationWindow::draw(double theta_rad, const QuestionPanel& panel, const Caption& caption) {
   int w = 0, h = 0;
   glfwGetFramebufferSize(impl_->window, &w, &h);
   w = std::max(w, 2);
@@ -253,6 +276,7 @@ void StationWindow::draw(double theta_rad, const QuestionPanel& panel) {
   ImGui_ImplGlfw_NewFrame();
   ImGui::NewFrame();
   const ImVec2 size = ImGui::GetIO().DisplaySize;
+  if (!caption.empty()) draw_caption(caption, size.x, size.y);
   if (panel.asking()) draw_panel(panel, size.x, size.y);
   ImGui::Render();
   ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
@@ -279,7 +303,7 @@ void StationWindow::write_png(const std::filesystem::path& png) const {
 
 StereoMode station_screenshot(const Scene& scene, double theta_rad,
                               const std::filesystem::path& png, StationWindowOptions options,
-                              const Question* question) {
+                              const Question* question, const Caption& caption) {
   options.fullscreen = false;
   options.visible = false;
   StationWindow window(scene, options);
@@ -287,7 +311,7 @@ StereoMode station_screenshot(const Scene& scene, double theta_rad,
   if (question != nullptr) panel.ask(*question);
   // ImGui places a window from the previous frame's sizes: two frames settle it.
   for (int i = 0; i < 3; ++i) {
-    window.draw(theta_rad, panel);
+    window.draw(theta_rad, panel, caption);
     if (i < 2) window.swap();
   }
   window.write_png(png);

@@ -20,6 +20,14 @@ struct StationWindowOptions {
   bool fullscreen = true;  // false: a window of width_px x height_px
   bool visible = true;     // false: a hidden window (screenshots)
   int width_px = 1280, height_px = 800;
+  // The live station's frames at most this often (0: the display's rate).
+  double max_frame_rate_hz = 0.0;
+  // The live station's drawing thread runs at this nice value (0 to 19), and so do the
+  // threads its OpenGL starts (Mesa's llvmpipe renders on threads of its own, which inherit
+  // it): above 0, drawing yields the cores to the playback's non-real-time threads, and to
+  // any other busy process (docs/PERFORMANCE.md: under load it then draws a few frames a
+  // second).
+  int nice = 0;
   std::string validate() const;  // "" or one line naming the option
 };
 
@@ -36,11 +44,12 @@ class StationWindow {
   StationWindow(const StationWindow&) = delete;
   StationWindow& operator=(const StationWindow&) = delete;
 
-  // One frame of the door at theta_rad (with `panel` over it when it asks) into the back
-  // buffer; swap() shows it.
-  void draw(double theta_rad, const QuestionPanel& panel);
+  // One frame of the door at theta_rad (with `caption` at the top, and `panel` over it when
+  // it asks) into the back buffer; swap() shows it.
+  void draw(double theta_rad, const QuestionPanel& panel, const Caption& caption = {});
   void swap();
-  // Pending window events; the keys and clicks among them are appended to `events`.
+  // Pending window events; the keys, clicks and typed characters among them are appended
+  // to `events`.
   void poll(std::vector<InputEvent>& events);
   bool close_requested() const;
   // The back buffer as an RGB PNG (after draw(), before swap()).
@@ -65,6 +74,6 @@ class StationWindow {
 // returns the stereo mode drawn (the scene's, or mono where quad-buffer is not offered).
 StereoMode station_screenshot(const Scene& scene, double theta_rad,
                               const std::filesystem::path& png, StationWindowOptions options,
-                              const Question* question = nullptr);
+                              const Question* question = nullptr, const Caption& caption = {});
 
 }  // namespace doorbench::station

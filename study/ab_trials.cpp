@@ -291,6 +291,64 @@ std::string AbSummary::to_json() const {
   return json.dump(2) + "\n";
 }
 
+namespace {
+
+// A trial's answer: on the participant's screen when `answers` has one (pressed there from
+// the next line when scripted), else the next line (asked again when interactive). Throws
+// std::runtime_error naming the source when the answers end ("the answers ended after ...")
+// and, with its line, for a wrong scripted answer.
+Answer next_answer(const AbTrial& trial, const AbRunInputs& inputs, const AnswerSource& answers,
+                   int& line, double elapsed_s, std::ostream& prompts) {
+  const AbOptions& options = inputs.options;
+  auto ended = [&] {
+    return std::runtime_error(answers.name + ": the answers ended after " +
+                              std::to_string(trial.trial - 1) + " of " +
+                              std::to_string(options.trials) + " trials (results so far in " +
+                              inputs.out_dir.string() + ")");
+  };
+  auto wrong_line = [&](const std::invalid_argument& wrong) {
+    return std::runtime_error(answers.name + ":" + std::to_string(line) + ": trial " +
+                              std::to_string(trial.trial) + ": " + wrong.what());
+  };
+  if (answers.screen != nullptr) {
+    prompts << "trial " << trial.trial << " of " << options.trials << ": asked on the station, "
+            << static_cast<long>(elapsed_s) << " s into the run" << std::endl;
+    std::optional<std::string> scripted;
+    if (answers.next_line) {
+      scripted = answers.next_line();
+      ++line;
+      if (!scripted) throw ended();
+    }
+    try {
+      const std::string text =
+          ask_on_screen(*answers.screen, options.asked(), options.labels, scripted);
+      return parse_answer(options.asked(), text, options.labels);
+    } catch (const std::invalid_argument& wrong) {
+      throw wrong_line(wrong);
+    }
+  }
+  const std::string prompt = options.asked().prompt(options.labels);
+  for (;;) {
+    prompts << prompt << std::flush;
+    const std::optional<std::string> text = answers.next_line();
+    ++line;
+    // A terminal echoes what was typed; a script's answer is shown so the log reads whole.
+    if (text && !answers.interactive) prompts << *text << "\n";
+    if (!text) {
+      prompts << "\n";
+      throw ended();
+    }
+    try {
+      return parse_answer(options.asked(), *text, options.labels);
+    } catch (const std::invalid_argument& wrong) {
+      if (!answers.interactive) throw wrong_line(wrong);
+      prompts << wrong.what() << "; again please\n";
+    }
+  }
+}
+
+}  // namespace
+
 AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const AnswerSource& answers,
                  std::ostream& prompts) {
   const AbOptions& options = inputs.options;
@@ -330,8 +388,8 @@ AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const An
     return summary;
   };
 
-  const std::string prompt = options.asked().prompt(options.labels);
   int line = 0;
+  const auto started = std::chrono::steady_clock::now();
   for (const AbTrial& trial : plan) {
     AbTrialOutcome outcome;
     outcome.plan = trial;
@@ -345,6 +403,7 @@ AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const An
       call.stimulus = &stimuli.at(trial.variant[position - 1]);
       call.session_path = inputs.out_dir / file;
       call.duration_s = options.presentation_s;
+      call.label = options.labels[position - 1];
       prompts << "trial " << trial.trial << " of " << options.trials << ": presentation "
               << options.labels[position - 1] << std::endl;
       try {
@@ -358,33 +417,14 @@ AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const An
                                  " (results so far in " + inputs.out_dir.string() + ")");
       }
     }
-    for (;;) {
-      prompts << prompt << std::flush;
-      const std::optional<std::string> text = answers.next_line();
-      ++line;
-      // A terminal echoes what was typed; a script's answer is shown so the log reads whole.
-      if (text && !answers.interactive) prompts << *text << "\n";
-      if (!text) {
-        prompts << "\n";
-        outcomes.push_back(outcome);
-        finish();
-        throw std::runtime_error(answers.name + ": the answers ended after " +
-                                 std::to_string(trial.trial - 1) + " of " +
-                                 std::to_string(options.trials) + " trials (results so far in " +
-                                 inputs.out_dir.string() + ")");
-      }
-      try {
-        outcome.answer = parse_answer(options.asked(), *text, options.labels);
-        break;
-      } catch (const std::invalid_argument& wrong) {
-        if (!answers.interactive) {
-          outcomes.push_back(outcome);
-          finish();
-          throw std::runtime_error(answers.name + ":" + std::to_string(line) + ": trial " +
-                                   std::to_string(trial.trial) + ": " + wrong.what());
-        }
-        prompts << wrong.what() << "; again please\n";
-      }
+    try {
+      const double elapsed_s =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+      outcome.answer = next_answer(trial, inputs, answers, line, elapsed_s, prompts);
+    } catch (const std::exception&) {
+      outcomes.push_back(outcome);
+      finish();
+      throw;
     }
     outcome.answered_utc = utc_now_iso8601();
     std::string answer_field = outcome.answer->text;

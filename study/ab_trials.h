@@ -20,6 +20,7 @@
 #include "acquisition/session/session_file.h"
 #include "analysis/model/door_model.h"
 #include "study/campaign_run.h"
+#include "study/participant_screen.h"
 #include "study/question.h"
 
 namespace doorbench::study {
@@ -98,6 +99,10 @@ struct AnswerSource {
   std::function<std::optional<std::string>()> next_line;
   std::string name;          // "stdin" or the answers file, for messages
   bool interactive = false;  // a wrong answer is asked again instead of ending the run
+  // The participant's screen (null: none): each trial's question is asked there, not on
+  // `prompts` (which then shows progress only), and answered there; with `next_line` too,
+  // each line is pressed on the screen as the participant would (a scripted run).
+  ParticipantScreen* screen = nullptr;
 };
 
 struct AbRunInputs {

@@ -409,7 +409,9 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
                           &stimulus,
                           state.session_dir / file,
                           tuned,
-                          tuned ? &respondent : nullptr};
+                          tuned ? &respondent : nullptr,
+                          0.0,
+                          std::to_string(position)};
     presenter(call);
     if (!sessions.empty()) sessions += ' ';
     sessions += (relative_dir / file).generic_string();

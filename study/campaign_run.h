@@ -55,6 +55,7 @@ struct PresentationCall {
   std::optional<DoorModel>* tuned = nullptr;
   Respondent* respondent = nullptr;  // with `tuned`: who tunes (Respondent::scripted_tuning_keys)
   double duration_s = 0.0;           // the presentation's length; 0: the presenter's own
+  std::string label;                 // what the participant calls it ("1"); empty: `position`
 };
 // Plays one presentation and records it; throws (std::exception) on a device fault.
 using Presenter = std::function<void(const PresentationCall&)>;

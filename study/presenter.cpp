@@ -76,6 +76,36 @@ class PresentationTuning {
   std::ostream* screen_;
 };
 
+// The participant's screen during one presentation: begin() shows it, the destructor ends
+// it (on every path); follow() makes a playback's start and end do the same.
+class ScreenShowing {
+ public:
+  explicit ScreenShowing(ParticipantScreen* screen) : screen_(screen) {}
+  ~ScreenShowing() { end(); }
+  ScreenShowing(const ScreenShowing&) = delete;
+  ScreenShowing& operator=(const ScreenShowing&) = delete;
+
+  void begin(const ScreenPresentation& shown, const haptic::DoorSnapshotChannel* door) {
+    if (screen_ == nullptr) return;
+    screen_->begin_presentation(shown, door);
+    begun_ = true;
+  }
+  void end() {
+    if (begun_) screen_->end_presentation();
+    begun_ = false;
+  }
+  // `play`'s playback shows `shown` with its door while it runs (`this` must outlive it).
+  void follow(PlaySettings& play, ScreenPresentation shown) {
+    if (screen_ == nullptr) return;
+    play.on_start = [this, shown](const haptic::DoorSnapshotChannel& door) { begin(shown, &door); };
+    play.on_end = [this] { end(); };
+  }
+
+ private:
+  ParticipantScreen* screen_;
+  bool begun_ = false;
+};
+
 // The keys of a scripted tune trial's line (spaces ignored); throws naming `where` for any
 // other character.
 std::string keys_of(const std::string& line, const std::string& where, int trial) {
@@ -142,8 +172,12 @@ void DevicePresenter::present(const PresentationCall& call) const {
       std::to_string(call.trial) + ", presentation " + std::to_string(call.position) +
       ", variant " + call.stimulus->name +
       (call.stimulus->source.empty() ? "" : " (" + call.stimulus->source + ")");
+  const ScreenPresentation shown{
+      "Presentation " + (call.label.empty() ? std::to_string(call.position) : call.label), {}};
   if (!call.stimulus->model) {
     if (!record_real_) throw std::logic_error("the real door without a rig to record it from");
+    ScreenShowing showing(participant_screen_);
+    showing.begin(shown, nullptr);
     record_real_(
         {duration_s, call.session_path, options_.operator_name, notes + ", the real door"});
     return;
@@ -163,6 +197,8 @@ void DevicePresenter::present(const PresentationCall& call) const {
     *call.tuned = tune_at_the_device(play, *call.stimulus->model, call);
     return;
   }
+  ScreenShowing showing(participant_screen_);
+  showing.follow(play, shown);
   const haptic::PlaybackSummary summary = play_(*call.stimulus->model, play);
   if (!summary.stop_cause.empty()) {
     throw std::runtime_error("the presentation stopped after " +
@@ -186,7 +222,22 @@ DoorModel DevicePresenter::tune_at_the_device(PlaySettings play, const DoorModel
   const std::optional<std::string> line = call.respondent->scripted_tuning_keys(call.trial, where);
   std::string keys;
   std::size_t pressed = 0;
-  if (!line) {
+  ScreenShowing showing(participant_screen_);
+  showing.follow(play, tuning_screen());
+  if (!line && participant_screen_ != nullptr) {
+    ParticipantScreen* screen = participant_screen_;
+    screen->take_typed();  // what was typed before the tuning is not a tuning key
+    *screen_ << at_trial << ": tuning on the station, Enter there when done\n";
+    play.simulated_time = false;
+    play.duration_s = 600.0;
+    play.control = [screen, tuning](haptic::Playback& playback) {
+      for (const char key : screen->take_typed()) {
+        if (key == '\n') return false;  // the person ends the tuning
+        tuning->press(playback, key);
+      }
+      return true;
+    };
+  } else if (!line) {
     auto terminal = std::make_shared<TerminalKeys>(STDIN_FILENO, "stdin");
     *screen_ << at_trial << ": tune with the keys, Enter when done\n" << key_map_text();
     play.simulated_time = false;

@@ -5,6 +5,9 @@
 // the tuning itself: the keys of study/tuning_keys.h move the playing door, live from a
 // terminal or, from an answers file, the trial's line of keys pressed one per 0.1 s.
 //
+// With a participant's screen (show_on) the presentations are shown on it too
+// (study/participant_screen.h), and a person tunes with its keys.
+//
 // It holds the rules the verbs share: which devices there are, simulated against real time,
 // the virtual user's seed and cycle, the sessions' notes, and the one line that says why a
 // presentation stopped early ("the presentation stopped after 0.42 s: CAUSE"). The playing
@@ -22,6 +25,7 @@
 #include "analysis/model/door_model.h"
 #include "haptic/playback.h"
 #include "study/campaign_run.h"
+#include "study/participant_screen.h"
 
 namespace doorbench::study {
 
@@ -53,6 +57,11 @@ struct PlaySettings {
   // Live tuning: called about every 0.1 s of the playback on the control thread; it may call
   // playback.change_parameters(). Returning false ends the presentation. Empty: none.
   std::function<bool(haptic::Playback&)> control;
+  // Called once the playback exists, before its first tick, with the render loop's door
+  // snapshot (the participant's screen follows it), and `on_end` once it is over, before the
+  // playback goes, on every path. Empty: none.
+  std::function<void(const haptic::DoorSnapshotChannel&)> on_start;
+  std::function<void()> on_end;
 };
 // Plays `model` as `settings` say and returns the playback's summary (whose stop_cause is
 // empty when the presentation ran its whole length). Throws on a device or session fault.
@@ -84,6 +93,11 @@ class DevicePresenter {
   Presenter as_presenter() const;
 
   const PresenterOptions& options() const { return options_; }
+  // The participant's screen (null: none): each presentation is shown on it as "Presentation
+  // LABEL" with the door played, a tuning as "Tune the door" with the keys' actions, and a
+  // person's tuning keys are taken from it instead of the terminal. It must outlive the
+  // presenter's calls.
+  void show_on(ParticipantScreen* screen) { participant_screen_ = screen; }
 
  private:
   DoorModel tune_at_the_device(PlaySettings play, const DoorModel& start,
@@ -93,6 +107,7 @@ class DevicePresenter {
   PlayOnDevice play_;
   RecordRealDoor record_real_;
   std::ostream* screen_;
+  ParticipantScreen* participant_screen_ = nullptr;
 };
 
 }  // namespace doorbench::study

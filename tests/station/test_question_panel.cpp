@@ -8,6 +8,8 @@
 #include <chrono>
 #include <cstdlib>
 #include <fstream>
+#include <memory>
+#include <sstream>
 #include <thread>
 
 #include "fixtures/temp_dir.h"
@@ -137,4 +139,73 @@ TEST_CASE("the live station answers a scripted click and key", "[station][xvfb]"
   CHECK(second == "2 no difference");
   const testing::Screenshot shot = testing::load_screenshot(dir.path / "question.png", false);
   CHECK(shot.width == 800);
+}
+
+// Run by the test below under Xvfb: a station that follows no playback, then one playback's
+// snapshot and none again; picks by key and by click of the question last asked; characters
+// typed and Enter as text; results to $DOORBENCH_TEST_DIR/trial.txt.
+TEST_CASE("station follows playbacks and takes picks and typing (child of the test below)",
+          "[.][child]") {
+  const char* dir = std::getenv("DOORBENCH_TEST_DIR");
+  REQUIRE(dir != nullptr);
+  const station::Scene scene = station::default_scene();
+  station::StationWindowOptions options;
+  options.fullscreen = false;
+  options.width_px = 640;
+  options.height_px = 480;
+  station::Station live(scene, options);
+  live.start();
+  std::ofstream out(std::filesystem::path(dir) / "trial.txt");
+  {
+    auto playback = std::make_unique<haptic::DoorSnapshotChannel>();
+    playback->publish(0.001, 0.4, 0.0);
+    live.show({"Presentation 1", {"+   heavier"}});
+    live.follow(playback.get());
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    live.follow(nullptr);
+    playback.reset();  // no longer read once follow() has returned
+  }
+  live.show({});
+  live.ask(preference());
+  live.pick(2, false);
+  const auto by_key = answer_of(live);
+  REQUIRE(by_key);
+  out << by_key->choice << " " << by_key->text << "\n";
+  live.ask(preference());
+  live.pick(1, true);
+  const auto by_click = answer_of(live);
+  REQUIRE(by_click);
+  out << by_click->choice << " " << int(by_click->by == InputEvent::Kind::kClick) << "\n";
+  CHECK_THROWS_WITH(live.pick(3, false), "station: no choice 4 in the question asked");
+  live.take_typed();
+  live.inject({InputEvent::Kind::kCharacter, '+', 0.0, 0.0});
+  live.inject({InputEvent::Kind::kCharacter, 'U', 0.0, 0.0});
+  live.inject(key(GLFW_KEY_KP_ENTER));
+  std::string typed;
+  for (int i = 0; i < 1000 && typed.size() < 3; ++i) {
+    typed += live.take_typed();
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  out << typed;
+  CHECK(live.running());
+  live.stop();
+  CHECK_FALSE(live.running());
+  CHECK(live.report().frames > 3);
+}
+
+TEST_CASE("the live station follows playbacks, takes picks and typed keys", "[station][xvfb]") {
+  testing::TempDir dir("station_follow");
+  const auto self = std::filesystem::read_symlink("/proc/self/exe");
+  std::string err;
+  const int status = testing::run_under_xvfb(
+      "env DOORBENCH_TEST_DIR='" + dir.path.string() + "' '" + self.string() +
+          "' 'station follows playbacks and takes picks and typing (child of the test below)'",
+      dir.path, err);
+  INFO("stderr: " << err);
+  REQUIRE(status == 0);
+  std::ifstream in(dir.path / "trial.txt");
+  std::stringstream text;
+  text << in.rdbuf();
+  // By key: choice 3; by click: choice 2, a click; typed "+U" and the keypad's Enter.
+  CHECK(text.str() == "2 no difference\n1 1\n+U\n");
 }

@@ -28,6 +28,7 @@
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
 #include "tests/support/run_on_terminal.h"
+#include "tests/support/trials_rows.h"
 
 using doorbench::testing::read_file;
 using doorbench::testing::TempDir;
@@ -125,20 +126,6 @@ std::vector<std::string> run_args(const fs::path& folder, const std::string& par
           "--device", "sim"};
 }
 
-// trials.csv's rows without the answer time: what an interrupted and an uninterrupted run
-// must agree on.
-std::vector<std::vector<std::string>> timeless_rows(const fs::path& folder) {
-  const doorbench::study::TrialsTable table =
-      doorbench::study::read_trials_table(folder / "trials.csv");
-  const std::size_t time = *table.find_column("answered_utc");
-  std::vector<std::vector<std::string>> rows;
-  for (std::vector<std::string> row : table.rows) {
-    row.erase(row.begin() + static_cast<long>(time));
-    rows.push_back(row);
-  }
-  return rows;
-}
-
 std::size_t count_rows_of(const fs::path& trials, const std::string& participant) {
   std::ifstream in(trials);
   std::string line;
@@ -208,8 +195,8 @@ void kill_and_compare(int participants, const std::vector<std::pair<int, int>>& 
     }
     if (!was_killed) REQUIRE(run(run_args(killed, id), dir.path).status == 0);
   }
-  const auto expected = timeless_rows(whole);
-  const auto got = timeless_rows(killed);
+  const auto expected = doorbench::testing::trials_rows_without_time(whole / "trials.csv");
+  const auto got = doorbench::testing::trials_rows_without_time(killed / "trials.csv");
   REQUIRE(expected.size() == static_cast<std::size_t>(participants * trials_each));
   REQUIRE(got.size() == expected.size());
   for (std::size_t r = 0; r < expected.size(); ++r) {
