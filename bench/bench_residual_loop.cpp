@@ -19,6 +19,7 @@
 #include "analysis/model/parameter_file.h"
 #include "analysis/preprocessing/preprocessing.h"
 #include "fixtures/simulated_session.h"
+#include "fixtures/temp_dir.h"
 #include "fixtures/tremor_recording.h"
 
 namespace {
@@ -27,14 +28,11 @@ using namespace doorbench;
 
 const PreparedData& demo_recording() {
   static const PreparedData data = [] {
-    const std::filesystem::path dir =
-        std::filesystem::temp_directory_path() / "doorbench_bench_residual_loop";
-    std::filesystem::create_directories(dir);
+    const testing::TempDir dir("bench_residual_loop");
     const auto effects_path = dir / "undeclared.json";
     std::ofstream(effects_path) << R"({"gravity_imbalance": {"g1": 3.0}})"
                                 << "\n";
     const auto session_path = dir / "demo.h5";
-    std::filesystem::remove(session_path);
     testing::record_built_in_session(session_path, 19.0, 1, "sensory", effects_path);
     return prepare_session(session_path);
   }();

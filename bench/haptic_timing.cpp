@@ -21,6 +21,7 @@
 #include "analysis/model/perceptual_controls.h"
 #include "bench/haptic_fixed_device.h"
 #include "core/percentile.h"
+#include "fixtures/temp_dir.h"
 #include "haptic/device_factory.h"
 #include "haptic/playback.h"
 
@@ -62,10 +63,8 @@ int run_realtime(double seconds, double rate_hz) {
   options.loop.safety.max_tick_interval_s = 1.0;
   haptic::OpenedDevice opened =
       haptic::open_device(request, options.arc, model.geometry().handle_radius_m);
-  const std::filesystem::path path =
-      std::filesystem::temp_directory_path() /
-      ("doorbench-haptic-timing-" + std::to_string(getpid()) + ".h5");
-  std::filesystem::remove(path);
+  const testing::TempDir dir("haptic_timing");
+  const std::filesystem::path path = dir / "timing.h5";
   SessionMetadata metadata;
   metadata.rig_name = "haptic timing benchmark";
   haptic::Playback playback(*opened.device, model, options, path, metadata,
@@ -101,7 +100,6 @@ int run_realtime(double seconds, double rate_hz) {
       "parameter change -> first tick: %zu changes, p50 %.1f us, p99 %.1f us, max %.1f us\n",
       latencies_us.size(), percentile(latencies_us, 0.5), percentile(latencies_us, 0.99),
       latencies_us.empty() ? 0.0 : *std::max_element(latencies_us.begin(), latencies_us.end()));
-  std::filesystem::remove(path);
   return 0;
 }
 

@@ -3,12 +3,12 @@
 // plotted window of every channel. 8 channels at 50 kS/s (the recorder's largest tested
 // rate) with a 10 s window: 500 k samples per channel plotted. Results: docs/PERFORMANCE.md.
 #include <benchmark/benchmark.h>
-#include <unistd.h>
 
 #include <filesystem>
 #include <vector>
 
 #include "acquisition/record/journal.h"
+#include "fixtures/temp_dir.h"
 #include "viewer/live_journal.h"
 
 namespace {
@@ -19,10 +19,8 @@ void live_update(benchmark::State& state) {
   const std::size_t channels = 8;
   const double rate_hz = 50000.0;
   const std::size_t block = 500;  // 10 ms
-  const auto path =
-      std::filesystem::temp_directory_path() /
-      std::string("doorbench_live_bench_").append(std::to_string(::getpid())).append(".h5.journal");
-  std::filesystem::remove(path);
+  const testing::TempDir dir("live_bench");
+  const auto path = dir / "live.h5.journal";
   JournalHeader header;
   ChannelInfo info;
   info.raw_scale = 1e-3;
@@ -65,7 +63,6 @@ void live_update(benchmark::State& state) {
     }
     state.counters["plotted_samples"] = static_cast<double>(plots[0].series[0]->size() * channels);
   }
-  std::filesystem::remove(path);
 }
 
 }  // namespace
