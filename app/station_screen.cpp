@@ -7,7 +7,10 @@
 namespace doorbench::app {
 
 station::StationRequest StationCommandOptions::request() const {
-  station::StationRequest request{scene, {.display = display}, !no_sound};
+  station::StationRequest request;
+  request.scene_file = scene;
+  request.window.display = display;
+  request.sound = !no_sound;
   request.window.max_frame_rate_hz = fps;
   request.window.nice = nice;
   return request;
