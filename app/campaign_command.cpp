@@ -174,7 +174,8 @@ void run_run(const RunCommandOptions& options) {
       throw UsageError("--station: " + problem);
     }
     // Opened now: a bad scene or display stops the run before the device moves.
-    station = std::make_unique<StationScreen>(options.station.request());
+    station =
+        std::make_unique<StationScreen>(campaign_station_request(options.station, folder.campaign));
     presenter.show_on(station.get());
     on_station.emplace(*station, respondent.get());
   }

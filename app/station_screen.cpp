@@ -7,7 +7,10 @@
 namespace doorbench::app {
 
 station::StationRequest StationCommandOptions::request() const {
-  station::StationRequest request{scene, {.display = display}, !no_sound};
+  station::StationRequest request;
+  request.scene_file = scene;
+  request.window.display = display;
+  request.sound = !no_sound;
   request.window.max_frame_rate_hz = fps;
   request.window.nice = nice;
   return request;
@@ -36,7 +39,19 @@ void add_station_options(CLI::App& verb, StationCommandOptions& options) {
       ->needs(station);
 }
 
-StationScreen::StationScreen(const station::StationRequest& request) : session_(request) {
+station::StationRequest campaign_station_request(const StationCommandOptions& options,
+                                                 const study::Campaign& campaign) {
+  station::StationRequest request = options.request();
+  for (const study::Variant& variant : campaign.variants) {
+    if (!variant.scene_file.empty()) request.scenes.push_back(variant.scene_file);
+    if (!variant.sounds_file.empty()) request.sound_sets.push_back(variant.sounds_file);
+  }
+  return request;
+}
+
+StationScreen::StationScreen(const station::StationRequest& request)
+    : session_(request),
+      own_(request.scene_file.empty() ? "built-in" : request.scene_file.string()) {
   session_.start();
 }
 
@@ -44,15 +59,25 @@ StationScreen::~StationScreen() {
   session_.close();
 }
 
-void StationScreen::begin_presentation(const study::ScreenPresentation& shown,
-                                       const haptic::DoorSnapshotChannel* door) {
+study::Presented StationScreen::begin_presentation(const study::ScreenPresentation& shown,
+                                                   const haptic::DoorSnapshotChannel* door) {
+  const study::Staging& staging = shown.staging;
+  session_.stage(staging.scene_file, staging.sounds_file);
   session_.station()->show({shown.caption, shown.key_help});
   if (door != nullptr) session_.follow(*door);
+  study::Presented presented;
+  presented.scene = staging.scene_file.empty() ? own_ : staging.scene;
+  presented.sounds = !session_.sound_playing()      ? "none"
+                     : !staging.sounds_file.empty() ? staging.sounds
+                     : !staging.scene_file.empty()  ? staging.scene
+                                                    : own_;
+  return presented;
 }
 
 void StationScreen::end_presentation() {
   session_.unfollow();
   session_.station()->show({});
+  session_.stage({}, {});
 }
 
 void StationScreen::ask(const study::ScreenQuestion& question) {

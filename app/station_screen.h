@@ -11,6 +11,7 @@
 #include <string>
 
 #include "station/station_session.h"
+#include "study/campaign_file.h"
 #include "study/participant_screen.h"
 
 namespace doorbench::app {
@@ -31,13 +32,17 @@ void add_station_options(CLI::App& verb, StationCommandOptions& options);
 
 class StationScreen : public study::ParticipantScreen {
  public:
-  // Reads the scene and its sounds (throws SceneError naming the file and key) and opens the
+  // Reads the scene and its sounds, and the other scenes and sound sets the request names
+  // (a campaign's variants'; throws SceneError naming the file and key), and opens the
   // window (throws std::runtime_error: no display, no such display), before any trial.
   explicit StationScreen(const station::StationRequest& request);
   ~StationScreen() override;
 
-  void begin_presentation(const study::ScreenPresentation& shown,
-                          const haptic::DoorSnapshotChannel* door) override;
+  // Stages the presentation in its scene and sound set (the station's own when it names
+  // none) and says what is shown and played: the names the presentation gives them, the
+  // station's own "built-in" or --scene file as given, "none" for sounds not playing.
+  study::Presented begin_presentation(const study::ScreenPresentation& shown,
+                                      const haptic::DoorSnapshotChannel* door) override;
   void end_presentation() override;
   void ask(const study::ScreenQuestion& question) override;
   std::optional<std::size_t> take_choice() override;
@@ -50,6 +55,11 @@ class StationScreen : public study::ParticipantScreen {
 
  private:
   station::StationSession session_;
+  std::string own_;  // the station's own scene and sounds, as trials.csv names them
 };
+
+// The request of `options` with the scenes and sound sets of `campaign`'s variants.
+station::StationRequest campaign_station_request(const StationCommandOptions& options,
+                                                 const study::Campaign& campaign);
 
 }  // namespace doorbench::app

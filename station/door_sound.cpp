@@ -113,12 +113,28 @@ struct DoorSound::Al {
   ALuint click = 0, knock = 0, hinge = 0;
 };
 
+SoundSamples load_sound_samples(const Sounds& s, std::string source) {
+  SoundSamples samples;
+  samples.source = std::move(source);
+  samples.sounds = s;
+  samples.click = s.latch_wav.empty() ? synthesised_click() : read_sound_file(s.latch_wav);
+  samples.knock = s.stop_wav.empty() ? synthesised_knock() : read_sound_file(s.stop_wav);
+  samples.hinge = s.hinge_wav.empty() ? synthesised_hinge() : read_sound_file(s.hinge_wav);
+  return samples;
+}
+
 DoorSound::DoorSound(const Scene& scene, const haptic::DoorSnapshotChannel& snapshot)
-    : scene_(scene), snapshot_(snapshot) {
-  const Sounds& s = scene.sounds;
-  click_ = s.latch_wav.empty() ? synthesised_click() : read_sound_file(s.latch_wav);
-  knock_ = s.stop_wav.empty() ? synthesised_knock() : read_sound_file(s.stop_wav);
-  hinge_ = s.hinge_wav.empty() ? synthesised_hinge() : read_sound_file(s.hinge_wav);
+    : DoorSound(scene, load_sound_samples(scene.sounds, scene.source), snapshot) {}
+
+DoorSound::DoorSound(const Scene& scene, const SoundSamples& samples,
+                     const haptic::DoorSnapshotChannel& snapshot)
+    : scene_(scene),
+      snapshot_(snapshot),
+      sounds_(samples.sounds),
+      click_(samples.click),
+      knock_(samples.knock),
+      hinge_(samples.hinge) {
+  report_.sounds = samples.source;
 }
 
 DoorSound::~DoorSound() {
@@ -155,7 +171,7 @@ void DoorSound::start() {
   alSourcei(al->click, AL_BUFFER, ALint(al->buffers[0]));
   alSourcei(al->knock, AL_BUFFER, ALint(al->buffers[1]));
   alSourcei(al->hinge, AL_BUFFER, ALint(al->buffers[2]));
-  alSourcef(al->click, AL_GAIN, float(scene_.sounds.latch_gain));
+  alSourcef(al->click, AL_GAIN, float(sounds_.latch_gain));
   alSourcei(al->hinge, AL_LOOPING, AL_TRUE);
   alSourcef(al->hinge, AL_GAIN, 0.0f);
   const Camera& camera = scene_.camera;
@@ -220,7 +236,7 @@ void DoorSound::note_device_clock() {
 void DoorSound::run() noexcept {
   alcMakeContextCurrent(al_->context);
   haptic::DoorSnapshot seen = snapshot_.read();
-  const Sounds& sounds = scene_.sounds;
+  const Sounds& sounds = sounds_;
   auto next = std::chrono::steady_clock::now();
   while (!quit_.load(std::memory_order_acquire)) {
     const haptic::DoorSnapshot now = snapshot_.read();

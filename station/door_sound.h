@@ -40,7 +40,19 @@ SoundSample synthesised_hinge();
 // A WAV (or any libsndfile format) mixed down to mono; throws SceneError naming the file.
 SoundSample read_sound_file(const std::filesystem::path& file);
 
+// A set of the door's sounds read and ready to play: the levels and the samples (the files
+// named, the built-in sounds for those not named), and where they came from (`source`: a
+// sound set's or scene file's path, "built-in").
+struct SoundSamples {
+  std::string source;
+  Sounds sounds;
+  SoundSample click, knock, hinge;
+};
+// Reads the samples of `sounds`; throws SceneError naming a file that cannot be read.
+SoundSamples load_sound_samples(const Sounds& sounds, std::string source);
+
 struct SoundReport {
+  std::string sounds;                    // SoundSamples::source of what plays
   std::string device;                    // OpenAL's name for the output
   std::uint64_t clicks = 0, knocks = 0;  // sounds started
   double latency_ms = -1.0;              // the device's reported output latency; −1 unknown
@@ -54,6 +66,9 @@ class DoorSound {
   // Loads the samples (the scene's files or the built-in ones); throws SceneError naming a
   // file that cannot be read.
   DoorSound(const Scene& scene, const haptic::DoorSnapshotChannel& snapshot);
+  // The scene's geometry (where the sources and the listener are) with `samples` (copied).
+  DoorSound(const Scene& scene, const SoundSamples& samples,
+            const haptic::DoorSnapshotChannel& snapshot);
   ~DoorSound();
   DoorSound(const DoorSound&) = delete;
   DoorSound& operator=(const DoorSound&) = delete;
@@ -79,6 +94,7 @@ class DoorSound {
 
   const Scene& scene_;
   const haptic::DoorSnapshotChannel& snapshot_;
+  Sounds sounds_;
   SoundSample click_, knock_, hinge_;
   std::unique_ptr<Al> al_;
   std::thread thread_;

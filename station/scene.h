@@ -101,6 +101,12 @@ Scene default_scene();
 // SceneError naming the file, line and key.
 Scene load_scene(const std::filesystem::path& path);
 
+// A sound set (a campaign variant's `sounds`): the [sound] table of a TOML file, read as a
+// scene file's (paths relative to the file, which must exist); the file's other tables, if
+// any, are checked as a scene file's and not used, so a scene file may lend its sounds.
+// Throws SceneError naming the file, line and key, or a file without a [sound] table.
+Sounds load_sound_set(const std::filesystem::path& path);
+
 // The mesh file's parts through assimp, scaled by `metres_per_unit`; a part moves with the
 // door when its node (or an ancestor) is named in `door_nodes`. With `names_required` every
 // name must be found (mesh.door_nodes as given); without, a mesh with none of them moves

@@ -233,9 +233,12 @@ const char* to_string(StereoMode mode) {
   return "mono";
 }
 
-Scene load_scene(const std::filesystem::path& path) {
+namespace {
+
+// The scene file (or sound set) at `path`, parsed and its tables and keys checked.
+SceneReader read_scene_file(const std::filesystem::path& path, const char* what) {
   if (!std::filesystem::is_regular_file(path)) {
-    throw SceneError(path.string() + ": no such scene file");
+    throw SceneError(path.string() + ": no such " + what);
   }
   toml::table root;
   try {
@@ -245,8 +248,27 @@ Scene load_scene(const std::filesystem::path& path) {
     message << path.string() << ":" << error.source().begin.line << ": " << error.description();
     throw SceneError(message.str());
   }
-  const SceneReader in(path, std::move(root));
+  SceneReader in(path, std::move(root));
   in.check_keys();
+  return in;
+}
+
+}  // namespace
+
+Sounds load_sound_set(const std::filesystem::path& path) {
+  const SceneReader in = read_scene_file(path, "sound set");
+  if (!in.has_table("sound")) {
+    throw SceneError(path.string() +
+                     ": no [sound] table (a sound set is the [sound] table of a "
+                     "scene file: latch_wav, stop_wav, hinge_wav, ...)");
+  }
+  Scene scene = default_scene();
+  read_sound(in, scene);
+  return scene.sounds;
+}
+
+Scene load_scene(const std::filesystem::path& path) {
+  const SceneReader in = read_scene_file(path, "scene file");
   Scene scene = default_scene();
   scene.source = path.string();
   in.vector("hinge", "point_m", scene.hinge_point_m);

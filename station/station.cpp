@@ -74,6 +74,27 @@ void Station::show(const Caption& caption) {
   caption_ = caption;
 }
 
+void Station::show_scene(const Scene* scene) {
+  std::lock_guard lock(mutex_);
+  shown_scene_ = scene;
+}
+
+void Station::capture(const std::filesystem::path& png, double timeout_s) {
+  std::unique_lock lock(mutex_);
+  if (!running_) throw std::runtime_error("station: not drawing, no frame to capture");
+  capture_png_ = png;
+  capture_error_.clear();
+  const std::uint64_t before = captures_done_;
+  const bool done = captured_.wait_for(lock, std::chrono::duration<double>(timeout_s),
+                                       [&] { return captures_done_ != before || !running_; });
+  capture_png_.clear();
+  if (!done || captures_done_ == before) {
+    throw std::runtime_error("station: no frame captured within " +
+                             format_significant(timeout_s, 3) + " s");
+  }
+  if (!capture_error_.empty()) throw std::runtime_error(capture_error_);
+}
+
 void Station::pick(std::size_t choice, bool by_click) {
   std::lock_guard lock(mutex_);
   if (choice >= last_asked_.choices.size()) {
@@ -205,8 +226,16 @@ void Station::run() noexcept {
       events.clear();
       window->poll(events);
       double theta_rad = 0.0;
+      const Scene* scene = &scene_;
+      std::filesystem::path capture_png;
       {
         std::lock_guard lock(mutex_);
+        if (shown_scene_ != nullptr) scene = shown_scene_;
+        if (scene->source != report_.scene) {
+          if (report_.frames > 0) ++report_.scene_changes;
+          report_.scene = scene->source;
+        }
+        capture_png = capture_png_;
         events.insert(events.end(), injected_.begin(), injected_.end());
         injected_.clear();
         if (asked_) panel.ask(std::move(*asked_));
@@ -231,7 +260,8 @@ void Station::run() noexcept {
         ++report_.frames;
       }
       last_frame_s = frame_s;
-      window->draw(theta_rad, panel, caption);
+      window->draw(*scene, theta_rad, panel, caption);
+      if (!capture_png.empty()) write_capture(*window, capture_png);
       window->swap();
       frame_pacing(next_frame_s);
     }
@@ -241,6 +271,21 @@ void Station::run() noexcept {
   }
   std::lock_guard lock(mutex_);
   running_ = false;
+  captured_.notify_all();
+}
+
+void Station::write_capture(const StationWindow& window, const std::filesystem::path& png) {
+  std::string error;
+  try {
+    window.write_png(png);
+  } catch (const std::exception& failure) {
+    error = failure.what();
+  }
+  std::lock_guard lock(mutex_);
+  capture_error_ = error;
+  ++captures_done_;
+  capture_png_.clear();
+  captured_.notify_all();
 }
 
 }  // namespace doorbench::station

@@ -7,13 +7,15 @@
 // Between playbacks (a trial's question, the next trial) the station follows no snapshot and
 // the door rests closed; follow() switches it to a playback's snapshot and back.
 //
-// Thread safety: start(), stop(), follow(), show(), ask(), take_answer(), take_typed(),
-// inject(), pick(), window_size(), running() and report() from any one control thread (they lock a
-// mutex the station's thread takes once per frame, never the tick). The scene must outlive the
-// Station, a followed snapshot channel the follow(nullptr) (or stop()) after it.
+// Thread safety: start(), stop(), follow(), show(), show_scene(), capture(), ask(),
+// take_answer(), take_typed(), inject(), pick(), window_size(), running() and report() from
+// any one control thread (they lock a mutex the station's thread takes once per frame, never
+// the tick). The scene must outlive the Station, a followed snapshot channel the
+// follow(nullptr) (or stop()) after it.
 #include <atomic>
 #include <condition_variable>
 #include <cstdint>
+#include <filesystem>
 #include <mutex>
 #include <optional>
 #include <string>
@@ -34,6 +36,8 @@ struct StationReport {
   std::string note;     // e.g. why stereo fell back to mono
   std::string error;    // what ended the station's thread early, or ""
   bool closed = false;  // the window was closed (by its close button or the window manager)
+  std::string scene;    // Scene::source of the scene the latest frame drew
+  std::uint64_t scene_changes = 0;  // frames that drew another scene than the frame before
   std::string brief_report() const;
 };
 
@@ -58,6 +62,14 @@ class Station {
   // The caption over the door (e.g. "Presentation 1", a tuning's key help) from the next
   // frame; an empty one shows nothing.
   void show(const Caption& caption);
+  // The scene drawn from the next frame (null: the station's own). It must outlive the
+  // show_scene() that replaces it (or stop()). The window's stereo mode stays the one it
+  // opened with (the station's scene's).
+  void show_scene(const Scene* scene);
+  // Writes the next frame drawn to `png` (RGB) and returns once it is written; throws
+  // std::runtime_error when the station is not drawing or the frame does not come within
+  // `timeout_s`.
+  void capture(const std::filesystem::path& png, double timeout_s = 30.0);
   // The question to show from the next frame (replacing any); throws std::invalid_argument
   // when it is not valid (Question::validate).
   void ask(const Question& question);
@@ -82,6 +94,7 @@ class Station {
 
  private:
   void run() noexcept;
+  void write_capture(const StationWindow& window, const std::filesystem::path& png);
   void frame_pacing(double& next_frame_s) const;
 
   const Scene& scene_;
@@ -94,6 +107,11 @@ class Station {
   std::string open_error_;
   // Under mutex_: the control side's requests and the station's results.
   const haptic::DoorSnapshotChannel* snapshot_ = nullptr;
+  const Scene* shown_scene_ = nullptr;
+  std::filesystem::path capture_png_;  // "" when no capture is asked for
+  std::uint64_t captures_done_ = 0;
+  std::string capture_error_;
+  std::condition_variable captured_;
   Caption caption_;
   std::optional<Question> asked_;
   Question last_asked_;

@@ -9,10 +9,47 @@ StationSession::StationSession(const StationRequest& request)
     throw std::invalid_argument("station: " + problem);
   }
   // The sound files are read now too: a bad one stops the run before the device moves.
-  for (const std::filesystem::path* file :
-       {&scene_.sounds.latch_wav, &scene_.sounds.stop_wav, &scene_.sounds.hinge_wav}) {
-    if (!file->empty()) read_sound_file(*file);
+  own_sounds_ = load_sound_samples(
+      scene_.sounds, request.scene_file.empty() ? "built-in" : request.scene_file.string());
+  for (const std::filesystem::path& file : request.scenes) {
+    if (scenes_.contains(file)) continue;
+    auto scene = std::make_unique<Scene>(load_scene(file));
+    scene->stereo = scene_.stereo;  // the screen's, whatever the staged scene says
+    scene_sounds_.emplace(file, load_sound_samples(scene->sounds, file.string()));
+    scenes_.emplace(file, std::move(scene));
   }
+  for (const std::filesystem::path& file : request.sound_sets) {
+    if (!sound_sets_.contains(file))
+      sound_sets_.emplace(file, load_sound_samples(load_sound_set(file), file.string()));
+  }
+}
+
+void StationSession::stage(const std::filesystem::path& scene_file,
+                           const std::filesystem::path& sounds_file) {
+  const Scene* scene = &scene_;
+  const SoundSamples* sounds = &own_sounds_;
+  if (!scene_file.empty()) {
+    const auto found = scenes_.find(scene_file);
+    if (found == scenes_.end())
+      throw std::invalid_argument("station: scene " + scene_file.string() +
+                                  " was not read at the start");
+    scene = found->second.get();
+    sounds = &scene_sounds_.at(scene_file);
+  }
+  if (!sounds_file.empty()) {
+    const auto found = sound_sets_.find(sounds_file);
+    if (found == sound_sets_.end())
+      throw std::invalid_argument("station: sound set " + sounds_file.string() +
+                                  " was not read at the start");
+    sounds = &found->second;
+  }
+  staged_scene_ = scene;
+  staged_sounds_ = sounds;
+  if (station_) station_->show_scene(scene == &scene_ ? nullptr : scene);
+}
+
+std::string StationSession::staged_scene() const {
+  return staged_scene_ == &scene_ ? own_sounds_.source : staged_scene_->source;
 }
 
 StationSession::~StationSession() {
@@ -31,6 +68,7 @@ void StationSession::start() {
   clicks_before_ = knocks_before_ = 0;
   station_ = std::make_unique<Station>(scene_, request_.window);
   station_->start();
+  if (staged_scene_ != &scene_) station_->show_scene(staged_scene_);
 }
 
 void StationSession::follow(const haptic::DoorSnapshotChannel& snapshot) {
@@ -41,7 +79,7 @@ void StationSession::follow(const haptic::DoorSnapshotChannel& snapshot) {
     return;
   }
   try {
-    sound_ = std::make_unique<DoorSound>(scene_, snapshot);
+    sound_ = std::make_unique<DoorSound>(*staged_scene_, *staged_sounds_, snapshot);
     sound_->start();
   } catch (const std::runtime_error& error) {
     // Sight and touch go on without sound; the report says why it is silent.

@@ -8,14 +8,19 @@
 //
 // For a run of trials (`ab`, `campaign run`) the window stays open from start() to close()
 // and follows each presentation's playback (follow(), unfollow()); the sound is opened for
-// each presentation and its counts add up over the run.
+// each presentation and its counts add up over the run. A presentation may be staged in
+// another scene and with another sound set (a campaign variant's, stage()): every one the
+// run may stage is read when the session is made, so that a switch reads no file and
+// allocates nothing the tick waits for (the tick only ever writes the snapshot).
 //
 // Thread safety: one control thread.
 #include <cstdint>
 #include <filesystem>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "haptic/door_snapshot.h"
 #include "station/door_sound.h"
@@ -28,11 +33,15 @@ struct StationRequest {
   std::filesystem::path scene_file;  // empty: the built-in dishwasher
   StationWindowOptions window;
   bool sound = true;
+  // The other scene files and sound sets (station/scene.h, load_sound_set) the run may
+  // stage. A staged scene is drawn with the station's stereo settings (the screen's).
+  std::vector<std::filesystem::path> scenes, sound_sets;
 };
 
 class StationSession {
  public:
-  // Reads the scene; throws SceneError naming the file and key.
+  // Reads the scene, the request's other scenes and sound sets and every sound file they
+  // name; throws SceneError naming the file and key.
   explicit StationSession(const StationRequest& request);
   ~StationSession();
 
@@ -47,6 +56,17 @@ class StationSession {
   void follow(const haptic::DoorSnapshotChannel& snapshot);
   // Stops following: the sound's output closes, the door rests closed.
   void unfollow();
+  // The scene drawn from the next frame and the sounds of the next follow(): a scene file
+  // and a sound set of the request (empty: the station's own scene; the staged scene's own
+  // sounds). std::invalid_argument for a file the request did not name.
+  void stage(const std::filesystem::path& scene_file, const std::filesystem::path& sounds_file);
+  // The staged scene's Scene::source and the staged sounds' SoundSamples::source (the
+  // station's own: "built-in" or the --scene file as given).
+  std::string staged_scene() const;
+  std::string staged_sounds() const { return staged_sounds_->source; }
+  // Whether a sound output plays the followed door (false before follow(), with
+  // --no-sound, or when no output could be opened).
+  bool sound_playing() const { return sound_ != nullptr; }
   // Ends the window's thread; keeps its report.
   void close();
   // Two lines for the summary: frames, frame interval, stereo, any note; the sounds played.
@@ -57,6 +77,11 @@ class StationSession {
  private:
   StationRequest request_;
   Scene scene_;
+  SoundSamples own_sounds_;
+  std::map<std::filesystem::path, std::unique_ptr<Scene>> scenes_;
+  std::map<std::filesystem::path, SoundSamples> scene_sounds_, sound_sets_;
+  const Scene* staged_scene_ = &scene_;
+  const SoundSamples* staged_sounds_ = &own_sounds_;
   std::unique_ptr<Station> station_;
   std::optional<StationReport> report_;
   std::unique_ptr<DoorSound> sound_;

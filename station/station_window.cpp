@@ -247,28 +247,33 @@ void draw_caption(const Caption& caption, double width, double height) {
 }  // namespace
 
 void StationWindow::draw(double theta_rad, const QuestionPanel& panel, const Caption& caption) {
+  draw(scene_, theta_rad, panel, caption);
+}
+
+void StationWindow::draw(const Scene& scene, double theta_rad, const QuestionPanel& panel,
+                         const Caption& caption) {
   int w = 0, h = 0;
   glfwGetFramebufferSize(impl_->window, &w, &h);
   w = std::max(w, 2);
   h = std::max(h, 2);
   switch (stereo_) {
     case StereoMode::kMono:
-      draw_scene(scene_, theta_rad, Eye::kCentre, {0, 0, w, h});
+      draw_scene(scene, theta_rad, Eye::kCentre, {0, 0, w, h});
       break;
     case StereoMode::kQuadBuffer:
       glDrawBuffer(GL_BACK_LEFT);
-      draw_scene(scene_, theta_rad, Eye::kLeft, {0, 0, w, h});
+      draw_scene(scene, theta_rad, Eye::kLeft, {0, 0, w, h});
       glDrawBuffer(GL_BACK_RIGHT);
-      draw_scene(scene_, theta_rad, Eye::kRight, {0, 0, w, h});
+      draw_scene(scene, theta_rad, Eye::kRight, {0, 0, w, h});
       glDrawBuffer(GL_BACK);
       break;
     case StereoMode::kSideBySide:
-      draw_scene(scene_, theta_rad, Eye::kLeft, {0, 0, w / 2, h});
-      draw_scene(scene_, theta_rad, Eye::kRight, {w / 2, 0, w - w / 2, h});
+      draw_scene(scene, theta_rad, Eye::kLeft, {0, 0, w / 2, h});
+      draw_scene(scene, theta_rad, Eye::kRight, {w / 2, 0, w - w / 2, h});
       break;
     case StereoMode::kTopBottom:
-      draw_scene(scene_, theta_rad, Eye::kLeft, {0, h - h / 2, w, h / 2});
-      draw_scene(scene_, theta_rad, Eye::kRight, {0, 0, w, h - h / 2});
+      draw_scene(scene, theta_rad, Eye::kLeft, {0, h - h / 2, w, h / 2});
+      draw_scene(scene, theta_rad, Eye::kRight, {0, 0, w, h - h / 2});
       break;
   }
   glViewport(0, 0, w, h);

@@ -47,6 +47,9 @@ class StationWindow {
   // One frame of the door at theta_rad (with `caption` at the top, and `panel` over it when
   // it asks) into the back buffer; swap() shows it.
   void draw(double theta_rad, const QuestionPanel& panel, const Caption& caption = {});
+  // The same with another scene than the window's (its stereo mode stays the window's).
+  void draw(const Scene& scene, double theta_rad, const QuestionPanel& panel,
+            const Caption& caption = {});
   void swap();
   // Pending window events; the keys, clicks and typed characters among them are appended
   // to `events`.

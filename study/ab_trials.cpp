@@ -373,8 +373,8 @@ AbSummary run_ab(const AbRunInputs& inputs, const Presenter& presenter, const An
   csv << "trial,answer,first_session,second_session,answered_utc\n" << std::flush;
 
   const std::map<std::string, Stimulus> stimuli = {
-      {options.variant_a(), Stimulus{options.variant_a(), inputs.model_a, "", inputs.params_a}},
-      {"B", Stimulus{"B", inputs.model_b, "", inputs.params_b}}};
+      {options.variant_a(), Stimulus{options.variant_a(), inputs.model_a, "", inputs.params_a, {}}},
+      {"B", Stimulus{"B", inputs.model_b, "", inputs.params_b, {}}}};
   std::vector<AbTrialOutcome> outcomes;
   auto finish = [&] {
     AbSummary summary = summarize(options, outcomes);

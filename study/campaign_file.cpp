@@ -151,6 +151,44 @@ Variant parse_variant(const Table& variants, const std::string& name, const std:
   return variant;
 }
 
+// A variant's scene or sound set (`key` of its table): the path as written and resolved
+// against the campaign file's folder; the file must exist.
+void read_staging_file(const Table& table, std::string_view key,
+                       const std::filesystem::path& folder, std::string& written,
+                       std::filesystem::path& resolved) {
+  const std::optional<std::string> path = table.string(key);
+  if (!path) return;
+  if (path->empty()) table.fail(key, "must name a file");
+  const std::filesystem::path file = folder / *path;
+  if (!std::filesystem::is_regular_file(file))
+    table.fail(key, "no such file '" + *path + "' (looked for " + file.string() + ")");
+  written = *path;
+  resolved = file;
+}
+
+// A variant as a string ("J*1.2") or a table ({ door = "J*1.2", scene = ..., sounds = ... }).
+Variant read_variant(const Table& variants, const std::string& name, const toml::node& node,
+                     const std::filesystem::path& folder) {
+  const char* what = "must be a string: base, real, file:PATH or steps such as \"J*1.2\"";
+  if (node.is_string()) return parse_variant(variants, name, node.as_string()->get(), folder);
+  if (!node.is_table())
+    variants.fail(name,
+                  std::string(what) + ", or a table { door = ..., scene = ..., sounds = ... }");
+  const std::optional<Table> table = variants.child(name, true);
+  table->allow_only({"door", "scene", "sounds"});
+  const std::optional<std::string> door = table->string("door");
+  if (!door) table->fail("", "missing door: base, real, file:PATH or steps such as \"J*1.2\"");
+  Variant variant = parse_variant(variants, name, *door, folder);
+  if (variant.kind == Variant::Kind::kReal && (table->get("scene") || table->get("sounds"))) {
+    table->fail(table->get("scene") ? "scene" : "sounds",
+                "the real door is seen and heard as it is on the bench; a scene and a sound set "
+                "are for a model");
+  }
+  read_staging_file(*table, "scene", folder, variant.scene, variant.scene_file);
+  read_staging_file(*table, "sounds", folder, variant.sounds, variant.sounds_file);
+  return variant;
+}
+
 std::vector<std::pair<std::string, std::string>> parse_pairs(const Table& block,
                                                              const Campaign& campaign) {
   std::vector<std::pair<std::string, std::string>> pairs;
@@ -408,11 +446,7 @@ Campaign parse_campaign(std::string_view text, std::string_view source,
   const Table variants = *top.child("variants", true);
   std::vector<std::pair<int, std::string>> order;
   for (auto&& [key, node] : variants.table()) {
-    if (!node.is_string())
-      variants.fail(key.str(),
-                    "must be a string: base, real, file:PATH or steps such as \"J*1.2\"");
-    Variant variant =
-        parse_variant(variants, std::string(key.str()), node.as_string()->get(), folder);
+    Variant variant = read_variant(variants, std::string(key.str()), node, folder);
     if (variant.kind == Variant::Kind::kReal && campaign.real_rig.empty()) {
       variants.fail(key.str(), "the real door needs campaign.real_rig (the bench's rig file)");
     }

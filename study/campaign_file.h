@@ -12,6 +12,14 @@
 //   "J*1.2,latch_effort*0.7"   analysis/perceptual_controls.h (sensory model) or a parameter
 //                              of the campaign's model (J, k_inf, d1 ...; J_d, k_l ...) times
 //                              a factor, applied left to right
+// or, when a study varies what is seen and heard too, as a table
+//   { door = "heaviness*1.2", scene = "scenes/oak.toml", sounds = "sounds/soft.toml" }
+// whose `door` is one of the strings above and whose `scene` (a station scene file) and
+// `sounds` (a sound set: the [sound] table of a TOML file, docs/station.md) are optional
+// paths relative to the campaign file. The files must exist ("c.toml:7: variants.oak.scene:
+// no such file 'scenes/oak.toml' (looked for /lab/study/scenes/oak.toml)"); what they hold
+// is read by the station when it opens (study/ does not read scenes). The real door takes
+// neither.
 // Thread safety: free functions without shared state.
 #include <cstdint>
 #include <filesystem>
@@ -43,6 +51,10 @@ struct Variant {
   enum class Kind { kBase, kFile, kReal, kSteps } kind = Kind::kBase;
   std::filesystem::path file;  // kFile: resolved against the campaign file's folder
   std::vector<Step> steps;     // kSteps
+  // What the station shows and plays for this variant: the paths as the campaign file spells
+  // them (for trials.csv) and resolved against its folder; empty: the station's own.
+  std::string scene, sounds;
+  std::filesystem::path scene_file, sounds_file;
 };
 
 enum class BlockType { kTune, kPair, kRating, kJnd };

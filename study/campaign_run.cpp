@@ -4,6 +4,7 @@
 #include <sys/file.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <chrono>
 #include <cmath>
@@ -268,6 +269,7 @@ Stimulus StimulusMaker::named(const std::string& name) {
   if (const Variant* variant = campaign_->find_variant(name)) {
     if (variant->kind != Variant::Kind::kReal) stimulus.model = variant_model(*campaign_, *variant);
     if (variant->kind == Variant::Kind::kFile) stimulus.source = variant->file.string();
+    stimulus.staging = {variant->scene, variant->sounds, variant->scene_file, variant->sounds_file};
   } else {
     stimulus.model = apply_steps(base_, parse_steps(name));
   }
@@ -336,7 +338,11 @@ const std::vector<std::string>& trials_columns() {
                                                 "answered_utc",
                                                 "sessions",
                                                 "first_parameters",
-                                                "second_parameters"};
+                                                "second_parameters",
+                                                "first_scene",
+                                                "first_sounds",
+                                                "second_scene",
+                                                "second_sounds"};
   return columns;
 }
 
@@ -386,9 +392,10 @@ void check_existing(const TrialsTable& table, const std::vector<std::size_t>& ro
   }
 }
 
-std::string run_one_trial(RunState& state, const PlanRow& row, int planned, StimulusMaker& maker,
-                          Respondent& respondent, const Presenter& presenter,
-                          std::ostream& prompts) {
+// The trial's row, in trials_columns()'s order.
+std::vector<std::string> run_one_trial(RunState& state, const PlanRow& row, int planned,
+                                       StimulusMaker& maker, Respondent& respondent,
+                                       const Presenter& presenter, std::ostream& prompts) {
   const Block& block = block_of(state.folder->campaign, row);
   auto [first, second] = maker.make(row, state.staircase[block.name]);
   move_leftovers(state.session_dir, state.session_dir.parent_path() / "interrupted",
@@ -397,6 +404,7 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
   const fs::path relative_dir =
       fs::path("sessions") / state.participant / (std::string("a") + std::to_string(state.attempt));
   std::string sessions, answer;
+  Presented presented[2];
   auto present = [&](int position, const Stimulus& stimulus,
                      std::optional<DoorModel>* tuned = nullptr) {
     prompts << "trial " << row.trial << " of " << planned << ": presentation " << position
@@ -411,7 +419,8 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
                           tuned,
                           tuned ? &respondent : nullptr,
                           0.0,
-                          std::to_string(position)};
+                          std::to_string(position),
+                          &presented[position - 1]};
     presenter(call);
     if (!sessions.empty()) sessions += ' ';
     sessions += (relative_dir / file).generic_string();
@@ -433,7 +442,7 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
     const std::string file = trial_file(row.trial, "-tuned.json");
     write_file_atomically(state.session_dir / file,
                           [&](std::ostream& out) { out << to_parameter_json(tuned); });
-    second = Stimulus{"tuned", tuned, rendered_parameters(tuned), "the tuned door"};
+    second = Stimulus{"tuned", tuned, rendered_parameters(tuned), "the tuned door", {}};
     present(2, second);
     answer = (relative_dir / file).generic_string();
   } else {
@@ -445,10 +454,45 @@ std::string run_one_trial(RunState& state, const PlanRow& row, int planned, Stim
     state.staircase[block.name].push_back(
         names_comparison(first.name, second.name, answer, block.parameter));
   }
-  return csv_row({state.participant, row.block, std::to_string(row.trial), row.question, first.name,
-                  block.type == BlockType::kTune ? "" : second.name, answer,
-                  std::to_string(state.attempt), utc_now(), sessions, first.parameters,
-                  second.parameters});
+  return {state.participant,
+          row.block,
+          std::to_string(row.trial),
+          row.question,
+          first.name,
+          block.type == BlockType::kTune ? "" : second.name,
+          answer,
+          std::to_string(state.attempt),
+          utc_now(),
+          sessions,
+          first.parameters,
+          second.parameters,
+          presented[0].scene,
+          presented[0].sounds,
+          presented[1].scene,
+          presented[1].sounds};
+}
+
+// `fields` (in trials_columns()'s order) as a row of a file whose header is `header`: a
+// column the header lacks is left out, one that trials_columns() lacks is left empty.
+std::string row_in_header(const std::vector<std::string>& fields,
+                          const std::vector<std::string>& header) {
+  const std::vector<std::string>& columns = trials_columns();
+  std::vector<std::string> row;
+  for (const std::string& name : header) {
+    const auto at = std::find(columns.begin(), columns.end(), name);
+    row.push_back(at == columns.end() ? "" : fields[std::size_t(at - columns.begin())]);
+  }
+  return csv_row(row);
+}
+
+// The columns of trials_columns() that `header` lacks, as "a, b" ("" when none).
+std::string missing_columns(const std::vector<std::string>& header) {
+  std::string missing;
+  for (const std::string& name : trials_columns()) {
+    if (std::find(header.begin(), header.end(), name) == header.end())
+      missing += (missing.empty() ? "" : ", ") + name;
+  }
+  return missing;
 }
 
 }  // namespace
@@ -508,8 +552,12 @@ RunResult run_participant(const CampaignFolder& folder, const RunOptions& option
     prompts << "resuming at trial " << result.answered_before + 1 << " of " << result.planned
             << "\n";
   }
+  if (const std::string missing = missing_columns(table.column_names); !missing.empty()) {
+    prompts << trials_path.string() << " was begun by an earlier doorbench without the columns "
+            << missing << ": its rows are written without them\n";
+  }
   for (std::size_t t = rows.size(); t < plan.size(); ++t) {
-    std::string row;
+    std::vector<std::string> row;
     try {
       row = run_one_trial(state, plan[t], result.planned, maker, respondent, presenter, prompts);
     } catch (const std::exception& failure) {
@@ -518,7 +566,7 @@ RunResult run_participant(const CampaignFolder& folder, const RunOptions& option
                                " (the " + std::to_string(t) + " answers before it are in " +
                                trials_path.string() + "; run the same command again to resume)");
     }
-    appender.append(row);
+    appender.append(row_in_header(row, table.column_names));
     ++result.answered_now;
     prompts << "trial " << plan[t].trial << " of " << result.planned << ": answered" << std::endl;
   }
@@ -577,7 +625,8 @@ void merge_campaign_folders(const std::vector<fs::path>& dirs, const fs::path& o
                                  "; merge joins folders of different participants");
       }
       std::vector<std::string> fields;
-      for (const std::string& column : trials_columns()) fields.push_back(table.value(r, column));
+      for (const std::string& column : trials_columns())
+        fields.push_back(table.find_column(column) ? table.value(r, column) : "");
       merged += csv_row(fields);
     }
   }

@@ -33,12 +33,31 @@
 
 namespace doorbench::study {
 
+// What a presentation is seen and heard in beside the door felt: a variant's scene and sound
+// set (Variant::scene, ::sounds as the campaign file spells them, and the files); empty: the
+// station's own.
+struct Staging {
+  std::string scene, sounds;
+  std::filesystem::path scene_file, sounds_file;
+};
+
 // What a presentation plays: a model, or the real door on the bench (model empty).
 struct Stimulus {
   std::string name;  // a variant's name, "J*1.1", or a tune start's steps
   std::optional<DoorModel> model;
   std::string parameters;  // the rendered parameters, "J=1.045 k=0.12 ..." (empty: real door)
   std::string source;      // where the model came from, for the session (a parameter file)
+  Staging staging;         // the variant's scene and sound set (none: the station's own)
+};
+
+// What a presentation showed and played beside the door felt, as trials.csv spells it
+// (docs/campaign.md, "trials.csv"): the scene drawn and where the sounds came from (a
+// variant's file as the campaign spells it, the station's --scene file as given, or
+// "built-in"), or "none" when nothing was shown or heard (no station; --no-sound, no audio
+// output or the real door for the sounds).
+struct Presented {
+  std::string scene = "none";
+  std::string sounds = "none";
 };
 
 class Respondent;
@@ -56,6 +75,9 @@ struct PresentationCall {
   Respondent* respondent = nullptr;  // with `tuned`: who tunes (Respondent::scripted_tuning_keys)
   double duration_s = 0.0;           // the presentation's length; 0: the presenter's own
   std::string label;                 // what the participant calls it ("1"); empty: `position`
+  // Where the presenter says what it showed and played (null: nobody asks); left as it is
+  // by a presenter that shows nothing.
+  Presented* presented = nullptr;
 };
 // Plays one presentation and records it; throws (std::exception) on a device fault.
 using Presenter = std::function<void(const PresentationCall&)>;
@@ -184,7 +206,10 @@ struct RunResult {
   bool finished() const { return answered_before + answered_now == planned; }
 };
 
-// The trials.csv header this run writes.
+// The trials.csv header this run writes. A run that resumes a trials.csv whose header lacks
+// some of them (written by an earlier doorbench) writes its rows in that file's header and
+// says which columns it leaves out; merge fills a column a folder lacks with "" (not
+// recorded).
 const std::vector<std::string>& trials_columns();
 
 // Runs (or resumes) `options.participant`. Throws std::runtime_error (device fault, answers

@@ -87,11 +87,19 @@ std::vector<ScreenQuestion> screen_questions(const Question& question, const Ans
 }
 
 ScreenPresentation tuning_screen() {
-  ScreenPresentation shown{"Tune the door with the keys, then press Enter", {}};
+  ScreenPresentation shown;
+  shown.caption = "Tune the door with the keys, then press Enter";
   for (const TuningKey& key : tuning_keys()) {
     shown.key_help.push_back(std::string(1, key.key) + "   " + std::string(key.action));
   }
   shown.key_help.push_back(std::string(1, kResetKey) + "   back to the start");
+  return shown;
+}
+
+ScreenPresentation screen_presentation(std::string caption, const Stimulus& stimulus) {
+  ScreenPresentation shown;
+  shown.caption = std::move(caption);
+  shown.staging = stimulus.staging;
   return shown;
 }
 

@@ -7,8 +7,10 @@
 // acquisition, analysis and haptic only (docs/architecture.md), and app/ joins the two.
 //
 // Blind by construction: a screen is told only the words to show (a presentation's label,
-// a question, its choices and anchors, the tuning keys' actions) and the door's angle
-// through the playback's snapshot, never a Stimulus, a variant's name or its parameters.
+// a question, its choices and anchors, the tuning keys' actions), the door's angle through
+// the playback's snapshot and, when the variant names them, the scene and the sound set to
+// stage it in (files, never shown as words), never a Stimulus, a variant's name or its
+// parameters.
 //
 // Thread safety: a ParticipantScreen is called from the run's one thread; an implementation
 // hands the requests to its own drawing thread.
@@ -52,7 +54,11 @@ std::string screen_problem(const std::vector<PlanRow>& rows);
 struct ScreenPresentation {
   std::string caption;                // "Presentation 1", "Tune the door"
   std::vector<std::string> key_help;  // a tuning's keys and what each does: "+  heavier"
+  Staging staging;  // the variant's scene and sound set (Stimulus::staging); none: the screen's own
 };
+
+// The presentation of `stimulus` called `caption`: its scene and sound set with it.
+ScreenPresentation screen_presentation(std::string caption, const Stimulus& stimulus);
 
 // What a tune trial's first presentation shows: "Tune the door with the keys, then press
 // Enter" and each tuning key with what it does ("+   heavier", ..., "r   back to the start").
@@ -61,12 +67,14 @@ ScreenPresentation tuning_screen();
 class ParticipantScreen {
  public:
   virtual ~ParticipantScreen() = default;
-  // A presentation starts: show `shown`, and the door at the angle `door` publishes (null for
-  // the real door on the bench: the screen's door rests closed). `door` must outlive the
-  // end_presentation() call that follows.
-  virtual void begin_presentation(const ScreenPresentation& shown,
-                                  const haptic::DoorSnapshotChannel* door) = 0;
-  // The presentation is over: stop reading its door (the door rests closed).
+  // A presentation starts: show `shown` in its scene (or the screen's own), the door at the
+  // angle `door` publishes, with its sounds (null for the real door on the bench: the
+  // screen's door rests closed, silent). `door` must outlive the end_presentation() call
+  // that follows. Returns what is shown and played, as trials.csv spells it (Presented).
+  virtual Presented begin_presentation(const ScreenPresentation& shown,
+                                       const haptic::DoorSnapshotChannel* door) = 0;
+  // The presentation is over: stop reading its door (the door rests closed, in the screen's
+  // own scene).
   virtual void end_presentation() = 0;
   // Shows `question` from now on (replacing any); take_choice() gives its answer.
   virtual void ask(const ScreenQuestion& question) = 0;

@@ -87,7 +87,7 @@ class ScreenShowing {
 
   void begin(const ScreenPresentation& shown, const haptic::DoorSnapshotChannel* door) {
     if (screen_ == nullptr) return;
-    screen_->begin_presentation(shown, door);
+    presented_ = screen_->begin_presentation(shown, door);
     begun_ = true;
   }
   void end() {
@@ -100,10 +100,15 @@ class ScreenShowing {
     play.on_start = [this, shown](const haptic::DoorSnapshotChannel& door) { begin(shown, &door); };
     play.on_end = [this] { end(); };
   }
+  // What the screen showed and played (nothing: "none", "none"), into `out` when given.
+  void tell(Presented* out) const {
+    if (out != nullptr) *out = presented_;
+  }
 
  private:
   ParticipantScreen* screen_;
   bool begun_ = false;
+  Presented presented_;
 };
 
 // The keys of a scripted tune trial's line (spaces ignored); throws naming `where` for any
@@ -172,12 +177,14 @@ void DevicePresenter::present(const PresentationCall& call) const {
       std::to_string(call.trial) + ", presentation " + std::to_string(call.position) +
       ", variant " + call.stimulus->name +
       (call.stimulus->source.empty() ? "" : " (" + call.stimulus->source + ")");
-  const ScreenPresentation shown{
-      "Presentation " + (call.label.empty() ? std::to_string(call.position) : call.label), {}};
+  const ScreenPresentation shown = screen_presentation(
+      "Presentation " + (call.label.empty() ? std::to_string(call.position) : call.label),
+      *call.stimulus);
   if (!call.stimulus->model) {
     if (!record_real_) throw std::logic_error("the real door without a rig to record it from");
     ScreenShowing showing(participant_screen_);
     showing.begin(shown, nullptr);
+    showing.tell(call.presented);
     record_real_(
         {duration_s, call.session_path, options_.operator_name, notes + ", the real door"});
     return;
@@ -200,6 +207,7 @@ void DevicePresenter::present(const PresentationCall& call) const {
   ScreenShowing showing(participant_screen_);
   showing.follow(play, shown);
   const haptic::PlaybackSummary summary = play_(*call.stimulus->model, play);
+  showing.tell(call.presented);
   if (!summary.stop_cause.empty()) {
     throw std::runtime_error("the presentation stopped after " +
                              format_significant(summary.duration_s, 3) +
@@ -223,7 +231,9 @@ DoorModel DevicePresenter::tune_at_the_device(PlaySettings play, const DoorModel
   std::string keys;
   std::size_t pressed = 0;
   ScreenShowing showing(participant_screen_);
-  showing.follow(play, tuning_screen());
+  ScreenPresentation tuning_shown = tuning_screen();
+  tuning_shown.staging = call.stimulus->staging;
+  showing.follow(play, tuning_shown);
   if (!line && participant_screen_ != nullptr) {
     ParticipantScreen* screen = participant_screen_;
     screen->take_typed();  // what was typed before the tuning is not a tuning key
@@ -258,6 +268,7 @@ DoorModel DevicePresenter::tune_at_the_device(PlaySettings play, const DoorModel
     };
   }
   const haptic::PlaybackSummary summary = play_(start, play);
+  showing.tell(call.presented);
   if (!summary.stop_cause.empty()) {
     throw std::runtime_error("the tuning stopped after " +
                              format_significant(summary.duration_s, 3) +

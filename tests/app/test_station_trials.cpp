@@ -64,9 +64,10 @@ method = "staircase"
 trials = 4
 )";
 
-fs::path planned(const TempDir& dir, const std::string& name) {
+fs::path planned(const TempDir& dir, const std::string& name,
+                 const std::string& text = kStationCampaign) {
   const fs::path campaign = dir.path / "station.toml";
-  std::ofstream(campaign) << kStationCampaign;
+  std::ofstream(campaign) << text;
   const DoorbenchRun run = run_doorbench_shell(
       "campaign plan '" + campaign.string() + "' --out '" + (dir.path / name).string() + "'", dir);
   REQUIRE(run.status == 0);
@@ -118,7 +119,18 @@ TEST_CASE("campaign run --station: answers on the station equal the same answers
   const std::vector<std::vector<std::string>> rows =
       doorbench::testing::trials_rows_without_time(typed / "trials.csv");
   REQUIRE(rows.size() >= 8);
-  CHECK(doorbench::testing::trials_rows_without_time(on_station / "trials.csv") == rows);
+  CHECK(doorbench::testing::trials_rows_without_time_and_staging(on_station / "trials.csv") ==
+        doorbench::testing::trials_rows_without_time_and_staging(typed / "trials.csv"));
+  // The station's own scene was shown, silent (--no-sound); without the station nothing.
+  for (const std::string& scene :
+       doorbench::testing::trials_column(on_station / "trials.csv", "first_scene"))
+    CHECK(scene == "built-in");
+  for (const std::string& sounds :
+       doorbench::testing::trials_column(on_station / "trials.csv", "second_sounds"))
+    CHECK(sounds == "none");
+  for (const std::string& scene :
+       doorbench::testing::trials_column(typed / "trials.csv", "second_scene"))
+    CHECK(scene == "none");
   // The tuned doors are the same files.
   CHECK(read_file(on_station / "sessions/P01/a1/t001-tuned.json") ==
         read_file(typed / "sessions/P01/a1/t001-tuned.json"));
@@ -135,8 +147,9 @@ TEST_CASE("campaign run --station: answers on the station equal the same answers
       kStationXvfb);
   INFO("simulated station run: " << run.err);
   REQUIRE(run.status == 0);
-  CHECK(doorbench::testing::trials_rows_without_time(simulated_on_station / "trials.csv") ==
-        doorbench::testing::trials_rows_without_time(simulated / "trials.csv"));
+  CHECK(doorbench::testing::trials_rows_without_time_and_staging(simulated_on_station /
+                                                                 "trials.csv") ==
+        doorbench::testing::trials_rows_without_time_and_staging(simulated / "trials.csv"));
 }
 
 TEST_CASE("ab --station: answers on the station equal the same answers on stdin",
@@ -180,4 +193,97 @@ TEST_CASE("ab --station: answers on the station equal the same answers on stdin"
                           "doorbench: --station: the station asks ratings of 2 to 9 points (keys "
                           "1 to 9); this one has 12"));
   CHECK_FALSE(fs::exists(dir.path / "wide"));
+}
+
+namespace {
+
+// Variants staged in scenes and a sound set (docs/campaign.md, "Scenes and sound sets"), and
+// a jnd block whose stimuli are no variant (the station's own scene).
+constexpr const char* kStagedCampaign = R"(
+[campaign]
+name = "staged"
+seed = 29
+simulated_presentation_s = 0.3
+[variants]
+oak = { door = "base", scene = "scenes/oak.toml" }
+steel = { door = "heaviness*1.2", scene = "scenes/steel.toml", sounds = "sounds/steel.toml" }
+plain = "latch_effort*0.7"
+[participants]
+count = 1
+[[blocks]]
+name = "pair"
+type = "pair"
+[[blocks]]
+name = "jnd"
+type = "jnd"
+parameter = "J"
+levels = [1.2, 1.4]
+)";
+
+// What trials.csv must say for `stimulus` on a station with sound (`sound`) or without.
+std::pair<std::string, std::string> staged_as(const std::string& stimulus, bool sound) {
+  if (stimulus == "oak") return {"scenes/oak.toml", sound ? "scenes/oak.toml" : "none"};
+  if (stimulus == "steel") return {"scenes/steel.toml", sound ? "sounds/steel.toml" : "none"};
+  return {"built-in", sound ? "built-in" : "none"};
+}
+
+void check_staging(const fs::path& trials, bool station, bool sound) {
+  const doorbench::study::TrialsTable table = doorbench::study::read_trials_table(trials);
+  REQUIRE(table.rows.size() == 8);
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    for (const std::string position : {"first", "second"}) {
+      INFO("row " << r + 1 << ", " << position << ": " << table.value(r, position));
+      const auto [scene, sounds] = staged_as(table.value(r, position), sound);
+      CHECK(table.value(r, position + "_scene") == (station ? scene : "none"));
+      CHECK(table.value(r, position + "_sounds") == (station ? sounds : "none"));
+    }
+  }
+}
+
+}  // namespace
+
+TEST_CASE("campaign run --station: each variant shown in its scene with its sounds, in trials.csv",
+          "[station][xvfb][campaign]") {
+  TempDir dir("station_staged");
+  dir.write("scenes/oak.toml", "[colours]\ndoor_rgb = [0.6, 0.4, 0.2]\n");
+  dir.write("scenes/steel.toml", "[colours]\ndoor_rgb = [0.8, 0.8, 0.85]\n");
+  dir.write("sounds/steel.toml", "[sound]\nlatch_gain = 2.0\nhinge_gain = 0.2\n");
+  // Without the station: the plan runs, nothing shown or heard.
+  const fs::path unseen = planned(dir, "unseen", kStagedCampaign);
+  DoorbenchRun run = run_doorbench_shell(run_participant(unseen, "--respondent sim"), dir);
+  INFO("run without the station: " << run.err);
+  REQUIRE(run.status == 0);
+  check_staging(unseen / "trials.csv", false, false);
+
+  // On the station, silent.
+  const fs::path silent = planned(dir, "silent", kStagedCampaign);
+  run = run_doorbench_shell(run_participant(silent, "--respondent sim --station --no-sound"), dir,
+                            kStationXvfb);
+  INFO("silent station run: " << run.err);
+  REQUIRE(run.status == 0);
+  check_staging(silent / "trials.csv", true, false);
+  CHECK(doorbench::testing::trials_rows_without_time_and_staging(silent / "trials.csv") ==
+        doorbench::testing::trials_rows_without_time_and_staging(unseen / "trials.csv"));
+
+  // With sound, into OpenAL Soft's wave writer (no sound card needed).
+  dir.write("alsoft.conf", "[general]\ndrivers = wave\n\n[wave]\nfile = " +
+                               (dir.path / "output.wav").string() + "\n");
+  const fs::path heard = planned(dir, "heard", kStagedCampaign);
+  run = run_doorbench_shell(run_participant(heard, "--respondent sim --station"), dir,
+                            "env ALSOFT_DRIVERS=wave ALSOFT_CONF='" +
+                                (dir.path / "alsoft.conf").string() + "' " + kStationXvfb);
+  INFO("station run with sound: " << run.err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.out, Catch::Matchers::Contains("sound: "));
+  check_staging(heard / "trials.csv", true, true);
+
+  // A scene the campaign names that is gone by the run: refused before the device moves.
+  fs::remove(dir.path / "scenes/oak.toml");
+  const fs::path folder = dir.path / "silent";
+  run = run_doorbench_shell(run_participant(folder, "--respondent sim --station --redo"), dir,
+                            kStationXvfb);
+  CHECK(run.status != 0);
+  CHECK_THAT(run.err, Catch::Matchers::Contains(
+                          "variants.oak.scene: no such file 'scenes/oak.toml' (looked for " +
+                          (dir.path / "scenes/oak.toml").string() + ")"));
 }

@@ -17,6 +17,7 @@
 #include "fixtures/temp_dir.h"
 #include "haptic/door_snapshot.h"
 #include "station/door_sound.h"
+#include "station/station_session.h"
 #include "tests/support/busy_processes.h"
 
 using namespace doorbench;
@@ -240,5 +241,113 @@ TEST_CASE("station sound: the latch click starts within 30 ms of the tick that c
   for (std::size_t i = 0; i < onsets.size(); ++i) {
     INFO("click " << i << ": tick at " << events_s[i] << " s, sound at " << onsets[i] << " s");
     CHECK(std::abs(onsets[i] - events_s[i]) <= 0.030);
+  }
+}
+
+namespace {
+
+// A WAV of a `frequency_hz` tone, 60 ms, full from its first frame (a click that says which
+// sound set played it).
+void write_tone_wav(const fs::path& path, double frequency_hz) {
+  std::vector<std::int16_t> frames;
+  for (int i = 0; i < 44100 * 6 / 100; ++i)
+    frames.push_back(
+        std::int16_t(20000 * std::sin(2 * std::acos(-1.0) * frequency_hz * i / 44100)));
+  write_wav(path, 1, 44100, frames);
+}
+
+// The tone's frequency in the 40 ms after `onset_s`: zero crossings / 2 / duration.
+double tone_frequency_hz(const Recording& recording, double onset_s) {
+  const auto begin = std::size_t(onset_s * recording.rate_hz) + 8;
+  const auto end =
+      std::min(recording.samples.size(), begin + std::size_t(0.04 * recording.rate_hz));
+  int crossings = 0;
+  for (std::size_t i = begin + 1; i < end; ++i)
+    crossings += (recording.samples[i - 1] < 0) != (recording.samples[i] < 0) ? 1 : 0;
+  return crossings / 2.0 / (double(end - begin) / recording.rate_hz);
+}
+
+}  // namespace
+
+// Run by the test below with OpenAL Soft's wave backend: a station session plays two
+// presentations of 2 strokes each, staged with the sound sets low.toml and high.toml; the
+// output of each is kept as presentation-N.wav and the set staged written to staged.txt.
+TEST_CASE("station sound: two presentations with two sound sets (child of the test below)",
+          "[.][child]") {
+  const char* dir_text = std::getenv("DOORBENCH_TEST_DIR");
+  REQUIRE(dir_text != nullptr);
+  const fs::path dir = dir_text;
+  station::StationRequest request;
+  request.sound_sets = {dir / "low.toml", dir / "high.toml"};
+  station::StationSession session(request);
+  std::ofstream staged(dir / "staged.txt");
+  for (int n = 0; n < 2; ++n) {
+    haptic::DoorEventAngles angles;
+    angles.latch_rad = kLatchRad;
+    haptic::DoorSnapshotChannel channel(angles);
+    channel.publish(0.0, 0.0, 0.0);
+    session.stage({}, request.sound_sets[n]);
+    session.follow(channel);
+    REQUIRE(session.sound_playing());
+    staged << session.staged_sounds() << "\n";
+    const double period_s = 0.8, begin_s = monotonic_now_s() + 0.2;
+    for (int tick = 0; tick < int(2 * period_s * 1000); ++tick) {
+      const double deadline_s = begin_s + tick * 1e-3;
+      while (monotonic_now_s() < deadline_s)
+        std::this_thread::sleep_for(std::chrono::duration<double>(deadline_s - monotonic_now_s()));
+      const double t = tick * 1e-3;
+      channel.publish(t, 0.01 + 0.145 * (1 - std::cos(2 * std::acos(-1.0) * t / period_s)), 0.0);
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(200));
+    session.unfollow();  // the output closes: the wave file is complete
+    fs::copy_file(dir / "output.wav", dir / ("presentation-" + std::to_string(n + 1) + ".wav"));
+  }
+}
+
+TEST_CASE("station sound: a presentation staged with another sound set plays that set's sounds",
+          "[station][sound]") {
+  testing::TempDir dir("station_sound_sets");
+  write_tone_wav(dir.path / "low.wav", 700.0);
+  write_tone_wav(dir.path / "high.wav", 3500.0);
+  // The latch's click from each file; the hinge and the stops silent.
+  for (const char* name : {"low", "high"}) {
+    std::ofstream(dir.path / (std::string(name) + ".toml"))
+        << "[sound]\nlatch_wav = \"" << name << ".wav\"\nhinge_gain = 0.0\nstop_gain = 0.0\n";
+  }
+  std::ofstream(dir.path / "alsoft.conf")
+      << "[general]\ndrivers = wave\nchannels = mono\nfrequency = 48000\n\n[wave]\nfile = "
+      << (dir.path / "output.wav").string() << "\n";
+  testing::BusyProcesses busy(2);
+  const fs::path self = fs::read_symlink("/proc/self/exe");
+  const std::string command =
+      "env ALSOFT_CONF='" + (dir.path / "alsoft.conf").string() +
+      "' ALSOFT_DRIVERS=wave DOORBENCH_TEST_DIR='" + dir.path.string() + "' '" + self.string() +
+      "' 'station sound: two presentations with two sound sets (child of the test below)' > '" +
+      (dir.path / "child.txt").string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream child_out(dir.path / "child.txt");
+  const std::string child_text((std::istreambuf_iterator<char>(child_out)),
+                               std::istreambuf_iterator<char>());
+  INFO("child: " << child_text);
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+  std::ifstream staged_in(dir.path / "staged.txt");
+  std::string low_staged, high_staged;
+  std::getline(staged_in, low_staged);
+  std::getline(staged_in, high_staged);
+  CHECK(low_staged == (dir.path / "low.toml").string());
+  CHECK(high_staged == (dir.path / "high.toml").string());
+  const double expected_hz[2] = {700.0, 3500.0};
+  for (int n = 0; n < 2; ++n) {
+    const Recording recording =
+        read_wav(dir.path / ("presentation-" + std::to_string(n + 1) + ".wav"));
+    // A click lasts 60 ms; a latching and the next unlatching are 134 ms apart.
+    const std::vector<double> onsets = onsets_s(recording, 0.05, 0.05);
+    INFO("presentation " << n + 1);
+    CHECK(onsets.size() == 4);  // 2 strokes: unlatching and latching each
+    for (const double onset_s : onsets) {
+      INFO("click at " << onset_s << " s");
+      CHECK(tone_frequency_hz(recording, onset_s) == Approx(expected_hz[n]).epsilon(0.1));
+    }
   }
 }

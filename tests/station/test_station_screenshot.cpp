@@ -10,7 +10,9 @@
 
 #include "fixtures/temp_dir.h"
 #include "station/scene.h"
+#include "station/station_session.h"
 #include "station/station_window.h"
+#include "tests/support/busy_processes.h"
 #include "tests/support/gltf_box.h"
 #include "tests/support/viewer_pixels.h"
 
@@ -256,4 +258,92 @@ TEST_CASE("the station's stereo: each eye's view where the screen's geometry put
     REQUIRE(drawn == "quad-buffer");
     check_view(quad, Pinhole(sbs, -1, 0, 0, kWidth, kHeight), door, theta, "left buffer");
   }
+}
+
+namespace {
+
+// The pixels of `shot` within 30 of `rgb`.
+int pixels_of(const testing::Screenshot& shot, const std::vector<int>& rgb) {
+  int count = 0;
+  for (int y = 0; y < shot.height; ++y) {
+    for (int x = 0; x < shot.width; ++x) count += testing::near_rgb(shot.pixel(x, y), rgb, 30);
+  }
+  return count;
+}
+
+}  // namespace
+
+// Run by the test below: the live station (its own thread, as in a campaign run) opened with
+// the flat red-door scene, a frame captured; the blue-door scene staged, a frame captured;
+// back to its own, a frame captured; the station's report written to report.txt.
+TEST_CASE("station staging: a live station switches scenes (child of the test below)",
+          "[.][child]") {
+  const char* dir_text = std::getenv("DOORBENCH_TEST_DIR");
+  REQUIRE(dir_text != nullptr);
+  const fs::path dir = dir_text;
+  station::StationRequest request;
+  request.scene_file = dir / "default.toml";
+  request.scenes = {dir / "blue.toml"};
+  request.sound = false;
+  request.window.fullscreen = false;
+  request.window.width_px = kWidth;
+  request.window.height_px = kHeight;
+  station::StationSession session(request);
+  session.start();
+  session.station()->capture(dir / "own.png");
+  session.stage(dir / "blue.toml", {});
+  session.station()->capture(dir / "staged.png");
+  const station::StationReport staged = session.station()->report();
+  session.stage({}, {});
+  session.station()->capture(dir / "own-again.png");
+  const station::StationReport again = session.station()->report();
+  session.close();
+  std::ofstream(dir / "report.txt") << staged.scene << "\n"
+                                    << staged.scene_changes << "\n"
+                                    << again.scene << "\n"
+                                    << again.scene_changes << "\n";
+}
+
+TEST_CASE("the live station draws the scene a presentation is staged in, then its own again",
+          "[station][xvfb]") {
+  testing::TempDir dir("station_staging");
+  write_scenes(dir.path);
+  std::string blue = kFlatLook;
+  blue.replace(blue.find("door_rgb = [1.0, 0.0, 0.0]"), 26, "door_rgb = [0.0, 0.0, 1.0]");
+  blue.replace(blue.find("handle_rgb = [0.0, 0.0, 1.0]"), 28, "handle_rgb = [1.0, 1.0, 0.0]");
+  std::ofstream(dir.path / "blue.toml") << blue;
+  testing::BusyProcesses busy(2);
+  const fs::path self = fs::read_symlink("/proc/self/exe");
+  std::string err;
+  const int status = testing::run_under_xvfb(
+      "env DOORBENCH_TEST_DIR='" + dir.path.string() + "' '" + self.string() +
+          "' 'station staging: a live station switches scenes (child of the test below)'",
+      dir.path, err);
+  INFO("stderr: " << err);
+  REQUIRE(status == 0);
+  const std::vector<int> red = {255, 0, 0}, blue_door = {0, 0, 255};
+  const testing::Screenshot own = testing::load_screenshot(dir.path / "own.png", false);
+  const testing::Screenshot staged = testing::load_screenshot(dir.path / "staged.png", false);
+  const testing::Screenshot again = testing::load_screenshot(dir.path / "own-again.png", false);
+  // The door fills a good part of the window in either scene: red in the station's own, blue
+  // (and no red) in the staged one.
+  const int door_pixels = pixels_of(own, red);
+  CHECK(door_pixels > kWidth * kHeight / 20);
+  CHECK(pixels_of(staged, red) == 0);
+  CHECK(pixels_of(staged, blue_door) > kWidth * kHeight / 20);
+  // The staged scene's handle is yellow; the own scene has none.
+  const std::vector<int> yellow = {255, 255, 0};
+  CHECK(pixels_of(own, yellow) == 0);
+  CHECK(pixels_of(staged, yellow) > 100);
+  CHECK(pixels_of(again, red) == door_pixels);
+  std::ifstream report(dir.path / "report.txt");
+  std::string staged_scene, staged_changes, again_scene, again_changes;
+  std::getline(report, staged_scene);
+  std::getline(report, staged_changes);
+  std::getline(report, again_scene);
+  std::getline(report, again_changes);
+  CHECK(staged_scene == (dir.path / "blue.toml").string());
+  CHECK(staged_changes == "1");
+  CHECK(again_scene == (dir.path / "default.toml").string());
+  CHECK(again_changes == "2");
 }

@@ -29,13 +29,24 @@ namespace {
 // does with its scripted input) and counts the presentations that showed a door.
 class RecordingScreen : public study::ParticipantScreen {
  public:
-  void begin_presentation(const study::ScreenPresentation& shown,
-                          const haptic::DoorSnapshotChannel* door) override {
+  study::Presented begin_presentation(const study::ScreenPresentation& shown,
+                                      const haptic::DoorSnapshotChannel* door) override {
     CHECK_FALSE(showing_);
     showing_ = true;
     shown_text.push_back(shown.caption);
     for (const std::string& line : shown.key_help) shown_text.push_back(line);
     if (door != nullptr) ++doors_followed;
+    const study::Staging& staging = shown.staging;
+    staged_files.push_back(staging.scene_file.string() + "|" + staging.sounds_file.string());
+    // As a station does: the variant's scene and sounds, else its own; silent for the real
+    // door.
+    study::Presented presented;
+    presented.scene = staging.scene.empty() ? "own-scene" : staging.scene;
+    presented.sounds = door == nullptr           ? "none"
+                       : !staging.sounds.empty() ? staging.sounds
+                       : !staging.scene.empty()  ? staging.scene
+                                                 : "own-scene";
+    return presented;
   }
   void end_presentation() override {
     CHECK(showing_);
@@ -65,6 +76,7 @@ class RecordingScreen : public study::ParticipantScreen {
 
   std::vector<study::ScreenQuestion> asked;
   std::vector<std::string> shown_text;
+  std::vector<std::string> staged_files;  // "SCENE_FILE|SOUNDS_FILE" per presentation
   int doors_followed = 0, clicks = 0;
 
  private:
@@ -194,8 +206,18 @@ TEST_CASE("campaign answers given on the screen equal the typed ones, and nothin
       screen_folder, {"P01", false}, on_screen, screen_presenter.as_presenter(), progress);
   REQUIRE(screen_result.finished());
 
-  CHECK(doorbench::testing::trials_rows_without_time(screen_folder.dir / "trials.csv") ==
-        doorbench::testing::trials_rows_without_time(typed_folder.dir / "trials.csv"));
+  CHECK(
+      doorbench::testing::trials_rows_without_time_and_staging(screen_folder.dir / "trials.csv") ==
+      doorbench::testing::trials_rows_without_time_and_staging(typed_folder.dir / "trials.csv"));
+  // What was shown and heard: the screen's own scene and sounds on it, nothing without it.
+  for (const char* column : {"first_scene", "first_sounds", "second_scene", "second_sounds"}) {
+    for (const std::string& value :
+         doorbench::testing::trials_column(screen_folder.dir / "trials.csv", column))
+      CHECK(value == "own-scene");
+    for (const std::string& value :
+         doorbench::testing::trials_column(typed_folder.dir / "trials.csv", column))
+      CHECK(value == "none");
+  }
   // Every presentation showed its door; a rating's second presentation was clicked.
   CHECK(screen.doors_followed == 2 * int(plan.size()));
   CHECK(screen.clicks > 0);
@@ -270,4 +292,66 @@ TEST_CASE("ab answers given on the screen equal the typed ones", "[screen][ab]")
   CHECK(screen.shown_text.front() == "Presentation left");
   CHECK(progress.str().find("rate") == std::string::npos);
   CHECK(progress.str().find("trial 6 of 6: asked on the station, ") != std::string::npos);
+}
+
+TEST_CASE("a presentation is staged on the screen in its variant's scene and sound set",
+          "[screen][campaign]") {
+  TempDir dir("participant_screen_staged");
+  std::filesystem::create_directories(dir.path / "scenes");
+  std::ofstream(dir.path / "scenes" / "oak.toml") << "";
+  std::ofstream(dir.path / "soft.toml") << "";
+  std::ofstream(dir.path / "staged.toml") << R"(
+[campaign]
+name = "staged"
+seed = 3
+[variants]
+oak = { door = "base", scene = "scenes/oak.toml", sounds = "soft.toml" }
+bare = { door = "heaviness*1.2", scene = "scenes/oak.toml" }
+plain = "latch_effort*0.7"
+[participants]
+count = 1
+[[blocks]]
+name = "pair"
+type = "pair"
+)";
+  const study::Campaign campaign = study::read_campaign(dir.path / "staged.toml");
+  study::write_campaign_folder(dir.path / "folder", campaign, study::make_plan(campaign, 3), false);
+  const study::CampaignFolder folder = study::open_campaign_folder(dir.path / "folder");
+  RecordingScreen screen;
+  study::PresenterOptions options;
+  options.presentation_s = 0.2;
+  std::ostringstream lines;
+  study::DevicePresenter presenter(options, instant_player(), {}, lines);
+  presenter.show_on(&screen);
+  study::SimulatedRespondent simulated(5, study::base_model(folder.campaign));
+  study::ScreenRespondent on_screen(screen, &simulated);
+  REQUIRE(study::run_participant(folder, {"P01", false}, on_screen, presenter.as_presenter(), lines)
+              .finished());
+  const study::TrialsTable table = study::read_trials_table(dir.path / "folder" / "trials.csv");
+  REQUIRE(table.rows.size() == 6);
+  const std::string oak_file = (dir.path / "scenes" / "oak.toml").string();
+  const std::string soft_file = (dir.path / "soft.toml").string();
+  for (std::size_t r = 0; r < table.rows.size(); ++r) {
+    for (const std::string position : {"first", "second"}) {
+      const std::string& variant = table.value(r, position);
+      INFO("row " << r + 1 << " " << position << ": " << variant);
+      // The screen was handed the files; trials.csv holds what it said it showed and played.
+      const std::string files = screen.staged_files[2 * r + (position == "first" ? 0 : 1)];
+      if (variant == "oak") {
+        CHECK(files == oak_file + "|" + soft_file);
+        CHECK(table.value(r, position + "_scene") == "scenes/oak.toml");
+        CHECK(table.value(r, position + "_sounds") == "soft.toml");
+      } else if (variant == "bare") {
+        CHECK(files == oak_file + "|");
+        CHECK(table.value(r, position + "_scene") == "scenes/oak.toml");
+        CHECK(table.value(r, position + "_sounds") == "scenes/oak.toml");
+      } else {
+        CHECK(files == "|");
+        CHECK(table.value(r, position + "_scene") == "own-scene");
+        CHECK(table.value(r, position + "_sounds") == "own-scene");
+      }
+    }
+  }
+  // Still blind: no file's name among the words shown.
+  for (const std::string& text : screen.shown_text) CHECK(text.find("oak") == std::string::npos);
 }
