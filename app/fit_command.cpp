@@ -105,11 +105,12 @@ std::string joined(const std::vector<std::string>& names) {
 }
 
 // --free auto (docs/fitting.md, "Identifiable parameters"): the default free set (less
-// --fixed) is fitted once without folds; when it leaves parameters undetermined, its
-// identifiable set (FitSummary::identifiable) is fitted with the others held at their start
-// values, and what that fit still leaves undetermined is held too (at most twice more).
-// Each choice is said on stderr and in the report. Throws std::runtime_error when no
-// parameter is identifiable.
+// --fixed) is fitted once without folds (the full fit); when it leaves parameters
+// undetermined, its identifiable set (FitSummary::identifiable) is refitted from the full
+// fit's optimum with the others held there, and what that fit still leaves undetermined is
+// held too (at most twice more). Each choice, and what holding the others costs in window FIT,
+// is said on stderr and in the report. Throws std::runtime_error when no parameter is
+// identifiable.
 FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOptions fit,
                         StatusLine& status, std::vector<std::string>& report_lines) {
   auto say = [&](const std::string& line) {
@@ -119,7 +120,8 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
   FitOptions trial_options = fit;
   trial_options.cross_validation_folds = 0;
   trial_options.partial_on_stop = false;  // a trial is whole or not at all
-  const FitSummary trial = fit_model(start, data, trial_options).summary;
+  const FitResult full = fit_model(start, data, trial_options);
+  const FitSummary& trial = full.summary;
   const std::size_t count = trial.free_names.size();
   if (trial.undetermined.empty()) {
     say("--free auto: the default free set's " + std::to_string(count) +
@@ -144,9 +146,13 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
       joined(trial.undetermined) + "); fitting the " + std::to_string(trial.identifiable.size()) +
       " the data determine with the others held (from the Jacobian's singular vectors at its "
       "optimum): " +
-      joined(trial.identifiable) + "; held at their start values: " + joined(held));
+      joined(trial.identifiable) + "; held at the full fit's values: " + joined(held));
+  // From the full fit's optimum: the values held are the fit's, and the free ones start
+  // where the full fit left them (no read-off, no equation-error stage, one start).
   fit.free_parameters = trial.identifiable;
-  FitResult result = fit_model(start, data, fit);
+  fit.latch_start_from_data = false;
+  fit.equation_error_start = false;
+  FitResult result = fit_model(full.model, data, fit);
   for (int round = 0;
        round < 2 && !result.summary.undetermined.empty() && result.summary.interrupted.empty();
        ++round) {
@@ -156,10 +162,15 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
     });
     if (fit.free_parameters.empty()) break;
     say("--free auto: that fit leaves " + joined(still) + " undetermined; refitting with " +
-        (still.size() == 1 ? "it" : "them") + " held at the start value" +
+        (still.size() == 1 ? "it" : "them") + " held at the full fit's value" +
         (still.size() == 1 ? "" : "s"));
-    result = fit_model(start, data, fit);
+    result = fit_model(full.model, data, fit);
   }
+  const double full_fit = trial.fitted.window.fit_percent();
+  const double set_fit = result.summary.fitted.window.fit_percent();
+  say("--free auto: holding the others costs " + printf_text("%.2f", full_fit - set_fit) +
+      " points of window FIT (the full fit " + printf_text("%.2f%%", full_fit) + ", this fit " +
+      printf_text("%.2f%%", set_fit) + ")");
   return result;
 }
 
@@ -184,7 +195,7 @@ void write_start(const std::filesystem::path& dir, const FitInputs& inputs) {
 
 void run_fit(const FitCommandOptions& options) {
   // SIGINT/SIGTERM: the fit ends at its next solver iteration. A whole window fit is written,
-  // marked interrupted (without what the stop cut: held-out metrics, a restart); before that
+  // marked interrupted (without what the stop cut: held-out metrics); before that
   // there is nothing to write. A second signal ends doorbench at once.
   const StopSignals signals;
   // Before any reading: a parameter is free or held, not both.
@@ -286,8 +297,8 @@ void add_fit_command(CLI::App& app, Action& action) {
       "Effects to add: an effects file (*.json) or names, e.g. stribeck,viscous_damping");
   fit->add_option("--free", options->free,
                   "Free parameters, comma-separated (default: docs/fitting.md); auto: the "
-                  "default set fitted once, then only the parameters its data determine, the "
-                  "others held at their start values");
+                  "default set fitted once, then only the parameters its data determine, "
+                  "refitted from there with the others held at that fit's values");
   fit->add_option("--fixed", options->fixed, "Parameters held at their start values");
   fit->add_option("--objective", options->objective,
                   "windows (least squares on windows) or study-max (the study's largest rate "
