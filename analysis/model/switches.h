@@ -17,11 +17,11 @@ T exp_minus(const T& x) {
 
 // The logistic function 1 / (1 + exp(−u)), in the form that neither overflows nor
 // loses relative accuracy in either tail.
+// The tail's exponential is exp_minus: the latch's sharp switches ask for logistic(±2000).
 template <typename T>
 T logistic(const T& u) {
-  using std::exp;
-  if (u >= T(0.0)) return T(1.0) / (T(1.0) + exp(-u));
-  const T exp_u = exp(u);
+  if (u >= T(0.0)) return T(1.0) / (T(1.0) + exp_minus(u));
+  const T exp_u = exp_minus(-u);
   return exp_u / (T(1.0) + exp_u);
 }
 
