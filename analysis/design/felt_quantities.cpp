@@ -216,8 +216,14 @@ FeltQuantities felt_from_strokes(std::span<const PreparedData> data, double thet
 PreparedData virtual_hand_strokes(const DoorModel& model, const FeltOptions& options) {
   check(options, model.geometry().theta_max_rad);
   const VirtualHand hand(options.hand, model.geometry().handle_radius_m);
-  const auto samples =
+  // The run ends at the last sample of a stroke: what follows (the door let go at rest) is
+  // read by no quantity, and the samples before it do not depend on it.
+  auto samples =
       static_cast<std::size_t>(std::floor(hand.duration_s() * options.output_rate_hz)) + 1;
+  while (samples > 1 &&
+         hand.stroke_at(static_cast<double>(samples - 1) / options.output_rate_hz) == 0) {
+    --samples;
+  }
   std::vector<double> times(samples);
   for (std::size_t i = 0; i < samples; ++i) {
     times[i] = static_cast<double>(i) / options.output_rate_hz;

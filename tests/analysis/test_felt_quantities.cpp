@@ -37,6 +37,40 @@ const doorbench::FeltQuantityError& error_of(const doorbench::FeelCheck& check,
 
 }  // namespace
 
+// The standard run ends at its last stroke sample (what follows is read by no quantity): the
+// quantities are those of the whole run's strokes.
+TEST_CASE("the standard run's quantities are the whole run's", "[felt]") {
+  const DoorModel door = doorbench::reference_model(ModelKind::kPhysical);
+  const FeltOptions options;
+  const doorbench::VirtualHand hand(options.hand, door.geometry().handle_radius_m);
+  std::vector<double> times;
+  for (int i = 0; i <= 10000; ++i) times.push_back(i / 1000.0);
+  const doorbench::Trajectory run = doorbench::simulate(door, hand, doorbench::DoorState{}, times);
+  PreparedData whole;
+  whole.handle_radius_m = door.geometry().handle_radius_m;
+  for (const int marker : {1, 2}) {
+    doorbench::Stroke stroke;
+    stroke.id = marker;
+    stroke.direction =
+        marker == 1 ? doorbench::StrokeDirection::kOpening : doorbench::StrokeDirection::kClosing;
+    for (std::size_t i = 0; i < times.size(); ++i) {
+      if (hand.stroke_at(times[i]) != marker) continue;
+      stroke.time_s.push_back(times[i]);
+      stroke.force_N.push_back(run.force_N[i]);
+      stroke.theta_rad.push_back(run.theta_rad[i]);
+      stroke.omega_rad_s.push_back(run.omega_rad_s[i]);
+    }
+    whole.strokes.push_back(std::move(stroke));
+  }
+  const PreparedData standard = doorbench::virtual_hand_strokes(door, options);
+  REQUIRE(standard.strokes.size() == 2);
+  for (std::size_t s = 0; s < 2; ++s) {
+    CHECK(standard.strokes[s].time_s == whole.strokes[s].time_s);
+    CHECK(standard.strokes[s].force_N == whole.strokes[s].force_N);
+    CHECK(standard.strokes[s].theta_rad == whole.strokes[s].theta_rad);
+  }
+}
+
 TEST_CASE("Felt quantities of the reference physical door", "[felt]") {
   const DoorModel door = doorbench::reference_model(ModelKind::kPhysical);
   const FeltOptions options;
