@@ -131,6 +131,10 @@ std::string PerceptualToleranceOptions::validate() const {
   if (!(min_factor > 0 && min_factor <= 1)) return "min_factor must be in (0, 1]";
   if (!(max_factor >= 1) || !std::isfinite(max_factor)) return "max_factor must be >= 1";
   if (bisection_steps < 0) return "bisection_steps must be >= 0";
+  if (!(factor_precision > 0) || !std::isfinite(factor_precision)) {
+    return "factor_precision must be > 0";
+  }
+  if (batch_samples < 0 || batch_samples == 1) return "batch_samples must be 0 or >= 2";
   return "";
 }
 
@@ -145,9 +149,67 @@ ToleranceSpec scaled(const ToleranceSpec& spec, double factor) {
 struct Evaluation {
   double factor = 1.0;
   double worst = 0.0;
+  int samples = 0;
   std::vector<PerceptualRow> rows;
   bool under(double level) const { return !(worst > level); }  // NaN (none assessed): under
 };
+
+// z of a two-sided 99 % interval: a factor's Monte Carlo stops early only on a clear answer.
+constexpr double kDecisionZ = 2.5758293035489004;
+
+// Is it clear on which side of `level` the worst share lies: some share's interval wholly
+// above it, or every assessed share's at or under it?
+bool decided(const std::vector<PerceptualRow>& rows, double level) {
+  bool all_under = true;
+  for (const PerceptualRow& row : rows) {
+    if (!std::isfinite(row.share)) continue;
+    const BinomialInterval interval = wilson_interval(row.felt_different, row.doors, kDecisionZ);
+    if (interval.low > level) return true;
+    if (!(interval.high <= level)) all_under = false;
+  }
+  return all_under;
+}
+
+// The shares at `factor`: the Monte Carlo in batches (options.batch_samples) of the same draws
+// as every other factor's, until decided() or every sample is run.
+Evaluation run_factor(const DoorModel& design, const ToleranceSpec& spec, double factor,
+                      const MonteCarloOptions& monte_carlo, std::span<const FeltJnd> jnds,
+                      const PerceptualToleranceOptions& options) {
+  const ToleranceSpec tolerances = scaled(spec, factor);
+  const int batch = options.batch_samples > 0 ? options.batch_samples : monte_carlo.samples;
+  ToleranceResult all;
+  Evaluation e;
+  e.factor = factor;
+  while (e.samples < monte_carlo.samples) {
+    MonteCarloOptions part = monte_carlo;
+    part.first_sample = monte_carlo.first_sample + e.samples;
+    // A last batch of one sample is run with the one before (the analysis takes two or more).
+    part.samples =
+        monte_carlo.samples - e.samples < 2 * batch ? monte_carlo.samples - e.samples : batch;
+    ToleranceResult result = tolerance_analysis(design, tolerances, part);
+    if (e.samples == 0) all.nominal = result.nominal;
+    all.felt.insert(all.felt.end(), result.felt.begin(), result.felt.end());
+    e.samples += part.samples;
+    e.rows = perceptual_shares(all, jnds);
+    if (decided(e.rows, options.felt_share)) break;
+  }
+  e.worst = worst_share(e.rows);
+  return e;
+}
+
+std::string samples_text(const PerceptualProposal& proposal, const MonteCarloOptions& mc,
+                         const PerceptualToleranceOptions& options) {
+  int all = 0;
+  for (int n : proposal.samples_run) all += n;
+  std::string text =
+      "; a Monte Carlo of up to " + std::to_string(mc.samples) + " samples per factor";
+  if (options.batch_samples > 0) {
+    text += " in batches of " + std::to_string(options.batch_samples) +
+            ", stopped where every share's 99% interval was clear of the level";
+  }
+  return text + " (" + std::to_string(all) + " samples, " +
+         std::to_string(proposal.samples_run.size()) + " factors)";
+}
 
 }  // namespace
 
@@ -157,21 +219,26 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
                                                  const PerceptualToleranceOptions& options,
                                                  const ToleranceResult* given) {
   if (std::string error = options.validate(); !error.empty()) throw std::invalid_argument(error);
+  if (std::string error = monte_carlo.validate(); !error.empty()) {
+    throw std::invalid_argument(error);
+  }
   PerceptualProposal proposal;
   proposal.felt_share = options.felt_share;
+  proposal.over_factor = kNaN;
   auto evaluate = [&](double factor) {
     Evaluation e;
-    e.factor = factor;
     if (factor == 1.0 && given) {
+      e.factor = factor;
       e.rows = perceptual_shares(*given, jnds);
+      e.worst = worst_share(e.rows);
+      e.samples = static_cast<int>(given->felt.size());
     } else {
-      e.rows =
-          perceptual_shares(tolerance_analysis(design, scaled(spec, factor), monte_carlo), jnds);
+      e = run_factor(design, spec, factor, monte_carlo, jnds, options);
     }
-    e.worst = worst_share(e.rows);
     proposal.factors_tried.push_back(factor);
     proposal.worst_shares.push_back(e.worst);
-    if (options.progress) options.progress(factor, e.worst);
+    proposal.samples_run.push_back(e.samples);
+    if (options.progress) options.progress(factor, e.worst, e.samples);
     return e;
   };
   const double level = options.felt_share;
@@ -213,7 +280,9 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
     }
   }
   if (have_over) {
-    for (int step = 0; step < options.bisection_steps; ++step) {
+    for (int step = 0; step < options.bisection_steps &&
+                       over.factor > under.factor * (1 + options.factor_precision);
+         ++step) {
       Evaluation middle = evaluate(std::sqrt(under.factor * over.factor));
       if (middle.under(level)) {
         under = std::move(middle);
@@ -221,6 +290,7 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
         over = std::move(middle);
       }
     }
+    proposal.over_factor = over.factor;
   }
   proposal.factor = under.factor;
   proposal.reached = true;
@@ -230,8 +300,13 @@ PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const 
                      " keeps each felt quantity's share felt as different at or under " +
                      format_significant(100 * level, 3) + "% (largest " +
                      format_significant(100 * under.worst, 3) + "%)";
-  if (!have_over)
+  if (!have_over) {
     proposal.summary += "; the largest factor tried, " + format_significant(under.factor, 3);
+  } else {
+    proposal.summary += "; × " + format_significant(over.factor, 3) + " leaves " +
+                        format_significant(100 * over.worst, 3) + "%";
+  }
+  proposal.summary += samples_text(proposal, monte_carlo, options);
   return proposal;
 }
 

@@ -85,14 +85,22 @@ double worst_share(std::span<const PerceptualRow> rows);
 struct PerceptualToleranceOptions {
   double felt_share = 0.05;  // the level every share must stay under (at or below), (0, 1)
   // The common factor on every tolerance is searched in [min_factor, max_factor]: doubled
-  // or halved from 1 until the worst share crosses the level, then bisected (in log2)
+  // or halved from 1 until the worst share crosses the level, then bisected (in log2) until
+  // the factor over the level is within factor_precision above the one under it, at most
   // bisection_steps times.
   double min_factor = 1.0 / 64.0;
   double max_factor = 4.0;
   int bisection_steps = 6;
-  // Called after each factor's Monte Carlo with the factor and its largest share (the
-  // caller's thread). Empty: none.
-  std::function<void(double factor, double worst_share)> progress;
+  double factor_precision = 0.05;  // > 0
+  // Each factor's Monte Carlo (but the given one) runs in batches of this many samples, the
+  // same draws at every factor, and stops after the batch where every assessed share's 99 %
+  // Wilson interval lies on one side of the level: wholly above it in one quantity, or at or
+  // under it in all. Else it runs the Monte Carlo's every sample. 0: every sample at every
+  // factor. >= 2 otherwise.
+  int batch_samples = 100;
+  // Called after each factor's Monte Carlo with the factor, its largest share and the
+  // samples it ran (the caller's thread). Empty: none.
+  std::function<void(double factor, double worst_share, int samples)> progress;
   std::string validate() const;  // empty when usable, else the message naming the option
 };
 
@@ -100,15 +108,20 @@ struct PerceptualProposal {
   double felt_share = 0.0;
   double factor = 1.0;   // the largest factor tried whose worst share is at or under the level
   bool reached = false;  // false: even min_factor leaves a share over the level
+  // The smallest factor tried above `factor` whose worst share is over the level (the
+  // bracket's other end; the level is crossed between them); NaN when none was tried.
+  double over_factor = 0.0;
   std::vector<ParameterTolerance> tolerances;       // proposed (as given × factor)
   std::vector<PerceptualRow> rows;                  // at the proposal (min_factor when not reached)
   std::vector<double> factors_tried, worst_shares;  // in the order run
+  std::vector<int> samples_run;                     // per factor tried: the doors simulated
   std::string summary;                              // one sentence saying what was found
 };
 
-// Runs tolerance_analysis at scaled tolerances (the same seed and samples: common random
-// numbers, so the worst share is a deterministic function of the factor) and returns the
-// proposal. `given` is the Monte Carlo at factor 1 when already run (else it is run).
+// Runs tolerance_analysis at scaled tolerances (the same seed and draws: common random
+// numbers, so the worst share is a deterministic function of the factor and of the samples
+// run) and returns the proposal. `given` is the Monte Carlo at factor 1 when already run
+// (else it is run, in batches as the other factors).
 PerceptualProposal propose_perceptual_tolerances(const DoorModel& design, const ToleranceSpec& spec,
                                                  const MonteCarloOptions& monte_carlo,
                                                  std::span<const FeltJnd> jnds,

@@ -185,8 +185,10 @@ json perceptual_json(const PerceptualSpec& p) {
            {{"factor", number(p.proposal.factor)},
             {"reached", p.proposal.reached},
             {"summary", p.proposal.summary},
+            {"over_factor", number(p.proposal.over_factor)},
             {"factors_tried", p.proposal.factors_tried},
             {"worst_shares", p.proposal.worst_shares},
+            {"samples_run", p.proposal.samples_run},
             {"tolerances", proposed}}}};
 }
 }  // namespace

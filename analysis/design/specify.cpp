@@ -171,10 +171,10 @@ PerceptualSpec perceptual_spec(const SpecOptions& spec, const CampaignForSpec& c
   p.rows = perceptual_shares(given, p.jnds);
   PerceptualToleranceOptions options;
   options.felt_share = spec.felt_share;
-  options.progress = [&spec](double factor, double worst) {
+  options.progress = [&spec](double factor, double worst, int samples) {
     spec_say(spec, "  tolerances x " + format_significant(factor, 3) +
                        ": largest share felt as different " + format_significant(100 * worst, 3) +
-                       "%");
+                       "% (" + std::to_string(samples) + " samples)");
   };
   MonteCarloOptions monte_carlo = evaluation_options.monte_carlo;
   monte_carlo.felt = evaluation_options.felt;
@@ -182,8 +182,10 @@ PerceptualSpec perceptual_spec(const SpecOptions& spec, const CampaignForSpec& c
   spec_say(spec,
            "perceptual tolerances: the common factor on every tolerance keeping each share "
            "felt as different under " +
-               format_significant(100 * spec.felt_share, 3) + "% (a Monte Carlo of " +
-               std::to_string(monte_carlo.samples) + " samples per factor tried)");
+               format_significant(100 * spec.felt_share, 3) + "% (a Monte Carlo of up to " +
+               std::to_string(monte_carlo.samples) + " samples per factor tried, in batches of " +
+               std::to_string(options.batch_samples) +
+               " until every share's 99% interval is clear of the level)");
   const ToleranceSpec tolerances{given.tolerances};
   p.proposal =
       propose_perceptual_tolerances(design, tolerances, monte_carlo, p.jnds, options, &given);

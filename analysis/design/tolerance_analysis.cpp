@@ -161,6 +161,7 @@ ToleranceSpec parse_tolerance_file(std::string_view json_text, std::string_view 
 
 std::string MonteCarloOptions::validate() const {
   if (samples < 2) return "monte carlo samples must be >= 2";
+  if (first_sample < 0) return "monte carlo first_sample must be >= 0";
   if (threads < 0) return "monte carlo threads must be >= 0";
   return felt.validate();
 }
@@ -184,13 +185,14 @@ std::vector<int> toleranced_parameters(const DoorModel& design, const ToleranceS
   return index;
 }
 
-// Sample s: its own generator seeded from (seed, s), every toleranced parameter drawn within
-// its band (clamped to its bounds), the felt quantities of that door; `failure` set when the
-// model refuses the draw or the run fails.
+// Sample s: its own generator seeded from (seed, first_sample + s), every toleranced parameter
+// drawn within its band (clamped to its bounds), the felt quantities of that door; `failure` set
+// when the model refuses the draw or the run fails.
 void run_sample(const DoorModel& design, const std::vector<int>& index,
                 const MonteCarloOptions& options, std::size_t s, ToleranceResult& result,
                 std::string& failure) {
-  std::mt19937_64 random(mix64(options.seed * 0x100000001b3ULL + s));
+  const auto drawn = static_cast<std::uint64_t>(options.first_sample) + s;
+  std::mt19937_64 random(mix64(options.seed * 0x100000001b3ULL + drawn));
   std::normal_distribution<double> normal(0.0, 1.0);
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   std::vector<double> values(design.parameter_values().begin(), design.parameter_values().end());

@@ -57,6 +57,9 @@ ToleranceSpec parse_tolerance_file(std::string_view json_text, std::string_view 
 struct MonteCarloOptions {
   int samples = 1000;
   std::uint64_t seed = 1;
+  // Sample i is drawn as sample first_sample + i (its generator seeded from (seed,
+  // first_sample + i)): runs of consecutive ranges draw the doors one run of them all would.
+  int first_sample = 0;
   int threads = 0;  // 0: every core (std::thread::hardware_concurrency)
   FeltOptions felt;
   // Called with 0 done as the samples begin, then now and then from worker threads

@@ -185,7 +185,7 @@ TEST_CASE("the proposal says when no factor reaches the level", "[perceptual_tol
   options.felt_share = 0.2;
   options.min_factor = 0.25;
   std::vector<double> reported;
-  options.progress = [&reported](double factor, double) { reported.push_back(factor); };
+  options.progress = [&reported](double factor, double, int) { reported.push_back(factor); };
   const doorbench::PerceptualProposal proposal = doorbench::propose_perceptual_tolerances(
       design, doorbench::default_tolerances(design), mc, test_jnds(), options);
   CHECK_FALSE(proposal.reached);
@@ -271,4 +271,64 @@ TEST_CASE("choose_favourite: the variant of largest worth with its file, the fir
   doorbench::choose_favourite(campaign);
   CHECK(campaign.favourite == "C");
   CHECK(campaign.favourite_file.empty());
+}
+
+TEST_CASE("a Monte Carlo in ranges of samples draws the doors one run of them all draws",
+          "[perceptual_tolerance]") {
+  const DoorModel design = doorbench::reference_model(doorbench::ModelKind::kPhysical);
+  const ToleranceSpec spec = doorbench::default_tolerances(design);
+  doorbench::MonteCarloOptions mc;
+  mc.samples = 12;
+  mc.threads = 2;
+  mc.seed = 7;
+  const doorbench::ToleranceResult whole = doorbench::tolerance_analysis(design, spec, mc);
+  mc.samples = 5;
+  mc.first_sample = 7;
+  const doorbench::ToleranceResult part = doorbench::tolerance_analysis(design, spec, mc);
+  REQUIRE(part.draws.size() == 5);
+  for (std::size_t s = 0; s < part.draws.size(); ++s) {
+    CHECK(part.draws[s] == whole.draws[s + 7]);
+    CHECK(part.felt[s].peak_unlatch_force_N == whole.felt[s + 7].peak_unlatch_force_N);
+  }
+  mc.first_sample = -1;
+  CHECK(mc.validate() == "monte carlo first_sample must be >= 0");
+}
+
+// With JNDs of 3 % the reference door's default tolerances leave most doors felt as different
+// (docs/design-spec.md: 65 %): at a level of 20 % one batch of 20 says so, and its shares are
+// those of a run of the same 20 doors.
+TEST_CASE("a factor's Monte Carlo stops after the batch where the answer is clear",
+          "[perceptual_tolerance]") {
+  const DoorModel design = doorbench::reference_model(doorbench::ModelKind::kPhysical);
+  const ToleranceSpec spec = doorbench::default_tolerances(design);
+  doorbench::MonteCarloOptions mc;
+  mc.samples = 60;
+  mc.threads = 2;
+  mc.seed = 5;
+  doorbench::PerceptualToleranceOptions options;
+  options.felt_share = 0.2;
+  options.batch_samples = 20;
+  options.min_factor = 0.5;
+  std::vector<int> reported;
+  options.progress = [&reported](double, double, int samples) { reported.push_back(samples); };
+  const doorbench::PerceptualProposal proposal =
+      doorbench::propose_perceptual_tolerances(design, spec, mc, test_jnds(), options);
+  REQUIRE(proposal.samples_run.size() == proposal.factors_tried.size());
+  CHECK(reported == proposal.samples_run);
+  REQUIRE(proposal.worst_shares.front() > 0.5);
+  CHECK(proposal.samples_run.front() == 20);
+  mc.samples = 20;
+  const std::vector<PerceptualRow> rows =
+      doorbench::perceptual_shares(doorbench::tolerance_analysis(design, spec, mc), test_jnds());
+  CHECK(proposal.worst_shares.front() == doorbench::worst_share(rows));
+
+  options.batch_samples = 1;
+  CHECK_THROWS_WITH(
+      doorbench::propose_perceptual_tolerances(design, spec, mc, test_jnds(), options),
+      "batch_samples must be 0 or >= 2");
+  options.batch_samples = 0;
+  options.factor_precision = 0;
+  CHECK_THROWS_WITH(
+      doorbench::propose_perceptual_tolerances(design, spec, mc, test_jnds(), options),
+      "factor_precision must be > 0");
 }
