@@ -353,3 +353,33 @@ TEST_CASE(
                                    CatalogueCase{effects::Kind::kInertiaError, {0.2}, true});
   check_catalogue_case(c, seed);
 }
+
+// Every refit obeys the nested-refit rule, those of a step the structure check abandons
+// included. The force offset is the only candidate and the check runs after its refit (the
+// refit explains less than structure_max_explained_fraction): the loop switches to the
+// physical model and abandons the step, whose refit of the offset is kept in
+// StructureCheck::candidates. It extends the sensory fit, so it ends at or below that fit's
+// fitted sum of squares like any step's refit.
+TEST_CASE(
+    "residual loop: the refit of a step abandoned for a family switch ends at or below "
+    "its parent",
+    "[residual_loop][tremor][slow]") {
+  const doorbench::PreparedData data =
+      tremor_data(doorbench::reference_model(ModelKind::kPhysical), 1);
+  doorbench::LoopOptions options;
+  options.candidates = {effects::Kind::kForceOffset};
+  const LoopResult loop = doorbench::run_residual_loop(sensory_reference(), data, options);
+  INFO(loop.full_report());
+  const doorbench::StructureCheck& check = loop.structure;
+  REQUIRE(check.switched);
+  CHECK(check.after_steps == 0);
+  int abandoned = 0;
+  for (const doorbench::CandidateEvidence& candidate : check.candidates) {
+    if (candidate.kind != effects::Kind::kForceOffset) continue;
+    REQUIRE(candidate.after.has_value());
+    abandoned += doorbench::testing::check_nested_refit(candidate);
+    CHECK(candidate.before.sum_of_squares == check.current.sum_of_squares);
+  }
+  CHECK(abandoned == 1);
+  CHECK(doorbench::testing::check_nested_refits(loop) >= 1);
+}
