@@ -8,9 +8,9 @@ StationSession::StationSession(const StationRequest& request)
   if (std::string problem = request_.window.validate(); !problem.empty()) {
     throw std::invalid_argument("station: " + problem);
   }
+  own_scene_name_ = request.scene_file.empty() ? "built-in" : request.scene_file.string();
   // The sound files are read now too: a bad one stops the run before the device moves.
-  own_sounds_ = load_sound_samples(
-      scene_.sounds, request.scene_file.empty() ? "built-in" : request.scene_file.string());
+  own_sounds_ = load_sound_samples(scene_.sounds, own_scene_name_);
   for (const std::filesystem::path& file : request.scenes) {
     if (scenes_.contains(file)) continue;
     auto scene = std::make_unique<Scene>(load_scene(file));
@@ -49,7 +49,7 @@ void StationSession::stage(const std::filesystem::path& scene_file,
 }
 
 std::string StationSession::staged_scene() const {
-  return staged_scene_ == &scene_ ? own_sounds_.source : staged_scene_->source;
+  return staged_scene_ == &scene_ ? own_scene_name_ : staged_scene_->source;
 }
 
 StationSession::~StationSession() {

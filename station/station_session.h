@@ -77,6 +77,7 @@ class StationSession {
  private:
   StationRequest request_;
   Scene scene_;
+  std::string own_scene_name_;  // "built-in" or the --scene file as given
   SoundSamples own_sounds_;
   std::map<std::filesystem::path, std::unique_ptr<Scene>> scenes_;
   std::map<std::filesystem::path, SoundSamples> scene_sounds_, sound_sets_;
