@@ -15,11 +15,13 @@
 #include <vector>
 
 #include "acquisition/session/session_file.h"
+#include "core/clock.h"
 #include "core/number_format.h"
 #include "fixtures/temp_dir.h"
 #include "tests/support/busy_processes.h"
 #include "tests/support/files.h"
 #include "tests/support/hapticmaster_emulator_process.h"
+#include "tests/support/pause_watch.h"
 #include "tests/support/run_doorbench.h"
 
 using Catch::Matchers::Contains;
@@ -28,6 +30,7 @@ using doorbench::SessionReader;
 using doorbench::testing::BusyProcesses;
 using doorbench::testing::DoorbenchRun;
 using doorbench::testing::HapticMasterEmulator;
+using doorbench::testing::PauseWatch;
 using doorbench::testing::run_doorbench_shell;
 using doorbench::testing::TempDir;
 namespace fs = std::filesystem;
@@ -105,10 +108,22 @@ TEST_CASE("play under load: 3 s on the HapticMaster emulator without a stop, 20 
   TempDir dir("play_load_hm");
   HapticMasterEmulator emulator;
   const BusyProcesses busy;
-  int played = 0;
+  const PauseWatch watch;
+  int played = 0, held = 0;
   for (int run = 1; run <= 20; ++run) {
-    const fs::path session = dir / ("play-" + std::to_string(run) + ".h5");
+    const fs::path session =
+        dir / ("play-" + std::to_string(run) + "-" + std::to_string(held) + ".h5");
+    const double started_s = doorbench::monotonic_now_s();
     const DoorbenchRun result = play(emulator.name(), 3.0, session, dir);
+    // A stall while the machine itself was held is the stall check doing its job, not a
+    // defect of the play: that run is played again, at most 3 times in all.
+    if (held < 3 && stop_event(session).find(" between two ticks, above ") != std::string::npos &&
+        watch.held_during(started_s, doorbench::monotonic_now_s(), 0.09)) {
+      WARN("run " << run << ": the machine was held " << watch.longest_gap_s()
+                  << " s and the ticks with it; played again");
+      ++held, --run;
+      continue;
+    }
     INFO("run " << run << " of 20 with " << busy.count() << " busy processes");
     check_played_through(result, session, 3.0);
     if (result.status == 0 && stop_event(session) == "end: the run's duration was played") {
