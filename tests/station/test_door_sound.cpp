@@ -120,6 +120,28 @@ std::vector<double> onsets_s(const Recording& recording, double threshold, doubl
   return onsets;
 }
 
+// Runs the test case `child` of this binary with OpenAL Soft's wave backend configured by
+// `dir`/alsoft.conf and DOORBENCH_TEST_DIR=`dir`, beside 2 busy processes, and requires it to
+// pass. The wave writer stands in for a sound card, whose clock a busy CPU does not hold back:
+// the child (and so OpenAL Soft's mixing thread, which inherits it) runs SCHED_FIFO where
+// permitted, as an output's mixing thread does with OpenAL Soft's rt-prio.
+void run_child_with_wave_output(const fs::path& dir, const std::string& child) {
+  testing::BusyProcesses busy(2);
+  const fs::path self = fs::read_symlink("/proc/self/exe");
+  const bool fifo = std::system("chrt -f 10 true > /dev/null 2>&1") == 0;
+  const std::string command =
+      std::string(fifo ? "chrt -f 10 " : "") + "env ALSOFT_CONF='" +
+      (dir / "alsoft.conf").string() + "' ALSOFT_DRIVERS=wave DOORBENCH_TEST_DIR='" + dir.string() +
+      "' '" + self.string() + "' '" + child + "' > '" + (dir / "child.txt").string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  std::ifstream child_out(dir / "child.txt");
+  const std::string child_text((std::istreambuf_iterator<char>(child_out)),
+                               std::istreambuf_iterator<char>());
+  INFO("child: " << child_text);
+  REQUIRE(WIFEXITED(status));
+  REQUIRE(WEXITSTATUS(status) == 0);
+}
+
 }  // namespace
 
 TEST_CASE("station sound: the built-in samples and WAV files mixed to mono", "[station][sound]") {
@@ -202,25 +224,8 @@ TEST_CASE("station sound: the latch click starts within 30 ms of the tick that c
       << "[general]\ndrivers = wave\nchannels = mono\n"
       << "frequency = 48000\nperiod_size = 256\n"
       << "periods = 2\n\n[wave]\nfile = " << wav.string() << "\n";
-  testing::BusyProcesses busy(2);
-  const fs::path self = fs::read_symlink("/proc/self/exe");
-  // The wave writer stands in for a sound card, whose clock a busy CPU does not hold back:
-  // the child (and so OpenAL Soft's mixing thread, which inherits it) runs SCHED_FIFO where
-  // permitted, as an output's mixing thread does with OpenAL Soft's rt-prio.
-  const bool fifo = std::system("chrt -f 10 true > /dev/null 2>&1") == 0;
-  const std::string command =
-      std::string(fifo ? "chrt -f 10 " : "") + "env ALSOFT_CONF='" +
-      (dir.path / "alsoft.conf").string() + "' ALSOFT_DRIVERS=wave DOORBENCH_TEST_DIR='" +
-      dir.path.string() + "' '" + self.string() +
-      "' 'station sound: 10 strokes through the latch (child of the test below)' > '" +
-      (dir.path / "child.txt").string() + "' 2>&1";
-  const int status = std::system(command.c_str());
-  std::ifstream child_out(dir.path / "child.txt");
-  const std::string child_text((std::istreambuf_iterator<char>(child_out)),
-                               std::istreambuf_iterator<char>());
-  INFO("child: " << child_text);
-  REQUIRE(WIFEXITED(status));
-  REQUIRE(WEXITSTATUS(status) == 0);
+  run_child_with_wave_output(
+      dir.path, "station sound: 10 strokes through the latch (child of the test below)");
 
   std::ifstream events_in(dir.path / "events.txt");
   double mixing_s = 0.0;
@@ -317,24 +322,8 @@ TEST_CASE("station sound: a presentation staged with another sound set plays tha
   std::ofstream(dir.path / "alsoft.conf")
       << "[general]\ndrivers = wave\nchannels = mono\nfrequency = 48000\n\n[wave]\nfile = "
       << (dir.path / "output.wav").string() << "\n";
-  testing::BusyProcesses busy(2);
-  const fs::path self = fs::read_symlink("/proc/self/exe");
-  // As in the latency test above: the wave writer stands in for a sound card, so the child runs
-  // SCHED_FIFO where permitted and a busy CPU does not hold its output back.
-  const bool fifo = std::system("chrt -f 10 true > /dev/null 2>&1") == 0;
-  const std::string command =
-      std::string(fifo ? "chrt -f 10 " : "") + "env ALSOFT_CONF='" +
-      (dir.path / "alsoft.conf").string() + "' ALSOFT_DRIVERS=wave DOORBENCH_TEST_DIR='" +
-      dir.path.string() + "' '" + self.string() +
-      "' 'station sound: two presentations with two sound sets (child of the test below)' > '" +
-      (dir.path / "child.txt").string() + "' 2>&1";
-  const int status = std::system(command.c_str());
-  std::ifstream child_out(dir.path / "child.txt");
-  const std::string child_text((std::istreambuf_iterator<char>(child_out)),
-                               std::istreambuf_iterator<char>());
-  INFO("child: " << child_text);
-  REQUIRE(WIFEXITED(status));
-  REQUIRE(WEXITSTATUS(status) == 0);
+  run_child_with_wave_output(
+      dir.path, "station sound: two presentations with two sound sets (child of the test below)");
   std::ifstream staged_in(dir.path / "staged.txt");
   std::string low_staged, high_staged;
   std::getline(staged_in, low_staged);
