@@ -128,6 +128,18 @@ std::string InverseDesignOptions::validate() const {
   if (!fit.priors.empty()) {
     return "inverse design fit.priors must be empty (the priors are the AS-IS design's)";
   }
+  for (const FeltJnd& jnd : felt_jnds) {
+    const bool known =
+        std::any_of(kFeltQuantities.begin(), kFeltQuantities.end(),
+                    [&](const FeltQuantityInfo& info) { return info.name == jnd.quantity; });
+    if (!known) return "inverse design felt_jnds: no felt quantity named '" + jnd.quantity + "'";
+    if (!finite_positive(jnd.weber_fraction)) {
+      return "inverse design felt_jnds: the Weber fraction of " + jnd.quantity + " must be > 0";
+    }
+  }
+  if (!felt_jnds.empty()) {
+    if (std::string message = felt.validate(); !message.empty()) return message;
+  }
   if (fit.objective != FitOptions::Objective::kWindows) {
     return "inverse design fit.objective must be the window objective";
   }

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <span>
 #include <stdexcept>
 
 #include "analysis/design/internal/design_run.h"
@@ -18,6 +19,14 @@ namespace {
 // Two refits of the sparse search whose data costs differ by less than this fraction fit
 // the same (a degenerate pair of parameters).
 constexpr double kSameCost = 1e-4;
+
+// How far a design is from the TO-BE's feel: the JNDs its misses lie beyond their JND, summed
+// (0 when it misses none).
+double felt_gap(const std::vector<FeltMiss>& misses) {
+  double gap = 0.0;
+  for (const FeltMiss& miss : misses) gap += std::isfinite(miss.jnds) ? miss.jnds - 1.0 : 1e6;
+  return gap;
+}
 
 SparseStep sparse_row(const DesignSolution& design, std::string added,
                       std::vector<std::string> free) {
@@ -67,9 +76,16 @@ DesignSolution DesignRun::as_is_design() {
 DesignSolution DesignRun::sparse_search() {
   DesignSolution current = as_is_design();
   result_.sparse_steps.push_back(sparse_row(current, "", {}));
+  result_.felt_goal = !options_.felt_jnds.empty();
   std::vector<int> chosen;  // positions in setup_.free_index
   while (static_cast<int>(chosen.size()) < options_.sparse_max_parts &&
          chosen.size() < setup_.free_index.size()) {
+    if (result_.felt_goal && felt_misses(current.model).empty()) {
+      result_.sparse_stop = printf_text(
+          "stopped at %zu part(s): every felt quantity is within its JND of the TO-BE's",
+          chosen.size());
+      break;
+    }
     if (!sparse_step(chosen, current)) break;
   }
   if (result_.sparse_stop.empty()) {
@@ -83,7 +99,34 @@ DesignSolution DesignRun::sparse_search() {
   sparse_held_ = names_except(chosen);
   current.held_at_as_is.clear();
   current.start_index = DesignSolution::kSparseSearch;
+  if (result_.felt_goal) result_.felt_misses = felt_misses(current.model);
   return current;
+}
+
+std::vector<FeltMiss> DesignRun::felt_misses(const DoorModel& model) const {
+  const FeelCheck check =
+      compare_feel(model, std::span<const PreparedData>(&data_, 1), options_.felt);
+  std::vector<FeltMiss> misses;
+  for (const FeltQuantityInfo& info : kFeltQuantities) {
+    const double design = check.model.*info.member;
+    const double tobe = check.recorded.*info.member;
+    if (!std::isfinite(tobe) || tobe == 0.0 || !std::isfinite(design)) continue;
+    const auto given = std::find_if(options_.felt_jnds.begin(), options_.felt_jnds.end(),
+                                    [&](const FeltJnd& jnd) { return jnd.quantity == info.name; });
+    const FeltJnd jnd = given != options_.felt_jnds.end() ? *given : typical_felt_jnd(info.name);
+    if (!felt_as_different(design, tobe, jnd.weber_fraction)) continue;
+    const double ratio = design / tobe;
+    misses.push_back({std::string(info.name), design, tobe, design - tobe,
+                      ratio > 0 ? std::abs(std::log(ratio)) / std::log1p(jnd.weber_fraction)
+                                : std::numeric_limits<double>::infinity(),
+                      jnd});
+  }
+  return misses;
+}
+
+void DesignRun::note_part_tried(const std::string& name) {
+  std::vector<std::string>& tried = result_.parts_tried;
+  if (std::find(tried.begin(), tried.end(), name) == tried.end()) tried.push_back(name);
 }
 
 // A refit of the design with the parameters at `set` (free positions) free, from `current`
@@ -151,8 +194,12 @@ void DesignRun::refine_sparse(std::vector<int>& chosen, DesignSolution& current)
     trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(c));
     const std::string what = "- " + name_of(chosen[c]);
     std::optional<DesignSolution> refit = refit_set(current, chosen[c], trial, what);
-    if (!refit || refit->data_cost - current.data_cost >=
-                      options_.sparse_min_improvement * refit->data_cost) {
+    // With the feel as the goal, a part stays when the design without it misses more.
+    if (!refit ||
+        refit->data_cost - current.data_cost >=
+            options_.sparse_min_improvement * refit->data_cost ||
+        (result_.felt_goal &&
+         felt_misses(refit->model).size() > felt_misses(current.model).size())) {
       ++c;
       continue;
     }
@@ -243,6 +290,7 @@ bool DesignRun::sparse_step(std::vector<int>& chosen, DesignSolution& current) {
     std::vector<int> trial = chosen;
     trial.push_back(k);
     const std::string name = asis_.parameter_name(setup_.free_index[k]);
+    note_part_tried(name);
     if (options_.progress) {
       options_.progress(
           printf_text("sparse search, part %zu: trying %s", chosen.size() + 1, name.c_str()));
@@ -286,7 +334,22 @@ bool DesignRun::sparse_step(std::vector<int>& chosen, DesignSolution& current) {
   DesignSolution& picked = trials[pick].second;
   const double improvement = (current.data_cost - picked.data_cost) / current.data_cost;
   const std::string picked_name = asis_.parameter_name(setup_.free_index[trials[pick].first]);
-  if (!(improvement >= options_.sparse_min_improvement)) {
+  // With the feel as the goal, a part that lowers the data cost by less than
+  // sparse_min_improvement is still taken when it brings the design nearer the TO-BE's feel
+  // (fewer JNDs missed in all).
+  const double gap = result_.felt_goal ? felt_gap(felt_misses(current.model)) : 0.0;
+  const double gap_with = result_.felt_goal ? felt_gap(felt_misses(picked.model)) : 0.0;
+  if (result_.felt_goal && !(improvement >= options_.sparse_min_improvement) &&
+      !(improvement > 0 && gap_with < gap)) {
+    result_.sparse_stop = printf_text(
+        "stopped at %zu part(s): the best further part, %s, lowers the data cost by %.2f %% "
+        "(%.6g to %.6g) and brings the design no nearer the TO-BE's feel (%.3g JNDs missed in "
+        "all, %.3g with it)",
+        chosen.size(), picked_name.c_str(), 100 * improvement, current.data_cost, picked.data_cost,
+        gap, gap_with);
+    return false;
+  }
+  if (!result_.felt_goal && !(improvement >= options_.sparse_min_improvement)) {
     result_.sparse_stop = printf_text(
         "stopped at %zu part(s): the best further part, %s, lowers the data cost by %.2f %% "
         "(%.6g to %.6g), less than the %.2f %% asked for (sparse_min_improvement): the rest of "

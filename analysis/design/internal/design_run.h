@@ -49,6 +49,11 @@ class DesignRun {
                                           const std::vector<int>& set, const std::string& what);
   void keep_equivalent(const std::vector<DesignSolution>& found, const DesignSolution* reference);
   std::vector<std::string> names_except(const std::vector<int>& free_positions) const;
+  // The felt quantities of `model` that miss their JND of the TO-BE recordings' (along their
+  // motion; InverseDesignOptions::felt_jnds).
+  std::vector<FeltMiss> felt_misses(const DoorModel& model) const;
+  // Adds `name` to result.parts_tried when it is not there yet.
+  void note_part_tried(const std::string& name);
 
   const DoorModel& asis_;
   const PreparedData& data_;
