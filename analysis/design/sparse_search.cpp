@@ -5,12 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <span>
 #include <stdexcept>
 
 #include "analysis/design/internal/design_run.h"
 #include "core/number_format.h"
 #include "core/numbers.h"
+#include "core/parallel.h"
 
 namespace doorbench::design_detail {
 
@@ -265,6 +267,51 @@ void DesignRun::keep_sparse_swaps() {
   }
 }
 
+// The refits of the candidates `order` added to `chosen`, side by side on the fit's threads
+// (each on its share: a fit's solve is one thread's work, its windows' evaluation several),
+// in `order`'s order; a candidate whose fit fails is left out with a note.
+std::vector<std::pair<int, DesignSolution>> DesignRun::fit_candidates(
+    const std::vector<int>& chosen, const std::vector<int>& order, const DesignSolution& current) {
+  const int count = static_cast<int>(order.size());
+  std::string names;
+  for (int k : order) {
+    const std::string name = asis_.parameter_name(setup_.free_index[k]);
+    note_part_tried(name);
+    names += (names.empty() ? "" : ", ") + name;
+  }
+  if (options_.progress) {
+    options_.progress(
+        printf_text("sparse search, part %zu: trying %s", chosen.size() + 1, names.c_str()));
+  }
+  std::vector<std::optional<DesignSolution>> fitted(order.size());
+  std::vector<std::string> failures(order.size());
+  const int threads = fit_thread_count(fit_);
+  const int at_once = std::max(1, std::min(threads, count));
+  parallel_for(count, at_once, [&](int t) {
+    std::vector<int> trial = chosen;
+    trial.push_back(order[static_cast<std::size_t>(t)]);
+    try {
+      fitted[static_cast<std::size_t>(t)] = fit_only(current.model, DesignSolution::kSparseSearch,
+                                                     names_except(trial), threads / at_once);
+    } catch (const std::runtime_error& error) {
+      failures[static_cast<std::size_t>(t)] = error.what();
+    }
+  });
+  std::vector<std::pair<int, DesignSolution>> trials;
+  for (std::size_t t = 0; t < order.size(); ++t) {
+    ++result_.fits_run;
+    if (!fitted[t]) {
+      result_.notes.push_back("sparse search: the fit with " +
+                              asis_.parameter_name(setup_.free_index[order[t]]) +
+                              " failed: " + failures[t]);
+      continue;
+    }
+    add_fit_times(*fitted[t]);
+    trials.emplace_back(order[t], std::move(*fitted[t]));
+  }
+  return trials;
+}
+
 // One step: rank the candidates by their predicted decrease, refit the best few, take the
 // one that fits best (of those the data cannot tell apart, the smallest weighted change)
 // when it lowers the data cost by sparse_min_improvement. False when the search stops.
@@ -285,23 +332,7 @@ bool DesignRun::sparse_step(std::vector<int>& chosen, DesignSolution& current) {
   if (static_cast<int>(order.size()) > options_.sparse_refits_per_step) {
     order.resize(options_.sparse_refits_per_step);
   }
-  std::vector<std::pair<int, DesignSolution>> trials;
-  for (int k : order) {
-    std::vector<int> trial = chosen;
-    trial.push_back(k);
-    const std::string name = asis_.parameter_name(setup_.free_index[k]);
-    note_part_tried(name);
-    if (options_.progress) {
-      options_.progress(
-          printf_text("sparse search, part %zu: trying %s", chosen.size() + 1, name.c_str()));
-    }
-    try {
-      trials.emplace_back(
-          k, fit_design(current.model, DesignSolution::kSparseSearch, names_except(trial)));
-    } catch (const std::runtime_error& error) {
-      result_.notes.push_back("sparse search: the fit with " + name + " failed: " + error.what());
-    }
-  }
+  std::vector<std::pair<int, DesignSolution>> trials = fit_candidates(chosen, order, current);
   if (trials.empty()) {
     result_.sparse_stop = "stopped: no candidate could be fitted";
     return false;
