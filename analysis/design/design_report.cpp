@@ -63,6 +63,27 @@ std::string sparse_table(const InverseDesignResult& result) {
 
 }  // namespace
 
+std::vector<std::string> InverseDesignResult::felt_miss_warnings() const {
+  std::vector<std::string> warnings;
+  std::string tried;
+  for (const std::string& part : parts_tried) tried += (tried.empty() ? "" : ", ") + part;
+  for (const FeltMiss& miss : felt_misses) {
+    std::string label = miss.quantity;
+    for (const FeltQuantityInfo& info : kFeltQuantities) {
+      if (info.name == miss.quantity) label = felt_label(info);
+    }
+    warnings.push_back(
+        "the design does not feel like the TO-BE: its " + label + " is " +
+        format_significant(miss.design, 3) + " against the TO-BE's " +
+        format_significant(miss.tobe, 3) + " (" + printf_text("%+.3g", miss.difference) + ", " +
+        (std::isfinite(miss.jnds) ? format_significant(miss.jnds, 3) + " JNDs"
+                                  : std::string("the sign differs")) +
+        "; JND " + format_significant(100 * miss.jnd.weber_fraction, 3) + " %, " + miss.jnd.source +
+        "); the sparse search tried " + (tried.empty() ? "no part" : tried));
+  }
+  return warnings;
+}
+
 std::string InverseDesignResult::brief_report() const {
   std::string text = feasible ? "Inverse design: feasible" : "Inverse design: INFEASIBLE";
   text += printf_text(", %zu distinct solution(s) from %d start(s), %.1f s.\n", solutions.size(),

@@ -128,6 +128,18 @@ std::string InverseDesignOptions::validate() const {
   if (!fit.priors.empty()) {
     return "inverse design fit.priors must be empty (the priors are the AS-IS design's)";
   }
+  for (const FeltJnd& jnd : felt_jnds) {
+    const bool known =
+        std::any_of(kFeltQuantities.begin(), kFeltQuantities.end(),
+                    [&](const FeltQuantityInfo& info) { return info.name == jnd.quantity; });
+    if (!known) return "inverse design felt_jnds: no felt quantity named '" + jnd.quantity + "'";
+    if (!finite_positive(jnd.weber_fraction)) {
+      return "inverse design felt_jnds: the Weber fraction of " + jnd.quantity + " must be > 0";
+    }
+  }
+  if (!felt_jnds.empty()) {
+    if (std::string message = felt.validate(); !message.empty()) return message;
+  }
   if (fit.objective != FitOptions::Objective::kWindows) {
     return "inverse design fit.objective must be the window objective";
   }
@@ -238,25 +250,29 @@ void DesignRun::set_priors(double lambda) {
   }
 }
 
-DesignSolution DesignRun::fit_design(const DoorModel& start, int start_index,
-                                     const std::vector<std::string>& held) {
-  ++result_.fits_run;
+DesignSolution DesignRun::fit_only(const DoorModel& start, int start_index,
+                                   const std::vector<std::string>& held, int threads) const {
+  FitOptions fit = fit_;
+  if (threads > 0) fit.num_threads = threads;
   DesignSolution solution = [&] {
     if (result_.commanded_torque) {
-      return fit_commanded_design(start, commanded_, data_, fit_, asis_, setup_, lambda_,
+      return fit_commanded_design(start, commanded_, data_, fit, asis_, setup_, lambda_,
                                   start_index, held);
     }
     if (held.empty()) {
-      return make_solution(fit_model(start, data_, fit_), asis_, setup_, lambda_, start_index);
+      return make_solution(fit_model(start, data_, fit), asis_, setup_, lambda_, start_index);
     }
-    FitOptions held_fit = fit_;
-    held_fit.fixed_parameters.insert(held_fit.fixed_parameters.end(), held.begin(), held.end());
-    std::erase_if(held_fit.priors, [&](const ParameterPrior& prior) {
+    fit.fixed_parameters.insert(fit.fixed_parameters.end(), held.begin(), held.end());
+    std::erase_if(fit.priors, [&](const ParameterPrior& prior) {
       return std::find(held.begin(), held.end(), prior.parameter) != held.end();
     });
-    return make_solution(fit_model(start, data_, held_fit), asis_, setup_, lambda_, start_index);
+    return make_solution(fit_model(start, data_, fit), asis_, setup_, lambda_, start_index);
   }();
   solution.held_at_as_is = held;
+  return solution;
+}
+
+void DesignRun::add_fit_times(const DesignSolution& solution) {
   FitSummary::Times& sum = result_.fit_times;
   const FitSummary::Times& times = solution.summary.times;
   sum.start_s += times.start_s;
@@ -265,6 +281,13 @@ DesignSolution DesignRun::fit_design(const DoorModel& start, int start_index,
   sum.statistics_s += times.statistics_s;
   sum.metrics_s += times.metrics_s;
   sum.held_out_s += times.held_out_s;
+}
+
+DesignSolution DesignRun::fit_design(const DoorModel& start, int start_index,
+                                     const std::vector<std::string>& held) {
+  ++result_.fits_run;
+  DesignSolution solution = fit_only(start, start_index, held, 0);
+  add_fit_times(solution);
   return solution;
 }
 

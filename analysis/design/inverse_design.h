@@ -26,6 +26,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/design/perceptual_tolerance.h"
 #include "analysis/fit/commanded_torque.h"
 #include "analysis/fit/fitting.h"
 #include "analysis/model/door_model.h"
@@ -126,6 +127,17 @@ struct InverseDesignOptions {
   int sparse_max_parts = 6;              // ≥ 1
   int sparse_refits_per_step = 4;        // ≥ 1
   double sparse_min_improvement = 0.10;  // > 0
+  // The sparse search's goal is the feel when `felt_jnds` is not empty (docs/inverse-design.md,
+  // "A design that feels like the TO-BE"): it stops as soon as every felt quantity of the
+  // design, read along the TO-BE recordings' motion (compare_feel with `felt`), is within its
+  // JND of the recordings' (felt_as_different). While one is not, a part that lowers the data
+  // cost by less than sparse_min_improvement is still added (up to sparse_max_parts) when it
+  // brings the design nearer the feel (fewer JNDs missed in all); a part is dropped after the
+  // forward pass only when the design without it misses no more quantities. Quantities not named
+  // take their typical JND (typical_felt_jnd); a quantity the recordings leave undefined or at 0 is
+  // not judged. What still misses at the end is InverseDesignResult::felt_misses.
+  std::vector<FeltJnd> felt_jnds;
+  FeltOptions felt;
   // A change counts (listed, highlighted, counted in parts_changed_cost) only when it is
   // larger than `significant_uncertainties` times its uncertainty (when finite) and than
   // `significant_fraction_of_bounds` of its bound width. ≥ 0.
@@ -192,6 +204,18 @@ struct DesignSolution {
   FitSummary summary;                 // the underlying fit's summary
 };
 
+// A felt quantity of the design that a panel member would feel as different from the TO-BE's
+// (InverseDesignOptions::felt_jnds).
+struct FeltMiss {
+  std::string quantity;     // a kFeltQuantities name
+  double design = 0.0;      // the design's, along the TO-BE recordings' motion
+  double tobe = 0.0;        // the recordings'
+  double difference = 0.0;  // design − tobe, in the quantity's unit
+  // |ln(design / tobe)| / ln(1 + w): how many JNDs apart (infinite when the sign differs).
+  double jnds = 0.0;
+  FeltJnd jnd;
+};
+
 // One step of the sparse design search: the parameter freed and the fit with it.
 struct SparseStep {
   std::string added;              // empty for step 0, AS-IS
@@ -234,6 +258,12 @@ struct InverseDesignResult {
   // why it stopped.
   std::vector<SparseStep> sparse_steps;
   std::string sparse_stop;
+  // With InverseDesignOptions::felt_jnds: the search's goal was the feel; the first
+  // solution's felt quantities that still miss their JND of the TO-BE's (empty: it feels like
+  // the TO-BE), and every part the sparse search refitted, in the order first tried.
+  bool felt_goal = false;
+  std::vector<FeltMiss> felt_misses;
+  std::vector<std::string> parts_tried;
   int fits_run = 0;              // fits of every kind (starts, refits, candidates)
   double sparse_search_s = 0.0;  // wall time of the sparse search (the rest: the smallest
                                  // change beside it, the feasibility refit)
@@ -241,6 +271,10 @@ struct InverseDesignResult {
   double total_time_s = 0.0;
   std::vector<std::string> notes;
 
+  // One sentence per felt miss: "the design's peak force to latch (N) is 53.1 against the
+  // TO-BE's 9.5 (+43.6, 12.1 JNDs of 15 %, measured: ...); the sparse search tried F0, L0";
+  // empty when there is none.
+  std::vector<std::string> felt_miss_warnings() const;
   std::string brief_report() const;  // a few lines: feasible?, biggest changes
   std::string full_report() const;   // every solution, every parameter, the fit metrics
 };

@@ -5,11 +5,14 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <optional>
+#include <span>
 #include <stdexcept>
 
 #include "analysis/design/internal/design_run.h"
 #include "core/number_format.h"
 #include "core/numbers.h"
+#include "core/parallel.h"
 
 namespace doorbench::design_detail {
 
@@ -18,6 +21,14 @@ namespace {
 // Two refits of the sparse search whose data costs differ by less than this fraction fit
 // the same (a degenerate pair of parameters).
 constexpr double kSameCost = 1e-4;
+
+// How far a design is from the TO-BE's feel: the JNDs its misses lie beyond their JND, summed
+// (0 when it misses none).
+double felt_gap(const std::vector<FeltMiss>& misses) {
+  double gap = 0.0;
+  for (const FeltMiss& miss : misses) gap += std::isfinite(miss.jnds) ? miss.jnds - 1.0 : 1e6;
+  return gap;
+}
 
 SparseStep sparse_row(const DesignSolution& design, std::string added,
                       std::vector<std::string> free) {
@@ -67,9 +78,16 @@ DesignSolution DesignRun::as_is_design() {
 DesignSolution DesignRun::sparse_search() {
   DesignSolution current = as_is_design();
   result_.sparse_steps.push_back(sparse_row(current, "", {}));
+  result_.felt_goal = !options_.felt_jnds.empty();
   std::vector<int> chosen;  // positions in setup_.free_index
   while (static_cast<int>(chosen.size()) < options_.sparse_max_parts &&
          chosen.size() < setup_.free_index.size()) {
+    if (result_.felt_goal && felt_misses(current.model).empty()) {
+      result_.sparse_stop = printf_text(
+          "stopped at %zu part(s): every felt quantity is within its JND of the TO-BE's",
+          chosen.size());
+      break;
+    }
     if (!sparse_step(chosen, current)) break;
   }
   if (result_.sparse_stop.empty()) {
@@ -83,7 +101,34 @@ DesignSolution DesignRun::sparse_search() {
   sparse_held_ = names_except(chosen);
   current.held_at_as_is.clear();
   current.start_index = DesignSolution::kSparseSearch;
+  if (result_.felt_goal) result_.felt_misses = felt_misses(current.model);
   return current;
+}
+
+std::vector<FeltMiss> DesignRun::felt_misses(const DoorModel& model) const {
+  const FeelCheck check =
+      compare_feel(model, std::span<const PreparedData>(&data_, 1), options_.felt);
+  std::vector<FeltMiss> misses;
+  for (const FeltQuantityInfo& info : kFeltQuantities) {
+    const double design = check.model.*info.member;
+    const double tobe = check.recorded.*info.member;
+    if (!std::isfinite(tobe) || tobe == 0.0 || !std::isfinite(design)) continue;
+    const auto given = std::find_if(options_.felt_jnds.begin(), options_.felt_jnds.end(),
+                                    [&](const FeltJnd& jnd) { return jnd.quantity == info.name; });
+    const FeltJnd jnd = given != options_.felt_jnds.end() ? *given : typical_felt_jnd(info.name);
+    if (!felt_as_different(design, tobe, jnd.weber_fraction)) continue;
+    const double ratio = design / tobe;
+    misses.push_back({std::string(info.name), design, tobe, design - tobe,
+                      ratio > 0 ? std::abs(std::log(ratio)) / std::log1p(jnd.weber_fraction)
+                                : std::numeric_limits<double>::infinity(),
+                      jnd});
+  }
+  return misses;
+}
+
+void DesignRun::note_part_tried(const std::string& name) {
+  std::vector<std::string>& tried = result_.parts_tried;
+  if (std::find(tried.begin(), tried.end(), name) == tried.end()) tried.push_back(name);
 }
 
 // A refit of the design with the parameters at `set` (free positions) free, from `current`
@@ -151,8 +196,12 @@ void DesignRun::refine_sparse(std::vector<int>& chosen, DesignSolution& current)
     trial.erase(trial.begin() + static_cast<std::ptrdiff_t>(c));
     const std::string what = "- " + name_of(chosen[c]);
     std::optional<DesignSolution> refit = refit_set(current, chosen[c], trial, what);
-    if (!refit || refit->data_cost - current.data_cost >=
-                      options_.sparse_min_improvement * refit->data_cost) {
+    // With the feel as the goal, a part stays when the design without it misses more.
+    if (!refit ||
+        refit->data_cost - current.data_cost >=
+            options_.sparse_min_improvement * refit->data_cost ||
+        (result_.felt_goal &&
+         felt_misses(refit->model).size() > felt_misses(current.model).size())) {
       ++c;
       continue;
     }
@@ -218,6 +267,51 @@ void DesignRun::keep_sparse_swaps() {
   }
 }
 
+// The refits of the candidates `order` added to `chosen`, side by side on the fit's threads
+// (each on its share: a fit's solve is one thread's work, its windows' evaluation several),
+// in `order`'s order; a candidate whose fit fails is left out with a note.
+std::vector<std::pair<int, DesignSolution>> DesignRun::fit_candidates(
+    const std::vector<int>& chosen, const std::vector<int>& order, const DesignSolution& current) {
+  const int count = static_cast<int>(order.size());
+  std::string names;
+  for (int k : order) {
+    const std::string name = asis_.parameter_name(setup_.free_index[k]);
+    note_part_tried(name);
+    names += (names.empty() ? "" : ", ") + name;
+  }
+  if (options_.progress) {
+    options_.progress(
+        printf_text("sparse search, part %zu: trying %s", chosen.size() + 1, names.c_str()));
+  }
+  std::vector<std::optional<DesignSolution>> fitted(order.size());
+  std::vector<std::string> failures(order.size());
+  const int threads = fit_thread_count(fit_);
+  const int at_once = std::max(1, std::min(threads, count));
+  parallel_for(count, at_once, [&](int t) {
+    std::vector<int> trial = chosen;
+    trial.push_back(order[static_cast<std::size_t>(t)]);
+    try {
+      fitted[static_cast<std::size_t>(t)] = fit_only(current.model, DesignSolution::kSparseSearch,
+                                                     names_except(trial), threads / at_once);
+    } catch (const std::runtime_error& error) {
+      failures[static_cast<std::size_t>(t)] = error.what();
+    }
+  });
+  std::vector<std::pair<int, DesignSolution>> trials;
+  for (std::size_t t = 0; t < order.size(); ++t) {
+    ++result_.fits_run;
+    if (!fitted[t]) {
+      result_.notes.push_back("sparse search: the fit with " +
+                              asis_.parameter_name(setup_.free_index[order[t]]) +
+                              " failed: " + failures[t]);
+      continue;
+    }
+    add_fit_times(*fitted[t]);
+    trials.emplace_back(order[t], std::move(*fitted[t]));
+  }
+  return trials;
+}
+
 // One step: rank the candidates by their predicted decrease, refit the best few, take the
 // one that fits best (of those the data cannot tell apart, the smallest weighted change)
 // when it lowers the data cost by sparse_min_improvement. False when the search stops.
@@ -238,22 +332,7 @@ bool DesignRun::sparse_step(std::vector<int>& chosen, DesignSolution& current) {
   if (static_cast<int>(order.size()) > options_.sparse_refits_per_step) {
     order.resize(options_.sparse_refits_per_step);
   }
-  std::vector<std::pair<int, DesignSolution>> trials;
-  for (int k : order) {
-    std::vector<int> trial = chosen;
-    trial.push_back(k);
-    const std::string name = asis_.parameter_name(setup_.free_index[k]);
-    if (options_.progress) {
-      options_.progress(
-          printf_text("sparse search, part %zu: trying %s", chosen.size() + 1, name.c_str()));
-    }
-    try {
-      trials.emplace_back(
-          k, fit_design(current.model, DesignSolution::kSparseSearch, names_except(trial)));
-    } catch (const std::runtime_error& error) {
-      result_.notes.push_back("sparse search: the fit with " + name + " failed: " + error.what());
-    }
-  }
+  std::vector<std::pair<int, DesignSolution>> trials = fit_candidates(chosen, order, current);
   if (trials.empty()) {
     result_.sparse_stop = "stopped: no candidate could be fitted";
     return false;
@@ -286,7 +365,22 @@ bool DesignRun::sparse_step(std::vector<int>& chosen, DesignSolution& current) {
   DesignSolution& picked = trials[pick].second;
   const double improvement = (current.data_cost - picked.data_cost) / current.data_cost;
   const std::string picked_name = asis_.parameter_name(setup_.free_index[trials[pick].first]);
-  if (!(improvement >= options_.sparse_min_improvement)) {
+  // With the feel as the goal, a part that lowers the data cost by less than
+  // sparse_min_improvement is still taken when it brings the design nearer the TO-BE's feel
+  // (fewer JNDs missed in all).
+  const double gap = result_.felt_goal ? felt_gap(felt_misses(current.model)) : 0.0;
+  const double gap_with = result_.felt_goal ? felt_gap(felt_misses(picked.model)) : 0.0;
+  if (result_.felt_goal && !(improvement >= options_.sparse_min_improvement) &&
+      !(improvement > 0 && gap_with < gap)) {
+    result_.sparse_stop = printf_text(
+        "stopped at %zu part(s): the best further part, %s, lowers the data cost by %.2f %% "
+        "(%.6g to %.6g) and brings the design no nearer the TO-BE's feel (%.3g JNDs missed in "
+        "all, %.3g with it)",
+        chosen.size(), picked_name.c_str(), 100 * improvement, current.data_cost, picked.data_cost,
+        gap, gap_with);
+    return false;
+  }
+  if (!result_.felt_goal && !(improvement >= options_.sparse_min_improvement)) {
     result_.sparse_stop = printf_text(
         "stopped at %zu part(s): the best further part, %s, lowers the data cost by %.2f %% "
         "(%.6g to %.6g), less than the %.2f %% asked for (sparse_min_improvement): the rest of "

@@ -251,7 +251,22 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
                      {"tried", tried},
                      {"equivalent", step.equivalent}});
   }
-  root["design_search"] = {{"steps", steps}, {"stopped", design.sparse_stop}};
+  json misses = json::array();
+  for (const FeltMiss& miss : design.felt_misses) {
+    misses.push_back({{"quantity", miss.quantity},
+                      {"design", number(miss.design)},
+                      {"tobe", number(miss.tobe)},
+                      {"difference", number(miss.difference)},
+                      {"jnds", number(miss.jnds)},
+                      {"weber_fraction", number(miss.jnd.weber_fraction)},
+                      {"jnd_source", miss.jnd.source}});
+  }
+  root["design_search"] = {
+      {"steps", steps},
+      {"stopped", design.sparse_stop},
+      {"goal", design.felt_goal ? "every felt quantity within its JND" : "the data cost"},
+      {"felt_misses", misses},
+      {"parts_tried", design.parts_tried}};
   root["check"] = {{"before", check_json(e.check_before)}, {"after", check_json(e.check_after)}};
   root["tolerances"] = e.tolerances ? tolerances_json(*e.tolerances) : json(nullptr);
   root["perceptual"] = e.perceptual ? perceptual_json(*e.perceptual) : json(nullptr);

@@ -281,6 +281,7 @@ SpecEvaluation evaluate_spec(const DoorModel& asis, const InverseDesignResult& d
   if (design.solutions.empty())
     throw std::invalid_argument("spec: the inverse design has no solution");
   SpecEvaluation e;
+  e.warnings = design.felt_miss_warnings();
   const DoorModel& tobe_model = design.solutions.front().model;
   e.felt_before = felt_quantities(asis, options.felt);
   e.felt_after = felt_quantities(tobe_model, options.felt);

@@ -129,10 +129,13 @@ DoorModel load_asis(const SpecOptions& options, const std::filesystem::path& asi
 }
 
 // The inverse design of the TO-BE recordings from `asis`, which is first corrected to its own
-// recording on the bench when one is given. Throws StopRequested when asked to stop.
+// recording on the bench when one is given. With a campaign the sparse search's goal is the
+// feel: every felt quantity within the panel's JND (typical where it measured none). Throws
+// StopRequested when asked to stop.
 InverseDesignResult design_stage(const SpecOptions& options, DoorModel& asis,
                                  const std::vector<PreparedData>& tobe,
-                                 const std::vector<CommandedTorque>& commanded) {
+                                 const std::vector<CommandedTorque>& commanded,
+                                 const std::optional<CampaignForSpec>& campaign) {
   InverseDesignOptions design_options;
   if (options.fixed) design_options.fixed = *options.fixed;
   for (const auto& [name, cost] : options.costs) design_options.weights[name] = cost;
@@ -148,6 +151,7 @@ InverseDesignResult design_stage(const SpecOptions& options, DoorModel& asis,
     spec_say(options, "  [" + std::to_string(static_cast<int>(seconds)) + " s] " + step);
   };
   design_options.fit.stop_requested = options.stop_requested;
+  if (campaign) design_options.felt_jnds = campaign->jnds;
   if (!options.asis_recording.empty()) asis = asis_on_bench(asis, options, design_options);
   spec_say(options, "inverse design: fitting the physical model to " + std::to_string(tobe.size()) +
                         " TO-BE recording(s), " + std::to_string(design_options.starts) +
@@ -159,12 +163,21 @@ InverseDesignResult design_stage(const SpecOptions& options, DoorModel& asis,
 // the Monte Carlo used, and the proposal keeping them under the level.
 PerceptualSpec perceptual_spec(const SpecOptions& spec, const CampaignForSpec& campaign,
                                const std::string& tobe_source, const DoorModel& design,
+                               const std::vector<FeltMiss>& misses,
                                const SpecEvaluationOptions& evaluation_options,
                                const ToleranceResult& given) {
   PerceptualSpec p;
   p.campaign = campaign.analysis_path.string();
   p.tobe_source = tobe_source;
   p.notes = campaign.notes;
+  if (!misses.empty()) {
+    std::string names;
+    for (const FeltMiss& miss : misses) names += (names.empty() ? "" : ", ") + miss.quantity;
+    p.notes.push_back(
+        "the tolerances are around the design, which the panel would feel as "
+        "different from the TO-BE in " +
+        names + " (the warnings say by how much)");
+  }
   p.preference = campaign.preference;
   p.thresholds = campaign.thresholds;
   p.jnds = campaign.jnds;
@@ -201,7 +214,7 @@ void add_panel(const SpecOptions& options, const CampaignForSpec& campaign,
   try {
     evaluation.perceptual =
         perceptual_spec(options, campaign, tobe_source, design.solutions.front().model,
-                        evaluation_options, *evaluation.tolerances);
+                        design.felt_misses, evaluation_options, *evaluation.tolerances);
   } catch (const StopRequested& stopped) {
     evaluation.interrupted = "during " + stopped.where() +
                              " of the panel's tolerances: no "
@@ -323,9 +336,12 @@ SpecSummary specify(const SpecOptions& options) {
                                       options.tolerances_path.string(), asis);
   }
   if (stop_requested(options.stop_requested)) throw StopRequested("the reading of its inputs");
-  summary.design = design_stage(options, asis, tobe, commanded);
+  summary.design = design_stage(options, asis, tobe, commanded, campaign);
   if (summary.design.solutions.empty())
     throw std::runtime_error("inverse design found no solution");
+  for (const std::string& warning : summary.design.felt_miss_warnings()) {
+    spec_say(options, "warning: " + warning);
+  }
 
   summary.evaluation =
       evaluate_design(options, asis, summary.design, tobe, tolerances, campaign, tobe_source);

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <iostream>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -289,6 +290,18 @@ TEST_CASE("inverse design options and inputs are checked by name", "[inverse]") 
           o.fit.objective = doorbench::FitOptions::Objective::kWholeStrokeMax;
         }) == "inverse design fit.objective must be the window objective");
   CHECK(message([](auto& o) { o.fit.window_s = 0; }) == "fit window_s must be > 0");
+  CHECK(message([](auto& o) {
+          o.felt_jnds.push_back({"latch_force", 0.15, false, 0, 0, "typical"});
+        }) == "inverse design felt_jnds: no felt quantity named 'latch_force'");
+  CHECK(message([](auto& o) {
+          o.felt_jnds.push_back({"peak_latch_force_N", 0, false, 0, 0, "typical"});
+        }) == "inverse design felt_jnds: the Weber fraction of peak_latch_force_N must be > 0");
+  // The felt options matter, and are checked, only when the feel is the goal.
+  CHECK(message([](auto& o) { o.felt.output_rate_hz = 0; }).empty());
+  CHECK(message([](auto& o) {
+          o.felt.output_rate_hz = 0;
+          o.felt_jnds.push_back({"peak_latch_force_N", 0.15, false, 0, 0, "typical"});
+        }) == "felt output_rate_hz must be > 0");
 
   CHECK_THROWS_WITH(
       doorbench::inverse_design(doorbench::reference_model(ModelKind::kSensory), {data}),
@@ -395,4 +408,34 @@ TEST_CASE("the default free set: 19 parameters, the sparse search", "[inverse]")
   for (const std::string& note : result.notes) {
     if (note.rfind("sparse search, ", 0) == 0) std::cout << "  " << note << "\n";
   }
+}
+
+TEST_CASE("inverse design: each felt quantity the design misses is one warning, word for word",
+          "[inverse]") {
+  InverseDesignResult result;
+  CHECK(result.felt_miss_warnings().empty());
+  doorbench::FeltJnd typical;
+  typical.quantity = "peak_latch_force_N";
+  typical.weber_fraction = 0.15;
+  typical.source = "typical: stiffness 15%";
+  result.felt_misses.push_back({"peak_latch_force_N", 53.1, 9.48, 53.1 - 9.48, 12.33, typical});
+  result.felt_misses.push_back({"balance_force_N", 1.25, -2.67, 1.25 + 2.67,
+                                std::numeric_limits<double>::infinity(), typical});
+  const auto none_tried = result.felt_miss_warnings();
+  REQUIRE(none_tried.size() == 2);
+  CHECK(none_tried[0] ==
+        "the design does not feel like the TO-BE: its peak force to latch (N) is 53.1 against "
+        "the TO-BE's 9.48 (+43.6, 12.3 JNDs; JND 15 %, typical: stiffness 15%); the sparse "
+        "search tried no part");
+  result.parts_tried = {"F0", "L0"};
+  const auto warnings = result.felt_miss_warnings();
+  REQUIRE(warnings.size() == 2);
+  CHECK(warnings[0] ==
+        "the design does not feel like the TO-BE: its peak force to latch (N) is 53.1 against "
+        "the TO-BE's 9.48 (+43.6, 12.3 JNDs; JND 15 %, typical: stiffness 15%); the sparse "
+        "search tried F0, L0");
+  CHECK(warnings[1] ==
+        "the design does not feel like the TO-BE: its holding force at mid-angle (N) is 1.25 "
+        "against the TO-BE's -2.67 (+3.92, the sign differs; JND 15 %, typical: stiffness 15%); "
+        "the sparse search tried F0, L0");
 }

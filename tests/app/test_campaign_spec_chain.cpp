@@ -362,3 +362,63 @@ TEST_CASE(
   CHECK_THAT(html, Contains("The panel's preference scale"));
   CHECK_THAT(html, Contains("Thresholds measured (panel)"));
 }
+
+// `spec --campaign` on the demo's campaign ends with every felt quantity
+// of the design within its JND of the favourite's (read along the TO-BE strokes' motion, the
+// JNDs the perceptual table uses), or with a warning naming each one that is not, by how much,
+// and the parts the search tried. The criterion is applied here to spec.json's numbers.
+TEST_CASE(
+    "spec --campaign: the design feels like the favourite, or a warning names each felt "
+    "quantity that misses its JND",
+    "[campaign][spec][slow]") {
+  TempDir dir("campaign_chain_feel");
+  demo_campaign_analysed(dir);
+  const auto asis = dir.write(
+      "physical-params.json",
+      doorbench::to_parameter_json(doorbench::reference_model(doorbench::ModelKind::kPhysical)));
+  const auto run = run_doorbench_shell(
+      "spec --campaign '" + (dir / "analysis").string() + "' --asis '" + asis.string() +
+          "' --out '" + (dir / "spec").string() + "' --samples 50 --starts 1 --no-pdf",
+      dir);
+  INFO("stdout: " << run.out << "\nstderr: " << run.err);
+  REQUIRE(run.status == 0);
+  const json spec = read_json(dir / "spec" / "spec.json");
+  const json& search = spec.at("design_search");
+  CHECK(search.at("goal") == "every felt quantity within its JND");
+  const json& errors = spec.at("check").at("after").at("errors");
+  const json& quantities = spec.at("perceptual").at("quantities");
+  REQUIRE(errors.size() == doorbench::kFeltQuantities.size());
+  int missed = 0;
+  for (std::size_t q = 0; q < doorbench::kFeltQuantities.size(); ++q) {
+    const auto& info = doorbench::kFeltQuantities[q];
+    REQUIRE(errors.at(q).at("name") == std::string(info.name));
+    REQUIRE(quantities.at(q).at("quantity") == std::string(info.name));
+    if (errors.at(q).at("model").is_null() || errors.at(q).at("recorded").is_null()) continue;
+    const double design = errors.at(q).at("model").get<double>();
+    const double tobe = errors.at(q).at("recorded").get<double>();
+    const double w = quantities.at(q).at("weber_fraction").get<double>();
+    if (tobe == 0.0) continue;
+    const bool different =
+        !(design / tobe > 0) || std::abs(std::log(design / tobe)) > std::log1p(w);
+    INFO(info.name << ": design " << design << ", TO-BE " << tobe << ", JND " << w);
+    bool warned = false;
+    for (const json& warning : spec.at("warnings")) {
+      const std::string text = warning.get<std::string>();
+      if (text.find("its " + doorbench::felt_label(info) + " is ") == std::string::npos) continue;
+      warned = true;
+      CHECK_THAT(text, Contains("the sparse search tried "));
+      CHECK_THAT(text, StartsWith("the design does not feel like the TO-BE: "));
+    }
+    CHECK(warned == different);
+    if (different) {
+      ++missed;
+      CHECK_THAT(run.err, Contains("warning: the design does not feel like the TO-BE: its " +
+                                   doorbench::felt_label(info)));
+    }
+  }
+  CHECK(search.at("felt_misses").size() == static_cast<std::size_t>(missed));
+  if (missed == 0) {
+    CHECK_THAT(search.at("stopped").get<std::string>(),
+               Contains("every felt quantity is within its JND of the TO-BE's"));
+  }
+}

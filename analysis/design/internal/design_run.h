@@ -5,6 +5,7 @@
 // holds references to its inputs and its result, which must outlive it; one thread.
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "analysis/design/internal/design_maths.h"
@@ -27,8 +28,15 @@ class DesignRun {
   void note_fit_quality();
 
  private:
+  // A fit of the design from `start` with `held` at AS-IS, counted in the result's fits and
+  // times.
   DesignSolution fit_design(const DoorModel& start, int start_index,
                             const std::vector<std::string>& held);
+  // The same fit on `threads` threads (0: the fit options'), neither counted nor timed: safe
+  // to call from several threads at once (the result is the same on any number of threads).
+  DesignSolution fit_only(const DoorModel& start, int start_index,
+                          const std::vector<std::string>& held, int threads) const;
+  void add_fit_times(const DesignSolution& solution);
   DesignFitter fitter() {
     return [this](const DoorModel& start, int index, const std::vector<std::string>& held) {
       return fit_design(start, index, held);
@@ -39,6 +47,9 @@ class DesignRun {
   DesignSolution as_is_design();
   DesignSolution sparse_search();
   bool sparse_step(std::vector<int>& chosen, DesignSolution& current);
+  std::vector<std::pair<int, DesignSolution>> fit_candidates(const std::vector<int>& chosen,
+                                                             const std::vector<int>& order,
+                                                             const DesignSolution& current);
   void refine_sparse(std::vector<int>& chosen, DesignSolution& current);
   // The sparse design with one of its parts swapped for a candidate its step could not tell
   // from it, refitted (DesignSolution::swapped): into sparse_swaps_.
@@ -49,6 +60,11 @@ class DesignRun {
                                           const std::vector<int>& set, const std::string& what);
   void keep_equivalent(const std::vector<DesignSolution>& found, const DesignSolution* reference);
   std::vector<std::string> names_except(const std::vector<int>& free_positions) const;
+  // The felt quantities of `model` that miss their JND of the TO-BE recordings' (along their
+  // motion; InverseDesignOptions::felt_jnds).
+  std::vector<FeltMiss> felt_misses(const DoorModel& model) const;
+  // Adds `name` to result.parts_tried when it is not there yet.
+  void note_part_tried(const std::string& name);
 
   const DoorModel& asis_;
   const PreparedData& data_;
