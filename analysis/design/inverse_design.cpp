@@ -265,6 +265,7 @@ DesignSolution DesignRun::fit_design(const DoorModel& start, int start_index,
   sum.statistics_s += times.statistics_s;
   sum.metrics_s += times.metrics_s;
   sum.held_out_s += times.held_out_s;
+  sum.determining_s += times.determining_s;
   return solution;
 }
 
