@@ -196,6 +196,7 @@ void DesignRun::set_up() {
     free[find_or_throw(asis_, name, "fit.free_parameters")] = 1;
   }
   fit_ = options_.fit;
+  fit_.what_would_determine = false;  // the design's reports do not show its fits' proposals
   for (const std::string& name : options_.fixed) {
     free[find_or_throw(asis_, name, "fixed")] = 0;
     fit_.fixed_parameters.push_back(name);
@@ -265,7 +266,6 @@ DesignSolution DesignRun::fit_design(const DoorModel& start, int start_index,
   sum.statistics_s += times.statistics_s;
   sum.metrics_s += times.metrics_s;
   sum.held_out_s += times.held_out_s;
-  sum.determining_s += times.determining_s;
   return solution;
 }
 
