@@ -119,7 +119,8 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
   };
   FitOptions trial_options = fit;
   trial_options.cross_validation_folds = 0;
-  trial_options.partial_on_stop = false;  // a trial is whole or not at all
+  trial_options.partial_on_stop = false;       // a trial is whole or not at all
+  trial_options.what_would_determine = false;  // its report is not shown
   const FitResult full = fit_model(start, data, trial_options);
   const FitSummary& trial = full.summary;
   const std::size_t count = trial.free_names.size();

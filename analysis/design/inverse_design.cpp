@@ -208,6 +208,7 @@ void DesignRun::set_up() {
     free[find_or_throw(asis_, name, "fit.free_parameters")] = 1;
   }
   fit_ = options_.fit;
+  fit_.what_would_determine = false;  // the design's reports do not show its fits' proposals
   for (const std::string& name : options_.fixed) {
     free[find_or_throw(asis_, name, "fixed")] = 0;
     fit_.fixed_parameters.push_back(name);

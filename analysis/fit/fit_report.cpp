@@ -62,6 +62,33 @@ void metric_rows(std::string& out, const FitMetrics& fitted, const FitMetrics* h
 
 }  // namespace
 
+std::string FitSummary::determining_lines() const {
+  if (determining.empty()) return "";
+  auto relative = [](double value) {
+    return std::isfinite(value) ? printf_text("%.3g%%", 100.0 * value)
+                                : std::string("undetermined");
+  };
+  std::string out =
+      "What would determine them (strokes simulated with the fitted door; u/|value| now, and "
+      "with such strokes added: their information added to the fit's, the uncertainty scaled "
+      "as the fit's window-robust one is to its classical one):\n";
+  for (const DeterminingStrokes& row : determining) {
+    const std::string state = row.undetermined && row.at_bound ? "undetermined, at a bound"
+                              : row.undetermined               ? "undetermined"
+                                                               : "at a bound";
+    out += "  " + row.parameter + " (" + state + "): now " + relative(row.relative_now);
+    std::string determined_by;
+    for (const DeterminingStrokes::Kind& kind : row.kinds) {
+      out += "; " + kind.kind + " " + relative(kind.relative);
+      if (kind.determines) determined_by += (determined_by.empty() ? "" : ", ") + kind.kind;
+    }
+    out += determined_by.empty() ? std::string(" -> none of these kinds determines it")
+                                 : " -> determined by " + determined_by;
+    out += "\n";
+  }
+  return out;
+}
+
 std::string FitSummary::brief_report() const {
   std::string out = printf_text(
       "Fit of the %s model (%d free parameters) to %zu strokes, %zu windows: %s after %d "
@@ -83,6 +110,7 @@ std::string FitSummary::brief_report() const {
     for (const std::string& name : undetermined) out += " " + name;
     out += ".\n" + identifiable_line() + "\n";
   }
+  out += determining_lines();
   return out;
 }
 
@@ -157,9 +185,10 @@ void solver_section(std::string& out, const FitSummary& summary) {
   }
   out += printf_text(
       "Time       start %.3f s, equation error %.3f s, windows %.3f s, statistics %.3f s, "
-      "metrics %.3f s, held out %.3f s\n\n",
+      "metrics %.3f s, held out %.3f s, what would determine %.3f s\n\n",
       summary.times.start_s, summary.times.equation_error_s, summary.times.windows_s,
-      summary.times.statistics_s, summary.times.metrics_s, summary.times.held_out_s);
+      summary.times.statistics_s, summary.times.metrics_s, summary.times.held_out_s,
+      summary.times.determining_s);
 }
 
 // The parameters with their uncertainties, strong correlations, the undetermined.
@@ -202,6 +231,7 @@ void parameter_section(std::string& out, const FitSummary& summary) {
   for (const std::string& name : summary.undetermined) out += " " + name;
   out += "\n";
   if (!summary.undetermined.empty()) out += summary.identifiable_line() + "\n";
+  out += summary.determining_lines();
 }
 
 // The latch read off the data, when it was.

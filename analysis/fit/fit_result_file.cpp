@@ -44,6 +44,27 @@ nlohmann::ordered_json metrics_json(const FitMetrics& metrics) {
           {"strokes", strokes}};
 }
 
+// For each free parameter undetermined or on a bound, the kinds of stroke that would
+// determine it (FitSummary::determining); an empty array when there is none.
+nlohmann::ordered_json determining_json(const FitSummary& s) {
+  constexpr nlohmann::ordered_json (*number)(double) = &json_number<nlohmann::ordered_json>;
+  nlohmann::ordered_json rows = nlohmann::ordered_json::array();
+  for (const DeterminingStrokes& row : s.determining) {
+    nlohmann::ordered_json kinds = nlohmann::ordered_json::array();
+    for (const DeterminingStrokes::Kind& kind : row.kinds) {
+      kinds.push_back({{"kind", kind.kind},
+                       {"relative_uncertainty", number(kind.relative)},
+                       {"determines", kind.determines}});
+    }
+    rows.push_back({{"parameter", row.parameter},
+                    {"undetermined", row.undetermined},
+                    {"at_bound", row.at_bound},
+                    {"relative_uncertainty_now", number(row.relative_now)},
+                    {"kinds", kinds}});
+  }
+  return rows;
+}
+
 nlohmann::ordered_json fit_result_object(const FitResult& result, const PreparedData& data) {
   const FitSummary& s = result.summary;
   nlohmann::ordered_json parameters = nlohmann::ordered_json::array();
@@ -95,6 +116,7 @@ nlohmann::ordered_json fit_result_object(const FitResult& result, const Prepared
           {"correlations_above_threshold", correlations},
           {"undetermined", s.undetermined},
           {"identifiable", s.identifiable},
+          {"what_would_determine", determining_json(s)},
           {"fitted", metrics_json(s.fitted)},
           {"held_out", s.held_out ? metrics_json(*s.held_out) : nlohmann::ordered_json(nullptr)},
           {"folds", s.folds},

@@ -12,6 +12,7 @@
 #include <thread>
 
 #include "analysis/fit/fit_problem.h"
+#include "analysis/fit/internal/fit_determine.h"
 #include "analysis/fit/internal/fit_setup.h"
 #include "analysis/model/sensory_model.h"
 #include "core/clock.h"
@@ -402,7 +403,7 @@ void window_stage(WindowProblem& problem, const DoorModel& start, const DoorMode
 void statistics_stage(WindowProblem& problem, const DoorModel& start, const ParameterMap& map,
                       const StartValues& starts, const std::vector<double>& window_start_values,
                       const std::vector<double>& fitted_values, const FitOptions& options,
-                      FitSummary& summary) {
+                      FitSummary& summary, Eigen::MatrixXd& information) {
   const int parameter_count = start.parameter_count();
   const std::vector<double>& values = starts.values;
   const std::vector<std::string>& origin = starts.origin;
@@ -414,6 +415,7 @@ void statistics_stage(WindowProblem& problem, const DoorModel& start, const Para
     throw std::runtime_error("fit: a window failed to evaluate at the result");
   }
   const int p = map.free_count();
+  information = system.information;
   const InformationInverse inverse = invert_information(system.information);
   summary.residual_variance = system.residual_variance();
   summary.covariance_rank = inverse.rank;
@@ -511,8 +513,16 @@ void statistics_stage(WindowProblem& problem, const DoorModel& start, const Para
             });
 }
 
+// What a fit leaves for the what-would-determine stage, which runs on the fit that is kept.
+struct KeptFit {
+  ParameterMap map;
+  std::vector<double> x;  // the fitted free values, scaled
+  FitWeights weights;
+  Eigen::MatrixXd information;  // the window problem's H at x
+};
+
 FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOptions& options,
-                   std::vector<DoorModel>& fold_models) {
+                   std::vector<DoorModel>& fold_models, KeptFit& kept) {
   const StageClock::time_point began = StageClock::now();
   if (const std::string message = options.validate(); !message.empty()) {
     throw std::invalid_argument(message);
@@ -552,7 +562,10 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   const std::vector<double> fitted_values = map.values(problem.x().data());
   FitResult result{start.with_parameter_values(fitted_values), FitSummary{}};
   statistics_stage(problem, start, map, chosen, window_start_values, fitted_values, options,
-                   summary);
+                   summary, kept.information);
+  kept.map = map;
+  kept.x = problem.x();
+  kept.weights = weights;
   summary.times.statistics_s = seconds_since(statistics_began);
 
   // Metrics: on the fitted strokes, then held out.
@@ -587,11 +600,49 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   return result;
 }
 
+// What would determine each free parameter of the kept fit left undetermined or on a bound
+// (FitSummary::determining); nothing to do when every one is determined and inside its bounds.
+void determining_stage(FitResult& result, const PreparedData& data, const FitOptions& options,
+                       const KeptFit& kept) {
+  FitSummary& summary = result.summary;
+  const bool robust = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
+  std::vector<int> positions;
+  std::vector<double> inflation, ratios;
+  for (int k = 0; k < kept.map.free_count(); ++k) {
+    const FittedParameter& parameter =
+        summary.parameters[static_cast<std::size_t>(kept.map.free_index[k])];
+    const double ratio = parameter.robust_uncertainty / parameter.classical_uncertainty;
+    inflation.push_back(robust && std::isfinite(ratio) && ratio > 0 ? ratio : kNaN);
+    if (std::isfinite(inflation.back())) ratios.push_back(inflation.back());
+    if (!parameter.determined || parameter.at_bound) positions.push_back(k);
+  }
+  if (positions.empty()) return;
+  // A parameter without a ratio of its own (in an undetermined direction) takes the median.
+  std::sort(ratios.begin(), ratios.end());
+  const double median = !robust || ratios.empty() ? 1.0 : ratios[ratios.size() / 2];
+  std::vector<double> chosen;
+  for (int k : positions) {
+    const double ratio = inflation[static_cast<std::size_t>(k)];
+    chosen.push_back(std::isfinite(ratio) ? ratio : median);
+  }
+  const ProblemKind kind = window_fit_kind(options, result.model);
+  const DeterminingInput input{
+      result.model, data,         kept.map,         kept.x,
+      kind,         kept.weights, kept.information, summary.residual_variance};
+  summary.determining = what_would_determine(input, options, positions, chosen);
+  for (std::size_t r = 0; r < summary.determining.size(); ++r) {
+    const FittedParameter& parameter = summary.parameters[static_cast<std::size_t>(
+        kept.map.free_index[static_cast<std::size_t>(positions[r])])];
+    summary.determining[r].undetermined = !parameter.determined;
+    summary.determining[r].at_bound = parameter.at_bound;
+  }
+}
+
 // The restart stage: each fold's model and the start on all strokes; `result` becomes a
 // restart from the best when one fits every stroke clearly better (fit_model).
 void restart_if_better(FitResult& result, const DoorModel& start, const PreparedData& data,
                        const FitOptions& options, const std::vector<DoorModel>& fold_models,
-                       StageClock::time_point began) {
+                       StageClock::time_point began, KeptFit& kept) {
   // Each cross-validation fold is refitted from the full fit on fewer strokes. When one of
   // them fits *all* the strokes clearly better than the full fit does, the full fit stopped
   // in a local minimum (an output-error cost is not convex: a window can settle on the
@@ -631,7 +682,8 @@ void restart_if_better(FitResult& result, const DoorModel& start, const Prepared
   restart.latch_start_from_data = false;  // start exactly at the fold's (or given) values
   restart.equation_error_start = false;
   std::vector<DoorModel> unused;
-  FitResult second = fit_once(*best, data, restart, unused);
+  KeptFit second_kept;
+  FitResult second = fit_once(*best, data, restart, unused, second_kept);
   if (!(second.summary.fitted.window.rmse() < fitted_rmse)) {
     result.summary.notes.push_back(
         from_start ? "the start model fitted all strokes better than the fit; a restart from "
@@ -660,6 +712,7 @@ void restart_if_better(FitResult& result, const DoorModel& start, const Prepared
           printf_text("%.4g", best_rmse) + " rad/s), and the fit was restarted from it");
   second.summary.total_time_s = seconds_since(began);
   result = std::move(second);
+  kept = std::move(second_kept);
 }
 
 }  // namespace
@@ -667,15 +720,29 @@ void restart_if_better(FitResult& result, const DoorModel& start, const Prepared
 FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
   const StageClock::time_point began = StageClock::now();
   std::vector<DoorModel> fold_models;
-  FitResult result = fit_once(start, data, options, fold_models);
+  KeptFit kept;
+  FitResult result = fit_once(start, data, options, fold_models, kept);
   if (!result.summary.interrupted.empty()) return result;
   try {
-    restart_if_better(result, start, data, options, fold_models, began);
+    restart_if_better(result, start, data, options, fold_models, began, kept);
   } catch (const StopRequested&) {
     if (!options.partial_on_stop) throw;
     result.summary.interrupted =
         "during the restart from a better start: the fit was not restarted";
+    return result;
   }
+  if (!options.what_would_determine) return result;
+  const StageClock::time_point determining_began = StageClock::now();
+  try {
+    determining_stage(result, data, options, kept);
+  } catch (const StopRequested&) {
+    if (!options.partial_on_stop) throw;
+    result.summary.determining.clear();
+    result.summary.interrupted =
+        "during what would determine the parameters: no such strokes proposed";
+  }
+  result.summary.times.determining_s = seconds_since(determining_began);
+  result.summary.total_time_s = seconds_since(began);
   return result;
 }
 

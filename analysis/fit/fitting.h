@@ -92,6 +92,12 @@ struct FitOptions {
   // the fit is exactly the plain one.
   std::vector<ParameterPrior> priors;
 
+  // For each free parameter left undetermined or on a bound: the kinds of stroke that would
+  // determine it, from the information such strokes add, simulated with the fitted door
+  // (FitSummary::determining; docs/fitting.md, "What would determine it"). Computed once, on
+  // the fit that is returned, and only when some free parameter is undetermined or on a bound.
+  bool what_would_determine = true;
+
   // --- Objective ---
   enum class Objective {
     kWindows,  // least squares on windows started from measured states
@@ -159,7 +165,8 @@ struct FitOptions {
   // What a stop after the window fit's statistics leaves: false, StopRequested as during the
   // fit (what the residual loop and the inverse design need: a fit is whole or not at all);
   // true, the fit as it stands, marked in FitSummary::interrupted (no held-out metrics when the
-  // cross-validation was cut, no restart when that was) — what `doorbench fit` writes.
+  // cross-validation was cut, no restart when that was, no FitSummary::determining when its
+  // strokes' information was cut) — what `doorbench fit` writes.
   bool partial_on_stop = false;
 
   // Empty when usable, else a one-line message naming the option.
@@ -214,6 +221,25 @@ struct FoldFit {
   std::vector<std::string> at_bound;  // free parameters that ended on a bound
 };
 
+// What would determine a free parameter the fit leaves undetermined or on a bound
+// (docs/fitting.md, "What would determine it"): kinds of stroke simulated with the fitted door,
+// and the parameter's relative standard uncertainty (u / |value|, or u / 1 % of its bound width
+// when the value is 0) with each kind's information added to the fit's: the classical
+// uncertainty times the fit's window-robust / classical ratio for the parameter (the median
+// ratio for one in an undetermined direction; 1 with classical uncertainties).
+struct DeterminingStrokes {
+  std::string parameter;
+  bool undetermined = false;
+  bool at_bound = false;
+  double relative_now = 0.0;  // NaN: in a direction the data do not determine
+  struct Kind {
+    std::string kind;         // "slow openings and closings (about 0.1 rad/s)", ...
+    double relative = 0.0;    // NaN: still in an undetermined direction
+    bool determines = false;  // finite and at most undetermined_relative_uncertainty
+  };
+  std::vector<Kind> kinds;
+};
+
 struct FitSummary {
   ModelKind model_kind = ModelKind::kSensory;
   std::string source;
@@ -246,6 +272,7 @@ struct FitSummary {
     double statistics_s = 0.0;      // covariances
     double metrics_s = 0.0;         // metrics on the fitted strokes (replays included)
     double held_out_s = 0.0;        // cross-validation
+    double determining_s = 0.0;     // what would determine the undetermined (when computed)
   } times;
 
   // Statistics at the result (window objective).
@@ -268,6 +295,9 @@ struct FitSummary {
   std::vector<std::string> identifiable;
 
   LatchReadOff latch_start;  // the sensory latch read off the data (when asked)
+  // For each free parameter left undetermined or on a bound, in the order of free_names
+  // (FitOptions::what_would_determine); empty when none is, or when not asked.
+  std::vector<DeterminingStrokes> determining;
 
   FitMetrics fitted;                   // on the strokes fitted (all of them)
   std::optional<FitMetrics> held_out;  // each stroke by the fit that left it out
@@ -284,6 +314,8 @@ struct FitSummary {
   // k s (doorbench fit --free auto fits this set)."; "" when all are determined.
   std::string identifiable_line() const;
   std::string full_report() const;  // parameters, correlations, metrics per stroke, solver
+  // "What would determine them (...):" and a line per row of `determining`; "" when none.
+  std::string determining_lines() const;
 };
 
 struct FitResult {

@@ -142,6 +142,7 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
     // pass's own precision instead of stopping at once where σ is inflated (a model lacking
     // an effect), so the iterations run at the coarse problem's half cost.
     fit.coarse_tolerance_factor = 1.0;
+    fit.what_would_determine = false;  // nobody reads a start's report
     try {
       const DoorModel model = which == 0 ? current.model.with_effect(setting) : fresh_start();
       attempts[which].result = fit_model(model, data, fit);
