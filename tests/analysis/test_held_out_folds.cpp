@@ -7,28 +7,10 @@
 #include <cmath>
 #include <cstddef>
 
-#include "analysis/fit/fit_init.h"
 #include "analysis/fit/fitting.h"
-#include "fixtures/recording_family.h"
-#include "fixtures/reference_doors.h"
+#include "tests/support/robot_recording.h"
 
 namespace doorbench {
-namespace {
-
-PreparedData robot_data() {
-  const DoorModel door = testing::with_handle_radius(testing::sensory_reference(), 0.8);
-  return testing::family_recording(door, testing::robot_operator_conditions(), 42);
-}
-
-// As `doorbench fit` starts without --params: the reference door with the recording's radius,
-// its values taken from the data; RK4 steps of at most 1 ms (20 per sample at 50 Hz).
-DoorModel robot_start(const PreparedData& data) {
-  return start_from_data(
-             data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
-      .model;
-}
-
-}  // namespace
 
 // Each fold is refitted again by the test, from the full fit on the other three strokes, and
 // its error on the stroke it left out must be what the fit reports; on this recording a fold's
@@ -38,12 +20,12 @@ TEST_CASE("Held out: each stroke is measured with its own fold's parameters", "[
   // The operator pressed 3 N harder through the first opening (as an untared cell drifting
   // would show): the other strokes disagree with it, so the fold that leaves it out fits
   // other friction than the full fit, and its error on that stroke differs.
-  PreparedData data = robot_data();
+  PreparedData data = testing::robot_recording();
   for (double& force : data.strokes.front().force_N) force += 3.0;
   FitOptions options;
   options.substeps_per_sample = 20;
   options.cross_validation_folds = 4;  // leave one stroke out
-  const FitResult fit = fit_model(robot_start(data), data, options);
+  const FitResult fit = fit_model(testing::robot_fit_start(data), data, options);
   REQUIRE(fit.summary.held_out.has_value());
   REQUIRE(fit.summary.held_out->strokes.size() == 4);
   int moved = 0;

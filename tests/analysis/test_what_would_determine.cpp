@@ -18,24 +18,11 @@
 #include "analysis/simulation/simulator.h"
 #include "analysis/simulation/virtual_hand.h"
 #include "core/number_format.h"
-#include "fixtures/recording_family.h"
 #include "fixtures/reference_doors.h"
+#include "tests/support/robot_recording.h"
 
 namespace doorbench {
 namespace determine_test {
-
-PreparedData robot_data() {
-  const DoorModel door = testing::with_handle_radius(testing::sensory_reference(), 0.8);
-  return testing::family_recording(door, testing::robot_operator_conditions(), 42);
-}
-
-// As `doorbench fit` starts without --params: the reference door with the recording's radius,
-// its values taken from the data; RK4 steps of at most 1 ms (20 per sample at 50 Hz).
-DoorModel robot_start(const PreparedData& data) {
-  return start_from_data(
-             data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
-      .model;
-}
 
 FitOptions robot_options() {
   FitOptions options;
@@ -46,8 +33,8 @@ FitOptions robot_options() {
 
 const FitResult& robot_fit() {
   static const FitResult fit = [] {
-    const PreparedData data = robot_data();
-    return fit_model(robot_start(data), data, robot_options());
+    const PreparedData data = testing::robot_recording();
+    return fit_model(testing::robot_fit_start(data), data, robot_options());
   }();
   return fit;
 }
@@ -191,7 +178,7 @@ TEST_CASE("What would determine it: the report's lines, word for word", "[fittin
 
 TEST_CASE("What would determine it: result.json holds the rows", "[fitting][slow]") {
   const FitResult& fit = robot_fit();
-  const PreparedData data = determine_test::robot_data();
+  const PreparedData data = testing::robot_recording();
   const nlohmann::json json = nlohmann::json::parse(fit_result_json(fit, data));
   const nlohmann::json& rows = json.at("what_would_determine");
   REQUIRE(rows.size() == fit.summary.determining.size());
@@ -232,7 +219,7 @@ TEST_CASE("What would determine it: slow strokes added determine what the foreca
           "[fitting][slow]") {
   const FitResult& fit = robot_fit();
   const FitSummary& s = fit.summary;
-  PreparedData data = determine_test::robot_data();
+  PreparedData data = testing::robot_recording();
   for (Stroke& stroke : determine_test::slow_strokes(fit.model, data)) {
     data.strokes.push_back(std::move(stroke));
   }
@@ -282,10 +269,10 @@ TEST_CASE("What would determine it: no rows when all are determined, or when not
   CHECK(nlohmann::json::parse(fit_result_json(fit, data)).at("what_would_determine") ==
         nlohmann::json::array());
 
-  const PreparedData robot = determine_test::robot_data();
+  const PreparedData robot = testing::robot_recording();
   FitOptions off = determine_test::robot_options();
   off.what_would_determine = false;
-  const FitResult without = fit_model(determine_test::robot_start(robot), robot, off);
+  const FitResult without = fit_model(testing::robot_fit_start(robot), robot, off);
   REQUIRE(!without.summary.undetermined.empty());
   CHECK(without.summary.determining.empty());
   CHECK(without.summary.full_report().find("What would determine") == std::string::npos);
