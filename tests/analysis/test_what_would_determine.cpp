@@ -172,6 +172,21 @@ TEST_CASE("What would determine it: the report's lines, word for word", "[fittin
   CHECK(determined_somehow > 0);
   CHECK(determined_somehow < static_cast<int>(s.determining.size()));
   CHECK(s.determining_lines() == expected);
+  // Which rows, and which are determined: the latch's switch angles theta1-theta3 by slow
+  // strokes (which cross them slowly); the stiffnesses, theta0, the snap's damping c and the
+  // friction's speed sensitivity s by none of these kinds.
+  std::string rows;
+  for (const DeterminingStrokes& row : s.determining) {
+    bool slow = false, any = false;
+    for (const DeterminingStrokes::Kind& kind : row.kinds) {
+      any = any || kind.determines;
+      slow = slow || (kind.determines && kind.kind.starts_with("slow openings"));
+    }
+    rows += row.parameter + (slow ? ":slow " : any ? ":other " : ":none ");
+  }
+  CHECK(rows ==
+        "k:none k_inf:none k_lock:none theta0:none theta1:slow theta2:slow theta3:slow "
+        "c:none s:none ");
   CHECK(s.brief_report().find(expected) != std::string::npos);
   CHECK(s.full_report().find(expected) != std::string::npos);
 }
