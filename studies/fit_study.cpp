@@ -1,0 +1,205 @@
+// A study, not a benchmark: the fit's result and CPU against --folds, with and without the global
+// stage (analysis/fit/fitting.h, FitOptions::global_*), on recordings the tests' generators make
+// (docs/PERFORMANCE.md). One CSV line per fit on stdout.
+//
+//   doorbench_fit_study [--family50 N] [--family1k N] [--robot] [--folds 0,3,4] [--truth]
+//                       [--first-seed S] [--threads T] [--report]
+//                       [--samples N] [--polished N] [--subsets K] [--no-global]
+//   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
+//            50 Hz and at 1 kHz (draw d has seed S + d - 1)
+//   --robot: the 50 Hz, 4-stroke robot-operator recording with a load cell not tared, handle
+//            at 0.8 m (fixtures/recording_family.h, robot_operator_conditions)
+//   --folds: the cross-validation folds of each fit (default 0,3,4)
+//   --truth: also fit each recording from the true door (as given, no start from the data)
+//   --threads T: FitOptions::num_threads (default 0: every hardware thread)
+//   --report: each fit's full report on stderr
+//   --samples N, --polished N, --subsets K: the global stage's FitOptions::global_samples,
+//            global_polished and global_subsets (0: no subset refits); --no-global: none of it
+//            (FitOptions::global_search false)
+//
+// Each fit starts as `doorbench fit` without --params does: the sensory reference door with the
+// recording's handle radius, its values taken from the data (analysis/fit/fit_init.h), RK4
+// steps of at most 1 ms. CPU is the process's user + system time (getrusage) over the call:
+// the runs go one after another, so it is the fit's, every thread counted.
+#include <sys/resource.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "analysis/fit/fit_init.h"
+#include "analysis/fit/fitting.h"
+#include "core/number_format.h"
+#include "fixtures/recording_family.h"
+#include "fixtures/reference_doors.h"
+
+using namespace doorbench;
+
+namespace {
+
+double process_cpu_s() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return static_cast<double>(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
+         1e-6 * static_cast<double>(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
+}
+
+struct Settings {
+  int family50 = 0;
+  int family1k = 0;
+  bool robot = false;
+  bool truth = false;
+  std::vector<int> folds = {0, 3, 4};
+  std::uint32_t first_seed = 1;
+  int threads = 0;
+  bool report = false;                            // --report: each fit's full report on stderr
+  int samples = -1, polished = -1, subsets = -1;  // the global stage's, when given
+  bool global = true;                             // --no-global: FitOptions::global_search off
+};
+
+struct Case {
+  std::string name;
+  DoorModel truth;
+  PreparedData data;
+};
+
+int substeps_for_data(const PreparedData& data) {
+  const double interval_s = data.interval_median_s > 0 ? data.interval_median_s
+                            : data.sample_rate_hz > 0  ? 1.0 / data.sample_rate_hz
+                                                       : 0.001;
+  return std::clamp(static_cast<int>(std::ceil(interval_s / 0.001 - 1e-9)), 2, 100);
+}
+
+DoorModel data_start(const PreparedData& data) {
+  const DoorModel base =
+      testing::with_handle_radius(reference_model(ModelKind::kSensory), data.handle_radius_m);
+  return start_from_data(data, base).model;
+}
+
+std::string values_text(const DoorModel& model) {
+  std::string text;
+  for (int i = 0; i < model.parameter_count(); ++i) {
+    if (i > 0) text += ';';
+    text += format_significant(model.parameter_values()[i], 10);
+  }
+  return text;
+}
+
+void fit_case(const Case& c, const Settings& s, const std::string& start_name,
+              const DoorModel& start, bool from_data) {
+  for (int folds : s.folds) {
+    FitOptions options;
+    options.substeps_per_sample = substeps_for_data(c.data);
+    options.cross_validation_folds = folds;
+    options.num_threads = s.threads;
+    if (!from_data) options.latch_start_from_data = false;
+    if (s.samples >= 0) options.global_samples = s.samples;
+    if (s.polished >= 0) options.global_polished = s.polished;
+    if (s.subsets >= 0) options.global_subsets = s.subsets;
+    options.global_search = s.global;
+    const double cpu0 = process_cpu_s();
+    const auto wall0 = std::chrono::steady_clock::now();
+    std::string outcome;
+    try {
+      const FitResult result = fit_model(start, c.data, options);
+      const double cpu = process_cpu_s() - cpu0;
+      if (s.report) std::fprintf(stderr, "%s\n", result.summary.full_report().c_str());
+      const double wall =
+          std::chrono::duration<double>(std::chrono::steady_clock::now() - wall0).count();
+      outcome = printf_text("%.3f,%.3f,%.10g,%.6g,%.6g,%d,%s", cpu, wall, result.summary.final_cost,
+                            result.summary.fitted.window.fit_percent(),
+                            result.summary.fitted.window.rmse(), result.summary.iterations,
+                            values_text(result.model).c_str());
+    } catch (const std::exception& error) {
+      outcome = std::string("error,") + error.what();
+    }
+    std::printf("%s,%s,%d,%s\n", c.name.c_str(), start_name.c_str(), folds, outcome.c_str());
+    std::fflush(stdout);
+  }
+}
+
+std::vector<Case> cases(const Settings& s) {
+  std::vector<Case> out;
+  const DoorModel reference = reference_model(ModelKind::kSensory);
+  for (int rate : {50, 1000}) {
+    const int draws = rate == 50 ? s.family50 : s.family1k;
+    for (int d = 0; d < draws; ++d) {
+      const std::uint32_t seed = s.first_seed + static_cast<std::uint32_t>(d);
+      testing::FamilyOptions family;
+      family.sample_rates_hz = {static_cast<double>(rate)};
+      const testing::RecordingConditions conditions = testing::draw_conditions(seed, family);
+      std::string name = "family";
+      name += std::to_string(rate) + "-" + std::to_string(seed);
+      out.push_back({name, reference, testing::family_recording(reference, conditions, seed)});
+    }
+  }
+  if (s.robot) {
+    const DoorModel door = testing::with_handle_radius(reference, 0.8);
+    out.push_back({"robot50", door,
+                   testing::family_recording(door, testing::robot_operator_conditions(), 42)});
+  }
+  return out;
+}
+
+std::vector<int> int_list(const char* text) {
+  std::vector<int> values;
+  for (const char* p = text; *p != '\0';) {
+    values.push_back(std::atoi(p));
+    const char* comma = std::strchr(p, ',');
+    if (comma == nullptr) break;
+    p = comma + 1;
+  }
+  return values;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Settings s;
+  for (int i = 1; i < argc; ++i) {
+    const std::string flag = argv[i];
+    const bool has_value = i + 1 < argc;
+    if (flag == "--report") {
+      s.report = true;
+    } else if (flag == "--robot") {
+      s.robot = true;
+    } else if (flag == "--truth") {
+      s.truth = true;
+    } else if (flag == "--no-global") {
+      s.global = false;
+    } else if (has_value && flag == "--family50") {
+      s.family50 = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--family1k") {
+      s.family1k = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--folds") {
+      s.folds = int_list(argv[++i]);
+    } else if (has_value && flag == "--first-seed") {
+      s.first_seed = static_cast<std::uint32_t>(std::atoi(argv[++i]));
+    } else if (has_value && flag == "--samples") {
+      s.samples = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--polished") {
+      s.polished = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--subsets") {
+      s.subsets = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--threads") {
+      s.threads = std::atoi(argv[++i]);
+    } else {
+      std::fprintf(stderr, "doorbench_fit_study: unknown option '%s' (see the file's header)\n",
+                   flag.c_str());
+      return 2;
+    }
+  }
+  std::printf(
+      "recording,start,folds,cpu_s,wall_s,final_cost,fit_percent,window_rmse_rad_s,"
+      "iterations,parameters\n");
+  for (const Case& c : cases(s)) {
+    std::fprintf(stderr, "%s: %s\n", c.name.c_str(), c.data.source.c_str());
+    fit_case(c, s, "data", data_start(c.data), true);
+    if (s.truth) fit_case(c, s, "truth", c.truth, false);
+  }
+  return 0;
+}
