@@ -153,6 +153,7 @@ FitResult fit_free_auto(const DoorModel& start, const PreparedData& data, FitOpt
   fit.free_parameters = trial.identifiable;
   fit.latch_start_from_data = false;
   fit.equation_error_start = false;
+  fit.global_search = false;
   FitResult result = fit_model(full.model, data, fit);
   for (int round = 0;
        round < 2 && !result.summary.undetermined.empty() && result.summary.interrupted.empty();

@@ -35,7 +35,9 @@ std::string interrupted_line(const LoopResult& result, int signal_number) {
                            .append(steps == 1 ? " step" : " steps")
                            .append(" finished before it ")
                            .append(steps == 1 ? "is" : "are")
-                           .append(" kept, the structure check was not run"));
+                           .append(result.structure.ran
+                                       ? " kept, as is the structure check that ran before it"
+                                       : " kept, the structure check was not run"));
 }
 
 void run_loop(const LoopCommandOptions& options) {

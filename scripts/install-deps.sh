@@ -31,6 +31,7 @@ packages=(
   clang-format-14             # scripts/check_format.sh: every C++ source formatted as .clang-format says
   clang libclang-rt-14-dev    # libFuzzer and the sanitizers for the parsers' fuzz targets (fuzz/)
   libboost-math-dev           # Boost.Math: Student-t quantile (calibration), exact binomial test (A/B)
+  libboost-dev                # Boost.Random: the Sobol sequence of the fit's global stage
   zlib1g-dev                  # zlib's crc32() for the recording journal's checksums
   r-base-core                 # tests only: R, the independent checks of the statistics
   r-cran-ordinal              # tests only: R's ordinal (clmm/clm), the ratings fit's independent check

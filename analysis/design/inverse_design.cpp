@@ -86,6 +86,10 @@ std::vector<std::string> default_fixed_design_parameters() {
 FitOptions InverseDesignOptions::default_fit_options() {
   FitOptions fit;
   fit.cross_validation_folds = 0;
+  // The design's starts are its own (AS-IS, the sparse search's parts, the perturbed starts):
+  // of the global stage only the start as given is screened.
+  fit.global_subsets = 0;
+  fit.global_samples = 0;
   return fit;
 }
 

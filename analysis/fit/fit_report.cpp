@@ -62,6 +62,53 @@ void metric_rows(std::string& out, const FitMetrics& fitted, const FitMetrics* h
 
 }  // namespace
 
+std::string GlobalSearch::report(const std::vector<std::string>& names) const {
+  if (!ran) return "";
+  std::vector<std::string> tried{"the data-derived start"};
+  if (start_as_given) tried.push_back("the start as given");
+  if (subset_refits > 0) {
+    tried.push_back(std::to_string(subset_refits) + " subset refits (" + std::to_string(partition) +
+                    " subsets)");
+  }
+  if (sample_points > 0) {
+    tried.push_back(std::to_string(sample_points) +
+                    " points of a space-filling sample of the bounds");
+  }
+  std::string out = "Global search: " + std::to_string(starts_tried) + " starts tried (";
+  for (std::size_t i = 0; i < tried.size(); ++i) {
+    out += (i == 0 ? "" : i + 1 == tried.size() ? " and " : ", ") + tried[i];
+  }
+  out += "), " + std::to_string(promising) + " promising, " + std::to_string(polished) +
+         " polished by Levenberg-Marquardt; " + std::to_string(optima.size()) +
+         (optima.size() == 1 ? " distinct optimum" : " distinct optima") + "; " +
+         std::to_string(reached_best) + " of the " + std::to_string(polished) +
+         " polished reached the fit's, first " + best_from + ".\n";
+  for (std::size_t o = 0; o < optima.size(); ++o) {
+    const GlobalOptimum& optimum = optima[o];
+    out += printf_text("  optimum %zu%s: cost %s", o + 1, o == 0 ? " (the fit)" : "",
+                       format_significant(optimum.cost, 4).c_str());
+    if (o > 0) out += " (" + format_signed_percent(optimum.cost / optima[0].cost - 1.0, 1) + ")";
+    out += ", window FIT " + format_percent(optimum.fit_percent / 100.0, 2) + ", from ";
+    for (std::size_t i = 0; i < optimum.reached_from.size(); ++i) {
+      out += (i == 0 ? "" : ", ") + optimum.reached_from[i];
+    }
+    std::string differs;
+    for (std::size_t k = 0; o > 0 && k < names.size() && k < optimum.free_values.size(); ++k) {
+      const double value = optimum.free_values[k];
+      const double fit = optima[0].free_values[k];
+      if (std::abs(value - fit) <=
+          kSameOptimumParameter * std::max(std::abs(value), std::abs(fit))) {
+        continue;
+      }
+      differs += (differs.empty() ? "" : ", ") + names[k] + " " + format_significant(value, 4) +
+                 " (the fit " + format_significant(fit, 4) + ")";
+    }
+    if (!differs.empty()) out += "; differs in " + differs;
+    out += "\n";
+  }
+  return out;
+}
+
 std::string FitSummary::determining_lines() const {
   if (determining.empty()) return "";
   auto relative = [](double value) {
@@ -105,6 +152,7 @@ std::string FitSummary::brief_report() const {
          std::to_string(fitted.worst_replay_stroke_id) + ").\n";
   out += fit_and_max_error_note(fitted);
   out += fit_percent_warnings(fitted, held_out ? &*held_out : nullptr);
+  out += global.report(free_names);
   if (!undetermined.empty()) {
     out += "Undetermined:";
     for (const std::string& name : undetermined) out += " " + name;
@@ -185,10 +233,10 @@ void solver_section(std::string& out, const FitSummary& summary) {
   }
   out += printf_text(
       "Time       start %.3f s, equation error %.3f s, windows %.3f s, statistics %.3f s, "
-      "metrics %.3f s, held out %.3f s, what would determine %.3f s\n\n",
+      "metrics %.3f s, global search %.3f s, held out %.3f s, what would determine %.3f s\n\n",
       summary.times.start_s, summary.times.equation_error_s, summary.times.windows_s,
-      summary.times.statistics_s, summary.times.metrics_s, summary.times.held_out_s,
-      summary.times.determining_s);
+      summary.times.statistics_s, summary.times.metrics_s, summary.times.search_s,
+      summary.times.held_out_s, summary.times.determining_s);
 }
 
 // The parameters with their uncertainties, strong correlations, the undetermined.
@@ -319,6 +367,7 @@ std::string FitSummary::full_report() const {
   std::string out = "doorbench fit report\n\n";
   data_section(out, *this);
   solver_section(out, *this);
+  if (global.ran) out += global.report(free_names) + "\n";
   parameter_section(out, *this);
   latch_section(out, *this);
   metrics_section(out, *this);

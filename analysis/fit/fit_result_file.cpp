@@ -44,6 +44,35 @@ nlohmann::ordered_json metrics_json(const FitMetrics& metrics) {
           {"strokes", strokes}};
 }
 
+// The global stage's starts and distinct optima; null when the stage did not run.
+nlohmann::ordered_json global_search_json(const FitSummary& s) {
+  if (!s.global.ran) return nullptr;
+  constexpr nlohmann::ordered_json (*number)(double) = &json_number<nlohmann::ordered_json>;
+  nlohmann::ordered_json optima = nlohmann::ordered_json::array();
+  for (const GlobalOptimum& optimum : s.global.optima) {
+    nlohmann::ordered_json values = nlohmann::ordered_json::object();
+    for (std::size_t k = 0; k < optimum.free_values.size() && k < s.free_names.size(); ++k) {
+      values[s.free_names[k]] = number(optimum.free_values[k]);
+    }
+    optima.push_back({{"cost", number(optimum.cost)},
+                      {"fit_percent", number(optimum.fit_percent)},
+                      {"reached_from", optimum.reached_from},
+                      {"parameters", values}});
+  }
+  return {{"starts_tried", s.global.starts_tried},
+          {"start_as_given", s.global.start_as_given},
+          {"subset_refits", s.global.subset_refits},
+          {"subsets", s.global.partition},
+          {"sample_points", s.global.sample_points},
+          {"promising", s.global.promising},
+          {"polished", s.global.polished},
+          {"distinct_optima", s.global.optima.size()},
+          {"reached_best", s.global.reached_best},
+          {"best_from", s.global.best_from},
+          {"optima", optima},
+          {"report", s.global.report(s.free_names)}};
+}
+
 // For each free parameter undetermined or on a bound, the kinds of stroke that would
 // determine it (FitSummary::determining); an empty array when there is none.
 nlohmann::ordered_json determining_json(const FitSummary& s) {
@@ -116,6 +145,7 @@ nlohmann::ordered_json fit_result_object(const FitResult& result, const Prepared
           {"correlations_above_threshold", correlations},
           {"undetermined", s.undetermined},
           {"identifiable", s.identifiable},
+          {"global_search", global_search_json(s)},
           {"what_would_determine", determining_json(s)},
           {"fitted", metrics_json(s.fitted)},
           {"held_out", s.held_out ? metrics_json(*s.held_out) : nlohmann::ordered_json(nullptr)},

@@ -13,6 +13,8 @@
 
 #include "analysis/fit/fit_problem.h"
 #include "analysis/fit/internal/fit_determine.h"
+#include "analysis/fit/internal/fit_folds.h"
+#include "analysis/fit/internal/fit_search.h"
 #include "analysis/fit/internal/fit_setup.h"
 #include "analysis/model/sensory_model.h"
 #include "core/clock.h"
@@ -63,6 +65,15 @@ std::string FitOptions::validate() const {
     return "fit cross_validation_folds must be 0 (none) or >= 2";
   }
   if (held_out_max_iterations < 1) return "fit held_out_max_iterations must be >= 1";
+  if (global_samples < 0) return "fit global_samples must be >= 0 (0: no sample)";
+  if (global_subsets < 0 || global_subsets == 1) {
+    return "fit global_subsets must be 0 (no subset refits) or >= 2";
+  }
+  if (global_polished < 1) return "fit global_polished must be >= 1";
+  if (!(global_promising_ratio > 0 && global_promising_ratio <= 1)) {
+    return "fit global_promising_ratio must lie in (0, 1]";
+  }
+  if (global_seed < 1) return "fit global_seed must be >= 1";
   if (!(correlation_threshold > 0 && correlation_threshold < 1)) {
     return "fit correlation_threshold must lie strictly between 0 and 1";
   }
@@ -107,174 +118,6 @@ WindowOptions metric_windows(const FitOptions& options, const DoorModel& model) 
   return metric_window_options(options, model);
 }
 
-ProblemKind window_fit_kind(const FitOptions& options, const DoorModel& model) {
-  ProblemKind kind;
-  kind.windows = metric_windows(options, model);
-  kind.windows.disjoint = options.estimate_window_states;
-  kind.estimate_start_states = options.estimate_window_states;
-  return kind;
-}
-
-// The window fit from the problem's x and z: coarse (one RK4 step per sample) then fine.
-// Leaves the result in `problem` (whose kind is the fine one).
-WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorModel& model,
-                                            const PreparedData& data, const ParameterMap& map,
-                                            const FitOptions& options, const FitWeights& weights,
-                                            int max_iterations,
-                                            const std::function<void(int)>& on_iteration = {}) {
-  int used = 0;
-  SolverSettings settings = solver_settings(options);
-  if (on_iteration) {
-    settings.on_iteration = [&on_iteration, &used](int iterations) {
-      on_iteration(used + iterations);
-    };
-  }
-  double initial_cost = kNaN;
-  if (options.coarse_first && options.substeps_per_sample > 1) {
-    ProblemKind coarse_kind = window_fit_kind(options, model);
-    coarse_kind.windows.substeps_per_sample = 1;
-    WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
-    coarse.z() = problem.z();
-    const WindowProblem::Outcome outcome = coarse.solve(
-        settings, max_iterations, options.coarse_tolerance_factor * options.uncertainty_tolerance);
-    used = outcome.iterations;
-    initial_cost = outcome.initial_cost;
-    if (outcome.usable) {
-      problem.x() = coarse.x();
-      problem.z() = coarse.z();
-    }
-  }
-  WindowProblem::Outcome outcome =
-      problem.solve(settings, std::max(1, max_iterations - used), options.uncertainty_tolerance);
-  outcome.iterations += used;
-  if (used > 0) outcome.initial_cost = initial_cost;
-  return outcome;
-}
-
-// One cross-validation fold's refit: its strokes left out, refitted from the full fit.
-struct FoldOutcome {
-  bool refitted = false;  // false: no window, or the solver failed (note says which)
-  std::string note;
-  std::optional<DoorModel> model;
-  FoldFit fit;
-  std::vector<int> held;  // indices into data.strokes
-  FitMetrics held_out;    // on the held strokes
-};
-
-PreparedData training_data(const PreparedData& data, int folds, int fold, std::vector<int>& held) {
-  PreparedData training;
-  training.source = data.source;
-  training.handle_radius_m = data.handle_radius_m;
-  training.sample_rate_hz = data.sample_rate_hz;
-  training.rate_noise_rad_s = data.rate_noise_rad_s;
-  training.angle_noise_rad = data.angle_noise_rad;
-  const int stroke_count = static_cast<int>(data.strokes.size());
-  for (int s = 0; s < stroke_count; ++s) {
-    if (s % folds == fold) {
-      if (data.strokes[s].size() >= 2) held.push_back(s);
-    } else {
-      training.strokes.push_back(data.strokes[s]);
-    }
-  }
-  return training;
-}
-
-std::vector<std::string> at_bound_names(const DoorModel& model,
-                                        const std::vector<int>& free_index) {
-  std::vector<std::string> names;
-  const auto bounds = model.parameter_bounds();
-  for (int index : free_index) {
-    const double value = model.parameter_values()[index];
-    const double width = bounds[index].upper - bounds[index].lower;
-    if (std::abs(value - bounds[index].lower) <= 1e-6 * width ||
-        std::abs(bounds[index].upper - value) <= 1e-6 * width) {
-      names.push_back(model.parameter_name(index));
-    }
-  }
-  return names;
-}
-
-FoldOutcome refit_fold(const DoorModel& fitted, const PreparedData& data, const ParameterMap& map,
-                       const std::vector<double>& x, const FitOptions& options,
-                       const FitWeights& weights, int folds, int fold) {
-  FoldOutcome out;
-  const PreparedData training = training_data(data, folds, fold, out.held);
-  WindowProblem problem(fitted, training, map, window_fit_kind(options, fitted), weights, x);
-  if (problem.windows().empty()) return out;
-  // Coarse pass first, window states from the measured states: see docs/fitting.md
-  // ("Held out") for why the folds do not start from the full fit's window states.
-  const WindowProblem::Outcome outcome = solve_coarse_to_fine(
-      problem, fitted, training, map, options, weights, options.held_out_max_iterations);
-  if (!outcome.usable) {
-    out.note =
-        "cross-validation fold " + std::to_string(fold + 1) + " failed: " + outcome.termination;
-    return out;
-  }
-  out.refitted = true;
-  out.model = fitted.with_parameter_values(map.values(problem.x().data()));
-  const WindowOptions windows = metric_windows(options, fitted);
-  out.held_out = compute_fit_metrics(*out.model, data, windows, out.held);
-  for (int s : out.held) out.fit.held_out_strokes.push_back(data.strokes[s].id);
-  out.fit.converged = outcome.converged;
-  out.fit.termination = outcome.termination;
-  out.fit.iterations = outcome.iterations;
-  out.fit.fitted_rmse_rad_s = compute_fit_metrics(*out.model, training, windows).window.rmse();
-  out.fit.held_out_rmse_rad_s = out.held_out.window.rmse();
-  out.fit.at_bound = at_bound_names(*out.model, map.free_index);
-  return out;
-}
-
-// Held-out metrics: stroke s is in fold s mod k; each fold is refitted from the full fit
-// without its strokes, and its strokes are measured with that refit. The folds are
-// independent and each deterministic, so they run at once (up to fit_thread_count) and are
-// gathered in fold order: the result is the same as one after another.
-FitMetrics cross_validate(const DoorModel& fitted, const PreparedData& data,
-                          const ParameterMap& map, const std::vector<double>& x,
-                          const FitOptions& options, const FitWeights& weights, int folds,
-                          std::vector<std::string>& notes, std::vector<DoorModel>& fold_models,
-                          std::vector<FoldFit>& fold_fits) {
-  const int stroke_count = static_cast<int>(data.strokes.size());
-  ParameterMap fold_map = map;
-  fold_map.base_values.assign(fitted.parameter_values().begin(), fitted.parameter_values().end());
-  std::vector<FoldOutcome> outcomes(static_cast<std::size_t>(folds));
-  std::mutex progress_mutex;
-  int folds_done = 0;
-  if (options.progress) options.progress({FitProgress::Stage::kFolds, 0, folds});
-  parallel_for(folds, fit_thread_count(options), [&](int fold) {
-    outcomes[static_cast<std::size_t>(fold)] =
-        refit_fold(fitted, data, fold_map, x, options, weights, folds, fold);
-    if (options.progress) {
-      const std::lock_guard lock(progress_mutex);
-      options.progress({FitProgress::Stage::kFolds, ++folds_done, folds});
-    }
-  });
-  std::vector<StrokeFitMetrics> per_stroke(stroke_count);
-  std::vector<char> have(stroke_count, 0);
-  for (FoldOutcome& outcome : outcomes) {
-    if (!outcome.note.empty()) notes.push_back(outcome.note);
-    if (!outcome.refitted) continue;
-    fold_models.push_back(std::move(*outcome.model));
-    fold_fits.push_back(std::move(outcome.fit));
-    for (std::size_t i = 0; i < outcome.held.size() && i < outcome.held_out.strokes.size(); ++i) {
-      per_stroke[outcome.held[i]] = outcome.held_out.strokes[i];
-      have[outcome.held[i]] = 1;
-    }
-  }
-  int unconverged = 0;
-  for (const FoldFit& fold_fit : fold_fits) unconverged += fold_fit.converged ? 0 : 1;
-  if (unconverged > 0) {
-    notes.push_back(std::to_string(unconverged) + " of " + std::to_string(fold_fits.size()) +
-                    " cross-validation folds stopped at held_out_max_iterations (" +
-                    std::to_string(options.held_out_max_iterations) +
-                    ") before converging: the held-out figures are where they stopped");
-  }
-  FitMetrics held_out;
-  for (int s = 0; s < stroke_count; ++s) {
-    if (have[s]) held_out.add(per_stroke[s]);
-  }
-  return held_out;
-}
-
 }  // namespace
 
 FitMetrics evaluate_model(const DoorModel& model, const PreparedData& data,
@@ -283,9 +126,6 @@ FitMetrics evaluate_model(const DoorModel& model, const PreparedData& data,
 }
 
 namespace {
-
-// A fold must fit every stroke at least this much better (RMSE ratio) to restart from it.
-constexpr double kFoldRestartGain = 0.9;
 
 // "stroke 3 (closing), the window from ... (largest |force| there ...)": where a simulation
 // was not finite.
@@ -521,8 +361,10 @@ struct KeptFit {
   Eigen::MatrixXd information;  // the window problem's H at x
 };
 
+// The fit of one start: set-up, equation-error stage, window fit, statistics and metrics on
+// the fitted strokes (no held-out metrics: held_out_stage).
 FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOptions& options,
-                   std::vector<DoorModel>& fold_models, KeptFit& kept) {
+                   KeptFit& kept) {
   const StageClock::time_point began = StageClock::now();
   if (const std::string message = options.validate(); !message.empty()) {
     throw std::invalid_argument(message);
@@ -568,30 +410,10 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   kept.weights = weights;
   summary.times.statistics_s = seconds_since(statistics_began);
 
-  // Metrics: on the fitted strokes, then held out.
+  // Metrics on the fitted strokes.
   const StageClock::time_point metrics_began = StageClock::now();
   summary.fitted = compute_fit_metrics(result.model, data, metric_windows(options, start));
   summary.times.metrics_s = seconds_since(metrics_began);
-  const StageClock::time_point held_out_began = StageClock::now();
-  const int stroke_count = static_cast<int>(data.strokes.size());
-  if (options.cross_validation_folds > 0 && stroke_count >= 2) {
-    try {
-      throw_if_stop_requested(options.stop_requested, "the cross-validation");
-      summary.folds = std::min(options.cross_validation_folds, stroke_count);
-      summary.held_out =
-          cross_validate(result.model, data, map, problem.x(), options, weights, summary.folds,
-                         summary.notes, fold_models, summary.fold_fits);
-    } catch (const StopRequested&) {
-      if (!options.partial_on_stop) throw;
-      summary.interrupted = "during the cross-validation: no held-out metrics";
-      summary.folds = 0;
-      summary.fold_fits.clear();
-      fold_models.clear();
-    }
-  } else if (options.cross_validation_folds > 0) {
-    summary.notes.push_back("one stroke only: no held-out metrics");
-  }
-  summary.times.held_out_s = seconds_since(held_out_began);
   if (!summary.converged) {
     summary.notes.push_back("the solver did not report convergence: " + summary.termination);
   }
@@ -638,99 +460,215 @@ void determining_stage(FitResult& result, const PreparedData& data, const FitOpt
   }
 }
 
-// The restart stage: each fold's model and the start on all strokes; `result` becomes a
-// restart from the best when one fits every stroke clearly better (fit_model).
-void restart_if_better(FitResult& result, const DoorModel& start, const PreparedData& data,
-                       const FitOptions& options, const std::vector<DoorModel>& fold_models,
-                       StageClock::time_point began, KeptFit& kept) {
-  // Each cross-validation fold is refitted from the full fit on fewer strokes. When one of
-  // them fits *all* the strokes clearly better than the full fit does, the full fit stopped
-  // in a local minimum (an output-error cost is not convex: a window can settle on the
-  // wrong side of a latch barrier). Restart once from the best such fold.
-  //
-  // The start model as given is tried the same way: start values read off the data (the
-  // latch's, on a recording that never enters it) or the equation-error stage can lead the
-  // fit to a minimum far worse than where it was started (docs/fitting.md, "Solving and
-  // stopping", has the recordings where it did).
-  const double fitted_rmse = result.summary.fitted.window.rmse();
-  // Each fold's model and the start on all strokes, at once (independent and deterministic),
-  // then in order.
-  const std::size_t folds = fold_models.size();
-  std::vector<double> candidate_rmse(folds + 1);
-  parallel_for(static_cast<int>(folds + 1), fit_thread_count(options), [&](int k) {
-    const DoorModel& model = static_cast<std::size_t>(k) < folds ? fold_models[k] : start;
-    candidate_rmse[k] = evaluate_model(model, data, options).window.rmse();
+// The global stage's starts after the first (FitOptions::global_search): each start's model,
+// where it came from and its kind's rank (subset refits 0, the start as given 1, the sample 2).
+struct SearchStart {
+  std::string origin;
+  DoorModel model;
+  int rank = 0;
+  double rmse = kNaN;  // window RMSE on every stroke, from the measured states
+};
+
+// The starts to screen: the subset refits from the first fit's optimum, the start as given
+// when it differs from the first start, and the sample of the bounds.
+std::vector<SearchStart> search_starts(const DoorModel& start, const FitResult& first,
+                                       const std::vector<FoldOutcome>& refits,
+                                       const FitOptions& options, const KeptFit& kept,
+                                       GlobalSearch& global) {
+  std::vector<SearchStart> starts;
+  for (std::size_t k = 0; k < refits.size(); ++k) {
+    if (!refits[k].refitted) continue;
+    starts.push_back({"the refit without subset " + std::to_string(k + 1) + " of " +
+                          std::to_string(refits.size()),
+                      *refits[k].model, 0});
+    ++global.subset_refits;
+  }
+  // The start as given, unless the first start's windows began exactly there.
+  const std::span<const double> given = start.parameter_values();
+  std::vector<double> first_start;
+  for (const FittedParameter& parameter : first.summary.parameters) {
+    first_start.push_back(parameter.equation_error);
+  }
+  if (first_start != std::vector<double>(given.begin(), given.end())) {
+    starts.push_back({"the start as given", start, 1});
+    global.start_as_given = true;
+  }
+  for (std::vector<double>& values :
+       space_filling_sample(first.model, kept.map, options.global_samples, options.global_seed)) {
+    starts.push_back({"sample point " + std::to_string(global.sample_points + 1),
+                      first.model.with_parameter_values(values), 2});
+    ++global.sample_points;
+  }
+  return starts;
+}
+
+// The global stage after the first start's fit (FitOptions::global_search): the other starts
+// screened by their window RMSE on every stroke, the promising ones polished, the optimum
+// options.global_keep names kept in `result` and `kept`. `refits` receives the subset
+// refits from the first fit's optimum. True when the first start's fit is kept.
+bool global_stage(FitResult& result, const DoorModel& start, const PreparedData& data,
+                  const FitOptions& options, KeptFit& kept, std::vector<FoldOutcome>& refits) {
+  const StageClock::time_point began = StageClock::now();
+  GlobalSearch global;
+  global.ran = true;
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  global.partition = std::min(options.global_subsets, stroke_count);
+  if (global.partition >= 2) {
+    refits = subset_refits(result.model, data, kept.map, kept.x, options, kept.weights,
+                           global.partition, FitProgress::Stage::kSearch);
+  } else {
+    global.partition = 0;
+  }
+  std::vector<SearchStart> starts = search_starts(start, result, refits, options, kept, global);
+  global.starts_tried = 1 + static_cast<int>(starts.size());
+  throw_if_stop_requested(options.stop_requested, "the global search");
+  parallel_for(static_cast<int>(starts.size()), fit_thread_count(options), [&](int k) {
+    starts[static_cast<std::size_t>(k)].rmse =
+        evaluate_model(starts[static_cast<std::size_t>(k)].model, data, options).window.rmse();
   });
-  const DoorModel* best = nullptr;
-  double best_rmse = kFoldRestartGain * fitted_rmse;
-  for (std::size_t k = 0; k < folds; ++k) {
-    if (candidate_rmse[k] < best_rmse) {
-      best_rmse = candidate_rmse[k];
-      best = &fold_models[k];
+  const double first_rmse = result.summary.fitted.window.rmse();
+  std::vector<std::size_t> promising;
+  for (std::size_t k = 0; k < starts.size(); ++k) {
+    if (starts[k].rmse < options.global_promising_ratio * first_rmse) promising.push_back(k);
+  }
+  global.promising = static_cast<int>(promising.size());
+  std::stable_sort(promising.begin(), promising.end(), [&](std::size_t a, std::size_t b) {
+    return starts[a].rank != starts[b].rank ? starts[a].rank < starts[b].rank
+                                            : starts[a].rmse < starts[b].rmse;
+  });
+  // At most global_polished of each kind: a kind's best start is never crowded out by another
+  // kind's many.
+  std::vector<int> per_kind(3, 0);
+  std::erase_if(promising, [&](std::size_t k) {
+    return ++per_kind[static_cast<std::size_t>(starts[k].rank)] > options.global_polished;
+  });
+  // Each promising start polished exactly from its values, one after another (each fit uses
+  // every thread); the optima in the order polished, the first start's first.
+  FitOptions polish = options;
+  polish.latch_start_from_data = false;
+  polish.equation_error_start = false;
+  std::vector<PolishedOptimum> optima{{"the data-derived start", result.summary.final_cost,
+                                       result.summary.fitted.window.fit_percent(), kept.x}};
+  std::optional<FitResult> best;
+  KeptFit best_kept;
+  std::size_t best_index = 0;
+  double best_measure = options.global_keep == FitOptions::GlobalKeep::kLowestCost
+                            ? result.summary.final_cost
+                            : first_rmse;
+  for (std::size_t k : promising) {
+    throw_if_stop_requested(options.stop_requested, "the global search");
+    KeptFit polished_kept;
+    std::optional<FitResult> attempt;
+    try {
+      attempt = fit_once(starts[k].model, data, polish, polished_kept);
+    } catch (const std::runtime_error& error) {
+      // A start whose simulation or solve fails is one the stage cannot use; the others stand.
+      result.summary.notes.push_back("the global stage's polish from " + starts[k].origin +
+                                     " failed: " + error.what());
+      continue;
+    }
+    FitResult& polished = *attempt;
+    optima.push_back({starts[k].origin, polished.summary.final_cost,
+                      polished.summary.fitted.window.fit_percent(), polished_kept.x});
+    const double measure = options.global_keep == FitOptions::GlobalKeep::kLowestCost
+                               ? polished.summary.final_cost
+                               : polished.summary.fitted.window.rmse();
+    if (measure < best_measure) {
+      best_measure = measure;
+      best = std::move(polished);
+      best_kept = std::move(polished_kept);
+      best_index = optima.size() - 1;
+      best->summary.notes.insert(best->summary.notes.begin(),
+                                 "the global stage's best optimum was reached from " +
+                                     starts[k].origin + ", not from the data-derived start");
     }
   }
-  // The start only when no fold offers a restart: a fold's basin, reached from the fit,
-  // is the better guess (the bench door's gravity refit, tests/analysis/test_loop_on_bench.cpp,
-  // rests on one).
-  if (best == nullptr && candidate_rmse[folds] < best_rmse) {
-    best_rmse = candidate_rmse[folds];
-    best = &start;
+  global.polished = static_cast<int>(optima.size());
+  distinct_optima(optima, best_index, kept.map, global);
+  if (best) {
+    // The parameters' starts as the user gave them, and how the fit was reached.
+    FitSummary& summary = best->summary;
+    for (std::size_t i = 0; i < summary.parameters.size() && i < result.summary.parameters.size();
+         ++i) {
+      summary.parameters[i].start = result.summary.parameters[i].start;
+      summary.parameters[i].start_origin = result.summary.parameters[i].start_origin;
+      summary.parameters[i].equation_error = result.summary.parameters[i].equation_error;
+    }
+    summary.latch_start = result.summary.latch_start;
+    summary.equation_error_iterations = result.summary.equation_error_iterations;
+    summary.equation_error_termination = result.summary.equation_error_termination;
+    summary.iterations += result.summary.iterations;
+    summary.initial_cost = result.summary.initial_cost;
+    summary.options = options;
+    result = std::move(*best);
+    kept = std::move(best_kept);
   }
-  if (best == nullptr) return;
-  const bool from_start = best == &start;
-  FitOptions restart = options;
-  restart.latch_start_from_data = false;  // start exactly at the fold's (or given) values
-  restart.equation_error_start = false;
-  std::vector<DoorModel> unused;
-  KeptFit second_kept;
-  FitResult second = fit_once(*best, data, restart, unused, second_kept);
-  if (!(second.summary.fitted.window.rmse() < fitted_rmse)) {
-    result.summary.notes.push_back(
-        from_start ? "the start model fitted all strokes better than the fit; a restart from "
-                     "it did not improve"
-                   : "a cross-validation fold fitted all strokes better; a restart from it did "
-                     "not improve");
+  global.time_s = seconds_since(began);
+  result.summary.times.search_s = global.time_s;
+  result.summary.global = std::move(global);
+  return best_index == 0;
+}
+
+// Held-out metrics of the kept fit (FitOptions::cross_validation_folds): the subset refits of
+// the global stage when they are the folds' partition and the fit is still the one they
+// started from, else the folds refitted from the fit.
+void held_out_stage(FitResult& result, const PreparedData& data, const FitOptions& options,
+                    const KeptFit& kept, const std::vector<FoldOutcome>& refits,
+                    bool refits_from_fit) {
+  FitSummary& summary = result.summary;
+  const int stroke_count = static_cast<int>(data.strokes.size());
+  if (options.cross_validation_folds == 0) return;
+  if (stroke_count < 2) {
+    summary.notes.push_back("one stroke only: no held-out metrics");
     return;
   }
-  // Report the parameters' starts as the user gave them, and how the result was reached.
-  for (std::size_t i = 0;
-       i < second.summary.parameters.size() && i < result.summary.parameters.size(); ++i) {
-    second.summary.parameters[i].start = result.summary.parameters[i].start;
-    second.summary.parameters[i].start_origin = result.summary.parameters[i].start_origin;
-    second.summary.parameters[i].equation_error = result.summary.parameters[i].equation_error;
+  const int folds = std::min(options.cross_validation_folds, stroke_count);
+  const bool reuse = refits_from_fit && static_cast<int>(refits.size()) == folds;
+  std::vector<FoldOutcome> computed;
+  if (!reuse) {
+    throw_if_stop_requested(options.stop_requested, "the cross-validation");
+    computed = subset_refits(result.model, data, kept.map, kept.x, options, kept.weights, folds,
+                             FitProgress::Stage::kFolds);
   }
-  second.summary.latch_start = result.summary.latch_start;
-  second.summary.iterations += result.summary.iterations;
-  second.summary.initial_cost = result.summary.initial_cost;
-  second.summary.options = options;
-  second.summary.notes.insert(
-      second.summary.notes.begin(),
-      "the full fit stopped in a local minimum (window RMSE " + printf_text("%.4g", fitted_rmse) +
-          (from_start ? " rad/s); the start model as given fitted every stroke better ("
-                      : " rad/s); a cross-validation fold's solution fitted every stroke "
-                        "better (") +
-          printf_text("%.4g", best_rmse) + " rad/s), and the fit was restarted from it");
-  second.summary.total_time_s = seconds_since(began);
-  result = std::move(second);
-  kept = std::move(second_kept);
+  summary.folds = folds;
+  summary.held_out =
+      held_out_metrics(reuse ? refits : computed, data, options, summary.notes, summary.fold_fits);
 }
 
 }  // namespace
 
 FitResult fit_model(const DoorModel& start, const PreparedData& data, const FitOptions& options) {
   const StageClock::time_point began = StageClock::now();
-  std::vector<DoorModel> fold_models;
   KeptFit kept;
-  FitResult result = fit_once(start, data, options, fold_models, kept);
-  if (!result.summary.interrupted.empty()) return result;
+  FitResult result = fit_once(start, data, options, kept);
+  std::vector<FoldOutcome> refits;
+  bool refits_from_fit = false;
+  if (options.global_search) {
+    try {
+      refits_from_fit = global_stage(result, start, data, options, kept, refits);
+    } catch (const StopRequested&) {
+      if (!options.partial_on_stop) throw;
+      result.summary.interrupted =
+          "during the global search: the fit is the data-derived start's, without held-out "
+          "metrics";
+      result.summary.total_time_s = seconds_since(began);
+      return result;
+    }
+  }
+  const StageClock::time_point held_out_began = StageClock::now();
   try {
-    restart_if_better(result, start, data, options, fold_models, began, kept);
+    held_out_stage(result, data, options, kept, refits, refits_from_fit);
   } catch (const StopRequested&) {
     if (!options.partial_on_stop) throw;
-    result.summary.interrupted =
-        "during the restart from a better start: the fit was not restarted";
+    result.summary.interrupted = "during the cross-validation: no held-out metrics";
+    result.summary.folds = 0;
+    result.summary.held_out.reset();
+    result.summary.fold_fits.clear();
+    result.summary.total_time_s = seconds_since(began);
     return result;
   }
+  result.summary.times.held_out_s = seconds_since(held_out_began);
+  result.summary.total_time_s = seconds_since(began);
   if (!options.what_would_determine) return result;
   const StageClock::time_point determining_began = StageClock::now();
   try {

@@ -40,6 +40,8 @@ struct FitProgress {
     kWindows,
     // The cross-validation folds refitted: `done` of `total`.
     kFolds,
+    // The global stage's subset refits (`done` of `total`); its polishes report as kWindows.
+    kSearch,
   };
   Stage stage = Stage::kWindows;
   int done = 0;
@@ -91,6 +93,34 @@ struct FitOptions {
   // window fit and its statistics, not in the equation-error stage (only a start). None:
   // the fit is exactly the plain one.
   std::vector<ParameterPrior> priors;
+
+  // --- The global stage (docs/fitting.md, "The global stage") ---
+  // After the fit from the data-derived start (the latch read off, the equation-error stage),
+  // other starts are tried: the start exactly as given, the refits without each subset of
+  // `global_subsets` (stroke s in subset s mod k, refitted from the fit's optimum), and
+  // `global_samples` points of a Sobol sequence over the free parameters' bounds (linear, or
+  // logarithmic where the bounds span more than two decades: the stiffnesses). Each is
+  // screened by its window RMSE on every stroke (from the measured states); those below
+  // global_promising_ratio times the fit's are promising, and the best `global_polished` of
+  // each kind (by RMSE; the subset refits first, then the start as given, then the sample)
+  // are polished by Levenberg–Marquardt on every stroke. The optimum `global_keep`
+  // names is the fit. Nothing of it depends on
+  // cross_validation_folds: when the folds are the subsets' partition and the fit stays the
+  // first, the cross-validation reuses the subset refits.
+  // false: the one start polished.
+  bool global_search = true;
+  int global_samples = 32;  // sample points screened (0: none)
+  // The subset refits' partition (0: none; else >= 2). 4, fit's default folds: `doorbench
+  // fit` reuses them as its folds.
+  int global_subsets = 4;
+  int global_polished = 1;              // promising starts of each kind polished (>= 1)
+  double global_promising_ratio = 0.9;  // window RMSE against the fit's, in (0, 1]
+  int global_seed = 1;  // the sample is the Sobol sequence from this point on (>= 1)
+  // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
+  // lowest window RMSE of the rate on every stroke from the measured states (the figure the
+  // residual loop compares fits by; its fits keep that one).
+  enum class GlobalKeep { kLowestCost, kLowestRateRmse };
+  GlobalKeep global_keep = GlobalKeep::kLowestCost;
 
   // For each free parameter left undetermined or on a bound: the kinds of stroke that would
   // determine it, from the information such strokes add, simulated with the fitted door
@@ -152,21 +182,23 @@ struct FitOptions {
   double correlation_threshold = 0.9;              // |correlations| above are named
   double undetermined_relative_uncertainty = 1.0;  // u/|value| above: "undetermined"
 
-  // Called as each stage begins (done 0), after each solver iteration of the window fit and
-  // after each cross-validation fold (for a fold from the thread that refitted it, never two
-  // at once); may be empty.
+  // Called as each stage begins (done 0), after each solver iteration of the window fit,
+  // after each subset refit of the global stage and after each cross-validation fold (for a
+  // refit from the thread that refitted it, never two at once); may be empty.
   // The equation-error stage, the statistics and the whole-stroke objective do not report.
-  // A restart from a fold (docs/fitting.md) reports its window fit again from 0.
+  // Each polish of the global stage reports its window fit again from 0.
   std::function<void(const FitProgress&)> progress;
   // Asked after every solver iteration (of every solve: the equation-error stage, the window
-  // fit, each fold, each restart) and between stages (core/stop_request.h); when it returns
-  // true, fit_model throws StopRequested naming what was under way. May be empty (never stop).
+  // fit, each subset refit, each polish, each fold) and between stages (core/stop_request.h);
+  // when it returns true, fit_model throws StopRequested naming what was under way. May be
+  // empty (never stop).
   StopHook stop_requested;
   // What a stop after the window fit's statistics leaves: false, StopRequested as during the
   // fit (what the residual loop and the inverse design need: a fit is whole or not at all);
-  // true, the fit as it stands, marked in FitSummary::interrupted (no held-out metrics when the
-  // cross-validation was cut, no restart when that was, no FitSummary::determining when its
-  // strokes' information was cut) — what `doorbench fit` writes.
+  // true, the fit as it stands, marked in FitSummary::interrupted (the first start's fit
+  // without held-out metrics when the global stage was cut, no held-out metrics when the
+  // cross-validation was, no FitSummary::determining when its strokes' information was cut)
+  // — what `doorbench fit` writes.
   bool partial_on_stop = false;
 
   // Empty when usable, else a one-line message naming the option.
@@ -240,6 +272,40 @@ struct DeterminingStrokes {
   std::vector<Kind> kinds;
 };
 
+// One distinct optimum the global stage reached (FitSummary::global).
+struct GlobalOptimum {
+  double cost = 0.0;         // ½ Σ r² of the window problem (FitSummary::final_cost's kind)
+  double fit_percent = 0.0;  // window FIT% on the fitted strokes
+  std::vector<std::string> reached_from;  // the starts whose polish ended here
+  std::vector<double> free_values;        // in the order of FitSummary::free_names
+};
+
+// What the global stage tried and found (docs/fitting.md, "The global stage").
+struct GlobalSearch {
+  bool ran = false;
+  bool start_as_given = false;  // the start as given was screened (it differs from the first)
+  int sample_points = 0;        // feasible points of the sample screened
+  int subset_refits = 0;        // subset refits screened
+  int partition = 0;            // their subsets
+  int starts_tried = 0;         // the first start and every start screened
+  int promising = 0;            // screened below global_promising_ratio times the fit's RMSE
+  int polished = 0;             // polished on every stroke, the first start included
+  // Distinct optima, the best first: two polishes end at one optimum when their costs differ
+  // by at most kSameOptimumCost (relative) and no free parameter by more than
+  // kSameOptimumParameter of the larger magnitude.
+  std::vector<GlobalOptimum> optima;
+  static constexpr double kSameOptimumCost = 1e-3;
+  static constexpr double kSameOptimumParameter = 0.02;
+  int reached_best = 0;   // polishes that ended at the best optimum
+  std::string best_from;  // the first start that reached it
+  double time_s = 0.0;    // wall clock of the stage (subset refits, screening, polishes)
+
+  // The report's lines: "Global search: ..." and one per distinct optimum (with the free
+  // parameters that differ from the best's; `names` in the order of free_values). "" when the
+  // stage did not run.
+  std::string report(const std::vector<std::string>& names) const;
+};
+
 struct FitSummary {
   ModelKind model_kind = ModelKind::kSensory;
   std::string source;
@@ -271,6 +337,7 @@ struct FitSummary {
     double windows_s = 0.0;         // the window fit (and the whole-stroke one, if asked)
     double statistics_s = 0.0;      // covariances
     double metrics_s = 0.0;         // metrics on the fitted strokes (replays included)
+    double search_s = 0.0;          // the global stage after the first start's fit
     double held_out_s = 0.0;        // cross-validation
     double determining_s = 0.0;     // what would determine the undetermined (when computed)
   } times;
@@ -295,6 +362,7 @@ struct FitSummary {
   std::vector<std::string> identifiable;
 
   LatchReadOff latch_start;  // the sensory latch read off the data (when asked)
+  GlobalSearch global;       // the global stage (FitOptions::global_search)
   // For each free parameter left undetermined or on a bound, in the order of free_names
   // (FitOptions::what_would_determine); empty when none is, or when not asked.
   std::vector<DeterminingStrokes> determining;

@@ -86,9 +86,13 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
       refit_setting(candidate.kind, neutral_values(candidate, current.model)));
   // The final fit starts at an optimum of the fine problem: no equation-error stage and no
   // coarse pass (which would leave that optimum for the coarse one's and come back).
+  // Its global stage is the subset refits alone (the loop chooses its starts): on the
+  // cross-validation's partition they are its folds when they find nothing better.
   FitOptions final_fit = from_fit;
   final_fit.equation_error_start = false;
   final_fit.coarse_first = false;
+  final_fit.global_samples = 0;
+  final_fit.global_subsets = final_fit.cross_validation_folds;
   RefitOutcome out;
   // A refit that ends above the parent is fitted again from the parent's optimum with the
   // effect at neutral (a point of the refit's problem); if that too ends above, the parent
@@ -138,6 +142,10 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
   auto attempt = [&](std::size_t which) {
     FitOptions fit = which == 0 ? from_fit : from_start;
     fit.cross_validation_folds = 0;
+    // Each attempt is one start polished; of the global stage only the start as given is
+    // screened (the loop's two attempts are its own search).
+    fit.global_subsets = 0;
+    fit.global_samples = 0;
     // A start is the loop's search, not its measurement: its coarse pass goes on to the fine
     // pass's own precision instead of stopping at once where σ is inflated (a model lacking
     // an effect), so the iterations run at the coarse problem's half cost.

@@ -42,9 +42,12 @@ struct LoopOptions {
   // refit_start). cross_validation_folds must be >= 2, since the loop compares held-out
   // errors. Avoid 2: stroke s is in fold s mod k, so with openings and closings alternating
   // each fold would be fitted on one direction alone (docs/residual-loop.md, "Limits").
+  // The loop compares fits by their rate RMSE: of the global stage's optima its fits keep the
+  // lowest RMSE.
   FitOptions fit = [] {
     FitOptions options;
     options.cross_validation_folds = 3;
+    options.global_keep = FitOptions::GlobalKeep::kLowestRateRmse;
     return options;
   }();
 

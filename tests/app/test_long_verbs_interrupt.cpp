@@ -113,11 +113,15 @@ TEST_CASE("fit, loop and spec: SIGINT or SIGTERM ends each within a second at se
     check_moments("fit", {"fit", session.string(), "--model", "sensory"}, dir,
                   {{"fitting the sensory model", 0.0, "stopped the fit during ", false},
                    {"fitting the sensory model", 0.8, "stopped the fit during ", false},
-                   {"cross-validation: 0 of", 0.1,
-                    "stopped the fit during the cross-validation: no held-out metrics", true}});
-    // The fit stopped in its folds is written, marked.
+                   {"global search: 0 of", 0.1,
+                    "stopped the fit during the global search: the fit is the data-derived "
+                    "start's, without held-out metrics",
+                    true}});
+    // The fit stopped in its global stage is written, marked: the first start's fit.
     const nlohmann::json result = nlohmann::json::parse(read_file(dir / "fit-2" / "result.json"));
-    CHECK(result.at("interrupted") == "during the cross-validation: no held-out metrics");
+    CHECK(result.at("interrupted") ==
+          "during the global search: the fit is the data-derived start's, without held-out "
+          "metrics");
     CHECK(result.at("held_out").is_null());
   }
   SECTION("loop") {

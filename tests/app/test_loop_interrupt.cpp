@@ -4,7 +4,7 @@
 //
 // The signal is sent when the loop's stderr says its first step was added (the stage line
 // `step 1: added ...`), not after a fixed sleep: the loop on this recording has a second
-// step and the structure check left (seconds), so the signal always lands before its end.
+// step left (seconds), so the signal always lands before its end.
 #include <signal.h>
 
 #include <catch2/catch.hpp>
@@ -52,14 +52,22 @@ TEST_CASE(
       CHECK(stop_reason.rfind("interrupted ", 0) == 0);
       REQUIRE(result.at("steps").size() >= 1);
       CHECK(result.at("steps").at(0).at("effect") == "gravity_imbalance");
-      CHECK(result.at("structure_check").at("ran") == false);
-      CHECK(result.at("structure_check").at("reason") == "not run: the loop was interrupted");
+      // The structure check runs when a step's refits leave a gap (docs/residual-loop.md): on
+      // this recording within step 1 (the start fit's global stage finds a basin whose refits
+      // leave one), so it is kept; had it not run, it is marked as not run.
+      const bool checked =
+          loop.err().find("\nstructure check: ") < loop.err().find("\nstep 1: added");
+      CHECK(result.at("structure_check").at("ran") == checked);
+      if (!checked) {
+        CHECK(result.at("structure_check").at("reason") == "not run: the loop was interrupted");
+      }
 
       const std::size_t steps = result.at("steps").size();
       const std::string kept = steps == 1 ? "the 1 step finished before it is kept"
                                           : "the 2 steps finished before it are kept";
       const std::string line = name + " stopped the loop: " + stop_reason + "; " + kept +
-                               ", the structure check was not run";
+                               (checked ? ", as is the structure check that ran before it"
+                                        : ", the structure check was not run");
       // report.md: its title, then the line.
       const std::string report = read_file(out / "report.md");
       CHECK_THAT(report, Catch::StartsWith("# Residual loop: the sensory model on "));

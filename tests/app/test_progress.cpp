@@ -188,7 +188,10 @@ TEST_CASE("fit shows its progress with the time left: on a terminal, in a file, 
         "\rwindow fit: iteration [1-9][0-9]* of at most 100, [0-9]+ s so far, at most about "
         "[0-9]+ (s|min [0-9]+ s) left\x1b\\[K");
     CHECK(std::regex_search(output, redrawn));
-    CHECK(output.find("\rcross-validation: 2 of 2 folds refitted, done in ") != std::string::npos);
+    // The global stage's subset refits (4 subsets of 2 strokes: 2), which the 4-fold
+    // cross-validation then reuses as its folds.
+    CHECK(output.find("\rglobal search: 2 of 2 subset refits, done in ") != std::string::npos);
+    CHECK(output.find("cross-validation:") == std::string::npos);
   }
   SECTION("into a file: plain lines") {
     const auto run = doorbench::testing::run_doorbench_shell(
@@ -199,12 +202,12 @@ TEST_CASE("fit shows its progress with the time left: on a terminal, in a file, 
     CHECK(run.err.find('\x1b') == std::string::npos);
     CHECK(run.err.find("\nwindow fit: iteration 0 of at most 100, 0 s so far, time left not "
                        "known yet\n") != std::string::npos);
-    // Where the window fit ended, before the folds began.
+    // Where the window fit ended, before the global stage's subset refits began.
     const std::regex windows_end(
         "\nwindow fit: iteration [1-9][0-9]* of at most 100, [0-9]+ s so far, at most about "
-        "[^\n]* left\ncross-validation: 0 of 2 folds refitted, ");
+        "[^\n]* left\nglobal search: 0 of 2 subset refits, ");
     CHECK(std::regex_search(run.err, windows_end));
-    CHECK(run.err.find("\ncross-validation: 2 of 2 folds refitted, done in ") != std::string::npos);
+    CHECK(run.err.find("\nglobal search: 2 of 2 subset refits, done in ") != std::string::npos);
   }
   SECTION("--quiet: nothing on stderr") {
     const auto run = doorbench::testing::run_doorbench_shell(

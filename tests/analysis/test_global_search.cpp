@@ -1,0 +1,208 @@
+// The fit's global stage (docs/fitting.md, "The global stage"): after the data-derived start,
+// the start as given, the refits without each of 4 subsets of strokes and a space-filling
+// sample of the bounds are screened; the promising ones are polished and the best kept. The
+// fit does not depend on the cross-validation's folds, and the report says how unique the
+// optimum is. Recordings: the 50 Hz, 4-stroke robot recording with an untared load cell
+// (tests/support/robot_recording.h), and a 50 Hz draw of the recording family on which the fit
+// of one start ended at a cost 4.6 times higher with --folds 0 or 3 than with --folds 4, whose
+// folds happened to offer a restart.
+#include <algorithm>
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "analysis/fit/fit_init.h"
+#include "analysis/fit/fit_result_file.h"
+#include "analysis/fit/fitting.h"
+#include "core/number_format.h"
+#include "fixtures/recording_family.h"
+#include "fixtures/reference_doors.h"
+#include "tests/support/robot_recording.h"
+
+namespace doorbench {
+namespace {
+
+// RK4 steps of at most 1 ms (20 per sample at 50 Hz), as `doorbench fit` takes them there.
+FitOptions options_with_folds(int folds) {
+  FitOptions options;
+  options.substeps_per_sample = 20;
+  options.cross_validation_folds = folds;
+  return options;
+}
+
+double largest_relative_difference(const DoorModel& a, const DoorModel& b) {
+  double largest = 0.0;
+  for (int i = 0; i < a.parameter_count(); ++i) {
+    const double x = a.parameter_values()[i];
+    const double y = b.parameter_values()[i];
+    const double scale = std::max(std::abs(x), std::abs(y));
+    if (scale > 0) largest = std::max(largest, std::abs(x - y) / scale);
+  }
+  return largest;
+}
+
+// Draw 3 of the recording family at 50 Hz (12 strokes), and the start `doorbench fit` takes.
+PreparedData family_draw_50hz() {
+  testing::FamilyOptions family;
+  family.sample_rates_hz = {50.0};
+  return testing::family_recording(testing::sensory_reference(),
+                                   testing::draw_conditions(3, family), 3);
+}
+
+void check_same_fit_for_folds(const PreparedData& data, const DoorModel& start) {
+  const FitResult none = fit_model(start, data, options_with_folds(0));
+  INFO(none.summary.full_report());
+  for (int folds : {3, 4}) {
+    INFO("--folds " << folds);
+    const FitResult with = fit_model(start, data, options_with_folds(folds));
+    CHECK(largest_relative_difference(none.model, with.model) <= 1e-6);
+    CHECK(with.summary.final_cost == Approx(none.summary.final_cost).epsilon(1e-9));
+    REQUIRE(with.summary.held_out.has_value());
+    CHECK(with.summary.fold_fits.size() == static_cast<std::size_t>(folds));
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Global search: --folds 0, 3 and 4 end at the same parameters on the robot recording",
+          "[fitting][global][slow]") {
+  const PreparedData data = testing::robot_recording();
+  REQUIRE(data.strokes.size() == 4);
+  check_same_fit_for_folds(data, testing::robot_fit_start(data));
+}
+
+TEST_CASE(
+    "Global search: --folds 0, 3 and 4 end at the same parameters on a family draw "
+    "where the folds used to decide",
+    "[fitting][global][slow]") {
+  const PreparedData data = family_draw_50hz();
+  const DoorModel start =
+      start_from_data(
+          data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
+          .model;
+  check_same_fit_for_folds(data, start);
+}
+
+TEST_CASE("Global search: the report says how unique the optimum is, word for word",
+          "[fitting][global][slow]") {
+  const PreparedData data = testing::robot_recording();
+  const FitResult fit = fit_model(testing::robot_fit_start(data), data, options_with_folds(0));
+  const FitSummary& s = fit.summary;
+  const GlobalSearch& g = s.global;
+  INFO(s.full_report());
+  REQUIRE(g.ran);
+  // What was screened: the start as given (the data-derived start differs from it), one refit
+  // per subset of 4 (a stroke each), the sample.
+  CHECK(g.start_as_given);
+  CHECK(g.subset_refits == 4);
+  CHECK(g.partition == 4);
+  CHECK(g.sample_points == 32);
+  CHECK(g.starts_tried == 1 + 1 + 4 + 32);
+  CHECK(g.polished >= 1);
+  CHECK(g.polished <= 1 + std::min(g.promising, 3));
+  // Every polish ends at one of the optima; the first is the fit.
+  REQUIRE(!g.optima.empty());
+  std::size_t reached = 0;
+  for (std::size_t o = 0; o < g.optima.size(); ++o) {
+    reached += g.optima[o].reached_from.size();
+    if (o > 1) CHECK(g.optima[o].cost >= g.optima[o - 1].cost);
+  }
+  CHECK(reached == static_cast<std::size_t>(g.polished));
+  CHECK(g.reached_best == static_cast<int>(g.optima.front().reached_from.size()));
+  CHECK(g.optima.front().cost == Approx(s.final_cost).epsilon(1e-12));
+  CHECK(g.optima.front().fit_percent == Approx(s.fitted.window.fit_percent()).epsilon(1e-9));
+  // The lines, built here from the figures.
+  std::string expected =
+      "Global search: 38 starts tried (the data-derived start, the start as given, 4 subset "
+      "refits (4 subsets) and 32 points of a space-filling sample of the bounds), " +
+      std::to_string(g.promising) + " promising, " + std::to_string(g.polished) +
+      " polished by Levenberg-Marquardt; " + std::to_string(g.optima.size()) +
+      (g.optima.size() == 1 ? " distinct optimum; " : " distinct optima; ") +
+      std::to_string(g.reached_best) + " of the " + std::to_string(g.polished) +
+      " polished reached the fit's, first " + g.best_from + ".\n";
+  for (std::size_t o = 0; o < g.optima.size(); ++o) {
+    const GlobalOptimum& optimum = g.optima[o];
+    expected += "  optimum " + std::to_string(o + 1) + (o == 0 ? " (the fit)" : "") + ": cost " +
+                format_significant(optimum.cost, 4);
+    if (o > 0) {
+      expected += printf_text(" (%+.1f%%)", 100.0 * (optimum.cost / g.optima[0].cost - 1.0));
+    }
+    expected += printf_text(", window FIT %.2f%%, from ", optimum.fit_percent);
+    for (std::size_t i = 0; i < optimum.reached_from.size(); ++i) {
+      expected += (i == 0 ? "" : ", ") + optimum.reached_from[i];
+    }
+    std::string differs;
+    for (std::size_t k = 0; o > 0 && k < s.free_names.size(); ++k) {
+      const double value = optimum.free_values[k];
+      const double best = g.optima[0].free_values[k];
+      if (std::abs(value - best) > 0.02 * std::max(std::abs(value), std::abs(best))) {
+        differs += (differs.empty() ? "" : ", ") + s.free_names[k] + " " +
+                   format_significant(value, 4) + " (the fit " + format_significant(best, 4) + ")";
+      }
+    }
+    if (!differs.empty()) expected += "; differs in " + differs;
+    expected += "\n";
+  }
+  CHECK(s.full_report().find("\n" + expected) != std::string::npos);
+  CHECK(s.brief_report().find(expected) != std::string::npos);
+  // result.json holds the same: the counts, each optimum and the lines.
+  const nlohmann::json json = nlohmann::json::parse(fit_result_json(fit, data));
+  const nlohmann::json& global = json.at("global_search");
+  CHECK(global.at("starts_tried") == 38);
+  CHECK(global.at("polished") == g.polished);
+  CHECK(global.at("distinct_optima") == g.optima.size());
+  CHECK(global.at("reached_best") == g.reached_best);
+  CHECK(global.at("best_from") == g.best_from);
+  REQUIRE(global.at("optima").size() == g.optima.size());
+  for (std::size_t o = 0; o < g.optima.size(); ++o) {
+    const nlohmann::json& optimum = global.at("optima")[o];
+    CHECK(optimum.at("cost").get<double>() == g.optima[o].cost);
+    CHECK(optimum.at("reached_from") == g.optima[o].reached_from);
+    CHECK(optimum.at("parameters").size() == s.free_names.size());
+  }
+  CHECK(global.at("report") == g.report(s.free_names));
+}
+
+TEST_CASE("Global search: the same seed gives the same fit on 1 and 2 threads",
+          "[fitting][global][slow]") {
+  const PreparedData data = testing::robot_recording();
+  const DoorModel start = testing::robot_fit_start(data);
+  FitOptions options = options_with_folds(0);
+  options.num_threads = 1;
+  const FitResult one = fit_model(start, data, options);
+  options.num_threads = 2;
+  const FitResult again = fit_model(start, data, options);
+  CHECK(largest_relative_difference(one.model, again.model) == 0.0);
+  CHECK(one.summary.global.report(one.summary.free_names) ==
+        again.summary.global.report(again.summary.free_names));
+}
+
+TEST_CASE("Global search: off, the fit is the one start polished; its options are checked",
+          "[fitting][global]") {
+  const PreparedData data = testing::robot_recording();
+  FitOptions options = options_with_folds(0);
+  options.global_search = false;
+  const FitResult fit = fit_model(testing::robot_fit_start(data), data, options);
+  CHECK(!fit.summary.global.ran);
+  CHECK(fit.summary.full_report().find("Global search:") == std::string::npos);
+  CHECK(nlohmann::json::parse(fit_result_json(fit, data)).at("global_search").is_null());
+  FitOptions bad = options;
+  bad.global_samples = -1;
+  CHECK(bad.validate() == "fit global_samples must be >= 0 (0: no sample)");
+  bad = options;
+  bad.global_subsets = 1;
+  CHECK(bad.validate() == "fit global_subsets must be 0 (no subset refits) or >= 2");
+  bad = options;
+  bad.global_polished = 0;
+  CHECK(bad.validate() == "fit global_polished must be >= 1");
+  bad = options;
+  bad.global_promising_ratio = 1.5;
+  CHECK(bad.validate() == "fit global_promising_ratio must lie in (0, 1]");
+  bad = options;
+  bad.global_seed = 0;
+  CHECK(bad.validate() == "fit global_seed must be >= 1");
+}
+
+}  // namespace doorbench
