@@ -179,7 +179,7 @@ TEST_CASE("Global search: the same seed gives the same fit on 1 and 2 threads",
         again.summary.global.report(again.summary.free_names));
 }
 
-TEST_CASE("Global search: off, the fit is the one start polished; its options are checked",
+TEST_CASE("Global search: off, the fit is the one start polished, and its options are checked",
           "[fitting][global]") {
   const PreparedData data = testing::robot_recording();
   FitOptions options = options_with_folds(0);
