@@ -53,8 +53,17 @@ std::vector<std::vector<double>> space_filling_sample(const DoorModel& model,
   return points;
 }
 
+std::vector<double> free_values(const ParameterMap& map, const std::vector<double>& x) {
+  const std::vector<double> values = map.values(x.data());
+  std::vector<double> free;
+  for (int k = 0; k < map.free_count(); ++k) {
+    free.push_back(values[static_cast<std::size_t>(map.free_index[k])]);
+  }
+  return free;
+}
+
 void distinct_optima(const std::vector<PolishedOptimum>& polished, std::size_t fit,
-                     const ParameterMap& map, GlobalSearch& global) {
+                     GlobalSearch& global) {
   std::vector<std::size_t> order(polished.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
@@ -64,10 +73,7 @@ void distinct_optima(const std::vector<PolishedOptimum>& polished, std::size_t f
   global.optima.clear();
   for (std::size_t i : order) {
     const PolishedOptimum& optimum = polished[i];
-    std::vector<double> free_values;
-    for (int k = 0; k < map.free_count(); ++k) {
-      free_values.push_back(optimum.x[static_cast<std::size_t>(k)] * map.scale[k]);
-    }
+    const std::vector<double>& free_values = optimum.free_values;
     GlobalOptimum* same = nullptr;
     for (GlobalOptimum& known : global.optima) {
       bool alike = std::abs(optimum.cost - known.cost) <=

@@ -70,8 +70,8 @@ std::string FitOptions::validate() const {
     return "fit global_subsets must be 0 (no subset refits) or >= 2";
   }
   if (global_polished < 1) return "fit global_polished must be >= 1";
-  if (!(global_promising_ratio > 0 && global_promising_ratio <= 1)) {
-    return "fit global_promising_ratio must lie in (0, 1]";
+  if (!(global_promising_ratio > 0 && std::isfinite(global_promising_ratio))) {
+    return "fit global_promising_ratio must be a number > 0";
   }
   if (global_seed < 1) return "fit global_seed must be >= 1";
   if (!(correlation_threshold > 0 && correlation_threshold < 1)) {
@@ -548,7 +548,9 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
   polish.latch_start_from_data = false;
   polish.equation_error_start = false;
   std::vector<PolishedOptimum> optima{{"the data-derived start", result.summary.final_cost,
-                                       result.summary.fitted.window.fit_percent(), kept.x}};
+                                       result.summary.fitted.window.fit_percent(),
+                                       free_values(kept.map, kept.x)}};
+  std::vector<std::string> failures;  // notes of the kept fit, whichever it is
   std::optional<FitResult> best;
   KeptFit best_kept;
   std::size_t best_index = 0;
@@ -563,13 +565,14 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
       attempt = fit_once(starts[k].model, data, polish, polished_kept);
     } catch (const std::runtime_error& error) {
       // A start whose simulation or solve fails is one the stage cannot use; the others stand.
-      result.summary.notes.push_back("the global stage's polish from " + starts[k].origin +
-                                     " failed: " + error.what());
+      failures.push_back("the global stage's polish from " + starts[k].origin +
+                         " failed: " + error.what());
       continue;
     }
     FitResult& polished = *attempt;
     optima.push_back({starts[k].origin, polished.summary.final_cost,
-                      polished.summary.fitted.window.fit_percent(), polished_kept.x});
+                      polished.summary.fitted.window.fit_percent(),
+                      free_values(polished_kept.map, polished_kept.x)});
     const double measure = options.global_keep == FitOptions::GlobalKeep::kLowestCost
                                ? polished.summary.final_cost
                                : polished.summary.fitted.window.rmse();
@@ -584,7 +587,7 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
     }
   }
   global.polished = static_cast<int>(optima.size());
-  distinct_optima(optima, best_index, kept.map, global);
+  distinct_optima(optima, best_index, global);
   if (best) {
     // The parameters' starts as the user gave them, and how the fit was reached.
     FitSummary& summary = best->summary;
@@ -603,6 +606,7 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
     result = std::move(*best);
     kept = std::move(best_kept);
   }
+  result.summary.notes.insert(result.summary.notes.end(), failures.begin(), failures.end());
   global.time_s = seconds_since(began);
   result.summary.times.search_s = global.time_s;
   result.summary.global = std::move(global);

@@ -113,8 +113,10 @@ struct FitOptions {
   // The subset refits' partition (0: none; else >= 2). 4, fit's default folds: `doorbench
   // fit` reuses them as its folds.
   int global_subsets = 4;
-  int global_polished = 1;              // promising starts of each kind polished (>= 1)
-  double global_promising_ratio = 0.9;  // window RMSE against the fit's, in (0, 1]
+  int global_polished = 1;  // promising starts of each kind polished (>= 1)
+  // A start is promising below this times the fit's window RMSE (> 0; above 1, starts that
+  // screen worse than the fit can be polished too).
+  double global_promising_ratio = 0.9;
   int global_seed = 1;  // the sample is the Sobol sequence from this point on (>= 1)
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the

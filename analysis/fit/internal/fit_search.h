@@ -21,18 +21,22 @@ std::vector<std::vector<double>> space_filling_sample(const DoorModel& model,
                                                       const ParameterMap& map, int count, int seed);
 
 // An optimum the global stage polished: where it started, its window cost and FIT%, and its
-// scaled free values (the map's).
+// free parameters' values in their units (each polish scales its parameters by its own start,
+// so scaled values of two polishes do not compare).
 struct PolishedOptimum {
   std::string origin;
   double cost = 0.0;
   double fit_percent = 0.0;
-  std::vector<double> x;
+  std::vector<double> free_values;
 };
+
+// The free parameters' values (in their units, the map's free order) at the scaled values x.
+std::vector<double> free_values(const ParameterMap& map, const std::vector<double>& x);
 
 // Fills global.optima (the distinct optima by GlobalSearch's rule: the fit's first, the fit
 // being polished[fit], then the others by cost), global.reached_best and global.best_from
 // from the polishes, the first start's first.
 void distinct_optima(const std::vector<PolishedOptimum>& polished, std::size_t fit,
-                     const ParameterMap& map, GlobalSearch& global);
+                     GlobalSearch& global);
 
 }  // namespace doorbench::fit_detail
