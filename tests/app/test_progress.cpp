@@ -66,6 +66,8 @@ TEST_CASE("progress: the fit's and the loop's lines", "[progress]") {
         "cross-validation: 2 of 4 folds refitted, 8 s so far, about 8 s left");
   CHECK(fit_progress_text({FitProgress::Stage::kFolds, 0, 4}, 1.0) ==
         "cross-validation: 0 of 4 folds refitted, 1 s so far, time left not known yet");
+  CHECK(fit_progress_text({FitProgress::Stage::kSearch, 1, 4}, 2.0) ==
+        "global search: 1 of 4 subset refits, 2 s so far, about 6 s left");
   // The loop: per completed step.
   struct LoopCase {
     LoopProgress progress;
