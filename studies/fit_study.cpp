@@ -4,7 +4,8 @@
 //
 //   doorbench_fit_study [--family50 N] [--family1k N] [--robot] [--folds 0,3,4] [--truth]
 //                       [--first-seed S] [--threads T] [--report]
-//                       [--samples N] [--polished N] [--subsets K] [--no-global]
+//                       [--samples N] [--polished N] [--promising R] [--subsets K]
+//                       [--no-global] [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
 //   --robot: the 50 Hz, 4-stroke robot-operator recording with a load cell not tared, handle
@@ -13,9 +14,12 @@
 //   --truth: also fit each recording from the true door (as given, no start from the data)
 //   --threads T: FitOptions::num_threads (default 0: every hardware thread)
 //   --report: each fit's full report on stderr
-//   --samples N, --polished N, --subsets K: the global stage's FitOptions::global_samples,
-//            global_polished and global_subsets (0: no subset refits); --no-global: none of it
+//   --samples N, --polished N, --promising R, --subsets K: the global stage's
+//            FitOptions::global_samples, global_polished, global_promising_ratio and
+//            global_subsets (0: no subset refits); --no-global: none of it
 //            (FitOptions::global_search false)
+//   --basins: instead of the fits, what separates the data fit's basin from the true door's
+//            (basins() below); one line per probe: recording,probe,what,final_cost,fit_percent
 //
 // Each fit starts as `doorbench fit` without --params does: the sensory reference door with the
 // recording's handle radius, its values taken from the data (analysis/fit/fit_init.h), RK4
@@ -28,6 +32,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -58,7 +63,9 @@ struct Settings {
   int threads = 0;
   bool report = false;                            // --report: each fit's full report on stderr
   int samples = -1, polished = -1, subsets = -1;  // the global stage's, when given
+  double promising = -1;                          // FitOptions::global_promising_ratio, given
   bool global = true;                             // --no-global: FitOptions::global_search off
+  bool basins = false;                            // --basins: the basin probes instead of fits
 };
 
 struct Case {
@@ -99,6 +106,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (!from_data) options.latch_start_from_data = false;
     if (s.samples >= 0) options.global_samples = s.samples;
     if (s.polished >= 0) options.global_polished = s.polished;
+    if (s.promising > 0) options.global_promising_ratio = s.promising;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
     options.global_search = s.global;
     const double cpu0 = process_cpu_s();
@@ -119,6 +127,86 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     }
     std::printf("%s,%s,%d,%s\n", c.name.c_str(), start_name.c_str(), folds, outcome.c_str());
     std::fflush(stdout);
+  }
+}
+
+// --basins: what separates the data fit's basin from the true door's. From the data fit
+// (global stage, no folds) and from the true door's fit, each free parameter is set alone to
+// the other fit's value and the door polished by one start (no global stage, no start from the
+// data); and the data-derived start is fitted with weaker angle residuals first (none, or σ_θ
+// 3-100 times the data's), then with the data's. One line each: recording, probe, what, final
+// cost, window FIT%.
+void basins(const Case& c) {
+  FitOptions options;
+  options.substeps_per_sample = substeps_for_data(c.data);
+  options.cross_validation_folds = 0;
+  options.what_would_determine = false;
+  const FitResult data_fit = fit_model(data_start(c.data), c.data, options);
+  FitOptions truth_options = options;
+  truth_options.latch_start_from_data = false;
+  const FitResult truth_fit = fit_model(c.truth, c.data, truth_options);
+  FitOptions one_start = truth_options;
+  one_start.global_search = false;
+  one_start.equation_error_start = false;
+  const auto line = [&](const char* probe, const std::string& what, const FitResult* fit,
+                        const std::string& error) {
+    std::printf("%s,%s,%s,%s\n", c.name.c_str(), probe, what.c_str(),
+                fit != nullptr ? printf_text("%.10g,%.6g", fit->summary.final_cost,
+                                             fit->summary.fitted.window.fit_percent())
+                                     .c_str()
+                               : ("error," + error).c_str());
+    std::fflush(stdout);
+  };
+  line("fit", "from the data", &data_fit, "");
+  line("fit", "from the truth", &truth_fit, "");
+  const auto polish = [&](const char* probe, const std::string& what, const DoorModel& start,
+                          const FitOptions& with) {
+    try {
+      const FitResult fit = fit_model(start, c.data, with);
+      line(probe, what, &fit, "");
+    } catch (const std::exception& error) {
+      line(probe, what, nullptr, error.what());
+    }
+  };
+  for (std::size_t i = 0; i < data_fit.summary.parameters.size(); ++i) {
+    if (!data_fit.summary.parameters[i].free) continue;
+    const std::string& name = data_fit.summary.parameters[i].name;
+    const int index = static_cast<int>(i);
+    std::vector<double> values(data_fit.model.parameter_values().begin(),
+                               data_fit.model.parameter_values().end());
+    values[i] = truth_fit.model.parameter_values()[index];
+    try {
+      polish("data fit, one from the truth's fit", name, c.truth.with_parameter_values(values),
+             one_start);
+    } catch (const std::invalid_argument& error) {
+      line("data fit, one from the truth's fit", name, nullptr, error.what());
+    }
+    values.assign(truth_fit.model.parameter_values().begin(),
+                  truth_fit.model.parameter_values().end());
+    values[i] = data_fit.model.parameter_values()[index];
+    try {
+      polish("truth's fit, one from the data fit", name, c.truth.with_parameter_values(values),
+             one_start);
+    } catch (const std::invalid_argument& error) {
+      line("truth's fit, one from the data fit", name, nullptr, error.what());
+    }
+  }
+  for (double factor : {0.0, 3.0, 10.0, 30.0, 100.0}) {
+    FitOptions weak = options;
+    weak.global_search = false;
+    if (factor == 0) {
+      weak.angle_residuals = false;
+    } else {
+      weak.angle_noise_rad = factor * c.data.angle_noise_rad;
+    }
+    const std::string what = factor == 0 ? std::string("no angle residuals, then the data's")
+                                         : printf_text("sigma_theta x%g, then the data's", factor);
+    try {
+      const FitResult first = fit_model(data_start(c.data), c.data, weak);
+      polish("weaker angle residuals first", what, first.model, one_start);
+    } catch (const std::exception& error) {
+      line("weaker angle residuals first", what, nullptr, error.what());
+    }
   }
 }
 
@@ -171,6 +259,8 @@ int main(int argc, char** argv) {
       s.truth = true;
     } else if (flag == "--no-global") {
       s.global = false;
+    } else if (flag == "--basins") {
+      s.basins = true;
     } else if (has_value && flag == "--family50") {
       s.family50 = std::atoi(argv[++i]);
     } else if (has_value && flag == "--family1k") {
@@ -181,6 +271,8 @@ int main(int argc, char** argv) {
       s.first_seed = static_cast<std::uint32_t>(std::atoi(argv[++i]));
     } else if (has_value && flag == "--samples") {
       s.samples = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--promising") {
+      s.promising = std::atof(argv[++i]);
     } else if (has_value && flag == "--polished") {
       s.polished = std::atoi(argv[++i]);
     } else if (has_value && flag == "--subsets") {
@@ -198,6 +290,10 @@ int main(int argc, char** argv) {
       "iterations,parameters\n");
   for (const Case& c : cases(s)) {
     std::fprintf(stderr, "%s: %s\n", c.name.c_str(), c.data.source.c_str());
+    if (s.basins) {
+      basins(c);
+      continue;
+    }
     fit_case(c, s, "data", data_start(c.data), true);
     if (s.truth) fit_case(c, s, "truth", c.truth, false);
   }
