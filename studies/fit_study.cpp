@@ -4,7 +4,8 @@
 //
 //   doorbench_fit_study [--family50 N] [--family1k N] [--robot] [--folds 0,3,4] [--truth]
 //                       [--first-seed S] [--threads T] [--report]
-//                       [--samples N] [--polished N] [--promising R] [--subsets K]
+//                       [--samples N] [--polished N] [--promising R] [--hops H]
+//                       [--hop-size D] [--subsets K]
 //                       [--no-global] [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
@@ -14,9 +15,10 @@
 //   --truth: also fit each recording from the true door (as given, no start from the data)
 //   --threads T: FitOptions::num_threads (default 0: every hardware thread)
 //   --report: each fit's full report on stderr
-//   --samples N, --polished N, --promising R, --subsets K: the global stage's
-//            FitOptions::global_samples, global_polished, global_promising_ratio and
-//            global_subsets (0: no subset refits); --no-global: none of it
+//   --samples N, --polished N, --promising R, --hops H, --subsets K: the global stage's
+//            FitOptions::global_samples, global_polished, global_promising_ratio, global_hops
+//            and global_subsets (0: no subset refits); --hop-size D: global_hop_size;
+//            --no-global: none of it
 //            (FitOptions::global_search false)
 //   --basins: instead of the fits, what separates the data fit's basin from the true door's
 //            (basins() below); one line per probe: recording,probe,what,final_cost,fit_percent
@@ -64,6 +66,8 @@ struct Settings {
   bool report = false;                            // --report: each fit's full report on stderr
   int samples = -1, polished = -1, subsets = -1;  // the global stage's, when given
   double promising = -1;                          // FitOptions::global_promising_ratio, given
+  int hops = -1;                                  // FitOptions::global_hops, when given
+  double hop_size = -1;                           // FitOptions::global_hop_size, when given
   bool global = true;                             // --no-global: FitOptions::global_search off
   bool basins = false;                            // --basins: the basin probes instead of fits
 };
@@ -107,6 +111,8 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (s.samples >= 0) options.global_samples = s.samples;
     if (s.polished >= 0) options.global_polished = s.polished;
     if (s.promising > 0) options.global_promising_ratio = s.promising;
+    if (s.hops >= 0) options.global_hops = s.hops;
+    if (s.hop_size > 0) options.global_hop_size = s.hop_size;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
     options.global_search = s.global;
     const double cpu0 = process_cpu_s();
@@ -168,6 +174,18 @@ void basins(const Case& c) {
       line(probe, what, nullptr, error.what());
     }
   };
+  DoorModel again = data_fit.model;
+  for (int round = 1; round <= 3; ++round) {
+    try {
+      const FitResult fit = fit_model(again, c.data, one_start);
+      line("data fit polished again from its own values", printf_text("round %d", round), &fit, "");
+      again = fit.model;
+    } catch (const std::exception& error) {
+      line("data fit polished again from its own values", printf_text("round %d", round), nullptr,
+           error.what());
+      break;
+    }
+  }
   for (std::size_t i = 0; i < data_fit.summary.parameters.size(); ++i) {
     if (!data_fit.summary.parameters[i].free) continue;
     const std::string& name = data_fit.summary.parameters[i].name;
@@ -271,6 +289,10 @@ int main(int argc, char** argv) {
       s.first_seed = static_cast<std::uint32_t>(std::atoi(argv[++i]));
     } else if (has_value && flag == "--samples") {
       s.samples = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--hop-size") {
+      s.hop_size = std::atof(argv[++i]);
+    } else if (has_value && flag == "--hops") {
+      s.hops = std::atoi(argv[++i]);
     } else if (has_value && flag == "--promising") {
       s.promising = std::atof(argv[++i]);
     } else if (has_value && flag == "--polished") {

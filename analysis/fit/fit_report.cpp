@@ -74,6 +74,10 @@ std::string GlobalSearch::report(const std::vector<std::string>& names) const {
     tried.push_back(std::to_string(sample_points) +
                     " points of a space-filling sample of the bounds");
   }
+  if (hops > 0) {
+    tried.push_back(std::to_string(hops) + (hops == 1 ? " basin hop" : " basin hops") +
+                    " from the best optimum so far (" + std::to_string(hops_lower) + " lower)");
+  }
   std::string out = "Global search: " + std::to_string(starts_tried) + " starts tried (";
   for (std::size_t i = 0; i < tried.size(); ++i) {
     out += (i == 0 ? "" : i + 1 == tried.size() ? " and " : ", ") + tried[i];

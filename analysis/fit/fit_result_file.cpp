@@ -66,6 +66,8 @@ nlohmann::ordered_json global_search_json(const FitSummary& s) {
           {"sample_points", s.global.sample_points},
           {"promising", s.global.promising},
           {"polished", s.global.polished},
+          {"hops", s.global.hops},
+          {"hops_lower", s.global.hops_lower},
           {"distinct_optima", s.global.optima.size()},
           {"reached_best", s.global.reached_best},
           {"best_from", s.global.best_from},

@@ -2,6 +2,8 @@
 #include "analysis/fit/internal/fit_search.h"
 
 #include <algorithm>
+#include <boost/random/mersenne_twister.hpp>
+#include <boost/random/normal_distribution.hpp>
 #include <boost/random/sobol.hpp>
 #include <cmath>
 #include <stdexcept>
@@ -15,8 +17,31 @@ namespace {
 constexpr double kLogSpan = 100.0;
 constexpr double kLogFloor = 1e-3;
 
-// Sobol sequences draw at most this many sequence points per point asked for.
+// Sobol sequences draw at most this many sequence points per point asked for; a hop tries at
+// most this many steps.
 constexpr int kTriesPerPoint = 20;
+
+// The sample's scale of one parameter: u in [0, 1] across its bounds, linear, or logarithmic
+// where the bounds span more than kLogSpan from a lower bound >= 0.
+struct UnitScale {
+  bool logarithmic = false;
+  double lower = 0.0, upper = 1.0;
+
+  explicit UnitScale(const Bounds& b) : lower(b.lower), upper(b.upper) {
+    const double log_lower = std::max(b.lower, b.upper * kLogFloor);
+    logarithmic = b.lower >= 0 && b.upper > kLogSpan * b.lower && log_lower > 0;
+    if (logarithmic) lower = log_lower;
+  }
+  double value(double u) const {
+    return logarithmic ? lower * std::pow(upper / lower, u) : lower + u * (upper - lower);
+  }
+  double unit(double value) const {
+    const double u = logarithmic
+                         ? std::log(std::max(value, lower) / lower) / std::log(upper / lower)
+                         : (value - lower) / (upper - lower);
+    return std::clamp(u, 0.0, 1.0);
+  }
+};
 
 }  // namespace
 
@@ -36,12 +61,8 @@ std::vector<std::vector<double>> space_filling_sample(const DoorModel& model,
     for (int k = 0; k < p; ++k) {
       // The generator's integers span [0, 2^64): u in [0, 1).
       const double u = std::ldexp(static_cast<double>(sequence()), -64);
-      const Bounds& b = bounds[static_cast<std::size_t>(map.free_index[k])];
-      const double log_lower = std::max(b.lower, b.upper * kLogFloor);
-      const bool logarithmic = b.lower >= 0 && b.upper > kLogSpan * b.lower && log_lower > 0;
       values[static_cast<std::size_t>(map.free_index[k])] =
-          logarithmic ? log_lower * std::pow(b.upper / log_lower, u)
-                      : b.lower + u * (b.upper - b.lower);
+          UnitScale(bounds[static_cast<std::size_t>(map.free_index[k])]).value(u);
     }
     try {
       (void)model.with_parameter_values(values);
@@ -51,6 +72,29 @@ std::vector<std::vector<double>> space_filling_sample(const DoorModel& model,
     }
   }
   return points;
+}
+
+std::vector<double> hop_point(const DoorModel& model, const ParameterMap& map, double size,
+                              std::uint32_t seed) {
+  boost::random::mt19937 generator(seed);
+  boost::random::normal_distribution<double> step(0.0, size);
+  const auto bounds = model.parameter_bounds();
+  const std::span<const double> model_values = model.parameter_values();
+  for (int tried = 0; tried < kTriesPerPoint; ++tried) {
+    std::vector<double> values(model_values.begin(), model_values.end());
+    for (int k = 0; k < map.free_count(); ++k) {
+      const std::size_t i = static_cast<std::size_t>(map.free_index[k]);
+      const UnitScale scale(bounds[i]);
+      values[i] = scale.value(std::clamp(scale.unit(values[i]) + step(generator), 0.0, 1.0));
+    }
+    try {
+      (void)model.with_parameter_values(values);
+      return values;
+    } catch (const std::invalid_argument&) {
+      // A step that breaks a constraint (θ0 < θ1 < ... ): another step.
+    }
+  }
+  return {};
 }
 
 std::vector<double> free_values(const ParameterMap& map, const std::vector<double>& x) {

@@ -74,6 +74,10 @@ std::string FitOptions::validate() const {
     return "fit global_promising_ratio must be a number > 0";
   }
   if (global_seed < 1) return "fit global_seed must be >= 1";
+  if (global_hops < 0) return "fit global_hops must be >= 0";
+  if (!(global_hop_size > 0 && global_hop_size <= 1)) {
+    return "fit global_hop_size must lie in (0, 1]";
+  }
   if (!(correlation_threshold > 0 && correlation_threshold < 1)) {
     return "fit correlation_threshold must lie strictly between 0 and 1";
   }
@@ -502,6 +506,47 @@ std::vector<SearchStart> search_starts(const DoorModel& start, const FitResult& 
   return starts;
 }
 
+// The best optimum of the global stage so far, when not the first start's: its fit, what the
+// fit keeps, its place among the polished optima and its global_keep measure.
+struct BestOptimum {
+  std::optional<FitResult> fit;
+  KeptFit kept;
+  std::size_t index = 0;
+  double measure = kNaN;
+};
+
+// Polishes `model` exactly from its values with `polish`; adds its optimum to `optima` and
+// makes it `best` when its options.global_keep measure is lower. A start whose simulation or
+// solve fails is one the stage cannot use: a note in `failures`. True when it became the best.
+bool polish_start(const std::string& origin, const DoorModel& model, const PreparedData& data,
+                  const FitOptions& polish, std::vector<PolishedOptimum>& optima,
+                  std::vector<std::string>& failures, BestOptimum& best) {
+  KeptFit polished_kept;
+  std::optional<FitResult> attempt;
+  try {
+    attempt = fit_once(model, data, polish, polished_kept);
+  } catch (const std::runtime_error& error) {
+    failures.push_back("the global stage's polish from " + origin + " failed: " + error.what());
+    return false;
+  }
+  FitResult& polished = *attempt;
+  optima.push_back({origin, polished.summary.final_cost,
+                    polished.summary.fitted.window.fit_percent(),
+                    free_values(polished_kept.map, polished_kept.x)});
+  const double measure = polish.global_keep == FitOptions::GlobalKeep::kLowestCost
+                             ? polished.summary.final_cost
+                             : polished.summary.fitted.window.rmse();
+  if (!(measure < best.measure)) return false;
+  best.measure = measure;
+  best.fit = std::move(polished);
+  best.kept = std::move(polished_kept);
+  best.index = optima.size() - 1;
+  best.fit->summary.notes.insert(best.fit->summary.notes.begin(),
+                                 "the global stage's best optimum was reached from " + origin +
+                                     ", not from the data-derived start");
+  return true;
+}
+
 // The global stage after the first start's fit (FitOptions::global_search): the other starts
 // screened by their window RMSE on every stroke, the promising ones polished, the optimum
 // options.global_keep names kept in `result` and `kept`. `refits` receives the subset
@@ -551,46 +596,41 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
                                        result.summary.fitted.window.fit_percent(),
                                        free_values(kept.map, kept.x)}};
   std::vector<std::string> failures;  // notes of the kept fit, whichever it is
-  std::optional<FitResult> best;
-  KeptFit best_kept;
-  std::size_t best_index = 0;
-  double best_measure = options.global_keep == FitOptions::GlobalKeep::kLowestCost
-                            ? result.summary.final_cost
-                            : first_rmse;
+  BestOptimum best;
+  best.measure = options.global_keep == FitOptions::GlobalKeep::kLowestCost
+                     ? result.summary.final_cost
+                     : first_rmse;
   for (std::size_t k : promising) {
     throw_if_stop_requested(options.stop_requested, "the global search");
-    KeptFit polished_kept;
-    std::optional<FitResult> attempt;
-    try {
-      attempt = fit_once(starts[k].model, data, polish, polished_kept);
-    } catch (const std::runtime_error& error) {
-      // A start whose simulation or solve fails is one the stage cannot use; the others stand.
-      failures.push_back("the global stage's polish from " + starts[k].origin +
-                         " failed: " + error.what());
-      continue;
-    }
-    FitResult& polished = *attempt;
-    optima.push_back({starts[k].origin, polished.summary.final_cost,
-                      polished.summary.fitted.window.fit_percent(),
-                      free_values(polished_kept.map, polished_kept.x)});
-    const double measure = options.global_keep == FitOptions::GlobalKeep::kLowestCost
-                               ? polished.summary.final_cost
-                               : polished.summary.fitted.window.rmse();
-    if (measure < best_measure) {
-      best_measure = measure;
-      best = std::move(polished);
-      best_kept = std::move(polished_kept);
-      best_index = optima.size() - 1;
-      best->summary.notes.insert(best->summary.notes.begin(),
-                                 "the global stage's best optimum was reached from " +
-                                     starts[k].origin + ", not from the data-derived start");
+    (void)polish_start(starts[k].origin, starts[k].model, data, polish, optima, failures, best);
+  }
+  // Basin hops from the best optimum so far, each seeded by its number.
+  FitOptions hop_polish = polish;
+  hop_polish.progress = nullptr;
+  for (int h = 1; h <= options.global_hops; ++h) {
+    throw_if_stop_requested(options.stop_requested, "the global search");
+    if (options.progress) options.progress({FitProgress::Stage::kHops, h - 1, options.global_hops});
+    const DoorModel& from = best.fit ? best.fit->model : result.model;
+    const std::vector<double> values = hop_point(
+        from, kept.map, options.global_hop_size,
+        static_cast<std::uint32_t>(options.global_seed) * 7919u + static_cast<std::uint32_t>(h));
+    if (values.empty()) continue;
+    ++global.hops;
+    if (polish_start("hop " + std::to_string(h), from.with_parameter_values(values), data,
+                     hop_polish, optima, failures, best)) {
+      ++global.hops_lower;
     }
   }
+  if (options.progress && options.global_hops > 0) {
+    options.progress({FitProgress::Stage::kHops, options.global_hops, options.global_hops});
+  }
+  global.starts_tried += global.hops;
+  const std::size_t best_index = best.index;
   global.polished = static_cast<int>(optima.size());
   distinct_optima(optima, best_index, global);
-  if (best) {
+  if (best.fit) {
     // The parameters' starts as the user gave them, and how the fit was reached.
-    FitSummary& summary = best->summary;
+    FitSummary& summary = best.fit->summary;
     for (std::size_t i = 0; i < summary.parameters.size() && i < result.summary.parameters.size();
          ++i) {
       summary.parameters[i].start = result.summary.parameters[i].start;
@@ -603,8 +643,8 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
     summary.iterations += result.summary.iterations;
     summary.initial_cost = result.summary.initial_cost;
     summary.options = options;
-    result = std::move(*best);
-    kept = std::move(best_kept);
+    result = std::move(*best.fit);
+    kept = std::move(best.kept);
   }
   result.summary.notes.insert(result.summary.notes.end(), failures.begin(), failures.end());
   global.time_s = seconds_since(began);

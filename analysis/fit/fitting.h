@@ -42,6 +42,9 @@ struct FitProgress {
     kFolds,
     // The global stage's subset refits (`done` of `total`); its polishes report as kWindows.
     kSearch,
+    // The global stage's basin hops polished (`done` of `total`, FitOptions::global_hops);
+    // a hop's polish reports nothing of its own.
+    kHops,
   };
   Stage stage = Stage::kWindows;
   int done = 0;
@@ -118,6 +121,12 @@ struct FitOptions {
   // screen worse than the fit can be polished too).
   double global_promising_ratio = 0.9;
   int global_seed = 1;  // the sample is the Sobol sequence from this point on (>= 1)
+  // Basin hops after the polishes (0: none): each moves the best optimum so far by a random
+  // step (normal, standard deviation global_hop_size of each free parameter's bounds, on the
+  // sample's linear or log scale; seeded by global_seed) and polishes it; a hop that ends
+  // lower by the global_keep measure becomes the best.
+  int global_hops = 0;
+  double global_hop_size = 0.1;  // in (0, 1]
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
   // residual loop compares fits by; its fits keep that one).
@@ -292,6 +301,8 @@ struct GlobalSearch {
   int starts_tried = 0;         // the first start and every start screened
   int promising = 0;            // screened below global_promising_ratio times the fit's RMSE
   int polished = 0;             // polished on every stroke, the first start included
+  int hops = 0;                 // basin hops polished (FitOptions::global_hops)
+  int hops_lower = 0;           // hops that ended lower than the best before them
   // Distinct optima, the best first: two polishes end at one optimum when their costs differ
   // by at most kSameOptimumCost (relative) and no free parameter by more than
   // kSameOptimumParameter of the larger magnitude.

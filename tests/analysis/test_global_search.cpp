@@ -67,14 +67,21 @@ void check_fit_optimum_values(const FitSummary& summary) {
   CHECK(k == listed.size());
 }
 
-// The --folds 0 fit, after checking that --folds 3 and 4 end at it.
+// The --folds 0 fit, after checking that --folds 3 and 4 end at it, each with the basin hops
+// `doorbench fit` takes.
 FitResult check_same_fit_for_folds(const PreparedData& data, const DoorModel& start) {
-  const FitResult none = fit_model(start, data, options_with_folds(0));
+  const auto options_as_fit_takes_them = [](int folds) {
+    FitOptions options = options_with_folds(folds);
+    options.global_hops = 6;  // `doorbench fit`'s --hops
+    options.global_hop_size = 0.02;
+    return options;
+  };
+  const FitResult none = fit_model(start, data, options_as_fit_takes_them(0));
   INFO(none.summary.full_report());
   check_fit_optimum_values(none.summary);
   for (int folds : {3, 4}) {
     INFO("--folds " << folds);
-    const FitResult with = fit_model(start, data, options_with_folds(folds));
+    const FitResult with = fit_model(start, data, options_as_fit_takes_them(folds));
     CHECK(largest_relative_difference(none.model, with.model) <= 1e-6);
     CHECK(with.summary.final_cost == Approx(none.summary.final_cost).epsilon(1e-9));
     REQUIRE(with.summary.held_out.has_value());
@@ -201,6 +208,50 @@ TEST_CASE("Global search: the same seed gives the same fit on 1 and 2 threads",
         again.summary.global.report(again.summary.free_names));
 }
 
+TEST_CASE(
+    "Global search: basin hops reach the true door's optimum on a family draw where the "
+    "stage's starts end 1.3 % above it",
+    "[fitting][global][slow]") {
+  testing::FamilyOptions family;
+  family.sample_rates_hz = {50.0};
+  const PreparedData data = testing::family_recording(testing::sensory_reference(),
+                                                      testing::draw_conditions(5, family), 5);
+  const DoorModel start =
+      start_from_data(
+          data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
+          .model;
+  const FitResult without = fit_model(start, data, options_with_folds(0));
+  FitOptions hopping = options_with_folds(0);
+  hopping.global_hops = 6;
+  hopping.global_hop_size = 0.02;
+  const FitResult with = fit_model(start, data, hopping);
+  FitOptions from_truth = options_with_folds(0);
+  from_truth.latch_start_from_data = false;
+  const FitResult truth = fit_model(testing::sensory_reference(), data, from_truth);
+  INFO(with.summary.full_report());
+  INFO("without hops " << without.summary.final_cost << ", with " << with.summary.final_cost
+                       << ", from the truth " << truth.summary.final_cost);
+  CHECK(with.summary.final_cost < 0.995 * without.summary.final_cost);
+  CHECK(with.summary.final_cost <= 1.01 * truth.summary.final_cost);
+  const GlobalSearch& g = with.summary.global;
+  CHECK(g.hops == 6);
+  CHECK(g.hops_lower >= 1);
+  CHECK(g.starts_tried ==
+        1 + (g.start_as_given ? 1 : 0) + g.subset_refits + g.sample_points + g.hops);
+  const std::string report = g.report(with.summary.free_names);
+  CHECK(report.find("32 points of a space-filling sample of the bounds and 6 basin hops from the "
+                    "best optimum so far (" +
+                    std::to_string(g.hops_lower) + " lower)), ") != std::string::npos);
+  CHECK(g.best_from.rfind("hop ", 0) == 0);
+  const nlohmann::json global =
+      nlohmann::json::parse(fit_result_json(with, data)).at("global_search");
+  CHECK(global.at("hops") == 6);
+  CHECK(global.at("hops_lower") == g.hops_lower);
+  // Without hops the fields say none.
+  CHECK(without.summary.global.hops == 0);
+  CHECK(without.summary.global.report(without.summary.free_names).find("hop") == std::string::npos);
+}
+
 TEST_CASE("Global search: off, the fit is the one start polished, and its options are checked",
           "[fitting][global]") {
   const PreparedData data = testing::robot_recording();
@@ -225,6 +276,14 @@ TEST_CASE("Global search: off, the fit is the one start polished, and its option
   bad = options;
   bad.global_seed = 0;
   CHECK(bad.validate() == "fit global_seed must be >= 1");
+  bad = options;
+  bad.global_hops = -1;
+  CHECK(bad.validate() == "fit global_hops must be >= 0");
+  for (double size : {0.0, 1.5}) {
+    bad = options;
+    bad.global_hop_size = size;
+    CHECK(bad.validate() == "fit global_hop_size must lie in (0, 1]");
+  }
 }
 
 }  // namespace doorbench

@@ -2,6 +2,7 @@
 // The global stage's sample and its account of the optima (analysis/fit/ only; fit_search.cpp,
 // used by fitting.cpp; docs/fitting.md, "The global stage"). Pure functions of their
 // arguments, safe on any thread.
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -19,6 +20,14 @@ namespace doorbench::fit_detail {
 // point asked for. Each point is every parameter's value, in the model's order.
 std::vector<std::vector<double>> space_filling_sample(const DoorModel& model,
                                                       const ParameterMap& map, int count, int seed);
+
+// A basin hop from `model` (FitOptions::global_hops): each free parameter moved by a normal
+// step of standard deviation `size` on the sample's scale of its bounds (u in [0, 1], linear
+// or logarithmic as space_filling_sample spreads it; clamped to the bounds), the generator
+// seeded with `seed`. A step that breaks a constraint is drawn again, at most 20 times; empty
+// when none held. Every parameter's value, in the model's order.
+std::vector<double> hop_point(const DoorModel& model, const ParameterMap& map, double size,
+                              std::uint32_t seed);
 
 // An optimum the global stage polished: where it started, its window cost and FIT%, and its
 // free parameters' values in their units (each polish scales its parameters by its own start,
