@@ -141,6 +141,11 @@ std::string fit_progress_text(const FitProgress& progress, double elapsed_s) {
     return printf_text("window fit: iteration %d of at most %d, ", progress.done, progress.total) +
            progress_time_text(progress.done, progress.total, elapsed_s, true);
   }
+  if (progress.stage == FitProgress::Stage::kHops) {
+    return printf_text("global search: %d of %d basin hops polished, ", progress.done,
+                       progress.total) +
+           progress_time_text(progress.done, progress.total, elapsed_s);
+  }
   if (progress.stage == FitProgress::Stage::kSearch) {
     return printf_text("global search: %d of %d subset refits, ", progress.done, progress.total) +
            progress_time_text(progress.done, progress.total, elapsed_s);

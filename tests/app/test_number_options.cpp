@@ -167,7 +167,7 @@ TEST_CASE("CLI numbers: every numeric option of every verb refuses what is not a
       "calibrate loadcell --masses-kg 0", "calibrate gyro --inclinometer-range-deg 0",
       "calibrate inclinometer --inclinometer-range-deg 0",
       "calibrate timing --inclinometer-range-deg 0", "fit --derivative-cutoff-hz 0",
-      "fit --folds 0", "fit --force-cutoff-hz 0", "fit --max-windows 0",
+      "fit --folds 0", "fit --force-cutoff-hz 0", "fit --hops 0", "fit --max-windows 0",
       "loop --derivative-cutoff-hz 0", "loop --force-cutoff-hz 0", "play --push-N 0",
       "play --pushes-hz 0", "play --seed 0", "record --max-wait-s 0", "spec --lambda 0",
       "spec --seed 0", "spec --threads 0", "ab --seed 0", "campaign analyze --bootstrap 0",

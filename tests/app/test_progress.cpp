@@ -68,6 +68,8 @@ TEST_CASE("progress: the fit's and the loop's lines", "[progress]") {
         "cross-validation: 0 of 4 folds refitted, 1 s so far, time left not known yet");
   CHECK(fit_progress_text({FitProgress::Stage::kSearch, 1, 4}, 2.0) ==
         "global search: 1 of 4 subset refits, 2 s so far, about 6 s left");
+  CHECK(fit_progress_text({FitProgress::Stage::kHops, 3, 6}, 9.0) ==
+        "global search: 3 of 6 basin hops polished, 9 s so far, about 9 s left");
   // The loop: per completed step.
   struct LoopCase {
     LoopProgress progress;
@@ -191,8 +193,12 @@ TEST_CASE("fit shows its progress with the time left: on a terminal, in a file, 
         "[0-9]+ (s|min [0-9]+ s) left\x1b\\[K");
     CHECK(std::regex_search(output, redrawn));
     // The global stage's subset refits (4 subsets of 2 strokes: 2), which the 4-fold
-    // cross-validation then reuses as its folds.
-    CHECK(output.find("\rglobal search: 2 of 2 subset refits, done in ") != std::string::npos);
+    // cross-validation then reuses as its folds, and its basin hops, the fit's last stage
+    // with a status (the line is redrawn at most every 100 ms: the subset refits' last count
+    // may be passed over).
+    CHECK(std::regex_search(output, std::regex("\rglobal search: [12] of 2 subset refits, ")));
+    CHECK(output.find("\rglobal search: 6 of 6 basin hops polished, done in ") !=
+          std::string::npos);
     CHECK(output.find("cross-validation:") == std::string::npos);
   }
   SECTION("into a file: plain lines") {
@@ -210,6 +216,9 @@ TEST_CASE("fit shows its progress with the time left: on a terminal, in a file, 
         "[^\n]* left\nglobal search: 0 of 2 subset refits, ");
     CHECK(std::regex_search(run.err, windows_end));
     CHECK(run.err.find("\nglobal search: 2 of 2 subset refits, done in ") != std::string::npos);
+    CHECK(run.err.find("\nglobal search: 0 of 6 basin hops polished, ") != std::string::npos);
+    CHECK(run.err.find("\nglobal search: 6 of 6 basin hops polished, done in ") !=
+          std::string::npos);
   }
   SECTION("--quiet: nothing on stderr") {
     const auto run = doorbench::testing::run_doorbench_shell(
