@@ -45,10 +45,10 @@ struct FitCommandOptions {
   // windows take at most about 2.5 min of CPU for 100 iterations (docs/fitting.md, "The fit's
   // size").
   static constexpr int kDefaultMaxWindows = 5000;
-  // Basin hops of 2 % of each bound's range after the global stage's polishes: on 27 family
-  // recordings they took the fit from 21 to 25 within 1 % of the true door's optimum, at
-  // about twice the stage's CPU (docs/PERFORMANCE.md, "Basin hops").
-  static constexpr int kDefaultHops = 6;
+  // None by default: on the fit study's 27 recordings 6 hops of 2 % of each bound's range
+  // lowered the cost on 8 (7 by 0.1-6.7 %, one by 86 %) at about twice the global stage's CPU,
+  // and lowered the fits from the true door as much (docs/PERFORMANCE.md, "Basin hops").
+  static constexpr int kDefaultHops = 0;
   static constexpr double kHopSize = 0.02;
 };
 
@@ -320,7 +320,7 @@ void add_fit_command(CLI::App& app, Action& action) {
       ->capture_default_str();
   fit->add_option("--hops", options->hops,
                   "Basin hops after the global stage: random steps from the best optimum so "
-                  "far, each polished (0: none; docs/fitting.md)")
+                  "far, each polished: lower costs at a polish each (docs/fitting.md)")
       ->check(number_range(0, 1000))
       ->capture_default_str();
   fit->add_option("--max-windows", options->max_windows,

@@ -22,6 +22,7 @@
 //            (FitOptions::global_search false)
 //   --basins: instead of the fits, what separates the data fit's basin from the true door's
 //            (basins() below); one line per probe: recording,probe,what,final_cost,fit_percent
+//            ("error" and its message in the last two when the start breaks a constraint)
 //
 // Each fit starts as `doorbench fit` without --params does: the sensory reference door with the
 // recording's handle radius, its values taken from the data (analysis/fit/fit_init.h), RK4
@@ -136,12 +137,12 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
   }
 }
 
-// --basins: what separates the data fit's basin from the true door's. From the data fit
-// (global stage, no folds) and from the true door's fit, each free parameter is set alone to
-// the other fit's value and the door polished by one start (no global stage, no start from the
-// data); and the data-derived start is fitted with weaker angle residuals first (none, or σ_θ
-// 3-100 times the data's), then with the data's. One line each: recording, probe, what, final
-// cost, window FIT%.
+// --basins: what separates the data fit's basin from the true door's. The data fit (global
+// stage, no folds) polished again from its own values, three rounds, each from the last; from
+// the data fit and from the true door's fit, each free parameter set alone to the other fit's
+// value and the door polished by one start (no global stage, no start from the data); and the
+// data-derived start is fitted with weaker angle residuals first (none, or σ_θ 3-100 times the
+// data's), then with the data's. One line each: recording, probe, what, final cost, window FIT%.
 void basins(const Case& c) {
   FitOptions options;
   options.substeps_per_sample = substeps_for_data(c.data);
@@ -194,19 +195,19 @@ void basins(const Case& c) {
                                data_fit.model.parameter_values().end());
     values[i] = truth_fit.model.parameter_values()[index];
     try {
-      polish("data fit, one from the truth's fit", name, c.truth.with_parameter_values(values),
-             one_start);
+      polish("data fit with one value of the truth's fit", name,
+             c.truth.with_parameter_values(values), one_start);
     } catch (const std::invalid_argument& error) {
-      line("data fit, one from the truth's fit", name, nullptr, error.what());
+      line("data fit with one value of the truth's fit", name, nullptr, error.what());
     }
     values.assign(truth_fit.model.parameter_values().begin(),
                   truth_fit.model.parameter_values().end());
     values[i] = data_fit.model.parameter_values()[index];
     try {
-      polish("truth's fit, one from the data fit", name, c.truth.with_parameter_values(values),
-             one_start);
+      polish("truth's fit with one value of the data fit", name,
+             c.truth.with_parameter_values(values), one_start);
     } catch (const std::invalid_argument& error) {
-      line("truth's fit, one from the data fit", name, nullptr, error.what());
+      line("truth's fit with one value of the data fit", name, nullptr, error.what());
     }
   }
   for (double factor : {0.0, 3.0, 10.0, 30.0, 100.0}) {
@@ -217,8 +218,8 @@ void basins(const Case& c) {
     } else {
       weak.angle_noise_rad = factor * c.data.angle_noise_rad;
     }
-    const std::string what = factor == 0 ? std::string("no angle residuals, then the data's")
-                                         : printf_text("sigma_theta x%g, then the data's", factor);
+    const std::string what = factor == 0 ? std::string("no angle residuals -> the data's")
+                                         : printf_text("sigma_theta x%g -> the data's", factor);
     try {
       const FitResult first = fit_model(data_start(c.data), c.data, weak);
       polish("weaker angle residuals first", what, first.model, one_start);

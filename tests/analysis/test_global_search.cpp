@@ -67,21 +67,22 @@ void check_fit_optimum_values(const FitSummary& summary) {
   CHECK(k == listed.size());
 }
 
-// The --folds 0 fit, after checking that --folds 3 and 4 end at it, each with the basin hops
-// `doorbench fit` takes.
+// The --folds 0 fit, after checking that --folds 3 and 4 end at it, each with 6 basin hops
+// (`doorbench fit --hops 6`): the hops start from the stage's best, which the folds do not
+// change.
 FitResult check_same_fit_for_folds(const PreparedData& data, const DoorModel& start) {
-  const auto options_as_fit_takes_them = [](int folds) {
+  const auto options_with_hops = [](int folds) {
     FitOptions options = options_with_folds(folds);
-    options.global_hops = 6;  // `doorbench fit`'s --hops
+    options.global_hops = 6;
     options.global_hop_size = 0.02;
     return options;
   };
-  const FitResult none = fit_model(start, data, options_as_fit_takes_them(0));
+  const FitResult none = fit_model(start, data, options_with_hops(0));
   INFO(none.summary.full_report());
   check_fit_optimum_values(none.summary);
   for (int folds : {3, 4}) {
     INFO("--folds " << folds);
-    const FitResult with = fit_model(start, data, options_as_fit_takes_them(folds));
+    const FitResult with = fit_model(start, data, options_with_hops(folds));
     CHECK(largest_relative_difference(none.model, with.model) <= 1e-6);
     CHECK(with.summary.final_cost == Approx(none.summary.final_cost).epsilon(1e-9));
     REQUIRE(with.summary.held_out.has_value());
