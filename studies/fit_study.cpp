@@ -35,6 +35,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -166,49 +167,38 @@ void basins(const Case& c) {
   };
   line("fit", "from the data", &data_fit, "");
   line("fit", "from the truth", &truth_fit, "");
-  const auto polish = [&](const char* probe, const std::string& what, const DoorModel& start,
-                          const FitOptions& with) {
+  // A start that breaks a constraint (θ0 < θ1 < ...) or a fit that fails is its line's error.
+  const auto polish = [&](const char* probe, const std::string& what,
+                          const std::vector<double>& values, const FitOptions& with) {
     try {
-      const FitResult fit = fit_model(start, c.data, with);
+      const FitResult fit = fit_model(c.truth.with_parameter_values(values), c.data, with);
       line(probe, what, &fit, "");
+      return std::optional<DoorModel>(fit.model);
     } catch (const std::exception& error) {
       line(probe, what, nullptr, error.what());
+      return std::optional<DoorModel>();
     }
   };
-  DoorModel again = data_fit.model;
+  const auto values_of = [](const DoorModel& model) {
+    return std::vector<double>(model.parameter_values().begin(), model.parameter_values().end());
+  };
+  std::vector<double> again = values_of(data_fit.model);
   for (int round = 1; round <= 3; ++round) {
-    try {
-      const FitResult fit = fit_model(again, c.data, one_start);
-      line("data fit polished again from its own values", printf_text("round %d", round), &fit, "");
-      again = fit.model;
-    } catch (const std::exception& error) {
-      line("data fit polished again from its own values", printf_text("round %d", round), nullptr,
-           error.what());
-      break;
-    }
+    const std::optional<DoorModel> polished =
+        polish("data fit polished again from its own values", printf_text("round %d", round), again,
+               one_start);
+    if (!polished) break;
+    again = values_of(*polished);
   }
   for (std::size_t i = 0; i < data_fit.summary.parameters.size(); ++i) {
     if (!data_fit.summary.parameters[i].free) continue;
     const std::string& name = data_fit.summary.parameters[i].name;
-    const int index = static_cast<int>(i);
-    std::vector<double> values(data_fit.model.parameter_values().begin(),
-                               data_fit.model.parameter_values().end());
-    values[i] = truth_fit.model.parameter_values()[index];
-    try {
-      polish("data fit with one value of the truth's fit", name,
-             c.truth.with_parameter_values(values), one_start);
-    } catch (const std::invalid_argument& error) {
-      line("data fit with one value of the truth's fit", name, nullptr, error.what());
-    }
-    values.assign(truth_fit.model.parameter_values().begin(),
-                  truth_fit.model.parameter_values().end());
-    values[i] = data_fit.model.parameter_values()[index];
-    try {
-      polish("truth's fit with one value of the data fit", name,
-             c.truth.with_parameter_values(values), one_start);
-    } catch (const std::invalid_argument& error) {
-      line("truth's fit with one value of the data fit", name, nullptr, error.what());
-    }
+    std::vector<double> values = values_of(data_fit.model);
+    values[i] = truth_fit.model.parameter_values()[static_cast<int>(i)];
+    (void)polish("data fit with one value of the truth's fit", name, values, one_start);
+    values = values_of(truth_fit.model);
+    values[i] = data_fit.model.parameter_values()[static_cast<int>(i)];
+    (void)polish("truth's fit with one value of the data fit", name, values, one_start);
   }
   for (double factor : {0.0, 3.0, 10.0, 30.0, 100.0}) {
     FitOptions weak = options;
@@ -222,7 +212,7 @@ void basins(const Case& c) {
                                          : printf_text("sigma_theta x%g -> the data's", factor);
     try {
       const FitResult first = fit_model(data_start(c.data), c.data, weak);
-      polish("weaker angle residuals first", what, first.model, one_start);
+      (void)polish("weaker angle residuals first", what, values_of(first.model), one_start);
     } catch (const std::exception& error) {
       line("weaker angle residuals first", what, nullptr, error.what());
     }
