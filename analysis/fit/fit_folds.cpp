@@ -114,7 +114,7 @@ FoldOutcome refit_fold(const DoorModel& fitted, const PreparedData& data, const 
   out.fit.converged = outcome.converged;
   out.fit.termination = outcome.termination;
   out.fit.iterations = outcome.iterations;
-  out.fit.fitted_rmse_rad_s = compute_fit_metrics(*out.model, training, windows).window.rmse();
+  out.fit.fitted_rmse_rad_s = compute_window_errors(*out.model, training, windows).rmse();
   out.fit.held_out_rmse_rad_s = out.held_out.window.rmse();
   out.fit.at_bound = at_bound_names(*out.model, map.free_index);
   return out;

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <limits>
 #include <stdexcept>
+#include <utility>
 
 #include "analysis/simulation/simulator.h"
 
@@ -152,11 +153,12 @@ void replay_stroke(const DoorModel& model, const Stroke& stroke, StrokeFitMetric
   }
 }
 
-}  // namespace
-
-FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
-                               const WindowOptions& options,
-                               const std::vector<int>& stroke_indices) {
+// Each listed stroke's window errors (every stroke's when `stroke_indices` is empty), in the
+// order listed, and every stroke's window count in `window_count`; a stroke of fewer than two
+// samples has no errors and is left out.
+std::vector<std::pair<int, ErrorStats>> stroke_window_errors(
+    const DoorModel& model, const PreparedData& data, const WindowOptions& options,
+    const std::vector<int>& stroke_indices, std::vector<std::size_t>& window_count) {
   std::vector<int> indices = stroke_indices;
   if (indices.empty()) {
     for (std::size_t s = 0; s < data.strokes.size(); ++s) indices.push_back(static_cast<int>(s));
@@ -164,7 +166,7 @@ FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
   const WindowSimulation windows = simulate_windows(model, data, options);
   // The samples measured: those in a window but not its first (a window left out because
   // it spans a gap measures none).
-  std::vector<std::size_t> window_count(data.strokes.size(), 0);
+  window_count.assign(data.strokes.size(), 0);
   std::vector<std::vector<char>> counted(data.strokes.size());
   for (std::size_t s = 0; s < data.strokes.size(); ++s) {
     counted[s].assign(data.strokes[s].size(), 0);
@@ -175,25 +177,52 @@ FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
     for (int j = 1; j < window.count; ++j) counted[window.stroke][window.first + j] = 1;
   }
   for (const FitWindow& window : windows_used) counted[window.stroke][window.first] = 0;
-  FitMetrics metrics;
+  std::vector<std::pair<int, ErrorStats>> out;
   for (int s : indices) {
     if (s < 0 || s >= static_cast<int>(data.strokes.size())) {
       throw std::out_of_range("compute_fit_metrics: no stroke at index " + std::to_string(s));
     }
     const Stroke& stroke = data.strokes[s];
     if (stroke.size() < 2) continue;  // nothing to compare
+    ErrorStats errors;
+    for (std::size_t i = 0; i < stroke.size(); ++i) {
+      if (!counted[s][i]) continue;
+      errors.add(stroke.omega_rad_s[i], windows.omega_rad_s[s][i], stroke.time_s[i]);
+    }
+    out.emplace_back(s, errors);
+  }
+  return out;
+}
+
+}  // namespace
+
+FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
+                               const WindowOptions& options,
+                               const std::vector<int>& stroke_indices) {
+  std::vector<std::size_t> window_count;
+  FitMetrics metrics;
+  for (const auto& [s, errors] :
+       stroke_window_errors(model, data, options, stroke_indices, window_count)) {
+    const Stroke& stroke = data.strokes[s];
     StrokeFitMetrics stroke_metrics;
     stroke_metrics.stroke_id = stroke.id;
     stroke_metrics.direction = stroke.direction;
     stroke_metrics.windows = window_count[s];
-    for (std::size_t i = 0; i < stroke.size(); ++i) {
-      if (!counted[s][i]) continue;
-      stroke_metrics.window.add(stroke.omega_rad_s[i], windows.omega_rad_s[s][i], stroke.time_s[i]);
-    }
+    stroke_metrics.window = errors;
     replay_stroke(model, stroke, stroke_metrics);
     metrics.add(stroke_metrics);
   }
   return metrics;
+}
+
+ErrorStats compute_window_errors(const DoorModel& model, const PreparedData& data,
+                                 const WindowOptions& options) {
+  std::vector<std::size_t> window_count;
+  ErrorStats all;
+  for (const auto& [s, errors] : stroke_window_errors(model, data, options, {}, window_count)) {
+    all.merge(errors);
+  }
+  return all;
 }
 
 }  // namespace doorbench

@@ -84,4 +84,9 @@ FitMetrics compute_fit_metrics(const DoorModel& model, const PreparedData& data,
                                const WindowOptions& options,
                                const std::vector<int>& stroke_indices = {});
 
+// The window errors of `model` on every stroke of `data`, merged: compute_fit_metrics(...)
+// .window to the last bit, without the replays (a screen of many models needs no more).
+ErrorStats compute_window_errors(const DoorModel& model, const PreparedData& data,
+                                 const WindowOptions& options);
+
 }  // namespace doorbench

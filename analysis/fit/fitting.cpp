@@ -568,8 +568,9 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
   global.starts_tried = 1 + static_cast<int>(starts.size());
   throw_if_stop_requested(options.stop_requested, "the global search");
   parallel_for(static_cast<int>(starts.size()), fit_thread_count(options), [&](int k) {
+    const DoorModel& model = starts[static_cast<std::size_t>(k)].model;
     starts[static_cast<std::size_t>(k)].rmse =
-        evaluate_model(starts[static_cast<std::size_t>(k)].model, data, options).window.rmse();
+        compute_window_errors(model, data, metric_windows(options, model)).rmse();
   });
   const double first_rmse = result.summary.fitted.window.rmse();
   std::vector<std::size_t> promising;

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/fit_start.h"
 #include "analysis/fit/fit_windows.h"
 #include "analysis/fit/fitting.h"
@@ -295,6 +296,28 @@ TEST_CASE("windows simulated by RK4 reproduce the adaptive simulator's strokes",
   CHECK(rmse[1] < 1e-5);
   CHECK(largest[1] < 1e-4);
   CHECK(largest[1] < largest[0]);
+}
+
+TEST_CASE("compute_window_errors is compute_fit_metrics' window errors without the replays",
+          "[fitting]") {
+  // A model 30 % off on noisy strokes: every window has an error, and each sum must be the
+  // same to the last bit (the global stage screens its starts with compute_window_errors and
+  // compares them with the fit's compute_fit_metrics).
+  WindowOptions options;
+  const DoorModel model = thirty_percent_off(sensory_truth());
+  options.cut_angles_rad = {0.0, model.geometry().theta_max_rad};
+  const doorbench::FitMetrics metrics =
+      doorbench::compute_fit_metrics(model, noisy_sensory_data(), options);
+  const doorbench::ErrorStats errors =
+      doorbench::compute_window_errors(model, noisy_sensory_data(), options);
+  REQUIRE(metrics.window.count > 100);
+  CHECK(errors.count == metrics.window.count);
+  CHECK(errors.sum_squared_error == metrics.window.sum_squared_error);
+  CHECK(errors.max_abs_error == metrics.window.max_abs_error);
+  CHECK(errors.time_of_max_s == metrics.window.time_of_max_s);
+  CHECK(errors.sum_measured == metrics.window.sum_measured);
+  CHECK(errors.sum_measured_squared == metrics.window.sum_measured_squared);
+  CHECK(errors.rmse() > 1e-3);
 }
 
 TEST_CASE("the latch read off the force-angle curves lands within a switch width", "[fitting]") {
