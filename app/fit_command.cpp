@@ -253,7 +253,7 @@ void run_fit(const FitCommandOptions& options) {
   fit_options.progress = fit_progress_display(status);
   fit_options.stop_requested = [&signals] { return signals.received() != 0; };
   fit_options.partial_on_stop = true;
-  FitResult result{start, FitSummary{}};
+  FitResult result{start, FitSummary{}, {}};
   try {
     result = free_auto ? fit_free_auto(start, data, fit_options, status, inputs.report_lines)
                        : fit_model(start, data, fit_options);

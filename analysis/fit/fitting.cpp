@@ -392,6 +392,15 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   const std::vector<double> x_start = scaled_values(map, start_model.parameter_values());
   WindowProblem problem(start_model, data, map, window_fit_kind(options, start), weights, x_start);
   check_problem(problem, data, map, summary);
+  if (!options.window_state_start.empty()) {
+    if (options.window_state_start.size() != problem.z().size()) {
+      throw std::invalid_argument(
+          "fit window_state_start holds " + std::to_string(options.window_state_start.size()) +
+          " values, but the windows of this fit have " + std::to_string(problem.z().size()) +
+          " start states (another recording, window_s or angle range?)");
+    }
+    problem.z() = options.window_state_start;
+  }
   summary.times.start_s = seconds_since(began);
 
   if (options.equation_error_start) {
@@ -406,7 +415,7 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   throw_if_stop_requested(options.stop_requested, "the fit's statistics");
   const StageClock::time_point statistics_began = StageClock::now();
   const std::vector<double> fitted_values = map.values(problem.x().data());
-  FitResult result{start.with_parameter_values(fitted_values), FitSummary{}};
+  FitResult result{start.with_parameter_values(fitted_values), FitSummary{}, problem.z()};
   statistics_stage(problem, start, map, chosen, window_start_values, fitted_values, options,
                    summary, kept.information);
   kept.map = map;
@@ -593,6 +602,7 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
   FitOptions polish = options;
   polish.latch_start_from_data = false;
   polish.equation_error_start = false;
+  polish.window_state_start.clear();  // the other starts are not the given optimum
   std::vector<PolishedOptimum> optima{{"the data-derived start", result.summary.final_cost,
                                        result.summary.fitted.window.fit_percent(),
                                        free_values(kept.map, kept.x)}};

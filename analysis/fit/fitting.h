@@ -76,6 +76,12 @@ struct FitOptions {
   // Estimate each window's start state too, tied to the measured state by its noise level
   // (errors in variables; docs/fitting.md). false: start exactly from the measured state.
   bool estimate_window_states = true;
+  // The estimated window start states to begin from (FitResult::window_states of a fit of the
+  // same data with the same window_s and angle range), for a start that is another fit's
+  // optimum: the window fit then begins at that optimum's cost. Empty: the measured states.
+  // The global stage's other starts and the subset refits begin from the measured states
+  // either way. fit_model throws std::invalid_argument when the count is not the problem's.
+  std::vector<double> window_state_start;
   // σ_ω and σ_θ, the residuals' weights. 0: the data's noise levels (PreparedData), or the
   // bench's (kBench*) when the data has none.
   double rate_noise_rad_s = 0.0;
@@ -402,6 +408,9 @@ struct FitSummary {
 struct FitResult {
   DoorModel model;  // the fitted model; every constraint holds
   FitSummary summary;
+  // The window fit's estimated start states at the result, θ and ω of each window in turn in
+  // solver units (FitOptions::window_state_start takes them); empty when not estimated.
+  std::vector<double> window_states;
 };
 
 // Fits `start` (its values are the start, its bounds the search range) to `data`. Throws

@@ -320,6 +320,33 @@ TEST_CASE("compute_window_errors is compute_fit_metrics' window errors without t
   CHECK(errors.rmse() > 1e-3);
 }
 
+TEST_CASE("a fit started at another fit's optimum with its window states begins at its cost",
+          "[fitting]") {
+  const FitResult& first = noisy_sensory_fit();
+  REQUIRE(first.window_states.size() == 2 * first.summary.windows);
+  // From the optimum's parameters alone, the windows begin at the measured states: above the
+  // optimum's cost. With its window states too, exactly at it, and the solve stays there.
+  FitOptions again = quick_options();
+  again.latch_start_from_data = false;
+  again.equation_error_start = false;
+  again.coarse_first = false;
+  again.global_search = false;
+  const FitResult cold = doorbench::fit_model(first.model, noisy_sensory_data(), again);
+  CHECK(cold.summary.initial_cost > 1.01 * first.summary.final_cost);
+  again.window_state_start = first.window_states;
+  const FitResult warm = doorbench::fit_model(first.model, noisy_sensory_data(), again);
+  CHECK(warm.summary.initial_cost == Approx(first.summary.final_cost).epsilon(1e-9));
+  CHECK(warm.summary.final_cost <= warm.summary.initial_cost);
+  CHECK(warm.summary.iterations < cold.summary.iterations);
+  CHECK(warm.window_states.size() == first.window_states.size());
+
+  again.window_state_start = {0.0, 0.0};
+  CHECK_THROWS_WITH(doorbench::fit_model(first.model, noisy_sensory_data(), again),
+                    "fit window_state_start holds 2 values, but the windows of this fit have " +
+                        std::to_string(first.window_states.size()) +
+                        " start states (another recording, window_s or angle range?)");
+}
+
 TEST_CASE("the latch read off the force-angle curves lands within a switch width", "[fitting]") {
   const DoorModel& truth = sensory_truth();
   const doorbench::LatchReadOff read = doorbench::read_latch_start(
