@@ -84,8 +84,10 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
   };
   const DoorModel neutral = current.model.with_effect(
       refit_setting(candidate.kind, neutral_values(candidate, current.model)));
-  // The final fit starts at an optimum of the fine problem: no equation-error stage and no
-  // coarse pass (which would leave that optimum for the coarse one's and come back).
+  // The final fit starts at an optimum of the fine problem, window states included (from the
+  // measured states it would begin above that optimum and could end above it): no
+  // equation-error stage and no coarse pass (which would leave that optimum for the coarse
+  // one's and come back).
   // Its global stage is the subset refits alone (the loop chooses its starts): on the
   // cross-validation's partition they are its folds when they find nothing better.
   FitOptions final_fit = from_fit;
@@ -95,8 +97,8 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
   final_fit.global_subsets = final_fit.cross_validation_folds;
   RefitOutcome out;
   // A refit that ends above the parent is fitted again from the parent's optimum with the
-  // effect at neutral (a point of the refit's problem); if that too ends above, the parent
-  // stands.
+  // effect at neutral and the parent's window states (a point of the refit's problem at the
+  // parent's sum of squares); if that too ends above, the parent stands.
   auto finish = [&](FitResult fitted, const std::string& origin, bool from_neutral) {
     out.origin = origin;
     out.best_sum_of_squares = fitted_sum_of_squares(fitted);
@@ -109,7 +111,9 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
       return;
     }
     ++fits;
-    FitResult again = fit_model(neutral, data, final_fit);
+    FitOptions from_parent = final_fit;
+    from_parent.window_state_start = current.window_states;
+    FitResult again = fit_model(neutral, data, from_parent);
     out.origin = origin + ", then the parent's optimum (the effect at neutral)";
     out.best_sum_of_squares = std::min(out.best_sum_of_squares, fitted_sum_of_squares(again));
     if (fitted_sum_of_squares(again) <= parent) {
@@ -172,6 +176,7 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
   }
   // The better start's optimum, or the parent's with the effect at neutral when both failed.
   ++fits;
+  final_fit.window_state_start = best ? best->window_states : current.window_states;
   finish(fit_model(best ? best->model : neutral, data, final_fit), origin, !best);
   return out;
 }
