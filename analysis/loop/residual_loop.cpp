@@ -345,6 +345,9 @@ LoopResult run_residual_loop(const DoorModel& start, const PreparedData& data,
   // to stop.
   LoopOptions options = given;
   if (!options.fit.stop_requested) options.fit.stop_requested = options.stop_requested;
+  // The global stage's subset refits are the folds' partition, so each fit's
+  // cross-validation reuses them instead of refitting the folds apart.
+  options.fit.global_subsets = options.fit.cross_validation_folds;
   int usable_strokes = 0;
   for (const Stroke& stroke : data.strokes) usable_strokes += stroke.size() >= 2 ? 1 : 0;
   if (usable_strokes < 2) {

@@ -43,7 +43,8 @@ struct LoopOptions {
   // errors. Avoid 2: stroke s is in fold s mod k, so with openings and closings alternating
   // each fold would be fitted on one direction alone (docs/residual-loop.md, "Limits").
   // The loop compares fits by their rate RMSE: of the global stage's optima its fits keep the
-  // lowest RMSE.
+  // lowest RMSE. Its global_subsets is ignored: the loop's fits take their subset refits on
+  // the folds, which the cross-validation then reuses.
   FitOptions fit = [] {
     FitOptions options;
     options.cross_validation_folds = 3;
