@@ -88,13 +88,13 @@ RefitOutcome refit(const DoorModel& family_start, const FitResult& current,
   // measured states it would begin above that optimum and could end above it): no
   // equation-error stage and no coarse pass (which would leave that optimum for the coarse
   // one's and come back).
-  // Its global stage is the subset refits alone (the loop chooses its starts): on the
-  // cross-validation's partition they are its folds when they find nothing better.
+  // Its global stage is the subset refits alone (the loop chooses its starts): they are on
+  // the cross-validation's partition (run_residual_loop), so they are its folds when they find
+  // nothing better.
   FitOptions final_fit = from_fit;
   final_fit.equation_error_start = false;
   final_fit.coarse_first = false;
   final_fit.global_samples = 0;
-  final_fit.global_subsets = final_fit.cross_validation_folds;
   RefitOutcome out;
   // A refit that ends above the parent is fitted again from the parent's optimum with the
   // effect at neutral and the parent's window states (a point of the refit's problem at the
