@@ -50,7 +50,10 @@ std::string check_grid(const std::vector<double>& grid, const char* option, effe
 }  // namespace
 
 std::string LoopOptions::validate() const {
-  if (const std::string message = fit.validate(); !message.empty()) {
+  // fit.global_subsets is checked as the loop uses it: set to the folds (run_residual_loop).
+  FitOptions used = fit;
+  used.global_subsets = fit.cross_validation_folds;
+  if (const std::string message = used.validate(); !message.empty()) {
     return "loop fit options: " + message;
   }
   if (fit.cross_validation_folds < 2) {

@@ -318,6 +318,8 @@ TEST_CASE("residual loop: options are validated with a message naming the option
              Contains("cross_validation_folds"));
   CHECK_THAT(message([](LoopOptions& o) { o.fit.window_s = -1; }),
              Contains("loop fit options") && Contains("window_s"));
+  // The loop sets its fits' subsets to the folds, so a value it ignores is not refused.
+  CHECK(message([](LoopOptions& o) { o.fit.global_subsets = 1; }).empty());
   CHECK_THAT(message([](LoopOptions& o) { o.max_steps = 0; }), Contains("max_steps"));
   CHECK_THAT(message([](LoopOptions& o) { o.refit_candidates = 0; }), Contains("refit_candidates"));
   CHECK_THAT(message([](LoopOptions& o) { o.min_explained_fraction = 1.0; }),
