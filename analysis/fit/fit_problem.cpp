@@ -549,7 +549,7 @@ WindowProblem::Outcome WindowProblem::solve(const SolverSettings& settings, int 
   }
   // Without the statistical stopping rule (the study's objective), the result must be the
   // best point seen: monotonic steps only.
-  solver.use_nonmonotonic_steps = uncertainty_tolerance > 0;
+  solver.use_nonmonotonic_steps = settings.nonmonotonic_steps && uncertainty_tolerance > 0;
   PredictedStepCheck check(*this, uncertainty_tolerance, settings.robust_uncertainty);
   // The report first: Ceres calls no further callback after one that ends the solve.
   IterationReport report(settings.on_iteration);

@@ -34,6 +34,8 @@ struct SolverSettings {
   double equation_error_step_tolerance = 1e-2;
   // The predicted-step rule measures steps in the window-robust uncertainty (else classical).
   bool robust_uncertainty = true;
+  // FitOptions::nonmonotonic_steps (taken only with the predicted-step rule).
+  bool nonmonotonic_steps = true;
   int threads = 1;  // evaluation threads, the caller's among them (>= 1)
   // Called after each solver iteration with the iterations of this solve so far, on the
   // solve's calling thread; may be empty.

@@ -183,6 +183,12 @@ struct FitOptions {
   // inflated and 10 stops the coarse pass at once, leaving the iterations to the fine pass
   // at twice the cost; the residual loop's refit starts use 1 (docs/residual-loop.md).
   double coarse_tolerance_factor = 10.0;
+  // Let Levenberg–Marquardt accept steps that raise the cost for a while (Ceres'
+  // use_nonmonotonic_steps) while the stopping rule above is on. They get through the window
+  // cost's small-scale roughness to lower optima, but the stopping rule cannot see an
+  // excursion that never comes back below its best, which then runs to max_iterations
+  // (docs/fitting.md, "Solving and stopping"). false: every accepted step lowers the cost.
+  bool nonmonotonic_steps = true;
   // The equation-error stage stops after two accepted steps that change no free parameter
   // by more than this fraction of its scale.
   double equation_error_step_tolerance = 1e-2;

@@ -179,7 +179,9 @@ struct LoopRun {
   const Say& say;
   LoopResult& result;
   FitResult current;            // the current model's fit
-  FitOptions current_options;   // the options it was fitted with
+  // The options it was fitted with (after a switch, the family's options for its refits; the
+  // structure check's physical fit itself took monotonic steps).
+  FitOptions current_options;
   DoorModel family_start;       // the start model of the current family
   int steps_in_family = 0;      // effects added in the current family
   bool family_checked = false;  // the structure check ran (it runs once)

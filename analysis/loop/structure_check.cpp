@@ -82,6 +82,10 @@ StructureCheck check_structure(StructureCheck check, const FitResult& current,
   const std::string other_name(to_string(check.other_kind));
   say("structure check: " + check.reason + "; fitting the " + other_name + " model");
   FitOptions fit = structure_fit_options(options, check.other_kind);
+  // The physical fit from the reference door takes monotonic steps: with non-monotonic ones
+  // its passes wander above their best to max_iterations, at the same or a worse held-out
+  // RMSE (docs/residual-loop.md, "The structure check").
+  if (check.other_kind == ModelKind::kPhysical) fit.nonmonotonic_steps = false;
   try {
     ++fits;
     check.other_fit = fit_model(reference_model(check.other_kind), data, fit);

@@ -43,12 +43,19 @@ double largest_relative_difference(const DoorModel& a, const DoorModel& b) {
   return largest;
 }
 
-// Draw 3 of the recording family at 50 Hz (12 strokes), and the start `doorbench fit` takes.
-PreparedData family_draw_50hz() {
+// A draw of the recording family at 50 Hz (12 strokes), as doorbench_fit_study draws it.
+PreparedData family_draw_50hz(int draw = 3) {
   testing::FamilyOptions family;
   family.sample_rates_hz = {50.0};
   return testing::family_recording(testing::sensory_reference(),
-                                   testing::draw_conditions(3, family), 3);
+                                   testing::draw_conditions(draw, family), draw);
+}
+
+// The start `doorbench fit` takes: the sensory reference door's values read off the data.
+DoorModel start_read_off(const PreparedData& data) {
+  return start_from_data(
+             data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
+      .model;
 }
 
 // The fit's optimum in the uniqueness lines holds the fit's own free values, whichever start
@@ -105,14 +112,24 @@ TEST_CASE(
     "where the folds used to decide",
     "[fitting][global][slow]") {
   const PreparedData data = family_draw_50hz();
-  const DoorModel start =
-      start_from_data(
-          data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
-          .model;
-  const FitResult fit = check_same_fit_for_folds(data, start);
+  const FitResult fit = check_same_fit_for_folds(data, start_read_off(data));
   // The fit is a polish's, not the data-derived start's: the values checked above are the
   // polish's own.
   CHECK(fit.summary.global.best_from != "the data-derived start");
+}
+
+// Draw 5 is one where the window cost's roughness matters: with monotonic steps the fit's
+// optimum has a much higher cost (docs/PERFORMANCE.md, "Monotonic steps").
+TEST_CASE("Global search: non-monotonic steps reach a lower optimum than monotonic ones",
+          "[fitting][global][slow]") {
+  const PreparedData data = family_draw_50hz(5);
+  const DoorModel start = start_read_off(data);
+  const FitResult nonmonotonic = fit_model(start, data, options_with_folds(0));
+  FitOptions options = options_with_folds(0);
+  options.nonmonotonic_steps = false;
+  const FitResult monotonic = fit_model(start, data, options);
+  INFO(nonmonotonic.summary.brief_report() << "\n" << monotonic.summary.brief_report());
+  CHECK(monotonic.summary.final_cost > 1.3 * nonmonotonic.summary.final_cost);
 }
 
 TEST_CASE("Global search: the report says how unique the optimum is, word for word",

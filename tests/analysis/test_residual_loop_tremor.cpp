@@ -147,6 +147,9 @@ TEST_CASE(
   REQUIRE(check.other_fit.has_value());
   CHECK(check.current_kind == ModelKind::kSensory);
   CHECK(check.other_kind == ModelKind::kPhysical);
+  // The physical fit from the reference door takes monotonic steps; the loop's own fits do not.
+  CHECK_FALSE(check.other_fit->summary.options.nonmonotonic_steps);
+  CHECK(loop.start_fit.summary.options.nonmonotonic_steps);
   CHECK(check.other_better);
   CHECK(check.other.held_out_rmse_rad_s < check.current.held_out_rmse_rad_s);
   CHECK(check.bic_change < 0);
