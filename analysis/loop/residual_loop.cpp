@@ -179,9 +179,7 @@ struct LoopRun {
   const Say& say;
   LoopResult& result;
   FitResult current;            // the current model's fit
-  // The options it was fitted with (after a switch, the family's options for its refits; the
-  // structure check's physical fit itself took monotonic steps).
-  FitOptions current_options;
+  FitOptions current_options;   // the options its refits derive from
   DoorModel family_start;       // the start model of the current family
   int steps_in_family = 0;      // effects added in the current family
   bool family_checked = false;  // the structure check ran (it runs once)
