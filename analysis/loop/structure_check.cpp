@@ -83,8 +83,8 @@ StructureCheck check_structure(StructureCheck check, const FitResult& current,
   say("structure check: " + check.reason + "; fitting the " + other_name + " model");
   FitOptions fit = structure_fit_options(options, check.other_kind);
   // The physical fit from the reference door takes monotonic steps: with non-monotonic ones
-  // its passes wander above their best to max_iterations, at the same or a worse held-out
-  // RMSE (docs/residual-loop.md, "The structure check").
+  // its passes wandered above their best to max_iterations on sensory doors, for no better
+  // decision (docs/residual-loop.md, "4. The structure check").
   if (check.other_kind == ModelKind::kPhysical) fit.nonmonotonic_steps = false;
   try {
     ++fits;

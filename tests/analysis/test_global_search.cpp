@@ -119,7 +119,8 @@ TEST_CASE(
 }
 
 // Draw 5 is one where the window cost's roughness matters: with monotonic steps the fit's
-// optimum has a much higher cost (docs/PERFORMANCE.md, "Monotonic steps").
+// optimum has a much higher cost (docs/PERFORMANCE.md, "Monotonic steps for the structure
+// check's physical fit").
 TEST_CASE("Global search: non-monotonic steps reach a lower optimum than monotonic ones",
           "[fitting][global][slow]") {
   const PreparedData data = family_draw_50hz(5);
