@@ -293,7 +293,9 @@ struct LoopStep {
 };
 
 // The structure check's comparison (LoopOptions::structure_check): the loop's final model
-// against the other model family fitted to the same data with the same options.
+// against the other model family fitted to the same data with the loop's fit options, but
+// for the free set (structure_free_parameters) and, for the physical model, monotonic steps
+// (FitOptions::nonmonotonic_steps false).
 struct StructureCheck {
   bool ran = false;                      // false: `reason` says why not
   std::string reason;                    // the conditions met, or the one that was not
