@@ -68,4 +68,11 @@ std::string format_signed_percent(double fraction, int decimals) {
   return printf_text("%+.*f%%", decimals, 100.0 * fraction);
 }
 
+std::string format_percent_at_most(double fraction, int decimals, double limit) {
+  if (std::isfinite(fraction) && fraction > limit) {
+    return "> " + printf_text("%.0f%%", 100.0 * limit);
+  }
+  return format_percent(fraction, decimals);
+}
+
 }  // namespace doorbench

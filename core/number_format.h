@@ -15,6 +15,11 @@
 //   format_percent(f, d)        a fraction as a percentage with d decimals (0.123, 1 ->
 //                               "12.3%"), "-" for NaN or an infinity
 //   format_signed_percent(f, d) the same with its sign always written ("+12.3%", "-0.5%")
+//   format_percent_at_most(f, d, limit)
+//                               format_percent up to `limit` (a fraction), "> " and the
+//                               limit's percentage above it (limit 10: "> 1000%"; "-" for NaN
+//                               or an infinity): a relative uncertainty whose size past the
+//                               limit says only "undetermined"
 //   format_readable(x)          a value or a limit in a message as people write it: 10
 //                               significant digits, no exponent below 1e10 ("1000000000",
 //                               "0.05", "1.21" where format_number says 1.2100000000000002),
@@ -34,5 +39,6 @@ std::string p_value_text(double p);
 std::string format_readable(double value);
 std::string format_percent(double fraction, int decimals);
 std::string format_signed_percent(double fraction, int decimals);
+std::string format_percent_at_most(double fraction, int decimals, double limit);
 
 }  // namespace doorbench

@@ -13,6 +13,10 @@ namespace doorbench {
 
 namespace {
 
+// Above this relative uncertainty (10: 1000 %) the parameters table writes "> 1000%": the figure
+// says only that the data do not determine the value.
+constexpr double kLargestRelativeUncertaintyShown = 10.0;
+
 std::string number(double value) {
   return format_significant(value, 6);
 }
@@ -266,7 +270,8 @@ void parameter_section(std::string& out, const FitSummary& summary) {
     out += printf_text(
         "  %-16s %-13s %-11s %-8s %-11s %-11s %-6s %-13s %-13s %-21s %s\n", p.name.c_str(),
         number(p.value).c_str(), short_number(p.uncertainty).c_str(),
-        p.free ? format_percent(relative, 2).c_str() : "-",
+        p.free ? format_percent_at_most(relative, 2, kLargestRelativeUncertaintyShown).c_str()
+               : "-",
         short_number(p.robust_uncertainty).c_str(), short_number(p.classical_uncertainty).c_str(),
         p.free ? printf_text("%.1f", p.effective_windows).c_str() : "-", number(p.start).c_str(),
         p.free ? number(p.equation_error).c_str() : "-", bounds.c_str(), status.c_str());

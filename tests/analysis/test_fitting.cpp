@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <catch2/catch.hpp>
+#include <cctype>
 #include <cmath>
 #include <memory>
 #include <string>
@@ -592,6 +593,28 @@ TEST_CASE("the reports name what the reader needs", "[fitting]") {
                            "study objective: max |omega error|", "Per stroke", "fixed"}) {
     CHECK_THAT(full, Contains(part));
   }
+}
+
+TEST_CASE("the parameters table writes a relative uncertainty past 1000 % as '> 1000%'",
+          "[fitting]") {
+  doorbench::FitSummary summary = noisy_sensory_fit().summary;
+  doorbench::FittedParameter& parameter = summary.parameters.front();
+  REQUIRE(parameter.free);
+  parameter.uncertainty = 4.76e37 * std::abs(parameter.value);
+  const std::string full = summary.full_report();
+  const std::size_t table = full.find("Parameters (u:");
+  REQUIRE(table != std::string::npos);
+  const std::size_t row = full.find("\n  " + parameter.name + " ", table);
+  REQUIRE(row != std::string::npos);
+  const std::string line = full.substr(row + 1, full.find('\n', row + 1) - row - 1);
+  INFO(line);
+  CHECK_THAT(line, Contains(" > 1000% "));
+  std::size_t longest_digits = 0;
+  for (std::size_t i = 0, run = 0; i < line.size(); ++i) {
+    run = std::isdigit(static_cast<unsigned char>(line[i])) ? run + 1 : 0;
+    longest_digits = std::max(longest_digits, run);
+  }
+  CHECK(longest_digits < 12);
 }
 
 TEST_CASE("options and inputs are checked, with messages naming the culprit", "[fitting]") {

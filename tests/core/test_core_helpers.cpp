@@ -85,6 +85,11 @@ TEST_CASE("format_percent: a fraction as a percentage, '-' where there is no num
   CHECK(doorbench::format_signed_percent(0.123, 1) == "+12.3%");
   CHECK(doorbench::format_signed_percent(-0.005, 1) == "-0.5%");
   CHECK(doorbench::format_signed_percent(std::nan(""), 1) == "-");
+  CHECK(doorbench::format_percent_at_most(0.123, 2, 10.0) == "12.30%");
+  CHECK(doorbench::format_percent_at_most(10.0, 2, 10.0) == "1000.00%");
+  CHECK(doorbench::format_percent_at_most(4.76e36, 2, 10.0) == "> 1000%");
+  CHECK(doorbench::format_percent_at_most(kInf, 2, 10.0) == "-");
+  CHECK(doorbench::format_percent_at_most(std::nan(""), 2, 10.0) == "-");
 }
 
 TEST_CASE(
