@@ -233,7 +233,7 @@ void run_fit(const FitCommandOptions& options) {
   }
 
   FitOptions fit_options;
-  fit_options.substeps_per_sample = substeps_for(data);
+  fit_options.substeps_per_sample = substeps_for_1ms_steps(data);
   if (!free_auto) fit_options.free_parameters = split_names(options.free);
   fit_options.fixed_parameters = split_names(options.fixed);
   if (options.objective == "study-max") {

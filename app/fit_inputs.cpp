@@ -287,13 +287,6 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
           .start_origin = std::move(origin)};
 }
 
-int substeps_for(const PreparedData& data) {
-  const double interval_s = data.interval_median_s > 0 ? data.interval_median_s
-                            : data.sample_rate_hz > 0  ? 1.0 / data.sample_rate_hz
-                                                       : 0.001;
-  return std::clamp(static_cast<int>(std::ceil(interval_s / 0.001 - 1e-9)), 2, 100);
-}
-
 std::string handle_radius_line(const PreparedData& data, const DoorModel& model) {
   std::ostringstream line;
   line << "handle radius " << model.geometry().handle_radius_m << " m, from ";

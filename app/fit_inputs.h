@@ -71,9 +71,6 @@ inline constexpr std::size_t kExcludedListed = 20;
 void list_excluded(PreparedData& data, const DoorModel& start,
                    std::vector<std::string>& report_lines);
 
-// RK4 sub-steps per sample for a fit of `data`: steps of at most 1 ms, and at least 2 per
-// sample (the fit's default, kept at 500 Hz and above). At 50 Hz: 20.
-int substeps_for(const PreparedData& data);
 void add_fit_data_options(CLI::App& command, FitDataOptions& options,
                           const std::string& effects_help);
 

@@ -51,7 +51,7 @@ void run_loop(const LoopCommandOptions& options) {
   }
   LoopOptions loop_options;
   loop_options.fit.cross_validation_folds = options.folds;
-  loop_options.fit.substeps_per_sample = substeps_for(inputs.data);
+  loop_options.fit.substeps_per_sample = substeps_for_1ms_steps(inputs.data);
   loop_options.max_steps = options.max_steps;
   // Stage lines stay; the start fit's, the steps' and the structure check's progress is a
   // status line with the time left (app/progress.h).

@@ -5,7 +5,7 @@
 //   doorbench_fit_study [--family50 N] [--family1k N] [--robot] [--folds 0,3,4] [--truth]
 //                       [--first-seed S] [--threads T] [--report]
 //                       [--samples N] [--polished N] [--promising R] [--hops H]
-//                       [--hop-size D] [--subsets K]
+//                       [--hop-size D] [--subsets K] [--rounds R]
 //                       [--no-global] [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
@@ -18,6 +18,7 @@
 //   --samples N, --polished N, --promising R, --hops H, --subsets K: the global stage's
 //            FitOptions::global_samples, global_polished, global_promising_ratio, global_hops
 //            and global_subsets (0: no subset refits); --hop-size D: global_hop_size;
+//            --rounds R: global_rounds
 //            --no-global: none of it
 //            (FitOptions::global_search false)
 //   --basins: instead of the fits, what separates the data fit's basin from the true door's
@@ -69,6 +70,7 @@ struct Settings {
   int samples = -1, polished = -1, subsets = -1;  // the global stage's, when given
   double promising = -1;                          // FitOptions::global_promising_ratio, given
   int hops = -1;                                  // FitOptions::global_hops, when given
+  int rounds = -1;                                // FitOptions::global_rounds, when given
   double hop_size = -1;                           // FitOptions::global_hop_size, when given
   bool global = true;                             // --no-global: FitOptions::global_search off
   bool basins = false;                            // --basins: the basin probes instead of fits
@@ -79,13 +81,6 @@ struct Case {
   DoorModel truth;
   PreparedData data;
 };
-
-int substeps_for_data(const PreparedData& data) {
-  const double interval_s = data.interval_median_s > 0 ? data.interval_median_s
-                            : data.sample_rate_hz > 0  ? 1.0 / data.sample_rate_hz
-                                                       : 0.001;
-  return std::clamp(static_cast<int>(std::ceil(interval_s / 0.001 - 1e-9)), 2, 100);
-}
 
 DoorModel data_start(const PreparedData& data) {
   const DoorModel base =
@@ -106,7 +101,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
               const DoorModel& start, bool from_data) {
   for (int folds : s.folds) {
     FitOptions options;
-    options.substeps_per_sample = substeps_for_data(c.data);
+    options.substeps_per_sample = substeps_for_1ms_steps(c.data);
     options.cross_validation_folds = folds;
     options.num_threads = s.threads;
     if (!from_data) options.latch_start_from_data = false;
@@ -114,6 +109,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (s.polished >= 0) options.global_polished = s.polished;
     if (s.promising > 0) options.global_promising_ratio = s.promising;
     if (s.hops >= 0) options.global_hops = s.hops;
+    if (s.rounds >= 0) options.global_rounds = s.rounds;
     if (s.hop_size > 0) options.global_hop_size = s.hop_size;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
     options.global_search = s.global;
@@ -146,7 +142,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
 // data's), then with the data's. One line each: recording, probe, what, final cost, window FIT%.
 void basins(const Case& c) {
   FitOptions options;
-  options.substeps_per_sample = substeps_for_data(c.data);
+  options.substeps_per_sample = substeps_for_1ms_steps(c.data);
   options.cross_validation_folds = 0;
   options.what_would_determine = false;
   const FitResult data_fit = fit_model(data_start(c.data), c.data, options);
@@ -282,6 +278,8 @@ int main(int argc, char** argv) {
       s.samples = std::atoi(argv[++i]);
     } else if (has_value && flag == "--hop-size") {
       s.hop_size = std::atof(argv[++i]);
+    } else if (has_value && flag == "--rounds") {
+      s.rounds = std::atoi(argv[++i]);
     } else if (has_value && flag == "--hops") {
       s.hops = std::atoi(argv[++i]);
     } else if (has_value && flag == "--promising") {

@@ -72,7 +72,8 @@ std::string GlobalSearch::report(const std::vector<std::string>& names) const {
   if (start_as_given) tried.push_back("the start as given");
   if (subset_refits > 0) {
     tried.push_back(std::to_string(subset_refits) + " subset refits (" + std::to_string(partition) +
-                    " subsets)");
+                    " subsets" + (rounds > 1 ? ", " + std::to_string(rounds) + " rounds" : "") +
+                    ")");
   }
   if (sample_points > 0) {
     tried.push_back(std::to_string(sample_points) +

@@ -63,6 +63,7 @@ nlohmann::ordered_json global_search_json(const FitSummary& s) {
           {"start_as_given", s.global.start_as_given},
           {"subset_refits", s.global.subset_refits},
           {"subsets", s.global.partition},
+          {"rounds", s.global.rounds},
           {"sample_points", s.global.sample_points},
           {"promising", s.global.promising},
           {"polished", s.global.polished},

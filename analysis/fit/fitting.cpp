@@ -14,7 +14,7 @@
 #include "analysis/fit/fit_problem.h"
 #include "analysis/fit/internal/fit_determine.h"
 #include "analysis/fit/internal/fit_folds.h"
-#include "analysis/fit/internal/fit_search.h"
+#include "analysis/fit/internal/fit_global.h"
 #include "analysis/fit/internal/fit_setup.h"
 #include "analysis/model/sensory_model.h"
 #include "core/clock.h"
@@ -75,6 +75,7 @@ std::string FitOptions::validate() const {
   }
   if (global_seed < 1) return "fit global_seed must be >= 1";
   if (global_hops < 0) return "fit global_hops must be >= 0";
+  if (global_rounds < 1) return "fit global_rounds must be >= 1";
   if (!(global_hop_size > 0 && global_hop_size <= 1)) {
     return "fit global_hop_size must lie in (0, 1]";
   }
@@ -98,6 +99,13 @@ int fit_thread_count(const FitOptions& options) {
   return static_cast<int>(std::max(1u, std::thread::hardware_concurrency()));
 }
 
+int substeps_for_1ms_steps(const PreparedData& data) {
+  const double interval_s = data.interval_median_s > 0 ? data.interval_median_s
+                            : data.sample_rate_hz > 0  ? 1.0 / data.sample_rate_hz
+                                                       : 0.001;
+  return std::clamp(static_cast<int>(std::ceil(interval_s / 0.001 - 1e-9)), 2, 100);
+}
+
 SolverSettings solver_settings(const FitOptions& options) {
   SolverSettings settings;
   settings.max_iterations = options.max_iterations;
@@ -119,11 +127,11 @@ std::vector<double> scaled_values(const ParameterMap& map, std::span<const doubl
   return map.scaled(std::vector<double>(values.begin(), values.end()));
 }
 
-WindowOptions metric_windows(const FitOptions& options, const DoorModel& model) {
+}  // namespace
+
+WindowOptions fit_detail::metric_windows(const FitOptions& options, const DoorModel& model) {
   return metric_window_options(options, model);
 }
-
-}  // namespace
 
 FitMetrics evaluate_model(const DoorModel& model, const PreparedData& data,
                           const FitOptions& options) {
@@ -358,18 +366,10 @@ void statistics_stage(WindowProblem& problem, const DoorModel& start, const Para
             });
 }
 
-// What a fit leaves for the what-would-determine stage, which runs on the fit that is kept.
-struct KeptFit {
-  ParameterMap map;
-  std::vector<double> x;  // the fitted free values, scaled
-  FitWeights weights;
-  Eigen::MatrixXd information;  // the window problem's H at x
-};
+}  // namespace
 
-// The fit of one start: set-up, equation-error stage, window fit, statistics and metrics on
-// the fitted strokes (no held-out metrics: held_out_stage).
-FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOptions& options,
-                   KeptFit& kept) {
+FitResult fit_detail::fit_once(const DoorModel& start, const PreparedData& data,
+                               const FitOptions& options, KeptFit& kept) {
   const StageClock::time_point began = StageClock::now();
   if (const std::string message = options.validate(); !message.empty()) {
     throw std::invalid_argument(message);
@@ -436,6 +436,8 @@ FitResult fit_once(const DoorModel& start, const PreparedData& data, const FitOp
   return result;
 }
 
+namespace {
+
 // What would determine each free parameter of the kept fit left undetermined or on a bound
 // (FitSummary::determining); nothing to do when every one is determined and inside its bounds.
 void determining_stage(FitResult& result, const PreparedData& data, const FitOptions& options,
@@ -472,197 +474,6 @@ void determining_stage(FitResult& result, const PreparedData& data, const FitOpt
     summary.determining[r].undetermined = !parameter.determined;
     summary.determining[r].at_bound = parameter.at_bound;
   }
-}
-
-// The global stage's starts after the first (FitOptions::global_search): each start's model,
-// where it came from and its kind's rank (subset refits 0, the start as given 1, the sample 2).
-struct SearchStart {
-  std::string origin;
-  DoorModel model;
-  int rank = 0;
-  double rmse = kNaN;  // window RMSE on every stroke, from the measured states
-};
-
-// The starts to screen: the subset refits from the first fit's optimum, the start as given
-// when it differs from the first start, and the sample of the bounds.
-std::vector<SearchStart> search_starts(const DoorModel& start, const FitResult& first,
-                                       const std::vector<FoldOutcome>& refits,
-                                       const FitOptions& options, const KeptFit& kept,
-                                       GlobalSearch& global) {
-  std::vector<SearchStart> starts;
-  for (std::size_t k = 0; k < refits.size(); ++k) {
-    if (!refits[k].refitted) continue;
-    starts.push_back({"the refit without subset " + std::to_string(k + 1) + " of " +
-                          std::to_string(refits.size()),
-                      *refits[k].model, 0});
-    ++global.subset_refits;
-  }
-  // The start as given, unless the first start's windows began exactly there.
-  const std::span<const double> given = start.parameter_values();
-  std::vector<double> first_start;
-  for (const FittedParameter& parameter : first.summary.parameters) {
-    first_start.push_back(parameter.equation_error);
-  }
-  if (first_start != std::vector<double>(given.begin(), given.end())) {
-    starts.push_back({"the start as given", start, 1});
-    global.start_as_given = true;
-  }
-  for (std::vector<double>& values :
-       space_filling_sample(first.model, kept.map, options.global_samples, options.global_seed)) {
-    starts.push_back({"sample point " + std::to_string(global.sample_points + 1),
-                      first.model.with_parameter_values(values), 2});
-    ++global.sample_points;
-  }
-  return starts;
-}
-
-// The best optimum of the global stage so far, when not the first start's: its fit, what the
-// fit keeps, its place among the polished optima and its global_keep measure.
-struct BestOptimum {
-  std::optional<FitResult> fit;
-  KeptFit kept;
-  std::size_t index = 0;
-  double measure = kNaN;
-};
-
-// Polishes `model` exactly from its values with `polish`; adds its optimum to `optima` and
-// makes it `best` when its options.global_keep measure is lower. A start whose simulation or
-// solve fails is one the stage cannot use: a note in `failures`. True when it became the best.
-bool polish_start(const std::string& origin, const DoorModel& model, const PreparedData& data,
-                  const FitOptions& polish, std::vector<PolishedOptimum>& optima,
-                  std::vector<std::string>& failures, BestOptimum& best) {
-  KeptFit polished_kept;
-  std::optional<FitResult> attempt;
-  try {
-    attempt = fit_once(model, data, polish, polished_kept);
-  } catch (const std::runtime_error& error) {
-    failures.push_back("the global stage's polish from " + origin + " failed: " + error.what());
-    return false;
-  }
-  FitResult& polished = *attempt;
-  optima.push_back({origin, polished.summary.final_cost,
-                    polished.summary.fitted.window.fit_percent(),
-                    free_values(polished_kept.map, polished_kept.x)});
-  const double measure = polish.global_keep == FitOptions::GlobalKeep::kLowestCost
-                             ? polished.summary.final_cost
-                             : polished.summary.fitted.window.rmse();
-  if (!(measure < best.measure)) return false;
-  best.measure = measure;
-  best.fit = std::move(polished);
-  best.kept = std::move(polished_kept);
-  best.index = optima.size() - 1;
-  best.fit->summary.notes.insert(best.fit->summary.notes.begin(),
-                                 "the global stage's best optimum was reached from " + origin +
-                                     ", not from the data-derived start");
-  return true;
-}
-
-// The global stage after the first start's fit (FitOptions::global_search): the other starts
-// screened by their window RMSE on every stroke, the promising ones polished, the optimum
-// options.global_keep names kept in `result` and `kept`. `refits` receives the subset
-// refits from the first fit's optimum. True when the first start's fit is kept.
-bool global_stage(FitResult& result, const DoorModel& start, const PreparedData& data,
-                  const FitOptions& options, KeptFit& kept, std::vector<FoldOutcome>& refits) {
-  const StageClock::time_point began = StageClock::now();
-  GlobalSearch global;
-  global.ran = true;
-  const int stroke_count = static_cast<int>(data.strokes.size());
-  global.partition = std::min(options.global_subsets, stroke_count);
-  if (global.partition >= 2) {
-    refits = subset_refits(result.model, data, kept.map, kept.x, options, kept.weights,
-                           global.partition, FitProgress::Stage::kSearch);
-  } else {
-    global.partition = 0;
-  }
-  std::vector<SearchStart> starts = search_starts(start, result, refits, options, kept, global);
-  global.starts_tried = 1 + static_cast<int>(starts.size());
-  throw_if_stop_requested(options.stop_requested, "the global search");
-  parallel_for(static_cast<int>(starts.size()), fit_thread_count(options), [&](int k) {
-    const DoorModel& model = starts[static_cast<std::size_t>(k)].model;
-    starts[static_cast<std::size_t>(k)].rmse =
-        compute_window_errors(model, data, metric_windows(options, model)).rmse();
-  });
-  const double first_rmse = result.summary.fitted.window.rmse();
-  std::vector<std::size_t> promising;
-  for (std::size_t k = 0; k < starts.size(); ++k) {
-    if (starts[k].rmse < options.global_promising_ratio * first_rmse) promising.push_back(k);
-  }
-  global.promising = static_cast<int>(promising.size());
-  std::stable_sort(promising.begin(), promising.end(), [&](std::size_t a, std::size_t b) {
-    return starts[a].rank != starts[b].rank ? starts[a].rank < starts[b].rank
-                                            : starts[a].rmse < starts[b].rmse;
-  });
-  // At most global_polished of each kind: a kind's best start is never crowded out by another
-  // kind's many.
-  std::vector<int> per_kind(3, 0);
-  std::erase_if(promising, [&](std::size_t k) {
-    return ++per_kind[static_cast<std::size_t>(starts[k].rank)] > options.global_polished;
-  });
-  // Each promising start polished exactly from its values, one after another (each fit uses
-  // every thread); the optima in the order polished, the first start's first.
-  FitOptions polish = options;
-  polish.latch_start_from_data = false;
-  polish.equation_error_start = false;
-  polish.window_state_start.clear();  // the other starts are not the given optimum
-  std::vector<PolishedOptimum> optima{{"the data-derived start", result.summary.final_cost,
-                                       result.summary.fitted.window.fit_percent(),
-                                       free_values(kept.map, kept.x)}};
-  std::vector<std::string> failures;  // notes of the kept fit, whichever it is
-  BestOptimum best;
-  best.measure = options.global_keep == FitOptions::GlobalKeep::kLowestCost
-                     ? result.summary.final_cost
-                     : first_rmse;
-  for (std::size_t k : promising) {
-    throw_if_stop_requested(options.stop_requested, "the global search");
-    (void)polish_start(starts[k].origin, starts[k].model, data, polish, optima, failures, best);
-  }
-  // Basin hops from the best optimum so far, each seeded by its number.
-  FitOptions hop_polish = polish;
-  hop_polish.progress = nullptr;
-  for (int h = 1; h <= options.global_hops; ++h) {
-    throw_if_stop_requested(options.stop_requested, "the global search");
-    if (options.progress) options.progress({FitProgress::Stage::kHops, h - 1, options.global_hops});
-    const DoorModel& from = best.fit ? best.fit->model : result.model;
-    const std::vector<double> values = hop_point(
-        from, kept.map, options.global_hop_size,
-        static_cast<std::uint32_t>(options.global_seed) * 7919u + static_cast<std::uint32_t>(h));
-    if (values.empty()) continue;
-    ++global.hops;
-    if (polish_start("hop " + std::to_string(h), from.with_parameter_values(values), data,
-                     hop_polish, optima, failures, best)) {
-      ++global.hops_lower;
-    }
-  }
-  if (options.progress && options.global_hops > 0) {
-    options.progress({FitProgress::Stage::kHops, options.global_hops, options.global_hops});
-  }
-  global.starts_tried += global.hops;
-  const std::size_t best_index = best.index;
-  global.polished = static_cast<int>(optima.size());
-  distinct_optima(optima, best_index, global);
-  if (best.fit) {
-    // The parameters' starts as the user gave them, and how the fit was reached.
-    FitSummary& summary = best.fit->summary;
-    for (std::size_t i = 0; i < summary.parameters.size() && i < result.summary.parameters.size();
-         ++i) {
-      summary.parameters[i].start = result.summary.parameters[i].start;
-      summary.parameters[i].start_origin = result.summary.parameters[i].start_origin;
-      summary.parameters[i].equation_error = result.summary.parameters[i].equation_error;
-    }
-    summary.latch_start = result.summary.latch_start;
-    summary.equation_error_iterations = result.summary.equation_error_iterations;
-    summary.equation_error_termination = result.summary.equation_error_termination;
-    summary.iterations += result.summary.iterations;
-    summary.initial_cost = result.summary.initial_cost;
-    summary.options = options;
-    result = std::move(*best.fit);
-    kept = std::move(best.kept);
-  }
-  result.summary.notes.insert(result.summary.notes.end(), failures.begin(), failures.end());
-  global.time_s = seconds_since(began);
-  result.summary.times.search_s = global.time_s;
-  result.summary.global = std::move(global);
-  return best_index == 0;
 }
 
 // Held-out metrics of the kept fit (FitOptions::cross_validation_folds): the subset refits of

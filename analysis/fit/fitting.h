@@ -133,6 +133,12 @@ struct FitOptions {
   // lower by the global_keep measure becomes the best.
   int global_hops = 0;
   double global_hop_size = 0.1;  // in (0, 1]
+  // Rounds of subset refits (>= 1). After the polishes, while the best optimum is a polish's
+  // and each round lowers its global_keep measure by more than GlobalSearch::kSameOptimumCost
+  // (relative), the subsets are refitted again from it, and those of the round that screen
+  // below the best's window RMSE (ratio 1: a refit from an optimum lies near it) are polished,
+  // at most global_polished. 1: the refits from the first fit only.
+  int global_rounds = 3;
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
   // residual loop compares fits by; its fits keep that one).
@@ -308,8 +314,9 @@ struct GlobalSearch {
   bool ran = false;
   bool start_as_given = false;  // the start as given was screened (it differs from the first)
   int sample_points = 0;        // feasible points of the sample screened
-  int subset_refits = 0;        // subset refits screened
+  int subset_refits = 0;        // subset refits screened, every round's
   int partition = 0;            // their subsets
+  int rounds = 0;               // rounds of subset refits (FitOptions::global_rounds)
   int starts_tried = 0;         // the first start and every start screened
   int promising = 0;            // screened below global_promising_ratio times the fit's RMSE
   int polished = 0;             // polished on every stroke, the first start included
@@ -432,6 +439,12 @@ FitResult fit_model(const DoorModel& start, const PreparedData& data,
 // (num_threads, 0: every hardware thread).
 SolverSettings solver_settings(const FitOptions& options);
 int fit_thread_count(const FitOptions& options);
+
+// RK4 sub-steps per sample for a fit of `data` (FitOptions::substeps_per_sample as `doorbench
+// fit` and `loop` choose it): steps of at most 1 ms over the data's median interval (else its
+// nominal rate, else 1 ms), and at least 2 per sample (the fit's default, kept at 500 Hz and
+// above), at most 100. At 50 Hz: 20, or 21 when the median interval is a little over 20 ms.
+int substeps_for_1ms_steps(const PreparedData& data);
 
 // The metrics of any model on `data` with the options' windows (the residual loop's
 // "error before and after").

@@ -286,7 +286,7 @@ TEST_CASE("Foreign recordings: a full-size door at 50 Hz fits from start values 
 
   FitOptions options;
   options.cross_validation_folds = 0;
-  options.substeps_per_sample = 20;  // 1 ms steps at 50 Hz (app/fit_inputs.h, substeps_for)
+  options.substeps_per_sample = 20;  // 1 ms steps at 50 Hz (substeps_for_1ms_steps)
   const FitResult result = fit_model(start.model, data, options);
   INFO(result.summary.full_report());
   const auto true_values = truth.parameter_values();
