@@ -147,7 +147,10 @@ std::string fit_progress_text(const FitProgress& progress, double elapsed_s) {
            progress_time_text(progress.done, progress.total, elapsed_s);
   }
   if (progress.stage == FitProgress::Stage::kSearch) {
-    return printf_text("global search: %d of %d subset refits, ", progress.done, progress.total) +
+    const std::string round =
+        progress.round > 1 ? printf_text(", round %d", progress.round) : std::string();
+    return printf_text("global search%s: %d of %d subset refits, ", round.c_str(), progress.done,
+                       progress.total) +
            progress_time_text(progress.done, progress.total, elapsed_s);
   }
   return printf_text("cross-validation: %d of %d folds refitted, ", progress.done, progress.total) +

@@ -119,7 +119,14 @@ bool subset_round(int round, const PreparedData& data, const FitOptions& options
                   const FitOptions& polish, GlobalSearch& global,
                   std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
                   BestOptimum& best, std::vector<FoldOutcome>& refits) {
-  refits = subset_refits(best.fit->model, data, best.kept.map, best.kept.x, options,
+  FitOptions in_round = options;
+  if (options.progress) {
+    in_round.progress = [&options, round](FitProgress progress) {
+      progress.round = round;
+      options.progress(progress);
+    };
+  }
+  refits = subset_refits(best.fit->model, data, best.kept.map, best.kept.x, in_round,
                          best.kept.weights, global.partition, FitProgress::Stage::kSearch);
   std::vector<SearchStart> starts;
   for (std::size_t k = 0; k < refits.size(); ++k) {

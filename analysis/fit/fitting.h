@@ -40,7 +40,8 @@ struct FitProgress {
     kWindows,
     // The cross-validation folds refitted: `done` of `total`.
     kFolds,
-    // The global stage's subset refits (`done` of `total`); its polishes report as kWindows.
+    // The global stage's subset refits (`done` of `total`, in `round`); its polishes report
+    // as kWindows.
     kSearch,
     // The global stage's basin hops polished (`done` of `total`, FitOptions::global_hops);
     // a hop's polish reports nothing of its own.
@@ -49,6 +50,7 @@ struct FitProgress {
   Stage stage = Stage::kWindows;
   int done = 0;
   int total = 0;
+  int round = 1;  // kSearch: the round of subset refits (FitOptions::global_rounds)
 };
 
 // The bench's noise levels (reference-door.json): the weights when neither the options

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -138,7 +139,16 @@ TEST_CASE("Global search: further rounds of subset refits reach a basin the firs
   options.global_rounds = 1;
   const FitResult one = fit_model(start, data, options);
   options.global_rounds = 3;
+  std::mutex progress_mutex;
+  std::vector<int> rounds_begun;  // the round of each start of the subset refits' progress
+  options.progress = [&](const FitProgress& progress) {
+    const std::lock_guard lock(progress_mutex);
+    if (progress.stage == FitProgress::Stage::kSearch && progress.done == 0) {
+      rounds_begun.push_back(progress.round);
+    }
+  };
   const FitResult three = fit_model(start, data, options);
+  CHECK(rounds_begun == std::vector<int>{1, 2, 3});
   INFO(one.summary.brief_report() << "\n" << three.summary.brief_report());
   CHECK(three.summary.final_cost < 0.8 * one.summary.final_cost);
   CHECK(one.summary.global.rounds == 1);

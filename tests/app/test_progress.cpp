@@ -68,6 +68,8 @@ TEST_CASE("progress: the fit's and the loop's lines", "[progress]") {
         "cross-validation: 0 of 4 folds refitted, 1 s so far, time left not known yet");
   CHECK(fit_progress_text({FitProgress::Stage::kSearch, 1, 4}, 2.0) ==
         "global search: 1 of 4 subset refits, 2 s so far, about 6 s left");
+  CHECK(fit_progress_text({FitProgress::Stage::kSearch, 1, 4, 2}, 2.0) ==
+        "global search, round 2: 1 of 4 subset refits, 2 s so far, about 6 s left");
   CHECK(fit_progress_text({FitProgress::Stage::kHops, 3, 6}, 9.0) ==
         "global search: 3 of 6 basin hops polished, 9 s so far, about 9 s left");
   // The loop: per completed step.
