@@ -14,7 +14,6 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit/fit_init.h"
 #include "analysis/fit/fit_result_file.h"
 #include "analysis/fit/fitting.h"
 #include "core/number_format.h"
@@ -40,13 +39,6 @@ PreparedData family_draw_50hz(int draw = 3) {
   family.sample_rates_hz = {50.0};
   return testing::family_recording(testing::sensory_reference(),
                                    testing::draw_conditions(draw, family), draw);
-}
-
-// The start `doorbench fit` takes: the sensory reference door's values read off the data.
-DoorModel start_read_off(const PreparedData& data) {
-  return start_from_data(
-             data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
-      .model;
 }
 
 // The fit's optimum in the uniqueness lines holds the fit's own free values, whichever start
@@ -103,7 +95,7 @@ TEST_CASE(
     "where the folds used to decide",
     "[fitting][global][slow]") {
   const PreparedData data = family_draw_50hz();
-  const FitResult fit = check_same_fit_for_folds(data, start_read_off(data));
+  const FitResult fit = check_same_fit_for_folds(data, testing::fit_start_read_off(data));
   // The fit is a polish's, not the data-derived start's: the values checked above are the
   // polish's own.
   CHECK(fit.summary.global.best_from != "the data-derived start");
@@ -115,7 +107,7 @@ TEST_CASE(
 TEST_CASE("Global search: non-monotonic steps reach a lower optimum than monotonic ones",
           "[fitting][global][slow]") {
   const PreparedData data = family_draw_50hz(5);
-  const DoorModel start = start_read_off(data);
+  const DoorModel start = testing::fit_start_read_off(data);
   const FitResult nonmonotonic = fit_model(start, data, options_with_folds(0));
   FitOptions options = options_with_folds(0);
   options.nonmonotonic_steps = false;
@@ -133,7 +125,7 @@ TEST_CASE("Global search: further rounds of subset refits reach a basin the firs
   family.sample_rates_hz = {1000.0};
   const PreparedData data = testing::family_recording(testing::sensory_reference(),
                                                       testing::draw_conditions(15, family), 15);
-  const DoorModel start = start_read_off(data);
+  const DoorModel start = testing::fit_start_read_off(data);
   FitOptions options = options_with_folds(0);
   options.substeps_per_sample = substeps_for_1ms_steps(data);  // `doorbench fit`'s
   options.global_rounds = 1;
@@ -267,10 +259,7 @@ TEST_CASE(
   family.sample_rates_hz = {50.0};
   const PreparedData data = testing::family_recording(testing::sensory_reference(),
                                                       testing::draw_conditions(5, family), 5);
-  const DoorModel start =
-      start_from_data(
-          data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
-          .model;
+  const DoorModel start = testing::fit_start_read_off(data);
   const FitResult without = fit_model(start, data, options_with_folds(0));
   FitOptions hopping = options_with_folds(0);
   hopping.global_hops = 6;

@@ -14,7 +14,6 @@
 #include <string>
 #include <vector>
 
-#include "analysis/fit/fit_init.h"
 #include "analysis/fit/fitting.h"
 #include "fixtures/recording_family.h"
 #include "fixtures/reference_doors.h"
@@ -52,10 +51,7 @@ std::map<std::string, double> best_costs_before_the_stage() {
 void check_folds_and_cost(const std::string& recording, const PreparedData& data,
                           const std::map<std::string, double>& before) {
   INFO(recording);
-  const DoorModel start =
-      start_from_data(
-          data, testing::with_handle_radius(testing::sensory_reference(), data.handle_radius_m))
-          .model;
+  const DoorModel start = testing::fit_start_read_off(data);
   const auto fit_with_folds = [&](int folds) {
     FitOptions options;
     options.substeps_per_sample = substeps_for_1ms_steps(data);

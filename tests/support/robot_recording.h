@@ -14,8 +14,13 @@ inline PreparedData robot_recording() {
   return family_recording(door, robot_operator_conditions(), 42);
 }
 
-inline DoorModel robot_fit_start(const PreparedData& data) {
+// The start `doorbench fit` takes without --params on any recording of the sensory family.
+inline DoorModel fit_start_read_off(const PreparedData& data) {
   return start_from_data(data, with_handle_radius(sensory_reference(), data.handle_radius_m)).model;
+}
+
+inline DoorModel robot_fit_start(const PreparedData& data) {
+  return fit_start_read_off(data);
 }
 
 }  // namespace doorbench::testing
