@@ -17,7 +17,6 @@
 #include "analysis/fit/fit_result_file.h"
 #include "analysis/fit/fitting.h"
 #include "core/number_format.h"
-#include "fixtures/recording_family.h"
 #include "fixtures/reference_doors.h"
 #include "tests/support/model_difference.h"
 #include "tests/support/robot_recording.h"
@@ -31,14 +30,6 @@ FitOptions options_with_folds(int folds) {
   options.substeps_per_sample = 20;
   options.cross_validation_folds = folds;
   return options;
-}
-
-// A draw of the recording family at 50 Hz (12 strokes), as doorbench_fit_study draws it.
-PreparedData family_draw_50hz(int draw = 3) {
-  testing::FamilyOptions family;
-  family.sample_rates_hz = {50.0};
-  return testing::family_recording(testing::sensory_reference(),
-                                   testing::draw_conditions(draw, family), draw);
 }
 
 // The fit's optimum in the uniqueness lines holds the fit's own free values, whichever start
@@ -94,7 +85,7 @@ TEST_CASE(
     "Global search: --folds 0, 3 and 4 end at the same parameters on a family draw "
     "where the folds used to decide",
     "[fitting][global][slow]") {
-  const PreparedData data = family_draw_50hz();
+  const PreparedData data = testing::family_draw(3, 50.0);
   const FitResult fit = check_same_fit_for_folds(data, testing::fit_start_read_off(data));
   // The fit is a polish's, not the data-derived start's: the values checked above are the
   // polish's own.
@@ -106,7 +97,7 @@ TEST_CASE(
 // check's physical fit").
 TEST_CASE("Global search: non-monotonic steps reach a lower optimum than monotonic ones",
           "[fitting][global][slow]") {
-  const PreparedData data = family_draw_50hz(5);
+  const PreparedData data = testing::family_draw(5, 50.0);
   const DoorModel start = testing::fit_start_read_off(data);
   const FitResult nonmonotonic = fit_model(start, data, options_with_folds(0));
   FitOptions options = options_with_folds(0);
@@ -121,10 +112,7 @@ TEST_CASE("Global search: non-monotonic steps reach a lower optimum than monoton
 // subset refits").
 TEST_CASE("Global search: further rounds of subset refits reach a basin the first round missed",
           "[fitting][global][slow]") {
-  testing::FamilyOptions family;
-  family.sample_rates_hz = {1000.0};
-  const PreparedData data = testing::family_recording(testing::sensory_reference(),
-                                                      testing::draw_conditions(15, family), 15);
+  const PreparedData data = testing::family_draw(15, 1000.0);
   const DoorModel start = testing::fit_start_read_off(data);
   FitOptions options = options_with_folds(0);
   options.substeps_per_sample = substeps_for_1ms_steps(data);  // `doorbench fit`'s
@@ -255,10 +243,7 @@ TEST_CASE(
     "Global search: basin hops reach the true door's optimum on a family draw where the "
     "stage's starts end 1.3 % above it",
     "[fitting][global][slow]") {
-  testing::FamilyOptions family;
-  family.sample_rates_hz = {50.0};
-  const PreparedData data = testing::family_recording(testing::sensory_reference(),
-                                                      testing::draw_conditions(5, family), 5);
+  const PreparedData data = testing::family_draw(5, 50.0);
   const DoorModel start = testing::fit_start_read_off(data);
   const FitResult without = fit_model(start, data, options_with_folds(0));
   FitOptions hopping = options_with_folds(0);

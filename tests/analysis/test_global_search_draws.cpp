@@ -15,8 +15,6 @@
 #include <vector>
 
 #include "analysis/fit/fitting.h"
-#include "fixtures/recording_family.h"
-#include "fixtures/reference_doors.h"
 #include "tests/support/model_difference.h"
 #include "tests/support/robot_recording.h"
 
@@ -71,15 +69,11 @@ void check_folds_and_cost(const std::string& recording, const PreparedData& data
   CHECK(none.summary.final_cost <= before.at(recording) * (1.0 + 1e-6));
 }
 
-// Draws first_seed .. last_seed of the recording family at one rate, as doorbench_fit_study
-// draws them (a draw's seed is also its recording's).
+// Draws first_seed .. last_seed of the recording family at one rate (testing::family_draw).
 void check_family_draws(double rate_hz, std::uint32_t first_seed, std::uint32_t last_seed) {
   const std::map<std::string, double> before = best_costs_before_the_stage();
-  testing::FamilyOptions family;
-  family.sample_rates_hz = {rate_hz};
   for (std::uint32_t seed = first_seed; seed <= last_seed; ++seed) {
-    const PreparedData data = testing::family_recording(
-        testing::sensory_reference(), testing::draw_conditions(seed, family), seed);
+    const PreparedData data = testing::family_draw(seed, rate_hz);
     REQUIRE(data.sample_rate_hz == Approx(rate_hz));
     check_folds_and_cost(
         "family" + std::to_string(static_cast<int>(rate_hz)) + "-" + std::to_string(seed), data,

@@ -1,8 +1,10 @@
 #pragma once
 // The 50 Hz, 4-stroke robot recording with an untared load cell (fixtures/'
-// robot_operator_conditions(), seed 42, the handle at 0.8 m), prepared, and the start
-// `doorbench fit` takes on it without --params: the reference door with the recording's radius,
-// its values taken from the data.
+// robot_operator_conditions(), seed 42, the handle at 0.8 m), prepared; the recording family's
+// draws at one rate; and the start `doorbench fit` takes on them without --params: the
+// reference door with the recording's radius, its values taken from the data.
+#include <cstdint>
+
 #include "analysis/fit/fit_init.h"
 #include "fixtures/recording_family.h"
 #include "fixtures/reference_doors.h"
@@ -12,6 +14,14 @@ namespace doorbench::testing {
 inline PreparedData robot_recording() {
   const DoorModel door = with_handle_radius(sensory_reference(), 0.8);
   return family_recording(door, robot_operator_conditions(), 42);
+}
+
+// Draw `seed` of the recording family (12 strokes) at one sample rate, as doorbench_fit_study
+// draws it: the seed is the draw's conditions' and its recording's.
+inline PreparedData family_draw(std::uint32_t seed, double rate_hz) {
+  FamilyOptions family;
+  family.sample_rates_hz = {rate_hz};
+  return family_recording(sensory_reference(), draw_conditions(seed, family), seed);
 }
 
 // The start `doorbench fit` takes without --params on any recording of the sensory family.
