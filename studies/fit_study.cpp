@@ -6,7 +6,7 @@
 //                       [--first-seed S] [--threads T] [--report]
 //                       [--samples N] [--polished N] [--promising R] [--hops H]
 //                       [--hop-size D] [--subsets K] [--rounds R]
-//                       [--no-global] [--basins]
+//                       [--uncertainty-tolerance U] [--no-global] [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
 //   --robot: the 50 Hz, 4-stroke robot-operator recording with a load cell not tared, handle
@@ -19,6 +19,8 @@
 //            FitOptions::global_samples, global_polished, global_promising_ratio, global_hops
 //            and global_subsets (0: no subset refits); --hop-size D: global_hop_size;
 //            --rounds R: global_rounds
+//   --uncertainty-tolerance U: FitOptions::uncertainty_tolerance, the stopping rule's (every
+//            solve of the fit, the global stage's included)
 //            --no-global: none of it
 //            (FitOptions::global_search false)
 //   --basins: instead of the fits, what separates the data fit's basin from the true door's
@@ -72,6 +74,7 @@ struct Settings {
   int hops = -1;                                  // FitOptions::global_hops, when given
   int rounds = -1;                                // FitOptions::global_rounds, when given
   double hop_size = -1;                           // FitOptions::global_hop_size, when given
+  double uncertainty_tolerance = -1;              // FitOptions::uncertainty_tolerance, given
   bool global = true;                             // --no-global: FitOptions::global_search off
   bool basins = false;                            // --basins: the basin probes instead of fits
 };
@@ -111,6 +114,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (s.hops >= 0) options.global_hops = s.hops;
     if (s.rounds >= 0) options.global_rounds = s.rounds;
     if (s.hop_size > 0) options.global_hop_size = s.hop_size;
+    if (s.uncertainty_tolerance >= 0) options.uncertainty_tolerance = s.uncertainty_tolerance;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
     options.global_search = s.global;
     const double cpu0 = process_cpu_s();
@@ -278,6 +282,8 @@ int main(int argc, char** argv) {
       s.samples = std::atoi(argv[++i]);
     } else if (has_value && flag == "--hop-size") {
       s.hop_size = std::atof(argv[++i]);
+    } else if (has_value && flag == "--uncertainty-tolerance") {
+      s.uncertainty_tolerance = std::atof(argv[++i]);
     } else if (has_value && flag == "--rounds") {
       s.rounds = std::atoi(argv[++i]);
     } else if (has_value && flag == "--hops") {
