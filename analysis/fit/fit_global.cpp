@@ -18,6 +18,9 @@ namespace doorbench::fit_detail {
 
 namespace {
 
+constexpr const char* kResetOrigin =
+    "the first optimum with its undetermined and bound parameters at their starts";
+
 // The global stage's starts after the first (FitOptions::global_search): each start's model,
 // where it came from and its kind's rank (subset refits 0, the start as given 1, the sample 2).
 struct SearchStart {
@@ -109,6 +112,43 @@ bool polish_start(const std::string& origin, const DoorModel& model, const Prepa
                                  "the global stage's best optimum was reached from " + origin +
                                      ", not from the data-derived start");
   return true;
+}
+
+// The first optimum with its free parameters that are undetermined or on a bound back at their
+// starts (FitOptions::global_reset); nothing when none differs from its start or the door put
+// back breaks a constraint of the model. `count` receives how many were put back.
+std::optional<DoorModel> reset_start(const FitResult& first, int& count) {
+  const std::span<const double> optimum = first.model.parameter_values();
+  std::vector<double> values(optimum.begin(), optimum.end());
+  count = 0;
+  for (std::size_t i = 0; i < first.summary.parameters.size() && i < values.size(); ++i) {
+    const FittedParameter& parameter = first.summary.parameters[i];
+    if (!parameter.free || (parameter.determined && !parameter.at_bound)) continue;
+    if (values[i] == parameter.start) continue;
+    values[i] = parameter.start;
+    ++count;
+  }
+  if (count == 0) return std::nullopt;
+  try {
+    return first.model.with_parameter_values(values);
+  } catch (const std::invalid_argument&) {
+    count = 0;
+    return std::nullopt;
+  }
+}
+
+// The reset start polished (FitOptions::global_reset), when the first optimum has one.
+void polish_reset(const FitResult& first, const PreparedData& data, const FitOptions& options,
+                  const FitOptions& polish, GlobalSearch& global,
+                  std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
+                  BestOptimum& best) {
+  int count = 0;
+  const std::optional<DoorModel> reset = reset_start(first, count);
+  if (!reset) return;
+  throw_if_stop_requested(options.stop_requested, "the global search");
+  global.reset_parameters = count;
+  ++global.starts_tried;
+  (void)polish_start(kResetOrigin, *reset, data, polish, optima, failures, best);
 }
 
 // One further round of subset refits (FitOptions::global_rounds), from the best optimum so
@@ -213,6 +253,9 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
   for (std::size_t k : promising) {
     throw_if_stop_requested(options.stop_requested, "the global search");
     (void)polish_start(starts[k].origin, starts[k].model, data, polish, optima, failures, best);
+  }
+  if (options.global_reset) {
+    polish_reset(result, data, options, polish, global, optima, failures, best);
   }
   global.rounds = global.partition >= 2 ? 1 : 0;
   // Further rounds while the best is a polish's and the last round lowered it by more than

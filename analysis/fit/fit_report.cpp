@@ -79,6 +79,11 @@ std::string GlobalSearch::report(const std::vector<std::string>& names) const {
     tried.push_back(std::to_string(sample_points) +
                     " points of a space-filling sample of the bounds");
   }
+  if (reset_parameters > 0) {
+    tried.push_back("the first optimum with " + std::to_string(reset_parameters) +
+                    (reset_parameters == 1 ? " undetermined or bound parameter at its start"
+                                           : " undetermined or bound parameters at their starts"));
+  }
   if (hops > 0) {
     tried.push_back(std::to_string(hops) + (hops == 1 ? " basin hop" : " basin hops") +
                     " from the best optimum so far (" + std::to_string(hops_lower) + " lower)");

@@ -64,6 +64,7 @@ nlohmann::ordered_json global_search_json(const FitSummary& s) {
           {"subset_refits", s.global.subset_refits},
           {"subsets", s.global.partition},
           {"rounds", s.global.rounds},
+          {"reset_parameters", s.global.reset_parameters},
           {"sample_points", s.global.sample_points},
           {"promising", s.global.promising},
           {"polished", s.global.polished},

@@ -141,6 +141,13 @@ struct FitOptions {
   // below the best's window RMSE (ratio 1: a refit from an optimum lies near it) are polished,
   // at most global_polished. 1: the refits from the first fit only.
   int global_rounds = 3;
+  // After the first polishes: when free parameters of the first optimum are undetermined or on
+  // a bound, the door with those parameters back at their starts (read off the data, or as
+  // given) and the others at the optimum, polished whatever it screens. Such parameters are
+  // where a fit drifts into a degenerate door the data do not hold it in (a latch zone
+  // collapsed to no width, a term switched off at its bound); the door put back screens worse
+  // than the optimum it came from, so the screen would never pass it. false: not tried.
+  bool global_reset = true;
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
   // residual loop compares fits by; its fits keep that one).
@@ -319,11 +326,14 @@ struct GlobalSearch {
   int subset_refits = 0;        // subset refits screened, every round's
   int partition = 0;            // their subsets
   int rounds = 0;               // rounds of subset refits (FitOptions::global_rounds)
-  int starts_tried = 0;         // the first start and every start screened
-  int promising = 0;            // screened below global_promising_ratio times the fit's RMSE
-  int polished = 0;             // polished on every stroke, the first start included
-  int hops = 0;                 // basin hops polished (FitOptions::global_hops)
-  int hops_lower = 0;           // hops that ended lower than the best before them
+  // Free parameters the reset start put back at their starts (FitOptions::global_reset); 0:
+  // no reset start was polished.
+  int reset_parameters = 0;
+  int starts_tried = 0;  // the first start, every start screened and the reset start
+  int promising = 0;     // screened below global_promising_ratio times the fit's RMSE
+  int polished = 0;      // polished on every stroke, the first start included
+  int hops = 0;          // basin hops polished (FitOptions::global_hops)
+  int hops_lower = 0;    // hops that ended lower than the best before them
   // Distinct optima, the best first: two polishes end at one optimum when their costs differ
   // by at most kSameOptimumCost (relative) and no free parameter by more than
   // kSameOptimumParameter of the larger magnitude.

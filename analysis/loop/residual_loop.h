@@ -44,13 +44,15 @@ struct LoopOptions {
   // each fold would be fitted on one direction alone (docs/residual-loop.md, "Limits").
   // The loop compares fits by their rate RMSE: of the global stage's optima its fits keep the
   // lowest RMSE. Its global_subsets is ignored: the loop's fits take their subset refits on
-  // the folds, which the cross-validation then reuses. One round of them: a refit's two
-  // starts are the loop's own search (docs/residual-loop.md, "Refits and acceptance").
+  // the folds, which the cross-validation then reuses. One round of them, and no reset start
+  // (FitOptions::global_reset): a refit's two starts are the loop's own search
+  // (docs/residual-loop.md, "Refits and acceptance").
   FitOptions fit = [] {
     FitOptions options;
     options.cross_validation_folds = 3;
     options.global_keep = FitOptions::GlobalKeep::kLowestRateRmse;
     options.global_rounds = 1;
+    options.global_reset = false;
     return options;
   }();
 
