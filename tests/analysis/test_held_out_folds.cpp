@@ -37,6 +37,7 @@ TEST_CASE("Held out: each stroke is measured with its own fold's parameters", "[
     fold.cross_validation_folds = 0;
     fold.latch_start_from_data = false;
     fold.equation_error_start = false;
+    fold.global_search = false;  // a fold's refit is one solve from the full fit
     fold.max_iterations = options.held_out_max_iterations;
     const FitResult refit = fit_model(fit.model, training, fold);
     const double own = evaluate_model(refit.model, held, options).window.rmse();
