@@ -144,9 +144,10 @@ struct FitOptions {
   // After the first polishes: when free parameters of the first optimum are undetermined or on
   // a bound, the door with those parameters back at their starts (read off the data, or as
   // given) and the others at the optimum, polished whatever it screens. Such parameters are
-  // where a fit drifts into a degenerate door the data do not hold it in (a latch zone
-  // collapsed to no width, a term switched off at its bound); the door put back screens worse
-  // than the optimum it came from, so the screen would never pass it. false: not tried.
+  // where a fit drifts along directions the data do not hold it in (stiffnesses traded off
+  // along an undetermined direction, a term switched off at its bound); the door put back
+  // screens worse than the optimum it came from, so the screen would never pass it. false:
+  // not tried.
   bool global_reset = true;
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
