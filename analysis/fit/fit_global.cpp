@@ -19,7 +19,7 @@ namespace doorbench::fit_detail {
 namespace {
 
 constexpr const char* kResetOrigin =
-    "the first optimum with its undetermined and bound parameters at their starts";
+    "the first optimum with its undetermined or bound parameters at their starts";
 
 // The global stage's starts after the first (FitOptions::global_search): each start's model,
 // where it came from and its kind's rank (subset refits 0, the start as given 1, the sample 2).
@@ -114,41 +114,51 @@ bool polish_start(const std::string& origin, const DoorModel& model, const Prepa
   return true;
 }
 
-// The first optimum with its free parameters that are undetermined or on a bound back at their
-// starts (FitOptions::global_reset); nothing when none differs from its start or the door put
-// back breaks a constraint of the model. `count` receives how many were put back.
-std::optional<DoorModel> reset_start(const FitResult& first, int& count) {
+// The reset start (FitOptions::global_reset): the first optimum with its free parameters that
+// are undetermined or on a bound back at their starts, and how many were put back.
+struct ResetStart {
+  std::optional<DoorModel> model;  // none when the door put back breaks a model constraint
+  int parameters = 0;              // 0: every such parameter is at its start already
+  std::string broken;              // the constraint the door put back breaks, when it does
+};
+
+ResetStart reset_start(const FitResult& first) {
   const std::span<const double> optimum = first.model.parameter_values();
   std::vector<double> values(optimum.begin(), optimum.end());
-  count = 0;
+  ResetStart reset;
   for (std::size_t i = 0; i < first.summary.parameters.size() && i < values.size(); ++i) {
     const FittedParameter& parameter = first.summary.parameters[i];
     if (!parameter.free || (parameter.determined && !parameter.at_bound)) continue;
     if (values[i] == parameter.start) continue;
     values[i] = parameter.start;
-    ++count;
+    ++reset.parameters;
   }
-  if (count == 0) return std::nullopt;
+  if (reset.parameters == 0) return reset;
   try {
-    return first.model.with_parameter_values(values);
-  } catch (const std::invalid_argument&) {
-    count = 0;
-    return std::nullopt;
+    reset.model = first.model.with_parameter_values(values);
+  } catch (const std::invalid_argument& error) {
+    reset.broken = error.what();
   }
+  return reset;
 }
 
-// The reset start polished (FitOptions::global_reset), when the first optimum has one.
+// The reset start polished (FitOptions::global_reset), when the first optimum has one; a note
+// in `failures` when the door put back breaks a constraint of the model.
 void polish_reset(const FitResult& first, const PreparedData& data, const FitOptions& options,
                   const FitOptions& polish, GlobalSearch& global,
                   std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
                   BestOptimum& best) {
-  int count = 0;
-  const std::optional<DoorModel> reset = reset_start(first, count);
-  if (!reset) return;
+  const ResetStart reset = reset_start(first);
+  if (reset.parameters == 0) return;
+  if (!reset.model) {
+    failures.push_back(std::string("the global stage did not try ") + kResetOrigin +
+                       ": that door breaks a constraint of the model: " + reset.broken);
+    return;
+  }
   throw_if_stop_requested(options.stop_requested, "the global search");
-  global.reset_parameters = count;
+  global.reset_parameters = reset.parameters;
   ++global.starts_tried;
-  (void)polish_start(kResetOrigin, *reset, data, polish, optima, failures, best);
+  (void)polish_start(kResetOrigin, *reset.model, data, polish, optima, failures, best);
 }
 
 // One further round of subset refits (FitOptions::global_rounds), from the best optimum so
