@@ -34,6 +34,7 @@ struct FitCommandOptions {
   std::string objective = "windows";
   int folds = 4;
   int hops = kDefaultHops;  // FitOptions::global_hops
+  bool no_reset = false;    // !FitOptions::global_reset
   // The window fit's size: more windows than this, and whole strokes spread evenly over
   // the recording are kept (fit_size). 0: every window.
   int max_windows = kDefaultMaxWindows;
@@ -242,6 +243,7 @@ void run_fit(const FitCommandOptions& options) {
   fit_options.cross_validation_folds = options.folds;
   fit_options.global_hops = options.hops;
   fit_options.global_hop_size = FitCommandOptions::kHopSize;
+  fit_options.global_reset = !options.no_reset;
   const std::string size = fit_size(inputs.data, start, fit_options, options.max_windows);
   std::cerr << size << "\n";
   inputs.report_lines.push_back(size);
@@ -323,6 +325,10 @@ void add_fit_command(CLI::App& app, Action& action) {
                   "far, each polished: lower costs at a polish each (docs/fitting.md)")
       ->check(number_range(0, 1000))
       ->capture_default_str();
+  fit->add_flag("--no-reset", options->no_reset,
+                "Leave out the global stage's reset start (the first optimum with its "
+                "undetermined or bound parameters at their starts): one polish less, and a "
+                "basin only it reaches is missed (docs/fitting.md)");
   fit->add_option("--max-windows", options->max_windows,
                   "Most windows in the window fit: beyond, whole strokes spread evenly over the "
                   "recording are fitted (0: every window)")

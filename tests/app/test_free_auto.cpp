@@ -130,6 +130,7 @@ TEST_CASE("doorbench fit --free auto fits the identifiable set and holds the res
 // A recording like one from another lab (50 Hz, jittered, 4 strokes, a robot operator, a load
 // cell not tared, the handle at 0.8 m): held at the full fit's values, the identifiable set
 // ends within 2 FIT points of the full fit, and the report says what holding them costs.
+// `--no-reset` on the same recording leaves out the reset start.
 TEST_CASE(
     "doorbench fit --free auto on the robot recording stays within 2 FIT points of the "
     "full fit",
@@ -161,4 +162,15 @@ TEST_CASE(
       " points of window FIT (the full fit " + printf_text("%.2f%%", full_fit) + ", this fit " +
       printf_text("%.2f%%", auto_fit) + ")";
   CHECK(auto_err.find("\n" + cost_line + "\n") != std::string::npos);
+  // --no-reset leaves out the reset start, one start less than the fit tried.
+  const auto [plain_err, plain] = run_fit("--no-reset", "no-reset");
+  const nlohmann::json& tried = full.at("global_search");
+  const nlohmann::json& plain_tried = plain.at("global_search");
+  CHECK(tried.at("reset_parameters").get<int>() > 0);
+  CHECK(plain_tried.at("reset_parameters").get<int>() == 0);
+  CHECK(plain_tried.at("starts_tried").get<int>() == tried.at("starts_tried").get<int>() - 1);
+  CHECK(testing::read_file(dir / "full" / "report.md").find("at their starts") !=
+        std::string::npos);
+  CHECK(testing::read_file(dir / "no-reset" / "report.md").find("at their starts") ==
+        std::string::npos);
 }
