@@ -6,7 +6,7 @@
 //                       [--first-seed S] [--threads T] [--report]
 //                       [--samples N] [--polished N] [--promising R] [--hops H]
 //                       [--hop-size D] [--subsets K] [--rounds R]
-//                       [--uncertainty-tolerance U] [--no-global] [--basins]
+//                       [--uncertainty-tolerance U] [--no-reset] [--no-global] [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
 //   --robot: the 50 Hz, 4-stroke robot-operator recording with a load cell not tared, handle
@@ -21,6 +21,7 @@
 //            --rounds R: global_rounds
 //   --uncertainty-tolerance U: FitOptions::uncertainty_tolerance, the stopping rule's (every
 //            solve of the fit, the global stage's included)
+//   --no-reset: no reset start (FitOptions::global_reset false)
 //            --no-global: none of it
 //            (FitOptions::global_search false)
 //   --basins: instead of the fits, what separates the data fit's basin from the true door's
@@ -75,6 +76,7 @@ struct Settings {
   int rounds = -1;                                // FitOptions::global_rounds, when given
   double hop_size = -1;                           // FitOptions::global_hop_size, when given
   double uncertainty_tolerance = -1;              // FitOptions::uncertainty_tolerance, given
+  bool reset = true;                              // --no-reset: FitOptions::global_reset off
   bool global = true;                             // --no-global: FitOptions::global_search off
   bool basins = false;                            // --basins: the basin probes instead of fits
 };
@@ -116,6 +118,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (s.hop_size > 0) options.global_hop_size = s.hop_size;
     if (s.uncertainty_tolerance >= 0) options.uncertainty_tolerance = s.uncertainty_tolerance;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
+    options.global_reset = s.reset;
     options.global_search = s.global;
     const double cpu0 = process_cpu_s();
     const auto wall0 = std::chrono::steady_clock::now();
@@ -266,6 +269,8 @@ int main(int argc, char** argv) {
       s.robot = true;
     } else if (flag == "--truth") {
       s.truth = true;
+    } else if (flag == "--no-reset") {
+      s.reset = false;
     } else if (flag == "--no-global") {
       s.global = false;
     } else if (flag == "--basins") {
