@@ -302,11 +302,12 @@ class RelativeStepCheck final : public ceres::IterationCallback {
 // Stops when, from the Jacobian the solver has just computed, the Gauss–Newton step for x
 // (window states eliminated) moves no determined parameter by more than `tolerance` of its
 // standard uncertainty (of the kind the fit reports): further iterations would change the
-// result by less than the statistics can tell. Also stops when three accepted steps in a
-// row each moved every parameter by less than that and lowered the cost by less than
-// kRoughCostChange of itself: the cost is rough at this scale (the
-// latch switches below their width, contact with a stop) and Levenberg–Marquardt would only
-// crawl.
+// result by less than the statistics can tell; before the first step, only when that step
+// also predicts a cost decrease ½ gᵀ H⁻¹ g of at most kRoughCostChange of the cost (a start's
+// misfit inflates every σ). Also stops when three accepted steps in a row each moved every
+// parameter by less than that and lowered the cost by less than kRoughCostChange of itself:
+// the cost is rough at this scale (the latch switches below their width, contact with a stop)
+// and Levenberg–Marquardt would only crawl.
 class PredictedStepCheck final : public ceres::IterationCallback {
  public:
   static constexpr double kRoughCostChange = 1e-3;  // relative, per step
@@ -333,12 +334,14 @@ class PredictedStepCheck final : public ceres::IterationCallback {
     // σ: far from the data (a model lacking an effect) σ is inflated by the residual.
     const bool small =
         taken <= tolerance_ && summary.cost_change <= kRoughCostChange * summary.cost;
+    const double predicted_decrease = 0.5 * system.gradient.dot(step);
     if (summary.iteration > 0) small_steps_ = small ? small_steps_ + 1 : 0;
     if (tracing()) {
-      std::fprintf(stderr, "step taken %.3g, predicted %.3g standard uncertainties\n", taken,
-                   predicted);
+      std::fprintf(stderr, "step taken %.3g, predicted %.3g standard uncertainties, -%.3g cost\n",
+                   taken, predicted, predicted_decrease);
     }
-    if (predicted <= tolerance_) {
+    if (predicted <= tolerance_ &&
+        (summary.iteration > 0 || predicted_decrease <= kRoughCostChange * summary.cost)) {
       reason_ = "the Gauss-Newton step predicts less than " + format_tolerance() +
                 " standard uncertainty for every parameter";
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;

@@ -143,8 +143,9 @@ class WindowProblem {
 
   // Levenberg–Marquardt from the current x and z. Besides Ceres' own tests it stops when
   // the Gauss–Newton step predicts that no free parameter would move by more than
-  // `uncertainty_tolerance` of its standard uncertainty (the kind settings name), or when three
-  // accepted steps in a row moved none by more than that; 0 turns these tests off.
+  // `uncertainty_tolerance` of its standard uncertainty (the kind settings name; before the
+  // first step, also a predicted cost decrease of at most 0.1 %), or when three accepted steps
+  // in a row moved none by more than that; 0 turns these tests off.
   struct Outcome {
     bool usable = false;
     bool converged = false;

@@ -162,13 +162,13 @@ TEST_CASE(
       " points of window FIT (the full fit " + printf_text("%.2f%%", full_fit) + ", this fit " +
       printf_text("%.2f%%", auto_fit) + ")";
   CHECK(auto_err.find("\n" + cost_line + "\n") != std::string::npos);
-  // --no-reset leaves out the reset start, one start less than the fit tried.
+  // --no-reset leaves out the reset start (and the rounds its polish would have begun).
   const auto [plain_err, plain] = run_fit("--no-reset", "no-reset");
   const nlohmann::json& tried = full.at("global_search");
   const nlohmann::json& plain_tried = plain.at("global_search");
   CHECK(tried.at("reset_parameters").get<int>() > 0);
   CHECK(plain_tried.at("reset_parameters").get<int>() == 0);
-  CHECK(plain_tried.at("starts_tried").get<int>() == tried.at("starts_tried").get<int>() - 1);
+  CHECK(plain_tried.at("starts_tried").get<int>() < tried.at("starts_tried").get<int>());
   CHECK(testing::read_file(dir / "full" / "report.md").find("at their starts") !=
         std::string::npos);
   CHECK(testing::read_file(dir / "no-reset" / "report.md").find("at their starts") ==
