@@ -301,24 +301,23 @@ class RelativeStepCheck final : public ceres::IterationCallback {
 
 // Stops when, from the Jacobian the solver has just computed, the Gauss–Newton step for x
 // (window states eliminated) moves no determined parameter by more than `tolerance` of its
-// standard uncertainty (of the kind the fit reports): further iterations would change the
-// result by less than the statistics can tell; before the first step, only when that step
-// also predicts a cost decrease ½ gᵀ H⁻¹ g of at most kRoughCostChange of the cost (a start's
-// misfit inflates every σ). Also stops when three accepted steps in a row each moved every
-// parameter by less than that and lowered the cost by less than kRoughCostChange of itself:
-// the cost is rough at this scale (the latch switches below their width, contact with a stop)
-// and Levenberg–Marquardt would only crawl.
+// standard uncertainty (the kind the fit reports): further iterations would change the result
+// by less than the statistics can tell. Before the first step, with first_step_decrease, that
+// step must also predict a decrease ½ gᵀ H⁻¹ g of at most kRoughCostChange of the cost (a
+// start's misfit inflates every σ). Also stops after three accepted steps in a row that each
+// moved every parameter by less than that and lowered the cost by less than kRoughCostChange:
+// the cost is rough at this scale (latch switches, a stop) and Levenberg–Marquardt would crawl.
 class PredictedStepCheck final : public ceres::IterationCallback {
  public:
   static constexpr double kRoughCostChange = 1e-3;  // relative, per step
-  PredictedStepCheck(const WindowProblem& problem, double tolerance, bool robust)
-      : problem_(problem), tolerance_(tolerance), robust_(robust), previous_(problem.x()) {}
+  PredictedStepCheck(const WindowProblem& problem, double tolerance, const SolverSettings& settings)
+      : problem_(problem), tolerance_(tolerance), settings_(settings), previous_(problem.x()) {}
   ceres::CallbackReturnType operator()(const ceres::IterationSummary& summary) override {
     if (!(tolerance_ > 0)) return ceres::SOLVER_CONTINUE;
     if (summary.iteration > 0 && !summary.step_is_successful) return ceres::SOLVER_CONTINUE;
     ReducedSystem system;
     if (!problem_.reduce(/*cached_only=*/true, system)) return ceres::SOLVER_CONTINUE;
-    const Eigen::VectorXd sigma = standard_uncertainties(system, robust_);
+    const Eigen::VectorXd sigma = standard_uncertainties(system, settings_.robust_uncertainty);
     const InformationInverse inverse = invert_information(system.information);
     const Eigen::VectorXd step = inverse.inverse * system.gradient;
     const std::vector<double>& x = problem_.x();
@@ -335,13 +334,14 @@ class PredictedStepCheck final : public ceres::IterationCallback {
     const bool small =
         taken <= tolerance_ && summary.cost_change <= kRoughCostChange * summary.cost;
     const double predicted_decrease = 0.5 * system.gradient.dot(step);
+    const bool first_step_waits = summary.iteration == 0 && settings_.first_step_decrease &&
+                                  predicted_decrease > kRoughCostChange * summary.cost;
     if (summary.iteration > 0) small_steps_ = small ? small_steps_ + 1 : 0;
     if (tracing()) {
       std::fprintf(stderr, "step taken %.3g, predicted %.3g standard uncertainties, -%.3g cost\n",
                    taken, predicted, predicted_decrease);
     }
-    if (predicted <= tolerance_ &&
-        (summary.iteration > 0 || predicted_decrease <= kRoughCostChange * summary.cost)) {
+    if (predicted <= tolerance_ && !first_step_waits) {
       reason_ = "the Gauss-Newton step predicts less than " + format_tolerance() +
                 " standard uncertainty for every parameter";
       return ceres::SOLVER_TERMINATE_SUCCESSFULLY;
@@ -364,7 +364,7 @@ class PredictedStepCheck final : public ceres::IterationCallback {
 
   const WindowProblem& problem_;
   double tolerance_;
-  bool robust_;
+  const SolverSettings& settings_;  // the solve's, which outlive the check
   std::vector<double> previous_;
   int small_steps_ = 0;
   std::string reason_;
@@ -553,7 +553,7 @@ WindowProblem::Outcome WindowProblem::solve(const SolverSettings& settings, int 
   // Without the statistical stopping rule (the study's objective), the result must be the
   // best point seen: monotonic steps only.
   solver.use_nonmonotonic_steps = settings.nonmonotonic_steps && uncertainty_tolerance > 0;
-  PredictedStepCheck check(*this, uncertainty_tolerance, settings.robust_uncertainty);
+  PredictedStepCheck check(*this, uncertainty_tolerance, settings);
   // The report first: Ceres calls no further callback after one that ends the solve.
   IterationReport report(settings.on_iteration);
   StopCheck stop(settings.stop_requested);

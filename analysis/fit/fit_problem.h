@@ -36,6 +36,9 @@ struct SolverSettings {
   bool robust_uncertainty = true;
   // FitOptions::nonmonotonic_steps (taken only with the predicted-step rule).
   bool nonmonotonic_steps = true;
+  // FitOptions::first_step_decrease: the predicted-step rule before the first step also asks
+  // for a predicted cost decrease of at most 0.1 %.
+  bool first_step_decrease = true;
   int threads = 1;  // evaluation threads, the caller's among them (>= 1)
   // Called after each solver iteration with the iterations of this solve so far, on the
   // solve's calling thread; may be empty.
@@ -144,8 +147,8 @@ class WindowProblem {
   // Levenberg–Marquardt from the current x and z. Besides Ceres' own tests it stops when
   // the Gauss–Newton step predicts that no free parameter would move by more than
   // `uncertainty_tolerance` of its standard uncertainty (the kind settings name; before the
-  // first step, also a predicted cost decrease of at most 0.1 %), or when three accepted steps
-  // in a row moved none by more than that; 0 turns these tests off.
+  // first step, also a predicted cost decrease of at most 0.1 % when settings ask it), or when
+  // three accepted steps in a row moved none by more than that; 0 turns these tests off.
   struct Outcome {
     bool usable = false;
     bool converged = false;

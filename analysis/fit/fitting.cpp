@@ -115,6 +115,7 @@ SolverSettings solver_settings(const FitOptions& options) {
   settings.equation_error_step_tolerance = options.equation_error_step_tolerance;
   settings.robust_uncertainty = options.uncertainty == FitOptions::Uncertainty::kWindowRobust;
   settings.nonmonotonic_steps = options.nonmonotonic_steps;
+  settings.first_step_decrease = options.first_step_decrease;
   settings.threads = fit_thread_count(options);
   settings.stop_requested = options.stop_requested;
   return settings;

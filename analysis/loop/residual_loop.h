@@ -46,13 +46,15 @@ struct LoopOptions {
   // lowest RMSE. Its global_subsets is ignored: the loop's fits take their subset refits on
   // the folds, which the cross-validation then reuses. One round of them, and no reset start
   // (FitOptions::global_reset): a refit's two starts are the loop's own search
-  // (docs/residual-loop.md, "Refits and acceptance").
+  // (docs/residual-loop.md, "Refits and acceptance"). The stopping rule as the loop's
+  // decisions were measured with it (FitOptions::first_step_decrease off).
   FitOptions fit = [] {
     FitOptions options;
     options.cross_validation_folds = 3;
     options.global_keep = FitOptions::GlobalKeep::kLowestRateRmse;
     options.global_rounds = 1;
     options.global_reset = false;
+    options.first_step_decrease = false;
     return options;
   }();
 

@@ -353,7 +353,7 @@ TEST_CASE("a fit started at another fit's optimum with its window states begins 
 // inflates every standard uncertainty, so that the Gauss-Newton step is under 0.1 of each
 // (0.012) while it predicts a cost 11 % lower. The small-step rule alone stops there after 0
 // iterations, at 42 times the cost of the optimum the fit reaches when it goes on; before the
-// first step it asks for a small predicted decrease too.
+// first step it asks for a small predicted decrease too (FitOptions::first_step_decrease).
 TEST_CASE(
     "a fit does not stop before its first step while the Gauss-Newton step predicts a "
     "markedly lower cost",
@@ -368,6 +368,12 @@ TEST_CASE(
   INFO(fit.summary.brief_report());
   CHECK(fit.summary.iterations > 0);
   CHECK(fit.summary.final_cost < 0.1 * fit.summary.initial_cost);
+  // Without the first step's check (the residual loop's fits), the rule stops it there.
+  options.first_step_decrease = false;
+  const FitResult stopped =
+      doorbench::fit_model(doorbench::testing::fit_start_read_off(data), data, options);
+  CHECK(stopped.summary.iterations == 0);
+  CHECK(stopped.summary.final_cost == stopped.summary.initial_cost);
 }
 
 TEST_CASE("the latch read off the force-angle curves lands within a switch width", "[fitting]") {
