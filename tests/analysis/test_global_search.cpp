@@ -114,8 +114,9 @@ TEST_CASE("Global search: non-monotonic steps reach a lower optimum than monoton
   CHECK(monotonic.summary.final_cost > 1.3 * nonmonotonic.summary.final_cost);
 }
 
-// The 50 Hz robot recording: the first round's best polish ends 32 % above the optimum a
-// refit from it reaches in the second round (docs/PERFORMANCE.md, "Rounds of subset refits").
+// The 50 Hz robot recording: the first round's best polish (the reset start's) ends 32 % above
+// the optimum a refit from it reaches in the second round (docs/fitting.md, "The global stage",
+// step 5).
 TEST_CASE("Global search: further rounds of subset refits reach a basin the first round missed",
           "[fitting][global][slow]") {
   const PreparedData data = testing::robot_recording();
