@@ -400,6 +400,31 @@ TEST_CASE("the latch read off the force-angle curves lands within a switch width
   CHECK_FALSE(none.notes.empty());
 }
 
+TEST_CASE("closings the hand stops short of the latch are not read as the latch", "[fitting]") {
+  // Draw 19 at 1 kHz: every closing stops at 0.108 rad, above the latch (θ3 0.06 rad). The
+  // hand's braking there peaks like a latching torque, with a knot one switch width above the
+  // peak: read as a latch, θ3 − θ2 = 0.0003 rad and k_lock 133733 N·m/rad.
+  const PreparedData short_of_latch = doorbench::testing::family_draw(19, 1000.0);
+  const DoorModel start = doorbench::testing::with_handle_radius(
+      doorbench::testing::sensory_reference(), short_of_latch.handle_radius_m);
+  const doorbench::LatchReadOff read =
+      doorbench::read_latch_start(short_of_latch, start, short_of_latch.rate_noise_rad_s);
+  CHECK(read.opening_strokes == 6);
+  CHECK(read.closing_strokes == 0);
+  CHECK_FALSE(read.theta2_rad);
+  CHECK_FALSE(read.k_lock_Nm_per_rad);
+  CHECK(std::find(read.notes.begin(), read.notes.end(),
+                  "no closing stroke latches from above the latch region: theta2, theta3, k_lock "
+                  "not read") != read.notes.end());
+  // Draw 1 at 1 kHz latches on every closing (the hand aims 0.056 rad past closed).
+  const PreparedData latching = doorbench::testing::family_draw(1, 1000.0);
+  const doorbench::LatchReadOff latched =
+      doorbench::read_latch_start(latching, start, latching.rate_noise_rad_s);
+  CHECK(latched.closing_strokes == 6);
+  REQUIRE(latched.theta2_rad);
+  CHECK(*latched.theta2_rad < *latched.theta3_rad);
+}
+
 TEST_CASE("from 30% off, the sensory fit recovers the parameters within their uncertainties",
           "[fitting]") {
   const DoorModel& truth = sensory_truth();
