@@ -5,6 +5,10 @@
 // before the stage (its restarts came from a fold or from the start model). Those costs are
 // doorbench_fit_study's lines for main at 35f0889 (studies/fit_study_runs_today.csv and
 // studies/fit_study_runs_today_1k.csv), measured with the same recordings, starts and options.
+//
+// The fit started from the true door (as given, no latch read off) ends no more than 1 % below
+// the fit from the data on every recording but the four where it was measured to
+// (docs/PERFORMANCE.md, "Closings that stop short of the latch"): 37 of 41, where the aim is 39.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -44,10 +48,21 @@ std::map<std::string, double> best_costs_before_the_stage() {
   return best;
 }
 
+// The recordings whose fit from the true door ends more than 1 % below the fit from the data
+// (studies/fit_study_runs_closing_truth.csv: −27.7 %, −6.8 %, −1.3 %, −1.5 %): true-door basins
+// that no start of the global stage reaches.
+bool measured_truth_miss(const std::string& recording) {
+  for (const char* miss : {"family50-16", "family50-8", "family50-5", "family1000-3"}) {
+    if (recording == miss) return true;
+  }
+  return false;
+}
+
 // As `doorbench fit` without --params: the reference door with the recording's handle radius,
-// its values taken from the data, RK4 steps of at most 1 ms (substeps_for_1ms_steps).
+// its values taken from the data, RK4 steps of at most 1 ms (substeps_for_1ms_steps). `truth`:
+// the door the recording was made with.
 void check_folds_and_cost(const std::string& recording, const PreparedData& data,
-                          const std::map<std::string, double>& before) {
+                          const DoorModel& truth, const std::map<std::string, double>& before) {
   INFO(recording);
   const DoorModel start = testing::fit_start_read_off(data);
   const auto fit_with_folds = [&](int folds) {
@@ -67,6 +82,13 @@ void check_folds_and_cost(const std::string& recording, const PreparedData& data
   INFO("cost " << none.summary.final_cost << ", the best before the stage "
                << before.at(recording));
   CHECK(none.summary.final_cost <= before.at(recording) * (1.0 + 1e-6));
+  FitOptions from_truth;
+  from_truth.substeps_per_sample = substeps_for_1ms_steps(data);
+  from_truth.cross_validation_folds = 0;
+  from_truth.latch_start_from_data = false;
+  const double truth_cost = fit_model(truth, data, from_truth).summary.final_cost;
+  INFO("from the true door " << truth_cost);
+  if (!measured_truth_miss(recording)) CHECK(truth_cost >= 0.99 * none.summary.final_cost);
 }
 
 // Draws first_seed .. last_seed of the recording family at one rate (testing::family_draw).
@@ -77,7 +99,7 @@ void check_family_draws(double rate_hz, std::uint32_t first_seed, std::uint32_t 
     REQUIRE(data.sample_rate_hz == Approx(rate_hz));
     check_folds_and_cost(
         "family" + std::to_string(static_cast<int>(rate_hz)) + "-" + std::to_string(seed), data,
-        before);
+        testing::sensory_reference(), before);
   }
 }
 
@@ -85,43 +107,46 @@ void check_family_draws(double rate_hz, std::uint32_t first_seed, std::uint32_t 
 
 TEST_CASE(
     "Global search on many draws: --folds 0, 3 and 4 agree, at no more than the cost before "
-    "the stage, on the robot recording and the family's 50 Hz draws 1-10",
+    "the stage and at most 1 % above the fit from the true door, on the robot recording and the "
+    "family's 50 Hz draws 1-10",
     "[fitting][global][slow]") {
-  check_folds_and_cost("robot50", testing::robot_recording(), best_costs_before_the_stage());
+  check_folds_and_cost("robot50", testing::robot_recording(),
+                       testing::with_handle_radius(testing::sensory_reference(), 0.8),
+                       best_costs_before_the_stage());
   check_family_draws(50.0, 1, 10);
 }
 
 TEST_CASE(
     "Global search on many draws: --folds 0, 3 and 4 agree, at no more than the cost before "
-    "the stage, on the family's 50 Hz draws 11-20",
+    "the stage and at most 1 % above the fit from the true door, on the family's 50 Hz draws 11-20",
     "[fitting][global][slow]") {
   check_family_draws(50.0, 11, 20);
 }
 
 TEST_CASE(
     "Global search on many draws: --folds 0, 3 and 4 agree, at no more than the cost before "
-    "the stage, on the family's 1 kHz draws 1-5",
+    "the stage and at most 1 % above the fit from the true door, on the family's 1 kHz draws 1-5",
     "[fitting][global][slow]") {
   check_family_draws(1000.0, 1, 5);
 }
 
 TEST_CASE(
     "Global search on many draws: --folds 0, 3 and 4 agree, at no more than the cost before "
-    "the stage, on the family's 1 kHz draws 6-10",
+    "the stage and at most 1 % above the fit from the true door, on the family's 1 kHz draws 6-10",
     "[fitting][global][slow]") {
   check_family_draws(1000.0, 6, 10);
 }
 
 TEST_CASE(
     "Global search on many draws: --folds 0, 3 and 4 agree, at no more than the cost before "
-    "the stage, on the family's 1 kHz draws 11-15",
+    "the stage and at most 1 % above the fit from the true door, on the family's 1 kHz draws 11-15",
     "[fitting][global][slow]") {
   check_family_draws(1000.0, 11, 15);
 }
 
 TEST_CASE(
     "Global search on many draws: --folds 0, 3 and 4 agree, at no more than the cost before "
-    "the stage, on the family's 1 kHz draws 16-20",
+    "the stage and at most 1 % above the fit from the true door, on the family's 1 kHz draws 16-20",
     "[fitting][global][slow]") {
   check_family_draws(1000.0, 16, 20);
 }
