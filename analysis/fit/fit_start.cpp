@@ -251,8 +251,9 @@ std::optional<ClosingReading> read_closing(const Stroke& stroke, const Context& 
   const Knot knot = best_knot(ramp, theta_peak + width, highest, /*hinge_above=*/false);
   const double k_lock = knot.fit.slope_change;
   if (!(k_lock > 0) || !std::isfinite(knot.at)) return std::nullopt;
-  // A knot within two switch widths of the peak (its search begins at one) is no latching
-  // zone: the torque rises only at its peak, as where a hand stops the door short of the latch.
+  // A knot less than 2/β above the peak (half a switch's width; its search begins at 1/β) is no
+  // latching zone: the torque rises only at its peak, as where a hand stops the door short of
+  // the latch.
   if (knot.at < theta_peak + 2.0 * width) return std::nullopt;
   // k_lock (θ3 − θ) S(θ; θ2, β) peaks at θ2 + ln(2β (θ3 − θ) − 1) / (2β).
   const double lever = 2.0 * context.beta * (knot.at - theta_peak) - 1.0;

@@ -402,8 +402,8 @@ TEST_CASE("the latch read off the force-angle curves lands within a switch width
 
 TEST_CASE("closings the hand stops short of the latch are not read as the latch", "[fitting]") {
   // Draw 19 at 1 kHz: every closing stops at 0.108 rad, above the latch (θ3 0.06 rad). The
-  // hand's braking there peaks like a latching torque, with a knot one switch width above the
-  // peak: read as a latch, θ3 − θ2 = 0.0003 rad and k_lock 133733 N·m/rad.
+  // hand's braking there peaks like a latching torque, with a knot about 1/β above the peak:
+  // read as a latch, θ3 − θ2 = 0.0003 rad and k_lock 133733 N·m/rad.
   const PreparedData short_of_latch = doorbench::testing::family_draw(19, 1000.0);
   const DoorModel start = doorbench::testing::with_handle_radius(
       doorbench::testing::sensory_reference(), short_of_latch.handle_radius_m);

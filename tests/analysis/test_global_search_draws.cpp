@@ -110,8 +110,7 @@ TEST_CASE(
     "the stage and at most 1 % above the fit from the true door, on the robot recording and the "
     "family's 50 Hz draws 1-10",
     "[fitting][global][slow]") {
-  check_folds_and_cost("robot50", testing::robot_recording(),
-                       testing::with_handle_radius(testing::sensory_reference(), 0.8),
+  check_folds_and_cost("robot50", testing::robot_recording(), testing::robot_door(),
                        best_costs_before_the_stage());
   check_family_draws(50.0, 1, 10);
 }

@@ -21,6 +21,7 @@
 #include "fixtures/reference_doors.h"
 #include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
+#include "tests/support/robot_recording.h"
 #include "tests/support/run_doorbench.h"
 
 namespace {
@@ -137,9 +138,9 @@ TEST_CASE(
     "[cli][fit][identifiable][slow]") {
   const testing::TempDir dir("free_auto_robot");
   const auto csv = dir / "robot.csv";
-  const DoorModel door = testing::with_handle_radius(testing::sensory_reference(), 0.8);
   write_recording_csv_file(
-      csv, testing::family_sensor_recording(door, testing::robot_operator_conditions(), 42));
+      csv, testing::family_sensor_recording(testing::robot_door(),
+                                            testing::robot_operator_conditions(), 42));
   auto run_fit = [&](const std::string& extra, const std::string& name) {
     const testing::DoorbenchRun run = testing::run_doorbench_shell(
         "fit '" + csv.string() + "' --folds 0 " + extra + " --out '" + (dir / name).string() + "'",

@@ -11,9 +11,13 @@
 
 namespace doorbench::testing {
 
+// The door the robot recording is made with: the sensory reference door, the handle at 0.8 m.
+inline DoorModel robot_door() {
+  return with_handle_radius(sensory_reference(), 0.8);
+}
+
 inline PreparedData robot_recording() {
-  const DoorModel door = with_handle_radius(sensory_reference(), 0.8);
-  return family_recording(door, robot_operator_conditions(), 42);
+  return family_recording(robot_door(), robot_operator_conditions(), 42);
 }
 
 // Draw `seed` of the recording family (12 strokes) at one sample rate, as doorbench_fit_study
