@@ -19,6 +19,11 @@
 //   --full-loop: the whole loop (max_steps and the structure check at their defaults), for
 //                its CPU time per recording (docs/PERFORMANCE.md); "found first" is still
 //                the first step's effect. Keep its runs in a CSV of their own.
+//   --rate HZ: every draw sampled at HZ (the other conditions as drawn)
+//   --stroke-seconds LO:HI, --total-seconds LO:HI: only draws whose clean recording has
+//                `--strokes` strokes, each lasting LO-HI s, summing to LO-HI s; draw d is then
+//                the d-th such seed from --first-seed on (a class of recordings, e.g. the
+//                12-stroke, 32 s ones of docs/PERFORMANCE.md's CPU bar)
 //
 // Each run: LoopOptions' defaults but max_steps = 1 (the first added effect is the answer),
 // no structure check, one fit thread and the refits one after another (the jobs run
@@ -32,8 +37,11 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <limits>
 #include <mutex>
+#include <optional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -110,6 +118,12 @@ struct Job {
   int draw = 0;
 };
 
+// A closed interval of seconds, "LO:HI" on the command line.
+struct SecondsRange {
+  double lo_s = 0.0, hi_s = std::numeric_limits<double>::infinity();
+  bool contains(double s) const { return s >= lo_s && s <= hi_s; }
+};
+
 struct Settings {
   std::string csv;
   std::vector<std::string> effects;
@@ -118,6 +132,9 @@ struct Settings {
   unsigned long first_seed = 1;
   bool table_only = false;
   bool full_loop = false;
+  double rate_hz = 0.0;  // 0: as drawn
+  std::optional<SecondsRange> stroke_s, total_s;
+  std::vector<unsigned long> draw_seeds;  // draw d's seed is draw_seeds[d - 1] (run_pending)
 };
 
 std::vector<std::string> split(const std::string& text, char by) {
@@ -142,6 +159,26 @@ int positive(const std::string& flag, const std::string& text) {
     throw std::invalid_argument(flag + " must be a whole number >= 1, not '" + text + "'");
   }
   return value;
+}
+
+SecondsRange seconds_range(const std::string& flag, const std::string& text) {
+  const std::vector<std::string> parts = split(text, ':');
+  SecondsRange range;
+  std::size_t used_lo = 0, used_hi = 0;
+  try {
+    if (parts.size() == 2) {
+      range.lo_s = std::stod(parts[0], &used_lo);
+      range.hi_s = std::stod(parts[1], &used_hi);
+    }
+  } catch (const std::logic_error&) {
+    used_lo = 0;
+  }
+  if (parts.size() != 2 || used_lo != parts[0].size() || used_hi != parts[1].size() ||
+      !(range.lo_s >= 0.0) || !(range.hi_s >= range.lo_s)) {
+    throw std::invalid_argument(flag + " must be LO:HI seconds with 0 <= LO <= HI, not '" + text +
+                                "'");
+  }
+  return range;
 }
 
 Settings parse_arguments(int argc, char** argv) {
@@ -170,6 +207,12 @@ Settings parse_arguments(int argc, char** argv) {
       s.jobs = positive(flag, value);
     else if (flag == "--first-seed")
       s.first_seed = std::stoul(value);
+    else if (flag == "--rate")
+      s.rate_hz = positive(flag, value);
+    else if (flag == "--stroke-seconds")
+      s.stroke_s = seconds_range(flag, value);
+    else if (flag == "--total-seconds")
+      s.total_s = seconds_range(flag, value);
     else
       throw std::invalid_argument("unknown option " + flag);
   }
@@ -286,6 +329,58 @@ std::string recovered_parameters(const LoopStep& step, const std::vector<double>
   return datasheet::format_parameters(out);
 }
 
+// Seed `seed`'s recording conditions: drawn, then the settings' rate.
+RecordingConditions conditions_of(unsigned long seed, const Settings& s) {
+  FamilyOptions family;
+  family.strokes = s.strokes;
+  RecordingConditions conditions = draw_conditions(static_cast<std::uint32_t>(seed), family);
+  if (s.rate_hz > 0) conditions.sample_rate_hz = s.rate_hz;
+  return conditions;
+}
+
+// Whether seed `seed`'s clean recording is of the class --stroke-seconds and --total-seconds
+// ask for: s.strokes strokes, each and their sum within the ranges.
+bool in_class(unsigned long seed, const Settings& s, const DoorModel& reference) {
+  const PreparedData data =
+      family_recording(reference, conditions_of(seed, s), static_cast<std::uint32_t>(seed));
+  if (static_cast<int>(data.strokes.size()) != s.strokes) return false;
+  double total_s = 0.0;
+  for (const Stroke& stroke : data.strokes) {
+    const double stroke_s = stroke.time_s.back() - stroke.time_s.front();
+    if (s.stroke_s && !s.stroke_s->contains(stroke_s)) return false;
+    total_s += stroke_s;
+  }
+  return !s.total_s || s.total_s->contains(total_s);
+}
+
+// Each draw's seed: first_seed + d - 1, or with --stroke-seconds / --total-seconds the
+// d-th seed from first_seed on whose recording is of the class (at most 100 seeds per draw
+// are tried).
+std::vector<unsigned long> draw_seeds(const Settings& s, const DoorModel& reference) {
+  int wanted = 0;
+  for (const std::string& e : s.effects)
+    wanted = std::max(wanted, e == "clean" ? s.clean_draws : s.draws);
+  std::vector<unsigned long> seeds;
+  if (!s.stroke_s && !s.total_s) {
+    for (int d = 0; d < wanted; ++d) seeds.push_back(s.first_seed + static_cast<unsigned long>(d));
+    return seeds;
+  }
+  const unsigned long last = s.first_seed + 100UL * static_cast<unsigned long>(wanted) - 1;
+  for (unsigned long seed = s.first_seed; seed <= last && static_cast<int>(seeds.size()) < wanted;
+       ++seed) {
+    if (in_class(seed, s, reference)) seeds.push_back(seed);
+  }
+  if (static_cast<int>(seeds.size()) < wanted) {
+    throw std::runtime_error(printf_text(
+        "only %zu of the %d draws asked for have recordings of the class among seeds %lu-%lu",
+        seeds.size(), wanted, s.first_seed, last));
+  }
+  std::string list;
+  for (unsigned long seed : seeds) list += (list.empty() ? "" : " ") + std::to_string(seed);
+  std::fprintf(stderr, "draws of the class: seeds %s\n", list.c_str());
+  return seeds;
+}
+
 RunRecord run_one(const Job& job, const Settings& s, const DoorModel& reference, double d1) {
   const double cpu0 = thread_cpu_s();
   const auto wall0 = std::chrono::steady_clock::now();
@@ -295,7 +390,7 @@ RunRecord run_one(const Job& job, const Settings& s, const DoorModel& reference,
   r.size = job.size;
   r.size_unit = job.unit;
   r.draw = job.draw;
-  r.seed = s.first_seed + static_cast<unsigned long>(job.draw) - 1;
+  r.seed = s.draw_seeds[static_cast<std::size_t>(job.draw) - 1];
   const LoopOptions options = loop_options_for(job, s.full_loop, r.loop_options);
   std::vector<double> truth;
   DoorModel model = reference;
@@ -305,10 +400,8 @@ RunRecord run_one(const Job& job, const Settings& s, const DoorModel& reference,
     model = with_effect(reference, kind, truth);
   }
   try {
-    FamilyOptions family;
-    family.strokes = s.strokes;
     const auto seed = static_cast<std::uint32_t>(r.seed);
-    const RecordingConditions conditions = draw_conditions(seed, family);
+    const RecordingConditions conditions = conditions_of(r.seed, s);
     r.hand = conditions.hand;
     r.sample_rate_hz = conditions.sample_rate_hz;
     r.sensors = conditions.sensors;
@@ -335,7 +428,7 @@ RunRecord run_one(const Job& job, const Settings& s, const DoorModel& reference,
 }
 
 // Runs the jobs not yet in `records` on s.jobs threads, rewriting the CSV after each.
-void run_pending(const Settings& s, std::vector<RunRecord>& records) {
+void run_pending(Settings& s, std::vector<RunRecord>& records) {
   std::vector<Job> pending;
   for (const Job& job : planned_jobs(s)) {
     bool done = false;
@@ -347,6 +440,7 @@ void run_pending(const Settings& s, std::vector<RunRecord>& records) {
                pending.size(), s.jobs);
   const DoorModel reference = reference_model(ModelKind::kSensory);
   const double d1 = reference.parameter_values()[reference.find_parameter("d1").value()];
+  if (!pending.empty()) s.draw_seeds = draw_seeds(s, reference);
   std::mutex mutex;
   std::atomic<int> finished{0};
   parallel_for(static_cast<int>(pending.size()), s.jobs, [&](int i) {

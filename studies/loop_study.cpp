@@ -14,9 +14,10 @@
 //   --compare-exam: after the loop, the examination's sum of squares at the start fit and
 //     at the final model
 //   --strokes: each stroke's angle range and its speed through a few angles, then stop
-//   family-clean | family-stribeck: a recording of the recording family
-//     (fixtures/recording_family.h), conditions drawn from SEED, breakaway friction of
-//     the issue-30 size (d_s - d1 = 1.5 N m, w_s = 0.05 rad/s) or none; issue-stribeck: the
+//   family-clean | family-stribeck | family-gravity: a recording of the recording family
+//     (fixtures/recording_family.h), conditions drawn from SEED, none, breakaway friction of
+//     the issue-30 size (d_s - d1 = 1.5 N m, w_s = 0.05 rad/s) or a 1 N m gravity imbalance
+//     (the datasheet's typical sizes); issue-stribeck: the
 //     issue's case (a PD hand, 0.3 N of 1-8 Hz tremor, openings to 60-77 deg, latch, 1 kHz).
 //     --hand H, --rate HZ, --sensors S override the drawn conditions; --replay: the data
 //     simulated again under the sampled force (RecordingConditions::replay_sampled_force);
@@ -194,8 +195,9 @@ bool make_recording(const std::string& which, const DoorModel& sensory,
     data = demo_recording(seed);
   } else if (which.rfind("family-", 0) == 0 || which == "issue-stribeck") {
     const testing::RecordingConditions c = family_conditions(which, seed, argc, argv);
-    const DoorModel truth = which == "family-clean"
-                                ? sensory
+    const DoorModel truth = which == "family-clean" ? sensory
+                            : which == "family-gravity"
+                                ? with_effect(sensory, effects::Kind::kGravityImbalance, {1.0})
                                 : with_effect(sensory, effects::Kind::kStribeck, {d1 + 1.5, 0.05});
     std::printf("conditions: %s\n", c.describe().c_str());
     // --datasheet-seed: the recording's seed is the draw's, as doorbench_loop_datasheet makes it.
