@@ -5,7 +5,7 @@
 //   doorbench_fit_study [--family50 N] [--family1k N] [--robot] [--folds 0,3,4] [--truth]
 //                       [--first-seed S] [--threads T] [--report]
 //                       [--samples N] [--polished N] [--promising R] [--hops H]
-//                       [--hop-size D] [--subsets K] [--rounds R]
+//                       [--hop-size D] [--subsets K] [--rounds R] [--repolish N]
 //                       [--uncertainty-tolerance U] [--no-reset] [--no-global] [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
@@ -22,6 +22,7 @@
 //   --uncertainty-tolerance U: FitOptions::uncertainty_tolerance, the stopping rule's (every
 //            solve of the fit, the global stage's included)
 //   --no-reset: no reset start (FitOptions::global_reset false)
+//   --repolish N: FitOptions::global_repolish (0: the best is not polished again)
 //            --no-global: none of it
 //            (FitOptions::global_search false)
 //   --basins: instead of the fits, what separates the data fit's basin from the true door's
@@ -74,6 +75,7 @@ struct Settings {
   double promising = -1;                          // FitOptions::global_promising_ratio, given
   int hops = -1;                                  // FitOptions::global_hops, when given
   int rounds = -1;                                // FitOptions::global_rounds, when given
+  int repolish = -1;                              // FitOptions::global_repolish, when given
   double hop_size = -1;                           // FitOptions::global_hop_size, when given
   double uncertainty_tolerance = -1;              // FitOptions::uncertainty_tolerance, given
   bool reset = true;                              // --no-reset: FitOptions::global_reset off
@@ -115,6 +117,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (s.promising > 0) options.global_promising_ratio = s.promising;
     if (s.hops >= 0) options.global_hops = s.hops;
     if (s.rounds >= 0) options.global_rounds = s.rounds;
+    if (s.repolish >= 0) options.global_repolish = s.repolish;
     if (s.hop_size > 0) options.global_hop_size = s.hop_size;
     if (s.uncertainty_tolerance >= 0) options.uncertainty_tolerance = s.uncertainty_tolerance;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
@@ -291,6 +294,8 @@ int main(int argc, char** argv) {
       s.uncertainty_tolerance = std::atof(argv[++i]);
     } else if (has_value && flag == "--rounds") {
       s.rounds = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--repolish") {
+      s.repolish = std::atoi(argv[++i]);
     } else if (has_value && flag == "--hops") {
       s.hops = std::atoi(argv[++i]);
     } else if (has_value && flag == "--promising") {

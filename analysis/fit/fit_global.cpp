@@ -161,6 +161,32 @@ void polish_reset(const FitResult& first, const PreparedData& data, const FitOpt
   (void)polish_start(kResetOrigin, *reset.model, data, polish, optima, failures, best);
 }
 
+// The best optimum so far (the first fit's when no polish became the best) polished again
+// from its own values (FitOptions::global_repolish), while each polish lowers the best by more
+// than GlobalSearch::kSameOptimumCost. True when a polish became the best.
+bool polish_again(const FitResult& first, const PreparedData& data, const FitOptions& options,
+                  const FitOptions& polish, GlobalSearch& global,
+                  std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
+                  BestOptimum& best, double first_measure) {
+  bool lower = false;
+  for (int again = 1; again <= options.global_repolish; ++again) {
+    throw_if_stop_requested(options.stop_requested, "the global search");
+    const double before = best.fit ? best.measure : first_measure;
+    const DoorModel from = best.fit ? best.fit->model : first.model;
+    ++global.repolished;
+    ++global.starts_tried;
+    if (!polish_start(
+            "polish " + std::to_string(again) + " of the best optimum from its own values", from,
+            data, polish, optima, failures, best)) {
+      break;
+    }
+    lower = true;
+    ++global.repolished_lower;
+    if (!(best.measure < (1.0 - GlobalSearch::kSameOptimumCost) * before)) break;
+  }
+  return lower;
+}
+
 // One further round of subset refits (FitOptions::global_rounds), from the best optimum so
 // far: the refits screened by their window RMSE on every stroke, the best global_polished of
 // those below the best's polished. `refits` receives the round's refits. True when a polish
@@ -279,6 +305,9 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
     round_began_at = best.measure;
     refits_from_kept =
         !subset_round(round, data, options, polish, global, optima, failures, best, refits);
+  }
+  if (polish_again(result, data, options, polish, global, optima, failures, best, first_measure)) {
+    refits_from_kept = false;
   }
   // Basin hops from the best optimum so far, each seeded by its number.
   FitOptions hop_polish = polish;

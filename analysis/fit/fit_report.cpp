@@ -84,6 +84,11 @@ std::string GlobalSearch::report(const std::vector<std::string>& names) const {
                     (reset_parameters == 1 ? " undetermined or bound parameter at its start"
                                            : " undetermined or bound parameters at their starts"));
   }
+  if (repolished > 0) {
+    tried.push_back(std::to_string(repolished) + (repolished == 1 ? " polish" : " polishes") +
+                    " of the best optimum from its own values (" +
+                    std::to_string(repolished_lower) + " lower)");
+  }
   if (hops > 0) {
     tried.push_back(std::to_string(hops) + (hops == 1 ? " basin hop" : " basin hops") +
                     " from the best optimum so far (" + std::to_string(hops_lower) + " lower)");

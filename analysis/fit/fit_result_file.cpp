@@ -65,6 +65,8 @@ nlohmann::ordered_json global_search_json(const FitSummary& s) {
           {"subsets", s.global.partition},
           {"rounds", s.global.rounds},
           {"reset_parameters", s.global.reset_parameters},
+          {"repolished", s.global.repolished},
+          {"repolished_lower", s.global.repolished_lower},
           {"sample_points", s.global.sample_points},
           {"promising", s.global.promising},
           {"polished", s.global.polished},

@@ -76,6 +76,7 @@ std::string FitOptions::validate() const {
   if (global_seed < 1) return "fit global_seed must be >= 1";
   if (global_hops < 0) return "fit global_hops must be >= 0";
   if (global_rounds < 1) return "fit global_rounds must be >= 1";
+  if (global_repolish < 0) return "fit global_repolish must be >= 0";
   if (!(global_hop_size > 0 && global_hop_size <= 1)) {
     return "fit global_hop_size must lie in (0, 1]";
   }

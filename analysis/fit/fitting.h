@@ -149,6 +149,13 @@ struct FitOptions {
   // screens worse than the optimum it came from, so the screen would never pass it. false:
   // not tried.
   bool global_reset = true;
+  // After the rounds: the best optimum polished again from its own values, the window states
+  // back at the measured ones, while each such polish lowers the best by more than
+  // GlobalSearch::kSameOptimumCost (relative); at most this many polishes. The window cost's
+  // floor is rugged: a polish that starts again from an optimum's values, with the measured
+  // states and the coarse pass, often ends in a neighbouring optimum a little lower. 0: not
+  // tried.
+  int global_repolish = 3;
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
   // residual loop compares fits by; its fits keep that one).
@@ -336,7 +343,12 @@ struct GlobalSearch {
   // Free parameters the reset start put back at their starts (FitOptions::global_reset); 0:
   // no reset start was polished.
   int reset_parameters = 0;
-  int starts_tried = 0;  // the first start, every start screened and the reset start
+  // Polishes of the best optimum from its own values (FitOptions::global_repolish), and how
+  // many of them ended lower than the best before them.
+  int repolished = 0;
+  int repolished_lower = 0;
+  int starts_tried = 0;  // the first start, every start screened, the reset start, the polishes
+                         // again and the hops
   int promising = 0;     // screened below global_promising_ratio times the fit's RMSE
   int polished = 0;      // polished on every stroke, the first start included
   int hops = 0;          // basin hops polished (FitOptions::global_hops)
