@@ -153,8 +153,8 @@ struct FitOptions {
   // back at the measured ones, while each such polish lowers the best by more than
   // GlobalSearch::kSameOptimumCost (relative); at most this many polishes. The window cost's
   // floor is rugged: a polish that starts again from an optimum's values, with the measured
-  // states and the coarse pass, often ends in a neighbouring optimum a little lower. 0: not
-  // tried.
+  // states (and the coarse pass, with sub-steps), often ends in a neighbouring optimum a
+  // little lower. 0: not tried.
   int global_repolish = 3;
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
