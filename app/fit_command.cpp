@@ -35,6 +35,7 @@ struct FitCommandOptions {
   int folds = 4;
   int hops = kDefaultHops;  // FitOptions::global_hops
   bool no_reset = false;    // !FitOptions::global_reset
+  int repolish = FitOptions{}.global_repolish;
   // The window fit's size: more windows than this, and whole strokes spread evenly over
   // the recording are kept (fit_size). 0: every window.
   int max_windows = kDefaultMaxWindows;
@@ -244,6 +245,7 @@ void run_fit(const FitCommandOptions& options) {
   fit_options.global_hops = options.hops;
   fit_options.global_hop_size = FitCommandOptions::kHopSize;
   fit_options.global_reset = !options.no_reset;
+  fit_options.global_repolish = options.repolish;
   const std::string size = fit_size(inputs.data, start, fit_options, options.max_windows);
   std::cerr << size << "\n";
   inputs.report_lines.push_back(size);
@@ -329,6 +331,12 @@ void add_fit_command(CLI::App& app, Action& action) {
                 "Leave out the global stage's reset start (the first optimum with its "
                 "undetermined or bound parameters at their starts): one polish less, and a "
                 "basin only it reaches is missed (docs/fitting.md)");
+  fit->add_option("--repolish", options->repolish,
+                  "Polishes of the global stage's best optimum from its own values, while each "
+                  "lowers it by more than 0.1 % (0: none; one polish less each, and a lower "
+                  "point of a rough cost floor may be missed; docs/fitting.md)")
+      ->check(number_range(0, 1000))
+      ->capture_default_str();
   fit->add_option("--max-windows", options->max_windows,
                   "Most windows in the window fit: beyond, whole strokes spread evenly over the "
                   "recording are fitted (0: every window)")

@@ -131,7 +131,8 @@ TEST_CASE("doorbench fit --free auto fits the identifiable set and holds the res
 // A recording like one from another lab (50 Hz, jittered, 4 strokes, a robot operator, a load
 // cell not tared, the handle at 0.8 m): held at the full fit's values, the identifiable set
 // ends within 2 FIT points of the full fit, and the report says what holding them costs.
-// `--no-reset` on the same recording leaves out the reset start.
+// `--no-reset` on the same recording leaves out the reset start, `--repolish 0` the polishes of
+// the best optimum again.
 TEST_CASE(
     "doorbench fit --free auto on the robot recording stays within 2 FIT points of the "
     "full fit",
@@ -173,5 +174,15 @@ TEST_CASE(
   CHECK(testing::read_file(dir / "full" / "report.md").find("at their starts") !=
         std::string::npos);
   CHECK(testing::read_file(dir / "no-reset" / "report.md").find("at their starts") ==
+        std::string::npos);
+  // --repolish 0 leaves out the polishes of the best optimum from its own values.
+  const auto [unpolished_err, unpolished] = run_fit("--repolish 0", "repolish-0");
+  const nlohmann::json& unpolished_tried = unpolished.at("global_search");
+  CHECK(tried.at("repolished").get<int>() > 0);
+  CHECK(unpolished_tried.at("repolished").get<int>() == 0);
+  CHECK(unpolished_tried.at("starts_tried").get<int>() < tried.at("starts_tried").get<int>());
+  CHECK(testing::read_file(dir / "full" / "report.md").find("from its own values") !=
+        std::string::npos);
+  CHECK(testing::read_file(dir / "repolish-0" / "report.md").find("from its own values") ==
         std::string::npos);
 }

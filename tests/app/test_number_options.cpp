@@ -168,10 +168,10 @@ TEST_CASE("CLI numbers: every numeric option of every verb refuses what is not a
       "calibrate inclinometer --inclinometer-range-deg 0",
       "calibrate timing --inclinometer-range-deg 0", "fit --derivative-cutoff-hz 0",
       "fit --folds 0", "fit --force-cutoff-hz 0", "fit --hops 0", "fit --max-windows 0",
-      "loop --derivative-cutoff-hz 0", "loop --force-cutoff-hz 0", "play --push-N 0",
-      "play --pushes-hz 0", "play --seed 0", "record --max-wait-s 0", "spec --lambda 0",
-      "spec --seed 0", "spec --threads 0", "ab --seed 0", "campaign analyze --bootstrap 0",
-      "campaign analyze --seed 0", "campaign plan --seed 0",
+      "fit --repolish 0", "loop --derivative-cutoff-hz 0", "loop --force-cutoff-hz 0",
+      "play --push-N 0", "play --pushes-hz 0", "play --seed 0", "record --max-wait-s 0",
+      "spec --lambda 0", "spec --seed 0", "spec --threads 0", "ab --seed 0",
+      "campaign analyze --bootstrap 0", "campaign analyze --seed 0", "campaign plan --seed 0",
       // the station's nice value 0: not lowered
       "play --station-nice 0", "ab --station-nice 0", "campaign run --station-nice 0"};
   std::string listed;
