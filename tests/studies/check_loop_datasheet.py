@@ -1,8 +1,9 @@
 #!/usr/bin/env python3
 """The loop datasheet program (studies/loop_datasheet.cpp) cannot rot: run it on one drawn
 recording of one effect and one clean one, check the CSV and the table, check that a second
-call resumes (runs nothing, keeps the CSV), and tabulate a hand-written CSV whose counts give
-Wilson intervals computed here by hand, and whose parameters give a known bias and coverage.
+call resumes (runs nothing, keeps the CSV), tabulate a hand-written CSV whose counts give
+Wilson intervals computed here by hand, and whose parameters give a known bias and coverage,
+and check the errors of the recording class options (--stroke-seconds, --total-seconds).
 
 usage: check_loop_datasheet.py DATASHEET_EXECUTABLE WORK_DIR
 """
@@ -94,6 +95,25 @@ def hand_written(exe, work):
           ">= 1, not '0'", "usage: " + usage.stderr)
 
 
+def class_errors(exe, work):
+    """The recording class options' errors: a range given the wrong way round, and a class no
+    seed of the searched ones has (no CSV is written then)."""
+    path = os.path.join(work, "class.csv")
+    reversed_range = run(exe, "--csv", path, "--stroke-seconds", "3:1", expect=2)
+    check(reversed_range.stderr.strip() == "doorbench_loop_datasheet: --stroke-seconds must be "
+          "LO:HI seconds with 0 <= LO <= HI, not '3:1'", "range: " + reversed_range.stderr)
+    not_a_range = run(exe, "--csv", path, "--total-seconds", "30", expect=2)
+    check(not_a_range.stderr.strip() == "doorbench_loop_datasheet: --total-seconds must be "
+          "LO:HI seconds with 0 <= LO <= HI, not '30'", "range: " + not_a_range.stderr)
+    # No drawn stroke lasts under 0.2 s: none of the 100 seeds searched for one draw qualifies.
+    none = run(exe, "--csv", path, "--effects", "clean", "--clean-draws", "1", "--strokes", "4",
+               "--stroke-seconds", "0:0.2", expect=1)
+    check(none.stderr.strip().endswith("doorbench_loop_datasheet: only 0 of the 1 draws asked "
+                                       "for have recordings of the class among seeds 1-100"),
+          "class: " + none.stderr)
+    check(not os.path.exists(path), "a CSV was written for a class no seed has")
+
+
 def main():
     if len(sys.argv) != 3:
         sys.exit(__doc__)
@@ -101,6 +121,7 @@ def main():
     shutil.rmtree(work, ignore_errors=True)
     os.makedirs(work)
     hand_written(exe, work)
+    class_errors(exe, work)
     real_runs(exe, work)
     for p in problems:
         print("FAIL:", p)
