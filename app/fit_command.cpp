@@ -332,9 +332,10 @@ void add_fit_command(CLI::App& app, Action& action) {
                 "undetermined or bound parameters at their starts): one polish less, and a "
                 "basin only it reaches is missed (docs/fitting.md)");
   fit->add_option("--repolish", options->repolish,
-                  "Polishes of the global stage's best optimum from its own values, while each "
-                  "lowers it by more than 0.1 % (0: none; one polish less each, and a lower "
-                  "point of a rough cost floor may be missed; docs/fitting.md)")
+                  "Polish the global stage's best optimum again from its own values, at most "
+                  "this many times, while each polish lowers it by more than 0.1 % (0: never: "
+                  "faster, and a lower point of a rough cost floor may be missed; "
+                  "docs/fitting.md)")
       ->check(number_range(0, 1000))
       ->capture_default_str();
   fit->add_option("--max-windows", options->max_windows,

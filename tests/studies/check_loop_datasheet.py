@@ -96,8 +96,8 @@ def hand_written(exe, work):
 
 
 def class_errors(exe, work):
-    """The recording class options' errors: a range given the wrong way round, and a class no
-    seed of the searched ones has (no CSV is written then)."""
+    """The recording class options' errors: a range given the wrong way round, a value that is
+    not a range, and a class no seed of the searched ones has (no CSV is written then)."""
     path = os.path.join(work, "class.csv")
     reversed_range = run(exe, "--csv", path, "--stroke-seconds", "3:1", expect=2)
     check(reversed_range.stderr.strip() == "doorbench_loop_datasheet: --stroke-seconds must be "
