@@ -5,7 +5,8 @@
 // optimum is. Recordings: the 50 Hz, 4-stroke robot recording with an untared load cell
 // (tests/support/robot_recording.h), and a 50 Hz draw of the recording family on which the fit
 // of one start ended at a cost 4.6 times higher with --folds 0 or 3 than with --folds 4, whose
-// folds happened to offer a restart.
+// folds happened to offer a restart. One test fits synthetic_strokes (6 strokes at 1 kHz) from a
+// start whose reset door breaks a constraint.
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
@@ -16,6 +17,8 @@
 
 #include "analysis/fit/fit_result_file.h"
 #include "analysis/fit/fitting.h"
+#include "analysis/model/sensory_model.h"
+#include "analysis/simulation/fit_synthetic.h"
 #include "core/number_format.h"
 #include "fixtures/reference_doors.h"
 #include "tests/support/model_difference.h"
@@ -387,6 +390,59 @@ TEST_CASE(
   CHECK(off.starts_tried ==
         1 + (off.start_as_given ? 1 : 0) + off.subset_refits + off.sample_points);
   CHECK(off.report(without.summary.free_names).find("at their starts") == std::string::npos);
+}
+
+// The reference sensory door started with d1 at 3.8 and d2 at 3.2 N*m, d2 bounded below at
+// 2.0 (the door's d1 2.6, d2 1.3): on synthetic_strokes the first optimum has d2 on that bound
+// and d1 near 2.96, below d2's start.
+DoorModel start_with_d2_bounded_above_d1(const DoorModel& door) {
+  const auto base = static_cast<std::size_t>(door.base_parameter_count());
+  std::vector<double> values(door.parameter_values().begin(),
+                             door.parameter_values().begin() + base);
+  std::vector<Bounds> bounds(door.parameter_bounds().begin(),
+                             door.parameter_bounds().begin() + base);
+  values[sensory::kD1] = 3.8;
+  values[sensory::kD2] = 3.2;
+  bounds[sensory::kD2].lower = 2.0;
+  return DoorModel(door.kind(), door.geometry(), values, bounds);
+}
+
+TEST_CASE(
+    "Global search: a reset start that breaks a constraint of the model is not polished, and "
+    "the fit's notes say why",
+    "[fitting][global]") {
+  const DoorModel door = testing::sensory_reference();
+  const PreparedData data = synthetic_strokes(door, {});
+  FitOptions options;
+  options.cross_validation_folds = 0;
+  options.latch_start_from_data = false;
+  const FitResult fit = fit_model(start_with_d2_bounded_above_d1(door), data, options);
+  INFO(fit.summary.full_report());
+  // The first optimum with d2 (and every other undetermined or bound parameter) back at its
+  // start breaks d1 >= d2.
+  const std::string prefix =
+      "the global stage did not try the first optimum with its undetermined or bound parameters "
+      "at their starts: that door breaks a constraint of the model: sensory parameter d1 = ";
+  const std::string suffix = " breaks d1 >= d2 >= 0 (d2 = 3.2)";
+  const auto note = std::find_if(fit.summary.notes.begin(), fit.summary.notes.end(),
+                                 [&](const std::string& n) { return n.starts_with(prefix); });
+  REQUIRE(note != fit.summary.notes.end());
+  CHECK(note->ends_with(suffix));
+  CHECK(std::stod(note->substr(prefix.size())) < 3.2);
+  // Not tried: not counted, not in the report's list of starts, none in result.json.
+  const GlobalSearch& g = fit.summary.global;
+  CHECK(g.reset_parameters == 0);
+  CHECK(g.starts_tried ==
+        1 + (g.start_as_given ? 1 : 0) + g.subset_refits + g.sample_points + g.repolished);
+  CHECK(g.report(fit.summary.free_names).find("at their starts") == std::string::npos);
+  for (const GlobalOptimum& optimum : g.optima) {
+    for (const std::string& origin : optimum.reached_from) {
+      CHECK(origin.find("at their starts") == std::string::npos);
+    }
+  }
+  CHECK(nlohmann::json::parse(fit_result_json(fit, data))
+            .at("global_search")
+            .at("reset_parameters") == 0);
 }
 
 TEST_CASE("Global search: off, the fit is the one start polished, and its options are checked",
