@@ -35,6 +35,7 @@ struct FitCommandOptions {
   int folds = 4;
   int hops = kDefaultHops;  // FitOptions::global_hops
   bool no_reset = false;    // !FitOptions::global_reset
+  bool no_soft = false;     // FitOptions::global_soft_switches empty
   int repolish = FitOptions{}.global_repolish;
   // The window fit's size: more windows than this, and whole strokes spread evenly over
   // the recording are kept (fit_size). 0: every window.
@@ -246,6 +247,7 @@ void run_fit(const FitCommandOptions& options) {
   fit_options.global_hop_size = FitCommandOptions::kHopSize;
   fit_options.global_reset = !options.no_reset;
   fit_options.global_repolish = options.repolish;
+  if (options.no_soft) fit_options.global_soft_switches.clear();
   const std::string size = fit_size(inputs.data, start, fit_options, options.max_windows);
   std::cerr << size << "\n";
   inputs.report_lines.push_back(size);
@@ -331,6 +333,10 @@ void add_fit_command(CLI::App& app, Action& action) {
                 "Leave out the global stage's reset start (the first optimum with its "
                 "undetermined or bound parameters at their starts): one polish less, and a "
                 "basin only it reaches is missed (docs/fitting.md)");
+  fit->add_flag("--no-soft", options->no_soft,
+                "Leave out the global stage's fits with softer switches (the data-derived "
+                "start fitted with the latch's switches 10 and 3 times softer, each then "
+                "polished): less CPU, and a basin only they reach is missed (docs/fitting.md)");
   fit->add_option("--repolish", options->repolish,
                   "Polish the global stage's best optimum again from its own values, at most "
                   "this many times, while each polish lowers it by more than 0.1 % (0: never: "

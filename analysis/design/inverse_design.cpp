@@ -87,12 +87,13 @@ FitOptions InverseDesignOptions::default_fit_options() {
   FitOptions fit;
   fit.cross_validation_folds = 0;
   // The design's starts are its own (AS-IS, the sparse search's parts, the perturbed starts):
-  // of the global stage only the start as given is screened, no reset start is polished and
-  // the best is not polished again.
+  // of the global stage only the start as given is screened, no reset start is polished, no
+  // start is fitted with softer switches and the best is not polished again.
   fit.global_subsets = 0;
   fit.global_samples = 0;
   fit.global_reset = false;
   fit.global_repolish = 0;
+  fit.global_soft_switches.clear();
   return fit;
 }
 

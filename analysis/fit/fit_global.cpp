@@ -4,12 +4,15 @@
 
 #include <algorithm>
 #include <optional>
+#include <span>
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/internal/fit_search.h"
 #include "core/clock.h"
+#include "core/number_format.h"
 #include "core/numbers.h"
 #include "core/parallel.h"
 #include "core/stop_request.h"
@@ -161,6 +164,47 @@ void polish_reset(const FitResult& first, const PreparedData& data, const FitOpt
   (void)polish_start(kResetOrigin, *reset.model, data, polish, optima, failures, best);
 }
 
+// The first start fitted with each of FitOptions::global_soft_switches' softer switches (no
+// global stage, no folds), each fit's optimum polished with the model's own switches. A note in
+// `failures` when a soft fit fails. True when a polish became the best.
+bool polish_soft_starts(const DoorModel& start, const PreparedData& data, const FitOptions& options,
+                        const FitOptions& polish, GlobalSearch& global,
+                        std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
+                        BestOptimum& best) {
+  const std::optional<int> sharpness = start.switch_sharpness_index();
+  if (!sharpness) return false;
+  const auto index = static_cast<std::size_t>(*sharpness);
+  const std::span<const double> given = start.parameter_values();
+  FitOptions soft = options;
+  soft.global_search = false;
+  soft.cross_validation_folds = 0;
+  soft.what_would_determine = false;
+  soft.window_state_start.clear();
+  soft.progress = nullptr;
+  bool lower = false;
+  for (double factor : options.global_soft_switches) {
+    throw_if_stop_requested(options.stop_requested, "the global search");
+    const std::string origin = "the data-derived start fitted with switches " +
+                               format_significant(1.0 / factor, 3) + " times softer";
+    try {
+      std::vector<double> values(given.begin(), given.end());
+      values[index] *= factor;
+      const FitResult soft_fit = fit_model(start.with_parameter_values(values), data, soft);
+      values.assign(soft_fit.model.parameter_values().begin(),
+                    soft_fit.model.parameter_values().end());
+      values[index] = given[index];
+      ++global.soft_starts;
+      ++global.starts_tried;
+      lower = polish_start(origin, start.with_parameter_values(values), data, polish, optima,
+                           failures, best) ||
+              lower;
+    } catch (const std::invalid_argument& error) {
+      failures.push_back("the global stage did not try " + origin + ": " + error.what());
+    }
+  }
+  return lower;
+}
+
 // The best optimum so far (the first fit's when no polish became the best) polished again
 // from its own values (FitOptions::global_repolish), while each polish lowers the best by more
 // than GlobalSearch::kSameOptimumCost. True when a polish became the best.
@@ -175,14 +219,30 @@ bool polish_again(const FitResult& first, const PreparedData& data, const FitOpt
     const DoorModel from = best.fit ? best.fit->model : first.model;
     ++global.repolished;
     ++global.starts_tried;
-    if (!polish_start(
-            "polish " + std::to_string(again) + " of the best optimum from its own values", from,
-            data, polish, optima, failures, best)) {
+    if (!polish_start("polish " + std::to_string(global.repolished) +
+                          " of the best optimum from its own values",
+                      from, data, polish, optima, failures, best)) {
       break;
     }
     lower = true;
     ++global.repolished_lower;
     if (!(best.measure < (1.0 - GlobalSearch::kSameOptimumCost) * before)) break;
+  }
+  return lower;
+}
+
+// After the rounds: the best polished again (polish_again), then the soft starts
+// (polish_soft_starts), last so that they only ever lower the fit, their best polished again
+// in turn. True when a polish became the best.
+bool polish_last(const FitResult& first, const DoorModel& start, const PreparedData& data,
+                 const FitOptions& options, const FitOptions& polish, GlobalSearch& global,
+                 std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
+                 BestOptimum& best, double first_measure) {
+  bool lower =
+      polish_again(first, data, options, polish, global, optima, failures, best, first_measure);
+  if (polish_soft_starts(start, data, options, polish, global, optima, failures, best)) {
+    lower = true;
+    (void)polish_again(first, data, options, polish, global, optima, failures, best, first_measure);
   }
   return lower;
 }
@@ -232,6 +292,36 @@ bool subset_round(int round, const PreparedData& data, const FitOptions& options
     throw_if_stop_requested(options.stop_requested, "the global search");
     lower = polish_start(starts[k].origin, starts[k].model, data, polish, optima, failures, best) ||
             lower;
+  }
+  return lower;
+}
+
+// Basin hops (FitOptions::global_hops) from the best optimum so far, each seeded by its number.
+// True when a hop became the best.
+bool hop_from_best(const FitResult& first, const PreparedData& data, const FitOptions& options,
+                   const FitOptions& polish, const KeptFit& kept, GlobalSearch& global,
+                   std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
+                   BestOptimum& best) {
+  FitOptions hop_polish = polish;
+  hop_polish.progress = nullptr;
+  bool lower = false;
+  for (int h = 1; h <= options.global_hops; ++h) {
+    throw_if_stop_requested(options.stop_requested, "the global search");
+    if (options.progress) options.progress({FitProgress::Stage::kHops, h - 1, options.global_hops});
+    const DoorModel& from = best.fit ? best.fit->model : first.model;
+    const std::vector<double> values = hop_point(
+        from, kept.map, options.global_hop_size,
+        static_cast<std::uint32_t>(options.global_seed) * 7919u + static_cast<std::uint32_t>(h));
+    if (values.empty()) continue;
+    ++global.hops;
+    if (polish_start("hop " + std::to_string(h), from.with_parameter_values(values), data,
+                     hop_polish, optima, failures, best)) {
+      ++global.hops_lower;
+      lower = true;
+    }
+  }
+  if (options.progress && options.global_hops > 0) {
+    options.progress({FitProgress::Stage::kHops, options.global_hops, options.global_hops});
   }
   return lower;
 }
@@ -306,29 +396,12 @@ bool global_stage(FitResult& result, const DoorModel& start, const PreparedData&
     refits_from_kept =
         !subset_round(round, data, options, polish, global, optima, failures, best, refits);
   }
-  if (polish_again(result, data, options, polish, global, optima, failures, best, first_measure)) {
+  if (polish_last(result, start, data, options, polish, global, optima, failures, best,
+                  first_measure)) {
     refits_from_kept = false;
   }
-  // Basin hops from the best optimum so far, each seeded by its number.
-  FitOptions hop_polish = polish;
-  hop_polish.progress = nullptr;
-  for (int h = 1; h <= options.global_hops; ++h) {
-    throw_if_stop_requested(options.stop_requested, "the global search");
-    if (options.progress) options.progress({FitProgress::Stage::kHops, h - 1, options.global_hops});
-    const DoorModel& from = best.fit ? best.fit->model : result.model;
-    const std::vector<double> values = hop_point(
-        from, kept.map, options.global_hop_size,
-        static_cast<std::uint32_t>(options.global_seed) * 7919u + static_cast<std::uint32_t>(h));
-    if (values.empty()) continue;
-    ++global.hops;
-    if (polish_start("hop " + std::to_string(h), from.with_parameter_values(values), data,
-                     hop_polish, optima, failures, best)) {
-      ++global.hops_lower;
-      refits_from_kept = false;
-    }
-  }
-  if (options.progress && options.global_hops > 0) {
-    options.progress({FitProgress::Stage::kHops, options.global_hops, options.global_hops});
+  if (hop_from_best(result, data, options, polish, kept, global, optima, failures, best)) {
+    refits_from_kept = false;
   }
   global.starts_tried += global.hops;
   const std::size_t best_index = best.index;

@@ -89,6 +89,10 @@ std::string GlobalSearch::report(const std::vector<std::string>& names) const {
                     " of the best optimum from its own values (" +
                     std::to_string(repolished_lower) + " lower)");
   }
+  if (soft_starts > 0) {
+    tried.push_back(std::to_string(soft_starts) + (soft_starts == 1 ? " fit" : " fits") +
+                    " of the data-derived start with softer switches");
+  }
   if (hops > 0) {
     tried.push_back(std::to_string(hops) + (hops == 1 ? " basin hop" : " basin hops") +
                     " from the best optimum so far (" + std::to_string(hops_lower) + " lower)");

@@ -65,6 +65,7 @@ nlohmann::ordered_json global_search_json(const FitSummary& s) {
           {"subsets", s.global.partition},
           {"rounds", s.global.rounds},
           {"reset_parameters", s.global.reset_parameters},
+          {"soft_starts", s.global.soft_starts},
           {"repolished", s.global.repolished},
           {"repolished_lower", s.global.repolished_lower},
           {"sample_points", s.global.sample_points},

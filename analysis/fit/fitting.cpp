@@ -77,6 +77,11 @@ std::string FitOptions::validate() const {
   if (global_hops < 0) return "fit global_hops must be >= 0";
   if (global_rounds < 1) return "fit global_rounds must be >= 1";
   if (global_repolish < 0) return "fit global_repolish must be >= 0";
+  for (double factor : global_soft_switches) {
+    if (!(factor > 0 && factor < 1)) {
+      return "fit global_soft_switches: each factor must lie strictly between 0 and 1";
+    }
+  }
   if (!(global_hop_size > 0 && global_hop_size <= 1)) {
     return "fit global_hop_size must lie in (0, 1]";
   }

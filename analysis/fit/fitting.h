@@ -156,6 +156,15 @@ struct FitOptions {
   // states (and the coarse pass, with sub-steps), often ends in a neighbouring optimum a
   // little lower. 0: not tried.
   int global_repolish = 3;
+  // After the reset start: the first start (as the first fit took it: the latch read off, the
+  // equation-error stage) fitted with the model's switches softer, its switch sharpness
+  // (DoorModel::switch_sharpness_index) times each factor, without a global stage, then polished
+  // with the model's own sharpness. The sensory model's switches (beta 3000: about 0.3 mrad)
+  // are narrower than the angle a door travels in one integration step, so the window cost is
+  // rough in the latch angles; with softer switches it is smoother, and such a fit can end in
+  // a basin no start with sharp switches reaches. Each factor in (0, 1); empty, or a model with
+  // no switch sharpness: not tried.
+  std::vector<double> global_soft_switches = {0.1, 1.0 / 3.0};
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
   // residual loop compares fits by; its fits keep that one).
@@ -347,8 +356,11 @@ struct GlobalSearch {
   // many of them ended lower than the best before them.
   int repolished = 0;
   int repolished_lower = 0;
-  int starts_tried = 0;  // the first start, every start screened, the reset start, the polishes
-                         // again and the hops
+  // Fits of the first start with softer switches, each then polished
+  // (FitOptions::global_soft_switches).
+  int soft_starts = 0;
+  int starts_tried = 0;  // the first start, every start screened, the reset start, the soft
+                         // starts, the polishes again and the hops
   int promising = 0;     // screened below global_promising_ratio times the fit's RMSE
   int polished = 0;      // polished on every stroke, the first start included
   int hops = 0;          // basin hops polished (FitOptions::global_hops)

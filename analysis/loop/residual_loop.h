@@ -45,8 +45,8 @@ struct LoopOptions {
   // The loop compares fits by their rate RMSE: of the global stage's optima its fits keep the
   // lowest RMSE. Its global_subsets is ignored: the loop's fits take their subset refits on
   // the folds, which the cross-validation then reuses. One round of them, no reset start
-  // (FitOptions::global_reset) and no polish again (global_repolish): a refit's two starts are
-  // the loop's own search
+  // (FitOptions::global_reset), no fits with softer switches (global_soft_switches) and no
+  // polish again (global_repolish): a refit's two starts are the loop's own search
   // (docs/residual-loop.md, "Refits and acceptance"). The stopping rule as the loop's
   // decisions were measured with it (FitOptions::first_step_decrease off).
   FitOptions fit = [] {
@@ -56,6 +56,7 @@ struct LoopOptions {
     options.global_rounds = 1;
     options.global_reset = false;
     options.global_repolish = 0;
+    options.global_soft_switches.clear();
     options.first_step_decrease = false;
     return options;
   }();

@@ -149,6 +149,11 @@ std::optional<int> DoorModel::find_parameter(std::string_view name) const {
   return std::nullopt;
 }
 
+std::optional<int> DoorModel::switch_sharpness_index() const {
+  if (kind_ == ModelKind::kSensory) return sensory::kBeta;
+  return std::nullopt;
+}
+
 bool DoorModel::has_effect(effects::Kind kind) const {
   for (const EffectSetting& effect : effects_) {
     if (effect.kind == kind) return true;

@@ -61,6 +61,11 @@ class DoorModel {
   int base_parameter_count() const { return base_parameter_count_; }
   std::span<const EffectSetting> effects() const { return effects_; }
   bool has_effect(effects::Kind kind) const;
+  // The parameter that sets how sharp the latch's switches are, or none: the sensory model's
+  // beta (each switch turns over about 1/beta rad). A smaller value spreads every switch over
+  // more angle, and the window cost over the latch angles is smoother. The physical model
+  // has none.
+  std::optional<int> switch_sharpness_index() const;
 
   // Terms: the base model's, then one per torque-adding effect.
   int term_count() const { return static_cast<int>(term_names_.size()); }

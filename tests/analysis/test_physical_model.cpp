@@ -78,6 +78,8 @@ TEST_CASE("Physical: the reference door's parts, inertia and parameters", "[phys
   const DoorModel shipped = doorbench::reference_model(ModelKind::kPhysical);
   REQUIRE(shipped.parameter_count() == kCount);
   for (int i = 0; i < kCount; ++i) CHECK(shipped.parameter_values()[i] == kReference[i]);
+  // No switch sharpness: the fit's softer-switch starts skip the physical model.
+  CHECK(!shipped.switch_sharpness_index().has_value());
 }
 
 TEST_CASE("Physical: gravity", "[physical]") {

@@ -69,6 +69,9 @@ TEST_CASE("Sensory: the reference door has 5 terms and J = 0.95", "[sensory]") {
   for (int i = 0; i < 17; ++i) CHECK(shipped.parameter_values()[i] == kReference[i]);
   CHECK(shipped.geometry().handle_radius_m == 0.58);
   CHECK(shipped.geometry().theta_max_rad == 1.5708);
+  // beta sets how sharp the latch's switches are (the fit's softer-switch starts lower it).
+  REQUIRE(shipped.switch_sharpness_index().has_value());
+  CHECK(shipped.parameter_name(*shipped.switch_sharpness_index()) == "beta");
 }
 
 TEST_CASE("Sensory: unlatching term in the stiff zone", "[sensory]") {

@@ -132,7 +132,7 @@ TEST_CASE("doorbench fit --free auto fits the identifiable set and holds the res
 // cell not tared, the handle at 0.8 m): held at the full fit's values, the identifiable set
 // ends within 2 FIT points of the full fit, and the report says what holding them costs.
 // `--no-reset` on the same recording leaves out the reset start, `--repolish 0` the polishes of
-// the best optimum again.
+// the best optimum again, `--no-soft` the fits with softer switches.
 TEST_CASE(
     "doorbench fit --free auto on the robot recording stays within 2 FIT points of the "
     "full fit",
@@ -184,5 +184,15 @@ TEST_CASE(
   CHECK(testing::read_file(dir / "full" / "report.md").find("from its own values") !=
         std::string::npos);
   CHECK(testing::read_file(dir / "repolish-0" / "report.md").find("from its own values") ==
+        std::string::npos);
+  // --no-soft leaves out the fits with softer switches.
+  const auto [hard_err, hard] = run_fit("--no-soft", "no-soft");
+  const nlohmann::json& hard_tried = hard.at("global_search");
+  CHECK(tried.at("soft_starts").get<int>() == 2);
+  CHECK(hard_tried.at("soft_starts").get<int>() == 0);
+  CHECK(hard_tried.at("starts_tried").get<int>() == tried.at("starts_tried").get<int>() - 2);
+  CHECK(testing::read_file(dir / "full" / "report.md").find("softer switches") !=
+        std::string::npos);
+  CHECK(testing::read_file(dir / "no-soft" / "report.md").find("softer switches") ==
         std::string::npos);
 }
