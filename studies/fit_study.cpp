@@ -6,7 +6,8 @@
 //                       [--first-seed S] [--threads T] [--report]
 //                       [--samples N] [--polished N] [--promising R] [--hops H]
 //                       [--hop-size D] [--subsets K] [--rounds R] [--repolish N]
-//                       [--uncertainty-tolerance U] [--no-reset] [--no-global] [--basins]
+//                       [--uncertainty-tolerance U] [--no-reset] [--no-soft] [--no-global]
+//                       [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
 //   --robot: the 50 Hz, 4-stroke robot-operator recording with a load cell not tared, handle
@@ -22,6 +23,7 @@
 //   --uncertainty-tolerance U: FitOptions::uncertainty_tolerance, the stopping rule's (every
 //            solve of the fit, the global stage's included)
 //   --no-reset: no reset start (FitOptions::global_reset false)
+//   --no-soft: no fits with softer switches (FitOptions::global_soft_switches empty)
 //   --repolish N: FitOptions::global_repolish (0: the best is not polished again)
 //            --no-global: none of it
 //            (FitOptions::global_search false)
@@ -79,6 +81,7 @@ struct Settings {
   double hop_size = -1;                           // FitOptions::global_hop_size, when given
   double uncertainty_tolerance = -1;              // FitOptions::uncertainty_tolerance, given
   bool reset = true;                              // --no-reset: FitOptions::global_reset off
+  bool soft = true;                               // --no-soft: no global_soft_switches
   bool global = true;                             // --no-global: FitOptions::global_search off
   bool basins = false;                            // --basins: the basin probes instead of fits
 };
@@ -122,6 +125,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (s.uncertainty_tolerance >= 0) options.uncertainty_tolerance = s.uncertainty_tolerance;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
     options.global_reset = s.reset;
+    if (!s.soft) options.global_soft_switches.clear();
     options.global_search = s.global;
     const double cpu0 = process_cpu_s();
     const auto wall0 = std::chrono::steady_clock::now();
@@ -274,6 +278,8 @@ int main(int argc, char** argv) {
       s.truth = true;
     } else if (flag == "--no-reset") {
       s.reset = false;
+    } else if (flag == "--no-soft") {
+      s.soft = false;
     } else if (flag == "--no-global") {
       s.global = false;
     } else if (flag == "--basins") {
