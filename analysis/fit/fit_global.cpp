@@ -165,8 +165,9 @@ void polish_reset(const FitResult& first, const PreparedData& data, const FitOpt
 }
 
 // The first start fitted with each of FitOptions::global_soft_switches' softer switches (no
-// global stage, no folds), each fit's optimum polished with the model's own switches. A note in
-// `failures` when a soft fit fails. True when a polish became the best.
+// global stage, no folds), each fit's optimum polished with the model's own switches. A soft
+// fit that fails (a start that breaks a constraint, a simulation or solve that fails) is a note
+// in `failures`, not the fit's failure. True when a polish became the best.
 bool polish_soft_starts(const DoorModel& start, const PreparedData& data, const FitOptions& options,
                         const FitOptions& polish, GlobalSearch& global,
                         std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
@@ -181,6 +182,7 @@ bool polish_soft_starts(const DoorModel& start, const PreparedData& data, const 
   soft.what_would_determine = false;
   soft.window_state_start.clear();
   soft.progress = nullptr;
+  soft.partial_on_stop = false;  // a stop ends the whole fit, as in every other step here
   bool lower = false;
   for (double factor : options.global_soft_switches) {
     throw_if_stop_requested(options.stop_requested, "the global search");
@@ -200,6 +202,8 @@ bool polish_soft_starts(const DoorModel& start, const PreparedData& data, const 
               lower;
     } catch (const std::invalid_argument& error) {
       failures.push_back("the global stage did not try " + origin + ": " + error.what());
+    } catch (const std::runtime_error& error) {
+      failures.push_back("the global stage's fit of " + origin + " failed: " + error.what());
     }
   }
   return lower;

@@ -156,14 +156,15 @@ struct FitOptions {
   // states (and the coarse pass, with sub-steps), often ends in a neighbouring optimum a
   // little lower. 0: not tried.
   int global_repolish = 3;
-  // After the reset start: the first start (as the first fit took it: the latch read off, the
-  // equation-error stage) fitted with the model's switches softer, its switch sharpness
-  // (DoorModel::switch_sharpness_index) times each factor, without a global stage, then polished
-  // with the model's own sharpness. The sensory model's switches (beta 3000: about 0.3 mrad)
-  // are narrower than the angle a door travels in one integration step, so the window cost is
-  // rough in the latch angles; with softer switches it is smoother, and such a fit can end in
-  // a basin no start with sharp switches reaches. Each factor in (0, 1); empty, or a model with
-  // no switch sharpness: not tried.
+  // After the polishes again (global_repolish), last before the hops: the first start (as the
+  // first fit took it: the latch read off, the equation-error stage) fitted with the model's
+  // switches softer, its switch sharpness (DoorModel::switch_sharpness_index) times each factor,
+  // without a global stage, then polished with the model's own sharpness; when one becomes the
+  // best, it is polished again as global_repolish says. Last, so that it never raises a fit. The
+  // sensory model's switches (beta 3000: about 0.3 mrad) are narrower than the angle a door travels
+  // in one integration step, so the window cost is rough in the latch angles; with softer switches
+  // it is smoother, and such a fit can end in a basin no start with sharp switches reaches. Each
+  // factor in (0, 1); empty, or a model with no switch sharpness: not tried.
   std::vector<double> global_soft_switches = {0.1, 1.0 / 3.0};
   // Which polished optimum is the fit: the lowest window cost (the fit's objective), or the
   // lowest window RMSE of the rate on every stroke from the measured states (the figure the
