@@ -6,7 +6,8 @@
 //                       [--first-seed S] [--threads T] [--report]
 //                       [--samples N] [--polished N] [--promising R] [--hops H]
 //                       [--hop-size D] [--subsets K] [--rounds R] [--repolish N]
-//                       [--uncertainty-tolerance U] [--no-reset] [--no-soft] [--no-global]
+//                       [--uncertainty-tolerance U] [--no-reset] [--no-soft] [--soft F,F]
+//                       [--no-global]
 //                       [--basins]
 //   --family50 N, --family1k N: N recordings drawn from the recording family (12 strokes) at
 //            50 Hz and at 1 kHz (draw d has seed S + d - 1)
@@ -24,6 +25,7 @@
 //            solve of the fit, the global stage's included)
 //   --no-reset: no reset start (FitOptions::global_reset false)
 //   --no-soft: no fits with softer switches (FitOptions::global_soft_switches empty)
+//   --soft F,F: FitOptions::global_soft_switches, the factors of the switches' sharpness
 //   --repolish N: FitOptions::global_repolish (0: the best is not polished again)
 //            --no-global: none of it
 //            (FitOptions::global_search false)
@@ -82,6 +84,7 @@ struct Settings {
   double uncertainty_tolerance = -1;              // FitOptions::uncertainty_tolerance, given
   bool reset = true;                              // --no-reset: FitOptions::global_reset off
   bool soft = true;                               // --no-soft: no global_soft_switches
+  std::vector<double> soft_factors;               // FitOptions::global_soft_switches, given
   bool global = true;                             // --no-global: FitOptions::global_search off
   bool basins = false;                            // --basins: the basin probes instead of fits
 };
@@ -125,6 +128,7 @@ void fit_case(const Case& c, const Settings& s, const std::string& start_name,
     if (s.uncertainty_tolerance >= 0) options.uncertainty_tolerance = s.uncertainty_tolerance;
     if (s.subsets >= 0) options.global_subsets = s.subsets;
     options.global_reset = s.reset;
+    if (!s.soft_factors.empty()) options.global_soft_switches = s.soft_factors;
     if (!s.soft) options.global_soft_switches.clear();
     options.global_search = s.global;
     const double cpu0 = process_cpu_s();
@@ -252,14 +256,20 @@ std::vector<Case> cases(const Settings& s) {
   return out;
 }
 
-std::vector<int> int_list(const char* text) {
-  std::vector<int> values;
+std::vector<double> number_list(const char* text) {
+  std::vector<double> values;
   for (const char* p = text; *p != '\0';) {
-    values.push_back(std::atoi(p));
+    values.push_back(std::atof(p));
     const char* comma = std::strchr(p, ',');
     if (comma == nullptr) break;
     p = comma + 1;
   }
+  return values;
+}
+
+std::vector<int> int_list(const char* text) {
+  std::vector<int> values;
+  for (double value : number_list(text)) values.push_back(static_cast<int>(value));
   return values;
 }
 
@@ -300,6 +310,8 @@ int main(int argc, char** argv) {
       s.uncertainty_tolerance = std::atof(argv[++i]);
     } else if (has_value && flag == "--rounds") {
       s.rounds = std::atoi(argv[++i]);
+    } else if (has_value && flag == "--soft") {
+      s.soft_factors = number_list(argv[++i]);
     } else if (has_value && flag == "--repolish") {
       s.repolish = std::atoi(argv[++i]);
     } else if (has_value && flag == "--hops") {

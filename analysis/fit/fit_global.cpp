@@ -165,13 +165,15 @@ void polish_reset(const FitResult& first, const PreparedData& data, const FitOpt
 }
 
 // The first start fitted with each of FitOptions::global_soft_switches' softer switches (no
-// global stage, no folds), each fit's optimum polished with the model's own switches. A soft
-// fit that fails (a start that breaks a constraint, a simulation or solve that fails) is a note
-// in `failures`, not the fit's failure. True when a polish became the best.
+// global stage, no folds). Each fit's optimum, with the model's own switches, is screened as a
+// round's subset refits are: polished when its window RMSE on every stroke is below the best
+// optimum's so far (`first_rmse` while that is the first fit). A soft fit that fails (a start
+// that breaks a constraint, a simulation or solve that fails) is a note in `failures`, not the
+// fit's failure. True when a polish became the best.
 bool polish_soft_starts(const DoorModel& start, const PreparedData& data, const FitOptions& options,
                         const FitOptions& polish, GlobalSearch& global,
                         std::vector<PolishedOptimum>& optima, std::vector<std::string>& failures,
-                        BestOptimum& best) {
+                        BestOptimum& best, double first_rmse) {
   const std::optional<int> sharpness = start.switch_sharpness_index();
   if (!sharpness) return false;
   const auto index = static_cast<std::size_t>(*sharpness);
@@ -197,9 +199,14 @@ bool polish_soft_starts(const DoorModel& start, const PreparedData& data, const 
       values[index] = given[index];
       ++global.soft_starts;
       ++global.starts_tried;
-      lower = polish_start(origin, start.with_parameter_values(values), data, polish, optima,
-                           failures, best) ||
-              lower;
+      std::vector<SearchStart> sharp{{origin, start.with_parameter_values(values), 0}};
+      screen(sharp, data, options);
+      const double best_rmse = best.fit ? best.fit->summary.fitted.window.rmse() : first_rmse;
+      if (!(sharp.front().rmse < best_rmse)) continue;
+      ++global.promising;
+      ++global.soft_polished;
+      lower =
+          polish_start(origin, sharp.front().model, data, polish, optima, failures, best) || lower;
     } catch (const std::invalid_argument& error) {
       failures.push_back("the global stage did not try " + origin + ": " + error.what());
     } catch (const std::runtime_error& error) {
@@ -244,7 +251,8 @@ bool polish_last(const FitResult& first, const DoorModel& start, const PreparedD
                  BestOptimum& best, double first_measure) {
   bool lower =
       polish_again(first, data, options, polish, global, optima, failures, best, first_measure);
-  if (polish_soft_starts(start, data, options, polish, global, optima, failures, best)) {
+  if (polish_soft_starts(start, data, options, polish, global, optima, failures, best,
+                         first.summary.fitted.window.rmse())) {
     lower = true;
     (void)polish_again(first, data, options, polish, global, optima, failures, best, first_measure);
   }

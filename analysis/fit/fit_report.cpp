@@ -91,7 +91,8 @@ std::string GlobalSearch::report(const std::vector<std::string>& names) const {
   }
   if (soft_starts > 0) {
     tried.push_back(std::to_string(soft_starts) + (soft_starts == 1 ? " fit" : " fits") +
-                    " of the data-derived start with softer switches");
+                    " of the data-derived start with softer switches (" +
+                    std::to_string(soft_polished) + " polished)");
   }
   if (hops > 0) {
     tried.push_back(std::to_string(hops) + (hops == 1 ? " basin hop" : " basin hops") +

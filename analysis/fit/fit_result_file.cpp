@@ -66,6 +66,7 @@ nlohmann::ordered_json global_search_json(const FitSummary& s) {
           {"rounds", s.global.rounds},
           {"reset_parameters", s.global.reset_parameters},
           {"soft_starts", s.global.soft_starts},
+          {"soft_polished", s.global.soft_polished},
           {"repolished", s.global.repolished},
           {"repolished_lower", s.global.repolished_lower},
           {"sample_points", s.global.sample_points},

@@ -159,7 +159,8 @@ struct FitOptions {
   // After the polishes again (global_repolish), last before the hops: the first start (as the
   // first fit took it: the latch read off, the equation-error stage) fitted with the model's
   // switches softer, its switch sharpness (DoorModel::switch_sharpness_index) times each factor,
-  // without a global stage, then polished with the model's own sharpness; when one becomes the
+  // without a global stage; its optimum with the model's own sharpness is polished when its
+  // window RMSE on every stroke is below the best optimum's so far; when one becomes the
   // best, it is polished again as global_repolish says. Last, so that it never raises a fit. The
   // sensory model's switches (beta 3000: about 0.3 mrad) are narrower than the angle a door travels
   // in one integration step, so the window cost is rough in the latch angles; with softer switches
@@ -357,15 +358,19 @@ struct GlobalSearch {
   // many of them ended lower than the best before them.
   int repolished = 0;
   int repolished_lower = 0;
-  // Fits of the first start with softer switches, each then polished
-  // (FitOptions::global_soft_switches).
+  // Fits of the first start with softer switches (FitOptions::global_soft_switches), and how
+  // many of their optima, with the model's own switches, were below the best's window RMSE
+  // and so polished.
   int soft_starts = 0;
+  int soft_polished = 0;
   int starts_tried = 0;  // the first start, every start screened, the reset start, the soft
                          // starts, the polishes again and the hops
-  int promising = 0;     // screened below global_promising_ratio times the fit's RMSE
-  int polished = 0;      // polished on every stroke, the first start included
-  int hops = 0;          // basin hops polished (FitOptions::global_hops)
-  int hops_lower = 0;    // hops that ended lower than the best before them
+  // Screened starts polished: the first screen's below global_promising_ratio times the fit's
+  // RMSE, a later round's and the soft starts' below the best optimum's so far.
+  int promising = 0;
+  int polished = 0;    // polished on every stroke, the first start included
+  int hops = 0;        // basin hops polished (FitOptions::global_hops)
+  int hops_lower = 0;  // hops that ended lower than the best before them
   // Distinct optima, the best first: two polishes end at one optimum when their costs differ
   // by at most kSameOptimumCost (relative) and no free parameter by more than
   // kSameOptimumParameter of the larger magnitude.
