@@ -10,6 +10,8 @@
 #include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <string>
@@ -456,19 +458,27 @@ TEST_CASE(
   CHECK(off.report(without.summary.free_names).find("softer switches") == std::string::npos);
 }
 
-// The reference sensory door started with d1 at 3.8 and d2 at 3.2 N*m, d2 bounded below at
-// 2.0 (the door's d1 2.6, d2 1.3): on synthetic_strokes the first optimum has d2 on that bound
-// and d1 near 2.96, below d2's start.
-DoorModel start_with_d2_bounded_above_d1(const DoorModel& door) {
+// `door` (no effects) with its base values and bounds changed by `edit`.
+DoorModel edited_door(const DoorModel& door,
+                      const std::function<void(std::vector<double>&, std::vector<Bounds>&)>& edit) {
   const auto base = static_cast<std::size_t>(door.base_parameter_count());
   std::vector<double> values(door.parameter_values().begin(),
                              door.parameter_values().begin() + base);
   std::vector<Bounds> bounds(door.parameter_bounds().begin(),
                              door.parameter_bounds().begin() + base);
-  values[sensory::kD1] = 3.8;
-  values[sensory::kD2] = 3.2;
-  bounds[sensory::kD2].lower = 2.0;
+  edit(values, bounds);
   return DoorModel(door.kind(), door.geometry(), values, bounds);
+}
+
+// The reference sensory door started with d1 at 3.8 and d2 at 3.2 N*m, d2 bounded below at
+// 2.0 (the door's d1 2.6, d2 1.3): on synthetic_strokes the first optimum has d2 on that bound
+// and d1 near 2.96, below d2's start.
+DoorModel start_with_d2_bounded_above_d1(const DoorModel& door) {
+  return edited_door(door, [](std::vector<double>& values, std::vector<Bounds>& bounds) {
+    values[sensory::kD1] = 3.8;
+    values[sensory::kD2] = 3.2;
+    bounds[sensory::kD2].lower = 2.0;
+  });
 }
 
 TEST_CASE(
@@ -507,6 +517,42 @@ TEST_CASE(
   CHECK(nlohmann::json::parse(fit_result_json(fit, data))
             .at("global_search")
             .at("reset_parameters") == 0);
+}
+
+// A start whose switch sharpness is the smallest double above 0: any softer factor rounds it
+// to 0, which breaks beta > 0. The fit goes on; each soft start is a note.
+TEST_CASE(
+    "Global search: a soft start that breaks a constraint of the model is a note, not the "
+    "fit's failure",
+    "[fitting][global]") {
+  const DoorModel door = testing::sensory_reference();
+  const PreparedData data = synthetic_strokes(door, {});
+  const double beta = std::numeric_limits<double>::denorm_min();
+  const DoorModel start = edited_door(
+      door,
+      [beta](std::vector<double>& values, std::vector<Bounds>&) { values[sensory::kBeta] = beta; });
+  FitOptions options;
+  options.cross_validation_folds = 0;
+  options.latch_start_from_data = false;
+  const FitResult fit = fit_model(start, data, options);
+  INFO(fit.summary.full_report());
+  for (const char* softer : {"10", "3"}) {
+    const std::string note = std::string(
+                                 "the global stage did not try the data-derived start "
+                                 "fitted with switches ") +
+                             softer + " times softer: sensory parameter beta = 0 breaks beta > 0";
+    CHECK(std::count(fit.summary.notes.begin(), fit.summary.notes.end(), note) == 1);
+  }
+  // Not tried: not counted, not in the report's list of starts, none in result.json.
+  const GlobalSearch& g = fit.summary.global;
+  CHECK(g.soft_starts == 0);
+  CHECK(g.soft_polished == 0);
+  CHECK(g.starts_tried == 1 + (g.start_as_given ? 1 : 0) + g.subset_refits + g.sample_points +
+                              (g.reset_parameters > 0 ? 1 : 0) + g.repolished);
+  CHECK(g.report(fit.summary.free_names).find("softer switches") == std::string::npos);
+  CHECK(nlohmann::json::parse(fit_result_json(fit, data)).at("global_search").at("soft_starts") ==
+        0);
+  CHECK(fit.model.parameter_values()[sensory::kBeta] == beta);
 }
 
 TEST_CASE("Global search: off, the fit is the one start polished, and its options are checked",
