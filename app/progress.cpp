@@ -146,6 +146,11 @@ std::string fit_progress_text(const FitProgress& progress, double elapsed_s) {
                        progress.total) +
            progress_time_text(progress.done, progress.total, elapsed_s);
   }
+  if (progress.stage == FitProgress::Stage::kPolish) {
+    return "global search: " + progress.what +
+           printf_text(": iteration %d of at most %d, ", progress.done, progress.total) +
+           progress_time_text(progress.done, progress.total, elapsed_s, true);
+  }
   if (progress.stage == FitProgress::Stage::kSearch) {
     const std::string round =
         progress.round > 1 ? printf_text(", round %d", progress.round) : std::string();

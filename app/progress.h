@@ -89,6 +89,8 @@ class StatusLine {
 // A fit's stage for the status line, `elapsed_s` since the stage began:
 //   "window fit: iteration 12 of at most 100, 3 s so far, at most about 22 s left"
 //   "cross-validation: 2 of 4 folds refitted, 8 s so far, about 8 s left"
+//   "global search: polishing the start as given: iteration 12 of at most 100, 3 s so far, at
+//   most about 22 s left"
 std::string fit_progress_text(const FitProgress& progress, double elapsed_s);
 
 // A loop's steps for the status line. `completed_s`: from the first step's start (its refits

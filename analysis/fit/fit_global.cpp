@@ -85,16 +85,36 @@ struct BestOptimum {
   double measure = kNaN;
 };
 
+// `options` with its window fit's progress reported as the global stage's
+// FitProgress::Stage::kPolish, `what` naming the fit; as they are when nobody listens.
+FitOptions reporting_as_polish(const FitOptions& options, std::string what) {
+  FitOptions reporting = options;
+  if (options.progress) {
+    reporting.progress = [report = options.progress, what = std::move(what)](FitProgress progress) {
+      if (progress.stage == FitProgress::Stage::kWindows) {
+        progress.stage = FitProgress::Stage::kPolish;
+        progress.what = what;
+      }
+      report(progress);
+    };
+  }
+  return reporting;
+}
+
 // Polishes `model` exactly from its values with `polish`; adds its optimum to `optima` and
 // makes it `best` when its options.global_keep measure is lower. A start whose simulation or
 // solve fails is one the stage cannot use: a note in `failures`. True when it became the best.
+// Its progress is kPolish, named `what` ("polishing " and the origin when empty).
 bool polish_start(const std::string& origin, const DoorModel& model, const PreparedData& data,
                   const FitOptions& polish, std::vector<PolishedOptimum>& optima,
-                  std::vector<std::string>& failures, BestOptimum& best) {
+                  std::vector<std::string>& failures, BestOptimum& best,
+                  const std::string& what = "") {
   KeptFit polished_kept;
   std::optional<FitResult> attempt;
   try {
-    attempt = fit_once(model, data, polish, polished_kept);
+    attempt = fit_once(model, data,
+                       reporting_as_polish(polish, what.empty() ? "polishing " + origin : what),
+                       polished_kept);
   } catch (const std::runtime_error& error) {
     failures.push_back("the global stage's polish from " + origin + " failed: " + error.what());
     return false;
@@ -183,17 +203,18 @@ bool polish_soft_starts(const DoorModel& start, const PreparedData& data, const 
   soft.cross_validation_folds = 0;
   soft.what_would_determine = false;
   soft.window_state_start.clear();
-  soft.progress = nullptr;
   soft.partial_on_stop = false;  // a stop ends the whole fit, as in every other step here
   bool lower = false;
   for (double factor : options.global_soft_switches) {
     throw_if_stop_requested(options.stop_requested, "the global search");
-    const std::string origin = "the data-derived start fitted with switches " +
-                               format_significant(1.0 / factor, 3) + " times softer";
+    const std::string softer = "switches " + format_significant(1.0 / factor, 3) + " times softer";
+    const std::string origin = "the data-derived start fitted with " + softer;
     try {
       std::vector<double> values(given.begin(), given.end());
       values[index] *= factor;
-      const FitResult soft_fit = fit_model(start.with_parameter_values(values), data, soft);
+      const FitResult soft_fit =
+          fit_model(start.with_parameter_values(values), data,
+                    reporting_as_polish(soft, "fitting the data-derived start with " + softer));
       values.assign(soft_fit.model.parameter_values().begin(),
                     soft_fit.model.parameter_values().end());
       values[index] = given[index];
@@ -230,9 +251,9 @@ bool polish_again(const FitResult& first, const PreparedData& data, const FitOpt
     const DoorModel from = best.fit ? best.fit->model : first.model;
     ++global.repolished;
     ++global.starts_tried;
-    if (!polish_start("polish " + std::to_string(global.repolished) +
-                          " of the best optimum from its own values",
-                      from, data, polish, optima, failures, best)) {
+    const std::string origin =
+        "polish " + std::to_string(global.repolished) + " of the best optimum from its own values";
+    if (!polish_start(origin, from, data, polish, optima, failures, best, origin)) {
       break;
     }
     lower = true;

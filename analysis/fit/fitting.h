@@ -40,17 +40,21 @@ struct FitProgress {
     kWindows,
     // The cross-validation folds refitted: `done` of `total`.
     kFolds,
-    // The global stage's subset refits (`done` of `total`, in `round`); its polishes report
-    // as kWindows.
+    // The global stage's subset refits (`done` of `total`, in `round`).
     kSearch,
     // The global stage's basin hops polished (`done` of `total`, FitOptions::global_hops);
     // a hop's polish reports nothing of its own.
     kHops,
+    // The global stage's other fits after the first, one after another (a promising start
+    // polished, the best polished again, the data-derived start fitted with softer switches):
+    // that fit's solver iterations as kWindows counts them, `what` naming the fit.
+    kPolish,
   };
   Stage stage = Stage::kWindows;
   int done = 0;
   int total = 0;
-  int round = 1;  // kSearch: the round of subset refits (FitOptions::global_rounds)
+  int round = 1;       // kSearch: the round of subset refits (FitOptions::global_rounds)
+  std::string what{};  // kPolish: "polishing the start as given", "fitting the data-derived ..."
 };
 
 // The bench's noise levels (reference-door.json): the weights when neither the options

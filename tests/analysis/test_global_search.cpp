@@ -166,7 +166,14 @@ TEST_CASE("Global search: further rounds of subset refits reach a basin the firs
 TEST_CASE("Global search: the report says how unique the optimum is, word for word",
           "[fitting][global][slow]") {
   const PreparedData data = testing::robot_recording();
-  const FitResult fit = fit_model(testing::robot_fit_start(data), data, options_with_folds(0));
+  FitOptions options = options_with_folds(0);
+  std::mutex progress_mutex;
+  std::vector<FitProgress> reports;
+  options.progress = [&](const FitProgress& progress) {
+    const std::lock_guard lock(progress_mutex);
+    reports.push_back(progress);
+  };
+  const FitResult fit = fit_model(testing::robot_fit_start(data), data, options);
   const FitSummary& s = fit.summary;
   const GlobalSearch& g = s.global;
   INFO(s.full_report());
@@ -214,6 +221,38 @@ TEST_CASE("Global search: the report says how unique the optimum is, word for wo
   CHECK(reset_reached);
   CHECK(g.optima.front().cost == Approx(s.final_cost).epsilon(1e-12));
   CHECK(g.optima.front().fit_percent == Approx(s.fitted.window.fit_percent()).epsilon(1e-9));
+  // The progress names each fit of the stage after the first as it begins: every polish, by
+  // the origin the optima list ("polishing" and it, or a polish of the best again by itself),
+  // and the two fits with softer switches, last. The window fit's own iterations are the
+  // first fit's alone, before the subset refits.
+  std::vector<std::string> begun;
+  bool searching = false;
+  bool window_fit_after_search = false;
+  for (const FitProgress& progress : reports) {
+    searching = searching || progress.stage == FitProgress::Stage::kSearch;
+    window_fit_after_search =
+        window_fit_after_search || (searching && progress.stage == FitProgress::Stage::kWindows);
+    if (progress.stage == FitProgress::Stage::kPolish) {
+      CHECK(progress.total == options.max_iterations);
+      if (progress.done == 0) begun.push_back(progress.what);
+    }
+  }
+  CHECK(searching);
+  CHECK_FALSE(window_fit_after_search);
+  std::vector<std::string> expected_fits = {
+      "fitting the data-derived start with switches 10 times softer",
+      "fitting the data-derived start with switches 3 times softer"};
+  for (const GlobalOptimum& optimum : g.optima) {
+    for (const std::string& origin : optimum.reached_from) {
+      if (origin == "the data-derived start") continue;
+      expected_fits.push_back(origin.starts_with("polish ") ? origin : "polishing " + origin);
+    }
+  }
+  REQUIRE(begun.size() == expected_fits.size());
+  CHECK(begun.back() == "fitting the data-derived start with switches 3 times softer");
+  std::sort(begun.begin(), begun.end());
+  std::sort(expected_fits.begin(), expected_fits.end());
+  CHECK(begun == expected_fits);
   // The lines, built here from the figures.
   std::string expected =
       "Global search: 52 starts tried (the data-derived start, the start as given, 12 subset "

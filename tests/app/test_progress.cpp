@@ -72,6 +72,10 @@ TEST_CASE("progress: the fit's and the loop's lines", "[progress]") {
         "global search, round 2: 1 of 4 subset refits, 2 s so far, about 6 s left");
   CHECK(fit_progress_text({FitProgress::Stage::kHops, 3, 6}, 9.0) ==
         "global search: 3 of 6 basin hops polished, 9 s so far, about 9 s left");
+  CHECK(fit_progress_text({FitProgress::Stage::kPolish, 12, 100, 1, "polishing the start as given"},
+                          3.0) ==
+        "global search: polishing the start as given: iteration 12 of at most 100, 3 s so far, "
+        "at most about 22 s left");
   // The loop: per completed step.
   struct LoopCase {
     LoopProgress progress;
