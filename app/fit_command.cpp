@@ -280,7 +280,10 @@ void run_fit(const FitCommandOptions& options) {
   if (!result.model.effects().empty()) {
     write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model));
   }
-  const FitPlots plots = write_fit_plots(dir, result.model, data, fit_options);
+  FitPlots plots = write_fit_plots(dir, result.model, data, fit_options);
+  if (const std::string optima = write_global_search_plot(dir, result.summary); !optima.empty()) {
+    plots.files.push_back(optima);
+  }
   std::ostringstream report;
   report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n";
   for (const std::string& line : inputs.report_lines) report << line << ".\n\n";

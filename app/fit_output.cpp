@@ -1,17 +1,27 @@
 // What `doorbench fit` and `doorbench loop` write: result.json pieces and the plots.
 #include "app/fit_output.h"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
+#include "acquisition/session/output_file.h"
 #include "analysis/fit/fit_metrics.h"
 #include "analysis/fit/residual_whiteness.h"
+#include "analysis/fit/search_scale.h"
 #include "analysis/report/svg_plot.h"
 #include "core/json_number.h"
+#include "core/numbers.h"
 #include "core/units.h"
 
 namespace doorbench::app {
-namespace {}  // namespace
+namespace {
+
+// Optima whose cost is within this share of the fit's: the global-search plot's inner range,
+// basins the data hardly tell apart from the fit's (the truth-start bar's 1 %, docs/fitting.md).
+constexpr double kNearOptimumCost = 0.01;
+
+}  // namespace
 
 // Measured against simulated (window by window) rate and angle, the force–angle loops, and
 // the rate residual against angle and speed, and the residual's whiteness (when the data
@@ -128,6 +138,66 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
     plots.whiteness = prefix + "not computed (" + reason + ")";
   }
   return plots;
+}
+
+std::vector<ForestRow> global_search_rows(const FitSummary& summary) {
+  const GlobalSearch& global = summary.global;
+  std::vector<ForestRow> rows;
+  if (!global.ran || global.optima.size() < 2) return rows;
+  const double fit_cost = global.optima.front().cost;
+  const auto near = [&](const GlobalOptimum& optimum) {
+    return optimum.cost <= (1.0 + kNearOptimumCost) * fit_cost;
+  };
+  const auto near_count = std::count_if(global.optima.begin(), global.optima.end(), near);
+  for (std::size_t k = 0; k < summary.free_names.size(); ++k) {
+    const auto parameter =
+        std::find_if(summary.parameters.begin(), summary.parameters.end(),
+                     [&](const FittedParameter& p) { return p.name == summary.free_names[k]; });
+    if (parameter == summary.parameters.end()) continue;
+    const Bounds& bounds = parameter->bounds;
+    const auto place = [&](const GlobalOptimum& optimum) {
+      return search_scale_place(bounds, optimum.free_values.at(k));
+    };
+    ForestRow row;
+    row.label = summary.free_names[k] + (search_scale_is_logarithmic(bounds) ? " (log)" : "");
+    row.estimate = row.low = row.high = place(global.optima.front());
+    double inner_low = row.estimate, inner_high = row.estimate;
+    for (const GlobalOptimum& optimum : global.optima) {
+      const double u = place(optimum);
+      row.low = std::min(row.low, u);
+      row.high = std::max(row.high, u);
+      if (near(optimum)) {
+        inner_low = std::min(inner_low, u);
+        inner_high = std::max(inner_high, u);
+      }
+    }
+    if (near_count >= 2) {
+      row.inner_low = inner_low;
+      row.inner_high = inner_high;
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+std::string write_global_search_plot(const std::filesystem::path& dir, const FitSummary& summary) {
+  const std::vector<ForestRow> rows = global_search_rows(summary);
+  if (rows.empty()) return "";
+  const std::size_t optima = summary.global.optima.size();
+  ForestOptions options;
+  options.title = "Global search: the fit and " + std::to_string(optima - 1) +
+                  " other distinct optima, each free parameter within its bounds";
+  options.x_label = "place within the bounds (0 lower, 1 upper; (log): on a log scale) [-]";
+  options.interval_label = "range of the " + std::to_string(optima) + " distinct optima";
+  options.inner_label = "range of those within 1 % of the fit's cost";
+  options.estimate_label = "the fit";
+  options.reference_line = kNaN;
+  options.band_low = 0.0;
+  options.band_high = 1.0;
+  options.band_label = "the bounds";
+  const std::string file = "global-search.svg";
+  write_text_file_atomically(dir / file, render_svg_forest(options, rows));
+  return file;
 }
 
 }  // namespace doorbench::app

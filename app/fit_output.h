@@ -7,6 +7,7 @@
 
 #include "analysis/fit/fitting.h"
 #include "analysis/preprocessing/strokes.h"
+#include "analysis/report/svg_charts.h"
 
 namespace doorbench::app {
 
@@ -20,5 +21,18 @@ struct FitPlots {
 // samples for its lags, residual-whiteness.svg (analysis/fit/residual_whiteness.h).
 FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
                          const PreparedData& data, const FitOptions& options);
+
+// The rows of global-search.svg, one per free parameter of `summary` (FitSummary::free_names),
+// each labelled with its name ("k_lock (log)" where the global stage's scale of its bounds is
+// logarithmic, analysis/fit/search_scale.h) and placed on that scale (0: lower bound, 1: upper
+// bound): the estimate the fit's value, the interval the range of every distinct optimum's
+// value, the inner interval the range of the optima within 1 % of the fit's cost (none when
+// only the fit is). Empty when the global stage did not run or found one distinct optimum.
+std::vector<ForestRow> global_search_rows(const FitSummary& summary);
+
+// global-search.svg in `dir`, drawn from global_search_rows, when there are rows: how unique
+// the optimum is, each parameter's spread over the distinct optima at a glance. Its file name,
+// or empty when nothing was drawn. Throws OutputError when it cannot write.
+std::string write_global_search_plot(const std::filesystem::path& dir, const FitSummary& summary);
 
 }  // namespace doorbench::app

@@ -8,6 +8,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "analysis/fit/search_scale.h"
+
 namespace doorbench::fit_detail {
 
 namespace {
@@ -44,6 +46,22 @@ struct UnitScale {
 };
 
 }  // namespace
+
+}  // namespace doorbench::fit_detail
+
+namespace doorbench {
+
+bool search_scale_is_logarithmic(const Bounds& bounds) {
+  return fit_detail::UnitScale(bounds).logarithmic;
+}
+
+double search_scale_place(const Bounds& bounds, double value) {
+  return fit_detail::UnitScale(bounds).unit(value);
+}
+
+}  // namespace doorbench
+
+namespace doorbench::fit_detail {
 
 std::vector<std::vector<double>> space_filling_sample(const DoorModel& model,
                                                       const ParameterMap& map, int count,
