@@ -117,9 +117,13 @@ LoopResult expect_first_step(const DoorModel& truth, effects::Kind expected,
   CHECK(last_fold->total == options.fit.cross_validation_folds);
   std::size_t windows = 0;
   for (const doorbench::FitProgress& p : fits) {
-    if (p.stage == doorbench::FitProgress::Stage::kWindows) ++windows;
+    if (p.stage == doorbench::FitProgress::Stage::kWindows ||
+        p.stage == doorbench::FitProgress::Stage::kPolish) {
+      ++windows;
+    }
   }
-  // The start fit and, when the loop ran it, the structure check's fit: 0, then each
+  // The start fit, the global stage's polishes (kPolish; the start fit's iterations count the
+  // kept polish's too) and, when the loop ran it, the structure check's fit: 0, then each
   // iteration of each.
   CHECK(windows >= 1 + static_cast<std::size_t>(loop.start_fit.summary.iterations));
   REQUIRE_FALSE(loop.steps.empty());

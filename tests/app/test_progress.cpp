@@ -222,6 +222,15 @@ TEST_CASE("fit shows its progress with the time left: on a terminal, in a file, 
         "[^\n]* left\nglobal search: 0 of 2 subset refits, ");
     CHECK(std::regex_search(run.err, windows_end));
     CHECK(run.err.find("\nglobal search: 2 of 2 subset refits, done in ") != std::string::npos);
+    // The stage's other fits, each named as it begins: the best polished again (at least once),
+    // the two fits with softer switches.
+    for (const char* fit : {"polish 1 of the best optimum from its own values",
+                            "fitting the data-derived start with switches 10 times softer",
+                            "fitting the data-derived start with switches 3 times softer"}) {
+      INFO(fit);
+      CHECK(run.err.find("\nglobal search: " + std::string(fit) +
+                         ": iteration 0 of at most 100, ") != std::string::npos);
+    }
     CHECK(run.err.find("\nglobal search: 0 of 2 basin hops polished, ") != std::string::npos);
     CHECK(run.err.find("\nglobal search: 2 of 2 basin hops polished, done in ") !=
           std::string::npos);
