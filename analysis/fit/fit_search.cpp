@@ -47,22 +47,6 @@ struct UnitScale {
 
 }  // namespace
 
-}  // namespace doorbench::fit_detail
-
-namespace doorbench {
-
-bool search_scale_is_logarithmic(const Bounds& bounds) {
-  return fit_detail::UnitScale(bounds).logarithmic;
-}
-
-double search_scale_place(const Bounds& bounds, double value) {
-  return fit_detail::UnitScale(bounds).unit(value);
-}
-
-}  // namespace doorbench
-
-namespace doorbench::fit_detail {
-
 std::vector<std::vector<double>> space_filling_sample(const DoorModel& model,
                                                       const ParameterMap& map, int count,
                                                       int seed) {
@@ -163,3 +147,15 @@ void distinct_optima(const std::vector<PolishedOptimum>& polished, std::size_t f
 }
 
 }  // namespace doorbench::fit_detail
+
+namespace doorbench {
+
+bool search_scale_is_logarithmic(const Bounds& bounds) {
+  return fit_detail::UnitScale(bounds).logarithmic;
+}
+
+double search_scale_place(const Bounds& bounds, double value) {
+  return fit_detail::UnitScale(bounds).unit(value);
+}
+
+}  // namespace doorbench
