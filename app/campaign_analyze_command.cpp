@@ -6,6 +6,8 @@
 #include <map>
 #include <memory>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "acquisition/session/output_file.h"
 #include "app/campaign_report.h"
@@ -78,6 +80,12 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
 
   std::filesystem::create_directories(folder);
   if (!variants.files.empty()) std::filesystem::create_directories(folder / "variants");
+  std::vector<std::string> written;
+  for (const study::VariantFile& variant : variants.files)
+    written.push_back(std::filesystem::path(variant.file).filename().string());
+  remove_outputs_not_written(
+      folder / "variants", [](const std::string& name) { return name.ends_with(".json"); },
+      written);
   for (const study::VariantFile& variant : variants.files)
     write_text_file_atomically(folder / variant.file, variant.text);
   write_text_file_atomically(folder / "analysis.json", analysis.dump(2) + "\n");

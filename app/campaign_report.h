@@ -44,9 +44,12 @@ struct CampaignReportFiles {
   std::string pdf_note;  // "wrote OUT/report.pdf", "no PDF (not asked for)" or "no PDF: why"
 };
 
-// Writes the plots, report.html and (when `pdf`) report.pdf into `out`, which must exist; the
-// output rule (check_output_folder) is the caller's. `progress` gets a line before the PDF.
-// Throws StopRequested when `stop` asked during the PDF's rendering (no PDF then).
+// Writes the plots, report.html and (when `pdf`) report.pdf into `out`, which must exist. An
+// earlier run's plot (a name study::is_analysis_plot_file knows) that this analysis does not
+// draw, and its report.pdf when this run renders none, are removed (output rule 5); other
+// files are left alone. The rest of the output rule (check_output_folder) is the caller's.
+// `progress` gets a line before the PDF. Throws StopRequested when `stop` asked during the PDF's
+// rendering (no PDF then).
 CampaignReportFiles write_campaign_report(const std::filesystem::path& out,
                                           const nlohmann::json& analysis, bool pdf,
                                           std::ostream& progress, const StopHook& stop = {});

@@ -5,6 +5,8 @@
 #include <iostream>
 #include <memory>
 #include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/pdf_output.h"
@@ -20,13 +22,18 @@ CampaignReportFiles write_campaign_report(const std::filesystem::path& out,
                                           std::ostream& progress, const StopHook& stop) {
   CampaignReportFiles files;
   const std::vector<study::AnalysisPlot> plots = study::analysis_plots(analysis);
+  std::vector<std::string> drawn;
+  for (const study::AnalysisPlot& plot : plots) drawn.push_back(plot.file);
+  remove_outputs_not_written(out, study::is_analysis_plot_file, drawn);
   for (const study::AnalysisPlot& plot : plots)
     write_text_file_atomically(out / plot.file, plot.svg);
   files.plots = static_cast<int>(plots.size());
   files.html = out / "report.html";
   write_text_file_atomically(files.html, study::analysis_html(analysis, plots));
   files.pdf_note = "no PDF (not asked for)";
-  if (pdf) {
+  if (!pdf) {
+    remove_output_not_written(out / "report.pdf");
+  } else {
     progress << "rendering " << (out / "report.pdf").string() << "\n" << std::flush;
     const std::string problem = render_pdf(files.html, out / "report.pdf", "", stop);
     files.pdf_note =

@@ -277,7 +277,9 @@ void run_fit(const FitCommandOptions& options) {
   const std::filesystem::path dir = options.out_dir;
   write_text_file_atomically(dir / "result.json", fit_result_json(result, data));
   write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model));
-  if (!result.model.effects().empty()) {
+  if (result.model.effects().empty()) {
+    remove_output_not_written(dir / "fitted-effects.json");
+  } else {
     write_text_file_atomically(dir / "fitted-effects.json", to_effects_json(result.model));
   }
   FitPlots plots = write_fit_plots(dir, result.model, data, fit_options);

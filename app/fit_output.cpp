@@ -136,6 +136,7 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
     const std::string prefix = "residual whiteness: ";
     if (reason.starts_with(prefix)) reason.erase(0, prefix.size());
     plots.whiteness = prefix + "not computed (" + reason + ")";
+    remove_output_not_written(dir / "residual-whiteness.svg");
   }
   return plots;
 }
@@ -181,8 +182,12 @@ std::vector<ForestRow> global_search_rows(const FitSummary& summary) {
 }
 
 std::string write_global_search_plot(const std::filesystem::path& dir, const FitSummary& summary) {
+  const std::string file = "global-search.svg";
   const std::vector<ForestRow> rows = global_search_rows(summary);
-  if (rows.empty()) return "";
+  if (rows.empty()) {
+    remove_output_not_written(dir / file);
+    return "";
+  }
   const std::size_t optima = summary.global.optima.size();
   ForestOptions options;
   options.title = "Global search: the fit and " + std::to_string(optima - 1) +
@@ -195,7 +200,6 @@ std::string write_global_search_plot(const std::filesystem::path& dir, const Fit
   options.band_low = 0.0;
   options.band_high = 1.0;
   options.band_label = "the bounds";
-  const std::string file = "global-search.svg";
   write_text_file_atomically(dir / file, render_svg_forest(options, rows));
   return file;
 }

@@ -18,7 +18,8 @@ struct FitPlots {
   std::string whiteness;
 };
 // rate.svg, force-angle.svg, residual-angle.svg, residual-speed.svg and, when there are enough
-// samples for its lags, residual-whiteness.svg (analysis/fit/residual_whiteness.h).
+// samples for its lags, residual-whiteness.svg (analysis/fit/residual_whiteness.h); when
+// there are not, an earlier run's residual-whiteness.svg in `dir` is removed (output rule 5).
 FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& model,
                          const PreparedData& data, const FitOptions& options);
 
@@ -32,7 +33,8 @@ std::vector<ForestRow> global_search_rows(const FitSummary& summary);
 
 // global-search.svg in `dir`, drawn from global_search_rows, when there are rows: how unique
 // the optimum is, each parameter's spread over the distinct optima at a glance. Its file name,
-// or empty when nothing was drawn. Throws OutputError when it cannot write.
+// or empty when nothing was drawn (and an earlier run's global-search.svg in `dir` is removed,
+// output rule 5). Throws OutputError when it cannot write or remove.
 std::string write_global_search_plot(const std::filesystem::path& dir, const FitSummary& summary);
 
 }  // namespace doorbench::app

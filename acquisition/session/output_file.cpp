@@ -4,6 +4,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
 #include <streambuf>
@@ -189,6 +190,28 @@ void write_file_atomically(const fs::path& path, const std::function<void(std::o
 
 void write_text_file_atomically(const fs::path& path, std::string_view text) {
   write_file_atomically(path, [text](std::ostream& out) { out << text; });
+}
+
+void remove_output_not_written(const fs::path& path) {
+  std::error_code error;
+  fs::remove(path, error);
+  if (error) throw OutputError(path.string() + ": cannot remove: " + error.message());
+}
+
+void remove_outputs_not_written(const fs::path& folder,
+                                const std::function<bool(const std::string&)>& is_such_output,
+                                const std::vector<std::string>& written) {
+  std::error_code error;
+  if (!fs::exists(folder, error)) return;
+  std::vector<fs::path> stale;
+  for (fs::directory_iterator entry(folder, error), end; !error && entry != end;
+       entry.increment(error)) {
+    const std::string name = entry->path().filename().string();
+    if (is_such_output(name) && std::find(written.begin(), written.end(), name) == written.end())
+      stale.push_back(entry->path());
+  }
+  if (error) throw OutputError(folder.string() + ": cannot read: " + error.message());
+  for (const fs::path& path : stale) remove_output_not_written(path);
 }
 
 }  // namespace doorbench

@@ -11,6 +11,10 @@
 //    NAME (write_file_atomically). On any failure the temporary file is removed, whatever
 //    was at NAME before is left as it was, and the OutputError names NAME and the system's
 //    error ("run.csv: cannot write: No space left on device").
+// 4. Inputs are checked before outputs are made (the verbs' order of work).
+// 5. An output a verb writes only on some runs (a plot, a PDF) that this run does not write is
+//    removed, so that an earlier run's file, left by --overwrite, never sits beside a report
+//    that does not describe it (remove_output_not_written).
 //
 // Thread safety: free functions without shared state; two writers of one NAME at once in
 // one process are not supported (the temporary file's name holds only the process id).
@@ -65,6 +69,18 @@ std::filesystem::path partial_path_for(const std::filesystem::path& path);
 void write_file_atomically(const std::filesystem::path& path,
                            const std::function<void(std::ostream&)>& write);
 void write_text_file_atomically(const std::filesystem::path& path, std::string_view text);
+
+// Rule 5: removes `path` when it exists (a file, or a link, not what it points to); nothing when
+// it does not. Throws OutputError "PATH: cannot remove: SYSTEM ERROR".
+void remove_output_not_written(const std::filesystem::path& path);
+
+// Rule 5 for outputs named by their content (a plot per attribute, a file per variant): removes
+// each entry of `folder` whose name `is_such_output` accepts and that is not in `written`;
+// other files are left alone. Nothing when `folder` does not exist. Throws OutputError as
+// remove_output_not_written, and when the folder cannot be read.
+void remove_outputs_not_written(const std::filesystem::path& folder,
+                                const std::function<bool(const std::string&)>& is_such_output,
+                                const std::vector<std::string>& written);
 
 // Renames a complete temporary file onto `path` and syncs the folder; on failure removes
 // the temporary file and throws OutputError naming `path`. For writers that make their

@@ -78,6 +78,7 @@ std::string find_executable(const std::string& name) {
 
 std::string render_pdf(const std::filesystem::path& html, const std::filesystem::path& pdf,
                        const std::string& renderer, const StopHook& stop) {
+  remove_output_not_written(pdf);
   const std::string name = renderer.empty() ? "weasyprint" : renderer;
   const std::string program = find_executable(name);
   if (program.empty()) {

@@ -20,9 +20,11 @@ namespace doorbench {
 // The renderer's path when `name` is an executable on PATH (or a path to one), else "".
 std::string find_executable(const std::string& name);
 
-// Renders `html` to `pdf` with `renderer` (empty: weasyprint from PATH). Returns "" when the
-// PDF was written, else why not: "weasyprint is not installed (scripts/install-deps.sh installs
-// it)", "weasyprint failed (see PDF.log)". Throws StopRequested when `stop` asked.
+// Renders `html` to `pdf` with `renderer` (empty: weasyprint from PATH). An earlier file at
+// `pdf` is removed first (output rule 5), so that after a failure or a stop there is no PDF
+// rather than another run's. Returns "" when the PDF was written, else why not: "weasyprint is not
+// installed (scripts/install-deps.sh installs it)", "weasyprint failed (see PDF.log)". Throws
+// StopRequested when `stop` asked, OutputError when the earlier PDF cannot be removed.
 std::string render_pdf(const std::filesystem::path& html, const std::filesystem::path& pdf,
                        const std::string& renderer = "", const StopHook& stop = {});
 

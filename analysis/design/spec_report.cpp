@@ -567,11 +567,12 @@ SpecReportFiles write_spec_report(const std::filesystem::path& dir,
   write(files.json, spec_json(design, evaluation));
   write(files.html, spec_html(design, evaluation));
 
+  const std::filesystem::path pdf = dir / "spec.pdf";
   if (pdf_renderer == "none") {
+    remove_output_not_written(pdf);
     files.pdf_note = "no PDF (not asked for)";
     return files;
   }
-  const std::filesystem::path pdf = dir / "spec.pdf";
   const std::string problem = render_pdf(files.html, pdf, pdf_renderer, stop);
   if (problem.empty()) {
     files.pdf = pdf;

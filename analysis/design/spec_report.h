@@ -80,7 +80,9 @@ std::string spec_summary(const InverseDesignResult& design, const SpecEvaluation
 std::string spec_html(const InverseDesignResult& design, const SpecEvaluation& evaluation);
 
 // Writes the folder (created when missing). `pdf_renderer`: the program turning HTML into PDF
-// ("" = look for weasyprint on PATH; "none" = no PDF; acquisition/session/pdf_output.h).
+// ("" = look for weasyprint on PATH; "none" = no PDF; acquisition/session/pdf_output.h). A
+// spec.pdf that this run does not render (not asked for, failed, stopped) is removed, so an
+// earlier run's never stands beside this spec.html (output rule 5).
 // Throws std::runtime_error naming the file it cannot write, and StopRequested when `stop`
 // asked while the PDF was rendered (spec.json and spec.html are then written, the PDF not).
 SpecReportFiles write_spec_report(const std::filesystem::path& dir,

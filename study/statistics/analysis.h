@@ -93,6 +93,11 @@ std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis);
 // ("ratings-" and "heavy/light" give "ratings-heavy_light.svg").
 std::string plot_file_name(const std::string& prefix, const std::string& name);
 
+// Whether `file` (a name, no folder) is one analysis_plots can give: preference-scale.svg,
+// identify-real.svg, two-ac.svg, tuning.svg, or "ratings-" or "jnd-" + NAME + ".svg". The
+// report removes such a file of an earlier run that this analysis does not draw.
+bool is_analysis_plot_file(const std::string& file);
+
 // report.html (study/statistics/analysis_html.cpp): every key of the analysis as a section
 // (the known ones as tables with the model's words, numbers to the digits a reader needs and
 // p-values as "< 0.001" or 3 significant digits, no number or name broken across lines; any

@@ -20,6 +20,15 @@ namespace {
 constexpr std::size_t kMostParticipantRows = 30;
 constexpr double kOpen = std::numeric_limits<double>::infinity();
 
+// The plots with fixed names; the ratings' and the psychometric curves' are named by their
+// attribute or parameter (plot_file_name).
+constexpr const char* kPreferencePlot = "preference-scale.svg";
+constexpr const char* kIdentifyPlot = "identify-real.svg";
+constexpr const char* kTwoAcPlot = "two-ac.svg";
+constexpr const char* kTuningPlot = "tuning.svg";
+constexpr const char* kRatingsPrefix = "ratings-";
+constexpr const char* kJndPrefix = "jnd-";
+
 double number_or_nan(const nlohmann::json& value) {
   return value.is_number() ? value.get<double>() : std::nan("");
 }
@@ -64,7 +73,7 @@ void add_preference_plot(const nlohmann::json& analysis, std::vector<AnalysisPlo
   options.x_label = "worth against the reference (log odds) [-]";
   options.inner_label = "comparison interval";
   if (!compared) options.title += " (no comparison intervals: two variants)";
-  add_forest(plots, "preference-scale.svg", options, rows);
+  add_forest(plots, kPreferencePlot, options, rows);
 }
 
 ForestRow dprime_row(const std::string& label, const nlohmann::json& r) {
@@ -104,7 +113,7 @@ void add_identify_plot(const nlohmann::json& ir, std::vector<AnalysisPlot>& plot
   options.title = "Real vs virtual: d' (2-AFC), 95 % intervals";
   options.x_label = "d' (0: chance; > 0: the real door told apart) [-]";
   set_margin(options, ir);
-  add_forest(plots, "identify-real.svg", options, rows);
+  add_forest(plots, kIdentifyPlot, options, rows);
 }
 
 void add_two_ac_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
@@ -119,7 +128,7 @@ void add_two_ac_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& 
   options.title = "2-AC: d' per pair (> 0: the second preferred), 95 % intervals";
   options.x_label = "d' (< 0: the first preferred; > 0: the second) [-]";
   if (!analysis["two_ac"].empty()) set_margin(options, analysis["two_ac"].front());
-  add_forest(plots, "two-ac.svg", options, rows);
+  add_forest(plots, kTwoAcPlot, options, rows);
 }
 
 void add_ratings_plots(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
@@ -144,7 +153,7 @@ void add_ratings_plots(const nlohmann::json& analysis, std::vector<AnalysisPlot>
     ForestOptions options;
     options.title = "Ratings of " + attribute + ": each variant's shift, 95 % intervals";
     options.x_label = "shift on the latent scale against the reference (logit) [-]";
-    add_forest(plots, plot_file_name("ratings-", attribute), options, rows);
+    add_forest(plots, plot_file_name(kRatingsPrefix, attribute), options, rows);
   }
 }
 
@@ -177,8 +186,8 @@ void add_psychometric_plots(const nlohmann::json& analysis, std::vector<Analysis
       found = true;
     }
     if (!found || t.counts.empty()) continue;
-    plots.push_back({plot_file_name("jnd-", t.parameter), "Psychometric function: " + t.parameter,
-                     render_psychometric_plot(t)});
+    plots.push_back({plot_file_name(kJndPrefix, t.parameter),
+                     "Psychometric function: " + t.parameter, render_psychometric_plot(t)});
   }
 }
 
@@ -212,7 +221,7 @@ void add_tuning_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& 
     t.doors.push_back(std::move(d));
   }
   try {
-    plots.push_back({"tuning.svg", "The panel's tuned doors", render_tuning_plot(t)});
+    plots.push_back({kTuningPlot, "The panel's tuned doors", render_tuning_plot(t)});
   } catch (const std::invalid_argument&) {
     // No parameter has perceptual steps: nothing to draw (the JSON says why).
   }
@@ -240,6 +249,15 @@ std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis) {
   add_psychometric_plots(analysis, plots);
   add_tuning_plot(analysis, plots);
   return plots;
+}
+
+bool is_analysis_plot_file(const std::string& file) {
+  for (const char* fixed : {kPreferencePlot, kIdentifyPlot, kTwoAcPlot, kTuningPlot}) {
+    if (file == fixed) return true;
+  }
+  // A named plot: the prefix, then only the characters plot_file_name keeps.
+  const bool prefixed = file.starts_with(kRatingsPrefix) || file.starts_with(kJndPrefix);
+  return prefixed && file.ends_with(".svg") && plot_file_name("", file) == file + ".svg";
 }
 
 }  // namespace doorbench::study

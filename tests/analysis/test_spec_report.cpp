@@ -187,7 +187,9 @@ TEST_CASE("Spec report: spec.json, spec.html and spec.pdf of a known design", "[
     WARN("weasyprint not installed: " << files.pdf_note);
     CHECK(files.pdf.empty());
   }
-  // Asked for no PDF: none.
+  // Asked for no PDF: none, and an earlier run's spec.pdf in the folder is removed.
+  std::filesystem::create_directories(dir / "nopdf");
+  std::ofstream(dir / "nopdf" / "spec.pdf") << "%PDF of an earlier run\n";
   const auto no_pdf = doorbench::write_spec_report(dir / "nopdf", design, evaluation, "none");
   CHECK(no_pdf.pdf.empty());
   CHECK(!std::filesystem::exists(dir / "nopdf" / "spec.pdf"));

@@ -15,6 +15,7 @@
 #include <string>
 
 #include "acquisition/session/output_file.h"
+#include "acquisition/session/pdf_output.h"
 #include "fixtures/simulated_session.h"
 #include "fixtures/temp_dir.h"
 #include "tests/support/files.h"
@@ -324,4 +325,75 @@ TEST_CASE("Outputs: write_file_atomically keeps the old file when the writer fai
   const fs::path missing = dir / "no-such-folder" / "b.txt";
   CHECK_THROWS_WITH(doorbench::write_text_file_atomically(missing, "x"),
                     missing.string() + ": cannot write: No such file or directory");
+}
+
+TEST_CASE("Outputs: remove_output_not_written removes a file or a link, never a link's target",
+          "[outputs]") {
+  const TempDir dir("output_remove");
+  const fs::path file = dir.write("plot.svg", "earlier\n");
+  doorbench::remove_output_not_written(file);
+  CHECK_FALSE(fs::exists(file));
+  doorbench::remove_output_not_written(file);  // nothing there: nothing to do
+  const fs::path target = dir.write("kept.txt", "kept\n");
+  fs::create_symlink(target, dir / "link.svg");
+  doorbench::remove_output_not_written(dir / "link.svg");
+  CHECK_FALSE(fs::is_symlink(dir / "link.svg"));
+  CHECK(read_file(target) == "kept\n");
+  // What cannot be removed is named with the system's reason.
+  fs::create_directories(dir / "full.svg");
+  std::ofstream(dir / "full.svg" / "inside") << "x\n";
+  CHECK_THROWS_WITH(doorbench::remove_output_not_written(dir / "full.svg"),
+                    (dir / "full.svg").string() + ": cannot remove: Directory not empty");
+}
+
+TEST_CASE("Outputs: remove_outputs_not_written removes only such outputs not written",
+          "[outputs]") {
+  const TempDir dir("output_remove_named");
+  dir.write("ratings-a.svg", "now\n");
+  dir.write("ratings-b.svg", "earlier\n");
+  dir.write("notes.txt", "the user's\n");
+  const auto is_rating = [](const std::string& name) { return name.starts_with("ratings-"); };
+  doorbench::remove_outputs_not_written(dir.path, is_rating, {"ratings-a.svg"});
+  CHECK(fs::exists(dir / "ratings-a.svg"));
+  CHECK_FALSE(fs::exists(dir / "ratings-b.svg"));
+  CHECK(fs::exists(dir / "notes.txt"));
+  doorbench::remove_outputs_not_written(dir / "absent", is_rating, {});  // no folder: nothing
+  CHECK_FALSE(fs::exists(dir / "absent"));
+}
+
+// Rule 5 on the verb: a second fit with --overwrite into the same folder that adds no effect
+// and ends with a fit that runs no global stage (--free auto's refit) leaves no
+// fitted-effects.json or global-search.svg of the first.
+TEST_CASE("Outputs: fit --overwrite removes the outputs of an earlier run it does not write",
+          "[outputs][cli]") {
+  const TempDir dir("output_fit_stale");
+  const fs::path session = small_session(dir);
+  const fs::path out = dir / "out";
+  const std::string fit =
+      "fit " + session.string() + " --folds 0 --out " + out.string() + " --overwrite";
+  const DoorbenchRun first = run_doorbench_shell(fit + " --effects viscous_damping", dir);
+  INFO(first.err);
+  REQUIRE(first.status == 0);
+  REQUIRE(fs::exists(out / "fitted-effects.json"));
+  std::ofstream(out / "global-search.svg") << "<svg/>\n";  // as an earlier search drew it
+  const DoorbenchRun second = run_doorbench_shell(fit + " --free auto", dir);
+  INFO(second.err);
+  REQUIRE(second.status == 0);
+  CHECK_FALSE(fs::exists(out / "fitted-effects.json"));
+  CHECK_FALSE(fs::exists(out / "global-search.svg"));
+  CHECK(fs::exists(out / "result.json"));
+  CHECK(read_file(out / "report.md").find("global-search.svg") == std::string::npos);
+}
+
+TEST_CASE("Outputs: a PDF not rendered leaves no earlier PDF behind", "[outputs]") {
+  const TempDir dir("output_pdf_stale");
+  const fs::path html = dir.write("report.html", "<html><body>now</body></html>\n");
+  const fs::path pdf = dir.write("report.pdf", "%PDF of an earlier run\n");
+  CHECK(doorbench::render_pdf(html, pdf, "/bin/false") ==
+        "/bin/false failed (see " + pdf.string() + ".log)");
+  CHECK_FALSE(fs::exists(pdf));
+  dir.write("report.pdf", "%PDF of an earlier run\n");
+  CHECK(doorbench::render_pdf(html, pdf, "no-such-renderer") ==
+        "no-such-renderer is not installed");
+  CHECK_FALSE(fs::exists(pdf));
 }

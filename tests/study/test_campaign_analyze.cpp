@@ -103,6 +103,26 @@ TEST_CASE("campaign analyze takes a campaign folder and --quiet silences stderr"
   CHECK(run.err.empty());
   CHECK(std::filesystem::exists(dir / "out" / "analysis.json"));
   CHECK_FALSE(std::filesystem::exists(dir / "out" / "report.pdf"));
+  // Again with --overwrite into a folder holding an earlier run's PDF and plots this campaign
+  // does not draw: they do not stay beside a report.html that does not describe them; a file
+  // of the user's stays.
+  write(dir / "out" / "report.pdf", "%PDF of an earlier run\n");
+  write(dir / "out" / "ratings-smooth.svg", "<svg/>\n");
+  write(dir / "out" / "jnd-k_lock.svg", "<svg/>\n");
+  write(dir / "out" / "my-notes.svg", "<svg/>\n");
+  std::filesystem::create_directories(dir / "out" / "variants");
+  write(dir / "out" / "variants" / "gone.json", "{}\n");
+  const auto again =
+      run_doorbench_shell("campaign analyze '" + (dir / "campaign").string() + "' --out '" +
+                              (dir / "out").string() + "' --no-pdf -q --overwrite",
+                          dir);
+  CHECK(again.status == 0);
+  CHECK_FALSE(std::filesystem::exists(dir / "out" / "report.pdf"));
+  CHECK_FALSE(std::filesystem::exists(dir / "out" / "ratings-smooth.svg"));
+  CHECK_FALSE(std::filesystem::exists(dir / "out" / "jnd-k_lock.svg"));
+  CHECK(std::filesystem::exists(dir / "out" / "my-notes.svg"));
+  CHECK_FALSE(std::filesystem::exists(dir / "out" / "variants" / "gone.json"));
+  CHECK(std::filesystem::exists(dir / "out" / "report.html"));
 }
 
 TEST_CASE("campaign analyze's errors name the file and line, or the option", "[study]") {

@@ -117,6 +117,21 @@ TEST_CASE("campaign report redraws what campaign analyze drew from analysis.json
   CHECK(svgs.svgs == 24);  // 6 files and 6 inline in each folder
 }
 
+TEST_CASE("is_analysis_plot_file knows the names analysis_plots gives, and no others",
+          "[study][campaign]") {
+  using doorbench::study::is_analysis_plot_file;
+  for (const char* name : {"preference-scale.svg", "identify-real.svg", "two-ac.svg", "tuning.svg",
+                           "ratings-heavy.svg", "ratings-heavy_light.svg", "jnd-J_d.svg"}) {
+    INFO(name);
+    CHECK(is_analysis_plot_file(name));
+  }
+  for (const char* name : {"report.html", "report.pdf", "notes.svg", "ratings-.txt", "jnd-J d.svg",
+                           "tuning.svg.bak", "global-search.svg"}) {
+    INFO(name);
+    CHECK_FALSE(is_analysis_plot_file(name));
+  }
+}
+
 TEST_CASE("the plots redrawn from analysis.json equal the ones the sections draw from the fits",
           "[study][campaign]") {
   TempDir dir("campaign_report_same");
