@@ -83,32 +83,34 @@ void add_ratings_thresholds_tuning(std::vector<AnalysisSection>& sections) {
                         std::vector<AnalysisPlot> plots;
                         if (!*thresholds) return plots;
                         for (const ParameterThresholds& p : (*thresholds)->parameters)
-                          plots.push_back({plot_file_name("jnd-", p.parameter),
+                          plots.push_back({plot_file_name(kJndPlotPrefix, p.parameter),
                                            "Psychometric function: " + p.parameter,
                                            render_psychometric_plot(p)});
                         return plots;
                       }});
   auto tuning = std::make_shared<std::optional<TuningResult>>();
-  sections.push_back(
-      {"tuning",
-       [thresholds, tuning](const TrialsTable& table) {
-         const auto doors = tuned_doors(table, std::filesystem::path(table.source).parent_path());
-         if (doors.empty()) return nlohmann::json(nullptr);
-         TuningOptions options;
-         if (*thresholds) options.measured_weber = measured_weber_fractions(**thresholds);
-         *tuning = analyze_tuning(doors, options);
-         return nlohmann::json{{"tuning", (*tuning)->to_json()}};
-       },
-       [tuning] {
-         std::vector<AnalysisPlot> plots;
-         if (!*tuning) return plots;
-         try {
-           plots.push_back({"tuning.svg", "The panel's tuned doors", render_tuning_plot(**tuning)});
-         } catch (const std::invalid_argument&) {
-           // No parameter has perceptual steps: nothing to draw (the JSON says why).
-         }
-         return plots;
-       }});
+  sections.push_back({"tuning",
+                      [thresholds, tuning](const TrialsTable& table) {
+                        const auto doors =
+                            tuned_doors(table, std::filesystem::path(table.source).parent_path());
+                        if (doors.empty()) return nlohmann::json(nullptr);
+                        TuningOptions options;
+                        if (*thresholds)
+                          options.measured_weber = measured_weber_fractions(**thresholds);
+                        *tuning = analyze_tuning(doors, options);
+                        return nlohmann::json{{"tuning", (*tuning)->to_json()}};
+                      },
+                      [tuning] {
+                        std::vector<AnalysisPlot> plots;
+                        if (!*tuning) return plots;
+                        try {
+                          plots.push_back({kTuningPlotFile, "The panel's tuned doors",
+                                           render_tuning_plot(**tuning)});
+                        } catch (const std::invalid_argument&) {
+                          // No parameter has perceptual steps: nothing to draw (the JSON says why).
+                        }
+                        return plots;
+                      }});
 }
 
 }  // namespace

@@ -89,6 +89,15 @@ nlohmann::json analyze_trials(const TrialsTable& table, const AnalysisOptions& o
 // section without the fields these plots read.
 std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis);
 
+// The plots' file names: fixed for the preference scale, identify-real, 2-AC and the tuned
+// doors; a prefix and the attribute or parameter for the ratings and the psychometric curves.
+inline constexpr const char* kPreferencePlotFile = "preference-scale.svg";
+inline constexpr const char* kIdentifyPlotFile = "identify-real.svg";
+inline constexpr const char* kTwoAcPlotFile = "two-ac.svg";
+inline constexpr const char* kTuningPlotFile = "tuning.svg";
+inline constexpr const char* kRatingsPlotPrefix = "ratings-";
+inline constexpr const char* kJndPlotPrefix = "jnd-";
+
 // A plot's file: PREFIX + NAME with every character outside [A-Za-z0-9._-] as '_' + ".svg"
 // ("ratings-" and "heavy/light" give "ratings-heavy_light.svg").
 std::string plot_file_name(const std::string& prefix, const std::string& name);

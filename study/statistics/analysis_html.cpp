@@ -177,7 +177,7 @@ std::string preference_html(const json& a, const std::vector<AnalysisPlot>& plot
             " (log odds; 0: the order does not matter).</p>\n";
   for (const auto& note : a["preference_fit"]["notes"])
     html += "<p class=\"small\">" + sentence(note) + "</p>\n";
-  return html + html_figure(plots, "preference-scale.svg");
+  return html + html_figure(plots, kPreferencePlotFile);
 }
 
 std::vector<std::string> forced_choice_row(const std::string& who, const json& r) {
@@ -205,7 +205,7 @@ std::string identify_html(const json& ir, const std::vector<AnalysisPlot>& plots
   for (const auto& p : ir["participants"])
     rows.push_back(forced_choice_row(html_escape(p["participant"].get<std::string>()), p));
   html += html_table({"participant", "trials", "correct", "Pc", "d'", "95 % interval", "p"}, rows);
-  return html + html_figure(plots, "identify-real.svg");
+  return html + html_figure(plots, kIdentifyPlotFile);
 }
 
 std::string two_ac_html(const json& a, const std::vector<AnalysisPlot>& plots) {
@@ -236,7 +236,7 @@ std::string two_ac_html(const json& a, const std::vector<AnalysisPlot>& plots) {
                       "95 % interval", "p", "p<sub>TOST</sub>"},
                      rows);
   html += "<ul class=\"small\">\n" + verdicts + "</ul>\n";
-  return html + html_figure(plots, "two-ac.svg");
+  return html + html_figure(plots, kTwoAcPlotFile);
 }
 
 std::string ratings_html(const json& a, const std::vector<AnalysisPlot>& plots) {
@@ -264,7 +264,7 @@ std::string ratings_html(const json& a, const std::vector<AnalysisPlot>& plots) 
                       reference ? "&ndash;" : html_fixed(r["std_error"], 3)});
     }
     html += html_table({"variant", "shift", "95 % interval", "SE"}, rows);
-    html += html_figure(plots, plot_file_name("ratings-", attribute));
+    html += html_figure(plots, plot_file_name(kRatingsPlotPrefix, attribute));
   }
   return html;
 }
@@ -319,7 +319,7 @@ std::string jnd_html(const json& a, const std::vector<AnalysisPlot>& plots) {
     html += html_table(
         {"participant", "method", "JND %", "95 % interval %", "PSE", "spread", "lapse", "trials"},
         rows);
-    html += html_figure(plots, plot_file_name("jnd-", first.value("parameter", "")));
+    html += html_figure(plots, plot_file_name(kJndPlotPrefix, first.value("parameter", "")));
   }
   return html;
 }
@@ -350,7 +350,7 @@ std::string tuning_html(const json& t, const std::vector<AnalysisPlot>& plots) {
             ": " + html_cell(c.value("rule", json(""))) + "; separation " +
             html_fixed(c.value("separation", json())) + " steps.</p>\n";
   }
-  return html + html_figure(plots, "tuning.svg");
+  return html + html_figure(plots, kTuningPlotFile);
 }
 
 const char* kStyle =

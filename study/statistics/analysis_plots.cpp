@@ -20,15 +20,6 @@ namespace {
 constexpr std::size_t kMostParticipantRows = 30;
 constexpr double kOpen = std::numeric_limits<double>::infinity();
 
-// The plots with fixed names; the ratings' and the psychometric curves' are named by their
-// attribute or parameter (plot_file_name).
-constexpr const char* kPreferencePlot = "preference-scale.svg";
-constexpr const char* kIdentifyPlot = "identify-real.svg";
-constexpr const char* kTwoAcPlot = "two-ac.svg";
-constexpr const char* kTuningPlot = "tuning.svg";
-constexpr const char* kRatingsPrefix = "ratings-";
-constexpr const char* kJndPrefix = "jnd-";
-
 double number_or_nan(const nlohmann::json& value) {
   return value.is_number() ? value.get<double>() : std::nan("");
 }
@@ -73,7 +64,7 @@ void add_preference_plot(const nlohmann::json& analysis, std::vector<AnalysisPlo
   options.x_label = "worth against the reference (log odds) [-]";
   options.inner_label = "comparison interval";
   if (!compared) options.title += " (no comparison intervals: two variants)";
-  add_forest(plots, kPreferencePlot, options, rows);
+  add_forest(plots, kPreferencePlotFile, options, rows);
 }
 
 ForestRow dprime_row(const std::string& label, const nlohmann::json& r) {
@@ -113,7 +104,7 @@ void add_identify_plot(const nlohmann::json& ir, std::vector<AnalysisPlot>& plot
   options.title = "Real vs virtual: d' (2-AFC), 95 % intervals";
   options.x_label = "d' (0: chance; > 0: the real door told apart) [-]";
   set_margin(options, ir);
-  add_forest(plots, kIdentifyPlot, options, rows);
+  add_forest(plots, kIdentifyPlotFile, options, rows);
 }
 
 void add_two_ac_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
@@ -128,7 +119,7 @@ void add_two_ac_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& 
   options.title = "2-AC: d' per pair (> 0: the second preferred), 95 % intervals";
   options.x_label = "d' (< 0: the first preferred; > 0: the second) [-]";
   if (!analysis["two_ac"].empty()) set_margin(options, analysis["two_ac"].front());
-  add_forest(plots, kTwoAcPlot, options, rows);
+  add_forest(plots, kTwoAcPlotFile, options, rows);
 }
 
 void add_ratings_plots(const nlohmann::json& analysis, std::vector<AnalysisPlot>& plots) {
@@ -153,7 +144,7 @@ void add_ratings_plots(const nlohmann::json& analysis, std::vector<AnalysisPlot>
     ForestOptions options;
     options.title = "Ratings of " + attribute + ": each variant's shift, 95 % intervals";
     options.x_label = "shift on the latent scale against the reference (logit) [-]";
-    add_forest(plots, plot_file_name(kRatingsPrefix, attribute), options, rows);
+    add_forest(plots, plot_file_name(kRatingsPlotPrefix, attribute), options, rows);
   }
 }
 
@@ -186,7 +177,7 @@ void add_psychometric_plots(const nlohmann::json& analysis, std::vector<Analysis
       found = true;
     }
     if (!found || t.counts.empty()) continue;
-    plots.push_back({plot_file_name(kJndPrefix, t.parameter),
+    plots.push_back({plot_file_name(kJndPlotPrefix, t.parameter),
                      "Psychometric function: " + t.parameter, render_psychometric_plot(t)});
   }
 }
@@ -221,7 +212,7 @@ void add_tuning_plot(const nlohmann::json& analysis, std::vector<AnalysisPlot>& 
     t.doors.push_back(std::move(d));
   }
   try {
-    plots.push_back({kTuningPlot, "The panel's tuned doors", render_tuning_plot(t)});
+    plots.push_back({kTuningPlotFile, "The panel's tuned doors", render_tuning_plot(t)});
   } catch (const std::invalid_argument&) {
     // No parameter has perceptual steps: nothing to draw (the JSON says why).
   }
@@ -252,11 +243,12 @@ std::vector<AnalysisPlot> analysis_plots(const nlohmann::json& analysis) {
 }
 
 bool is_analysis_plot_file(const std::string& file) {
-  for (const char* fixed : {kPreferencePlot, kIdentifyPlot, kTwoAcPlot, kTuningPlot}) {
+  for (const char* fixed :
+       {kPreferencePlotFile, kIdentifyPlotFile, kTwoAcPlotFile, kTuningPlotFile}) {
     if (file == fixed) return true;
   }
   // A named plot: the prefix, then only the characters plot_file_name keeps.
-  const bool prefixed = file.starts_with(kRatingsPrefix) || file.starts_with(kJndPrefix);
+  const bool prefixed = file.starts_with(kRatingsPlotPrefix) || file.starts_with(kJndPlotPrefix);
   return prefixed && file.ends_with(".svg") && plot_file_name("", file) == file + ".svg";
 }
 
