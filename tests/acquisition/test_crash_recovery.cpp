@@ -307,15 +307,19 @@ void run_kill_test(int kills, int parallel) {
   const unsigned seed = device();
   INFO("kill moments from seed " << seed);
   std::mt19937 random(seed);
-  // Mostly during the recording; some in its last moments and its conversion.
-  std::uniform_real_distribution<double> moment(0.02, kRecordS + 0.4);
+  // From the start to the recording's last moments and its conversion, each batch's kills
+  // spread over that span: the span is cut into as many equal parts as the batch has
+  // recordings, and each is killed at a random moment within its own part. Most kills then
+  // land in the recording, however slowly a loaded machine starts the processes, and the
+  // moments come in order for the loop below.
+  constexpr double kFirstKillS = 0.02, kLastKillS = kRecordS + 0.4;
+  std::uniform_real_distribution<double> within(0.0, 1.0);
   KillStats stats;
   for (int first = 0; first < kills; first += parallel) {
+    const int batch = std::min(kills, first + parallel) - first;
+    const double part_s = (kLastKillS - kFirstKillS) / batch;
     std::vector<double> moments;
-    for (int k = first; k < std::min(kills, first + parallel); ++k)
-      moments.push_back(moment(random));
-    // Sorted, so that the loop below kills each at its moment.
-    std::sort(moments.begin(), moments.end());
+    for (int k = 0; k < batch; ++k) moments.push_back(kFirstKillS + (k + within(random)) * part_s);
     std::vector<KillRun> runs;
     for (int k = first; k < std::min(kills, first + parallel); ++k) {
       KillRun run;
