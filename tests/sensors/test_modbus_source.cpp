@@ -202,10 +202,13 @@ namespace {
 // window of request phases (requests never come before their deadline).
 struct GridCheck {
   double on_grid_fraction = 0;  // requests within 2 ms after a deadline
-  // No catch-up bursts: in any 10 periods at most 11 requests (a late poll and the next
-  // deadline's may come close together, but never more polls than deadlines). Counted on
-  // the request times alone, so that a grid phase estimated on a loaded machine cannot
-  // make it fail.
+  // No catch-up bursts: in any 10 periods from a request, at most 12 requests. The requests
+  // after it have distinct deadlines on the grid, each later than one period before the
+  // request before it (the latest deadline passed is polled, any before it skipped), so they
+  // fall in an open interval of 11 periods: at most 11, whatever the machine's load delays.
+  // A source that polled every missed deadline would exceed it after a delay of 2 periods.
+  // Counted on the request times alone, so that a grid phase estimated on a loaded machine
+  // cannot make it fail.
   bool one_per_deadline = true;
   double polled_fraction = 0;  // requests / deadlines from the first to the last
 };
@@ -229,7 +232,7 @@ GridCheck grid_check(const std::vector<PolledSample>& samples, std::int64_t peri
     while (j < samples.size() && samples[j].request_ns < samples[i].request_ns + 10 * period_ns) {
       ++j;
     }
-    if (j - i > 11) result.one_per_deadline = false;
+    if (j - i > 12) result.one_per_deadline = false;
   }
   const double span_periods =
       static_cast<double>(samples.back().request_ns - samples.front().request_ns) /
@@ -239,6 +242,37 @@ GridCheck grid_check(const std::vector<PolledSample>& samples, std::int64_t peri
   return result;
 }
 
+// How punctually this machine wakes a thread at absolute deadlines while the source runs: a
+// thread of its own sleeps to each deadline of a `period` grid and counts the wakes within
+// 2 ms of it. On a busy machine the source cannot be more punctual than this, so its
+// on-grid fraction is judged against the probe's.
+class WakeProbe {
+ public:
+  explicit WakeProbe(std::chrono::nanoseconds period)
+      : thread_([this, period](const std::stop_token& stop) {
+          auto deadline = std::chrono::steady_clock::now();
+          while (!stop.stop_requested()) {
+            deadline += period;
+            std::this_thread::sleep_until(deadline);
+            const auto late = std::chrono::steady_clock::now() - deadline;
+            ++wakes_;
+            if (late < std::chrono::milliseconds(2)) ++on_time_;
+            // A wake later than a period skips the deadlines it missed, as the source does.
+            while (deadline + period < std::chrono::steady_clock::now()) deadline += period;
+          }
+        }) {}
+  // Stops and joins the probe (also on destruction); the fraction of wakes on time.
+  double on_time_fraction() {
+    thread_.request_stop();
+    if (thread_.joinable()) thread_.join();
+    return wakes_ == 0 ? 0.0 : static_cast<double>(on_time_) / static_cast<double>(wakes_);
+  }
+
+ private:
+  int wakes_ = 0, on_time_ = 0;
+  std::jthread thread_;  // last: started after the counts exist
+};
+
 }  // namespace
 
 TEST_CASE("modbus source: the achieved poll rate is the requested one", "[modbus]") {
@@ -246,19 +280,31 @@ TEST_CASE("modbus source: the achieved poll rate is the requested one", "[modbus
   ModbusSource source(rig_of(
       tcp_device(server.port),
       force_channel("force", 0, "big", "big", 50) + force_channel("slow", 2, "big", "little", 10)));
+  WakeProbe probe(std::chrono::milliseconds(20));
   const Collected got = run_for(source, 3.0);
+  const double machine_on_time = probe.on_time_fraction();
   for (std::uint32_t c = 0; c < 2; ++c) {
     const auto samples = of_channel(got, c);
     REQUIRE(samples.size() > 10);
     const std::int64_t period_ns = c == 0 ? 20000000 : 100000000;
     const GridCheck grid = grid_check(samples, period_ns);
     INFO("channel " << c << ": " << grid.on_grid_fraction << " on the grid, "
-                    << grid.polled_fraction << " of the deadlines polled");
+                    << grid.polled_fraction << " of the deadlines polled; the machine wakes "
+                    << machine_on_time << " of a probe's deadlines on time");
     // Each deadline is polled at most once, so the rate is never above the requested one.
     CHECK(grid.one_per_deadline);
     // Absolute deadlines keep requests on the grid; relative ones (reply + period) would
-    // drift off it (~10 % in a 2 ms window of a 20 ms period).
-    CHECK(grid.on_grid_fraction >= 0.6);
+    // drift off it (~10 % in a 2 ms window of a 20 ms period). The bar is half the probe's
+    // punctuality: 0.5 on an idle machine, lower on a busy one, where the source's thread also
+    // waits for the server's replies and the slow channel for the fast one's poll at shared
+    // deadlines. While the probe wakes on time at least a third of the time it stays above what
+    // a drifting grid gives.
+    CHECK(grid.on_grid_fraction >= 0.5 * machine_on_time);
+    if (machine_on_time < 1.0 / 3.0) {
+      WARN("the machine woke only " << machine_on_time
+                                    << " of the probe's deadlines on time: the on-grid check "
+                                       "cannot tell absolute deadlines from drifting ones");
+    }
     // Every deadline polled on an idle machine (bench/modbus_poll.cpp: 100 Hz reached). On
     // the shared test machines, loaded to 10 on 2 cores while the whole suite runs,
     // scheduling delays longer than a period skip deadlines: 85 % of 50 Hz was seen.
