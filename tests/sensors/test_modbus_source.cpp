@@ -202,11 +202,12 @@ namespace {
 // window of request phases (requests never come before their deadline).
 struct GridCheck {
   double on_grid_fraction = 0;  // requests within 2 ms after a deadline
-  // No catch-up bursts: in any 10 periods from a request, at most 12 requests. The requests
-  // after it have distinct deadlines on the grid, each later than one period before the
-  // request before it (the latest deadline passed is polled, any before it skipped), so they
-  // fall in an open interval of 11 periods: at most 11, whatever the machine's load delays.
-  // A source that polled every missed deadline would exceed it after a delay of 2 periods.
+  // No catch-up bursts: in any 10 periods from a request, at most 12 requests, that one and
+  // 11 after it. The requests after it have distinct deadlines on the grid, each later than
+  // one period before the request before it (the latest deadline passed is polled, any before
+  // it skipped), so their deadlines fall in an open interval of 11 periods whatever the
+  // machine's load delays. A source that polled every missed deadline would exceed 12 after
+  // a delay of 2 periods.
   // Counted on the request times alone, so that a grid phase estimated on a loaded machine
   // cannot make it fail.
   bool one_per_deadline = true;
@@ -244,8 +245,9 @@ GridCheck grid_check(const std::vector<PolledSample>& samples, std::int64_t peri
 
 // How punctually this machine wakes a thread at absolute deadlines while the source runs: a
 // thread of its own sleeps to each deadline of a `period` grid and counts the wakes within
-// 2 ms of it. On a busy machine the source cannot be more punctual than this, so its
-// on-grid fraction is judged against the probe's.
+// 2 ms of it. On a busy machine the source, whose thread also waits for the server's replies,
+// is not expected to be more punctual than this, so its on-grid fraction is judged against the
+// probe's.
 class WakeProbe {
  public:
   explicit WakeProbe(std::chrono::nanoseconds period)
