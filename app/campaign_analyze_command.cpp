@@ -79,15 +79,7 @@ void run_campaign_analyze(const CampaignAnalyzeOptions& options, std::ostream& p
   const study::VariantFiles variants = study::variant_parameter_files(table, analysis);
 
   std::filesystem::create_directories(folder);
-  if (!variants.files.empty()) std::filesystem::create_directories(folder / "variants");
-  std::vector<std::string> written;
-  for (const study::VariantFile& variant : variants.files)
-    written.push_back(std::filesystem::path(variant.file).filename().string());
-  remove_outputs_not_written(
-      folder / "variants", [](const std::string& name) { return name.ends_with(".json"); },
-      written);
-  for (const study::VariantFile& variant : variants.files)
-    write_text_file_atomically(folder / variant.file, variant.text);
+  study::write_variant_files(folder, variants);
   write_text_file_atomically(folder / "analysis.json", analysis.dump(2) + "\n");
   // An interrupted analysis is written without its PDF (the renderer takes seconds).
   const bool pdf = !options.no_pdf && !analysis.contains("interrupted");

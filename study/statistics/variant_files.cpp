@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "acquisition/session/output_file.h"
 #include "analysis/model/parameter_file.h"
 
 namespace doorbench::study {
@@ -49,14 +50,35 @@ std::optional<DoorModel> door_from_rendered(std::string_view rendered) {
   return std::nullopt;
 }
 
+namespace {
+constexpr std::string_view kVariantFolder = "variants";
+constexpr std::string_view kVariantExtension = ".json";
+}  // namespace
+
 std::string variant_file_name(std::string_view variant) {
-  std::string name = "variants/";
+  std::string name = std::string(kVariantFolder) + "/";
   for (const char c : variant) {
     const bool plain = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') ||
                        c == '.' || c == '_' || c == '-';
     name += plain ? c : '_';
   }
-  return name + ".json";
+  return name + std::string(kVariantExtension);
+}
+
+bool is_variant_file(const std::string& name) {
+  return name.size() > kVariantExtension.size() && name.ends_with(kVariantExtension);
+}
+
+void write_variant_files(const std::filesystem::path& analysis_folder,
+                         const VariantFiles& variants) {
+  const std::filesystem::path folder = analysis_folder / kVariantFolder;
+  std::vector<std::string> written;
+  for (const VariantFile& variant : variants.files)
+    written.push_back(std::filesystem::path(variant.file).filename().string());
+  remove_outputs_not_written(folder, is_variant_file, written);
+  if (!variants.files.empty()) std::filesystem::create_directories(folder);
+  for (const VariantFile& variant : variants.files)
+    write_text_file_atomically(analysis_folder / variant.file, variant.text);
 }
 
 namespace {

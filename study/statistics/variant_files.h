@@ -13,7 +13,8 @@
 //
 // Errors: none thrown for the table's content (a variant without a file is a note); the
 // JSON must hold analyze_trials' preference_scale array when it has the key.
-// Thread safety: free functions without shared state.
+// Thread safety: free functions without shared state; write_variant_files writes files.
+#include <filesystem>
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
@@ -44,6 +45,17 @@ struct VariantFiles {
   std::vector<VariantFile> files;
   std::vector<std::string> notes;  // variants without a file, and why
 };
+
+// True for a file name (without folder) that variant_file_name gives: "NAME.json". Only such
+// files in the variants folder are taken for an earlier analysis's variant files.
+bool is_variant_file(const std::string& name);
+
+// Writes `variants`' files under `analysis_folder` (each atomically, making the variants folder
+// when there are files) and removes the variant files an earlier analysis left there that this
+// one does not write (docs/output-files.md, rule 5); other files there are left alone.
+// Errors: OutputError naming a file that cannot be written or removed.
+void write_variant_files(const std::filesystem::path& analysis_folder,
+                         const VariantFiles& variants);
 
 // The files for `analysis`'s preference_scale rows; sets each row's "file" and adds the notes
 // to analysis["preference_fit"]["notes"] (made when missing). Nothing when the analysis has

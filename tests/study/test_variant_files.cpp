@@ -2,15 +2,20 @@
 // variant the trials table renders one way, a note naming the variant and the reason for
 // each one without.
 #include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
 #include <nlohmann/json.hpp>
+#include <string>
 
 #include "analysis/model/parameter_file.h"
+#include "fixtures/temp_dir.h"
 #include "study/statistics/variant_files.h"
 #include "study/trials_table.h"
 
 using doorbench::study::door_from_rendered;
 using doorbench::study::variant_file_name;
 using doorbench::study::variant_parameter_files;
+using doorbench::study::write_variant_files;
 
 namespace {
 
@@ -91,4 +96,37 @@ TEST_CASE("variant files: a table written by hand gives none, said once", "[stud
                                                 "column"});
   nlohmann::json none = {{"input", {}}};
   CHECK(variant_parameter_files(table, none).notes.empty());
+}
+
+TEST_CASE("variant files: is_variant_file takes NAME.json only", "[study][campaign]") {
+  CHECK(doorbench::study::is_variant_file("heavier.json"));
+  CHECK(doorbench::study::is_variant_file(
+      std::filesystem::path(variant_file_name("D/E x")).filename().string()));
+  CHECK_FALSE(doorbench::study::is_variant_file(".json"));
+  CHECK_FALSE(doorbench::study::is_variant_file("heavier.json.bak"));
+  CHECK_FALSE(doorbench::study::is_variant_file("notes.txt"));
+}
+
+TEST_CASE("variant files: writing them removes an earlier analysis's, not the user's files",
+          "[study][campaign][outputs]") {
+  const doorbench::testing::TempDir dir("variant_files");
+  dir.write("variants/gone.json", "an earlier analysis's variant\n");
+  dir.write("variants/notes.txt", "the user's\n");
+  dir.write("variants/A.json", "the earlier A\n");
+  doorbench::study::VariantFiles variants;
+  variants.files.push_back({"A", variant_file_name("A"), "the new A\n"});
+  write_variant_files(dir.path, variants);
+  CHECK_FALSE(std::filesystem::exists(dir / "variants/gone.json"));
+  CHECK(std::filesystem::exists(dir / "variants/notes.txt"));
+  std::ifstream a(dir / "variants/A.json");
+  std::string line;
+  std::getline(a, line);
+  CHECK(line == "the new A");
+  // No files: the earlier ones go, and no variants folder is made where there was none.
+  write_variant_files(dir.path, {});
+  CHECK_FALSE(std::filesystem::exists(dir / "variants/A.json"));
+  CHECK(std::filesystem::exists(dir / "variants/notes.txt"));
+  const doorbench::testing::TempDir empty("variant_files_none");
+  write_variant_files(empty.path, {});
+  CHECK_FALSE(std::filesystem::exists(empty / "variants"));
 }
