@@ -234,6 +234,17 @@ method = "staircase"
 trials = 8
 )";
 
+// True when `folder` is a campaign folder planned from a campaign named `name` (its
+// plan-id.txt says so and its plan.csv matches it).
+bool holds_campaign_named(const std::filesystem::path& folder, const std::string& name) {
+  if (!std::filesystem::exists(folder / "plan-id.txt")) return false;
+  try {
+    return study::read_plan_identity(folder).campaign == name;
+  } catch (const std::exception&) {
+    return false;
+  }
+}
+
 }  // namespace
 
 void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
@@ -242,6 +253,11 @@ void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
   write_file_atomically(campaign_path, [](std::ostream& file) { file << kDemoCampaign; });
   const study::Campaign campaign = study::read_campaign(campaign_path);
   const std::filesystem::path folder = dir / "folder";
+  // The demo owns its campaign: an earlier demo's run there is replaced (its answers are the
+  // seeded simulation's, made again below). Any other folder there is refused as a plan's
+  // output is.
+  const bool replaced = holds_campaign_named(folder, campaign.name);
+  if (replaced) std::filesystem::remove_all(folder);
   study::write_campaign_folder(folder, campaign, study::make_plan(campaign, campaign.seed), false);
   const study::CampaignFolder opened = study::open_campaign_folder(folder);
   RunCommandOptions options;
@@ -262,7 +278,8 @@ void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
        study::block_summaries(opened.campaign, study::read_trials_table(folder / "trials.csv"))) {
     out << "  " << line << "\n";
   }
-  out << "  answers in " << (folder / "trials.csv").string() << "\n";
+  out << "  answers in " << (folder / "trials.csv").string()
+      << (replaced ? " (an earlier demo's campaign there replaced)" : "") << "\n";
 }
 
 CLI::App* add_campaign_command(CLI::App& app, Action& action) {

@@ -43,7 +43,9 @@ void add_hapticmaster_command(CLI::App& app, Action& action);
 // `campaign` and its plan, run and merge; returns the campaign subcommand, to which other
 // campaign subcommands (e.g. `campaign analyze`) attach in main.cpp.
 CLI::App* add_campaign_command(CLI::App& app, Action& action);
-// The demo's short simulated campaign into `dir`, a summary line per block on `out`.
+// The demo's short simulated campaign into `dir`, a summary line per block on `out`. An
+// earlier demo's campaign in dir/folder is replaced; any other non-empty dir/folder is refused
+// (OutputRefused).
 void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out);
 // `campaign analyze`, added to the `campaign` verb (app/campaign_analyze_command.cpp).
 void add_campaign_analyze(CLI::App& campaign, Action& action);

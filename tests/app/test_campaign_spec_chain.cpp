@@ -422,3 +422,27 @@ TEST_CASE(
                Contains("every felt quantity is within its JND of the TO-BE's"));
   }
 }
+
+TEST_CASE("demo campaign: a second run replaces the earlier demo's, another folder is refused",
+          "[campaign][outputs]") {
+  const TempDir dir("demo_campaign_again");
+  std::ostringstream first, second;
+  doorbench::app::run_demo_campaign(dir / "campaign", first);
+  const auto rows_first =
+      doorbench::study::read_trials_table(dir / "campaign" / "folder" / "trials.csv").rows.size();
+  CHECK_THAT(first.str(), !Contains("replaced"));
+  doorbench::app::run_demo_campaign(dir / "campaign", second);
+  const auto rows_second =
+      doorbench::study::read_trials_table(dir / "campaign" / "folder" / "trials.csv").rows.size();
+  CHECK(rows_second == rows_first);
+  CHECK_THAT(second.str(), Contains("/trials.csv (an earlier demo's campaign there replaced)\n"));
+
+  // A folder that is not a demo campaign's stays as it is.
+  const TempDir other("demo_campaign_other");
+  other.write("campaign/folder/notes.txt", "the user's\n");
+  std::ostringstream refused;
+  CHECK_THROWS_WITH(doorbench::app::run_demo_campaign(other / "campaign", refused),
+                    (other / "campaign" / "folder").string() +
+                        ": exists and is not empty (give --overwrite to write into it)");
+  CHECK(std::filesystem::exists(other / "campaign" / "folder" / "notes.txt"));
+}
