@@ -318,15 +318,13 @@ void run_kill_test(int kills, int parallel) {
   for (int first = 0; first < kills; first += parallel) {
     const int batch = std::min(kills, first + parallel) - first;
     const double part_s = (kLastKillS - kFirstKillS) / batch;
-    std::vector<double> moments;
-    for (int k = 0; k < batch; ++k) moments.push_back(kFirstKillS + (k + within(random)) * part_s);
     std::vector<KillRun> runs;
-    for (int k = first; k < std::min(kills, first + parallel); ++k) {
+    for (int k = first; k < first + batch; ++k) {
       KillRun run;
       run.dir = dir / ("kill" + std::to_string(k));
       fs::create_directories(run.dir);
       run.session = run.dir / "s.h5";
-      run.kill_after_s = moments[static_cast<std::size_t>(k - first)];
+      run.kill_after_s = kFirstKillS + (k - first + within(random)) * part_s;
       run.child = start_doorbench({"record", "--rig", rig.string(), "--duration-s",
                                    std::to_string(kRecordS), "--out", run.session.string()},
                                   run.dir);

@@ -3,9 +3,7 @@
 // each one without.
 #include <catch2/catch.hpp>
 #include <filesystem>
-#include <fstream>
 #include <nlohmann/json.hpp>
-#include <string>
 
 #include "analysis/model/parameter_file.h"
 #include "fixtures/temp_dir.h"
@@ -118,10 +116,7 @@ TEST_CASE("variant files: writing them removes an earlier analysis's, not the us
   write_variant_files(dir.path, variants);
   CHECK_FALSE(std::filesystem::exists(dir / "variants/gone.json"));
   CHECK(std::filesystem::exists(dir / "variants/notes.txt"));
-  std::ifstream a(dir / "variants/A.json");
-  std::string line;
-  std::getline(a, line);
-  CHECK(line == "the new A");
+  CHECK(doorbench::read_text_file(dir / "variants/A.json") == "the new A\n");
   // No files: the earlier ones go, and no variants folder is made where there was none.
   write_variant_files(dir.path, {});
   CHECK_FALSE(std::filesystem::exists(dir / "variants/A.json"));
