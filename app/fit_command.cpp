@@ -230,6 +230,7 @@ void run_fit(const FitCommandOptions& options) {
   const PreparedData& data = inputs.data;
   const DoorModel& start = inputs.start;
   if (options.init_only) {
+    remove_whole_fit_outputs(options.out_dir);
     write_start(options.out_dir, inputs);
     std::cout << "start-params.json and start.md are in " << options.out_dir << "/\n";
     return;
@@ -275,6 +276,7 @@ void run_fit(const FitCommandOptions& options) {
   if (!interrupted.empty()) inputs.report_lines.insert(inputs.report_lines.begin(), interrupted);
 
   const std::filesystem::path dir = options.out_dir;
+  remove_start_outputs(dir);
   write_text_file_atomically(dir / "result.json", fit_result_json(result, data));
   write_text_file_atomically(dir / "fitted-params.json", to_parameter_json(result.model));
   if (result.model.effects().empty()) {

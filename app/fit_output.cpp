@@ -2,6 +2,7 @@
 #include "app/fit_output.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 
@@ -20,6 +21,13 @@ namespace {
 // Optima whose cost is within this share of the fit's: the global-search plot's inner range,
 // basins the data hardly tell apart from the fit's (the truth-start bar's 1 %, docs/fitting.md).
 constexpr double kNearOptimumCost = 0.01;
+
+// The plots write_fit_plots draws, in order (the last when the data allow its lags), and
+// write_global_search_plot's.
+constexpr std::array<const char*, 5> kFitPlotFiles = {"rate.svg", "force-angle.svg",
+                                                      "residual-angle.svg", "residual-speed.svg",
+                                                      "residual-whiteness.svg"};
+constexpr const char* kGlobalSearchFile = "global-search.svg";
 
 }  // namespace
 
@@ -87,7 +95,7 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
   }
   FitPlots plots;
   std::vector<std::string>& files = plots.files;
-  files = {"rate.svg", "force-angle.svg", "residual-angle.svg", "residual-speed.svg"};
+  files = {kFitPlotFiles[0], kFitPlotFiles[1], kFitPlotFiles[2], kFitPlotFiles[3]};
   write_svg_plot((dir / files[0]).string(),
                  {"Door rate: measured and simulated window by window", "time [s]", "rate [deg/s]"},
                  rate);
@@ -126,7 +134,7 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
          .meaning = plot_style::Meaning::kOther},
         {.label = "", .x = band_x, .y = lower, .color = "", .meaning = plot_style::Meaning::kOther},
     };
-    files.push_back("residual-whiteness.svg");
+    files.push_back(kFitPlotFiles[4]);
     write_svg_plot((dir / files.back()).string(),
                    {"Residual whiteness: " + w.summary(), "lag [s]", "correlation"}, whiteness);
     plots.whiteness = w.report_line();
@@ -136,7 +144,7 @@ FitPlots write_fit_plots(const std::filesystem::path& dir, const DoorModel& mode
     const std::string prefix = "residual whiteness: ";
     if (reason.starts_with(prefix)) reason.erase(0, prefix.size());
     plots.whiteness = prefix + "not computed (" + reason + ")";
-    remove_output_not_written(dir / "residual-whiteness.svg");
+    remove_output_not_written(dir / kFitPlotFiles[4]);
   }
   return plots;
 }
@@ -182,7 +190,7 @@ std::vector<ForestRow> global_search_rows(const FitSummary& summary) {
 }
 
 std::string write_global_search_plot(const std::filesystem::path& dir, const FitSummary& summary) {
-  const std::string file = "global-search.svg";
+  const std::string file = kGlobalSearchFile;
   const std::vector<ForestRow> rows = global_search_rows(summary);
   if (rows.empty()) {
     remove_output_not_written(dir / file);
@@ -202,6 +210,20 @@ std::string write_global_search_plot(const std::filesystem::path& dir, const Fit
   options.band_label = "the bounds";
   write_text_file_atomically(dir / file, render_svg_forest(options, rows));
   return file;
+}
+
+void remove_whole_fit_outputs(const std::filesystem::path& dir) {
+  for (const char* file :
+       {"result.json", "report.md", "fitted-params.json", "fitted-effects.json"}) {
+    remove_output_not_written(dir / file);
+  }
+  for (const char* file : kFitPlotFiles) remove_output_not_written(dir / file);
+  remove_output_not_written(dir / kGlobalSearchFile);
+}
+
+void remove_start_outputs(const std::filesystem::path& dir) {
+  remove_output_not_written(dir / "start-params.json");
+  remove_output_not_written(dir / "start.md");
 }
 
 }  // namespace doorbench::app

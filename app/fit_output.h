@@ -37,4 +37,12 @@ std::vector<ForestRow> global_search_rows(const FitSummary& summary);
 // output rule 5). Throws OutputError when it cannot write or remove.
 std::string write_global_search_plot(const std::filesystem::path& dir, const FitSummary& summary);
 
+// Output rule 5 between `fit`'s two kinds of run, so that `dir` holds one run's outputs: a
+// whole fit writes result.json, report.md, fitted-params.json, fitted-effects.json and the
+// plots above; `--init-only` writes start-params.json and start.md. Each kind removes the
+// other kind's files that an earlier run left in `dir` (under --overwrite); other files stay.
+// Throws OutputError "PATH: cannot remove: SYSTEM ERROR".
+void remove_whole_fit_outputs(const std::filesystem::path& dir);
+void remove_start_outputs(const std::filesystem::path& dir);
+
 }  // namespace doorbench::app

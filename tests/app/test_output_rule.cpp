@@ -8,11 +8,13 @@
 // a file size limit (`ulimit -f`), which makes write() fail the same way (EFBIG).
 #include <sys/stat.h>
 
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/pdf_output.h"
@@ -42,6 +44,16 @@ std::string files_in(const fs::path& folder) {
   for (const auto& entry : fs::directory_iterator(folder)) {
     names += entry.path().filename().string() + " ";
   }
+  return names;
+}
+
+// The names of the files in `folder`, sorted.
+std::vector<std::string> files_in_order(const fs::path& folder) {
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(folder)) {
+    names.push_back(entry.path().filename().string());
+  }
+  std::sort(names.begin(), names.end());
   return names;
 }
 
@@ -383,6 +395,35 @@ TEST_CASE("Outputs: fit --overwrite removes the outputs of an earlier run it doe
   CHECK_FALSE(fs::exists(out / "global-search.svg"));
   CHECK(fs::exists(out / "result.json"));
   CHECK(read_file(out / "report.md").find("global-search.svg") == std::string::npos);
+}
+
+// Rule 5 between fit's two kinds of run: --init-only into a whole fit's folder leaves none of
+// its files, and a whole fit into an --init-only folder leaves no start files; a file of the
+// user's stays through both.
+TEST_CASE("Outputs: fit --init-only and a whole fit each remove the other's earlier outputs",
+          "[outputs][cli]") {
+  const TempDir dir("output_fit_init_only");
+  const fs::path session = small_session(dir);
+  const fs::path out = dir / "out";
+  const std::string fit =
+      "fit " + session.string() + " --folds 0 --out " + out.string() + " --overwrite";
+  const DoorbenchRun whole = run_doorbench_shell(fit, dir);
+  INFO(whole.err);
+  REQUIRE(whole.status == 0);
+  std::ofstream(out / "global-search.svg") << "<svg/>\n";  // as an earlier search drew it
+  std::ofstream(out / "notes.txt") << "the operator's notes\n";
+  const DoorbenchRun init = run_doorbench_shell(fit + " --init-only", dir);
+  INFO(init.err);
+  REQUIRE(init.status == 0);
+  CHECK(files_in_order(out) ==
+        std::vector<std::string>{"notes.txt", "start-params.json", "start.md"});
+  const DoorbenchRun again = run_doorbench_shell(fit, dir);
+  INFO(again.err);
+  REQUIRE(again.status == 0);
+  CHECK_FALSE(fs::exists(out / "start-params.json"));
+  CHECK_FALSE(fs::exists(out / "start.md"));
+  CHECK(fs::exists(out / "result.json"));
+  CHECK(read_file(out / "notes.txt") == "the operator's notes\n");
 }
 
 TEST_CASE("Outputs: a PDF not rendered leaves no earlier PDF behind", "[outputs]") {
