@@ -257,7 +257,7 @@ void run_demo_campaign(const std::filesystem::path& dir, std::ostream& out) {
   // seeded simulation's, made again below). Any other folder there is refused as a plan's
   // output is.
   const bool replaced = holds_campaign_named(folder, campaign.name);
-  if (replaced) std::filesystem::remove_all(folder);
+  if (replaced) remove_output_folder(folder);
   study::write_campaign_folder(folder, campaign, study::make_plan(campaign, campaign.seed), false);
   const study::CampaignFolder opened = study::open_campaign_folder(folder);
   RunCommandOptions options;

@@ -198,6 +198,12 @@ void remove_output_not_written(const fs::path& path) {
   if (error) throw OutputError(path.string() + ": cannot remove: " + error.message());
 }
 
+void remove_output_folder(const fs::path& folder) {
+  std::error_code error;
+  fs::remove_all(folder, error);
+  if (error) throw OutputError(folder.string() + ": cannot remove: " + error.message());
+}
+
 void remove_outputs_not_written(const fs::path& folder,
                                 const std::function<bool(const std::string&)>& is_such_output,
                                 const std::vector<std::string>& written) {

@@ -82,6 +82,11 @@ void remove_outputs_not_written(const std::filesystem::path& folder,
                                 const std::function<bool(const std::string&)>& is_such_output,
                                 const std::vector<std::string>& written);
 
+// Removes `folder` and everything in it, for a verb that owns the whole folder (the demo's
+// campaign, made again on each run); nothing when it does not exist. Throws OutputError
+// "FOLDER: cannot remove: SYSTEM ERROR".
+void remove_output_folder(const std::filesystem::path& folder);
+
 // Renames a complete temporary file onto `path` and syncs the folder; on failure removes
 // the temporary file and throws OutputError naming `path`. For writers that make their
 // own temporary file (HDF5 sessions: SessionWriter on partial_path_for(path)).

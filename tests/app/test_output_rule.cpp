@@ -358,6 +358,20 @@ TEST_CASE("Outputs: remove_output_not_written removes a file or a link, never a 
                     (dir / "full.svg").string() + ": cannot remove: Directory not empty");
 }
 
+TEST_CASE("Outputs: remove_output_folder removes a folder whole, or names what it cannot",
+          "[outputs]") {
+  const TempDir dir("output_remove_folder");
+  fs::create_directories(dir / "campaign" / "answers");
+  std::ofstream(dir / "campaign" / "answers" / "trials.csv") << "x\n";
+  doorbench::remove_output_folder(dir / "campaign");
+  CHECK_FALSE(fs::exists(dir / "campaign"));
+  doorbench::remove_output_folder(dir / "campaign");  // nothing there: nothing to do
+  const fs::path under_file = dir.write("a.txt", "kept\n") / "sub";
+  CHECK_THROWS_WITH(doorbench::remove_output_folder(under_file),
+                    under_file.string() + ": cannot remove: Not a directory");
+  CHECK(read_file(dir / "a.txt") == "kept\n");
+}
+
 TEST_CASE("Outputs: remove_outputs_not_written removes only such outputs not written",
           "[outputs]") {
   const TempDir dir("output_remove_named");
