@@ -120,7 +120,7 @@ void analyze_demo_campaign(const std::filesystem::path& dir,
   std::istringstream lines(summary.str());
   for (std::string line; std::getline(lines, line);) out << "  " << line << "\n";
   out << "  the specification on the panel's perception (the favourite variant as the TO-BE "
-         "feel, tolerances judged by the panel's JNDs; a few minutes):\n"
+         "feel, tolerances judged by the panel's JNDs; under a minute on two cores):\n"
       << "    doorbench spec --campaign " << options.out_dir << " --asis " << asis_params.string()
       << " --out " << (dir / "spec").string() << " --felt-share 5%\n";
 }
