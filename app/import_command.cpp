@@ -45,7 +45,9 @@ struct ImportOptions {
   std::string csv_path;
   std::string out_path;
   std::string operator_name, product_id, notes;
-  std::string tdms_map;      // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h)
+  // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h); CSV files:
+  // TARGET=COLUMN,... (acquisition/session/import_units.h).
+  std::string tdms_map;
   bool keep_raw = false;     // TDMS files: the DAQmx scalers' raw values beside the scaled ones
   double resample_hz = 0.0;  // > 0: the recording on a uniform clock of this rate
   double rate_hz = 0.0;      // TDMS files: > 0, the rate of channels without wf_increment
@@ -77,17 +79,15 @@ Recording read_import(const ImportOptions& options) {
     throw UsageError(error.what());
   }
   if (extension != ".tdms") {
-    if (!options.tdms_map.empty()) throw UsageError("--map is for TDMS files (*.tdms)");
     if (options.keep_raw) throw UsageError("--keep-raw is for TDMS files (*.tdms)");
     if (options.rate_hz > 0) {
       throw UsageError("--rate-hz is for TDMS files (*.tdms): a CSV's time_s gives the time");
     }
-    CsvTable table = read_csv_file(options.csv_path, EmptyCells::kMissing);  // empty: lost samples
-    std::map<std::string, CalibrationRecord> records =
-        take_raw_columns(table, conversions, options.csv_path);
-    Recording recording = recording_from_table(table, options.csv_path);
-    recording.calibrations = std::move(records);
-    return recording;
+    try {
+      return read_csv_import(options.csv_path, options.tdms_map, conversions);
+    } catch (const CsvMapSyntaxError& error) {
+      throw UsageError(error.what());
+    }
   }
   // The file first: a missing or malformed --map is answered with the channels to map.
   const TdmsFile file = read_tdms(options.csv_path);
@@ -162,18 +162,20 @@ void add_import_command(CLI::App& app, Action& action) {
   auto import = std::make_shared<ImportOptions>();
   CLI::App* import_command = app.add_subcommand(
       "import",
-      "Make a session of a recording from elsewhere: the CSV exchange format, or a TDMS file "
-      "(LabVIEW, SignalExpress, DAQmx logging) with --map (docs/tdms.md)");
-  import_command
-      ->add_option("CSV", import->csv_path, "Recording (CSV exchange format, or *.tdms with --map)")
+      "Make a session of a recording from elsewhere: the CSV exchange format (or any CSV with "
+      "--map naming its columns), or a TDMS file (LabVIEW, SignalExpress, DAQmx logging) with "
+      "--map (docs/tdms.md)");
+  import_command->add_option("CSV", import->csv_path, "Recording (CSV, or *.tdms with --map)")
       ->required();
   import_command->add_option("--out", import->out_path, "The new session file (HDF5)")->required();
   import_command->add_option("--operator", import->operator_name, "Who recorded it");
   import_command->add_option("--product", import->product_id, "The door or product");
   import_command->add_option("--notes", import->notes, "Free text kept in the session");
   import_command->add_option("--map", import->tdms_map,
-                             "TDMS channels: force=GROUP/CHANNEL,angle=GROUP/CHANNEL[,rate=...]"
-                             "[,time=...][,NAME_UNIT=...]");
+                             "The file's own channels: force=GROUP/CHANNEL,angle=GROUP/CHANNEL"
+                             "[,rate=...][,time=...][,NAME_UNIT=...] for TDMS; "
+                             "time=COLUMN,force=COLUMN,angle=COLUMN[,...] for CSV (a CSV's "
+                             "other columns are left out)");
   import_command->add_flag("--keep-raw", import->keep_raw,
                            "TDMS files: also each mapped channel's DAQmx raw values as stored "
                            "(ADC counts), as columns TARGET_raw");

@@ -5,6 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "acquisition/session/map_syntax.h"
 #include "acquisition/session/recording_csv.h"
 
 namespace doorbench {
@@ -85,14 +86,140 @@ ImportConversion parse_calibration(const std::string& item, const CalibrationSto
   return conversion;
 }
 
-// The columns of a table, for messages: "time_s, force_V, angle_rad".
-std::string column_list(const CsvTable& table) {
+// The stem of a target's column, to which a raw column adds its own unit: "force" for
+// force_N, "inclinometer_angle" for inclinometer_angle_rad.
+std::string raw_column_stem(const std::string& target) {
+  const std::string column = import_target_column(target);
+  const std::string suffix = unit_column_suffix(import_target_unit(target));
+  return column.substr(0, column.size() - suffix.size() - 1);
+}
+
+// The name apply_csv_map gives a mapped column: the target's column, or for a converted target
+// its raw column (STEM_UNIT). Throws std::invalid_argument "is in 'U', not T" (with what to do)
+// when the unit the column's name states is not the one the target or its record takes.
+std::string mapped_column_name(const CsvMapItem& item, const std::string& stated,
+                               const ImportConversion* conversion) {
+  if (conversion == nullptr) {
+    const bool time = item.target == "time";
+    const std::string unit = time ? "s" : import_target_unit(item.target);
+    if (!stated.empty() && stated != unit) {
+      throw std::invalid_argument(
+          "is in '" + stated + "', not " + unit +
+          (time ? " (the time is read in seconds: convert the column)"
+                : " (convert it: --calibration " + item.target + "=RECORD or --scale " +
+                      item.target +
+                      "=GAIN[,OFFSET]; or map it as an extra column whose name ends "
+                      "in its unit)"));
+    }
+    return time ? std::string(kTimeColumn) : import_target_column(item.target);
+  }
+  std::string unit = stated;
+  if (conversion->record) {
+    conversion->record_for(stated);  // throws when the record takes another unit
+    unit = conversion->record->input_unit;
+  }
+  return raw_column_stem(item.target) + "_" + unit_column_suffix(unit.empty() ? "unstated" : unit);
+}
+
+}  // namespace
+
+std::string csv_column_list(const CsvTable& table) {
   std::string list;
   for (const std::string& name : table.column_names) list += (list.empty() ? "" : ", ") + name;
   return list;
 }
 
-}  // namespace
+std::vector<CsvMapItem> parse_csv_map(const std::string& text) {
+  std::vector<CsvMapItem> map;
+  std::vector<std::string> targets;
+  for (const MapItemText& given : split_map_items(text)) {
+    if (given.target.empty() || given.text.empty()) {
+      throw std::invalid_argument("--map item '" + given.item +
+                                  "' is not TARGET=COLUMN (e.g. force=Force (N))");
+    }
+    check_map_target(given.target, targets);
+    targets.push_back(given.target);
+    map.push_back({given.target, unescaped(given.text), "--map " + given.item});
+  }
+  return map;
+}
+
+std::string unit_stated_in_name(const std::string& column) {
+  if (column.empty()) return "";
+  const char close = column.back();
+  const char open = close == ')' ? '(' : close == ']' ? '[' : '\0';
+  const std::size_t at = open == '\0' ? std::string::npos : column.rfind(open);
+  if (at == std::string::npos) return "";
+  std::string unit = column.substr(at + 1, column.size() - at - 2);
+  const auto blank = [](char c) { return c == ' ' || c == '\t'; };
+  while (!unit.empty() && blank(unit.back())) unit.pop_back();
+  while (!unit.empty() && blank(unit.front())) unit.erase(0, 1);
+  return unit;
+}
+
+void apply_csv_map(CsvTable& table, const std::vector<CsvMapItem>& map,
+                   const std::vector<ImportConversion>& conversions, std::string_view source) {
+  const auto error = [&](const CsvMapItem& item, const std::string& what) {
+    return CsvError(source, table.header_line,
+                    item.given + ": " + what + "; the file's columns: " + csv_column_list(table));
+  };
+  std::vector<std::size_t> mapped_at;  // the column of each item
+  std::vector<std::string> names;      // the name each takes
+  for (const CsvMapItem& item : map) {
+    const std::optional<std::size_t> at = table.find_column(item.column);
+    if (!at) throw error(item, "no column '" + item.column + "'");
+    for (std::size_t k = 0; k < mapped_at.size(); ++k) {
+      if (mapped_at[k] == *at) {
+        throw error(item, "column '" + item.column + "' is mapped to " + map[k].target +
+                              " already (one column, one target)");
+      }
+    }
+    try {
+      names.push_back(mapped_column_name(item, unit_stated_in_name(item.column),
+                                         find_conversion(conversions, item.target)));
+    } catch (const std::invalid_argument& problem) {
+      throw error(item, "column '" + item.column + "' " + problem.what());
+    }
+    mapped_at.push_back(*at);
+  }
+  std::vector<std::vector<double>> columns;
+  for (std::size_t k = 0; k < map.size(); ++k) {
+    columns.push_back(std::move(table.columns[mapped_at[k]]));
+    table.metadata.emplace_back("map_" + map[k].target + "_column", map[k].column);
+    table.metadata_line_numbers.push_back(0);  // not a line of the file
+  }
+  table.column_names = std::move(names);
+  table.columns = std::move(columns);
+}
+
+Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
+                          const std::vector<ImportConversion>& conversions) {
+  CsvTable table = read_csv_file(path, EmptyCells::kMissing);
+  const std::string source = path.string();
+  const std::string columns = csv_column_list(table);
+  std::vector<CsvMapItem> map;
+  try {
+    map = parse_csv_map(map_text);
+  } catch (const std::invalid_argument& error) {
+    if (!map_text.empty()) {
+      throw CsvMapSyntaxError(std::string(error.what()) + "; the file's columns: " + columns);
+    }
+  }
+  if (!map.empty()) apply_csv_map(table, map, conversions, source);
+  std::map<std::string, CalibrationRecord> records = take_raw_columns(table, conversions, source);
+  Recording recording;
+  try {
+    recording = recording_from_table(table, source);
+  } catch (const CsvError& error) {
+    if (error.line() != table.header_line) throw;
+    throw CsvError(source, error.line(),
+                   error.detail() + "; the file's columns: " + columns +
+                       " (--map time=COLUMN,force=COLUMN,angle=COLUMN names a file's own "
+                       "columns: docs/csv-format.md)");
+  }
+  recording.calibrations = std::move(records);
+  return recording;
+}
 
 CalibrationRecord ImportConversion::record_for(const std::string& input_unit) const {
   if (record) {
@@ -152,8 +279,7 @@ std::map<std::string, CalibrationRecord> take_raw_columns(
   std::map<std::string, CalibrationRecord> records;
   for (const ImportConversion& conversion : conversions) {
     const std::string column = import_target_column(conversion.target);
-    const std::string suffix = unit_column_suffix(import_target_unit(conversion.target));
-    const std::string stem = column.substr(0, column.size() - suffix.size() - 1);
+    const std::string stem = raw_column_stem(conversion.target);
     std::vector<std::size_t> raw;  // the columns that can hold the target's raw signal
     for (std::size_t c = 0; c < table.column_names.size(); ++c) {
       const std::string& name = table.column_names[c];
@@ -167,13 +293,13 @@ std::map<std::string, CalibrationRecord> take_raw_columns(
                             : stem + "_UNIT";
       throw CsvError(source, table.header_line,
                      conversion.given + ": no column " + wanted + " (the raw " + conversion.target +
-                         "); the columns: " + column_list(table));
+                         "); the columns: " + csv_column_list(table));
     }
     if (raw.size() > 1) {
       throw CsvError(source, table.header_line,
                      conversion.given + ": columns " + table.column_names[raw[0]] + " and " +
                          table.column_names[raw[1]] + " could both be the raw " +
-                         conversion.target + " (keep one); the columns: " + column_list(table));
+                         conversion.target + " (keep one); the columns: " + csv_column_list(table));
     }
     const std::string raw_name = table.column_names[raw.front()];
     if (raw_name != column && table.find_column(column)) {

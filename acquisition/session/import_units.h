@@ -6,8 +6,10 @@
 // that makes them physical, as a recorded session does (Recording::calibrations).
 //
 // Thread safety: free functions without shared state.
+#include <filesystem>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -15,6 +17,7 @@
 #include "acquisition/rig/calibration_record.h"
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/session/csv_table.h"
+#include "acquisition/session/recording_csv.h"
 
 namespace doorbench {
 
@@ -62,5 +65,55 @@ const ImportConversion* find_conversion(const std::vector<ImportConversion>& con
 // CsvError at the header's line when there is none, or for a --scale more than one.
 std::map<std::string, CalibrationRecord> take_raw_columns(
     CsvTable& table, const std::vector<ImportConversion>& conversions, std::string_view source);
+
+// One item of `doorbench import --map` for a CSV file: TARGET=COLUMN (the syntax of
+// acquisition/session/map_syntax.h; '/' needs no escape in a column's name).
+struct CsvMapItem {
+  std::string target;  // force, angle, rate, time, or an extra column name with a unit suffix
+  std::string column;  // the header's name, unescaped
+  std::string given;   // "--map TARGET=COLUMN", for messages
+};
+// "time=Time (s),force=Force (V)"; throws std::invalid_argument naming the item: not
+// TARGET=COLUMN, a target that is not force, angle, rate, time or a name with a unit suffix, a
+// target named twice.
+std::vector<CsvMapItem> parse_csv_map(const std::string& text);
+
+// The unit a CSV column's name states at its end in parentheses or brackets: "V" for
+// "Force (V)", "deg/s" for "Rate [deg/s]"; "" when it states none.
+std::string unit_stated_in_name(const std::string& column);
+
+// A file from elsewhere, its own columns named by the map: each mapped column of `table` is
+// renamed to what the exchange format reads (time_s, force_N, angle_rad, rate_rad_s, the extra
+// target itself) and the columns not mapped are left out, as a TDMS import takes only the
+// channels mapped. The unit a mapped column's name states (unit_stated_in_name) must be its
+// target's (s, N, rad, rad/s, the extra target's suffix): a column in degrees taken as the
+// angle would be 57 times too large. A target converted by `conversions` (--scale,
+// --calibration) takes its column as the raw signal: the column becomes STEM_UNIT (force_V)
+// for take_raw_columns, UNIT the one its name states, else the record's input unit, else
+// "unstated"; a record must take the unit the name states. Each mapped column's own name goes
+// into the metadata as map_TARGET_column. Throws CsvError at the header's line naming the item
+// and ending with the file's columns: no such column, one column mapped to two targets, a
+// unit that is not the target's or the record's.
+void apply_csv_map(CsvTable& table, const std::vector<CsvMapItem>& map,
+                   const std::vector<ImportConversion>& conversions, std::string_view source);
+
+// A --map that is not TARGET=COLUMN,... (a usage error), its message ending with the file's
+// columns.
+class CsvMapSyntaxError : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
+// A CSV file as `doorbench import` reads it: empty cells as lost samples, its own columns
+// named by `map_text` (parse_csv_map, apply_csv_map; empty: the exchange format's names), raw
+// columns through `conversions` (take_raw_columns). Throws CsvMapSyntaxError for a malformed
+// map, CsvError and std::invalid_argument as those functions do; a column the
+// recording lacks or cannot take ("header lacks required column time_s") is reported at the
+// header's line with the file's own columns and how --map names them.
+Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
+                          const std::vector<ImportConversion>& conversions);
+
+// The columns of a table, for messages: "time_s, force_V, angle_rad".
+std::string csv_column_list(const CsvTable& table);
 
 }  // namespace doorbench

@@ -11,43 +11,19 @@
 #include <set>
 
 #include "acquisition/session/csv_table.h"
+#include "acquisition/session/map_syntax.h"
 #include "acquisition/session/tdms.h"
 
 namespace doorbench {
 
 namespace {
 
-// The positions of `separator` in `text` not escaped by a backslash.
-std::vector<std::size_t> unescaped_positions(const std::string& text, char separator) {
-  std::vector<std::size_t> positions;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if (text[i] == '\\') {
-      ++i;
-    } else if (text[i] == separator) {
-      positions.push_back(i);
-    }
-  }
-  return positions;
-}
-
-// `text` with each "\x" as "x"; a backslash at the end is kept.
-std::string unescaped(const std::string& text) {
-  std::string out;
-  for (std::size_t i = 0; i < text.size(); ++i) {
-    if (text[i] == '\\' && i + 1 < text.size()) ++i;
-    out += text[i];
-  }
-  return out;
-}
-
 // One TARGET=GROUP/CHANNEL item (escapes kept).
-TdmsMapItem parse_map_item(const std::string& item) {
-  const std::vector<std::size_t> equals_at = unescaped_positions(item, '=');
-  const std::size_t equals = equals_at.empty() ? std::string::npos : equals_at.front();
+TdmsMapItem parse_map_item(const MapItemText& given) {
   TdmsMapItem parsed;
-  if (equals != std::string::npos && equals > 0) {
-    parsed.target = item.substr(0, equals);
-    parsed.text = item.substr(equals + 1);
+  parsed.target = given.target;
+  parsed.text = given.text;
+  if (!given.target.empty()) {
     for (std::size_t slash : unescaped_positions(parsed.text, '/')) {
       std::string group = unescaped(parsed.text.substr(0, slash));
       std::string channel = unescaped(parsed.text.substr(slash + 1));
@@ -55,7 +31,7 @@ TdmsMapItem parse_map_item(const std::string& item) {
     }
   }
   if (parsed.splits.empty()) {
-    throw std::invalid_argument("--map item '" + item +
+    throw std::invalid_argument("--map item '" + given.item +
                                 "' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force)");
   }
   parsed.group = parsed.splits.front().first;
@@ -67,25 +43,12 @@ TdmsMapItem parse_map_item(const std::string& item) {
 
 std::vector<TdmsMapItem> parse_tdms_map(const std::string& text) {
   std::vector<TdmsMapItem> items;
-  std::vector<std::size_t> commas = unescaped_positions(text, ',');
-  commas.push_back(text.size());
-  std::size_t start = 0;
-  for (std::size_t comma : commas) {
-    TdmsMapItem item = parse_map_item(text.substr(start, comma - start));
-    const std::string& target = item.target;
-    if (target != "force" && target != "angle" && target != "rate" && target != "time" &&
-        !has_unit_suffix(target)) {
-      throw std::invalid_argument("--map target '" + target +
-                                  "' is not force, angle, rate, time or a column name with a "
-                                  "unit suffix (e.g. inclinometer_angle_rad)");
-    }
-    for (const TdmsMapItem& earlier : items) {
-      if (earlier.target == target) {
-        throw std::invalid_argument("--map names target '" + target + "' twice");
-      }
-    }
+  std::vector<std::string> targets;
+  for (const MapItemText& given : split_map_items(text)) {
+    TdmsMapItem item = parse_map_item(given);
+    check_map_target(item.target, targets);
+    targets.push_back(item.target);
     items.push_back(std::move(item));
-    start = comma + 1;
   }
   return items;
 }

@@ -12,8 +12,10 @@
 
 #include "acquisition/rig/calibration_record.h"
 #include "acquisition/rig/calibration_store.h"
+#include "acquisition/session/import_units.h"
 #include "acquisition/session/session_file.h"
 #include "acquisition/session/tdms.h"
+#include "core/units.h"
 #include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
 #include "tests/support/tdms_writer.h"
@@ -237,7 +239,109 @@ TEST_CASE("Import units: a CSV's raw column imports through a record or a scale"
   // Without a conversion a CSV's force_V is not a force.
   run = testing::run_doorbench_shell("import run.csv --out u.h5", dir, units_dir_env(dir));
   CHECK(run.status == 1);
-  CHECK(run.err == "doorbench: run.csv:2: header lacks required column force_N\n");
+  CHECK(run.err ==
+        "doorbench: run.csv:2: header lacks required column force_N; the file's columns: time_s, "
+        "force_V, angle_rad (--map time=COLUMN,force=COLUMN,angle=COLUMN names a file's own "
+        "columns: docs/csv-format.md)\n");
+}
+
+TEST_CASE("Import: the units a CSV column's name states", "[csv]") {
+  CHECK(unit_stated_in_name("Force (V)") == "V");
+  CHECK(unit_stated_in_name("Rate [deg/s]") == "deg/s");
+  CHECK(unit_stated_in_name("Time ( s )") == "s");
+  CHECK(unit_stated_in_name("Force") == "");
+  CHECK(unit_stated_in_name("Force (V) filtered") == "");
+  CHECK(unit_stated_in_name("force_V") == "");
+  CHECK(unit_stated_in_name(")") == "");
+}
+
+// A logger's own CSV: its own column names with units in parentheses, the force in volts and
+// the angle in degrees, a column nobody maps. --map names the columns and --calibration and
+// --scale make them physical; the mistakes are answered word for word with the file's columns.
+TEST_CASE("Import: a CSV with its own column names imports through --map", "[csv][cli]") {
+  const testing::TempDir dir("import_csv_map");
+  std::string csv = "Time (s),Force (V),Angle [deg],Temperature (C)\n";
+  for (int k = 0; k < kVoltSamples; ++k) {
+    csv += format_csv_number(0.001 * k) + "," + format_csv_number(bridge_volts(k)) + "," +
+           format_csv_number(1e-3 * encoder_counts(k)) + ",21.5\n";
+  }
+  dir.write("log.csv", csv);
+  const doorbench::CalibrationStore store(dir / "store");
+  store.add(load_cell_record());
+  const std::string map = " --map 'time=Time (s),force=Force (V),angle=Angle [deg]'";
+  const std::string degrees = " --scale angle=" + format_csv_number(kRadPerDeg);
+  testing::DoorbenchRun run = testing::run_doorbench_shell(
+      "import log.csv --calibrations store --calibration force=load_cell-LC445-0193-v2" + map +
+          degrees + " --out r.h5",
+      dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  check_force_in_newtons(dir / "r.h5", "load_cell-LC445-0193-v2", kGainNPerV, kOffsetN);
+  const SessionReader session(dir / "r.h5");
+  CHECK(session.channel("angle").raw_unit == "deg");
+  const ChannelSlice angle = session.read("angle");
+  const std::vector<double> radians = session.physical("angle", angle);
+  REQUIRE(radians.size() == kVoltSamples);
+  for (int k = 0; k < kVoltSamples; ++k) {
+    const double expected = 1e-3 * encoder_counts(k) * kRadPerDeg;
+    CHECK(std::abs(radians[k] - expected) <= 1e-12 * std::abs(expected));
+  }
+  std::vector<std::string> names;  // the temperature column is not mapped: not imported
+  for (const ChannelInfo& channel : session.channels()) names.push_back(channel.name);
+  CHECK(names == std::vector<std::string>{"force", "angle"});
+  CHECK(session.read_group_attribute("import", "csv_map_force_column") == "Force (V)");
+  // --scale on a column that states no unit.
+  dir.write("plain.csv", "t (s),Load,Angle (rad)\n0,1,0\n0.001,2,0.001\n");
+  run = testing::run_doorbench_shell(
+      "import plain.csv --map 'time=t (s),force=Load,angle=Angle (rad)' --scale force=2 --out "
+      "p.h5",
+      dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(SessionReader(dir / "p.h5").channel("force").raw_unit == "unstated");
+
+  const auto refused = [&](const std::string& options) {
+    return testing::run_doorbench_shell("import log.csv" + options + " --out x.h5", dir,
+                                        units_dir_env(dir));
+  };
+  const std::string columns =
+      "; the file's columns: Time (s), Force (V), Angle [deg], Temperature (C)\n";
+  run = refused(map);
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: log.csv:1: --map force=Force (V): column 'Force (V)' is in 'V', not N "
+        "(convert it: --calibration force=RECORD or --scale force=GAIN[,OFFSET]; or map it as "
+        "an extra column whose name ends in its unit)" +
+            columns);
+  run = refused(" --map 'time=Time (s),force=Force (N),angle=Angle [deg]'");
+  CHECK(run.err == "doorbench: log.csv:1: --map force=Force (N): no column 'Force (N)'" + columns);
+  run = refused(" --map 'time=Time (s),force=Force (V),angle=Force (V)' --scale force=2");
+  CHECK(run.err ==
+        "doorbench: log.csv:1: --map angle=Force (V): column 'Force (V)' is mapped to force "
+        "already (one column, one target)" +
+            columns);
+  run = refused(
+      " --map 'time=Time (s),force=Force (V),angle=Angle [deg]' --calibrations store "
+      "--calibration angle=load_cell-LC445-0193-v2");
+  CHECK(run.status == 2);
+  run = refused(" --map 'time=Temperature (C),force=Force (V),angle=Angle [deg]' --scale force=2" +
+                degrees);
+  CHECK(run.err ==
+        "doorbench: log.csv:1: --map time=Temperature (C): column 'Temperature (C)' is in 'C', "
+        "not s (the time is read in seconds: convert the column)" +
+            columns);
+  run = refused(" --map 'time=Time (s),force'");
+  CHECK(run.status == 2);
+  CHECK(run.err ==
+        "doorbench: --map item 'force' is not TARGET=COLUMN (e.g. force=Force (N)); the file's "
+        "columns: Time (s), Force (V), Angle [deg], Temperature (C) (see doorbench import "
+        "--help)\n");
+  run = refused(" --map 'force=Force (V),angle=Angle [deg]' --scale force=2" + degrees);
+  CHECK(run.err ==
+        "doorbench: log.csv:1: header lacks required column time_s; the file's columns: Time "
+        "(s), Force (V), Angle [deg], Temperature (C) (--map time=COLUMN,force=COLUMN,"
+        "angle=COLUMN names a file's own columns: docs/csv-format.md)\n");
+  CHECK_FALSE(std::filesystem::exists(dir / "x.h5"));
 }
 
 TEST_CASE("Import: a TDMS file without timing imports with --rate-hz and --start-time",
