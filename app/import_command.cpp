@@ -47,11 +47,13 @@ struct ImportOptions {
   std::string operator_name, product_id, notes;
   // TDMS files: TARGET=GROUP/CHANNEL,... (acquisition/session/tdms.h); CSV files:
   // TARGET=COLUMN,... (acquisition/session/import_units.h).
-  std::string tdms_map;
-  bool keep_raw = false;     // TDMS files: the DAQmx scalers' raw values beside the scaled ones
-  double resample_hz = 0.0;  // > 0: the recording on a uniform clock of this rate
-  double rate_hz = 0.0;      // TDMS files: > 0, the rate of channels without wf_increment
-  std::string start_time;    // the session's start (ISO 8601 UTC); "": the file's, else now
+  std::string map;
+  bool keep_raw = false;  // TDMS files: the DAQmx scalers' raw values beside the scaled ones
+  std::string separator = "comma";  // CSV files: comma, semicolon or tab
+  bool decimal_comma = false;       // CSV files: ',' is the decimal point
+  double resample_hz = 0.0;         // > 0: the recording on a uniform clock of this rate
+  double rate_hz = 0.0;             // TDMS files: > 0, the rate of channels without wf_increment
+  std::string start_time;           // the session's start (ISO 8601 UTC); "": the file's, else now
   // Raw channels to physical units (acquisition/session/import_units.h).
   std::vector<std::string> scales, calibrations;
   std::string store_dir;  // --calibrations: the store --calibration's ids are in
@@ -80,18 +82,27 @@ Recording read_import(const ImportOptions& options) {
   }
   if (extension != ".tdms") {
     if (options.keep_raw) throw UsageError("--keep-raw is for TDMS files (*.tdms)");
+    CsvDialect dialect;
+    dialect.separator = options.separator == "semicolon" ? ';'
+                        : options.separator == "tab"     ? '\t'
+                                                         : ',';
+    dialect.decimal_comma = options.decimal_comma;
+    if (const std::string problem = dialect.validate(); !problem.empty()) throw UsageError(problem);
     if (options.rate_hz > 0) {
       throw UsageError("--rate-hz is for TDMS files (*.tdms): a CSV's time_s gives the time");
     }
     try {
-      return read_csv_import(options.csv_path, options.tdms_map, conversions);
+      return read_csv_import(options.csv_path, options.map, conversions, dialect);
     } catch (const CsvMapSyntaxError& error) {
       throw UsageError(error.what());
     }
   }
+  if (options.separator != "comma" || options.decimal_comma) {
+    throw UsageError("--separator and --decimal-comma are for CSV files");
+  }
   // The file first: a missing or malformed --map is answered with the channels to map.
   const TdmsFile file = read_tdms(options.csv_path);
-  if (options.tdms_map.empty()) {
+  if (options.map.empty()) {
     throw UsageError(
         "a TDMS file needs --map force=GROUP/CHANNEL,angle=GROUP/CHANNEL (or rate=); the file's "
         "channels: " +
@@ -99,7 +110,7 @@ Recording read_import(const ImportOptions& options) {
   }
   std::vector<TdmsMapItem> map;
   try {
-    map = parse_tdms_map(options.tdms_map);
+    map = parse_tdms_map(options.map);
   } catch (const std::invalid_argument& error) {
     throw UsageError(std::string(error.what()) +
                      "; the file's channels: " + tdms_channel_list(file));
@@ -171,11 +182,20 @@ void add_import_command(CLI::App& app, Action& action) {
   import_command->add_option("--operator", import->operator_name, "Who recorded it");
   import_command->add_option("--product", import->product_id, "The door or product");
   import_command->add_option("--notes", import->notes, "Free text kept in the session");
-  import_command->add_option("--map", import->tdms_map,
+  import_command->add_option("--map", import->map,
                              "The file's own channels: force=GROUP/CHANNEL,angle=GROUP/CHANNEL"
                              "[,rate=...][,time=...][,NAME_UNIT=...] for TDMS; "
                              "time=COLUMN,force=COLUMN,angle=COLUMN[,...] for CSV (a CSV's "
                              "other columns are left out)");
+  import_command
+      ->add_option("--separator", import->separator,
+                   "CSV files: what separates the fields: comma (the exchange format), semicolon "
+                   "or tab (docs/csv-format.md)")
+      ->check(CLI::IsMember({"comma", "semicolon", "tab"}))
+      ->capture_default_str();
+  import_command->add_flag("--decimal-comma", import->decimal_comma,
+                           "CSV files: ',' is the decimal point (1,5 for 1.5), with --separator "
+                           "semicolon or tab");
   import_command->add_flag("--keep-raw", import->keep_raw,
                            "TDMS files: also each mapped channel's DAQmx raw values as stored "
                            "(ADC counts), as columns TARGET_raw");

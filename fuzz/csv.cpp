@@ -1,7 +1,7 @@
-// Fuzzes the CSV exchange format (acquisition/session/csv_table.h, recording_csv.h): any text gives
-// a table and a recording, or a CsvError; nothing else may escape, crash or be undefined.
-// A recording read back is written and read again: the writer must accept what the reader
-// gave and give the same samples back.
+// Fuzzes the CSV exchange format (acquisition/session/csv_table.h, recording_csv.h) and the
+// dialects import reads: any text gives a table and a recording, or a CsvError; nothing else
+// may escape, crash or be undefined. A recording read back is written and read again: the
+// writer must accept what the reader gave and give the same samples back.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -25,9 +25,14 @@ bool same(const std::vector<double>& a, const std::vector<double>& b) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  try {
-    doorbench::parse_csv_table(text, "fuzz.csv");
-  } catch (const doorbench::CsvError&) {
+  // The exchange format, and the dialects doorbench import reads (--separator, --decimal-comma).
+  for (const doorbench::CsvDialect dialect :
+       {doorbench::CsvDialect{}, doorbench::CsvDialect{';', true},
+        doorbench::CsvDialect{'\t', false}}) {
+    try {
+      doorbench::parse_csv_table(text, "fuzz.csv", doorbench::EmptyCells::kMissing, dialect);
+    } catch (const doorbench::CsvError&) {
+    }
   }
   doorbench::Recording recording;
   try {

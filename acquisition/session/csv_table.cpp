@@ -151,14 +151,29 @@ void read_metadata_line(std::string_view line, int line_number, std::string_view
   table.metadata_line_numbers.push_back(line_number);
 }
 
+// The separator as messages name it.
+std::string separator_name(char separator) {
+  return separator == '\t' ? "a tab" : std::string("'") + separator + "'";
+}
+
 // What is wrong with a column name, or an empty string when nothing is.
-std::string column_name_problem(std::string_view name) {
+std::string column_name_problem(std::string_view name, const CsvDialect& dialect) {
   if (name.empty()) return "is empty";
   if (name.find('"') != std::string_view::npos) {
     return "contains '\"' (quoted fields are not supported)";
   }
-  if (name.find(';') != std::string_view::npos || name.find('\t') != std::string_view::npos) {
-    return "contains ';' or a tab (fields must be separated by commas)";
+  if (dialect.separator == ',') {
+    if (name.find(';') != std::string_view::npos || name.find('\t') != std::string_view::npos) {
+      return "contains ';' or a tab (fields must be separated by commas; doorbench import reads "
+             "other separators with --separator)";
+    }
+  } else {
+    for (const char other : {';', '\t'}) {
+      if (other != dialect.separator && name.find(other) != std::string_view::npos) {
+        return "contains " + separator_name(other) + " (fields are separated by " +
+               separator_name(dialect.separator) + " here, as --separator says)";
+      }
+    }
   }
   if (const std::size_t at = control_character_at(name); at != std::string_view::npos) {
     return "contains the control character " + printable(name.substr(at, 1));
@@ -167,13 +182,14 @@ std::string column_name_problem(std::string_view name) {
   return {};
 }
 
-void read_header(std::string_view line, int line_number, std::string_view source, CsvTable& table) {
+void read_header(std::string_view line, int line_number, std::string_view source,
+                 const CsvDialect& dialect, CsvTable& table) {
   table.header_line = line_number;
   std::size_t start = 0;
   while (true) {
-    const auto comma = line.find(',', start);
+    const auto comma = line.find(dialect.separator, start);
     const std::string_view name = trim(line.substr(start, comma - start));
-    const std::string problem = column_name_problem(name);
+    const std::string problem = column_name_problem(name, dialect);
     if (!problem.empty()) {
       throw CsvError(source, line_number,
                      "column " + std::to_string(table.column_names.size() + 1) + " name " +
@@ -189,21 +205,38 @@ void read_header(std::string_view line, int line_number, std::string_view source
   }
 }
 
+// A cell with a decimal comma as parse_cell reads it ("1,5" as "1.5"); false when it holds a
+// '.', which the dialect does not read (a thousands separator, or a file of the other kind).
+bool with_decimal_point(std::string_view cell, std::string& out) {
+  if (cell.find('.') != std::string_view::npos) return false;
+  out.assign(cell);
+  std::replace(out.begin(), out.end(), ',', '.');
+  return true;
+}
+
 void read_data_row(std::string_view line, int line_number, std::string_view source,
-                   EmptyCells empty_cells, CsvTable& table) {
+                   EmptyCells empty_cells, const CsvDialect& dialect, CsvTable& table) {
   const std::size_t column_count = table.column_names.size();
-  const std::size_t field_count = 1 + std::count(line.begin(), line.end(), ',');
+  const std::size_t field_count = 1 + std::count(line.begin(), line.end(), dialect.separator);
   if (field_count != column_count) {
     throw CsvError(source, line_number,
                    "expected " + std::to_string(column_count) + " fields, found " +
                        std::to_string(field_count));
   }
   std::size_t start = 0;
+  std::string decimal_point_cell;
   for (std::size_t column = 0; column < column_count; ++column) {
-    const auto comma = line.find(',', start);
+    const auto comma = line.find(dialect.separator, start);
     const std::string_view cell = line.substr(start, comma - start);
+    if (dialect.decimal_comma && !with_decimal_point(cell, decimal_point_cell)) {
+      throw CsvError(source, line_number,
+                     "column " + table.column_names[column] + ": " + quoted(trim(cell)) +
+                         " holds a '.' (with --decimal-comma the decimal point is ',', and "
+                         "thousands separators are not read)");
+    }
     double value = 0.0;
-    CellProblem problem = parse_cell(cell, value);
+    CellProblem problem =
+        parse_cell(dialect.decimal_comma ? std::string_view(decimal_point_cell) : cell, value);
     if (problem == CellProblem::kEmpty && empty_cells == EmptyCells::kMissing) {
       value = std::numeric_limits<double>::quiet_NaN();  // a missing sample
       problem = CellProblem::kNone;
@@ -222,6 +255,10 @@ void read_data_row(std::string_view line, int line_number, std::string_view sour
           break;
         default:
           detail += quoted(trim(cell)) + " is not a number";
+          if (dialect.separator != ',' && !dialect.decimal_comma &&
+              cell.find(',') != std::string_view::npos) {
+            detail += " (a decimal comma? give --decimal-comma)";
+          }
           break;
       }
       throw CsvError(source, line_number, detail);
@@ -271,7 +308,7 @@ void check_columns_for_writing(const std::vector<std::string>& column_names,
   std::unordered_set<std::string_view> names;
   for (std::size_t c = 0; c < column_names.size(); ++c) {
     const std::string& name = column_names[c];
-    const std::string problem = column_name_problem(name);
+    const std::string problem = column_name_problem(name, CsvDialect{});
     require(problem.empty(), "column name '" + name + "' " + problem);
     require(trim(name) == name, "column name '" + name + "' has leading or trailing spaces");
     require(name.find(',') == std::string::npos && !has_line_break(name),
@@ -345,7 +382,22 @@ std::string format_csv_number(double value) {
   return std::string(buffer, end);
 }
 
-CsvTable parse_csv_table(std::string_view text, std::string_view source, EmptyCells empty_cells) {
+std::string CsvDialect::validate() const {
+  if (separator != ',' && separator != ';' && separator != '\t') {
+    return "the separator must be ',', ';' or a tab";
+  }
+  if (decimal_comma && separator == ',') {
+    return "--decimal-comma needs --separator semicolon or tab (a comma cannot both separate "
+           "fields and mark decimals)";
+  }
+  return {};
+}
+
+CsvTable parse_csv_table(std::string_view text, std::string_view source, EmptyCells empty_cells,
+                         const CsvDialect& dialect) {
+  if (const std::string problem = dialect.validate(); !problem.empty()) {
+    throw std::invalid_argument(problem);
+  }
   if (const std::string pointer = lfs_pointer_description(text); !pointer.empty()) {
     throw CsvError(source, 0, pointer);
   }
@@ -359,7 +411,7 @@ CsvTable parse_csv_table(std::string_view text, std::string_view source, EmptyCe
     if (!is_comment(line)) break;
     read_metadata_line(line, reader.line_number(), source, table);
   }
-  read_header(line, reader.line_number(), source, table);
+  read_header(line, reader.line_number(), source, dialect, table);
 
   // Reserving for every remaining line saves the columns' regrowth on big files.
   const auto lines_left =
@@ -375,12 +427,13 @@ CsvTable parse_csv_table(std::string_view text, std::string_view source, EmptyCe
       throw CsvError(source, reader.line_number(),
                      "'#' line after the header (metadata must come before the header row)");
     }
-    read_data_row(line, reader.line_number(), source, empty_cells, table);
+    read_data_row(line, reader.line_number(), source, empty_cells, dialect, table);
   }
   return table;
 }
 
-CsvTable read_csv_file(const std::filesystem::path& path, EmptyCells empty_cells) {
+CsvTable read_csv_file(const std::filesystem::path& path, EmptyCells empty_cells,
+                       const CsvDialect& dialect) {
   const std::string source = path.string();
   std::error_code error;
   if (std::filesystem::is_directory(path, error)) {
@@ -391,7 +444,7 @@ CsvTable read_csv_file(const std::filesystem::path& path, EmptyCells empty_cells
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw CsvError(source, 0, "read error");
-  return parse_csv_table(text.str(), source, empty_cells);
+  return parse_csv_table(text.str(), source, empty_cells, dialect);
 }
 
 void write_csv(std::ostream& out, const CsvMetadata& metadata,

@@ -57,14 +57,32 @@ struct CsvTable {
 // caller decides which columns may hold one.
 enum class EmptyCells { kRefuse, kMissing };
 
-// Parses `text`; `source` names it in error messages (usually the file's path).
+// How a CSV from elsewhere separates its fields and writes its decimal point (doorbench
+// import --separator, --decimal-comma): a spreadsheet in a European locale writes "1,5;2,25",
+// LabVIEW's spreadsheet files separate with tabs. The default is the exchange format's: commas,
+// and '.' as the decimal point.
+struct CsvDialect {
+  char separator = ',';        // ',', ';' or '\t'
+  bool decimal_comma = false;  // ',' is the decimal point; a '.' in a cell is refused
+  // "" when usable, else what is wrong: "--decimal-comma needs --separator semicolon or tab (a
+  // comma cannot both separate fields and mark decimals)".
+  std::string validate() const;
+};
+
+// Parses `text`; `source` names it in error messages (usually the file's path). With a
+// dialect other than the default, fields are split at its separator and, with decimal_comma,
+// a cell's ',' is its decimal point ("column force: '1.234' holds a '.' (with --decimal-comma
+// the decimal point is ',', and thousands separators are not read)"). Throws
+// std::invalid_argument when the dialect is not valid.
 CsvTable parse_csv_table(std::string_view text, std::string_view source,
-                         EmptyCells empty_cells = EmptyCells::kRefuse);
+                         EmptyCells empty_cells = EmptyCells::kRefuse,
+                         const CsvDialect& dialect = {});
 
 // Reads and parses a file; the path is the source in messages. A file that cannot be read
 // throws CsvError "PATH: cannot open for reading".
 CsvTable read_csv_file(const std::filesystem::path& path,
-                       EmptyCells empty_cells = EmptyCells::kRefuse);
+                       EmptyCells empty_cells = EmptyCells::kRefuse,
+                       const CsvDialect& dialect = {});
 
 // Parses `text` (spaces and tabs around it allowed) as a whole, finite double the way data
 // cells are parsed; nullopt when it is anything else.

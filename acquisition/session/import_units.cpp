@@ -193,8 +193,9 @@ void apply_csv_map(CsvTable& table, const std::vector<CsvMapItem>& map,
 }
 
 Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
-                          const std::vector<ImportConversion>& conversions) {
-  CsvTable table = read_csv_file(path, EmptyCells::kMissing);
+                          const std::vector<ImportConversion>& conversions,
+                          const CsvDialect& dialect) {
+  CsvTable table = read_csv_file(path, EmptyCells::kMissing, dialect);
   const std::string source = path.string();
   const std::string columns = csv_column_list(table);
   std::vector<CsvMapItem> map;

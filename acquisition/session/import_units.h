@@ -104,14 +104,15 @@ class CsvMapSyntaxError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
-// A CSV file as `doorbench import` reads it: empty cells as lost samples, its own columns
-// named by `map_text` (parse_csv_map, apply_csv_map; empty: the exchange format's names), raw
-// columns through `conversions` (take_raw_columns). Throws CsvMapSyntaxError for a malformed
+// A CSV file as `doorbench import` reads it: in `dialect`, empty cells as lost samples, its own
+// columns named by `map_text` (parse_csv_map, apply_csv_map; empty: the exchange format's names),
+// raw columns through `conversions` (take_raw_columns). Throws CsvMapSyntaxError for a malformed
 // map, CsvError and std::invalid_argument as those functions do; a column the
 // recording lacks or cannot take ("header lacks required column time_s") is reported at the
 // header's line with the file's own columns and how --map names them.
 Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
-                          const std::vector<ImportConversion>& conversions);
+                          const std::vector<ImportConversion>& conversions,
+                          const CsvDialect& dialect = {});
 
 // The columns of a table, for messages: "time_s, force_V, angle_rad".
 std::string csv_column_list(const CsvTable& table);

@@ -274,7 +274,8 @@ TEST_CASE("table format errors name the source and line", "[csv][errors]") {
                         "run.csv:1: column 1 name '0' is a number (is the header row missing?)");
     REQUIRE_THROWS_WITH(parse("time_s;force_N;angle_rad\n"),
                         "run.csv:1: column 1 name 'time_s;force_N;angle_rad' contains ';' or a "
-                        "tab (fields must be separated by commas)");
+                        "tab (fields must be separated by commas; doorbench import reads other "
+                        "separators with --separator)");
     REQUIRE_THROWS_WITH(
         parse("\"time_s\",force_N\n"),
         "run.csv:1: column 1 name '\"time_s\"' contains '\"' (quoted fields are not supported)");
@@ -313,6 +314,53 @@ TEST_CASE("table format errors name the source and line", "[csv][errors]") {
         parse("time_s,force_N,angle_rad\r0,1,2\r"),
         "run.csv:1: carriage return inside the line (line endings must be \\n or \\r\\n)");
   }
+}
+
+// The dialects of CSV files from elsewhere: a spreadsheet's semicolons with decimal commas,
+// LabVIEW's tabs. Each reads as the same table in the exchange format does, and a file read in
+// the wrong dialect is refused with a hint, word for word.
+TEST_CASE("CSV dialects: semicolons with decimal commas, and tabs", "[csv][errors]") {
+  using doorbench::CsvDialect;
+  using doorbench::parse_csv_table;
+  const CsvDialect semicolon{';', true}, tab{'\t', false};
+  const doorbench::CsvTable comma_table =
+      parse_csv_table("# a: 1,5\nTime (s),Force (N)\n0,1.5\n0.001,-2.25e-3\n", "run.csv");
+  const doorbench::CsvTable semicolon_table =
+      parse_csv_table("# a: 1,5\r\nTime (s);Force (N)\r\n0;1,5\r\n0,001 ; -2,25e-3\r\n", "run.csv",
+                      doorbench::EmptyCells::kRefuse, semicolon);
+  const doorbench::CsvTable tab_table =
+      parse_csv_table("# a: 1,5\nTime (s)\tForce (N)\n0\t1.5\n0.001\t-2.25e-3\n", "run.csv",
+                      doorbench::EmptyCells::kRefuse, tab);
+  for (const doorbench::CsvTable* table : {&semicolon_table, &tab_table}) {
+    CHECK(table->column_names == comma_table.column_names);
+    CHECK(table->columns == comma_table.columns);
+    CHECK(table->metadata == comma_table.metadata);
+    CHECK(table->line_numbers == comma_table.line_numbers);
+  }
+  // A missing sample is an empty cell in any dialect.
+  const doorbench::CsvTable missing =
+      parse_csv_table("t_s;f_N\n0;\n", "run.csv", doorbench::EmptyCells::kMissing, semicolon);
+  CHECK(std::isnan(missing.columns[1][0]));
+  REQUIRE_THROWS_WITH(
+      parse_csv_table("t_s;f_N\n0;1.234,5\n", "run.csv", doorbench::EmptyCells::kRefuse, semicolon),
+      "run.csv:2: column f_N: '1.234,5' holds a '.' (with --decimal-comma the decimal point is "
+      "',', and thousands separators are not read)");
+  REQUIRE_THROWS_WITH(parse_csv_table("t_s;f_N\n0;1,5\n", "run.csv", doorbench::EmptyCells::kRefuse,
+                                      CsvDialect{';', false}),
+                      "run.csv:2: column f_N: '1,5' is not a number (a decimal comma? give "
+                      "--decimal-comma)");
+  REQUIRE_THROWS_WITH(
+      parse_csv_table("t_s\tf_N\n0\t1\n", "run.csv", doorbench::EmptyCells::kRefuse, semicolon),
+      "run.csv:1: column 1 name 't_s\\tf_N' contains a tab (fields are separated by ';' here, as "
+      "--separator says)");
+  REQUIRE_THROWS_WITH(
+      parse_csv_table("t_s;f_N\n0;1\n", "run.csv", doorbench::EmptyCells::kRefuse, tab),
+      "run.csv:1: column 1 name 't_s;f_N' contains ';' (fields are separated by a tab here, as "
+      "--separator says)");
+  REQUIRE_THROWS_WITH(parse_csv_table("t_s,f_N\n", "run.csv", doorbench::EmptyCells::kRefuse,
+                                      CsvDialect{',', true}),
+                      "--decimal-comma needs --separator semicolon or tab (a comma cannot both "
+                      "separate fields and mark decimals)");
 }
 
 TEST_CASE("recording rule errors name the source and line", "[csv][errors]") {

@@ -4,6 +4,7 @@
 // --scale; the session keeps the volts as its raw values and names the record, and its
 // physical values are raw × gain + offset to 1e-12. The same for a CSV's force_V column.
 // The mistakes a user makes are answered word for word.
+#include <algorithm>
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
@@ -342,6 +343,52 @@ TEST_CASE("Import: a CSV with its own column names imports through --map", "[csv
         "(s), Force (V), Angle [deg], Temperature (C) (--map time=COLUMN,force=COLUMN,"
         "angle=COLUMN names a file's own columns: docs/csv-format.md)\n");
   CHECK_FALSE(std::filesystem::exists(dir / "x.h5"));
+}
+
+// A spreadsheet's export in a European locale (semicolons, decimal commas, CRLF) and a LabVIEW
+// spreadsheet file (tabs) of the same log import to the same session as its comma file.
+TEST_CASE("Import: semicolon and tab files import as their comma file does", "[csv][cli]") {
+  const testing::TempDir dir("import_csv_dialects");
+  std::string comma = "Time (s),Force (V),Angle (rad)\n";
+  std::string semicolon = "Time (s);Force (V);Angle (rad)\r\n";
+  std::string tab = "Time (s)\tForce (V)\tAngle (rad)\n";
+  for (int k = 0; k < kVoltSamples; ++k) {
+    const std::string cells[] = {format_csv_number(0.001 * k), format_csv_number(bridge_volts(k)),
+                                 format_csv_number(2.5e-5 * encoder_counts(k))};
+    comma += cells[0] + "," + cells[1] + "," + cells[2] + "\n";
+    tab += cells[0] + "\t" + cells[1] + "\t" + cells[2] + "\n";
+    for (int c = 0; c < 3; ++c) {
+      std::string cell = cells[c];
+      std::replace(cell.begin(), cell.end(), '.', ',');
+      semicolon += cell + (c < 2 ? ";" : "\r\n");
+    }
+  }
+  dir.write("log.csv", comma);
+  dir.write("log-it.csv", semicolon);
+  dir.write("log.txt", tab);
+  const std::string map =
+      " --map 'time=Time (s),force=Force (V),angle=Angle (rad)' --scale force=65.377,-0.8125";
+  for (const auto& [file, options] : std::vector<std::pair<std::string, std::string>>{
+           {"log.csv", ""},
+           {"log-it.csv", " --separator semicolon --decimal-comma"},
+           {"log.txt", " --separator tab"}}) {
+    const testing::DoorbenchRun run = testing::run_doorbench_shell(
+        "import " + file + options + map + " --out " + file + ".h5", dir, units_dir_env(dir));
+    INFO(file << ": " << run.err);
+    REQUIRE(run.status == 0);
+    check_force_in_newtons(dir / (file + ".h5"), "scale-force", 65.377, -0.8125);
+    const SessionReader session(dir / (file + ".h5"));
+    const std::vector<double> angle = session.physical("angle", session.read("angle"));
+    REQUIRE(angle.size() == kVoltSamples);
+    for (int k = 0; k < kVoltSamples; ++k) CHECK(angle[k] == 2.5e-5 * encoder_counts(k));
+  }
+  const testing::DoorbenchRun wrong =
+      testing::run_doorbench_shell("import log-it.csv --out x.h5", dir, units_dir_env(dir));
+  CHECK(wrong.status == 1);
+  CHECK(wrong.err ==
+        "doorbench: log-it.csv:1: column 1 name 'Time (s);Force (V);Angle (rad)' contains ';' or "
+        "a tab (fields must be separated by commas; doorbench import reads other separators with "
+        "--separator)\n");
 }
 
 TEST_CASE("Import: a TDMS file without timing imports with --rate-hz and --start-time",
