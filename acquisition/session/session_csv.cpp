@@ -5,6 +5,7 @@
 #include <limits>
 #include <map>
 #include <optional>
+#include <set>
 #include <stdexcept>
 #include <system_error>
 
@@ -551,6 +552,19 @@ void write_recording_session(const Recording& recording, const std::filesystem::
   writer.close();
 }
 
+// Each metadata key becomes one attribute of the import group, so a key may come once. The
+// file's own keys are unique (parse_csv_table checks), so a repeat is a key the file has and
+// import adds itself (--map, --resample-hz, a TDMS file's timing): refused before anything is
+// written, naming the file and the key.
+void check_metadata_keys_once(const Recording& recording) {
+  std::set<std::string> keys;
+  for (const auto& [key, value] : recording.metadata) {
+    if (key.empty() || keys.insert(key).second) continue;
+    throw SessionError(recording.source + ": metadata key '" + key +
+                       "' is one import writes itself; rename the file's key");
+  }
+}
+
 }  // namespace
 
 void recording_to_session(const Recording& recording, const std::filesystem::path& path,
@@ -558,6 +572,7 @@ void recording_to_session(const Recording& recording, const std::filesystem::pat
   if (std::filesystem::exists(path)) {
     throw SessionError(path.string() + ": already exists (sessions are never overwritten)");
   }
+  check_metadata_keys_once(recording);
   // Whole or not at all (acquisition/session/output_file.h): the session is written beside its
   // name and renamed into place once closed.
   const std::filesystem::path partial = partial_path_for(path);

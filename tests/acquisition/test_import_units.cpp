@@ -342,7 +342,18 @@ TEST_CASE("Import: a CSV with its own column names imports through --map", "[csv
         "doorbench: log.csv:1: header lacks required column time_s; the file's columns: Time "
         "(s), Force (V), Angle [deg], Temperature (C) (--map time=COLUMN,force=COLUMN,"
         "angle=COLUMN names a file's own columns: docs/csv-format.md)\n");
-  CHECK_FALSE(std::filesystem::exists(dir / "x.h5"));
+  // A key of the file's own metadata that import writes itself (the column --map took).
+  dir.write("keyed.csv", "# map_force_column: Load\n" + csv);
+  run = testing::run_doorbench_shell(
+      "import keyed.csv" + map + " --scale force=2" + degrees + " --out x.h5", dir,
+      units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: keyed.csv: metadata key 'map_force_column' is one import writes itself; "
+        "rename the file's key\n");
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path)) {
+    CHECK(entry.path().filename().string().rfind("x.h5", 0) == std::string::npos);  // no partial
+  }
 }
 
 // A spreadsheet's export in a European locale (semicolons, decimal commas, CRLF) and a LabVIEW
