@@ -192,6 +192,28 @@ void apply_csv_map(CsvTable& table, const std::vector<CsvMapItem>& map,
   table.columns = std::move(columns);
 }
 
+namespace {
+
+// recording_from_table_with_columns with the columns to name given: import's are the file's
+// own names, from before --map renamed them.
+Recording recording_from_table_naming(const CsvTable& table, std::string_view source,
+                                      const std::string& columns, std::string_view hint) {
+  try {
+    return recording_from_table(table, source);
+  } catch (const CsvError& error) {
+    if (error.line() != table.header_line) throw;
+    throw CsvError(source, error.line(),
+                   error.detail() + "; the file's columns: " + columns + " " + std::string(hint));
+  }
+}
+
+}  // namespace
+
+Recording recording_from_table_with_columns(const CsvTable& table, std::string_view source,
+                                            std::string_view hint) {
+  return recording_from_table_naming(table, source, csv_column_list(table), hint);
+}
+
 Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
                           const std::vector<ImportConversion>& conversions,
                           const CsvDialect& dialect) {
@@ -208,16 +230,7 @@ Recording read_csv_import(const std::filesystem::path& path, const std::string& 
   }
   if (!map.empty()) apply_csv_map(table, map, conversions, source);
   std::map<std::string, CalibrationRecord> records = take_raw_columns(table, conversions, source);
-  Recording recording;
-  try {
-    recording = recording_from_table(table, source);
-  } catch (const CsvError& error) {
-    if (error.line() != table.header_line) throw;
-    throw CsvError(source, error.line(),
-                   error.detail() + "; the file's columns: " + columns +
-                       " (--map time=COLUMN,force=COLUMN,angle=COLUMN names a file's own "
-                       "columns: docs/csv-format.md)");
-  }
+  Recording recording = recording_from_table_naming(table, source, columns, kCsvMapHint);
   recording.calibrations = std::move(records);
   return recording;
 }

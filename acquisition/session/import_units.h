@@ -117,4 +117,20 @@ Recording read_csv_import(const std::filesystem::path& path, const std::string& 
 // The columns of a table, for messages: "time_s, force_V, angle_rad".
 std::string csv_column_list(const CsvTable& table);
 
+// recording_from_table, except that a column the recording lacks or cannot take at the header's
+// line is rethrown as a CsvError that adds the file's own columns and then `hint` ("header lacks
+// required column time_s; the file's columns: Time (s), Load (N) HINT"): a file with its own
+// column names is what the reader most likely has.
+Recording recording_from_table_with_columns(const CsvTable& table, std::string_view source,
+                                            std::string_view hint);
+
+// The hints for a file whose columns are not the exchange format's: `doorbench import`'s
+// (--map names them), and that of a command that reads only the exchange format (import first).
+inline constexpr std::string_view kCsvMapHint =
+    "(--map time=COLUMN,force=COLUMN,angle=COLUMN names a file's own columns: "
+    "docs/csv-format.md)";
+inline constexpr std::string_view kCsvImportFirstHint =
+    "(a file with its own column names is read through doorbench import FILE --map "
+    "time=COLUMN,force=COLUMN,angle=COLUMN --out SESSION.h5 first: docs/csv-format.md)";
+
 }  // namespace doorbench

@@ -4,6 +4,7 @@
 #include <fstream>
 #include <stdexcept>
 
+#include "acquisition/session/import_units.h"
 #include "acquisition/session/recording_csv.h"
 #include "acquisition/session/session_csv.h"
 #include "acquisition/session/session_file.h"
@@ -30,8 +31,10 @@ PreparedData load_prepared_data(const std::string& path,
   }
   // Empty cells of a CSV are lost samples. A session is prepare_session's reading, kept
   // here to name a channel cut short (its cells are missing from its end).
-  const Recording recording = session ? session_to_recording(SessionReader(path))
-                                      : read_recording_csv(path, EmptyCells::kMissing);
+  const Recording recording =
+      session ? session_to_recording(SessionReader(path))
+              : recording_from_table_with_columns(read_csv_file(path, EmptyCells::kMissing), path,
+                                                  kCsvImportFirstHint);
   PreparedData data = prepare(recording, preprocessing);
   for (const auto& [key, value] : recording.metadata) {
     if (key != kCutShortKey) continue;

@@ -23,7 +23,8 @@ inline constexpr std::string_view kCutShortWarning = "a channel ends before the 
 
 // The recording at `path`, prepared. A file named *.h5 or *.hdf5 that is not HDF5 is refused
 // ("PATH: not an HDF5 file ..."). A handle radius the recording states gets its origin named
-// for the file's kind (PreparedData::handle_radius_origin).
+// for the file's kind (PreparedData::handle_radius_origin). A CSV whose columns are not the
+// exchange format's is refused at its header's line with its columns and how to import it.
 PreparedData load_prepared_data(const std::string& path,
                                 const PreprocessingOptions& preprocessing = {});
 

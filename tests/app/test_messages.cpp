@@ -86,6 +86,21 @@ TEST_CASE("Messages: fit on a .h5 file that is not HDF5 says so", "[messages][cl
             "recording is read only under another name)\n");
 }
 
+TEST_CASE("Messages: fit on a logger's own CSV names its columns and how to import it",
+          "[messages][cli]") {
+  const TempDir dir("messages_own_columns");
+  dir.write("log.csv", "# operator: P03\nTime (s),Force (N),Angle (rad)\n0,1,0.1\n0.01,1,0.1\n");
+  const DoorbenchRun run =
+      run_doorbench_shell("fit log.csv --out out", dir, "env -C '" + dir.path.string() + "'");
+  CHECK(run.status == 1);
+  CHECK(last_line(run.err) ==
+        "doorbench: log.csv:2: header lacks required column time_s; the file's columns: Time (s), "
+        "Force (N), Angle (rad) (a file with its own column names is read through doorbench "
+        "import FILE --map time=COLUMN,force=COLUMN,angle=COLUMN --out SESSION.h5 first: "
+        "docs/csv-format.md)\n");
+  CHECK_FALSE(std::filesystem::exists(dir / "out"));
+}
+
 TEST_CASE("Messages: a session's broken explicit times name the dataset and sample",
           "[messages][cli][session]") {
   const TempDir dir("messages_times");
