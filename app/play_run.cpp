@@ -69,6 +69,7 @@ haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& req
                                   });
   }
   const bool tty = isatty(STDERR_FILENO) != 0;
+  const char* command_unit = haptic::device_units(playback.loop().mapping().kinematics()).force;
   int calls = 0;
   bool signal_reported = false;
   haptic::PlaybackSummary summary =
@@ -87,10 +88,10 @@ haptic::PlaybackSummary play_into(const DoorModel& model, const PlayRequest& req
           const double rate_hz = status.time_s > 0 ? counters.ticks / status.time_s : 0.0;
           std::fprintf(stderr,
                        "%s%6.1f s  %7.1f Hz  θ %6.1f°  ω %6.1f°/s  hand %6.1f N  command %6.1f "
-                       "N  set %d  safety %s%s",
+                       "%s  set %d  safety %s%s",
                        tty ? "\r" : "", status.time_s, rate_hz, status.theta_rad * kDegPerRad,
                        status.omega_rad_s * kDegPerRad, status.user_force_N,
-                       status.commanded_force_N, status.parameter_set,
+                       status.commanded_force_N, command_unit, status.parameter_set,
                        std::string(haptic::to_string(playback.loop().safety_state())).c_str(),
                        tty ? "   " : "\n");
         }

@@ -37,6 +37,19 @@ class DeviceError : public std::runtime_error {
 
 enum class Kinematics { kCartesian3, kRotary1 };
 
+// The units of a device's own quantities (its position, velocity and force, as DeviceSample and
+// DeviceLimits hold them): a Cartesian device's m, m/s and N; a rotary device's rad, rad/s and
+// N*m. Sessions label their device channels with them and reports print them.
+struct DeviceUnits {
+  const char* position;
+  const char* velocity;
+  const char* force;
+};
+constexpr DeviceUnits device_units(Kinematics kinematics) {
+  return kinematics == Kinematics::kRotary1 ? DeviceUnits{"rad", "rad/s", "N*m"}
+                                            : DeviceUnits{"m", "m/s", "N"};
+}
+
 // One reading of the device.
 struct DeviceSample {
   // Seconds on the host's CLOCK_MONOTONIC (or the simulated clock) when the reading was

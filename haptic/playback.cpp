@@ -24,10 +24,11 @@ std::string PlaybackSummary::brief_report() const {
   std::ostringstream text;
   text.precision(4);
   text << ticks << " ticks over " << duration_s << " s into " << session_path.string()
-       << "; max commanded force " << max_commanded_force << ", arc error radial/axial max "
-       << max_radial_error_m * 1e3 << "/" << max_axial_error_m * 1e3 << " mm; " << parameter_changes
-       << " parameter changes; " << clipped_ticks << " ticks clipped; " << records_dropped
-       << " records dropped; safety " << to_string(final_state);
+       << "; max commanded force " << max_commanded_force << " " << force_unit
+       << ", arc error radial/axial max " << max_radial_error_m * 1e3 << "/"
+       << max_axial_error_m * 1e3 << " mm; " << parameter_changes << " parameter changes; "
+       << clipped_ticks << " ticks clipped; " << records_dropped << " records dropped; safety "
+       << to_string(final_state);
   if (!safety_events.empty()) {
     // Each kind once, in order of first appearance, with its count.
     text << " (events:";
@@ -220,6 +221,7 @@ PlaybackSummary Playback::finish(std::optional<TimingReport> timing, const std::
   const ChannelSlice x = session.read("commanded_force_x");
   const ChannelSlice y = session.read("commanded_force_y");
   const ChannelSlice z = session.read("commanded_force_z");
+  summary.force_unit = session.channel("commanded_force_x").unit;
   for (std::size_t i = 0; i < x.raw.size(); ++i) {
     summary.max_commanded_force =
         std::max(summary.max_commanded_force,

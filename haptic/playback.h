@@ -50,7 +50,8 @@ struct PlaybackSummary {
   std::filesystem::path session_path;
   std::uint64_t ticks = 0;
   double duration_s = 0.0;
-  double max_commanded_force = 0.0;  // N (rotary: N*m)
+  double max_commanded_force = 0.0;  // in force_unit
+  std::string force_unit = "N";      // the device's (device_units): N, or N*m for a rotary one
   double max_radial_error_m = 0.0, max_axial_error_m = 0.0;
   std::uint64_t clipped_ticks = 0, records_dropped = 0, parameter_changes = 0;
   SafetyState final_state = SafetyState::kStarting;

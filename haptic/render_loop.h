@@ -115,7 +115,8 @@ class RenderLoop {
   RenderLoopCounters counters() const noexcept;
   // The newest tick's state for status lines (any thread; may tear between fields).
   struct Status {
-    double time_s, theta_rad, omega_rad_s, user_force_N, commanded_force_N;
+    double time_s, theta_rad, omega_rad_s, user_force_N;
+    double commanded_force_N;  // the command along the arc (a rotary device: its torque, N*m)
     int parameter_set;
   };
   Status status() const noexcept;

@@ -14,7 +14,8 @@ namespace {
 
 constexpr std::size_t kBufferTicks = 4096;
 
-// The channels, in the order of tick_value() below.
+// The channels, in the order of tick_value() below. The device's position, velocity and forces
+// carry a Cartesian device's units here; a rotary device's are its own (channel_unit).
 struct ChannelSpec {
   const char* name;
   const char* kind;
@@ -86,6 +87,16 @@ double tick_value(const TickRecord& record, int channel) {
   }
 }
 
+// A fixed channel's unit: the device's own for its position, velocity and forces.
+std::string channel_unit(const ChannelSpec& spec, Kinematics kinematics) {
+  const std::string_view kind = spec.kind;
+  const DeviceUnits units = device_units(kinematics);
+  if (kind == "haptic_position") return units.position;
+  if (kind == "haptic_velocity") return units.velocity;
+  if (kind == "haptic_force_sensor" || kind == "haptic_command") return units.force;
+  return spec.unit;
+}
+
 ChannelInfo value_channel(const std::string& name, const std::string& kind,
                           const std::string& unit) {
   ChannelInfo info;
@@ -107,8 +118,11 @@ TickRecorder::TickRecorder(const std::filesystem::path& path, const SessionMetad
     : path_(path), loop_(loop), setup_(setup) {
   writer_ = std::make_unique<SessionWriter>(path, metadata);
   term_count_ = model.term_count();
+  const Kinematics kinematics = loop.mapping().kinematics();
   for (const ChannelSpec& spec : kFixedChannels) {
-    channels_.push_back({writer_->add_channel(value_channel(spec.name, spec.kind, spec.unit)), {}});
+    channels_.push_back(
+        {writer_->add_channel(value_channel(spec.name, spec.kind, channel_unit(spec, kinematics))),
+         {}});
   }
   for (int term = 0; term < term_count_; ++term) {
     channels_.push_back(

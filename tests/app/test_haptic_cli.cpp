@@ -13,6 +13,39 @@ using namespace doorbench;
 using doorbench::testing::run_doorbench_shell;
 using doorbench::testing::TempDir;
 
+// A rotary device's position is an angle and its force a torque: the session's device channels
+// and the summary say so, where a HapticMaster's say m, m/s and N.
+TEST_CASE("play: the device's channels and the summary carry the device's own units",
+          "[haptic][cli]") {
+  TempDir dir("play_cli_units");
+  struct Case {
+    std::string device, position, velocity, force;
+  };
+  for (const Case& c : {Case{"sim:rotary", "rad", "rad/s", "N*m"}, Case{"sim", "m", "m/s", "N"}}) {
+    INFO(c.device);
+    const auto session = dir / (c.device == "sim" ? "sim.h5" : "rotary.h5");
+    const auto run =
+        run_doorbench_shell("play --device " + c.device +
+                                " --simulated-time --duration-s 2 --out '" + session.string() + "'",
+                            dir);
+    INFO(run.err);
+    REQUIRE(run.status == 0);
+    CHECK(std::regex_search(
+        run.out,
+        std::regex("; max commanded force [0-9.e+-]+ " +
+                   std::regex_replace(c.force, std::regex("\\*"), "\\*") + ", arc error")));
+    const SessionReader reader(session);
+    for (const char* axis : {"x", "y", "z"}) {
+      CHECK(reader.channel(std::string("position_") + axis).unit == c.position);
+      CHECK(reader.channel(std::string("velocity_") + axis).unit == c.velocity);
+      CHECK(reader.channel(std::string("measured_force_") + axis).unit == c.force);
+      CHECK(reader.channel(std::string("commanded_force_") + axis).unit == c.force);
+    }
+    CHECK(reader.channel("force").unit == "N");  // the hand's force along the arc, either way
+    CHECK(reader.channel("model_torque").unit == "N*m");
+  }
+}
+
 TEST_CASE("play: the simulated HapticMaster in simulated time writes a session and a summary",
           "[haptic][cli]") {
   TempDir dir("play_cli");
