@@ -22,6 +22,7 @@ namespace {
 // One kind of stroke to try: its name and its strokes, simulated with the fitted door.
 struct StrokeKind {
   std::string name;
+  std::string label;  // the report table's column
   std::vector<Stroke> strokes;
 };
 
@@ -56,13 +57,13 @@ std::vector<double> sample_times(double end_s, double interval_s) {
 }
 
 // A virtual hand's opening to `target_rad` and closing through the latch, over duration_s.
-StrokeKind hand_kind(const std::string& name, const DoorModel& door, double target_rad,
-                     double duration_s, double interval_s) {
+StrokeKind hand_kind(const std::string& name, const std::string& label, const DoorModel& door,
+                     double target_rad, double duration_s, double interval_s) {
   VirtualHandOptions options;
   options.target_angle_rad = target_rad;
   options.duration_s = duration_s;
   const VirtualHand hand(options, door.geometry().handle_radius_m);
-  StrokeKind kind{name, {}};
+  StrokeKind kind{name, label, {}};
   const Trajectory run = simulate(door, hand, DoorState{}, sample_times(duration_s, interval_s));
   append_opening_and_closing(run, kind.strokes);
   return kind;
@@ -77,7 +78,7 @@ StrokeKind impulse_kind(const DoorModel& door, const std::vector<double>& angles
   for (std::size_t a = 0; a < angles_rad.size(); ++a) {
     name += (a == 0 ? " " : ", ") + printf_text("%.2g", angles_rad[a]);
   }
-  StrokeKind kind{name + " rad, each left to coast", {}};
+  StrokeKind kind{name + " rad, each left to coast", "impulses", {}};
   const double r_h = door.geometry().handle_radius_m;
   constexpr double kPush_s = 0.1, kCoast_s = 2.0, kCoastRate_rad_s = 0.8;
   for (double angle : angles_rad) {
@@ -121,15 +122,16 @@ std::vector<StrokeKind> stroke_kinds(const DoorModel& door, double interval_s) {
     }
   };
   add([&] {
-    return hand_kind("slow openings and closings (about 0.1 rad/s)", door,
+    return hand_kind("slow openings and closings (about 0.1 rad/s)", "slow", door,
                      std::min(1.0, theta_max - 0.1), 30.0, interval_s);
   });
   add([&] {
-    return hand_kind("a full-range opening and closing", door, theta_max - 0.05, 6.0, interval_s);
+    return hand_kind("a full-range opening and closing", "full range", door, theta_max - 0.05, 6.0,
+                     interval_s);
   });
   add([&] {
-    return hand_kind("a latch crossing (open to 0.25 rad and shut through the latch)", door, 0.25,
-                     4.0, interval_s);
+    return hand_kind("a latch crossing (open to 0.25 rad and shut through the latch)", "latch",
+                     door, 0.25, 4.0, interval_s);
   });
   add([&] {
     std::vector<double> angles;
@@ -209,7 +211,7 @@ std::vector<DeterminingStrokes> what_would_determine(const DeterminingInput& inp
     for (std::size_t r = 0; r < rows.size(); ++r) {
       const double relative = with[static_cast<std::size_t>(positions[r])] * inflation[r];
       rows[r].kinds.push_back(
-          {kind.name, relative,
+          {kind.name, kind.label, relative,
            std::isfinite(relative) && relative <= options.undetermined_relative_uncertainty});
     }
   }

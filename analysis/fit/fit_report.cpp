@@ -139,23 +139,49 @@ std::string FitSummary::determining_lines() const {
     return std::isfinite(value) ? printf_text("%.3g%%", 100.0 * value)
                                 : std::string("undetermined");
   };
+  // Every row has the same kinds, in the same order (what_would_determine).
+  const std::vector<DeterminingStrokes::Kind>& kinds = determining.front().kinds;
   std::string out =
-      "What would determine them (strokes simulated with the fitted door; u/|value| now, and "
-      "with such strokes added: their information added to the fit's, the uncertainty scaled "
-      "as the fit's window-robust one is to its classical one):\n";
+      "What would determine them: u/|value| now, and with strokes of each kind added, simulated "
+      "with the fitted door (their information added to the fit's, the uncertainty scaled as "
+      "the fit's window-robust one is to its classical one):\n";
+  std::size_t label_width = 0;
+  for (const DeterminingStrokes::Kind& kind : kinds) {
+    label_width = std::max(label_width, kind.label.size());
+  }
+  for (const DeterminingStrokes::Kind& kind : kinds) {
+    out += "  " + kind.label + std::string(label_width + 2 - kind.label.size(), ' ') + kind.kind +
+           "\n";
+  }
+  // The table: a cell per parameter and column, then each column as wide as its widest cell.
+  std::vector<std::vector<std::string>> cells{{"parameter", "now"}};
+  for (const DeterminingStrokes::Kind& kind : kinds) cells.front().push_back(kind.label);
+  cells.front().push_back("determined by");
   for (const DeterminingStrokes& row : determining) {
     const std::string state = row.undetermined && row.at_bound ? "undetermined, at a bound"
                               : row.undetermined               ? "undetermined"
                                                                : "at a bound";
-    out += "  " + row.parameter + " (" + state + "): now " + relative(row.relative_now);
+    std::vector<std::string> line{row.parameter + " (" + state + ")", relative(row.relative_now)};
     std::string determined_by;
     for (const DeterminingStrokes::Kind& kind : row.kinds) {
-      out += "; " + kind.kind + " " + relative(kind.relative);
-      if (kind.determines) determined_by += (determined_by.empty() ? "" : ", ") + kind.kind;
+      line.push_back(relative(kind.relative));
+      if (kind.determines) determined_by += (determined_by.empty() ? "" : ", ") + kind.label;
     }
-    out += determined_by.empty() ? std::string(" -> none of these kinds determines it")
-                                 : " -> determined by " + determined_by;
-    out += "\n";
+    line.push_back(determined_by.empty() ? std::string("none of these kinds") : determined_by);
+    cells.push_back(std::move(line));
+  }
+  std::vector<std::size_t> widths(cells.front().size(), 0);
+  for (const std::vector<std::string>& line : cells) {
+    for (std::size_t c = 0; c < line.size() && c < widths.size(); ++c) {
+      widths[c] = std::max(widths[c], line[c].size());
+    }
+  }
+  for (const std::vector<std::string>& line : cells) {
+    out += "  " + line[0] + std::string(widths[0] - line[0].size(), ' ');
+    for (std::size_t c = 1; c + 1 < line.size(); ++c) {  // figures, right-aligned
+      out += "  " + std::string(widths[c] - line[c].size(), ' ') + line[c];
+    }
+    out += "  " + line.back() + "\n";
   }
   return out;
 }

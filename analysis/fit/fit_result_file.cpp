@@ -90,6 +90,7 @@ nlohmann::ordered_json determining_json(const FitSummary& s) {
     nlohmann::ordered_json kinds = nlohmann::ordered_json::array();
     for (const DeterminingStrokes::Kind& kind : row.kinds) {
       kinds.push_back({{"kind", kind.kind},
+                       {"label", kind.label},
                        {"relative_uncertainty", number(kind.relative)},
                        {"determines", kind.determines}});
     }

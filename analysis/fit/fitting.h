@@ -333,6 +333,7 @@ struct DeterminingStrokes {
   double relative_now = 0.0;  // NaN: in a direction the data do not determine
   struct Kind {
     std::string kind;         // "slow openings and closings (about 0.1 rad/s)", ...
+    std::string label;        // its short name, the report table's column: "slow", ...
     double relative = 0.0;    // NaN: still in an undetermined direction
     bool determines = false;  // finite and at most undetermined_relative_uncertainty
   };
@@ -467,7 +468,9 @@ struct FitSummary {
   // k s (doorbench fit --free auto fits this set)."; "" when all are determined.
   std::string identifiable_line() const;
   std::string full_report() const;  // parameters, correlations, metrics per stroke, solver
-  // "What would determine them (...):" and a line per row of `determining`; "" when none.
+  // "What would determine them: ...", a line per kind of stroke naming its column, and a table:
+  // a row per row of `determining`, its u/|value| now and with each kind, and the kinds that
+  // determine it; "" when none.
   std::string determining_lines() const;
 };
 

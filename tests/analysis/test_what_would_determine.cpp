@@ -123,6 +123,10 @@ TEST_CASE(
     CHECK(row.kinds[1].kind == "a full-range opening and closing");
     CHECK(row.kinds[2].kind == "a latch crossing (open to 0.25 rad and shut through the latch)");
     CHECK(row.kinds[3].kind == "impulses at 0.3, 0.7, 1.1 rad, each left to coast");
+    CHECK(row.kinds[0].label == "slow");
+    CHECK(row.kinds[1].label == "full range");
+    CHECK(row.kinds[2].label == "latch");
+    CHECK(row.kinds[3].label == "impulses");
     for (const DeterminingStrokes::Kind& kind : row.kinds) {
       // More strokes never add uncertainty.
       if (std::isfinite(row.relative_now)) CHECK(kind.relative <= row.relative_now * (1 + 1e-9));
@@ -141,37 +145,66 @@ namespace doorbench {
 TEST_CASE("What would determine it: the report's lines, word for word", "[fitting][slow]") {
   const FitSummary& s = robot_fit().summary;
   REQUIRE(s.determining.size() >= 2);
-  std::string expected =
-      "What would determine them (strokes simulated with the fitted door; u/|value| now, and "
-      "with such strokes added: their information added to the fit's, the uncertainty scaled "
-      "as the fit's window-robust one is to its classical one):\n";
+  const std::string text = s.determining_lines();
+  const std::string head =
+      "What would determine them: u/|value| now, and with strokes of each kind added, simulated "
+      "with the fitted door (their information added to the fit's, the uncertainty scaled as "
+      "the fit's window-robust one is to its classical one):\n"
+      "  slow        slow openings and closings (about 0.1 rad/s)\n"
+      "  full range  a full-range opening and closing\n"
+      "  latch       a latch crossing (open to 0.25 rad and shut through the latch)\n"
+      "  impulses    impulses at 0.3, 0.7, 1.1 rad, each left to coast\n";
+  REQUIRE(text.starts_with(head));
+  std::vector<std::string> lines;
+  for (std::size_t at = head.size(); at < text.size();) {
+    const std::size_t end = text.find('\n', at);
+    REQUIRE(end != std::string::npos);
+    lines.push_back(text.substr(at, end - at));
+    at = end + 1;
+  }
+  REQUIRE(lines.size() == s.determining.size() + 1);
+  // Each line's cells, in order, separated by two spaces or more; the figures right-aligned,
+  // so that every line's last figure ends in the same column.
+  const auto check_line = [&](const std::string& line, const std::vector<std::string>& cells) {
+    INFO(line);
+    CHECK(line.starts_with("  " + cells.front() + "  "));
+    std::size_t at = 2 + cells.front().size();
+    for (std::size_t c = 1; c < cells.size(); ++c) {
+      const std::size_t found = line.find(cells[c], at);
+      REQUIRE(found != std::string::npos);
+      CHECK(found >= at + 2);
+      CHECK(line.find_first_not_of(' ', at) == found);
+      at = found + cells[c].size();
+      if (c + 2 == cells.size()) CHECK(at == lines.front().find("impulses") + 8);
+    }
+    CHECK(at == line.size());
+  };
+  check_line(lines.front(),
+             {"parameter", "now", "slow", "full range", "latch", "impulses", "determined by"});
   int determined_somehow = 0;
-  for (const DeterminingStrokes& row : s.determining) {
+  for (std::size_t r = 0; r < s.determining.size(); ++r) {
+    const DeterminingStrokes& row = s.determining[r];
     REQUIRE(row.kinds.size() == 4);
-    expected += "  " + row.parameter + " (" +
-                (row.undetermined && row.at_bound ? "undetermined, at a bound"
-                 : row.undetermined               ? "undetermined"
-                                                  : "at a bound") +
-                "): now " + relative_text(row.relative_now) + "; slow openings and closings " +
-                "(about 0.1 rad/s) " + relative_text(row.kinds[0].relative) +
-                "; a full-range opening and closing " + relative_text(row.kinds[1].relative) +
-                "; a latch crossing (open to 0.25 rad and shut through the latch) " +
-                relative_text(row.kinds[2].relative) +
-                "; impulses at 0.3, 0.7, 1.1 rad, each left to coast " +
-                relative_text(row.kinds[3].relative);
+    std::vector<std::string> cells{
+        row.parameter + " (" +
+            (row.undetermined && row.at_bound ? "undetermined, at a bound"
+             : row.undetermined               ? "undetermined"
+                                              : "at a bound") +
+            ")",
+        relative_text(row.relative_now)};
     std::string by;
     for (const DeterminingStrokes::Kind& kind : row.kinds) {
-      if (kind.determines) by += (by.empty() ? "" : ", ") + kind.kind;
+      cells.push_back(relative_text(kind.relative));
+      if (kind.determines) by += (by.empty() ? "" : ", ") + kind.label;
     }
-    expected +=
-        by.empty() ? " -> none of these kinds determines it\n" : " -> determined by " + by + "\n";
+    cells.push_back(by.empty() ? "none of these kinds" : by);
+    check_line(lines[r + 1], cells);
     determined_somehow += by.empty() ? 0 : 1;
   }
   // On this recording some undetermined parameters would be determined by one kind or
   // another, and some by none.
   CHECK(determined_somehow > 0);
   CHECK(determined_somehow < static_cast<int>(s.determining.size()));
-  CHECK(s.determining_lines() == expected);
   // Which rows, and which are determined: the latch's stiffness k_lock and its switch angles
   // theta1 and theta3 by slow strokes (which cross them slowly); theta2 is determined by the
   // recording itself (no row); k_inf, theta0, the snap's damping c and the friction's d1, d2
@@ -188,8 +221,8 @@ TEST_CASE("What would determine it: the report's lines, word for word", "[fittin
   CHECK(rows ==
         "k_inf:none k_lock:slow theta0:none theta1:slow theta3:slow c:none d1:none d2:none "
         "s:none ");
-  CHECK(s.brief_report().find(expected) != std::string::npos);
-  CHECK(s.full_report().find(expected) != std::string::npos);
+  CHECK(s.brief_report().find(text) != std::string::npos);
+  CHECK(s.full_report().find(text) != std::string::npos);
 }
 
 TEST_CASE("What would determine it: result.json holds the rows", "[fitting][slow]") {
@@ -213,6 +246,7 @@ TEST_CASE("What would determine it: result.json holds the rows", "[fitting][slow
     for (std::size_t k = 0; k < row.kinds.size(); ++k) {
       const nlohmann::json& kind = rows[r].at("kinds")[k];
       CHECK(kind.at("kind") == row.kinds[k].kind);
+      CHECK(kind.at("label") == row.kinds[k].label);
       CHECK(kind.at("determines") == row.kinds[k].determines);
       if (std::isfinite(row.kinds[k].relative)) {
         CHECK(kind.at("relative_uncertainty").get<double>() ==
