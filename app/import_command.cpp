@@ -186,7 +186,8 @@ void add_import_command(CLI::App& app, Action& action) {
                              "The file's own channels: force=GROUP/CHANNEL,angle=GROUP/CHANNEL"
                              "[,rate=...][,time=...][,NAME_UNIT=...] for TDMS; "
                              "time=COLUMN,force=COLUMN,angle=COLUMN[,...] for CSV (a CSV's "
-                             "other columns are left out)");
+                             "other columns are left out; a unit its name states in ms, kN, "
+                             "deg, deg/s or rpm is converted)");
   import_command
       ->add_option("--separator", import->separator,
                    "CSV files: what separates the fields: comma (the exchange format), semicolon "

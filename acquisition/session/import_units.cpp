@@ -2,11 +2,14 @@
 
 #include <filesystem>
 #include <fstream>
+#include <numbers>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
 #include "acquisition/session/map_syntax.h"
 #include "acquisition/session/recording_csv.h"
+#include "core/units.h"
 
 namespace doorbench {
 
@@ -102,10 +105,10 @@ std::string mapped_column_name(const CsvMapItem& item, const std::string& stated
   if (conversion == nullptr) {
     const bool time = item.target == "time";
     const std::string unit = time ? "s" : import_target_unit(item.target);
-    if (!stated.empty() && stated != unit) {
+    if (!stated.empty() && stated != unit && !(time && stated_unit_factor(stated, unit))) {
       throw std::invalid_argument(
           "is in '" + stated + "', not " + unit +
-          (time ? " (the time is read in seconds: convert the column)"
+          (time ? " (the time is read in s, ms or us: convert the column)"
                 : " (convert it: --calibration " + item.target + "=RECORD or --scale " +
                       item.target +
                       "=GAIN[,OFFSET]; or map it as an extra column whose name ends "
@@ -142,6 +145,46 @@ std::vector<CsvMapItem> parse_csv_map(const std::string& text) {
     map.push_back({given.target, unescaped(given.text), "--map " + given.item});
   }
   return map;
+}
+
+std::optional<double> stated_unit_factor(const std::string& stated, const std::string& unit) {
+  struct Factor {
+    const char* from;
+    const char* to;
+    double factor;
+  };
+  static constexpr Factor kFactors[] = {
+      {"ms", "s", 1e-3},
+      {"us", "s", 1e-6},
+      {"deg", "rad", kRadPerDeg},
+      {"deg/s", "rad/s", kRadPerDeg},
+      {"rpm", "rad/s", 2.0 * std::numbers::pi / 60.0},
+      {"kN", "N", 1e3},
+  };
+  for (const Factor& entry : kFactors) {
+    if (stated == entry.from && unit == entry.to) return entry.factor;
+  }
+  return std::nullopt;
+}
+
+std::vector<ImportConversion> with_stated_unit_conversions(
+    const std::vector<ImportConversion>& conversions, const std::vector<CsvMapItem>& map) {
+  std::vector<ImportConversion> all = conversions;
+  for (const CsvMapItem& item : map) {
+    if (item.target != "force" && item.target != "angle" && item.target != "rate") continue;
+    if (find_conversion(conversions, item.target) != nullptr) continue;
+    const std::string stated = unit_stated_in_name(item.column);
+    const std::optional<double> factor =
+        stated_unit_factor(stated, import_target_unit(item.target));
+    if (!factor) continue;
+    ImportConversion conversion;
+    conversion.target = item.target;
+    conversion.given = item.given + ", the unit its name states";
+    conversion.gain = *factor;
+    conversion.from_stated_unit = true;
+    all.push_back(std::move(conversion));
+  }
+  return all;
 }
 
 std::string unit_stated_in_name(const std::string& column) {
@@ -185,6 +228,10 @@ void apply_csv_map(CsvTable& table, const std::vector<CsvMapItem>& map,
   std::vector<std::vector<double>> columns;
   for (std::size_t k = 0; k < map.size(); ++k) {
     columns.push_back(std::move(table.columns[mapped_at[k]]));
+    if (map[k].target == "time") {
+      const double factor = stated_unit_factor(unit_stated_in_name(map[k].column), "s").value_or(1);
+      for (double& value : columns.back()) value *= factor;
+    }
     table.metadata.emplace_back("map_" + map[k].target + "_column", map[k].column);
     table.metadata_line_numbers.push_back(0);  // not a line of the file
   }
@@ -228,8 +275,9 @@ Recording read_csv_import(const std::filesystem::path& path, const std::string& 
       throw CsvMapSyntaxError(std::string(error.what()) + "; the file's columns: " + columns);
     }
   }
-  if (!map.empty()) apply_csv_map(table, map, conversions, source);
-  std::map<std::string, CalibrationRecord> records = take_raw_columns(table, conversions, source);
+  const std::vector<ImportConversion> all = with_stated_unit_conversions(conversions, map);
+  if (!map.empty()) apply_csv_map(table, map, all, source);
+  std::map<std::string, CalibrationRecord> records = take_raw_columns(table, all, source);
   Recording recording = recording_from_table_naming(table, source, columns, kCsvMapHint);
   recording.calibrations = std::move(records);
   return recording;
@@ -243,8 +291,9 @@ CalibrationRecord ImportConversion::record_for(const std::string& input_unit) co
     }
     return *record;
   }
-  return linear_record("scale-" + target, input_unit.empty() ? "unstated" : input_unit,
-                       import_target_unit(target), gain, offset, "doorbench import " + given);
+  return linear_record((from_stated_unit ? "unit-" : "scale-") + target,
+                       input_unit.empty() ? "unstated" : input_unit, import_target_unit(target),
+                       gain, offset, "doorbench import " + given);
 }
 
 std::string import_target_unit(const std::string& target) {

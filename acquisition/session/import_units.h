@@ -29,6 +29,9 @@ struct ImportConversion {
   // physical = offset + gain · raw.
   std::optional<CalibrationRecord> record;
   double gain = 1.0, offset = 0.0;
+  // A conversion read off the unit a --map column's name states (stated_unit_factor), not
+  // given: its record is "unit-TARGET" instead of "scale-TARGET".
+  bool from_stated_unit = false;
 
   // The record for a channel whose raw values are in `input_unit` ("" when the channel states
   // none): --calibration's record, which must take that unit; --scale's linear record (id
@@ -82,6 +85,17 @@ std::vector<CsvMapItem> parse_csv_map(const std::string& text);
 // "Force (V)", "deg/s" for "Rate [deg/s]"; "" when it states none.
 std::string unit_stated_in_name(const std::string& column);
 
+// The exact factor from a stated unit to a target's unit, for the units loggers write in
+// place of the session's: ms and us to s, deg to rad, deg/s and rpm to rad/s, kN to N; none
+// for any other pair (volts, counts, an unknown spelling: those need --scale or --calibration).
+std::optional<double> stated_unit_factor(const std::string& stated, const std::string& unit);
+
+// `conversions` and, for each force, angle or rate the map names without one, a column whose
+// name states a unit stated_unit_factor converts ("Angle (deg)"): a conversion from that unit
+// (physical = factor · raw; the session keeps the raw values in it, record unit-TARGET).
+std::vector<ImportConversion> with_stated_unit_conversions(
+    const std::vector<ImportConversion>& conversions, const std::vector<CsvMapItem>& map);
+
 // A file from elsewhere, its own columns named by the map: each mapped column of `table` is
 // renamed to what the exchange format reads (time_s, force_N, angle_rad, rate_rad_s, the extra
 // target itself) and the columns not mapped are left out, as a TDMS import takes only the
@@ -91,7 +105,8 @@ std::string unit_stated_in_name(const std::string& column);
 // --calibration) takes its column as the raw signal: the column becomes STEM_UNIT (force_V)
 // for take_raw_columns, UNIT the one its name states, else the record's input unit, else
 // "unstated"; a record must take the unit the name states. Each mapped column's own name goes
-// into the metadata as map_TARGET_column. Throws CsvError at the header's line naming the item
+// into the metadata as map_TARGET_column. A time column in ms or us is converted to seconds
+// (stated_unit_factor). Throws CsvError at the header's line naming the item
 // and ending with the file's columns: no such column, one column mapped to two targets, a
 // unit that is not the target's or the record's.
 void apply_csv_map(CsvTable& table, const std::vector<CsvMapItem>& map,

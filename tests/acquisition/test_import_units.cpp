@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -329,7 +330,7 @@ TEST_CASE("Import: a CSV with its own column names imports through --map", "[csv
                 degrees);
   CHECK(run.err ==
         "doorbench: log.csv:1: --map time=Temperature (C): column 'Temperature (C)' is in 'C', "
-        "not s (the time is read in seconds: convert the column)" +
+        "not s (the time is read in s, ms or us: convert the column)" +
             columns);
   run = refused(" --map 'time=Time (s),force'");
   CHECK(run.status == 2);
@@ -354,6 +355,77 @@ TEST_CASE("Import: a CSV with its own column names imports through --map", "[csv
   for (const auto& entry : std::filesystem::directory_iterator(dir.path)) {
     CHECK(entry.path().filename().string().rfind("x.h5", 0) == std::string::npos);  // no partial
   }
+}
+
+// A logger's own units that are exact multiples of the session's are converted, not refused:
+// the time in ms, the force in kN, the angle in degrees and the rate in deg/s or rpm. The
+// session keeps the raw values in the stated unit under a unit-TARGET record; an explicit
+// --scale still wins over the stated unit.
+TEST_CASE("Import: a --map column in ms, kN, deg, deg/s or rpm is converted exactly",
+          "[csv][cli]") {
+  const testing::TempDir dir("import_csv_stated_units");
+  constexpr int kSamples = 50;
+  const auto rate_in_rpm = [](int k) { return 3.0 + 0.5 * k; };
+  std::string csv = "Zeit (ms),Kraft (kN),Winkel (deg),Drehrate (deg/s),Motor (rpm)\n";
+  for (int k = 0; k < kSamples; ++k) {
+    csv += format_csv_number(2.0 * k) + "," + format_csv_number(1e-3 * bridge_volts(k)) + "," +
+           format_csv_number(0.25 * k) + "," + format_csv_number(10.0 - 0.1 * k) + "," +
+           format_csv_number(rate_in_rpm(k)) + "\n";
+  }
+  dir.write("log.csv", csv);
+  testing::DoorbenchRun run = testing::run_doorbench_shell(
+      "import log.csv --map 'time=Zeit (ms),force=Kraft (kN),angle=Winkel (deg),rate=Drehrate "
+      "(deg/s)' --out a.h5",
+      dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.err, Catch::Contains("angle_rad: raw deg kept, physical through unit-angle "
+                                      "(doorbench import --map angle=Winkel (deg), the unit its "
+                                      "name states)"));
+  {
+    const SessionReader session(dir / "a.h5");
+    const ChannelSlice angle = session.read("angle");
+    REQUIRE(angle.time_s.size() == kSamples);
+    CHECK(session.channel("angle").raw_unit == "deg");
+    CHECK(session.channel("angle").calibration_id == "unit-angle");
+    CHECK(session.channel("force").raw_unit == "kN");
+    CHECK(session.channel("rate").raw_unit == "deg/s");
+    const std::vector<double> radians = session.physical("angle", angle);
+    const std::vector<double> newtons = session.physical("force", session.read("force"));
+    const std::vector<double> rates = session.physical("rate", session.read("rate"));
+    for (int k = 0; k < kSamples; ++k) {
+      CHECK(std::abs(angle.time_s[k] - angle.time_s[0] - 2e-3 * k) <= 1e-12);
+      CHECK(std::abs(radians[k] - 0.25 * k * kRadPerDeg) <= 1e-12);
+      CHECK(std::abs(newtons[k] - bridge_volts(k)) <= 1e-9 * std::abs(bridge_volts(k)) + 1e-12);
+      CHECK(std::abs(rates[k] - (10.0 - 0.1 * k) * kRadPerDeg) <= 1e-12);
+    }
+  }
+  // rpm for the rate; an explicit --scale wins over the unit the name states.
+  run = testing::run_doorbench_shell(
+      "import log.csv --map 'time=Zeit (ms),force=Kraft (kN),rate=Motor (rpm)' --scale force=2 "
+      "--out b.h5",
+      dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  const SessionReader session(dir / "b.h5");
+  CHECK(session.channel("force").calibration_id == "scale-force");
+  const std::vector<double> newtons = session.physical("force", session.read("force"));
+  const std::vector<double> rates = session.physical("rate", session.read("rate"));
+  REQUIRE(rates.size() == kSamples);
+  for (int k = 0; k < kSamples; ++k) {
+    CHECK(std::abs(newtons[k] - 2e-3 * bridge_volts(k)) <= 1e-12);
+    CHECK(std::abs(rates[k] - rate_in_rpm(k) * 2.0 * std::numbers::pi / 60.0) <= 1e-12);
+  }
+  // A unit that is no exact multiple (a time in minutes, an angle in grads) is still refused.
+  dir.write("min.csv", "t (min),F (N),a (grad)\n0,1,0\n1,1,1\n");
+  run = testing::run_doorbench_shell(
+      "import min.csv --map 'time=t (min),force=F (N),angle=a (grad)' --out c.h5", dir,
+      units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: min.csv:1: --map time=t (min): column 't (min)' is in 'min', not s (the time "
+        "is read in s, ms or us: convert the column); the file's columns: t (min), F (N), a "
+        "(grad)\n");
 }
 
 // A spreadsheet's export in a European locale (semicolons, decimal commas, CRLF) and a LabVIEW
