@@ -5,17 +5,25 @@
 #include <stdexcept>
 
 namespace doorbench {
+namespace {
+
+// Reads `count` digits at `at`; -1 when they are not all there.
+int read_digits(std::string_view text, std::size_t at, std::size_t count) {
+  if (at + count > text.size()) return -1;
+  int value = 0;
+  for (std::size_t i = at; i < at + count; ++i) {
+    if (text[i] < '0' || text[i] > '9') return -1;
+    value = value * 10 + (text[i] - '0');
+  }
+  return value;
+}
+
+}  // namespace
 
 std::string iso8601_utc_problem(const std::string& text) {
   const std::string form = " is not an ISO 8601 date (YYYY-MM-DD, or YYYY-MM-DDTHH:MM:SSZ in UTC)";
   const auto digits = [&](std::size_t at, std::size_t count) {
-    if (at + count > text.size()) return -1;
-    int value = 0;
-    for (std::size_t i = at; i < at + count; ++i) {
-      if (text[i] < '0' || text[i] > '9') return -1;
-      value = value * 10 + (text[i] - '0');
-    }
-    return value;
+    return read_digits(text, at, count);
   };
   const int year = digits(0, 4), month = digits(5, 2), day = digits(8, 2);
   if (year < 0 || month < 0 || day < 0 || text[4] != '-' || text[7] != '-') return text + form;
@@ -67,6 +75,85 @@ std::string iso8601_utc_text(std::int64_t unix_s, std::int64_t fraction, int fra
   std::snprintf(text, sizeof text, "%s.%0*lldZ", date, fraction_digits,
                 static_cast<long long>(fraction));
   return text;
+}
+
+namespace {
+
+// Days from 1970-01-01 to year-month-day of the proleptic Gregorian calendar: whole 400-year
+// eras of 146097 days, with March as the first month so that a leap day ends its year.
+std::int64_t days_since_epoch(std::int64_t year, int month, int day) {
+  const std::int64_t y = month <= 2 ? year - 1 : year;
+  const std::int64_t era = (y >= 0 ? y : y - 399) / 400;
+  const std::int64_t year_of_era = y - era * 400;                               // [0, 399]
+  const int month_from_march = month > 2 ? month - 3 : month + 9;               // [0, 11]
+  const std::int64_t day_of_year = (153 * month_from_march + 2) / 5 + day - 1;  // [0, 365]
+  const std::int64_t day_of_era =
+      year_of_era * 365 + year_of_era / 4 - year_of_era / 100 + day_of_year;
+  return era * 146097 + day_of_era - 719468;  // 719468: days from 0000-03-01 to 1970-01-01
+}
+
+}  // namespace
+
+std::optional<DateTimeText> parse_date_time(std::string_view text) {
+  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+  const int year = read_digits(text, 0, 4), month = read_digits(text, 5, 2);
+  const int day = read_digits(text, 8, 2), hour = read_digits(text, 11, 2);
+  const int minute = read_digits(text, 14, 2);
+  if (year < 0 || month < 0 || day < 0 || hour < 0 || minute < 0 || text[4] != '-' ||
+      text[7] != '-' || (text[10] != 'T' && text[10] != ' ') || text[13] != ':') {
+    return std::nullopt;
+  }
+  std::size_t at = 16;
+  int second = 0;
+  DateTimeText out;
+  if (at < text.size() && text[at] == ':') {
+    second = read_digits(text, at + 1, 2);
+    if (second < 0) return std::nullopt;
+    at += 3;
+    if (at < text.size() && text[at] == '.') {
+      // The digits as an integer over a power of ten (one rounding); beyond 18, ignored.
+      std::int64_t numerator = 0, denominator = 1;
+      const std::size_t first = ++at;
+      for (; at < text.size() && text[at] >= '0' && text[at] <= '9'; ++at) {
+        if (at - first >= 18) continue;
+        numerator = numerator * 10 + (text[at] - '0');
+        denominator *= 10;
+      }
+      if (at == first) return std::nullopt;
+      out.fraction_s = static_cast<double>(numerator) / static_cast<double>(denominator);
+    }
+  }
+  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+  const int days[] = {31, leap ? 29 : 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  if (month < 1 || month > 12 || day < 1 || day > days[month - 1] || hour > 23 || minute > 59 ||
+      second > 59) {
+    return std::nullopt;
+  }
+  while (at < text.size() && text[at] == ' ') ++at;
+  int offset_minutes = 0;
+  if (at < text.size() && text[at] == 'Z') {
+    out.zone_known = true;
+    ++at;
+  } else if (at < text.size() && (text[at] == '+' || text[at] == '-')) {
+    const int sign = text[at] == '+' ? 1 : -1;
+    const int offset_hours = read_digits(text, at + 1, 2);
+    if (offset_hours < 0 || offset_hours > 18) return std::nullopt;
+    at += 3;
+    int offset_extra = 0;
+    if (at < text.size()) {
+      const std::size_t digits_at = text[at] == ':' ? at + 1 : at;
+      offset_extra = read_digits(text, digits_at, 2);
+      if (offset_extra < 0 || offset_extra > 59) return std::nullopt;
+      at = digits_at + 2;
+    }
+    offset_minutes = sign * (offset_hours * 60 + offset_extra);
+    out.zone_known = true;
+  }
+  if (at != text.size()) return std::nullopt;
+  out.seconds = days_since_epoch(year, month, day) * 86400 + hour * 3600 + minute * 60 + second -
+                offset_minutes * 60;
+  return out;
 }
 
 }  // namespace doorbench

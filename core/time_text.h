@@ -2,7 +2,9 @@
 // Dates and times as text: ISO 8601 in UTC, the one form doorbench writes and takes on the
 // command line (a session's start, a record's expiry).
 #include <cstdint>
+#include <optional>
 #include <string>
+#include <string_view>
 
 namespace doorbench {
 
@@ -20,5 +22,18 @@ std::string utc_now_iso8601();
 // ranges.
 std::string iso8601_utc_text(std::int64_t unix_s, std::int64_t fraction = 0,
                              int fraction_digits = 0);
+
+// A date and time as a logger writes it (parse_date_time).
+struct DateTimeText {
+  std::int64_t seconds = 0;  // since 1970-01-01T00:00:00 on its own clock (UTC when zone_known)
+  double fraction_s = 0.0;   // the fraction of the second, [0, 1)
+  bool zone_known = false;   // the text ends in Z or an offset, so `seconds` are UTC
+};
+
+// "YYYY-MM-DD hh:mm:ss", 'T' or one space between date and time, seconds optional, a fraction
+// after '.' of any number of digits, then optionally 'Z' or an offset +hh:mm, +hhmm or +hh
+// (- too), with spaces around it allowed; nullopt for anything else or a day that is not on
+// the calendar. An offset is taken off: 08:00:00+01:00 is 07:00:00 UTC.
+std::optional<DateTimeText> parse_date_time(std::string_view text);
 
 }  // namespace doorbench

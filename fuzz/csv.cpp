@@ -25,10 +25,11 @@ bool same(const std::vector<double>& a, const std::vector<double>& b) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string_view text(reinterpret_cast<const char*>(data), size);
-  // The exchange format, and the dialects doorbench import reads (--separator, --decimal-comma).
+  // The exchange format, and the dialects doorbench import reads (--separator, --decimal-comma,
+  // a --map time column of dates and times).
   for (const doorbench::CsvDialect dialect :
-       {doorbench::CsvDialect{}, doorbench::CsvDialect{';', true},
-        doorbench::CsvDialect{'\t', false}}) {
+       {doorbench::CsvDialect{}, doorbench::CsvDialect{';', true, ""},
+        doorbench::CsvDialect{'\t', false, ""}, doorbench::CsvDialect{',', false, "time_s"}}) {
     try {
       doorbench::parse_csv_table(text, "fuzz.csv", doorbench::EmptyCells::kMissing, dialect);
     } catch (const doorbench::CsvError&) {

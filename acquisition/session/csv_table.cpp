@@ -214,6 +214,34 @@ bool with_decimal_point(std::string_view cell, std::string& out) {
   return true;
 }
 
+// A cell of the dialect's date-time column (CsvDialect::date_time_column): true when it is a
+// date and time, appended as seconds since the first row's; false when it and the first row's are
+// not (then it is a number). Throws CsvError for a column that mixes the two, or zones.
+bool read_date_time_cell(std::string_view cell, std::size_t column, int line_number,
+                         std::string_view source, CsvTable& table) {
+  const std::string& name = table.column_names[column];
+  const std::optional<DateTimeText> when = parse_date_time(cell);
+  const bool first_row = table.line_numbers.empty();
+  if (first_row && when) table.first_date_time = when;
+  if (!table.first_date_time) {
+    if (!when) return false;
+    throw CsvError(source, line_number,
+                   "column " + name + ": " + quoted(trim(cell)) +
+                       " is a date and time, but the first row's is a number");
+  }
+  const DateTimeText& first = *table.first_date_time;
+  if (!when || when->zone_known != first.zone_known) {
+    throw CsvError(
+        source, line_number,
+        "column " + name + ": " + quoted(trim(cell)) + " is not a date and time " +
+            (first.zone_known ? "with a time zone (Z or +hh:mm)" : "without a time zone") +
+            " as the first row's (YYYY-MM-DD hh:mm:ss.fff)");
+  }
+  table.columns[column].push_back(static_cast<double>(when->seconds - first.seconds) +
+                                  (when->fraction_s - first.fraction_s));
+  return true;
+}
+
 void read_data_row(std::string_view line, int line_number, std::string_view source,
                    EmptyCells empty_cells, const CsvDialect& dialect, CsvTable& table) {
   const std::size_t column_count = table.column_names.size();
@@ -233,6 +261,12 @@ void read_data_row(std::string_view line, int line_number, std::string_view sour
                      "column " + table.column_names[column] + ": " + quoted(trim(cell)) +
                          " holds a '.' (with --decimal-comma the decimal point is ',', and "
                          "thousands separators are not read)");
+    }
+    if (!dialect.date_time_column.empty() &&
+        table.column_names[column] == dialect.date_time_column &&
+        read_date_time_cell(cell, column, line_number, source, table)) {
+      start = comma + 1;
+      continue;
     }
     double value = 0.0;
     CellProblem problem =

@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "core/time_text.h"
+
 namespace doorbench {
 
 // Text that breaks the format. what() is one line, "SOURCE:LINE: detail", or
@@ -43,6 +45,8 @@ struct CsvTable {
   std::vector<std::string> column_names;
   std::vector<std::vector<double>> columns;  // column-major: columns[c][row]
   std::vector<int> line_numbers;             // file line of each data row, 1-based
+  // The first row's date and time in the dialect's date_time_column, when it holds one.
+  std::optional<DateTimeText> first_date_time;
 
   std::optional<std::size_t> find_column(std::string_view name) const;
   // The value of metadata key `key` (keys are unique in a parsed table). Throws
@@ -64,6 +68,11 @@ enum class EmptyCells { kRefuse, kMissing };
 struct CsvDialect {
   char separator = ',';        // ',', ';' or '\t'
   bool decimal_comma = false;  // ',' is the decimal point; a '.' in a cell is refused
+  // A column that may hold dates and times (a logger's "2024-05-02 09:30:00.125"): when its first
+  // row's cell is one (parse_date_time), every cell must be one stating a zone as the first does,
+  // and each is read as seconds since the first (CsvTable::first_date_time); otherwise the column
+  // is numbers as any other. "": none.
+  std::string date_time_column;
   // "" when usable, else what is wrong: "--decimal-comma needs --separator semicolon or tab (a
   // comma cannot both separate fields and mark decimals)".
   std::string validate() const;

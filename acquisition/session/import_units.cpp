@@ -1,5 +1,7 @@
 #include "acquisition/session/import_units.h"
 
+#include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <numbers>
@@ -9,6 +11,7 @@
 
 #include "acquisition/session/map_syntax.h"
 #include "acquisition/session/recording_csv.h"
+#include "core/time_text.h"
 #include "core/units.h"
 
 namespace doorbench {
@@ -261,10 +264,50 @@ Recording recording_from_table_with_columns(const CsvTable& table, std::string_v
   return recording_from_table_naming(table, source, csv_column_list(table), hint);
 }
 
+namespace {
+
+// The dialect with the --map time column as its date-time column. A map that does not parse is
+// reported later, with the file's columns.
+CsvDialect with_date_time_column(const CsvDialect& dialect, const std::string& map_text) {
+  CsvDialect out = dialect;
+  try {
+    for (const CsvMapItem& item : parse_csv_map(map_text)) {
+      if (item.target == "time") out.date_time_column = item.column;
+    }
+  } catch (const std::invalid_argument&) {
+  }
+  return out;
+}
+
+// The first date and time of the table's time column, kept in its metadata to the microsecond:
+// in UTC ("2024-05-02T09:30:00.125000Z"), also as the start when the file states none; without a
+// zone, the clock's own reading without the Z.
+void keep_first_date_time(CsvTable& table) {
+  const DateTimeText& first = *table.first_date_time;
+  std::int64_t seconds = first.seconds;
+  auto microseconds = static_cast<std::int64_t>(std::llround(first.fraction_s * 1e6));
+  if (microseconds == 1000000) {
+    ++seconds;
+    microseconds = 0;
+  }
+  std::string text = iso8601_utc_text(seconds, microseconds, 6);
+  if (first.zone_known && !table.metadata_value(kStartTimeKey)) {
+    table.metadata.emplace_back(kStartTimeKey, text);
+    table.metadata_line_numbers.push_back(0);  // not a line of the file
+  }
+  if (!first.zone_known) text.pop_back();  // the Z
+  table.metadata.emplace_back(kFirstDateTimeKey, text);
+  table.metadata_line_numbers.push_back(0);
+}
+
+}  // namespace
+
 Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
                           const std::vector<ImportConversion>& conversions,
                           const CsvDialect& dialect) {
-  CsvTable table = read_csv_file(path, EmptyCells::kMissing, dialect);
+  CsvTable table =
+      read_csv_file(path, EmptyCells::kMissing, with_date_time_column(dialect, map_text));
+  if (table.first_date_time) keep_first_date_time(table);
   const std::string source = path.string();
   const std::string columns = csv_column_list(table);
   std::vector<CsvMapItem> map;

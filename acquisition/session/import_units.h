@@ -119,12 +119,19 @@ class CsvMapSyntaxError : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+// The metadata key of the first row's date and time, when the --map time column holds dates and
+// times (CsvDialect::date_time_column): the cell as written.
+inline constexpr const char* kFirstDateTimeKey = "map_time_first_date_time";
+
 // A CSV file as `doorbench import` reads it: in `dialect`, empty cells as lost samples, its own
 // columns named by `map_text` (parse_csv_map, apply_csv_map; empty: the exchange format's names),
 // raw columns through `conversions` (take_raw_columns). Throws CsvMapSyntaxError for a malformed
 // map, CsvError and std::invalid_argument as those functions do; a column the
 // recording lacks or cannot take ("header lacks required column time_s") is reported at the
-// header's line with the file's own columns and how --map names them.
+// header's line with the file's own columns and how --map names them. A --map time column of
+// dates and times is read as seconds since its first row's (CsvDialect::date_time_column), which
+// goes into the metadata (kFirstDateTimeKey) and, when it states a zone and the file states no
+// start, as the start (kStartTimeKey).
 Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
                           const std::vector<ImportConversion>& conversions,
                           const CsvDialect& dialect = {});

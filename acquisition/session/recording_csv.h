@@ -53,6 +53,8 @@ inline constexpr std::string_view kRateColumn = "rate_rad_s";
 inline constexpr std::string_view kStrokeColumn = "stroke";
 inline constexpr std::string_view kHandleRadiusKey = "handle_radius_m";
 inline constexpr std::string_view kSampleRateKey = "sample_rate_hz";
+// The recording's start, ISO 8601 UTC (export writes it; import takes it as the session's).
+inline constexpr const char* kStartTimeKey = "start_time_utc";
 
 // Where a door handle can be: kHandleRadiusMinM to kHandleRadiusMaxM from the hinge axis.
 // A recording's, a geometry calibration's or a door file's radius outside is most likely a

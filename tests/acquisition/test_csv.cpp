@@ -322,7 +322,7 @@ TEST_CASE("table format errors name the source and line", "[csv][errors]") {
 TEST_CASE("CSV dialects: semicolons with decimal commas, and tabs", "[csv][errors]") {
   using doorbench::CsvDialect;
   using doorbench::parse_csv_table;
-  const CsvDialect semicolon{';', true}, tab{'\t', false};
+  const CsvDialect semicolon{';', true, ""}, tab{'\t', false, ""};
   const doorbench::CsvTable comma_table =
       parse_csv_table("# a: 1,5\nTime (s),Force (N)\n0,1.5\n0.001,-2.25e-3\n", "run.csv");
   const doorbench::CsvTable semicolon_table =
@@ -346,7 +346,7 @@ TEST_CASE("CSV dialects: semicolons with decimal commas, and tabs", "[csv][error
       "run.csv:2: column f_N: '1.234,5' holds a '.' (with --decimal-comma the decimal point is "
       "',', and thousands separators are not read)");
   REQUIRE_THROWS_WITH(parse_csv_table("t_s;f_N\n0;1,5\n", "run.csv", doorbench::EmptyCells::kRefuse,
-                                      CsvDialect{';', false}),
+                                      CsvDialect{';', false, ""}),
                       "run.csv:2: column f_N: '1,5' is not a number (a decimal comma? give "
                       "--decimal-comma)");
   REQUIRE_THROWS_WITH(
@@ -358,7 +358,7 @@ TEST_CASE("CSV dialects: semicolons with decimal commas, and tabs", "[csv][error
       "run.csv:1: column 1 name 't_s;f_N' contains ';' (fields are separated by a tab here, as "
       "--separator says)");
   REQUIRE_THROWS_WITH(parse_csv_table("t_s,f_N\n", "run.csv", doorbench::EmptyCells::kRefuse,
-                                      CsvDialect{',', true}),
+                                      CsvDialect{',', true, ""}),
                       "--decimal-comma needs --separator semicolon or tab (a comma cannot both "
                       "separate fields and mark decimals)");
 }

@@ -17,6 +17,7 @@
 #include "acquisition/session/import_units.h"
 #include "acquisition/session/session_file.h"
 #include "acquisition/session/tdms.h"
+#include "core/number_format.h"
 #include "core/units.h"
 #include "fixtures/temp_dir.h"
 #include "tests/support/run_doorbench.h"
@@ -426,6 +427,75 @@ TEST_CASE("Import: a --map column in ms, kN, deg, deg/s or rpm is converted exac
         "doorbench: min.csv:1: --map time=t (min): column 't (min)' is in 'min', not s (the time "
         "is read in s, ms or us: convert the column); the file's columns: t (min), F (N), a "
         "(grad)\n");
+}
+
+// A logger that stamps each row with its date and time: the --map time column is read as
+// seconds since the first row's; a stated zone gives the session's start, none is warned about;
+// a column that mixes dates and numbers is refused at its line.
+TEST_CASE("Import: a --map time column of dates and times is read as seconds since the first",
+          "[csv][cli]") {
+  const testing::TempDir dir("import_csv_date_times");
+  const auto log = [](const std::string& zone) {
+    std::string csv = "Timestamp,Force (N),Angle (rad)\n";
+    for (int k = 0; k < 120; ++k) {  // 8 ms apart from 23:58:59.5, across the minute's end
+      const int ms = 58 * 60000 + 59500 + 8 * k;
+      csv += printf_text("2024-02-29 23:%02d:%02d.%03d", ms / 60000, (ms / 1000) % 60, ms % 1000);
+      csv += zone + "," + format_csv_number(1.0 + 0.01 * k) + ",0.1\n";
+    }
+    return csv;
+  };
+  dir.write("local.csv", log(""));
+  dir.write("zoned.csv", log("+01:00"));
+  const std::string map = " --map 'time=Timestamp,force=Force (N),angle=Angle (rad)'";
+  testing::DoorbenchRun run = testing::run_doorbench_shell("import local.csv" + map + " --out a.h5",
+                                                           dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(run.err ==
+        "wrote a.h5: 120 samples\n"
+        "  time_s: dates and times read as seconds since the first, 2024-02-29T23:58:59.500000 "
+        "(no time zone stated)\n"
+        "warning: the time column states no time zone, so the session's start is the import's "
+        "time; give the recording's with --start-time (ISO 8601 UTC)\n");
+  {
+    const SessionReader session(dir / "a.h5");
+    const ChannelSlice force = session.read("force");
+    REQUIRE(force.time_s.size() == 120);
+    for (std::size_t k = 0; k < force.time_s.size(); ++k) {
+      CHECK(std::abs(force.time_s[k] - force.time_s[0] - 0.008 * static_cast<double>(k)) <= 1e-9);
+    }
+    CHECK(session.read_group_attribute("import", "csv_map_time_first_date_time") ==
+          "2024-02-29T23:58:59.500000");
+  }
+  run = testing::run_doorbench_shell("import zoned.csv" + map + " --out b.h5", dir,
+                                     units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  CHECK(run.err.find("warning") == std::string::npos);
+  CHECK(SessionReader(dir / "b.h5").metadata().start_time_utc == "2024-02-29T22:58:59.500000Z");
+  // --start-time is the start whatever the column says, and silences the warning.
+  run = testing::run_doorbench_shell(
+      "import local.csv" + map + " --start-time 2024-02-29T22:59:59Z --out c.h5", dir,
+      units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  CHECK(run.err.find("warning") == std::string::npos);
+  // A number among dates, or a date without the first row's zone, is refused at its line.
+  std::string mixed = log("");
+  mixed.replace(mixed.find("2024-02-29 23:58:59.516"), 23, "0.016");
+  dir.write("mixed.csv", mixed);
+  run = testing::run_doorbench_shell("import mixed.csv" + map + " --out d.h5", dir,
+                                     units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: mixed.csv:4: column Timestamp: '0.016' is not a date and time without a time "
+        "zone as the first row's (YYYY-MM-DD hh:mm:ss.fff)\n");
+  std::string zones = log("Z");
+  zones.replace(zones.find("23:58:59.508Z"), 13, "23:58:59.508");
+  dir.write("zones.csv", zones);
+  run = testing::run_doorbench_shell("import zones.csv" + map + " --out e.h5", dir,
+                                     units_dir_env(dir));
+  CHECK(run.err ==
+        "doorbench: zones.csv:3: column Timestamp: '2024-02-29 23:58:59.508' is not a date and "
+        "time with a time zone (Z or +hh:mm) as the first row's (YYYY-MM-DD hh:mm:ss.fff)\n");
 }
 
 // A spreadsheet's export in a European locale (semicolons, decimal commas, CRLF) and a LabVIEW

@@ -4,6 +4,8 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
+#include <ctime>
 #include <limits>
 #include <optional>
 #include <random>
@@ -157,4 +159,46 @@ TEST_CASE("iso8601_utc_text: seconds since 1970 in UTC, with the fraction's lead
   // The present moment is a valid UTC time as the command line takes it.
   CHECK(doorbench::iso8601_utc_problem(doorbench::utc_now_iso8601()).empty());
   CHECK(doorbench::utc_now_iso8601().size() == 20);
+}
+
+TEST_CASE("parse_date_time: a logger's date and time as seconds since 1970, its zone if stated",
+          "[core]") {
+  using doorbench::parse_date_time;
+  // Against timegm (the C library's own calendar) over dates either side of leap days and
+  // centuries, at every month's first and last day.
+  for (int year : {1970, 1999, 2000, 2024, 2025, 2100}) {
+    for (int month = 1; month <= 12; ++month) {
+      for (int day : {1, 28}) {
+        std::tm civil{};
+        civil.tm_year = year - 1900;
+        civil.tm_mon = month - 1;
+        civil.tm_mday = day;
+        civil.tm_hour = 13;
+        civil.tm_min = 7;
+        civil.tm_sec = 59;
+        char text[32];
+        std::snprintf(text, sizeof text, "%04d-%02d-%02d 13:07:59", year, month, day);
+        const auto parsed = parse_date_time(text);
+        REQUIRE(parsed);
+        CHECK(parsed->seconds == static_cast<std::int64_t>(timegm(&civil)));
+        CHECK_FALSE(parsed->zone_known);
+      }
+    }
+  }
+  const auto utc = parse_date_time("2024-02-29T23:59:58.125Z");
+  REQUIRE(utc);
+  CHECK(utc->seconds == 1709251198);
+  CHECK(utc->fraction_s == 0.125);
+  CHECK(utc->zone_known);
+  // An offset is taken off; seconds and the fraction are optional.
+  CHECK(parse_date_time("2024-03-01 00:59:58.125+01:00")->seconds == 1709251198);
+  CHECK(parse_date_time("2024-02-29 18:59:58-0500")->seconds == 1709251198);
+  CHECK(parse_date_time(" 2024-02-29 23:59 ")->seconds == 1709251140);
+  CHECK(parse_date_time("2024-02-29 23:59:58.000000000000000000001")->fraction_s == 0.0);
+  for (const char* bad : {"2023-02-29 00:00:00", "2024-13-01 00:00", "2024-01-01", "12.5",
+                          "2024-01-01 24:00:00", "2024-01-01 00:00:00.", "2024-01-01 00:00:00 PM",
+                          "2024-01-01 00:00:00+1", "2024-01-01_00:00:00", ""}) {
+    INFO(bad);
+    CHECK_FALSE(parse_date_time(bad));
+  }
 }
