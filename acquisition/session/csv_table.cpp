@@ -256,17 +256,18 @@ void read_data_row(std::string_view line, int line_number, std::string_view sour
   for (std::size_t column = 0; column < column_count; ++column) {
     const auto comma = line.find(dialect.separator, start);
     const std::string_view cell = line.substr(start, comma - start);
-    if (dialect.decimal_comma && !with_decimal_point(cell, decimal_point_cell)) {
-      throw CsvError(source, line_number,
-                     "column " + table.column_names[column] + ": " + quoted(trim(cell)) +
-                         " holds a '.' (with --decimal-comma the decimal point is ',', and "
-                         "thousands separators are not read)");
-    }
+    // A date and time's fraction is after a '.' whatever the dialect's decimal point.
     if (!dialect.date_time_column.empty() &&
         table.column_names[column] == dialect.date_time_column &&
         read_date_time_cell(cell, column, line_number, source, table)) {
       start = comma + 1;
       continue;
+    }
+    if (dialect.decimal_comma && !with_decimal_point(cell, decimal_point_cell)) {
+      throw CsvError(source, line_number,
+                     "column " + table.column_names[column] + ": " + quoted(trim(cell)) +
+                         " holds a '.' (with --decimal-comma the decimal point is ',', and "
+                         "thousands separators are not read)");
     }
     double value = 0.0;
     CellProblem problem =

@@ -478,6 +478,24 @@ TEST_CASE("Import: a --map time column of dates and times is read as seconds sin
       units_dir_env(dir));
   REQUIRE(run.status == 0);
   CHECK(run.err.find("warning") == std::string::npos);
+  // A spreadsheet's ';' file with decimal commas keeps the '.' of the dates' fractions.
+  std::string european = log("");
+  std::replace(european.begin(), european.end(), ',', ';');
+  for (std::size_t line = european.find('\n'); line != std::string::npos;
+       line = european.find('\n', line + 1)) {
+    const std::size_t end = european.find('\n', line + 1);
+    const std::size_t first_field_end = european.find(';', line);
+    for (std::size_t at = first_field_end; at < end && at != std::string::npos; ++at) {
+      if (european[at] == '.') european[at] = ',';  // the numbers' decimal points, not the dates'
+    }
+  }
+  dir.write("european.csv", european);
+  run = testing::run_doorbench_shell(
+      "import european.csv" + map + " --separator semicolon --decimal-comma --out f.h5", dir,
+      units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(SessionReader(dir / "f.h5").read("force").time_s.size() == 120);
   // A number among dates, or a date without the first row's zone, is refused at its line.
   std::string mixed = log("");
   mixed.replace(mixed.find("2024-02-29 23:58:59.516"), 23, "0.016");
