@@ -18,6 +18,13 @@ int read_digits(std::string_view text, std::size_t at, std::size_t count) {
   return value;
 }
 
+// True when year-month-day names a day of the proleptic Gregorian calendar.
+bool is_calendar_day(int year, int month, int day) {
+  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
+  const int days[] = {31, leap ? 29 : 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
+  return month >= 1 && month <= 12 && day >= 1 && day <= days[month - 1];
+}
+
 }  // namespace
 
 std::string iso8601_utc_problem(const std::string& text) {
@@ -45,11 +52,7 @@ std::string iso8601_utc_problem(const std::string& text) {
       return text + form;
     }
   }
-  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
-  const int days[] = {31, leap ? 29 : 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
-  if (month < 1 || month > 12 || day < 1 || day > days[month - 1]) {
-    return text + " is not a day of the calendar";
-  }
+  if (!is_calendar_day(year, month, day)) return text + " is not a day of the calendar";
   return "";
 }
 
@@ -124,10 +127,7 @@ std::optional<DateTimeText> parse_date_time(std::string_view text) {
       out.fraction_s = static_cast<double>(numerator) / static_cast<double>(denominator);
     }
   }
-  const bool leap = (year % 4 == 0 && year % 100 != 0) || year % 400 == 0;
-  const int days[] = {31, leap ? 29 : 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31};
-  if (month < 1 || month > 12 || day < 1 || day > days[month - 1] || hour > 23 || minute > 59 ||
-      second > 59) {
+  if (!is_calendar_day(year, month, day) || hour > 23 || minute > 59 || second > 59) {
     return std::nullopt;
   }
   while (at < text.size() && text[at] == ' ') ++at;

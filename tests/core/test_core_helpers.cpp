@@ -9,6 +9,7 @@
 #include <limits>
 #include <optional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "core/html_escape.h"
@@ -159,6 +160,30 @@ TEST_CASE("iso8601_utc_text: seconds since 1970 in UTC, with the fraction's lead
   // The present moment is a valid UTC time as the command line takes it.
   CHECK(doorbench::iso8601_utc_problem(doorbench::utc_now_iso8601()).empty());
   CHECK(doorbench::utc_now_iso8601().size() == 20);
+}
+
+TEST_CASE("iso8601_utc_problem and parse_date_time take the same days of the calendar as timegm",
+          "[core]") {
+  // A day is in the calendar when timegm does not move it to another day.
+  for (int year : {1900, 1999, 2000, 2023, 2024, 2100, 2400}) {
+    for (int month = 1; month <= 12; ++month) {
+      for (int day = 27; day <= 32; ++day) {
+        std::tm civil{};
+        civil.tm_year = year - 1900;
+        civil.tm_mon = month - 1;
+        civil.tm_mday = day;
+        const std::time_t back = timegm(&civil);
+        std::tm normal{};
+        gmtime_r(&back, &normal);
+        const bool in_calendar = normal.tm_mday == day && day <= 31;
+        const std::string date = doorbench::printf_text("%04d-%02d-%02d", year, month, day);
+        CAPTURE(date);
+        CHECK(doorbench::iso8601_utc_problem(date).empty() == in_calendar);
+        CHECK(static_cast<bool>(doorbench::parse_date_time(date + " 12:00")) == in_calendar);
+      }
+    }
+  }
+  CHECK(doorbench::iso8601_utc_problem("2100-02-29") == "2100-02-29 is not a day of the calendar");
 }
 
 TEST_CASE("parse_date_time: a logger's date and time as seconds since 1970, its zone if stated",
