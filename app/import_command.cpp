@@ -165,11 +165,10 @@ void run_import(const ImportOptions& options) {
               << " kept, physical through " << printable(record.id) << " ("
               << printable(record.method) << ")\n";
   }
-  if (const std::string first = from_csv(kFirstDateTimeKey, ""); !first.empty()) {
-    const bool utc = first.ends_with('Z');
-    std::cerr << "  time_s: dates and times read as seconds since the first, " << first
-              << (utc ? "" : " (no time zone stated)") << "\n";
-    if (!utc && options.start_time.empty() && from_csv(kCsvStartKey, "").empty()) {
+  if (const auto dates = imported_date_times(recording)) {
+    std::cerr << "  time_s: dates and times read as seconds since the first, " << dates->first
+              << (dates->zone_stated ? "" : " (no time zone stated)") << "\n";
+    if (dates->start_unknown(!options.start_time.empty())) {
       std::cerr << "warning: the time column states no time zone, so the session's start is the "
                    "import's time; give the recording's with --start-time (ISO 8601 UTC)\n";
     }

@@ -302,6 +302,19 @@ void keep_first_date_time(CsvTable& table) {
 
 }  // namespace
 
+std::optional<ImportedDateTimes> imported_date_times(const Recording& recording) {
+  std::optional<ImportedDateTimes> out;
+  bool start_stated = false;
+  for (const auto& [key, value] : recording.metadata) {
+    if (key == kFirstDateTimeKey && !value.empty()) {
+      out = ImportedDateTimes{value, value.ends_with('Z'), false};
+    }
+    if (key == kStartTimeKey && !value.empty()) start_stated = true;
+  }
+  if (out) out->start_stated = start_stated;
+  return out;
+}
+
 Recording read_csv_import(const std::filesystem::path& path, const std::string& map_text,
                           const std::vector<ImportConversion>& conversions,
                           const CsvDialect& dialect) {

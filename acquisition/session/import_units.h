@@ -123,6 +123,24 @@ class CsvMapSyntaxError : public std::invalid_argument {
 // times (CsvDialect::date_time_column): the cell as written.
 inline constexpr const char* kFirstDateTimeKey = "map_time_first_date_time";
 
+// What a --map time column of dates and times told about the recording's clock.
+struct ImportedDateTimes {
+  // The first row's date and time: in UTC with a Z when the column states a zone, else the
+  // logger's own clock reading without one ("2024-05-02T09:30:00.125000").
+  std::string first;
+  bool zone_stated = false;
+  // The recording states its start: its file's own metadata does, or the column's zone did.
+  bool start_stated = false;
+
+  // Without a stated start the session's start would be the import's time, unless the user
+  // gives one (--start-time): true when that is what happens.
+  bool start_unknown(bool start_time_given) const { return !start_stated && !start_time_given; }
+};
+
+// The recording's ImportedDateTimes (kFirstDateTimeKey, kStartTimeKey), as read_csv_import kept
+// them; none when its time column held numbers.
+std::optional<ImportedDateTimes> imported_date_times(const Recording& recording);
+
 // A CSV file as `doorbench import` reads it: in `dialect`, empty cells as lost samples, its own
 // columns named by `map_text` (parse_csv_map, apply_csv_map; empty: the exchange format's names),
 // raw columns through `conversions` (take_raw_columns). Throws CsvMapSyntaxError for a malformed

@@ -516,6 +516,39 @@ TEST_CASE("Import: a --map time column of dates and times is read as seconds sin
         "time with a time zone (Z or +hh:mm) as the first row's (YYYY-MM-DD hh:mm:ss.fff)\n");
 }
 
+// What import tells of a date-time column's clock comes from the recording itself: the zone the
+// column states, or a start the file's own metadata gives, makes the start known.
+TEST_CASE("Import: imported_date_times says whether the recording states its start", "[csv]") {
+  const testing::TempDir dir("import_date_time_start");
+  const auto read = [&dir](const std::string& metadata, const std::string& zone) {
+    std::string csv = metadata + "Timestamp,Force (N),Angle (rad)\n";
+    for (int k = 0; k < 10; ++k) {
+      csv += printf_text("2024-05-02 09:30:00.%03d%s,1.0,0.1\n", 10 * k, zone.c_str());
+    }
+    dir.write("log.csv", csv);
+    return imported_date_times(
+        read_csv_import(dir / "log.csv", "time=Timestamp,force=Force (N),angle=Angle (rad)", {}));
+  };
+  const auto local = read("", "");
+  REQUIRE(local);
+  CHECK(local->first == "2024-05-02T09:30:00.000000");
+  CHECK_FALSE(local->zone_stated);
+  CHECK(local->start_unknown(false));
+  CHECK_FALSE(local->start_unknown(true));
+  const auto zoned = read("", "-02:00");
+  REQUIRE(zoned);
+  CHECK(zoned->first == "2024-05-02T11:30:00.000000Z");
+  CHECK(zoned->zone_stated);
+  CHECK_FALSE(zoned->start_unknown(false));
+  const auto stated = read("# start_time_utc: 2024-05-02T07:30:00Z\n", "");
+  REQUIRE(stated);
+  CHECK_FALSE(stated->zone_stated);
+  CHECK(stated->start_stated);
+  CHECK_FALSE(stated->start_unknown(false));
+  dir.write("numbers.csv", "time_s,force_N,angle_rad\n0,1,0.1\n0.01,1,0.1\n");
+  CHECK_FALSE(imported_date_times(read_csv_import(dir / "numbers.csv", "", {})));
+}
+
 // A spreadsheet's export in a European locale (semicolons, decimal commas, CRLF) and a LabVIEW
 // spreadsheet file (tabs) of the same log import to the same session as its comma file.
 TEST_CASE("Import: semicolon and tab files import as their comma file does", "[csv][cli]") {
