@@ -24,11 +24,13 @@ std::string PlaybackSummary::brief_report() const {
   std::ostringstream text;
   text.precision(4);
   text << ticks << " ticks over " << duration_s << " s into " << session_path.string()
-       << "; max commanded force " << max_commanded_force << " " << force_unit
-       << ", arc error radial/axial max " << max_radial_error_m * 1e3 << "/"
-       << max_axial_error_m * 1e3 << " mm; " << parameter_changes << " parameter changes; "
-       << clipped_ticks << " ticks clipped; " << records_dropped << " records dropped; safety "
-       << to_string(final_state);
+       << "; max commanded force " << max_commanded_force << " " << force_unit;
+  if (max_radial_error_m && max_axial_error_m) {
+    text << ", arc error radial/axial max " << *max_radial_error_m * 1e3 << "/"
+         << *max_axial_error_m * 1e3 << " mm";
+  }
+  text << "; " << parameter_changes << " parameter changes; " << clipped_ticks << " ticks clipped; "
+       << records_dropped << " records dropped; safety " << to_string(final_state);
   if (!safety_events.empty()) {
     // Each kind once, in order of first appearance, with its count.
     text << " (events:";
@@ -228,11 +230,16 @@ PlaybackSummary Playback::finish(std::optional<TimingReport> timing, const std::
                  std::sqrt(x.raw[i] * x.raw[i] + y.raw[i] * y.raw[i] + z.raw[i] * z.raw[i]));
   }
   if (!x.time_s.empty()) summary.duration_s = x.time_s.back() - x.time_s.front();
-  for (const double error : session.read("radial_error").raw) {
-    summary.max_radial_error_m = std::max(summary.max_radial_error_m, std::abs(error));
-  }
-  for (const double error : session.read("axial_error").raw) {
-    summary.max_axial_error_m = std::max(summary.max_axial_error_m, std::abs(error));
+  if (device_.limits().kinematics == Kinematics::kCartesian3) {
+    double radial_m = 0.0, axial_m = 0.0;
+    for (const double error : session.read("radial_error").raw) {
+      radial_m = std::max(radial_m, std::abs(error));
+    }
+    for (const double error : session.read("axial_error").raw) {
+      axial_m = std::max(axial_m, std::abs(error));
+    }
+    summary.max_radial_error_m = radial_m;
+    summary.max_axial_error_m = axial_m;
   }
   for (const SessionEvent& event : session.events()) {
     if (event.kind == "safety")

@@ -52,7 +52,9 @@ struct PlaybackSummary {
   double duration_s = 0.0;
   double max_commanded_force = 0.0;  // in force_unit
   std::string force_unit = "N";      // the device's (device_units): N, or N*m for a rotary one
-  double max_radial_error_m = 0.0, max_axial_error_m = 0.0;
+  // The handle's largest distance off the door's arc, radially and along the hinge; none for a
+  // rotary device, whose shaft is the hinge and has no arc to leave.
+  std::optional<double> max_radial_error_m, max_axial_error_m;
   std::uint64_t clipped_ticks = 0, records_dropped = 0, parameter_changes = 0;
   SafetyState final_state = SafetyState::kStarting;
   std::vector<std::string> safety_events;  // names, in order, e.g. "start_ramp_done"
