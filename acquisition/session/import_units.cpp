@@ -170,6 +170,17 @@ std::optional<double> stated_unit_factor(const std::string& stated, const std::s
   return std::nullopt;
 }
 
+std::string unit_symbol(const std::string& spelling) {
+  static constexpr std::pair<const char*, const char*> kSymbols[] = {
+      {"Newtons", "N"},       {"Degrees", "deg"}, {"Radians", "rad"}, {"Degrees/s", "deg/s"},
+      {"Radians/s", "rad/s"}, {"RPM", "rpm"},     {"Seconds", "s"},
+  };
+  for (const auto& [name, symbol] : kSymbols) {
+    if (spelling == name) return symbol;
+  }
+  return spelling;
+}
+
 std::vector<ImportConversion> with_stated_unit_conversions(
     const std::vector<ImportConversion>& conversions, const std::vector<CsvMapItem>& map) {
   std::vector<ImportConversion> all = conversions;

@@ -90,6 +90,12 @@ std::string unit_stated_in_name(const std::string& column);
 // for any other pair (volts, counts, an unknown spelling: those need --scale or --calibration).
 std::optional<double> stated_unit_factor(const std::string& stated, const std::string& unit);
 
+// The symbol of a unit NI-DAQmx spells out in a TDMS channel's unit_string, by the names its
+// unit constants carry (Newtons, Degrees, Radians, Degrees/s, Radians/s, RPM, Seconds): N, deg,
+// rad, deg/s, rad/s, rpm, s. Any other text is returned as it is ("Volts" too: a calibration
+// record names its input unit as the file does).
+std::string unit_symbol(const std::string& spelling);
+
 // `conversions` and, for each force, angle or rate the map names without one, a column whose
 // name states a unit stated_unit_factor converts ("Angle (deg)"): a conversion from that unit
 // (physical = factor · raw; the session keeps the raw values in it, record unit-TARGET).

@@ -176,6 +176,39 @@ double waveform_time(const TdmsFile& file, const TdmsChannel& force, const std::
   return interval_s;
 }
 
+// The factor from a time channel's unit to seconds: 1e-3 for ms, 1e-6 for us, none for
+// another unit or another target's channel.
+std::optional<double> time_unit_factor(const TdmsChannel& channel, bool time) {
+  const TdmsProperty* unit = property(channel, "unit_string");
+  if (!time || !unit) return std::nullopt;
+  return stated_unit_factor(unit_symbol(unit->text), "s");
+}
+
+// `conversions` and, for each force, angle or rate mapped without one whose channel's
+// unit_string states a unit stated_unit_factor converts ("Degrees", "deg/s", "kN"): a
+// conversion from that unit, as a --scale would give (the record "unit-TARGET").
+std::vector<ImportConversion> with_channel_unit_conversions(
+    const TdmsFile& file, const std::vector<TdmsMapItem>& map,
+    const std::vector<ImportConversion>& conversions, const std::string& source) {
+  std::vector<ImportConversion> all = conversions;
+  for (const TdmsMapItem& item : map) {
+    if (item.target != "force" && item.target != "angle" && item.target != "rate") continue;
+    if (find_conversion(conversions, item.target) != nullptr) continue;
+    const TdmsProperty* unit = property(mapped_channel(file, item, source), "unit_string");
+    if (!unit) continue;
+    const std::optional<double> factor =
+        stated_unit_factor(unit_symbol(unit->text), import_target_unit(item.target));
+    if (!factor) continue;
+    ImportConversion conversion;
+    conversion.target = item.target;
+    conversion.given = item.target + "=" + item.text + ", the unit its channel states";
+    conversion.gain = *factor;
+    conversion.from_stated_unit = true;
+    all.push_back(std::move(conversion));
+  }
+  return all;
+}
+
 // The unit a target's channel must state (when it states one): the target's, or for a
 // converted target its record's input unit ("" for a --scale: any).
 std::string expected_unit(const TdmsMapItem& item, const ImportConversion* conversion) {
@@ -215,15 +248,18 @@ void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item, const Tdm
   const std::string expected = expected_unit(item, conversion);
   const TdmsProperty* unit = property(channel, "unit_string");
   const bool states_unit = unit && !unit->text.empty();
-  if (!expected.empty() && states_unit && unit->text != expected) {
+  const bool time = item.target == "time";
+  if (!expected.empty() && states_unit && unit->text != expected &&
+      (conversion || (unit_symbol(unit->text) != expected && !time_unit_factor(channel, time)))) {
     mapping_error(file, source,
                   item.target + ": channel " + name + " is in '" + unit->text + "', not " +
                       expected +
                       (conversion ? " (" + conversion->given + ")"
+                       : time     ? " (the time is read in s, ms or us)"
                                   : " (convert it: --calibration " + item.target +
-                                        "=RECORD or --scale " + item.target +
-                                        "=GAIN[,OFFSET]; or map it as an extra column whose "
-                                        "name ends in its unit)"));
+                                    "=RECORD or --scale " + item.target +
+                                    "=GAIN[,OFFSET]; or map it as an extra column whose "
+                                    "name ends in its unit)"));
   }
   if (conversion) {
     CalibrationRecord record;
@@ -363,16 +399,22 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
                   "--rate-hz and time=" + time_item->text + " both give the time (give one)");
   }
   if (time_item) {
-    recording.time_s = mapped_channel(file, *time_item, source).values;
+    const TdmsChannel& clock = mapped_channel(file, *time_item, source);
+    recording.time_s = clock.values;
+    if (const std::optional<double> factor = time_unit_factor(clock, true)) {
+      for (double& t : recording.time_s) t *= *factor;
+    }
   } else {
     interval_s = waveform_time(file, force, source, options.rate_hz, recording);
   }
   if (const TdmsProperty* start = property(force, "wf_start_time")) {
     recording.metadata.emplace_back("tdms_wf_start_time", start->text);
   }
+  TdmsImportOptions with_units = options;
+  with_units.conversions = with_channel_unit_conversions(file, map, options.conversions, source);
   for (const TdmsMapItem& item : map) {
-    take_mapped_column(file, item, mapped_channel(file, item, source), force, interval_s, options,
-                       source, recording);
+    take_mapped_column(file, item, mapped_channel(file, item, source), force, interval_s,
+                       with_units, source, recording);
   }
   for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
     if (!(recording.time_s[i] > recording.time_s[i - 1])) {

@@ -121,6 +121,17 @@ void check_force_in_newtons(const std::filesystem::path& session_path, const std
   }
 }
 
+// A channel of doubles in group Lab as LabVIEW writes one: its values and its unit, no timing.
+Object lab_channel(const std::string& name, const std::string& unit, std::uint64_t count) {
+  Object channel;
+  channel.raw = Object::kNew;
+  channel.path = "/'Lab'/'" + name + "'";
+  channel.type = kDouble;
+  channel.count = count;
+  channel.properties = {text_property("unit_string", unit)};
+  return channel;
+}
+
 // Runs doorbench in `dir`, so that names in its messages are as given.
 std::string units_dir_env(const testing::TempDir& dir) {
   return "env -C '" + dir.path.string() + "'";
@@ -595,6 +606,75 @@ TEST_CASE("Import: semicolon and tab files import as their comma file does", "[c
         "--separator)\n");
 }
 
+// A TDMS channel's unit_string in DAQmx's spelling (Newtons, Degrees, RPM) or a multiple of the
+// target's unit is converted exactly, as a CSV column's stated unit is; any other is refused.
+TEST_CASE("Import: a TDMS channel in Degrees, RPM or ms is converted exactly", "[tdms][cli]") {
+  const testing::TempDir dir("import_tdms_stated_units");
+  constexpr int kSamples = 40;
+  const auto lab_file = [](const std::vector<std::pair<std::string, std::string>>& channels) {
+    std::vector<Object> objects;
+    for (const auto& [name, unit] : channels) {
+      objects.push_back(lab_channel(name, unit, kSamples));
+    }
+    Bytes raw;
+    for (int k = 0; k < kSamples; ++k) raw.put(2.5 * k);                   // Time
+    for (int k = 0; k < kSamples; ++k) raw.put(10.0 * std::sin(0.2 * k));  // Force
+    for (int k = 0; k < kSamples; ++k) raw.put(1.5 * k);                   // Angle
+    for (int k = 0; k < kSamples; ++k) raw.put(6.0);                       // Rate
+    return segment(kTocMetaData | kTocNewObjList | kTocRawData, objects, raw).data;
+  };
+  write_bytes(
+      dir / "daqmx.tdms",
+      lab_file({{"Time", "ms"}, {"Force", "Newtons"}, {"Angle", "Degrees"}, {"Rate", "RPM"}}));
+  const std::string map = " --map time=Lab/Time,force=Lab/Force,angle=Lab/Angle,rate=Lab/Rate ";
+  testing::DoorbenchRun run = testing::run_doorbench_shell("import daqmx.tdms" + map + "--out a.h5",
+                                                           dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  {
+    const SessionReader session(dir / "a.h5");
+    const ChannelSlice force = session.read("force");
+    REQUIRE(force.time_s.size() == kSamples);
+    const std::vector<double> angle = session.physical("angle", session.read("angle"));
+    const std::vector<double> rate = session.physical("rate", session.read("rate"));
+    for (int k = 0; k < kSamples; ++k) {
+      CHECK(force.time_s[k] == Approx(2.5e-3 * k).margin(1e-15));
+      CHECK(force.raw[k] == 10.0 * std::sin(0.2 * k));
+      CHECK(angle[k] == Approx(1.5 * k * kRadPerDeg).epsilon(1e-14).margin(1e-16));
+      CHECK(rate[k] == Approx(6.0 * 2.0 * std::numbers::pi / 60.0).epsilon(1e-14));
+    }
+    CHECK(session.channel("angle").calibration_id == "unit-angle");
+    CHECK(session.channel("angle").raw_unit == "Degrees");
+    CHECK(session.channel("rate").calibration_id == "unit-rate");
+    CHECK(session.channel("force").calibration_id.empty());
+  }
+  // A unit that is no multiple of the target's is refused, as before; so is a time in minutes.
+  write_bytes(dir / "volts.tdms",
+              lab_file({{"Time", "s"}, {"Force", "Volts"}, {"Angle", "Degrees"}, {"Rate", "RPM"}}));
+  run = testing::run_doorbench_shell("import volts.tdms" + map + "--out b.h5", dir,
+                                     units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: volts.tdms: force: channel Lab/Force is in 'Volts', not N (convert it: "
+        "--calibration force=RECORD or --scale force=GAIN[,OFFSET]; or map it as an extra column "
+        "whose name ends in its unit); the file's channels: Lab/Time, Lab/Force, Lab/Angle, "
+        "Lab/Rate\n");
+  write_bytes(dir / "minutes.tdms",
+              lab_file({{"Time", "min"}, {"Force", "N"}, {"Angle", "rad"}, {"Rate", "rad/s"}}));
+  run = testing::run_doorbench_shell("import minutes.tdms" + map + "--out b.h5", dir,
+                                     units_dir_env(dir));
+  CHECK(run.status == 1);
+  CHECK(run.err ==
+        "doorbench: minutes.tdms: time: channel Lab/Time is in 'min', not s (the time is read in "
+        "s, ms or us); the file's channels: Lab/Time, Lab/Force, Lab/Angle, Lab/Rate\n");
+  // A --scale given for the target wins over the unit the channel states.
+  run = testing::run_doorbench_shell("import daqmx.tdms" + map + "--scale angle=0.5 --out c.h5",
+                                     dir, units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  CHECK(SessionReader(dir / "c.h5").channel("angle").calibration_id == "scale-angle");
+  CHECK(!std::filesystem::exists(dir / "b.h5"));
+}
+
 TEST_CASE("Import: a TDMS file without timing imports with --rate-hz and --start-time",
           "[tdms][cli]") {
   const testing::TempDir dir("import_rate");
@@ -602,12 +682,7 @@ TEST_CASE("Import: a TDMS file without timing imports with --rate-hz and --start
   const auto lab_file = [](bool with_increment) {
     std::vector<Object> objects;
     for (const auto& [name, unit] : {std::pair{"Force", "N"}, std::pair{"Angle", "rad"}}) {
-      Object channel;
-      channel.raw = Object::kNew;
-      channel.path = std::string("/'Lab'/'") + name + "'";
-      channel.type = kDouble;
-      channel.count = 50;
-      channel.properties = {text_property("unit_string", unit)};
+      Object channel = lab_channel(name, unit, 50);
       if (with_increment) channel.properties.push_back(double_property("wf_increment", 0.001));
       objects.push_back(channel);
     }

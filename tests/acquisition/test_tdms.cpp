@@ -212,14 +212,22 @@ TEST_CASE("TDMS: doorbench import makes a session with the samples bit for bit",
         "doorbench: --map item 'force' is not TARGET=GROUP/CHANNEL (e.g. force=Load/Force); the "
         "file's channels: Door/Force, Door/Angle, Door/Incl, Door/Note (see doorbench import "
         "--help)\n");
+  // A channel in degrees as the angle is converted exactly (record unit-angle); one in
+  // radians as the force is refused.
   run = testing::run_doorbench_shell("import '" + tdms +
                                          "' --map force=Door/Force,angle=Door/Incl --out '" +
+                                         (dir / "deg.h5").string() + "'",
+                                     dir);
+  CHECK(run.status == 0);
+  CHECK(SessionReader(dir / "deg.h5").channel("angle").calibration_id == "unit-angle");
+  run = testing::run_doorbench_shell("import '" + tdms +
+                                         "' --map force=Door/Angle,angle=Door/Incl --out '" +
                                          (dir / "t.h5").string() + "'",
                                      dir);
   CHECK(run.status == 1);
   CHECK(run.err == "doorbench: " + tdms +
-                       ": angle: channel Door/Incl is in 'deg', not rad (convert it: "
-                       "--calibration angle=RECORD or --scale angle=GAIN[,OFFSET]; or map it as "
+                       ": force: channel Door/Angle is in 'rad', not N (convert it: "
+                       "--calibration force=RECORD or --scale force=GAIN[,OFFSET]; or map it as "
                        "an extra column whose name ends in its unit)" +
                        channels);
 
