@@ -34,13 +34,16 @@ WindowProblem::Outcome solve_coarse_to_fine(WindowProblem& problem, const DoorMo
     };
   }
   double initial_cost = kNaN;
-  if (options.coarse_first && options.substeps_per_sample > 1) {
+  // The coarse stage leaves the fine one at least one of the iterations, so that both together
+  // take at most max_iterations.
+  if (options.coarse_first && options.substeps_per_sample > 1 && max_iterations > 1) {
     ProblemKind coarse_kind = window_fit_kind(options, model);
     coarse_kind.windows.substeps_per_sample = 1;
     WindowProblem coarse(model, data, map, coarse_kind, weights, problem.x());
     coarse.z() = problem.z();
-    const WindowProblem::Outcome outcome = coarse.solve(
-        settings, max_iterations, options.coarse_tolerance_factor * options.uncertainty_tolerance);
+    const WindowProblem::Outcome outcome =
+        coarse.solve(settings, max_iterations - 1,
+                     options.coarse_tolerance_factor * options.uncertainty_tolerance);
     used = outcome.iterations;
     initial_cost = outcome.initial_cost;
     if (outcome.usable) {

@@ -464,6 +464,29 @@ TEST_CASE("on noise-free strokes the fit recovers the parameters tightly", "[fit
   CHECK(result.summary.fitted.window.rmse() < 1e-4);
 }
 
+TEST_CASE("a fit's window stage takes at most max_iterations, coarse and fine together",
+          "[fitting]") {
+  for (int max_iterations : {1, 2, 3}) {
+    INFO("max_iterations " << max_iterations);
+    FitOptions options = quick_options();
+    options.max_iterations = max_iterations;
+    int largest_done = -1;
+    options.progress = [&](const doorbench::FitProgress& progress) {
+      using Stage = doorbench::FitProgress::Stage;
+      if (progress.stage != Stage::kWindows && progress.stage != Stage::kPolish) return;
+      // What the progress line prints: "iteration DONE of at most TOTAL".
+      CHECK(progress.done <= progress.total);
+      if (progress.stage == Stage::kWindows) {
+        CHECK(progress.total == max_iterations);
+        largest_done = std::max(largest_done, progress.done);
+      }
+    };
+    doorbench::fit_model(thirty_percent_off(sensory_truth()), noisy_sensory_data(), options);
+    // 30 % off, the window stage does not converge in three iterations: it uses its budget.
+    CHECK(largest_done == max_iterations);
+  }
+}
+
 TEST_CASE("fixed parameters stay fixed and the constraints hold at the result", "[fitting]") {
   const DoorModel start = thirty_percent_off(sensory_truth());
   FitOptions options = quick_options();
