@@ -166,11 +166,14 @@ void run_import(const ImportOptions& options) {
               << printable(record.method) << ")\n";
   }
   if (const auto dates = imported_date_times(recording)) {
-    std::cerr << "  time_s: dates and times read as seconds since the first, " << dates->first
-              << (dates->zone_stated ? "" : " (no time zone stated)") << "\n";
+    const char* lacks = dates->date_stated ? "no time zone" : "no date";
+    std::cerr << "  time_s: " << (dates->date_stated ? "dates and times" : "times of the day")
+              << " read as seconds since the first, " << dates->first
+              << (dates->zone_stated ? "" : std::string(" (") + lacks + " stated)") << "\n";
     if (dates->start_unknown(!options.start_time.empty())) {
-      std::cerr << "warning: the time column states no time zone, so the session's start is the "
-                   "import's time; give the recording's with --start-time (ISO 8601 UTC)\n";
+      std::cerr << "warning: the time column states " << lacks
+                << ", so the session's start is the import's time; give the recording's with "
+                   "--start-time (ISO 8601 UTC)\n";
     }
   }
 }

@@ -97,22 +97,20 @@ std::int64_t days_since_epoch(std::int64_t year, int month, int day) {
 
 }  // namespace
 
-std::optional<DateTimeText> parse_date_time(std::string_view text) {
-  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
-  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
-  const int year = read_digits(text, 0, 4), month = read_digits(text, 5, 2);
-  const int day = read_digits(text, 8, 2), hour = read_digits(text, 11, 2);
-  const int minute = read_digits(text, 14, 2);
-  if (year < 0 || month < 0 || day < 0 || hour < 0 || minute < 0 || text[4] != '-' ||
-      text[7] != '-' || (text[10] != 'T' && text[10] != ' ') || text[13] != ':') {
-    return std::nullopt;
+namespace {
+
+// "hh:mm[:ss[.fraction]]" at `at`: its seconds since midnight and fraction into `out`, and the
+// index after it; npos when it is not one (or names no time of the day).
+std::size_t read_clock(std::string_view text, std::size_t at, DateTimeText& out) {
+  const int hour = read_digits(text, at, 2), minute = read_digits(text, at + 3, 2);
+  if (hour < 0 || minute < 0 || text[at + 2] != ':' || hour > 23 || minute > 59) {
+    return std::string_view::npos;
   }
-  std::size_t at = 16;
+  at += 5;
   int second = 0;
-  DateTimeText out;
   if (at < text.size() && text[at] == ':') {
     second = read_digits(text, at + 1, 2);
-    if (second < 0) return std::nullopt;
+    if (second < 0 || second > 59) return std::string_view::npos;
     at += 3;
     if (at < text.size() && text[at] == '.') {
       // The digits as an integer over a power of ten (one rounding); beyond 18, ignored.
@@ -123,36 +121,65 @@ std::optional<DateTimeText> parse_date_time(std::string_view text) {
         numerator = numerator * 10 + (text[at] - '0');
         denominator *= 10;
       }
-      if (at == first) return std::nullopt;
+      if (at == first) return std::string_view::npos;
       out.fraction_s = static_cast<double>(numerator) / static_cast<double>(denominator);
     }
   }
-  if (!is_calendar_day(year, month, day) || hour > 23 || minute > 59 || second > 59) {
-    return std::nullopt;
-  }
+  out.seconds = hour * 3600 + minute * 60 + second;
+  return at;
+}
+
+// A zone after the clock at `at` ("Z", "+01:00", "-0500", "+01", spaces before it allowed):
+// its offset east of UTC in minutes, 0 and zone_known false when there is none, and the index
+// after it; npos when what follows is no zone.
+std::size_t read_zone(std::string_view text, std::size_t at, int& offset_minutes,
+                      bool& zone_known) {
   while (at < text.size() && text[at] == ' ') ++at;
-  int offset_minutes = 0;
+  offset_minutes = 0;
+  zone_known = false;
   if (at < text.size() && text[at] == 'Z') {
-    out.zone_known = true;
+    zone_known = true;
     ++at;
   } else if (at < text.size() && (text[at] == '+' || text[at] == '-')) {
     const int sign = text[at] == '+' ? 1 : -1;
     const int offset_hours = read_digits(text, at + 1, 2);
-    if (offset_hours < 0 || offset_hours > 18) return std::nullopt;
+    if (offset_hours < 0 || offset_hours > 18) return std::string_view::npos;
     at += 3;
     int offset_extra = 0;
     if (at < text.size()) {
       const std::size_t digits_at = text[at] == ':' ? at + 1 : at;
       offset_extra = read_digits(text, digits_at, 2);
-      if (offset_extra < 0 || offset_extra > 59) return std::nullopt;
+      if (offset_extra < 0 || offset_extra > 59) return std::string_view::npos;
       at = digits_at + 2;
     }
     offset_minutes = sign * (offset_hours * 60 + offset_extra);
-    out.zone_known = true;
+    zone_known = true;
   }
+  return at;
+}
+
+}  // namespace
+
+std::optional<DateTimeText> parse_date_time(std::string_view text) {
+  while (!text.empty() && (text.front() == ' ' || text.front() == '\t')) text.remove_prefix(1);
+  while (!text.empty() && (text.back() == ' ' || text.back() == '\t')) text.remove_suffix(1);
+  DateTimeText out;
+  if (text.size() > 2 && text[2] == ':') {  // a time of the day alone
+    out.date_known = false;
+    if (read_clock(text, 0, out) != text.size()) return std::nullopt;
+    return out;
+  }
+  const int year = read_digits(text, 0, 4), month = read_digits(text, 5, 2);
+  const int day = read_digits(text, 8, 2);
+  if (year < 0 || month < 0 || day < 0 || text.size() < 11 || text[4] != '-' || text[7] != '-' ||
+      (text[10] != 'T' && text[10] != ' ') || !is_calendar_day(year, month, day)) {
+    return std::nullopt;
+  }
+  int offset_minutes = 0;
+  std::size_t at = read_clock(text, 11, out);
+  if (at != std::string_view::npos) at = read_zone(text, at, offset_minutes, out.zone_known);
   if (at != text.size()) return std::nullopt;
-  out.seconds = days_since_epoch(year, month, day) * 86400 + hour * 3600 + minute * 60 + second -
-                offset_minutes * 60;
+  out.seconds += days_since_epoch(year, month, day) * 86400 - offset_minutes * 60;
   return out;
 }
 

@@ -28,12 +28,15 @@ struct DateTimeText {
   std::int64_t seconds = 0;  // since 1970-01-01T00:00:00 on its own clock (UTC when zone_known)
   double fraction_s = 0.0;   // the fraction of the second, [0, 1)
   bool zone_known = false;   // the text ends in Z or an offset, so `seconds` are UTC
+  bool date_known = true;    // false for a time of the day alone: `seconds` since its midnight
 };
 
 // "YYYY-MM-DD hh:mm:ss", 'T' or one space between date and time, seconds optional, a fraction
 // after '.' of any number of digits, then optionally 'Z' or an offset +hh:mm, +hhmm or +hh
 // (- too), with spaces around it allowed; nullopt for anything else or a day that is not on
-// the calendar. An offset is taken off: 08:00:00+01:00 is 07:00:00 UTC.
+// the calendar. An offset is taken off: 08:00:00+01:00 is 07:00:00 UTC. A time of the day alone,
+// "hh:mm[:ss[.fraction]]" without a zone, is read as seconds since its midnight (date_known
+// false).
 std::optional<DateTimeText> parse_date_time(std::string_view text);
 
 }  // namespace doorbench

@@ -214,6 +214,8 @@ bool with_decimal_point(std::string_view cell, std::string& out) {
   return true;
 }
 
+constexpr double kSecondsPerDay = 86400.0;
+
 // A cell of the dialect's date-time column (CsvDialect::date_time_column): true when it is a
 // date and time, appended as seconds since the first row's; false when it and the first row's are
 // not (then it is a number). Throws CsvError for a column that mixes the two, or zones.
@@ -230,15 +232,27 @@ bool read_date_time_cell(std::string_view cell, std::size_t column, int line_num
                        " is a date and time, but the first row's is a number");
   }
   const DateTimeText& first = *table.first_date_time;
-  if (!when || when->zone_known != first.zone_known) {
+  if (!first.date_known && (!when || when->date_known)) {
+    throw CsvError(source, line_number,
+                   "column " + name + ": " + quoted(trim(cell)) +
+                       " is not a time of the day without a date as the first row's "
+                       "(hh:mm:ss.fff)");
+  }
+  if (!when || when->zone_known != first.zone_known || when->date_known != first.date_known) {
     throw CsvError(
         source, line_number,
         "column " + name + ": " + quoted(trim(cell)) + " is not a date and time " +
             (first.zone_known ? "with a time zone (Z or +hh:mm)" : "without a time zone") +
             " as the first row's (YYYY-MM-DD hh:mm:ss.fff)");
   }
-  table.columns[column].push_back(static_cast<double>(when->seconds - first.seconds) +
-                                  (when->fraction_s - first.fraction_s));
+  double since_first_s =
+      static_cast<double>(when->seconds - first.seconds) + (when->fraction_s - first.fraction_s);
+  // A time of the day that falls more than 12 h behind the row before has passed midnight.
+  std::vector<double>& times = table.columns[column];
+  if (!first.date_known && !times.empty()) {
+    while (since_first_s < times.back() - kSecondsPerDay / 2) since_first_s += kSecondsPerDay;
+  }
+  times.push_back(since_first_s);
   return true;
 }
 

@@ -68,10 +68,11 @@ enum class EmptyCells { kRefuse, kMissing };
 struct CsvDialect {
   char separator = ',';        // ',', ';' or '\t'
   bool decimal_comma = false;  // ',' is the decimal point; a '.' in a cell is refused
-  // A column that may hold dates and times (a logger's "2024-05-02 09:30:00.125"): when its first
-  // row's cell is one (parse_date_time), every cell must be one stating a zone as the first does,
-  // and each is read as seconds since the first (CsvTable::first_date_time); otherwise the column
-  // is numbers as any other. "": none.
+  // A column that may hold dates and times (a logger's "2024-05-02 09:30:00.125") or times of
+  // the day ("09:30:00.125"): when its first row's cell is one (parse_date_time), every cell must
+  // be one of its kind, stating a zone as the first does, and each is read as seconds since the
+  // first (CsvTable::first_date_time); a time of the day more than 12 h behind the row before
+  // has passed midnight. Otherwise the column is numbers as any other. "": none.
   std::string date_time_column;
   // "" when usable, else what is wrong: "--decimal-comma needs --separator semicolon or tab (a
   // comma cannot both separate fields and mark decimals)".

@@ -292,7 +292,7 @@ CsvDialect with_date_time_column(const CsvDialect& dialect, const std::string& m
 
 // The first date and time of the table's time column, kept in its metadata to the microsecond:
 // in UTC ("2024-05-02T09:30:00.125000Z"), also as the start when the file states none; without a
-// zone, the clock's own reading without the Z.
+// zone, the clock's own reading without the Z; a time of the day alone as "09:30:00.125000".
 void keep_first_date_time(CsvTable& table) {
   const DateTimeText& first = *table.first_date_time;
   std::int64_t seconds = first.seconds;
@@ -306,7 +306,8 @@ void keep_first_date_time(CsvTable& table) {
     table.metadata.emplace_back(kStartTimeKey, text);
     table.metadata_line_numbers.push_back(0);  // not a line of the file
   }
-  if (!first.zone_known) text.pop_back();  // the Z
+  if (!first.zone_known) text.pop_back();                    // the Z
+  if (!first.date_known) text.erase(0, text.find('T') + 1);  // 1970-01-01T of the clock alone
   table.metadata.emplace_back(kFirstDateTimeKey, text);
   table.metadata_line_numbers.push_back(0);
 }
@@ -318,7 +319,8 @@ std::optional<ImportedDateTimes> imported_date_times(const Recording& recording)
   bool start_stated = false;
   for (const auto& [key, value] : recording.metadata) {
     if (key == kFirstDateTimeKey && !value.empty()) {
-      out = ImportedDateTimes{value, value.ends_with('Z'), false};
+      out = ImportedDateTimes{value, value.ends_with('Z'), value.find('-') != std::string::npos,
+                              false};
     }
     if (key == kStartTimeKey && !value.empty()) start_stated = true;
   }

@@ -132,9 +132,11 @@ inline constexpr const char* kFirstDateTimeKey = "map_time_first_date_time";
 // What a --map time column of dates and times told about the recording's clock.
 struct ImportedDateTimes {
   // The first row's date and time: in UTC with a Z when the column states a zone, else the
-  // logger's own clock reading without one ("2024-05-02T09:30:00.125000").
+  // logger's own clock reading without one ("2024-05-02T09:30:00.125000"); the time of the day
+  // alone ("09:30:00.125000") when the column states no date.
   std::string first;
   bool zone_stated = false;
+  bool date_stated = true;
   // The recording states its start: its file's own metadata does, or the column's zone did.
   bool start_stated = false;
 

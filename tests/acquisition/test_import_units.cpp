@@ -132,6 +132,17 @@ Object lab_channel(const std::string& name, const std::string& unit, std::uint64
   return channel;
 }
 
+// The session's force samples: `count` of them, `interval_s` apart from the first to 1 ns.
+void check_sample_times(const std::filesystem::path& session_path, std::size_t count,
+                        double interval_s) {
+  const ChannelSlice force = SessionReader(session_path).read("force");
+  REQUIRE(force.time_s.size() == count);
+  for (std::size_t k = 0; k < count; ++k) {
+    CHECK(std::abs(force.time_s[k] - force.time_s[0] - interval_s * static_cast<double>(k)) <=
+          1e-9);
+  }
+}
+
 // Runs doorbench in `dir`, so that names in its messages are as given.
 std::string units_dir_env(const testing::TempDir& dir) {
   return "env -C '" + dir.path.string() + "'";
@@ -468,16 +479,10 @@ TEST_CASE("Import: a --map time column of dates and times is read as seconds sin
         "(no time zone stated)\n"
         "warning: the time column states no time zone, so the session's start is the import's "
         "time; give the recording's with --start-time (ISO 8601 UTC)\n");
-  {
-    const SessionReader session(dir / "a.h5");
-    const ChannelSlice force = session.read("force");
-    REQUIRE(force.time_s.size() == 120);
-    for (std::size_t k = 0; k < force.time_s.size(); ++k) {
-      CHECK(std::abs(force.time_s[k] - force.time_s[0] - 0.008 * static_cast<double>(k)) <= 1e-9);
-    }
-    CHECK(session.read_group_attribute("import", "csv_map_time_first_date_time") ==
-          "2024-02-29T23:58:59.500000");
-  }
+  check_sample_times(dir / "a.h5", 120, 0.008);
+  CHECK(
+      SessionReader(dir / "a.h5").read_group_attribute("import", "csv_map_time_first_date_time") ==
+      "2024-02-29T23:58:59.500000");
   run = testing::run_doorbench_shell("import zoned.csv" + map + " --out b.h5", dir,
                                      units_dir_env(dir));
   REQUIRE(run.status == 0);
@@ -527,6 +532,51 @@ TEST_CASE("Import: a --map time column of dates and times is read as seconds sin
         "time with a time zone (Z or +hh:mm) as the first row's (YYYY-MM-DD hh:mm:ss.fff)\n");
 }
 
+// A logger that stamps each row with the time of the day only: read as seconds since the first
+// row's, across midnight; the start is the import's time unless given, and said so.
+TEST_CASE("Import: a --map time column of times of the day is read across midnight", "[csv][cli]") {
+  const testing::TempDir dir("import_csv_times_of_day");
+  std::string csv = "Time,Force (N),Angle (rad)\n";
+  for (int k = 0; k < 100; ++k) {  // 20 ms apart from 23:59:59.000, across midnight at k = 50
+    const int ms = (86399000 + 20 * k) % 86400000;
+    csv += printf_text("%02d:%02d:%02d.%03d,%s,0.1\n", ms / 3600000, (ms / 60000) % 60,
+                       (ms / 1000) % 60, ms % 1000, format_csv_number(1.0 + 0.01 * k).c_str());
+  }
+  dir.write("clock.csv", csv);
+  const std::string map = " --map 'time=Time,force=Force (N),angle=Angle (rad)'";
+  testing::DoorbenchRun run = testing::run_doorbench_shell("import clock.csv" + map + " --out a.h5",
+                                                           dir, units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(run.err ==
+        "wrote a.h5: 100 samples\n"
+        "  time_s: times of the day read as seconds since the first, 23:59:59.000000 (no date "
+        "stated)\n"
+        "warning: the time column states no date, so the session's start is the import's time; "
+        "give the recording's with --start-time (ISO 8601 UTC)\n");
+  check_sample_times(dir / "a.h5", 100, 0.02);
+  // A date among times of the day is refused at its line, as is a time of the day among dates.
+  struct Refused {
+    std::string file, cell, replacement, message;
+  };
+  for (const Refused& refused :
+       {Refused{"mixed.csv", "23:59:59.020", "2024-05-02 23:59:59.020",
+                "mixed.csv:3: column Time: '2024-05-02 23:59:59.020' is not a time of the day "
+                "without a date as the first row's (hh:mm:ss.fff)"},
+        Refused{"dated.csv", "23:59:59.000", "2024-05-02 23:59:59.000",
+                "dated.csv:3: column Time: '23:59:59.020' is not a date and time without a "
+                "time zone as the first row's (YYYY-MM-DD hh:mm:ss.fff)"}}) {
+    std::string text = csv;
+    text.replace(text.find(refused.cell), refused.cell.size(), refused.replacement);
+    dir.write(refused.file, text);
+    run = testing::run_doorbench_shell("import " + refused.file + map + " --out b.h5", dir,
+                                       units_dir_env(dir));
+    CHECK(run.status == 1);
+    CHECK(run.err == "doorbench: " + refused.message + "\n");
+  }
+  CHECK(!std::filesystem::exists(dir / "b.h5"));
+}
+
 // What import tells of a date-time column's clock comes from the recording itself: the zone the
 // column states, or a start the file's own metadata gives, makes the start known.
 TEST_CASE("Import: imported_date_times says whether the recording states its start", "[csv]") {
@@ -544,6 +594,7 @@ TEST_CASE("Import: imported_date_times says whether the recording states its sta
   REQUIRE(local);
   CHECK(local->first == "2024-05-02T09:30:00.000000");
   CHECK_FALSE(local->zone_stated);
+  CHECK(local->date_stated);
   CHECK(local->start_unknown(false));
   CHECK_FALSE(local->start_unknown(true));
   const auto zoned = read("", "-02:00");

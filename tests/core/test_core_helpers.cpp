@@ -226,4 +226,18 @@ TEST_CASE("parse_date_time: a logger's date and time as seconds since 1970, its 
     INFO(bad);
     CHECK_FALSE(parse_date_time(bad));
   }
+  // A time of the day alone: seconds since its midnight, no date, no zone.
+  const auto clock = parse_date_time(" 09:30:05.25 ");
+  REQUIRE(clock);
+  CHECK(clock->seconds == 9 * 3600 + 30 * 60 + 5);
+  CHECK(clock->fraction_s == 0.25);
+  CHECK_FALSE(clock->date_known);
+  CHECK_FALSE(clock->zone_known);
+  CHECK(parse_date_time("23:59")->seconds == 86340);
+  CHECK(parse_date_time("2024-02-29 23:59")->date_known);
+  for (const char* bad :
+       {"24:00:00", "09:60", "09:30:60", "09:30:00Z", "09:30:00.", "9:30:00", "09:30 PM", "09:3"}) {
+    INFO(bad);
+    CHECK_FALSE(parse_date_time(bad));
+  }
 }
