@@ -70,7 +70,10 @@ void run_view(const ViewOptions& options) {
       throw UsageError(
           "--screenshot takes one SESSION (two, A and B, for --layout overlay; any for steps)");
     }
-    if (options.layout.empty()) throw UsageError("--screenshot needs --layout");
+    if (options.layout.empty()) {
+      throw UsageError("--screenshot needs --layout, the view to render: one of " +
+                       viewer::layout_list());
+    }
   }
   viewer::WindowOptions window;
   window.width_px = options.width_px;

@@ -47,13 +47,17 @@ constexpr ImGuiTableFlags kTableFlags =
 
 }  // namespace
 
+std::string layout_list() {
+  std::string list;
+  for (const std::string& name : layout_names()) list += (list.empty() ? "" : ", ") + name;
+  return list;
+}
+
 std::string check_layout(const std::string& name) {
   const auto& names = layout_names();
   // "live" is not a tab: the viewer follows a journal instead of showing sessions.
   if (name == "live" || std::find(names.begin(), names.end(), name) != names.end()) return "";
-  std::string message = std::string("unknown layout '").append(name).append("' (expected ");
-  for (std::size_t i = 0; i < names.size(); ++i) message += (i ? ", " : "") + names[i];
-  return message + " or live)";
+  return "unknown layout '" + name + "' (expected " + layout_list() + " or live)";
 }
 
 Viewer::Viewer(std::vector<SessionData> sessions, std::vector<std::optional<FitComparison>> fits) {

@@ -30,6 +30,9 @@ inline const std::vector<std::string>& layout_names() {
   return names;
 }
 
+// The layouts for messages: "browser, channels, loop, fit, overlay, steps, tuning".
+std::string layout_list();
+
 class Viewer {
  public:
   // fits[i] (optional) compares session i with a model.

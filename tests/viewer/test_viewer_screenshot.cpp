@@ -137,7 +137,9 @@ TEST_CASE("view refuses a screenshot without a layout or with an unknown one", "
   const fs::path png = dir.path / "x.png";
   Run r = run("view --screenshot " + png.string() + " " + session.string(), dir.path);
   REQUIRE(r.exit_code == 2);
-  REQUIRE_THAT(r.err, Contains("--screenshot needs --layout"));
+  REQUIRE(r.err ==
+          "doorbench: --screenshot needs --layout, the view to render: one of browser, channels, "
+          "loop, fit, overlay, steps, tuning (see doorbench view --help)\n");
   r = run("view --screenshot " + png.string() + " --layout nope " + session.string(), dir.path);
   REQUIRE(r.exit_code == 2);
   REQUIRE_THAT(r.err, Contains("unknown layout 'nope' (expected browser, channels, loop, fit, "
