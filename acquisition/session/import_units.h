@@ -126,7 +126,9 @@ class CsvMapSyntaxError : public std::invalid_argument {
 };
 
 // The metadata key of the first row's date and time, when the --map time column holds dates and
-// times (CsvDialect::date_time_column): the cell as written.
+// times or times of the day (CsvDialect::date_time_column), to the microsecond in one of three
+// forms: "2024-05-02T08:30:00.125000Z" (UTC, the column stated a zone),
+// "2024-05-02T09:30:00.125000" (the logger's clock, no zone), "09:30:00.125000" (no date).
 inline constexpr const char* kFirstDateTimeKey = "map_time_first_date_time";
 
 // What a --map time column of dates and times told about the recording's clock.
