@@ -181,22 +181,29 @@ std::string unit_symbol(const std::string& spelling) {
   return spelling;
 }
 
+std::optional<ImportConversion> stated_unit_conversion(const std::string& target,
+                                                       const std::string& stated,
+                                                       const std::string& given) {
+  if (target != "force" && target != "angle" && target != "rate") return std::nullopt;
+  const std::optional<double> factor = stated_unit_factor(stated, import_target_unit(target));
+  if (!factor) return std::nullopt;
+  ImportConversion conversion;
+  conversion.target = target;
+  conversion.given = given;
+  conversion.gain = *factor;
+  conversion.from_stated_unit = true;
+  return conversion;
+}
+
 std::vector<ImportConversion> with_stated_unit_conversions(
     const std::vector<ImportConversion>& conversions, const std::vector<CsvMapItem>& map) {
   std::vector<ImportConversion> all = conversions;
   for (const CsvMapItem& item : map) {
-    if (item.target != "force" && item.target != "angle" && item.target != "rate") continue;
     if (find_conversion(conversions, item.target) != nullptr) continue;
-    const std::string stated = unit_stated_in_name(item.column);
-    const std::optional<double> factor =
-        stated_unit_factor(stated, import_target_unit(item.target));
-    if (!factor) continue;
-    ImportConversion conversion;
-    conversion.target = item.target;
-    conversion.given = item.given + ", the unit its name states";
-    conversion.gain = *factor;
-    conversion.from_stated_unit = true;
-    all.push_back(std::move(conversion));
+    if (auto conversion = stated_unit_conversion(item.target, unit_stated_in_name(item.column),
+                                                 item.given + ", the unit its name states")) {
+      all.push_back(std::move(*conversion));
+    }
   }
   return all;
 }

@@ -96,9 +96,17 @@ std::optional<double> stated_unit_factor(const std::string& stated, const std::s
 // record names its input unit as the file does).
 std::string unit_symbol(const std::string& spelling);
 
+// The conversion a target's raw values stated in `stated` imply when no --scale or --calibration
+// gives one: for force, angle or rate, a unit stated_unit_factor converts to the target's
+// ("deg" for angle): physical = factor · raw, the session keeping the raw values in it (record
+// unit-TARGET), `given` naming where the unit was stated, for messages. None for another target
+// or unit.
+std::optional<ImportConversion> stated_unit_conversion(const std::string& target,
+                                                       const std::string& stated,
+                                                       const std::string& given);
+
 // `conversions` and, for each force, angle or rate the map names without one, a column whose
-// name states a unit stated_unit_factor converts ("Angle (deg)"): a conversion from that unit
-// (physical = factor · raw; the session keeps the raw values in it, record unit-TARGET).
+// name states a unit stated_unit_factor converts ("Angle (deg)"): its stated_unit_conversion.
 std::vector<ImportConversion> with_stated_unit_conversions(
     const std::vector<ImportConversion>& conversions, const std::vector<CsvMapItem>& map);
 

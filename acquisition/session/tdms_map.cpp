@@ -176,17 +176,17 @@ double waveform_time(const TdmsFile& file, const TdmsChannel& force, const std::
   return interval_s;
 }
 
-// The factor from a time channel's unit to seconds: 1e-3 for ms, 1e-6 for us, none for
-// another unit or another target's channel.
-std::optional<double> time_unit_factor(const TdmsChannel& channel, bool time) {
+// The factor from a time channel's unit to seconds: 1e-3 for ms, 1e-6 for us; none for
+// another unit or none stated.
+std::optional<double> time_unit_factor(const TdmsChannel& channel) {
   const TdmsProperty* unit = property(channel, "unit_string");
-  if (!time || !unit) return std::nullopt;
+  if (!unit) return std::nullopt;
   return stated_unit_factor(unit_symbol(unit->text), "s");
 }
 
 // `conversions` and, for each force, angle or rate mapped without one whose channel's
-// unit_string states a unit stated_unit_factor converts ("Degrees", "deg/s", "kN"): a
-// conversion from that unit, as a --scale would give (the record "unit-TARGET").
+// unit_string states a unit stated_unit_factor converts ("Degrees", "deg/s", "kN"): its
+// stated_unit_conversion.
 std::vector<ImportConversion> with_channel_unit_conversions(
     const TdmsFile& file, const std::vector<TdmsMapItem>& map,
     const std::vector<ImportConversion>& conversions, const std::string& source) {
@@ -196,15 +196,11 @@ std::vector<ImportConversion> with_channel_unit_conversions(
     if (find_conversion(conversions, item.target) != nullptr) continue;
     const TdmsProperty* unit = property(mapped_channel(file, item, source), "unit_string");
     if (!unit) continue;
-    const std::optional<double> factor =
-        stated_unit_factor(unit_symbol(unit->text), import_target_unit(item.target));
-    if (!factor) continue;
-    ImportConversion conversion;
-    conversion.target = item.target;
-    conversion.given = item.target + "=" + item.text + ", the unit its channel states";
-    conversion.gain = *factor;
-    conversion.from_stated_unit = true;
-    all.push_back(std::move(conversion));
+    if (auto conversion = stated_unit_conversion(
+            item.target, unit_symbol(unit->text),
+            item.target + "=" + item.text + ", the unit its channel states")) {
+      all.push_back(std::move(*conversion));
+    }
   }
   return all;
 }
@@ -250,7 +246,8 @@ void take_mapped_column(const TdmsFile& file, const TdmsMapItem& item, const Tdm
   const bool states_unit = unit && !unit->text.empty();
   const bool time = item.target == "time";
   if (!expected.empty() && states_unit && unit->text != expected &&
-      (conversion || (unit_symbol(unit->text) != expected && !time_unit_factor(channel, time)))) {
+      (conversion ||
+       (unit_symbol(unit->text) != expected && !(time && time_unit_factor(channel))))) {
     mapping_error(file, source,
                   item.target + ": channel " + name + " is in '" + unit->text + "', not " +
                       expected +
@@ -401,7 +398,7 @@ Recording tdms_to_recording(const TdmsFile& file, const std::vector<TdmsMapItem>
   if (time_item) {
     const TdmsChannel& clock = mapped_channel(file, *time_item, source);
     recording.time_s = clock.values;
-    if (const std::optional<double> factor = time_unit_factor(clock, true)) {
+    if (const std::optional<double> factor = time_unit_factor(clock)) {
       for (double& t : recording.time_s) t *= *factor;
     }
   } else {

@@ -280,6 +280,29 @@ TEST_CASE("Import: the units a CSV column's name states", "[csv]") {
   CHECK(unit_stated_in_name(")") == "");
 }
 
+// The conversion a stated unit implies, shared by a CSV column's name and a TDMS channel's
+// unit_string: force, angle and rate only, and only units with an exact factor.
+TEST_CASE("Import: the conversion a stated unit implies", "[csv][tdms]") {
+  const auto angle = stated_unit_conversion("angle", "deg", "--map angle=Angle (deg)");
+  REQUIRE(angle);
+  CHECK(angle->target == "angle");
+  CHECK(angle->gain == kRadPerDeg);
+  CHECK(angle->offset == 0.0);
+  CHECK(angle->from_stated_unit);
+  CHECK_FALSE(angle->record);
+  CHECK(angle->given == "--map angle=Angle (deg)");
+  const auto rate = stated_unit_conversion("rate", "rpm", "rate=/'g'/'rate'");
+  REQUIRE(rate);
+  CHECK(rate->gain == Approx(2.0 * std::numbers::pi / 60.0).epsilon(1e-15));
+  const auto force = stated_unit_conversion("force", "kN", "force");
+  REQUIRE(force);
+  CHECK(force->gain == 1000.0);
+  CHECK_FALSE(stated_unit_conversion("force", "V", "force"));      // needs a record
+  CHECK_FALSE(stated_unit_conversion("angle", "rad", "angle"));    // already the target's
+  CHECK_FALSE(stated_unit_conversion("time", "ms", "time"));       // the time is scaled
+  CHECK_FALSE(stated_unit_conversion("incl_deg", "deg", "incl"));  // an extra keeps its unit
+}
+
 // A logger's own CSV: its own column names with units in parentheses, the force in volts and
 // the angle in degrees, a column nobody maps. --map names the columns and --calibration and
 // --scale make them physical; the mistakes are answered word for word with the file's columns.
