@@ -194,7 +194,9 @@ FitInputs load_fit_inputs(const FitDataOptions& options) {
   std::vector<std::string> report_lines;
   list_excluded(data, start, report_lines);
   for (const std::string& warning : data.warnings) {
-    if (warning.starts_with(kCutShortWarning)) report_lines.push_back("warning: " + warning);
+    if (warning.starts_with(kCutShortWarning) || warning.starts_with(kUnitDoubtWarning)) {
+      report_lines.push_back("warning: " + warning);
+    }
   }
   const double file_radius_m = start.geometry().handle_radius_m;
   if (data.handle_radius_m > 0 &&

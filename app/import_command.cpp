@@ -23,6 +23,7 @@
 #include "acquisition/session/import_units.h"
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/printable.h"
+#include "acquisition/session/recording_csv.h"
 #include "acquisition/session/resample.h"
 #include "acquisition/session/session_csv.h"
 #include "acquisition/session/tdms.h"
@@ -164,6 +165,9 @@ void run_import(const ImportOptions& options) {
     std::cerr << "  " << column << ": raw " << printable(record.input_unit)
               << " kept, physical through " << printable(record.id) << " ("
               << printable(record.method) << ")\n";
+  }
+  for (const std::string& doubt : unit_doubts(recording)) {
+    std::cerr << "warning: " << kUnitDoubtWarning << doubt << "\n";
   }
   if (const auto dates = imported_date_times(recording)) {
     const char* lacks = dates->date_stated ? "no time zone" : "no date";

@@ -9,6 +9,8 @@
 
 #include "acquisition/session/output_file.h"
 #include "core/number_format.h"
+#include "core/percentile.h"
+#include "core/units.h"
 
 namespace doorbench {
 namespace {
@@ -112,6 +114,67 @@ std::string handle_radius_problem(double radius_m, const std::string& origin) {
   return printf_text("%.6g m", radius_m) + (origin.empty() ? "" : " (from " + origin + ")") +
          " is outside " + format_number(kHandleRadiusMinM) + " to " +
          format_number(kHandleRadiusMaxM) + " m, where a door handle is";
+}
+
+namespace {
+
+// The finite physical values of a column: through its record when Recording::calibrations has
+// one.
+std::vector<double> physical_values(const Recording& recording, std::string_view column,
+                                    const std::vector<double>& values) {
+  const auto record = recording.calibrations.find(std::string(column));
+  std::vector<double> out;
+  out.reserve(values.size());
+  for (const double value : values) {
+    const double physical =
+        record == recording.calibrations.end() ? value : record->second.apply(value);
+    if (std::isfinite(physical)) out.push_back(physical);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<std::string> unit_doubts(const Recording& recording) {
+  std::vector<std::string> doubts;
+  if (recording.angle_rad) {
+    const std::vector<double> angle =
+        physical_values(recording, kAngleColumn, *recording.angle_rad);
+    const auto [low, high] = std::minmax_element(angle.begin(), angle.end());
+    if (low != angle.end() && *high - *low > kAngleSpanMaxRad) {
+      doubts.push_back(
+          "angle_rad spans " + format_significant(*low, 4) + " to " + format_significant(*high, 4) +
+          " rad, more than a turn: an angle in degrees read as radians? (import "
+          "converts it: --scale angle=" +
+          format_significant(kRadPerDeg, 6) + ", or a --map column whose name ends in (deg))");
+    }
+  }
+  if (recording.rate_rad_s) {
+    double fastest_rad_s = 0.0;
+    for (const double rate : physical_values(recording, kRateColumn, *recording.rate_rad_s)) {
+      fastest_rad_s = std::max(fastest_rad_s, std::abs(rate));
+    }
+    if (fastest_rad_s > kRateMaxRadPerS) {
+      doubts.push_back("|rate_rad_s| reaches " + format_significant(fastest_rad_s, 4) +
+                       " rad/s, more than two turns a second: a rate in deg/s read as rad/s? "
+                       "(import converts it: --scale rate=" +
+                       format_significant(kRadPerDeg, 6) +
+                       ", or a --map column whose name ends in (deg/s))");
+    }
+  }
+  std::vector<double> steps_s;
+  steps_s.reserve(recording.time_s.size());
+  for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
+    steps_s.push_back(recording.time_s[i] - recording.time_s[i - 1]);
+  }
+  const double step_s = steps_s.empty() ? 0.0 : median(std::move(steps_s));
+  if (step_s > kSampleIntervalMaxS) {
+    doubts.push_back("time_s steps " + format_significant(step_s, 4) +
+                     " s from sample to sample (the median), too slow to follow a door: a time "
+                     "in ms read as seconds? (import converts a --map time column whose name "
+                     "ends in (ms))");
+  }
+  return doubts;
 }
 
 bool has_unit_suffix(std::string_view name) {

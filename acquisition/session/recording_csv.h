@@ -8,6 +8,7 @@
 #include <cstddef>
 #include <filesystem>
 #include <map>
+#include <numbers>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -65,6 +66,21 @@ inline constexpr double kHandleRadiusMaxM = 2.0;
 // to 2 m, where a door handle is" (R as printf's %.6g; without "(from ORIGIN)" when `origin`
 // is empty).
 std::string handle_radius_problem(double radius_m, const std::string& origin = "");
+
+// A door's angle spans less than a turn, turns at less than two turns a second, and is sampled
+// faster than every half second: a recording beyond one of these most likely holds a unit read
+// as another (degrees as radians, milliseconds as seconds).
+inline constexpr double kAngleSpanMaxRad = 2.0 * std::numbers::pi;
+inline constexpr double kRateMaxRadPerS = 4.0 * std::numbers::pi;
+inline constexpr double kSampleIntervalMaxS = 0.5;
+// The recording's units in doubt, one sentence each, in the physical values (a column a record
+// converts through Recording::calibrations is judged after the record): "angle_rad spans 0 to
+// 80 rad, more than a turn: an angle in degrees read as radians? (...)"; the same for
+// |rate_rad_s| above kRateMaxRadPerS and a median step of time_s above kSampleIntervalMaxS.
+// Empty when none is in doubt. Missing samples (NaN) are left out.
+std::vector<std::string> unit_doubts(const Recording& recording);
+// What a verb puts before each of unit_doubts in a warning: "warning: units in doubt: ...".
+inline constexpr std::string_view kUnitDoubtWarning = "units in doubt: ";
 
 // True when `name` ends in a unit suffix: an underscore with text on both sides ("tau_Nm").
 bool has_unit_suffix(std::string_view name);

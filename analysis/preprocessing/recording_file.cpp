@@ -41,6 +41,9 @@ PreparedData load_prepared_data(const std::string& path,
     data.warnings.push_back(std::string(kCutShortWarning) + value +
                             "; only the time where every channel has samples is fitted");
   }
+  for (const std::string& doubt : unit_doubts(recording)) {
+    data.warnings.push_back(std::string(kUnitDoubtWarning) + doubt);
+  }
   if (data.handle_radius_m > 0 && data.geometry_calibration_id.empty()) {
     data.handle_radius_origin = session ? "the session's handle_radius_m attribute"
                                         : "the CSV's metadata (# handle_radius_m)";

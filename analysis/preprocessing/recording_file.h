@@ -25,6 +25,8 @@ inline constexpr std::string_view kCutShortWarning = "a channel ends before the 
 // ("PATH: not an HDF5 file ..."). A handle radius the recording states gets its origin named
 // for the file's kind (PreparedData::handle_radius_origin). A CSV whose columns are not the
 // exchange format's is refused at its header's line with its columns and how to import it.
+// Each of the recording's unit_doubts (acquisition/session/recording_csv.h) is a warning
+// starting with kUnitDoubtWarning.
 PreparedData load_prepared_data(const std::string& path,
                                 const PreprocessingOptions& preprocessing = {});
 

@@ -12,8 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "acquisition/rig/calibration_record.h"
 #include "acquisition/session/csv_table.h"
 #include "acquisition/session/recording_csv.h"
+#include "core/number_format.h"
+#include "core/units.h"
 
 using namespace doorbench;
 
@@ -559,4 +562,62 @@ TEST_CASE("unit suffixes", "[csv]") {
   CHECK_FALSE(has_unit_suffix("foo_"));
   CHECK_FALSE(has_unit_suffix("_V"));
   CHECK_FALSE(has_unit_suffix(""));
+}
+
+// A door's recording in degrees, deg/s or milliseconds read as radians, rad/s or seconds is
+// told by its physical values, word for word; a column a record converts is judged after it.
+TEST_CASE("units in doubt: an angle beyond a turn, a rate beyond two turns a second, a slow clock",
+          "[csv][errors]") {
+  Recording door;
+  for (int i = 0; i <= 100; ++i) {
+    const double t_s = 0.01 * i;
+    door.time_s.push_back(t_s);
+    door.force_N.push_back(1.0);
+    door.angle_rad = door.angle_rad.value_or(std::vector<double>{});
+    door.angle_rad->push_back(1.5 * t_s);  // 0 to 1.5 rad: a door
+    door.rate_rad_s = door.rate_rad_s.value_or(std::vector<double>{});
+    door.rate_rad_s->push_back(i == 50 ? std::nan("") : 1.5);
+  }
+  CHECK(unit_doubts(door).empty());
+
+  Recording degrees = door;
+  for (double& angle : *degrees.angle_rad) angle /= kRadPerDeg;  // 0 to 85.94
+  for (double& rate : *degrees.rate_rad_s) rate = -rate / kRadPerDeg;
+  for (double& t : degrees.time_s) t *= 1000.0;
+  const std::vector<std::string> doubts = unit_doubts(degrees);
+  REQUIRE(doubts.size() == 3);
+  CHECK(doubts[0] ==
+        "angle_rad spans 0 to 85.94 rad, more than a turn: an angle in degrees read as radians? "
+        "(import converts it: --scale angle=" +
+            format_significant(kRadPerDeg, 6) +
+            ", or a --map column whose name ends in "
+            "(deg))");
+  CHECK(doubts[1] ==
+        "|rate_rad_s| reaches 85.94 rad/s, more than two turns a second: a rate in deg/s read as "
+        "rad/s? (import converts it: --scale rate=" +
+            format_significant(kRadPerDeg, 6) +
+            ", or a --map column whose name ends "
+            "in (deg/s))");
+  CHECK(doubts[2] ==
+        "time_s steps 10 s from sample to sample (the median), too slow to follow a door: a "
+        "time in ms read as seconds? (import converts a --map time column whose name ends in "
+        "(ms))");
+
+  // The same degrees through the records that make them radians: no doubt left.
+  Recording converted = degrees;
+  converted.time_s = door.time_s;
+  converted.calibrations["angle_rad"] =
+      linear_record("unit-angle", "deg", "rad", kRadPerDeg, 0.0, "unit");
+  converted.calibrations["rate_rad_s"] =
+      linear_record("unit-rate", "deg/s", "rad/s", kRadPerDeg, 0.0, "unit");
+  CHECK(unit_doubts(converted).empty());
+
+  // Just inside each limit.
+  Recording edge = door;
+  (*edge.angle_rad)[7] = -0.5;
+  (*edge.angle_rad)[9] = kAngleSpanMaxRad - 0.5;
+  (*edge.rate_rad_s)[3] = -kRateMaxRadPerS;
+  CHECK(unit_doubts(edge).empty());
+  (*edge.rate_rad_s)[3] = -1.001 * kRateMaxRadPerS;
+  CHECK(unit_doubts(edge).size() == 1);
 }

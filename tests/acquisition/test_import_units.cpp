@@ -8,6 +8,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <fstream>
+#include <iterator>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 #include "acquisition/rig/calibration_record.h"
 #include "acquisition/rig/calibration_store.h"
 #include "acquisition/session/import_units.h"
+#include "acquisition/session/recording_csv.h"
 #include "acquisition/session/session_file.h"
 #include "acquisition/session/tdms.h"
 #include "core/number_format.h"
@@ -632,6 +634,59 @@ TEST_CASE("Import: imported_date_times says whether the recording states its sta
   CHECK_FALSE(stated->start_unknown(false));
   dir.write("numbers.csv", "time_s,force_N,angle_rad\n0,1,0.1\n0.01,1,0.1\n");
   CHECK_FALSE(imported_date_times(read_csv_import(dir / "numbers.csv", "", {})));
+}
+
+// A logger's columns that state no unit are read in the session's units; a door's angle in
+// degrees read that way spans more than a turn, and import and fit say so word for word (the fit
+// in report.md too), naming the conversion. Stated as (deg), the same column is converted and
+// nothing is in doubt.
+TEST_CASE("Import: an angle in degrees whose column states no unit is in doubt", "[csv][cli]") {
+  const testing::TempDir dir("import_units_in_doubt");
+  const std::string simulated = testing::simulate_open_close_csv(dir, "sim.csv", 10.0, 1000.0);
+  REQUIRE_FALSE(simulated.empty());
+  const Recording door = read_recording_csv(simulated);
+  REQUIRE(door.angle_rad);
+  std::string plain = "Time,Load,Angle\n";
+  std::string stated = "Time,Load,Angle (deg)\n";
+  double lowest_deg = 0.0, widest_deg = 0.0;
+  for (std::size_t k = 0; k < door.size(); ++k) {
+    const double degrees = (*door.angle_rad)[k] / kRadPerDeg;
+    lowest_deg = std::min(lowest_deg, degrees);
+    widest_deg = std::max(widest_deg, degrees);
+    const std::string row = format_csv_number(door.time_s[k]) + "," +
+                            format_csv_number(door.force_N[k]) + "," + format_csv_number(degrees) +
+                            "\n";
+    plain += row;
+    stated += row;
+  }
+  REQUIRE(widest_deg > 60.0);
+  dir.write("plain.csv", plain);
+  dir.write("stated.csv", stated);
+  const std::string doubt =
+      "warning: units in doubt: angle_rad spans " + format_significant(lowest_deg, 4) + " to " +
+      format_significant(widest_deg, 4) +
+      " rad, more than a turn: an angle in degrees read as radians? (import converts it: --scale "
+      "angle=" +
+      format_significant(kRadPerDeg, 6) + ", or a --map column whose name ends in (deg))";
+  testing::DoorbenchRun run = testing::run_doorbench_shell(
+      "import plain.csv --map time=Time,force=Load,angle=Angle --out plain.h5", dir,
+      units_dir_env(dir));
+  INFO(run.err);
+  REQUIRE(run.status == 0);
+  CHECK(run.err == "wrote plain.h5: " + std::to_string(door.size()) + " samples\n" + doubt + "\n");
+  run = testing::run_doorbench_shell("fit plain.h5 --out fit", dir, units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.err, Catch::Contains("\n" + doubt + "\n"));
+  std::ifstream report(dir / "fit" / "report.md");
+  const std::string report_text((std::istreambuf_iterator<char>(report)),
+                                std::istreambuf_iterator<char>());
+  CHECK_THAT(report_text, Catch::Contains(doubt));
+
+  run = testing::run_doorbench_shell(
+      "import stated.csv --map 'time=Time,force=Load,angle=Angle (deg)' --out stated.h5", dir,
+      units_dir_env(dir));
+  REQUIRE(run.status == 0);
+  CHECK_THAT(run.err, !Catch::Contains("units in doubt"));
 }
 
 // A spreadsheet's export in a European locale (semicolons, decimal commas, CRLF) and a LabVIEW
