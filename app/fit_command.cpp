@@ -204,6 +204,36 @@ void write_start(const std::filesystem::path& dir, const FitInputs& inputs) {
   write_text_file_atomically(dir / "start.md", page.str());
 }
 
+// report.md: the outcome first (what stopped the fit, when something did; the warnings about
+// the data among the notes), then how the data were read and the fit set up, the full report, the
+// residual's whiteness and the plots.
+std::string fit_report_page(const std::string& model_name, const FitInputs& inputs,
+                            const FitResult& result, const FitPlots& plots,
+                            const std::string& interrupted) {
+  std::ostringstream page;
+  page << "# Fit of the " << model_name << " model to " << inputs.data.source << "\n\n"
+       << "## Result\n\n";
+  if (!interrupted.empty()) page << "**" << interrupted << ".**\n\n";
+  std::istringstream headline(result.summary.headline());
+  for (std::string line; std::getline(headline, line);) page << line << "\n\n";
+  for (const std::string& line : inputs.report_lines) {
+    if (line.starts_with("warning: ")) page << line << ".\n\n";
+  }
+  page << "## The data and the fit's set-up\n\n";
+  for (const std::string& line : inputs.report_lines) {
+    if (!line.starts_with("warning: ")) page << line << ".\n\n";
+  }
+  page << "Data: " << inputs.data.rate_summary << ".\n\n"
+       << handle_radius_line(inputs.data, result.model) << ".\n\n"
+       << "## In full\n\n"
+       << "```\n"
+       << result.summary.full_report() << "```\n\n"
+       << "The fitted model's " << plots.whiteness << ".\n\n";
+  if (!plots.files.empty()) page << "## Plots\n\n";
+  for (const std::string& plot : plots.files) page << "![" << plot << "](" << plot << ")\n\n";
+  return page.str();
+}
+
 void run_fit(const FitCommandOptions& options) {
   // SIGINT/SIGTERM: the fit ends at its next solver iteration. A whole window fit is written,
   // marked interrupted (without what the stop cut: held-out metrics); before that
@@ -273,7 +303,6 @@ void run_fit(const FitCommandOptions& options) {
       result.summary.interrupted.empty()
           ? ""
           : signal_name(signals.received()) + " stopped the fit " + result.summary.interrupted;
-  if (!interrupted.empty()) inputs.report_lines.insert(inputs.report_lines.begin(), interrupted);
 
   const std::filesystem::path dir = options.out_dir;
   remove_start_outputs(dir);
@@ -288,16 +317,8 @@ void run_fit(const FitCommandOptions& options) {
   if (const std::string optima = write_global_search_plot(dir, result.summary); !optima.empty()) {
     plots.files.push_back(optima);
   }
-  std::ostringstream report;
-  report << "# Fit of the " << options.input.model.model << " model to " << data.source << "\n\n";
-  for (const std::string& line : inputs.report_lines) report << line << ".\n\n";
-  report << "Data: " << data.rate_summary << ".\n\n"
-         << handle_radius_line(data, result.model) << ".\n\n"
-         << "```\n"
-         << result.summary.full_report() << "```\n\n"
-         << "The fitted model's " << plots.whiteness << ".\n\n";
-  for (const std::string& plot : plots.files) report << "![" << plot << "](" << plot << ")\n\n";
-  write_text_file_atomically(dir / "report.md", report.str());
+  write_text_file_atomically(dir / "report.md", fit_report_page(options.input.model.model, inputs,
+                                                                result, plots, interrupted));
   std::cout << result.summary.brief_report() << "\nresult.json, report.md, fitted-params.json and "
             << "plots are in " << dir.string() << "/\n";
   if (!interrupted.empty()) {

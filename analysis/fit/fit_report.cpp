@@ -186,12 +186,18 @@ std::string FitSummary::determining_lines() const {
   return out;
 }
 
-std::string FitSummary::brief_report() const {
+namespace {
+
+// What was fitted, how well, and the study objective: brief_report's and headline's first lines.
+std::string outcome_lines(const FitSummary& summary) {
+  const FitMetrics& fitted = summary.fitted;
+  const std::optional<FitMetrics>& held_out = summary.held_out;
   std::string out = printf_text(
       "Fit of the %s model (%d free parameters) to %zu strokes, %zu windows: %s after %d "
       "iterations, %.2f s.\n",
-      std::string(to_string(model_kind)).c_str(), free_parameters, strokes, windows,
-      converged ? "converged" : "NOT converged", iterations, total_time_s);
+      std::string(to_string(summary.model_kind)).c_str(), summary.free_parameters, summary.strokes,
+      summary.windows, summary.converged ? "converged" : "NOT converged", summary.iterations,
+      summary.total_time_s);
   out += "Window RMSE of omega " + short_number(fitted.window.rmse()) + " rad/s fitted";
   if (held_out) out += ", " + short_number(held_out->window.rmse()) + " held out";
   out += "; FIT% " + format_percent(fitted.window.fit_percent() / 100.0, 2);
@@ -200,6 +206,13 @@ std::string FitSummary::brief_report() const {
   out += "Study objective (whole strokes replayed): max |omega error| " +
          short_number(fitted.study_objective_rad_s()) + " rad/s (stroke " +
          std::to_string(fitted.worst_replay_stroke_id) + ").\n";
+  return out;
+}
+
+}  // namespace
+
+std::string FitSummary::brief_report() const {
+  std::string out = outcome_lines(*this);
   out += fit_and_max_error_note(fitted);
   out += fit_percent_warnings(fitted, held_out ? &*held_out : nullptr);
   out += global.report(free_names);
@@ -209,6 +222,17 @@ std::string FitSummary::brief_report() const {
     out += ".\n" + identifiable_line() + "\n";
   }
   out += determining_lines();
+  return out;
+}
+
+std::string FitSummary::headline() const {
+  std::string out = outcome_lines(*this);
+  out += fit_percent_warnings(fitted, held_out ? &*held_out : nullptr);
+  if (!undetermined.empty()) {
+    out += "Undetermined:";
+    for (const std::string& name : undetermined) out += " " + name;
+    out += " (the parameter table and \"What would determine them\" below).\n";
+  }
   return out;
 }
 

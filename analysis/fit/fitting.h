@@ -464,6 +464,10 @@ struct FitSummary {
   std::string interrupted;
 
   std::string brief_report() const;  // a few lines
+  // The outcome in a few lines, the first of brief_report's: what was fitted and whether it
+  // converged, the window RMSE and FIT% fitted and held out, the study objective, a FIT% below 0
+  // or far below the fitted one held out as a warning, and the undetermined parameters.
+  std::string headline() const;
   // With undetermined parameters, the proposal: "Identifiable free set (...): J c d1; held:
   // k s (doorbench fit --free auto fits this set)."; "" when all are determined.
   std::string identifiable_line() const;

@@ -59,6 +59,22 @@ TEST_CASE(
   CHECK(line == "the window fit: " + std::to_string(windows) + " windows of 0.2 s on " +
                     std::to_string(strokes) + " strokes");
   CHECK_THAT(report, Catch::Contains("\n\n" + line + ".\n\n"));
+  // report.md reads outcome first: the result, then the data and set-up (the size line among
+  // them), the full report, the plots.
+  CHECK_THAT(report, Catch::StartsWith("# Fit of the sensory model to " + session.string() +
+                                       "\n\n## Result\n\nFit of the sensory model ("));
+  const std::size_t result_at = report.find("\n## Result\n");
+  const std::size_t rmse_at = report.find("\n\nWindow RMSE of omega ");
+  const std::size_t data_at = report.find("\n## The data and the fit's set-up\n");
+  const std::size_t size_at = report.find("\n" + line + ".\n");
+  const std::size_t full_at = report.find("\n## In full\n\n```\ndoorbench fit report\n");
+  const std::size_t plots_at = report.find("\n## Plots\n\n![");
+  CHECK(result_at < rmse_at);
+  CHECK(rmse_at < data_at);
+  CHECK(data_at < size_at);
+  CHECK(size_at < full_at);
+  CHECK(full_at < plots_at);
+  CHECK(plots_at != std::string::npos);
 
   // One window fewer than all: whole pairs of strokes, fewer windows than the limit.
   const int limit = windows - 1;

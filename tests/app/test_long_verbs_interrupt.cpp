@@ -131,6 +131,11 @@ TEST_CASE("fit, loop and spec: SIGINT or SIGTERM ends each within a second at se
           "during the global search: the fit is the data-derived start's, without held-out "
           "metrics");
     CHECK(result.at("held_out").is_null());
+    // report.md says so first.
+    CHECK_THAT(read_file(dir / "fit-2" / "report.md"),
+               Catch::Contains("\n## Result\n\n**SIGINT stopped the fit during the global search: "
+                               "the fit is the data-derived start's, without held-out "
+                               "metrics.**\n\nFit of the sensory model ("));
   }
   SECTION("loop") {
     check_moments("loop", {"loop", session.string(), "--model", "sensory"}, dir,
