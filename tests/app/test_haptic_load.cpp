@@ -91,6 +91,25 @@ fs::path plan_small_campaign(const TempDir& dir, const std::string& name) {
   return folder;
 }
 
+// Runs stopped by a stall while a CPU was held that a load test plays again, in all: on the
+// virtual machines the tests run on, a host holds one virtual CPU for 100 ms every 20 to 50 s
+// under sustained load (measured: a pinned SCHED_FIFO watcher per CPU).
+constexpr int kHeldRunsMax = 10;
+
+// Whether a run that stopped with `stop` (its stop event, or its stderr) stopped for a stall
+// while a CPU of the machine was held long enough to cause it: a stalled tick (0.1 s between
+// two ticks) and a 90 ms hold, or a stalled device reading (50 ticks) and a 45 ms hold.
+bool stalled_while_held(const std::string& stop, const PauseWatch& watch, double from_s,
+                        double until_s) {
+  if (stop.find(" between two ticks, above max_tick_stall_s") != std::string::npos) {
+    return watch.held_during(from_s, until_s, 0.09);
+  }
+  if (stop.find("device_stalled: the device's reading did not change for ") != std::string::npos) {
+    return watch.held_during(from_s, until_s, 0.045);
+  }
+  return false;
+}
+
 // The lines of trials.csv after its header.
 std::size_t answered_trials(const fs::path& folder) {
   std::ifstream in(folder / "trials.csv");
@@ -115,12 +134,12 @@ TEST_CASE("play under load: 3 s on the HapticMaster emulator without a stop, 20 
         dir / ("play-" + std::to_string(run) + "-" + std::to_string(held) + ".h5");
     const double started_s = doorbench::monotonic_now_s();
     const DoorbenchRun result = play(emulator.name(), 3.0, session, dir);
-    // A stall while the machine itself was held is the stall check doing its job, not a
-    // defect of the play: that run is played again, at most 3 times in all.
-    if (held < 3 && stop_event(session).find(" between two ticks, above ") != std::string::npos &&
-        watch.held_during(started_s, doorbench::monotonic_now_s(), 0.09)) {
-      WARN("run " << run << ": the machine was held " << watch.longest_gap_s()
-                  << " s and the ticks with it; played again");
+    // A stall while a CPU of the machine was held is the stall check doing its job, not a
+    // defect of the play: that run is played again, at most kHeldRunsMax times in all.
+    if (held < kHeldRunsMax &&
+        stalled_while_held(stop_event(session), watch, started_s, doorbench::monotonic_now_s())) {
+      WARN("run " << run << ": a CPU was held (longest gap so far " << watch.longest_gap_s()
+                  << " s) and the play stalled with it; played again");
       ++held, --run;
       continue;
     }
@@ -153,15 +172,28 @@ TEST_CASE("ab under load: blinded trials on the emulator, the simulated and the 
   HapticMasterEmulator emulator;
   std::ofstream(dir / "answers.txt") << "1\n2\n";
   const BusyProcesses busy;
+  const PauseWatch watch;
+  int held = 0;
   for (const std::string& device :
        {emulator.name(), std::string("sim --real-time"), std::string("sim:rotary --real-time")}) {
     INFO(device << " with " << busy.count() << " busy processes");
-    const fs::path out = dir / ("ab-" + std::to_string(device.size()));
-    const DoorbenchRun run = run_doorbench_shell(
-        "ab --a '" + kReference + "' --b '" + kReference + "' --trials 2 --seed 3 " +
-            "--presentation-s 1.5 --device " + device + " --answers '" +
-            (dir / "answers.txt").string() + "' --out '" + out.string() + "'",
-        dir);
+    DoorbenchRun run;
+    fs::path out;
+    for (;;) {  // again while a stall came with a held CPU, at most kHeldRunsMax times in all
+      out = dir / ("ab-" + std::to_string(device.size()) + "-" + std::to_string(held));
+      const double started_s = doorbench::monotonic_now_s();
+      run = run_doorbench_shell("ab --a '" + kReference + "' --b '" + kReference +
+                                    "' --trials 2 --seed 3 " + "--presentation-s 1.5 --device " +
+                                    device + " --answers '" + (dir / "answers.txt").string() +
+                                    "' --out '" + out.string() + "'",
+                                dir);
+      if (run.status == 0 || held >= kHeldRunsMax ||
+          !stalled_while_held(run.err, watch, started_s, doorbench::monotonic_now_s())) {
+        break;
+      }
+      WARN(device << ": a CPU was held and the presentation stalled with it; run again");
+      ++held;
+    }
     INFO(run.out << run.err);
     REQUIRE(run.status == 0);
     for (const char* presentation :
@@ -176,13 +208,22 @@ TEST_CASE("campaign run under load: a simulated participant on the emulator, 10 
   TempDir dir("campaign_load");
   HapticMasterEmulator emulator;
   const BusyProcesses busy;
-  int finished = 0;
+  const PauseWatch watch;
+  int finished = 0, held = 0;
   for (int run = 1; run <= 10; ++run) {
-    const fs::path folder = plan_small_campaign(dir, "hm" + std::to_string(run));
+    const fs::path folder =
+        plan_small_campaign(dir, "hm" + std::to_string(run) + "-" + std::to_string(held));
+    const double started_s = doorbench::monotonic_now_s();
     const DoorbenchRun result =
         run_doorbench_shell("campaign run '" + folder.string() +
                                 "' --participant P01 --respondent sim --device " + emulator.name(),
                             dir);
+    if (result.status != 0 && held < kHeldRunsMax &&
+        stalled_while_held(result.err, watch, started_s, doorbench::monotonic_now_s())) {
+      WARN("run " << run << ": a CPU was held and a presentation stalled with it; run again");
+      ++held, --run;
+      continue;
+    }
     INFO("run " << run << " of 10 with " << busy.count() << " busy processes: " << result.err);
     CHECK(result.status == 0);
     CHECK(answered_trials(folder) == 2);
