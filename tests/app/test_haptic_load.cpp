@@ -4,9 +4,14 @@
 // twice as many spinning processes as there are cores (tests/support/busy_processes.h); and
 // each kind of stop named on stderr and in the session, word for word.
 //
-// The emulator runs at the normal priority beside the spinners, so its replies are slower and
-// less regular than a real HapticMaster's (which has a processor of its own): that is the
-// harder case for the driver's watchdog and the safety layer's stall checks.
+// The emulator runs at SCHED_FIFO 70 where the test may (below the play's tick at 80), else at
+// the normal priority beside the spinners; either way it shares the test's CPUs, so its replies
+// are less regular than a real HapticMaster's (which has a processor of its own): the harder
+// case for the driver's watchdog and the safety layer's stall checks.
+//
+// A run that stops for a stall while the machine itself held a CPU (PauseWatch) is run again,
+// at most kHeldRunsMax times per test case: that stop is the stall check doing its job. A stall
+// without a hold fails the test.
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <filesystem>
@@ -96,9 +101,9 @@ fs::path plan_small_campaign(const TempDir& dir, const std::string& name) {
 // under sustained load (measured: a pinned SCHED_FIFO watcher per CPU).
 constexpr int kHeldRunsMax = 10;
 
-// Whether a run that stopped with `stop` (its stop event, or its stderr) stopped for a stall
-// while a CPU of the machine was held long enough to cause it: a stalled tick (0.1 s between
-// two ticks) and a 90 ms hold, or a stalled device reading (50 ticks) and a 45 ms hold.
+// Whether a run that stopped with `stop` (its stderr) stopped for a stall while a CPU of the
+// machine was held long enough to cause it: a stalled tick (0.1 s between two ticks) and a
+// 90 ms hold, or a stalled device reading (50 ticks) and a 45 ms hold.
 bool stalled_while_held(const std::string& stop, const PauseWatch& watch, double from_s,
                         double until_s) {
   if (stop.find(" between two ticks, above max_tick_stall_s") != std::string::npos) {
@@ -109,6 +114,35 @@ bool stalled_while_held(const std::string& stop, const PauseWatch& watch, double
   }
   return false;
 }
+
+// Runs one attempt of a load test's command and runs it again while it stopped for a stall
+// while a CPU was held, at most kHeldRunsMax times over the test case. `attempt(n)` runs the
+// command for the n-th time in the test case (so that each writes its own files) and returns
+// its DoorbenchRun; run() returns the last.
+class ReplayWhenHeld {
+ public:
+  explicit ReplayWhenHeld(const PauseWatch& watch) : watch_(watch) {}
+
+  template <class Attempt>
+  DoorbenchRun run(const std::string& what, Attempt&& attempt) {
+    for (;;) {
+      const double started_s = doorbench::monotonic_now_s();
+      DoorbenchRun result = attempt(attempts_++);
+      if (result.status == 0 || held_ >= kHeldRunsMax ||
+          !stalled_while_held(result.err, watch_, started_s, doorbench::monotonic_now_s())) {
+        return result;
+      }
+      WARN(what << ": a CPU was held (longest gap so far " << watch_.longest_gap_s()
+                << " s) and the run stalled with it; run again");
+      ++held_;
+    }
+  }
+
+ private:
+  const PauseWatch& watch_;
+  int attempts_ = 0;
+  int held_ = 0;
+};
 
 // The lines of trials.csv after its header.
 std::size_t answered_trials(const fs::path& folder) {
@@ -128,21 +162,14 @@ TEST_CASE("play under load: 3 s on the HapticMaster emulator without a stop, 20 
   HapticMasterEmulator emulator;
   const BusyProcesses busy;
   const PauseWatch watch;
-  int played = 0, held = 0;
+  ReplayWhenHeld replay(watch);
+  int played = 0;
   for (int run = 1; run <= 20; ++run) {
-    const fs::path session =
-        dir / ("play-" + std::to_string(run) + "-" + std::to_string(held) + ".h5");
-    const double started_s = doorbench::monotonic_now_s();
-    const DoorbenchRun result = play(emulator.name(), 3.0, session, dir);
-    // A stall while a CPU of the machine was held is the stall check doing its job, not a
-    // defect of the play: that run is played again, at most kHeldRunsMax times in all.
-    if (held < kHeldRunsMax &&
-        stalled_while_held(stop_event(session), watch, started_s, doorbench::monotonic_now_s())) {
-      WARN("run " << run << ": a CPU was held (longest gap so far " << watch.longest_gap_s()
-                  << " s) and the play stalled with it; played again");
-      ++held, --run;
-      continue;
-    }
+    fs::path session;
+    const DoorbenchRun result = replay.run("run " + std::to_string(run), [&](int attempt) {
+      session = dir / ("play-" + std::to_string(attempt) + ".h5");
+      return play(emulator.name(), 3.0, session, dir);
+    });
     INFO("run " << run << " of 20 with " << busy.count() << " busy processes");
     check_played_through(result, session, 3.0);
     if (result.status == 0 && stop_event(session) == "end: the run's duration was played") {
@@ -156,12 +183,19 @@ TEST_CASE("play under load: the simulated HapticMaster and the rotary device in 
           "[slow][load][cli]") {
   TempDir dir("play_load_sim");
   const BusyProcesses busy;
+  const PauseWatch watch;
+  ReplayWhenHeld replay(watch);
   for (const std::string device : {"sim", "sim:rotary"}) {
     for (int run = 1; run <= 3; ++run) {
-      INFO(device << ", run " << run << " of 3 with " << busy.count() << " busy processes");
-      const fs::path session =
-          dir / ("play-" + device.substr(device.find(':') + 1) + "-" + std::to_string(run) + ".h5");
-      check_played_through(play(device, 3.0, session, dir), session, 3.0);
+      const std::string what = device + ", run " + std::to_string(run) + " of 3";
+      fs::path session;
+      const DoorbenchRun result = replay.run(what, [&](int attempt) {
+        session = dir / ("play-" + device.substr(device.find(':') + 1) + "-" +
+                         std::to_string(attempt) + ".h5");
+        return play(device, 3.0, session, dir);
+      });
+      INFO(what << " with " << busy.count() << " busy processes");
+      check_played_through(result, session, 3.0);
     }
   }
 }
@@ -173,27 +207,19 @@ TEST_CASE("ab under load: blinded trials on the emulator, the simulated and the 
   std::ofstream(dir / "answers.txt") << "1\n2\n";
   const BusyProcesses busy;
   const PauseWatch watch;
-  int held = 0;
+  ReplayWhenHeld replay(watch);
   for (const std::string& device :
        {emulator.name(), std::string("sim --real-time"), std::string("sim:rotary --real-time")}) {
-    INFO(device << " with " << busy.count() << " busy processes");
-    DoorbenchRun run;
     fs::path out;
-    for (;;) {  // again while a stall came with a held CPU, at most kHeldRunsMax times in all
-      out = dir / ("ab-" + std::to_string(device.size()) + "-" + std::to_string(held));
-      const double started_s = doorbench::monotonic_now_s();
-      run = run_doorbench_shell("ab --a '" + kReference + "' --b '" + kReference +
-                                    "' --trials 2 --seed 3 " + "--presentation-s 1.5 --device " +
-                                    device + " --answers '" + (dir / "answers.txt").string() +
-                                    "' --out '" + out.string() + "'",
-                                dir);
-      if (run.status == 0 || held >= kHeldRunsMax ||
-          !stalled_while_held(run.err, watch, started_s, doorbench::monotonic_now_s())) {
-        break;
-      }
-      WARN(device << ": a CPU was held and the presentation stalled with it; run again");
-      ++held;
-    }
+    const DoorbenchRun run = replay.run(device, [&](int attempt) {
+      out = dir / ("ab-" + std::to_string(attempt));
+      return run_doorbench_shell("ab --a '" + kReference + "' --b '" + kReference +
+                                     "' --trials 2 --seed 3 --presentation-s 1.5 --device " +
+                                     device + " --answers '" + (dir / "answers.txt").string() +
+                                     "' --out '" + out.string() + "'",
+                                 dir);
+    });
+    INFO(device << " with " << busy.count() << " busy processes");
     INFO(run.out << run.err);
     REQUIRE(run.status == 0);
     for (const char* presentation :
@@ -209,36 +235,29 @@ TEST_CASE("campaign run under load: a simulated participant on the emulator, 10 
   HapticMasterEmulator emulator;
   const BusyProcesses busy;
   const PauseWatch watch;
-  int finished = 0, held = 0;
-  for (int run = 1; run <= 10; ++run) {
-    const fs::path folder =
-        plan_small_campaign(dir, "hm" + std::to_string(run) + "-" + std::to_string(held));
-    const double started_s = doorbench::monotonic_now_s();
-    const DoorbenchRun result =
-        run_doorbench_shell("campaign run '" + folder.string() +
-                                "' --participant P01 --respondent sim --device " + emulator.name(),
-                            dir);
-    if (result.status != 0 && held < kHeldRunsMax &&
-        stalled_while_held(result.err, watch, started_s, doorbench::monotonic_now_s())) {
-      WARN("run " << run << ": a CPU was held and a presentation stalled with it; run again");
-      ++held, --run;
-      continue;
-    }
-    INFO("run " << run << " of 10 with " << busy.count() << " busy processes: " << result.err);
+  ReplayWhenHeld replay(watch);
+  const auto run_campaign = [&](const std::string& device, const std::string& what,
+                                const std::string& extra) {
+    fs::path folder;
+    const DoorbenchRun result = replay.run(what, [&](int attempt) {
+      folder = plan_small_campaign(dir, "campaign-" + std::to_string(attempt));
+      return run_doorbench_shell("campaign run '" + folder.string() +
+                                     "' --participant P01 --respondent sim --device " + device +
+                                     extra,
+                                 dir);
+    });
+    INFO(what << " with " << busy.count() << " busy processes: " << result.err);
     CHECK(result.status == 0);
     CHECK(answered_trials(folder) == 2);
-    if (result.status == 0 && answered_trials(folder) == 2) ++finished;
+    return result.status == 0 && answered_trials(folder) == 2;
+  };
+  int finished = 0;
+  for (int run = 1; run <= 10; ++run) {
+    if (run_campaign(emulator.name(), "run " + std::to_string(run) + " of 10", "")) ++finished;
   }
   CHECK(finished == 10);
   for (const std::string device : {"sim", "sim:rotary"}) {
-    const fs::path folder = plan_small_campaign(dir, device.substr(device.find(':') + 1));
-    const DoorbenchRun result = run_doorbench_shell(
-        "campaign run '" + folder.string() + "' --participant P01 --respondent sim --device " +
-            device + " --real-time",
-        dir);
-    INFO(device << ": " << result.err);
-    CHECK(result.status == 0);
-    CHECK(answered_trials(folder) == 2);
+    run_campaign(device, device, " --real-time");
   }
 }
 

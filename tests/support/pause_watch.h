@@ -39,23 +39,26 @@ class PauseWatch {
     CPU_ZERO(&allowed);
     if (sched_getaffinity(0, sizeof allowed, &allowed) != 0) CPU_SET(0, &allowed);
     fifo_ = true;
-    for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
-      if (!CPU_ISSET(cpu, &allowed)) continue;
-      threads_.emplace_back([this, cpu] { watch(cpu); });
-      cpu_set_t one;
-      CPU_ZERO(&one);
-      CPU_SET(cpu, &one);
-      pthread_setaffinity_np(threads_.back().native_handle(), sizeof one, &one);
-      sched_param parameter{};
-      parameter.sched_priority = 90;
-      fifo_ = pthread_setschedparam(threads_.back().native_handle(), SCHED_FIFO, &parameter) == 0 &&
-              fifo_;
+    try {
+      for (int cpu = 0; cpu < CPU_SETSIZE; ++cpu) {
+        if (!CPU_ISSET(cpu, &allowed)) continue;
+        threads_.emplace_back([this, cpu] { watch(cpu); });
+        cpu_set_t one;
+        CPU_ZERO(&one);
+        CPU_SET(cpu, &one);
+        pthread_setaffinity_np(threads_.back().native_handle(), sizeof one, &one);
+        sched_param parameter{};
+        parameter.sched_priority = 90;
+        fifo_ =
+            pthread_setschedparam(threads_.back().native_handle(), SCHED_FIFO, &parameter) == 0 &&
+            fifo_;
+      }
+    } catch (...) {
+      stop_watching();  // a thread that could not start: the started ones end before the throw
+      throw;
     }
   }
-  ~PauseWatch() {
-    stop_ = true;
-    for (std::thread& thread : threads_) thread.join();
-  }
+  ~PauseWatch() { stop_watching(); }
   PauseWatch(const PauseWatch&) = delete;
   PauseWatch& operator=(const PauseWatch&) = delete;
 
@@ -83,6 +86,11 @@ class PauseWatch {
   }
 
  private:
+  void stop_watching() {
+    stop_ = true;
+    for (std::thread& thread : threads_) thread.join();
+  }
+
   void watch(int cpu) {
     double last_s = monotonic_now_s();
     while (!stop_) {
