@@ -209,6 +209,13 @@ std::string outcome_lines(const FitSummary& summary) {
   return out;
 }
 
+// "Undetermined: a b", the parameters the data cannot determine (no line end).
+std::string undetermined_list(const FitSummary& summary) {
+  std::string out = "Undetermined:";
+  for (const std::string& name : summary.undetermined) out += " " + name;
+  return out;
+}
+
 }  // namespace
 
 std::string FitSummary::brief_report() const {
@@ -217,9 +224,7 @@ std::string FitSummary::brief_report() const {
   out += fit_percent_warnings(fitted, held_out ? &*held_out : nullptr);
   out += global.report(free_names);
   if (!undetermined.empty()) {
-    out += "Undetermined:";
-    for (const std::string& name : undetermined) out += " " + name;
-    out += ".\n" + identifiable_line() + "\n";
+    out += undetermined_list(*this) + ".\n" + identifiable_line() + "\n";
   }
   out += determining_lines();
   return out;
@@ -229,9 +234,8 @@ std::string FitSummary::headline() const {
   std::string out = outcome_lines(*this);
   out += fit_percent_warnings(fitted, held_out ? &*held_out : nullptr);
   if (!undetermined.empty()) {
-    out += "Undetermined:";
-    for (const std::string& name : undetermined) out += " " + name;
-    out += " (the parameter table and \"What would determine them\" below).\n";
+    out += undetermined_list(*this) +
+           " (the parameter table and \"What would determine them\" below).\n";
   }
   return out;
 }

@@ -578,7 +578,10 @@ TEST_CASE("parameters the data cannot tell apart are named undetermined", "[fitt
   CHECK(result.summary.covariance_rank == 2);
   CHECK(result.summary.undetermined == std::vector<std::string>{"m_d", "l_c"});
   CHECK(std::isnan(result.summary.parameters[*physical_truth().find_parameter("m_d")].uncertainty));
-  CHECK_THAT(result.summary.brief_report(), Contains("Undetermined: m_d l_c."));
+  CHECK_THAT(result.summary.brief_report(), Contains("Undetermined: m_d l_c.\n"));
+  CHECK_THAT(result.summary.headline(),
+             Contains("\nUndetermined: m_d l_c (the parameter table and \"What would determine "
+                      "them\" below).\n"));
 }
 
 TEST_CASE("held-out metrics come from folds that left each stroke out", "[fitting]") {
