@@ -41,9 +41,11 @@ PreparedData load_prepared_data(const std::string& path,
     data.warnings.push_back(std::string(kCutShortWarning) + value +
                             "; only the time where every channel has samples is fitted");
   }
-  for (const std::string& doubt : unit_doubts(recording)) {
-    data.warnings.push_back(std::string(kUnitDoubtWarning) + doubt);
-  }
+  // A unit in doubt comes first: it is the likely cause of what preprocessing found (an angle
+  // in degrees has physically impossible samples).
+  std::vector<std::string> doubts = unit_doubts(recording);
+  for (std::string& doubt : doubts) doubt.insert(0, kUnitDoubtWarning);
+  data.warnings.insert(data.warnings.begin(), doubts.begin(), doubts.end());
   if (data.handle_radius_m > 0 && data.geometry_calibration_id.empty()) {
     data.handle_radius_origin = session ? "the session's handle_radius_m attribute"
                                         : "the CSV's metadata (# handle_radius_m)";

@@ -26,7 +26,7 @@ inline constexpr std::string_view kCutShortWarning = "a channel ends before the 
 // for the file's kind (PreparedData::handle_radius_origin). A CSV whose columns are not the
 // exchange format's is refused at its header's line with its columns and how to import it.
 // Each of the recording's unit_doubts (acquisition/session/recording_csv.h) is a warning
-// starting with kUnitDoubtWarning.
+// starting with kUnitDoubtWarning, before preprocessing's warnings.
 PreparedData load_prepared_data(const std::string& path,
                                 const PreprocessingOptions& preprocessing = {});
 

@@ -677,6 +677,12 @@ TEST_CASE("Import: an angle in degrees whose column states no unit is in doubt",
   run = testing::run_doorbench_shell("fit plain.h5 --out fit", dir, units_dir_env(dir));
   REQUIRE(run.status == 0);
   CHECK_THAT(run.err, Catch::Contains("\n" + doubt + "\n"));
+  // The doubt, the likely cause, comes before the samples preprocessing could not use.
+  const std::size_t impossible = run.err.find("\nwarning: angle_rad: ");
+  REQUIRE(impossible != std::string::npos);
+  CHECK_THAT(run.err.substr(impossible, run.err.find('\n', impossible + 1) - impossible),
+             Catch::Contains(" physically impossible samples (|value| > "));
+  CHECK(run.err.find(doubt) < impossible);
   std::ifstream report(dir / "fit" / "report.md");
   const std::string report_text((std::istreambuf_iterator<char>(report)),
                                 std::istreambuf_iterator<char>());
