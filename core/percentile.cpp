@@ -29,4 +29,11 @@ double median(std::vector<double> values) {
   return 0.5 * (*std::max_element(values.begin(), middle) + *middle);
 }
 
+double median_interval_s(std::span<const double> time_s) {
+  if (time_s.size() < 2) return kNaN;
+  std::vector<double> intervals(time_s.size() - 1);
+  for (std::size_t i = 1; i < time_s.size(); ++i) intervals[i - 1] = time_s[i] - time_s[i - 1];
+  return median(std::move(intervals));
+}
+
 }  // namespace doorbench

@@ -7,6 +7,8 @@
 //   percentile_of_sorted(sorted, f)   `sorted` already in ascending order (no copy, no sort)
 //   median(values)                    the middle value, or the mean of the two middle ones
 //                                     (percentile(values, 0.5) up to rounding; linear time)
+//   median_interval_s(time_s)         the median of the steps between consecutive times (a
+//                                     recording's sampling interval; kNaN for fewer than 2)
 //
 // Contract: an empty sample has no percentile and no median: the result is kNaN (core/numbers.h),
 // never an exception or a read out of range. f is clamped to [0, 1] (0 the smallest value, 1 the
@@ -20,5 +22,6 @@ namespace doorbench {
 double percentile(std::vector<double> values, double fraction);
 double percentile_of_sorted(std::span<const double> sorted, double fraction);
 double median(std::vector<double> values);
+double median_interval_s(std::span<const double> time_s);
 
 }  // namespace doorbench

@@ -162,12 +162,7 @@ std::vector<std::string> unit_doubts(const Recording& recording) {
                        ", or a --map column whose name ends in (deg/s))");
     }
   }
-  std::vector<double> steps_s;
-  steps_s.reserve(recording.time_s.size());
-  for (std::size_t i = 1; i < recording.time_s.size(); ++i) {
-    steps_s.push_back(recording.time_s[i] - recording.time_s[i - 1]);
-  }
-  const double step_s = steps_s.empty() ? 0.0 : median(std::move(steps_s));
+  const double step_s = median_interval_s(recording.time_s);
   if (step_s > kSampleIntervalMaxS) {
     doubts.push_back("time_s steps " + format_significant(step_s, 4) +
                      " s from sample to sample (the median), too slow to follow a door: a time "

@@ -7,20 +7,9 @@
 
 #include "acquisition/session/recording_csv.h"
 #include "core/number_format.h"
+#include "core/percentile.h"
 
 namespace doorbench {
-
-double median_interval_s(std::span<const double> time_s) {
-  if (time_s.size() < 2) return std::numeric_limits<double>::quiet_NaN();
-  std::vector<double> intervals(time_s.size() - 1);
-  for (std::size_t i = 1; i < time_s.size(); ++i) intervals[i - 1] = time_s[i] - time_s[i - 1];
-  const auto middle = intervals.begin() + static_cast<std::ptrdiff_t>(intervals.size() / 2);
-  std::nth_element(intervals.begin(), middle, intervals.end());
-  if (intervals.size() % 2 == 1) return *middle;
-  const double upper = *middle;
-  const double lower = *std::max_element(intervals.begin(), middle);
-  return (lower + upper) / 2;
-}
 
 std::vector<double> resample_linear(std::span<const double> time_s, std::span<const double> values,
                                     std::span<const double> at, double max_gap_s,

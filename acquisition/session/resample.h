@@ -13,10 +13,8 @@ namespace doorbench {
 
 struct Recording;
 
-// The median of the intervals between consecutive times; NaN with fewer than two times.
-double median_interval_s(std::span<const double> time_s);
-
-// The gap limit of a channel: kGapIntervals × its median sampling interval.
+// The gap limit of a channel: kGapIntervals × its median sampling interval
+// (core/percentile.h's median_interval_s).
 inline constexpr double kGapIntervals = 3.0;
 
 // `values` (at strictly increasing `time_s`) at each of the increasing times `at`:

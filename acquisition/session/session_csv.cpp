@@ -12,6 +12,7 @@
 #include "acquisition/session/interpolation.h"
 #include "acquisition/session/output_file.h"
 #include "acquisition/session/resample.h"
+#include "core/percentile.h"
 
 namespace doorbench {
 namespace {

@@ -4,20 +4,11 @@
 #include <cmath>
 
 #include "analysis/fit/internal/window_residual.h"
+#include "core/percentile.h"
 
 namespace doorbench {
 
 namespace {
-
-double median_step_s(const Stroke& stroke) {
-  std::vector<double> steps(stroke.size() - 1);
-  for (std::size_t i = 0; i + 1 < stroke.size(); ++i) {
-    steps[i] = stroke.time_s[i + 1] - stroke.time_s[i];
-  }
-  auto middle = steps.begin() + static_cast<std::ptrdiff_t>(steps.size() / 2);
-  std::nth_element(steps.begin(), middle, steps.end());
-  return *middle;
-}
 
 // Whether `window` has one of the (increasing) `gaps` between two of its samples.
 bool spans_gap(const FitWindow& window, const std::vector<int>& gaps) {
@@ -58,7 +49,7 @@ std::vector<int> stroke_gaps(const Stroke& stroke) {
   std::vector<int> gaps;
   const int n = static_cast<int>(stroke.size());
   if (n < 2) return gaps;
-  const double gap_s = kWindowGapFactor * median_step_s(stroke);
+  const double gap_s = kWindowGapFactor * median_interval_s(stroke.time_s);
   for (int i = 1; i < n; ++i) {
     const bool marked = std::binary_search(stroke.gap_before.begin(), stroke.gap_before.end(), i);
     if (marked || stroke.time_s[i] - stroke.time_s[i - 1] > gap_s) gaps.push_back(i);

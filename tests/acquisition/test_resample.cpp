@@ -8,6 +8,7 @@
 
 #include "acquisition/session/resample.h"
 #include "acquisition/session/session_csv.h"
+#include "core/percentile.h"
 #include "fixtures/temp_dir.h"
 
 using Catch::Matchers::Contains;
@@ -60,9 +61,6 @@ TEST_CASE("Resample: no extrapolation, gaps are marked (NaN), not bridged", "[re
   CHECK(std::isnan(out[2]));  // inside the gap
   CHECK(out[3] == Approx(3.5));
   CHECK(std::isnan(out[4]));  // after the last sample
-  CHECK(median_interval_s(t) == Approx(0.1));
-  CHECK(median_interval_s(std::vector<double>{0.0, 1.0, 3.0}) == Approx(1.5));
-  CHECK(std::isnan(median_interval_s(std::vector<double>{1.0})));
   CHECK_THROWS_WITH(resample_linear(std::vector<double>{0.0, 0.0}, std::vector<double>{1, 2}, at,
                                     1.0, "channel q"),
                     Contains("channel q: sample times do not increase at sample 1"));

@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "analysis/model/parameter_file.h"
+#include "core/percentile.h"
 #include "fixtures/recording_family.h"
 
 namespace {
@@ -18,16 +19,6 @@ using doorbench::PreparedData;
 using doorbench::Stroke;
 using doorbench::StrokeDirection;
 using doorbench::testing::RecordingConditions;
-
-// The median of a stroke's sample intervals.
-double median_interval_s(const Stroke& stroke) {
-  std::vector<double> intervals;
-  for (std::size_t i = 1; i < stroke.size(); ++i) {
-    intervals.push_back(stroke.time_s[i] - stroke.time_s[i - 1]);
-  }
-  std::nth_element(intervals.begin(), intervals.begin() + intervals.size() / 2, intervals.end());
-  return intervals[intervals.size() / 2];
-}
 
 // The rate integrated over the stroke (trapezoid), to compare with its angle change.
 double integrated_rate_rad(const Stroke& stroke) {
@@ -54,7 +45,7 @@ void check_well_formed(const PreparedData& data, const RecordingConditions& c) {
     CHECK(s.id == static_cast<int>(k) + 1);
     CHECK(s.direction == (s.id % 2 == 1 ? StrokeDirection::kOpening : StrokeDirection::kClosing));
     REQUIRE(s.size() > 10);
-    CHECK(median_interval_s(s) == Approx(1.0 / c.sample_rate_hz).epsilon(0.05));
+    CHECK(doorbench::median_interval_s(s.time_s) == Approx(1.0 / c.sample_rate_hz).epsilon(0.05));
     bool finite = true, increasing = true;
     for (std::size_t i = 0; i < s.size(); ++i) {
       finite = finite && std::isfinite(s.force_N[i]) && std::isfinite(s.theta_rad[i]) &&

@@ -80,6 +80,15 @@ TEST_CASE("median: the middle value, or the mean of the two middle ones, NaN whe
   CHECK(doorbench::median(values) == Approx(doorbench::percentile(values, 0.5)));
 }
 
+TEST_CASE("median_interval_s: the median step between consecutive times, NaN below two times",
+          "[core]") {
+  CHECK(doorbench::median_interval_s(std::vector<double>{0.0, 1.0, 3.0}) == 1.5);
+  CHECK(doorbench::median_interval_s(std::vector<double>{0.0, 0.1, 0.2, 0.5}) == Approx(0.1));
+  CHECK(doorbench::median_interval_s(std::vector<double>{0.0, 1.0, 3.0, 6.0, 10.0}) == 2.5);
+  CHECK(std::isnan(doorbench::median_interval_s(std::vector<double>{1.0})));
+  CHECK(std::isnan(doorbench::median_interval_s(std::vector<double>{})));
+}
+
 TEST_CASE("format_percent: a fraction as a percentage, '-' where there is no number", "[core]") {
   CHECK(doorbench::format_percent(0.123, 1) == "12.3%");
   CHECK(doorbench::format_percent(0.5, 2) == "50.00%");
