@@ -61,6 +61,21 @@ std::string sparse_table(const InverseDesignResult& result) {
   return text + "    " + result.sparse_stop + "\n";
 }
 
+// How far the fit with every part free stays from the TO-BE in `quantity`:
+// "; with every part free (9 parts changed) 12.1 JNDs", "...) within its JND", or empty when
+// that fit was not made.
+std::string every_part_miss(const InverseDesignResult& result, const std::string& quantity) {
+  if (!result.every_part_fitted) return "";
+  const std::string head =
+      printf_text("; with every part free (%d parts changed) ", result.every_part_parts_changed);
+  for (const FeltMiss& miss : result.every_part_felt_misses) {
+    if (miss.quantity != quantity) continue;
+    return head + (std::isfinite(miss.jnds) ? format_significant(miss.jnds, 3) + " JNDs"
+                                            : std::string("the sign differs"));
+  }
+  return head + "within its JND";
+}
+
 }  // namespace
 
 std::vector<std::string> InverseDesignResult::felt_miss_warnings() const {
@@ -72,14 +87,15 @@ std::vector<std::string> InverseDesignResult::felt_miss_warnings() const {
     for (const FeltQuantityInfo& info : kFeltQuantities) {
       if (info.name == miss.quantity) label = felt_label(info);
     }
-    warnings.push_back(
-        "the design does not feel like the TO-BE: its " + label + " is " +
-        format_significant(miss.design, 3) + " against the TO-BE's " +
-        format_significant(miss.tobe, 3) + " (" + printf_text("%+.3g", miss.difference) + ", " +
-        (std::isfinite(miss.jnds) ? format_significant(miss.jnds, 3) + " JNDs"
-                                  : std::string("the sign differs")) +
-        "; JND " + format_significant(100 * miss.jnd.weber_fraction, 3) + " %, " + miss.jnd.source +
-        "); the sparse search tried " + (tried.empty() ? "no part" : tried));
+    warnings.push_back("the design does not feel like the TO-BE: its " + label + " is " +
+                       format_significant(miss.design, 3) + " against the TO-BE's " +
+                       format_significant(miss.tobe, 3) + " (" +
+                       printf_text("%+.3g", miss.difference) + ", " +
+                       (std::isfinite(miss.jnds) ? format_significant(miss.jnds, 3) + " JNDs"
+                                                 : std::string("the sign differs")) +
+                       "; JND " + format_significant(100 * miss.jnd.weber_fraction, 3) + " %, " +
+                       miss.jnd.source + "); the sparse search tried " +
+                       (tried.empty() ? "no part" : tried) + every_part_miss(*this, miss.quantity));
   }
   return warnings;
 }

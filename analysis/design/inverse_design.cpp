@@ -449,6 +449,11 @@ void DesignRun::sparse_then_smallest_change() {
     result_.notes.insert(result_.notes.end(), start_notes_.begin(), start_notes_.end());
     keep_equivalent(smallest, &found_.front());
     const DesignSolution* low = lowest_cost(smallest);
+    if (low != nullptr && result_.felt_goal) {
+      result_.every_part_fitted = true;
+      result_.every_part_parts_changed = low->parts_changed;
+      result_.every_part_felt_misses = felt_misses(low->model);
+    }
     if (low != nullptr &&
         !equivalent_cost(found_.front().data_cost, low->data_cost, low->data_residuals,
                          options_.equivalent_cost_tolerance)) {

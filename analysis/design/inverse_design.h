@@ -264,6 +264,13 @@ struct InverseDesignResult {
   bool felt_goal = false;
   std::vector<FeltMiss> felt_misses;
   std::vector<std::string> parts_tried;
+  // With the feel as the goal and the smallest change fitted beside the sparse design
+  // (smallest_change_alongside): that fit's felt misses, every free parameter free (its lowest
+  // data cost of its starts), and the parts it changes. They tell a miss of the model family
+  // from a miss of the sparse search. every_part_fitted is false when it was not fitted.
+  bool every_part_fitted = false;
+  int every_part_parts_changed = 0;
+  std::vector<FeltMiss> every_part_felt_misses;
   int fits_run = 0;              // fits of every kind (starts, refits, candidates)
   double sparse_search_s = 0.0;  // wall time of the sparse search (the rest: the smallest
                                  // change beside it, the feasibility refit)
@@ -271,9 +278,10 @@ struct InverseDesignResult {
   double total_time_s = 0.0;
   std::vector<std::string> notes;
 
-  // One sentence per felt miss: "the design's peak force to latch (N) is 53.1 against the
-  // TO-BE's 9.5 (+43.6, 12.1 JNDs of 15 %, measured: ...); the sparse search tried F0, L0";
-  // empty when there is none.
+  // One sentence per felt miss: "the design does not feel like the TO-BE: its peak force to
+  // latch (N) is 53.1 against the TO-BE's 9.48 (+43.6, 12.3 JNDs; JND 15 %, typical: stiffness
+  // 15%); the sparse search tried F0, L0", and when every_part_fitted "; with every part free
+  // (9 parts changed) 12.1 JNDs" or "...) within its JND"; empty when there is none.
   std::vector<std::string> felt_miss_warnings() const;
   std::string brief_report() const;  // a few lines: feasible?, biggest changes
   std::string full_report() const;   // every solution, every parameter, the fit metrics

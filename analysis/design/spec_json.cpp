@@ -123,6 +123,20 @@ json equivalence_json(const SolutionEquivalence& q) {
           {"verdict", q.verdict}};
 }
 
+json felt_misses_json(const std::vector<FeltMiss>& felt_misses) {
+  json misses = json::array();
+  for (const FeltMiss& miss : felt_misses) {
+    misses.push_back({{"quantity", miss.quantity},
+                      {"design", number(miss.design)},
+                      {"tobe", number(miss.tobe)},
+                      {"difference", number(miss.difference)},
+                      {"jnds", number(miss.jnds)},
+                      {"weber_fraction", number(miss.jnd.weber_fraction)},
+                      {"jnd_source", miss.jnd.source}});
+  }
+  return misses;
+}
+
 json perceptual_row_json(const PerceptualRow& row) {
   return {{"doors", row.doors},
           {"felt_different", row.felt_different},
@@ -251,22 +265,17 @@ std::string spec_json(const InverseDesignResult& design, const SpecEvaluation& e
                      {"tried", tried},
                      {"equivalent", step.equivalent}});
   }
-  json misses = json::array();
-  for (const FeltMiss& miss : design.felt_misses) {
-    misses.push_back({{"quantity", miss.quantity},
-                      {"design", number(miss.design)},
-                      {"tobe", number(miss.tobe)},
-                      {"difference", number(miss.difference)},
-                      {"jnds", number(miss.jnds)},
-                      {"weber_fraction", number(miss.jnd.weber_fraction)},
-                      {"jnd_source", miss.jnd.source}});
-  }
   root["design_search"] = {
       {"steps", steps},
       {"stopped", design.sparse_stop},
       {"goal", design.felt_goal ? "every felt quantity within its JND" : "the data cost"},
-      {"felt_misses", misses},
-      {"parts_tried", design.parts_tried}};
+      {"felt_misses", felt_misses_json(design.felt_misses)},
+      {"parts_tried", design.parts_tried},
+      {"every_part_free",
+       design.every_part_fitted
+           ? json{{"parts_changed", design.every_part_parts_changed},
+                  {"felt_misses", felt_misses_json(design.every_part_felt_misses)}}
+           : json(nullptr)}};
   root["check"] = {{"before", check_json(e.check_before)}, {"after", check_json(e.check_after)}};
   root["tolerances"] = e.tolerances ? tolerances_json(*e.tolerances) : json(nullptr);
   root["perceptual"] = e.perceptual ? perceptual_json(*e.perceptual) : json(nullptr);

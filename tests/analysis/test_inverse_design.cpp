@@ -438,4 +438,19 @@ TEST_CASE("inverse design: each felt quantity the design misses is one warning, 
         "the design does not feel like the TO-BE: its holding force at mid-angle (N) is 1.25 "
         "against the TO-BE's -2.67 (+3.92, the sign differs; JND 15 %, typical: stiffness 15%); "
         "the sparse search tried F0, L0");
+  // With every part free the latch force still misses; the holding force does not.
+  result.every_part_fitted = true;
+  result.every_part_parts_changed = 9;
+  result.every_part_felt_misses.push_back(
+      {"peak_latch_force_N", 52.6, 9.48, 52.6 - 9.48, 12.04, typical});
+  const auto with_every_part = result.felt_miss_warnings();
+  REQUIRE(with_every_part.size() == 2);
+  CHECK(with_every_part[0] ==
+        "the design does not feel like the TO-BE: its peak force to latch (N) is 53.1 against "
+        "the TO-BE's 9.48 (+43.6, 12.3 JNDs; JND 15 %, typical: stiffness 15%); the sparse "
+        "search tried F0, L0; with every part free (9 parts changed) 12 JNDs");
+  CHECK(with_every_part[1] ==
+        "the design does not feel like the TO-BE: its holding force at mid-angle (N) is 1.25 "
+        "against the TO-BE's -2.67 (+3.92, the sign differs; JND 15 %, typical: stiffness 15%); "
+        "the sparse search tried F0, L0; with every part free (9 parts changed) within its JND");
 }

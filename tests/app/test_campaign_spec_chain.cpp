@@ -366,7 +366,8 @@ TEST_CASE(
 // `spec --campaign` on the demo's campaign ends with every felt quantity
 // of the design within its JND of the favourite's (read along the TO-BE strokes' motion, the
 // JNDs the perceptual table uses), or with a warning naming each one that is not, by how much,
-// and the parts the search tried. The criterion is applied here to spec.json's numbers.
+// the parts the search tried and how far the fit with every part free stays from it. The criterion
+// is applied here to spec.json's numbers.
 TEST_CASE(
     "spec --campaign: the design feels like the favourite, or a warning names each felt "
     "quantity that misses its JND",
@@ -407,6 +408,8 @@ TEST_CASE(
       if (text.find("its " + doorbench::felt_label(info) + " is ") == std::string::npos) continue;
       warned = true;
       CHECK_THAT(text, Contains("the sparse search tried "));
+      // How far the fit with every part free stays in the same quantity.
+      CHECK_THAT(text, Contains("; with every part free ("));
       CHECK_THAT(text, StartsWith("the design does not feel like the TO-BE: "));
     }
     CHECK(warned == different);
@@ -417,6 +420,14 @@ TEST_CASE(
     }
   }
   CHECK(search.at("felt_misses").size() == static_cast<std::size_t>(missed));
+  if (missed > 0) {
+    const json& every_part = search.at("every_part_free");
+    REQUIRE(every_part.is_object());
+    CHECK(every_part.at("parts_changed").get<int>() > 0);
+    for (const json& miss : every_part.at("felt_misses")) {
+      if (miss.at("jnds").is_number()) CHECK(miss.at("jnds").get<double>() > 1.0);
+    }
+  }
   if (missed == 0) {
     CHECK_THAT(search.at("stopped").get<std::string>(),
                Contains("every felt quantity is within its JND of the TO-BE's"));
